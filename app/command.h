@@ -1,0 +1,44 @@
+#pragma once
+// Subcommand registry: each app/<name>.cc defines its CLI11 subcommand and registers it with a
+// static CommandRegistration, so adding a command touches no shared file.
+//
+// Exit codes: 0 success; 2 bad input or usage (one line on stderr naming file, line and problem);
+// 1 an internal error.
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+namespace shutterlab::app {
+
+// Adds the subcommand to app and returns the function to run once parsing succeeded.
+using CommandSetup = std::function<std::function<void()>(CLI::App& app)>;
+
+struct CommandRegistration {
+  CommandRegistration(int order, CommandSetup setup);
+};
+
+struct RegisteredCommand {
+  int order;  // position in --help
+  CommandSetup setup;
+};
+std::vector<RegisteredCommand>& Registry();
+
+// Prints progress "label: 42%" on a terminal (stderr), overwriting the line; silent when stderr
+// is not a terminal, so logs and CI stay clean.
+class Progress {
+ public:
+  Progress(std::string label, size_t total);
+  void Update(size_t done);
+  ~Progress();
+
+ private:
+  std::string label_;
+  size_t total_;
+  int last_percent_ = -1;
+  bool enabled_;
+};
+
+}  // namespace shutterlab::app

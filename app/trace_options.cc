@@ -1,0 +1,33 @@
+#include "app/trace_options.h"
+
+namespace shutterlab::app {
+
+void TraceOptions::Add(CLI::App* command, bool with_bias) {
+  command->add_option("TRACE", path, "gyro log (gyro.csv, Gyroflow .gcsv, or raw-count CSV)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  command->add_option("--format", format, "log format: auto, csv, gcsv, raw")->capture_default_str();
+  command->add_flag("--raw", raw, "the log holds raw int16 counts (the source paper's logger)");
+  command->add_option("--range", range_dps, "raw counts: gyro full-scale range, deg/s (250, 500, 1000, 2000)")
+      ->capture_default_str();
+  command->add_option("--time-unit", time_unit, "raw counts: unit of the time column (s, ms, us, ns)")
+      ->capture_default_str();
+  if (with_bias) {
+    command->add_option("--bias", bias, "still segment for the bias, A:B seconds after the first sample")
+        ->capture_default_str();
+    command->add_flag("--auto-bias", auto_bias, "detect the still segment automatically");
+  }
+}
+
+GyroReadOptions TraceOptions::ReadOptions() const {
+  GyroReadOptions options;
+  options.format = raw ? GyroFormat::kRaw : ParseGyroFormat(format);
+  options.raw_range_dps = range_dps;
+  options.raw_time_unit = ParseTimeUnit(time_unit);
+  options.Check();
+  return options;
+}
+
+GyroTrace TraceOptions::Load() const { return ReadGyro(path, ReadOptions()); }
+
+}  // namespace shutterlab::app

@@ -1,0 +1,28 @@
+#pragma once
+// CLI options shared by every command that reads a gyro trace: format selection and bias segment.
+
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "sim/bias.h"
+#include "sim/gyro_io.h"
+
+namespace shutterlab::app {
+
+struct TraceOptions {
+  std::string path;
+  std::string format = "auto";  // auto | csv | gcsv | raw
+  bool raw = false;             // shorthand for --format raw
+  int range_dps = 250;          // raw counts: full-scale range
+  std::string time_unit = "s";  // raw counts: unit of the time column
+  std::string bias = "0:5";     // bias segment A:B, seconds after the first sample
+  bool auto_bias = false;       // find the still segment automatically instead of --bias
+
+  // Adds TRACE (positional) and the options above to a subcommand. with_bias: add --bias too.
+  void Add(CLI::App* command, bool with_bias);
+  GyroReadOptions ReadOptions() const;
+  GyroTrace Load() const;
+};
+
+}  // namespace shutterlab::app

@@ -1,0 +1,48 @@
+#include "sim/bias.h"
+
+#include <cmath>
+#include <string>
+
+#include "sim/check.h"
+#include "sim/text_file.h"
+
+namespace shutterlab {
+
+BiasEstimate EstimateBias(const GyroTrace& trace, const BiasSegment& segment) {
+  SHUTTERLAB_CHECK(segment.begin_s >= 0.0 && segment.end_s > segment.begin_s)
+      << "bias segment " << segment.begin_s << ":" << segment.end_s << " is empty or negative";
+  SHUTTERLAB_CHECK(!trace.empty()) << "empty gyro trace";
+  const int64_t t0 = trace.t_begin_ns();
+  const size_t begin = trace.LowerBound(t0 + SecondsToNs(segment.begin_s));
+  const size_t end = trace.LowerBound(t0 + SecondsToNs(segment.end_s));
+  BiasEstimate out;
+  out.samples = end - begin;
+  out.first_after = end;
+  SHUTTERLAB_CHECK(out.samples >= kMinBiasSamples)
+      << "bias segment " << segment.begin_s << ":" << segment.end_s << " s holds " << out.samples
+      << " samples (need at least " << kMinBiasSamples << "; the trace lasts " << trace.DurationS()
+      << " s)";
+  // Two passes: mean, then spread about it (no cancellation for large biases).
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (size_t i = begin; i < end; ++i) sum += trace[i].omega_rad_s;
+  out.bias_rad_s = sum / static_cast<double>(out.samples);
+  Eigen::Vector3d sq = Eigen::Vector3d::Zero();
+  for (size_t i = begin; i < end; ++i) sq += (trace[i].omega_rad_s - out.bias_rad_s).cwiseAbs2();
+  out.stderr_rad_s = (sq / static_cast<double>(out.samples - 1)).cwiseSqrt() /
+                     std::sqrt(static_cast<double>(out.samples));
+  return out;
+}
+
+BiasSegment ParseBiasSegment(const std::string& text) {
+  const size_t colon = text.find(':');
+  SHUTTERLAB_CHECK(colon != std::string::npos) << "bias segment '" << text << "' is not A:B (seconds)";
+  const auto a = ParseDouble(std::string_view(text).substr(0, colon));
+  const auto b = ParseDouble(std::string_view(text).substr(colon + 1));
+  SHUTTERLAB_CHECK(a && b) << "bias segment '" << text << "' is not A:B (seconds)";
+  BiasSegment s{*a, *b};
+  SHUTTERLAB_CHECK(s.begin_s >= 0 && s.end_s > s.begin_s)
+      << "bias segment '" << text << "' must satisfy 0 <= A < B";
+  return s;
+}
+
+}  // namespace shutterlab

@@ -1,0 +1,33 @@
+#pragma once
+// Gyro bias from a still segment.
+
+#include <Eigen/Core>
+
+#include "sim/gyro_trace.h"
+
+namespace shutterlab {
+
+// A segment of a trace in seconds after its first sample: [begin_s, end_s).
+struct BiasSegment {
+  double begin_s = 0.0;
+  double end_s = 5.0;  // the source paper averages the first 5 s while still
+};
+
+struct BiasEstimate {
+  Eigen::Vector3d bias_rad_s = Eigen::Vector3d::Zero();  // per-axis mean rate over the segment
+  Eigen::Vector3d stderr_rad_s = Eigen::Vector3d::Zero();  // standard error of that mean (white-noise assumption)
+  size_t samples = 0;             // samples inside the segment
+  size_t first_after = 0;         // index of the first sample at or after end_s: analyses start here
+};
+
+// Minimum samples a bias segment must hold to give a meaningful mean.
+inline constexpr size_t kMinBiasSamples = 10;
+
+// Mean rate over the segment. Throws std::invalid_argument when the segment is malformed or holds
+// fewer than kMinBiasSamples samples (the message says how many it holds).
+BiasEstimate EstimateBias(const GyroTrace& trace, const BiasSegment& segment);
+
+// Parses "A:B" (seconds). Throws std::invalid_argument on anything else.
+BiasSegment ParseBiasSegment(const std::string& text);
+
+}  // namespace shutterlab

@@ -1,0 +1,113 @@
+#include "sim/text_file.h"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <random>
+
+#include "sim/check.h"
+
+namespace shutterlab {
+
+std::string ReadFileToString(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(IoMessage(path, 0, std::string("cannot open: ") + std::strerror(errno)));
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size < 0) throw IoError(IoMessage(path, 0, "cannot read (not a regular file?)"));
+  std::string content(static_cast<size_t>(size), '\0');
+  in.seekg(0, std::ios::beg);
+  if (size > 0 && !in.read(content.data(), size)) throw IoError(IoMessage(path, 0, "read failed"));
+  return content;
+}
+
+void WriteFileAtomically(const std::string& path, std::string_view content) {
+  // A unique temporary name beside the target: rename() is atomic only within one file system.
+  std::random_device entropy;
+  const std::string tmp = path + ".tmp" + std::to_string(::getpid()) + "_" +
+                          std::to_string(entropy() % 1000000);
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) throw IoError(IoMessage(path, 0, std::string("cannot write: ") + std::strerror(errno)));
+  const bool written = std::fwrite(content.data(), 1, content.size(), f) == content.size();
+  const bool closed = std::fclose(f) == 0;
+  if (!written || !closed || std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string reason = std::strerror(errno);
+    std::remove(tmp.c_str());
+    throw IoError(IoMessage(path, 0, "write failed: " + reason));
+  }
+}
+
+std::optional<std::string_view> LineCursor::Next() {
+  if (pos_ >= text_.size()) return std::nullopt;
+  size_t end = text_.find('\n', pos_);
+  if (end == std::string_view::npos) end = text_.size();
+  std::string_view line = text_.substr(pos_, end - pos_);
+  pos_ = end + 1;
+  ++line_number_;
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  return line;
+}
+
+void SplitFields(std::string_view line, char delimiter, std::vector<std::string_view>* fields) {
+  fields->clear();
+  size_t start = 0;
+  while (true) {
+    size_t end = line.find(delimiter, start);
+    std::string_view field =
+        line.substr(start, end == std::string_view::npos ? std::string_view::npos : end - start);
+    while (!field.empty() && (field.front() == ' ' || field.front() == '\t')) field.remove_prefix(1);
+    while (!field.empty() && (field.back() == ' ' || field.back() == '\t')) field.remove_suffix(1);
+    fields->push_back(field);
+    if (end == std::string_view::npos) break;
+    start = end + 1;
+  }
+}
+
+std::optional<double> ParseDouble(std::string_view field) {
+  if (!field.empty() && field.front() == '+') field.remove_prefix(1);
+  if (field.empty()) return std::nullopt;
+  double value = 0.0;
+  const auto [ptr, ec] = std::from_chars(field.data(), field.data() + field.size(), value);
+  if (ec != std::errc() || ptr != field.data() + field.size() || !std::isfinite(value)) {
+    return std::nullopt;
+  }
+  return value;
+}
+
+std::optional<int64_t> ParseInt(std::string_view field) {
+  if (!field.empty() && field.front() == '+') field.remove_prefix(1);
+  if (field.empty()) return std::nullopt;
+  int64_t value = 0;
+  const auto [ptr, ec] = std::from_chars(field.data(), field.data() + field.size(), value);
+  if (ec != std::errc() || ptr != field.data() + field.size()) return std::nullopt;
+  return value;
+}
+
+void AppendDouble(double value, std::string* out) {
+  char buffer[32];
+  const auto [ptr, ec] = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  out->append(buffer, ec == std::errc() ? ptr - buffer : 0);
+}
+
+void AppendSecondsFromNs(int64_t t_ns, std::string* out) {
+  char buffer[40];
+  const bool negative = t_ns < 0;
+  const uint64_t magnitude = negative ? 0 - static_cast<uint64_t>(t_ns) : t_ns;
+  const int n = std::snprintf(buffer, sizeof(buffer), "%s%llu.%09llu", negative ? "-" : "",
+                              static_cast<unsigned long long>(magnitude / 1000000000ULL),
+                              static_cast<unsigned long long>(magnitude % 1000000000ULL));
+  out->append(buffer, n);
+}
+
+std::string ToLower(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+}  // namespace shutterlab

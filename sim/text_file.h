@@ -1,0 +1,51 @@
+#pragma once
+// Whole-file text input and all-or-nothing file output, shared by every reader and writer.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace shutterlab {
+
+// Reads a whole file; throws IoError naming the path when it cannot.
+std::string ReadFileToString(const std::string& path);
+
+// Writes content to path via a temporary file in the same folder and a rename, so that a reader
+// never sees a partial file and a failed write leaves no output. Throws IoError.
+void WriteFileAtomically(const std::string& path, std::string_view content);
+
+// Iterates the lines of a text buffer, tracking 1-based line numbers; strips a trailing '\r'.
+class LineCursor {
+ public:
+  explicit LineCursor(std::string_view text) : text_(text) {}
+  // Next line, or nullopt at the end of the buffer.
+  std::optional<std::string_view> Next();
+  long line_number() const { return line_number_; }
+
+ private:
+  std::string_view text_;
+  size_t pos_ = 0;
+  long line_number_ = 0;
+};
+
+// Splits a line on a delimiter, trimming spaces and tabs around each field. Appends to fields
+// (cleared first) to let callers reuse the vector across lines.
+void SplitFields(std::string_view line, char delimiter, std::vector<std::string_view>* fields);
+
+// Parses a whole field as a finite double (leading '+' allowed). nullopt when the field is not a
+// number, has trailing text, or is inf/nan.
+std::optional<double> ParseDouble(std::string_view field);
+// Parses a whole field as a signed 64-bit integer. nullopt when it is not one.
+std::optional<int64_t> ParseInt(std::string_view field);
+
+// Shortest round-trip text of a double (std::to_chars), appended to out.
+void AppendDouble(double value, std::string* out);
+// Appends t_ns as seconds with nine decimals, exactly (no floating-point rounding).
+void AppendSecondsFromNs(int64_t t_ns, std::string* out);
+
+// Lowercase copy of a string (ASCII).
+std::string ToLower(std::string_view s);
+
+}  // namespace shutterlab
