@@ -88,6 +88,8 @@ GyroTrace ReadGyro(const std::string& path, const GyroReadOptions& options) {
     case GyroFormat::kAuto:
     case GyroFormat::kGyroCsv:
       return ReadGyroCsv(path);
+    case GyroFormat::kRaw:
+      return ReadRawCsv(path, options.raw_range_dps, options.raw_time_unit);
     default:
       throw IoError(IoMessage(path, 0, std::string("format not supported yet: ") +
                                            GyroFormatName(options.format)));

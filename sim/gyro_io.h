@@ -5,6 +5,7 @@
 #include <string>
 
 #include "sim/gyro_trace.h"
+#include "sim/raw_csv.h"  // TimeUnit, ReadRawCsv, WriteRawCsv
 
 namespace shutterlab {
 
@@ -14,9 +15,6 @@ enum class GyroFormat {
   kGcsv,     // Gyroflow .gcsv ("GYROFLOW IMU LOG" header block)
   kRaw,      // the source paper's raw-count CSV: time and three int16 counts per line
 };
-
-// Time unit of a raw-count log's time column.
-enum class TimeUnit { kSeconds, kMilliseconds, kMicroseconds, kNanoseconds };
 
 struct GyroReadOptions {
   GyroFormat format = GyroFormat::kAuto;
