@@ -6,10 +6,19 @@
 namespace shutterlab {
 namespace {
 
-// Reads the numeric rows of a CSV whose first three columns after `t` are rates; `first_line`
-// is the cursor already past the header.
-GyroTrace ReadRows(const std::string& path, LineCursor* cursor, double time_scale_to_s,
-                   double rate_scale_to_rad_s) {
+bool IsGyroCsvHeader(const std::vector<std::string_view>& fields) {
+  return fields.size() >= 4 && ToLower(fields[0]) == "t" && ToLower(fields[1]) == "gx" &&
+         ToLower(fields[2]) == "gy" && ToLower(fields[3]) == "gz";
+}
+
+std::string_view StripBom(std::string_view line) {
+  if (line.size() >= 3 && line.substr(0, 3) == "\xEF\xBB\xBF") line.remove_prefix(3);
+  return line;
+}
+
+// Reads the rows of a gyro.csv: t in seconds, then gx, gy, gz in rad/s; the cursor is already past
+// the header.
+GyroTrace ReadRows(const std::string& path, LineCursor* cursor) {
   std::vector<GyroSample> samples;
   std::vector<std::string_view> fields;
   int64_t previous_t_ns = 0;
@@ -22,8 +31,11 @@ GyroTrace ReadRows(const std::string& path, LineCursor* cursor, double time_scal
                                            std::to_string(fields.size())));
     }
     GyroSample s;
-    const auto t = ParseDouble(fields[0]);
-    if (!t) throw IoError(IoMessage(path, n, "t is not a finite number: '" + std::string(fields[0]) + "'"));
+    // Exact for plain decimals (9 digits of seconds keep every ns at any epoch).
+    const auto t_ns = ParseTimeInUnitNs(fields[0], TimeUnit::kSeconds);
+    if (!t_ns) {
+      throw IoError(IoMessage(path, n, "t is not a finite number in range: '" + std::string(fields[0]) + "'"));
+    }
     for (int axis = 0; axis < 3; ++axis) {
       const auto value = ParseDouble(fields[axis + 1]);
       if (!value) {
@@ -31,11 +43,9 @@ GyroTrace ReadRows(const std::string& path, LineCursor* cursor, double time_scal
                                              " is not a finite number: '" +
                                              std::string(fields[axis + 1]) + "'"));
       }
-      s.omega_rad_s[axis] = *value * rate_scale_to_rad_s;
+      s.omega_rad_s[axis] = *value;
     }
-    const double t_s = *t * time_scale_to_s;
-    if (!(std::abs(t_s) < 9.2e9)) throw IoError(IoMessage(path, n, "t out of range"));
-    s.t_ns = SecondsToNs(t_s);
+    s.t_ns = *t_ns;
     if (!samples.empty() && s.t_ns < previous_t_ns) {
       throw IoError(IoMessage(path, n, "timestamp decreases (" + std::string(fields[0]) +
                                            " after an earlier, larger one)"));
@@ -60,12 +70,11 @@ GyroTrace ReadGyroCsv(const std::string& path) {
   LineCursor cursor(text);
   const auto header = cursor.Next();
   std::vector<std::string_view> fields;
-  if (header) SplitFields(*header, ',', &fields);
-  if (!header || fields.size() < 4 || ToLower(fields[0]) != "t" || ToLower(fields[1]) != "gx" ||
-      ToLower(fields[2]) != "gy" || ToLower(fields[3]) != "gz") {
+  if (header) SplitFields(StripBom(*header), ',', &fields);
+  if (!header || !IsGyroCsvHeader(fields)) {
     throw IoError(IoMessage(path, 1, "missing header 't,gx,gy,gz'"));
   }
-  return ReadRows(path, &cursor, 1.0, 1.0);
+  return ReadRows(path, &cursor);
 }
 
 void WriteGyroCsv(const std::string& path, const GyroTrace& trace) {
@@ -82,18 +91,63 @@ void WriteGyroCsv(const std::string& path, const GyroTrace& trace) {
   WriteFileAtomically(path, out);
 }
 
+GyroFormat DetectGyroFormat(std::string_view text, const std::string& path) {
+  LineCursor cursor(text);
+  std::vector<std::string_view> fields;
+  std::optional<std::string_view> first;
+  while ((first = cursor.Next()) && first->empty()) {
+  }
+  if (!first) throw IoError(IoMessage(path, 0, "empty file"));
+  const long first_line = cursor.line_number();
+  SplitFields(StripBom(*first), ',', &fields);
+  if (fields.size() == 1 && (fields[0] == "GYROFLOW IMU LOG" || fields[0] == "CAMERA IMU LOG")) {
+    return GyroFormat::kGcsv;
+  }
+  const bool has_header = !ParseDouble(fields[0]);
+  if (has_header && !IsGyroCsvHeader(fields)) {
+    throw IoError(IoMessage(path, first_line, "unrecognised first line '" + std::string(*first) +
+                                                  "': expected the header 't,gx,gy,gz' (gyro.csv, raw "
+                                                  "counts) or 'GYROFLOW IMU LOG' (.gcsv); see --format"));
+  }
+  // Scan the rows of a headerless file from its first line, else from the line after the header.
+  LineCursor rows(text);
+  if (has_header) {
+    while (rows.line_number() < first_line) rows.Next();
+  }
+  bool any_row = false;
+  while (auto line = rows.Next()) {
+    if (line->empty()) continue;
+    any_row = true;
+    SplitFields(*line, ',', &fields);
+    for (size_t axis = 1; axis < 4 && axis < fields.size(); ++axis) {
+      if (ParseInt(fields[axis])) continue;
+      if (has_header) return GyroFormat::kGyroCsv;
+      // A non-number is left to the raw reader, which names it; a fractional number is neither format.
+      if (!ParseDouble(fields[axis])) return GyroFormat::kRaw;
+      throw IoError(IoMessage(path, rows.line_number(),
+                              "no header line and a non-integer rate '" + std::string(fields[axis]) +
+                                  "': not raw counts (integers), and a gyro.csv needs the header "
+                                  "'t,gx,gy,gz'; see --format"));
+    }
+  }
+  // Every rate an integer, or no rows at all after a header (the gyro.csv reader says "no samples").
+  return has_header && !any_row ? GyroFormat::kGyroCsv : GyroFormat::kRaw;
+}
+
 GyroTrace ReadGyro(const std::string& path, const GyroReadOptions& options) {
   options.Check();
-  switch (options.format) {
+  GyroFormat format = options.format;
+  if (format == GyroFormat::kAuto) format = DetectGyroFormat(ReadFileToString(path), path);
+  switch (format) {
     case GyroFormat::kAuto:
     case GyroFormat::kGyroCsv:
       return ReadGyroCsv(path);
+    case GyroFormat::kGcsv:
+      return ReadGcsv(path).trace;
     case GyroFormat::kRaw:
       return ReadRawCsv(path, options.raw_range_dps, options.raw_time_unit);
-    default:
-      throw IoError(IoMessage(path, 0, std::string("format not supported yet: ") +
-                                           GyroFormatName(options.format)));
   }
+  return ReadGyroCsv(path);
 }
 
 GyroFormat ParseGyroFormat(const std::string& name) {

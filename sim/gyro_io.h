@@ -3,7 +3,9 @@
 // and never returns a partial trace.
 
 #include <string>
+#include <string_view>
 
+#include "sim/gcsv.h"     // GcsvLog, ReadGcsv, WriteGcsv
 #include "sim/gyro_trace.h"
 #include "sim/raw_csv.h"  // TimeUnit, ReadRawCsv, WriteRawCsv
 
@@ -26,8 +28,25 @@ struct GyroReadOptions {
   void Check() const;
 };
 
-// Reads a gyro log of any supported format; the result is in seconds / rad/s, sensor axes.
+// Reads a gyro log of any supported format; the result is in seconds / rad/s, sensor axes (for a
+// .gcsv: after its orientation string, see sim/gcsv.h). kAuto detects the format with
+// DetectGyroFormat. Throws IoError naming path and line on bad input.
 GyroTrace ReadGyro(const std::string& path, const GyroReadOptions& options = {});
+
+// Detects the format of a log from its content (path only names it in errors):
+//  1. first non-empty line "GYROFLOW IMU LOG" or "CAMERA IMU LOG"            -> kGcsv;
+//  2. a header line t,gx,gy,gz[,...] and at least one rate field (gx, gy or gz of any row) that
+//     is not an integer (holds '.', an exponent, ...)                        -> kGyroCsv;
+//     the same header with every rate field an integer                       -> kRaw;
+//     the header and no rows                                                 -> kGyroCsv;
+//  3. no header (the first line starts with a number) and every rate an integer -> kRaw;
+//     no header and a non-integer rate                                       -> IoError naming that
+//     line (neither format: gyro.csv needs its header, raw counts are integers);
+//  4. any other first line                                                   -> IoError naming line 1.
+// Rule 2's ambiguity: a gyro.csv whose every rate is a whole number of rad/s (in practice: all
+// zero) reads as raw counts; with the default --range/--time-unit an all-zero trace is the same
+// either way. Override with --format.
+GyroFormat DetectGyroFormat(std::string_view text, const std::string& path);
 
 // FORMATS.md gyro.csv. Extra columns after gz are ignored.
 GyroTrace ReadGyroCsv(const std::string& path);

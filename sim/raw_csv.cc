@@ -26,7 +26,8 @@ int FractionDigits(TimeUnit unit) {
   return 0;
 }
 
-// t_ns in the unit, exact: integer part, then the fraction with trailing zeros dropped.
+}  // namespace
+
 void AppendTimeInUnit(int64_t t_ns, TimeUnit unit, std::string* out) {
   const int64_t per_unit = NanosecondsPerUnit(unit);
   const bool negative = t_ns < 0;
@@ -43,9 +44,7 @@ void AppendTimeInUnit(int64_t t_ns, TimeUnit unit, std::string* out) {
   out->append(buffer, n);
 }
 
-// Parses a time field in the unit. A plain decimal ("-12.345") is converted exactly, so a ns or us
-// clock keeps every tick even beyond 2^53 ns; anything else (an exponent) goes through double.
-std::optional<int64_t> ParseTimeNs(std::string_view field, TimeUnit unit) {
+std::optional<int64_t> ParseTimeInUnitNs(std::string_view field, TimeUnit unit) {
   const int64_t per_unit = NanosecondsPerUnit(unit);
   const int max_fraction_digits = FractionDigits(unit);
   std::string_view rest = field;
@@ -80,6 +79,8 @@ std::optional<int64_t> ParseTimeNs(std::string_view field, TimeUnit unit) {
   if (!(std::abs(t_s) < 9.2e9)) return std::nullopt;
   return SecondsToNs(t_s);
 }
+
+namespace {
 
 bool IsHeader(const std::vector<std::string_view>& fields) {
   if (fields.size() < 4) return false;
@@ -140,7 +141,7 @@ GyroTrace ReadRawCsv(const std::string& path, int range_dps, TimeUnit time_unit)
                                            std::to_string(fields.size())));
     }
     GyroSample s;
-    const auto t_ns = ParseTimeNs(fields[0], time_unit);
+    const auto t_ns = ParseTimeInUnitNs(fields[0], time_unit);
     if (!t_ns) {
       throw IoError(IoMessage(path, n, "t is not a finite number in range: '" +
                                            std::string(fields[0]) + "'"));

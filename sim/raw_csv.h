@@ -5,7 +5,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <string_view>
 
 #include "sim/gyro_trace.h"
 
@@ -35,6 +37,13 @@ GyroTrace ReadRawCsv(const std::string& path, int range_dps, TimeUnit time_unit)
 // number of saturated values. Writes whole or not at all (IoError on failure).
 size_t WriteRawCsv(const std::string& path, const GyroTrace& trace, int range_dps,
                    TimeUnit time_unit = TimeUnit::kSeconds);
+
+// Parses a time field given in `unit` to ns. A plain decimal ("-12.345") converts exactly, so a ns
+// or us clock keeps every tick even beyond 2^53 ns; an exponent form goes through double and rounds
+// to the ns. nullopt when the field is not a finite number or overflows int64 ns.
+std::optional<int64_t> ParseTimeInUnitNs(std::string_view field, TimeUnit unit);
+// Appends t_ns in `unit`, exactly: integer part, then the fraction without trailing zeros.
+void AppendTimeInUnit(int64_t t_ns, TimeUnit unit, std::string* out);
 
 // One rate in rad/s to the nearest int16 count, saturating; *saturated set when it clipped.
 int16_t RateToCount(double omega_rad_s, double lsb_per_dps, bool* saturated);
