@@ -70,7 +70,7 @@ void StepsOptions::Check() const {
       << "still time between turns must be >= 0 s, got " << still_s;
 }
 
-void FlightOptions::Check() const {
+void FlightMotionOptions::Check() const {
   const auto non_negative = [](double v) { return std::isfinite(v) && v >= 0; };
   SHUTTERLAB_CHECK(non_negative(lead_still_s)) << "flight lead still time must be >= 0 s";
   SHUTTERLAB_CHECK(non_negative(spin_up_s)) << "flight spin-up time must be >= 0 s";
@@ -103,7 +103,7 @@ Motion Motion::Steps(const StepsOptions& options, uint64_t seed) {
   return m;
 }
 
-Motion Motion::Flight(const FlightOptions& options, double duration_s, uint64_t seed) {
+Motion Motion::Flight(const FlightMotionOptions& options, double duration_s, uint64_t seed) {
   options.Check();
   SHUTTERLAB_CHECK(std::isfinite(duration_s) && duration_s >= 0) << "flight duration must be >= 0 s";
   Motion m;

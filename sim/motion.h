@@ -44,7 +44,7 @@ struct StepsOptions {
 // A multirotor in hover / slow flight. All rate amplitudes are deg/s, frequencies Hz.
 // The defaults give flagged shares near the source paper's flight (50 m altitude, 20" allowance):
 // see sim/synth.h.
-struct FlightOptions {
+struct FlightMotionOptions {
   double lead_still_s = 6.0;  // on the ground, motors off, s (covers the default 5 s bias segment)
   double spin_up_s = 1.0;     // all motion ramps smoothly from zero over this time after the lead, s
   // Slow attitude wobble: a sum of sinusoids from 0.2 to 2.5 Hz per axis whose amplitude follows a
@@ -84,7 +84,7 @@ class Motion {
   // seed draws the turn durations.
   static Motion Steps(const StepsOptions& options, uint64_t seed);
   // seed draws the wobble, gusts and vibration phases; duration_s bounds where gusts are placed.
-  static Motion Flight(const FlightOptions& options, double duration_s, uint64_t seed);
+  static Motion Flight(const FlightMotionOptions& options, double duration_s, uint64_t seed);
 
   MotionProfile profile() const { return profile_; }
 
@@ -120,7 +120,7 @@ class Motion {
   double natural_duration_s_ = 0.0;
   std::vector<StepTurn> turns_;
   // Flight components (times relative to the end of the lead).
-  FlightOptions flight_;
+  FlightMotionOptions flight_;
   std::vector<Sinusoid> envelope_;
   std::vector<Sinusoid> wobble_[3];
   std::vector<Gust> gusts_;  // sorted by center

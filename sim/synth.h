@@ -36,7 +36,7 @@ struct SynthOptions {
   double t0_s = 0.0;   // time of the first sample, s (gyro clock)
   ImuErrorModel imu;   // sensor errors, range and logger timing; Ideal() for a perfect sensor
   StepsOptions steps;  // used by the steps profile
-  FlightOptions flight;  // used by the flight profile
+  FlightMotionOptions flight;  // used by the flight profile
 
   void Check() const;  // throws std::invalid_argument naming the first bad field
   // The duration actually used, s (resolves duration_s = 0).
