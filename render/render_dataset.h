@@ -1,0 +1,60 @@
+#pragma once
+// `shutterlab render`: renders a rig dataset with exact ground truth from a scene image, a declared
+// camera, a gyro log and capture times (FORMATS.md "Rig dataset", "Render output").
+//
+// DIR receives:
+//   camera.json, gyro.csv          the DECLARED camera and the logged gyro, as given
+//   frames.csv                     frame,t_first_row,ref,image
+//   images/NNNN_ref.png            global-shutter reference (every row at the true time of row 0)
+//   images/NNNN_rs.png             rolling-shutter image
+//   truth/NNNN_disp.exr            d(p) = p_ref - p, float32 channels dx, dy, pixels
+//   truth.json                     {"injected": {...}, "frames": [{"frame", "D_px", "D_m"}, ...]}
+//   truth/NNNN_heat.png, truth/NNNN_side.png, overview.png   pictures (unless pictures = false)
+// The truth differs from camera.json by the --inject effects only (render/truth_model.h).
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "render/rs_warp.h"
+
+namespace shutterlab {
+
+struct RenderOptions {
+  std::string scene_path;     // scene image (FORMATS.md "The scene image")
+  std::string camera_path;    // declared camera.json
+  std::string gyro_path;      // gyro.csv (gyro clock, gyro axes)
+  std::string frames_path;    // frame,t_first_row (camera clock, first row read)
+  std::string out_dir;        // created if missing
+  std::vector<std::string> injections;  // "NAME=VALUE", FORMATS.md effect names
+  Interpolation interpolation = Interpolation::kBilinear;
+  bool pictures = true;       // heatmaps, side-by-side panels and the overview
+  // Throws std::invalid_argument naming the first bad field.
+  void Check() const;
+};
+
+struct RenderedFrame {
+  int64_t frame = 0;
+  double d_px = 0.0;              // FORMATS.md frame distortion D, pixels
+  double d_m = 0.0;               // D on the ground, m
+  double outside_fraction = 0.0;  // share of rolling-shutter pixels that see outside the scene (black)
+};
+
+struct RenderSummary {
+  nlohmann::json injected = nlohmann::json::object();
+  std::vector<RenderedFrame> frames;
+};
+
+// Reads and checks every input (and every frame's time against the gyro trace) before writing
+// anything, so bad input leaves no output; each file is written whole or not at all.
+// progress(done, total) is called after each frame when given.
+RenderSummary RenderDataset(const RenderOptions& options,
+                            const std::function<void(size_t, size_t)>& progress = {});
+
+// Share of pixels whose scene sample lies (partly) outside the scene: what comes out black.
+double OutsideSceneFraction(const FrameGeometry& geometry, cv::Size scene_size);
+
+}  // namespace shutterlab

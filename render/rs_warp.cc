@@ -1,0 +1,300 @@
+#include "render/rs_warp.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include <opencv2/imgproc.hpp>
+
+#include "sim/check.h"
+
+namespace shutterlab {
+
+FrameGeometry::FrameGeometry(const PinholeCamera& camera, double altitude_m, const FrameMotion& motion,
+                             cv::Size scene_size)
+    : camera_(camera), altitude_m_(altitude_m), motion_(motion) {
+  SHUTTERLAB_CHECK(static_cast<int>(motion.world_from_cam.size()) == camera.height &&
+                   static_cast<int>(motion.cam_center_m.size()) == camera.height)
+      << "frame motion has " << motion.world_from_cam.size() << " rows, the camera " << camera.height;
+  SHUTTERLAB_CHECK(altitude_m > 0) << "altitude must be positive";
+  SHUTTERLAB_CHECK(scene_size.width > 0 && scene_size.height > 0) << "empty scene";
+  scene_k_ << camera.fx, 0, (scene_size.width - 1) / 2.0, 0, camera.fy, (scene_size.height - 1) / 2.0, 0, 0, 1;
+  inv_k_ = camera.K().inverse();
+  rotation_only_ = !camera.HasDistortion() && !motion.HasTranslation();
+}
+
+Eigen::Matrix3d FrameGeometry::SceneFromImageHomography(int v) const {
+  return scene_k_ * motion_.world_from_cam[v] * inv_k_;
+}
+
+std::optional<Eigen::Vector3d> FrameGeometry::GroundPoint(double u, int v) const {
+  const Eigen::Vector3d ray_w = motion_.world_from_cam[v] * camera_.CamFromImg(Eigen::Vector2d(u, v));
+  const Eigen::Vector3d& c = motion_.cam_center_m[v];
+  const double s = (altitude_m_ - c.z()) / ray_w.z();
+  if (!(s > 0) || !std::isfinite(s)) return std::nullopt;
+  return c + s * ray_w;
+}
+
+std::optional<Eigen::Vector2d> FrameGeometry::ScenePixel(double u, int v) const {
+  const std::optional<Eigen::Vector3d> x = GroundPoint(u, v);
+  if (!x) return std::nullopt;
+  return Eigen::Vector2d(scene_k_(0, 0) * x->x() / altitude_m_ + scene_k_(0, 2),
+                         scene_k_(1, 1) * x->y() / altitude_m_ + scene_k_(1, 2));
+}
+
+std::optional<Eigen::Vector2d> FrameGeometry::RefPixel(double u, int v) const {
+  const std::optional<Eigen::Vector3d> x = GroundPoint(u, v);
+  if (!x) return std::nullopt;
+  return camera_.ImgFromCam(motion_.world_from_ref.transpose() * (*x - motion_.ref_center_m));
+}
+
+void FrameGeometry::SceneRow(int v, float* xs, float* ys) const {
+  const int width = camera_.width;
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  if (rotation_only_) {
+    // (a + u b) / (a_z + u b_z): the row's homography, direct in u (nothing accumulates).
+    const Eigen::Matrix3d h = SceneFromImageHomography(v);
+    const Eigen::Vector3d a = h.col(1) * v + h.col(2);
+    const Eigen::Vector3d b = h.col(0);
+    // float: ~1e-4 px rounding on a 5000 px scene, far below the 1/256 px sampling grid.
+    const float ax = static_cast<float>(a.x()), ay = static_cast<float>(a.y()), az = static_cast<float>(a.z());
+    const float bx = static_cast<float>(b.x()), by = static_cast<float>(b.y()), bz = static_cast<float>(b.z());
+    for (int u = 0; u < width; ++u) {
+      const float w = az + u * bz;
+      const float inv = w > 0 ? 1.0f / w : kNaN;
+      xs[u] = (ax + u * bx) * inv;
+      ys[u] = (ay + u * by) * inv;
+    }
+    return;
+  }
+  for (int u = 0; u < width; ++u) {
+    const std::optional<Eigen::Vector2d> s = ScenePixel(u, v);
+    xs[u] = s ? static_cast<float>(s->x()) : kNaN;
+    ys[u] = s ? static_cast<float>(s->y()) : kNaN;
+  }
+}
+
+namespace {
+
+// Fixed-point bilinear weights for integer images: 8 fractional bits per axis, so a weight product
+// is at most 2^16 and a 16-bit sample times 2^16 still fits in uint32.
+constexpr int kFracBits = 8;
+constexpr int kFracOne = 1 << kFracBits;
+
+template <typename T>
+inline T RoundFixed(uint32_t acc) {
+  return static_cast<T>((acc + (1u << (2 * kFracBits - 1))) >> (2 * kFracBits));
+}
+
+// One row of bilinear samples. Taps outside the scene read as 0.
+template <typename T, int kCn>
+void BilinearRowInt(const cv::Mat& scene, const float* xs, const float* ys, int width, int cn_runtime, T* out) {
+  const int cn = kCn > 0 ? kCn : cn_runtime;
+  const int sw = scene.cols, sh = scene.rows;
+  const size_t step = scene.step1();
+  const T* base = scene.ptr<T>();
+  for (int u = 0; u < width; ++u, out += cn) {
+    const float x = xs[u], y = ys[u];
+    if (!(x > -1.0f && x < static_cast<float>(sw) && y > -1.0f && y < static_cast<float>(sh))) {
+      for (int c = 0; c < cn; ++c) out[c] = 0;
+      continue;
+    }
+    const int xi = cvRound(x * kFracOne), yi = cvRound(y * kFracOne);
+    const int ix = xi >> kFracBits, iy = yi >> kFracBits;  // arithmetic shift: floor
+    const uint32_t fx = xi & (kFracOne - 1), fy = yi & (kFracOne - 1);
+    const uint32_t w00 = (kFracOne - fx) * (kFracOne - fy), w01 = fx * (kFracOne - fy);
+    const uint32_t w10 = (kFracOne - fx) * fy, w11 = fx * fy;
+    if (ix >= 0 && iy >= 0 && ix < sw - 1 && iy < sh - 1) {
+      const T* p0 = base + iy * step + static_cast<size_t>(ix) * cn;
+      const T* p1 = p0 + step;
+      for (int c = 0; c < cn; ++c) {
+        out[c] = RoundFixed<T>(p0[c] * w00 + p0[c + cn] * w01 + p1[c] * w10 + p1[c + cn] * w11);
+      }
+      continue;
+    }
+    const bool x0 = ix >= 0 && ix < sw, x1 = ix + 1 >= 0 && ix + 1 < sw;
+    const bool y0 = iy >= 0 && iy < sh, y1 = iy + 1 >= 0 && iy + 1 < sh;
+    for (int c = 0; c < cn; ++c) {
+      uint32_t acc = 0;
+      if (y0 && x0) acc += base[iy * step + static_cast<size_t>(ix) * cn + c] * w00;
+      if (y0 && x1) acc += base[iy * step + static_cast<size_t>(ix + 1) * cn + c] * w01;
+      if (y1 && x0) acc += base[(iy + 1) * step + static_cast<size_t>(ix) * cn + c] * w10;
+      if (y1 && x1) acc += base[(iy + 1) * step + static_cast<size_t>(ix + 1) * cn + c] * w11;
+      out[c] = RoundFixed<T>(acc);
+    }
+  }
+}
+
+void BilinearRowFloat(const cv::Mat& scene, const float* xs, const float* ys, int width, float* out) {
+  const int cn = scene.channels();
+  const int sw = scene.cols, sh = scene.rows;
+  const size_t step = scene.step1();
+  const float* base = scene.ptr<float>();
+  for (int u = 0; u < width; ++u, out += cn) {
+    const float x = xs[u], y = ys[u];
+    for (int c = 0; c < cn; ++c) out[c] = 0.0f;
+    if (!(x > -1.0f && x < static_cast<float>(sw) && y > -1.0f && y < static_cast<float>(sh))) continue;
+    const int ix = static_cast<int>(std::floor(x)), iy = static_cast<int>(std::floor(y));
+    const float fx = x - ix, fy = y - iy;
+    const float w[2][2] = {{(1 - fx) * (1 - fy), fx * (1 - fy)}, {(1 - fx) * fy, fx * fy}};
+    for (int dy = 0; dy < 2; ++dy) {
+      const int yy = iy + dy;
+      if (yy < 0 || yy >= sh) continue;
+      for (int dx = 0; dx < 2; ++dx) {
+        const int xx = ix + dx;
+        if (xx < 0 || xx >= sw) continue;
+        const float* p = base + yy * step + static_cast<size_t>(xx) * cn;
+        for (int c = 0; c < cn; ++c) out[c] += w[dy][dx] * p[c];
+      }
+    }
+  }
+}
+
+// OpenCV's cubic convolution kernel (A = -0.75), the one INTER_CUBIC uses.
+inline void CubicWeights(float t, float w[4]) {
+  constexpr float kA = -0.75f;
+  w[0] = ((kA * (t + 1) - 5 * kA) * (t + 1) + 8 * kA) * (t + 1) - 4 * kA;
+  w[1] = ((kA + 2) * t - (kA + 3)) * t * t + 1;
+  w[2] = ((kA + 2) * (1 - t) - (kA + 3)) * (1 - t) * (1 - t) + 1;
+  w[3] = 1.0f - w[0] - w[1] - w[2];
+}
+
+template <typename T>
+void BicubicRow(const cv::Mat& scene, const float* xs, const float* ys, int width, T* out) {
+  const int cn = scene.channels();
+  const int sw = scene.cols, sh = scene.rows;
+  const size_t step = scene.step1();
+  const T* base = scene.ptr<T>();
+  float acc[4];
+  for (int u = 0; u < width; ++u, out += cn) {
+    const float x = xs[u], y = ys[u];
+    if (!(x > -2.0f && x < static_cast<float>(sw + 1) && y > -2.0f && y < static_cast<float>(sh + 1))) {
+      for (int c = 0; c < cn; ++c) out[c] = 0;
+      continue;
+    }
+    const int ix = static_cast<int>(std::floor(x)), iy = static_cast<int>(std::floor(y));
+    float wx[4], wy[4];
+    CubicWeights(x - ix, wx);
+    CubicWeights(y - iy, wy);
+    for (int c = 0; c < cn; ++c) acc[c] = 0.0f;
+    for (int dy = 0; dy < 4; ++dy) {
+      const int yy = iy - 1 + dy;
+      if (yy < 0 || yy >= sh) continue;
+      for (int dx = 0; dx < 4; ++dx) {
+        const int xx = ix - 1 + dx;
+        if (xx < 0 || xx >= sw) continue;
+        const float w = wy[dy] * wx[dx];
+        const T* p = base + yy * step + static_cast<size_t>(xx) * cn;
+        for (int c = 0; c < cn; ++c) acc[c] += w * static_cast<float>(p[c]);
+      }
+    }
+    for (int c = 0; c < cn; ++c) out[c] = cv::saturate_cast<T>(acc[c]);
+  }
+}
+
+void SampleRow(const cv::Mat& scene, const float* xs, const float* ys, int width, Interpolation interpolation,
+               uchar* out) {
+  const int depth = scene.depth(), cn = scene.channels();
+  if (interpolation == Interpolation::kBicubic) {
+    if (depth == CV_8U) return BicubicRow<uint8_t>(scene, xs, ys, width, out);
+    if (depth == CV_16U) return BicubicRow<uint16_t>(scene, xs, ys, width, reinterpret_cast<uint16_t*>(out));
+    return BicubicRow<float>(scene, xs, ys, width, reinterpret_cast<float*>(out));
+  }
+  if (depth == CV_8U) {
+    if (cn == 3) return BilinearRowInt<uint8_t, 3>(scene, xs, ys, width, cn, out);
+    if (cn == 1) return BilinearRowInt<uint8_t, 1>(scene, xs, ys, width, cn, out);
+    return BilinearRowInt<uint8_t, 0>(scene, xs, ys, width, cn, out);
+  }
+  if (depth == CV_16U) {
+    auto* out16 = reinterpret_cast<uint16_t*>(out);
+    if (cn == 3) return BilinearRowInt<uint16_t, 3>(scene, xs, ys, width, cn, out16);
+    if (cn == 1) return BilinearRowInt<uint16_t, 1>(scene, xs, ys, width, cn, out16);
+    return BilinearRowInt<uint16_t, 0>(scene, xs, ys, width, cn, out16);
+  }
+  BilinearRowFloat(scene, xs, ys, width, reinterpret_cast<float*>(out));
+}
+
+}  // namespace
+
+void RenderFrame(const cv::Mat& scene, const FrameGeometry& geometry, Interpolation interpolation, cv::Mat* out) {
+  SHUTTERLAB_CHECK(!scene.empty()) << "empty scene";
+  const int depth = scene.depth();
+  SHUTTERLAB_CHECK(depth == CV_8U || depth == CV_16U || depth == CV_32F) << "scene must be 8U, 16U or 32F";
+  SHUTTERLAB_CHECK(scene.channels() <= 4) << "scene has more than 4 channels";
+  const int width = geometry.camera().width, height = geometry.camera().height;
+  out->create(height, width, scene.type());
+  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+    std::vector<float> xs(width), ys(width);
+    for (int v = rows.start; v < rows.end; ++v) {
+      geometry.SceneRow(v, xs.data(), ys.data());
+      SampleRow(scene, xs.data(), ys.data(), width, interpolation, out->ptr(v));
+    }
+  });
+}
+
+cv::Mat DisplacementField(const FrameGeometry& geometry) {
+  const int width = geometry.camera().width, height = geometry.camera().height;
+  cv::Mat field(height, width, CV_32FC2);
+  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      auto* d = field.ptr<cv::Vec2f>(v);
+      for (int u = 0; u < width; ++u) {
+        const std::optional<Eigen::Vector2d> ref = geometry.RefPixel(u, v);
+        d[u] = ref ? cv::Vec2f(static_cast<float>(ref->x() - u), static_cast<float>(ref->y() - v))
+                   : cv::Vec2f(std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::quiet_NaN());
+      }
+    }
+  });
+  return field;
+}
+
+namespace {
+
+double ConvexPolygonDiameter(const std::vector<cv::Point2f>& hull) {
+  const size_t n = hull.size();
+  auto dist2 = [&](size_t a, size_t b) {
+    const double dx = double{hull[a].x} - hull[b].x, dy = double{hull[a].y} - hull[b].y;
+    return dx * dx + dy * dy;
+  };
+  // Twice the area of triangle (a, b, c), unsigned.
+  auto area2 = [&](size_t a, size_t b, size_t c) {
+    const double abx = double{hull[b].x} - hull[a].x, aby = double{hull[b].y} - hull[a].y;
+    const double acx = double{hull[c].x} - hull[a].x, acy = double{hull[c].y} - hull[a].y;
+    return std::abs(abx * acy - aby * acx);
+  };
+  if (n < 2) return 0.0;
+  if (n == 2) return std::sqrt(dist2(0, 1));
+  double best = 0.0;
+  size_t j = 1;
+  for (size_t i = 0; i < n; ++i) {
+    const size_t next = (i + 1) % n;
+    // Advance j to the vertex farthest from edge (i, next): the antipodal vertex of that edge.
+    for (size_t steps = 0; steps < n && area2(i, next, (j + 1) % n) > area2(i, next, j); ++steps) j = (j + 1) % n;
+    best = std::max({best, dist2(i, j), dist2(next, j)});
+  }
+  return std::sqrt(best);
+}
+
+}  // namespace
+
+double FrameDistortionPx(const cv::Mat& displacement) {
+  SHUTTERLAB_CHECK(displacement.type() == CV_32FC2) << "displacement field must be CV_32FC2";
+  double d_max = 0.0;
+  std::vector<cv::Point2f> column, hull;
+  for (int u = 0; u < displacement.cols; ++u) {
+    column.clear();
+    for (int v = 0; v < displacement.rows; ++v) {
+      const cv::Vec2f d = displacement.at<cv::Vec2f>(v, u);
+      if (std::isfinite(d[0]) && std::isfinite(d[1])) column.emplace_back(d[0], d[1]);
+    }
+    if (column.size() < 2) continue;
+    // The diameter of a point set is attained between two vertices of its convex hull; rotating
+    // calipers (Shamos 1978) find it in O(h): the hull of a smooth field's column has many vertices.
+    cv::convexHull(column, hull);
+    d_max = std::max(d_max, ConvexPolygonDiameter(hull));
+  }
+  return d_max;
+}
+
+}  // namespace shutterlab

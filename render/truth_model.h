@@ -1,0 +1,80 @@
+#pragma once
+// The TRUE sensor model a render uses, and the camera motion it implies for each frame.
+//
+// The declared model (camera.json, RigModel) is what a dataset says about itself; `render --inject`
+// makes the truth differ from it by the effects of FORMATS.md's table. Everything the renderer and
+// its ground truth need about time and motion is computed here, once per frame.
+//
+// Orientation choice (documented in FORMATS.md terms): the world frame is re-anchored for every
+// frame so that the frame's row 0 (the top row) looks exactly nadir:
+//   world_from_cam(t) = R_int(t_0)^-1 * R_int(t),
+// R_int the SO(3) integration of the true body rates from the first gyro sample, t_0 the true
+// capture time of row 0. A frame far into a flight therefore never drifts off the scene, and the
+// reference image of every frame is the same nadir view. The camera centre is likewise re-anchored:
+// c(t) = velocity_mps * (t - t_0), zero at row 0.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "render/camera.h"
+#include "sim/gyro_trace.h"
+#include "sim/integrate.h"
+
+namespace shutterlab {
+
+// The rig as it really is, plus the gyro errors that camera.json cannot declare.
+struct TrueModel {
+  RigModel rig;  // true intrinsics, distortion, readout, direction, R_CG, time offset, velocity
+  // True gyro rate (gyro axes) = gyro_scale (per axis) * (logged rate - gyro_bias_rad_s).
+  Eigen::Vector3d gyro_scale = Eigen::Vector3d::Ones();
+  Eigen::Vector3d gyro_bias_rad_s = Eigen::Vector3d::Zero();
+  // Gyro clock = camera clock * (1 + clock_rate_ppm * 1e-6) + rig.time_offset_s.
+  double clock_rate_ppm = 0.0;
+
+  // Throws std::invalid_argument naming the first nonsensical field.
+  void Check() const;
+  // The true rate in the camera frame for a logged gyro-axis rate: R_CG * scale * (w - bias).
+  Eigen::Vector3d CamRate(const Eigen::Vector3d& logged_omega_rad_s) const;
+  // Gyro-clock seconds after t_first_row_ns (on the gyro clock) at which image row `row` is captured,
+  // for a frame whose first-read row is at camera time t_first_row_ns.
+  double RowGyroOffsetS(int64_t t_first_row_ns, double row) const;
+};
+
+// The effect names of FORMATS.md's table, in its order.
+const std::vector<std::string>& InjectionNames();
+
+// Applies one `NAME=VALUE` effect to the true model and returns the value as truth.json records it
+// (FORMATS.md units). VALUE is JSON ("[1.01,1,1]", "{\"k1\":-0.1}") or comma-separated numbers
+// ("1.01,1,1"; gyro_to_camera: 9 numbers, row-major; lens_distortion: k1[,k2[,p1,p2[,k3]]]) or, for
+// readout_direction, a bare word. Throws std::invalid_argument for an unknown name or a bad value.
+nlohmann::json ApplyInjection(const std::string& name_equals_value, TrueModel* model);
+
+// Per-row camera pose of one frame (see the header comment for the frame anchoring).
+struct FrameMotion {
+  std::vector<Eigen::Matrix3d> world_from_cam;   // one per image row v, at the row's capture time
+  std::vector<Eigen::Vector3d> cam_center_m;     // one per image row: c(t_v), world frame, m
+  Eigen::Matrix3d world_from_ref = Eigen::Matrix3d::Identity();  // R(t_0), the reference view
+  Eigen::Vector3d ref_center_m = Eigen::Vector3d::Zero();        // c(t_0)
+  bool HasTranslation() const;  // any row centre differs from the reference centre
+  // A global-shutter frame: every row at the reference pose (renders the reference image).
+  FrameMotion Reference() const;
+};
+
+// Integrates the true body rates of a logged gyro trace once, for all frames of a flight.
+class CameraMotion {
+ public:
+  CameraMotion(const GyroTrace& logged, const TrueModel& model);
+  // The motion of a frame whose first-read row is captured at camera time t_first_row_ns.
+  // Throws std::out_of_range when the frame's readout lies outside the gyro trace.
+  FrameMotion Frame(int64_t t_first_row_ns) const;
+  const TrueModel& model() const { return model_; }
+
+ private:
+  TrueModel model_;
+  OrientationTrace world_from_cam_;  // R_int, camera frame, gyro clock
+};
+
+}  // namespace shutterlab

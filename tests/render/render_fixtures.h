@@ -1,0 +1,61 @@
+#pragma once
+// Small fixtures shared by the render tests: rigs, constant-rate gyro traces, synthetic textures.
+
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "render/camera.h"
+#include "sim/gyro_trace.h"
+
+namespace shutterlab::test {
+
+// A small nadir rig: width x height, f = 300 px, principal point at the centre, 20 ms readout.
+inline RigModel SmallRig(int width = 96, int height = 72) {
+  RigModel rig;
+  rig.camera.width = width;
+  rig.camera.height = height;
+  rig.camera.fx = 300.0;
+  rig.camera.fy = 310.0;
+  rig.camera.cx = (width - 1) / 2.0;
+  rig.camera.cy = (height - 1) / 2.0;
+  rig.shutter.readout_s = 0.020;
+  rig.altitude_m = 40.0;
+  return rig;
+}
+
+// Constant logged rate (gyro axes) from t0_s for duration_s at rate_hz; times are exact integers.
+inline GyroTrace ConstantRateTrace(const Eigen::Vector3d& omega_rad_s, double t0_s = 0.0, double duration_s = 2.0,
+                                   double rate_hz = 1000.0) {
+  std::vector<GyroSample> samples;
+  const int64_t period_ns = static_cast<int64_t>(std::llround(1e9 / rate_hz));
+  const int64_t t0_ns = SecondsToNs(t0_s);
+  const int64_t n = static_cast<int64_t>(std::llround(duration_s * rate_hz));
+  for (int64_t k = 0; k <= n; ++k) samples.push_back({t0_ns + k * period_ns, omega_rad_s});
+  return GyroTrace(std::move(samples));
+}
+
+// A smooth random texture (blurred noise, fixed seed): band-limited, so bilinear sampling is accurate.
+inline cv::Mat SmoothTexture(cv::Size size, int type, uint64_t seed = 7, double blur_sigma_px = 2.0) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+  const int cn = CV_MAT_CN(type);
+  cv::Mat noise(size, CV_32FC(cn));
+  for (int v = 0; v < size.height; ++v) {
+    float* row = noise.ptr<float>(v);
+    for (int i = 0; i < size.width * cn; ++i) row[i] = uniform(rng);
+  }
+  cv::GaussianBlur(noise, noise, cv::Size(0, 0), blur_sigma_px);
+  cv::normalize(noise, noise, 0.0, 1.0, cv::NORM_MINMAX);
+  const double scale = CV_MAT_DEPTH(type) == CV_8U ? 255.0 : CV_MAT_DEPTH(type) == CV_16U ? 65535.0 : 1.0;
+  cv::Mat out;
+  noise.convertTo(out, type, scale);
+  return out;
+}
+
+}  // namespace shutterlab::test

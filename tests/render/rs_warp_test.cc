@@ -1,0 +1,412 @@
+#include "render/rs_warp.h"
+
+#include <cmath>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "render/truth_model.h"
+#include "tests/render/render_fixtures.h"
+#include "tests/test_util.h"
+
+namespace shutterlab {
+namespace {
+
+using test::ConstantRateTrace;
+using test::SmallRig;
+using test::SmoothTexture;
+
+// Known-answer tolerance on the double-precision truth: only rounding (1e-10 px) separates the
+// library from the closed form; 1e-6 px is the brief's bar.
+constexpr double kTruthTolPx = 1e-6;
+// The EXR field is float32: ~1e-6 relative on displacements of tens of pixels.
+constexpr double kFloatFieldTolPx = 1e-4;
+// No motion at all: K^-1 then K leaves only double rounding.
+constexpr double kRoundingTolPx = 1e-12;
+
+FrameGeometry Geometry(const TrueModel& model, const GyroTrace& logged, double t_first_row_s, cv::Size scene) {
+  const CameraMotion motion(logged, model);
+  return FrameGeometry(model.rig.camera, model.rig.altitude_m, motion.Frame(SecondsToNs(t_first_row_s)), scene);
+}
+
+TrueModel Truth(const RigModel& rig) {
+  TrueModel model;
+  model.rig = rig;
+  return model;
+}
+
+TEST(RsWarp, IdentityMotionIsSceneCrop) {
+  const RigModel rig = SmallRig(96, 72);  // principal point (47.5, 35.5)
+  const cv::Size scene_size(160, 120);    // centre (79.5, 59.5): the view is the crop at (32, 24)
+  const GyroTrace still = ConstantRateTrace(Eigen::Vector3d::Zero());
+  const FrameGeometry geometry = Geometry(Truth(rig), still, 0.5, scene_size);
+  const FrameGeometry reference(rig.camera, rig.altitude_m, geometry.motion().Reference(), scene_size);
+  ASSERT_TRUE(geometry.RotationOnly());
+  for (int type : {CV_8UC3, CV_16UC1, CV_32FC1, CV_8UC4}) {
+    const cv::Mat scene = SmoothTexture(scene_size, type);
+    const cv::Mat crop = scene(cv::Rect(32, 24, 96, 72));
+    for (Interpolation interpolation : {Interpolation::kBilinear, Interpolation::kBicubic}) {
+      cv::Mat rs, ref;
+      RenderFrame(scene, geometry, interpolation, &rs);
+      RenderFrame(scene, reference, interpolation, &ref);
+      ASSERT_EQ(rs.type(), type);
+      EXPECT_EQ(cv::norm(rs, crop, cv::NORM_INF), 0.0) << "type " << type;
+      EXPECT_EQ(cv::norm(ref, crop, cv::NORM_INF), 0.0) << "type " << type;
+    }
+  }
+  const cv::Mat field = DisplacementField(geometry);
+  EXPECT_LE(cv::norm(field, cv::NORM_INF), kRoundingTolPx);
+  EXPECT_LE(FrameDistortionPx(field), kRoundingTolPx);
+}
+
+TEST(RsWarp, ConstantRateAboutXDisplacesPrincipalPointByFyTan) {
+  RigModel rig = SmallRig(96, 73);  // odd height: the principal point (47.5, 36) lies on a row
+  const double omega_rad_s = 0.8;
+  const GyroTrace trace = ConstantRateTrace(Eigen::Vector3d(omega_rad_s, 0, 0));
+  for (double readout_s : {0.010, 0.030}) {
+    rig.shutter.readout_s = readout_s;
+    const FrameGeometry geometry = Geometry(Truth(rig), trace, 0.7, cv::Size(300, 300));
+    const int row = 36;
+    const double dt_s = row * readout_s / rig.camera.height;
+    // p_ref ~ K Rx(w dt) (0, 0, 1) = K (0, -sin, cos): the centre moves up by fy tan(w dt).
+    const Eigen::Vector2d ref = *geometry.RefPixel(rig.camera.cx, row);
+    EXPECT_NEAR(ref.x() - rig.camera.cx, 0.0, kTruthTolPx);
+    EXPECT_NEAR(ref.y() - row, -rig.camera.fy * std::tan(omega_rad_s * dt_s), kTruthTolPx);
+    const cv::Mat field = DisplacementField(geometry);
+    // Column 47 neighbours the centre; its row-36 value is the closed form at u = 47 (x shift ~ 0).
+    EXPECT_NEAR(field.at<cv::Vec2f>(row, 47)[1], -rig.camera.fy * std::tan(omega_rad_s * dt_s), 1e-2);
+    // Row 0 is the reference time: no displacement at all.
+    EXPECT_LE(cv::norm(field.row(0), cv::NORM_INF), kRoundingTolPx);
+  }
+}
+
+// ---- An independent evaluation of FORMATS.md's model, written from the text, for a constant
+// logged rate (so that R(t) has a closed form), using OpenCV's own distortion code.
+struct OracleParams {
+  Eigen::Matrix3d cam_from_gyro = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d scale = Eigen::Vector3d::Ones(), bias = Eigen::Vector3d::Zero();
+  double time_offset_s = 0.0, readout_s = 0.0, ppm = 0.0;
+  bool bottom_to_top = false;
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+  std::array<double, 5> dist{};
+};
+
+Eigen::Vector2d OracleRefPixel(const RigModel& declared, const OracleParams& o, const Eigen::Vector3d& logged_w,
+                               double t_first_row_s, double u, int v) {
+  const PinholeCamera& cam = declared.camera;
+  const int h = cam.height;
+  auto read_index = [&](int row) { return o.bottom_to_top ? h - 1 - row : row; };
+  auto gyro_time = [&](int row) {
+    const double t_cam = t_first_row_s + read_index(row) * o.readout_s / h;
+    return t_cam * (1 + o.ppm * 1e-6) + o.time_offset_s;
+  };
+  auto cam_time = [&](int row) { return t_first_row_s + read_index(row) * o.readout_s / h; };
+  const Eigen::Vector3d w_cam = o.cam_from_gyro * (o.scale.cwiseProduct(logged_w - o.bias));
+  const double angle = w_cam.norm() * (gyro_time(v) - gyro_time(0));
+  const Eigen::Matrix3d r_v =
+      w_cam.norm() > 0 ? Eigen::AngleAxisd(angle, w_cam.normalized()).toRotationMatrix() : Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d c_v = o.velocity * (cam_time(v) - cam_time(0));
+  const cv::Matx33d k(cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);
+  const std::vector<double> dist(o.dist.begin(), o.dist.end());
+  std::vector<cv::Point2d> in = {{u, static_cast<double>(v)}}, undistorted;
+  cv::undistortPoints(in, undistorted, k, dist, cv::noArray(), cv::noArray(),
+                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-16));
+  const Eigen::Vector3d ray = r_v * Eigen::Vector3d(undistorted[0].x, undistorted[0].y, 1.0);
+  const double s = (declared.altitude_m - c_v.z()) / ray.z();
+  const Eigen::Vector3d x = c_v + s * ray;  // ground point; the reference pose is identity at c = 0
+  std::vector<cv::Point3d> points = {{x.x(), x.y(), x.z()}};
+  std::vector<cv::Point2d> projected;
+  cv::projectPoints(points, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), k, dist, projected);
+  return Eigen::Vector2d(projected[0].x, projected[0].y);
+}
+
+TEST(RsWarp, TruthMatchesIndependentModelForEveryEffect) {
+  RigModel declared = SmallRig(96, 72);
+  declared.time_offset_s = 0.001;
+  const Eigen::Vector3d logged_w(0.3, -0.5, 0.7);
+  const GyroTrace trace = ConstantRateTrace(logged_w);
+  const double t_first_row_s = 0.5;
+  OracleParams base;
+  base.time_offset_s = declared.time_offset_s;
+  base.readout_s = declared.shutter.readout_s;
+  struct Case {
+    std::vector<std::string> injections;
+    std::function<void(OracleParams*)> apply;
+  };
+  const std::vector<Case> cases = {
+      {{}, [](OracleParams*) {}},
+      {{"time_offset=0.0042"}, [](OracleParams* o) { o->time_offset_s = 0.0042; }},
+      {{"readout_time=0.033"}, [](OracleParams* o) { o->readout_s = 0.033; }},
+      {{"gyro_to_camera=[[0,-1,0],[1,0,0],[0,0,1]]"},
+       [](OracleParams* o) { o->cam_from_gyro << 0, -1, 0, 1, 0, 0, 0, 0, 1; }},
+      {{"gyro_scale=1.02,0.97,1.01"}, [](OracleParams* o) { o->scale = Eigen::Vector3d(1.02, 0.97, 1.01); }},
+      {{"gyro_bias=0.01,-0.02,0.005"}, [](OracleParams* o) { o->bias = Eigen::Vector3d(0.01, -0.02, 0.005); }},
+      {{"velocity=3,-2,0.5"}, [](OracleParams* o) { o->velocity = Eigen::Vector3d(3, -2, 0.5); }},
+      {{"lens_distortion={\"k1\":-0.3,\"k2\":0.1}"}, [](OracleParams* o) { o->dist = {-0.3, 0.1, 0, 0, 0}; }},
+      {{"readout_direction=bottom_to_top"}, [](OracleParams* o) { o->bottom_to_top = true; }},
+      {{"clock_rate=200"}, [](OracleParams* o) { o->ppm = 200; }},
+      {{"gyro_scale=1.02,0.97,1.01", "gyro_bias=0.01,-0.02,0.005", "velocity=3,-2,0.5", "clock_rate=-150",
+        "lens_distortion=-0.2,0.05,0.001,-0.002,0.01", "readout_direction=bottom_to_top", "time_offset=-0.003"},
+       [](OracleParams* o) {
+         o->scale = Eigen::Vector3d(1.02, 0.97, 1.01);
+         o->bias = Eigen::Vector3d(0.01, -0.02, 0.005);
+         o->velocity = Eigen::Vector3d(3, -2, 0.5);
+         o->ppm = -150;
+         o->dist = {-0.2, 0.05, 0.001, -0.002, 0.01};
+         o->bottom_to_top = true;
+         o->time_offset_s = -0.003;
+       }},
+  };
+  std::mt19937_64 rng(42);
+  std::uniform_real_distribution<double> random_u(0.0, declared.camera.width - 1.0);
+  std::uniform_int_distribution<int> random_v(0, declared.camera.height - 1);
+  for (const Case& c : cases) {
+    TrueModel truth = Truth(declared);
+    std::string name;
+    for (const std::string& injection : c.injections) {
+      ApplyInjection(injection, &truth);
+      name += injection + " ";
+    }
+    OracleParams oracle = base;
+    c.apply(&oracle);
+    const FrameGeometry geometry = Geometry(truth, trace, t_first_row_s, cv::Size(400, 400));
+    const cv::Mat field = DisplacementField(geometry);
+    double largest_px = 0.0;
+    for (int i = 0; i < 200; ++i) {
+      const double u = i < 100 ? random_u(rng) : std::floor(random_u(rng));
+      const int v = random_v(rng);
+      const Eigen::Vector2d expected = OracleRefPixel(declared, oracle, logged_w, t_first_row_s, u, v);
+      const Eigen::Vector2d got = *geometry.RefPixel(u, v);
+      ASSERT_NEAR(got.x(), expected.x(), kTruthTolPx) << name << " at (" << u << ", " << v << ")";
+      ASSERT_NEAR(got.y(), expected.y(), kTruthTolPx) << name << " at (" << u << ", " << v << ")";
+      largest_px = std::max(largest_px, (expected - Eigen::Vector2d(u, v)).norm());
+      if (u == std::floor(u)) {
+        const cv::Vec2f d = field.at<cv::Vec2f>(v, static_cast<int>(u));
+        EXPECT_NEAR(d[0], expected.x() - u, kFloatFieldTolPx) << name;
+        EXPECT_NEAR(d[1], expected.y() - v, kFloatFieldTolPx) << name;
+      }
+    }
+    EXPECT_GT(largest_px, 0.05) << name << ": the case must move pixels to test anything";
+  }
+}
+
+TEST(RsWarp, BottomToTopMirrorsTheTiming) {
+  // With a constant rate, row v of a bottom_to_top frame is captured v*r/H BEFORE row 0: exactly a
+  // top_to_bottom frame turning the other way.
+  RigModel rig = SmallRig(64, 48);
+  const Eigen::Vector3d omega(0.4, -0.9, 0.3);
+  const FrameGeometry forward = Geometry(Truth(rig), ConstantRateTrace(-omega), 0.6, cv::Size(300, 300));
+  rig.shutter.direction = ReadoutDirection::kBottomToTop;
+  const FrameGeometry mirrored = Geometry(Truth(rig), ConstantRateTrace(omega), 0.6, cv::Size(300, 300));
+  double largest_px = 0.0;
+  for (int v = 0; v < rig.camera.height; v += 3) {
+    for (int u = 0; u < rig.camera.width; u += 5) {
+      const Eigen::Vector2d a = *forward.RefPixel(u, v), b = *mirrored.RefPixel(u, v);
+      EXPECT_NEAR((a - b).norm(), 0.0, kTruthTolPx) << u << "," << v;
+      largest_px = std::max(largest_px, (a - Eigen::Vector2d(u, v)).norm());
+    }
+  }
+  EXPECT_GT(largest_px, 1.0);
+}
+
+TEST(RsWarp, ReadoutTimeScalesTheDisplacement) {
+  // Twice the readout at one rate is the same rotation per row as one readout at twice the rate.
+  RigModel rig = SmallRig(64, 48);
+  const Eigen::Vector3d omega(0.4, -0.9, 0.3);
+  rig.shutter.readout_s = 0.040;
+  const FrameGeometry slow_readout = Geometry(Truth(rig), ConstantRateTrace(omega), 0.6, cv::Size(300, 300));
+  rig.shutter.readout_s = 0.020;
+  const FrameGeometry fast_turn = Geometry(Truth(rig), ConstantRateTrace(2 * omega), 0.6, cv::Size(300, 300));
+  for (int v = 0; v < rig.camera.height; v += 3) {
+    for (int u = 0; u < rig.camera.width; u += 5) {
+      EXPECT_NEAR((*slow_readout.RefPixel(u, v) - *fast_turn.RefPixel(u, v)).norm(), 0.0, kTruthTolPx);
+    }
+  }
+  // And the displacement itself grows with the readout (first order: proportionally).
+  const double d_slow = FrameDistortionPx(DisplacementField(slow_readout));
+  rig.shutter.readout_s = 0.020;
+  const double d_fast = FrameDistortionPx(DisplacementField(Geometry(Truth(rig), ConstantRateTrace(omega), 0.6,
+                                                                      cv::Size(300, 300))));
+  EXPECT_NEAR(d_slow / d_fast, 2.0, 0.02);
+}
+
+TEST(RsWarp, VelocityAtAltitudeShiftsByVtFOverH) {
+  RigModel rig = SmallRig(64, 48);
+  rig.velocity_mps = Eigen::Vector3d(6.0, -4.0, 0.0);
+  const FrameGeometry geometry = Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d::Zero()), 0.6,
+                                          cv::Size(300, 300));
+  ASSERT_FALSE(geometry.RotationOnly());
+  const cv::Mat field = DisplacementField(geometry);
+  for (int v = 0; v < rig.camera.height; ++v) {
+    const double t_s = v * rig.shutter.readout_s / rig.camera.height;
+    for (int u = 0; u < rig.camera.width; u += 7) {
+      const Eigen::Vector2d d = *geometry.RefPixel(u, v) - Eigen::Vector2d(u, v);
+      EXPECT_NEAR(d.x(), rig.velocity_mps.x() * t_s * rig.camera.fx / rig.altitude_m, kTruthTolPx);
+      EXPECT_NEAR(d.y(), rig.velocity_mps.y() * t_s * rig.camera.fy / rig.altitude_m, kTruthTolPx);
+      EXPECT_NEAR(field.at<cv::Vec2f>(v, u)[0], d.x(), kFloatFieldTolPx);
+    }
+  }
+}
+
+TEST(RsWarp, HomographyRowsMatchThePerPixelModel) {
+  const RigModel rig = SmallRig(200, 150);
+  const FrameGeometry geometry = Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d(1.5, -2.0, 3.0)), 0.6,
+                                          cv::Size(2000, 1500));
+  ASSERT_TRUE(geometry.RotationOnly());
+  std::vector<float> xs(rig.camera.width), ys(rig.camera.width);
+  // float evaluation of the homography on a 2000 px scene: ~1e-4 px rounding.
+  constexpr double kFloatRowTolPx = 2e-3;
+  for (int v = 0; v < rig.camera.height; v += 7) {
+    geometry.SceneRow(v, xs.data(), ys.data());
+    for (int u = 0; u < rig.camera.width; ++u) {
+      const Eigen::Vector2d s = *geometry.ScenePixel(u, v);
+      ASSERT_NEAR(xs[u], s.x(), kFloatRowTolPx);
+      ASSERT_NEAR(ys[u], s.y(), kFloatRowTolPx);
+    }
+  }
+}
+
+// A frame seen through one fixed rotation: every row the same homography, as warpPerspective does.
+FrameGeometry FixedRotation(const RigModel& rig, const Eigen::Matrix3d& world_from_cam, cv::Size scene) {
+  FrameMotion motion;
+  motion.world_from_cam.assign(rig.camera.height, world_from_cam);
+  motion.cam_center_m.assign(rig.camera.height, Eigen::Vector3d::Zero());
+  return FrameGeometry(rig.camera, rig.altitude_m, motion, scene);
+}
+
+TEST(RsWarp, SamplingAgreesWithOpenCvWarpPerspective) {
+  const RigModel rig = SmallRig(120, 90);
+  const cv::Size scene_size(240, 200);
+  const FrameGeometry geometry =
+      FixedRotation(rig, Eigen::AngleAxisd(0.05, Eigen::Vector3d(0.3, -0.5, 0.8).normalized()).toRotationMatrix(),
+                    scene_size);
+  const cv::Mat scene = SmoothTexture(scene_size, CV_8UC3, 11, 1.0);
+  const Eigen::Matrix3d h = geometry.SceneFromImageHomography(0);
+  cv::Matx33d m;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) m(r, c) = h(r, c);
+  }
+  // OpenCV quantises coordinates to 1/32 px, we to 1/256 px: a level or two apart on 8-bit data.
+  const std::vector<std::pair<Interpolation, int>> kinds = {{Interpolation::kBilinear, cv::INTER_LINEAR},
+                                                            {Interpolation::kBicubic, cv::INTER_CUBIC}};
+  for (const auto& [ours, theirs] : kinds) {
+    cv::Mat rendered, expected;
+    RenderFrame(scene, geometry, ours, &rendered);
+    cv::warpPerspective(scene, expected, m, rendered.size(), theirs | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT);
+    cv::Mat diff;
+    cv::absdiff(rendered, expected, diff);
+    double max_level = 0;
+    cv::minMaxLoc(diff.reshape(1), nullptr, &max_level);
+    EXPECT_LE(max_level, 3.0);
+    EXPECT_LT(cv::mean(diff)[0], 0.5);
+  }
+}
+
+TEST(RsWarp, BorderOutsideTheSceneIsBlack) {
+  // A 40x30 scene behind a 96x72 frame with no motion: exactly the scene, surrounded by zeros.
+  const RigModel rig = SmallRig(96, 72);
+  const cv::Size scene_size(40, 30);  // centre (19.5, 14.5): frame pixel (u, v) sees (u - 28, v - 21)
+  const FrameGeometry geometry = Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d::Zero()), 0.5, scene_size);
+  const cv::Mat scene = SmoothTexture(scene_size, CV_8UC1) + 1;  // no zero inside the scene
+  for (Interpolation interpolation : {Interpolation::kBilinear, Interpolation::kBicubic}) {
+    cv::Mat rs;
+    RenderFrame(scene, geometry, interpolation, &rs);
+    cv::Mat expected = cv::Mat::zeros(72, 96, CV_8UC1);
+    scene.copyTo(expected(cv::Rect(28, 21, 40, 30)));
+    EXPECT_EQ(cv::norm(rs, expected, cv::NORM_INF), 0.0);
+  }
+}
+
+TEST(RsWarp, RenderedPairIsConsistentWithTheTruthField) {
+  // RS(p) and REF(p + d(p)) see the same ground point: with a smooth float scene they agree to the
+  // interpolation error of the bilinear kernel.
+  RigModel rig = SmallRig(160, 120);
+  rig.velocity_mps = Eigen::Vector3d(2.0, 1.0, 0.0);
+  const cv::Size scene_size(400, 320);
+  const FrameGeometry geometry = Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d(0.6, -0.8, 1.2)), 0.5,
+                                          scene_size);
+  const FrameGeometry reference(rig.camera, rig.altitude_m, geometry.motion().Reference(), scene_size);
+  const cv::Mat scene = SmoothTexture(scene_size, CV_32FC1, 3, 4.0);
+  cv::Mat rs, ref;
+  RenderFrame(scene, geometry, Interpolation::kBilinear, &rs);
+  RenderFrame(scene, reference, Interpolation::kBilinear, &ref);
+  const cv::Mat field = DisplacementField(geometry);
+  cv::Mat map(field.size(), CV_32FC2);
+  for (int v = 0; v < map.rows; ++v) {
+    for (int u = 0; u < map.cols; ++u) map.at<cv::Vec2f>(v, u) = field.at<cv::Vec2f>(v, u) + cv::Vec2f(u, v);
+  }
+  cv::Mat warped;
+  cv::remap(ref, warped, map, cv::noArray(), cv::INTER_LINEAR);
+  const cv::Rect interior(10, 10, rig.camera.width - 20, rig.camera.height - 20);
+  cv::Mat diff;
+  cv::absdiff(rs(interior), warped(interior), diff);
+  // Texture range 0..1 with a 4 px blur: bilinear's second-order error is ~1e-3.
+  EXPECT_LT(cv::mean(diff)[0], 3e-3);
+  // And a wrong field (zero) is clearly worse: the test can fail.
+  cv::absdiff(rs(interior), ref(interior), diff);
+  EXPECT_GT(cv::mean(diff)[0], 1e-2);
+}
+
+TEST(RsWarp, OutputDoesNotDependOnThreadCount) {
+  const RigModel rig = SmallRig(256, 192);
+  const cv::Size scene_size(600, 500);
+  const FrameGeometry geometry = Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d(0.6, -0.8, 1.2)), 0.5,
+                                          scene_size);
+  const cv::Mat scene = SmoothTexture(scene_size, CV_8UC3);
+  const int threads = cv::getNumThreads();
+  cv::Mat one, many;
+  cv::setNumThreads(1);
+  RenderFrame(scene, geometry, Interpolation::kBicubic, &one);
+  cv::setNumThreads(4);
+  RenderFrame(scene, geometry, Interpolation::kBicubic, &many);
+  cv::setNumThreads(threads);
+  EXPECT_EQ(cv::norm(one, many, cv::NORM_INF), 0.0);
+}
+
+TEST(FrameDistortion, MatchesBruteForceDiameter) {
+  std::mt19937_64 rng(5);
+  std::normal_distribution<float> normal(0.0f, 3.0f);
+  cv::Mat field(150, 7, CV_32FC2);
+  for (int v = 0; v < field.rows; ++v) {
+    for (int u = 0; u < field.cols; ++u) field.at<cv::Vec2f>(v, u) = cv::Vec2f(normal(rng) * (u + 1), normal(rng));
+  }
+  field.at<cv::Vec2f>(3, 2) = cv::Vec2f(NAN, NAN);  // undefined pixels are skipped
+  double brute = 0.0;
+  for (int u = 0; u < field.cols; ++u) {
+    for (int a = 0; a < field.rows; ++a) {
+      for (int b = a + 1; b < field.rows; ++b) {
+        const cv::Vec2f p = field.at<cv::Vec2f>(a, u), q = field.at<cv::Vec2f>(b, u);
+        const double n = std::hypot(double{p[0]} - q[0], double{p[1]} - q[1]);
+        if (std::isfinite(n)) brute = std::max(brute, n);
+      }
+    }
+  }
+  EXPECT_NEAR(FrameDistortionPx(field), brute, 1e-9 * brute);
+}
+
+TEST(FrameDistortion, SmoothFieldMatchesBruteForce) {
+  // A real field's columns are smooth curves whose hulls have many vertices: the calipers' hard case.
+  const RigModel rig = SmallRig(64, 48);
+  const cv::Mat field = DisplacementField(
+      Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d(2.0, -3.0, 4.0)), 0.5, cv::Size(400, 400)));
+  double brute = 0.0;
+  for (int u = 0; u < field.cols; ++u) {
+    for (int a = 0; a < field.rows; ++a) {
+      for (int b = a + 1; b < field.rows; ++b) {
+        const cv::Vec2f p = field.at<cv::Vec2f>(a, u), q = field.at<cv::Vec2f>(b, u);
+        brute = std::max(brute, std::hypot(double{p[0]} - q[0], double{p[1]} - q[1]));
+      }
+    }
+  }
+  EXPECT_GT(brute, 1.0);
+  EXPECT_NEAR(FrameDistortionPx(field), brute, 1e-9 * brute);
+}
+
+}  // namespace
+}  // namespace shutterlab
