@@ -1,5 +1,7 @@
 #include "app/trace_options.h"
 
+#include <cstdio>
+
 namespace shutterlab::app {
 
 void TraceOptions::Add(CLI::App* command, bool with_bias) {
@@ -15,7 +17,9 @@ void TraceOptions::Add(CLI::App* command, bool with_bias) {
   if (with_bias) {
     command->add_option("--bias", bias, "still segment for the bias, A:B seconds after the first sample")
         ->capture_default_str();
-    command->add_flag("--auto-bias", auto_bias, "detect the still segment automatically");
+    command->add_flag("--auto-bias", auto_bias,
+                      "detect the still segment automatically (longest stretch >= 2 s whose 0.1 s mean "
+                      "and variance stay at the quiet level); overrides --bias");
   }
 }
 
@@ -29,5 +33,12 @@ GyroReadOptions TraceOptions::ReadOptions() const {
 }
 
 GyroTrace TraceOptions::Load() const { return ReadGyro(path, ReadOptions()); }
+
+BiasSegment TraceOptions::Segment(const GyroTrace& trace) const {
+  if (!auto_bias) return ParseBiasSegment(bias);
+  const StillSegment still = DetectStillSegment(trace);
+  std::fprintf(stderr, "auto-bias: still segment %.3f:%.3f s\n", still.segment.begin_s, still.segment.end_s);
+  return still.segment;
+}
 
 }  // namespace shutterlab::app

@@ -7,6 +7,7 @@
 
 #include "sim/bias.h"
 #include "sim/gyro_io.h"
+#include "sim/still_detect.h"
 
 namespace shutterlab::app {
 
@@ -23,6 +24,10 @@ struct TraceOptions {
   void Add(CLI::App* command, bool with_bias);
   GyroReadOptions ReadOptions() const;
   GyroTrace Load() const;
+  // The bias segment for this trace: with --auto-bias the detected still segment
+  // (DetectStillSegment, default StillDetectOptions; one note "auto-bias: still segment A:B s" on
+  // stderr), otherwise --bias A:B. Throws std::invalid_argument when neither gives a segment.
+  BiasSegment Segment(const GyroTrace& trace) const;
 };
 
 }  // namespace shutterlab::app

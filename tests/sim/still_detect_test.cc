@@ -1,0 +1,173 @@
+#include "sim/still_detect.h"
+
+#include <cmath>
+#include <functional>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace shutterlab {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// The brief's requirement for a recovered still segment's ends.
+constexpr double kEdgeTolS = 0.050;
+
+struct Synth {
+  double rate_hz = 1000.0;
+  double duration_s = 12.0;
+  Eigen::Vector3d bias_rad_s = Eigen::Vector3d(0.012, -0.02, 0.004);
+  double noise_rad_s = 0.002;   // white noise per sample and axis
+  double lowpass_alpha = 1.0;   // 1: white; < 1: first-order low pass (correlated noise, like a DLPF)
+  double count_rad_s = 0.0;     // > 0: quantise to this step (raw counts)
+  uint64_t seed = 1;
+};
+
+// motion(t_s) is the true body rate; the gyro reads motion + bias + noise.
+GyroTrace Make(const Synth& o, const std::function<Eigen::Vector3d(double)>& motion) {
+  std::mt19937_64 rng(o.seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const int64_t period_ns = std::llround(1e9 / o.rate_hz);
+  const size_t n = static_cast<size_t>(o.duration_s * o.rate_hz);
+  std::vector<GyroSample> samples;
+  Eigen::Vector3d filtered = Eigen::Vector3d::Zero();
+  // Scale the driving noise so that the filtered noise keeps the std noise_rad_s.
+  const double drive = o.noise_rad_s * std::sqrt((2 - o.lowpass_alpha) / o.lowpass_alpha);
+  for (size_t k = 0; k < n; ++k) {
+    const int64_t t_ns = 1000000000LL + static_cast<int64_t>(k) * period_ns;
+    const double t_s = static_cast<double>(k) * period_ns * 1e-9;
+    const Eigen::Vector3d white(normal(rng), normal(rng), normal(rng));
+    filtered += o.lowpass_alpha * (drive * white - filtered);
+    Eigen::Vector3d w = motion(t_s) + o.bias_rad_s + filtered;
+    if (o.count_rad_s > 0) w = (w / o.count_rad_s).array().round().matrix() * o.count_rad_s;
+    samples.push_back({t_ns, w});
+  }
+  return GyroTrace(std::move(samples));
+}
+
+// Hand-held style motion outside [still_begin, still_end): sinusoids that start at zero rate at
+// the still segment's end (the hardest onset to see) and a step into stillness at its start.
+std::function<Eigen::Vector3d(double)> MotionOutside(double still_begin, double still_end) {
+  return [=](double t) -> Eigen::Vector3d {
+    if (t >= still_begin && t < still_end) return Eigen::Vector3d::Zero();
+    const double u = t - still_end;
+    return Eigen::Vector3d(0.3 * std::sin(2 * kPi * 0.7 * u), 0.2 * std::sin(2 * kPi * 1.3 * u),
+                           0.1 + 0.05 * std::sin(2 * kPi * 0.4 * u));
+  };
+}
+
+void ExpectSegment(const StillSegment& s, double begin_s, double end_s) {
+  EXPECT_NEAR(s.segment.begin_s, begin_s, kEdgeTolS);
+  EXPECT_NEAR(s.segment.end_s, end_s, kEdgeTolS);
+}
+
+TEST(StillDetect, FindsTheStillSegmentWithinFiftyMilliseconds) {
+  for (uint64_t seed = 1; seed <= 5; ++seed) {
+    Synth o;
+    o.seed = seed;
+    const GyroTrace trace = Make(o, MotionOutside(2.0, 6.0));
+    const StillSegment s = DetectStillSegment(trace);
+    ExpectSegment(s, 2.0, 6.0);
+    // The reference mean is the bias, to the noise of a 2 s mean (sigma / sqrt(2000) ~ 4.5e-5).
+    EXPECT_LE((s.quiet_mean_rad_s - o.bias_rad_s).cwiseAbs().maxCoeff(), 2.5e-4) << seed;
+  }
+}
+
+TEST(StillDetect, StillAtTheStartAsInThePaper) {
+  Synth o;
+  o.duration_s = 10.0;
+  const GyroTrace trace = Make(o, MotionOutside(0.0, 5.0));
+  const StillSegment s = DetectStillSegment(trace);
+  ExpectSegment(s, 0.0, 5.0);
+  EXPECT_EQ(s.first_sample, 0u);
+}
+
+TEST(StillDetect, StillAtTheEndRunsToTheLastSample) {
+  Synth o;
+  o.duration_s = 8.0;
+  const GyroTrace trace = Make(o, MotionOutside(5.0, 100.0));
+  ExpectSegment(DetectStillSegment(trace), 5.0, 8.0);
+}
+
+TEST(StillDetect, CorrelatedAndQuantisedNoise) {
+  // A 41 Hz-like low pass at 1 kHz (alpha 0.2) and MPU-9250 counts at +-250 deg/s.
+  Synth o;
+  o.lowpass_alpha = 0.2;
+  o.count_rad_s = kPi / 180.0 / 131.0;
+  o.noise_rad_s = 0.0015;
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    o.seed = seed;
+    ExpectSegment(DetectStillSegment(Make(o, MotionOutside(3.0, 7.5))), 3.0, 7.5);
+  }
+}
+
+TEST(StillDetect, SmallSlowMotionIsNotStill) {
+  // A 0.02 rad/s drift (ten times the noise, far below the motion above) breaks the still segment.
+  Synth o;
+  const GyroTrace trace = Make(o, [](double t) -> Eigen::Vector3d {
+    if (t < 2.0) return Eigen::Vector3d(0.5, 0, 0);
+    if (t >= 4.0 && t < 4.5) return Eigen::Vector3d(0, 0, 0.02);
+    if (t >= 9.0) return Eigen::Vector3d(0, -0.5, 0);
+    return Eigen::Vector3d::Zero();
+  });
+  // Still runs: 2-4 s and 4.5-9 s; the longest is the second.
+  ExpectSegment(DetectStillSegment(trace), 4.5, 9.0);
+}
+
+TEST(StillDetect, LongestOrFirst) {
+  Synth o;
+  o.duration_s = 16.0;
+  const GyroTrace trace = Make(o, [](double t) -> Eigen::Vector3d {
+    const bool still = (t >= 1.0 && t < 3.5) || (t >= 6.0 && t < 11.0);
+    return still ? Eigen::Vector3d::Zero() : Eigen::Vector3d(0.2 * std::sin(3 * t) + 0.3, 0.1, 0);
+  });
+  ExpectSegment(DetectStillSegment(trace), 6.0, 11.0);
+  StillDetectOptions first;
+  first.first = true;
+  ExpectSegment(DetectStillSegment(trace, first), 1.0, 3.5);
+  // With a 3 s minimum the first run is too short, and the second qualifies.
+  first.min_duration_s = 3.0;
+  ExpectSegment(DetectStillSegment(trace, first), 6.0, 11.0);
+}
+
+TEST(StillDetect, NoiseFreeTrace) {
+  Synth o;
+  o.noise_rad_s = 0.0;
+  o.duration_s = 6.0;
+  ExpectSegment(DetectStillSegment(Make(o, MotionOutside(1.0, 4.0))), 1.0, 4.0);
+}
+
+TEST(StillDetect, RejectsTracesWithoutStillness) {
+  Synth o;
+  o.duration_s = 6.0;
+  const GyroTrace moving = Make(o, [](double t) -> Eigen::Vector3d {
+    return Eigen::Vector3d(0.3 * std::sin(2 * kPi * 0.9 * t), 0.2 * std::cos(2 * kPi * 1.7 * t), 0.1 * t);
+  });
+  EXPECT_THROW(DetectStillSegment(moving), std::invalid_argument);
+  // Shorter than the window / than the minimum duration.
+  Synth short_trace;
+  short_trace.duration_s = 0.05;
+  EXPECT_THROW(DetectStillSegment(Make(short_trace, MotionOutside(0, 1))), std::invalid_argument);
+  short_trace.duration_s = 1.5;
+  EXPECT_THROW(DetectStillSegment(Make(short_trace, MotionOutside(0, 1))), std::invalid_argument);
+  StillDetectOptions bad;
+  bad.window_s = -1;
+  EXPECT_THROW(bad.Check(), std::invalid_argument);
+  bad = {};
+  bad.min_duration_s = 0.01;  // shorter than the window
+  EXPECT_THROW(bad.Check(), std::invalid_argument);
+}
+
+TEST(StillDetect, SegmentFeedsEstimateBias) {
+  Synth o;
+  const GyroTrace trace = Make(o, MotionOutside(2.0, 6.0));
+  const StillSegment s = DetectStillSegment(trace);
+  const BiasEstimate bias = EstimateBias(trace, s.segment);
+  EXPECT_EQ(bias.samples, s.end_sample - s.first_sample);
+  // Four seconds of 0.002 rad/s noise: the mean is within 5 standard errors (~1.6e-4) of the bias.
+  EXPECT_LE((bias.bias_rad_s - o.bias_rad_s).cwiseAbs().maxCoeff(), 1.6e-4);
+}
+
+}  // namespace
+}  // namespace shutterlab
