@@ -1,0 +1,90 @@
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "sim/gyro_io.h"
+#include "sim/raw_csv.h"
+#include "sim/text_file.h"
+#include "tests/test_util.h"
+
+namespace shutterlab {
+namespace {
+
+using test::RunShutterlab;
+
+// Counts lines of CLI output (a trailing newline ends the last line).
+size_t LineCount(const std::string& text) {
+  size_t n = 0;
+  for (char c : text) n += c == '\n';
+  return n + (!text.empty() && text.back() != '\n');
+}
+
+TEST(SynthCli, WritesATraceThatReadGyroReadsBack) {
+  test::TempDir dir;
+  const std::string out = dir / "still.csv";
+  const auto result = RunShutterlab("synth still --out " + out + " --duration 2 --rate 2000");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const GyroTrace trace = ReadGyro(out);
+  EXPECT_EQ(trace.size(), 4001u);
+  EXPECT_NEAR(trace.sampling().RateHz(), 2000.0, 1e-9);
+  EXPECT_NE(result.output.find("4001 samples"), std::string::npos) << result.output;
+}
+
+TEST(SynthCli, StepsToRawCountsWithASecondSensor) {
+  test::TempDir dir;
+  const std::string out = dir / "a.csv", out2 = dir / "b.csv";
+  const auto result = RunShutterlab("synth steps --turns 2 --angle 1 --out " + out + " --out2 " + out2 +
+                                    " --format raw --range 500 --time-unit ms");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("turn 2:"), std::string::npos) << result.output;
+  const GyroTrace a = ReadRawCsv(out, 500, TimeUnit::kMilliseconds);
+  const GyroTrace b = ReadRawCsv(out2, 500, TimeUnit::kMilliseconds);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_GT(a.size(), 3000u * 12);  // 6 s lead + two turns with 3 s still after each
+  EXPECT_EQ(a[0].t_ns, b[0].t_ns);
+  EXPECT_NE(ReadFileToString(out), ReadFileToString(out2));
+}
+
+TEST(SynthCli, SameSeedSameBytes) {
+  test::TempDir dir;
+  const std::string common = " flight --duration 7 --jitter 1e-6 --gap-period 2 --gap-duration 0.01 --out ";
+  ASSERT_EQ(RunShutterlab("synth --seed 5" + common + (dir / "a.csv")).exit_code, 0);
+  ASSERT_EQ(RunShutterlab("synth --seed 5" + common + (dir / "b.csv")).exit_code, 0);
+  ASSERT_EQ(RunShutterlab("synth --seed 6" + common + (dir / "c.csv")).exit_code, 0);
+  EXPECT_EQ(ReadFileToString(dir / "a.csv"), ReadFileToString(dir / "b.csv"));
+  EXPECT_NE(ReadFileToString(dir / "a.csv"), ReadFileToString(dir / "c.csv"));
+}
+
+TEST(SynthCli, IdealSensorWritesTheExactMotion) {
+  test::TempDir dir;
+  const std::string out = dir / "ideal.csv";
+  ASSERT_EQ(RunShutterlab("synth still --ideal --duration 1 --out " + out).exit_code, 0);
+  for (const GyroSample& s : ReadGyro(out).samples()) ASSERT_EQ(s.omega_rad_s, Eigen::Vector3d::Zero());
+  // An error option given with --ideal still applies.
+  ASSERT_EQ(RunShutterlab("synth still --ideal --const-bias 0.5,0,0 --duration 1 --out " + out).exit_code, 0);
+  for (const GyroSample& s : ReadGyro(out).samples()) ASSERT_EQ(s.omega_rad_s.x(), 0.5);
+}
+
+TEST(SynthCli, BadArgumentsExitTwoWithOneLineAndNoFile) {
+  test::TempDir dir;
+  const std::string out = dir / "bad.csv";
+  for (const std::string& args : std::vector<std::string>
+       {"synth wobble --out " + out, "synth still --rate -5 --out " + out,
+        "synth still --range 300 --out " + out, "synth still --time-unit h --raw --out " + out,
+        std::string("synth still --duration 1"),
+        "synth still --duration 1 --out " + (dir / "missing_folder/x.csv")}) {
+    const auto result = RunShutterlab(args);
+    EXPECT_EQ(result.exit_code, 2) << args << "\n" << result.output;
+    EXPECT_EQ(LineCount(result.output), 1u) << args << "\n" << result.output;
+    EXPECT_EQ(result.output.rfind("error: ", 0), 0u) << args << "\n" << result.output;
+    EXPECT_FALSE(std::filesystem::exists(out)) << args;
+  }
+  // Malformed numbers are CLI11's parse errors: exit 2 as well.
+  EXPECT_EQ(RunShutterlab("synth still --rate fast --out " + out).exit_code, 2);
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+}  // namespace
+}  // namespace shutterlab
