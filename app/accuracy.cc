@@ -1,0 +1,59 @@
+// `shutterlab accuracy`: the source paper's total-station test; each turn detected and measured.
+
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "app/command.h"
+#include "app/trace_options.h"
+#include "estimate/accuracy.h"
+#include "sim/check.h"
+
+namespace shutterlab::app {
+namespace {
+
+struct AccuracyCommand {
+  TraceOptions trace;
+  AccuracyOptions accuracy;
+  bool json = false;
+};
+
+void Run(const AccuracyCommand& command) {
+  SHUTTERLAB_CHECK(!command.trace.auto_bias)
+      << "--auto-bias is not available yet; give the still segment with --bias A:B";
+  AccuracyOptions options = command.accuracy;
+  options.bias = ParseBiasSegment(command.trace.bias);
+  options.Check();
+  const GyroTrace trace = command.trace.Load();
+  AccuracyResult result;
+  try {
+    result = AnalyzeAccuracy(trace, options);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(command.trace.path + ": " + e.what());
+  }
+  std::cout << (command.json ? AccuracyJson(result) : AccuracyTable(result));
+}
+
+const CommandRegistration kRegistration(30, [](CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "accuracy", "total-station test: detect each turn, measure it, compare with the reference angle");
+  auto command = std::make_shared<AccuracyCommand>();
+  command->trace.Add(cmd, /*with_bias=*/true);
+  cmd->add_option("--reference-deg", command->accuracy.reference_deg, "the turn angle, degrees")
+      ->required();
+  cmd->add_option("--average", command->accuracy.average_samples,
+                  "samples averaged just before and just after each turn")
+      ->capture_default_str();
+  cmd->add_option("--guard", command->accuracy.guard_s,
+                  "still time between a turn and its averaging windows, s")
+      ->capture_default_str();
+  cmd->add_option("--min-still", command->accuracy.min_still_s,
+                  "motions closer than this are one turn, s")
+      ->capture_default_str();
+  cmd->add_flag("--json", command->json, "print JSON (FORMATS.md `accuracy`) instead of a table");
+  return std::function<void()>([command] { Run(*command); });
+});
+
+}  // namespace
+}  // namespace shutterlab::app

@@ -1,0 +1,55 @@
+// `shutterlab noise`: the source paper's static-noise tables and the Allan deviation of a still trace.
+
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "app/command.h"
+#include "app/trace_options.h"
+#include "estimate/noise.h"
+#include "sim/check.h"
+#include "sim/text_file.h"
+
+namespace shutterlab::app {
+namespace {
+
+struct NoiseCommand {
+  TraceOptions trace;
+  NoiseOptions noise;
+  bool json = false;
+  std::string allan_path;
+};
+
+void Run(const NoiseCommand& command) {
+  SHUTTERLAB_CHECK(!command.trace.auto_bias)
+      << "--auto-bias is not available yet; give the still segment with --bias A:B";
+  NoiseOptions options = command.noise;
+  options.bias = ParseBiasSegment(command.trace.bias);
+  options.Check();
+  const GyroTrace trace = command.trace.Load();
+  NoiseResult result;
+  try {
+    result = AnalyzeNoise(trace, options);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(command.trace.path + ": " + e.what());
+  }
+  if (!command.allan_path.empty()) WriteFileAtomically(command.allan_path, AllanCsv(result.allan));
+  std::cout << (command.json ? NoiseJson(result) : NoiseTable(result));
+}
+
+const CommandRegistration kRegistration(20, [](CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "noise", "static noise of a still gyro: sliding-window sigma and range of the angle, Allan deviation");
+  auto command = std::make_shared<NoiseCommand>();
+  command->trace.Add(cmd, /*with_bias=*/true);
+  cmd->add_option("--window", command->noise.window_samples, "window length, samples")
+      ->capture_default_str();
+  cmd->add_flag("--json", command->json, "print JSON (FORMATS.md `noise`) instead of a table");
+  cmd->add_option("--allan", command->allan_path,
+                  "write the Allan deviation to this CSV (tau_s,adev_x,adev_y,adev_z; rad/s)");
+  return std::function<void()>([command] { Run(*command); });
+});
+
+}  // namespace
+}  // namespace shutterlab::app

@@ -1,0 +1,81 @@
+#pragma once
+// Allan deviation of gyro rates (overlapping estimator) and the noise coefficients read off it.
+//
+// Reference: IEEE Std 952-1997 (Annex C, Allan variance of fibre-optic gyros) and
+// El-Sheimy, Hou, Niu, "Analysis and modeling of inertial sensors using Allan variance",
+// IEEE Trans. Instrum. Meas. 57(1), 2008: angle random walk N is the value of the -1/2 slope line
+// at tau = 1 s; bias instability B is the flat minimum of the curve divided by sqrt(2 ln2 / pi)
+// = 0.664.
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "sim/gyro_trace.h"
+
+namespace shutterlab {
+
+// Cluster sizes m (in samples) for a record of n_rates rate samples: log-spaced with
+// points_per_decade per decade, from 1 up to floor(n_rates * max_fraction) (tau from one sample
+// period to a tenth of the record by default), without repeats. Empty when n_rates * max_fraction < 1.
+std::vector<size_t> AllanClusterSizes(size_t n_rates, int points_per_decade = 10,
+                                      double max_fraction = 0.1);
+
+// Overlapping Allan deviation in the angle (phase) form, rad/s, one value per cluster size m:
+//   sigma^2(tau) = sum_{k=0}^{L-2m-1} (theta_{k+2m} - 2 theta_{k+m} + theta_k)^2 / (2 tau^2 (L - 2m)),
+//   tau = m * tau0_s,
+// where theta (L entries, rad) is the integrated rate: theta_k = sum_{i<k} rate_i * tau0, so L rate
+// samples' angle has L+1 entries. O(L) per m. Requires L >= 2m + 1 for every m.
+std::vector<double> OverlappingAllanDeviation(const std::vector<double>& angle_rad, double tau0_s,
+                                              const std::vector<size_t>& cluster_sizes);
+
+// Brute-force twin from the rates, O(n * m) per m: the textbook definition with cluster means
+// ybar_k = mean(rate_k .. rate_{k+m-1}), sigma^2 = mean over k of (ybar_{k+m} - ybar_k)^2 / 2.
+std::vector<double> OverlappingAllanDeviationBruteForce(const std::vector<double>& rate_rad_s,
+                                                        const std::vector<size_t>& cluster_sizes);
+
+// Noise coefficients of one axis read off its Allan curve.
+struct AllanCoefficients {
+  // Angle random walk N: the -1/2 slope line's value at tau = 1 s. rad/s/sqrt(Hz) = rad/sqrt(s).
+  double arw_rad_s_sqrt_hz = 0.0;
+  double arw_deg_sqrt_h = 0.0;  // the same in deg/sqrt(h): N * 180/pi * 60
+  // Bias instability B = (minimum of the curve) / 0.664, in deg/h, and the tau of that minimum.
+  double bias_instability_deg_h = 0.0;
+  double bias_instability_tau_s = 0.0;
+  // True when the minimum is not a floor: it is the longest tau, or (record length known) it lies
+  // within 3 standard errors of the white-noise line N / sqrt(tau). The record is then too short to
+  // see the flat part and B is only an upper bound.
+  bool bias_instability_upper_bound = false;
+};
+
+// Reads N and B off a curve (tau_s ascending, adev_rad_s > 0 where defined). N: the -1/2 line fitted
+// (in log space, weighted by the number of clusters ~ 1/m) through the first run of points whose local
+// log-log slope is within 0.15 of -1/2; when no point qualifies, the point whose slope is nearest -1/2.
+// record_s: the record's length, for the standard error of each point (white noise: relative error
+// 1/sqrt(3 record/tau), from the overlapping estimator's ~1.5 record/tau degrees of freedom); 0 when
+// unknown.
+AllanCoefficients ReadAllanCoefficients(const std::vector<double>& tau_s,
+                                        const std::vector<double>& adev_rad_s, double record_s = 0.0);
+
+// Per-axis Allan curves of a trace segment, with their coefficients.
+struct AllanResult {
+  double tau0_s = 0.0;              // the sample period used: the trace's median interval
+  std::vector<double> tau_s;        // ascending
+  std::vector<double> adev_rad_s[3];  // x, y, z (gyro axes), rad/s
+  AllanCoefficients axes[3];
+  bool empty() const { return tau_s.empty(); }
+};
+
+// Allan deviation of the rates of samples [first, size) of the trace. Timestamps are taken as
+// uniform at the median interval tau0 (the estimator needs it); each sample's contribution to the
+// angle uses its own interval, so jitter and logging gaps enter as they do in the per-axis angles.
+// A constant bias does not change the result. Returns an empty result when the segment holds
+// fewer than 20 rates (no tau with at least a few clusters).
+AllanResult AllanAnalysis(const GyroTrace& trace, size_t first = 0, int points_per_decade = 10);
+
+// CSV for --allan: header "tau_s,adev_x,adev_y,adev_z", one line per tau, rad/s.
+std::string AllanCsv(const AllanResult& result);
+
+}  // namespace shutterlab
