@@ -1,14 +1,15 @@
 // shutterlab synth: deterministic synthetic gyro traces (still, total-station steps, multirotor
 // flight) through an IMU error model. Thin: fills SynthOptions, calls WriteSynthetic, prints.
 
+#include "sim/synth.h"
+
+#include "app/command.h"
+#include "sim/check.h"
+
 #include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include "app/command.h"
-#include "sim/check.h"
-#include "sim/synth.h"
 
 namespace shutterlab::app {
 namespace {
@@ -86,18 +87,21 @@ const CommandRegistration kRegistration(10, [](CLI::App& app) {
       "synth", "write a deterministic synthetic gyro trace (still, steps, flight) with IMU errors");
   auto o = std::make_shared<SynthCliOptions>();
   SynthOptions& s = o->synth;
-  cmd->add_option("PROFILE", o->profile,
-                  "motion: still | steps (total station: turns about a tilted axis, still between) | "
-                  "flight (multirotor)")
+  cmd->add_option(
+         "PROFILE", o->profile,
+         "motion: still | steps (total station: turns about a tilted axis, still between) | "
+         "flight (multirotor)")
       ->capture_default_str();
   // Output.
-  cmd->add_option("--out", o->output.out_path, "output file (required): gyro.csv, or raw counts with --raw");
+  cmd->add_option("--out", o->output.out_path,
+                  "output file (required): gyro.csv, or raw counts with --raw");
   cmd->add_option("--out2", o->output.out2_path,
                   "second sensor's file: same motion, independent noise (the two-gyro idea)");
   cmd->add_option("--format", o->format, "csv (gyro.csv: s, rad/s) or raw (int16 counts)")
       ->capture_default_str();
   cmd->add_flag("--raw", o->raw, "shorthand for --format raw");
-  cmd->add_option("--time-unit", o->time_unit, "raw format: unit of the time column (s, ms, us, ns)")
+  cmd->add_option("--time-unit", o->time_unit,
+                  "raw format: unit of the time column (s, ms, us, ns)")
       ->capture_default_str();
   // Sampling.
   cmd->add_option("--rate", s.rate_hz, "sampling rate, Hz")->capture_default_str();
@@ -106,7 +110,9 @@ const CommandRegistration kRegistration(10, [](CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--seed", s.seed, "random seed (same seed, same bytes)")->capture_default_str();
   cmd->add_option("--t0", s.t0_s, "time of the first sample, s")->capture_default_str();
-  cmd->add_option("--range", s.imu.range_dps, "gyro full-scale range, deg/s (250, 500, 1000, 2000 = 131, 65.5, 32.8, 16.4 LSB per deg/s): sets quantisation and saturation")
+  cmd->add_option("--range", s.imu.range_dps,
+                  "gyro full-scale range, deg/s (250, 500, 1000, 2000 = 131, 65.5, 32.8, 16.4 LSB "
+                  "per deg/s): sets quantisation and saturation")
       ->capture_default_str();
   // Sensor errors.
   cmd->add_flag("--ideal", o->ideal,
@@ -116,24 +122,29 @@ const CommandRegistration kRegistration(10, [](CLI::App& app) {
   const auto model_option = [cmd, p](const std::string& name, double ImuErrorModel::*field,
                                      const std::string& help) {
     auto* option = cmd->add_option(name, p->given.*field, help)->capture_default_str();
-    p->model_overrides.emplace_back(option, [p, field](ImuErrorModel& m) { m.*field = p->given.*field; });
+    p->model_overrides.emplace_back(option,
+                                    [p, field](ImuErrorModel& m) { m.*field = p->given.*field; });
   };
   model_option("--noise-density", &ImuErrorModel::noise_density_rad_s_sqrt_hz,
                "white rate noise (angle random walk), rad/s/sqrt(Hz)");
   model_option("--bias-instability", &ImuErrorModel::bias_instability_rad_s,
                "Gauss-Markov bias std, rad/s");
-  model_option("--bias-tau", &ImuErrorModel::bias_correlation_s, "Gauss-Markov bias correlation time, s");
+  model_option("--bias-tau", &ImuErrorModel::bias_correlation_s,
+               "Gauss-Markov bias correlation time, s");
   model_option("--rate-random-walk", &ImuErrorModel::rate_random_walk_rad_s2_sqrt_hz,
                "rate random walk, rad/s^2/sqrt(Hz)");
   model_option("--jitter", &ImuErrorModel::timestamp_jitter_s, "timestamp jitter std, s");
-  model_option("--gap-period", &ImuErrorModel::gap_period_s, "a logging gap every this many s (0: none)");
+  model_option("--gap-period", &ImuErrorModel::gap_period_s,
+               "a logging gap every this many s (0: none)");
   model_option("--gap-duration", &ImuErrorModel::gap_duration_s, "length of each logging gap, s");
   auto* option = TripleOption(cmd, "--const-bias", &p->const_bias,
                               "constant bias X,Y,Z, rad/s (default ~0.6,-0.4,0.25 deg/s)");
-  p->model_overrides.emplace_back(option, [p](ImuErrorModel& m) { m.bias_rad_s = Triple(p->const_bias); });
+  p->model_overrides.emplace_back(option,
+                                  [p](ImuErrorModel& m) { m.bias_rad_s = Triple(p->const_bias); });
   option = TripleOption(cmd, "--scale-error", &p->scale_error,
                         "scale error X,Y,Z, dimensionless: measured = (1 + e) * true");
-  p->model_overrides.emplace_back(option, [p](ImuErrorModel& m) { m.scale_error = Triple(p->scale_error); });
+  p->model_overrides.emplace_back(
+      option, [p](ImuErrorModel& m) { m.scale_error = Triple(p->scale_error); });
   option = cmd->add_option("--misalignment", p->misalignment,
                            "cross-axis sensitivity XY,XZ,YX,YZ,ZX,ZY, rad (entry ij: sensor axis i "
                            "sees this much of the rate about body axis j)")
@@ -148,9 +159,11 @@ const CommandRegistration kRegistration(10, [](CLI::App& app) {
   option = cmd->add_flag("--no-saturate", p->no_saturate, "do not clip rates at the range");
   p->model_overrides.emplace_back(option, [](ImuErrorModel& m) { m.saturate = false; });
   // Motion.
-  cmd->add_option("--lead", o->lead_s, "steps / flight: still time before the motion, s (default 6)");
+  cmd->add_option("--lead", o->lead_s,
+                  "steps / flight: still time before the motion, s (default 6)");
   cmd->add_option("--turns", s.steps.turns, "steps: number of turns")->capture_default_str();
-  cmd->add_option("--angle", s.steps.angle_deg, "steps: angle of each turn, deg")->capture_default_str();
+  cmd->add_option("--angle", s.steps.angle_deg, "steps: angle of each turn, deg")
+      ->capture_default_str();
   TripleOption(cmd, "--axis", &p->axis, "steps: turn axis X,Y,Z in sensor axes (normalised)");
   cmd->add_option("--turn-time", o->turn_time, "steps: each turn lasts MIN,MAX s (uniform)")
       ->expected(2)
@@ -159,7 +172,8 @@ const CommandRegistration kRegistration(10, [](CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--wobble", s.flight.wobble_rms_dps, "flight: attitude wobble RMS rate, deg/s")
       ->capture_default_str();
-  cmd->add_option("--gusts", s.flight.gusts_per_s, "flight: wind gusts per second")->capture_default_str();
+  cmd->add_option("--gusts", s.flight.gusts_per_s, "flight: wind gusts per second")
+      ->capture_default_str();
   cmd->add_option("--gust-max", s.flight.gust_max_dps, "flight: largest gust peak rate, deg/s")
       ->capture_default_str();
   cmd->add_option("--vibration", s.flight.vibration_dps, "flight: motor harmonic amplitude, deg/s")

@@ -1,10 +1,10 @@
 #include "sim/imu_model.h"
 
-#include <algorithm>
-#include <cmath>
-
 #include "sim/check.h"
 #include "sim/raw_csv.h"
+
+#include <algorithm>
+#include <cmath>
 
 namespace shutterlab {
 namespace {
@@ -28,9 +28,7 @@ NoiseSource::NoiseSource(uint64_t seed, uint64_t stream) {
   engine_.seed(seq);
 }
 
-double NoiseSource::Uniform() {
-  return static_cast<double>(engine_() >> 11) * 0x1.0p-53;
-}
+double NoiseSource::Uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
 
 double NoiseSource::Normal() {
   if (has_spare_) {
@@ -113,7 +111,8 @@ ImuSimulator::ImuSimulator(const ImuErrorModel& model, double rate_hz, NoiseSour
   gm_drive_rad_s_ = model_.bias_instability_rad_s * std::sqrt(1.0 - gm_phi_ * gm_phi_);
   rrw_step_rad_s_ = model_.rate_random_walk_rad_s2_sqrt_hz * std::sqrt(dt_s);
   lsb_per_dps_ = model_.LsbPerDps();
-  rad_s_per_count_ = kRadPerDeg / lsb_per_dps_;  // as ReadRawCsv converts, for bit-exact round trips
+  // The same expression as ReadRawCsv's, so that raw counts read back bit-exactly.
+  rad_s_per_count_ = kRadPerDeg / lsb_per_dps_;
   gm_bias_rad_s_ = model_.bias_instability_rad_s > 0
                        ? Eigen::Vector3d(model_.bias_instability_rad_s * noise_.Normal3())
                        : Eigen::Vector3d::Zero();

@@ -3,15 +3,15 @@
 //
 // measured = Q(Sat(T * true + b_const + b_gm(t) + b_rrw(t) + n_white)), with
 //   T = diag(1 + scale_error) + misalignment_rad   (sensor_from_body, small terms)
-//   b_gm   first-order Gauss-Markov bias (bias instability), b_rrw a random walk (rate random walk),
-//   n_white white rate noise (angle random walk), Sat/Q the sensor's int16 output register.
+//   b_gm   first-order Gauss-Markov bias (bias instability), b_rrw a random walk (rate random
+//   walk), n_white white rate noise (angle random walk), Sat/Q the sensor's int16 output register.
 // Conventions follow the Kalibr/basalt IMU noise model: a continuous density sigma_c (per sqrt(Hz))
 // becomes a per-sample std sigma_c * sqrt(rate_hz) (white) or sigma_c * sqrt(dt) per step (walk).
 
+#include <Eigen/Core>
+
 #include <cstdint>
 #include <random>
-
-#include <Eigen/Core>
 
 namespace shutterlab {
 
@@ -33,9 +33,9 @@ class NoiseSource {
 };
 
 // Every field has its unit in the name or comment. Default-constructed, the model resembles an
-// InvenSense MPU-9250 at +-250 deg/s as logged by the source paper's Raspberry Pi logger at 2-4 kHz;
-// the white-noise density is calibrated so that a still trace at 3000 Hz gives the paper's Table 1
-// (120-sample windows of the integrated angle: mean sigma ~1.1", mean range ~4.2").
+// InvenSense MPU-9250 at +-250 deg/s as logged by the source paper's Raspberry Pi logger at 2-4
+// kHz; the white-noise density is calibrated so that a still trace at 3000 Hz gives the paper's
+// Table 1 (120-sample windows of the integrated angle: mean sigma ~1.1", mean range ~4.2").
 struct ImuErrorModel {
   // White rate noise (angle random walk), rad/s/sqrt(Hz). Per-sample std = density * sqrt(rate_hz);
   // the integrated angle over T seconds then has std density * sqrt(T) rad.
@@ -74,7 +74,8 @@ struct ImuErrorModel {
   double gap_period_s = 0.0;
   double gap_duration_s = 0.0;
 
-  // A perfect sensor: no noise, bias, scale, misalignment, quantisation, saturation, jitter or gaps.
+  // A perfect sensor: no noise, bias, scale, misalignment, quantisation, saturation, jitter or
+  // gaps.
   static ImuErrorModel Ideal();
 
   // sensor_from_body = diag(1 + scale_error) + misalignment_rad.
@@ -106,7 +107,7 @@ class ImuSimulator {
   Eigen::Matrix3d sensor_from_body_;
   NoiseSource noise_;
   double white_std_rad_s_;
-  double gm_phi_;        // exp(-dt / tau)
+  double gm_phi_;          // exp(-dt / tau)
   double gm_drive_rad_s_;  // std of the Gauss-Markov innovation per step
   double rrw_step_rad_s_;  // std of the random-walk step per sample
   double lsb_per_dps_;

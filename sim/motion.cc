@@ -1,12 +1,12 @@
 #include "sim/motion.h"
 
-#include <algorithm>
-#include <cmath>
-
 #include "sim/check.h"
 #include "sim/imu_model.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
+
+#include <algorithm>
+#include <cmath>
 
 namespace shutterlab {
 namespace {
@@ -48,9 +48,12 @@ MotionProfile ParseMotionProfile(const std::string& name) {
 
 const char* MotionProfileName(MotionProfile profile) {
   switch (profile) {
-    case MotionProfile::kStill: return "still";
-    case MotionProfile::kSteps: return "steps";
-    case MotionProfile::kFlight: return "flight";
+    case MotionProfile::kStill:
+      return "still";
+    case MotionProfile::kSteps:
+      return "steps";
+    case MotionProfile::kFlight:
+      return "flight";
   }
   return "?";
 }
@@ -75,11 +78,13 @@ void FlightMotionOptions::Check() const {
   SHUTTERLAB_CHECK(non_negative(lead_still_s)) << "flight lead still time must be >= 0 s";
   SHUTTERLAB_CHECK(non_negative(spin_up_s)) << "flight spin-up time must be >= 0 s";
   SHUTTERLAB_CHECK(non_negative(wobble_rms_dps)) << "wobble RMS must be >= 0 deg/s";
-  SHUTTERLAB_CHECK(non_negative(gusts_per_s) && gusts_per_s <= 100) << "gusts per second must be 0..100";
-  SHUTTERLAB_CHECK(std::isfinite(gust_min_dps) && gust_min_dps > 0 && gust_max_dps >= gust_min_dps &&
-                   std::isfinite(gust_max_dps))
+  SHUTTERLAB_CHECK(non_negative(gusts_per_s) && gusts_per_s <= 100)
+      << "gusts per second must be 0..100";
+  SHUTTERLAB_CHECK(std::isfinite(gust_min_dps) && gust_min_dps > 0 &&
+                   gust_max_dps >= gust_min_dps && std::isfinite(gust_max_dps))
       << "gust peak rates must satisfy 0 < min <= max deg/s";
-  SHUTTERLAB_CHECK(non_negative(motor_hz) && non_negative(motor_sweep_hz) && motor_sweep_hz <= motor_hz)
+  SHUTTERLAB_CHECK(non_negative(motor_hz) && non_negative(motor_sweep_hz) &&
+                   motor_sweep_hz <= motor_hz)
       << "motor frequency must be >= 0 Hz with a sweep no larger than itself";
   SHUTTERLAB_CHECK(non_negative(vibration_dps)) << "vibration amplitude must be >= 0 deg/s";
   SHUTTERLAB_CHECK(non_negative(resonance_hz) && non_negative(resonance_dps))
@@ -105,7 +110,8 @@ Motion Motion::Steps(const StepsOptions& options, uint64_t seed) {
 
 Motion Motion::Flight(const FlightMotionOptions& options, double duration_s, uint64_t seed) {
   options.Check();
-  SHUTTERLAB_CHECK(std::isfinite(duration_s) && duration_s >= 0) << "flight duration must be >= 0 s";
+  SHUTTERLAB_CHECK(std::isfinite(duration_s) && duration_s >= 0)
+      << "flight duration must be >= 0 s";
   Motion m;
   m.profile_ = MotionProfile::kFlight;
   m.flight_ = options;
@@ -114,8 +120,8 @@ Motion Motion::Flight(const FlightMotionOptions& options, double duration_s, uin
   // Activity level exp(0.5 * s(t)), s a sum of three slow sinusoids of unit RMS: calm and busy
   // stretches of tens of seconds, the level ranging about 0.4..2.5.
   for (int j = 0; j < 3; ++j) {
-    m.envelope_.push_back({0.5 * std::sqrt(2.0 / 3.0), LogUniform(rng, 0.015, 0.1),
-                           kTwoPi * rng.Uniform()});
+    m.envelope_.push_back(
+        {0.5 * std::sqrt(2.0 / 3.0), LogUniform(rng, 0.015, 0.1), kTwoPi * rng.Uniform()});
   }
   // Wobble: six sinusoids per axis, random weights normalised to the requested RMS.
   for (int axis = 0; axis < 3; ++axis) {
@@ -138,7 +144,8 @@ Motion Motion::Flight(const FlightMotionOptions& options, double duration_s, uin
       if (t_s >= flight_s) break;
       Eigen::Vector3d dir(rng.Normal(), rng.Normal(), 0.5 * rng.Normal());
       dir.normalize();
-      const double peak_rad_s = LogUniform(rng, options.gust_min_dps, options.gust_max_dps) * kRadPerDeg;
+      const double peak_rad_s =
+          LogUniform(rng, options.gust_min_dps, options.gust_max_dps) * kRadPerDeg;
       const double width_s = LogUniform(rng, kGustMinWidthS, kGustMaxWidthS);
       m.gusts_.push_back({t_s, width_s, peak_rad_s * dir});
     }
@@ -151,7 +158,8 @@ Motion Motion::Flight(const FlightMotionOptions& options, double duration_s, uin
   m.throttle_phase_rad_ = kTwoPi * rng.Uniform();
   m.burst_freq_hz_ = LogUniform(rng, 0.08, 0.2);
   m.burst_phase_rad_ = kTwoPi * rng.Uniform();
-  const auto weights = [&rng](double amplitude_rad_s, Eigen::Vector3d* sin_w, Eigen::Vector3d* cos_w) {
+  const auto weights = [&rng](double amplitude_rad_s, Eigen::Vector3d* sin_w,
+                              Eigen::Vector3d* cos_w) {
     for (int axis = 0; axis < 3; ++axis) {
       const double a = amplitude_rad_s * (0.5 + 0.5 * rng.Uniform());
       const double phase = kTwoPi * rng.Uniform();
@@ -177,8 +185,8 @@ Eigen::Vector3d Motion::OmegaRadS(double t_s) const {
       const StepTurn& turn = *(it - 1);
       const double tau_s = t_s - turn.start_s;
       if (tau_s > turn.duration_s) return Eigen::Vector3d::Zero();
-      const double rate = turn.angle_rad / turn.duration_s *
-                          (1.0 - std::cos(kTwoPi * tau_s / turn.duration_s));
+      const double rate =
+          turn.angle_rad / turn.duration_s * (1.0 - std::cos(kTwoPi * tau_s / turn.duration_s));
       return rate * turn.axis;
     }
     case MotionProfile::kFlight:
@@ -193,7 +201,8 @@ Eigen::Vector3d Motion::FlightOmegaRadS(double t_s) const {
   const double ramp = flight_.spin_up_s > 0 ? SmoothStep(u / flight_.spin_up_s) : 1.0;
 
   double level = 0.0;
-  for (const Sinusoid& s : envelope_) level += s.amplitude * std::sin(kTwoPi * s.freq_hz * u + s.phase_rad);
+  for (const Sinusoid& s : envelope_)
+    level += s.amplitude * std::sin(kTwoPi * s.freq_hz * u + s.phase_rad);
   const double activity = std::exp(level);
   Eigen::Vector3d omega = Eigen::Vector3d::Zero();
   for (int axis = 0; axis < 3; ++axis) {
@@ -216,16 +225,20 @@ Eigen::Vector3d Motion::FlightOmegaRadS(double t_s) const {
   const double sweep = kTwoPi * motor_sweep_freq_hz_;
   const double rotor_phase =
       kTwoPi * flight_.motor_hz * u -
-      (sweep > 0 ? kTwoPi * flight_.motor_sweep_hz / sweep *
-                       (std::cos(sweep * u + motor_sweep_phase_rad_) - std::cos(motor_sweep_phase_rad_))
-                 : 0.0);
-  const double throttle = 1.0 + 0.5 * std::sin(kTwoPi * throttle_freq_hz_ * u + throttle_phase_rad_);
+      (sweep > 0
+           ? kTwoPi * flight_.motor_sweep_hz / sweep *
+                 (std::cos(sweep * u + motor_sweep_phase_rad_) - std::cos(motor_sweep_phase_rad_))
+           : 0.0);
+  const double throttle =
+      1.0 + 0.5 * std::sin(kTwoPi * throttle_freq_hz_ * u + throttle_phase_rad_);
   const double s1 = std::sin(rotor_phase), c1 = std::cos(rotor_phase);
   const double s2 = 2.0 * s1 * c1, c2 = c1 * c1 - s1 * s1;
-  omega += throttle * (s1 * harmonic1_[0] + c1 * harmonic1_[1] + s2 * harmonic2_[0] + c2 * harmonic2_[1]);
+  omega += throttle *
+           (s1 * harmonic1_[0] + c1 * harmonic1_[1] + s2 * harmonic2_[0] + c2 * harmonic2_[1]);
   const double b = 0.5 + 0.5 * std::sin(kTwoPi * burst_freq_hz_ * u + burst_phase_rad_);
   const double resonance_phase = kTwoPi * flight_.resonance_hz * u;
-  omega += b * b * (std::sin(resonance_phase) * resonance_[0] + std::cos(resonance_phase) * resonance_[1]);
+  omega += b * b *
+           (std::sin(resonance_phase) * resonance_[0] + std::cos(resonance_phase) * resonance_[1]);
   return ramp * omega;
 }
 

@@ -5,12 +5,12 @@
 // Time t_s is in seconds since the first sample of the trace. Rates are rad/s about the body axes,
 // which are the ideal sensor axes (the sensor's own errors are in sim/imu_model.h).
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 
 namespace shutterlab {
 
@@ -35,8 +35,9 @@ struct StepsOptions {
   // Each turn lasts a duration drawn uniformly from [turn_min_s, turn_max_s] (seeded), s.
   double turn_min_s = 0.2;
   double turn_max_s = 0.3;
-  double lead_still_s = 6.0;  // still before the first turn, s (covers the default 5 s bias segment)
-  double still_s = 3.0;       // still after each turn, s
+  double lead_still_s =
+      6.0;               // still before the first turn, s (covers the default 5 s bias segment)
+  double still_s = 3.0;  // still after each turn, s
 
   void Check() const;  // throws std::invalid_argument naming the first bad field
 };
@@ -46,7 +47,7 @@ struct StepsOptions {
 // see sim/synth.h.
 struct FlightMotionOptions {
   double lead_still_s = 6.0;  // on the ground, motors off, s (covers the default 5 s bias segment)
-  double spin_up_s = 1.0;     // all motion ramps smoothly from zero over this time after the lead, s
+  double spin_up_s = 1.0;  // all motion ramps smoothly from zero over this time after the lead, s
   // Slow attitude wobble: a sum of sinusoids from 0.2 to 2.5 Hz per axis whose amplitude follows a
   // slowly varying activity level; RMS rate per roll / pitch axis (yaw gets 0.6 of it), deg/s.
   double wobble_rms_dps = 2.2;
@@ -56,7 +57,8 @@ struct FlightMotionOptions {
   double gust_min_dps = 4.0;
   double gust_max_dps = 50.0;
   // Motor harmonics: the rotor frequency sweeps motor_hz +- motor_sweep_hz (throttle); the first
-  // harmonic has amplitude vibration_dps per axis (times 0.5-1.5 with throttle), the second 0.4 of it.
+  // harmonic has amplitude vibration_dps per axis (times 0.5-1.5 with throttle), the second 0.4 of
+  // it.
   double motor_hz = 140.0;
   double motor_sweep_hz = 25.0;
   double vibration_dps = 3.0;

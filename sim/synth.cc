@@ -1,11 +1,11 @@
 #include "sim/synth.h"
 
+#include "sim/check.h"
+#include "sim/raw_csv.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-
-#include "sim/check.h"
-#include "sim/raw_csv.h"
 
 namespace shutterlab {
 namespace {
@@ -29,15 +29,17 @@ void SynthOptions::Check() const {
   SHUTTERLAB_CHECK(std::isfinite(duration_s) && duration_s >= 0 && duration_s <= kMaxDurationS)
       << "duration must be in [0, " << kMaxDurationS << "] s (0 = the profile's default), got "
       << duration_s;
-  SHUTTERLAB_CHECK(std::isfinite(t0_s) && std::abs(t0_s) < 1e9) << "t0 must be finite, |t0| < 1e9 s";
+  SHUTTERLAB_CHECK(std::isfinite(t0_s) && std::abs(t0_s) < 1e9)
+      << "t0 must be finite, |t0| < 1e9 s";
   imu.Check();
   if (profile == MotionProfile::kSteps) steps.Check();
   if (profile == MotionProfile::kFlight) flight.Check();
   SHUTTERLAB_CHECK(NominalSampleCount() >= 2)
-      << "the trace would hold fewer than 2 samples (duration " << DurationS() << " s at " << rate_hz
-      << " Hz)";
+      << "the trace would hold fewer than 2 samples (duration " << DurationS() << " s at "
+      << rate_hz << " Hz)";
   SHUTTERLAB_CHECK(NominalSampleCount() <= kMaxSamples)
-      << "the trace would hold " << NominalSampleCount() << " samples (limit " << kMaxSamples << ")";
+      << "the trace would hold " << NominalSampleCount() << " samples (limit " << kMaxSamples
+      << ")";
   if (imu.gap_period_s > 0) {
     SHUTTERLAB_CHECK(imu.gap_duration_s * rate_hz >= 1.0)
         << "gap duration " << imu.gap_duration_s << " s is shorter than one sample period at "
@@ -48,9 +50,12 @@ void SynthOptions::Check() const {
 double SynthOptions::DurationS() const {
   if (duration_s > 0) return duration_s;
   switch (profile) {
-    case MotionProfile::kStill: return kStillDefaultS;
-    case MotionProfile::kFlight: return kFlightDefaultS;
-    case MotionProfile::kSteps: return Motion::Steps(steps, seed).natural_duration_s();
+    case MotionProfile::kStill:
+      return kStillDefaultS;
+    case MotionProfile::kFlight:
+      return kFlightDefaultS;
+    case MotionProfile::kSteps:
+      return Motion::Steps(steps, seed).natural_duration_s();
   }
   return kStillDefaultS;
 }
@@ -66,9 +71,12 @@ int64_t SynthOptions::NominalTimeNs(int64_t k) const {
 
 Motion MakeMotion(const SynthOptions& options) {
   switch (options.profile) {
-    case MotionProfile::kStill: return Motion::Still();
-    case MotionProfile::kSteps: return Motion::Steps(options.steps, options.seed);
-    case MotionProfile::kFlight: return Motion::Flight(options.flight, options.DurationS(), options.seed);
+    case MotionProfile::kStill:
+      return Motion::Still();
+    case MotionProfile::kSteps:
+      return Motion::Steps(options.steps, options.seed);
+    case MotionProfile::kFlight:
+      return Motion::Flight(options.flight, options.DurationS(), options.seed);
   }
   return Motion::Still();
 }
@@ -85,7 +93,8 @@ GyroTrace SynthesizeTrace(const SynthOptions& options, int sensor, size_t* satur
   // Nominal intervals are floor or ceil of 1e9 / rate; a jitter below half the shorter one keeps
   // the logged timestamps non-decreasing.
   const double max_jitter_ns = std::max(0.0, std::floor(1e9 / options.rate_hz) / 2.0 - 1.0);
-  const int64_t gap_period_ns = options.imu.gap_period_s > 0 ? SecondsToNs(options.imu.gap_period_s) : 0;
+  const int64_t gap_period_ns =
+      options.imu.gap_period_s > 0 ? SecondsToNs(options.imu.gap_period_s) : 0;
   const int64_t gap_duration_ns = SecondsToNs(options.imu.gap_duration_s);
 
   std::vector<GyroSample> samples;
@@ -95,7 +104,9 @@ GyroTrace SynthesizeTrace(const SynthOptions& options, int sensor, size_t* satur
     // Draw the noise and the jitter of every sample, even a lost one, so that gaps do not shift
     // the random streams of the samples after them.
     const Eigen::Vector3d omega = imu.Measure(motion.OmegaRadS((t_ns - t0_ns) * 1e-9));
-    const double jitter = jitter_ns > 0 ? std::clamp(jitter_ns * timing.Normal(), -max_jitter_ns, max_jitter_ns) : 0.0;
+    const double jitter =
+        jitter_ns > 0 ? std::clamp(jitter_ns * timing.Normal(), -max_jitter_ns, max_jitter_ns)
+                      : 0.0;
     if (gap_period_ns > 0) {
       const int64_t since_ns = t_ns - t0_ns;
       const int64_t m = since_ns / gap_period_ns;

@@ -14,14 +14,14 @@
 //  - flight (120 s, 50 m, 20" allowance): flagged shares per axis of about 25 % / 55 % at 5 cm
 //    (10 ms / 20 ms windows) and 11 % / 25 % at 10 cm, as in the paper's flight.
 
-#include <cstdint>
-#include <string>
-#include <vector>
-
 #include "sim/gyro_io.h"
 #include "sim/gyro_trace.h"
 #include "sim/imu_model.h"
 #include "sim/motion.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
 
 namespace shutterlab {
 
@@ -65,8 +65,9 @@ GyroTrace SynthesizeTruth(const SynthOptions& options);
 struct SynthOutputOptions {
   std::string out_path;   // first sensor
   std::string out2_path;  // second sensor (same motion, independent noise); empty for none
-  // kGyroCsv (FORMATS.md gyro.csv, seconds and rad/s) or kRaw (the paper's logger: header t,gx,gy,gz,
-  // int16 counts of imu.range_dps, time in time_unit; read back with --raw --range --time-unit).
+  // kGyroCsv (FORMATS.md gyro.csv, seconds and rad/s) or kRaw (the paper's logger: header
+  // t,gx,gy,gz, int16 counts of imu.range_dps, time in time_unit; read back with --raw --range
+  // --time-unit).
   GyroFormat format = GyroFormat::kGyroCsv;
   TimeUnit time_unit = TimeUnit::kSeconds;  // raw only
 

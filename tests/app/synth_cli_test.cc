@@ -1,13 +1,13 @@
-#include <filesystem>
-#include <string>
-#include <vector>
-
-#include <gtest/gtest.h>
-
 #include "sim/gyro_io.h"
 #include "sim/raw_csv.h"
 #include "sim/text_file.h"
 #include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
 
 namespace shutterlab {
 namespace {
@@ -35,8 +35,8 @@ TEST(SynthCli, WritesATraceThatReadGyroReadsBack) {
 TEST(SynthCli, StepsToRawCountsWithASecondSensor) {
   test::TempDir dir;
   const std::string out = dir / "a.csv", out2 = dir / "b.csv";
-  const auto result = RunShutterlab("synth steps --turns 2 --angle 1 --out " + out + " --out2 " + out2 +
-                                    " --format raw --range 500 --time-unit ms");
+  const auto result = RunShutterlab("synth steps --turns 2 --angle 1 --out " + out + " --out2 " +
+                                    out2 + " --format raw --range 500 --time-unit ms");
   ASSERT_EQ(result.exit_code, 0) << result.output;
   EXPECT_NE(result.output.find("turn 2:"), std::string::npos) << result.output;
   const GyroTrace a = ReadRawCsv(out, 500, TimeUnit::kMilliseconds);
@@ -49,7 +49,8 @@ TEST(SynthCli, StepsToRawCountsWithASecondSensor) {
 
 TEST(SynthCli, SameSeedSameBytes) {
   test::TempDir dir;
-  const std::string common = " flight --duration 7 --jitter 1e-6 --gap-period 2 --gap-duration 0.01 --out ";
+  const std::string common =
+      " flight --duration 7 --jitter 1e-6 --gap-period 2 --gap-duration 0.01 --out ";
   ASSERT_EQ(RunShutterlab("synth --seed 5" + common + (dir / "a.csv")).exit_code, 0);
   ASSERT_EQ(RunShutterlab("synth --seed 5" + common + (dir / "b.csv")).exit_code, 0);
   ASSERT_EQ(RunShutterlab("synth --seed 6" + common + (dir / "c.csv")).exit_code, 0);
@@ -61,20 +62,23 @@ TEST(SynthCli, IdealSensorWritesTheExactMotion) {
   test::TempDir dir;
   const std::string out = dir / "ideal.csv";
   ASSERT_EQ(RunShutterlab("synth still --ideal --duration 1 --out " + out).exit_code, 0);
-  for (const GyroSample& s : ReadGyro(out).samples()) ASSERT_EQ(s.omega_rad_s, Eigen::Vector3d::Zero());
+  for (const GyroSample& s : ReadGyro(out).samples())
+    ASSERT_EQ(s.omega_rad_s, Eigen::Vector3d::Zero());
   // An error option given with --ideal still applies.
-  ASSERT_EQ(RunShutterlab("synth still --ideal --const-bias 0.5,0,0 --duration 1 --out " + out).exit_code, 0);
+  ASSERT_EQ(
+      RunShutterlab("synth still --ideal --const-bias 0.5,0,0 --duration 1 --out " + out).exit_code,
+      0);
   for (const GyroSample& s : ReadGyro(out).samples()) ASSERT_EQ(s.omega_rad_s.x(), 0.5);
 }
 
 TEST(SynthCli, BadArgumentsExitTwoWithOneLineAndNoFile) {
   test::TempDir dir;
   const std::string out = dir / "bad.csv";
-  for (const std::string& args : std::vector<std::string>
-       {"synth wobble --out " + out, "synth still --rate -5 --out " + out,
-        "synth still --range 300 --out " + out, "synth still --time-unit h --raw --out " + out,
-        std::string("synth still --duration 1"),
-        "synth still --duration 1 --out " + (dir / "missing_folder/x.csv")}) {
+  for (const std::string& args : std::vector<std::string>{
+           "synth wobble --out " + out, "synth still --rate -5 --out " + out,
+           "synth still --range 300 --out " + out, "synth still --time-unit h --raw --out " + out,
+           std::string("synth still --duration 1"),
+           "synth still --duration 1 --out " + (dir / "missing_folder/x.csv")}) {
     const auto result = RunShutterlab(args);
     EXPECT_EQ(result.exit_code, 2) << args << "\n" << result.output;
     EXPECT_EQ(LineCount(result.output), 1u) << args << "\n" << result.output;

@@ -1,12 +1,12 @@
 #include "sim/imu_model.h"
 
-#include <cmath>
-#include <set>
-#include <vector>
+#include "sim/raw_csv.h"
 
 #include <gtest/gtest.h>
 
-#include "sim/raw_csv.h"
+#include <cmath>
+#include <set>
+#include <vector>
 
 namespace shutterlab {
 namespace {
@@ -73,7 +73,8 @@ TEST(ImuSimulator, IntegratedWhiteNoiseGrowsAsSqrtTime) {
   std::vector<double> angles[3];
   for (size_t s = 0; s < kSegments; ++s) {
     Eigen::Vector3d angle = Eigen::Vector3d::Zero();
-    for (int k = 0; k < kSamplesPerSegment; ++k) angle += imu.Measure(Eigen::Vector3d::Zero()) / kRateHz;
+    for (int k = 0; k < kSamplesPerSegment; ++k)
+      angle += imu.Measure(Eigen::Vector3d::Zero()) / kRateHz;
     for (int a = 0; a < 3; ++a) angles[a].push_back(angle[a]);
   }
   const double expected = kDensity * std::sqrt(kSamplesPerSegment / kRateHz);
@@ -110,7 +111,8 @@ TEST(ImuSimulator, QuantisationStepIsOneLsb) {
     const double lsb_per_dps = RawSensitivityLsbPerDps(range_dps);
     const double step_rad_s = kRadPerDeg / lsb_per_dps;
     std::set<double> levels;
-    // A slow ramp over a few dozen counts: every output is a whole count, neighbours one count apart.
+    // A slow ramp over a few dozen counts: every output is a whole count, neighbours one count
+    // apart.
     for (int i = 0; i <= 1000; ++i) {
       const double rate = (-20.0 + 0.04 * i) * step_rad_s + 1e-3 * step_rad_s;
       const double out = imu.Measure(Eigen::Vector3d(rate, 0, 0))[0];

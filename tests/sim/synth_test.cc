@@ -1,17 +1,17 @@
 #include "sim/synth.h"
 
-#include <algorithm>
-#include <cmath>
-#include <vector>
-
-#include <gtest/gtest.h>
-
 #include "estimate/window_stats.h"
 #include "sim/bias.h"
 #include "sim/integrate.h"
 #include "sim/raw_csv.h"
 #include "sim/text_file.h"
 #include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
 
 namespace shutterlab {
 namespace {
@@ -119,7 +119,8 @@ TEST(SynthesizeTrace, SameSeedSameTraceOtherSeedOtherTrace) {
   o.seed = 2;
   const GyroTrace c = SynthesizeTrace(o);
   size_t differing = 0;
-  for (size_t i = 0; i < std::min(a.size(), c.size()); ++i) differing += a[i].omega_rad_s != c[i].omega_rad_s;
+  for (size_t i = 0; i < std::min(a.size(), c.size()); ++i)
+    differing += a[i].omega_rad_s != c[i].omega_rad_s;
   EXPECT_GT(differing, a.size() / 2);
 }
 
@@ -137,7 +138,8 @@ TEST(WriteSynthetic, SameSeedSameBytes) {
   WriteSynthetic(o, out);
   EXPECT_EQ(ReadFileToString(dir / "a.csv"), ReadFileToString(dir / "b.csv"));
   EXPECT_EQ(ReadFileToString(dir / "a2.csv"), ReadFileToString(dir / "b2.csv"));
-  EXPECT_NE(ReadFileToString(dir / "a.csv"), ReadFileToString(dir / "a2.csv"));  // independent noise
+  EXPECT_NE(ReadFileToString(dir / "a.csv"),
+            ReadFileToString(dir / "a2.csv"));  // independent noise
   o.seed = 99;
   out.out_path = dir / "c.csv";
   out.out2_path.clear();
@@ -202,7 +204,8 @@ TEST(SynthesizeTrace, StepsIntegrateToTurnsTimesAngleAboutTheAxis) {
   // Noiseless truth equals the ideal sensor's trace.
   const GyroTrace truth = SynthesizeTruth(o);
   ASSERT_EQ(truth.size(), trace.size());
-  for (size_t i = 0; i < truth.size(); i += 97) EXPECT_EQ(truth[i].omega_rad_s, trace[i].omega_rad_s);
+  for (size_t i = 0; i < truth.size(); i += 97)
+    EXPECT_EQ(truth[i].omega_rad_s, trace[i].omega_rad_s);
 }
 
 TEST(SynthesizeTrace, GapsAppearWithThePeriodAsked) {
