@@ -1,0 +1,136 @@
+// CLI tests of `shutterlab noise` and `shutterlab accuracy`: output formats, exit codes, bad input.
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "sim/gyro_io.h"
+#include "sim/text_file.h"
+#include "tests/test_util.h"
+
+namespace shutterlab {
+namespace {
+
+using test::RunShutterlab;
+
+constexpr int64_t kPeriodNs = 1'000'000;  // 1 kHz keeps the files small
+constexpr double kSigmaRadS = 0.002;
+
+size_t LineCount(const std::string& text) {
+  size_t n = 0;
+  for (char c : text) n += c == '\n';
+  return n + (!text.empty() && text.back() != '\n');
+}
+
+// still_s of white noise, then turns of 1 deg about z (sin^2 rate pulses of 0.25 s), 1.5 s apart.
+void WriteSession(const std::string& path, double still_s, int turns) {
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  std::vector<double> z(static_cast<size_t>(still_s * 1000), 0.0);
+  for (int i = 0; i < turns; ++i) {
+    const double peak = 2.0 * M_PI / 180.0 / 0.25;
+    for (int j = 0; j < 250; ++j) z.push_back(peak * std::pow(std::sin(M_PI * j / 250.0), 2));
+    z.resize(z.size() + 1500, 0.0);
+  }
+  std::vector<GyroSample> samples(z.size());
+  for (size_t k = 0; k < z.size(); ++k) {
+    samples[k].t_ns = static_cast<int64_t>(k) * kPeriodNs;
+    samples[k].omega_rad_s = Eigen::Vector3d(0.01 + kSigmaRadS * unit(rng), kSigmaRadS * unit(rng),
+                                             z[k] + kSigmaRadS * unit(rng));
+  }
+  WriteGyroCsv(path, GyroTrace(std::move(samples)));
+}
+
+TEST(NoiseCli, PrintsJsonAndWritesTheAllanCsv) {
+  test::TempDir dir;
+  const std::string trace = dir / "still.csv", allan = dir / "allan.csv";
+  WriteSession(trace, 8.0, 0);
+  const auto result = RunShutterlab("noise " + trace + " --window 40 --json --allan " + allan);
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const nlohmann::json j = nlohmann::json::parse(result.output);
+  EXPECT_EQ(j.at("window_samples").get<int>(), 40);
+  EXPECT_EQ(j.at("samples").get<int>(), 3000);  // 8 s at 1 kHz after the default bias 0:5
+  // Random walk of step s = sigma dt = 0.41" over 40 points: rms sigma = s sqrt((N^2-1)/(6N)) =
+  // 1.06"; only ~75 independent windows here, so a wide band.
+  const double sigma_x = j["axes"]["x"]["sigma_rms_arcsec"].get<double>();
+  EXPECT_GT(sigma_x, 0.8);
+  EXPECT_LT(sigma_x, 1.3);
+  const std::string csv = ReadFileToString(allan);
+  EXPECT_EQ(csv.rfind("tau_s,adev_x,adev_y,adev_z\n0.001,", 0), 0u) << csv.substr(0, 80);
+  EXPECT_GT(LineCount(csv), 20u);
+}
+
+TEST(NoiseCli, TableHasOneRowPerAxis) {
+  test::TempDir dir;
+  const std::string trace = dir / "still.csv";
+  WriteSession(trace, 6.0, 0);
+  const auto result = RunShutterlab("noise " + trace);
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("sigma mean"), std::string::npos);
+  EXPECT_NE(result.output.find("\n  z "), std::string::npos);
+  EXPECT_NE(result.output.find("ARW"), std::string::npos);
+}
+
+TEST(NoiseCli, WindowLongerThanTheTraceIsOneLineExit2AndNoFile) {
+  test::TempDir dir;
+  const std::string trace = dir / "still.csv", allan = dir / "allan.csv";
+  WriteSession(trace, 6.0, 0);
+  const auto result = RunShutterlab("noise " + trace + " --window 5000 --allan " + allan);
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_EQ(LineCount(result.output), 1u) << result.output;
+  EXPECT_EQ(result.output.rfind("error: " + trace + ": window of 5000 samples", 0), 0u)
+      << result.output;
+  EXPECT_FALSE(std::filesystem::exists(allan));
+}
+
+TEST(NoiseCli, BadBiasSegmentIsExit2) {
+  test::TempDir dir;
+  const std::string trace = dir / "still.csv";
+  WriteSession(trace, 6.0, 0);
+  const auto result = RunShutterlab("noise " + trace + " --bias 3:1");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_EQ(LineCount(result.output), 1u) << result.output;
+}
+
+TEST(AccuracyCli, FindsEachTurnAndPrintsJson) {
+  test::TempDir dir;
+  const std::string trace = dir / "station.csv";
+  WriteSession(trace, 5.5, 3);
+  const auto result = RunShutterlab("accuracy " + trace + " --reference-deg 1 --average 50 --json");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const nlohmann::json j = nlohmann::json::parse(result.output);
+  EXPECT_DOUBLE_EQ(j.at("reference_deg").get<double>(), 1.0);
+  ASSERT_EQ(j.at("rotations").size(), 3u);
+  for (const auto& rot : j["rotations"]) {
+    // Noise 2e-3 rad/s at 1 kHz: ~7.5" random walk between the averaging windows (fixed seed).
+    EXPECT_NEAR(rot.at("theta_arcsec").get<double>(), 3600.0, 20.0);
+    EXPECT_NEAR(rot.at("difference_arcsec").get<double>(),
+                rot.at("theta_arcsec").get<double>() - 3600.0, 1e-9);
+  }
+  const auto table = RunShutterlab("accuracy " + trace + " --reference-deg 1");
+  ASSERT_EQ(table.exit_code, 0) << table.output;
+  EXPECT_NE(table.output.find("Turns detected: 3"), std::string::npos) << table.output;
+}
+
+TEST(AccuracyCli, NoTurnOrNoReferenceIsExit2) {
+  test::TempDir dir;
+  const std::string trace = dir / "still.csv";
+  WriteSession(trace, 8.0, 0);
+  const auto none = RunShutterlab("accuracy " + trace + " --reference-deg 1");
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_EQ(LineCount(none.output), 1u) << none.output;
+  EXPECT_NE(none.output.find("no rotation found"), std::string::npos) << none.output;
+  const auto missing = RunShutterlab("accuracy " + trace);
+  EXPECT_EQ(missing.exit_code, 2);
+  const auto bad = RunShutterlab("accuracy " + trace + " --reference-deg -1");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_EQ(LineCount(bad.output), 1u) << bad.output;
+}
+
+}  // namespace
+}  // namespace shutterlab
