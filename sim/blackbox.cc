@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <functional>
@@ -891,6 +892,12 @@ DecodedFile DecodeAllLogs(std::string_view bytes, const std::string& path) {
   return file;
 }
 
+std::string FormatSeconds(double t_s) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.2f s", t_s);
+  return text;
+}
+
 std::string Plural(size_t n, const std::string& word) {
   return std::to_string(n) + " " + word + (n == 1 ? "" : "s");
 }
@@ -1081,7 +1088,8 @@ FlightLog ToFlightLog(DecodedFile file, int log_index, const std::string& path) 
     for (const DecodedLog& other : file.logs) {
       if (other.info.index == chosen) continue;
       others += (others.empty() ? "" : ", ") + std::to_string(other.info.index) + " (" +
-                Plural(other.info.main_frames, "frame") + ")";
+                Plural(other.info.main_frames, "frame") + ", " +
+                FormatSeconds(other.info.duration_s) + ")";
     }
     out.warnings.push_back("the file holds " + Plural(count, "log") + "; read " + where +
                            (log_index < 0 ? " (the longest)" : "") + " with " +

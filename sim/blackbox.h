@@ -8,6 +8,10 @@
 // the header's gyro_scale (see GyroRadPerSecondPerLsb in blackbox.cc for the rule and its source).
 // Axes are the flight controller's (Betaflight: x roll, y pitch, z yaw after board alignment).
 //
+// FlightLog::altitude_above_ground_m is left empty: Betaflight's BaroAlt is relative to the
+// barometer's power-on level and drifts by metres (LOG00037: -6.6 .. +2.9 m on a 17 s flight), and
+// GPS altitude is above sea level. camera_events stay empty: Betaflight logs no camera triggers.
+//
 // Corrupt input never crashes or hangs the reader: frames that do not decode are skipped and
 // counted (FlightLog::records_skipped, one warning line per kind), as blackbox-tools does; a file
 // that has no usable header or no main frame throws IoError naming the path and the problem.
