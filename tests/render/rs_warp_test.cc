@@ -10,7 +10,9 @@
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
 
+#include "render/image_io.h"
 #include "render/truth_model.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
@@ -406,6 +408,49 @@ TEST(FrameDistortion, SmoothFieldMatchesBruteForce) {
   }
   EXPECT_GT(brute, 1.0);
   EXPECT_NEAR(FrameDistortionPx(field), brute, 1e-9 * brute);
+}
+
+}  // namespace
+}  // namespace shutterlab
+
+namespace shutterlab {
+namespace {
+
+TEST(RsWarp, DenseOpticalFlowOnARealSceneAgreesWithTheTruth) {
+  // Real aerial texture (assets/scenes), a rendered rolling-shutter/reference pair, and OpenCV's DIS
+  // optical flow from the rolling-shutter image to the reference: it must find d(p).
+  const cv::Mat scene = ReadImage(test::SourcePath("assets/scenes/siyi_zr10_img0150.jpg"));
+  RigModel rig = SmallRig(480, 360);
+  rig.camera.fx = rig.camera.fy = 900.0;
+  rig.shutter.readout_s = 0.030;
+  const FrameGeometry geometry =
+      Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d(0.15, -0.25, 0.3)), 0.5, scene.size());
+  const FrameGeometry reference(rig.camera, rig.altitude_m, geometry.motion().Reference(), scene.size());
+  cv::Mat rs, ref, rs_grey, ref_grey;
+  RenderFrame(scene, geometry, Interpolation::kBicubic, &rs);
+  RenderFrame(scene, reference, Interpolation::kBicubic, &ref);
+  cv::cvtColor(rs, rs_grey, cv::COLOR_RGB2GRAY);
+  cv::cvtColor(ref, ref_grey, cv::COLOR_RGB2GRAY);
+  const cv::Mat truth = DisplacementField(geometry);
+  cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
+  dis->setFinestScale(0);
+  cv::Mat flow;
+  dis->calc(rs_grey, ref_grey, flow);
+  const int margin = 24;  // flow is unreliable where the match leaves the image
+  double sum2 = 0.0, truth_max = 0.0;
+  size_t n = 0;
+  for (int v = margin; v < rig.camera.height - margin; ++v) {
+    for (int u = margin; u < rig.camera.width - margin; ++u) {
+      const cv::Vec2f e = flow.at<cv::Vec2f>(v, u) - truth.at<cv::Vec2f>(v, u);
+      sum2 += e.dot(e);
+      truth_max = std::max<double>(truth_max, cv::norm(truth.at<cv::Vec2f>(v, u)));
+      ++n;
+    }
+  }
+  const double rms_px = std::sqrt(sum2 / n);
+  RecordProperty("flow_rms_px", std::to_string(rms_px));
+  EXPECT_GT(truth_max, 3.0) << "the pair must be visibly distorted";
+  EXPECT_LT(rms_px, 0.1);
 }
 
 }  // namespace
