@@ -1,0 +1,95 @@
+#pragma once
+// The source paper's flight analysis (its Table 4): the share of sliding time windows in which the
+// camera rotated enough for the rolling shutter to smear the image by more than a ground limit.
+//
+// Definitions (FORMATS.md `flight`): bias b = per-axis mean rate over the bias segment; per-axis
+// angles angle_k = sum over i <= k of (w_i - b)(t_i - t_{i-1}) over the samples after the segment
+// (sim/integrate.h IntegratePerAxis); a window of duration W starts at every sample and holds the
+// samples with t in [t_k, t_k + W); windows that run past the last sample are left out. A window is
+// flagged when the range (max - min) of any axis's angle exceeds
+//   threshold = atan(limit_m / altitude_m) + noise allowance.
+// The vector criterion flags a window when the rotation angle between any two orientations in it
+// (SO(3) trapezoid integration of the same bias-corrected rates) exceeds the same threshold.
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "sim/bias.h"
+#include "sim/gyro_trace.h"
+
+namespace shutterlab {
+
+struct FlightOptions {
+  double altitude_m = 50.0;                    // camera height above flat ground
+  std::vector<double> limits_m{0.05, 0.10};    // acceptable smear on the ground
+  std::vector<double> windows_s{0.010, 0.020};  // rolling-shutter readout durations to test
+  double noise_allowance_arcsec = 20.0;        // the paper's allowance for the gyro's own noise
+  BiasSegment bias;                            // default 0:5 s, as in the paper
+  bool vector_criterion = true;                // also flag by the SO(3) angle (costs ~2x)
+  bool series = false;                         // fill FlightResult::series for windows_s[0]
+  // Called now and then with the fraction done (0..1); may be empty.
+  std::function<void(double)> progress;
+  // Throws std::invalid_argument naming the first bad field.
+  void Check() const;
+};
+
+// One (limit, window) cell of the paper's Table 4.
+struct FlightRow {
+  double limit_m = 0;
+  double window_s = 0;
+  double threshold_arcsec = 0;
+  size_t windows = 0;                      // windows of this duration
+  size_t flagged = 0;                      // per-axis criterion: any axis over the threshold
+  std::array<size_t, 3> flagged_axis{};    // that axis over the threshold
+  size_t flagged_vector = 0;               // vector criterion (0 when not computed)
+  size_t flagged_vector_only = 0;          // vector flags, per-axis does not
+  size_t flagged_axis_only = 0;            // per-axis flags, vector does not
+  double flagged_percent = 0;
+  std::array<double, 3> flagged_percent_axis{};
+  double flagged_percent_vector = 0;
+};
+
+// Per-window values for plotting, for the windows of windows_s[0] (arcsec).
+struct FlightSeries {
+  double window_s = 0;
+  std::vector<int64_t> t_ns;                   // window start, gyro clock
+  std::array<std::vector<double>, 3> range_arcsec;
+  std::vector<double> vector_arcsec;           // largest pairwise rotation angle; empty without
+                                               // the vector criterion
+};
+
+struct FlightResult {
+  double altitude_m = 0;
+  double noise_allowance_arcsec = 0;
+  BiasEstimate bias;
+  size_t samples = 0;        // samples analysed (those after the bias segment)
+  size_t windows_total = 0;  // windows of windows_s[0] (each row has its own count)
+  bool vector_criterion = false;
+  std::vector<FlightRow> rows;  // limit-major: for each limit, each window (Table 4 order)
+  FlightSeries series;
+};
+
+// Runs the analysis. Throws std::invalid_argument when the bias segment is too short, or a window
+// is longer than the trace after the bias segment (no window fits).
+FlightResult Flight(const GyroTrace& trace, const FlightOptions& options);
+
+// FORMATS.md `flight` JSON (plus per-axis percentages, window counts and the bias).
+nlohmann::json FlightToJson(const FlightResult& result);
+// The person-readable table in the paper's Table 4 layout, with a closing line saying which
+// criterion flags more on this data.
+std::string FlightTable(const FlightResult& result);
+// CSV "t,range_x,range_y,range_z,vector" (seconds, arcsec; vector empty when not computed), written
+// whole or not at all.
+void WriteFlightSeriesCsv(const std::string& path, const FlightSeries& series);
+
+// "5cm", "50mm", "0.05m", "0.05" (metres) -> metres. Throws std::invalid_argument otherwise.
+double ParseLengthM(const std::string& text);
+// "10ms", "0.01s", "10000us", "0.01" (seconds) -> seconds. Throws std::invalid_argument otherwise.
+double ParseDurationS(const std::string& text);
+
+}  // namespace shutterlab
