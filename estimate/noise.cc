@@ -51,12 +51,13 @@ NoiseResult AnalyzeNoise(const GyroTrace& trace, const NoiseOptions& options) {
 
   const PerAxisAngles angles = IntegratePerAxis(trace, result.bias.bias_rad_s, first);
   result.windows = result.samples_analysed - n_window + 1;
-  std::vector<uint32_t> ends(result.windows);
-  for (size_t k = 0; k < result.windows; ++k) ends[k] = static_cast<uint32_t>(k + n_window);
 
   for (int a = 0; a < 3; ++a) {
-    const std::vector<double> sigma = SlidingStdDevBruteForce(angles.angle_rad[a], ends);
-    const std::vector<double> range = SlidingRangeBruteForce(angles.angle_rad[a], ends);
+    // O(N) sliding statistics (estimate/window_stats.h); their brute-force twins are the definition.
+    const std::vector<double> sigma = SlidingStdDevByCount(angles.angle_rad[a], n_window);
+    const std::vector<double> range = SlidingRangeByCount(angles.angle_rad[a], n_window);
+    SHUTTERLAB_CHECK(sigma.size() == result.windows && range.size() == result.windows)
+        << "window statistics returned " << sigma.size() << " windows, expected " << result.windows;
     double sigma_sum = 0.0, sigma_sq_sum = 0.0, range_sum = 0.0;
     double sigma_max = 0.0, range_max = 0.0;
     for (size_t k = 0; k < result.windows; ++k) {

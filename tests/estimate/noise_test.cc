@@ -1,11 +1,15 @@
 #include "estimate/noise.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+
+#include "estimate/window_stats.h"
+#include "sim/integrate.h"
 
 namespace shutterlab {
 namespace {
@@ -93,6 +97,31 @@ TEST(AnalyzeNoise, WhiteNoiseWindowSigmaAndRangeMatchTheory) {
     // Allan deviation read on the same samples: N = sigma sqrt(dt).
     constexpr double kArwTol = 0.05;
     EXPECT_NEAR(r.allan.axes[a].arw_rad_s_sqrt_hz / (kSigmaRadS * std::sqrt(dt)), 1.0, kArwTol);
+  }
+}
+
+TEST(AnalyzeNoise, AgreesWithTheBruteForceWindowTwins) {
+  const GyroTrace trace = StillTrace(6.0, kSigmaRadS, Eigen::Vector3d(0.2, 0.0, -0.1), 8);
+  NoiseOptions options;
+  options.window_samples = 37;
+  const NoiseResult r = AnalyzeNoise(trace, options);
+  const BiasEstimate bias = EstimateBias(trace, options.bias);
+  const PerAxisAngles angles = IntegratePerAxis(trace, bias.bias_rad_s, bias.first_after);
+  std::vector<uint32_t> ends;
+  for (size_t k = 0; k + 37 <= angles.size(); ++k) ends.push_back(static_cast<uint32_t>(k + 37));
+  ASSERT_EQ(r.windows, ends.size());
+  for (int a = 0; a < 3; ++a) {
+    const std::vector<double> sigma = SlidingStdDevBruteForce(angles.angle_rad[a], ends);
+    const std::vector<double> range = SlidingRangeBruteForce(angles.angle_rad[a], ends);
+    double sigma_sum = 0, range_max = 0;
+    for (size_t k = 0; k < ends.size(); ++k) {
+      sigma_sum += sigma[k];
+      range_max = std::max(range_max, range[k]);
+    }
+    constexpr double kRelTol = 1e-9;  // the O(N) sigma's running sums: ~1e-12 relative
+    EXPECT_NEAR(r.axes[a].sigma_mean_arcsec, sigma_sum / ends.size() * kRadToArcsec,
+                kRelTol * r.axes[a].sigma_mean_arcsec);
+    EXPECT_DOUBLE_EQ(r.axes[a].range_max_arcsec, range_max * kRadToArcsec);
   }
 }
 
