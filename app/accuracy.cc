@@ -8,7 +8,6 @@
 #include "app/command.h"
 #include "app/trace_options.h"
 #include "estimate/accuracy.h"
-#include "sim/check.h"
 
 namespace shutterlab::app {
 namespace {
@@ -20,12 +19,11 @@ struct AccuracyCommand {
 };
 
 void Run(const AccuracyCommand& command) {
-  SHUTTERLAB_CHECK(!command.trace.auto_bias)
-      << "--auto-bias is not available yet; give the still segment with --bias A:B";
   AccuracyOptions options = command.accuracy;
-  options.bias = ParseBiasSegment(command.trace.bias);
-  options.Check();
+  if (!command.trace.auto_bias) options.bias = ParseBiasSegment(command.trace.bias);
+  options.Check();  // bad options fail before the trace is read
   const GyroTrace trace = command.trace.Load();
+  options.bias = command.trace.Segment(trace);  // --bias A:B, or the detected still segment
   AccuracyResult result;
   try {
     result = AnalyzeAccuracy(trace, options);

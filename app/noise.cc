@@ -8,7 +8,6 @@
 #include "app/command.h"
 #include "app/trace_options.h"
 #include "estimate/noise.h"
-#include "sim/check.h"
 #include "sim/text_file.h"
 
 namespace shutterlab::app {
@@ -22,12 +21,11 @@ struct NoiseCommand {
 };
 
 void Run(const NoiseCommand& command) {
-  SHUTTERLAB_CHECK(!command.trace.auto_bias)
-      << "--auto-bias is not available yet; give the still segment with --bias A:B";
   NoiseOptions options = command.noise;
-  options.bias = ParseBiasSegment(command.trace.bias);
-  options.Check();
+  if (!command.trace.auto_bias) options.bias = ParseBiasSegment(command.trace.bias);
+  options.Check();  // bad options fail before the trace is read
   const GyroTrace trace = command.trace.Load();
+  options.bias = command.trace.Segment(trace);  // --bias A:B, or the detected still segment
   NoiseResult result;
   try {
     result = AnalyzeNoise(trace, options);
