@@ -1,0 +1,83 @@
+// `shutterlab flight`: the source paper's flight analysis (Table 4): the share of readout-long
+// windows in which the camera turned more than a ground limit allows.
+
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "app/command.h"
+#include "app/trace_options.h"
+#include "estimate/flight.h"
+#include "sim/check.h"
+
+namespace shutterlab::app {
+namespace {
+
+struct FlightCommand {
+  TraceOptions trace;
+  FlightOptions flight;
+  std::vector<std::string> limits{"5cm", "10cm"};
+  std::vector<std::string> windows{"10ms", "20ms"};
+  bool no_vector = false;
+  bool json = false;
+  std::string series_path;
+};
+
+void Run(const FlightCommand& command) {
+  FlightOptions options = command.flight;
+  options.limits_m.clear();
+  for (const std::string& text : command.limits) options.limits_m.push_back(ParseLengthM(text));
+  options.windows_s.clear();
+  for (const std::string& text : command.windows) options.windows_s.push_back(ParseDurationS(text));
+  options.vector_criterion = !command.no_vector;
+  options.series = !command.series_path.empty();
+  if (!command.trace.auto_bias) options.bias = ParseBiasSegment(command.trace.bias);
+  options.Check();  // before the (possibly long) read
+  const GyroTrace trace = command.trace.Load();
+  options.bias = command.trace.Segment(trace);
+  Progress progress("flight", 1000);
+  options.progress = [&progress](double fraction) { progress.Update(static_cast<size_t>(fraction * 1000)); };
+  FlightResult result;
+  try {
+    result = Flight(trace, options);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(command.trace.path + ": " + e.what());
+  }
+  if (options.series) WriteFlightSeriesCsv(command.series_path, result.series);
+  if (command.json) {
+    std::cout << FlightToJson(result).dump(2) << "\n";
+  } else {
+    std::cout << FlightTable(result);
+  }
+}
+
+const CommandRegistration kRegistration(40, [](CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "flight", "share of time windows whose rotation smears the image beyond a ground limit (Table 4)");
+  auto command = std::make_shared<FlightCommand>();
+  command->trace.Add(cmd, /*with_bias=*/true);
+  cmd->add_option("--altitude", command->flight.altitude_m, "height above flat ground, m")
+      ->capture_default_str();
+  cmd->add_option("--limit", command->limits, "ground limits, e.g. 5cm,10cm (m, cm, mm; bare = m)")
+      ->delimiter(',')
+      ->capture_default_str();
+  cmd->add_option("--window", command->windows,
+                  "window durations (the rolling-shutter readout), e.g. 10ms,20ms (s, ms, us; bare = s)")
+      ->delimiter(',')
+      ->capture_default_str();
+  cmd->add_option("--noise-allowance", command->flight.noise_allowance_arcsec,
+                  "added to each threshold for the gyro's own noise, arcsec")
+      ->capture_default_str();
+  cmd->add_flag("--no-vector", command->no_vector,
+                "skip the vector (SO(3) rotation angle) criterion, about halving the run time");
+  cmd->add_flag("--json", command->json, "print JSON (FORMATS.md `flight`) instead of a table");
+  cmd->add_option("--series", command->series_path,
+                  "write per-window ranges for the FIRST --window duration to this CSV: "
+                  "t,range_x,range_y,range_z,vector (window start in s; arcsec)");
+  return std::function<void()>([command] { Run(*command); });
+});
+
+}  // namespace
+}  // namespace shutterlab::app
