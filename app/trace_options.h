@@ -1,13 +1,13 @@
 #pragma once
 // CLI options shared by every command that reads a gyro trace: format selection and bias segment.
 
-#include <string>
-
-#include <CLI/CLI.hpp>
-
 #include "sim/bias.h"
 #include "sim/gyro_io.h"
 #include "sim/still_detect.h"
+
+#include <CLI/CLI.hpp>
+
+#include <string>
 
 namespace shutterlab::app {
 

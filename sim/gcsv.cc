@@ -1,10 +1,10 @@
 #include "sim/gcsv.h"
 
-#include <cmath>
-#include <string_view>
-
 #include "sim/check.h"
 #include "sim/text_file.h"
+
+#include <cmath>
+#include <string_view>
 
 namespace shutterlab {
 namespace {
@@ -21,10 +21,14 @@ std::optional<TimeUnit> ExactUnit(double tscale) {
 
 const char* TscaleText(TimeUnit unit) {
   switch (unit) {
-    case TimeUnit::kSeconds: return "1";
-    case TimeUnit::kMilliseconds: return "0.001";
-    case TimeUnit::kMicroseconds: return "0.000001";
-    case TimeUnit::kNanoseconds: return "0.000000001";
+    case TimeUnit::kSeconds:
+      return "1";
+    case TimeUnit::kMilliseconds:
+      return "0.001";
+    case TimeUnit::kMicroseconds:
+      return "0.000001";
+    case TimeUnit::kNanoseconds:
+      return "0.000000001";
   }
   return "1";
 }
@@ -48,7 +52,8 @@ int ReadoutDirectionCode(const std::string& word) {
 // Value of a "key,value" line: everything after the first comma, trimmed (a note may hold commas).
 std::string ValueAfterKey(std::string_view line) {
   const size_t comma = line.find(',');
-  std::string_view value = comma == std::string_view::npos ? std::string_view() : line.substr(comma + 1);
+  std::string_view value =
+      comma == std::string_view::npos ? std::string_view() : line.substr(comma + 1);
   while (!value.empty() && (value.front() == ' ' || value.front() == '\t')) value.remove_prefix(1);
   while (!value.empty() && (value.back() == ' ' || value.back() == '\t')) value.remove_suffix(1);
   return std::string(value);
@@ -60,8 +65,15 @@ std::string_view StripBom(std::string_view line) {
 }
 
 bool IsReservedKey(const std::string& key) {
-  static const char* const kReserved[] = {"version", "id", "orientation", "tscale", "gscale",
-                                          "frame_readout_time", "frame_readout_direction", "t", "time"};
+  static const char* const kReserved[] = {"version",
+                                          "id",
+                                          "orientation",
+                                          "tscale",
+                                          "gscale",
+                                          "frame_readout_time",
+                                          "frame_readout_direction",
+                                          "t",
+                                          "time"};
   for (const char* reserved : kReserved) {
     if (ToLower(key) == reserved) return true;
   }
@@ -115,14 +127,16 @@ GcsvLog ReadGcsv(const std::string& path) {
       break;
     }
     if (fields.size() < 2) {
-      throw IoError(IoMessage(path, n, "header line is not 'key,value': '" + std::string(*line) + "'"));
+      throw IoError(
+          IoMessage(path, n, "header line is not 'key,value': '" + std::string(*line) + "'"));
     }
     const std::string value = ValueAfterKey(*line);
     log.header.emplace_back(std::string(fields[0]), value);
     auto positive = [&](const char* name) {
       const auto v = ParseDouble(value);
       if (!v || !(*v > 0.0)) {
-        throw IoError(IoMessage(path, n, std::string(name) + " must be a positive number, found '" + value + "'"));
+        throw IoError(IoMessage(
+            path, n, std::string(name) + " must be a positive number, found '" + value + "'"));
       }
       return *v;
     };
@@ -136,15 +150,17 @@ GcsvLog ReadGcsv(const std::string& path) {
     } else if (key == "frame_readout_time") {
       readout_ms = ParseDouble(value);
       if (!readout_ms) {
-        throw IoError(IoMessage(path, n, "frame_readout_time is not a finite number: '" + value + "'"));
+        throw IoError(
+            IoMessage(path, n, "frame_readout_time is not a finite number: '" + value + "'"));
       }
       readout_line = n;
     } else if (key == "frame_readout_direction") {
       direction_value = value;
       const auto word = ReadoutDirectionWord(value);
       if (!word) {
-        throw IoError(IoMessage(path, n, "unknown frame_readout_direction '" + value +
-                                             "' (0-3, TopToBottom, BottomToTop, LeftToRight, RightToLeft)"));
+        throw IoError(IoMessage(path, n,
+                                "unknown frame_readout_direction '" + value +
+                                    "' (0-3, TopToBottom, BottomToTop, LeftToRight, RightToLeft)"));
       }
       log.frame_readout_direction = *word;
     }
@@ -165,8 +181,9 @@ GcsvLog ReadGcsv(const std::string& path) {
   try {
     to_out = GcsvOrientationMatrix(orientation);
   } catch (const std::invalid_argument&) {
-    throw IoError(IoMessage(path, orientation_line, "orientation '" + orientation +
-                                                        "' is not three letters of xXyYzZ naming each axis once"));
+    throw IoError(IoMessage(
+        path, orientation_line,
+        "orientation '" + orientation + "' is not three letters of xXyYzZ naming each axis once"));
   }
   log.orientation = orientation;
   if (readout_ms) {
@@ -191,9 +208,10 @@ GcsvLog ReadGcsv(const std::string& path) {
     if (line->empty()) continue;
     SplitFields(*line, ',', &fields);
     if (fields.size() != columns.size()) {
-      throw IoError(IoMessage(path, n, "expected " + std::to_string(columns.size()) +
-                                           " columns as on line " + std::to_string(column_line) +
-                                           ", found " + std::to_string(fields.size())));
+      throw IoError(IoMessage(path, n,
+                              "expected " + std::to_string(columns.size()) +
+                                  " columns as on line " + std::to_string(column_line) +
+                                  ", found " + std::to_string(fields.size())));
     }
     GyroSample s;
     std::optional<int64_t> t_ns;
@@ -203,22 +221,25 @@ GcsvLog ReadGcsv(const std::string& path) {
       t_ns = SecondsToNs(*t * *tscale);
     }
     if (!t_ns) {
-      throw IoError(IoMessage(path, n, "t is not a finite number in range: '" + std::string(fields[0]) + "'"));
+      throw IoError(IoMessage(
+          path, n, "t is not a finite number in range: '" + std::string(fields[0]) + "'"));
     }
     s.t_ns = *t_ns;
     Eigen::Vector3d in;
     for (int axis = 0; axis < 3; ++axis) {
       const auto value = ParseDouble(fields[axis + 1]);
       if (!value || !std::isfinite(*value * *gscale)) {
-        throw IoError(IoMessage(path, n, std::string("g") + "xyz"[axis] + " is not a finite number: '" +
-                                             std::string(fields[axis + 1]) + "'"));
+        throw IoError(IoMessage(path, n,
+                                std::string("g") + "xyz"[axis] + " is not a finite number: '" +
+                                    std::string(fields[axis + 1]) + "'"));
       }
       in[axis] = *value * *gscale;
     }
     s.omega_rad_s = to_out * in;
     if (!samples.empty() && s.t_ns < samples.back().t_ns) {
-      throw IoError(IoMessage(path, n, "timestamp decreases (" + std::string(fields[0]) +
-                                           " after an earlier, larger one)"));
+      throw IoError(IoMessage(
+          path, n,
+          "timestamp decreases (" + std::string(fields[0]) + " after an earlier, larger one)"));
     }
     samples.push_back(s);
   }
@@ -232,14 +253,17 @@ void GcsvWriteOptions::Check() const {
   SHUTTERLAB_CHECK(std::isfinite(gscale) && gscale >= 0.0) << "gscale must be >= 0, got " << gscale;
   SHUTTERLAB_CHECK(!frame_readout_s || (std::isfinite(*frame_readout_s) && *frame_readout_s > 0.0))
       << "frame_readout_s must be positive";
-  SHUTTERLAB_CHECK(frame_readout_direction == "top_to_bottom" || frame_readout_direction == "bottom_to_top" ||
-                   frame_readout_direction == "left_to_right" || frame_readout_direction == "right_to_left")
+  SHUTTERLAB_CHECK(
+      frame_readout_direction == "top_to_bottom" || frame_readout_direction == "bottom_to_top" ||
+      frame_readout_direction == "left_to_right" || frame_readout_direction == "right_to_left")
       << "unknown frame_readout_direction '" << frame_readout_direction << "'";
-  SHUTTERLAB_CHECK(id.find_first_of(",\r\n") == std::string::npos) << "id must not hold ',' or a newline";
+  SHUTTERLAB_CHECK(id.find_first_of(",\r\n") == std::string::npos)
+      << "id must not hold ',' or a newline";
   for (const auto& [key, value] : extra_header) {
     SHUTTERLAB_CHECK(!key.empty() && key.find_first_of(",\r\n") == std::string::npos)
         << "header key '" << key << "' must be non-empty without ',' or newlines";
-    SHUTTERLAB_CHECK(!IsReservedKey(key)) << "header key '" << key << "' is written by WriteGcsv itself";
+    SHUTTERLAB_CHECK(!IsReservedKey(key))
+        << "header key '" << key << "' is written by WriteGcsv itself";
     SHUTTERLAB_CHECK(value.find_first_of("\r\n") == std::string::npos)
         << "header value of '" << key << "' must not hold a newline";
   }

@@ -1,6 +1,6 @@
 #pragma once
-// Gyroflow's text IMU log, `.gcsv` (https://docs.gyroflow.xyz, "gcsv format"; gyroflow/gyroflow-docs
-// docs/logging/gcsv.md):
+// Gyroflow's text IMU log, `.gcsv` (https://docs.gyroflow.xyz, "gcsv format";
+// gyroflow/gyroflow-docs docs/logging/gcsv.md):
 //
 //   GYROFLOW IMU LOG            (or CAMERA IMU LOG)
 //   version,1.3
@@ -18,15 +18,15 @@
 // Gyroflow's own IMU frame; the same parser (src/gyroflow/gcsv.rs) assumes "xzY" when a file has no
 // orientation line, and so do we.
 
+#include "sim/gyro_trace.h"
+#include "sim/raw_csv.h"
+
+#include <Eigen/Core>
+
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
-
-#include "sim/gyro_trace.h"
-#include "sim/raw_csv.h"
 
 namespace shutterlab {
 
@@ -34,7 +34,7 @@ struct GcsvLog {
   // Seconds (t * tscale) and rad/s (g * gscale), with `orientation` applied: the axes Gyroflow
   // would use.
   GyroTrace trace;
-  std::string orientation = "XYZ";  // as applied (the file's, or the default "xzY")
+  std::string orientation = "XYZ";        // as applied (the file's, or the default "xzY")
   std::optional<double> frame_readout_s;  // frame_readout_time (Gyroflow writes milliseconds)
   // frame_readout_direction as a word: "top_to_bottom" (also when absent), "bottom_to_top",
   // "left_to_right", "right_to_left". Gyroflow's codes 0/1/2/3 (and 180/270/90) are mapped.
@@ -70,7 +70,8 @@ struct GcsvWriteOptions {
 };
 
 // Writes a .gcsv whole or not at all (IoError on failure).
-void WriteGcsv(const std::string& path, const GyroTrace& trace, const GcsvWriteOptions& options = {});
+void WriteGcsv(const std::string& path, const GyroTrace& trace,
+               const GcsvWriteOptions& options = {});
 
 // The signed permutation M of an orientation string: out = M * in (see the note at the top).
 // Throws std::invalid_argument unless the string is three of xXyYzZ naming each axis once.

@@ -27,28 +27,30 @@ GyroTrace ReadRows(const std::string& path, LineCursor* cursor) {
     SplitFields(*line, ',', &fields);
     const long n = cursor->line_number();
     if (fields.size() < 4) {
-      throw IoError(IoMessage(path, n, "expected 4 columns t,gx,gy,gz, found " +
-                                           std::to_string(fields.size())));
+      throw IoError(IoMessage(
+          path, n, "expected 4 columns t,gx,gy,gz, found " + std::to_string(fields.size())));
     }
     GyroSample s;
     // Exact for plain decimals (9 digits of seconds keep every ns at any epoch).
     const auto t_ns = ParseTimeInUnitNs(fields[0], TimeUnit::kSeconds);
     if (!t_ns) {
-      throw IoError(IoMessage(path, n, "t is not a finite number in range: '" + std::string(fields[0]) + "'"));
+      throw IoError(IoMessage(
+          path, n, "t is not a finite number in range: '" + std::string(fields[0]) + "'"));
     }
     for (int axis = 0; axis < 3; ++axis) {
       const auto value = ParseDouble(fields[axis + 1]);
       if (!value) {
-        throw IoError(IoMessage(path, n, std::string("g") + "xyz"[axis] +
-                                             " is not a finite number: '" +
-                                             std::string(fields[axis + 1]) + "'"));
+        throw IoError(IoMessage(path, n,
+                                std::string("g") + "xyz"[axis] + " is not a finite number: '" +
+                                    std::string(fields[axis + 1]) + "'"));
       }
       s.omega_rad_s[axis] = *value;
     }
     s.t_ns = *t_ns;
     if (!samples.empty() && s.t_ns < previous_t_ns) {
-      throw IoError(IoMessage(path, n, "timestamp decreases (" + std::string(fields[0]) +
-                                           " after an earlier, larger one)"));
+      throw IoError(IoMessage(
+          path, n,
+          "timestamp decreases (" + std::string(fields[0]) + " after an earlier, larger one)"));
     }
     previous_t_ns = s.t_ns;
     samples.push_back(s);
@@ -105,9 +107,10 @@ GyroFormat DetectGyroFormat(std::string_view text, const std::string& path) {
   }
   const bool has_header = !ParseDouble(fields[0]);
   if (has_header && !IsGyroCsvHeader(fields)) {
-    throw IoError(IoMessage(path, first_line, "unrecognised first line '" + std::string(*first) +
-                                                  "': expected the header 't,gx,gy,gz' (gyro.csv, raw "
-                                                  "counts) or 'GYROFLOW IMU LOG' (.gcsv); see --format"));
+    throw IoError(IoMessage(path, first_line,
+                            "unrecognised first line '" + std::string(*first) +
+                                "': expected the header 't,gx,gy,gz' (gyro.csv, raw "
+                                "counts) or 'GYROFLOW IMU LOG' (.gcsv); see --format"));
   }
   // Scan the rows of a headerless file from its first line, else from the line after the header.
   LineCursor rows(text);
@@ -122,15 +125,18 @@ GyroFormat DetectGyroFormat(std::string_view text, const std::string& path) {
     for (size_t axis = 1; axis < 4 && axis < fields.size(); ++axis) {
       if (ParseInt(fields[axis])) continue;
       if (has_header) return GyroFormat::kGyroCsv;
-      // A non-number is left to the raw reader, which names it; a fractional number is neither format.
+      // A non-number is left to the raw reader, which names it; a fractional number is neither
+      // format.
       if (!ParseDouble(fields[axis])) return GyroFormat::kRaw;
       throw IoError(IoMessage(path, rows.line_number(),
-                              "no header line and a non-integer rate '" + std::string(fields[axis]) +
+                              "no header line and a non-integer rate '" +
+                                  std::string(fields[axis]) +
                                   "': not raw counts (integers), and a gyro.csv needs the header "
                                   "'t,gx,gy,gz'; see --format"));
     }
   }
-  // Every rate an integer, or no rows at all after a header (the gyro.csv reader says "no samples").
+  // Every rate an integer, or no rows at all after a header (the gyro.csv reader says "no
+  // samples").
   return has_header && !any_row ? GyroFormat::kGyroCsv : GyroFormat::kRaw;
 }
 
@@ -171,10 +177,14 @@ TimeUnit ParseTimeUnit(const std::string& name) {
 
 const char* GyroFormatName(GyroFormat format) {
   switch (format) {
-    case GyroFormat::kAuto: return "auto";
-    case GyroFormat::kGyroCsv: return "gyro.csv";
-    case GyroFormat::kGcsv: return "gcsv";
-    case GyroFormat::kRaw: return "raw";
+    case GyroFormat::kAuto:
+      return "auto";
+    case GyroFormat::kGyroCsv:
+      return "gyro.csv";
+    case GyroFormat::kGcsv:
+      return "gcsv";
+    case GyroFormat::kRaw:
+      return "raw";
   }
   return "?";
 }

@@ -2,12 +2,12 @@
 // Readers and writers of gyro logs. Every reader throws IoError("PATH:LINE: problem") on bad input
 // and never returns a partial trace.
 
-#include <string>
-#include <string_view>
-
-#include "sim/gcsv.h"     // GcsvLog, ReadGcsv, WriteGcsv
+#include "sim/gcsv.h"  // GcsvLog, ReadGcsv, WriteGcsv
 #include "sim/gyro_trace.h"
 #include "sim/raw_csv.h"  // TimeUnit, ReadRawCsv, WriteRawCsv
+
+#include <string>
+#include <string_view>
 
 namespace shutterlab {
 
@@ -42,7 +42,8 @@ GyroTrace ReadGyro(const std::string& path, const GyroReadOptions& options = {})
 //  3. no header (the first line starts with a number) and every rate an integer -> kRaw;
 //     no header and a non-integer rate                                       -> IoError naming that
 //     line (neither format: gyro.csv needs its header, raw counts are integers);
-//  4. any other first line                                                   -> IoError naming line 1.
+//  4. any other first line                                                   -> IoError naming
+//  line 1.
 // Rule 2's ambiguity: a gyro.csv whose every rate is a whole number of rad/s (in practice: all
 // zero) reads as raw counts; with the default --range/--time-unit an all-zero trace is the same
 // either way. Override with --format.

@@ -1,13 +1,13 @@
 #include "sim/raw_csv.h"
 
+#include "sim/check.h"
+#include "sim/text_file.h"
+
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <optional>
 #include <vector>
-
-#include "sim/check.h"
-#include "sim/text_file.h"
 
 namespace shutterlab {
 namespace {
@@ -18,10 +18,14 @@ constexpr double kRadPerDeg = kPi / 180.0;
 // Decimal digits of the fraction needed to write t_ns exactly in a unit: 9, 6, 3, 0.
 int FractionDigits(TimeUnit unit) {
   switch (unit) {
-    case TimeUnit::kSeconds: return 9;
-    case TimeUnit::kMilliseconds: return 6;
-    case TimeUnit::kMicroseconds: return 3;
-    case TimeUnit::kNanoseconds: return 0;
+    case TimeUnit::kSeconds:
+      return 9;
+    case TimeUnit::kMilliseconds:
+      return 6;
+    case TimeUnit::kMicroseconds:
+      return 3;
+    case TimeUnit::kNanoseconds:
+      return 0;
   }
   return 0;
 }
@@ -52,7 +56,8 @@ std::optional<int64_t> ParseTimeInUnitNs(std::string_view field, TimeUnit unit) 
   if (!rest.empty() && (rest.front() == '-' || rest.front() == '+')) rest.remove_prefix(1);
   const size_t dot = rest.find('.');
   const std::string_view whole = rest.substr(0, dot);
-  const std::string_view fraction = dot == std::string_view::npos ? std::string_view() : rest.substr(dot + 1);
+  const std::string_view fraction =
+      dot == std::string_view::npos ? std::string_view() : rest.substr(dot + 1);
   auto all_digits = [](std::string_view s) {
     for (char c : s) {
       if (c < '0' || c > '9') return false;
@@ -62,7 +67,8 @@ std::optional<int64_t> ParseTimeInUnitNs(std::string_view field, TimeUnit unit) 
   if (!whole.empty() && all_digits(whole) && all_digits(fraction) &&
       fraction.size() <= static_cast<size_t>(max_fraction_digits)) {
     const auto parsed = ParseInt(whole);  // nullopt on int64 overflow
-    if (!parsed || *parsed > std::numeric_limits<int64_t>::max() / per_unit - 1) return std::nullopt;
+    if (!parsed || *parsed > std::numeric_limits<int64_t>::max() / per_unit - 1)
+      return std::nullopt;
     const int64_t units = *parsed;
     int64_t fraction_ns = 0;
     int64_t place = per_unit;
@@ -94,20 +100,28 @@ bool IsHeader(const std::vector<std::string_view>& fields) {
 
 int64_t NanosecondsPerUnit(TimeUnit unit) {
   switch (unit) {
-    case TimeUnit::kSeconds: return 1000000000;
-    case TimeUnit::kMilliseconds: return 1000000;
-    case TimeUnit::kMicroseconds: return 1000;
-    case TimeUnit::kNanoseconds: return 1;
+    case TimeUnit::kSeconds:
+      return 1000000000;
+    case TimeUnit::kMilliseconds:
+      return 1000000;
+    case TimeUnit::kMicroseconds:
+      return 1000;
+    case TimeUnit::kNanoseconds:
+      return 1;
   }
   return 1;
 }
 
 double RawSensitivityLsbPerDps(int range_dps) {
   switch (range_dps) {
-    case 250: return 131.0;
-    case 500: return 65.5;
-    case 1000: return 32.8;
-    case 2000: return 16.4;
+    case 250:
+      return 131.0;
+    case 500:
+      return 65.5;
+    case 1000:
+      return 32.8;
+    case 2000:
+      return 16.4;
   }
   SHUTTERLAB_CHECK(false) << "unknown gyro range " << range_dps
                           << " deg/s (expected 250, 500, 1000 or 2000)";
@@ -137,14 +151,14 @@ GyroTrace ReadRawCsv(const std::string& path, int range_dps, TimeUnit time_unit)
       if (IsHeader(fields)) continue;
     }
     if (fields.size() < 4) {
-      throw IoError(IoMessage(path, n, "expected 4 columns t,gx,gy,gz, found " +
-                                           std::to_string(fields.size())));
+      throw IoError(IoMessage(
+          path, n, "expected 4 columns t,gx,gy,gz, found " + std::to_string(fields.size())));
     }
     GyroSample s;
     const auto t_ns = ParseTimeInUnitNs(fields[0], time_unit);
     if (!t_ns) {
-      throw IoError(IoMessage(path, n, "t is not a finite number in range: '" +
-                                           std::string(fields[0]) + "'"));
+      throw IoError(IoMessage(
+          path, n, "t is not a finite number in range: '" + std::string(fields[0]) + "'"));
     }
     s.t_ns = *t_ns;
     for (int axis = 0; axis < 3; ++axis) {
@@ -152,18 +166,20 @@ GyroTrace ReadRawCsv(const std::string& path, int range_dps, TimeUnit time_unit)
       const std::string name = std::string("g") + "xyz"[axis];
       const auto count = ParseInt(field);
       if (!count) {
-        throw IoError(IoMessage(path, n, name + " is not an integer count: '" +
-                                             std::string(field) + "'"));
+        throw IoError(
+            IoMessage(path, n, name + " is not an integer count: '" + std::string(field) + "'"));
       }
       if (*count < -32768 || *count > 32767) {
-        throw IoError(IoMessage(path, n, name + " = " + std::string(field) +
-                                             " is outside the int16 range of a raw count"));
+        throw IoError(IoMessage(
+            path, n,
+            name + " = " + std::string(field) + " is outside the int16 range of a raw count"));
       }
       s.omega_rad_s[axis] = static_cast<double>(*count) * rad_s_per_count;
     }
     if (!samples.empty() && s.t_ns < samples.back().t_ns) {
-      throw IoError(IoMessage(path, n, "timestamp decreases (" + std::string(fields[0]) +
-                                           " after an earlier, larger one)"));
+      throw IoError(IoMessage(
+          path, n,
+          "timestamp decreases (" + std::string(fields[0]) + " after an earlier, larger one)"));
     }
     samples.push_back(s);
   }

@@ -3,13 +3,13 @@
 // Raspberry Pi): one sample per line `t,gx,gy,gz[,...]`, an optional header line, gx..gz the
 // sensor's int16 output registers, t in s, ms, us or ns.
 
+#include "sim/gyro_trace.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
-
-#include "sim/gyro_trace.h"
 
 namespace shutterlab {
 

@@ -1,11 +1,11 @@
 #include "sim/still_detect.h"
 
+#include "sim/check.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
-
-#include "sim/check.h"
 
 namespace shutterlab {
 namespace {
@@ -45,10 +45,12 @@ class WindowStats {
 }  // namespace
 
 void StillDetectOptions::Check() const {
-  SHUTTERLAB_CHECK(std::isfinite(window_s) && window_s > 0) << "still window must be > 0 s, got " << window_s;
+  SHUTTERLAB_CHECK(std::isfinite(window_s) && window_s > 0)
+      << "still window must be > 0 s, got " << window_s;
   SHUTTERLAB_CHECK(std::isfinite(k_sigma) && k_sigma > 0) << "k_sigma must be > 0, got " << k_sigma;
   SHUTTERLAB_CHECK(std::isfinite(min_duration_s) && min_duration_s >= window_s)
-      << "min still duration " << min_duration_s << " s must be at least the window " << window_s << " s";
+      << "min still duration " << min_duration_s << " s must be at least the window " << window_s
+      << " s";
 }
 
 StillSegment DetectStillSegment(const GyroTrace& trace, const StillDetectOptions& options) {
@@ -57,8 +59,10 @@ StillSegment DetectStillSegment(const GyroTrace& trace, const StillDetectOptions
   const double dt_s = trace.sampling().median_interval_ns * 1e-9;
   SHUTTERLAB_CHECK(dt_s > 0) << "still detection needs increasing timestamps";
   const size_t n = trace.size();
-  const size_t window = std::max<size_t>(2, static_cast<size_t>(std::llround(options.window_s / dt_s)));
-  const size_t stretch = std::max(window, static_cast<size_t>(std::llround(options.min_duration_s / dt_s)));
+  const size_t window =
+      std::max<size_t>(2, static_cast<size_t>(std::llround(options.window_s / dt_s)));
+  const size_t stretch =
+      std::max(window, static_cast<size_t>(std::llround(options.min_duration_s / dt_s)));
   SHUTTERLAB_CHECK(window <= n) << "still window of " << options.window_s << " s (" << window
                                 << " samples) is longer than the trace (" << n << " samples, "
                                 << trace.DurationS() << " s)";
@@ -80,7 +84,8 @@ StillSegment DetectStillSegment(const GyroTrace& trace, const StillDetectOptions
   size_t ref = 0;
   double ref_rate = std::numeric_limits<double>::infinity();
   for (size_t j = 0; j + stretch <= n; ++j) {
-    if (stretch_variance[j] > kQuietVarianceFactor * least + kMinSpreadRadS * kMinSpreadRadS) continue;
+    if (stretch_variance[j] > kQuietVarianceFactor * least + kMinSpreadRadS * kMinSpreadRadS)
+      continue;
     const double rate = stats.Mean(j, j + stretch).norm();
     if (rate < ref_rate) {
       ref_rate = rate;
@@ -100,8 +105,8 @@ StillSegment DetectStillSegment(const GyroTrace& trace, const StillDetectOptions
   const Eigen::Vector3d mean_spread =
       (dm_sq / static_cast<double>(inside)).cwiseSqrt().cwiseMax(kMinSpreadRadS);
   const double v_mean = v_sum / inside;
-  const double v_spread =
-      std::max(std::sqrt(std::max(0.0, v_sq / inside - v_mean * v_mean)), kMinSpreadRadS * kMinSpreadRadS);
+  const double v_spread = std::max(std::sqrt(std::max(0.0, v_sq / inside - v_mean * v_mean)),
+                                   kMinSpreadRadS * kMinSpreadRadS);
   const Eigen::Vector3d mean_limit = options.k_sigma * mean_spread;
   const double v_limit = v_mean + options.k_sigma * v_spread;
   // A stretch that moves slowly is quiet within each window but its window means wander: for noise
@@ -110,8 +115,9 @@ StillSegment DetectStillSegment(const GyroTrace& trace, const StillDetectOptions
   const double wander = mean_spread.cwiseAbs2().sum();
   SHUTTERLAB_CHECK(wander <= kMaxWanderRatio * v_mean + 3 * kMinSpreadRadS * kMinSpreadRadS)
       << "no still segment found: the quietest " << options.min_duration_s << " s, from "
-      << (trace[ref].t_ns - trace.t_begin_ns()) * 1e-9 << " s, still moves (its " << options.window_s
-      << " s means wander " << std::sqrt(wander / std::max(v_mean, 1e-300)) << " times the in-window noise); give --bias A:B";
+      << (trace[ref].t_ns - trace.t_begin_ns()) * 1e-9 << " s, still moves (its "
+      << options.window_s << " s means wander " << std::sqrt(wander / std::max(v_mean, 1e-300))
+      << " times the in-window noise); give --bias A:B";
 
   // 3.-5. Runs of still windows.
   auto still = [&](size_t j) {
@@ -149,9 +155,10 @@ StillSegment DetectStillSegment(const GyroTrace& trace, const StillDetectOptions
   }
   const int64_t t0 = trace.t_begin_ns();
   SHUTTERLAB_CHECK(best_ns >= min_ns)
-      << "no still segment of at least " << options.min_duration_s << " s found (longest: "
-      << std::max<int64_t>(best_ns, 0) * 1e-9 << " s"
-      << (best_ns > 0 ? " at " + std::to_string((trace[best_begin].t_ns - t0) * 1e-9) + " s" : std::string())
+      << "no still segment of at least " << options.min_duration_s
+      << " s found (longest: " << std::max<int64_t>(best_ns, 0) * 1e-9 << " s"
+      << (best_ns > 0 ? " at " + std::to_string((trace[best_begin].t_ns - t0) * 1e-9) + " s"
+                      : std::string())
       << "); give --bias A:B";
   StillSegment out;
   out.first_sample = best_begin;

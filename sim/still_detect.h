@@ -38,11 +38,12 @@ struct StillDetectOptions {
 };
 
 struct StillSegment {
-  BiasSegment segment;              // seconds after the trace's first sample, [begin_s, end_s)
-  size_t first_sample = 0;          // index range of the still samples [first_sample, end_sample)
+  BiasSegment segment;      // seconds after the trace's first sample, [begin_s, end_s)
+  size_t first_sample = 0;  // index range of the still samples [first_sample, end_sample)
   size_t end_sample = 0;
-  size_t window_samples = 0;        // N
-  Eigen::Vector3d quiet_mean_rad_s = Eigen::Vector3d::Zero();  // m_ref, the reference stretch's mean
+  size_t window_samples = 0;  // N
+  Eigen::Vector3d quiet_mean_rad_s =
+      Eigen::Vector3d::Zero();  // m_ref, the reference stretch's mean
 };
 
 // Finds the still segment. Throws std::invalid_argument when the window or min_duration_s is longer

@@ -2,13 +2,13 @@
 // 2, and no output file left behind. One test per case, so that ctest can run them in parallel
 // (each starts the executable once).
 
-#include <filesystem>
-#include <fstream>
-#include <string>
+#include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 
-#include "tests/test_util.h"
+#include <filesystem>
+#include <fstream>
+#include <string>
 
 namespace shutterlab {
 namespace {
@@ -39,7 +39,8 @@ TEST_P(BadInputCli, OneLineExitTwoNoOutput) {
   const std::string trace = dir / (std::string(c.name) + ".log");
   std::ofstream(trace) << c.content;
   const std::string out = dir / "allan.csv";
-  const test::CommandResult r = test::RunShutterlab("noise '" + trace + "' " + c.args + " --allan '" + out + "'");
+  const test::CommandResult r =
+      test::RunShutterlab("noise '" + trace + "' " + c.args + " --allan '" + out + "'");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   ASSERT_FALSE(r.output.empty());
   EXPECT_EQ(r.output.rfind("error: ", 0), 0u) << r.output;
@@ -60,33 +61,46 @@ INSTANTIATE_TEST_SUITE_P(
         // gyro.csv
         BadCase{"csv_missing_header", "0,1,2,3\n", "--format csv", 1, "missing header"},
         BadCase{"csv_columns", "t,gx,gy,gz\n0,1,2,3\n0.001,1,2\n", "", 3, "expected 4 columns"},
-        BadCase{"csv_text", "t,gx,gy,gz\n0,1.5,2,3\n0.001,1.5,two,3\n", "", 3, "gy is not a finite number: 'two'"},
-        BadCase{"csv_nan", "t,gx,gy,gz\n0,1.5,2,3\n0.001,nan,2,3\n", "", 3, "gx is not a finite number"},
-        BadCase{"csv_decreasing", "t,gx,gy,gz\n0.002,1.5,2,3\n0.001,1.5,2,3\n", "", 3, "timestamp decreases"},
+        BadCase{"csv_text", "t,gx,gy,gz\n0,1.5,2,3\n0.001,1.5,two,3\n", "", 3,
+                "gy is not a finite number: 'two'"},
+        BadCase{"csv_nan", "t,gx,gy,gz\n0,1.5,2,3\n0.001,nan,2,3\n", "", 3,
+                "gx is not a finite number"},
+        BadCase{"csv_decreasing", "t,gx,gy,gz\n0.002,1.5,2,3\n0.001,1.5,2,3\n", "", 3,
+                "timestamp decreases"},
         // raw counts
-        BadCase{"raw_range", "0,1,2,3\n1,1,2,3\n", "--raw --range 300", -1, "unknown gyro range 300"},
+        BadCase{"raw_range", "0,1,2,3\n1,1,2,3\n", "--raw --range 300", -1,
+                "unknown gyro range 300"},
         BadCase{"raw_int16", "t,gx,gy,gz\n0,1,2,3\n1,40000,2,3\n", "--format raw", 3,
                 "gx = 40000 is outside the int16 range"},
         BadCase{"raw_fraction", "0,1,2,3\n1,1,2.5,3\n", "--raw", 2, "gy is not an integer count"},
-        BadCase{"raw_decreasing", "10,1,2,3\n9,1,2,3\n", "--raw --time-unit ms", 2, "timestamp decreases"},
-        BadCase{"raw_time_unit", "0,1,2,3\n", "--raw --time-unit min", -1, "unknown time unit 'min'"},
+        BadCase{"raw_decreasing", "10,1,2,3\n9,1,2,3\n", "--raw --time-unit ms", 2,
+                "timestamp decreases"},
+        BadCase{"raw_time_unit", "0,1,2,3\n", "--raw --time-unit min", -1,
+                "unknown time unit 'min'"},
         // .gcsv
-        BadCase{"gcsv_truncated", "GYROFLOW IMU LOG\nversion,1.3\nid,te", "", 3, "header ends before the column line"},
-        BadCase{"gcsv_no_tscale", "GYROFLOW IMU LOG\nversion,1.3\nt,gx,gy,gz\n0,1,2,3\n", "", 3, "no tscale"},
+        BadCase{"gcsv_truncated", "GYROFLOW IMU LOG\nversion,1.3\nid,te", "", 3,
+                "header ends before the column line"},
+        BadCase{"gcsv_no_tscale", "GYROFLOW IMU LOG\nversion,1.3\nt,gx,gy,gz\n0,1,2,3\n", "", 3,
+                "no tscale"},
         BadCase{"gcsv_orientation",
-                "GYROFLOW IMU LOG\nversion,1.3\norientation,XXZ\ntscale,1\ngscale,1\nt,gx,gy,gz\n0,1,2,3\n", "", 3,
-                "orientation 'XXZ'"},
-        BadCase{"gcsv_columns", kG + "t,gx,gy,gz,ax,ay,az\n0,1,2,3,4,5,6\n1,1,2,3\n", "", 9, "expected 7 columns"},
-        BadCase{"gcsv_inf", kG + "t,gx,gy,gz\n0,1,2,3\n1,1,2,inf\n", "", 9, "gz is not a finite number"},
+                "GYROFLOW IMU "
+                "LOG\nversion,1.3\norientation,XXZ\ntscale,1\ngscale,1\nt,gx,gy,gz\n0,1,2,3\n",
+                "", 3, "orientation 'XXZ'"},
+        BadCase{"gcsv_columns", kG + "t,gx,gy,gz,ax,ay,az\n0,1,2,3,4,5,6\n1,1,2,3\n", "", 9,
+                "expected 7 columns"},
+        BadCase{"gcsv_inf", kG + "t,gx,gy,gz\n0,1,2,3\n1,1,2,inf\n", "", 9,
+                "gz is not a finite number"},
         BadCase{"gcsv_forced_on_csv", "t,gx,gy,gz\n0,1.5,2,3\n", "--format gcsv", 1,
                 "missing first line 'GYROFLOW IMU LOG'"},
         // format detection
-        BadCase{"detect_neither", "0.0,0.5,0.25,0.125\n", "", 1, "no header line and a non-integer rate"},
+        BadCase{"detect_neither", "0.0,0.5,0.25,0.125\n", "", 1,
+                "no header line and a non-integer rate"},
         BadCase{"detect_other_header", "time,x,y,z\n0,1,2,3\n", "", 1, "unrecognised first line"},
         BadCase{"detect_empty", "", "", 0, "empty file"},
         // options that fail once the trace is read
         BadCase{"bias_too_few_samples", StillTrace(), "--bias 0:0.005", 0, "holds 5 samples"},
-        BadCase{"window_longer_than_trace", StillTrace(), "--bias 0:1 --window 100000", 0, "100000"},
+        BadCase{"window_longer_than_trace", StillTrace(), "--bias 0:1 --window 100000", 0,
+                "100000"},
         BadCase{"bias_reversed", StillTrace(), "--bias 5:2", -1, "bias segment"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });
 

@@ -1,16 +1,16 @@
 #include "sim/gcsv.h"
 
+#include "sim/check.h"
+#include "sim/text_file.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <string>
-
-#include <gtest/gtest.h>
-
-#include "sim/check.h"
-#include "sim/text_file.h"
-#include "tests/test_util.h"
 
 namespace shutterlab {
 namespace {
@@ -64,11 +64,12 @@ void ExpectIoError(const std::string& path, long line, const std::string& proble
 
 TEST(Gcsv, ReadsTheDocumentedExample) {
   test::TempDir dir;
-  const std::string path = WriteText(dir, "a.gcsv", std::string(kHeader) +
-                                                        "t,gx,gy,gz,ax,ay,az\n"
-                                                        "0,39,86,183,-1137,-15689,-2986\n"
-                                                        "1,56,100,202,-1179,-15694,-2887\n"
-                                                        "2,63,108,218,-1247,-15702,-2794\n");
+  const std::string path = WriteText(dir, "a.gcsv",
+                                     std::string(kHeader) +
+                                         "t,gx,gy,gz,ax,ay,az\n"
+                                         "0,39,86,183,-1137,-15689,-2986\n"
+                                         "1,56,100,202,-1179,-15694,-2887\n"
+                                         "2,63,108,218,-1247,-15702,-2794\n");
   const GcsvLog log = ReadGcsv(path);
   ASSERT_EQ(log.trace.size(), 3u);
   EXPECT_EQ(log.trace[1].t_ns, 1000000);  // 1 * tscale 0.001 s, exact
@@ -97,8 +98,8 @@ TEST(Gcsv, OrientationFollowsTelemetryParser) {
   EXPECT_THROW(GcsvOrientationMatrix("XYW"), std::invalid_argument);
 
   test::TempDir dir;
-  const std::string text = Replace(kHeader, "orientation,XYZ", "orientation,YxZ") +
-                           "t,gx,gy,gz\n0,1,2,3\n";
+  const std::string text =
+      Replace(kHeader, "orientation,XYZ", "orientation,YxZ") + "t,gx,gy,gz\n0,1,2,3\n";
   const GcsvLog log = ReadGcsv(WriteText(dir, "o.gcsv", text));
   const Eigen::Vector3d expected = Eigen::Vector3d(2, -1, 3) * 0.00122173;
   EXPECT_NEAR((log.trace[0].omega_rad_s - expected).norm(), 0.0, 1e-15);
@@ -118,7 +119,7 @@ TEST(Gcsv, ReadoutDirectionCodes) {
   const struct {
     const char* code;
     const char* word;
-  } cases[] = {{"0", "top_to_bottom"}, {"1", "bottom_to_top"}, {"180", "bottom_to_top"},
+  } cases[] = {{"0", "top_to_bottom"}, {"1", "bottom_to_top"},           {"180", "bottom_to_top"},
                {"2", "left_to_right"}, {"RightToLeft", "right_to_left"}, {"90", "right_to_left"}};
   for (const auto& c : cases) {
     const std::string text = Replace(kHeader, "frame_readout_direction,0",
@@ -127,19 +128,22 @@ TEST(Gcsv, ReadoutDirectionCodes) {
     EXPECT_EQ(ReadGcsv(WriteText(dir, "d.gcsv", text)).frame_readout_direction, c.word) << c.code;
   }
   // Legacy sign encoding: a negative time means the other direction.
-  const std::string negative = Replace(kHeader, "frame_readout_time,15.23", "frame_readout_time,-15.23") +
-                               "t,gx,gy,gz\n0,1,2,3\n";
+  const std::string negative =
+      Replace(kHeader, "frame_readout_time,15.23", "frame_readout_time,-15.23") +
+      "t,gx,gy,gz\n0,1,2,3\n";
   const GcsvLog log = ReadGcsv(WriteText(dir, "n.gcsv", negative));
   EXPECT_EQ(log.frame_readout_direction, "bottom_to_top");
   EXPECT_DOUBLE_EQ(*log.frame_readout_s, 0.01523);
   // No readout line: none.
-  const std::string none = Replace(kHeader, "frame_readout_time,15.23\n", "") + "t,gx,gy,gz\n0,1,2,3\n";
+  const std::string none =
+      Replace(kHeader, "frame_readout_time,15.23\n", "") + "t,gx,gy,gz\n0,1,2,3\n";
   EXPECT_FALSE(ReadGcsv(WriteText(dir, "x.gcsv", none)).frame_readout_s.has_value());
 }
 
 TEST(Gcsv, NonDecimalTscaleGoesThroughDouble) {
   test::TempDir dir;
-  const std::string text = Replace(kHeader, "tscale,0.001", "tscale,0.00025") + "t,gx,gy,gz\n4,0,0,0\n8.5,0,0,0\n";
+  const std::string text =
+      Replace(kHeader, "tscale,0.001", "tscale,0.00025") + "t,gx,gy,gz\n4,0,0,0\n8.5,0,0,0\n";
   const GcsvLog log = ReadGcsv(WriteText(dir, "t.gcsv", text));
   EXPECT_EQ(log.trace[0].t_ns, 1000000);
   EXPECT_EQ(log.trace[1].t_ns, 2125000);
@@ -151,7 +155,8 @@ TEST(Gcsv, WriterRoundTripsLosslessAndQuantised) {
   std::normal_distribution<double> rate(0.0, 2.0);
   std::vector<GyroSample> samples;
   for (int k = 0; k < 300; ++k) {
-    samples.push_back({1600000000000000000LL + k * 2000123LL, Eigen::Vector3d(rate(rng), rate(rng), rate(rng))});
+    samples.push_back(
+        {1600000000000000000LL + k * 2000123LL, Eigen::Vector3d(rate(rng), rate(rng), rate(rng))});
   }
   const GyroTrace trace(samples);
   for (const char* orientation : {"XYZ", "yXz", "zxY"}) {
@@ -206,26 +211,39 @@ TEST(Gcsv, WriterRejectsBadOptions) {
 TEST(Gcsv, RejectsBadInputNamingTheLine) {
   test::TempDir dir;
   const std::string rows = "t,gx,gy,gz\n0,1,2,3\n1,1,2,3\n";
-  ExpectIoError(WriteText(dir, "a", "version,1.3\n" + rows), 1, "missing first line 'GYROFLOW IMU LOG'");
+  ExpectIoError(WriteText(dir, "a", "version,1.3\n" + rows), 1,
+                "missing first line 'GYROFLOW IMU LOG'");
   // Truncated inside the header block.
-  ExpectIoError(WriteText(dir, "b", "GYROFLOW IMU LOG\nversion,1.3\nid,x\n"), 3, "header ends before the column line");
-  ExpectIoError(WriteText(dir, "c", Replace(kHeader, "tscale,0.001\n", "") + rows), 16, "no tscale");
-  ExpectIoError(WriteText(dir, "d", Replace(kHeader, "gscale,0.00122173\n", "") + rows), 16, "no gscale");
+  ExpectIoError(WriteText(dir, "b", "GYROFLOW IMU LOG\nversion,1.3\nid,x\n"), 3,
+                "header ends before the column line");
+  ExpectIoError(WriteText(dir, "c", Replace(kHeader, "tscale,0.001\n", "") + rows), 16,
+                "no tscale");
+  ExpectIoError(WriteText(dir, "d", Replace(kHeader, "gscale,0.00122173\n", "") + rows), 16,
+                "no gscale");
   ExpectIoError(WriteText(dir, "e", Replace(kHeader, "gscale,0.00122173", "gscale,-1") + rows), 15,
                 "gscale must be a positive number");
-  ExpectIoError(WriteText(dir, "f", Replace(kHeader, "orientation,XYZ", "orientation,XYQ") + rows), 4,
-                "orientation 'XYQ'");
-  ExpectIoError(WriteText(dir, "g", Replace(kHeader, "frame_readout_direction,0", "frame_readout_direction,7") + rows),
-                13, "unknown frame_readout_direction '7'");
-  ExpectIoError(WriteText(dir, "h", std::string(kHeader) + "t,gy,gx,gz\n0,1,2,3\n"), 17, "column line must start");
-  ExpectIoError(WriteText(dir, "i", std::string(kHeader) + "t,gx,gy,gz,ax,ay,az\n0,1,2,3,4,5,6\n1,1,2,3\n"), 19,
-                "expected 7 columns as on line 17, found 4");
-  ExpectIoError(WriteText(dir, "j", std::string(kHeader) + rows + "2,1,abc,3\n"), 20, "gy is not a finite number: 'abc'");
-  ExpectIoError(WriteText(dir, "k", std::string(kHeader) + rows + "2,1,nan,3\n"), 20, "gy is not a finite number");
-  ExpectIoError(WriteText(dir, "l", std::string(kHeader) + rows + "0.5,1,2,3\n"), 20, "timestamp decreases");
-  ExpectIoError(WriteText(dir, "m", std::string(kHeader) + rows + "inf,1,2,3\n"), 20, "t is not a finite number");
+  ExpectIoError(WriteText(dir, "f", Replace(kHeader, "orientation,XYZ", "orientation,XYQ") + rows),
+                4, "orientation 'XYQ'");
+  ExpectIoError(
+      WriteText(dir, "g",
+                Replace(kHeader, "frame_readout_direction,0", "frame_readout_direction,7") + rows),
+      13, "unknown frame_readout_direction '7'");
+  ExpectIoError(WriteText(dir, "h", std::string(kHeader) + "t,gy,gx,gz\n0,1,2,3\n"), 17,
+                "column line must start");
+  ExpectIoError(
+      WriteText(dir, "i", std::string(kHeader) + "t,gx,gy,gz,ax,ay,az\n0,1,2,3,4,5,6\n1,1,2,3\n"),
+      19, "expected 7 columns as on line 17, found 4");
+  ExpectIoError(WriteText(dir, "j", std::string(kHeader) + rows + "2,1,abc,3\n"), 20,
+                "gy is not a finite number: 'abc'");
+  ExpectIoError(WriteText(dir, "k", std::string(kHeader) + rows + "2,1,nan,3\n"), 20,
+                "gy is not a finite number");
+  ExpectIoError(WriteText(dir, "l", std::string(kHeader) + rows + "0.5,1,2,3\n"), 20,
+                "timestamp decreases");
+  ExpectIoError(WriteText(dir, "m", std::string(kHeader) + rows + "inf,1,2,3\n"), 20,
+                "t is not a finite number");
   ExpectIoError(WriteText(dir, "n", std::string(kHeader) + "t,gx,gy,gz\n"), 0, "no samples");
-  ExpectIoError(WriteText(dir, "o", Replace(kHeader, "version,1.3", "version") + rows), 2, "not 'key,value'");
+  ExpectIoError(WriteText(dir, "o", Replace(kHeader, "version,1.3", "version") + rows), 2,
+                "not 'key,value'");
 }
 
 }  // namespace

@@ -1,15 +1,15 @@
 #include "sim/gyro_io.h"
 
+#include "sim/check.h"
+#include "sim/text_file.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
-
-#include <gtest/gtest.h>
-
-#include "sim/check.h"
-#include "sim/text_file.h"
-#include "tests/test_util.h"
 
 namespace shutterlab {
 namespace {
@@ -39,7 +39,8 @@ void ExpectDetectError(const std::string& text, long line, const std::string& pr
 
 TEST(GyroIo, DetectsGcsvFromTheFirstLine) {
   EXPECT_EQ(Detect("GYROFLOW IMU LOG\nversion,1.3\n"), GyroFormat::kGcsv);
-  EXPECT_EQ(Detect("\xEF\xBB\xBFGYROFLOW IMU LOG\r\nversion,1.3\r\n"), GyroFormat::kGcsv);  // BOM, CRLF
+  EXPECT_EQ(Detect("\xEF\xBB\xBFGYROFLOW IMU LOG\r\nversion,1.3\r\n"),
+            GyroFormat::kGcsv);  // BOM, CRLF
   EXPECT_EQ(Detect("\nCAMERA IMU LOG\n"), GyroFormat::kGcsv);
 }
 
@@ -91,7 +92,8 @@ TEST(GyroIo, ReadGyroDispatchesOnDetectionAndOverride) {
   EXPECT_NEAR(as_wide[0].omega_rad_s.x(), 131.0 / 16.4 * kPi / 180.0, 1e-15);
   EXPECT_EQ(as_wide[1].t_ns, 10000);  // 0.01 ms
   // Gcsv.
-  const GyroTrace trace({{0, Eigen::Vector3d(0.1, 0.2, 0.3)}, {1000000, Eigen::Vector3d(-0.1, 0, 1)}});
+  const GyroTrace trace(
+      {{0, Eigen::Vector3d(0.1, 0.2, 0.3)}, {1000000, Eigen::Vector3d(-0.1, 0, 1)}});
   WriteGcsv(dir / "a.gcsv", trace);
   const GyroTrace as_gcsv = ReadGyro(dir / "a.gcsv");
   EXPECT_EQ(as_gcsv[1].omega_rad_s, trace[1].omega_rad_s);

@@ -1,16 +1,16 @@
 #include "sim/raw_csv.h"
 
+#include "sim/check.h"
+#include "sim/text_file.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
-
-#include "sim/check.h"
-#include "sim/text_file.h"
-#include "tests/test_util.h"
 
 namespace shutterlab {
 namespace {
@@ -51,7 +51,8 @@ TEST(RawCsv, SensitivitiesAreTheMpu9250Table) {
 TEST(RawCsv, ConvertsCountsToRadPerSecond) {
   test::TempDir dir;
   // 131 counts at +-250 deg/s is exactly 1 deg/s; -32768 is the most negative register value.
-  const std::string path = WriteText(dir, "a.csv", "t,gx,gy,gz\n0.0,131,-262,0\n0.001,0,-32768,32767\n");
+  const std::string path =
+      WriteText(dir, "a.csv", "t,gx,gy,gz\n0.0,131,-262,0\n0.001,0,-32768,32767\n");
   const GyroTrace trace = ReadRawCsv(path, 250, TimeUnit::kSeconds);
   ASSERT_EQ(trace.size(), 2u);
   EXPECT_EQ(trace[0].t_ns, 0);
@@ -88,7 +89,8 @@ TEST(RawCsv, TimeUnitsAreExactForIntegers) {
   const GyroTrace ms = ReadRawCsv(us_path, 250, TimeUnit::kMilliseconds);
   EXPECT_EQ(ms[1].t_ns, 2000500000);
   // Fractions finer than a nanosecond and exponents fall back to double and round to the ns.
-  const std::string odd_path = WriteText(dir, "odd.csv", "1e-3,0,0,0\n0.0020000004,0,0,0\n-0,0,0,0\n");
+  const std::string odd_path =
+      WriteText(dir, "odd.csv", "1e-3,0,0,0\n0.0020000004,0,0,0\n-0,0,0,0\n");
   EXPECT_THROW(ReadRawCsv(odd_path, 250, TimeUnit::kSeconds), IoError);  // -0 < 0.002: decreasing
   const std::string odd2 = WriteText(dir, "odd2.csv", "1e-3,0,0,0\n0.0020000004,0,0,0\n");
   const GyroTrace s = ReadRawCsv(odd2, 250, TimeUnit::kSeconds);
@@ -98,8 +100,8 @@ TEST(RawCsv, TimeUnitsAreExactForIntegers) {
 
 TEST(RawCsv, IgnoresExtraColumnsAndBlankLines) {
   test::TempDir dir;
-  const std::string path =
-      WriteText(dir, "a.csv", "t,gx,gy,gz,ax,ay,az\r\n0,1,2,3,16384,0,0\r\n\r\n0.01,4,5,6,0,0,0\r\n");
+  const std::string path = WriteText(
+      dir, "a.csv", "t,gx,gy,gz,ax,ay,az\r\n0,1,2,3,16384,0,0\r\n\r\n0.01,4,5,6,0,0,0\r\n");
   const GyroTrace trace = ReadRawCsv(path, 250, TimeUnit::kSeconds);
   ASSERT_EQ(trace.size(), 2u);
   EXPECT_NEAR(trace[1].omega_rad_s.z(), 6.0 / 131.0 * kPi / 180.0, kConversionTolRadS);

@@ -1,11 +1,11 @@
 #include "sim/still_detect.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <functional>
 #include <random>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 namespace shutterlab {
 namespace {
@@ -18,9 +18,10 @@ struct Synth {
   double rate_hz = 1000.0;
   double duration_s = 12.0;
   Eigen::Vector3d bias_rad_s = Eigen::Vector3d(0.012, -0.02, 0.004);
-  double noise_rad_s = 0.002;   // white noise per sample and axis
-  double lowpass_alpha = 1.0;   // 1: white; < 1: first-order low pass (correlated noise, like a DLPF)
-  double count_rad_s = 0.0;     // > 0: quantise to this step (raw counts)
+  double noise_rad_s = 0.002;  // white noise per sample and axis
+  double lowpass_alpha =
+      1.0;                   // 1: white; < 1: first-order low pass (correlated noise, like a DLPF)
+  double count_rad_s = 0.0;  // > 0: quantise to this step (raw counts)
   uint64_t seed = 1;
 };
 
@@ -142,7 +143,8 @@ TEST(StillDetect, RejectsTracesWithoutStillness) {
   Synth o;
   o.duration_s = 6.0;
   const GyroTrace moving = Make(o, [](double t) -> Eigen::Vector3d {
-    return Eigen::Vector3d(0.3 * std::sin(2 * kPi * 0.9 * t), 0.2 * std::cos(2 * kPi * 1.7 * t), 0.1 * t);
+    return Eigen::Vector3d(0.3 * std::sin(2 * kPi * 0.9 * t), 0.2 * std::cos(2 * kPi * 1.7 * t),
+                           0.1 * t);
   });
   EXPECT_THROW(DetectStillSegment(moving), std::invalid_argument);
   // Shorter than the window / than the minimum duration.
