@@ -143,7 +143,9 @@ AllanCoefficients ReadAllanCoefficients(const std::vector<double>& tau_s,
   if (record_s > 0.0) {
     const double white_line = out.arw_rad_s_sqrt_hz / std::sqrt(tau[i_min]);
     const double relative_error = 1.0 / std::sqrt(3.0 * record_s / tau[i_min]);
-    if (std::exp(log_adev[i_min]) > white_line * (1.0 - kFloorSigmas * relative_error)) {
+    // A floor lies above the white-noise line; a minimum on it (within its scatter) is white noise
+    // that has not yet met the floor.
+    if (std::abs(std::exp(log_adev[i_min]) / white_line - 1.0) <= kFloorSigmas * relative_error) {
       out.bias_instability_upper_bound = true;
     }
   }

@@ -142,7 +142,8 @@ std::string NoiseTable(const NoiseResult& result) {
   bool any_upper = false;
   for (const auto& c : result.allan.axes) any_upper |= c.bias_instability_upper_bound;
   if (any_upper) {
-    out += "  <= : the curve still falls at the longest tau; the record is too short to see the floor\n";
+    out += "  <= : upper bound: the minimum is still on the -1/2 (white-noise) line; the record is too "
+           "short to reach the floor\n";
   }
   return out;
 }

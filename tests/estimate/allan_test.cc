@@ -159,6 +159,22 @@ TEST(ReadAllanCoefficients, RecoversArwAndBiasInstabilityFromAnalyticCurve) {
   EXPECT_LT(c.bias_instability_tau_s, 1e5);
 }
 
+TEST(ReadAllanCoefficients, MinimumOnTheWhiteLineIsOnlyAnUpperBound) {
+  // Pure white noise up to a tenth of a 1000 s record: the minimum is the last point, on the line.
+  std::vector<double> tau, white, floored;
+  for (int j = -30; j <= 20; ++j) {
+    const double t = std::pow(10.0, j / 10.0);
+    tau.push_back(t);
+    white.push_back(1e-4 / std::sqrt(t));
+    // A floor (0.664 B = 3e-5) and rate random walk make a minimum well above the white line.
+    floored.push_back(std::sqrt(1e-8 / t + 9e-10 + 1e-11 * t));
+  }
+  EXPECT_TRUE(ReadAllanCoefficients(tau, white, 1000.0).bias_instability_upper_bound);
+  const AllanCoefficients c = ReadAllanCoefficients(tau, floored, 1000.0);
+  EXPECT_FALSE(c.bias_instability_upper_bound);
+  EXPECT_LT(c.bias_instability_tau_s, tau.back());
+}
+
 TEST(AllanCsv, HeaderAndOneLinePerTau) {
   AllanResult r;
   r.tau_s = {0.5, 1.0};
