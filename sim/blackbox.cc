@@ -44,6 +44,7 @@ constexpr uint32_t kMaxIterationJump = 500 * 10;
 constexpr uint32_t kNoIteration = std::numeric_limits<uint32_t>::max();
 // Op code of a field with the increment predictor: it consumes no bytes.
 constexpr uint8_t kIncrementOp = 255;
+constexpr int kEventLogEnd = 255;  // firmware FLIGHT_LOG_EVENT_LOG_END
 // Larger I intervals (never written by a firmware) are handled without the skip table.
 constexpr int64_t kMaxTabulatedIInterval = 1 << 16;
 
@@ -424,28 +425,28 @@ class LogDecoder {
   }
 
   void Run(DecodedLog* out) {
-    ByteReader r{data_, h_.data_begin, end_, false};
     // Main frames take at least a few bytes each; reserving avoids regrowing a large trace.
     out->samples.reserve((end_ - h_.data_begin) / 8 + 16);
+    size_t pos = h_.data_begin;
+    size_t end = end_;  // a LOG_END event moves it to just after itself
     bool have_last = false;
     int last_kind = -1;
     size_t frame_start = 0;
     bool premature_eof = false;
     while (true) {
-      const int command = r.pos < r.end ? r.data[r.pos++] : -1;
+      const int command = pos < end ? data_[pos++] : -1;
       if (have_last) {
-        const size_t frame_size = (command < 0 ? r.pos : r.pos - 1) - frame_start;
+        const size_t frame_size = (command < 0 ? pos : pos - 1) - frame_start;
         const bool next_starts_frame = command >= 0 && FrameKind(command) >= 0;
         const bool looks_complete = next_starts_frame || (command < 0 && !premature_eof);
         if (frame_size <= kMaxFrameBytes && looks_complete) {
           Complete(last_kind, out);
         } else {
           // Corrupt: resynchronise on the next plausible frame start after this frame's marker.
+          // Frame starts only move forward, so the loop ends.
           ++out->corrupt_frames;
           main_valid_ = false;
-          r.pos = frame_start + 1;
-          r.end = end_;
-          r.eof = false;
+          pos = frame_start + 1;
           have_last = false;
           premature_eof = false;
           continue;
@@ -453,11 +454,16 @@ class LogDecoder {
         have_last = false;
       }
       if (command < 0) break;
-      frame_start = r.pos - 1;
+      frame_start = pos - 1;
       const int kind = FrameKind(command);
       if (kind >= 0 && (kind == kKindE || h_.defs[kind].usable)) {
+        // A frame may not be longer than kMaxFrameBytes: reading stops there (and the frame is
+        // corrupt), so one attempt costs at most that many bytes however garbled the input.
+        ByteReader r{data_, pos, std::min(end, frame_start + kMaxFrameBytes), false};
         Parse(kind, &r);
+        pos = r.pos;
         premature_eof = r.eof;
+        if (kind == kKindE && event_valid_ && event_ == kEventLogEnd) end = pos;
         have_last = true;
         last_kind = kind;
       } else {
@@ -649,12 +655,11 @@ class LogDecoder {
         r->ReadUnsignedVb();
         r->ReadUnsignedVb();
         break;
-      case 255: {  // LOG_END: "End of log\0" ends this log's data
+      case kEventLogEnd: {  // LOG_END: "End of log\0" ends this log's data
         static constexpr char kEndMessage[] = "End of log";  // 10 chars + the NUL = 11 bytes
         if (r->end - r->pos >= sizeof(kEndMessage) &&
             std::memcmp(r->data + r->pos, kEndMessage, sizeof(kEndMessage)) == 0) {
-          r->pos += sizeof(kEndMessage);
-          r->end = r->pos;
+          r->pos += sizeof(kEndMessage);  // Run() ends the log's data here
         } else {
           event_valid_ = false;  // bytes that merely looked like an event
         }
@@ -751,7 +756,7 @@ class LogDecoder {
           last_iteration_ = resume_iteration_;
           last_time_us_ = resume_time_us_;
           ++out->logging_resumes;
-        } else if (event_ == 255) {
+        } else if (event_ == kEventLogEnd) {
           out->info.ended_cleanly = true;
         }
         return;

@@ -699,6 +699,26 @@ TEST(Blackbox, RandomBodiesAfterAValidHeaderNeverCrashOrHang) {
   }
 }
 
+TEST(Blackbox, FloodsOfFrameMarkersAreBoundedPerFrame) {
+  // Every byte starts a frame attempt; each attempt reads at most one maximal frame, so these
+  // finish in linear time. Only that they finish and do not crash is checked.
+  const std::string header = SyntheticHeader(SyntheticOptions{});
+  for (const char marker : std::string("IPEGHS")) {
+    const std::string file = header + std::string(200000, marker);
+    try {
+      DecodeBlackbox(file, "flood.bbl");
+    } catch (const IoError&) {
+    }
+  }
+  // A P frame can never start the main stream: P frames before any I frame are dropped.
+  Synthetic s = MakeSyntheticLog(SyntheticOptions{});
+  const size_t first_p = s.bytes.find('P', SyntheticHeader(SyntheticOptions{}).size());
+  std::string p_first = SyntheticHeader(SyntheticOptions{}) + s.bytes.substr(first_p);
+  const FlightLog log = DecodeBlackbox(p_first, "pfirst.bbl");
+  EXPECT_LT(log.gyro.size(), s.t_us.size());
+  EXPECT_GT(log.records_skipped, 0u);
+}
+
 // ---- The real logs ----
 
 std::string DataPath(const std::string& leaf) {
