@@ -1,13 +1,14 @@
 // `shutterlab accuracy`: the source paper's total-station test; each turn detected and measured.
 
+#include "estimate/accuracy.h"
+
+#include "app/command.h"
+#include "app/trace_options.h"
+
 #include <iostream>
 #include <memory>
 #include <stdexcept>
 #include <string>
-
-#include "app/command.h"
-#include "app/trace_options.h"
-#include "estimate/accuracy.h"
 
 namespace shutterlab::app {
 namespace {
@@ -35,7 +36,8 @@ void Run(const AccuracyCommand& command) {
 
 const CommandRegistration kRegistration(30, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "accuracy", "total-station test: detect each turn, measure it, compare with the reference angle");
+      "accuracy",
+      "total-station test: detect each turn, measure it, compare with the reference angle");
   auto command = std::make_shared<AccuracyCommand>();
   command->trace.Add(cmd, /*with_bias=*/true);
   cmd->add_option("--reference-deg", command->accuracy.reference_deg, "the turn angle, degrees")

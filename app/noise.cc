@@ -1,14 +1,16 @@
-// `shutterlab noise`: the source paper's static-noise tables and the Allan deviation of a still trace.
+// `shutterlab noise`: the source paper's static-noise tables and the Allan deviation of a still
+// trace.
+
+#include "estimate/noise.h"
+
+#include "app/command.h"
+#include "app/trace_options.h"
+#include "sim/text_file.h"
 
 #include <iostream>
 #include <memory>
 #include <stdexcept>
 #include <string>
-
-#include "app/command.h"
-#include "app/trace_options.h"
-#include "estimate/noise.h"
-#include "sim/text_file.h"
 
 namespace shutterlab::app {
 namespace {
@@ -38,7 +40,8 @@ void Run(const NoiseCommand& command) {
 
 const CommandRegistration kRegistration(20, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "noise", "static noise of a still gyro: sliding-window sigma and range of the angle, Allan deviation");
+      "noise",
+      "static noise of a still gyro: sliding-window sigma and range of the angle, Allan deviation");
   auto command = std::make_shared<NoiseCommand>();
   command->trace.Add(cmd, /*with_bias=*/true);
   cmd->add_option("--window", command->noise.window_samples, "window length, samples")

@@ -1,16 +1,16 @@
 #include "estimate/accuracy.h"
 
-#include <algorithm>
-#include <cmath>
-#include <cstdio>
-#include <sstream>
+#include "sim/check.h"
+#include "sim/integrate.h"
+#include "sim/so3.h"
 
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
-#include "sim/check.h"
-#include "sim/integrate.h"
-#include "sim/so3.h"
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
 
 namespace shutterlab {
 namespace {
@@ -84,7 +84,8 @@ AccuracyResult AnalyzeAccuracy(const GyroTrace& trace, const AccuracyOptions& op
   // Smoothed bias-corrected rate magnitude: centred moving average of the vector via prefix sums
   // (averaging the vector, not the magnitude, is what lowers the noise).
   std::vector<Eigen::Vector3d> prefix(n + 1, Eigen::Vector3d::Zero());
-  for (size_t i = 0; i < n; ++i) prefix[i + 1] = prefix[i] + (trace[i].omega_rad_s - bias.bias_rad_s);
+  for (size_t i = 0; i < n; ++i)
+    prefix[i + 1] = prefix[i] + (trace[i].omega_rad_s - bias.bias_rad_s);
   const double rate_hz = trace.sampling().RateHz();
   const size_t half = static_cast<size_t>(std::llround(0.5 * options.smooth_s * rate_hz));
   std::vector<double> magnitude(n);
@@ -114,7 +115,8 @@ AccuracyResult AnalyzeAccuracy(const GyroTrace& trace, const AccuracyOptions& op
     size_t end = k + 1;
     while (end < n && magnitude[end] > result.exit_rad_s) ++end;
     const int64_t min_still_ns = SecondsToNs(options.min_still_s);
-    if (!segments.empty() && trace[begin].t_ns - trace[segments.back().end - 1].t_ns < min_still_ns) {
+    if (!segments.empty() &&
+        trace[begin].t_ns - trace[segments.back().end - 1].t_ns < min_still_ns) {
       segments.back().end = end;
     } else {
       segments.push_back({begin, end});
@@ -217,8 +219,8 @@ std::string AccuracyJson(const AccuracyResult& result) {
 
 std::string AccuracyTable(const AccuracyResult& result) {
   std::string out = "Turns detected: " + std::to_string(result.rotations.size()) + "; reference " +
-                    Format("%g", result.reference_deg) + " deg = " +
-                    Format("%g", result.reference_deg * 3600.0) + " arcsec; " +
+                    Format("%g", result.reference_deg) +
+                    " deg = " + Format("%g", result.reference_deg * 3600.0) + " arcsec; " +
                     std::to_string(result.average_samples) +
                     " samples averaged before and after each turn\n\n";
   out +=

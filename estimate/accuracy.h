@@ -6,17 +6,17 @@
 // The paper picked the turns by hand; here they are detected: the bias-corrected rate is smoothed
 // (moving average of the vector over smooth_s), and a turn is where its magnitude rises above
 // enter_factor times the still noise level, extended both ways while it stays above exit_factor
-// times that level (hysteresis). The still noise level is the RMS of the same smoothed magnitude over
-// the bias segment. Turns separated by less than min_still_s are one turn.
+// times that level (hysteresis). The still noise level is the RMS of the same smoothed magnitude
+// over the bias segment. Turns separated by less than min_still_s are one turn.
+
+#include "sim/bias.h"
+#include "sim/gyro_trace.h"
+
+#include <Eigen/Core>
 
 #include <cstddef>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-
-#include "sim/bias.h"
-#include "sim/gyro_trace.h"
 
 namespace shutterlab {
 
@@ -30,8 +30,8 @@ struct AccuracyOptions {
   // Floor of the still noise level, rad/s: a noiseless trace still needs a non-zero threshold
   // (1e-7 rad/s = 0.02 deg/h, far below any MEMS gyro's noise).
   double min_noise_rad_s = 1e-7;
-  double guard_s = 0.020;     // still time between a turn and its averaging windows, s: leaves out
-                              // the turn's slow start and end that stay below the exit threshold
+  double guard_s = 0.020;      // still time between a turn and its averaging windows, s: leaves out
+                               // the turn's slow start and end that stay below the exit threshold
   double min_still_s = 0.200;  // motions closer than this belong to one turn, s
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;

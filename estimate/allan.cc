@@ -1,17 +1,18 @@
 #include "estimate/allan.h"
 
-#include <algorithm>
-#include <cmath>
-
 #include "sim/check.h"
 #include "sim/integrate.h"
 #include "sim/text_file.h"
+
+#include <algorithm>
+#include <cmath>
 
 namespace shutterlab {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
-// sigma(tau) of bias instability (flicker rate noise) flattens at sqrt(2 ln2 / pi) B (IEEE 952, C.4).
+// sigma(tau) of bias instability (flicker rate noise) flattens at sqrt(2 ln2 / pi) B (IEEE 952,
+// C.4).
 constexpr double kFlickerFloorFactor = 0.664;
 // A point belongs to the white-noise (-1/2) region when its local slope is this close to -1/2.
 constexpr double kWhiteSlopeTolerance = 0.15;
@@ -37,7 +38,8 @@ std::vector<size_t> AllanClusterSizes(size_t n_rates, int points_per_decade, dou
 
 std::vector<double> OverlappingAllanDeviation(const std::vector<double>& angle_rad, double tau0_s,
                                               const std::vector<size_t>& cluster_sizes) {
-  SHUTTERLAB_CHECK(tau0_s > 0.0 && std::isfinite(tau0_s)) << "Allan: sample period must be positive";
+  SHUTTERLAB_CHECK(tau0_s > 0.0 && std::isfinite(tau0_s))
+      << "Allan: sample period must be positive";
   const size_t length = angle_rad.size();
   std::vector<double> adev;
   adev.reserve(cluster_sizes.size());
@@ -63,8 +65,8 @@ std::vector<double> OverlappingAllanDeviationBruteForce(const std::vector<double
   const size_t n = rate_rad_s.size();
   std::vector<double> adev;
   for (const size_t m : cluster_sizes) {
-    SHUTTERLAB_CHECK(m >= 1 && n >= 2 * m) << "Allan: cluster of " << m << " samples needs "
-                                           << 2 * m << " rates, have " << n;
+    SHUTTERLAB_CHECK(m >= 1 && n >= 2 * m)
+        << "Allan: cluster of " << m << " samples needs " << 2 * m << " rates, have " << n;
     auto cluster_mean = [&](size_t k) {
       double s = 0.0;
       for (size_t i = k; i < k + m; ++i) s += rate_rad_s[i];
@@ -83,9 +85,11 @@ std::vector<double> OverlappingAllanDeviationBruteForce(const std::vector<double
 
 AllanCoefficients ReadAllanCoefficients(const std::vector<double>& tau_s,
                                         const std::vector<double>& adev_rad_s, double record_s) {
-  SHUTTERLAB_CHECK(tau_s.size() == adev_rad_s.size()) << "Allan: tau and deviation differ in length";
+  SHUTTERLAB_CHECK(tau_s.size() == adev_rad_s.size())
+      << "Allan: tau and deviation differ in length";
   AllanCoefficients out;
-  // Only strictly positive, finite points have a place on a log-log plot (a noiseless axis gives 0).
+  // Only strictly positive, finite points have a place on a log-log plot (a noiseless axis gives
+  // 0).
   std::vector<double> log_tau, log_adev, tau;
   for (size_t i = 0; i < tau_s.size(); ++i) {
     if (adev_rad_s[i] > 0.0 && std::isfinite(adev_rad_s[i]) && tau_s[i] > 0.0) {
@@ -160,8 +164,9 @@ AllanResult AllanAnalysis(const GyroTrace& trace, size_t first, int points_per_d
   if (sizes.empty()) return result;
   result.tau0_s = trace.sampling().median_interval_ns * 1e-9;
   SHUTTERLAB_CHECK(result.tau0_s > 0.0) << "Allan: the trace has no positive sample interval";
-  // Remove the segment's mean rate first: the angle stays near zero (no precision lost to drift) and
-  // the result does not depend on a constant bias even where logging gaps make the sampling uneven.
+  // Remove the segment's mean rate first: the angle stays near zero (no precision lost to drift)
+  // and the result does not depend on a constant bias even where logging gaps make the sampling
+  // uneven.
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (size_t i = first + 1; i < trace.size(); ++i) mean += trace[i].omega_rad_s;
   mean /= static_cast<double>(n_rates);

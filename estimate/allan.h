@@ -7,25 +7,26 @@
 // at tau = 1 s; bias instability B is the flat minimum of the curve divided by sqrt(2 ln2 / pi)
 // = 0.664.
 
-#include <cstddef>
-#include <string>
-#include <vector>
+#include "sim/gyro_trace.h"
 
 #include <Eigen/Core>
 
-#include "sim/gyro_trace.h"
+#include <cstddef>
+#include <string>
+#include <vector>
 
 namespace shutterlab {
 
 // Cluster sizes m (in samples) for a record of n_rates rate samples: log-spaced with
 // points_per_decade per decade, from 1 up to floor(n_rates * max_fraction) (tau from one sample
-// period to a tenth of the record by default), without repeats. Empty when n_rates * max_fraction < 1.
+// period to a tenth of the record by default), without repeats. Empty when n_rates * max_fraction
+// < 1.
 std::vector<size_t> AllanClusterSizes(size_t n_rates, int points_per_decade = 10,
                                       double max_fraction = 0.1);
 
 // Overlapping Allan deviation in the angle (phase) form, rad/s, one value per cluster size m:
-//   sigma^2(tau) = sum_{k=0}^{L-2m-1} (theta_{k+2m} - 2 theta_{k+m} + theta_k)^2 / (2 tau^2 (L - 2m)),
-//   tau = m * tau0_s,
+//   sigma^2(tau) = sum_{k=0}^{L-2m-1} (theta_{k+2m} - 2 theta_{k+m} + theta_k)^2 / (2 tau^2 (L -
+//   2m)), tau = m * tau0_s,
 // where theta (L entries, rad) is the integrated rate: theta_k = sum_{i<k} rate_i * tau0, so L rate
 // samples' angle has L+1 entries. O(L) per m. Requires L >= 2m + 1 for every m.
 std::vector<double> OverlappingAllanDeviation(const std::vector<double>& angle_rad, double tau0_s,
@@ -50,19 +51,20 @@ struct AllanCoefficients {
   bool bias_instability_upper_bound = false;
 };
 
-// Reads N and B off a curve (tau_s ascending, adev_rad_s > 0 where defined). N: the -1/2 line fitted
-// (in log space, weighted by the number of clusters ~ 1/m) through the first run of points whose local
-// log-log slope is within 0.15 of -1/2; when no point qualifies, the point whose slope is nearest -1/2.
-// record_s: the record's length, for the standard error of each point (white noise: relative error
-// 1/sqrt(3 record/tau), from the overlapping estimator's ~1.5 record/tau degrees of freedom); 0 when
-// unknown.
+// Reads N and B off a curve (tau_s ascending, adev_rad_s > 0 where defined). N: the -1/2 line
+// fitted (in log space, weighted by the number of clusters ~ 1/m) through the first run of points
+// whose local log-log slope is within 0.15 of -1/2; when no point qualifies, the point whose slope
+// is nearest -1/2. record_s: the record's length, for the standard error of each point (white
+// noise: relative error 1/sqrt(3 record/tau), from the overlapping estimator's ~1.5 record/tau
+// degrees of freedom); 0 when unknown.
 AllanCoefficients ReadAllanCoefficients(const std::vector<double>& tau_s,
-                                        const std::vector<double>& adev_rad_s, double record_s = 0.0);
+                                        const std::vector<double>& adev_rad_s,
+                                        double record_s = 0.0);
 
 // Per-axis Allan curves of a trace segment, with their coefficients.
 struct AllanResult {
-  double tau0_s = 0.0;              // the sample period used: the trace's median interval
-  std::vector<double> tau_s;        // ascending
+  double tau0_s = 0.0;                // the sample period used: the trace's median interval
+  std::vector<double> tau_s;          // ascending
   std::vector<double> adev_rad_s[3];  // x, y, z (gyro axes), rad/s
   AllanCoefficients axes[3];
   bool empty() const { return tau_s.empty(); }

@@ -1,15 +1,15 @@
 #include "estimate/noise.h"
 
+#include "estimate/window_stats.h"
+#include "sim/check.h"
+#include "sim/integrate.h"
+
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
-
-#include <nlohmann/json.hpp>
-
-#include "estimate/window_stats.h"
-#include "sim/check.h"
-#include "sim/integrate.h"
 
 namespace shutterlab {
 namespace {
@@ -53,7 +53,8 @@ NoiseResult AnalyzeNoise(const GyroTrace& trace, const NoiseOptions& options) {
   result.windows = result.samples_analysed - n_window + 1;
 
   for (int a = 0; a < 3; ++a) {
-    // O(N) sliding statistics (estimate/window_stats.h); their brute-force twins are the definition.
+    // O(N) sliding statistics (estimate/window_stats.h); their brute-force twins are the
+    // definition.
     const std::vector<double> sigma = SlidingStdDevByCount(angles.angle_rad[a], n_window);
     const std::vector<double> range = SlidingRangeByCount(angles.angle_rad[a], n_window);
     SHUTTERLAB_CHECK(sigma.size() == result.windows && range.size() == result.windows)
@@ -135,15 +136,18 @@ std::string NoiseTable(const NoiseResult& result) {
   for (int a = 0; a < 3; ++a) {
     const AllanCoefficients& c = result.allan.axes[a];
     out += std::string("  ") + kAxisNames[a] + Format("  %15.4f", c.arw_deg_sqrt_h) +
-           Format("   %18.3e", c.arw_rad_s_sqrt_hz) + Format("   %10.3f", c.bias_instability_deg_h) +
+           Format("   %18.3e", c.arw_rad_s_sqrt_hz) +
+           Format("   %10.3f", c.bias_instability_deg_h) +
            (c.bias_instability_upper_bound ? " <=" : "   ") +
            Format(" (%.3g)", c.bias_instability_tau_s) + "\n";
   }
   bool any_upper = false;
   for (const auto& c : result.allan.axes) any_upper |= c.bias_instability_upper_bound;
   if (any_upper) {
-    out += "  <= : upper bound: the minimum is still on the -1/2 (white-noise) line; the record is too "
-           "short to reach the floor\n";
+    out +=
+        "  <= : upper bound: the minimum is still on the -1/2 (white-noise) line; the record is "
+        "too "
+        "short to reach the floor\n";
   }
   return out;
 }

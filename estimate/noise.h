@@ -2,14 +2,14 @@
 // The source paper's static-noise analysis (its Tables 1-2): sliding-window sigma and range of the
 // per-axis integrated angle of a still gyro, plus the Allan deviation of the same samples.
 
-#include <cstddef>
-#include <string>
-
-#include <Eigen/Core>
-
 #include "estimate/allan.h"
 #include "sim/bias.h"
 #include "sim/gyro_trace.h"
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <string>
 
 namespace shutterlab {
 
@@ -25,7 +25,7 @@ struct NoiseOptions {
 struct AxisNoise {
   double sigma_mean_arcsec = 0.0;  // mean over windows of the window's population std
   double sigma_max_arcsec = 0.0;
-  double sigma_rms_arcsec = 0.0;   // sqrt(mean of sigma^2): has an exact expectation for white noise
+  double sigma_rms_arcsec = 0.0;  // sqrt(mean of sigma^2): has an exact expectation for white noise
   double range_mean_arcsec = 0.0;  // mean over windows of max - min
   double range_max_arcsec = 0.0;
 };
@@ -35,15 +35,16 @@ struct NoiseResult {
   size_t windows = 0;           // windows per axis: samples_analysed - window_samples + 1
   size_t samples_analysed = 0;  // samples after the bias segment's end
   double rate_hz = 0.0;         // the trace's median sample rate
-  BiasEstimate bias;            // per-axis mean over the bias segment, subtracted before integrating
-  AxisNoise axes[3];            // x, y, z (gyro axes)
-  AllanResult allan;            // over the same samples
+  BiasEstimate bias;  // per-axis mean over the bias segment, subtracted before integrating
+  AxisNoise axes[3];  // x, y, z (gyro axes)
+  AllanResult allan;  // over the same samples
 };
 
 // FORMATS.md "Analysis outputs" / noise: bias = per-axis mean rate over the bias segment; the
-// per-axis angles (sim/integrate.h IntegratePerAxis) of the samples after the segment's end; sliding
-// windows of window_samples consecutive samples, step one sample. Throws std::invalid_argument when
-// the bias segment is too short or the window is longer than the samples after it.
+// per-axis angles (sim/integrate.h IntegratePerAxis) of the samples after the segment's end;
+// sliding windows of window_samples consecutive samples, step one sample. Throws
+// std::invalid_argument when the bias segment is too short or the window is longer than the samples
+// after it.
 NoiseResult AnalyzeNoise(const GyroTrace& trace, const NoiseOptions& options);
 
 // JSON exactly as FORMATS.md `noise`, plus extra keys: per axis sigma_rms_arcsec, arw_deg_sqrt_h,

@@ -1,13 +1,13 @@
 #include "estimate/accuracy.h"
 
-#include <cmath>
-#include <random>
-#include <vector>
+#include "sim/so3.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "sim/so3.h"
+#include <cmath>
+#include <random>
+#include <vector>
 
 namespace shutterlab {
 namespace {
@@ -45,7 +45,8 @@ GyroTrace MakeSession(const Session& session) {
       const double s = std::sin(M_PI * static_cast<double>(j) / kPulseSamples);
       rate.push_back(session.axis * (peak * s * s));
     }
-    rate.resize(rate.size() + static_cast<size_t>(session.still_s[i] / kDt), Eigen::Vector3d::Zero());
+    rate.resize(rate.size() + static_cast<size_t>(session.still_s[i] / kDt),
+                Eigen::Vector3d::Zero());
   }
   std::vector<GyroSample> samples(rate.size());
   for (size_t k = 0; k < rate.size(); ++k) {
@@ -86,7 +87,8 @@ TEST(AnalyzeAccuracy, NoiselessTurnsAreFoundAndMeasuredExactly) {
   EXPECT_TRUE(r.skipped_t_s.empty());
   for (size_t i = 0; i < 4; ++i) {
     const DetectedRotation& rot = r.rotations[i];
-    // Turn i starts at 5.5 + i * (0.25 + 1.5) s; smoothing (+-5 ms) starts the detection a bit early.
+    // Turn i starts at 5.5 + i * (0.25 + 1.5) s; smoothing (+-5 ms) starts the detection a bit
+    // early.
     const double start_s = 5.5 + i * (kPulseSamples * kDt + 1.5);
     EXPECT_NEAR(rot.t_start_s, start_s, 0.01);
     EXPECT_NEAR(rot.t_end_s, start_s + 0.25, 0.01);
@@ -115,8 +117,8 @@ TEST(AnalyzeAccuracy, PerAxisAnglesAreExactButTheZyxCompositionIsNot) {
   for (const DetectedRotation& rot : r.rotations) {
     EXPECT_NEAR(rot.theta_so3_arcsec, 3600.0, 1e-6);
     EXPECT_NEAR(rot.theta_vector_arcsec, 3600.0, 1e-6);
-    EXPECT_LT(rot.theta_arcsec, 3600.0 - 5.0);        // a visible error of the paper's method ...
-    constexpr double kThirdOrder = 0.2;               // phi^3 terms: ~0.06" at 1 deg
+    EXPECT_LT(rot.theta_arcsec, 3600.0 - 5.0);  // a visible error of the paper's method ...
+    constexpr double kThirdOrder = 0.2;         // phi^3 terms: ~0.06" at 1 deg
     EXPECT_NEAR(rot.theta_arcsec, bch_arcsec, kThirdOrder);  // ... and the size BCH predicts
   }
   // About a sensor axis the composition is exact.

@@ -1,12 +1,12 @@
 #include "estimate/allan.h"
 
-#include <cmath>
-#include <random>
-#include <vector>
+#include "sim/check.h"
 
 #include <gtest/gtest.h>
 
-#include "sim/check.h"
+#include <cmath>
+#include <random>
+#include <vector>
 
 namespace shutterlab {
 namespace {
@@ -46,7 +46,8 @@ GyroTrace WhiteTrace(size_t n, double rate_hz, const Eigen::Vector3d& sigma,
 // 1981, "Properties of signal sources and measurement methods", Table 1 / Stable32 manual).
 double WhiteNoiseEdf(size_t n_rates, size_t m) {
   const double n = static_cast<double>(n_rates + 1), md = static_cast<double>(m);
-  return (3.0 * (n - 1.0) / (2.0 * md) - 2.0 * (n - 2.0) / n) * 4.0 * md * md / (4.0 * md * md + 5.0);
+  return (3.0 * (n - 1.0) / (2.0 * md) - 2.0 * (n - 2.0) / n) * 4.0 * md * md /
+         (4.0 * md * md + 5.0);
 }
 
 TEST(AllanClusterSizes, LogSpacedFromOneToATenth) {
@@ -56,7 +57,8 @@ TEST(AllanClusterSizes, LogSpacedFromOneToATenth) {
   EXPECT_LE(m.back(), 10000u);
   EXPECT_GE(m.back(), 7944u);  // within one log step (10^0.1 = 1.26) of the tenth
   for (size_t i = 1; i < m.size(); ++i) EXPECT_GT(m[i], m[i - 1]);
-  // 4 decades at 10 per decade, minus the repeats of the rounding below m = 10 (1,1,2,2,3,3,4,5,6,8).
+  // 4 decades at 10 per decade, minus the repeats of the rounding below m = 10
+  // (1,1,2,2,3,3,4,5,6,8).
   EXPECT_EQ(m.size(), 38u);
   EXPECT_TRUE(AllanClusterSizes(9, 10).empty());
   EXPECT_EQ(AllanClusterSizes(10, 10), std::vector<size_t>{1});
@@ -92,15 +94,16 @@ TEST(OverlappingAllanDeviation, WhiteNoiseIsSigmaOverSqrtTau) {
   const std::vector<double> adev = OverlappingAllanDeviation(AngleOf(rate, kTau0), kTau0, m);
   for (size_t i = 0; i < m.size(); ++i) {
     const double expected = kSigma / std::sqrt(static_cast<double>(m[i]));
-    // chi-square with EDF degrees of freedom: relative std of the deviation ~ 1/sqrt(2 EDF); 4 sigma.
+    // chi-square with EDF degrees of freedom: relative std of the deviation ~ 1/sqrt(2 EDF); 4
+    // sigma.
     const double tolerance = 4.0 / std::sqrt(2.0 * WhiteNoiseEdf(kRates, m[i]));
     EXPECT_NEAR(adev[i] / expected, 1.0, tolerance) << "m = " << m[i];
   }
 }
 
 TEST(AllanAnalysis, ConstantRateGivesZero) {
-  const GyroTrace trace = WhiteTrace(5000, 1000.0, Eigen::Vector3d::Zero(),
-                                     Eigen::Vector3d(0.3, -1.7, 12.5), 1);
+  const GyroTrace trace =
+      WhiteTrace(5000, 1000.0, Eigen::Vector3d::Zero(), Eigen::Vector3d(0.3, -1.7, 12.5), 1);
   const AllanResult result = AllanAnalysis(trace);
   ASSERT_FALSE(result.empty());
   constexpr double kZero = 1e-12;  // rad/s: rounding of the mean only
@@ -126,7 +129,8 @@ TEST(AllanAnalysis, WhiteNoiseGivesArwAndUnaffectedByBias) {
     const double n_expected = sigma[axis] * std::sqrt(1.0 / kRateHz);
     constexpr double kArwTol = 0.03;  // the fit leans on short taus with ~1e5 clusters: <1% seen
     EXPECT_NEAR(a.axes[axis].arw_rad_s_sqrt_hz / n_expected, 1.0, kArwTol);
-    EXPECT_NEAR(a.axes[axis].arw_deg_sqrt_h, a.axes[axis].arw_rad_s_sqrt_hz * kRadToDeg * 60.0, 1e-12);
+    EXPECT_NEAR(a.axes[axis].arw_deg_sqrt_h, a.axes[axis].arw_rad_s_sqrt_hz * kRadToDeg * 60.0,
+                1e-12);
     // White noise only: the minimum is on the -1/2 line (within its scatter), not a floor.
     EXPECT_TRUE(a.axes[axis].bias_instability_upper_bound);
     EXPECT_GT(a.axes[axis].bias_instability_tau_s, 0.1 * a.tau_s.back());
@@ -140,17 +144,19 @@ TEST(AllanAnalysis, WhiteNoiseGivesArwAndUnaffectedByBias) {
 
 TEST(ReadAllanCoefficients, RecoversArwAndBiasInstabilityFromAnalyticCurve) {
   // sigma^2(tau) = N^2/tau + (0.664 B)^2 + K^2 tau / 3 (IEEE 952 C.1-C.3 terms), log-spaced tau.
-  const double n_arw = 1e-4;      // rad/sqrt(s)
-  const double b_rad_s = 2e-5;    // bias instability, rad/s
-  const double k_rrw = 1e-8;      // rate random walk, rad/s^1.5: tiny, so the floor is flat
+  const double n_arw = 1e-4;    // rad/sqrt(s)
+  const double b_rad_s = 2e-5;  // bias instability, rad/s
+  const double k_rrw = 1e-8;    // rate random walk, rad/s^1.5: tiny, so the floor is flat
   std::vector<double> tau, adev;
   for (int j = -30; j <= 50; ++j) {
     const double t = std::pow(10.0, j / 10.0);
     tau.push_back(t);
-    adev.push_back(std::sqrt(n_arw * n_arw / t + std::pow(0.664 * b_rad_s, 2) + k_rrw * k_rrw * t / 3));
+    adev.push_back(
+        std::sqrt(n_arw * n_arw / t + std::pow(0.664 * b_rad_s, 2) + k_rrw * k_rrw * t / 3));
   }
   const AllanCoefficients c = ReadAllanCoefficients(tau, adev);
-  constexpr double kArwTol = 0.02;  // the floor term bends the -1/2 region by < 2% where slope ~ -1/2
+  constexpr double kArwTol =
+      0.02;  // the floor term bends the -1/2 region by < 2% where slope ~ -1/2
   EXPECT_NEAR(c.arw_rad_s_sqrt_hz / n_arw, 1.0, kArwTol);
   constexpr double kBiTol = 0.02;  // the minimum sits on the floor plus a little N and K
   EXPECT_NEAR(c.bias_instability_deg_h / (b_rad_s * kRadToDeg * 3600.0), 1.0, kBiTol);

@@ -1,15 +1,15 @@
 #include "estimate/noise.h"
 
-#include <algorithm>
-#include <cmath>
-#include <random>
-#include <vector>
+#include "estimate/window_stats.h"
+#include "sim/integrate.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "estimate/window_stats.h"
-#include "sim/integrate.h"
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
 
 namespace shutterlab {
 namespace {
@@ -20,7 +20,8 @@ constexpr int64_t kPeriodNs = 333'333;  // 3 kHz, an integer period as a logger 
 // Per-sample rate noise of an MPU-9250 at 3 kHz that gives the paper's ~1.1" window sigma.
 constexpr double kSigmaRadS = 0.0036;
 
-// Still trace: white noise of per-sample std sigma on each axis plus a constant bias, uniform times.
+// Still trace: white noise of per-sample std sigma on each axis plus a constant bias, uniform
+// times.
 GyroTrace StillTrace(double duration_s, double sigma_rad_s, const Eigen::Vector3d& bias_rad_s,
                      uint64_t seed) {
   std::mt19937_64 rng(seed);
@@ -35,8 +36,9 @@ GyroTrace StillTrace(double duration_s, double sigma_rad_s, const Eigen::Vector3
 }
 
 TEST(AnalyzeNoise, ConstantRateGivesExactWindowStatistics) {
-  // Still (zero rate) for the 1 s bias segment, then a constant rate on x only: the angle is a line,
-  // so every window of N samples (N-1 intervals) has range w dt (N-1) and sigma w dt sqrt((N^2-1)/12).
+  // Still (zero rate) for the 1 s bias segment, then a constant rate on x only: the angle is a
+  // line, so every window of N samples (N-1 intervals) has range w dt (N-1) and sigma w dt
+  // sqrt((N^2-1)/12).
   constexpr double kW = 1e-3;
   std::vector<GyroSample> samples;
   for (int64_t k = 0; k < 6000; ++k) {
@@ -66,7 +68,8 @@ TEST(AnalyzeNoise, WhiteNoiseWindowSigmaAndRangeMatchTheory) {
   // The angle of white rate noise is a random walk with step s = sigma dt. Over N points (N-1
   // steps) its population variance has expectation s^2 (N^2 - 1) / (6N) exactly; the residual bias
   // error db adds a line whose variance is (db dt)^2 (N^2 - 1) / 12. The mean range of an n-step
-  // Gaussian walk is s (2 sqrt(2n/pi) + 2 zeta(1/2)/sqrt(2 pi)) + O(n^-1/2) (Comtet & Majumdar 2005).
+  // Gaussian walk is s (2 sqrt(2n/pi) + 2 zeta(1/2)/sqrt(2 pi)) + O(n^-1/2) (Comtet & Majumdar
+  // 2005).
   constexpr int kN = 120;
   const Eigen::Vector3d true_bias(0.01, -0.02, 0.005);
   const GyroTrace trace = StillTrace(65.0, kSigmaRadS, true_bias, 42);
@@ -86,7 +89,8 @@ TEST(AnalyzeNoise, WhiteNoiseWindowSigmaAndRangeMatchTheory) {
     EXPECT_LT(r.axes[a].sigma_mean_arcsec, r.axes[a].sigma_rms_arcsec);  // Jensen
     EXPECT_GT(r.axes[a].sigma_max_arcsec, r.axes[a].sigma_rms_arcsec);
     const double zeta_half = -1.4603545088095868;
-    const double range = s * (2.0 * std::sqrt(2.0 * (kN - 1) / M_PI) + 2.0 * zeta_half / std::sqrt(2 * M_PI));
+    const double range =
+        s * (2.0 * std::sqrt(2.0 * (kN - 1) / M_PI) + 2.0 * zeta_half / std::sqrt(2 * M_PI));
     constexpr double kRangeTol = 0.05;  // mean range scatters by ~1% (45 seeded runs): 5 sigma
     EXPECT_NEAR(r.axes[a].range_mean_arcsec / range, 1.0, kRangeTol) << "axis " << a;
     // The paper's Table 1 band for an MPU-9250 at ~3 kHz: mean sigma 1.0-1.3", mean range 3.6-4.7".
@@ -136,7 +140,8 @@ TEST(AnalyzeNoise, InjectedBiasIsRecoveredAndRemoved) {
   for (int a = 0; a < 3; ++a) {
     // The mean of 15000 samples has standard error sigma / sqrt(15000); 4 standard errors.
     EXPECT_NEAR(rb.bias.bias_rad_s[a], true_bias[a], 4.0 * kSigmaRadS / std::sqrt(15000.0));
-    EXPECT_NEAR(rb.bias.stderr_rad_s[a], kSigmaRadS / std::sqrt(15001.0), 0.05 * kSigmaRadS / 122.0);
+    EXPECT_NEAR(rb.bias.stderr_rad_s[a], kSigmaRadS / std::sqrt(15001.0),
+                0.05 * kSigmaRadS / 122.0);
     // Same noise, bias removed: the statistics agree to rounding.
     constexpr double kTol = 1e-9;  // arcsec
     EXPECT_NEAR(rb.axes[a].sigma_mean_arcsec, ru.axes[a].sigma_mean_arcsec, kTol);
@@ -154,7 +159,8 @@ TEST(AnalyzeNoise, WindowLongerThanTheRestOfTheTraceIsAnError) {
     AnalyzeNoise(trace, options);
     FAIL() << "expected an error";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("longer than the 60 samples"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("longer than the 60 samples"), std::string::npos)
+        << e.what();
   }
   options.window_samples = 60;
   EXPECT_EQ(AnalyzeNoise(trace, options).windows, 1u);
