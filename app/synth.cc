@@ -27,8 +27,9 @@ struct SynthCliOptions {
   bool no_quantize = false;
   bool no_saturate = false;
   std::vector<double> const_bias, scale_error, misalignment, axis, turn_time;
-  double lead_s = -1.0;  // < 0: each profile's default
-  ImuErrorModel given;   // values of the error options as parsed (defaults when not given)
+  double lead_s = 6.0;
+  CLI::Option* lead_option = nullptr;  // given: sets both profiles' lead
+  ImuErrorModel given;  // values of the error options as parsed (defaults when not given)
   // The error-model options, to tell given from defaulted when --ideal resets the model.
   std::vector<std::pair<CLI::Option*, std::function<void(ImuErrorModel&)>>> model_overrides;
 };
@@ -61,7 +62,7 @@ void Run(SynthCliOptions& o) {
     s.steps.turn_max_s = o.turn_time[1];
   }
   if (!o.axis.empty()) s.steps.axis = Triple(o.axis);
-  if (o.lead_s >= 0) s.steps.lead_still_s = s.flight.lead_still_s = o.lead_s;
+  if (o.lead_option->count() > 0) s.steps.lead_still_s = s.flight.lead_still_s = o.lead_s;
   s.Check();
   o.output.Check();
 
@@ -159,8 +160,8 @@ const CommandRegistration kRegistration(10, [](CLI::App& app) {
   option = cmd->add_flag("--no-saturate", p->no_saturate, "do not clip rates at the range");
   p->model_overrides.emplace_back(option, [](ImuErrorModel& m) { m.saturate = false; });
   // Motion.
-  cmd->add_option("--lead", o->lead_s,
-                  "steps / flight: still time before the motion, s (default 6)");
+  o->lead_option = cmd->add_option("--lead", o->lead_s,
+                                   "steps / flight: still time before the motion, s (default 6)");
   cmd->add_option("--turns", s.steps.turns, "steps: number of turns")->capture_default_str();
   cmd->add_option("--angle", s.steps.angle_deg, "steps: angle of each turn, deg")
       ->capture_default_str();

@@ -35,7 +35,7 @@ class NoiseSource {
 // Every field has its unit in the name or comment. Default-constructed, the model resembles an
 // InvenSense MPU-9250 at +-250 deg/s as logged by the source paper's Raspberry Pi logger at 2-4
 // kHz; the white-noise density is calibrated so that a still trace at 3000 Hz gives the paper's
-// Table 1 (120-sample windows of the integrated angle: mean sigma ~1.1", mean range ~4.2").
+// Table 1 (120-sample windows of the integrated angle: mean sigma ~1.1", mean range ~4.3").
 struct ImuErrorModel {
   // White rate noise (angle random walk), rad/s/sqrt(Hz). Per-sample std = density * sqrt(rate_hz);
   // the integrated angle over T seconds then has std density * sqrt(T) rad.

@@ -10,9 +10,11 @@
 //
 // What the defaults give (3000 Hz, +-250 deg/s, seed-dependent, see tests/sim/synth_test.cc):
 //  - still: the paper's Table 1 statistic (120-sample windows of the per-axis integrated angle,
-//    bias from the first 5 s) has mean sigma ~1.1" and mean range ~4.2" per axis.
-//  - flight (120 s, 50 m, 20" allowance): flagged shares per axis of about 25 % / 55 % at 5 cm
-//    (10 ms / 20 ms windows) and 11 % / 25 % at 10 cm, as in the paper's flight.
+//    bias from the first 5 s) has mean sigma ~1.1" and mean range ~4.3" per axis (noise
+//    density 7.0e-5 rad/s/sqrt(Hz)).
+//  - flight (120 s, 50 m, 20" allowance): flagged shares per axis, 10 ms / 20 ms windows, of
+//    21-31 % / 50-60 % at 5 cm and 9-14 % / 23-33 % at 10 cm over seeds 1-5 (seed 1: 21 / 54 and
+//    9 / 23 %); the paper's flight had 25 / 56 % and 11 / 25 %.
 
 #include "sim/gyro_io.h"
 #include "sim/gyro_trace.h"

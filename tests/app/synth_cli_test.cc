@@ -62,13 +62,18 @@ TEST(SynthCli, IdealSensorWritesTheExactMotion) {
   test::TempDir dir;
   const std::string out = dir / "ideal.csv";
   ASSERT_EQ(RunShutterlab("synth still --ideal --duration 1 --out " + out).exit_code, 0);
-  for (const GyroSample& s : ReadGyro(out).samples())
-    ASSERT_EQ(s.omega_rad_s, Eigen::Vector3d::Zero());
+  // ReadGyroCsv, not ReadGyro: format detection takes a file whose rates are all integers (here
+  // every rate is "0") for raw counts.
+  const GyroTrace ideal =
+      ReadGyroCsv(out);  // named: a range-for over a temporary's samples dangles
+  ASSERT_EQ(ideal.size(), 3001u);
+  for (const GyroSample& s : ideal.samples()) ASSERT_EQ(s.omega_rad_s, Eigen::Vector3d::Zero());
   // An error option given with --ideal still applies.
   ASSERT_EQ(
       RunShutterlab("synth still --ideal --const-bias 0.5,0,0 --duration 1 --out " + out).exit_code,
       0);
-  for (const GyroSample& s : ReadGyro(out).samples()) ASSERT_EQ(s.omega_rad_s.x(), 0.5);
+  const GyroTrace biased = ReadGyroCsv(out);
+  for (const GyroSample& s : biased.samples()) ASSERT_EQ(s.omega_rad_s.x(), 0.5);
 }
 
 TEST(SynthCli, BadArgumentsExitTwoWithOneLineAndNoFile) {
