@@ -3,13 +3,31 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include <opencv2/imgproc.hpp>
 
 #include "sim/check.h"
 
 namespace shutterlab {
+namespace {
+
+// Fixed-point bilinear sampling for integer images: coordinates in 1/128 px (7 fractional bits per
+// axis), so a weight product is at most 2^14: it fits the signed 16-bit lanes of _mm_madd_epi16, and a
+// 16-bit sample times 2^14 fits in uint32. Quantisation error <= 1/256 px per axis.
+constexpr int kFracBits = 7;
+constexpr int kFracOne = 1 << kFracBits;
+constexpr int kFracMask = kFracOne - 1;
+// Marks a pixel whose ray misses the ground: far outside any scene, so it samples black.
+constexpr int kInvalidFixed = std::numeric_limits<int>::min();
+
+}  // namespace
+
 
 FrameGeometry::FrameGeometry(const PinholeCamera& camera, double altitude_m, const FrameMotion& motion,
                              cv::Size scene_size)
@@ -75,56 +93,148 @@ void FrameGeometry::SceneRow(int v, float* xs, float* ys) const {
   }
 }
 
+bool FrameGeometry::SceneRowFixed(int v, int frac_bits, int* xi, int* yi) const {
+  if (!rotation_only_) return false;
+  const Eigen::Matrix3d h = SceneFromImageHomography(v);
+  const Eigen::Vector3d a = h.col(1) * v + h.col(2);
+  const Eigen::Vector3d b = h.col(0);
+  const int width = camera_.width;
+  // The denominator a_z + u b_z is linear in u: positive at both ends means positive on the row
+  // (otherwise part of the row looks above the horizon: leave it to the NaN-aware float path).
+  if (!(a.z() > 0 && a.z() + (width - 1) * b.z() > 0)) return false;
+  const float one = static_cast<float>(1 << frac_bits);
+  const float ax = static_cast<float>(a.x()) * one, ay = static_cast<float>(a.y()) * one;
+  const float bx = static_cast<float>(b.x()) * one, by = static_cast<float>(b.y()) * one;
+  const float az = static_cast<float>(a.z()), bz = static_cast<float>(b.z());
+  // Fixed-point coordinates beyond 2^30 would overflow int: such rows see nothing of any scene.
+  constexpr float kLimit = 1073741824.0f;
+  int u = 0;
+#if defined(__SSE2__)
+  const __m128 vax = _mm_set1_ps(ax), vay = _mm_set1_ps(ay), vbx = _mm_set1_ps(bx), vby = _mm_set1_ps(by);
+  const __m128 vaz = _mm_set1_ps(az), vbz = _mm_set1_ps(bz), limit = _mm_set1_ps(kLimit);
+  const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+  __m128 vu = _mm_setr_ps(0.0f, 1.0f, 2.0f, 3.0f);
+  const __m128 four = _mm_set1_ps(4.0f);
+  for (; u + 4 <= width; u += 4, vu = _mm_add_ps(vu, four)) {
+    const __m128 inv = _mm_div_ps(_mm_set1_ps(1.0f), _mm_add_ps(vaz, _mm_mul_ps(vu, vbz)));
+    const __m128 x = _mm_mul_ps(_mm_add_ps(vax, _mm_mul_ps(vu, vbx)), inv);
+    const __m128 y = _mm_mul_ps(_mm_add_ps(vay, _mm_mul_ps(vu, vby)), inv);
+    // cvtps rounds to nearest (the default MXCSR mode), as cvRound does.
+    __m128i ix = _mm_cvtps_epi32(x), iy = _mm_cvtps_epi32(y);
+    const __m128i far = _mm_castps_si128(
+        _mm_or_ps(_mm_cmpge_ps(_mm_and_ps(x, abs_mask), limit), _mm_cmpge_ps(_mm_and_ps(y, abs_mask), limit)));
+    const __m128i invalid = _mm_set1_epi32(kInvalidFixed);
+    ix = _mm_or_si128(_mm_andnot_si128(far, ix), _mm_and_si128(far, invalid));
+    iy = _mm_or_si128(_mm_andnot_si128(far, iy), _mm_and_si128(far, invalid));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(xi + u), ix);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(yi + u), iy);
+  }
+#endif
+  for (; u < width; ++u) {
+    const float inv = 1.0f / (az + u * bz);
+    const float x = (ax + u * bx) * inv, y = (ay + u * by) * inv;
+    const bool far = !(std::abs(x) < kLimit && std::abs(y) < kLimit);
+    xi[u] = far ? kInvalidFixed : cvRound(x);
+    yi[u] = far ? kInvalidFixed : cvRound(y);
+  }
+  return true;
+}
+
 namespace {
 
-// Fixed-point bilinear weights for integer images: 8 fractional bits per axis, so a weight product
-// is at most 2^16 and a 16-bit sample times 2^16 still fits in uint32.
-constexpr int kFracBits = 8;
-constexpr int kFracOne = 1 << kFracBits;
+inline int ToFixed(float x) {
+  // NaN and anything beyond +-2^23 px is outside every scene.
+  return std::abs(x) < 8388608.0f ? cvRound(x * kFracOne) : kInvalidFixed;
+}
 
 template <typename T>
 inline T RoundFixed(uint32_t acc) {
   return static_cast<T>((acc + (1u << (2 * kFracBits - 1))) >> (2 * kFracBits));
 }
 
-// One row of bilinear samples. Taps outside the scene read as 0.
-template <typename T, int kCn>
-void BilinearRowInt(const cv::Mat& scene, const float* xs, const float* ys, int width, int cn_runtime, T* out) {
-  const int cn = kCn > 0 ? kCn : cn_runtime;
-  const int sw = scene.cols, sh = scene.rows;
-  const size_t step = scene.step1();
-  const T* base = scene.ptr<T>();
-  for (int u = 0; u < width; ++u, out += cn) {
-    const float x = xs[u], y = ys[u];
-    if (!(x > -1.0f && x < static_cast<float>(sw) && y > -1.0f && y < static_cast<float>(sh))) {
-      for (int c = 0; c < cn; ++c) out[c] = 0;
-      continue;
-    }
-    const int xi = cvRound(x * kFracOne), yi = cvRound(y * kFracOne);
-    const int ix = xi >> kFracBits, iy = yi >> kFracBits;  // arithmetic shift: floor
-    const uint32_t fx = xi & (kFracOne - 1), fy = yi & (kFracOne - 1);
-    const uint32_t w00 = (kFracOne - fx) * (kFracOne - fy), w01 = fx * (kFracOne - fy);
-    const uint32_t w10 = (kFracOne - fx) * fy, w11 = fx * fy;
-    if (ix >= 0 && iy >= 0 && ix < sw - 1 && iy < sh - 1) {
-      const T* p0 = base + iy * step + static_cast<size_t>(ix) * cn;
-      const T* p1 = p0 + step;
-      for (int c = 0; c < cn; ++c) {
-        out[c] = RoundFixed<T>(p0[c] * w00 + p0[c + cn] * w01 + p1[c] * w10 + p1[c + cn] * w11);
-      }
-      continue;
-    }
-    const bool x0 = ix >= 0 && ix < sw, x1 = ix + 1 >= 0 && ix + 1 < sw;
-    const bool y0 = iy >= 0 && iy < sh, y1 = iy + 1 >= 0 && iy + 1 < sh;
+// Scalar bilinear sample of one pixel at fixed-point (xi, yi); taps outside the scene read as 0.
+template <typename T>
+inline void BilinearPixel(const T* base, size_t step, int sw, int sh, int cn, int xi, int yi, T* out) {
+  const int ix = xi >> kFracBits, iy = yi >> kFracBits;  // arithmetic shift: floor
+  if (xi == kInvalidFixed || yi == kInvalidFixed || ix < -1 || iy < -1 || ix >= sw || iy >= sh) {
+    for (int c = 0; c < cn; ++c) out[c] = 0;
+    return;
+  }
+  const uint32_t fx = xi & kFracMask, fy = yi & kFracMask;
+  const uint32_t w00 = (kFracOne - fx) * (kFracOne - fy), w01 = fx * (kFracOne - fy);
+  const uint32_t w10 = (kFracOne - fx) * fy, w11 = fx * fy;
+  if (ix >= 0 && iy >= 0 && ix < sw - 1 && iy < sh - 1) {
+    const T* p0 = base + iy * step + static_cast<size_t>(ix) * cn;
+    const T* p1 = p0 + step;
     for (int c = 0; c < cn; ++c) {
-      uint32_t acc = 0;
-      if (y0 && x0) acc += base[iy * step + static_cast<size_t>(ix) * cn + c] * w00;
-      if (y0 && x1) acc += base[iy * step + static_cast<size_t>(ix + 1) * cn + c] * w01;
-      if (y1 && x0) acc += base[(iy + 1) * step + static_cast<size_t>(ix) * cn + c] * w10;
-      if (y1 && x1) acc += base[(iy + 1) * step + static_cast<size_t>(ix + 1) * cn + c] * w11;
-      out[c] = RoundFixed<T>(acc);
+      out[c] = RoundFixed<T>(p0[c] * w00 + p0[c + cn] * w01 + p1[c] * w10 + p1[c + cn] * w11);
     }
+    return;
+  }
+  const bool x0 = ix >= 0, x1 = ix + 1 < sw, y0 = iy >= 0, y1 = iy + 1 < sh;
+  for (int c = 0; c < cn; ++c) {
+    uint32_t acc = 0;
+    if (y0 && x0) acc += base[iy * step + static_cast<size_t>(ix) * cn + c] * w00;
+    if (y0 && x1) acc += base[iy * step + static_cast<size_t>(ix + 1) * cn + c] * w01;
+    if (y1 && x0) acc += base[(iy + 1) * step + static_cast<size_t>(ix) * cn + c] * w10;
+    if (y1 && x1) acc += base[(iy + 1) * step + static_cast<size_t>(ix + 1) * cn + c] * w11;
+    out[c] = RoundFixed<T>(acc);
   }
 }
+
+template <typename T, int kCn>
+void BilinearRowInt(const cv::Mat& scene, const int* xi, const int* yi, int width, int cn_runtime, T* out) {
+  const int cn = kCn > 0 ? kCn : cn_runtime;
+  const T* base = scene.ptr<T>();
+  for (int u = 0; u < width; ++u) BilinearPixel(base, scene.step1(), scene.cols, scene.rows, cn, xi[u], yi[u], out + u * cn);
+}
+
+#if defined(__SSE2__)
+// 8-bit RGB, the common case, one pixel per step in SSE2: the 2x2 neighbourhood is two 8-byte loads;
+// interleaving the top and bottom rows pairs each tap with its vertical partner, so _mm_madd_epi16
+// applies the (top, bottom) weights of one column and sums them in one instruction. Same weights
+// and rounding as BilinearPixel: the result is bit-identical to the scalar path.
+void BilinearRow8uc3(const cv::Mat& scene, const int* xi, const int* yi, int width, uint8_t* out) {
+  const int sw = scene.cols, sh = scene.rows;
+  const size_t step = scene.step;
+  const uint8_t* base = scene.data;
+  const __m128i zero = _mm_setzero_si128();
+  const __m128i round = _mm_set1_epi32(1 << (2 * kFracBits - 1));
+  // The fast path reads 8 bytes from column ix: ix <= sw - 3 keeps the read inside the row.
+  const unsigned fast_x = static_cast<unsigned>(std::max(0, sw - 2)), fast_y = static_cast<unsigned>(std::max(0, sh - 1));
+  // The row's last pixel goes through the scalar path, after the loop: the 4-byte store below would
+  // spill past it.
+  const int last = width - 1;
+  for (int u = 0; u < last; ++u) {
+    const int ix = xi[u] >> kFracBits, iy = yi[u] >> kFracBits;
+    if (static_cast<unsigned>(ix) >= fast_x || static_cast<unsigned>(iy) >= fast_y) {
+      BilinearPixel<uint8_t>(base, step, sw, sh, 3, xi[u], yi[u], out + 3 * u);
+      continue;
+    }
+    const int fx = xi[u] & kFracMask, fy = yi[u] & kFracMask;
+    const int gx = kFracOne - fx, gy = kFracOne - fy;
+    const uint8_t* p0 = base + iy * step + ix * 3;
+    const __m128i top = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p0));
+    const __m128i bottom = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p0 + step));
+    const __m128i pairs = _mm_unpacklo_epi8(top, bottom);  // r0t r0b g0t g0b b0t b0b r1t r1b g1t g1b b1t b1b ..
+    const __m128i lo = _mm_unpacklo_epi8(pairs, zero);     // int16: r0t r0b g0t g0b b0t b0b r1t r1b
+    const __m128i hi = _mm_unpackhi_epi8(pairs, zero);     // int16: g1t g1b b1t b1b ...
+    const int w0 = (gx * gy) | ((gx * fy) << 16);           // column ix:   (top, bottom) weights
+    const int w1 = (fx * gy) | ((fx * fy) << 16);           // column ix+1
+    const __m128i sum_lo = _mm_madd_epi16(lo, _mm_set_epi32(w1, w0, w0, w0));  // R0 G0 B0 R1
+    const __m128i sum_hi = _mm_madd_epi16(hi, _mm_set_epi32(0, 0, w1, w1));    // G1 B1 0 0
+    __m128i sum = _mm_add_epi32(sum_lo, _mm_slli_si128(sum_hi, 4));           // R0 G G B R1
+    sum = _mm_add_epi32(sum, _mm_srli_si128(sum, 12));                          // R G B R1
+    sum = _mm_srli_epi32(_mm_add_epi32(sum, round), 2 * kFracBits);
+    sum = _mm_packs_epi32(sum, sum);
+    sum = _mm_packus_epi16(sum, sum);
+    const uint32_t rgbx = static_cast<uint32_t>(_mm_cvtsi128_si32(sum));
+    // 4-byte store: its 4th byte belongs to pixel u+1, which is written afterwards.
+    std::memcpy(out + 3 * u, &rgbx, 4);
+  }
+  if (width > 0) BilinearPixel<uint8_t>(base, step, sw, sh, 3, xi[last], yi[last], out + 3 * last);
+}
+#endif
 
 void BilinearRowFloat(const cv::Mat& scene, const float* xs, const float* ys, int width, float* out) {
   const int cn = scene.channels();
@@ -193,26 +303,34 @@ void BicubicRow(const cv::Mat& scene, const float* xs, const float* ys, int widt
   }
 }
 
-void SampleRow(const cv::Mat& scene, const float* xs, const float* ys, int width, Interpolation interpolation,
-               uchar* out) {
-  const int depth = scene.depth(), cn = scene.channels();
+// Float-coordinate rows: bicubic for every type, bilinear for float images.
+void SampleRowFloat(const cv::Mat& scene, const float* xs, const float* ys, int width, Interpolation interpolation,
+                    uchar* out) {
+  const int depth = scene.depth();
   if (interpolation == Interpolation::kBicubic) {
     if (depth == CV_8U) return BicubicRow<uint8_t>(scene, xs, ys, width, out);
     if (depth == CV_16U) return BicubicRow<uint16_t>(scene, xs, ys, width, reinterpret_cast<uint16_t*>(out));
     return BicubicRow<float>(scene, xs, ys, width, reinterpret_cast<float*>(out));
   }
-  if (depth == CV_8U) {
-    if (cn == 3) return BilinearRowInt<uint8_t, 3>(scene, xs, ys, width, cn, out);
-    if (cn == 1) return BilinearRowInt<uint8_t, 1>(scene, xs, ys, width, cn, out);
-    return BilinearRowInt<uint8_t, 0>(scene, xs, ys, width, cn, out);
-  }
-  if (depth == CV_16U) {
-    auto* out16 = reinterpret_cast<uint16_t*>(out);
-    if (cn == 3) return BilinearRowInt<uint16_t, 3>(scene, xs, ys, width, cn, out16);
-    if (cn == 1) return BilinearRowInt<uint16_t, 1>(scene, xs, ys, width, cn, out16);
-    return BilinearRowInt<uint16_t, 0>(scene, xs, ys, width, cn, out16);
-  }
   BilinearRowFloat(scene, xs, ys, width, reinterpret_cast<float*>(out));
+}
+
+// Fixed-point rows: bilinear for 8- and 16-bit images.
+void SampleRowFixed(const cv::Mat& scene, const int* xi, const int* yi, int width, uchar* out) {
+  const int cn = scene.channels();
+  if (scene.depth() == CV_8U) {
+#if defined(__SSE2__)
+    if (cn == 3) return BilinearRow8uc3(scene, xi, yi, width, out);
+#else
+    if (cn == 3) return BilinearRowInt<uint8_t, 3>(scene, xi, yi, width, cn, out);
+#endif
+    if (cn == 1) return BilinearRowInt<uint8_t, 1>(scene, xi, yi, width, cn, out);
+    return BilinearRowInt<uint8_t, 0>(scene, xi, yi, width, cn, out);
+  }
+  auto* out16 = reinterpret_cast<uint16_t*>(out);
+  if (cn == 3) return BilinearRowInt<uint16_t, 3>(scene, xi, yi, width, cn, out16);
+  if (cn == 1) return BilinearRowInt<uint16_t, 1>(scene, xi, yi, width, cn, out16);
+  return BilinearRowInt<uint16_t, 0>(scene, xi, yi, width, cn, out16);
 }
 
 }  // namespace
@@ -224,11 +342,25 @@ void RenderFrame(const cv::Mat& scene, const FrameGeometry& geometry, Interpolat
   SHUTTERLAB_CHECK(scene.channels() <= 4) << "scene has more than 4 channels";
   const int width = geometry.camera().width, height = geometry.camera().height;
   out->create(height, width, scene.type());
+  const bool fixed = interpolation == Interpolation::kBilinear && depth != CV_32F;
   cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+    // Per-range row buffers: a few KiB, no full-size map.
     std::vector<float> xs(width), ys(width);
+    std::vector<int> xi(width), yi(width);
     for (int v = rows.start; v < rows.end; ++v) {
-      geometry.SceneRow(v, xs.data(), ys.data());
-      SampleRow(scene, xs.data(), ys.data(), width, interpolation, out->ptr(v));
+      if (!fixed) {
+        geometry.SceneRow(v, xs.data(), ys.data());
+        SampleRowFloat(scene, xs.data(), ys.data(), width, interpolation, out->ptr(v));
+        continue;
+      }
+      if (!geometry.SceneRowFixed(v, kFracBits, xi.data(), yi.data())) {
+        geometry.SceneRow(v, xs.data(), ys.data());
+        for (int u = 0; u < width; ++u) {
+          xi[u] = ToFixed(xs[u]);
+          yi[u] = ToFixed(ys[u]);
+        }
+      }
+      SampleRowFixed(scene, xi.data(), yi.data(), width, out->ptr(v));
     }
   });
 }

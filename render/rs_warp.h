@@ -12,7 +12,8 @@
 //    homography H_v = K_scene R_v K^-1 per row, evaluated along the row as (a + u b) / (a_z + u b_z)
 //    with a, b two columns of H_v: no per-pixel rotation maths;
 //  - general (velocity or lens distortion): the model above, exact per pixel in double.
-// Sampling is bilinear (fixed point, 1/256 px weights for integer images) or bicubic (OpenCV's
+// Sampling is bilinear (fixed point, coordinates rounded to 1/128 px for integer images; float for
+// float images) or bicubic (OpenCV's
 // A = -0.75 kernel, float weights). Border: scene pixels outside the scene read as 0 (black), each tap
 // separately, as OpenCV's BORDER_CONSTANT with value 0; a ray that misses the ground gives 0.
 // Work is split over rows (cv::parallel_for_); every row is computed the same way whatever the
@@ -57,6 +58,10 @@ class FrameGeometry {
   // Fills xs, ys (size camera().width) with the scene pixel of each pixel of row v (NaN where the ray
   // misses the ground). Uses the homography for RotationOnly() frames.
   void SceneRow(int v, float* xs, float* ys) const;
+  // The same in fixed point (round(x * 2^frac_bits)), straight from the row's homography; INT_MIN
+  // where a coordinate is beyond 2^30 / 2^frac_bits px. Returns false (and writes nothing) unless
+  // RotationOnly() and the whole row looks at the ground: then use SceneRow.
+  bool SceneRowFixed(int v, int frac_bits, int* xi, int* yi) const;
 
  private:
   PinholeCamera camera_;

@@ -310,6 +310,31 @@ TEST(RsWarp, SamplingAgreesWithOpenCvWarpPerspective) {
   }
 }
 
+TEST(RsWarp, RgbKernelMatchesThePerChannelScalarPath) {
+  // 8-bit RGB bilinear has its own SIMD kernel; rendering each channel as a grey image takes the
+  // plain scalar path. Same fixed-point weights: bit-identical, at the borders too (the scene is
+  // smaller than the view, so edges, corners and the row's last pixel are all exercised).
+  const RigModel rig = SmallRig(131, 97);
+  const cv::Size scene_size(120, 90);
+  const FrameGeometry geometry = Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d(0.9, -1.3, 2.0)), 0.5,
+                                          scene_size);
+  ASSERT_TRUE(geometry.RotationOnly());
+  const cv::Mat scene = SmoothTexture(scene_size, CV_8UC3, 21, 0.7) + cv::Scalar::all(1);
+  cv::Mat rgb;
+  RenderFrame(scene, geometry, Interpolation::kBilinear, &rgb);
+  std::vector<cv::Mat> scene_channels, rgb_channels;
+  cv::split(scene, scene_channels);
+  cv::split(rgb, rgb_channels);
+  size_t black = 0;
+  for (int c = 0; c < 3; ++c) {
+    cv::Mat grey;
+    RenderFrame(scene_channels[c], geometry, Interpolation::kBilinear, &grey);
+    EXPECT_EQ(cv::norm(grey, rgb_channels[c], cv::NORM_INF), 0.0) << "channel " << c;
+    black += grey.total() - cv::countNonZero(grey);
+  }
+  EXPECT_GT(black, 0u) << "part of the view must fall outside the scene";
+}
+
 TEST(RsWarp, BorderOutsideTheSceneIsBlack) {
   // A 40x30 scene behind a 96x72 frame with no motion: exactly the scene, surrounded by zeros.
   const RigModel rig = SmallRig(96, 72);
