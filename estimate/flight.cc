@@ -8,7 +8,6 @@
 
 #include "estimate/window_stats.h"
 #include "sim/check.h"
-#include "sim/integrate.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
 
@@ -43,33 +42,79 @@ struct Quaternions {
   }
 };
 
-// SO(3) integration of the bias-corrected rates of samples [first, size), with the same trapezoid
-// step as OrientationTrace (sim/integrate.h): q_k = q_{k-1} Exp(0.5 (w_{k-1} + w_k) dt).
-Quaternions IntegrateOrientations(const GyroTrace& trace, const Eigen::Vector3d& bias_rad_s,
-                                  size_t first) {
-  const size_t n = trace.size() - first;
-  Quaternions q;
-  q.w.resize(n);
-  q.x.resize(n);
-  q.y.resize(n);
-  q.z.resize(n);
-  Eigen::Quaterniond current = Eigen::Quaterniond::Identity();
-  for (size_t k = 0; k < n; ++k) {
-    if (k > 0) {
-      const GyroSample& a = trace[first + k - 1];
-      const GyroSample& b = trace[first + k];
-      const double dt_s = (b.t_ns - a.t_ns) * 1e-9;
-      const Eigen::Vector3d wa = a.omega_rad_s - bias_rad_s;
-      const Eigen::Vector3d wb = b.omega_rad_s - bias_rad_s;
-      current = (current * ExpSO3(0.5 * (wa + wb) * dt_s)).normalized();
+// The analysed samples' per-axis angles and orientations, integrated as a stream over a sliding
+// buffer that holds samples [base, end) only, so that memory stays O(chunk + window) for any trace
+// length (and a 10^8-sample log needs no 3 GB of angle arrays). Index g counts the samples after
+// the bias segment (trace index first + g). The recurrences are exactly those of
+// IntegratePerAxis (angle += (w_g - b) dt) and OrientationTrace (q_g = q_{g-1} Exp(0.5 (w_{g-1} +
+// w_g) dt), bias-corrected rates), evaluated in the same order, so the values are bit-identical
+// to theirs.
+class AngleStream {
+ public:
+  AngleStream(const GyroTrace& trace, size_t first, const Eigen::Vector3d& bias_rad_s, bool with_q)
+      : trace_(trace), first_(first), bias_(bias_rad_s), with_q_(with_q) {}
+
+  // Makes samples [new_base, new_end) available; new_base and new_end never decrease.
+  void Advance(size_t new_base, size_t new_end) {
+    // Every sample must be stepped through once, in order, for the running sums.
+    SHUTTERLAB_CHECK(new_base <= end_ || (end_ == 0 && new_base == 0)) << "stream skipped samples";
+    const size_t keep_from = std::max(new_base, base_);
+    const size_t keep = end_ > keep_from ? end_ - keep_from : 0;
+    const size_t size = new_end - new_base;
+    for (auto* v : Buffers()) {
+      if (keep > 0 && keep_from > base_) {
+        std::copy(v->begin() + (keep_from - base_), v->begin() + (keep_from - base_) + keep, v->begin());
+      }
+      if (v->size() < size) v->resize(size);
     }
-    q.w[k] = current.w();
-    q.x[k] = current.x();
-    q.y[k] = current.y();
-    q.z[k] = current.z();
+    base_ = new_base;
+    for (size_t g = std::max(end_, new_base); g < new_end; ++g) Step(g);
+    end_ = std::max(end_, new_end);
   }
-  return q;
-}
+
+  const double* angle(int a) const { return angle_buffer_[a].data(); }
+  const Quaternions& q() const { return q_; }
+  size_t base() const { return base_; }
+
+ private:
+  std::vector<std::vector<double>*> Buffers() {
+    std::vector<std::vector<double>*> out = {&angle_buffer_[0], &angle_buffer_[1], &angle_buffer_[2]};
+    if (with_q_) out.insert(out.end(), {&q_.w, &q_.x, &q_.y, &q_.z});
+    return out;
+  }
+
+  void Step(size_t g) {
+    const GyroSample& s = trace_[first_ + g];
+    if (g > 0) {
+      const GyroSample& previous = trace_[first_ + g - 1];
+      const double dt_s = (s.t_ns - previous.t_ns) * 1e-9;
+      for (int a = 0; a < 3; ++a) angle_[a] += (s.omega_rad_s[a] - bias_[a]) * dt_s;
+      if (with_q_) {
+        const Eigen::Vector3d wa = previous.omega_rad_s - bias_;
+        const Eigen::Vector3d wb = s.omega_rad_s - bias_;
+        current_ = (current_ * ExpSO3(0.5 * (wa + wb) * dt_s)).normalized();
+      }
+    }
+    const size_t i = g - base_;
+    for (int a = 0; a < 3; ++a) angle_buffer_[a][i] = angle_[a];
+    if (with_q_) {
+      q_.w[i] = current_.w();
+      q_.x[i] = current_.x();
+      q_.y[i] = current_.y();
+      q_.z[i] = current_.z();
+    }
+  }
+
+  const GyroTrace& trace_;
+  const size_t first_;
+  const Eigen::Vector3d bias_;
+  const bool with_q_;
+  size_t base_ = 0, end_ = 0;
+  double angle_[3] = {0.0, 0.0, 0.0};
+  Eigen::Quaterniond current_ = Eigen::Quaterniond::Identity();
+  std::vector<double> angle_buffer_[3];
+  Quaternions q_;
+};
 
 // The vector criterion for one window [begin, end) against several thresholds (cos_half[l] =
 // cos(threshold_l / 2)); flags[l] set when some pair of orientations is further apart.
@@ -188,99 +233,124 @@ FlightResult Flight(const GyroTrace& trace, const FlightOptions& options) {
   result.vector_criterion = options.vector_criterion;
   result.bias = EstimateBias(trace, options.bias);
   const size_t first = result.bias.first_after;
-  const PerAxisAngles angles = IntegratePerAxis(trace, result.bias.bias_rad_s, first);
-  const size_t n = angles.size();
+  const size_t n = trace.size() - first;
   result.samples = n;
   SHUTTERLAB_CHECK(n >= 2) << "no samples after the bias segment (it ends at " << options.bias.end_s
                            << " s; the trace lasts " << trace.DurationS() << " s)";
-  const std::vector<int64_t>& t = angles.t_ns;
-  const double span_s = (t.back() - t.front()) * 1e-9;
-  for (double w : options.windows_s) {
-    SHUTTERLAB_CHECK(t.front() + SecondsToNs(w) <= t.back())
-        << "window " << w << " s is longer than the " << span_s
-        << " s of trace after the bias segment";
+  auto t = [&](size_t g) { return trace[first + g].t_ns; };
+  const int64_t t_last = trace.t_end_ns();
+  const double span_s = (t_last - t(0)) * 1e-9;
+  const size_t windows_count = options.windows_s.size();
+  // Windows per duration: starts k with t_k + W <= t_last (FORMATS.md: the rest run past the end).
+  std::vector<int64_t> window_ns(windows_count);
+  std::vector<size_t> windows(windows_count);
+  size_t windows_max = 0;
+  for (size_t wi = 0; wi < windows_count; ++wi) {
+    const double w = options.windows_s[wi];
+    window_ns[wi] = SecondsToNs(w);
+    SHUTTERLAB_CHECK(t(0) + window_ns[wi] <= t_last)
+        << "window " << w << " s is longer than the " << span_s << " s of trace after the bias segment";
+    windows[wi] = trace.LowerBound(t_last - window_ns[wi] + 1) - first;
+    windows_max = std::max(windows_max, windows[wi]);
   }
-  Quaternions q;
-  if (options.vector_criterion) q = IntegrateOrientations(trace, result.bias.bias_rad_s, first);
 
   const size_t limits = options.limits_m.size();
+  SHUTTERLAB_CHECK(limits <= 64) << "at most 64 ground limits";
   std::vector<double> threshold_rad(limits), cos_half(limits);
   for (size_t l = 0; l < limits; ++l) {
     threshold_rad[l] = std::atan(options.limits_m[l] / options.altitude_m) +
                        options.noise_allowance_arcsec / kArcsecPerRad;
     cos_half[l] = std::cos(0.5 * threshold_rad[l]);
   }
-  result.rows.resize(limits * options.windows_s.size());
-  const size_t windows_count = options.windows_s.size();
+  result.rows.resize(limits * windows_count);
   auto row_of = [&](size_t l, size_t w) -> FlightRow& { return result.rows[l * windows_count + w]; };
+  if (options.series) result.series.window_s = options.windows_s[0];
 
+  AngleStream stream(trace, first, result.bias.bias_rad_s, options.vector_criterion);
   SlidingRangeKernel kernel;
-  std::vector<uint32_t> chunk_end(kChunkWindows);
+  std::vector<std::vector<uint32_t>> chunk_end(windows_count, std::vector<uint32_t>(kChunkWindows));
+  std::vector<size_t> e(windows_count, 0);  // running window end per duration (global index)
   std::array<std::vector<double>, 3> range;
   for (auto& r : range) r.resize(kChunkWindows);
   bool vector_flag[64];
-  SHUTTERLAB_CHECK(limits <= 64) << "at most 64 ground limits";
   std::vector<double> scratch;
 
-  for (size_t wi = 0; wi < windows_count; ++wi) {
-    const int64_t window_ns = SecondsToNs(options.windows_s[wi]);
-    const bool series = options.series && wi == 0;
-    if (series) {
-      result.series.window_s = options.windows_s[wi];
+  // One pass over chunks of window starts; every duration's windows of the chunk are done together
+  // so the angles are integrated once.
+  for (size_t k0 = 0; k0 < windows_max; k0 += kChunkWindows) {
+    const size_t k1 = std::min(windows_max, k0 + kChunkWindows);
+    size_t region_end = k0 + 1;
+    std::vector<size_t> count(windows_count, 0);
+    for (size_t wi = 0; wi < windows_count; ++wi) {
+      const size_t k_stop = std::min(k1, windows[wi]);
+      for (size_t k = k0; k < k_stop; ++k) {
+        const int64_t t_end = t(k) + window_ns[wi];
+        while (e[wi] < n && t(e[wi]) < t_end) ++e[wi];
+        // Local index: the stream's buffer starts at sample k0.
+        chunk_end[wi][count[wi]++] = static_cast<uint32_t>(e[wi] - k0);
+      }
+      if (count[wi] > 0) region_end = std::max(region_end, e[wi]);
     }
-    size_t e = 0;       // running window end
-    size_t k0 = 0;      // first window of the chunk
-    size_t windows = 0;
-    while (k0 < n && t[k0] + window_ns <= t.back()) {
-      // Ends for this chunk's windows (WindowEndsByDuration, streamed).
-      size_t count = 0;
-      for (size_t k = k0; k < n && count < kChunkWindows && t[k] + window_ns <= t.back(); ++k) {
-        while (e < n && t[e] < t[k] + window_ns) ++e;
-        chunk_end[count++] = static_cast<uint32_t>(e);
+    stream.Advance(k0, region_end);
+    const Quaternions& q = stream.q();
+    for (size_t wi = 0; wi < windows_count; ++wi) {
+      const size_t m = count[wi];
+      if (m == 0) continue;
+      const uint32_t* ends = chunk_end[wi].data();
+      kernel.Run3({stream.angle(0), stream.angle(1), stream.angle(2)}, ends, 0, m,
+                  {range[0].data(), range[1].data(), range[2].data()});
+      // Per-axis counts: limit-outer loops with local counters in doubles (exact below 2^53), a
+      // form the compiler vectorises (compare, blend, add), unlike bool-to-integer sums.
+      const double* rx = range[0].data();
+      const double* ry = range[1].data();
+      const double* rz = range[2].data();
+      for (size_t l = 0; l < limits; ++l) {
+        const double th = threshold_rad[l];
+        double any = 0, fx = 0, fy = 0, fz = 0;
+        for (size_t i = 0; i < m; ++i) {
+          const double x = rx[i], y = ry[i], z = rz[i];
+          fx += x > th ? 1.0 : 0.0;
+          fy += y > th ? 1.0 : 0.0;
+          fz += z > th ? 1.0 : 0.0;
+          any += (x > th || y > th || z > th) ? 1.0 : 0.0;
+        }
+        FlightRow& row = row_of(l, wi);
+        row.flagged += static_cast<size_t>(any);
+        row.flagged_axis[0] += static_cast<size_t>(fx);
+        row.flagged_axis[1] += static_cast<size_t>(fy);
+        row.flagged_axis[2] += static_cast<size_t>(fz);
       }
-      const size_t k1 = k0 + count;
-      for (int a = 0; a < 3; ++a) {
-        kernel.Run(angles.angle_rad[a].data(), chunk_end.data(), k0, k1, range[a].data());
-      }
-      for (size_t i = 0; i < count; ++i) {
-        const double rx = range[0][i], ry = range[1][i], rz = range[2][i];
-        const double r_max = std::max(rx, std::max(ry, rz));
-        if (options.vector_criterion) VectorFlags(q, k0 + i, chunk_end[i], cos_half, vector_flag);
+      for (size_t i = 0; options.vector_criterion && i < m; ++i) {
+        VectorFlags(q, i, ends[i], cos_half, vector_flag);
+        const double r_max = std::max(rx[i], std::max(ry[i], rz[i]));
         for (size_t l = 0; l < limits; ++l) {
           FlightRow& row = row_of(l, wi);
-          const double th = threshold_rad[l];
-          const bool flagged = r_max > th;
-          row.flagged += flagged;
-          row.flagged_axis[0] += rx > th;
-          row.flagged_axis[1] += ry > th;
-          row.flagged_axis[2] += rz > th;
-          if (options.vector_criterion) {
-            row.flagged_vector += vector_flag[l];
-            row.flagged_vector_only += vector_flag[l] && !flagged;
-            row.flagged_axis_only += flagged && !vector_flag[l];
-          }
-        }
-        if (series) {
-          result.series.t_ns.push_back(t[k0 + i]);
-          for (int a = 0; a < 3; ++a) result.series.range_arcsec[a].push_back(range[a][i] * kArcsecPerRad);
-          if (options.vector_criterion) {
-            result.series.vector_arcsec.push_back(
-                MaxPairwiseAngle(q, k0 + i, chunk_end[i], &scratch) * kArcsecPerRad);
-          }
+          const bool flagged = r_max > threshold_rad[l];
+          row.flagged_vector += vector_flag[l];
+          row.flagged_vector_only += vector_flag[l] && !flagged;
+          row.flagged_axis_only += flagged && !vector_flag[l];
         }
       }
-      windows += count;
-      k0 = k1;
-      if (options.progress) options.progress((wi + static_cast<double>(k0) / n) / windows_count);
+      for (size_t i = 0; options.series && wi == 0 && i < m; ++i) {
+        result.series.t_ns.push_back(t(k0 + i));
+        for (int a = 0; a < 3; ++a) result.series.range_arcsec[a].push_back(range[a][i] * kArcsecPerRad);
+        if (options.vector_criterion) {
+          result.series.vector_arcsec.push_back(MaxPairwiseAngle(q, i, ends[i], &scratch) *
+                                                kArcsecPerRad);
+        }
+      }
     }
-    if (wi == 0) result.windows_total = windows;
+    if (options.progress) options.progress(static_cast<double>(k1) / windows_max);
+  }
+  result.windows_total = windows[0];
+  for (size_t wi = 0; wi < windows_count; ++wi) {
     for (size_t l = 0; l < limits; ++l) {
       FlightRow& row = row_of(l, wi);
       row.limit_m = options.limits_m[l];
       row.window_s = options.windows_s[wi];
       row.threshold_arcsec = threshold_rad[l] * kArcsecPerRad;
-      row.windows = windows;
-      const double to_percent = 100.0 / static_cast<double>(windows);
+      row.windows = windows[wi];
+      const double to_percent = 100.0 / static_cast<double>(windows[wi]);
       row.flagged_percent = row.flagged * to_percent;
       for (int a = 0; a < 3; ++a) row.flagged_percent_axis[a] = row.flagged_axis[a] * to_percent;
       row.flagged_percent_vector = row.flagged_vector * to_percent;

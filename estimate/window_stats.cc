@@ -109,79 +109,98 @@ std::vector<double> SlidingStdDevBruteForce(const std::vector<double>& x,
 // extrema (block start .. i) and suffix extrema (i .. block end). A window of at least B samples
 // starting in block bs and ending in block bl > bs is then
 //   max(suffix[s], block maxima bs+1 .. bl-1, prefix[e-1]),
-// and with B near the window length there are at most one or two whole blocks in between. This is
-// three passes of branch-free streaming code per sample, against the data-dependent branches of the
-// monotonic-deque algorithm.
-void SlidingRangeKernel::Run(const double* x, const uint32_t* chunk_end, size_t k_begin, size_t k_end,
-                             double* out) {
+// and with B near the window length there are at most one or two whole blocks in between. A window
+// of exactly B samples inside one block is that block, where suffix[s] = prefix[e-1] = its maximum,
+// so the same formula holds. This is streaming code with predictable branches, against the
+// data-dependent branches of the monotonic-deque algorithm. kAxes signals share one pass (the
+// window bookkeeping is the same for all), with their buffers interleaved per sample.
+template <int kAxes>
+void RangeKernel(const double* const* x, const uint32_t* chunk_end, size_t k_begin, size_t k_end,
+                 double* const* out, std::vector<double>* buffers) {
   if (k_end <= k_begin) return;
   const size_t base = k_begin;
   const size_t n = chunk_end[k_end - 1 - base] - base;  // samples the chunk's windows touch
   const size_t block = ChooseBlock(chunk_end, k_begin, k_end);
   const size_t blocks = (n + block - 1) / block;
-  prefix_max_.resize(n);
-  prefix_min_.resize(n);
-  suffix_max_.resize(n);
-  suffix_min_.resize(n);
-  block_max_.resize(blocks);
-  block_min_.resize(blocks);
-  const double* xs = x + base;
-  double* pmax = prefix_max_.data();
-  double* pmin = prefix_min_.data();
-  double* smax = suffix_max_.data();
-  double* smin = suffix_min_.data();
-  for (size_t b = 0; b < blocks; ++b) {
-    const size_t lo = b * block;
-    const size_t hi = std::min(n, lo + block);
-    double run_max = xs[lo], run_min = xs[lo];
-    for (size_t i = lo; i < hi; ++i) {
-      run_max = std::max(run_max, xs[i]);
-      run_min = std::min(run_min, xs[i]);
-      pmax[i] = run_max;
-      pmin[i] = run_min;
-    }
-    block_max_[b] = run_max;
-    block_min_[b] = run_min;
-    run_max = xs[hi - 1];
-    run_min = xs[hi - 1];
-    for (size_t i = hi; i-- > lo;) {
-      run_max = std::max(run_max, xs[i]);
-      run_min = std::min(run_min, xs[i]);
-      smax[i] = run_max;
-      smin[i] = run_min;
+  for (int i = 0; i < 4; ++i) buffers[i].resize(n * kAxes);
+  buffers[4].resize(blocks * kAxes);
+  buffers[5].resize(blocks * kAxes);
+  double* pmax = buffers[0].data();
+  double* pmin = buffers[1].data();
+  double* smax = buffers[2].data();
+  double* smin = buffers[3].data();
+  double* bmax = buffers[4].data();
+  double* bmin = buffers[5].data();
+  for (int a = 0; a < kAxes; ++a) {
+    const double* xs = x[a] + base;
+    for (size_t b = 0; b < blocks; ++b) {
+      const size_t lo = b * block;
+      const size_t hi = std::min(n, lo + block);
+      double run_max = xs[lo], run_min = xs[lo];
+      for (size_t i = lo; i < hi; ++i) {
+        run_max = std::max(run_max, xs[i]);
+        run_min = std::min(run_min, xs[i]);
+        pmax[i * kAxes + a] = run_max;
+        pmin[i * kAxes + a] = run_min;
+      }
+      bmax[b * kAxes + a] = run_max;
+      bmin[b * kAxes + a] = run_min;
+      run_max = xs[hi - 1];
+      run_min = xs[hi - 1];
+      for (size_t i = hi; i-- > lo;) {
+        run_max = std::max(run_max, xs[i]);
+        run_min = std::min(run_min, xs[i]);
+        smax[i * kAxes + a] = run_max;
+        smin[i * kAxes + a] = run_min;
+      }
     }
   }
-  // Block indices of the window's first and last sample, advanced incrementally (both only grow).
-  size_t first_block = 0, last_block = 0;
+  // Block index of the window's first sample, advanced incrementally (s grows by one per window).
+  size_t first_block = 0, first_block_end = block;
   for (size_t k = k_begin; k < k_end; ++k) {
     const size_t s = k - base;
     const size_t e = chunk_end[s] - base;
-    const size_t len = e - s;
-    if (s >= (first_block + 1) * block) ++first_block;  // s grows by one per window
-    while (e - 1 >= (last_block + 1) * block) ++last_block;
-    double hi, lo;
-    if (len < block) {
+    if (s == first_block_end) {
+      ++first_block;
+      first_block_end += block;
+    }
+    if (e - s < block) {
       // Shorter than a block (only near logging gaps): scan directly.
-      hi = xs[s];
-      lo = xs[s];
-      for (size_t i = s + 1; i < e; ++i) {
-        hi = std::max(hi, xs[i]);
-        lo = std::min(lo, xs[i]);
+      for (int a = 0; a < kAxes; ++a) {
+        const double* xs = x[a] + base;
+        double hi = xs[s], lo = xs[s];
+        for (size_t i = s + 1; i < e; ++i) {
+          hi = std::max(hi, xs[i]);
+          lo = std::min(lo, xs[i]);
+        }
+        out[a][k - k_begin] = hi - lo;
       }
-    } else if (first_block == last_block) {
-      // len >= block inside one block: the window is exactly that block.
-      hi = smax[s];
-      lo = smin[s];
-    } else {
-      hi = std::max(smax[s], pmax[e - 1]);
-      lo = std::min(smin[s], pmin[e - 1]);
-      for (size_t b = first_block + 1; b < last_block; ++b) {
-        hi = std::max(hi, block_max_[b]);
-        lo = std::min(lo, block_min_[b]);
+      continue;
+    }
+    double hi[kAxes], lo[kAxes];
+    for (int a = 0; a < kAxes; ++a) {
+      hi[a] = std::max(smax[s * kAxes + a], pmax[(e - 1) * kAxes + a]);
+      lo[a] = std::min(smin[s * kAxes + a], pmin[(e - 1) * kAxes + a]);
+    }
+    // Whole blocks strictly between the first and the last block, if any.
+    for (size_t b = first_block + 1; (b + 1) * block <= e - 1; ++b) {
+      for (int a = 0; a < kAxes; ++a) {
+        hi[a] = std::max(hi[a], bmax[b * kAxes + a]);
+        lo[a] = std::min(lo[a], bmin[b * kAxes + a]);
       }
     }
-    out[k - k_begin] = hi - lo;
+    for (int a = 0; a < kAxes; ++a) out[a][k - k_begin] = hi[a] - lo[a];
   }
+}
+
+void SlidingRangeKernel::Run(const double* x, const uint32_t* chunk_end, size_t k_begin, size_t k_end,
+                             double* out) {
+  RangeKernel<1>(&x, chunk_end, k_begin, k_end, &out, buffers_);
+}
+
+void SlidingRangeKernel::Run3(const std::array<const double*, 3>& x, const uint32_t* chunk_end,
+                              size_t k_begin, size_t k_end, const std::array<double*, 3>& out) {
+  RangeKernel<3>(x.data(), chunk_end, k_begin, k_end, out.data(), buffers_);
 }
 
 std::vector<double> SlidingRange(const std::vector<double>& x, const std::vector<uint32_t>& window_end) {

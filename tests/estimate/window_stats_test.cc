@@ -1,6 +1,7 @@
 #include "estimate/window_stats.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -189,6 +190,19 @@ TEST(WindowStats, KernelChunkedMatchesWholeRun) {
     kernel.Run(x.data(), local.data(), k0, k1, out.data() + k0);
   }
   EXPECT_EQ(out, whole);
+
+  // Three signals in one pass give each signal's own ranges.
+  const auto y = RandomSignal(x.size(), 13), z = RandomSignal(x.size(), 14);
+  std::array<std::vector<double>, 3> three;
+  for (auto& o : three) o.resize(ends.size());
+  for (size_t k0 = 0; k0 < ends.size(); k0 += 777) {
+    const size_t k1 = std::min(ends.size(), k0 + 777);
+    kernel.Run3({x.data(), y.data(), z.data()}, ends.data() + k0, k0, k1,
+                {three[0].data() + k0, three[1].data() + k0, three[2].data() + k0});
+  }
+  EXPECT_EQ(three[0], whole);
+  EXPECT_EQ(three[1], SlidingRangeBruteForce(y, ends));
+  EXPECT_EQ(three[2], SlidingRangeBruteForce(z, ends));
 }
 
 }  // namespace

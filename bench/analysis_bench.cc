@@ -1,0 +1,258 @@
+// Speed of the two hot paths of a long-flight analysis, each against a reference measured in the
+// same run, on one thread:
+//  1. reading a 30-million-line gyro.csv (sim/gyro_io ReadGyroCsv) -> MB/s, with the time split
+//     into file read / line splitting / number parsing, and istream >> double as the reference;
+//  2. the flight analysis (estimate/flight, two limits x two windows) -> samples/s, per-axis and
+//     vector criteria separately, against a monotonic-deque sliding range (std::deque).
+//
+// Usage: analysis_bench [--lines N] [--file PATH] [--keep]
+// Generates PATH (default /tmp/shutterlab_bench_gyro.csv) when it does not exist with N lines.
+// A table, not Google Benchmark: one run of each step is long enough (seconds) to need no repeats.
+
+#include <time.h>
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "estimate/flight.h"
+#include "estimate/window_stats.h"
+#include "sim/bias.h"
+#include "sim/gyro_io.h"
+#include "sim/integrate.h"
+#include "sim/text_file.h"
+
+namespace shutterlab {
+namespace {
+
+constexpr double kArcsecPerRad = 180.0 * 3600.0 / 3.14159265358979323846;
+
+// This thread's CPU time (user + system), s: on a shared machine wall time measures the neighbours.
+double Now() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+// A multirotor-like log at 1 kHz: 5 s still, then a slow random-walk attitude rate with vibration.
+// Times with 3 decimals and rates with 6, as real loggers write them (~40 bytes a line).
+void GenerateCsv(const std::string& path, size_t lines) {
+  std::mt19937_64 rng(20261122);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) throw std::runtime_error("cannot write " + path);
+  std::string buffer = "t,gx,gy,gz\n";
+  double w[3] = {0, 0, 0};
+  char number[64];
+  for (size_t i = 0; i < lines; ++i) {
+    const int64_t t_ms = static_cast<int64_t>(i);
+    buffer += std::to_string(t_ms / 1000);
+    std::snprintf(number, sizeof(number), ".%03d", static_cast<int>(t_ms % 1000));
+    buffer += number;
+    for (int a = 0; a < 3; ++a) {
+      if (i >= 5000) w[a] = 0.999 * w[a] + 0.003 * normal(rng);
+      const double rate = 0.002 + w[a] + 0.01 * normal(rng);  // bias + motion + noise, rad/s
+      const auto r = std::to_chars(number, number + sizeof(number), rate, std::chars_format::fixed, 6);
+      buffer += ',';
+      buffer.append(number, r.ptr);
+    }
+    buffer += '\n';
+    if (buffer.size() > (1 << 22)) {
+      std::fwrite(buffer.data(), 1, buffer.size(), f);
+      buffer.clear();
+    }
+  }
+  std::fwrite(buffer.data(), 1, buffer.size(), f);
+  std::fclose(f);
+}
+
+// Reference reader: the classic std::ifstream >> double loop (the issue's ~80 MB/s figure).
+size_t ReadWithIstream(const std::string& path, size_t max_bytes, size_t* bytes_read) {
+  std::ifstream in(path);
+  std::string header;
+  std::getline(in, header);
+  double t, x, y, z;
+  char comma;
+  size_t n = 0;
+  std::vector<GyroSample> samples;
+  while (in >> t >> comma >> x >> comma >> y >> comma >> z) {
+    samples.push_back({static_cast<int64_t>(std::llround(t * 1e9)), Eigen::Vector3d(x, y, z)});
+    ++n;
+    if ((n & 1023) == 0 && static_cast<size_t>(in.tellg()) >= max_bytes) break;
+  }
+  const auto position = in.tellg();  // -1 once the stream hit the end of the file
+  *bytes_read = position < 0 ? std::filesystem::file_size(path) : static_cast<size_t>(position);
+  return n;
+}
+
+// Reference sliding range: the monotonic-deque algorithm with std::deque, per axis, counting the
+// windows over each threshold exactly as estimate/flight does.
+std::vector<size_t> DequeFlagged(const PerAxisAngles& angles, int64_t window_ns,
+                                 const std::vector<double>& threshold_rad, size_t* windows) {
+  const auto& t = angles.t_ns;
+  const size_t n = t.size();
+  std::vector<double> max_range;
+  for (int a = 0; a < 3; ++a) {
+    const std::vector<double>& x = angles.angle_rad[a];
+    std::deque<size_t> hi, lo;
+    size_t e = 0, k = 0;
+    for (; k < n && t[k] + window_ns <= t.back(); ++k) {
+      while (e < n && t[e] < t[k] + window_ns) {
+        while (!hi.empty() && x[hi.back()] <= x[e]) hi.pop_back();
+        hi.push_back(e);
+        while (!lo.empty() && x[lo.back()] >= x[e]) lo.pop_back();
+        lo.push_back(e);
+        ++e;
+      }
+      while (hi.front() < k) hi.pop_front();
+      while (lo.front() < k) lo.pop_front();
+      const double r = x[hi.front()] - x[lo.front()];
+      if (a == 0) max_range.push_back(r);
+      else max_range[k] = std::max(max_range[k], r);
+    }
+  }
+  *windows = max_range.size();
+  std::vector<size_t> flagged(threshold_rad.size(), 0);
+  for (double r : max_range) {
+    for (size_t l = 0; l < threshold_rad.size(); ++l) flagged[l] += r > threshold_rad[l];
+  }
+  return flagged;
+}
+
+int Main(int argc, char** argv) {
+  size_t lines = 30000000;
+  std::string path = "/tmp/shutterlab_bench_gyro.csv";
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--lines" && i + 1 < argc) lines = std::stoull(argv[++i]);
+    else if (arg == "--file" && i + 1 < argc) path = argv[++i];
+    else {
+      std::fprintf(stderr, "usage: %s [--lines N] [--file PATH]\n", argv[0]);
+      return 2;
+    }
+  }
+  if (!std::filesystem::exists(path)) {
+    std::printf("generating %s (%zu lines) ...\n", path.c_str(), lines);
+    std::fflush(stdout);
+    const double t0 = Now();
+    GenerateCsv(path, lines);
+    std::printf("  generated in %.1f s\n", Now() - t0);
+  }
+  const double file_mb = std::filesystem::file_size(path) / 1e6;
+  std::printf("file: %s, %.1f MB\n\n", path.c_str(), file_mb);
+
+  // --- 1. Reading -------------------------------------------------------------------------------
+  std::printf("%-58s %10s %10s\n", "read step (one thread, CPU time)", "seconds", "MB/s");
+  double t0 = Now();
+  const std::string text = ReadFileToString(path);
+  const double t_file = Now() - t0;
+  std::printf("%-58s %10.3f %10.0f\n", "ReadFileToString (whole file into memory)", t_file, file_mb / t_file);
+  // Splitting lines and fields only (LineCursor + SplitFields, no number parsing).
+  t0 = Now();
+  size_t fields_seen = 0;
+  {
+    LineCursor cursor(text);
+    std::vector<std::string_view> fields;
+    while (auto line = cursor.Next()) {
+      SplitFields(*line, ',', &fields);
+      fields_seen += fields.size();
+    }
+  }
+  const double t_split = Now() - t0;
+  std::printf("%-58s %10.3f %10.0f\n", "LineCursor + SplitFields only", t_split, file_mb / t_split);
+  // Number parsing only: std::from_chars over the whole buffer, no lines or fields kept.
+  t0 = Now();
+  double checksum = 0;
+  {
+    const char* p = text.data() + text.find('\n') + 1;
+    const char* end = text.data() + text.size();
+    while (p < end) {
+      double v;
+      const auto r = std::from_chars(p, end, v);
+      checksum += v;
+      p = r.ptr + 1;  // skip ',' or '\n'
+    }
+  }
+  const double t_parse = Now() - t0;
+  std::printf("%-58s %10.3f %10.0f\n", "std::from_chars whole buffer only (upper bound)", t_parse,
+              file_mb / t_parse);
+  t0 = Now();
+  GyroTrace trace = ReadGyroCsv(path);
+  const double t_read = Now() - t0;
+  std::printf("%-58s %10.3f %10.0f   <- %zu samples\n", "ReadGyroCsv (sim/gyro_io, total)", t_read,
+              file_mb / t_read, trace.size());
+  size_t ref_bytes = 0;
+  t0 = Now();
+  const size_t ref_lines = ReadWithIstream(path, 200000000, &ref_bytes);
+  const double t_ref = Now() - t0;
+  std::printf("%-58s %10.3f %10.0f   (first %zu lines)\n", "reference: std::ifstream >> double",
+              t_ref, ref_bytes / 1e6 / t_ref, ref_lines);
+  std::printf("(checksum %.3g, %zu fields)\n\n", checksum, fields_seen);
+
+  // --- 2. Flight analysis -----------------------------------------------------------------------
+  FlightOptions options;  // 50 m, 5 cm and 10 cm, 10 ms and 20 ms, 20", bias 0:5
+  const size_t n = trace.size();
+  std::printf("%-58s %10s %10s\n", "flight step (2 limits x 2 windows, CPU time)", "seconds", "Msamples/s");
+  options.vector_criterion = false;
+  t0 = Now();
+  const FlightResult axis = Flight(trace, options);
+  const double t_axis = Now() - t0;
+  std::printf("%-58s %10.3f %10.1f\n", "Flight per-axis (bias + IntegratePerAxis + ranges)", t_axis,
+              n / t_axis / 1e6);
+  // The per-axis part split: integration alone.
+  t0 = Now();
+  const BiasEstimate bias = EstimateBias(trace, options.bias);
+  const PerAxisAngles angles = IntegratePerAxis(trace, bias.bias_rad_s, bias.first_after);
+  const double t_integrate = Now() - t0;
+  std::printf("%-58s %10.3f %10.1f\n", "  of which bias + IntegratePerAxis alone", t_integrate,
+              n / t_integrate / 1e6);
+  // Reference: std::deque monotonic queues.
+  std::vector<double> threshold_rad;
+  for (double limit : options.limits_m) {
+    threshold_rad.push_back(std::atan(limit / options.altitude_m) +
+                            options.noise_allowance_arcsec / kArcsecPerRad);
+  }
+  t0 = Now();
+  bool counts_match = true;
+  for (size_t wi = 0; wi < options.windows_s.size(); ++wi) {
+    size_t windows = 0;
+    const auto flagged = DequeFlagged(angles, SecondsToNs(options.windows_s[wi]), threshold_rad, &windows);
+    for (size_t l = 0; l < flagged.size(); ++l) {
+      const FlightRow& row = axis.rows[l * options.windows_s.size() + wi];
+      counts_match &= row.flagged == flagged[l] && row.windows == windows;
+    }
+  }
+  const double t_deque = Now() - t0;
+  std::printf("%-58s %10.3f %10.1f   counts %s\n", "reference: std::deque sliding range (ranges only)",
+              t_deque, n / t_deque / 1e6, counts_match ? "identical" : "DIFFER");
+  std::printf("%-58s %10.3f %10.1f\n", "  -> Flight's range part alone (total - integration)",
+              t_axis - t_integrate, n / (t_axis - t_integrate) / 1e6);
+
+  options.vector_criterion = true;
+  t0 = Now();
+  const FlightResult both = Flight(trace, options);
+  const double t_both = Now() - t0;
+  std::printf("%-58s %10.3f %10.1f\n", "Flight per-axis + vector (SO(3) integration + pruning)", t_both,
+              n / t_both / 1e6);
+  std::printf("\n%s", FlightTable(both).c_str());
+  return counts_match ? 0 : 1;
+}
+
+}  // namespace
+}  // namespace shutterlab
+
+int main(int argc, char** argv) {
+  try {
+    return shutterlab::Main(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+}
