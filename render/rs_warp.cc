@@ -93,14 +93,17 @@ void FrameGeometry::SceneRow(int v, float* xs, float* ys) const {
   }
 }
 
-bool FrameGeometry::SceneRowFixed(int v, int frac_bits, int* xi, int* yi) const {
+bool FrameGeometry::SceneRowFixed(int v, int frac_bits, int* xi, int* yi, int u_begin, int count) const {
   if (!rotation_only_) return false;
+  if (count < 0) count = camera_.width - u_begin;
+  SHUTTERLAB_CHECK(u_begin >= 0 && u_begin + count <= camera_.width) << "columns outside the image";
   const Eigen::Matrix3d h = SceneFromImageHomography(v);
-  const Eigen::Vector3d a = h.col(1) * v + h.col(2);
+  // Origin moved to column u_begin, so that u below runs from 0.
+  const Eigen::Vector3d a = h.col(0) * u_begin + h.col(1) * v + h.col(2);
   const Eigen::Vector3d b = h.col(0);
-  const int width = camera_.width;
-  // The denominator a_z + u b_z is linear in u: positive at both ends means positive on the row
-  // (otherwise part of the row looks above the horizon: leave it to the NaN-aware float path).
+  const int width = count;
+  // The denominator a_z + u b_z is linear in u: positive at both ends means positive on the span
+  // (otherwise part of it looks above the horizon: leave it to the NaN-aware float path).
   if (!(a.z() > 0 && a.z() + (width - 1) * b.z() > 0)) return false;
   const float one = static_cast<float>(1 << frac_bits);
   const float ax = static_cast<float>(a.x()) * one, ay = static_cast<float>(a.y()) * one;
@@ -221,8 +224,10 @@ void BilinearRow8uc3(const cv::Mat& scene, const int* xi, const int* yi, int wid
     const __m128i hi = _mm_unpackhi_epi8(pairs, zero);     // int16: g1t g1b b1t b1b ...
     const int w0 = (gx * gy) | ((gx * fy) << 16);           // column ix:   (top, bottom) weights
     const int w1 = (fx * gy) | ((fx * fy) << 16);           // column ix+1
-    const __m128i sum_lo = _mm_madd_epi16(lo, _mm_set_epi32(w1, w0, w0, w0));  // R0 G0 B0 R1
-    const __m128i sum_hi = _mm_madd_epi16(hi, _mm_set_epi32(0, 0, w1, w1));    // G1 B1 0 0
+    // (w0, w1, 0, 0) once, then two shuffles: cheaper than two _mm_set_epi32 of scalars.
+    const __m128i w01 = _mm_unpacklo_epi32(_mm_cvtsi32_si128(w0), _mm_cvtsi32_si128(w1));
+    const __m128i sum_lo = _mm_madd_epi16(lo, _mm_shuffle_epi32(w01, _MM_SHUFFLE(1, 0, 0, 0)));  // R0 G0 B0 R1
+    const __m128i sum_hi = _mm_madd_epi16(hi, _mm_shuffle_epi32(w01, _MM_SHUFFLE(2, 2, 1, 1)));  // G1 B1 0 0
     __m128i sum = _mm_add_epi32(sum_lo, _mm_slli_si128(sum_hi, 4));           // R0 G G B R1
     sum = _mm_add_epi32(sum, _mm_srli_si128(sum, 12));                          // R G B R1
     sum = _mm_srli_epi32(_mm_add_epi32(sum, round), 2 * kFracBits);
@@ -343,24 +348,31 @@ void RenderFrame(const cv::Mat& scene, const FrameGeometry& geometry, Interpolat
   const int width = geometry.camera().width, height = geometry.camera().height;
   out->create(height, width, scene.type());
   const bool fixed = interpolation == Interpolation::kBilinear && depth != CV_32F;
+  constexpr int kChunk = 512;  // columns per pass: 4 KiB of coordinates
   cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
     // Per-range row buffers: a few KiB, no full-size map.
     std::vector<float> xs(width), ys(width);
-    std::vector<int> xi(width), yi(width);
+    std::vector<int> xi(kChunk), yi(kChunk);
     for (int v = rows.start; v < rows.end; ++v) {
       if (!fixed) {
         geometry.SceneRow(v, xs.data(), ys.data());
         SampleRowFloat(scene, xs.data(), ys.data(), width, interpolation, out->ptr(v));
         continue;
       }
-      if (!geometry.SceneRowFixed(v, kFracBits, xi.data(), yi.data())) {
-        geometry.SceneRow(v, xs.data(), ys.data());
-        for (int u = 0; u < width; ++u) {
-          xi[u] = ToFixed(xs[u]);
-          yi[u] = ToFixed(ys[u]);
+      // Column chunks keep the coordinate buffers in L1 between the two passes.
+      bool have_floats = false;
+      for (int u0 = 0; u0 < width; u0 += kChunk) {
+        const int n = std::min(kChunk, width - u0);
+        if (!geometry.SceneRowFixed(v, kFracBits, xi.data(), yi.data(), u0, n)) {
+          if (!have_floats) geometry.SceneRow(v, xs.data(), ys.data());
+          have_floats = true;
+          for (int u = 0; u < n; ++u) {
+            xi[u] = ToFixed(xs[u0 + u]);
+            yi[u] = ToFixed(ys[u0 + u]);
+          }
         }
+        SampleRowFixed(scene, xi.data(), yi.data(), n, out->ptr(v) + u0 * out->elemSize());
       }
-      SampleRowFixed(scene, xi.data(), yi.data(), width, out->ptr(v));
     }
   });
 }

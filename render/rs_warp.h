@@ -58,10 +58,11 @@ class FrameGeometry {
   // Fills xs, ys (size camera().width) with the scene pixel of each pixel of row v (NaN where the ray
   // misses the ground). Uses the homography for RotationOnly() frames.
   void SceneRow(int v, float* xs, float* ys) const;
-  // The same in fixed point (round(x * 2^frac_bits)), straight from the row's homography; INT_MIN
-  // where a coordinate is beyond 2^30 / 2^frac_bits px. Returns false (and writes nothing) unless
-  // RotationOnly() and the whole row looks at the ground: then use SceneRow.
-  bool SceneRowFixed(int v, int frac_bits, int* xi, int* yi) const;
+  // The same in fixed point (round(x * 2^frac_bits)), straight from the row's homography, for the
+  // `count` columns from u_begin (count < 0: to the row's end) into xi[0..count), yi[0..count);
+  // INT_MIN where a coordinate is beyond 2^30 / 2^frac_bits px. Returns false (writing nothing)
+  // unless RotationOnly() and those columns all look at the ground: then use SceneRow.
+  bool SceneRowFixed(int v, int frac_bits, int* xi, int* yi, int u_begin = 0, int count = -1) const;
 
  private:
   PinholeCamera camera_;

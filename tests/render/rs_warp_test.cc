@@ -335,6 +335,30 @@ TEST(RsWarp, RgbKernelMatchesThePerChannelScalarPath) {
   EXPECT_GT(black, 0u) << "part of the view must fall outside the scene";
 }
 
+TEST(RsWarp, HomographyPathRendersLikeThePerPixelPath) {
+  // A wide frame (several 512-column chunks) rendered twice: rotation only (row homographies, fixed
+  // point from the start) and with a negligible velocity (1 nm/s: the exact per-pixel path).
+  RigModel rig = SmallRig(1100, 24);
+  rig.camera.fx = rig.camera.fy = 900.0;
+  const cv::Size scene_size(1600, 400);
+  const GyroTrace trace = ConstantRateTrace(Eigen::Vector3d(0.5, -0.7, 1.1));
+  const FrameGeometry fast = Geometry(Truth(rig), trace, 0.5, scene_size);
+  rig.velocity_mps = Eigen::Vector3d(1e-9, 0, 0);
+  const FrameGeometry exact = Geometry(Truth(rig), trace, 0.5, scene_size);
+  ASSERT_TRUE(fast.RotationOnly());
+  ASSERT_FALSE(exact.RotationOnly());
+  const cv::Mat scene = SmoothTexture(scene_size, CV_8UC3, 4, 1.0);
+  cv::Mat a, b, diff;
+  RenderFrame(scene, fast, Interpolation::kBilinear, &a);
+  RenderFrame(scene, exact, Interpolation::kBilinear, &b);
+  cv::absdiff(a, b, diff);
+  double max_level = 0;
+  cv::minMaxLoc(diff.reshape(1), nullptr, &max_level);
+  // The two float evaluations may round to neighbouring 1/128 px steps: one level at most.
+  EXPECT_LE(max_level, 1.0);
+  EXPECT_LT(cv::mean(diff)[0], 0.05);
+}
+
 TEST(RsWarp, BorderOutsideTheSceneIsBlack) {
   // A 40x30 scene behind a 96x72 frame with no motion: exactly the scene, surrounded by zeros.
   const RigModel rig = SmallRig(96, 72);
