@@ -121,18 +121,22 @@ cv::Mat TiledOverview(const std::vector<cv::Mat>& tiles, const std::vector<std::
                       int columns) {
   SHUTTERLAB_CHECK(!tiles.empty() && tiles.size() == captions.size()) << "one caption per tile";
   SHUTTERLAB_CHECK(tile_width > 0 && columns > 0) << "bad overview layout";
-  const int tile_height =
-      std::max(1, static_cast<int>(std::lround(static_cast<double>(tile_width) * tiles.front().rows / tiles.front().cols)));
+  const int tile_height = std::max(
+      1, static_cast<int>(std::lround(static_cast<double>(tile_width) * tiles.front().rows / tiles.front().cols)));
+  const int caption_height = 24;  // a strip under each tile, so captions never cover the picture
   const int cols = std::min<int>(columns, static_cast<int>(tiles.size()));
   const int rows = (static_cast<int>(tiles.size()) + cols - 1) / cols;
   const int gap = 4;
-  cv::Mat canvas((tile_height + gap) * rows - gap, (tile_width + gap) * cols - gap, CV_8UC3, cv::Scalar::all(0));
+  const int cell_height = tile_height + caption_height;
+  cv::Mat canvas((cell_height + gap) * rows - gap, (tile_width + gap) * cols - gap, CV_8UC3, cv::Scalar::all(0));
   for (size_t i = 0; i < tiles.size(); ++i) {
     cv::Mat tile;
     cv::resize(ToRgb8(tiles[i]), tile, cv::Size(tile_width, tile_height), 0, 0, cv::INTER_AREA);
-    cv::putText(tile, captions[i], cv::Point(6, 22), cv::FONT_HERSHEY_SIMPLEX, 0.6, kWhite, 1, cv::LINE_AA);
     const int r = static_cast<int>(i) / cols, c = static_cast<int>(i) % cols;
-    tile.copyTo(canvas(cv::Rect(c * (tile_width + gap), r * (tile_height + gap), tile_width, tile_height)));
+    const int x = c * (tile_width + gap), y = r * (cell_height + gap);
+    tile.copyTo(canvas(cv::Rect(x, y, tile_width, tile_height)));
+    cv::putText(canvas, captions[i], cv::Point(x + 6, y + tile_height + caption_height - 7), cv::FONT_HERSHEY_SIMPLEX,
+                0.55, kWhite, 1, cv::LINE_AA);
   }
   return canvas;
 }
