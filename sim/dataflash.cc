@@ -126,6 +126,7 @@ std::string TrimmedText(std::string_view s) {
 
 struct Format {
   std::string name;
+  bool relevant = false;  // a message this reader decodes; most of a real log is not
   size_t length = 0;  // whole message, header included
   std::map<std::string, Field> fields;
   const Field* Find(const std::string& label) const {
@@ -165,6 +166,9 @@ std::optional<Format> ParseFmt(std::string_view p, std::string* error) {
     fmt.fields.emplace(names[i], Field{format[i], offset});
     offset += bytes;
   }
+  static const char* kRelevant[] = {"GYR", "IMU", "IMU2", "IMU3", "ISBH", "ISBD", "CAM", "TRIG"};
+  fmt.relevant = std::any_of(std::begin(kRelevant), std::end(kRelevant),
+                             [&](const char* n) { return fmt.name == n; });
   if (offset + kHeaderBytes != fmt.length) {
     *error = "FMT for '" + fmt.name + "' declares length " + std::to_string(fmt.length) + " but its format '" +
              format + "' needs " + std::to_string(offset + kHeaderBytes);
@@ -263,6 +267,7 @@ void DataFlashParser::Accept(size_t pos, size_t len) {
 }
 
 void DataFlashParser::Handle(const Format& fmt, std::string_view p) {
+  if (!fmt.relevant) return;
   const std::string& name = fmt.name;
   const Field* time_us = fmt.Find("TimeUS");
   if (name == "GYR" || name == "IMU" || name == "IMU2" || name == "IMU3") {

@@ -357,6 +357,8 @@ struct Subscription {
   int multi_id = 0;
   std::shared_ptr<const Layout> layout;  // null when the format could not be resolved
   std::vector<std::string_view> payloads;  // data after msg_id, in file order
+  bool gyro_topic = false;  // IsGyroTopic(topic), cached: tested for every data message
+  bool wanted = false;      // WantedTopic(topic), cached
 };
 
 bool IsGyroTopic(const std::string& topic) {
@@ -592,6 +594,8 @@ void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
       const uint16_t msg_id = LoadU16(payload.data() + 1);
       sub.topic = std::string(payload.substr(3));
       while (!sub.topic.empty() && sub.topic.back() == '\0') sub.topic.pop_back();
+      sub.gyro_topic = IsGyroTopic(sub.topic);
+      sub.wanted = WantedTopic(sub.topic);
       std::string error;
       sub.layout = LayoutFor(sub.topic, &error);
       if (!sub.layout) {
@@ -625,13 +629,13 @@ void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
       const std::string_view data = payload.substr(2);
       // A dropout is placed at the time of the last gyro-topic message before it: these come at
       // hundreds of Hz, and a single odd timestamp in a slow topic cannot drag the time away.
-      if (IsGyroTopic(sub.topic)) {
+      if (sub.gyro_topic) {
         auto ts = sub.layout->fields.find("timestamp");
         if (ts != sub.layout->fields.end()) {
           if (auto t_ns = ReadTimeNs(data, ts->second)) last_timestamp_us_ = static_cast<uint64_t>(*t_ns / 1000);
         }
       }
-      if (WantedTopic(sub.topic)) sub.payloads.push_back(data);
+      if (sub.wanted) sub.payloads.push_back(data);
       return;
     }
     case 'O': {
