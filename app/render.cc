@@ -1,16 +1,18 @@
-// `shutterlab render`: a rolling-shutter rig dataset with exact ground truth (render/render_dataset.h).
-
-#include <cstdio>
-#include <memory>
+// `shutterlab render`: a rolling-shutter rig dataset with exact ground truth
+// (render/render_dataset.h).
 
 #include "app/command.h"
 #include "render/render_dataset.h"
+
+#include <cstdio>
+#include <memory>
 
 namespace shutterlab::app {
 namespace {
 
 const CommandRegistration kRegistration(50, [](CLI::App& app) {
-  auto* cmd = app.add_subcommand("render", "render rolling-shutter frames and their exact ground truth");
+  auto* cmd =
+      app.add_subcommand("render", "render rolling-shutter frames and their exact ground truth");
   auto options = std::make_shared<RenderOptions>();
   auto interpolation = std::make_shared<std::string>("bilinear");
   cmd->add_option("--scene", options->scene_path, "scene image (nadir ground texture)")
@@ -19,20 +21,25 @@ const CommandRegistration kRegistration(50, [](CLI::App& app) {
   cmd->add_option("--camera", options->camera_path, "declared camera.json (rig/1)")
       ->required()
       ->check(CLI::ExistingFile);
-  cmd->add_option("--gyro", options->gyro_path, "gyro.csv (t,gx,gy,gz)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--gyro", options->gyro_path, "gyro.csv (t,gx,gy,gz)")
+      ->required()
+      ->check(CLI::ExistingFile);
   cmd->add_option("--frames", options->frames_path, "capture times: frame,t_first_row")
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", options->out_dir, "output dataset folder")->required();
-  cmd->add_option("--inject", options->injections,
-                  "NAME=VALUE: render with a true effect that camera.json does not declare (time_offset, "
-                  "readout_time, gyro_to_camera, gyro_scale, gyro_bias, velocity, lens_distortion, "
-                  "readout_direction, clock_rate); repeatable");
+  cmd->add_option(
+      "--inject", options->injections,
+      "NAME=VALUE: render with a true effect that camera.json does not declare (time_offset, "
+      "readout_time, gyro_to_camera, gyro_scale, gyro_bias, velocity, lens_distortion, "
+      "readout_direction, clock_rate); repeatable");
   cmd->add_option("--interpolation", *interpolation, "bilinear or bicubic")
       ->check(CLI::IsMember({"bilinear", "bicubic"}));
-  cmd->add_flag("!--no-pictures", options->pictures, "skip heatmaps, side-by-side panels and overview");
+  cmd->add_flag("!--no-pictures", options->pictures,
+                "skip heatmaps, side-by-side panels and overview");
   return std::function<void()>([options, interpolation] {
-    options->interpolation = *interpolation == "bicubic" ? Interpolation::kBicubic : Interpolation::kBilinear;
+    options->interpolation =
+        *interpolation == "bicubic" ? Interpolation::kBicubic : Interpolation::kBilinear;
     options->Check();
     std::unique_ptr<Progress> bar;
     const RenderSummary summary = RenderDataset(*options, [&](size_t done, size_t total) {
@@ -44,8 +51,10 @@ const CommandRegistration kRegistration(50, [](CLI::App& app) {
     for (const RenderedFrame& f : summary.frames) {
       std::printf("%5lld %9.3f %9.4f\n", static_cast<long long>(f.frame), f.d_px, f.d_m);
       if (f.outside_fraction > 0) {
-        std::fprintf(stderr, "warning: frame %lld: %.2f%% of pixels see outside the scene (rendered black)\n",
-                     static_cast<long long>(f.frame), 100.0 * f.outside_fraction);
+        std::fprintf(
+            stderr,
+            "warning: frame %lld: %.2f%% of pixels see outside the scene (rendered black)\n",
+            static_cast<long long>(f.frame), 100.0 * f.outside_fraction);
       }
     }
     std::printf("wrote %zu frames to %s\n", summary.frames.size(), options->out_dir.c_str());

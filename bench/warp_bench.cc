@@ -2,26 +2,25 @@
 // thread (cv::setNumThreads(1)), bilinear, after a warm-up, all buffers preallocated:
 //   - RenderRollingShutter: render/rs_warp.h, rotation-only frame, one homography per row;
 //   - WarpPerspective:      cv::warpPerspective of the same scene with one homography;
-//   - RemapPrecomputed:     cv::remap with a precomputed fixed-point map (convertMaps: CV_16SC2 + CV_16UC1).
+//   - RemapPrecomputed:     cv::remap with a precomputed fixed-point map (convertMaps: CV_16SC2 +
+//   CV_16UC1).
 // At the end it prints each time relative to warpPerspective, measured in the same run.
 // Run: build/bin/warp_bench [--benchmark_repetitions=3]
 // The scene is the real asset upscaled to 6000 x 4000 (margin around the frame for the rotation).
-
-#include <benchmark/benchmark.h>
-
-#include <time.h>
-
-#include <cstdio>
-#include <map>
-#include <string>
-
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "render/image_io.h"
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
 #include "sim/so3.h"
+
+#include <benchmark/benchmark.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cstdio>
+#include <map>
+#include <string>
+#include <time.h>
 
 namespace shutterlab {
 namespace {
@@ -44,8 +43,8 @@ struct Fixture {
   cv::Mat map1, map2;
   cv::Matx33d homography;
   Fixture() {
-    cv::resize(ReadImage(RepoPath("assets/scenes/siyi_zr10_img0150.jpg")), scene, cv::Size(6000, 4000), 0, 0,
-               cv::INTER_LINEAR);
+    cv::resize(ReadImage(RepoPath("assets/scenes/siyi_zr10_img0150.jpg")), scene,
+               cv::Size(6000, 4000), 0, 0, cv::INTER_LINEAR);
     camera.width = kWidth;
     camera.height = kHeight;
     camera.fx = camera.fy = 4000.0;
@@ -55,7 +54,8 @@ struct Fixture {
     motion.world_from_cam.resize(kHeight);
     motion.cam_center_m.assign(kHeight, Eigen::Vector3d::Zero());
     for (int v = 0; v < kHeight; ++v) {
-      motion.world_from_cam[v] = ExpSO3(Eigen::Vector3d(0.3, -0.4, 0.6) * (0.030 * v / kHeight)).toRotationMatrix();
+      motion.world_from_cam[v] =
+          ExpSO3(Eigen::Vector3d(0.3, -0.4, 0.6) * (0.030 * v / kHeight)).toRotationMatrix();
     }
     const FrameGeometry geometry(camera, 50.0, motion, scene.size());
     const Eigen::Matrix3d h = geometry.SceneFromImageHomography(kHeight / 2);
@@ -121,14 +121,15 @@ void BM_RenderRollingShutter(benchmark::State& state) {
 void BM_WarpPerspective(benchmark::State& state) {
   Fixture& f = Shared();
   Timed(state, "warpPerspective", [&] {
-    cv::warpPerspective(f.scene, f.out, f.homography, f.out.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
-                        cv::BORDER_CONSTANT);
+    cv::warpPerspective(f.scene, f.out, f.homography, f.out.size(),
+                        cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT);
   });
 }
 
 void BM_RemapPrecomputed(benchmark::State& state) {
   Fixture& f = Shared();
-  Timed(state, "remap", [&] { cv::remap(f.scene, f.out, f.map1, f.map2, cv::INTER_LINEAR, cv::BORDER_CONSTANT); });
+  Timed(state, "remap",
+        [&] { cv::remap(f.scene, f.out, f.map1, f.map2, cv::INTER_LINEAR, cv::BORDER_CONSTANT); });
 }
 
 BENCHMARK(BM_WarpPerspective)->Unit(benchmark::kMillisecond)->MinTime(1.0);
@@ -148,7 +149,8 @@ int main(int argc, char** argv) {
   if (reference != seconds.end() && reference->second > 0) {
     std::printf("\n20 MP RGB, 1 thread, bilinear thread CPU time (best mean per repetition):\n");
     for (const auto& [name, s] : seconds) {
-      std::printf("  %-16s %8.1f ms   %.2fx warpPerspective\n", name.c_str(), s * 1e3, s / reference->second);
+      std::printf("  %-16s %8.1f ms   %.2fx warpPerspective\n", name.c_str(), s * 1e3,
+                  s / reference->second);
     }
   }
   return 0;

@@ -1,11 +1,11 @@
 #include "render/frames_csv.h"
 
-#include <cmath>
-#include <set>
-
 #include "sim/check.h"
 #include "sim/gyro_trace.h"
 #include "sim/text_file.h"
+
+#include <cmath>
+#include <set>
 
 namespace shutterlab {
 namespace {
@@ -15,7 +15,8 @@ std::vector<FrameEntry> ReadFrames(const std::string& path, bool with_images) {
   LineCursor lines(text);
   std::vector<std::string_view> fields;
   std::optional<std::string_view> header = lines.Next();
-  while (header && header->find_first_not_of(" \t") == std::string_view::npos) header = lines.Next();
+  while (header && header->find_first_not_of(" \t") == std::string_view::npos)
+    header = lines.Next();
   if (!header) throw IoError(IoMessage(path, 0, "empty file, expected a header line"));
   SplitFields(*header, ',', &fields);
   const size_t needed = with_images ? 4 : 2;
@@ -24,7 +25,8 @@ std::vector<FrameEntry> ReadFrames(const std::string& path, bool with_images) {
   bool header_ok = fields.size() >= needed;
   for (size_t i = 0; header_ok && i < needed; ++i) header_ok = ToLower(fields[i]) == names[i];
   if (!header_ok) {
-    throw IoError(IoMessage(path, lines.line_number(), "header is '" + std::string(*header) + "', expected " + expected));
+    throw IoError(IoMessage(path, lines.line_number(),
+                            "header is '" + std::string(*header) + "', expected " + expected));
   }
   std::vector<FrameEntry> frames;
   std::set<int64_t> ids;
@@ -33,15 +35,20 @@ std::vector<FrameEntry> ReadFrames(const std::string& path, bool with_images) {
     SplitFields(*line, ',', &fields);
     const long n = lines.line_number();
     if (fields.size() < needed) {
-      throw IoError(IoMessage(path, n, "expected " + std::to_string(needed) + " columns " + expected + ", found " +
-                                           std::to_string(fields.size())));
+      throw IoError(IoMessage(path, n,
+                              "expected " + std::to_string(needed) + " columns " + expected +
+                                  ", found " + std::to_string(fields.size())));
     }
     const std::optional<int64_t> id = ParseInt(fields[0]);
-    if (!id || *id < 0) throw IoError(IoMessage(path, n, "frame '" + std::string(fields[0]) + "' is not a non-negative integer"));
-    if (!ids.insert(*id).second) throw IoError(IoMessage(path, n, "frame " + std::to_string(*id) + " appears twice"));
+    if (!id || *id < 0)
+      throw IoError(IoMessage(
+          path, n, "frame '" + std::string(fields[0]) + "' is not a non-negative integer"));
+    if (!ids.insert(*id).second)
+      throw IoError(IoMessage(path, n, "frame " + std::to_string(*id) + " appears twice"));
     const std::optional<double> t = ParseDouble(fields[1]);
     if (!t || std::abs(*t) > 9e9) {
-      throw IoError(IoMessage(path, n, "t_first_row '" + std::string(fields[1]) + "' is not a time in seconds"));
+      throw IoError(IoMessage(
+          path, n, "t_first_row '" + std::string(fields[1]) + "' is not a time in seconds"));
     }
     FrameEntry entry;
     entry.frame = *id;

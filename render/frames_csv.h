@@ -9,17 +9,18 @@
 namespace shutterlab {
 
 struct FrameEntry {
-  int64_t frame = 0;              // frame id
-  int64_t t_first_row_ns = 0;     // camera clock: capture time of the first row READ (FORMATS.md)
-  std::string ref;                // reference image path relative to the dataset folder ("" in video datasets)
-  std::string image;              // rolling-shutter image path relative to the dataset folder
+  int64_t frame = 0;           // frame id
+  int64_t t_first_row_ns = 0;  // camera clock: capture time of the first row READ (FORMATS.md)
+  std::string ref;    // reference image path relative to the dataset folder ("" in video datasets)
+  std::string image;  // rolling-shutter image path relative to the dataset folder
 };
 
 // Reads `frame,t_first_row[,...]` (header required, extra columns ignored). Frame ids must be
 // non-negative and unique. Throws IoError("PATH:LINE: problem").
 std::vector<FrameEntry> ReadFrameTimes(const std::string& path);
 
-// Reads a dataset's frames.csv (header frame,t_first_row,ref,image). Throws IoError("PATH:LINE: problem").
+// Reads a dataset's frames.csv (header frame,t_first_row,ref,image). Throws IoError("PATH:LINE:
+// problem").
 std::vector<FrameEntry> ReadFramesCsv(const std::string& path);
 
 // Writes frames.csv whole or not at all; times with nine decimals, exact to the nanosecond.

@@ -1,14 +1,13 @@
 #include "render/image_io.h"
 
-#include <unistd.h>
+#include "sim/check.h"
+
+#include <OpenImageIO/imageio.h>
 
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-
-#include <OpenImageIO/imageio.h>
-
-#include "sim/check.h"
+#include <unistd.h>
 
 namespace shutterlab {
 namespace {
@@ -60,7 +59,9 @@ cv::Mat ReadRaw(const std::string& path, int forced_depth, int* file_channels,
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth != 1) {
     throw IoError(IoMessage(path, 0, "not a 2-D image"));
   }
-  const int depth = forced_depth >= 0 ? forced_depth : CvDepth(static_cast<OIIO::TypeDesc::BASETYPE>(spec.format.basetype));
+  const int depth = forced_depth >= 0
+                        ? forced_depth
+                        : CvDepth(static_cast<OIIO::TypeDesc::BASETYPE>(spec.format.basetype));
   cv::Mat image(spec.height, spec.width, CV_MAKETYPE(depth, spec.nchannels));
   if (!input->read_image(0, 0, 0, spec.nchannels, OiioType(depth), image.data)) {
     throw IoError(IoMessage(path, 0, "cannot decode image: " + OiioError(input->geterror())));
@@ -84,7 +85,8 @@ cv::Mat ReadImage(const std::string& path) {
     cv::mixChannels(&raw, 1, &rgb, 1, from_to, 3);
     return rgb;
   }
-  throw IoError(IoMessage(path, 0, "has " + std::to_string(channels) + " channels; expected grey, RGB or RGBA"));
+  throw IoError(IoMessage(
+      path, 0, "has " + std::to_string(channels) + " channels; expected grey, RGB or RGBA"));
 }
 
 cv::Mat ReadFloatImage(const std::string& path, std::vector<std::string>* channel_names) {
@@ -92,29 +94,33 @@ cv::Mat ReadFloatImage(const std::string& path, std::vector<std::string>* channe
   return ReadRaw(path, CV_32F, &channels, channel_names);
 }
 
-void WriteImage(const std::string& path, const cv::Mat& image, const std::vector<std::string>& channel_names) {
+void WriteImage(const std::string& path, const cv::Mat& image,
+                const std::vector<std::string>& channel_names) {
   SHUTTERLAB_CHECK(!image.empty()) << "cannot write an empty image to " << path;
   const OIIO::TypeDesc type = OiioType(image.depth());
   SHUTTERLAB_CHECK(type != OIIO::TypeDesc::UNKNOWN) << "unsupported pixel depth writing " << path;
-  SHUTTERLAB_CHECK(channel_names.empty() || static_cast<int>(channel_names.size()) == image.channels())
+  SHUTTERLAB_CHECK(channel_names.empty() ||
+                   static_cast<int>(channel_names.size()) == image.channels())
       << "channel names do not match the channel count writing " << path;
   const std::filesystem::path target(path);
   // The temporary keeps the extension: OIIO chooses the format by it.
-  const std::filesystem::path temp =
-      target.parent_path() / (".tmp" + std::to_string(::getpid()) + "_" + target.filename().string());
+  const std::filesystem::path temp = target.parent_path() / (".tmp" + std::to_string(::getpid()) +
+                                                             "_" + target.filename().string());
   OIIO::ImageSpec spec(image.cols, image.rows, image.channels(), type);
   if (!channel_names.empty()) spec.channelnames = channel_names;
   if (image.channels() == 4 && channel_names.empty()) spec.alpha_channel = 3;
   const std::string extension = target.extension().string();
   // zlib level 1: photographic textures barely compress further, and level 6 costs ~5x the time.
   if (extension == ".png" || extension == ".PNG") spec.attribute("png:compressionLevel", 1);
-  if (extension == ".jpg" || extension == ".jpeg" || extension == ".JPG") spec.attribute("Compression", "jpeg:95");
+  if (extension == ".jpg" || extension == ".jpeg" || extension == ".JPG")
+    spec.attribute("Compression", "jpeg:95");
   {
     auto output = OIIO::ImageOutput::create(temp.string());
-    if (!output) throw IoError(IoMessage(path, 0, "cannot write image: " + OiioError("unknown format")));
+    if (!output)
+      throw IoError(IoMessage(path, 0, "cannot write image: " + OiioError("unknown format")));
     cv::Mat contiguous = image.isContinuous() ? image : image.clone();
-    const bool ok = output->open(temp.string(), spec) && output->write_image(type, contiguous.data) &&
-                    output->close();
+    const bool ok = output->open(temp.string(), spec) &&
+                    output->write_image(type, contiguous.data) && output->close();
     if (!ok) {
       const std::string message = OiioError(output->geterror());
       std::error_code ec;

@@ -6,10 +6,10 @@
 // so the order never matters to the geometry, and a grey image stays one channel.
 // Rows are never reoriented (oiio:reorient = 0): an image row must stay a sensor row.
 
+#include <opencv2/core.hpp>
+
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 namespace shutterlab {
 

@@ -1,12 +1,12 @@
 #include "render/pictures.h"
 
-#include <algorithm>
-#include <cmath>
-#include <cstdio>
+#include "sim/check.h"
 
 #include <opencv2/imgproc.hpp>
 
-#include "sim/check.h"
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 
 namespace shutterlab {
 namespace {
@@ -41,7 +41,8 @@ cv::Mat ToRgb8(const cv::Mat& image) {
   } else {
     rgb = eight.clone();
   }
-  SHUTTERLAB_CHECK(rgb.type() == CV_8UC3) << "cannot show an image with " << image.channels() << " channels";
+  SHUTTERLAB_CHECK(rgb.type() == CV_8UC3)
+      << "cannot show an image with " << image.channels() << " channels";
   return rgb;
 }
 
@@ -72,25 +73,29 @@ cv::Mat DisplacementHeatmap(const cv::Mat& displacement, double max_px) {
   const double font = FontScale(h);
   const int bar_width = std::max(12, h / 30), margin = bar_width / 2;
   int baseline = 0;
-  const cv::Size label = cv::getTextSize(FormatPx(max_px), cv::FONT_HERSHEY_SIMPLEX, font, 1, &baseline);
+  const cv::Size label =
+      cv::getTextSize(FormatPx(max_px), cv::FONT_HERSHEY_SIMPLEX, font, 1, &baseline);
   const int strip_width = margin * 3 + bar_width + label.width;
   cv::Mat canvas(h, displacement.cols + strip_width, CV_8UC3, cv::Scalar::all(32));
   bgr.copyTo(canvas(cv::Rect(0, 0, displacement.cols, h)));
   const int top = label.height + margin, bottom = h - label.height - margin;
   cv::Mat ramp(std::max(1, bottom - top), 1, CV_8U);
-  for (int r = 0; r < ramp.rows; ++r) ramp.at<uchar>(r) = cv::saturate_cast<uchar>(255.0 * (ramp.rows - 1 - r) / std::max(1, ramp.rows - 1));
+  for (int r = 0; r < ramp.rows; ++r)
+    ramp.at<uchar>(r) =
+        cv::saturate_cast<uchar>(255.0 * (ramp.rows - 1 - r) / std::max(1, ramp.rows - 1));
   cv::Mat ramp_bgr;
   cv::applyColorMap(ramp, ramp_bgr, cv::COLORMAP_VIRIDIS);
   const int bar_x = displacement.cols + margin;
-  cv::resize(ramp_bgr, canvas(cv::Rect(bar_x, top, bar_width, ramp.rows)), cv::Size(bar_width, ramp.rows), 0, 0,
-             cv::INTER_NEAREST);
+  cv::resize(ramp_bgr, canvas(cv::Rect(bar_x, top, bar_width, ramp.rows)),
+             cv::Size(bar_width, ramp.rows), 0, 0, cv::INTER_NEAREST);
   const int text_x = bar_x + bar_width + margin;
-  cv::putText(canvas, FormatPx(max_px), cv::Point(text_x, top + label.height), cv::FONT_HERSHEY_SIMPLEX, font, kWhite,
-              1, cv::LINE_AA);
-  cv::putText(canvas, FormatPx(max_px / 2), cv::Point(text_x, (top + bottom) / 2 + label.height / 2),
+  cv::putText(canvas, FormatPx(max_px), cv::Point(text_x, top + label.height),
               cv::FONT_HERSHEY_SIMPLEX, font, kWhite, 1, cv::LINE_AA);
-  cv::putText(canvas, FormatPx(0), cv::Point(text_x, bottom), cv::FONT_HERSHEY_SIMPLEX, font, kWhite, 1,
-              cv::LINE_AA);
+  cv::putText(canvas, FormatPx(max_px / 2),
+              cv::Point(text_x, (top + bottom) / 2 + label.height / 2), cv::FONT_HERSHEY_SIMPLEX,
+              font, kWhite, 1, cv::LINE_AA);
+  cv::putText(canvas, FormatPx(0), cv::Point(text_x, bottom), cv::FONT_HERSHEY_SIMPLEX, font,
+              kWhite, 1, cv::LINE_AA);
   cv::Mat rgb;
   cv::cvtColor(canvas, rgb, cv::COLOR_BGR2RGB);
   return rgb;
@@ -105,10 +110,12 @@ cv::Mat SideBySide(const std::vector<cv::Mat>& panels, const std::vector<std::st
   for (size_t i = 0; i < panels.size(); ++i) {
     cv::Mat rgb = ToRgb8(panels[i]);
     if (rgb.rows != height) {
-      cv::resize(rgb, rgb, cv::Size(std::max(1, rgb.cols * height / rgb.rows), height), 0, 0, cv::INTER_AREA);
+      cv::resize(rgb, rgb, cv::Size(std::max(1, rgb.cols * height / rgb.rows), height), 0, 0,
+                 cv::INTER_AREA);
     }
-    cv::putText(rgb, captions[i], cv::Point(gap * 2, static_cast<int>(30 * font) + gap), cv::FONT_HERSHEY_SIMPLEX,
-                font, kWhite, std::max(1, static_cast<int>(font * 2)), cv::LINE_AA);
+    cv::putText(rgb, captions[i], cv::Point(gap * 2, static_cast<int>(30 * font) + gap),
+                cv::FONT_HERSHEY_SIMPLEX, font, kWhite, std::max(1, static_cast<int>(font * 2)),
+                cv::LINE_AA);
     row.push_back(rgb);
     if (i + 1 < panels.size()) row.emplace_back(height, gap, CV_8UC3, cv::Scalar::all(0));
   }
@@ -117,26 +124,28 @@ cv::Mat SideBySide(const std::vector<cv::Mat>& panels, const std::vector<std::st
   return out;
 }
 
-cv::Mat TiledOverview(const std::vector<cv::Mat>& tiles, const std::vector<std::string>& captions, int tile_width,
-                      int columns) {
+cv::Mat TiledOverview(const std::vector<cv::Mat>& tiles, const std::vector<std::string>& captions,
+                      int tile_width, int columns) {
   SHUTTERLAB_CHECK(!tiles.empty() && tiles.size() == captions.size()) << "one caption per tile";
   SHUTTERLAB_CHECK(tile_width > 0 && columns > 0) << "bad overview layout";
-  const int tile_height = std::max(
-      1, static_cast<int>(std::lround(static_cast<double>(tile_width) * tiles.front().rows / tiles.front().cols)));
+  const int tile_height =
+      std::max(1, static_cast<int>(std::lround(static_cast<double>(tile_width) *
+                                               tiles.front().rows / tiles.front().cols)));
   const int caption_height = 24;  // a strip under each tile, so captions never cover the picture
   const int cols = std::min<int>(columns, static_cast<int>(tiles.size()));
   const int rows = (static_cast<int>(tiles.size()) + cols - 1) / cols;
   const int gap = 4;
   const int cell_height = tile_height + caption_height;
-  cv::Mat canvas((cell_height + gap) * rows - gap, (tile_width + gap) * cols - gap, CV_8UC3, cv::Scalar::all(0));
+  cv::Mat canvas((cell_height + gap) * rows - gap, (tile_width + gap) * cols - gap, CV_8UC3,
+                 cv::Scalar::all(0));
   for (size_t i = 0; i < tiles.size(); ++i) {
     cv::Mat tile;
     cv::resize(ToRgb8(tiles[i]), tile, cv::Size(tile_width, tile_height), 0, 0, cv::INTER_AREA);
     const int r = static_cast<int>(i) / cols, c = static_cast<int>(i) % cols;
     const int x = c * (tile_width + gap), y = r * (cell_height + gap);
     tile.copyTo(canvas(cv::Rect(x, y, tile_width, tile_height)));
-    cv::putText(canvas, captions[i], cv::Point(x + 6, y + tile_height + caption_height - 7), cv::FONT_HERSHEY_SIMPLEX,
-                0.55, kWhite, 1, cv::LINE_AA);
+    cv::putText(canvas, captions[i], cv::Point(x + 6, y + tile_height + caption_height - 7),
+                cv::FONT_HERSHEY_SIMPLEX, 0.55, kWhite, 1, cv::LINE_AA);
   }
   return canvas;
 }

@@ -3,10 +3,10 @@
 // panel per frame, and a tiled overview of a flight. All return 8-bit RGB (R, G, B channel order,
 // as render/image_io.h writes it).
 
+#include <opencv2/core.hpp>
+
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 namespace shutterlab {
 

@@ -1,11 +1,5 @@
 #include "render/render_dataset.h"
 
-#include <cmath>
-#include <cstdio>
-#include <filesystem>
-
-#include <opencv2/imgproc.hpp>
-
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "render/pictures.h"
@@ -13,6 +7,12 @@
 #include "sim/check.h"
 #include "sim/gyro_io.h"
 #include "sim/text_file.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
 
 namespace shutterlab {
 
@@ -32,7 +32,8 @@ double OutsideSceneFraction(const FrameGeometry& geometry, cv::Size scene_size) 
     geometry.SceneRow(v, xs.data(), ys.data());
     for (int u = 0; u < width; ++u) {
       // Inside when all bilinear taps are: 0 <= x <= W-1, 0 <= y <= H-1 (NaN compares false).
-      const bool inside = xs[u] >= 0 && xs[u] <= scene_size.width - 1 && ys[u] >= 0 && ys[u] <= scene_size.height - 1;
+      const bool inside = xs[u] >= 0 && xs[u] <= scene_size.width - 1 && ys[u] >= 0 &&
+                          ys[u] <= scene_size.height - 1;
       outside += inside ? 0 : 1;
     }
   }
@@ -57,7 +58,8 @@ void CreateFolder(const std::filesystem::path& path) {
 
 }  // namespace
 
-RenderSummary RenderDataset(const RenderOptions& options, const std::function<void(size_t, size_t)>& progress) {
+RenderSummary RenderDataset(const RenderOptions& options,
+                            const std::function<void(size_t, size_t)>& progress) {
   options.Check();
   // --- read and check everything first: bad input must leave no output
   const RigModel declared = ReadRigModel(options.camera_path);
@@ -70,7 +72,8 @@ RenderSummary RenderDataset(const RenderOptions& options, const std::function<vo
     summary.injected[injection.substr(0, eq)] = value;
   }
   const GyroTrace logged = ReadGyroCsv(options.gyro_path);
-  SHUTTERLAB_CHECK(logged.size() >= 2) << options.gyro_path << ": a gyro log needs at least two samples";
+  SHUTTERLAB_CHECK(logged.size() >= 2)
+      << options.gyro_path << ": a gyro log needs at least two samples";
   const std::vector<FrameEntry> times = ReadFrameTimes(options.frames_path);
   const cv::Mat scene = ReadImage(options.scene_path);
   const CameraMotion camera_motion(logged, truth);
@@ -79,7 +82,8 @@ RenderSummary RenderDataset(const RenderOptions& options, const std::function<vo
     try {
       motions.push_back(camera_motion.Frame(f.t_first_row_ns));
     } catch (const std::out_of_range& e) {
-      throw std::out_of_range(options.frames_path + ": frame " + std::to_string(f.frame) + ": " + e.what());
+      throw std::out_of_range(options.frames_path + ": frame " + std::to_string(f.frame) + ": " +
+                              e.what());
     }
   }
 
@@ -116,7 +120,8 @@ RenderSummary RenderDataset(const RenderOptions& options, const std::function<vo
     WriteImage((out / entry.image).string(), rs);
     entries.push_back(entry);
     WriteImage((out / "truth" / (name + "_disp.exr")).string(), field, {"dx", "dy"});
-    frames_json.push_back({{"frame", rendered.frame}, {"D_px", rendered.d_px}, {"D_m", rendered.d_m}});
+    frames_json.push_back(
+        {{"frame", rendered.frame}, {"D_px", rendered.d_px}, {"D_m", rendered.d_m}});
     if (options.pictures) {
       const cv::Mat heat = DisplacementHeatmap(field);
       WriteImage((out / "truth" / (name + "_heat.png")).string(), heat);
@@ -124,17 +129,19 @@ RenderSummary RenderDataset(const RenderOptions& options, const std::function<vo
       WriteImage((out / "truth" / (name + "_side.png")).string(), side);
       // Keep only a thumbnail for the overview: a flight may have hundreds of frames.
       cv::Mat thumbnail;
-      cv::resize(side, thumbnail, cv::Size(kTileWidth, std::max(1, side.rows * kTileWidth / side.cols)), 0, 0,
+      cv::resize(side, thumbnail,
+                 cv::Size(kTileWidth, std::max(1, side.rows * kTileWidth / side.cols)), 0, 0,
                  cv::INTER_AREA);
       tiles.push_back(thumbnail);
       char caption[96];
-      std::snprintf(caption, sizeof(caption), "frame %s  D = %.2f px = %.3f m", name.c_str(), rendered.d_px,
-                    rendered.d_m);
+      std::snprintf(caption, sizeof(caption), "frame %s  D = %.2f px = %.3f m", name.c_str(),
+                    rendered.d_px, rendered.d_m);
       captions.emplace_back(caption);
     }
     if (progress) progress(i + 1, times.size());
   }
-  if (options.pictures) WriteImage((out / "overview.png").string(), TiledOverview(tiles, captions, kTileWidth, 2));
+  if (options.pictures)
+    WriteImage((out / "overview.png").string(), TiledOverview(tiles, captions, kTileWidth, 2));
   WriteRigModel((out / "camera.json").string(), declared);
   WriteGyroCsv((out / "gyro.csv").string(), logged);
   WriteFramesCsv((out / "frames.csv").string(), entries);

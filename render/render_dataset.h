@@ -12,35 +12,36 @@
 //   truth/NNNN_heat.png, truth/NNNN_side.png, overview.png   pictures (unless pictures = false)
 // The truth differs from camera.json by the --inject effects only (render/truth_model.h).
 
+#include "render/rs_warp.h"
+
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
-#include "render/rs_warp.h"
-
 namespace shutterlab {
 
 struct RenderOptions {
-  std::string scene_path;     // scene image (FORMATS.md "The scene image")
-  std::string camera_path;    // declared camera.json
-  std::string gyro_path;      // gyro.csv (gyro clock, gyro axes)
-  std::string frames_path;    // frame,t_first_row (camera clock, first row read)
-  std::string out_dir;        // created if missing
+  std::string scene_path;               // scene image (FORMATS.md "The scene image")
+  std::string camera_path;              // declared camera.json
+  std::string gyro_path;                // gyro.csv (gyro clock, gyro axes)
+  std::string frames_path;              // frame,t_first_row (camera clock, first row read)
+  std::string out_dir;                  // created if missing
   std::vector<std::string> injections;  // "NAME=VALUE", FORMATS.md effect names
   Interpolation interpolation = Interpolation::kBilinear;
-  bool pictures = true;       // heatmaps, side-by-side panels and the overview
+  bool pictures = true;  // heatmaps, side-by-side panels and the overview
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };
 
 struct RenderedFrame {
   int64_t frame = 0;
-  double d_px = 0.0;              // FORMATS.md frame distortion D, pixels
-  double d_m = 0.0;               // D on the ground, m
-  double outside_fraction = 0.0;  // share of rolling-shutter pixels that see outside the scene (black)
+  double d_px = 0.0;  // FORMATS.md frame distortion D, pixels
+  double d_m = 0.0;   // D on the ground, m
+  double outside_fraction =
+      0.0;  // share of rolling-shutter pixels that see outside the scene (black)
 };
 
 struct RenderSummary {

@@ -10,16 +10,16 @@
 #include <emmintrin.h>
 #endif
 
-#include <opencv2/imgproc.hpp>
-
 #include "sim/check.h"
+
+#include <opencv2/imgproc.hpp>
 
 namespace shutterlab {
 namespace {
 
 // Fixed-point bilinear sampling for integer images: coordinates in 1/128 px (7 fractional bits per
-// axis), so a weight product is at most 2^14: it fits the signed 16-bit lanes of _mm_madd_epi16, and a
-// 16-bit sample times 2^14 fits in uint32. Quantisation error <= 1/256 px per axis.
+// axis), so a weight product is at most 2^14: it fits the signed 16-bit lanes of _mm_madd_epi16,
+// and a 16-bit sample times 2^14 fits in uint32. Quantisation error <= 1/256 px per axis.
 constexpr int kFracBits = 7;
 constexpr int kFracOne = 1 << kFracBits;
 constexpr int kFracMask = kFracOne - 1;
@@ -28,16 +28,17 @@ constexpr int kInvalidFixed = std::numeric_limits<int>::min();
 
 }  // namespace
 
-
-FrameGeometry::FrameGeometry(const PinholeCamera& camera, double altitude_m, const FrameMotion& motion,
-                             cv::Size scene_size)
+FrameGeometry::FrameGeometry(const PinholeCamera& camera, double altitude_m,
+                             const FrameMotion& motion, cv::Size scene_size)
     : camera_(camera), altitude_m_(altitude_m), motion_(motion) {
   SHUTTERLAB_CHECK(static_cast<int>(motion.world_from_cam.size()) == camera.height &&
                    static_cast<int>(motion.cam_center_m.size()) == camera.height)
-      << "frame motion has " << motion.world_from_cam.size() << " rows, the camera " << camera.height;
+      << "frame motion has " << motion.world_from_cam.size() << " rows, the camera "
+      << camera.height;
   SHUTTERLAB_CHECK(altitude_m > 0) << "altitude must be positive";
   SHUTTERLAB_CHECK(scene_size.width > 0 && scene_size.height > 0) << "empty scene";
-  scene_k_ << camera.fx, 0, (scene_size.width - 1) / 2.0, 0, camera.fy, (scene_size.height - 1) / 2.0, 0, 0, 1;
+  scene_k_ << camera.fx, 0, (scene_size.width - 1) / 2.0, 0, camera.fy,
+      (scene_size.height - 1) / 2.0, 0, 0, 1;
   inv_k_ = camera.K().inverse();
   rotation_only_ = !camera.HasDistortion() && !motion.HasTranslation();
 }
@@ -47,7 +48,8 @@ Eigen::Matrix3d FrameGeometry::SceneFromImageHomography(int v) const {
 }
 
 std::optional<Eigen::Vector3d> FrameGeometry::GroundPoint(double u, int v) const {
-  const Eigen::Vector3d ray_w = motion_.world_from_cam[v] * camera_.CamFromImg(Eigen::Vector2d(u, v));
+  const Eigen::Vector3d ray_w =
+      motion_.world_from_cam[v] * camera_.CamFromImg(Eigen::Vector2d(u, v));
   const Eigen::Vector3d& c = motion_.cam_center_m[v];
   const double s = (altitude_m_ - c.z()) / ray_w.z();
   if (!(s > 0) || !std::isfinite(s)) return std::nullopt;
@@ -76,8 +78,10 @@ void FrameGeometry::SceneRow(int v, float* xs, float* ys) const {
     const Eigen::Vector3d a = h.col(1) * v + h.col(2);
     const Eigen::Vector3d b = h.col(0);
     // float: ~1e-4 px rounding on a 5000 px scene, far below the 1/256 px sampling grid.
-    const float ax = static_cast<float>(a.x()), ay = static_cast<float>(a.y()), az = static_cast<float>(a.z());
-    const float bx = static_cast<float>(b.x()), by = static_cast<float>(b.y()), bz = static_cast<float>(b.z());
+    const float ax = static_cast<float>(a.x()), ay = static_cast<float>(a.y()),
+                az = static_cast<float>(a.z());
+    const float bx = static_cast<float>(b.x()), by = static_cast<float>(b.y()),
+                bz = static_cast<float>(b.z());
     for (int u = 0; u < width; ++u) {
       const float w = az + u * bz;
       const float inv = w > 0 ? 1.0f / w : kNaN;
@@ -93,7 +97,8 @@ void FrameGeometry::SceneRow(int v, float* xs, float* ys) const {
   }
 }
 
-bool FrameGeometry::SceneRowFixed(int v, int frac_bits, int* xi, int* yi, int u_begin, int count) const {
+bool FrameGeometry::SceneRowFixed(int v, int frac_bits, int* xi, int* yi, int u_begin,
+                                  int count) const {
   if (!rotation_only_) return false;
   if (count < 0) count = camera_.width - u_begin;
   SHUTTERLAB_CHECK(u_begin >= 0 && u_begin + count <= camera_.width) << "columns outside the image";
@@ -113,7 +118,8 @@ bool FrameGeometry::SceneRowFixed(int v, int frac_bits, int* xi, int* yi, int u_
   constexpr float kLimit = 1073741824.0f;
   int u = 0;
 #if defined(__SSE2__)
-  const __m128 vax = _mm_set1_ps(ax), vay = _mm_set1_ps(ay), vbx = _mm_set1_ps(bx), vby = _mm_set1_ps(by);
+  const __m128 vax = _mm_set1_ps(ax), vay = _mm_set1_ps(ay), vbx = _mm_set1_ps(bx),
+               vby = _mm_set1_ps(by);
   const __m128 vaz = _mm_set1_ps(az), vbz = _mm_set1_ps(bz), limit = _mm_set1_ps(kLimit);
   const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
   __m128 vu = _mm_setr_ps(0.0f, 1.0f, 2.0f, 3.0f);
@@ -124,8 +130,8 @@ bool FrameGeometry::SceneRowFixed(int v, int frac_bits, int* xi, int* yi, int u_
     const __m128 y = _mm_mul_ps(_mm_add_ps(vay, _mm_mul_ps(vu, vby)), inv);
     // cvtps rounds to nearest (the default MXCSR mode), as cvRound does.
     __m128i ix = _mm_cvtps_epi32(x), iy = _mm_cvtps_epi32(y);
-    const __m128i far = _mm_castps_si128(
-        _mm_or_ps(_mm_cmpge_ps(_mm_and_ps(x, abs_mask), limit), _mm_cmpge_ps(_mm_and_ps(y, abs_mask), limit)));
+    const __m128i far = _mm_castps_si128(_mm_or_ps(_mm_cmpge_ps(_mm_and_ps(x, abs_mask), limit),
+                                                   _mm_cmpge_ps(_mm_and_ps(y, abs_mask), limit)));
     const __m128i invalid = _mm_set1_epi32(kInvalidFixed);
     ix = _mm_or_si128(_mm_andnot_si128(far, ix), _mm_and_si128(far, invalid));
     iy = _mm_or_si128(_mm_andnot_si128(far, iy), _mm_and_si128(far, invalid));
@@ -157,7 +163,8 @@ inline T RoundFixed(uint32_t acc) {
 
 // Scalar bilinear sample of one pixel at fixed-point (xi, yi); taps outside the scene read as 0.
 template <typename T>
-inline void BilinearPixel(const T* base, size_t step, int sw, int sh, int cn, int xi, int yi, T* out) {
+inline void BilinearPixel(const T* base, size_t step, int sw, int sh, int cn, int xi, int yi,
+                          T* out) {
   const int ix = xi >> kFracBits, iy = yi >> kFracBits;  // arithmetic shift: floor
   if (xi == kInvalidFixed || yi == kInvalidFixed || ix < -1 || iy < -1 || ix >= sw || iy >= sh) {
     for (int c = 0; c < cn; ++c) out[c] = 0;
@@ -186,17 +193,19 @@ inline void BilinearPixel(const T* base, size_t step, int sw, int sh, int cn, in
 }
 
 template <typename T, int kCn>
-void BilinearRowInt(const cv::Mat& scene, const int* xi, const int* yi, int width, int cn_runtime, T* out) {
+void BilinearRowInt(const cv::Mat& scene, const int* xi, const int* yi, int width, int cn_runtime,
+                    T* out) {
   const int cn = kCn > 0 ? kCn : cn_runtime;
   const T* base = scene.ptr<T>();
-  for (int u = 0; u < width; ++u) BilinearPixel(base, scene.step1(), scene.cols, scene.rows, cn, xi[u], yi[u], out + u * cn);
+  for (int u = 0; u < width; ++u)
+    BilinearPixel(base, scene.step1(), scene.cols, scene.rows, cn, xi[u], yi[u], out + u * cn);
 }
 
 #if defined(__SSE2__)
-// 8-bit RGB, the common case, one pixel per step in SSE2: the 2x2 neighbourhood is two 8-byte loads;
-// interleaving the top and bottom rows pairs each tap with its vertical partner, so _mm_madd_epi16
-// applies the (top, bottom) weights of one column and sums them in one instruction. Same weights
-// and rounding as BilinearPixel: the result is bit-identical to the scalar path.
+// 8-bit RGB, the common case, one pixel per step in SSE2: the 2x2 neighbourhood is two 8-byte
+// loads; interleaving the top and bottom rows pairs each tap with its vertical partner, so
+// _mm_madd_epi16 applies the (top, bottom) weights of one column and sums them in one instruction.
+// Same weights and rounding as BilinearPixel: the result is bit-identical to the scalar path.
 void BilinearRow8uc3(const cv::Mat& scene, const int* xi, const int* yi, int width, uint8_t* out) {
   const int sw = scene.cols, sh = scene.rows;
   const size_t step = scene.step;
@@ -204,7 +213,8 @@ void BilinearRow8uc3(const cv::Mat& scene, const int* xi, const int* yi, int wid
   const __m128i zero = _mm_setzero_si128();
   const __m128i round = _mm_set1_epi32(1 << (2 * kFracBits - 1));
   // The fast path reads 8 bytes from column ix: ix <= sw - 3 keeps the read inside the row.
-  const unsigned fast_x = static_cast<unsigned>(std::max(0, sw - 2)), fast_y = static_cast<unsigned>(std::max(0, sh - 1));
+  const unsigned fast_x = static_cast<unsigned>(std::max(0, sw - 2)),
+                 fast_y = static_cast<unsigned>(std::max(0, sh - 1));
   // The row's last pixel goes through the scalar path, after the loop: the 4-byte store below would
   // spill past it.
   const int last = width - 1;
@@ -219,17 +229,20 @@ void BilinearRow8uc3(const cv::Mat& scene, const int* xi, const int* yi, int wid
     const uint8_t* p0 = base + iy * step + ix * 3;
     const __m128i top = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p0));
     const __m128i bottom = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p0 + step));
-    const __m128i pairs = _mm_unpacklo_epi8(top, bottom);  // r0t r0b g0t g0b b0t b0b r1t r1b g1t g1b b1t b1b ..
-    const __m128i lo = _mm_unpacklo_epi8(pairs, zero);     // int16: r0t r0b g0t g0b b0t b0b r1t r1b
-    const __m128i hi = _mm_unpackhi_epi8(pairs, zero);     // int16: g1t g1b b1t b1b ...
-    const int w0 = (gx * gy) | ((gx * fy) << 16);           // column ix:   (top, bottom) weights
-    const int w1 = (fx * gy) | ((fx * fy) << 16);           // column ix+1
+    const __m128i pairs =
+        _mm_unpacklo_epi8(top, bottom);  // r0t r0b g0t g0b b0t b0b r1t r1b g1t g1b b1t b1b ..
+    const __m128i lo = _mm_unpacklo_epi8(pairs, zero);  // int16: r0t r0b g0t g0b b0t b0b r1t r1b
+    const __m128i hi = _mm_unpackhi_epi8(pairs, zero);  // int16: g1t g1b b1t b1b ...
+    const int w0 = (gx * gy) | ((gx * fy) << 16);       // column ix:   (top, bottom) weights
+    const int w1 = (fx * gy) | ((fx * fy) << 16);       // column ix+1
     // (w0, w1, 0, 0) once, then two shuffles: cheaper than two _mm_set_epi32 of scalars.
     const __m128i w01 = _mm_unpacklo_epi32(_mm_cvtsi32_si128(w0), _mm_cvtsi32_si128(w1));
-    const __m128i sum_lo = _mm_madd_epi16(lo, _mm_shuffle_epi32(w01, _MM_SHUFFLE(1, 0, 0, 0)));  // R0 G0 B0 R1
-    const __m128i sum_hi = _mm_madd_epi16(hi, _mm_shuffle_epi32(w01, _MM_SHUFFLE(2, 2, 1, 1)));  // G1 B1 0 0
+    const __m128i sum_lo =
+        _mm_madd_epi16(lo, _mm_shuffle_epi32(w01, _MM_SHUFFLE(1, 0, 0, 0)));  // R0 G0 B0 R1
+    const __m128i sum_hi =
+        _mm_madd_epi16(hi, _mm_shuffle_epi32(w01, _MM_SHUFFLE(2, 2, 1, 1)));  // G1 B1 0 0
     __m128i sum = _mm_add_epi32(sum_lo, _mm_slli_si128(sum_hi, 4));           // R0 G G B R1
-    sum = _mm_add_epi32(sum, _mm_srli_si128(sum, 12));                          // R G B R1
+    sum = _mm_add_epi32(sum, _mm_srli_si128(sum, 12));                        // R G B R1
     sum = _mm_srli_epi32(_mm_add_epi32(sum, round), 2 * kFracBits);
     sum = _mm_packs_epi32(sum, sum);
     sum = _mm_packus_epi16(sum, sum);
@@ -241,7 +254,8 @@ void BilinearRow8uc3(const cv::Mat& scene, const int* xi, const int* yi, int wid
 }
 #endif
 
-void BilinearRowFloat(const cv::Mat& scene, const float* xs, const float* ys, int width, float* out) {
+void BilinearRowFloat(const cv::Mat& scene, const float* xs, const float* ys, int width,
+                      float* out) {
   const int cn = scene.channels();
   const int sw = scene.cols, sh = scene.rows;
   const size_t step = scene.step1();
@@ -249,7 +263,8 @@ void BilinearRowFloat(const cv::Mat& scene, const float* xs, const float* ys, in
   for (int u = 0; u < width; ++u, out += cn) {
     const float x = xs[u], y = ys[u];
     for (int c = 0; c < cn; ++c) out[c] = 0.0f;
-    if (!(x > -1.0f && x < static_cast<float>(sw) && y > -1.0f && y < static_cast<float>(sh))) continue;
+    if (!(x > -1.0f && x < static_cast<float>(sw) && y > -1.0f && y < static_cast<float>(sh)))
+      continue;
     const int ix = static_cast<int>(std::floor(x)), iy = static_cast<int>(std::floor(y));
     const float fx = x - ix, fy = y - iy;
     const float w[2][2] = {{(1 - fx) * (1 - fy), fx * (1 - fy)}, {(1 - fx) * fy, fx * fy}};
@@ -284,7 +299,8 @@ void BicubicRow(const cv::Mat& scene, const float* xs, const float* ys, int widt
   float acc[4];
   for (int u = 0; u < width; ++u, out += cn) {
     const float x = xs[u], y = ys[u];
-    if (!(x > -2.0f && x < static_cast<float>(sw + 1) && y > -2.0f && y < static_cast<float>(sh + 1))) {
+    if (!(x > -2.0f && x < static_cast<float>(sw + 1) && y > -2.0f &&
+          y < static_cast<float>(sh + 1))) {
       for (int c = 0; c < cn; ++c) out[c] = 0;
       continue;
     }
@@ -309,12 +325,13 @@ void BicubicRow(const cv::Mat& scene, const float* xs, const float* ys, int widt
 }
 
 // Float-coordinate rows: bicubic for every type, bilinear for float images.
-void SampleRowFloat(const cv::Mat& scene, const float* xs, const float* ys, int width, Interpolation interpolation,
-                    uchar* out) {
+void SampleRowFloat(const cv::Mat& scene, const float* xs, const float* ys, int width,
+                    Interpolation interpolation, uchar* out) {
   const int depth = scene.depth();
   if (interpolation == Interpolation::kBicubic) {
     if (depth == CV_8U) return BicubicRow<uint8_t>(scene, xs, ys, width, out);
-    if (depth == CV_16U) return BicubicRow<uint16_t>(scene, xs, ys, width, reinterpret_cast<uint16_t*>(out));
+    if (depth == CV_16U)
+      return BicubicRow<uint16_t>(scene, xs, ys, width, reinterpret_cast<uint16_t*>(out));
     return BicubicRow<float>(scene, xs, ys, width, reinterpret_cast<float*>(out));
   }
   BilinearRowFloat(scene, xs, ys, width, reinterpret_cast<float*>(out));
@@ -340,10 +357,12 @@ void SampleRowFixed(const cv::Mat& scene, const int* xi, const int* yi, int widt
 
 }  // namespace
 
-void RenderFrame(const cv::Mat& scene, const FrameGeometry& geometry, Interpolation interpolation, cv::Mat* out) {
+void RenderFrame(const cv::Mat& scene, const FrameGeometry& geometry, Interpolation interpolation,
+                 cv::Mat* out) {
   SHUTTERLAB_CHECK(!scene.empty()) << "empty scene";
   const int depth = scene.depth();
-  SHUTTERLAB_CHECK(depth == CV_8U || depth == CV_16U || depth == CV_32F) << "scene must be 8U, 16U or 32F";
+  SHUTTERLAB_CHECK(depth == CV_8U || depth == CV_16U || depth == CV_32F)
+      << "scene must be 8U, 16U or 32F";
   SHUTTERLAB_CHECK(scene.channels() <= 4) << "scene has more than 4 channels";
   const int width = geometry.camera().width, height = geometry.camera().height;
   out->create(height, width, scene.type());
@@ -386,7 +405,8 @@ cv::Mat DisplacementField(const FrameGeometry& geometry) {
       for (int u = 0; u < width; ++u) {
         const std::optional<Eigen::Vector2d> ref = geometry.RefPixel(u, v);
         d[u] = ref ? cv::Vec2f(static_cast<float>(ref->x() - u), static_cast<float>(ref->y() - v))
-                   : cv::Vec2f(std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::quiet_NaN());
+                   : cv::Vec2f(std::numeric_limits<float>::quiet_NaN(),
+                               std::numeric_limits<float>::quiet_NaN());
       }
     }
   });
@@ -414,7 +434,8 @@ double ConvexPolygonDiameter(const std::vector<cv::Point2f>& hull) {
   for (size_t i = 0; i < n; ++i) {
     const size_t next = (i + 1) % n;
     // Advance j to the vertex farthest from edge (i, next): the antipodal vertex of that edge.
-    for (size_t steps = 0; steps < n && area2(i, next, (j + 1) % n) > area2(i, next, j); ++steps) j = (j + 1) % n;
+    for (size_t steps = 0; steps < n && area2(i, next, (j + 1) % n) > area2(i, next, j); ++steps)
+      j = (j + 1) % n;
     best = std::max({best, dist2(i, j), dist2(next, j)});
   }
   return std::sqrt(best);
@@ -434,7 +455,8 @@ double FrameDistortionPx(const cv::Mat& displacement) {
     }
     if (column.size() < 2) continue;
     // The diameter of a point set is attained between two vertices of its convex hull; rotating
-    // calipers (Shamos 1978) find it in O(h): the hull of a smooth field's column has many vertices.
+    // calipers (Shamos 1978) find it in O(h): the hull of a smooth field's column has many
+    // vertices.
     cv::convexHull(column, hull);
     d_max = std::max(d_max, ConvexPolygonDiameter(hull));
   }

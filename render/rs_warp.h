@@ -2,31 +2,32 @@
 // Rolling-shutter rendering from a scene image, and its exact ground truth (FORMATS.md "The model",
 // "The scene image", "Frame distortion D").
 //
-// For a rolling-shutter pixel p = (u, v) the ray d_W = R_v K^-1 p (K^-1 undistorts when the true lens
-// has distortion) leaves c_v and meets the ground z_W = altitude_m at X. The scene pixel is
-// K_scene X / altitude_m, K_scene = the rig's fx, fy with principal point ((W_s-1)/2, (H_s-1)/2); the
-// reference pixel is p_ref ~ K R_0^T (X - c_0) and the displacement d(p) = p_ref - p.
+// For a rolling-shutter pixel p = (u, v) the ray d_W = R_v K^-1 p (K^-1 undistorts when the true
+// lens has distortion) leaves c_v and meets the ground z_W = altitude_m at X. The scene pixel is
+// K_scene X / altitude_m, K_scene = the rig's fx, fy with principal point ((W_s-1)/2, (H_s-1)/2);
+// the reference pixel is p_ref ~ K R_0^T (X - c_0) and the displacement d(p) = p_ref - p.
 //
 // Two rendering paths give the same picture:
 //  - rotation only, no lens distortion: X / altitude ~ R_v K^-1 p, so the scene pixel is one 3x3
-//    homography H_v = K_scene R_v K^-1 per row, evaluated along the row as (a + u b) / (a_z + u b_z)
-//    with a, b two columns of H_v: no per-pixel rotation maths;
+//    homography H_v = K_scene R_v K^-1 per row, evaluated along the row as
+//    (a + u b) / (a_z + u b_z), a and b from H_v: no per-pixel rotation maths; its coordinates go
+//    straight to fixed point and into the sampler, a row chunk at a time (no full-size map);
 //  - general (velocity or lens distortion): the model above, exact per pixel in double.
-// Sampling is bilinear (fixed point, coordinates rounded to 1/128 px for integer images; float for
-// float images) or bicubic (OpenCV's
-// A = -0.75 kernel, float weights). Border: scene pixels outside the scene read as 0 (black), each tap
-// separately, as OpenCV's BORDER_CONSTANT with value 0; a ray that misses the ground gives 0.
+// Sampling is bilinear (integer images: coordinates rounded to 1/128 px, fixed-point weights, an
+// SSE2 kernel for 8-bit RGB; float images: float weights) or bicubic (OpenCV's A = -0.75 kernel,
+// float weights). Border: scene pixels outside the scene read as 0 (black), each tap separately,
+// as OpenCV's BORDER_CONSTANT with value 0; a ray that misses the ground gives 0.
 // Work is split over rows (cv::parallel_for_); every row is computed the same way whatever the
 // thread count, so the output is bit-identical for any number of threads.
 
-#include <optional>
-#include <vector>
+#include "render/camera.h"
+#include "render/truth_model.h"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
-#include "render/camera.h"
-#include "render/truth_model.h"
+#include <optional>
+#include <vector>
 
 namespace shutterlab {
 
@@ -35,15 +36,17 @@ enum class Interpolation { kBilinear, kBicubic };
 // The per-pixel geometry of one frame under the true model.
 class FrameGeometry {
  public:
-  // camera: the true intrinsics and distortion; scene_size: the scene image's size (its centre is the
-  // principal point of K_scene). motion must have one pose per image row.
-  FrameGeometry(const PinholeCamera& camera, double altitude_m, const FrameMotion& motion, cv::Size scene_size);
+  // camera: the true intrinsics and distortion; scene_size: the scene image's size (its centre is
+  // the principal point of K_scene). motion must have one pose per image row.
+  FrameGeometry(const PinholeCamera& camera, double altitude_m, const FrameMotion& motion,
+                cv::Size scene_size);
 
   // True when every row's scene map is a homography (no translation, no distortion).
   bool RotationOnly() const { return rotation_only_; }
   // H_v: scene pixel ~ H_v * (u, v, 1) (valid for RotationOnly() frames).
   Eigen::Matrix3d SceneFromImageHomography(int v) const;
-  // Ground point seen by pixel (u, v) at row v's capture time; nullopt when the ray misses the ground.
+  // Ground point seen by pixel (u, v) at row v's capture time; nullopt when the ray misses the
+  // ground.
   std::optional<Eigen::Vector3d> GroundPoint(double u, int v) const;
   // Scene pixel seen by (u, v); nullopt when the ray misses the ground.
   std::optional<Eigen::Vector2d> ScenePixel(double u, int v) const;
@@ -55,8 +58,8 @@ class FrameGeometry {
   const FrameMotion& motion() const { return motion_; }
   double altitude_m() const { return altitude_m_; }
 
-  // Fills xs, ys (size camera().width) with the scene pixel of each pixel of row v (NaN where the ray
-  // misses the ground). Uses the homography for RotationOnly() frames.
+  // Fills xs, ys (size camera().width) with the scene pixel of each pixel of row v (NaN where the
+  // ray misses the ground). Uses the homography for RotationOnly() frames.
   void SceneRow(int v, float* xs, float* ys) const;
   // The same in fixed point (round(x * 2^frac_bits)), straight from the row's homography, for the
   // `count` columns from u_begin (count < 0: to the row's end) into xi[0..count), yi[0..count);
@@ -73,16 +76,16 @@ class FrameGeometry {
   bool rotation_only_;
 };
 
-// Renders the frame: out (resized/retyped if needed; reuse it to avoid page faults) gets the scene's
-// type and the camera's size. scene: CV_8U, CV_16U or CV_32F, 1, 3 or 4 channels.
+// Renders the frame: out (resized/retyped if needed; reuse it to avoid page faults) gets the
+// scene's type and the camera's size. scene: CV_8U, CV_16U or CV_32F, 1, 3 or 4 channels.
 void RenderFrame(const cv::Mat& scene, const FrameGeometry& geometry, Interpolation interpolation,
                  cv::Mat* out);
 
 // The displacement field d(p) = p_ref - p of every pixel, CV_32FC2 (dx, dy), NaN where undefined.
 cv::Mat DisplacementField(const FrameGeometry& geometry);
 
-// FORMATS.md "Frame distortion D" of a displacement field: the largest, over columns, diameter of the
-// column's displacement vectors, px (NaN entries are skipped).
+// FORMATS.md "Frame distortion D" of a displacement field: the largest, over columns, diameter of
+// the column's displacement vectors, px (NaN entries are skipped).
 double FrameDistortionPx(const cv::Mat& displacement);
 
 }  // namespace shutterlab

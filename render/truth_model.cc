@@ -1,10 +1,10 @@
 #include "render/truth_model.h"
 
-#include <cmath>
-
 #include "sim/check.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
+
+#include <cmath>
 
 namespace shutterlab {
 
@@ -30,9 +30,9 @@ double TrueModel::RowGyroOffsetS(int64_t t_first_row_ns, double row) const {
 }
 
 const std::vector<std::string>& InjectionNames() {
-  static const std::vector<std::string> names = {"time_offset",   "readout_time",      "gyro_to_camera",
-                                                 "gyro_scale",    "gyro_bias",         "velocity",
-                                                 "lens_distortion", "readout_direction", "clock_rate"};
+  static const std::vector<std::string> names = {
+      "time_offset", "readout_time",    "gyro_to_camera",    "gyro_scale", "gyro_bias",
+      "velocity",    "lens_distortion", "readout_direction", "clock_rate"};
   return names;
 }
 
@@ -74,8 +74,8 @@ std::vector<double> Numbers(const json& j, const std::string& name, size_t n) {
     }
   }
   if (flat.size() != n) {
-    throw std::invalid_argument("--inject " + name + ": expected " + std::to_string(n) + " numbers, got " +
-                                j.dump());
+    throw std::invalid_argument("--inject " + name + ": expected " + std::to_string(n) +
+                                " numbers, got " + j.dump());
   }
   std::vector<double> out;
   for (const json& x : flat) out.push_back(Scalar(x, name));
@@ -110,7 +110,8 @@ nlohmann::json ApplyInjection(const std::string& name_equals_value, TrueModel* m
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) rig.cam_from_gyro(r, c) = m[3 * r + c];
     }
-    SHUTTERLAB_CHECK(IsRotationMatrix(rig.cam_from_gyro, 1e-6)) << "--inject gyro_to_camera is not a rotation";
+    SHUTTERLAB_CHECK(IsRotationMatrix(rig.cam_from_gyro, 1e-6))
+        << "--inject gyro_to_camera is not a rotation";
     recorded = json::array();
     for (int r = 0; r < 3; ++r) recorded.push_back({m[3 * r], m[3 * r + 1], m[3 * r + 2]});
   } else if (name == "gyro_scale") {
@@ -130,13 +131,16 @@ nlohmann::json ApplyInjection(const std::string& name_equals_value, TrueModel* m
       for (const auto& [key, x] : value.items()) {
         int i = 0;
         while (i < 5 && key != kNames[i]) ++i;
-        if (i == 5) throw std::invalid_argument("--inject lens_distortion: unknown coefficient '" + key + "'");
+        if (i == 5)
+          throw std::invalid_argument("--inject lens_distortion: unknown coefficient '" + key +
+                                      "'");
         rig.camera.dist[i] = Scalar(x, name);
       }
     } else {
       const json list = value.is_array() ? value : json::array({value});
       if (list.empty() || list.size() > 5) {
-        throw std::invalid_argument("--inject lens_distortion: expected k1[,k2[,p1,p2[,k3]]], got " + value.dump());
+        throw std::invalid_argument(
+            "--inject lens_distortion: expected k1[,k2[,p1,p2[,k3]]], got " + value.dump());
       }
       for (size_t i = 0; i < list.size(); ++i) rig.camera.dist[i] = Scalar(list[i], name);
     }
@@ -150,7 +154,8 @@ nlohmann::json ApplyInjection(const std::string& name_equals_value, TrueModel* m
     } else if (word == "bottom_to_top") {
       rig.shutter.direction = ReadoutDirection::kBottomToTop;
     } else {
-      throw std::invalid_argument("--inject readout_direction: '" + word + "' is not top_to_bottom or bottom_to_top");
+      throw std::invalid_argument("--inject readout_direction: '" + word +
+                                  "' is not top_to_bottom or bottom_to_top");
     }
     recorded = word;
   } else if (name == "clock_rate") {
@@ -200,14 +205,17 @@ FrameMotion CameraMotion::Frame(int64_t t_first_row_ns) const {
   motion.world_from_cam.resize(height);
   motion.cam_center_m.resize(height);
   const Eigen::Quaterniond ref_from_world =
-      world_from_cam_.WorldFromBodyAt(t_first_row_ns, model_.RowGyroOffsetS(t_first_row_ns, 0)).conjugate();
+      world_from_cam_.WorldFromBodyAt(t_first_row_ns, model_.RowGyroOffsetS(t_first_row_ns, 0))
+          .conjugate();
   const double t0_s = model_.rig.shutter.RowTimeOffsetS(0, height);
   for (int v = 0; v < height; ++v) {
     const Eigen::Quaterniond q =
-        ref_from_world * world_from_cam_.WorldFromBodyAt(t_first_row_ns, model_.RowGyroOffsetS(t_first_row_ns, v));
+        ref_from_world *
+        world_from_cam_.WorldFromBodyAt(t_first_row_ns, model_.RowGyroOffsetS(t_first_row_ns, v));
     motion.world_from_cam[v] = q.normalized().toRotationMatrix();
     // Velocity is constant in the world frame, over camera-clock time since row 0.
-    motion.cam_center_m[v] = model_.rig.velocity_mps * (model_.rig.shutter.RowTimeOffsetS(v, height) - t0_s);
+    motion.cam_center_m[v] =
+        model_.rig.velocity_mps * (model_.rig.shutter.RowTimeOffsetS(v, height) - t0_s);
   }
   return motion;
 }

@@ -13,15 +13,15 @@
 // reference image of every frame is the same nadir view. The camera centre is likewise re-anchored:
 // c(t) = velocity_mps * (t - t_0), zero at row 0.
 
-#include <string>
-#include <vector>
+#include "render/camera.h"
+#include "sim/gyro_trace.h"
+#include "sim/integrate.h"
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
-#include "render/camera.h"
-#include "sim/gyro_trace.h"
-#include "sim/integrate.h"
+#include <string>
+#include <vector>
 
 namespace shutterlab {
 
@@ -38,8 +38,8 @@ struct TrueModel {
   void Check() const;
   // The true rate in the camera frame for a logged gyro-axis rate: R_CG * scale * (w - bias).
   Eigen::Vector3d CamRate(const Eigen::Vector3d& logged_omega_rad_s) const;
-  // Gyro-clock seconds after t_first_row_ns (on the gyro clock) at which image row `row` is captured,
-  // for a frame whose first-read row is at camera time t_first_row_ns.
+  // Gyro-clock seconds after t_first_row_ns (on the gyro clock) at which image row `row` is
+  // captured, for a frame whose first-read row is at camera time t_first_row_ns.
   double RowGyroOffsetS(int64_t t_first_row_ns, double row) const;
 };
 
@@ -54,8 +54,8 @@ nlohmann::json ApplyInjection(const std::string& name_equals_value, TrueModel* m
 
 // Per-row camera pose of one frame (see the header comment for the frame anchoring).
 struct FrameMotion {
-  std::vector<Eigen::Matrix3d> world_from_cam;   // one per image row v, at the row's capture time
-  std::vector<Eigen::Vector3d> cam_center_m;     // one per image row: c(t_v), world frame, m
+  std::vector<Eigen::Matrix3d> world_from_cam;  // one per image row v, at the row's capture time
+  std::vector<Eigen::Vector3d> cam_center_m;    // one per image row: c(t_v), world frame, m
   Eigen::Matrix3d world_from_ref = Eigen::Matrix3d::Identity();  // R(t_0), the reference view
   Eigen::Vector3d ref_center_m = Eigen::Vector3d::Zero();        // c(t_0)
   bool HasTranslation() const;  // any row centre differs from the reference centre

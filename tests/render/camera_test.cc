@@ -1,15 +1,15 @@
 #include "render/camera.h"
 
-#include <cmath>
-#include <random>
-#include <string>
-
-#include <gtest/gtest.h>
-
 #include "sim/check.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
 #include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <string>
 
 namespace shutterlab {
 namespace {
@@ -73,7 +73,8 @@ TEST(RigModel, OptionalFieldsDefault) {
 }
 
 // Replaces the first occurrence of `from` in the valid camera.json and expects a clear IoError.
-void ExpectRejected(const std::string& from, const std::string& to, const std::string& message_part) {
+void ExpectRejected(const std::string& from, const std::string& to,
+                    const std::string& message_part) {
   test::TempDir dir;
   std::string text = ValidJson();
   const size_t at = text.find(from);
@@ -100,9 +101,11 @@ TEST(RigModel, RejectsNonsenseWithAClearError) {
   ExpectRejected("\"width\": 1280", "\"width\": 0", "image size");
   ExpectRejected("\"fx\": 1100.0", "\"fx\": \"big\"", "fx");
   ExpectRejected("\"rig/1\"", "\"rig/9\"", "format");
-  ExpectRejected("\"format\": \"rig/1\",", "\"format\": \"rig/1\", \"gyro_to_camera\": [[1,0,0],[0,1,0],[0,0,2]],",
+  ExpectRejected("\"format\": \"rig/1\",",
+                 "\"format\": \"rig/1\", \"gyro_to_camera\": [[1,0,0],[0,1,0],[0,0,2]],",
                  "gyro_to_camera");
-  ExpectRejected("\"format\": \"rig/1\",", "\"format\": \"rig/1\", \"gyro_to_camera\": [[1,0,0],[0,1,0],[0,0,-1]],",
+  ExpectRejected("\"format\": \"rig/1\",",
+                 "\"format\": \"rig/1\", \"gyro_to_camera\": [[1,0,0],[0,1,0],[0,0,-1]],",
                  "gyro_to_camera");  // a reflection is orthonormal but not a rotation
   ExpectRejected("\"intrinsics\"", "\"intrinsic\"", "camera.json");
 }
@@ -121,8 +124,10 @@ TEST(RigModel, RejectsInvalidJsonWithItsLine) {
 TEST(PinholeCamera, ImgFromCamInvertsCamFromImg) {
   PinholeCamera camera = FullRig().camera;
   std::mt19937_64 rng(3);
-  std::uniform_real_distribution<double> u(-100.0, camera.width + 100.0), v(-100.0, camera.height + 100.0);
-  for (const auto& dist : {std::array<double, 5>{}, camera.dist, std::array<double, 5>{0.25, -0.1, 0, 0, 0.02}}) {
+  std::uniform_real_distribution<double> u(-100.0, camera.width + 100.0),
+      v(-100.0, camera.height + 100.0);
+  for (const auto& dist :
+       {std::array<double, 5>{}, camera.dist, std::array<double, 5>{0.25, -0.1, 0, 0, 0.02}}) {
     camera.dist = dist;
     for (int i = 0; i < 500; ++i) {
       const Eigen::Vector2d px(u(rng), v(rng));

@@ -1,14 +1,14 @@
 #include "render/image_io.h"
 
-#include <filesystem>
-#include <string>
-
-#include <gtest/gtest.h>
-
 #include "sim/check.h"
 #include "sim/text_file.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
 
 namespace shutterlab {
 namespace {
@@ -50,7 +50,8 @@ TEST(ImageIo, ExrKeepsFloatsAndChannelNames) {
   test::TempDir dir;
   cv::Mat field(5, 7, CV_32FC2);
   for (int v = 0; v < 5; ++v) {
-    for (int u = 0; u < 7; ++u) field.at<cv::Vec2f>(v, u) = cv::Vec2f(0.1f * u - 1e-3f * v, -3.25f * v + 1e-7f);
+    for (int u = 0; u < 7; ++u)
+      field.at<cv::Vec2f>(v, u) = cv::Vec2f(0.1f * u - 1e-3f * v, -3.25f * v + 1e-7f);
   }
   field.at<cv::Vec2f>(2, 3) = cv::Vec2f(NAN, NAN);
   WriteImage(dir / "disp.exr", field, {"dx", "dy"});
@@ -89,10 +90,12 @@ TEST(ImageIo, BadFilesThrowIoErrorNamingThePath) {
     }
   }
   // Writing into a missing folder fails cleanly and leaves nothing behind.
-  EXPECT_THROW(WriteImage(dir / "no/such/folder/out.png", cv::Mat(2, 2, CV_8UC1, cv::Scalar(1))), IoError);
+  EXPECT_THROW(WriteImage(dir / "no/such/folder/out.png", cv::Mat(2, 2, CV_8UC1, cv::Scalar(1))),
+               IoError);
   EXPECT_THROW(WriteImage(dir / "out.unknownext", cv::Mat(2, 2, CV_8UC1, cv::Scalar(1))), IoError);
   size_t files = 0;
-  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path())) ++files;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    ++files;
   EXPECT_EQ(files, 1u) << "only garbage.png may remain";
 }
 

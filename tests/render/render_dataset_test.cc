@@ -1,10 +1,5 @@
 #include "render/render_dataset.h"
 
-#include <filesystem>
-#include <string>
-
-#include <gtest/gtest.h>
-
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "render/truth_model.h"
@@ -13,6 +8,11 @@
 #include "sim/text_file.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
 
 namespace shutterlab {
 namespace {
@@ -31,7 +31,8 @@ struct Inputs {
     WriteFileAtomically(dir / "times.csv", "frame,t_first_row\n3,0.5\n12,1.25\n");
     WriteImage(dir / "scene.png", scene);
   }
-  std::string Args(const std::string& out, const std::string& extra = "", const std::string& frames = "times.csv",
+  std::string Args(const std::string& out, const std::string& extra = "",
+                   const std::string& frames = "times.csv",
                    const std::string& scene = "scene.png") const {
     return "render --scene " + (dir / scene) + " --camera " + (dir / "camera.json") + " --gyro " +
            (dir / "gyro.csv") + " --frames " + (dir / frames) + " --out " + out + " " + extra;
@@ -69,10 +70,10 @@ TEST(RenderCommand, WritesACompleteDatasetWithTruth) {
   EXPECT_EQ(truth_json["injected"]["time_offset"], 0.004);
   EXPECT_EQ(truth_json["injected"]["gyro_scale"], nlohmann::json::parse("[1.01, 1.0, 1.0]"));
   for (size_t i = 0; i < frames.size(); ++i) {
-    const FrameGeometry geometry(truth.rig.camera, truth.rig.altitude_m, motion.Frame(frames[i].t_first_row_ns),
-                                 in.scene.size());
-    const FrameGeometry reference(truth.rig.camera, truth.rig.altitude_m, geometry.motion().Reference(),
-                                  in.scene.size());
+    const FrameGeometry geometry(truth.rig.camera, truth.rig.altitude_m,
+                                 motion.Frame(frames[i].t_first_row_ns), in.scene.size());
+    const FrameGeometry reference(truth.rig.camera, truth.rig.altitude_m,
+                                  geometry.motion().Reference(), in.scene.size());
     cv::Mat rs, ref;
     RenderFrame(in.scene, geometry, Interpolation::kBilinear, &rs);
     RenderFrame(in.scene, reference, Interpolation::kBilinear, &ref);
@@ -89,8 +90,9 @@ TEST(RenderCommand, WritesACompleteDatasetWithTruth) {
     EXPECT_GT(d_px, 0.5);
     EXPECT_EQ(truth_json["frames"][i]["frame"], frames[i].frame);
     EXPECT_DOUBLE_EQ(truth_json["frames"][i]["D_px"].get<double>(), d_px);
-    EXPECT_DOUBLE_EQ(truth_json["frames"][i]["D_m"].get<double>(),
-                     d_px * in.declared.altitude_m / ((in.declared.camera.fx + in.declared.camera.fy) / 2));
+    EXPECT_DOUBLE_EQ(
+        truth_json["frames"][i]["D_m"].get<double>(),
+        d_px * in.declared.altitude_m / ((in.declared.camera.fx + in.declared.camera.fy) / 2));
     EXPECT_TRUE(fs::exists(out + "/truth/" + name + "_heat.png"));
     EXPECT_TRUE(fs::exists(out + "/truth/" + name + "_side.png"));
   }
@@ -125,8 +127,9 @@ TEST(RenderCommand, BadInputExitsTwoAndWritesNothing) {
 
 TEST(FramesCsv, RoundTripsExactly) {
   test::TempDir dir;
-  const std::vector<FrameEntry> frames = {{0, 1'234'567'891, "images/0000_ref.png", "images/0000_rs.png"},
-                                          {7, 99'000'000'001, "", "video/0007.png"}};
+  const std::vector<FrameEntry> frames = {
+      {0, 1'234'567'891, "images/0000_ref.png", "images/0000_rs.png"},
+      {7, 99'000'000'001, "", "video/0007.png"}};
   WriteFramesCsv(dir / "frames.csv", frames);
   const std::vector<FrameEntry> back = ReadFramesCsv(dir / "frames.csv");
   ASSERT_EQ(back.size(), 2u);

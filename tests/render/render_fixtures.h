@@ -1,17 +1,17 @@
 #pragma once
 // Small fixtures shared by the render tests: rigs, constant-rate gyro traces, synthetic textures.
 
-#include <cmath>
-#include <cstdint>
-#include <random>
-#include <vector>
+#include "render/camera.h"
+#include "sim/gyro_trace.h"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "render/camera.h"
-#include "sim/gyro_trace.h"
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <vector>
 
 namespace shutterlab::test {
 
@@ -30,8 +30,8 @@ inline RigModel SmallRig(int width = 96, int height = 72) {
 }
 
 // Constant logged rate (gyro axes) from t0_s for duration_s at rate_hz; times are exact integers.
-inline GyroTrace ConstantRateTrace(const Eigen::Vector3d& omega_rad_s, double t0_s = 0.0, double duration_s = 2.0,
-                                   double rate_hz = 1000.0) {
+inline GyroTrace ConstantRateTrace(const Eigen::Vector3d& omega_rad_s, double t0_s = 0.0,
+                                   double duration_s = 2.0, double rate_hz = 1000.0) {
   std::vector<GyroSample> samples;
   const int64_t period_ns = static_cast<int64_t>(std::llround(1e9 / rate_hz));
   const int64_t t0_ns = SecondsToNs(t0_s);
@@ -40,8 +40,10 @@ inline GyroTrace ConstantRateTrace(const Eigen::Vector3d& omega_rad_s, double t0
   return GyroTrace(std::move(samples));
 }
 
-// A smooth random texture (blurred noise, fixed seed): band-limited, so bilinear sampling is accurate.
-inline cv::Mat SmoothTexture(cv::Size size, int type, uint64_t seed = 7, double blur_sigma_px = 2.0) {
+// A smooth random texture (blurred noise, fixed seed): band-limited, so bilinear sampling is
+// accurate.
+inline cv::Mat SmoothTexture(cv::Size size, int type, uint64_t seed = 7,
+                             double blur_sigma_px = 2.0) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
   const int cn = CV_MAT_CN(type);
@@ -52,7 +54,9 @@ inline cv::Mat SmoothTexture(cv::Size size, int type, uint64_t seed = 7, double 
   }
   cv::GaussianBlur(noise, noise, cv::Size(0, 0), blur_sigma_px);
   cv::normalize(noise, noise, 0.0, 1.0, cv::NORM_MINMAX);
-  const double scale = CV_MAT_DEPTH(type) == CV_8U ? 255.0 : CV_MAT_DEPTH(type) == CV_16U ? 65535.0 : 1.0;
+  const double scale = CV_MAT_DEPTH(type) == CV_8U    ? 255.0
+                       : CV_MAT_DEPTH(type) == CV_16U ? 65535.0
+                                                      : 1.0;
   cv::Mat out;
   noise.convertTo(out, type, scale);
   return out;

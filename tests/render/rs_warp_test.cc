@@ -1,10 +1,9 @@
 #include "render/rs_warp.h"
 
-#include <cmath>
-#include <functional>
-#include <random>
-#include <string>
-#include <vector>
+#include "render/image_io.h"
+#include "render/truth_model.h"
+#include "tests/render/render_fixtures.h"
+#include "tests/test_util.h"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -12,10 +11,11 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
-#include "render/image_io.h"
-#include "render/truth_model.h"
-#include "tests/render/render_fixtures.h"
-#include "tests/test_util.h"
+#include <cmath>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
 
 namespace shutterlab {
 namespace {
@@ -32,9 +32,11 @@ constexpr double kFloatFieldTolPx = 1e-4;
 // No motion at all: K^-1 then K leaves only double rounding.
 constexpr double kRoundingTolPx = 1e-12;
 
-FrameGeometry Geometry(const TrueModel& model, const GyroTrace& logged, double t_first_row_s, cv::Size scene) {
+FrameGeometry Geometry(const TrueModel& model, const GyroTrace& logged, double t_first_row_s,
+                       cv::Size scene) {
   const CameraMotion motion(logged, model);
-  return FrameGeometry(model.rig.camera, model.rig.altitude_m, motion.Frame(SecondsToNs(t_first_row_s)), scene);
+  return FrameGeometry(model.rig.camera, model.rig.altitude_m,
+                       motion.Frame(SecondsToNs(t_first_row_s)), scene);
 }
 
 TrueModel Truth(const RigModel& rig) {
@@ -48,7 +50,8 @@ TEST(RsWarp, IdentityMotionIsSceneCrop) {
   const cv::Size scene_size(160, 120);    // centre (79.5, 59.5): the view is the crop at (32, 24)
   const GyroTrace still = ConstantRateTrace(Eigen::Vector3d::Zero());
   const FrameGeometry geometry = Geometry(Truth(rig), still, 0.5, scene_size);
-  const FrameGeometry reference(rig.camera, rig.altitude_m, geometry.motion().Reference(), scene_size);
+  const FrameGeometry reference(rig.camera, rig.altitude_m, geometry.motion().Reference(),
+                                scene_size);
   ASSERT_TRUE(geometry.RotationOnly());
   for (int type : {CV_8UC3, CV_16UC1, CV_32FC1, CV_8UC4}) {
     const cv::Mat scene = SmoothTexture(scene_size, type);
@@ -82,7 +85,8 @@ TEST(RsWarp, ConstantRateAboutXDisplacesPrincipalPointByFyTan) {
     EXPECT_NEAR(ref.y() - row, -rig.camera.fy * std::tan(omega_rad_s * dt_s), kTruthTolPx);
     const cv::Mat field = DisplacementField(geometry);
     // Column 47 neighbours the centre; its row-36 value is the closed form at u = 47 (x shift ~ 0).
-    EXPECT_NEAR(field.at<cv::Vec2f>(row, 47)[1], -rig.camera.fy * std::tan(omega_rad_s * dt_s), 1e-2);
+    EXPECT_NEAR(field.at<cv::Vec2f>(row, 47)[1], -rig.camera.fy * std::tan(omega_rad_s * dt_s),
+                1e-2);
     // Row 0 is the reference time: no displacement at all.
     EXPECT_LE(cv::norm(field.row(0), cv::NORM_INF), kRoundingTolPx);
   }
@@ -99,8 +103,9 @@ struct OracleParams {
   std::array<double, 5> dist{};
 };
 
-Eigen::Vector2d OracleRefPixel(const RigModel& declared, const OracleParams& o, const Eigen::Vector3d& logged_w,
-                               double t_first_row_s, double u, int v) {
+Eigen::Vector2d OracleRefPixel(const RigModel& declared, const OracleParams& o,
+                               const Eigen::Vector3d& logged_w, double t_first_row_s, double u,
+                               int v) {
   const PinholeCamera& cam = declared.camera;
   const int h = cam.height;
   auto read_index = [&](int row) { return o.bottom_to_top ? h - 1 - row : row; };
@@ -111,14 +116,16 @@ Eigen::Vector2d OracleRefPixel(const RigModel& declared, const OracleParams& o, 
   auto cam_time = [&](int row) { return t_first_row_s + read_index(row) * o.readout_s / h; };
   const Eigen::Vector3d w_cam = o.cam_from_gyro * (o.scale.cwiseProduct(logged_w - o.bias));
   const double angle = w_cam.norm() * (gyro_time(v) - gyro_time(0));
-  const Eigen::Matrix3d r_v =
-      w_cam.norm() > 0 ? Eigen::AngleAxisd(angle, w_cam.normalized()).toRotationMatrix() : Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d r_v = w_cam.norm() > 0
+                                  ? Eigen::AngleAxisd(angle, w_cam.normalized()).toRotationMatrix()
+                                  : Eigen::Matrix3d::Identity();
   const Eigen::Vector3d c_v = o.velocity * (cam_time(v) - cam_time(0));
   const cv::Matx33d k(cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);
   const std::vector<double> dist(o.dist.begin(), o.dist.end());
   std::vector<cv::Point2d> in = {{u, static_cast<double>(v)}}, undistorted;
-  cv::undistortPoints(in, undistorted, k, dist, cv::noArray(), cv::noArray(),
-                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-16));
+  cv::undistortPoints(
+      in, undistorted, k, dist, cv::noArray(), cv::noArray(),
+      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-16));
   const Eigen::Vector3d ray = r_v * Eigen::Vector3d(undistorted[0].x, undistorted[0].y, 1.0);
   const double s = (declared.altitude_m - c_v.z()) / ray.z();
   const Eigen::Vector3d x = c_v + s * ray;  // ground point; the reference pose is identity at c = 0
@@ -147,14 +154,20 @@ TEST(RsWarp, TruthMatchesIndependentModelForEveryEffect) {
       {{"readout_time=0.033"}, [](OracleParams* o) { o->readout_s = 0.033; }},
       {{"gyro_to_camera=[[0,-1,0],[1,0,0],[0,0,1]]"},
        [](OracleParams* o) { o->cam_from_gyro << 0, -1, 0, 1, 0, 0, 0, 0, 1; }},
-      {{"gyro_scale=1.02,0.97,1.01"}, [](OracleParams* o) { o->scale = Eigen::Vector3d(1.02, 0.97, 1.01); }},
-      {{"gyro_bias=0.01,-0.02,0.005"}, [](OracleParams* o) { o->bias = Eigen::Vector3d(0.01, -0.02, 0.005); }},
+      {{"gyro_scale=1.02,0.97,1.01"},
+       [](OracleParams* o) { o->scale = Eigen::Vector3d(1.02, 0.97, 1.01); }},
+      {{"gyro_bias=0.01,-0.02,0.005"},
+       [](OracleParams* o) { o->bias = Eigen::Vector3d(0.01, -0.02, 0.005); }},
       {{"velocity=3,-2,0.5"}, [](OracleParams* o) { o->velocity = Eigen::Vector3d(3, -2, 0.5); }},
-      {{"lens_distortion={\"k1\":-0.3,\"k2\":0.1}"}, [](OracleParams* o) { o->dist = {-0.3, 0.1, 0, 0, 0}; }},
+      {{"lens_distortion={\"k1\":-0.3,\"k2\":0.1}"},
+       [](OracleParams* o) {
+         o->dist = {-0.3, 0.1, 0, 0, 0};
+       }},
       {{"readout_direction=bottom_to_top"}, [](OracleParams* o) { o->bottom_to_top = true; }},
       {{"clock_rate=200"}, [](OracleParams* o) { o->ppm = 200; }},
-      {{"gyro_scale=1.02,0.97,1.01", "gyro_bias=0.01,-0.02,0.005", "velocity=3,-2,0.5", "clock_rate=-150",
-        "lens_distortion=-0.2,0.05,0.001,-0.002,0.01", "readout_direction=bottom_to_top", "time_offset=-0.003"},
+      {{"gyro_scale=1.02,0.97,1.01", "gyro_bias=0.01,-0.02,0.005", "velocity=3,-2,0.5",
+        "clock_rate=-150", "lens_distortion=-0.2,0.05,0.001,-0.002,0.01",
+        "readout_direction=bottom_to_top", "time_offset=-0.003"},
        [](OracleParams* o) {
          o->scale = Eigen::Vector3d(1.02, 0.97, 1.01);
          o->bias = Eigen::Vector3d(0.01, -0.02, 0.005);
@@ -183,7 +196,8 @@ TEST(RsWarp, TruthMatchesIndependentModelForEveryEffect) {
     for (int i = 0; i < 200; ++i) {
       const double u = i < 100 ? random_u(rng) : std::floor(random_u(rng));
       const int v = random_v(rng);
-      const Eigen::Vector2d expected = OracleRefPixel(declared, oracle, logged_w, t_first_row_s, u, v);
+      const Eigen::Vector2d expected =
+          OracleRefPixel(declared, oracle, logged_w, t_first_row_s, u, v);
       const Eigen::Vector2d got = *geometry.RefPixel(u, v);
       ASSERT_NEAR(got.x(), expected.x(), kTruthTolPx) << name << " at (" << u << ", " << v << ")";
       ASSERT_NEAR(got.y(), expected.y(), kTruthTolPx) << name << " at (" << u << ", " << v << ")";
@@ -203,9 +217,11 @@ TEST(RsWarp, BottomToTopMirrorsTheTiming) {
   // top_to_bottom frame turning the other way.
   RigModel rig = SmallRig(64, 48);
   const Eigen::Vector3d omega(0.4, -0.9, 0.3);
-  const FrameGeometry forward = Geometry(Truth(rig), ConstantRateTrace(-omega), 0.6, cv::Size(300, 300));
+  const FrameGeometry forward =
+      Geometry(Truth(rig), ConstantRateTrace(-omega), 0.6, cv::Size(300, 300));
   rig.shutter.direction = ReadoutDirection::kBottomToTop;
-  const FrameGeometry mirrored = Geometry(Truth(rig), ConstantRateTrace(omega), 0.6, cv::Size(300, 300));
+  const FrameGeometry mirrored =
+      Geometry(Truth(rig), ConstantRateTrace(omega), 0.6, cv::Size(300, 300));
   double largest_px = 0.0;
   for (int v = 0; v < rig.camera.height; v += 3) {
     for (int u = 0; u < rig.camera.width; u += 5) {
@@ -222,27 +238,30 @@ TEST(RsWarp, ReadoutTimeScalesTheDisplacement) {
   RigModel rig = SmallRig(64, 48);
   const Eigen::Vector3d omega(0.4, -0.9, 0.3);
   rig.shutter.readout_s = 0.040;
-  const FrameGeometry slow_readout = Geometry(Truth(rig), ConstantRateTrace(omega), 0.6, cv::Size(300, 300));
+  const FrameGeometry slow_readout =
+      Geometry(Truth(rig), ConstantRateTrace(omega), 0.6, cv::Size(300, 300));
   rig.shutter.readout_s = 0.020;
-  const FrameGeometry fast_turn = Geometry(Truth(rig), ConstantRateTrace(2 * omega), 0.6, cv::Size(300, 300));
+  const FrameGeometry fast_turn =
+      Geometry(Truth(rig), ConstantRateTrace(2 * omega), 0.6, cv::Size(300, 300));
   for (int v = 0; v < rig.camera.height; v += 3) {
     for (int u = 0; u < rig.camera.width; u += 5) {
-      EXPECT_NEAR((*slow_readout.RefPixel(u, v) - *fast_turn.RefPixel(u, v)).norm(), 0.0, kTruthTolPx);
+      EXPECT_NEAR((*slow_readout.RefPixel(u, v) - *fast_turn.RefPixel(u, v)).norm(), 0.0,
+                  kTruthTolPx);
     }
   }
   // And the displacement itself grows with the readout (first order: proportionally).
   const double d_slow = FrameDistortionPx(DisplacementField(slow_readout));
   rig.shutter.readout_s = 0.020;
-  const double d_fast = FrameDistortionPx(DisplacementField(Geometry(Truth(rig), ConstantRateTrace(omega), 0.6,
-                                                                      cv::Size(300, 300))));
+  const double d_fast = FrameDistortionPx(
+      DisplacementField(Geometry(Truth(rig), ConstantRateTrace(omega), 0.6, cv::Size(300, 300))));
   EXPECT_NEAR(d_slow / d_fast, 2.0, 0.02);
 }
 
 TEST(RsWarp, VelocityAtAltitudeShiftsByVtFOverH) {
   RigModel rig = SmallRig(64, 48);
   rig.velocity_mps = Eigen::Vector3d(6.0, -4.0, 0.0);
-  const FrameGeometry geometry = Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d::Zero()), 0.6,
-                                          cv::Size(300, 300));
+  const FrameGeometry geometry =
+      Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d::Zero()), 0.6, cv::Size(300, 300));
   ASSERT_FALSE(geometry.RotationOnly());
   const cv::Mat field = DisplacementField(geometry);
   for (int v = 0; v < rig.camera.height; ++v) {
@@ -258,8 +277,8 @@ TEST(RsWarp, VelocityAtAltitudeShiftsByVtFOverH) {
 
 TEST(RsWarp, HomographyRowsMatchThePerPixelModel) {
   const RigModel rig = SmallRig(200, 150);
-  const FrameGeometry geometry = Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d(1.5, -2.0, 3.0)), 0.6,
-                                          cv::Size(2000, 1500));
+  const FrameGeometry geometry = Geometry(
+      Truth(rig), ConstantRateTrace(Eigen::Vector3d(1.5, -2.0, 3.0)), 0.6, cv::Size(2000, 1500));
   ASSERT_TRUE(geometry.RotationOnly());
   std::vector<float> xs(rig.camera.width), ys(rig.camera.width);
   // float evaluation of the homography on a 2000 px scene: ~1e-4 px rounding.
@@ -275,7 +294,8 @@ TEST(RsWarp, HomographyRowsMatchThePerPixelModel) {
 }
 
 // A frame seen through one fixed rotation: every row the same homography, as warpPerspective does.
-FrameGeometry FixedRotation(const RigModel& rig, const Eigen::Matrix3d& world_from_cam, cv::Size scene) {
+FrameGeometry FixedRotation(const RigModel& rig, const Eigen::Matrix3d& world_from_cam,
+                            cv::Size scene) {
   FrameMotion motion;
   motion.world_from_cam.assign(rig.camera.height, world_from_cam);
   motion.cam_center_m.assign(rig.camera.height, Eigen::Vector3d::Zero());
@@ -285,9 +305,9 @@ FrameGeometry FixedRotation(const RigModel& rig, const Eigen::Matrix3d& world_fr
 TEST(RsWarp, SamplingAgreesWithOpenCvWarpPerspective) {
   const RigModel rig = SmallRig(120, 90);
   const cv::Size scene_size(240, 200);
-  const FrameGeometry geometry =
-      FixedRotation(rig, Eigen::AngleAxisd(0.05, Eigen::Vector3d(0.3, -0.5, 0.8).normalized()).toRotationMatrix(),
-                    scene_size);
+  const FrameGeometry geometry = FixedRotation(
+      rig, Eigen::AngleAxisd(0.05, Eigen::Vector3d(0.3, -0.5, 0.8).normalized()).toRotationMatrix(),
+      scene_size);
   const cv::Mat scene = SmoothTexture(scene_size, CV_8UC3, 11, 1.0);
   const Eigen::Matrix3d h = geometry.SceneFromImageHomography(0);
   cv::Matx33d m;
@@ -295,12 +315,13 @@ TEST(RsWarp, SamplingAgreesWithOpenCvWarpPerspective) {
     for (int c = 0; c < 3; ++c) m(r, c) = h(r, c);
   }
   // OpenCV quantises coordinates to 1/32 px, we to 1/256 px: a level or two apart on 8-bit data.
-  const std::vector<std::pair<Interpolation, int>> kinds = {{Interpolation::kBilinear, cv::INTER_LINEAR},
-                                                            {Interpolation::kBicubic, cv::INTER_CUBIC}};
+  const std::vector<std::pair<Interpolation, int>> kinds = {
+      {Interpolation::kBilinear, cv::INTER_LINEAR}, {Interpolation::kBicubic, cv::INTER_CUBIC}};
   for (const auto& [ours, theirs] : kinds) {
     cv::Mat rendered, expected;
     RenderFrame(scene, geometry, ours, &rendered);
-    cv::warpPerspective(scene, expected, m, rendered.size(), theirs | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT);
+    cv::warpPerspective(scene, expected, m, rendered.size(), theirs | cv::WARP_INVERSE_MAP,
+                        cv::BORDER_CONSTANT);
     cv::Mat diff;
     cv::absdiff(rendered, expected, diff);
     double max_level = 0;
@@ -316,8 +337,8 @@ TEST(RsWarp, RgbKernelMatchesThePerChannelScalarPath) {
   // smaller than the view, so edges, corners and the row's last pixel are all exercised).
   const RigModel rig = SmallRig(131, 97);
   const cv::Size scene_size(120, 90);
-  const FrameGeometry geometry = Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d(0.9, -1.3, 2.0)), 0.5,
-                                          scene_size);
+  const FrameGeometry geometry =
+      Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d(0.9, -1.3, 2.0)), 0.5, scene_size);
   ASSERT_TRUE(geometry.RotationOnly());
   const cv::Mat scene = SmoothTexture(scene_size, CV_8UC3, 21, 0.7) + cv::Scalar::all(1);
   cv::Mat rgb;
@@ -362,8 +383,10 @@ TEST(RsWarp, HomographyPathRendersLikeThePerPixelPath) {
 TEST(RsWarp, BorderOutsideTheSceneIsBlack) {
   // A 40x30 scene behind a 96x72 frame with no motion: exactly the scene, surrounded by zeros.
   const RigModel rig = SmallRig(96, 72);
-  const cv::Size scene_size(40, 30);  // centre (19.5, 14.5): frame pixel (u, v) sees (u - 28, v - 21)
-  const FrameGeometry geometry = Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d::Zero()), 0.5, scene_size);
+  const cv::Size scene_size(40,
+                            30);  // centre (19.5, 14.5): frame pixel (u, v) sees (u - 28, v - 21)
+  const FrameGeometry geometry =
+      Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d::Zero()), 0.5, scene_size);
   const cv::Mat scene = SmoothTexture(scene_size, CV_8UC1) + 1;  // no zero inside the scene
   for (Interpolation interpolation : {Interpolation::kBilinear, Interpolation::kBicubic}) {
     cv::Mat rs;
@@ -380,9 +403,10 @@ TEST(RsWarp, RenderedPairIsConsistentWithTheTruthField) {
   RigModel rig = SmallRig(160, 120);
   rig.velocity_mps = Eigen::Vector3d(2.0, 1.0, 0.0);
   const cv::Size scene_size(400, 320);
-  const FrameGeometry geometry = Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d(0.6, -0.8, 1.2)), 0.5,
-                                          scene_size);
-  const FrameGeometry reference(rig.camera, rig.altitude_m, geometry.motion().Reference(), scene_size);
+  const FrameGeometry geometry =
+      Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d(0.6, -0.8, 1.2)), 0.5, scene_size);
+  const FrameGeometry reference(rig.camera, rig.altitude_m, geometry.motion().Reference(),
+                                scene_size);
   const cv::Mat scene = SmoothTexture(scene_size, CV_32FC1, 3, 4.0);
   cv::Mat rs, ref;
   RenderFrame(scene, geometry, Interpolation::kBilinear, &rs);
@@ -390,7 +414,8 @@ TEST(RsWarp, RenderedPairIsConsistentWithTheTruthField) {
   const cv::Mat field = DisplacementField(geometry);
   cv::Mat map(field.size(), CV_32FC2);
   for (int v = 0; v < map.rows; ++v) {
-    for (int u = 0; u < map.cols; ++u) map.at<cv::Vec2f>(v, u) = field.at<cv::Vec2f>(v, u) + cv::Vec2f(u, v);
+    for (int u = 0; u < map.cols; ++u)
+      map.at<cv::Vec2f>(v, u) = field.at<cv::Vec2f>(v, u) + cv::Vec2f(u, v);
   }
   cv::Mat warped;
   cv::remap(ref, warped, map, cv::noArray(), cv::INTER_LINEAR);
@@ -407,8 +432,8 @@ TEST(RsWarp, RenderedPairIsConsistentWithTheTruthField) {
 TEST(RsWarp, OutputDoesNotDependOnThreadCount) {
   const RigModel rig = SmallRig(256, 192);
   const cv::Size scene_size(600, 500);
-  const FrameGeometry geometry = Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d(0.6, -0.8, 1.2)), 0.5,
-                                          scene_size);
+  const FrameGeometry geometry =
+      Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d(0.6, -0.8, 1.2)), 0.5, scene_size);
   const cv::Mat scene = SmoothTexture(scene_size, CV_8UC3);
   const int threads = cv::getNumThreads();
   cv::Mat one, many;
@@ -425,7 +450,8 @@ TEST(FrameDistortion, MatchesBruteForceDiameter) {
   std::normal_distribution<float> normal(0.0f, 3.0f);
   cv::Mat field(150, 7, CV_32FC2);
   for (int v = 0; v < field.rows; ++v) {
-    for (int u = 0; u < field.cols; ++u) field.at<cv::Vec2f>(v, u) = cv::Vec2f(normal(rng) * (u + 1), normal(rng));
+    for (int u = 0; u < field.cols; ++u)
+      field.at<cv::Vec2f>(v, u) = cv::Vec2f(normal(rng) * (u + 1), normal(rng));
   }
   field.at<cv::Vec2f>(3, 2) = cv::Vec2f(NAN, NAN);  // undefined pixels are skipped
   double brute = 0.0;
@@ -442,10 +468,11 @@ TEST(FrameDistortion, MatchesBruteForceDiameter) {
 }
 
 TEST(FrameDistortion, SmoothFieldMatchesBruteForce) {
-  // A real field's columns are smooth curves whose hulls have many vertices: the calipers' hard case.
+  // A real field's columns are smooth curves whose hulls have many vertices: the calipers' hard
+  // case.
   const RigModel rig = SmallRig(64, 48);
-  const cv::Mat field = DisplacementField(
-      Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d(2.0, -3.0, 4.0)), 0.5, cv::Size(400, 400)));
+  const cv::Mat field = DisplacementField(Geometry(
+      Truth(rig), ConstantRateTrace(Eigen::Vector3d(2.0, -3.0, 4.0)), 0.5, cv::Size(400, 400)));
   double brute = 0.0;
   for (int u = 0; u < field.cols; ++u) {
     for (int a = 0; a < field.rows; ++a) {
@@ -466,15 +493,16 @@ namespace shutterlab {
 namespace {
 
 TEST(RsWarp, DenseOpticalFlowOnARealSceneAgreesWithTheTruth) {
-  // Real aerial texture (assets/scenes), a rendered rolling-shutter/reference pair, and OpenCV's DIS
-  // optical flow from the rolling-shutter image to the reference: it must find d(p).
+  // Real aerial texture (assets/scenes), a rendered rolling-shutter/reference pair, and OpenCV's
+  // DIS optical flow from the rolling-shutter image to the reference: it must find d(p).
   const cv::Mat scene = ReadImage(test::SourcePath("assets/scenes/siyi_zr10_img0150.jpg"));
   RigModel rig = SmallRig(480, 360);
   rig.camera.fx = rig.camera.fy = 900.0;
   rig.shutter.readout_s = 0.030;
   const FrameGeometry geometry =
       Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d(0.15, -0.25, 0.3)), 0.5, scene.size());
-  const FrameGeometry reference(rig.camera, rig.altitude_m, geometry.motion().Reference(), scene.size());
+  const FrameGeometry reference(rig.camera, rig.altitude_m, geometry.motion().Reference(),
+                                scene.size());
   cv::Mat rs, ref, rs_grey, ref_grey;
   RenderFrame(scene, geometry, Interpolation::kBicubic, &rs);
   RenderFrame(scene, reference, Interpolation::kBicubic, &ref);

@@ -1,14 +1,14 @@
 #include "render/truth_model.h"
 
-#include <cmath>
-#include <set>
-#include <string>
-
-#include <gtest/gtest.h>
-
 #include "sim/so3.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+#include <string>
 
 namespace shutterlab {
 namespace {
@@ -62,10 +62,10 @@ TEST(ApplyInjection, ChangesOnlyItsOwnField) {
 }
 
 TEST(ApplyInjection, RejectsBadNamesAndValues) {
-  for (const char* bad :
-       {"time_offset", "warp_speed=9", "time_offset=soon", "readout_time=-0.01", "gyro_scale=1,1",
-        "gyro_scale=0,1,1", "gyro_to_camera=1,0,0,0,1,0,0,0,2", "gyro_to_camera=1,0,0,0,1,0,0,0,-1",
-        "readout_direction=sideways", "lens_distortion={\"k9\":1}", "velocity=1,2,nan", "clock_rate=[1,2]"}) {
+  for (const char* bad : {"time_offset", "warp_speed=9", "time_offset=soon", "readout_time=-0.01",
+                          "gyro_scale=1,1", "gyro_scale=0,1,1", "gyro_to_camera=1,0,0,0,1,0,0,0,2",
+                          "gyro_to_camera=1,0,0,0,1,0,0,0,-1", "readout_direction=sideways",
+                          "lens_distortion={\"k9\":1}", "velocity=1,2,nan", "clock_rate=[1,2]"}) {
     TrueModel model = Base();
     EXPECT_THROW(ApplyInjection(bad, &model), std::invalid_argument) << bad;
   }
@@ -102,10 +102,11 @@ TEST(CameraMotion, FramesAreAnchoredAtRowZero) {
   for (double t_s : {0.1, 1.7, 2.5}) {
     const FrameMotion frame = motion.Frame(SecondsToNs(t_s));
     ASSERT_EQ(frame.world_from_cam.size(), 48u);
-    test::ExpectRotationNear(Eigen::Quaterniond(frame.world_from_cam[0]), Eigen::Quaterniond::Identity(),
-                             kRotationTolRad);
+    test::ExpectRotationNear(Eigen::Quaterniond(frame.world_from_cam[0]),
+                             Eigen::Quaterniond::Identity(), kRotationTolRad);
     const double dt_s = 47 * 0.020 / 48;
-    test::ExpectRotationNear(Eigen::Quaterniond(frame.world_from_cam[47]), ExpSO3(w * dt_s), kRotationTolRad);
+    test::ExpectRotationNear(Eigen::Quaterniond(frame.world_from_cam[47]), ExpSO3(w * dt_s),
+                             kRotationTolRad);
     EXPECT_FALSE(frame.HasTranslation());
   }
 }
@@ -118,10 +119,10 @@ TEST(CameraMotion, BottomToTopAnchorsAtTheTopRowToo) {
   const FrameMotion frame = motion.Frame(SecondsToNs(1.0));
   // Row 0 is read LAST; the reference is its (true) time, so the bottom row, read first, is
   // 47 row intervals earlier.
-  test::ExpectRotationNear(Eigen::Quaterniond(frame.world_from_cam[0]), Eigen::Quaterniond::Identity(),
-                           kRotationTolRad);
-  test::ExpectRotationNear(Eigen::Quaterniond(frame.world_from_cam[47]), ExpSO3(-w * (47 * 0.020 / 48)),
-                           kRotationTolRad);
+  test::ExpectRotationNear(Eigen::Quaterniond(frame.world_from_cam[0]),
+                           Eigen::Quaterniond::Identity(), kRotationTolRad);
+  test::ExpectRotationNear(Eigen::Quaterniond(frame.world_from_cam[47]),
+                           ExpSO3(-w * (47 * 0.020 / 48)), kRotationTolRad);
 }
 
 TEST(CameraMotion, FramesOutsideTheGyroTraceThrow) {
