@@ -106,38 +106,33 @@ GyroFormat DetectGyroFormat(std::string_view text, const std::string& path) {
     return GyroFormat::kGcsv;
   }
   const bool has_header = !ParseDouble(fields[0]);
-  if (has_header && !IsGyroCsvHeader(fields)) {
-    throw IoError(IoMessage(path, first_line,
-                            "unrecognised first line '" + std::string(*first) +
-                                "': expected the header 't,gx,gy,gz' (gyro.csv, raw "
-                                "counts) or 'GYROFLOW IMU LOG' (.gcsv); see --format"));
-  }
+  // FORMATS.md is the contract: its header means gyro.csv, whatever the values look like (an
+  // ideal still trace writes every rate as "0"). Raw counts carry another header or none.
+  if (has_header && IsGyroCsvHeader(fields)) return GyroFormat::kGyroCsv;
   // Scan the rows of a headerless file from its first line, else from the line after the header.
   LineCursor rows(text);
   if (has_header) {
     while (rows.line_number() < first_line) rows.Next();
   }
-  bool any_row = false;
   while (auto line = rows.Next()) {
     if (line->empty()) continue;
-    any_row = true;
     SplitFields(*line, ',', &fields);
     for (size_t axis = 1; axis < 4 && axis < fields.size(); ++axis) {
       if (ParseInt(fields[axis])) continue;
-      if (has_header) return GyroFormat::kGyroCsv;
       // A non-number is left to the raw reader, which names it; a fractional number is neither
       // format.
       if (!ParseDouble(fields[axis])) return GyroFormat::kRaw;
-      throw IoError(IoMessage(path, rows.line_number(),
-                              "no header line and a non-integer rate '" +
-                                  std::string(fields[axis]) +
-                                  "': not raw counts (integers), and a gyro.csv needs the header "
-                                  "'t,gx,gy,gz'; see --format"));
+      throw IoError(IoMessage(
+          path, rows.line_number(),
+          std::string(has_header ? "unrecognised header '" + std::string(*first) + "' and"
+                                 : "no header line and") +
+              " a non-integer rate '" + std::string(fields[axis]) +
+              "': not raw counts (integers), and a gyro.csv needs the header 't,gx,gy,gz'; see "
+              "--format"));
     }
   }
-  // Every rate an integer, or no rows at all after a header (the gyro.csv reader says "no
-  // samples").
-  return has_header && !any_row ? GyroFormat::kGyroCsv : GyroFormat::kRaw;
+  // Every rate an integer: raw counts (whatever their header says).
+  return GyroFormat::kRaw;
 }
 
 GyroTrace ReadGyro(const std::string& path, const GyroReadOptions& options) {

@@ -190,7 +190,7 @@ GyroTrace ReadRawCsv(const std::string& path, int range_dps, TimeUnit time_unit)
 size_t WriteRawCsv(const std::string& path, const GyroTrace& trace, int range_dps,
                    TimeUnit time_unit) {
   const double lsb_per_dps = RawSensitivityLsbPerDps(range_dps);
-  std::string out = "t,gx,gy,gz\n";
+  std::string out = std::string(kRawCsvHeader) + "\n";
   out.reserve(trace.size() * 40 + 16);
   size_t saturated_count = 0;
   for (const GyroSample& s : trace.samples()) {

@@ -31,7 +31,11 @@ double RawSensitivityLsbPerDps(int range_dps);
 // std::invalid_argument for an unknown range.
 GyroTrace ReadRawCsv(const std::string& path, int range_dps, TimeUnit time_unit);
 
-// Writes a raw-count log with the header "t,gx,gy,gz": rates quantised to the nearest count of the
+// Header of the raw-count logs we write: not gyro.csv's "t,gx,gy,gz", so that detection can tell
+// counts from rad/s (a FORMATS.md header always means gyro.csv).
+inline constexpr const char* kRawCsvHeader = "t,gx_counts,gy_counts,gz_counts";
+
+// Writes a raw-count log with the header kRawCsvHeader: rates quantised to the nearest count of the
 // range's sensitivity; times written exactly in time_unit (integers for ns, a decimal fraction
 // otherwise). A rate beyond full scale saturates at -32768 / 32767, as the sensor does. Returns the
 // number of saturated values. Writes whole or not at all (IoError on failure).

@@ -95,7 +95,7 @@ INSTANTIATE_TEST_SUITE_P(
         // format detection
         BadCase{"detect_neither", "0.0,0.5,0.25,0.125\n", "", 1,
                 "no header line and a non-integer rate"},
-        BadCase{"detect_other_header", "time,x,y,z\n0,1,2,3\n", "", 1, "unrecognised first line"},
+        BadCase{"detect_other_header", "time,x,y,z\n0,1,2,3.5\n", "", 2, "unrecognised header"},
         BadCase{"detect_empty", "", "", 0, "empty file"},
         // options that fail once the trace is read
         BadCase{"bias_too_few_samples", StillTrace(), "--bias 0:0.005", 0, "holds 5 samples"},

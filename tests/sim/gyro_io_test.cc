@@ -56,12 +56,15 @@ TEST(GyroIo, DetectsGyroCsvByAnyNonIntegerRate) {
 }
 
 TEST(GyroIo, DetectsRawCountsByIntegerRates) {
-  // Header with integer rates only: raw counts (t may still be fractional).
-  EXPECT_EQ(Detect("t,gx,gy,gz\n0.001,12,-7,3\n0.002,11,-8,2\n"), GyroFormat::kRaw);
+  // Another header with integer rates only: raw counts (t may still be fractional).
+  EXPECT_EQ(Detect("t,gx_counts,gy_counts,gz_counts\n0.001,12,-7,3\n0.002,11,-8,2\n"),
+            GyroFormat::kRaw);
+  EXPECT_EQ(Detect("time_us,x,y,z\n1000,12,-7,3\n"), GyroFormat::kRaw);
   // No header, integers: raw.
   EXPECT_EQ(Detect("1000,12,-7,3\n2000,11,-8,2\n"), GyroFormat::kRaw);
-  // The documented ambiguity: an all-zero gyro.csv is read as raw counts (the same zero rates).
-  EXPECT_EQ(Detect("t,gx,gy,gz\n0,0,0,0\n0.01,0,0,0\n"), GyroFormat::kRaw);
+  // FORMATS.md's header always means gyro.csv, even with whole-number rates (--raw overrides).
+  EXPECT_EQ(Detect("t,gx,gy,gz\n0,0,0,0\n0.01,0,0,0\n"), GyroFormat::kGyroCsv);
+  EXPECT_EQ(Detect("t,gx,gy,gz\n0.001,12,-7,3\n"), GyroFormat::kGyroCsv);
 }
 
 TEST(GyroIo, DetectionRejectsNeitherFormat) {
@@ -70,20 +73,28 @@ TEST(GyroIo, DetectionRejectsNeitherFormat) {
   // The real phone log's layout gx,gy,gz,t with exponents.
   ExpectDetectError("3.97e-03,3.83e-02,1.47e-02,4.328040426741000265e+06\n", 1, "non-integer rate");
   // Some other header.
-  ExpectDetectError("time,x,y,z\n0,1,2,3\n", 1, "unrecognised first line 'time,x,y,z'");
+  ExpectDetectError("time,x,y,z\n0,1,2,3.5\n", 2, "unrecognised header 'time,x,y,z'");
   ExpectDetectError("\n\n", 0, "empty file");
 }
 
 TEST(GyroIo, ReadGyroDispatchesOnDetectionAndOverride) {
   test::TempDir dir;
-  const std::string raw = WriteText(dir, "raw.csv", "t,gx,gy,gz\n0,131,0,0\n0.01,0,262,0\n");
+  const std::string raw =
+      WriteText(dir, "raw.csv", "t,gx_counts,gy_counts,gz_counts\n0,131,0,0\n0.01,0,262,0\n");
   // Auto: raw counts at the default +-250 deg/s: 131 counts = 1 deg/s.
   const GyroTrace as_raw = ReadGyro(raw);
   EXPECT_NEAR(as_raw[0].omega_rad_s.x(), kPi / 180.0, 1e-15);
-  // --format csv: the same numbers taken as rad/s.
+  // --format csv insists on gyro.csv's header.
   GyroReadOptions csv;
   csv.format = GyroFormat::kGyroCsv;
-  EXPECT_EQ(ReadGyro(raw, csv)[0].omega_rad_s.x(), 131.0);
+  EXPECT_THROW(ReadGyro(raw, csv), IoError);
+  // --raw reads FORMATS.md's header as counts when told to.
+  const std::string counts_with_csv_header =
+      WriteText(dir, "counts.csv", "t,gx,gy,gz\n0,131,0,0\n0.01,0,262,0\n");
+  GyroReadOptions raw_forced;
+  raw_forced.format = GyroFormat::kRaw;
+  EXPECT_NEAR(ReadGyro(counts_with_csv_header, raw_forced)[0].omega_rad_s.x(), kPi / 180.0, 1e-15);
+  EXPECT_EQ(ReadGyro(counts_with_csv_header)[0].omega_rad_s.x(), 131.0);
   // --range 2000 --time-unit ms.
   GyroReadOptions wide;
   wide.raw_range_dps = 2000;

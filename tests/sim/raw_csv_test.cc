@@ -138,7 +138,7 @@ TEST(RawCsv, WriterQuantisesAndSaturates) {
                          {1000000, Eigen::Vector3d(-300 * deg, 0, 0)}});
   const std::string path = dir / "q.csv";
   EXPECT_EQ(WriteRawCsv(path, trace, 250, TimeUnit::kMilliseconds), 2u);
-  EXPECT_EQ(ReadFileToString(path), "t,gx,gy,gz\n0,0,1,32767\n1,-32768,0,0\n");
+  EXPECT_EQ(ReadFileToString(path), std::string(kRawCsvHeader) + "\n0,0,1,32767\n1,-32768,0,0\n");
 }
 
 TEST(RawCsv, RejectsBadInputNamingTheLine) {
