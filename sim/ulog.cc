@@ -425,8 +425,8 @@ class ULogParser {
   size_t Resync(size_t from, size_t end);
   void ReadFlagBits(std::string_view payload, size_t offset);
   void Handle(uint8_t type, std::string_view payload, size_t offset);
-  // For a 'D' payload: its msg_id is subscribed and its size fits the topic's format (or the
-  // format is unknown, so the size cannot be judged).
+  // For a 'D' payload: false only when its topic's format is known and its size does not fit it
+  // (an unsubscribed msg_id or an unresolved format cannot be judged by size).
   bool DataSizeFits(std::string_view payload) const;
   // For a 'D' payload: its topic's layout is known, so DataSizeFits was a real check.
   bool SizeCheckedAgainstFormat(std::string_view payload) const {
