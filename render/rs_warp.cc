@@ -206,6 +206,32 @@ void BilinearRowInt(const cv::Mat& scene, const int* xi, const int* yi, int widt
 // loads; interleaving the top and bottom rows pairs each tap with its vertical partner, so
 // _mm_madd_epi16 applies the (top, bottom) weights of one column and sums them in one instruction.
 // Same weights and rounding as BilinearPixel: the result is bit-identical to the scalar path.
+// Weight pairs of pixels [0, n): weights[2u] = column ix's (top | bottom << 16), weights[2u+1] =
+// column ix+1's, four pixels per step. Products are < 2^15, so 16-bit multiplies are exact.
+void BilinearWeights(const int* xi, const int* yi, int n, int32_t* weights) {
+  const __m128i mask = _mm_set1_epi32(kFracMask), one = _mm_set1_epi32(kFracOne);
+  int u = 0;
+  for (; u + 4 <= n; u += 4) {
+    const __m128i fx =
+        _mm_and_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(xi + u)), mask);
+    const __m128i fy =
+        _mm_and_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(yi + u)), mask);
+    const __m128i gx = _mm_sub_epi32(one, fx), gy = _mm_sub_epi32(one, fy);
+    const __m128i w0 =
+        _mm_or_si128(_mm_mullo_epi16(gx, gy), _mm_slli_epi32(_mm_mullo_epi16(gx, fy), 16));
+    const __m128i w1 =
+        _mm_or_si128(_mm_mullo_epi16(fx, gy), _mm_slli_epi32(_mm_mullo_epi16(fx, fy), 16));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(weights + 2 * u), _mm_unpacklo_epi32(w0, w1));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(weights + 2 * u + 4), _mm_unpackhi_epi32(w0, w1));
+  }
+  for (; u < n; ++u) {
+    const int fx = xi[u] & kFracMask, fy = yi[u] & kFracMask;
+    const int gx = kFracOne - fx, gy = kFracOne - fy;
+    weights[2 * u] = (gx * gy) | ((gx * fy) << 16);
+    weights[2 * u + 1] = (fx * gy) | ((fx * fy) << 16);
+  }
+}
+
 void BilinearRow8uc3(const cv::Mat& scene, const int* xi, const int* yi, int width, uint8_t* out) {
   const int sw = scene.cols, sh = scene.rows;
   const size_t step = scene.step;
@@ -215,42 +241,48 @@ void BilinearRow8uc3(const cv::Mat& scene, const int* xi, const int* yi, int wid
   // The fast path reads 8 bytes from column ix: ix <= sw - 3 keeps the read inside the row.
   const unsigned fast_x = static_cast<unsigned>(std::max(0, sw - 2)),
                  fast_y = static_cast<unsigned>(std::max(0, sh - 1));
+  constexpr int kBlock = 256;  // weights of a block of pixels, computed four at a time
+  alignas(16) int32_t weights[2 * kBlock];
   // The row's last pixel goes through the scalar path, after the loop: the 4-byte store below would
   // spill past it.
   const int last = width - 1;
-  for (int u = 0; u < last; ++u) {
-    const int ix = xi[u] >> kFracBits, iy = yi[u] >> kFracBits;
-    if (static_cast<unsigned>(ix) >= fast_x || static_cast<unsigned>(iy) >= fast_y) {
-      BilinearPixel<uint8_t>(base, step, sw, sh, 3, xi[u], yi[u], out + 3 * u);
-      continue;
+  for (int u0 = 0; u0 < last; u0 += kBlock) {
+    const int n = std::min(kBlock, last - u0);
+    BilinearWeights(xi + u0, yi + u0, n, weights);
+    for (int k = 0; k < n; ++k) {
+      const int u = u0 + k;
+      const int ix = xi[u] >> kFracBits, iy = yi[u] >> kFracBits;
+      if (static_cast<unsigned>(ix) >= fast_x || static_cast<unsigned>(iy) >= fast_y) {
+        BilinearPixel<uint8_t>(base, step, sw, sh, 3, xi[u], yi[u], out + 3 * u);
+        continue;
+      }
+      const uint8_t* p0 = base + iy * step + ix * 3;
+      const __m128i top = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p0));
+      const __m128i bottom = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p0 + step));
+      // r0t r0b g0t g0b b0t b0b r1t r1b g1t g1b b1t b1b ..
+      const __m128i pairs = _mm_unpacklo_epi8(top, bottom);
+      const __m128i lo = _mm_unpacklo_epi8(pairs, zero);  // int16: r0t r0b g0t g0b b0t b0b r1t r1b
+      const __m128i hi = _mm_unpackhi_epi8(pairs, zero);  // int16: g1t g1b b1t b1b ...
+      // (w0, w1, ., .): the (top, bottom) weights of columns ix and ix+1.
+      const __m128i w01 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(weights + 2 * k));
+      const __m128i sum_lo =
+          _mm_madd_epi16(lo, _mm_shuffle_epi32(w01, _MM_SHUFFLE(1, 0, 0, 0)));  // R0 G0 B0 R1
+      const __m128i sum_hi =
+          _mm_madd_epi16(_mm_unpacklo_epi64(hi, zero),
+                         _mm_shuffle_epi32(w01, _MM_SHUFFLE(1, 1, 1, 1)));  // G1 B1 0 0
+      __m128i sum = _mm_add_epi32(sum_lo, _mm_slli_si128(sum_hi, 4));       // R0 G G B R1
+      sum = _mm_add_epi32(sum, _mm_srli_si128(sum, 12));                    // R G B R1
+      sum = _mm_srli_epi32(_mm_add_epi32(sum, round), 2 * kFracBits);
+      sum = _mm_packs_epi32(sum, sum);
+      sum = _mm_packus_epi16(sum, sum);
+      const uint32_t rgbx = static_cast<uint32_t>(_mm_cvtsi128_si32(sum));
+      // 4-byte store: its 4th byte belongs to pixel u+1, which is written afterwards.
+      std::memcpy(out + 3 * u, &rgbx, 4);
     }
-    const int fx = xi[u] & kFracMask, fy = yi[u] & kFracMask;
-    const int gx = kFracOne - fx, gy = kFracOne - fy;
-    const uint8_t* p0 = base + iy * step + ix * 3;
-    const __m128i top = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p0));
-    const __m128i bottom = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p0 + step));
-    const __m128i pairs =
-        _mm_unpacklo_epi8(top, bottom);  // r0t r0b g0t g0b b0t b0b r1t r1b g1t g1b b1t b1b ..
-    const __m128i lo = _mm_unpacklo_epi8(pairs, zero);  // int16: r0t r0b g0t g0b b0t b0b r1t r1b
-    const __m128i hi = _mm_unpackhi_epi8(pairs, zero);  // int16: g1t g1b b1t b1b ...
-    const int w0 = (gx * gy) | ((gx * fy) << 16);       // column ix:   (top, bottom) weights
-    const int w1 = (fx * gy) | ((fx * fy) << 16);       // column ix+1
-    // (w0, w1, 0, 0) once, then two shuffles: cheaper than two _mm_set_epi32 of scalars.
-    const __m128i w01 = _mm_unpacklo_epi32(_mm_cvtsi32_si128(w0), _mm_cvtsi32_si128(w1));
-    const __m128i sum_lo =
-        _mm_madd_epi16(lo, _mm_shuffle_epi32(w01, _MM_SHUFFLE(1, 0, 0, 0)));  // R0 G0 B0 R1
-    const __m128i sum_hi =
-        _mm_madd_epi16(hi, _mm_shuffle_epi32(w01, _MM_SHUFFLE(2, 2, 1, 1)));  // G1 B1 0 0
-    __m128i sum = _mm_add_epi32(sum_lo, _mm_slli_si128(sum_hi, 4));           // R0 G G B R1
-    sum = _mm_add_epi32(sum, _mm_srli_si128(sum, 12));                        // R G B R1
-    sum = _mm_srli_epi32(_mm_add_epi32(sum, round), 2 * kFracBits);
-    sum = _mm_packs_epi32(sum, sum);
-    sum = _mm_packus_epi16(sum, sum);
-    const uint32_t rgbx = static_cast<uint32_t>(_mm_cvtsi128_si32(sum));
-    // 4-byte store: its 4th byte belongs to pixel u+1, which is written afterwards.
-    std::memcpy(out + 3 * u, &rgbx, 4);
   }
-  if (width > 0) BilinearPixel<uint8_t>(base, step, sw, sh, 3, xi[last], yi[last], out + 3 * last);
+  if (width > 0) {
+    BilinearPixel<uint8_t>(base, step, sw, sh, 3, xi[last], yi[last], out + 3 * last);
+  }
 }
 #endif
 
