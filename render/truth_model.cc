@@ -204,18 +204,17 @@ FrameMotion CameraMotion::Frame(int64_t t_first_row_ns) const {
   FrameMotion motion;
   motion.world_from_cam.resize(height);
   motion.cam_center_m.resize(height);
+  const double t0_gyro_s = model_.RowGyroOffsetS(t_first_row_ns, 0);
   const Eigen::Quaterniond ref_from_world =
-      world_from_cam_.WorldFromBodyAt(t_first_row_ns, model_.RowGyroOffsetS(t_first_row_ns, 0))
-          .conjugate();
-  const double t0_s = model_.rig.shutter.RowTimeOffsetS(0, height);
+      world_from_cam_.WorldFromBodyAt(t_first_row_ns, t0_gyro_s).conjugate();
   for (int v = 0; v < height; ++v) {
+    const double row_gyro_s = model_.RowGyroOffsetS(t_first_row_ns, v);
     const Eigen::Quaterniond q =
-        ref_from_world *
-        world_from_cam_.WorldFromBodyAt(t_first_row_ns, model_.RowGyroOffsetS(t_first_row_ns, v));
+        ref_from_world * world_from_cam_.WorldFromBodyAt(t_first_row_ns, row_gyro_s);
     motion.world_from_cam[v] = q.normalized().toRotationMatrix();
-    // Velocity is constant in the world frame, over camera-clock time since row 0.
-    motion.cam_center_m[v] =
-        model_.rig.velocity_mps * (model_.rig.shutter.RowTimeOffsetS(v, height) - t0_s);
+    // c(t_v) = velocity * (t_v - t_0) with t_v the row's gyro-clock time, as FORMATS.md writes it
+    // (under clock_rate the gyro clock runs (1 + ppm 1e-6) times the camera's).
+    motion.cam_center_m[v] = model_.rig.velocity_mps * (row_gyro_s - t0_gyro_s);
   }
   return motion;
 }

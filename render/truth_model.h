@@ -11,7 +11,7 @@
 // R_int the SO(3) integration of the true body rates from the first gyro sample, t_0 the true
 // capture time of row 0. A frame far into a flight therefore never drifts off the scene, and the
 // reference image of every frame is the same nadir view. The camera centre is likewise re-anchored:
-// c(t) = velocity_mps * (t - t_0), zero at row 0.
+// c(t) = velocity_mps * (t - t_0) (t on the gyro clock, as FORMATS.md's t_v), zero at row 0.
 
 #include "render/camera.h"
 #include "sim/gyro_trace.h"

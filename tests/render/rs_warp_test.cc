@@ -113,13 +113,12 @@ Eigen::Vector2d OracleRefPixel(const RigModel& declared, const OracleParams& o,
     const double t_cam = t_first_row_s + read_index(row) * o.readout_s / h;
     return t_cam * (1 + o.ppm * 1e-6) + o.time_offset_s;
   };
-  auto cam_time = [&](int row) { return t_first_row_s + read_index(row) * o.readout_s / h; };
   const Eigen::Vector3d w_cam = o.cam_from_gyro * (o.scale.cwiseProduct(logged_w - o.bias));
   const double angle = w_cam.norm() * (gyro_time(v) - gyro_time(0));
   const Eigen::Matrix3d r_v = w_cam.norm() > 0
                                   ? Eigen::AngleAxisd(angle, w_cam.normalized()).toRotationMatrix()
                                   : Eigen::Matrix3d::Identity();
-  const Eigen::Vector3d c_v = o.velocity * (cam_time(v) - cam_time(0));
+  const Eigen::Vector3d c_v = o.velocity * (gyro_time(v) - gyro_time(0));
   const cv::Matx33d k(cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);
   const std::vector<double> dist(o.dist.begin(), o.dist.end());
   std::vector<cv::Point2d> in = {{u, static_cast<double>(v)}}, undistorted;
