@@ -1,5 +1,10 @@
 #include "sim/gyro_io.h"
 
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+
 #include "sim/check.h"
 #include "sim/text_file.h"
 
@@ -16,44 +21,116 @@ std::string_view StripBom(std::string_view line) {
   return line;
 }
 
-// Reads the rows of a gyro.csv: t in seconds, then gx, gy, gz in rad/s; the cursor is already past
-// the header.
-GyroTrace ReadRows(const std::string& path, LineCursor* cursor) {
+// Parses one ordinary row "t,gx,gy,gz[,...]" at p in a single pass: t a plain decimal with at
+// most 9 fraction digits, rates anything std::from_chars takes, no spaces. Returns the position
+// after the row's '\n' (or end), or nullptr for anything else, which the caller then re-reads
+// field by field for the general case and its exact error message. This path is what makes a
+// 30-million-line log read at hundreds of MB/s: no per-line memchr, no field vector.
+const char* ParseRowFast(const char* p, const char* end, GyroSample* s) {
+  int64_t whole = 0;
+  const char* digits = p;
+  while (p < end && *p >= '0' && *p <= '9' && p - digits < 12) whole = whole * 10 + (*p++ - '0');
+  if (p == digits || p >= end) return nullptr;
+  int64_t fraction_ns = 0;
+  if (*p == '.') {
+    ++p;
+    int64_t place = 100000000;
+    const char* fraction = p;
+    while (p < end && *p >= '0' && *p <= '9' && p - fraction < 9) {
+      fraction_ns += (*p++ - '0') * place;
+      place /= 10;
+    }
+  }
+  if (p >= end || *p != ',') return nullptr;
+  s->t_ns = whole * 1000000000 + fraction_ns;
+  for (int axis = 0; axis < 3; ++axis) {
+    ++p;  // the ',' before this field
+    double value;
+    const auto [next, ec] = std::from_chars(p, end, value);
+    if (ec != std::errc() || !std::isfinite(value)) return nullptr;
+    s->omega_rad_s[axis] = value;
+    p = next;
+    if (axis < 2 && (p >= end || *p != ',')) return nullptr;
+  }
+  if (p < end && *p == '\r') ++p;
+  if (p < end && *p == ',') {  // extra columns: ignored
+    p = static_cast<const char*>(std::memchr(p, '\n', end - p));
+    return p ? p + 1 : end;
+  }
+  if (p == end) return p;
+  return *p == '\n' ? p + 1 : nullptr;
+}
+
+// Reads the general form of one row (spaces, '+', exponents in t, ...) or throws the error that
+// names what is wrong with it.
+GyroSample ParseRowGeneral(const std::string& path, long n, std::string_view line,
+                           std::vector<std::string_view>* fields) {
+  SplitFields(line, ',', fields);
+  if (fields->size() < 4) {
+    throw IoError(IoMessage(
+        path, n, "expected 4 columns t,gx,gy,gz, found " + std::to_string(fields->size())));
+  }
+  GyroSample s;
+  // Exact for plain decimals (9 digits of seconds keep every ns at any epoch).
+  const auto t_ns = ParseTimeInUnitNs((*fields)[0], TimeUnit::kSeconds);
+  if (!t_ns) {
+    throw IoError(IoMessage(
+        path, n, "t is not a finite number in range: '" + std::string((*fields)[0]) + "'"));
+  }
+  s.t_ns = *t_ns;
+  for (int axis = 0; axis < 3; ++axis) {
+    const auto value = ParseDouble((*fields)[axis + 1]);
+    if (!value) {
+      throw IoError(IoMessage(path, n,
+                              std::string("g") + "xyz"[axis] + " is not a finite number: '" +
+                                  std::string((*fields)[axis + 1]) + "'"));
+    }
+    s.omega_rad_s[axis] = *value;
+  }
+  return s;
+}
+
+// Reads the rows of a gyro.csv from `begin` (just past the header, which is line 1): t in seconds,
+// then gx, gy, gz in rad/s.
+GyroTrace ReadRows(const std::string& path, std::string_view text, size_t begin) {
+  const char* p = text.data() + begin;
+  const char* const end = text.data() + text.size();
   std::vector<GyroSample> samples;
+  // Reserve from the length of the first lines so that a long log is never re-copied while it
+  // grows; untouched capacity costs address space only.
+  {
+    const size_t probe = std::min<size_t>(end - p, 4096);
+    const size_t probe_lines = std::max<size_t>(1, std::count(p, p + probe, '\n'));
+    const size_t estimate = (end - p) / std::max<size_t>(1, probe / probe_lines) * 5 / 4 + 16;
+    samples.reserve(estimate);
+    AdviseHugePages(samples.data(), estimate * sizeof(GyroSample));
+  }
   std::vector<std::string_view> fields;
-  int64_t previous_t_ns = 0;
-  while (auto line = cursor->Next()) {
-    if (line->empty()) continue;
-    SplitFields(*line, ',', &fields);
-    const long n = cursor->line_number();
-    if (fields.size() < 4) {
-      throw IoError(IoMessage(
-          path, n, "expected 4 columns t,gx,gy,gz, found " + std::to_string(fields.size())));
-    }
+  long line_number = 1;
+  while (p < end) {
+    ++line_number;
     GyroSample s;
-    // Exact for plain decimals (9 digits of seconds keep every ns at any epoch).
-    const auto t_ns = ParseTimeInUnitNs(fields[0], TimeUnit::kSeconds);
-    if (!t_ns) {
-      throw IoError(IoMessage(
-          path, n, "t is not a finite number in range: '" + std::string(fields[0]) + "'"));
-    }
-    for (int axis = 0; axis < 3; ++axis) {
-      const auto value = ParseDouble(fields[axis + 1]);
-      if (!value) {
-        throw IoError(IoMessage(path, n,
-                                std::string("g") + "xyz"[axis] + " is not a finite number: '" +
-                                    std::string(fields[axis + 1]) + "'"));
+    const char* next = ParseRowFast(p, end, &s);
+    if (!next) {
+      const char* eol = static_cast<const char*>(std::memchr(p, '\n', end - p));
+      if (!eol) eol = end;
+      std::string_view line(p, eol - p);
+      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+      next = eol < end ? eol + 1 : end;
+      if (line.empty()) {
+        p = next;
+        continue;
       }
-      s.omega_rad_s[axis] = *value;
+      s = ParseRowGeneral(path, line_number, line, &fields);
     }
-    s.t_ns = *t_ns;
-    if (!samples.empty() && s.t_ns < previous_t_ns) {
-      throw IoError(IoMessage(
-          path, n,
-          "timestamp decreases (" + std::string(fields[0]) + " after an earlier, larger one)"));
+    if (!samples.empty() && s.t_ns < samples.back().t_ns) {
+      const char* eol = static_cast<const char*>(std::memchr(p, ',', end - p));
+      throw IoError(IoMessage(path, line_number,
+                              "timestamp decreases (" + std::string(p, eol ? eol - p : 0) +
+                                  " after an earlier, larger one)"));
     }
-    previous_t_ns = s.t_ns;
     samples.push_back(s);
+    p = next;
   }
   if (samples.empty()) throw IoError(IoMessage(path, 0, "no samples"));
   return GyroTrace(std::move(samples));
@@ -68,7 +145,8 @@ void GyroReadOptions::Check() const {
 }
 
 GyroTrace ReadGyroCsv(const std::string& path) {
-  const std::string text = ReadFileToString(path);
+  const MappedFile file(path);
+  const std::string_view text = file.text();
   LineCursor cursor(text);
   const auto header = cursor.Next();
   std::vector<std::string_view> fields;
@@ -76,7 +154,8 @@ GyroTrace ReadGyroCsv(const std::string& path) {
   if (!header || !IsGyroCsvHeader(fields)) {
     throw IoError(IoMessage(path, 1, "missing header 't,gx,gy,gz'"));
   }
-  return ReadRows(path, &cursor);
+  const size_t header_end = text.find('\n');
+  return ReadRows(path, text, header_end == std::string_view::npos ? text.size() : header_end + 1);
 }
 
 void WriteGyroCsv(const std::string& path, const GyroTrace& trace) {

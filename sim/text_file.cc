@@ -1,5 +1,8 @@
 #include "sim/text_file.h"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -24,6 +27,43 @@ std::string ReadFileToString(const std::string& path) {
   in.seekg(0, std::ios::beg);
   if (size > 0 && !in.read(content.data(), size)) throw IoError(IoMessage(path, 0, "read failed"));
   return content;
+}
+
+MappedFile::MappedFile(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) throw IoError(IoMessage(path, 0, std::string("cannot open: ") + std::strerror(errno)));
+  struct stat info {};
+  if (::fstat(fd, &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0) {
+    void* p = ::mmap(nullptr, static_cast<size_t>(info.st_size), PROT_READ, MAP_PRIVATE | MAP_POPULATE,
+                     fd, 0);
+    if (p != MAP_FAILED) {
+      data_ = static_cast<const char*>(p);
+      size_ = static_cast<size_t>(info.st_size);
+      mapped_ = true;
+    }
+  }
+  ::close(fd);
+  if (!mapped_) {
+    fallback_ = ReadFileToString(path);
+    data_ = fallback_.data();
+    size_ = fallback_.size();
+  }
+}
+
+MappedFile::~MappedFile() {
+  if (mapped_) ::munmap(const_cast<char*>(data_), size_);
+}
+
+void AdviseHugePages(const void* data, size_t bytes) {
+#ifdef MADV_HUGEPAGE
+  constexpr uintptr_t kHugePage = 2u << 20;
+  const uintptr_t begin = (reinterpret_cast<uintptr_t>(data) + kHugePage - 1) & ~(kHugePage - 1);
+  const uintptr_t end = (reinterpret_cast<uintptr_t>(data) + bytes) & ~(kHugePage - 1);
+  if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+#else
+  (void)data;
+  (void)bytes;
+#endif
 }
 
 void WriteFileAtomically(const std::string& path, std::string_view content) {

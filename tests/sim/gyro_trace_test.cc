@@ -1,7 +1,9 @@
 #include "sim/gyro_trace.h"
 
 #include <cmath>
+#include <algorithm>
 #include <limits>
+#include <random>
 
 #include <gtest/gtest.h>
 
@@ -88,6 +90,33 @@ TEST(GyroCsv, BadInputNamesFileLineAndProblem) {
       EXPECT_NE(what.find(path), std::string::npos) << what;
       EXPECT_NE(what.find(c.expected_fragment), std::string::npos) << c.name << ": " << what;
     }
+  }
+}
+
+}  // namespace
+}  // namespace shutterlab
+
+namespace shutterlab {
+namespace {
+
+// The median interval is exact on both paths: few distinct intervals (histogram) and many
+// (nth_element); both are checked against a sort.
+TEST(GyroTrace, MedianIntervalIsExactForRegularAndIrregularClocks) {
+  std::mt19937_64 rng(7);
+  for (int distinct : {3, 1000}) {
+    std::uniform_int_distribution<int64_t> interval(1000, 1000 + distinct - 1);
+    std::vector<GyroSample> s;
+    std::vector<int64_t> intervals;
+    int64_t t = 0;
+    for (int k = 0; k < 5001; ++k) {
+      s.push_back({t, {0, 0, 0}});
+      const int64_t dt = interval(rng);
+      if (k < 5000) intervals.push_back(dt);
+      t += dt;
+    }
+    std::sort(intervals.begin(), intervals.end());
+    EXPECT_EQ(GyroTrace(s).sampling().median_interval_ns, intervals[intervals.size() / 2])
+        << distinct << " distinct intervals";
   }
 }
 
