@@ -18,7 +18,6 @@
 #include "sim/check.h"
 #include "sim/blackbox.h"
 #include "sim/gyro_io.h"
-#include "sim/still_detect.h"
 #include "sim/synth.h"
 #include "sim/text_file.h"
 
@@ -77,17 +76,9 @@ void RunDemo(const DemoOptions& options) {
             << log.gyro.sampling().RateHz() << " Hz (" << log.gyro_source << ")\n";
   FlightOptions flight;
   flight.windows_s = {0.010, 0.020, 0.030};
-  // The craft is armed on the ground for the first seconds: use that still stretch for the bias.
-  StillDetectOptions still_options;
-  still_options.min_duration_s = 1.0;
-  still_options.first = true;
-  try {
-    flight.bias = DetectStillSegment(log.gyro, still_options).segment;
-    std::cout << "bias from the still segment " << flight.bias.begin_s << ":" << flight.bias.end_s << " s\n";
-  } catch (const std::invalid_argument&) {
-    flight.bias = BiasSegment{0.0, 0.5};
-    std::cout << "no still segment found: bias from the first 0.5 s\n";
-  }
+  // Betaflight calibrates the gyro at arming and this log starts in flight (no still stretch), so
+  // the logged rates are taken as bias-free.
+  flight.known_bias_rad_s = Eigen::Vector3d::Zero();
   {
     Progress progress("flight windows", 100);
     flight.progress = [&progress](double fraction) { progress.Update(static_cast<size_t>(fraction * 100)); };

@@ -21,6 +21,7 @@ struct FlightCommand {
   std::vector<std::string> limits{"5cm", "10cm"};
   std::vector<std::string> windows{"10ms", "20ms"};
   bool no_vector = false;
+  bool zero_bias = false;
   bool json = false;
   std::string series_path;
 };
@@ -36,7 +37,11 @@ void Run(const FlightCommand& command) {
   if (!command.trace.auto_bias) options.bias = ParseBiasSegment(command.trace.bias);
   options.Check();  // before the (possibly long) read
   const GyroTrace trace = command.trace.Load();
-  options.bias = command.trace.Segment(trace);
+  if (command.zero_bias) {
+    options.known_bias_rad_s = Eigen::Vector3d::Zero();
+  } else {
+    options.bias = command.trace.Segment(trace);
+  }
   Progress progress("flight", 1000);
   options.progress = [&progress](double fraction) { progress.Update(static_cast<size_t>(fraction * 1000)); };
   FlightResult result;
@@ -72,6 +77,9 @@ const CommandRegistration kRegistration(40, [](CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--no-vector", command->no_vector,
                 "skip the vector (SO(3) rotation angle) criterion, about halving the run time");
+  cmd->add_flag("--zero-bias", command->zero_bias,
+                "take the logged rates as bias-free and analyse every sample (flight-controller logs, "
+                "calibrated at arming)");
   cmd->add_flag("--json", command->json, "print JSON (FORMATS.md `flight`) instead of a table");
   cmd->add_option("--series", command->series_path,
                   "write per-window ranges for the FIRST --window duration to this CSV: "

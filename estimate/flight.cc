@@ -231,7 +231,12 @@ FlightResult Flight(const GyroTrace& trace, const FlightOptions& options) {
   result.altitude_m = options.altitude_m;
   result.noise_allowance_arcsec = options.noise_allowance_arcsec;
   result.vector_criterion = options.vector_criterion;
-  result.bias = EstimateBias(trace, options.bias);
+  if (options.known_bias_rad_s) {
+    result.bias.bias_rad_s = *options.known_bias_rad_s;
+    result.bias.first_after = 0;
+  } else {
+    result.bias = EstimateBias(trace, options.bias);
+  }
   const size_t first = result.bias.first_after;
   const size_t n = trace.size() - first;
   result.samples = n;

@@ -14,6 +14,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,9 @@ struct FlightOptions {
   std::vector<double> windows_s{0.010, 0.020};  // rolling-shutter readout durations to test
   double noise_allowance_arcsec = 20.0;        // the paper's allowance for the gyro's own noise
   BiasSegment bias;                            // default 0:5 s, as in the paper
+  // When set, this bias (rad/s, gyro axes) is used instead of the segment's mean, and every sample
+  // is analysed: flight-controller logs are calibrated at arming and rarely hold a still stretch.
+  std::optional<Eigen::Vector3d> known_bias_rad_s;
   bool vector_criterion = true;                // also flag by the SO(3) angle (costs ~2x)
   bool series = false;                         // fill FlightResult::series for windows_s[0]
   // Called now and then with the fraction done (0..1); may be empty.

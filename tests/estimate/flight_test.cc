@@ -276,3 +276,27 @@ TEST(Flight, JsonHasFormatsKeysAndTableSaysWhichFlagsMore) {
 
 }  // namespace
 }  // namespace shutterlab
+
+namespace shutterlab {
+namespace {
+
+// A known bias replaces the segment: every sample is analysed and the bias is taken off exactly,
+// so a constant rate equal to the bias flags nothing.
+TEST(Flight, KnownBiasAnalysesEverySample) {
+  const Eigen::Vector3d bias(0.3, -0.2, 0.1);  // far above any threshold if left in
+  std::vector<GyroSample> samples;
+  for (int64_t i = 0; i < 1000; ++i) samples.push_back({i * 1000000, bias});
+  FlightOptions options;
+  options.known_bias_rad_s = bias;
+  options.limits_m = {0.05};
+  options.windows_s = {0.010};
+  const FlightResult r = Flight(GyroTrace(samples), options);
+  EXPECT_EQ(r.samples, 1000u);
+  EXPECT_EQ(r.windows_total, 1000u - 10u);
+  EXPECT_EQ(r.rows[0].flagged, 0u);
+  options.known_bias_rad_s = Eigen::Vector3d::Zero();
+  EXPECT_EQ(Flight(GyroTrace(samples), options).rows[0].flagged_percent, 100.0);
+}
+
+}  // namespace
+}  // namespace shutterlab
