@@ -1,0 +1,146 @@
+// `shutterlab analyze LOG`: per-image rolling-shutter distortion from a real flight log, with the
+// flight table for the camera's readout and a verdict (estimate/analyze.h).
+
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "app/command.h"
+#include "estimate/analyze.h"
+#include "estimate/flight.h"
+#include "sim/check.h"
+#include "sim/flight_log_io.h"
+#include "sim/gyro_io.h"
+
+namespace shutterlab::app {
+namespace {
+
+struct AnalyzeCommand {
+  std::string log_path;
+  std::string format = "auto";
+  int log_index = -1;
+  int range_dps = 250;
+  std::string time_unit = "s";
+  std::string camera_path;
+  std::string readout = "30ms";
+  double altitude_m = 50.0;
+  double focal_px = 1100.0;
+  std::string size = "1280x960";
+  std::string triggers_path;
+  std::string every;
+  std::string latency = "0";
+  std::vector<std::string> limits{"5cm", "10cm"};
+  double noise_allowance_arcsec = 20.0;
+  std::string out_dir;
+  bool json = false;
+  bool altitude_given = false;
+};
+
+RigModel RigFromFlags(const AnalyzeCommand& command) {
+  RigModel rig;
+  const size_t x = command.size.find_first_of("xX");
+  int width = 0, height = 0;
+  try {
+    SHUTTERLAB_CHECK(x != std::string::npos) << "";
+    width = std::stoi(command.size.substr(0, x));
+    height = std::stoi(command.size.substr(x + 1));
+  } catch (const std::exception&) {
+    throw std::invalid_argument("--size must be WxH, e.g. 1280x960 (got '" + command.size + "')");
+  }
+  rig.camera.width = width;
+  rig.camera.height = height;
+  rig.camera.fx = rig.camera.fy = command.focal_px;
+  rig.camera.cx = 0.5 * (width - 1);
+  rig.camera.cy = 0.5 * (height - 1);
+  rig.shutter.readout_s = ParseDurationS(command.readout);
+  rig.altitude_m = command.altitude_m;
+  return rig;
+}
+
+void Run(const AnalyzeCommand& command) {
+  AnalyzeOptions options;
+  if (!command.camera_path.empty()) {
+    options.rig = ReadRigModel(command.camera_path);
+    if (command.altitude_given) options.rig.altitude_m = command.altitude_m;
+  } else {
+    options.rig = RigFromFlags(command);
+  }
+  options.limits_m.clear();
+  for (const std::string& text : command.limits) options.limits_m.push_back(ParseLengthM(text));
+  options.noise_allowance_arcsec = command.noise_allowance_arcsec;
+  if (!command.every.empty()) options.every_s = ParseDurationS(command.every);
+  options.trigger_latency_s = ParseDurationS(command.latency);
+  FlightLogReadOptions read;
+  read.format = ParseFlightLogFormat(command.format);
+  read.log_index = command.log_index;
+  read.raw_range_dps = command.range_dps;
+  read.raw_time_unit = ParseTimeUnit(command.time_unit);
+  read.Check();
+  options.Check();  // before the (possibly long) read
+  if (!command.triggers_path.empty()) options.triggers = ReadTriggersCsv(command.triggers_path);
+  const FlightLog log = ReadFlightLog(command.log_path, read);
+  Progress progress("analyze", 1000);
+  options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
+  AnalyzeResult result;
+  try {
+    result = Analyze(log, options);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(command.log_path + ": " + e.what());
+  }
+  if (!command.out_dir.empty()) WriteAnalyzeOutputs(command.out_dir, result);
+  if (command.json) {
+    std::cout << AnalyzeToJson(result).dump(2) << "\n";
+  } else {
+    std::cout << AnalyzeReport(result);
+  }
+}
+
+const CommandRegistration kRegistration(80, [](CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "analyze", "per-image rolling-shutter distortion from a flight log (ULog, DataFlash, blackbox, gyro.csv)");
+  auto command = std::make_shared<AnalyzeCommand>();
+  cmd->add_option("LOG", command->log_path, "flight or gyro log")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--format", command->format,
+                  "auto, ulog, dataflash, blackbox, gyro.csv, gcsv, raw")
+      ->capture_default_str();
+  cmd->add_option("--log-index", command->log_index, "blackbox: which log of the file (-1 = longest)")
+      ->capture_default_str();
+  cmd->add_option("--range", command->range_dps, "raw counts: full-scale range, deg/s")
+      ->capture_default_str();
+  cmd->add_option("--time-unit", command->time_unit, "raw counts: time column unit (s, ms, us, ns)")
+      ->capture_default_str();
+  cmd->add_option("--camera", command->camera_path, "camera.json (FORMATS.md rig/1)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--readout", command->readout, "rolling-shutter readout without --camera (s, ms, us)")
+      ->capture_default_str();
+  auto* altitude = cmd->add_option("--altitude", command->altitude_m,
+                                   "height above flat ground, m (overrides camera.json)")
+                       ->capture_default_str();
+  cmd->add_option("--focal-px", command->focal_px, "focal length without --camera, pixels")
+      ->capture_default_str();
+  cmd->add_option("--size", command->size, "image size WxH without --camera")->capture_default_str();
+  cmd->add_option("--triggers", command->triggers_path,
+                  "CSV 'image,t' or 't': trigger times in seconds on the log clock")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--every", command->every,
+                  "simulated triggers at this cadence (e.g. 2s) when the log has no camera events");
+  cmd->add_option("--latency", command->latency, "trigger-to-exposure latency (s, ms, us)")
+      ->capture_default_str();
+  cmd->add_option("--limit", command->limits, "ground limits, e.g. 5cm,10cm")
+      ->delimiter(',')
+      ->capture_default_str();
+  cmd->add_option("--noise-allowance", command->noise_allowance_arcsec,
+                  "flight table: added to each threshold for the gyro's own noise, arcsec")
+      ->capture_default_str();
+  cmd->add_option("--out", command->out_dir, "write DIR/images.csv and DIR/exclude.txt");
+  cmd->add_flag("--json", command->json, "print JSON (FORMATS.md `analyze`)");
+  return std::function<void()>([command, altitude] {
+    command->altitude_given = altitude->count() > 0;
+    Run(*command);
+  });
+});
+
+}  // namespace
+}  // namespace shutterlab::app
