@@ -1,18 +1,19 @@
 // `shutterlab analyze LOG`: per-image rolling-shutter distortion from a real flight log, with the
 // flight table for the camera's readout and a verdict (estimate/analyze.h).
 
+#include "estimate/analyze.h"
+
+#include "app/command.h"
+#include "estimate/flight.h"
+#include "sim/check.h"
+#include "sim/flight_log_io.h"
+#include "sim/gyro_io.h"
+
 #include <iostream>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include "app/command.h"
-#include "estimate/analyze.h"
-#include "estimate/flight.h"
-#include "sim/check.h"
-#include "sim/flight_log_io.h"
-#include "sim/gyro_io.h"
 
 namespace shutterlab::app {
 namespace {
@@ -70,6 +71,8 @@ void Run(const AnalyzeCommand& command) {
   options.limits_m.clear();
   for (const std::string& text : command.limits) options.limits_m.push_back(ParseLengthM(text));
   options.noise_allowance_arcsec = command.noise_allowance_arcsec;
+  // --altitude wins, then camera.json; without either the log's height above ground beats 50 m.
+  options.use_log_altitude = !command.altitude_given && command.camera_path.empty();
   if (!command.every.empty()) options.every_s = ParseDurationS(command.every);
   options.trigger_latency_s = ParseDurationS(command.latency);
   FlightLogReadOptions read;
@@ -98,14 +101,18 @@ void Run(const AnalyzeCommand& command) {
 }
 
 const CommandRegistration kRegistration(80, [](CLI::App& app) {
-  auto* cmd = app.add_subcommand(
-      "analyze", "per-image rolling-shutter distortion from a flight log (ULog, DataFlash, blackbox, gyro.csv)");
+  auto* cmd = app.add_subcommand("analyze",
+                                 "per-image rolling-shutter distortion from a flight log (ULog, "
+                                 "DataFlash, blackbox, gyro.csv)");
   auto command = std::make_shared<AnalyzeCommand>();
-  cmd->add_option("LOG", command->log_path, "flight or gyro log")->required()->check(CLI::ExistingFile);
+  cmd->add_option("LOG", command->log_path, "flight or gyro log")
+      ->required()
+      ->check(CLI::ExistingFile);
   cmd->add_option("--format", command->format,
                   "auto, ulog, dataflash, blackbox, gyro.csv, gcsv, raw")
       ->capture_default_str();
-  cmd->add_option("--log-index", command->log_index, "blackbox: which log of the file (-1 = longest)")
+  cmd->add_option("--log-index", command->log_index,
+                  "blackbox: which log of the file (-1 = longest)")
       ->capture_default_str();
   cmd->add_option("--range", command->range_dps, "raw counts: full-scale range, deg/s")
       ->capture_default_str();
@@ -113,14 +120,18 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--camera", command->camera_path, "camera.json (FORMATS.md rig/1)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--readout", command->readout, "rolling-shutter readout without --camera (s, ms, us)")
+  cmd->add_option("--readout", command->readout,
+                  "rolling-shutter readout without --camera (s, ms, us)")
       ->capture_default_str();
-  auto* altitude = cmd->add_option("--altitude", command->altitude_m,
-                                   "height above flat ground, m (overrides camera.json)")
-                       ->capture_default_str();
+  auto* altitude =
+      cmd->add_option("--altitude", command->altitude_m,
+                      "height above flat ground, m (overrides camera.json; default: the log's "
+                      "altitude above ground when it has one, else 50)")
+          ->capture_default_str();
   cmd->add_option("--focal-px", command->focal_px, "focal length without --camera, pixels")
       ->capture_default_str();
-  cmd->add_option("--size", command->size, "image size WxH without --camera")->capture_default_str();
+  cmd->add_option("--size", command->size, "image size WxH without --camera")
+      ->capture_default_str();
   cmd->add_option("--triggers", command->triggers_path,
                   "CSV 'image,t' or 't': trigger times in seconds on the log clock")
       ->check(CLI::ExistingFile);

@@ -1,5 +1,11 @@
 #include "estimate/analyze.h"
 
+#include "sim/bias.h"
+#include "sim/check.h"
+#include "sim/integrate.h"
+#include "sim/still_detect.h"
+#include "sim/text_file.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -8,12 +14,6 @@
 #include <sstream>
 #include <stdexcept>
 #include <utility>
-
-#include "sim/bias.h"
-#include "sim/check.h"
-#include "sim/integrate.h"
-#include "sim/still_detect.h"
-#include "sim/text_file.h"
 
 namespace shutterlab {
 namespace {
@@ -199,8 +199,14 @@ void AnalyzeOptions::Check() const {
       << "trigger latency must be finite and below 1000 s (got " << trigger_latency_s << " s)";
 }
 
-AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& options) {
-  options.Check();
+AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options) {
+  given_options.Check();
+  AnalyzeOptions options = given_options;
+  std::string altitude_source = "camera";
+  if (options.use_log_altitude && log.altitude_above_ground_m && *log.altitude_above_ground_m > 0) {
+    options.rig.altitude_m = *log.altitude_above_ground_m;
+    altitude_source = "log";
+  }
   const GyroTrace& gyro = log.gyro;
   SHUTTERLAB_CHECK(gyro.samples().size() >= 2) << "the log's gyro trace has fewer than 2 samples";
   const auto progress = [&options](double fraction) {
@@ -216,6 +222,7 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& options) {
   result.gaps = gyro.sampling().gap_indices.size();
   result.limits_m = options.limits_m;
   result.altitude_m = options.rig.altitude_m;
+  result.altitude_source = altitude_source;
   result.readout_s = options.rig.shutter.readout_s;
 
   const GyroTrace camera_rates =
@@ -258,15 +265,16 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& options) {
     std::map<std::string, size_t> kinds;
     for (const CameraEvent& event : log.camera_events) ++kinds[event.kind];
     const std::string kind =
-        std::max_element(kinds.begin(), kinds.end(),
-                         [](const auto& a, const auto& b) { return a.second < b.second; })
-            ->first;
+        std::max_element(kinds.begin(), kinds.end(), [](const auto& a, const auto& b) {
+          return a.second < b.second;
+        })->first;
     result.trigger_source = "camera events (" + kind + ")";
     for (size_t i = 0; i < log.camera_events.size(); ++i) {
       const CameraEvent& event = log.camera_events[i];
       if (event.kind != kind) continue;
-      triggers.push_back({event.sequence >= 0 ? "IMG_" + std::to_string(event.sequence) : ImageName(i),
-                          event.t_ns});
+      triggers.push_back(
+          {event.sequence >= 0 ? "IMG_" + std::to_string(event.sequence) : ImageName(i),
+           event.t_ns});
     }
   } else if (triggers.empty() && options.every_s > 0) {
     result.trigger_source = Format("every %g s", options.every_s);
@@ -339,15 +347,14 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& options) {
     std::ostringstream line;
     line << "verdict: " << verdict.images_in_trace << " images, "
          << SharesText(verdict.share_percent, options.limits_m);
-    const bool any_flagged =
-        std::any_of(verdict.share_percent.begin(), verdict.share_percent.end(),
-                    [](double s) { return s > 0; });
+    const bool any_flagged = std::any_of(verdict.share_percent.begin(), verdict.share_percent.end(),
+                                         [](double s) { return s > 0; });
     line << (any_flagged ? "; stabilise camera axis " : "; largest rotation about camera axis ")
          << kAxisNames[verdict.axis_to_stabilise];
     if (options.what_if) {
-      line << "; with a " << Format("%g", verdict.fast_readout_s * 1e3) << " ms readout: "
-           << SharesText(verdict.share_fast_readout_percent, options.limits_m) << "; at "
-           << Format("%g", 0.5 * options.rig.altitude_m)
+      line << "; with a " << Format("%g", verdict.fast_readout_s * 1e3)
+           << " ms readout: " << SharesText(verdict.share_fast_readout_percent, options.limits_m)
+           << "; at " << Format("%g", 0.5 * options.rig.altitude_m)
            << " m altitude: " << SharesText(verdict.share_half_altitude_percent, options.limits_m);
     }
     verdict.line = line.str();
@@ -373,12 +380,12 @@ std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path) {
       const std::string last = ToLower(fields.back());
       if (!ParseDouble(fields.back())) {
         const bool time_name = last == "t" || last == "time" || last == "t_s";
-        const bool image_name = fields.size() == 2 && (ToLower(fields[0]) == "image" ||
-                                                       ToLower(fields[0]) == "name");
+        const bool image_name =
+            fields.size() == 2 && (ToLower(fields[0]) == "image" || ToLower(fields[0]) == "name");
         if (!time_name || (fields.size() == 2 && !image_name) || fields.size() > 2) {
-          throw IoError(IoMessage(path, line_number,
-                                  "expected a header 'image,t' or 't', or a time in seconds (got '" +
-                                      trimmed + "')"));
+          throw IoError(IoMessage(
+              path, line_number,
+              "expected a header 'image,t' or 't', or a time in seconds (got '" + trimmed + "')"));
         }
         columns = static_cast<int>(fields.size());
         continue;
@@ -387,7 +394,8 @@ std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path) {
     if (columns == 0) columns = static_cast<int>(fields.size());
     if (static_cast<int>(fields.size()) != columns || columns > 2) {
       throw IoError(IoMessage(path, line_number,
-                              "expected " + std::string(columns == 1 ? "1 field (t)" : "2 fields (image,t)") +
+                              "expected " +
+                                  std::string(columns == 1 ? "1 field (t)" : "2 fields (image,t)") +
                                   ", got " + std::to_string(fields.size())));
     }
     const std::optional<double> t_s = ParseDouble(fields.back());
@@ -411,9 +419,9 @@ std::string LimitKey(double limit_m) { return Format("%.12g", limit_m); }
 
 nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
   nlohmann::json json;
-  json["source"] = {{"format", result.format},     {"gyro", result.gyro_source},
-                    {"samples", result.samples},   {"duration_s", result.duration_s},
-                    {"rate_hz", result.rate_hz},   {"gaps", result.gaps}};
+  json["source"] = {{"format", result.format},   {"gyro", result.gyro_source},
+                    {"samples", result.samples}, {"duration_s", result.duration_s},
+                    {"rate_hz", result.rate_hz}, {"gaps", result.gaps}};
   json["flight"] = result.flight ? FlightToJson(*result.flight) : nlohmann::json(nullptr);
   if (!result.flight) json["flight_problem"] = result.flight_problem;
   json["bias"] = {{"from_still_segment", result.bias_from_still},
@@ -421,7 +429,9 @@ nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
   if (result.bias_from_still) {
     json["bias"]["segment_s"] = {result.still_segment.begin_s, result.still_segment.end_s};
   }
-  json["camera"] = {{"altitude_m", result.altitude_m}, {"readout_s", result.readout_s}};
+  json["camera"] = {{"altitude_m", result.altitude_m},
+                    {"altitude_source", result.altitude_source},
+                    {"readout_s", result.readout_s}};
   json["triggers"] = result.trigger_source;
   nlohmann::json images = nlohmann::json::array();
   for (const ImageResult& image : result.images) {
@@ -452,9 +462,9 @@ nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
   const AnalyzeVerdict& v = result.verdict;
   json["verdict"] = {{"images_in_trace", v.images_in_trace},
                      {"flagged_percent", v.share_percent},
-                     {"axis_to_stabilise",
-                      v.axis_to_stabilise < 0 ? nlohmann::json(nullptr)
-                                              : nlohmann::json(kAxisNames[v.axis_to_stabilise])},
+                     {"axis_to_stabilise", v.axis_to_stabilise < 0
+                                               ? nlohmann::json(nullptr)
+                                               : nlohmann::json(kAxisNames[v.axis_to_stabilise])},
                      {"fast_readout_s", v.fast_readout_s},
                      {"flagged_percent_fast_readout", v.share_fast_readout_percent},
                      {"flagged_percent_half_altitude", v.share_half_altitude_percent},
@@ -474,7 +484,8 @@ std::string AnalyzeReport(const AnalyzeResult& result) {
     out << "bias: none (no still segment found; zero bias assumed)\n";
   }
   out << "camera: readout " << Format("%g", result.readout_s * 1e3) << " ms, altitude "
-      << Format("%g", result.altitude_m) << " m; triggers: " << result.trigger_source << "\n\n";
+      << Format("%g", result.altitude_m) << " m (" << result.altitude_source
+      << "); triggers: " << result.trigger_source << "\n\n";
   if (result.flight) {
     out << FlightTable(*result.flight) << "\n";
   } else {
@@ -490,7 +501,8 @@ std::string AnalyzeReport(const AnalyzeResult& result) {
       } else {
         std::string flags;
         for (size_t l = 0; l < result.limits_m.size(); ++l) {
-          if (image.flagged[l]) flags += (flags.empty() ? ">" : ", >") + LengthText(result.limits_m[l]);
+          if (image.flagged[l])
+            flags += (flags.empty() ? ">" : ", >") + LengthText(result.limits_m[l]);
         }
         std::snprintf(line, sizeof(line), "%-12s %9.3f  %12.2f %12.2f  %4s  %s\n",
                       image.name.c_str(), image.t_ns * 1e-9, image.d_paper_m * 100.0,

@@ -20,6 +20,12 @@
 // DetectStillSegment finds, else zero (AnalyzeResult::bias_from_still says which); it applies to
 // every sample, the flight table's included (FlightOptions::known_bias_rad_s).
 
+#include "estimate/flight.h"
+#include "render/camera.h"
+#include "sim/flight_log.h"
+
+#include <nlohmann/json.hpp>
+
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -27,16 +33,11 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
-#include "estimate/flight.h"
-#include "render/camera.h"
-#include "sim/flight_log.h"
-
 namespace shutterlab {
 
-// Grid step of the D_full evaluation, pixels (columns and rows). D changes smoothly over the
-// frame, so a 16-px grid loses well under a pixel against the full grid.
+// Grid step of the D_full evaluation, pixels (columns and rows). The first and last rows and
+// columns are always on the grid, so the frame's extremes, where a smooth rotation's D peaks, are
+// included; interior peaks (rare) can be missed by a fraction of the displacement over 16 px.
 inline constexpr int kGridStepPx = 16;
 
 struct ImageTrigger {
@@ -53,7 +54,10 @@ struct AnalyzeOptions {
   std::vector<ImageTrigger> triggers;
   double every_s = 0.0;
   double trigger_latency_s = 0.0;  // trigger to exposure of row 0, s (may be negative)
-  bool what_if = true;             // compute the verdict's faster-readout / half-altitude shares
+  // Use the log's altitude above ground (FlightLog::altitude_above_ground_m) instead of
+  // rig.altitude_m when the log has one.
+  bool use_log_altitude = false;
+  bool what_if = true;  // compute the verdict's faster-readout / half-altitude shares
   std::function<void(double)> progress;  // fraction done (0..1); may be empty
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
@@ -77,7 +81,7 @@ struct AnalyzeVerdict {
   std::vector<double> share_percent;  // per limit: images over the limit / images in the trace
   int axis_to_stabilise = -1;         // most frequent dominant axis of flagged images; -1 none
   double fast_readout_s = 0.010;
-  std::vector<double> share_fast_readout_percent;  // recomputed with readout fast_readout_s
+  std::vector<double> share_fast_readout_percent;   // recomputed with readout fast_readout_s
   std::vector<double> share_half_altitude_percent;  // recomputed with half the altitude
   std::string line;                                 // the one-line verdict for a person
 };
@@ -97,6 +101,7 @@ struct AnalyzeResult {
   std::string trigger_source;  // "none", "camera events", "triggers", "every N s"
   std::vector<double> limits_m;
   double altitude_m = 0.0, readout_s = 0.0;
+  std::string altitude_source;  // "camera" (the options) or "log"
   std::vector<ImageResult> images;
   AnalyzeVerdict verdict;
 };

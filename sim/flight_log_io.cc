@@ -1,15 +1,15 @@
 #include "sim/flight_log_io.h"
 
-#include <algorithm>
-#include <fstream>
-#include <utility>
-
 #include "sim/blackbox.h"
 #include "sim/check.h"
 #include "sim/dataflash.h"
 #include "sim/gyro_io.h"
 #include "sim/text_file.h"
 #include "sim/ulog.h"
+
+#include <algorithm>
+#include <fstream>
+#include <utility>
 
 namespace shutterlab {
 namespace {
@@ -42,8 +42,8 @@ GyroFormat ToGyroFormat(FlightLogFormat format) {
 }  // namespace
 
 void FlightLogReadOptions::Check() const {
-  SHUTTERLAB_CHECK(log_index >= -1) << "log index must be -1 (longest) or >= 0 (got " << log_index
-                                    << ")";
+  SHUTTERLAB_CHECK(log_index >= -1)
+      << "log index must be -1 (longest) or >= 0 (got " << log_index << ")";
   GyroReadOptions gyro;
   gyro.raw_range_dps = raw_range_dps;
   gyro.raw_time_unit = raw_time_unit;

@@ -4,11 +4,11 @@
 // .gcsv, the source paper's raw counts), detected by content. Plain gyro logs are wrapped into a
 // FlightLog with no camera events and no altitude, so that `analyze` treats every source alike.
 
-#include <string>
-#include <string_view>
-
 #include "sim/flight_log.h"
 #include "sim/raw_csv.h"
+
+#include <string>
+#include <string_view>
 
 namespace shutterlab {
 

@@ -1,13 +1,13 @@
-#include <algorithm>
-#include <filesystem>
-#include <fstream>
-#include <string>
+#include "sim/text_file.h"
+#include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "sim/text_file.h"
-#include "tests/test_util.h"
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <string>
 
 namespace shutterlab {
 namespace {
@@ -23,8 +23,9 @@ size_t LineCount(const std::string& text) {
 
 TEST(AnalyzeCli, BlackboxEveryTwoSecondsJsonAndOutputs) {
   test::TempDir dir;
-  const auto r = RunShutterlab("analyze " + Bbl() + " --every 2s --readout 20ms --altitude 40 --json --out " +
-                               (dir / "out"));
+  const auto r =
+      RunShutterlab("analyze " + Bbl() + " --every 2s --readout 20ms --altitude 40 --json --out " +
+                    (dir / "out"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json json = nlohmann::json::parse(r.output);
   EXPECT_EQ(json["source"]["format"], "betaflight");
@@ -52,8 +53,8 @@ TEST(AnalyzeCli, TableHasVerdict) {
 TEST(AnalyzeCli, BadTriggersCsvIsOneLineExitTwoAndNoOutput) {
   test::TempDir dir;
   std::ofstream(dir / "times.csv") << "image,t\nIMG_1,1.0\nIMG_2,abc\n";
-  const auto r = RunShutterlab("analyze " + Bbl() + " --triggers " + (dir / "times.csv") + " --out " +
-                               (dir / "out"));
+  const auto r = RunShutterlab("analyze " + Bbl() + " --triggers " + (dir / "times.csv") +
+                               " --out " + (dir / "out"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_EQ(LineCount(r.output), 1u) << r.output;
   EXPECT_NE(r.output.find("times.csv:3:"), std::string::npos) << r.output;

@@ -1,17 +1,17 @@
 #include "estimate/analyze.h"
 
+#include "sim/check.h"
+#include "sim/flight_log_io.h"
+#include "sim/text_file.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
-
-#include "sim/check.h"
-#include "sim/flight_log_io.h"
-#include "sim/text_file.h"
-#include "tests/test_util.h"
 
 namespace shutterlab {
 namespace {
@@ -57,8 +57,10 @@ TEST(Analyze, ConstantRateGivesPaperDistortionAndFlagsAboveTheLimit) {
   const double omega = RateForGroundSmear(0.07);  // between the 5 cm and 10 cm limits
   const FlightLog log = ConstantRateLog(Eigen::Vector3d(omega, 0, 0), 10.0);
   AnalyzeOptions options = BaseOptions();
-  options.triggers = {{"moving", SecondsToNs(6.0)}, {"still", SecondsToNs(1.0)},
-                      {"late", SecondsToNs(9.99)}, {"early", SecondsToNs(-1.0)}};
+  options.triggers = {{"moving", SecondsToNs(6.0)},
+                      {"still", SecondsToNs(1.0)},
+                      {"late", SecondsToNs(9.99)},
+                      {"early", SecondsToNs(-1.0)}};
   const AnalyzeResult result = Analyze(log, options);
   ASSERT_TRUE(result.bias_from_still);
   EXPECT_NEAR(result.bias_rad_s.norm(), 0.0, 1e-12);
@@ -150,6 +152,19 @@ TEST(Analyze, CamFromGyroMapsTheLogsAxesToTheCamera) {
   EXPECT_NEAR(result.images[0].d_paper_m, 0.07, kPaperTolM);
 }
 
+TEST(Analyze, LogAltitudeWhenAsked) {
+  FlightLog log = ConstantRateLog(Eigen::Vector3d(RateForGroundSmear(0.07), 0, 0), 8.0);
+  log.altitude_above_ground_m = 2.0 * kAltitudeM;
+  AnalyzeOptions options = BaseOptions();
+  options.triggers = {{"a", SecondsToNs(6.0)}};
+  EXPECT_NEAR(Analyze(log, options).images[0].d_paper_m, 0.07, kPaperTolM);
+  options.use_log_altitude = true;
+  const AnalyzeResult result = Analyze(log, options);
+  EXPECT_EQ(result.altitude_source, "log");
+  // D_paper is linear in the altitude: tan of the same angle.
+  EXPECT_NEAR(result.images[0].d_paper_m, 0.14, 2 * kPaperTolM);
+}
+
 TEST(Analyze, LatencyShiftsTheExposure) {
   const FlightLog log = ConstantRateLog(Eigen::Vector3d(RateForGroundSmear(0.07), 0, 0), 8.0);
   AnalyzeOptions options = BaseOptions();
@@ -232,7 +247,8 @@ TEST(Analyze, WritesImagesCsvAndExcludeList) {
   WriteAnalyzeOutputs(dir / "out", result);
   EXPECT_EQ(ReadFileToString(dir / "out/exclude.txt"), "IMG_A\n");
   const std::string csv = ReadFileToString(dir / "out/images.csv");
-  EXPECT_EQ(csv.substr(0, csv.find('\n')), "name,t,D_paper_m,D_full_m,flag_0.05,flag_0.1,dominant_axis");
+  EXPECT_EQ(csv.substr(0, csv.find('\n')),
+            "name,t,D_paper_m,D_full_m,flag_0.05,flag_0.1,dominant_axis");
 }
 
 TEST(ReadTriggersCsv, ReadsNamedAndBareTimesAndRejectsBadLines) {

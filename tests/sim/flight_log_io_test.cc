@@ -1,14 +1,14 @@
 #include "sim/flight_log_io.h"
 
-#include <fstream>
-#include <stdexcept>
-#include <string>
-
-#include <gtest/gtest.h>
-
 #include "sim/check.h"
 #include "sim/gyro_io.h"
 #include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <stdexcept>
+#include <string>
 
 namespace shutterlab {
 namespace {
@@ -51,7 +51,8 @@ TEST(ReadFlightLog, WrapsGyroCsvAndHonoursTheLogIndex) {
 
 TEST(ReadFlightLog, UnknownFileIsAClearIoError) {
   test::TempDir dir;
-  std::ofstream(dir / "photo.jpg", std::ios::binary) << std::string("\xff\xd8\xff\xe0\0\x10JFIF", 10);
+  std::ofstream(dir / "photo.jpg", std::ios::binary)
+      << std::string("\xff\xd8\xff\xe0\0\x10JFIF", 10);
   std::ofstream(dir / "notes.txt") << "hello world\n";
   for (const std::string name : {"photo.jpg", "notes.txt"}) {
     try {
