@@ -31,6 +31,9 @@ struct BadCase {
   std::string problem;  // part of the message
 };
 
+// Names the case in test output instead of GoogleTest's byte dump.
+void PrintTo(const BadCase& c, std::ostream* os) { *os << c.name; }
+
 class BadInputCli : public ::testing::TestWithParam<BadCase> {};
 
 TEST_P(BadInputCli, OneLineExitTwoNoOutput) {
