@@ -5,10 +5,12 @@
 namespace shutterlab::app {
 
 void TraceOptions::Add(CLI::App* command, bool with_bias) {
-  command->add_option("TRACE", path, "gyro log (gyro.csv, Gyroflow .gcsv, or raw-count CSV)")
+  command->add_option("TRACE", path,
+                      "gyro log: gyro.csv, Gyroflow .gcsv, raw-count CSV, PX4 ULog, Betaflight "
+                      "blackbox, ArduPilot DataFlash")
       ->required()
       ->check(CLI::ExistingFile);
-  command->add_option("--format", format, "log format: auto, csv, gcsv, raw")
+  command->add_option("--format", format, "log format: auto, csv, gcsv, raw, ulog, blackbox, dataflash")
       ->capture_default_str();
   command->add_flag("--raw", raw, "the log holds raw int16 counts (the source paper's logger)");
   command
@@ -30,16 +32,17 @@ void TraceOptions::Add(CLI::App* command, bool with_bias) {
   }
 }
 
-GyroReadOptions TraceOptions::ReadOptions() const {
-  GyroReadOptions options;
-  options.format = raw ? GyroFormat::kRaw : ParseGyroFormat(format);
+FlightLogReadOptions TraceOptions::ReadOptions() const {
+  FlightLogReadOptions options;
+  options.format = raw ? FlightLogFormat::kRaw : ParseFlightLogFormat(format);
   options.raw_range_dps = range_dps;
   options.raw_time_unit = ParseTimeUnit(time_unit);
   options.Check();
   return options;
 }
 
-GyroTrace TraceOptions::Load() const { return ReadGyro(path, ReadOptions()); }
+// Any supported log: the gyro formats and the flight logs (ULog, blackbox, DataFlash) alike.
+GyroTrace TraceOptions::Load() const { return ReadFlightLog(path, ReadOptions()).gyro; }
 
 BiasSegment TraceOptions::Segment(const GyroTrace& trace) const {
   if (!auto_bias) return ParseBiasSegment(bias);

@@ -2,6 +2,7 @@
 // CLI options shared by every command that reads a gyro trace: format selection and bias segment.
 
 #include "sim/bias.h"
+#include "sim/flight_log_io.h"
 #include "sim/gyro_io.h"
 #include "sim/still_detect.h"
 
@@ -13,7 +14,7 @@ namespace shutterlab::app {
 
 struct TraceOptions {
   std::string path;
-  std::string format = "auto";  // auto | csv | gcsv | raw
+  std::string format = "auto";  // auto | csv | gcsv | raw | ulog | blackbox | dataflash
   bool raw = false;             // shorthand for --format raw
   int range_dps = 250;          // raw counts: full-scale range
   std::string time_unit = "s";  // raw counts: unit of the time column
@@ -22,7 +23,7 @@ struct TraceOptions {
 
   // Adds TRACE (positional) and the options above to a subcommand. with_bias: add --bias too.
   void Add(CLI::App* command, bool with_bias);
-  GyroReadOptions ReadOptions() const;
+  FlightLogReadOptions ReadOptions() const;
   GyroTrace Load() const;
   // The bias segment for this trace: with --auto-bias the detected still segment
   // (DetectStillSegment, default StillDetectOptions; one note "auto-bias: still segment A:B s" on

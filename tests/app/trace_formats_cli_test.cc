@@ -1,0 +1,47 @@
+// The trace commands read every supported log, not only gyro.csv: real flight logs go through the
+// same dispatcher as `analyze`.
+
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/test_util.h"
+
+namespace shutterlab {
+namespace {
+
+nlohmann::json RunJson(const std::string& args) {
+  const test::CommandResult result = test::RunShutterlab(args + " 2>/dev/null");
+  EXPECT_EQ(result.exit_code, 0) << args << "\n" << result.output;
+  return nlohmann::json::parse(result.output, nullptr, /*allow_exceptions=*/false);
+}
+
+TEST(TraceFormatsCli, NoiseReadsARealULog) {
+  // sample_log_small.ulg: a stationary PX4 board, vehicle_angular_velocity at ~280 Hz over ~6.5 s.
+  const nlohmann::json j =
+      RunJson("noise " + test::SourcePath("tests/data/px4/sample_log_small.ulg") + " --bias 0:2 --json");
+  ASSERT_TRUE(j.is_object());
+  EXPECT_EQ(j["window_samples"], 120);
+  for (const char* axis : {"x", "y", "z"}) {
+    const auto& a = j["axes"][axis];
+    EXPECT_GT(a["sigma_mean_arcsec"].get<double>(), 0.0) << axis;
+    EXPECT_GE(a["range_max_arcsec"].get<double>(), a["range_mean_arcsec"].get<double>()) << axis;
+  }
+}
+
+TEST(TraceFormatsCli, FlightReadsARealBlackboxLog) {
+  // btfl_001.bbl log 1: 24,893 frames at 500 Hz; with --zero-bias every sample is analysed.
+  const nlohmann::json j = RunJson("flight " + test::SourcePath("tests/data/betaflight/btfl_001.bbl") +
+                                   " --zero-bias --no-vector --json");
+  ASSERT_TRUE(j.is_object());
+  EXPECT_EQ(j["samples"], 24893);
+  ASSERT_EQ(j["rows"].size(), 4u);
+  for (const auto& row : j["rows"]) {
+    EXPECT_GT(row["flagged_percent"].get<double>(), 0.0);
+    EXPECT_LE(row["flagged_percent"].get<double>(), 100.0);
+  }
+}
+
+}  // namespace
+}  // namespace shutterlab
