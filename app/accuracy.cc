@@ -20,17 +20,7 @@ struct AccuracyCommand {
 };
 
 void Run(const AccuracyCommand& command) {
-  AccuracyOptions options = command.accuracy;
-  if (!command.trace.auto_bias) options.bias = ParseBiasSegment(command.trace.bias);
-  options.Check();  // bad options fail before the trace is read
-  const GyroTrace trace = command.trace.Load();
-  options.bias = command.trace.Segment(trace);  // --bias A:B, or the detected still segment
-  AccuracyResult result;
-  try {
-    result = AnalyzeAccuracy(trace, options);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(command.trace.path + ": " + e.what());
-  }
+  const AccuracyResult result = AnalyzeTrace(command.trace, command.accuracy, AnalyzeAccuracy);
   std::cout << (command.json ? AccuracyJson(result) : AccuracyTable(result));
 }
 

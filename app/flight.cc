@@ -34,22 +34,11 @@ void Run(const FlightCommand& command) {
   for (const std::string& text : command.windows) options.windows_s.push_back(ParseDurationS(text));
   options.vector_criterion = !command.no_vector;
   options.series = !command.series_path.empty();
-  if (!command.trace.auto_bias) options.bias = ParseBiasSegment(command.trace.bias);
-  options.Check();  // before the (possibly long) read
-  const GyroTrace trace = command.trace.Load();
-  if (command.zero_bias) {
-    options.known_bias_rad_s = Eigen::Vector3d::Zero();
-  } else {
-    options.bias = command.trace.Segment(trace);
-  }
+  // A known (zero) bias takes precedence over the segment in Flight().
+  if (command.zero_bias) options.known_bias_rad_s = Eigen::Vector3d::Zero();
   Progress progress("flight", 1000);
   options.progress = [&progress](double fraction) { progress.Update(static_cast<size_t>(fraction * 1000)); };
-  FlightResult result;
-  try {
-    result = Flight(trace, options);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(command.trace.path + ": " + e.what());
-  }
+  const FlightResult result = AnalyzeTrace(command.trace, options, Flight);
   if (options.series) WriteFlightSeriesCsv(command.series_path, result.series);
   if (command.json) {
     std::cout << FlightToJson(result).dump(2) << "\n";

@@ -23,17 +23,7 @@ struct NoiseCommand {
 };
 
 void Run(const NoiseCommand& command) {
-  NoiseOptions options = command.noise;
-  if (!command.trace.auto_bias) options.bias = ParseBiasSegment(command.trace.bias);
-  options.Check();  // bad options fail before the trace is read
-  const GyroTrace trace = command.trace.Load();
-  options.bias = command.trace.Segment(trace);  // --bias A:B, or the detected still segment
-  NoiseResult result;
-  try {
-    result = AnalyzeNoise(trace, options);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(command.trace.path + ": " + e.what());
-  }
+  const NoiseResult result = AnalyzeTrace(command.trace, command.noise, AnalyzeNoise);
   if (!command.allan_path.empty()) WriteFileAtomically(command.allan_path, AllanCsv(result.allan));
   std::cout << (command.json ? NoiseJson(result) : NoiseTable(result));
 }

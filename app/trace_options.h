@@ -8,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <stdexcept>
 #include <string>
 
 namespace shutterlab::app {
@@ -30,5 +31,21 @@ struct TraceOptions {
   // stderr), otherwise --bias A:B. Throws std::invalid_argument when neither gives a segment.
   BiasSegment Segment(const GyroTrace& trace) const;
 };
+
+// Runs analysis(trace, options) the way every trace command does: --bias is parsed and the options
+// checked before the (possibly long) read, the segment is resolved after it (--auto-bias detects
+// the still segment), and the analysis's own errors are prefixed with the trace's path.
+template <typename Options, typename Analysis>
+auto AnalyzeTrace(const TraceOptions& trace_options, Options options, const Analysis& analysis) {
+  if (!trace_options.auto_bias) options.bias = ParseBiasSegment(trace_options.bias);
+  options.Check();
+  const GyroTrace trace = trace_options.Load();
+  options.bias = trace_options.Segment(trace);
+  try {
+    return analysis(trace, options);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(trace_options.path + ": " + e.what());
+  }
+}
 
 }  // namespace shutterlab::app
