@@ -396,7 +396,10 @@ nlohmann::json FlightToJson(const FlightResult& result) {
 
 std::string FlightTable(const FlightResult& result) {
   std::ostringstream out;
-  out << "flight: " << result.samples << " samples after the bias segment, altitude "
+  // A known bias (FlightOptions::known_bias_rad_s) leaves no segment: every sample is analysed.
+  out << "flight: " << result.samples
+      << (result.bias.samples > 0 ? " samples after the bias segment" : " samples (known bias)")
+      << ", altitude "
       << result.altitude_m << " m, noise allowance " << result.noise_allowance_arcsec << "\"\n";
   out << "limit    window   threshold   windows      x %      y %      z %   per-axis %";
   if (result.vector_criterion) out << "   vector %";

@@ -3,6 +3,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -59,6 +60,15 @@ inline CommandResult RunShutterlab(const std::string& args) {
   const int status = ::pclose(pipe);
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return result;
+}
+
+// Appends a plain value's bytes in host (little-endian on our targets) order: the binary log
+// formats (ULog, DataFlash) that the reader tests write byte by byte.
+template <typename T>
+void PutLittleEndian(std::string* out, T value) {
+  char raw[sizeof(T)];
+  std::memcpy(raw, &value, sizeof(T));
+  out->append(raw, sizeof(T));
 }
 
 inline std::string SourcePath(const std::string& relative) {

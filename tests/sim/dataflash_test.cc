@@ -18,13 +18,6 @@
 namespace shutterlab {
 namespace {
 
-template <typename T>
-void Put(std::string* out, T value) {
-  char raw[sizeof(T)];
-  std::memcpy(raw, &value, sizeof(T));
-  out->append(raw, sizeof(T));
-}
-
 void PutText(std::string* out, const std::string& text, size_t width) {
   std::string padded = text.substr(0, width);
   padded.resize(width, '\0');
@@ -51,73 +44,73 @@ class DataFlashBuilder {
   void Fmt(uint8_t type, uint8_t length, const std::string& name, const std::string& format,
            const std::string& labels) {
     Header(128);
-    Put<uint8_t>(&bytes_, type);
-    Put<uint8_t>(&bytes_, length);
+    test::PutLittleEndian<uint8_t>(&bytes_, type);
+    test::PutLittleEndian<uint8_t>(&bytes_, length);
     PutText(&bytes_, name, 4);
     PutText(&bytes_, format, 16);
     PutText(&bytes_, labels, 64);
   }
   void Gyr(uint64_t t_us, uint8_t instance, uint64_t sample_us, float x, float y, float z) {
     Header(kGyr);
-    Put(&bytes_, t_us);
-    Put(&bytes_, instance);
-    Put(&bytes_, sample_us);
-    Put(&bytes_, x);
-    Put(&bytes_, y);
-    Put(&bytes_, z);
+    test::PutLittleEndian(&bytes_, t_us);
+    test::PutLittleEndian(&bytes_, instance);
+    test::PutLittleEndian(&bytes_, sample_us);
+    test::PutLittleEndian(&bytes_, x);
+    test::PutLittleEndian(&bytes_, y);
+    test::PutLittleEndian(&bytes_, z);
   }
   void Imu(uint64_t t_us, uint8_t instance, float x, float y, float z) {
     Header(kImu);
-    Put(&bytes_, t_us);
-    Put(&bytes_, instance);
-    Put(&bytes_, x);
-    Put(&bytes_, y);
-    Put(&bytes_, z);
-    for (int i = 0; i < 3; ++i) Put(&bytes_, 9.81f);
+    test::PutLittleEndian(&bytes_, t_us);
+    test::PutLittleEndian(&bytes_, instance);
+    test::PutLittleEndian(&bytes_, x);
+    test::PutLittleEndian(&bytes_, y);
+    test::PutLittleEndian(&bytes_, z);
+    for (int i = 0; i < 3; ++i) test::PutLittleEndian(&bytes_, 9.81f);
   }
   void Isbh(uint16_t n, uint8_t type, uint8_t instance, uint16_t mul, uint16_t count, uint64_t sample_us,
             float rate_hz) {
     Header(kIsbh);
-    Put<uint64_t>(&bytes_, sample_us + 100);
-    Put(&bytes_, n);
-    Put(&bytes_, type);
-    Put(&bytes_, instance);
-    Put(&bytes_, mul);
-    Put(&bytes_, count);
-    Put(&bytes_, sample_us);
-    Put(&bytes_, rate_hz);
+    test::PutLittleEndian<uint64_t>(&bytes_, sample_us + 100);
+    test::PutLittleEndian(&bytes_, n);
+    test::PutLittleEndian(&bytes_, type);
+    test::PutLittleEndian(&bytes_, instance);
+    test::PutLittleEndian(&bytes_, mul);
+    test::PutLittleEndian(&bytes_, count);
+    test::PutLittleEndian(&bytes_, sample_us);
+    test::PutLittleEndian(&bytes_, rate_hz);
   }
   void Isbd(uint16_t n, uint16_t seqno, const std::vector<int16_t>& x, const std::vector<int16_t>& y,
             const std::vector<int16_t>& z) {
     Header(kIsbd);
-    Put<uint64_t>(&bytes_, 1);
-    Put(&bytes_, n);
-    Put(&bytes_, seqno);
+    test::PutLittleEndian<uint64_t>(&bytes_, 1);
+    test::PutLittleEndian(&bytes_, n);
+    test::PutLittleEndian(&bytes_, seqno);
     for (const auto* axis : {&x, &y, &z}) {
-      for (size_t i = 0; i < 32; ++i) Put<int16_t>(&bytes_, i < axis->size() ? (*axis)[i] : int16_t{0});
+      for (size_t i = 0; i < 32; ++i) test::PutLittleEndian<int16_t>(&bytes_, i < axis->size() ? (*axis)[i] : int16_t{0});
     }
   }
   void Cam(uint8_t type, uint64_t t_us, uint16_t image, double rel_alt_m) {
     Header(type);
-    Put(&bytes_, t_us);
-    Put<uint8_t>(&bytes_, 0);
-    Put(&bytes_, image);
-    Put<uint32_t>(&bytes_, 0);
-    Put<uint16_t>(&bytes_, 0);
-    Put<int32_t>(&bytes_, 473'977'000);
-    Put<int32_t>(&bytes_, 85'456'000);
-    Put<int32_t>(&bytes_, 50'000);
-    Put<int32_t>(&bytes_, static_cast<int32_t>(std::lround(rel_alt_m * 100)));
-    Put<int32_t>(&bytes_, 50'000);
-    Put<int16_t>(&bytes_, 0);
-    Put<int16_t>(&bytes_, 0);
-    Put<uint16_t>(&bytes_, 0);
+    test::PutLittleEndian(&bytes_, t_us);
+    test::PutLittleEndian<uint8_t>(&bytes_, 0);
+    test::PutLittleEndian(&bytes_, image);
+    test::PutLittleEndian<uint32_t>(&bytes_, 0);
+    test::PutLittleEndian<uint16_t>(&bytes_, 0);
+    test::PutLittleEndian<int32_t>(&bytes_, 473'977'000);
+    test::PutLittleEndian<int32_t>(&bytes_, 85'456'000);
+    test::PutLittleEndian<int32_t>(&bytes_, 50'000);
+    test::PutLittleEndian<int32_t>(&bytes_, static_cast<int32_t>(std::lround(rel_alt_m * 100)));
+    test::PutLittleEndian<int32_t>(&bytes_, 50'000);
+    test::PutLittleEndian<int16_t>(&bytes_, 0);
+    test::PutLittleEndian<int16_t>(&bytes_, 0);
+    test::PutLittleEndian<uint16_t>(&bytes_, 0);
   }
   void Parm(uint64_t t_us, const std::string& name, float value) {
     Header(kParm);
-    Put(&bytes_, t_us);
+    test::PutLittleEndian(&bytes_, t_us);
     PutText(&bytes_, name, 16);
-    Put(&bytes_, value);
+    test::PutLittleEndian(&bytes_, value);
   }
   std::string& bytes() { return bytes_; }
 

@@ -16,24 +16,16 @@
 namespace shutterlab {
 namespace {
 
-// Little-endian append of a plain value.
-template <typename T>
-void Put(std::string* out, T value) {
-  char raw[sizeof(T)];
-  std::memcpy(raw, &value, sizeof(T));
-  out->append(raw, sizeof(T));
-}
-
 // Writes a ULog file message by message, as PX4's logger lays it out.
 class ULogBuilder {
  public:
   explicit ULogBuilder(uint8_t version = 1) {
     bytes_.append("ULog\x01\x12\x35", 7);
-    Put<uint8_t>(&bytes_, version);
-    Put<uint64_t>(&bytes_, 1'000'000);
+    test::PutLittleEndian<uint8_t>(&bytes_, version);
+    test::PutLittleEndian<uint64_t>(&bytes_, 1'000'000);
   }
   void Message(char type, const std::string& payload) {
-    Put<uint16_t>(&bytes_, static_cast<uint16_t>(payload.size()));
+    test::PutLittleEndian<uint16_t>(&bytes_, static_cast<uint16_t>(payload.size()));
     bytes_.push_back(type);
     bytes_ += payload;
   }
@@ -42,26 +34,26 @@ class ULogBuilder {
     p.push_back(static_cast<char>(incompat0));
     p.push_back(static_cast<char>(incompat1));
     p.append(6, '\0');
-    Put<uint64_t>(&p, appended_offset);
-    Put<uint64_t>(&p, 0);
-    Put<uint64_t>(&p, 0);
+    test::PutLittleEndian<uint64_t>(&p, appended_offset);
+    test::PutLittleEndian<uint64_t>(&p, 0);
+    test::PutLittleEndian<uint64_t>(&p, 0);
     Message('B', p);
   }
   void Format(const std::string& text) { Message('F', text); }
   void AddLogged(uint8_t multi_id, uint16_t msg_id, const std::string& topic) {
     std::string p;
-    Put<uint8_t>(&p, multi_id);
-    Put<uint16_t>(&p, msg_id);
+    test::PutLittleEndian<uint8_t>(&p, multi_id);
+    test::PutLittleEndian<uint16_t>(&p, msg_id);
     Message('A', p + topic);
   }
   void Data(uint16_t msg_id, const std::string& fields) {
     std::string p;
-    Put<uint16_t>(&p, msg_id);
+    test::PutLittleEndian<uint16_t>(&p, msg_id);
     Message('D', p + fields);
   }
   void Dropout(uint16_t ms) {
     std::string p;
-    Put<uint16_t>(&p, ms);
+    test::PutLittleEndian<uint16_t>(&p, ms);
     Message('O', p);
   }
   std::string& bytes() { return bytes_; }
@@ -81,27 +73,27 @@ std::string FifoRecord(uint64_t t_us, uint64_t t_sample_us, float dt_us, float s
                        const std::vector<int16_t>& x, const std::vector<int16_t>& y,
                        const std::vector<int16_t>& z) {
   std::string r;
-  Put<uint64_t>(&r, t_us);
-  Put<uint64_t>(&r, t_sample_us);
-  Put<uint32_t>(&r, 42);
-  Put<float>(&r, dt_us);
-  Put<float>(&r, scale);
-  Put<uint8_t>(&r, n);
+  test::PutLittleEndian<uint64_t>(&r, t_us);
+  test::PutLittleEndian<uint64_t>(&r, t_sample_us);
+  test::PutLittleEndian<uint32_t>(&r, 42);
+  test::PutLittleEndian<float>(&r, dt_us);
+  test::PutLittleEndian<float>(&r, scale);
+  test::PutLittleEndian<uint8_t>(&r, n);
   for (const auto* axis : {&x, &y, &z}) {
-    for (size_t i = 0; i < 32; ++i) Put<int16_t>(&r, i < axis->size() ? (*axis)[i] : int16_t{0});
+    for (size_t i = 0; i < 32; ++i) test::PutLittleEndian<int16_t>(&r, i < axis->size() ? (*axis)[i] : int16_t{0});
   }
   return r;  // trailing _padding0 left out, as PX4 does
 }
 
 std::string CombinedRecord(uint64_t t_us, float gx, float gy, float gz) {
   std::string r;
-  Put<uint64_t>(&r, t_us);
-  Put<float>(&r, gx);
-  Put<float>(&r, gy);
-  Put<float>(&r, gz);
-  Put<uint32_t>(&r, 4000);
-  Put<int32_t>(&r, 0);
-  for (int i = 0; i < 3; ++i) Put<float>(&r, 9.81f);
+  test::PutLittleEndian<uint64_t>(&r, t_us);
+  test::PutLittleEndian<float>(&r, gx);
+  test::PutLittleEndian<float>(&r, gy);
+  test::PutLittleEndian<float>(&r, gz);
+  test::PutLittleEndian<uint32_t>(&r, 4000);
+  test::PutLittleEndian<int32_t>(&r, 0);
+  for (int i = 0; i < 3; ++i) test::PutLittleEndian<float>(&r, 9.81f);
   return r;
 }
 
@@ -244,15 +236,15 @@ TEST(ULog, ReadsNestedTypesAndOmittedTrailingPadding) {
   b.AddLogged(0, 7, "vehicle_angular_velocity");
   for (int k = 0; k < 20; ++k) {
     std::string r;
-    Put<uint64_t>(&r, 5'000'000 + k * 2000 + 300);
+    test::PutLittleEndian<uint64_t>(&r, 5'000'000 + k * 2000 + 300);
     for (int j = 0; j < 2; ++j) {
-      Put<uint16_t>(&r, 0xFFFF);
-      Put<float>(&r, -1.0f);
+      test::PutLittleEndian<uint16_t>(&r, 0xFFFF);
+      test::PutLittleEndian<float>(&r, -1.0f);
     }
-    Put<uint64_t>(&r, 5'000'000 + k * 2000);
-    Put<float>(&r, 0.5f * k);
-    Put<float>(&r, -0.25f);
-    Put<float>(&r, 2.0f);
+    test::PutLittleEndian<uint64_t>(&r, 5'000'000 + k * 2000);
+    test::PutLittleEndian<float>(&r, 0.5f * k);
+    test::PutLittleEndian<float>(&r, -0.25f);
+    test::PutLittleEndian<float>(&r, 2.0f);
     if (k % 2 == 1) r.append(4, '\0');  // some writers keep the padding; both are valid
     b.Data(7, r);
   }
@@ -298,7 +290,7 @@ TEST(ULog, ReadsAppendedDataAfterACutMessage) {
   for (int k = 0; k < 10; ++k) b.Data(3, CombinedRecord(1'000'000 + k * 4000, 0.01f * k, 0, 0));
   // The logger stopped in the middle of a message and later appended data at a known offset.
   std::string cut;
-  Put<uint16_t>(&cut, 2 + 44);
+  test::PutLittleEndian<uint16_t>(&cut, 2 + 44);
   cut.push_back('D');
   cut += "\x03\x00partial";
   b.bytes() += cut;
@@ -345,18 +337,18 @@ TEST(ULog, ChoosesRawerSourceOnlyAtSimilarRate) {
       "vehicle_angular_velocity:uint64_t timestamp;uint64_t timestamp_sample;float[3] xyz;";
   auto gyro_record = [](uint64_t t_us) {
     std::string r;
-    Put<uint64_t>(&r, t_us);
-    Put<uint64_t>(&r, t_us);
-    Put<uint32_t>(&r, 1);
-    for (int i = 0; i < 4; ++i) Put<float>(&r, 0.0f);
-    Put<uint32_t>(&r, 0);
+    test::PutLittleEndian<uint64_t>(&r, t_us);
+    test::PutLittleEndian<uint64_t>(&r, t_us);
+    test::PutLittleEndian<uint32_t>(&r, 1);
+    for (int i = 0; i < 4; ++i) test::PutLittleEndian<float>(&r, 0.0f);
+    test::PutLittleEndian<uint32_t>(&r, 0);
     return r;
   };
   auto vav_record = [](uint64_t t_us) {
     std::string r;
-    Put<uint64_t>(&r, t_us);
-    Put<uint64_t>(&r, t_us);
-    for (int i = 0; i < 3; ++i) Put<float>(&r, 0.0f);
+    test::PutLittleEndian<uint64_t>(&r, t_us);
+    test::PutLittleEndian<uint64_t>(&r, t_us);
+    for (int i = 0; i < 3; ++i) test::PutLittleEndian<float>(&r, 0.0f);
     return r;
   };
   for (const int gyro_period_us : {2000, 1'000'000}) {
@@ -395,35 +387,35 @@ TEST(ULog, ReadsCameraEventsAndAltitude) {
   for (int k = 0; k < 400; ++k) b.Data(0, CombinedRecord(1'000'000 + k * 4000, 0, 0, 0));
   for (uint32_t seq = 0; seq < 3; ++seq) {
     std::string r;
-    Put<uint64_t>(&r, 1'200'000 + seq * 100'000);
-    Put<uint64_t>(&r, 0);
-    Put<uint32_t>(&r, seq + 10);
-    Put<uint8_t>(&r, 1);
+    test::PutLittleEndian<uint64_t>(&r, 1'200'000 + seq * 100'000);
+    test::PutLittleEndian<uint64_t>(&r, 0);
+    test::PutLittleEndian<uint32_t>(&r, seq + 10);
+    test::PutLittleEndian<uint8_t>(&r, 1);
     b.Data(1, r);
   }
   {
     std::string r;
-    Put<uint64_t>(&r, 1'250'000);
-    Put<uint64_t>(&r, 0);
-    Put<int32_t>(&r, 7);
-    Put<double>(&r, 47.0);
-    Put<double>(&r, 8.0);
-    for (int i = 0; i < 6; ++i) Put<float>(&r, 0.0f);
-    Put<int8_t>(&r, 1);
+    test::PutLittleEndian<uint64_t>(&r, 1'250'000);
+    test::PutLittleEndian<uint64_t>(&r, 0);
+    test::PutLittleEndian<int32_t>(&r, 7);
+    test::PutLittleEndian<double>(&r, 47.0);
+    test::PutLittleEndian<double>(&r, 8.0);
+    for (int i = 0; i < 6; ++i) test::PutLittleEndian<float>(&r, 0.0f);
+    test::PutLittleEndian<int8_t>(&r, 1);
     b.Data(2, r);
   }
   // On the ground (dist 0.1 m, invalid), then at 30, 31, 32, 33 m with a valid range finder.
   auto position = [](uint64_t t_us, float z, float dist, bool dist_valid) {
     std::string r;
-    Put<uint64_t>(&r, t_us);
-    Put<uint8_t>(&r, 1);
-    Put<uint8_t>(&r, 1);
-    Put<uint16_t>(&r, 0);
-    Put<float>(&r, 0.0f);
-    Put<float>(&r, 0.0f);
-    Put<float>(&r, z);
-    Put<float>(&r, dist);
-    Put<uint8_t>(&r, dist_valid);
+    test::PutLittleEndian<uint64_t>(&r, t_us);
+    test::PutLittleEndian<uint8_t>(&r, 1);
+    test::PutLittleEndian<uint8_t>(&r, 1);
+    test::PutLittleEndian<uint16_t>(&r, 0);
+    test::PutLittleEndian<float>(&r, 0.0f);
+    test::PutLittleEndian<float>(&r, 0.0f);
+    test::PutLittleEndian<float>(&r, z);
+    test::PutLittleEndian<float>(&r, dist);
+    test::PutLittleEndian<uint8_t>(&r, dist_valid);
     return r;
   };
   const float heights[] = {0.1f, 0.2f, 30.0f, 31.0f, 32.0f, 33.0f};
