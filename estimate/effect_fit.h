@@ -1,0 +1,78 @@
+#pragma once
+// Closing the loop (issue 4): the residual between measured displacements and the declared model,
+// a statistical test of whether it is above the measurement noise, and the search over FORMATS.md's
+// candidate effects (fit each by nonlinear least squares, pick by an information criterion, add,
+// repeat).
+//
+// (Interface fixed first so that validate can be written against it; see effect_fit.cc.)
+
+#include "estimate/measure.h"
+#include "render/camera.h"
+#include "render/truth_model.h"
+#include "sim/gyro_trace.h"
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace shutterlab {
+
+// The measured points of one frame of a rig dataset.
+struct FramePoints {
+  int64_t frame = 0;
+  int64_t t_first_row_ns = 0;  // camera clock (frames.csv)
+  std::vector<MeasuredPoint> points;
+};
+
+struct ResidualStats {
+  double rms_px = 0.0;  // root mean square of |measured - predicted| over all points, px
+  double max_px = 0.0;
+  size_t points = 0;
+};
+
+// One identified effect, FORMATS.md names, values and units.
+struct IdentifiedEffect {
+  std::string name;                      // "time_offset", "readout_time", ...
+  nlohmann::json value;                  // FORMATS.md value (number, [3], 3x3, {"k1","k2"}, string)
+  nlohmann::json stderr_value;           // same shape as value (null for readout_direction)
+  std::string unit;                      // "s", "ppm", "rad/s", "m/s", "" ...
+  std::vector<std::string> ambiguous_with;  // effects that explain the data as well
+  ResidualStats after;                   // residual once this effect is added
+};
+
+struct LoopOptions {
+  // Candidate effect names tried (FORMATS.md table); default: all of them.
+  std::vector<std::string> candidates;
+  int max_effects = 3;
+  // Throws std::invalid_argument naming the first bad field.
+  void Check() const;
+};
+
+struct LoopResult {
+  ResidualStats before, after;
+  double noise_px = 0.0;
+  std::vector<IdentifiedEffect> effects;  // in the order added
+  bool unexplained = false;
+  TrueModel model;  // the declared model plus the identified effects
+  // For a person: each round's candidates with their fitted residual and criterion.
+  std::vector<std::string> log;
+};
+
+// Predicted d(p) = p_ref - p at each point of `frame` under `model` (FORMATS.md "The model"), with
+// the logged gyro trace; NaN where the ray misses the ground or leaves the trace.
+std::vector<Eigen::Vector2d> PredictDisplacements(const TrueModel& model, const GyroTrace& gyro,
+                                                  const FramePoints& frame);
+
+// Runs the loop. declared: camera.json; noise_px: the measurement's noise (MeasureDisplacement).
+LoopResult CloseTheLoop(const RigModel& declared, const GyroTrace& gyro,
+                        const std::vector<FramePoints>& frames, double noise_px,
+                        const LoopOptions& options = {});
+
+// FORMATS.md "Validation report" keys (format, frames, before, effects, after, noise_px,
+// unexplained) for a loop result.
+nlohmann::json LoopToJson(const LoopResult& result, size_t frame_count);
+
+}  // namespace shutterlab

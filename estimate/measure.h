@@ -1,0 +1,44 @@
+#pragma once
+// `measure`: the displacement field between a global-shutter reference and a rolling-shutter image
+// of the same view (FORMATS.md: d(p) = p_ref - p for every rolling-shutter pixel p).
+//
+// (Interface fixed first so that validate can be written against it; the method is documented in
+// measure.cc with the accuracy it was chosen by.)
+
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+namespace shutterlab {
+
+// One measured displacement at a rolling-shutter pixel (u, v): d = (dx, dy) = p_ref - p, pixels.
+struct MeasuredPoint {
+  double u = 0.0, v = 0.0;    // rolling-shutter pixel (column, row)
+  double dx = 0.0, dy = 0.0;  // measured displacement, px
+  double weight = 1.0;        // confidence, 0..1 (1: well textured, consistent)
+};
+
+struct MeasureOptions {
+  // Spacing of the sparse measured points handed to the model fit, px.
+  int grid_step_px = 16;
+  // Throws std::invalid_argument naming the first bad field.
+  void Check() const;
+};
+
+struct DisplacementMeasurement {
+  cv::Mat field;       // CV_32FC2 (dx, dy) per rolling-shutter pixel; NaN where unmeasured
+  cv::Mat confidence;  // CV_32F, 0..1, 0 where unmeasured (textureless, saturated, inconsistent)
+  std::vector<MeasuredPoint> points;  // independent measurements on the grid, unmeasured left out
+  // The measurement's own noise: the RMS length of (measured - true) over `points` as estimated from
+  // the data, i.e. the rms_px that a perfect model would leave on these points, px.
+  double noise_px = 0.0;
+  double d_px = 0.0;                  // FORMATS.md frame distortion D of `field`, px
+  double measured_fraction = 0.0;     // share of pixels with a measurement
+};
+
+// ref and image: same size, 8U/16U/32F, grey or RGB (any channel order). Throws
+// std::invalid_argument when the sizes differ or an image is empty.
+DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& image,
+                                            const MeasureOptions& options = {});
+
+}  // namespace shutterlab
