@@ -227,13 +227,16 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
 
   const GyroTrace camera_rates =
       RotateTrace(gyro, options.rig.cam_from_gyro, Eigen::Vector3d::Zero());
-  try {
-    const StillSegment still = DetectStillSegment(camera_rates);
-    result.still_segment = still.segment;
-    result.bias_rad_s = EstimateBias(camera_rates, still.segment).bias_rad_s;
-    result.bias_from_still = true;
-  } catch (const std::invalid_argument&) {
-    result.bias_from_still = false;  // no still stretch: zero bias, said so in the output
+  result.bias_estimated = options.estimate_bias;
+  if (options.estimate_bias) {
+    try {
+      const StillSegment still = DetectStillSegment(camera_rates);
+      result.still_segment = still.segment;
+      result.bias_rad_s = EstimateBias(camera_rates, still.segment).bias_rad_s;
+      result.bias_from_still = true;
+    } catch (const std::invalid_argument&) {
+      result.bias_from_still = false;  // no still stretch: zero bias, said so in the output
+    }
   }
 
   // The flight table for this camera's readout.
@@ -424,7 +427,8 @@ nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
                     {"rate_hz", result.rate_hz}, {"gaps", result.gaps}};
   json["flight"] = result.flight ? FlightToJson(*result.flight) : nlohmann::json(nullptr);
   if (!result.flight) json["flight_problem"] = result.flight_problem;
-  json["bias"] = {{"from_still_segment", result.bias_from_still},
+  json["bias"] = {{"estimated", result.bias_estimated},
+                  {"from_still_segment", result.bias_from_still},
                   {"rad_s", {result.bias_rad_s.x(), result.bias_rad_s.y(), result.bias_rad_s.z()}}};
   if (result.bias_from_still) {
     json["bias"]["segment_s"] = {result.still_segment.begin_s, result.still_segment.end_s};
@@ -480,6 +484,8 @@ std::string AnalyzeReport(const AnalyzeResult& result) {
   if (result.bias_from_still) {
     out << "bias: still segment " << Format("%.2f", result.still_segment.begin_s) << ":"
         << Format("%.2f", result.still_segment.end_s) << " s\n";
+  } else if (!result.bias_estimated) {
+    out << "bias: zero (not estimated)\n";
   } else {
     out << "bias: none (no still segment found; zero bias assumed)\n";
   }

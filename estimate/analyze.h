@@ -17,7 +17,8 @@
 //    flight table's windows, whose flags it reproduces).
 // The gyro rates are rotated into camera axes with rig.cam_from_gyro before anything else, so
 // "axis" means camera x (right), y (down), z (optical axis). Bias: the still segment that
-// DetectStillSegment finds, else zero (AnalyzeResult::bias_from_still says which); it applies to
+// DetectStillSegment finds, else zero (AnalyzeResult::bias_from_still says which; with
+// AnalyzeOptions::estimate_bias false, zero without a search); it applies to
 // every sample, the flight table's included (FlightOptions::known_bias_rad_s).
 
 #include "estimate/flight.h"
@@ -58,6 +59,9 @@ struct AnalyzeOptions {
   // rig.altitude_m when the log has one.
   bool use_log_altitude = false;
   bool what_if = true;  // compute the verdict's faster-readout / half-altitude shares
+  // false: zero bias and no still-segment search (calibrated flight-controller rates, or a
+  // caller that removed the bias itself, e.g. `validate` on synthetic truth).
+  bool estimate_bias = true;
   std::function<void(double)> progress;  // fraction done (0..1); may be empty
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
@@ -95,6 +99,7 @@ struct AnalyzeResult {
   // analysis
   std::optional<FlightResult> flight;  // empty when the trace is too short for one window
   std::string flight_problem;          // why flight is empty
+  bool bias_estimated = true;  // AnalyzeOptions::estimate_bias
   bool bias_from_still = false;
   BiasSegment still_segment;
   Eigen::Vector3d bias_rad_s = Eigen::Vector3d::Zero();  // camera axes

@@ -204,6 +204,29 @@ TEST(Analyze, NoStillSegmentMeansZeroBias) {
   EXPECT_EQ(result.images.size(), 7u);
 }
 
+TEST(Analyze, EstimateBiasFalseKeepsTheRatesAsGiven) {
+  // A constant 0.01 rad/s everywhere: with estimation the still lead-in reads it as bias and the
+  // image sees nothing; without, the image sees the rate itself.
+  const double omega = 0.01;
+  std::vector<GyroSample> samples;
+  for (int64_t k = 0; k <= 8000; ++k) samples.push_back({k * kDtNs, Eigen::Vector3d(omega, 0, 0)});
+  FlightLog log;
+  log.gyro = GyroTrace(std::move(samples));
+  AnalyzeOptions options = BaseOptions();
+  options.triggers = {{"a", SecondsToNs(6.0)}};
+  const AnalyzeResult estimated = Analyze(log, options);
+  ASSERT_TRUE(estimated.bias_from_still);
+  EXPECT_NEAR(estimated.bias_rad_s.x(), omega, 1e-12);
+  EXPECT_NEAR(estimated.images[0].d_paper_m, 0.0, 1e-9);
+  options.estimate_bias = false;
+  const AnalyzeResult raw = Analyze(log, options);
+  EXPECT_FALSE(raw.bias_estimated);
+  EXPECT_FALSE(raw.bias_from_still);
+  EXPECT_EQ(raw.bias_rad_s, Eigen::Vector3d::Zero());
+  EXPECT_NEAR(raw.images[0].d_paper_m, kAltitudeM * std::tan(omega * kReadoutS), kPaperTolM);
+  EXPECT_NE(AnalyzeReport(raw).find("bias: zero (not estimated)"), std::string::npos);
+}
+
 TEST(Analyze, CameraEventsAreTheDefaultTriggers) {
   FlightLog log = ConstantRateLog(Eigen::Vector3d(RateForGroundSmear(0.07), 0, 0), 8.0);
   log.camera_events = {{SecondsToNs(5.0), 7, "camera_capture"},
