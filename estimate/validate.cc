@@ -1,0 +1,644 @@
+#include "estimate/validate.h"
+
+#include "estimate/analyze.h"
+#include "render/frames_csv.h"
+#include "render/image_io.h"
+#include "render/pictures.h"
+#include "render/rs_warp.h"
+#include "render/truth_model.h"
+#include "sim/check.h"
+#include "sim/gyro_io.h"
+#include "sim/text_file.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+#include <utility>
+
+namespace shutterlab {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr const char* kAxisNames[3] = {"x", "y", "z"};
+// Ratios D_model / D_meas are left out for frames measured below this D: a ratio of two numbers
+// near the noise says nothing about a model.
+constexpr double kMinRatioDPx = 1.0;
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::string Format(const char* format, double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), format, value);
+  return buffer;
+}
+
+std::string FrameName(int64_t frame) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "%04lld", static_cast<long long>(frame));
+  return name;
+}
+
+// Grid rows or columns: every kGridStepPx-th plus the last one (as analyze's D_full).
+std::vector<int> GridLines(int size) {
+  std::vector<int> lines;
+  for (int i = 0; i < size; i += kGridStepPx) lines.push_back(i);
+  if (lines.back() != size - 1) lines.push_back(size - 1);
+  return lines;
+}
+
+struct FullModelD {
+  double d_px = 0.0;         // FORMATS.md D of the grid
+  double d_centre_px = 0.0;  // D of the grid column nearest the principal point
+  double max_angle_rad = 0.0;  // largest rotation between any two grid rows' orientations
+};
+
+// The declared full model's D for one frame, on the grid.
+FullModelD FullModel(const RigModel& rig, const FrameMotion& motion) {
+  const PinholeCamera& cam = rig.camera;
+  const FrameGeometry geometry(cam, rig.altitude_m, motion, cv::Size(cam.width, cam.height));
+  const std::vector<int> rows = GridLines(cam.height), cols = GridLines(cam.width);
+  cv::Mat field(static_cast<int>(rows.size()), static_cast<int>(cols.size()), CV_32FC2);
+  for (size_t r = 0; r < rows.size(); ++r) {
+    for (size_t c = 0; c < cols.size(); ++c) {
+      const std::optional<Eigen::Vector2d> ref = geometry.RefPixel(cols[c], rows[r]);
+      const float nan = std::numeric_limits<float>::quiet_NaN();
+      field.at<cv::Vec2f>(static_cast<int>(r), static_cast<int>(c)) =
+          ref ? cv::Vec2f(static_cast<float>(ref->x() - cols[c]),
+                          static_cast<float>(ref->y() - rows[r]))
+              : cv::Vec2f(nan, nan);
+    }
+  }
+  FullModelD out;
+  out.d_px = FrameDistortionPx(field);
+  size_t centre = 0;
+  for (size_t c = 0; c < cols.size(); ++c) {
+    if (std::abs(cols[c] - cam.cx) < std::abs(cols[centre] - cam.cx)) centre = c;
+  }
+  out.d_centre_px = FrameDistortionPx(field.col(static_cast<int>(centre)).clone());
+  // Vector criterion: the largest angle between the orientations of any two rows.
+  std::vector<Eigen::Quaterniond> q;
+  for (int v : rows) q.emplace_back(motion.world_from_cam[static_cast<size_t>(v)]);
+  for (size_t a = 0; a < q.size(); ++a) {
+    for (size_t b = a + 1; b < q.size(); ++b) {
+      out.max_angle_rad = std::max(out.max_angle_rad, q[a].angularDistance(q[b]));
+    }
+  }
+  return out;
+}
+
+ResidualStats Stats(const std::vector<double>& squared_norms) {
+  ResidualStats stats;
+  double sum = 0.0;
+  for (double s : squared_norms) {
+    sum += s;
+    stats.max_px = std::max(stats.max_px, std::sqrt(s));
+  }
+  stats.points = squared_norms.size();
+  stats.rms_px = stats.points > 0 ? std::sqrt(sum / stats.points) : 0.0;
+  return stats;
+}
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + mid, values.end());
+  const double hi = values[mid];
+  if (values.size() % 2 == 1) return hi;
+  return 0.5 * (hi + *std::max_element(values.begin(), values.begin() + mid));
+}
+
+RatioGroup Ratios(const std::vector<FrameValidation>& frames, int axis) {
+  RatioGroup group;
+  group.axis = axis;
+  std::vector<double> paper, vector, full, centre;
+  for (const FrameValidation& f : frames) {
+    if (axis < 3 && f.dominant_axis != axis) continue;
+    if (f.d_meas_px < kMinRatioDPx) continue;
+    paper.push_back(f.d_paper_m / f.d_meas_m);
+    vector.push_back(f.d_vector_m / f.d_meas_m);
+    full.push_back(f.d_full_px / f.d_meas_px);
+    if (f.d_full_px > 0) centre.push_back(f.d_centre_px / f.d_full_px);
+  }
+  group.frames = static_cast<int>(paper.size());
+  if (paper.empty()) return group;
+  group.paper_min = *std::min_element(paper.begin(), paper.end());
+  group.paper_max = *std::max_element(paper.begin(), paper.end());
+  group.paper_median = Median(paper);
+  group.vector_median = Median(vector);
+  group.full_median = Median(full);
+  group.centre_median = Median(centre);
+  return group;
+}
+
+Confusion Confuse(const std::vector<FrameValidation>& frames, size_t limit, double limit_m,
+                  bool full) {
+  Confusion c;
+  c.limit_m = limit_m;
+  for (const FrameValidation& f : frames) {
+    const bool truth = f.flag_meas[limit];
+    const bool predicted = full ? f.flag_full[limit] : f.flag_paper[limit];
+    if (truth && predicted) ++c.true_positive;
+    if (!truth && predicted) ++c.false_positive;
+    if (truth && !predicted) ++c.false_negative;
+    if (!truth && !predicted) ++c.true_negative;
+  }
+  return c;
+}
+
+}  // namespace
+
+void ValidateOptions::Check() const {
+  SHUTTERLAB_CHECK(!limits_m.empty()) << "give at least one ground limit";
+  for (double limit : limits_m) {
+    SHUTTERLAB_CHECK(std::isfinite(limit) && limit > 0)
+        << "ground limit must be positive (got " << limit << " m)";
+  }
+  measure.Check();
+  loop.Check();
+}
+
+ValidationResult ValidateDataset(const std::string& dataset_dir, const ValidateOptions& options,
+                                 const ValidateProgress& progress) {
+  options.Check();
+  auto start = std::chrono::steady_clock::now();
+  ValidationResult result;
+  result.dataset = dataset_dir;
+  result.limits_m = options.limits_m;
+
+  // --- read and check everything that is cheap to check before the long stages
+  const fs::path dir(dataset_dir);
+  if (!fs::is_directory(dir)) throw IoError(IoMessage(dataset_dir, 0, "not a dataset folder"));
+  const std::string camera_path = (dir / "camera.json").string();
+  const std::string gyro_path = (dir / "gyro.csv").string();
+  const std::string frames_path = (dir / "frames.csv").string();
+  for (const std::string& path : {camera_path, gyro_path, frames_path}) {
+    if (!fs::is_regular_file(path)) throw IoError(IoMessage(path, 0, "missing"));
+  }
+  result.declared = ReadRigModel(camera_path);
+  const RigModel& rig = result.declared;
+  const GyroTrace gyro = ReadGyroCsv(gyro_path);
+  if (gyro.size() < 2) throw IoError(IoMessage(gyro_path, 0, "fewer than two samples"));
+  const std::vector<FrameEntry> entries = ReadFramesCsv(frames_path);
+  if (entries.empty()) throw IoError(IoMessage(frames_path, 0, "no frames"));
+  for (size_t i = 0; i < entries.size(); ++i) {
+    // frames.csv: a header line, then one frame a line.
+    const long line = static_cast<long>(i) + 2;
+    if (entries[i].ref.empty()) {
+      throw IoError(IoMessage(frames_path, line,
+                              "no ref image: video datasets are not supported yet (issue 6)"));
+    }
+    for (const std::string& name : {entries[i].ref, entries[i].image}) {
+      if (name.empty() || !fs::is_regular_file(dir / name)) {
+        throw IoError(IoMessage(frames_path, line, "image '" + name + "' not found"));
+      }
+    }
+  }
+  TrueModel declared_model;
+  declared_model.rig = rig;
+  const CameraMotion motion(gyro, declared_model);
+  std::vector<FrameMotion> motions;
+  for (size_t i = 0; i < entries.size(); ++i) {
+    try {
+      motions.push_back(motion.Frame(entries[i].t_first_row_ns));
+    } catch (const std::out_of_range& e) {
+      throw IoError(IoMessage(frames_path, static_cast<long>(i) + 2,
+                              "frame " + std::to_string(entries[i].frame) + ": " + e.what()));
+    }
+  }
+  result.read_s = SecondsSince(start);
+
+  // --- measure every frame
+  const double f_px = 0.5 * (rig.camera.fx + rig.camera.fy);
+  const double m_per_px = rig.altitude_m / f_px;
+  std::vector<FramePoints> frame_points(entries.size());
+  result.frames.resize(entries.size());
+  for (size_t i = 0; i < entries.size(); ++i) {
+    start = std::chrono::steady_clock::now();
+    const long line = static_cast<long>(i) + 2;
+    const cv::Mat ref = ReadImage((dir / entries[i].ref).string());
+    const cv::Mat image = ReadImage((dir / entries[i].image).string());
+    for (const auto& [name, picture] : {std::pair{entries[i].ref, ref}, {entries[i].image, image}}) {
+      if (picture.cols != rig.camera.width || picture.rows != rig.camera.height) {
+        throw IoError(IoMessage(frames_path, line,
+                                "image '" + name + "' is " + std::to_string(picture.cols) + "x" +
+                                    std::to_string(picture.rows) + ", camera.json declares " +
+                                    std::to_string(rig.camera.width) + "x" +
+                                    std::to_string(rig.camera.height)));
+      }
+    }
+    result.read_s += SecondsSince(start);
+    start = std::chrono::steady_clock::now();
+    const DisplacementMeasurement measured = MeasureDisplacement(ref, image, options.measure);
+    result.measure_s += SecondsSince(start);
+
+    FrameValidation& f = result.frames[i];
+    f.frame = entries[i].frame;
+    f.image = entries[i].image;
+    f.t_gyro_s = entries[i].t_first_row_ns * 1e-9 + rig.time_offset_s;
+    f.points = measured.points.size();
+    f.measured_fraction = measured.measured_fraction;
+    f.noise_px = measured.noise_px;
+    f.d_meas_px = measured.d_px;
+    f.d_meas_m = measured.d_px * m_per_px;
+    frame_points[i] = {entries[i].frame, entries[i].t_first_row_ns, measured.points};
+    if (progress) progress("measure", i + 1, entries.size());
+  }
+
+  // --- predict: the declared full model and the paper's threshold model
+  start = std::chrono::steady_clock::now();
+  AnalyzeOptions analyze;
+  analyze.rig = rig;
+  analyze.limits_m = options.limits_m;
+  analyze.what_if = false;
+  analyze.estimate_bias = false;  // gyro.csv is the calibrated log the dataset declares
+  for (const FrameEntry& e : entries) {
+    analyze.triggers.push_back(
+        {FrameName(e.frame), e.t_first_row_ns + SecondsToNs(rig.time_offset_s)});
+  }
+  FlightLog log;
+  log.gyro = gyro;
+  log.format = "gyro.csv";
+  const AnalyzeResult paper = Analyze(log, analyze);
+  for (size_t i = 0; i < entries.size(); ++i) {
+    FrameValidation& f = result.frames[i];
+    const ImageResult& image = paper.images[i];
+    SHUTTERLAB_CHECK(image.in_trace) << frames_path << ":" << i + 2 << ": frame " << f.frame
+                                     << ": the readout is outside the gyro log";
+    f.d_paper_m = image.d_paper_m;
+    f.range_arcsec = image.range_arcsec;
+    f.dominant_axis = image.dominant_axis;
+    const FullModelD full = FullModel(rig, motions[i]);
+    f.d_full_px = full.d_px;
+    f.d_full_m = full.d_px * m_per_px;
+    f.d_centre_px = full.d_centre_px;
+    f.d_vector_m = rig.altitude_m * std::tan(full.max_angle_rad);
+    for (double limit : options.limits_m) {
+      f.flag_meas.push_back(f.d_meas_m > limit);
+      f.flag_full.push_back(f.d_full_m > limit);
+      f.flag_paper.push_back(f.d_paper_m > limit);
+    }
+    if (progress) progress("predict", i + 1, entries.size());
+  }
+  for (size_t l = 0; l < options.limits_m.size(); ++l) {
+    result.confusion_paper.push_back(Confuse(result.frames, l, options.limits_m[l], false));
+    result.confusion_full.push_back(Confuse(result.frames, l, options.limits_m[l], true));
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    const RatioGroup group = Ratios(result.frames, axis);
+    if (group.frames > 0) result.ratios.push_back(group);
+  }
+  result.ratios.push_back(Ratios(result.frames, 3));
+  result.predict_s = SecondsSince(start);
+
+  // --- close the loop over all frames' points
+  start = std::chrono::steady_clock::now();
+  double noise_sum = 0.0;
+  size_t noise_points = 0;
+  for (const FrameValidation& f : result.frames) {
+    noise_sum += f.noise_px * f.noise_px * static_cast<double>(f.points);
+    noise_points += f.points;
+  }
+  const double noise_px = noise_points > 0 ? std::sqrt(noise_sum / noise_points) : 0.0;
+  result.loop = CloseTheLoop(rig, gyro, frame_points, noise_px, options.loop);
+  for (size_t i = 0; i < entries.size(); ++i) {
+    FrameValidation& f = result.frames[i];
+    const std::vector<Eigen::Vector2d> before =
+        PredictDisplacements(declared_model, gyro, frame_points[i]);
+    const std::vector<Eigen::Vector2d> after =
+        PredictDisplacements(result.loop.model, gyro, frame_points[i]);
+    std::vector<double> before_sq, after_sq;
+    for (size_t k = 0; k < frame_points[i].points.size(); ++k) {
+      const MeasuredPoint& p = frame_points[i].points[k];
+      if (!before[k].allFinite() || !after[k].allFinite()) continue;
+      const Eigen::Vector2d measured(p.dx, p.dy);
+      const Eigen::Vector2d rb = measured - before[k], ra = measured - after[k];
+      before_sq.push_back(rb.squaredNorm());
+      after_sq.push_back(ra.squaredNorm());
+      if (options.keep_residuals) {
+        f.residuals.push_back({static_cast<float>(p.u), static_cast<float>(p.v),
+                               static_cast<float>(rb.x()), static_cast<float>(rb.y()),
+                               static_cast<float>(ra.x()), static_cast<float>(ra.y())});
+      }
+    }
+    f.before = Stats(before_sq);
+    f.after = Stats(after_sq);
+  }
+  result.loop_s = SecondsSince(start);
+  return result;
+}
+
+nlohmann::json ValidationToJson(const ValidationResult& result) {
+  nlohmann::json json = LoopToJson(result.loop, result.frames.size());
+  json["dataset"] = result.dataset;
+  json["limits_m"] = result.limits_m;
+  nlohmann::json frames = nlohmann::json::array();
+  for (const FrameValidation& f : result.frames) {
+    nlohmann::json flags = nlohmann::json::object();
+    for (size_t l = 0; l < result.limits_m.size(); ++l) {
+      flags[LimitKey(result.limits_m[l])] = {
+          {"measured", bool(f.flag_meas[l])}, {"full", bool(f.flag_full[l])},
+          {"paper", bool(f.flag_paper[l])}};
+    }
+    frames.push_back({{"frame", f.frame},
+                      {"image", f.image},
+                      {"t_gyro_s", f.t_gyro_s},
+                      {"points", f.points},
+                      {"measured_fraction", f.measured_fraction},
+                      {"noise_px", f.noise_px},
+                      {"D_meas_px", f.d_meas_px},
+                      {"D_meas_m", f.d_meas_m},
+                      {"D_full_px", f.d_full_px},
+                      {"D_full_m", f.d_full_m},
+                      {"D_paper_m", f.d_paper_m},
+                      {"D_vector_m", f.d_vector_m},
+                      {"D_centre_px", f.d_centre_px},
+                      {"range_arcsec", f.range_arcsec},
+                      {"dominant_axis", kAxisNames[f.dominant_axis]},
+                      {"flagged", flags},
+                      {"before", {{"rms_px", f.before.rms_px}, {"max_px", f.before.max_px}}},
+                      {"after", {{"rms_px", f.after.rms_px}, {"max_px", f.after.max_px}}}});
+  }
+  json["frames_detail"] = frames;
+  nlohmann::json confusion = nlohmann::json::array();
+  for (size_t l = 0; l < result.confusion_paper.size(); ++l) {
+    for (const auto& [model, c] : {std::pair{"paper", result.confusion_paper[l]},
+                                   std::pair{"full", result.confusion_full[l]}}) {
+      confusion.push_back({{"model", model},
+                           {"limit_m", c.limit_m},
+                           {"true_positive", c.true_positive},
+                           {"false_positive", c.false_positive},
+                           {"false_negative", c.false_negative},
+                           {"true_negative", c.true_negative}});
+    }
+  }
+  json["confusion"] = confusion;
+  nlohmann::json ratios = nlohmann::json::array();
+  for (const RatioGroup& g : result.ratios) {
+    ratios.push_back({{"dominant_axis", g.axis < 3 ? kAxisNames[g.axis] : "all"},
+                      {"frames", g.frames},
+                      {"paper_over_measured_min", g.paper_min},
+                      {"paper_over_measured_median", g.paper_median},
+                      {"paper_over_measured_max", g.paper_max},
+                      {"vector_over_measured_median", g.vector_median},
+                      {"full_over_measured_median", g.full_median},
+                      {"centre_column_over_full_median", g.centre_median}});
+  }
+  json["ratios"] = ratios;
+  json["timing_s"] = {{"read", result.read_s},
+                      {"measure", result.measure_s},
+                      {"predict", result.predict_s},
+                      {"loop", result.loop_s}};
+  json["log"] = result.loop.log;
+  return json;
+}
+
+std::string ValidationReport(const ValidationResult& result) {
+  std::ostringstream out;
+  const auto& limits = result.limits_m;
+  out << "dataset " << result.dataset << ": " << result.frames.size() << " frames, "
+      << result.declared.camera.width << "x" << result.declared.camera.height << ", f "
+      << Format("%.1f", 0.5 * (result.declared.camera.fx + result.declared.camera.fy))
+      << " px, readout " << Format("%.2f", result.declared.shutter.readout_s * 1e3) << " ms, "
+      << Format("%g", result.declared.altitude_m) << " m\n\n";
+  out << "frame  points  noise |  D_meas        |  D_full        | D_paper | D_vector | axis |"
+         " flags M F P at";
+  for (double l : limits) out << " " << Format("%g", l * 100) << "cm";
+  out << "\n";
+  out << "                  px |    px      cm  |    px      cm  |    cm   |    cm    |      |\n";
+  for (const FrameValidation& f : result.frames) {
+    char line[256];
+    std::snprintf(line, sizeof(line),
+                  "%5lld %7zu %6.3f | %6.2f %7.2f | %6.2f %7.2f | %7.2f | %8.2f |  %s   |",
+                  static_cast<long long>(f.frame), f.points, f.noise_px, f.d_meas_px,
+                  f.d_meas_m * 100, f.d_full_px, f.d_full_m * 100, f.d_paper_m * 100,
+                  f.d_vector_m * 100, kAxisNames[f.dominant_axis]);
+    out << line;
+    for (size_t l = 0; l < limits.size(); ++l) {
+      out << " " << (f.flag_meas[l] ? 'M' : '.') << (f.flag_full[l] ? 'F' : '.')
+          << (f.flag_paper[l] ? 'P' : '.');
+    }
+    out << "\n";
+  }
+  out << "(M measured, F full model, P paper's model: D over the limit)\n\n";
+
+  out << "paper's flags against the measured D (true pos / false pos / false neg / true neg):\n";
+  for (size_t l = 0; l < limits.size(); ++l) {
+    const Confusion& p = result.confusion_paper[l];
+    const Confusion& f = result.confusion_full[l];
+    char line[256];
+    std::snprintf(line, sizeof(line),
+                  "  %5g cm: paper %d / %d / %d / %d   full model %d / %d / %d / %d\n",
+                  limits[l] * 100, p.true_positive, p.false_positive, p.false_negative,
+                  p.true_negative, f.true_positive, f.false_positive, f.false_negative,
+                  f.true_negative);
+    out << line;
+  }
+  out << "\nD_model / D_meas by dominant axis (frames with D_meas >= " << kMinRatioDPx
+      << " px; > 1: conservative):\n";
+  for (const RatioGroup& g : result.ratios) {
+    if (g.frames == 0) continue;
+    const std::string name =
+        g.axis == 0   ? "about x (image rows shift up/down)"
+        : g.axis == 1 ? "about y (image rows shift sideways)"
+        : g.axis == 2 ? "z (yaw about the optical axis)"
+                      : "all frames";
+    char line[320];
+    std::snprintf(line, sizeof(line),
+                  "  %-32s %2d frames: paper %.2f (%.2f-%.2f)  vector %.2f  full %.2f;"
+                  " nadir column holds %.0f%% of D\n",
+                  name.c_str(), g.frames, g.paper_median, g.paper_min, g.paper_max,
+                  g.vector_median, g.full_median, 100 * g.centre_median);
+    out << line;
+  }
+  const RatioGroup& all = result.ratios.back();
+  if (all.frames > 0) {
+    out << "  -> the paper's per-axis model is "
+        << (all.paper_max < 1.0   ? "NOT conservative on any frame"
+            : all.paper_min >= 1.0 ? "conservative on every frame"
+                                   : "conservative on some frames only")
+        << "; the vector angle gives " << Format("%.2f", all.vector_median / all.paper_median)
+        << "x the per-axis D (median)\n";
+  }
+
+  const LoopResult& loop = result.loop;
+  out << "\nclosing the loop over " << loop.before.points << " points (noise "
+      << Format("%.3f", loop.noise_px) << " px):\n";
+  out << "  before: rms " << Format("%.3f", loop.before.rms_px) << " px, max "
+      << Format("%.3f", loop.before.max_px) << " px\n";
+  for (const IdentifiedEffect& e : loop.effects) {
+    out << "  + " << e.name << " = " << e.value.dump() << " +- " << e.stderr_value.dump() << " "
+        << e.unit << " -> rms " << Format("%.3f", e.after.rms_px) << " px, max "
+        << Format("%.3f", e.after.max_px) << " px";
+    if (!e.ambiguous_with.empty()) {
+      out << " (ambiguous with";
+      for (const std::string& other : e.ambiguous_with) out << " " << other;
+      out << ")";
+    }
+    out << "\n";
+  }
+  if (loop.effects.empty()) out << "  no effect added\n";
+  out << "  after: rms " << Format("%.3f", loop.after.rms_px) << " px, max "
+      << Format("%.3f", loop.after.max_px) << " px ("
+      << Format("%.2f", loop.noise_px > 0 ? loop.after.rms_px / loop.noise_px : 0.0)
+      << "x noise); " << (loop.unexplained ? "UNEXPLAINED residual remains" : "explained")
+      << "\n";
+  out << "\ntime: read " << Format("%.2f", result.read_s) << " s, measure "
+      << Format("%.2f", result.measure_s) << " s, predict " << Format("%.2f", result.predict_s)
+      << " s, loop " << Format("%.2f", result.loop_s) << " s\n";
+  return out.str();
+}
+
+namespace {
+
+// A small line chart (8-bit RGB): each series over x, a legend, axes with min/max labels.
+cv::Mat LineChart(const std::vector<double>& x, const std::vector<std::vector<double>>& series,
+                  const std::vector<std::string>& labels, const std::vector<cv::Scalar>& colours,
+                  const std::string& title, const std::string& x_label) {
+  const int width = 900, height = 420, left = 70, right = 20, top = 40, bottom = 50;
+  cv::Mat chart(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
+  double lo = 0.0, hi = 0.0;
+  for (const auto& s : series) {
+    for (double y : s) {
+      if (!std::isfinite(y)) continue;
+      lo = std::min(lo, y);
+      hi = std::max(hi, y);
+    }
+  }
+  if (hi - lo < 1e-9) hi = lo + 1.0;
+  const double x0 = x.empty() ? 0.0 : x.front(), x1 = x.empty() ? 1.0 : std::max(x.back(), x0 + 1);
+  auto to_px = [&](double xv, double yv) {
+    return cv::Point(left + static_cast<int>((xv - x0) / (x1 - x0) * (width - left - right)),
+                     top + static_cast<int>((hi - yv) / (hi - lo) * (height - top - bottom)));
+  };
+  const cv::Scalar grey(120, 120, 120);
+  cv::rectangle(chart, to_px(x0, hi), to_px(x1, lo), grey, 1);
+  cv::line(chart, to_px(x0, 0.0), to_px(x1, 0.0), cv::Scalar(200, 200, 200), 1);
+  const auto text = [&](const std::string& s, cv::Point at, double scale = 0.45) {
+    cv::putText(chart, s, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 0, 0), 1,
+                cv::LINE_AA);
+  };
+  text(title, cv::Point(left, 25), 0.6);
+  text(Format("%.3g", hi), cv::Point(5, top + 5));
+  text(Format("%.3g", lo), cv::Point(5, height - bottom));
+  text("0", cv::Point(left - 15, to_px(x0, 0.0).y + 5));
+  text(Format("%g", x0), cv::Point(left, height - bottom + 20));
+  text(Format("%g", x1), cv::Point(width - right - 40, height - bottom + 20));
+  text(x_label, cv::Point(width / 2 - 40, height - bottom + 20));
+  for (size_t s = 0; s < series.size(); ++s) {
+    for (size_t i = 1; i < x.size(); ++i) {
+      if (!std::isfinite(series[s][i - 1]) || !std::isfinite(series[s][i])) continue;
+      cv::line(chart, to_px(x[i - 1], series[s][i - 1]), to_px(x[i], series[s][i]), colours[s], 2,
+               cv::LINE_AA);
+    }
+    const cv::Point at(left + 10 + static_cast<int>(s) * 200, height - bottom + 38);
+    cv::line(chart, at + cv::Point(0, -4), at + cv::Point(20, -4), colours[s], 2);
+    text(labels[s], at + cv::Point(25, 0));
+  }
+  return chart;
+}
+
+}  // namespace
+
+std::vector<std::string> WriteValidationPlots(const std::string& dir,
+                                              const ValidationResult& result) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw IoError(IoMessage(dir, 0, "cannot create folder: " + ec.message()));
+  std::vector<std::string> written;
+  const int width = result.declared.camera.width, height = result.declared.camera.height;
+  // Residual pictures: one cell per measure grid step, before and after on one colour scale.
+  int step = kGridStepPx;
+  for (const FrameValidation& f : result.frames) {
+    for (size_t k = 1; k < f.residuals.size() && k < 4; ++k) {
+      const float du = std::abs(f.residuals[k].u - f.residuals[k - 1].u);
+      if (du >= 1) step = std::max(1, static_cast<int>(std::lround(du)));
+    }
+    break;
+  }
+  const cv::Size cells((width + step - 1) / step, (height + step - 1) / step);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (const FrameValidation& f : result.frames) {
+    cv::Mat before(cells, CV_32FC2, cv::Scalar(nan, nan)), after = before.clone();
+    for (const PointResidual& r : f.residuals) {
+      const int c = std::clamp(static_cast<int>(std::lround(r.u / step)), 0, cells.width - 1);
+      const int w = std::clamp(static_cast<int>(std::lround(r.v / step)), 0, cells.height - 1);
+      before.at<cv::Vec2f>(w, c) = cv::Vec2f(r.before_dx, r.before_dy);
+      after.at<cv::Vec2f>(w, c) = cv::Vec2f(r.after_dx, r.after_dy);
+    }
+    // Display at about 640 px wide, nearest neighbour so each cell stays one measured point.
+    const double scale = 640.0 / cells.width;
+    const cv::Size shown(640, std::max(1, static_cast<int>(std::lround(cells.height * scale))));
+    cv::resize(before, before, shown, 0, 0, cv::INTER_NEAREST);
+    cv::resize(after, after, shown, 0, 0, cv::INTER_NEAREST);
+    const double max_px = std::max(f.before.max_px, 1e-3);
+    const cv::Mat panel = SideBySide(
+        {DisplacementHeatmap(before, max_px), DisplacementHeatmap(after, max_px)},
+        {"residual before: rms " + Format("%.3f", f.before.rms_px) + " px",
+         "after: rms " + Format("%.3f", f.after.rms_px) + " px"});
+    const std::string path = (fs::path(dir) / (FrameName(f.frame) + "_residual.png")).string();
+    WriteImage(path, panel);
+    written.push_back(path);
+  }
+
+  // Per-row profile over all frames: mean residual dx, dy and RMS per band of `step` rows.
+  const int bands = (height + step - 1) / step;
+  std::vector<double> sum[6], count(bands, 0.0);
+  for (auto& s : sum) s.assign(bands, 0.0);
+  for (const FrameValidation& f : result.frames) {
+    for (const PointResidual& r : f.residuals) {
+      const int b = std::clamp(static_cast<int>(r.v) / step, 0, bands - 1);
+      count[b] += 1;
+      sum[0][b] += r.before_dx;
+      sum[1][b] += r.before_dy;
+      sum[2][b] += r.before_dx * r.before_dx + r.before_dy * r.before_dy;
+      sum[3][b] += r.after_dx;
+      sum[4][b] += r.after_dy;
+      sum[5][b] += r.after_dx * r.after_dx + r.after_dy * r.after_dy;
+    }
+  }
+  std::vector<double> row(bands);
+  std::vector<std::vector<double>> mean(6, std::vector<double>(bands));
+  std::string csv = "row_px,points,before_dx_px,before_dy_px,before_rms_px,after_dx_px,"
+                    "after_dy_px,after_rms_px\n";
+  for (int b = 0; b < bands; ++b) {
+    row[b] = std::min(height - 1.0, (b + 0.5) * step);
+    const double n = count[b];
+    for (int s = 0; s < 6; ++s) {
+      const double m = n > 0 ? sum[s][b] / n : std::numeric_limits<double>::quiet_NaN();
+      mean[s][b] = (s == 2 || s == 5) ? std::sqrt(m) : m;
+    }
+    csv += Format("%.1f", row[b]) + "," + std::to_string(static_cast<long long>(n));
+    for (int s = 0; s < 6; ++s) csv += "," + (n > 0 ? Format("%.5f", mean[s][b]) : "");
+    csv += "\n";
+  }
+  const std::string csv_path = (fs::path(dir) / "residual_rows.csv").string();
+  WriteFileAtomically(csv_path, csv);
+  written.push_back(csv_path);
+  // Colours in R, G, B order (image_io writes the file's channel order).
+  const cv::Mat chart_before = LineChart(
+      row, {mean[0], mean[1], mean[2]}, {"mean dx", "mean dy", "rms"},
+      {cv::Scalar(31, 119, 180), cv::Scalar(255, 127, 14), cv::Scalar(60, 60, 60)},
+      "residual per row, before (declared model), px", "image row");
+  const cv::Mat chart_after = LineChart(
+      row, {mean[3], mean[4], mean[5]}, {"mean dx", "mean dy", "rms"},
+      {cv::Scalar(31, 119, 180), cv::Scalar(255, 127, 14), cv::Scalar(60, 60, 60)},
+      "residual per row, after (declared + identified effects), px", "image row");
+  cv::Mat charts;
+  cv::vconcat(chart_before, chart_after, charts);
+  const std::string chart_path = (fs::path(dir) / "residual_rows.png").string();
+  WriteImage(chart_path, charts);
+  written.push_back(chart_path);
+  return written;
+}
+
+}  // namespace shutterlab

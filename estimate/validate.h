@@ -1,0 +1,117 @@
+#pragma once
+// `validate` (issue 4): test the paper's threshold model and the declared full model against the
+// displacement measured in a rig dataset, then close the loop on undeclared effects.
+//
+// For every frame of the dataset (FORMATS.md "Rig dataset"; truth/ and truth.json are never read):
+//  - measured: MeasureDisplacement(ref, image): the points, their noise, D_meas (px), and
+//    D_meas_m = D_meas_px * altitude_m / f, f = (fx + fy) / 2;
+//  - full model: FORMATS.md's D of the declared model's d(p) (rotation, velocity, lens), evaluated
+//    on a grid (kGridStepPx, first and last rows and columns included);
+//  - paper's model: estimate/analyze.h Analyze() with a trigger at the frame's gyro time
+//    t_first_row + time_offset_s (no bias estimate: gyro.csv is taken as calibrated), which gives
+//    D_paper_m = altitude * tan(largest per-axis range in the readout), the per-axis ranges and the
+//    dominant axis; D_vector_m = altitude * tan(largest rotation angle between row 0 and any row),
+//    the vector criterion, for the per-axis vs vector question.
+// Then CloseTheLoop over all frames' points, noise_px = the RMS of the frames' noise over points.
+
+#include "estimate/effect_fit.h"
+#include "estimate/measure.h"
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace shutterlab {
+
+struct ValidateOptions {
+  std::vector<double> limits_m{0.05, 0.10};  // acceptable smear on the ground, m
+  MeasureOptions measure;
+  LoopOptions loop;
+  // Keep the per-point residuals before and after the loop (for plots).
+  bool keep_residuals = true;
+  // Throws std::invalid_argument naming the first bad field.
+  void Check() const;
+};
+
+// One measured point's residual (measured - predicted), px, at rolling-shutter pixel (u, v).
+struct PointResidual {
+  float u = 0, v = 0;
+  float before_dx = 0, before_dy = 0;  // against the declared model
+  float after_dx = 0, after_dy = 0;    // against the declared model plus the identified effects
+};
+
+struct FrameValidation {
+  int64_t frame = 0;
+  std::string image;            // frames.csv's image path (relative to the dataset)
+  double t_gyro_s = 0.0;        // t_first_row + time_offset_s, gyro clock
+  size_t points = 0;            // measured points
+  double measured_fraction = 0.0;
+  double noise_px = 0.0;        // this frame's measurement noise
+  double d_meas_px = 0.0, d_meas_m = 0.0;
+  double d_full_px = 0.0, d_full_m = 0.0;  // declared full model
+  double d_paper_m = 0.0;                  // paper's per-axis threshold model
+  double d_vector_m = 0.0;                 // the same with the rotation-vector angle
+  double d_centre_px = 0.0;  // full model's D in the principal point's column only (nadir pixels)
+  std::array<double, 3> range_arcsec{};    // per camera axis within the readout
+  int dominant_axis = 0;                   // 0 x, 1 y, 2 z (camera axes)
+  std::vector<bool> flag_meas, flag_full, flag_paper;  // one per limit: D_m > limit
+  ResidualStats before, after;             // this frame's points only
+  std::vector<PointResidual> residuals;    // when ValidateOptions::keep_residuals
+};
+
+// Paper's flags against the measured truth at one limit (a frame is "positive" when over it).
+struct Confusion {
+  double limit_m = 0.0;
+  int true_positive = 0, false_positive = 0, false_negative = 0, true_negative = 0;
+};
+
+// D_paper / D_meas over the frames whose dominant axis is `axis` (0 x, 1 y, 2 z; 3: all frames).
+struct RatioGroup {
+  int axis = 3;
+  int frames = 0;
+  double paper_min = 0, paper_median = 0, paper_max = 0;     // D_paper_m / D_meas_m
+  double vector_median = 0;                                  // D_vector_m / D_meas_m
+  double full_median = 0;                                    // D_full / D_meas
+  double centre_median = 0;                                  // D_centre_px / D_full_px
+};
+
+struct ValidationResult {
+  std::string dataset;
+  RigModel declared;
+  std::vector<double> limits_m;
+  std::vector<FrameValidation> frames;
+  std::vector<Confusion> confusion_paper;  // one per limit
+  std::vector<Confusion> confusion_full;   // the full model's flags, same layout
+  std::vector<RatioGroup> ratios;          // per dominant axis that occurs, then all frames
+  LoopResult loop;
+  // Wall time per stage, s.
+  double read_s = 0, measure_s = 0, predict_s = 0, loop_s = 0;
+};
+
+// progress(stage, done, total): stage is "measure" or "predict"; may be empty.
+using ValidateProgress = std::function<void(const std::string& stage, size_t done, size_t total)>;
+
+// Reads the dataset in `dataset_dir` and validates it. Everything is read and checked first; bad
+// input throws IoError / std::invalid_argument with one line naming the file, line and problem
+// (video datasets, whose ref is empty, are refused: issue 6).
+ValidationResult ValidateDataset(const std::string& dataset_dir, const ValidateOptions& options,
+                                 const ValidateProgress& progress = {});
+
+// The report JSON: LoopToJson's FORMATS.md keys plus "dataset", "limits_m", "frames_detail",
+// "confusion", "ratios", "timing_s" and "log".
+nlohmann::json ValidationToJson(const ValidationResult& result);
+
+// The table and summary for a person.
+std::string ValidationReport(const ValidationResult& result);
+
+// With --out DIR: per-frame residual pictures before/after (DIR/NNNN_residual.png), the per-row
+// residual profile before/after of all frames (DIR/residual_rows.png, DIR/residual_rows.csv).
+// Returns the paths written. Creates DIR when missing; each file whole or not at all.
+std::vector<std::string> WriteValidationPlots(const std::string& dir,
+                                              const ValidationResult& result);
+
+}  // namespace shutterlab
