@@ -35,18 +35,33 @@ struct ResidualStats {
 
 // One identified effect, FORMATS.md names, values and units.
 struct IdentifiedEffect {
-  std::string name;                      // "time_offset", "readout_time", ...
-  nlohmann::json value;                  // FORMATS.md value (number, [3], 3x3, {"k1","k2"}, string)
-  nlohmann::json stderr_value;           // same shape as value (null for readout_direction)
-  std::string unit;                      // "s", "ppm", "rad/s", "m/s", "" ...
+  std::string name;             // "time_offset", "readout_time", ...
+  nlohmann::json value;         // FORMATS.md value (number, [3], 3x3, {"k1","k2"}, string)
+  nlohmann::json stderr_value;  // same shape as value (null for readout_direction)
+  std::string unit;             // "s", "ppm", "rad/s", "m/s", "" ...
   std::vector<std::string> ambiguous_with;  // effects that explain the data as well
-  ResidualStats after;                   // residual once this effect is added
+  ResidualStats after;                      // residual once this effect is added
 };
 
 struct LoopOptions {
   // Candidate effect names tried (FORMATS.md table); default: all of them.
   std::vector<std::string> candidates;
   int max_effects = 3;
+  // False-alarm rate of the "residual above the measurement noise" test (a chi-square test of the
+  // robust mean square residual against noise_px, degrees of freedom divided by the spatial
+  // correlation factor estimated from the residual; see effect_fit.cc).
+  double significance = 1e-3;
+  // A candidate is added only when it lowers BIC by more than this (10: "very strong" evidence,
+  // Kass & Raftery 1995) ...
+  double bic_margin = 10.0;
+  // ... and explains at least this share of the residual's excess over the noise (a candidate that
+  // removes a sliver of a large unexplained residual is not what is there).
+  double min_explained_share = 0.3;
+  // Other candidates whose BIC is within this of the chosen one's are reported in ambiguous_with.
+  double ambiguity_margin = 10.0;
+  // unexplained needs the residual to be significantly above noise (the test above) AND its robust
+  // RMS above material_ratio * noise_px: noise_px is itself an estimate, good to ~20 %.
+  double material_ratio = 1.25;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };

@@ -1,0 +1,587 @@
+#include "estimate/effect_fit.h"
+
+// How the loop decides (issue 4, "Close the loop"):
+//
+// Residual r_i = measured - predicted at every point (2 components). noise_px is the RMS length of
+// the measurement error, so each component has variance sigma^2 = noise_px^2 / 2.
+//
+// 1. "Above the noise?" is a chi-square test: m = sum w_i 2 rho(|r_i|) / (sum w_i noise_px^2), rho
+//    the Huber loss (= |r|^2 / 2 inside 3 noise_px, so m is the mean square residual over the
+//    noise's, with single wild points capped), against chi2_{1-alpha}(k) / k with
+//    k = 2 (sum w)^2 / sum w^2 / c. c is the spatial correlation factor of the residual: the
+//    variance of a sum of neighbouring residuals over the sum of their variances,
+//    c = 1 + sum_{i != j, |p_i - p_j| <= R} r_i.r_j / sum_i |r_i|^2 (R = 4 point spacings), which
+//    is 1 for independent points and the factor by which correlated noise (dense optical flow)
+//    inflates every sum of squares. Dividing the degrees of freedom by c keeps the false-alarm
+//    rate at alpha (LoopOptions::significance, 1e-3) for correlated noise; the quantile uses the
+//    Wilson-Hilferty approximation. Measured false-alarm rate on clean data: see the tests.
+// 2. Candidates: each effect not yet added is fitted jointly with the added ones (robust LM,
+//    estimate/least_squares.h; time_offset and clock_rate start from the best of a coarse scan).
+//    Each is scored by BIC in its Gaussian form with the variance of the best candidate of the
+//    round (an F-test's denominator, independent of noise_px's accuracy):
+//      dBIC = (RSS_j - RSS_current) / (s^2 c) + (p_j - p_current) ln(n / c),
+//    RSS = 2 sum w rho, s^2 = RSS_best / (n - p_best), c from the best candidate's residual,
+//    n = 2 (sum w)^2 / sum w^2 (readout_direction counts as one parameter). The candidate with the
+//    lowest dBIC is added when dBIC < -bic_margin and it explains >= min_explained_share of the
+//    residual's excess over the noise (RSS - noise_px^2 sum w).
+// 3. Ambiguity: other candidates within ambiguity_margin of the chosen one's dBIC (and explaining
+//    as much) are named in ambiguous_with.
+// 4. Repeat until the residual passes test 1, no candidate qualifies, or max_effects.
+// 5. unexplained = test 1 still rejects AND the robust RMS is above material_ratio * noise_px.
+//    A candidate that removes part of a residual that stays far above noise therefore never stands
+//    alone as a confident answer: either it explains most of the excess (rule 2) or it is not
+//    added, and a residual left far above noise is always flagged.
+//
+// Standard errors: (J^T W J)^-1 s^2 c with s^2 the model's own residual variance (not noise_px)
+// and c its residual's spatial correlation factor (a white-noise covariance would be too
+// optimistic by c for correlated measurement noise, since every parameter here moves whole
+// regions of the image coherently).
+
+#include "estimate/effect_model.h"
+#include "estimate/least_squares.h"
+#include "sim/check.h"
+
+#include <Eigen/Cholesky>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <unordered_map>
+
+namespace shutterlab {
+
+void LoopOptions::Check() const {
+  for (const std::string& name : candidates) {
+    const std::vector<std::string>& known = InjectionNames();
+    SHUTTERLAB_CHECK(std::find(known.begin(), known.end(), name) != known.end())
+        << "candidates: unknown effect '" << name << "'";
+  }
+  SHUTTERLAB_CHECK(max_effects >= 0 && max_effects <= 9)
+      << "max_effects must be in [0, 9], got " << max_effects;
+  SHUTTERLAB_CHECK(significance > 0 && significance < 0.5)
+      << "significance must be in (0, 0.5), got " << significance;
+  SHUTTERLAB_CHECK(bic_margin >= 0) << "bic_margin must be >= 0";
+  SHUTTERLAB_CHECK(min_explained_share >= 0 && min_explained_share <= 1)
+      << "min_explained_share must be in [0, 1]";
+  SHUTTERLAB_CHECK(ambiguity_margin >= 0) << "ambiguity_margin must be >= 0";
+  SHUTTERLAB_CHECK(material_ratio >= 1) << "material_ratio must be >= 1";
+}
+
+std::vector<Eigen::Vector2d> PredictDisplacements(const TrueModel& model, const GyroTrace& gyro,
+                                                  const FramePoints& frame) {
+  const std::vector<FramePoints> frames = {frame};
+  const DisplacementPredictor predictor(gyro, frames);
+  std::vector<Eigen::Vector2d> out;
+  predictor.Predict(model, &out);
+  return out;
+}
+
+namespace {
+
+using nlohmann::json;
+
+// Upper-tail standard normal quantile z with P(Z > z) = alpha, by bisection on erfc.
+double NormalUpperQuantile(double alpha) {
+  double lo = -10.0, hi = 10.0;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    if (0.5 * std::erfc(mid / std::sqrt(2.0)) > alpha) {
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  return 0.5 * (lo + hi);
+}
+
+// chi2_{1-alpha}(k) / k by Wilson-Hilferty (accurate to ~1 % for k >= 10).
+double ChiSquareQuantileOverDof(double alpha, double k) {
+  const double a = 2.0 / (9.0 * k);
+  const double base = 1.0 - a + NormalUpperQuantile(alpha) * std::sqrt(a);
+  return base * base * base;
+}
+
+// Everything a fit needs about the data.
+struct Context {
+  TrueModel declared;
+  const DisplacementPredictor* predictor = nullptr;
+  std::vector<Eigen::Vector2d> measured;
+  std::vector<Eigen::Vector2d> px;
+  std::vector<std::pair<size_t, size_t>> frame_ranges;  // [begin, end) per frame
+  Eigen::VectorXd weights;  // per point; 0 for points the declared model cannot predict
+  double noise_px = 0.0;
+  double huber_delta = 0.0;
+  double span_s = 0.0;
+};
+
+struct Hypothesis {
+  std::vector<std::string> effects;  // in the order added
+  Eigen::VectorXd x;                 // continuous parameters, concatenated in that order
+};
+
+int ParameterCount(const std::vector<std::string>& effects) {
+  int n = 0;
+  for (const std::string& e : effects) n += EffectParameterCount(e);
+  return n;
+}
+
+// For the information criterion: a discrete choice is one decision.
+int CriterionParameters(const std::vector<std::string>& effects) {
+  int n = 0;
+  for (const std::string& e : effects) n += std::max(1, EffectParameterCount(e));
+  return n;
+}
+
+TrueModel ModelOf(const Context& ctx, const std::vector<std::string>& effects,
+                  const Eigen::VectorXd& x) {
+  TrueModel model = ctx.declared;
+  int offset = 0;
+  for (const std::string& e : effects) {
+    ApplyEffect(e, x.data() + offset, &model);
+    offset += EffectParameterCount(e);
+  }
+  return model;
+}
+
+bool Plausible(const TrueModel& model) {
+  return model.rig.shutter.readout_s > 0 && (model.gyro_scale.array() > 0).all() &&
+         std::abs(model.clock_rate_ppm) < 1e5 && model.gyro_bias_rad_s.allFinite() &&
+         model.rig.velocity_mps.allFinite();
+}
+
+void Residuals(const Context& ctx, const TrueModel& model, Eigen::VectorXd* r,
+               std::vector<uint8_t>* valid) {
+  const size_t n = ctx.measured.size();
+  r->setZero(2 * n);
+  valid->assign(n, 0);
+  if (!Plausible(model)) return;
+  std::vector<Eigen::Vector2d> predicted;
+  ctx.predictor->Predict(model, &predicted);
+  for (size_t i = 0; i < n; ++i) {
+    if (!predicted[i].allFinite()) continue;
+    r->segment<2>(2 * i) = ctx.measured[i] - predicted[i];
+    (*valid)[i] = 1;
+  }
+}
+
+// c = 1 + sum_{i != j near} r_i.r_j / sum |r_i|^2 over the kept points' weighted residuals.
+double CorrelationFactor(const Context& ctx, const Eigen::VectorXd& r,
+                         const std::vector<uint8_t>& keep) {
+  double self = 0.0, cross = 0.0;
+  std::vector<size_t> idx;
+  std::vector<Eigen::Vector2d> z;
+  for (const auto& [begin, end] : ctx.frame_ranges) {
+    idx.clear();
+    z.clear();
+    double u0 = 1e300, u1 = -1e300, v0 = 1e300, v1 = -1e300;
+    for (size_t i = begin; i < end; ++i) {
+      if (!keep[i]) continue;
+      z.push_back(std::sqrt(ctx.weights[i]) * r.segment<2>(2 * i));
+      idx.push_back(i);
+      u0 = std::min(u0, ctx.px[i].x());
+      u1 = std::max(u1, ctx.px[i].x());
+      v0 = std::min(v0, ctx.px[i].y());
+      v1 = std::max(v1, ctx.px[i].y());
+    }
+    if (idx.size() < 2) continue;
+    const double spacing =
+        std::max(1.0, std::sqrt((u1 - u0 + 1) * (v1 - v0 + 1) / static_cast<double>(idx.size())));
+    const double radius = 4.0 * spacing;
+    std::unordered_map<int64_t, std::vector<size_t>> cells;
+    auto key = [](int64_t cu, int64_t cv) { return (cu << 32) ^ (cv & 0xffffffff); };
+    for (size_t k = 0; k < idx.size(); ++k) {
+      const Eigen::Vector2d& p = ctx.px[idx[k]];
+      cells[key(static_cast<int64_t>(std::floor(p.x() / radius)),
+                static_cast<int64_t>(std::floor(p.y() / radius)))]
+          .push_back(k);
+    }
+    for (size_t k = 0; k < idx.size(); ++k) {
+      self += z[k].squaredNorm();
+      const Eigen::Vector2d& p = ctx.px[idx[k]];
+      const int64_t cu = static_cast<int64_t>(std::floor(p.x() / radius));
+      const int64_t cv = static_cast<int64_t>(std::floor(p.y() / radius));
+      for (int64_t du = -1; du <= 1; ++du) {
+        for (int64_t dv = -1; dv <= 1; ++dv) {
+          const auto it = cells.find(key(cu + du, cv + dv));
+          if (it == cells.end()) continue;
+          for (size_t m : it->second) {
+            if (m <= k) continue;
+            if ((ctx.px[idx[m]] - p).squaredNorm() > radius * radius) continue;
+            cross += 2.0 * z[k].dot(z[m]);
+          }
+        }
+      }
+    }
+  }
+  if (!(self > 0)) return 1.0;
+  return std::max(1.0, 1.0 + cross / self);
+}
+
+// The points a residual is judged on: every weighted point with a prediction, less gross
+// outliers: points more than kOutlierNoise * noise_px off (probability e^-25 for a Gaussian
+// measurement), at most kMaxOutlierShare of the points (the largest ones). Beyond that share a
+// large residual is the model's, not a few bad matches', and is kept.
+constexpr double kOutlierNoise = 5.0;
+constexpr double kMaxOutlierShare = 0.05;
+
+std::vector<uint8_t> KeepMask(const Context& ctx, const Eigen::VectorXd& r,
+                              const std::vector<uint8_t>& valid) {
+  const size_t n = valid.size();
+  std::vector<uint8_t> keep(n, 0);
+  std::vector<std::pair<double, size_t>> large;
+  size_t candidates = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (!valid[i] || ctx.weights[i] <= 0) continue;
+    ++candidates;
+    keep[i] = 1;
+    const double s = r.segment<2>(2 * i).norm();
+    if (s > kOutlierNoise * ctx.noise_px) large.emplace_back(s, i);
+  }
+  const size_t max_drop = static_cast<size_t>(kMaxOutlierShare * candidates);
+  std::sort(large.begin(), large.end(), std::greater<>());
+  for (size_t k = 0; k < std::min(max_drop, large.size()); ++k) keep[large[k].second] = 0;
+  return keep;
+}
+
+// Weighted sum of squares over the mask; a masked point without prediction counts as an outlier at
+// the trimming level (it was fitted elsewhere and lost its prediction).
+double MaskedRss(const Context& ctx, const Eigen::VectorXd& r, const std::vector<uint8_t>& valid,
+                 const std::vector<uint8_t>& keep) {
+  const double lost = std::pow(kOutlierNoise * ctx.noise_px, 2);
+  double rss = 0.0;
+  for (size_t i = 0; i < keep.size(); ++i) {
+    if (!keep[i]) continue;
+    rss += ctx.weights[i] * (valid[i] ? r.segment<2>(2 * i).squaredNorm() : lost);
+  }
+  return rss;
+}
+
+struct MaskSums {
+  double w = 0.0, w2 = 0.0;
+};
+MaskSums SumWeights(const Context& ctx, const std::vector<uint8_t>& keep) {
+  MaskSums sums;
+  for (size_t i = 0; i < keep.size(); ++i) {
+    if (!keep[i]) continue;
+    sums.w += ctx.weights[i];
+    sums.w2 += ctx.weights[i] * ctx.weights[i];
+  }
+  return sums;
+}
+
+struct LevelTest {
+  double ratio = 0.0;      // mean square residual / noise_px^2 (trimmed)
+  double threshold = 0.0;  // chi2 quantile / dof
+  double c = 1.0;
+  double rms_px = 0.0;  // trimmed RMS
+  bool above = false;
+};
+
+LevelTest TestLevel(const Context& ctx, const Eigen::VectorXd& r, const std::vector<uint8_t>& valid,
+                    double significance) {
+  LevelTest t;
+  const std::vector<uint8_t> keep = KeepMask(ctx, r, valid);
+  const MaskSums sums = SumWeights(ctx, keep);
+  if (!(sums.w > 0)) return t;
+  const double rss = MaskedRss(ctx, r, valid, keep);
+  t.rms_px = std::sqrt(rss / sums.w);
+  t.ratio = rss / (sums.w * ctx.noise_px * ctx.noise_px);
+  t.c = CorrelationFactor(ctx, r, keep);
+  const double k = std::max(1.0, 2.0 * sums.w * sums.w / sums.w2 / t.c);
+  t.threshold = ChiSquareQuantileOverDof(significance, k);
+  t.above = t.ratio > t.threshold;
+  return t;
+}
+
+ResidualStats Stats(const Eigen::VectorXd& r, const std::vector<uint8_t>& valid) {
+  ResidualStats s;
+  double sum = 0.0;
+  for (size_t i = 0; i < valid.size(); ++i) {
+    if (!valid[i]) continue;
+    const double sq = r.segment<2>(2 * i).squaredNorm();
+    sum += sq;
+    s.max_px = std::max(s.max_px, std::sqrt(sq));
+    ++s.points;
+  }
+  s.rms_px = s.points > 0 ? std::sqrt(sum / s.points) : 0.0;
+  return s;
+}
+
+struct Fit {
+  Hypothesis hypothesis;
+  TrueModel model;
+  RobustSolution solution;
+  double rss = 0.0;  // 2 * robust cost
+  ResidualStats stats;
+};
+
+RobustProblem MakeProblem(const Context& ctx, const std::vector<std::string>& effects) {
+  RobustProblem problem;
+  problem.residuals = [&ctx, effects](const Eigen::VectorXd& x, Eigen::VectorXd* r,
+                                      std::vector<uint8_t>* valid) {
+    Residuals(ctx, ModelOf(ctx, effects, x), r, valid);
+  };
+  problem.weights = ctx.weights;
+  problem.steps.resize(ParameterCount(effects));
+  int k = 0;
+  for (const std::string& e : effects) {
+    for (int i = 0; i < EffectParameterCount(e); ++i)
+      problem.steps[k++] = EffectStep(e, i, ctx.span_s);
+  }
+  problem.huber_delta = ctx.huber_delta;
+  // Far above any point's real cost: the solver does not fit by pushing points off the trace, and
+  // rejects implausible models (negative readout or scale), which predict nothing.
+  problem.invalid_cost = HuberRho(1e3 * ctx.huber_delta, ctx.huber_delta);
+  return problem;
+}
+
+// Fits hypothesis.effects from hypothesis.x. When the last effect is time_offset or clock_rate,
+// its start is the best of a coarse scan (the cost is not convex over tens of ms of shift).
+Fit FitHypothesis(const Context& ctx, Hypothesis hypothesis) {
+  const RobustProblem problem = MakeProblem(ctx, hypothesis.effects);
+  const Eigen::Index p = problem.steps.size();
+  if (!hypothesis.effects.empty() && p > 0) {
+    const std::string& last = hypothesis.effects.back();
+    std::vector<double> starts;
+    if (last == "time_offset" || last == "clock_rate") {
+      // Shifts (of the latest frame, for clock_rate) within +-kScanS in steps of kScanStepS: finer
+      // than the ~0.1 s over which a multirotor's rotation rate changes, so one start lies in the
+      // true minimum's basin.
+      constexpr double kScanS = 0.25, kScanStepS = 0.004;
+      const double to_param = last == "time_offset" ? 1.0 : 1e6 / std::max(ctx.span_s, 1.0);
+      const int steps = static_cast<int>(std::lround(kScanS / kScanStepS));
+      for (int k = -steps; k <= steps; ++k) starts.push_back(k * kScanStepS * to_param);
+      double best_cost = std::numeric_limits<double>::infinity();
+      const double base = hypothesis.x[p - 1];
+      double best = base;
+      Eigen::VectorXd r;
+      std::vector<uint8_t> valid;
+      for (double s : starts) {
+        Eigen::VectorXd x = hypothesis.x;
+        x[p - 1] = base + s;
+        problem.residuals(x, &r, &valid);
+        const double cost = RobustCost(problem, r, valid);
+        if (cost < best_cost) {
+          best_cost = cost;
+          best = base + s;
+        }
+      }
+      hypothesis.x[p - 1] = best;
+    }
+  }
+  Fit fit;
+  fit.solution = SolveRobust(problem, hypothesis.x);
+  hypothesis.x = fit.solution.x;
+  fit.model = ModelOf(ctx, hypothesis.effects, hypothesis.x);
+  fit.hypothesis = std::move(hypothesis);
+  fit.rss = 2.0 * fit.solution.cost;
+  fit.stats = Stats(fit.solution.residuals, fit.solution.valid);
+  return fit;
+}
+
+// Covariance of the fitted parameters: (J^T W J)^-1 s^2 c (see the top of this file).
+Eigen::MatrixXd Covariance(const Context& ctx, const Fit& fit) {
+  const Eigen::Index p = fit.solution.x.size();
+  const std::vector<uint8_t> keep = KeepMask(ctx, fit.solution.residuals, fit.solution.valid);
+  const MaskSums sums = SumWeights(ctx, keep);
+  const double dof = std::max(1.0, 2.0 * sums.w - static_cast<double>(p));
+  const double s2 = MaskedRss(ctx, fit.solution.residuals, fit.solution.valid, keep) / dof;
+  const double c = CorrelationFactor(ctx, fit.solution.residuals, keep);
+  Eigen::MatrixXd cov = fit.solution.normal.ldlt().solve(Eigen::MatrixXd::Identity(p, p));
+  if (!cov.allFinite()) cov.setConstant(std::numeric_limits<double>::quiet_NaN());
+  return cov * s2 * c;
+}
+
+std::string Format(const char* fmt, double a) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), fmt, a);
+  return buf;
+}
+
+std::string Describe(const std::vector<std::string>& effects, const TrueModel& model) {
+  std::string out;
+  for (const std::string& e : effects) {
+    out += (out.empty() ? "" : "; ") + e + " = " + EffectValue(e, model).dump();
+  }
+  return out;
+}
+
+}  // namespace
+
+LoopResult CloseTheLoop(const RigModel& declared, const GyroTrace& gyro,
+                        const std::vector<FramePoints>& frames, double noise_px,
+                        const LoopOptions& options) {
+  options.Check();
+  declared.Check();
+  SHUTTERLAB_CHECK(std::isfinite(noise_px) && noise_px > 0)
+      << "noise_px must be positive, got " << noise_px;
+  SHUTTERLAB_CHECK(!frames.empty()) << "no frames to fit";
+  const DisplacementPredictor predictor(gyro, frames);
+  Context ctx;
+  ctx.declared.rig = declared;
+  ctx.predictor = &predictor;
+  ctx.noise_px = noise_px;
+  // 3 noise_px on the residual's length: a Gaussian point passes with probability 1 - e^-9.
+  ctx.huber_delta = 3.0 * noise_px;
+  ctx.span_s = predictor.frames_span_s();
+  ctx.weights.resize(predictor.point_count());
+  for (const FramePoints& f : frames) {
+    const size_t begin = ctx.measured.size();
+    for (const MeasuredPoint& p : f.points) {
+      ctx.weights[ctx.measured.size()] = std::isfinite(p.weight) ? std::max(0.0, p.weight) : 0.0;
+      if (!std::isfinite(p.dx) || !std::isfinite(p.dy)) ctx.weights[ctx.measured.size()] = 0.0;
+      ctx.measured.emplace_back(p.dx, p.dy);
+      ctx.px.emplace_back(p.u, p.v);
+    }
+    ctx.frame_ranges.emplace_back(begin, ctx.measured.size());
+  }
+
+  LoopResult result;
+  result.noise_px = noise_px;
+  const std::vector<std::string>& names =
+      options.candidates.empty() ? InjectionNames() : options.candidates;
+
+  // The declared model; points it cannot predict take no part (they would have no residual).
+  Fit current = FitHypothesis(ctx, Hypothesis{});
+  for (size_t i = 0; i < current.solution.valid.size(); ++i) {
+    if (!current.solution.valid[i]) ctx.weights[i] = 0.0;
+  }
+  SHUTTERLAB_CHECK(ctx.weights.sum() > 0)
+      << "no measured point that the declared model can predict";
+  current = FitHypothesis(ctx, Hypothesis{});
+  result.before = current.stats;
+
+  LevelTest level =
+      TestLevel(ctx, current.solution.residuals, current.solution.valid, options.significance);
+  auto level_line = [&](const std::string& what, const LevelTest& t) {
+    return what + ": rms " + Format("%.4f", t.rms_px) + " px (trimmed), mean square " +
+           Format("%.3f", t.ratio) + "x noise^2, threshold " + Format("%.3f", t.threshold) +
+           " (alpha " + Format("%g", options.significance) + ", correlation factor " +
+           Format("%.2f", t.c) + "): " + (t.above ? "above the noise" : "at the noise level");
+  };
+  result.log.push_back(level_line("declared model", level));
+
+  std::vector<ResidualStats> after_each;
+  std::vector<std::vector<std::string>> ambiguous_each;
+  for (int round = 1; level.above && round <= options.max_effects; ++round) {
+    std::vector<Fit> fits;
+    for (const std::string& name : names) {
+      if (std::find(current.hypothesis.effects.begin(), current.hypothesis.effects.end(), name) !=
+          current.hypothesis.effects.end()) {
+        continue;
+      }
+      Hypothesis h = current.hypothesis;
+      h.effects.push_back(name);
+      const int n_new = EffectParameterCount(name);
+      h.x.conservativeResize(h.x.size() + n_new);
+      h.x.tail(n_new).setZero();
+      fits.push_back(FitHypothesis(ctx, std::move(h)));
+    }
+    if (fits.empty()) break;
+    const Fit* best_fit = &fits[0];
+    for (const Fit& f : fits) {
+      if (f.rss < best_fit->rss) best_fit = &f;
+    }
+    // Every model of the round is judged on the same points: those the best candidate does not
+    // call gross outliers.
+    const std::vector<uint8_t> keep =
+        KeepMask(ctx, best_fit->solution.residuals, best_fit->solution.valid);
+    const MaskSums sums = SumWeights(ctx, keep);
+    auto rss_of = [&](const Fit& f) {
+      return MaskedRss(ctx, f.solution.residuals, f.solution.valid, keep);
+    };
+    const int p_best = CriterionParameters(best_fit->hypothesis.effects);
+    const double s2 = rss_of(*best_fit) / std::max(1.0, 2.0 * sums.w - p_best);
+    const double c = CorrelationFactor(ctx, best_fit->solution.residuals, keep);
+    const double n_eff = std::max(2.0, 2.0 * sums.w * sums.w / sums.w2 / c);
+    const int p_cur = CriterionParameters(current.hypothesis.effects);
+    const double rss_cur = rss_of(current);
+    const double noise_rss = noise_px * noise_px * sums.w;
+    const double excess_cur = std::max(0.0, rss_cur - noise_rss);
+    std::vector<double> dbic(fits.size()), share(fits.size());
+    int chosen = -1;
+    for (size_t j = 0; j < fits.size(); ++j) {
+      const int p_j = CriterionParameters(fits[j].hypothesis.effects);
+      const double rss_j = rss_of(fits[j]);
+      dbic[j] = (rss_j - rss_cur) / (s2 * c) + (p_j - p_cur) * std::log(n_eff);
+      share[j] =
+          excess_cur > 0 ? (excess_cur - std::max(0.0, rss_j - noise_rss)) / excess_cur : 0.0;
+      const std::string& name = fits[j].hypothesis.effects.back();
+      result.log.push_back("round " + std::to_string(round) + ": " + name + ": rms " +
+                           Format("%.4f", fits[j].stats.rms_px) + " px, dBIC " +
+                           Format("%.1f", dbic[j]) + ", explains " +
+                           Format("%.1f", 100.0 * share[j]) + " % of the excess; " +
+                           Describe({name}, fits[j].model));
+      if (share[j] >= options.min_explained_share && (chosen < 0 || dbic[j] < dbic[chosen])) {
+        chosen = static_cast<int>(j);
+      }
+    }
+    if (chosen < 0 || dbic[chosen] >= -options.bic_margin) {
+      result.log.push_back("round " + std::to_string(round) + ": no candidate lowers BIC by " +
+                           Format("%g", options.bic_margin) + " while explaining " +
+                           Format("%g", 100.0 * options.min_explained_share) +
+                           " % of the excess; stop");
+      break;
+    }
+    std::vector<std::string> ambiguous;
+    for (size_t j = 0; j < fits.size(); ++j) {
+      if (static_cast<int>(j) == chosen) continue;
+      if (dbic[j] - dbic[chosen] < options.ambiguity_margin &&
+          share[j] >= options.min_explained_share) {
+        ambiguous.push_back(fits[j].hypothesis.effects.back());
+      }
+    }
+    current = std::move(fits[chosen]);
+    const std::string& added = current.hypothesis.effects.back();
+    after_each.push_back(current.stats);
+    ambiguous_each.push_back(ambiguous);
+    level =
+        TestLevel(ctx, current.solution.residuals, current.solution.valid, options.significance);
+    std::string line = "round " + std::to_string(round) + ": added " + added;
+    for (const std::string& a : ambiguous) line += " (ambiguous with " + a + ")";
+    result.log.push_back(line);
+    result.log.push_back(level_line("with " + added, level));
+  }
+
+  // Values and standard errors from the final joint fit.
+  const Eigen::MatrixXd cov = Covariance(ctx, current);
+  int offset = 0;
+  for (size_t k = 0; k < current.hypothesis.effects.size(); ++k) {
+    const std::string& name = current.hypothesis.effects[k];
+    const int n = EffectParameterCount(name);
+    IdentifiedEffect effect;
+    effect.name = name;
+    effect.value = EffectValue(name, current.model);
+    effect.stderr_value = EffectStderr(name, current.model, cov.block(offset, offset, n, n));
+    effect.unit = EffectUnit(name);
+    effect.ambiguous_with = ambiguous_each[k];
+    effect.after = after_each[k];
+    result.effects.push_back(std::move(effect));
+    offset += n;
+  }
+  result.after = current.stats;
+  result.model = current.model;
+  result.unexplained = level.above && level.rms_px > options.material_ratio * noise_px;
+  result.log.push_back(std::string("unexplained: ") + (result.unexplained ? "yes" : "no"));
+  return result;
+}
+
+nlohmann::json LoopToJson(const LoopResult& result, size_t frame_count) {
+  auto stats = [](const ResidualStats& s) {
+    return json{{"rms_px", s.rms_px}, {"max_px", s.max_px}};
+  };
+  json effects = json::array();
+  for (const IdentifiedEffect& e : result.effects) {
+    json j = {{"name", e.name}, {"value", e.value}, {"stderr", e.stderr_value}, {"unit", e.unit}};
+    if (!e.ambiguous_with.empty()) j["ambiguous_with"] = e.ambiguous_with;
+    j["after"] = stats(e.after);
+    effects.push_back(std::move(j));
+  }
+  return json{{"format", "validation/1"},          {"frames", frame_count},
+              {"before", stats(result.before)},    {"effects", std::move(effects)},
+              {"after", stats(result.after)},      {"noise_px", result.noise_px},
+              {"unexplained", result.unexplained}, {"log", result.log}};
+}
+
+}  // namespace shutterlab
