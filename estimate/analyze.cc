@@ -1,5 +1,7 @@
 #include "estimate/analyze.h"
 
+#include "render/rs_warp.h"
+#include "render/truth_model.h"
 #include "sim/bias.h"
 #include "sim/check.h"
 #include "sim/integrate.h"
@@ -41,38 +43,25 @@ double AngleAt(const PerAxisAngles& angles, int axis, int64_t t_ns) {
   return a[k - 1] + (a[k] - a[k - 1]) * w;
 }
 
-// FORMATS.md frame distortion D, rotation only, on the coarse grid (kGridStepPx), pixels.
-double FrameDistortionPx(const OrientationTrace& orientation, const RigModel& rig, int64_t t_ns) {
-  const PinholeCamera& cam = rig.camera;
-  const Eigen::Matrix3d k = cam.K();
-  const Eigen::Matrix3d k_inv = k.inverse();
+// FORMATS.md frame distortion D on the coarse grid (kGridStepPx), pixels: per grid column, the
+// largest distance between two rows' displacements RefPixel - p.
+double GridDistortionPx(const FrameGeometry& geometry) {
+  const PinholeCamera& cam = geometry.camera();
   std::vector<int> rows, cols;
   for (int v = 0; v < cam.height; v += kGridStepPx) rows.push_back(v);
   if (rows.back() != cam.height - 1) rows.push_back(cam.height - 1);
   for (int u = 0; u < cam.width; u += kGridStepPx) cols.push_back(u);
   if (cols.back() != cam.width - 1) cols.push_back(cam.width - 1);
-
-  const Eigen::Matrix3d world_from_cam0 =
-      orientation.WorldFromBodyAt(t_ns, rig.shutter.RowTimeOffsetS(0, cam.height))
-          .toRotationMatrix();
-  std::vector<Eigen::Matrix3d> homographies;
-  homographies.reserve(rows.size());
-  for (int v : rows) {
-    const Eigen::Matrix3d world_from_cam_v =
-        orientation.WorldFromBodyAt(t_ns, rig.shutter.RowTimeOffsetS(v, cam.height))
-            .toRotationMatrix();
-    homographies.push_back(k * world_from_cam0.transpose() * world_from_cam_v * k_inv);
-  }
   double d_px = 0.0;
-  std::vector<Eigen::Vector2d> displacement(rows.size());
+  std::vector<Eigen::Vector2d> displacement;
   for (int u : cols) {
-    for (size_t r = 0; r < rows.size(); ++r) {
-      const Eigen::Vector3d p(u, rows[r], 1.0);
-      const Eigen::Vector3d q = homographies[r] * p;
-      displacement[r] = q.head<2>() / q.z() - p.head<2>();
+    displacement.clear();
+    for (int v : rows) {
+      const std::optional<Eigen::Vector2d> ref = geometry.RefPixel(u, v);
+      if (ref) displacement.push_back(*ref - Eigen::Vector2d(u, v));
     }
-    for (size_t a = 0; a < rows.size(); ++a) {
-      for (size_t b = a + 1; b < rows.size(); ++b) {
+    for (size_t a = 0; a < displacement.size(); ++a) {
+      for (size_t b = a + 1; b < displacement.size(); ++b) {
         d_px = std::max(d_px, (displacement[a] - displacement[b]).norm());
       }
     }
@@ -80,9 +69,19 @@ double FrameDistortionPx(const OrientationTrace& orientation, const RigModel& ri
   return d_px;
 }
 
+// The renderer's true model for the declared rig: the triggers are on the log clock (no time
+// offset) and the bias (camera axes) is removed as the renderer's gyro bias (gyro axes).
+TrueModel AnalyzeTrueModel(const RigModel& rig, const Eigen::Vector3d& bias_cam_rad_s) {
+  TrueModel model;
+  model.rig = rig;
+  model.rig.time_offset_s = 0.0;
+  model.gyro_bias_rad_s = rig.cam_from_gyro.transpose() * bias_cam_rad_s;
+  return model;
+}
+
 struct ImageContext {
   const PerAxisAngles* angles;
-  const OrientationTrace* orientation;  // null: skip D_full
+  const CameraMotion* motion;  // null: skip D_full
   RigModel rig;
   std::vector<double> limits_m;
 };
@@ -124,8 +123,11 @@ ImageResult AnalyzeImage(const ImageContext& context, const ImageTrigger& trigge
   for (size_t l = 0; l < context.limits_m.size(); ++l) {
     image.flagged[l] = image.d_paper_m > context.limits_m[l];
   }
-  if (context.orientation != nullptr) {
-    image.d_full_px = FrameDistortionPx(*context.orientation, context.rig, image.t_ns);
+  if (context.motion != nullptr) {
+    const FrameGeometry geometry(context.rig.camera, context.rig.altitude_m,
+                                 context.motion->Frame(image.t_ns),
+                                 cv::Size(context.rig.camera.width, context.rig.camera.height));
+    image.d_full_px = GridDistortionPx(geometry);
     const double f_px = 0.5 * (context.rig.camera.fx + context.rig.camera.fy);
     image.d_full_m = image.d_full_px * context.rig.altitude_m / f_px;
   }
@@ -246,6 +248,7 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
   flight_options.windows_s = {options.rig.shutter.readout_s};
   flight_options.noise_allowance_arcsec = options.noise_allowance_arcsec;
   flight_options.progress = [&progress](double f) { progress(0.7 * f); };
+  flight_options.series = options.flight_series;
   try {
     // The still segment may lie anywhere (often after landing), so its bias is applied to every
     // sample rather than starting the statistics after the segment as `flight --bias` does.
@@ -257,12 +260,20 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
 
   // Per-image distortion.
   const PerAxisAngles angles = IntegratePerAxis(camera_rates, result.bias_rad_s);
-  const OrientationTrace orientation(
-      RotateTrace(gyro, options.rig.cam_from_gyro, result.bias_rad_s));
+  const CameraMotion motion(gyro, AnalyzeTrueModel(options.rig, result.bias_rad_s));
 
   std::vector<ImageTrigger> triggers = options.triggers;
   result.trigger_source = "triggers";
-  if (triggers.empty() && !log.camera_events.empty()) {
+  if (triggers.empty() && options.every_s > 0) {
+    result.trigger_source = Format("every %g s", options.every_s);
+    const int64_t every_ns = SecondsToNs(options.every_s);
+    const int64_t t0_ns = gyro.samples().front().t_ns;
+    const int64_t span_ns = gyro.samples().back().t_ns - t0_ns;
+    const int64_t count = span_ns / every_ns;
+    for (int64_t k = 0; k < count; ++k) {
+      triggers.push_back({ImageName(static_cast<size_t>(k)), t0_ns + k * every_ns});
+    }
+  } else if (triggers.empty() && !log.camera_events.empty()) {
     // A log may record each image twice (PX4 camera_trigger and camera_capture): use the most
     // frequent kind only.
     std::map<std::string, size_t> kinds;
@@ -279,20 +290,17 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
           {event.sequence >= 0 ? "IMG_" + std::to_string(event.sequence) : ImageName(i),
            event.t_ns});
     }
-  } else if (triggers.empty() && options.every_s > 0) {
-    result.trigger_source = Format("every %g s", options.every_s);
-    const int64_t every_ns = SecondsToNs(options.every_s);
-    const int64_t t0_ns = gyro.samples().front().t_ns;
-    const int64_t span_ns = gyro.samples().back().t_ns - t0_ns;
-    const int64_t count = span_ns / every_ns;
-    for (int64_t k = 0; k < count; ++k) {
-      triggers.push_back({ImageName(static_cast<size_t>(k)), t0_ns + k * every_ns});
-    }
   } else if (triggers.empty()) {
     result.trigger_source = "none";
   }
+  if (!options.triggers.empty() || options.every_s > 0) {
+    if (!log.camera_events.empty()) {
+      result.trigger_source += " (the log's " + std::to_string(log.camera_events.size()) +
+                               " camera events not used)";
+    }
+  }
 
-  ImageContext context{&angles, &orientation, options.rig, options.limits_m};
+  ImageContext context{&angles, &motion, options.rig, options.limits_m};
   const int64_t latency_ns = SecondsToNs(options.trigger_latency_s);
   result.images.reserve(triggers.size());
   for (size_t i = 0; i < triggers.size(); ++i) {
@@ -328,10 +336,10 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
   }
   if (options.what_if && verdict.images_in_trace > 0) {
     ImageContext fast = context;
-    fast.orientation = nullptr;
+    fast.motion = nullptr;
     fast.rig.shutter.readout_s = verdict.fast_readout_s;
     ImageContext low = context;
-    low.orientation = nullptr;
+    low.motion = nullptr;
     low.rig.altitude_m = 0.5 * options.rig.altitude_m;
     std::vector<ImageResult> fast_images, low_images;
     for (const ImageTrigger& trigger : triggers) {
@@ -348,7 +356,8 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
                        : "verdict: no image lies inside the gyro trace";
   } else {
     std::ostringstream line;
-    line << "verdict: " << verdict.images_in_trace << " images, "
+    line << "verdict: " << verdict.images_in_trace
+         << (verdict.images_in_trace == 1 ? " image, " : " images, ")
          << SharesText(verdict.share_percent, options.limits_m);
     const bool any_flagged = std::any_of(verdict.share_percent.begin(), verdict.share_percent.end(),
                                          [](double s) { return s > 0; });
@@ -502,7 +511,7 @@ std::string AnalyzeReport(const AnalyzeResult& result) {
     for (const ImageResult& image : result.images) {
       char line[256];
       if (!image.in_trace) {
-        std::snprintf(line, sizeof(line), "%-12s %9.3f  outside the gyro trace\n",
+        std::snprintf(line, sizeof(line), "%-12s %9.3f  outside the log\n",
                       image.name.c_str(), image.t_ns * 1e-9);
       } else {
         std::string flags;

@@ -8,11 +8,12 @@
 //    angle within [t, t + readout_s]) — the source paper's threshold model (FORMATS.md). The angle
 //    is the paper's rectangle-rule sum (sim/integrate.h IntegratePerAxis), linear between samples,
 //    so the window's end points are interpolated: a constant rate w gives exactly w * readout_s.
-//  - D_full_m = FORMATS.md's frame distortion D, rotation only: row v at t_v (RollingShutter::
-//    RowTimeOffsetS) maps to the row-0 reference by K R(t_0)^T R(t_v) K^-1 (pinhole K: lens
-//    distortion is ignored here), R from OrientationTrace of the same bias-corrected camera-frame
-//    rates. D is evaluated on a coarse grid, every kGridStepPx-th column and row plus the last
-//    ones, and converted to the ground as D_px * altitude_m / f, f = (fx + fy) / 2.
+//  - D_full_m = FORMATS.md's frame distortion D under the renderer's model of the declared rig
+//    (render/truth_model.h CameraMotion, render/rs_warp.h FrameGeometry::RefPixel): lens distortion
+//    and camera.json's velocity count; the bias-corrected rates are the truth (TrueModel with
+//    gyro_bias = the bias, time_offset_s 0 since the triggers are on the log clock). D is evaluated
+//    on a coarse grid, every kGridStepPx-th column and row plus the last ones, and converted to the
+//    ground as D_px * altitude_m / f, f = (fx + fy) / 2.
 //  - flagged[i] = D_paper_m > limits_m[i] (no noise allowance: the allowance belongs to the
 //    flight table's windows, whose flags it reproduces).
 // The gyro rates are rotated into camera axes with rig.cam_from_gyro before anything else, so
@@ -50,8 +51,8 @@ struct AnalyzeOptions {
   RigModel rig;                              // camera, readout, altitude_m, cam_from_gyro
   std::vector<double> limits_m{0.05, 0.10};  // acceptable smear on the ground
   double noise_allowance_arcsec = 20.0;      // for the flight table (FORMATS.md `flight`)
-  // Image triggers. When empty: the log's camera events; when the log has none and every_s > 0,
-  // simulated triggers every every_s seconds from the first gyro sample (a mapping cadence).
+  // Image triggers, first match wins: these; else, when every_s > 0, simulated triggers every
+  // every_s seconds from the first gyro sample (a mapping cadence); else the log's camera events.
   std::vector<ImageTrigger> triggers;
   double every_s = 0.0;
   double trigger_latency_s = 0.0;  // trigger to exposure of row 0, s (may be negative)
@@ -62,6 +63,8 @@ struct AnalyzeOptions {
   // false: zero bias and no still-segment search (calibrated flight-controller rates, or a
   // caller that removed the bias itself, e.g. `validate` on synthetic truth).
   bool estimate_bias = true;
+  // Keep the flight table's per-window ranges (FlightResult::series, readout window) for plots.
+  bool flight_series = false;
   std::function<void(double)> progress;  // fraction done (0..1); may be empty
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
@@ -103,7 +106,7 @@ struct AnalyzeResult {
   bool bias_from_still = false;
   BiasSegment still_segment;
   Eigen::Vector3d bias_rad_s = Eigen::Vector3d::Zero();  // camera axes
-  std::string trigger_source;  // "none", "camera events", "triggers", "every N s"
+  std::string trigger_source;  // "none", "camera events (KIND)", "triggers", "every N s"
   std::vector<double> limits_m;
   double altitude_m = 0.0, readout_s = 0.0;
   std::string altitude_source;  // "camera" (the options) or "log"

@@ -440,6 +440,25 @@ std::string FlightTable(const FlightResult& result) {
   return out.str();
 }
 
+std::vector<std::pair<double, double>> FlaggedIntervalsS(const FlightSeries& series,
+                                                         double threshold_arcsec) {
+  std::vector<std::pair<double, double>> intervals;
+  for (size_t k = 0; k < series.t_ns.size(); ++k) {
+    const bool flagged = series.range_arcsec[0][k] > threshold_arcsec ||
+                         series.range_arcsec[1][k] > threshold_arcsec ||
+                         series.range_arcsec[2][k] > threshold_arcsec;
+    if (!flagged) continue;
+    const double begin_s = series.t_ns[k] * 1e-9;
+    const double end_s = begin_s + series.window_s;
+    if (!intervals.empty() && begin_s <= intervals.back().second) {
+      intervals.back().second = std::max(intervals.back().second, end_s);
+    } else {
+      intervals.emplace_back(begin_s, end_s);
+    }
+  }
+  return intervals;
+}
+
 void WriteFlightSeriesCsv(const std::string& path, const FlightSeries& series) {
   std::string out = "t,range_x,range_y,range_z,vector\n";
   out.reserve(series.t_ns.size() * 80 + out.size());

@@ -16,6 +16,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -90,6 +91,13 @@ std::string FlightTable(const FlightResult& result);
 // CSV "t,range_x,range_y,range_z,vector" (seconds, arcsec; vector empty when not computed), written
 // whole or not at all.
 void WriteFlightSeriesCsv(const std::string& path, const FlightSeries& series);
+
+// The windows of a series that the per-axis criterion flags (any axis's range above
+// threshold_arcsec), as time intervals in seconds on the gyro clock: window k covers
+// [t_k, t_k + window_s]; overlapping or touching windows are merged, so the intervals are disjoint
+// and ascending.
+std::vector<std::pair<double, double>> FlaggedIntervalsS(const FlightSeries& series,
+                                                         double threshold_arcsec);
 
 // "5cm", "50mm", "0.05m", "0.05" (metres) -> metres. Throws std::invalid_argument otherwise.
 double ParseLengthM(const std::string& text);
