@@ -1,0 +1,56 @@
+// `shutterlab import SOURCE --out DATASET`: a GoPro MP4 with GPMF telemetry or a phone clip folder
+// into a video rig dataset (render/video_import.h).
+
+#include "app/command.h"
+#include "render/video_import.h"
+
+#include <cstdio>
+#include <memory>
+
+namespace shutterlab::app {
+namespace {
+
+const CommandRegistration kRegistration(55, [](CLI::App& app) {
+  auto* cmd = app.add_subcommand("import",
+                                 "real footage with its own gyro (GoPro MP4 with GPMF, phone clip "
+                                 "folder) -> video rig dataset");
+  auto options = std::make_shared<ImportOptions>();
+  cmd->add_option(
+         "SOURCE", options->source,
+         "a GoPro .mp4 with a gpmd track, or a folder with gyro.txt, framestamp.txt, frames/")
+      ->required();
+  cmd->add_option("--out", options->out_dir,
+                  "output dataset folder (replaced only if it is an earlier import)")
+      ->required();
+  cmd->add_option("--max-frames", options->max_frames, "import at most N frames");
+  cmd->add_option(
+      "--start-frame", options->start_frame,
+      "first frame id to import (GoPro: video frame index from 0; phone: frame number)");
+  return std::function<void()>([options] {
+    options->Check();
+    std::unique_ptr<Progress> bar;
+    const ImportSummary summary = ImportVideo(*options, [&](size_t done, size_t total) {
+      if (!bar) bar = std::make_unique<Progress>("import", total);
+      bar->Update(done);
+    });
+    bar.reset();
+    const char* kind = summary.kind == ImportSource::kGoproMp4 ? "GoPro MP4 (GPMF)" : "phone clip";
+    std::printf("source   %s: %s\n", kind, options->source.c_str());
+    std::printf("gyro     %zu samples, %.2f Hz\n", summary.gyro_samples, summary.gyro_rate_hz);
+    std::printf("frames   %zu, t_first_row %.6f .. %.6f s\n", summary.frames, summary.t_first_s,
+                summary.t_last_s);
+    const auto& record = summary.record;
+    if (record.contains("frames") && record["frames"].contains("failed_grabs") &&
+        record["frames"]["failed_grabs"].get<int>() > 0)
+      std::printf("note     the video reader failed %d grab(s) and went on\n",
+                  record["frames"]["failed_grabs"].get<int>());
+    for (const auto& claim : record["claims"])
+      std::printf("declared %-15s %-14s %s\n", claim["what"].get<std::string>().c_str(),
+                  claim["status"].get<std::string>().c_str(), claim["value"].dump().c_str());
+    std::printf("wrote %s (camera.json, gyro.csv, frames.csv, images/, import.json)\n",
+                options->out_dir.c_str());
+  });
+});
+
+}  // namespace
+}  // namespace shutterlab::app

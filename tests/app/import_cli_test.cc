@@ -1,0 +1,241 @@
+#include "render/camera.h"
+#include "render/frames_csv.h"
+#include "sim/gyro_io.h"
+#include "sim/text_file.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace shutterlab {
+namespace {
+
+namespace fs = std::filesystem;
+using test::RunShutterlab;
+using test::SourcePath;
+
+const std::string kKarma = SourcePath("tests/data/gopro/karma.mp4");
+const std::string kPhone = SourcePath("tests/data/phone");
+
+size_t LineCount(const std::string& text) {
+  return static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
+}
+
+nlohmann::json ReadJson(const std::string& path) {
+  return nlohmann::json::parse(ReadFileToString(path));
+}
+
+double PeakRate(const GyroTrace& trace) {
+  double peak = 0;
+  for (const GyroSample& s : trace.samples()) peak = std::max(peak, s.omega_rad_s.norm());
+  return peak;
+}
+
+// The one test that decodes all 362 frames of karma.mp4.
+TEST(ImportCli, GoproKarmaWholeClip) {
+  test::TempDir dir;
+  const std::string out = dir / "karma";
+  const auto r = RunShutterlab("import " + kKarma + " --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("4795 samples, 397.18 Hz"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("failed 1 grab"), std::string::npos)
+      << r.output;  // OpenCV 4.6, near frame 29
+
+  const std::vector<FrameEntry> frames = ReadFramesCsv(out + "/frames.csv");
+  ASSERT_EQ(frames.size(), 362u);  // the failed grab loses no frame
+  for (size_t i = 0; i < frames.size(); ++i) {
+    EXPECT_EQ(frames[i].frame, static_cast<int64_t>(i));
+    EXPECT_TRUE(frames[i].ref.empty());
+    // The video track's sample table: 3003 ticks of 1/90000 s per frame.
+    EXPECT_EQ(frames[i].t_first_row_ns,
+              static_cast<int64_t>(std::llround(i * 3003 / 90000.0 * 1e9)));
+  }
+  for (size_t i : {size_t{0}, size_t{28}, size_t{29}, size_t{361}})
+    EXPECT_TRUE(fs::exists(out + "/" + frames[i].image)) << frames[i].image;
+
+  const GyroTrace gyro = ReadGyroCsv(out + "/gyro.csv");
+  ASSERT_EQ(gyro.size(), 4795u);
+  EXPECT_NEAR(1.0 / ((gyro.t_end_ns() - gyro.t_begin_ns()) * 1e-9 / (gyro.size() - 1)), 397.18,
+              0.05);
+  EXPECT_NEAR(PeakRate(gyro), 0.83, 0.01);
+  // gyro.csv holds the sensor's x, y, z; GPMF stores z, x, y. Peak |rate| per stored column is
+  // 0.8245 (z), 0.0567 (x), 0.2993 (y) rad/s (int16 counts / 3755).
+  double peak_axis[3] = {0, 0, 0};
+  for (const GyroSample& s : gyro.samples())
+    for (int a = 0; a < 3; ++a) peak_axis[a] = std::max(peak_axis[a], std::abs(s.omega_rad_s[a]));
+  EXPECT_NEAR(peak_axis[0], 0.0567, 0.0005);
+  EXPECT_NEAR(peak_axis[1], 0.2993, 0.0005);
+  EXPECT_NEAR(peak_axis[2], 0.8245, 0.0005);
+
+  const RigModel rig = ReadRigModel(out + "/camera.json");
+  EXPECT_EQ(rig.camera.width, 854);
+  EXPECT_EQ(rig.camera.height, 480);
+  EXPECT_NEAR(rig.cam_from_gyro.determinant(), 1.0, 1e-12);
+  EXPECT_EQ(rig.cam_from_gyro.row(1), Eigen::RowVector3d(0, 0, -1));  // camera y = -sensor z (up)
+
+  const nlohmann::json record = ReadJson(out + "/import.json");
+  EXPECT_EQ(record["source"]["kind"], "gopro_mp4");
+  EXPECT_EQ(record["gyro"]["scal"], nlohmann::json::array({3755.0}));
+  EXPECT_EQ(record["frames"]["failed_grabs"], 1);
+  EXPECT_EQ(record["frames"]["reader_time_mismatches"], 0);
+  ASSERT_EQ(record["exposure_s"].size(), 362u);
+  EXPECT_NEAR(record["exposure_s"][0]["exposure_s"].get<double>(), 0.00487, 0.00001);
+  size_t guesses = 0;
+  for (const auto& claim : record["claims"]) guesses += claim["status"] == "guess";
+  EXPECT_GE(guesses, 2u);  // intrinsics and readout are guesses, and say so
+}
+
+TEST(ImportCli, GoproSelectionAndReimport) {
+  test::TempDir dir;
+  const std::string out = dir / "karma";
+  const auto r =
+      RunShutterlab("import " + kKarma + " --out " + out + " --start-frame 100 --max-frames 3");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::vector<FrameEntry> frames = ReadFramesCsv(out + "/frames.csv");
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[0].frame, 100);
+  EXPECT_EQ(frames[2].t_first_row_ns, std::llround(102 * 3003 / 90000.0 * 1e9));
+  // Importing again over an earlier import replaces it.
+  const auto again = RunShutterlab("import " + kKarma + " --out " + out + " --max-frames 2");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  frames = ReadFramesCsv(out + "/frames.csv");
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].frame, 0);
+  EXPECT_FALSE(fs::exists(out + "/images/0100.png"));
+  for (const auto& entry : fs::directory_iterator(dir.path()))  // no staging folder left behind
+    EXPECT_EQ(entry.path().filename(), "karma");
+}
+
+TEST(ImportCli, PhoneClip) {
+  test::TempDir dir;
+  const std::string out = dir / "phone";
+  const auto r = RunShutterlab("import " + kPhone + " --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+
+  // What the source files hold, read here independently of the importer.
+  const std::string gyro_text = ReadFileToString(kPhone + "/gyro.txt");
+  const std::string stamps_text = ReadFileToString(kPhone + "/framestamp.txt");
+  ASSERT_EQ(LineCount(gyro_text), 29466u);
+  ASSERT_EQ(LineCount(stamps_text), 2146u);
+  std::vector<double> sof_s;
+  LineCursor stamps(stamps_text);
+  while (auto line = stamps.Next()) sof_s.push_back(*ParseDouble(*line));
+  const double first_gyro_t =
+      std::stod(gyro_text.substr(gyro_text.rfind(',', gyro_text.find('\n')) + 1));
+  const double origin_s = std::floor(first_gyro_t);
+
+  const GyroTrace gyro = ReadGyroCsv(out + "/gyro.csv");
+  ASSERT_EQ(gyro.size(), 29466u);
+  EXPECT_NEAR(gyro.sampling().RateHz(), 412.2, 0.3);
+  EXPECT_NEAR(PeakRate(gyro), 0.75, 0.01);
+  // Doubles near 4.3e6 s resolve ~1 ns: times agree to a few ns.
+  EXPECT_NEAR(gyro.t_begin_ns(), (first_gyro_t - origin_s) * 1e9, 2.0);
+
+  const std::vector<FrameEntry> frames = ReadFramesCsv(out + "/frames.csv");
+  ASSERT_EQ(frames.size(), 20u);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const int64_t n = 100 + static_cast<int64_t>(i);
+    EXPECT_EQ(frames[i].frame, n);
+    // Line N of framestamp.txt, on the same shifted clock as the gyro.
+    EXPECT_NEAR(frames[i].t_first_row_ns, (sof_s[n - 1] - origin_s) * 1e9, 2.0) << n;
+    EXPECT_TRUE(frames[i].ref.empty());
+    // Copied byte for byte.
+    EXPECT_EQ(ReadFileToString(out + "/" + frames[i].image),
+              ReadFileToString(kPhone + "/frames/RE_frame-" + std::to_string(n) + ".jpg"));
+  }
+
+  const RigModel rig = ReadRigModel(out + "/camera.json");
+  EXPECT_EQ(rig.camera.width, 800);
+  EXPECT_EQ(rig.camera.height, 600);
+  EXPECT_DOUBLE_EQ(rig.camera.fx, 573.8534);
+  EXPECT_DOUBLE_EQ(rig.camera.cy, 309.0112);
+  EXPECT_DOUBLE_EQ(rig.shutter.readout_s, 0.033312);
+  EXPECT_EQ(std::abs(rig.cam_from_gyro(1, 0)), 1.0);  // "gyro x is camera y"
+
+  const nlohmann::json record = ReadJson(out + "/import.json");
+  EXPECT_EQ(record["frames"]["sof_times"], 2146);
+  EXPECT_DOUBLE_EQ(record["time_origin_s"].get<double>(), origin_s);
+  EXPECT_DOUBLE_EQ(record["exposure_range_s"][0].get<double>(), 0.004946);
+  EXPECT_DOUBLE_EQ(record["exposure_range_s"][1].get<double>(), 0.005906);
+  EXPECT_LE(record["frames"]["dump_sof_max_diff_s"].get<double>(),
+            1e-6);  // the dump agrees with framestamp.txt
+  ASSERT_EQ(record["exposure_s"].size(), 20u);
+  EXPECT_DOUBLE_EQ(record["exposure_s"][0]["exposure_s"].get<double>(), 0.005405);  // frameNum :100
+}
+
+// Writes a phone clip folder: the bundled files, with `edit` applied to one of them.
+void CopyPhoneClip(const std::string& to, int max_frames) {
+  fs::create_directories(to + "/frames");
+  for (const char* name : {"gyro.txt", "framestamp.txt"})
+    fs::copy_file(kPhone + "/" + name, to + "/" + name);
+  for (int n = 100; n < 100 + max_frames; ++n) {
+    const std::string name = "/frames/RE_frame-" + std::to_string(n) + ".jpg";
+    fs::copy_file(kPhone + name, to + name);
+  }
+}
+
+void ExpectOneLineError(const std::string& args, const std::string& needle,
+                        const std::string& out_dir) {
+  const auto r = RunShutterlab(args);
+  EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+  EXPECT_EQ(LineCount(r.output), 1u) << r.output;
+  EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
+  if (!out_dir.empty()) {
+    EXPECT_FALSE(fs::exists(out_dir)) << "output left by: " << args;
+  }
+}
+
+TEST(ImportCli, BadInputsAreOneLineExitTwoAndNoOutput) {
+  test::TempDir dir;
+  const std::string out = dir / "out";
+  ExpectOneLineError("import " + (dir / "missing.mp4") + " --out " + out,
+                     "missing.mp4: no such file", out);
+  std::ofstream(dir / "text.mp4") << "not a video\n";
+  ExpectOneLineError("import " + (dir / "text.mp4") + " --out " + out, "text.mp4: offset ", out);
+  // Truncated copies of karma.mp4: the index is at the end.
+  const std::string karma = ReadFileToString(kKarma);
+  std::ofstream(dir / "cut.mp4", std::ios::binary).write(karma.data(), 2000000);
+  ExpectOneLineError("import " + (dir / "cut.mp4") + " --out " + out, "cut.mp4: offset ", out);
+  // A payload offset past the end: the moov is whole, mdat's first gpmd payload is gone.
+  std::string hole = karma;
+  for (size_t i = 323381; i < 323381 + 64; ++i) hole[i] = '\xff';
+  std::ofstream(dir / "hole.mp4", std::ios::binary)
+      .write(hole.data(), static_cast<std::streamsize>(hole.size()));
+  ExpectOneLineError("import " + (dir / "hole.mp4") + " --out " + out,
+                     "hole.mp4: offset 323381: GPMF", out);
+
+  // Phone folders.
+  const std::string clip = dir / "clip";
+  CopyPhoneClip(clip, 2);
+  fs::remove(clip + "/framestamp.txt");
+  ExpectOneLineError("import " + clip + " --out " + out, "no framestamp.txt", out);
+  fs::copy_file(kPhone + "/framestamp.txt", clip + "/framestamp.txt");
+  std::string gyro = ReadFileToString(kPhone + "/gyro.txt");
+  const size_t line3 = gyro.find('\n', gyro.find('\n') + 1) + 1;
+  gyro.replace(line3, 5, "abcde");
+  std::ofstream(clip + "/gyro.txt", std::ios::binary | std::ios::trunc) << gyro;
+  ExpectOneLineError("import " + clip + " --out " + out, "gyro.txt:3: field 1 is not a number",
+                     out);
+  fs::copy_file(kPhone + "/gyro.txt", clip + "/gyro.txt", fs::copy_options::overwrite_existing);
+  std::ofstream(clip + "/frames/RE_frame-3000.jpg") << "x";
+  ExpectOneLineError("import " + clip + " --out " + out, "has no time in framestamp.txt", out);
+  fs::remove(clip + "/frames/RE_frame-3000.jpg");
+  // An existing folder that is not an import is never overwritten.
+  fs::create_directories(dir / "keep");
+  std::ofstream(dir / "keep/notes.txt") << "mine\n";
+  ExpectOneLineError("import " + clip + " --out " + (dir / "keep"), "not an import", "");
+  EXPECT_TRUE(fs::exists(dir / "keep/notes.txt"));
+  // And the repaired clip imports.
+  const auto r = RunShutterlab("import " + clip + " --out " + out + " --start-frame 101");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(ReadFramesCsv(out + "/frames.csv").size(), 1u);
+}
+
+}  // namespace
+}  // namespace shutterlab
