@@ -71,6 +71,8 @@ struct LoopResult {
   double noise_px = 0.0;
   std::vector<IdentifiedEffect> effects;  // in the order added
   bool unexplained = false;
+  // The level test on the declared model's residual (the loop searches only when it is true).
+  bool above_noise_before = false;
   TrueModel model;  // the declared model plus the identified effects
   // For a person: each round's candidates with their fitted residual and criterion.
   std::vector<std::string> log;
