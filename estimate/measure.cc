@@ -5,7 +5,7 @@
 // the end of this comment):
 //  1. Both images become one grey channel (the plain mean of the channels: any channel order), in
 //     0..1 of the type's full scale.
-//  2. cv::DISOpticalFlow at the finest scale with variational refinement, forward (image -> ref)
+//  2. cv::DISOpticalFlow (ULTRAFAST preset) down to the finest scale, forward (image -> ref)
 //     and backward (ref -> image); the forward flow at p is d(p) = p_ref - p directly.
 //  3. A pixel is measured when: it and its match are not saturated / black (renderer's border), the
 //     smaller eigenvalue of the structure tensor is large enough (texture in both directions), and
@@ -21,13 +21,27 @@
 //     apart are close to independent); noise_px is the RMS of (point - row model) over them,
 //     corrected for the model's degrees of freedom.
 //
-// Accuracy (RMS of |field - truth| over measured pixels, px) on rendered 1280x960 pairs:
-//   (filled in below as measured)
+// Accuracy, RMS of |flow - truth| over the measured pixels, px, on rendered 1280x960 pairs of both
+// real scenes (tests/estimate/measure_test.cc, fx 1100, 30 ms readout, D = 1.8 .. 24.4 px), one core;
+// raw flow alone unless "+ model":
+//   DIS ULTRAFAST finest scale 0 + row model (chosen)       0.0012 .. 0.0055   0.85 s / frame (both
+//                                                                               directions + model)
+//   DIS MEDIUM finest 0 (variational refinement) + model    0.0019 .. 0.0042   2.75 s
+//   DIS ULTRAFAST / FAST / MEDIUM finest 0, raw             0.008-0.083 / 0.007-0.032 / 0.007-0.027
+//                                                            (0.36 / 0.87 / 1.15 s one direction)
+//   DIS FAST / MEDIUM finest 1, raw                          0.052-0.090 / 0.051-0.077
+//   DIS finest 2 (the presets' default), raw                 0.07-0.60
+//   Farneback (pyr 0.5, 4 levels, win 15), raw               0.017-1.96 (fails on large D)
+//   pyramidal LK 21x21 on the 16 px grid, fb-checked, raw    0.007-0.067   (0.2 s, sparse only)
+// So the row model, not the flow preset, sets the accuracy; the rest buys nothing but time.
 
 #include "estimate/measure.h"
 
+#include "render/image_io.h"
+#include "render/pictures.h"
 #include "render/rs_warp.h"
 #include "sim/check.h"
+#include "sim/text_file.h"
 
 #include <Eigen/Dense>
 #include <opencv2/imgproc.hpp>
@@ -36,7 +50,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <limits>
+#include <sstream>
 
 namespace shutterlab {
 namespace {
@@ -296,7 +313,10 @@ DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& i
   grey_ref.convertTo(ref8, CV_8U, 255.0);
   grey_img.convertTo(img8, CV_8U, 255.0);
 
-  cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
+  // ULTRAFAST (no variational refinement) at full resolution: as accurate after the row model as
+  // the slower presets (header), at a third of the time.
+  cv::Ptr<cv::DISOpticalFlow> dis =
+      cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_ULTRAFAST);
   dis->setFinestScale(0);
   cv::Mat forward, backward;
   dis->calc(img8, ref8, forward);
@@ -390,6 +410,121 @@ DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& i
   }
   result.d_px = FrameDistortionPx(result.field);
   return result;
+}
+
+FieldComparison CompareFields(const cv::Mat& measured, const cv::Mat& truth) {
+  SHUTTERLAB_CHECK(measured.type() == CV_32FC2 && truth.type() == CV_32FC2)
+      << "displacement fields must be CV_32FC2";
+  SHUTTERLAB_CHECK(measured.size() == truth.size()) << "displacement fields differ in size";
+  FieldComparison c;
+  double sum_sq = 0.0;
+  for (int v = 0; v < measured.rows; ++v) {
+    const cv::Vec2f* m = measured.ptr<cv::Vec2f>(v);
+    const cv::Vec2f* t = truth.ptr<cv::Vec2f>(v);
+    for (int u = 0; u < measured.cols; ++u) {
+      const cv::Vec2f e = m[u] - t[u];
+      const double sq = e.dot(e);
+      if (!std::isfinite(sq)) continue;
+      sum_sq += sq;
+      c.max_px = std::max(c.max_px, std::sqrt(sq));
+      ++c.pixels;
+    }
+  }
+  c.rms_px = c.pixels ? std::sqrt(sum_sq / c.pixels) : 0.0;
+  return c;
+}
+
+nlohmann::json MeasureToJson(const MeasureReport& report) {
+  const DisplacementMeasurement& m = report.measurement;
+  nlohmann::json j = {{"format", "measure/1"},
+                      {"width", m.field.cols},
+                      {"height", m.field.rows},
+                      {"D_px", m.d_px}};
+  if (report.ground_m_per_px) j["D_m"] = m.d_px * *report.ground_m_per_px;
+  j["noise_px"] = m.noise_px;
+  j["measured_fraction"] = m.measured_fraction;
+  j["points"] = m.points.size();
+  if (report.truth) {
+    j["truth"] = {{"rms_px", report.truth->rms_px},
+                  {"max_px", report.truth->max_px},
+                  {"pixels", report.truth->pixels}};
+  }
+  return j;
+}
+
+std::string MeasureText(const MeasureReport& report) {
+  const DisplacementMeasurement& m = report.measurement;
+  char line[256];
+  std::string text;
+  std::snprintf(line, sizeof(line), "frame distortion D  %.3f px", m.d_px);
+  text += line;
+  if (report.ground_m_per_px) {
+    std::snprintf(line, sizeof(line), " = %.4f m on the ground", m.d_px * *report.ground_m_per_px);
+    text += line;
+  }
+  std::snprintf(line, sizeof(line),
+                "\nmeasurement noise   %.4f px (over %zu grid points)\n"
+                "measured            %.1f %% of pixels\n",
+                m.noise_px, m.points.size(), 100.0 * m.measured_fraction);
+  text += line;
+  if (report.truth) {
+    std::snprintf(line, sizeof(line),
+                  "against the truth   rms %.4f px, max %.4f px over %zu pixels\n",
+                  report.truth->rms_px, report.truth->max_px, report.truth->pixels);
+    text += line;
+  }
+  return text;
+}
+
+std::string RowProfileCsv(const DisplacementMeasurement& measurement) {
+  const cv::Mat& field = measurement.field;
+  const int width = field.cols;
+  std::string csv = "row,measured_columns,mean_dx,mean_dy,left_dx,left_dy,centre_dx,centre_dy,"
+                    "right_dx,right_dy\n";
+  // Mean of the finite entries of row v in columns [u0, u1); false when there are none.
+  auto mean = [&](int v, int u0, int u1, cv::Vec2d* out, int* count) {
+    cv::Vec2d sum(0, 0);
+    int n = 0;
+    const cv::Vec2f* row = field.ptr<cv::Vec2f>(v);
+    for (int u = u0; u < u1; ++u) {
+      if (!std::isfinite(row[u][0])) continue;
+      sum += cv::Vec2d(row[u][0], row[u][1]);
+      ++n;
+    }
+    if (count) *count = n;
+    if (n) *out = sum / n;
+    return n > 0;
+  };
+  auto append_pair = [&csv](bool ok, const cv::Vec2d& d) {
+    csv += ',';
+    if (ok) AppendDouble(d[0], &csv);
+    csv += ',';
+    if (ok) AppendDouble(d[1], &csv);
+  };
+  for (int v = 0; v < field.rows; ++v) {
+    cv::Vec2d all, left, centre, right;
+    int count = 0;
+    const bool any = mean(v, 0, width, &all, &count);
+    csv += std::to_string(v) + ',' + std::to_string(count);
+    append_pair(any, all);
+    append_pair(mean(v, 0, width / 5, &left, nullptr), left);
+    append_pair(mean(v, 2 * width / 5, 3 * width / 5, &centre, nullptr), centre);
+    append_pair(mean(v, 4 * width / 5, width, &right, nullptr), right);
+    csv += '\n';
+  }
+  return csv;
+}
+
+void WriteMeasureOutputs(const std::string& dir, const DisplacementMeasurement& measurement) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw IoError(IoMessage(dir, 0, "cannot create folder: " + ec.message()));
+  WriteFileAtomically(dir + "/rows.csv", RowProfileCsv(measurement));
+  WriteImage(dir + "/field.exr", measurement.field, {"dx", "dy"});
+  WriteImage(dir + "/heatmap.png", DisplacementHeatmap(measurement.field));
+  cv::Mat confidence8;
+  measurement.confidence.convertTo(confidence8, CV_8U, 255.0);
+  WriteImage(dir + "/confidence.png", confidence8);
 }
 
 }  // namespace shutterlab

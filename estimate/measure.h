@@ -5,8 +5,11 @@
 // (Interface fixed first so that validate can be written against it; the method is documented in
 // measure.cc with the accuracy it was chosen by.)
 
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace shutterlab {
@@ -40,5 +43,37 @@ struct DisplacementMeasurement {
 // std::invalid_argument when the sizes differ or an image is empty.
 DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& image,
                                             const MeasureOptions& options = {});
+
+// A measured field against a reference field (e.g. a render's truth/NNNN_disp.exr), over the
+// pixels where both are finite: RMS and largest length of the difference, px.
+struct FieldComparison {
+  double rms_px = 0.0;
+  double max_px = 0.0;
+  size_t pixels = 0;
+};
+FieldComparison CompareFields(const cv::Mat& measured, const cv::Mat& truth);
+
+// `shutterlab measure`'s report. ground_m_per_px: altitude_m / f (f = (fx + fy) / 2) when a camera
+// is known, for D in metres.
+struct MeasureReport {
+  DisplacementMeasurement measurement;
+  std::optional<double> ground_m_per_px;
+  std::optional<FieldComparison> truth;  // with --truth
+};
+// JSON: {"format": "measure/1", "width", "height", "D_px", ["D_m"], "noise_px",
+// "measured_fraction", "points", ["truth": {"rms_px", "max_px", "pixels"}]}.
+nlohmann::json MeasureToJson(const MeasureReport& report);
+// Table for a person.
+std::string MeasureText(const MeasureReport& report);
+
+// Per-row profile CSV: row,measured_columns,mean_dx,mean_dy,left_dx,left_dy,centre_dx,centre_dy,
+// right_dx,right_dy (left / centre / right: the mean over the measured pixels of the first, middle
+// and last fifth of the columns; empty where a row has none there), px.
+std::string RowProfileCsv(const DisplacementMeasurement& measurement);
+
+// Writes DIR/rows.csv, DIR/field.exr (float32 channels dx, dy; NaN where unmeasured),
+// DIR/heatmap.png (|d|) and DIR/confidence.png (8-bit, 255 = confidence 1); each file whole or not
+// at all. Creates DIR.
+void WriteMeasureOutputs(const std::string& dir, const DisplacementMeasurement& measurement);
 
 }  // namespace shutterlab
