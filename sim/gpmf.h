@@ -29,7 +29,8 @@ struct GpmfKlv {
   std::vector<GpmfKlv> children;  // type 0 only
 };
 
-// Parses a payload into its KLV tree. file_offset is the file offset of payload[0]. Four zero
+// Parses a payload into its KLV tree; the KLVs' data are views into payload, which must outlive
+// them. file_offset is the file offset of payload[0]. Four zero
 // bytes where a key should be end a level (payloads may be zero-padded). Throws IoError.
 std::vector<GpmfKlv> ParseGpmf(std::string_view payload, uint64_t file_offset,
                                const std::string& path);

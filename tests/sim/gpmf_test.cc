@@ -130,7 +130,8 @@ TEST(Gpmf, EveryTruncationAndByteValueIsAnErrorOrAResult) {
   const std::string payload = KnownPayload();
   for (size_t cut = 0; cut <= payload.size(); ++cut) {
     try {
-      const auto klvs = ParseGpmf(payload.substr(0, cut), 0, "cut");
+      const std::string truncated = payload.substr(0, cut);  // the KLVs view into it
+      const auto klvs = ParseGpmf(truncated, 0, "cut");
       FindGpmfStreams(klvs, "GYRO", "cut");
     } catch (const IoError& e) {
       EXPECT_EQ(std::string(e.what()).rfind("cut: offset ", 0), 0u) << e.what();
