@@ -9,6 +9,7 @@
 #include "sim/mp4.h"
 #include "sim/text_file.h"
 
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
@@ -16,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
 #include <regex>
 #include <unistd.h>
 
@@ -34,6 +36,8 @@ constexpr double kHero5ReadoutGuessS = 0.015;
 // OpenCV's reader fails an occasional grab and then goes on (OpenCV 4.6 on karma.mp4: once, near
 // frame 29); this many failures in a row means the end.
 constexpr int kMaxConsecutiveGrabFailures = 8;
+constexpr size_t kWriteBatch =
+    32;  // frames held in memory for parallel PNG writing (~40 MB at 854x480)
 
 // The phone clip's calibration, as the source repository's example states it (SOURCES.md).
 constexpr double kPhoneFx = 573.8534, kPhoneFy = 575.0448, kPhoneCx = 406.0101, kPhoneCy = 309.0112;
@@ -156,7 +160,28 @@ ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
   if (!capture.isOpened()) throw IoError(IoMessage(path, -1, "OpenCV cannot open the video"));
   std::vector<FrameEntry> entries;
   nlohmann::json exposures = nlohmann::json::array();
-  cv::Mat frame, rgb;
+  cv::Mat frame;
+  cv::Size size;
+  // Encoding a PNG takes several times longer than decoding the frame: frames are written in
+  // batches, in parallel.
+  std::vector<std::pair<std::string, cv::Mat>> pending;
+  auto flush = [&] {
+    std::mutex mutex;
+    std::string error;
+    cv::parallel_for_(cv::Range(0, static_cast<int>(pending.size())), [&](const cv::Range& range) {
+      for (int i = range.start; i < range.end; ++i) {
+        try {
+          WriteImage(pending[i].first, pending[i].second);
+        } catch (const std::exception& e) {  // exceptions must not cross the worker threads
+          std::lock_guard<std::mutex> lock(mutex);
+          if (error.empty()) error = e.what();
+        }
+      }
+    });
+    pending.clear();
+    if (!error.empty()) throw IoError(error);
+    if (progress) progress(entries.size(), selected.size());
+  };
   int64_t decoded = 0;  // index of the next frame the reader returns
   int failures = 0, consecutive = 0, time_mismatches = 0;
   const double period_s =
@@ -178,14 +203,16 @@ ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
         std::abs(reader_s - frame_times_s[index]) > 0.5 * period_s)
       ++time_mismatches;
     if (index < selected.front()) continue;
-    if (!entries.empty() && frame.size() != rgb.size())
+    if (size.empty()) size = frame.size();
+    if (frame.size() != size)
       throw IoError(IoMessage(path, -1, "frame " + std::to_string(index) + " changes size"));
     FrameEntry entry;
     entry.frame = index;
     entry.t_first_row_ns = SecondsToNs(frame_times_s[index]);
     entry.image = "images/" + FrameName(index) + ".png";
+    cv::Mat rgb;
     cv::cvtColor(frame, rgb, frame.channels() == 4 ? cv::COLOR_BGRA2RGB : cv::COLOR_BGR2RGB);
-    WriteImage((dir / entry.image).string(), rgb);
+    pending.emplace_back((dir / entry.image).string(), rgb);
     entries.push_back(entry);
     // Exposure: the SHUT value nearest in time (SHUT is written once per video frame).
     nlohmann::json exposure = nullptr;
@@ -200,15 +227,16 @@ ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
         exposure = telemetry.shutter_s[best];
     }
     exposures.push_back({{"frame", index}, {"exposure_s", exposure}});
-    if (progress) progress(entries.size(), selected.size());
+    if (pending.size() >= kWriteBatch) flush();
   }
+  flush();
   if (entries.empty())
     throw IoError(IoMessage(path, -1, "OpenCV decoded no frame of the selection"));
   if (static_cast<int64_t>(entries.size()) < static_cast<int64_t>(selected.size()))
     std::fprintf(stderr, "warning: %s: OpenCV decoded %zu of the %zu frames selected\n",
                  path.c_str(), entries.size(), selected.size());
 
-  RigModel rig = BaseRig(rgb.cols, rgb.rows);
+  RigModel rig = BaseRig(size.width, size.height);
   const double f_px = 0.5 * rig.camera.width / (0.5 * kHero5WideHfovDeg * kPi / 180.0);
   rig.camera.fx = rig.camera.fy = f_px;
   rig.camera.cx = 0.5 * (rig.camera.width - 1);
