@@ -1,0 +1,150 @@
+// Speed of `measure` (estimate/measure.h) on a rendered 1280 x 960 RGB pair of a real scene (fx
+// 1100, 30 ms readout, a multirotor-like trace, D about 10 px), one thread (cv::setNumThreads(1)),
+// thread CPU time, after a warm-up, against references measured in the same run:
+//   - Measure:            MeasureDisplacement, everything (both flow directions, masks, row model,
+//                         points);
+//   - DisUltrafastFull:   cv::DISOpticalFlow ULTRAFAST at finest scale 0, one direction, on the grey
+//                         pair: the flow that Measure runs twice;
+//   - DisMediumDefault:   cv::DISOpticalFlow MEDIUM as shipped (finest scale 1), one direction.
+// The budget is about 1.5 s per frame on one core (validate: 12 frames and the fit in 60 s on 2).
+// Run: build/bin/measure_bench [--benchmark_repetitions=3]
+
+#include "estimate/measure.h"
+#include "render/image_io.h"
+#include "render/rs_warp.h"
+#include "render/truth_model.h"
+#include "sim/synth.h"
+
+#include <benchmark/benchmark.h>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <string>
+#include <time.h>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+std::string RepoPath(const std::string& relative) {
+  std::string here = __FILE__;
+  const size_t cut = here.rfind("bench/");
+  return (cut == std::string::npos ? std::string() : here.substr(0, cut)) + relative;
+}
+
+double ThreadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+struct Fixture {
+  cv::Mat ref, rs, ref_grey, rs_grey, flow;
+  double d_px = 0.0;
+  Fixture() {
+    const cv::Mat scene = ReadImage(RepoPath("assets/scenes/siyi_zr10_img0100.jpg"));
+    SynthOptions synth;
+    synth.profile = MotionProfile::kFlight;
+    synth.rate_hz = 1000.0;
+    synth.duration_s = 20.0;
+    synth.seed = 11;
+    synth.imu = ImuErrorModel::Ideal();
+    TrueModel truth;
+    truth.rig.camera.width = 1280;
+    truth.rig.camera.height = 960;
+    truth.rig.camera.fx = truth.rig.camera.fy = 1100.0;
+    truth.rig.camera.cx = 639.5;
+    truth.rig.camera.cy = 479.5;
+    truth.rig.shutter.readout_s = 0.030;
+    const CameraMotion motion(SynthesizeTrace(synth), truth);
+    const FrameMotion fm = motion.Frame(SecondsToNs(10.1));
+    const FrameGeometry geometry(truth.rig.camera, 50.0, fm, scene.size());
+    RenderFrame(scene, geometry, Interpolation::kBilinear, &rs);
+    RenderFrame(scene, FrameGeometry(truth.rig.camera, 50.0, fm.Reference(), scene.size()),
+                Interpolation::kBilinear, &ref);
+    d_px = FrameDistortionPx(DisplacementField(geometry));
+    cv::cvtColor(ref, ref_grey, cv::COLOR_RGB2GRAY);
+    cv::cvtColor(rs, rs_grey, cv::COLOR_RGB2GRAY);
+  }
+};
+
+Fixture& Shared() {
+  static Fixture fixture;
+  return fixture;
+}
+
+void RunMeasure(Fixture& f) { benchmark::DoNotOptimize(MeasureDisplacement(f.ref, f.rs)); }
+void RunDisUltrafast(Fixture& f) {
+  auto dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_ULTRAFAST);
+  dis->setFinestScale(0);
+  dis->calc(f.rs_grey, f.ref_grey, f.flow);
+}
+void RunDisMedium(Fixture& f) {
+  cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM)->calc(f.rs_grey, f.ref_grey, f.flow);
+}
+
+template <typename Body>
+void Timed(benchmark::State& state, Body body) {
+  cv::setNumThreads(1);
+  Fixture& f = Shared();
+  body(f);  // warm-up
+  double total_s = 0.0;
+  for (auto _ : state) {
+    const double start_s = ThreadCpuSeconds();
+    body(f);
+    total_s += ThreadCpuSeconds() - start_s;
+  }
+  state.counters["cpu_ms"] = 1e3 * total_s / static_cast<double>(state.iterations());
+}
+
+void BM_Measure(benchmark::State& state) { Timed(state, RunMeasure); }
+void BM_DisUltrafastFull(benchmark::State& state) { Timed(state, RunDisUltrafast); }
+void BM_DisMediumDefault(benchmark::State& state) { Timed(state, RunDisMedium); }
+
+BENCHMARK(BM_Measure)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_DisUltrafastFull)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_DisMediumDefault)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
+// The shared machine's load drifts: alternate the contenders run by run, compare medians.
+void PrintPairedRatios(int runs) {
+  cv::setNumThreads(1);
+  Fixture& f = Shared();
+  std::vector<double> measure_s, ultrafast_s, medium_s;
+  auto time = [&f](void (*body)(Fixture&)) {
+    const double start_s = ThreadCpuSeconds();
+    body(f);
+    return ThreadCpuSeconds() - start_s;
+  };
+  for (int i = 0; i < runs; ++i) {
+    ultrafast_s.push_back(time(RunDisUltrafast));
+    measure_s.push_back(time(RunMeasure));
+    medium_s.push_back(time(RunDisMedium));
+  }
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  const double ultrafast = median(ultrafast_s), measure = median(measure_s),
+               medium = median(medium_s);
+  std::printf("\nPaired, %d alternating runs, median thread CPU time (1280x960 RGB, D %.1f px, "
+              "1 thread):\n", runs, f.d_px);
+  std::printf("  DIS ULTRAFAST finest 0, one way  %7.1f ms   1.00x\n", ultrafast * 1e3);
+  std::printf("  measure (all)                    %7.1f ms   %.2fx\n", measure * 1e3,
+              measure / ultrafast);
+  std::printf("  DIS MEDIUM default, one way      %7.1f ms   %.2fx\n", medium * 1e3,
+              medium / ultrafast);
+}
+
+}  // namespace
+}  // namespace shutterlab
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  shutterlab::PrintPairedRatios(7);
+  return 0;
+}
