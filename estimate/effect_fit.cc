@@ -42,7 +42,9 @@
 // Standard errors: (J^T W J)^-1 s^2 c with s^2 the model's own residual variance (not noise_px)
 // and c its residual's spatial correlation factor: a white-noise covariance would be too
 // optimistic by c for correlated measurement noise, since every parameter here moves whole regions
-// of the image coherently.
+// of the image coherently. Each is raised to the cluster-robust (sandwich) standard error with the
+// frames as clusters where that is larger: measurement errors coherent over a whole frame (a bias
+// along row bands) are correlated beyond the neighbourhood that c looks at.
 
 #include "estimate/effect_model.h"
 #include "estimate/least_squares.h"
@@ -387,17 +389,50 @@ Fit FitHypothesis(const Context& ctx, Hypothesis hypothesis) {
   return fit;
 }
 
-// Covariance of the fitted parameters: (J^T W J)^-1 s^2 c (see the top of this file).
+// Covariance of the fitted parameters (see the top of this file): the model-based
+// (J^T W J)^-1 s^2 c, each standard error raised to the cluster-robust one (frames as clusters)
+// where that is larger, keeping the model-based correlations.
 Eigen::MatrixXd Covariance(const Context& ctx, const Fit& fit) {
   const Eigen::Index p = fit.solution.x.size();
-  const std::vector<uint8_t> keep = KeepMask(ctx, fit.solution.residuals, fit.solution.valid);
+  if (p == 0) return Eigen::MatrixXd();
+  const RobustSolution& sol = fit.solution;
+  const std::vector<uint8_t> keep = KeepMask(ctx, sol.residuals, sol.valid);
   const MaskSums sums = SumWeights(ctx, keep);
   const double dof = std::max(1.0, 2.0 * sums.w - static_cast<double>(p));
-  const double s2 = MaskedRss(ctx, fit.solution.residuals, fit.solution.valid, keep) / dof;
-  const double c = CorrelationFactor(ctx, fit.solution.residuals, keep);
-  Eigen::MatrixXd cov = fit.solution.normal.ldlt().solve(Eigen::MatrixXd::Identity(p, p));
-  if (!cov.allFinite()) cov.setConstant(std::numeric_limits<double>::quiet_NaN());
-  return cov * s2 * c;
+  const double s2 = MaskedRss(ctx, sol.residuals, sol.valid, keep) / dof;
+  const double c = CorrelationFactor(ctx, sol.residuals, keep);
+  const Eigen::MatrixXd a_inv = sol.normal.ldlt().solve(Eigen::MatrixXd::Identity(p, p));
+  if (!a_inv.allFinite()) {
+    return Eigen::MatrixXd::Constant(p, p, std::numeric_limits<double>::quiet_NaN());
+  }
+  const Eigen::MatrixXd model = a_inv * s2 * c;
+  // Cluster-robust (Liang & Zeger 1986, with the G / (G - 1) small-sample factor): the scatter of
+  // the frames' score contributions g_f = sum_i w_i J_i^T r_i. It sees errors that are coherent
+  // over a whole frame (a measurement bias along row bands, a per-frame timing error), which the
+  // neighbourhood factor c cannot.
+  Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(p, p);
+  int clusters = 0;
+  for (const auto& [begin, end] : ctx.frame_ranges) {
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(p);
+    bool any = false;
+    for (size_t i = begin; i < end; ++i) {
+      if (!keep[i] || sol.irls_weights[i] <= 0) continue;
+      g.noalias() += sol.irls_weights[i] * sol.jacobian.middleRows(2 * i, 2).transpose() *
+                     sol.residuals.segment<2>(2 * i);
+      any = true;
+    }
+    if (!any) continue;
+    meat.noalias() += g * g.transpose();
+    ++clusters;
+  }
+  Eigen::VectorXd sd = model.diagonal().cwiseMax(0.0).cwiseSqrt();
+  if (clusters >= 2) {
+    const Eigen::MatrixXd robust = a_inv * meat * a_inv * (clusters / (clusters - 1.0));
+    sd = sd.cwiseMax(robust.diagonal().cwiseMax(0.0).cwiseSqrt());
+  }
+  const Eigen::VectorXd model_sd = model.diagonal().cwiseMax(1e-300).cwiseSqrt();
+  const Eigen::VectorXd scale = sd.cwiseQuotient(model_sd);
+  return scale.asDiagonal() * model * scale.asDiagonal();
 }
 
 std::string Format(const char* fmt, double a) {

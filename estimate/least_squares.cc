@@ -54,9 +54,13 @@ Evaluation Evaluate(const RobustProblem& problem, const Eigen::VectorXd& x, int*
 // A = J^T W J and g = J^T W r at x, W = point weight * Huber weight (IRLS), J = d predicted / d x
 // = -d r / d x by central differences; points invalid on either side get no derivative.
 void Linearise(const RobustProblem& problem, const Eigen::VectorXd& x, const Evaluation& at,
-               Eigen::MatrixXd* a, Eigen::VectorXd* g, int* evaluations) {
+               Eigen::MatrixXd* a, Eigen::VectorXd* g, int* evaluations,
+               Eigen::MatrixXd* jacobian = nullptr, Eigen::VectorXd* irls_weights = nullptr) {
   const Eigen::Index p = x.size(), n = problem.weights.size();
-  Eigen::MatrixXd jac(2 * n, p);  // d predicted / d x
+  Eigen::MatrixXd local_jac;
+  Eigen::MatrixXd& jac = jacobian ? *jacobian : local_jac;  // d predicted / d x
+  jac.resize(2 * n, p);
+  if (irls_weights) irls_weights->setZero(n);
   std::vector<uint8_t> ok(n, 1);
   for (Eigen::Index k = 0; k < p; ++k) {
     Eigen::VectorXd xp = x, xm = x;
@@ -72,9 +76,13 @@ void Linearise(const RobustProblem& problem, const Eigen::VectorXd& x, const Eva
   g->setZero(p);
   for (Eigen::Index i = 0; i < n; ++i) {
     const double w = problem.weights[i];
-    if (w <= 0 || !ok[i] || !at.valid[i]) continue;
+    if (w <= 0 || !ok[i] || !at.valid[i]) {
+      jac.middleRows(2 * i, 2).setZero();
+      continue;
+    }
     const double s = std::hypot(at.r[2 * i], at.r[2 * i + 1]);
     const double wh = w * HuberWeight(s, problem.huber_delta);
+    if (irls_weights) (*irls_weights)[i] = wh;
     const auto j = jac.middleRows(2 * i, 2);
     a->noalias() += wh * j.transpose() * j;
     g->noalias() += wh * j.transpose() * at.r.segment(2 * i, 2);
@@ -122,7 +130,7 @@ RobustSolution SolveRobust(const RobustProblem& problem, const Eigen::VectorXd& 
       }
       if (!accepted || decrease <= options.relative_tolerance * cur.cost) break;
     }
-    Linearise(problem, x, cur, &a, &g, &out.evaluations);
+    Linearise(problem, x, cur, &a, &g, &out.evaluations, &out.jacobian, &out.irls_weights);
     out.normal = a;
   }
   out.x = x;

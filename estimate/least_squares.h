@@ -35,10 +35,12 @@ struct RobustOptions {
 
 struct RobustSolution {
   Eigen::VectorXd x;
-  double cost = 0.0;           // sum w rho at x
-  Eigen::MatrixXd normal;      // J^T W_huber J at x (the Gauss-Newton information)
-  Eigen::VectorXd residuals;   // r(x), 2 per point
-  std::vector<uint8_t> valid;  // per point
+  double cost = 0.0;             // sum w rho at x
+  Eigen::MatrixXd normal;        // J^T W_huber J at x (the Gauss-Newton information)
+  Eigen::MatrixXd jacobian;      // d predicted / d x at x, 2 rows per point (0 where undefined)
+  Eigen::VectorXd irls_weights;  // w_i * Huber weight at x, per point (0 where undefined)
+  Eigen::VectorXd residuals;     // r(x), 2 per point
+  std::vector<uint8_t> valid;    // per point
   int iterations = 0;
   int evaluations = 0;
 };
