@@ -84,7 +84,8 @@ std::vector<int64_t> SelectFrames(const std::vector<int64_t>& ids, const ImportO
 // A dataset folder under construction: removed unless Commit() moved it to its final place.
 class StagingDir {
  public:
-  explicit StagingDir(const std::string& out_dir) : out_(out_dir) {
+  explicit StagingDir(const std::string& out_dir) : out_(fs::absolute(out_dir).lexically_normal()) {
+    if (!out_.has_filename()) out_ = out_.parent_path();  // "DIR/" names DIR
     const fs::path parent = out_.parent_path().empty() ? fs::path(".") : out_.parent_path();
     if (!fs::is_directory(parent))
       throw IoError(IoMessage(out_dir, -1, "its parent folder does not exist"));

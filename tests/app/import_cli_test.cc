@@ -232,7 +232,7 @@ TEST(ImportCli, BadInputsAreOneLineExitTwoAndNoOutput) {
   ExpectOneLineError("import " + clip + " --out " + (dir / "keep"), "not an import", "");
   EXPECT_TRUE(fs::exists(dir / "keep/notes.txt"));
   // And the repaired clip imports.
-  const auto r = RunShutterlab("import " + clip + " --out " + out + " --start-frame 101");
+  const auto r = RunShutterlab("import " + clip + " --out " + out + "/ --start-frame 101");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(ReadFramesCsv(out + "/frames.csv").size(), 1u);
 }
