@@ -125,8 +125,17 @@ RigModel BaseRig(int width, int height) {
 
 ImportSummary WriteDataset(const fs::path& dir, ImportSource kind, const RigModel& rig,
                            const GyroTrace& gyro, const std::vector<FrameEntry>& frames,
-                           const nlohmann::json& record) {
+                           nlohmann::json record) {
   rig.Check();
+  // Every frame is kept; those whose declared readout the gyro log does not cover are listed
+  // (karma.mp4's gyro starts 8 ms after its first frame), so that a consumer can skip them.
+  nlohmann::json outside = nlohmann::json::array();
+  for (const FrameEntry& frame : frames) {
+    const int64_t t0_ns = frame.t_first_row_ns + SecondsToNs(rig.time_offset_s);
+    if (t0_ns < gyro.t_begin_ns() || t0_ns + SecondsToNs(rig.shutter.readout_s) > gyro.t_end_ns())
+      outside.push_back(frame.frame);
+  }
+  record["frames"]["outside_gyro"] = outside;
   WriteRigModel((dir / "camera.json").string(), rig);
   WriteGyroCsv((dir / "gyro.csv").string(), gyro);
   WriteFramesCsv((dir / "frames.csv").string(), frames);

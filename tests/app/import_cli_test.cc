@@ -84,6 +84,8 @@ TEST(ImportCli, GoproKarmaWholeClip) {
   EXPECT_EQ(record["gyro"]["scal"], nlohmann::json::array({3755.0}));
   EXPECT_EQ(record["frames"]["failed_grabs"], 1);
   EXPECT_EQ(record["frames"]["reader_time_mismatches"], 0);
+  // The gyro starts 8.3 ms after frame 0 (the linear fit's intercept): only frame 0 is uncovered.
+  EXPECT_EQ(record["frames"]["outside_gyro"], nlohmann::json::array({0}));
   ASSERT_EQ(record["exposure_s"].size(), 362u);
   EXPECT_NEAR(record["exposure_s"][0]["exposure_s"].get<double>(), 0.00487, 0.00001);
   size_t guesses = 0;
@@ -160,6 +162,7 @@ TEST(ImportCli, PhoneClip) {
 
   const nlohmann::json record = ReadJson(out + "/import.json");
   EXPECT_EQ(record["frames"]["sof_times"], 2146);
+  EXPECT_TRUE(record["frames"]["outside_gyro"].empty());
   EXPECT_DOUBLE_EQ(record["time_origin_s"].get<double>(), origin_s);
   EXPECT_DOUBLE_EQ(record["exposure_range_s"][0].get<double>(), 0.004946);
   EXPECT_DOUBLE_EQ(record["exposure_range_s"][1].get<double>(), 0.005906);
