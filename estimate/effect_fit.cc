@@ -33,7 +33,11 @@
 //    residual's excess over the noise (RSS - noise_px^2 sum w).
 // 3. Ambiguity: other candidates within ambiguity_margin (10) of the chosen one's dBIC that explain
 //    as much are named in ambiguous_with.
-// 4. Repeat until the residual passes test 1, no candidate qualifies, or max_effects.
+// 4. Backward step (stepwise selection): after an addition, each earlier effect is refitted away;
+//    the one whose removal costs least is dropped if that is less than bic_margin (a readout error
+//    first absorbed by a gyro scale is replaced, not kept beside the readout). A dropped effect is
+//    not tried again. Repeat until the residual passes test 1, no candidate qualifies, or
+//    max_effects.
 // 5. unexplained = test 1 still rejects AND the trimmed RMS is above material_ratio (1.25) x
 //    noise_px (noise_px is itself an estimate). So a candidate that removes a sliver of a residual
 //    that stays far above noise is not added (rule 2), and a residual left far above noise is
@@ -507,11 +511,16 @@ LoopResult CloseTheLoop(const RigModel& declared, const GyroTrace& gyro,
 
   std::vector<ResidualStats> after_each;
   std::vector<std::vector<std::string>> ambiguous_each;
-  for (int round = 1; level.above && round <= options.max_effects; ++round) {
+  std::vector<std::string> removed;  // dropped by the backward step; not tried again
+  for (int round = 1;
+       level.above && static_cast<int>(current.hypothesis.effects.size()) < options.max_effects &&
+       round <= 2 * options.max_effects;
+       ++round) {
     std::vector<Fit> fits;
     for (const std::string& name : names) {
       if (std::find(current.hypothesis.effects.begin(), current.hypothesis.effects.end(), name) !=
-          current.hypothesis.effects.end()) {
+              current.hypothesis.effects.end() ||
+          std::find(removed.begin(), removed.end(), name) != removed.end()) {
         continue;
       }
       Hypothesis h = current.hypothesis;
@@ -576,14 +585,70 @@ LoopResult CloseTheLoop(const RigModel& declared, const GyroTrace& gyro,
       }
     }
     current = std::move(fits[chosen]);
-    const std::string& added = current.hypothesis.effects.back();
+    const std::string added = current.hypothesis.effects.back();
     after_each.push_back(current.stats);
     ambiguous_each.push_back(ambiguous);
-    level =
-        TestLevel(ctx, current.solution.residuals, current.solution.valid, options.significance);
     std::string line = "round " + std::to_string(round) + ": added " + added;
     for (const std::string& a : ambiguous) line += " (ambiguous with " + a + ")";
     result.log.push_back(line);
+    // Backward step (stepwise selection): an effect added earlier may be redundant now (a readout
+    // error first absorbed by a gyro scale, say). Refit without each earlier effect; drop the one
+    // whose removal costs least if that is less than bic_margin.
+    if (current.hypothesis.effects.size() >= 2) {
+      const std::vector<uint8_t> keep_now =
+          KeepMask(ctx, current.solution.residuals, current.solution.valid);
+      const MaskSums sums_now = SumWeights(ctx, keep_now);
+      const double rss_now =
+          MaskedRss(ctx, current.solution.residuals, current.solution.valid, keep_now);
+      const double s2_now =
+          rss_now /
+          std::max(1.0, 2.0 * sums_now.w - CriterionParameters(current.hypothesis.effects));
+      const double c_now = CorrelationFactor(ctx, current.solution.residuals, keep_now);
+      const double n_now = std::max(2.0, 2.0 * sums_now.w * sums_now.w / sums_now.w2 / c_now);
+      int drop = -1;
+      double drop_dbic = options.bic_margin;
+      Fit drop_fit;
+      const std::vector<std::string>& effects = current.hypothesis.effects;
+      for (size_t k = 0; k + 1 < effects.size(); ++k) {
+        Hypothesis h;
+        int offset = 0;
+        for (size_t m = 0; m < effects.size(); ++m) {
+          const int n = EffectParameterCount(effects[m]);
+          if (m != k) {
+            h.effects.push_back(effects[m]);
+            h.x.conservativeResize(h.x.size() + n);
+            h.x.tail(n) = current.hypothesis.x.segment(offset, n);
+          }
+          offset += n;
+        }
+        // Keep the just-added effect last (its start is the current value, no scan needed).
+        Fit without = FitHypothesis(ctx, std::move(h));
+        const double dbic_remove =
+            (MaskedRss(ctx, without.solution.residuals, without.solution.valid, keep_now) -
+             rss_now) /
+                (s2_now * c_now) -
+            std::max(1, EffectParameterCount(effects[k])) * std::log(n_now);
+        result.log.push_back("round " + std::to_string(round) + ": without " + effects[k] +
+                             ": rms " + Format("%.4f", without.stats.rms_px) + " px, dBIC " +
+                             Format("%+.1f", dbic_remove));
+        if (dbic_remove < drop_dbic) {
+          drop_dbic = dbic_remove;
+          drop = static_cast<int>(k);
+          drop_fit = std::move(without);
+        }
+      }
+      if (drop >= 0) {
+        result.log.push_back("round " + std::to_string(round) + ": dropped " + effects[drop] +
+                             " (redundant now)");
+        removed.push_back(effects[drop]);
+        after_each.erase(after_each.begin() + drop);
+        ambiguous_each.erase(ambiguous_each.begin() + drop);
+        current = std::move(drop_fit);
+        after_each.back() = current.stats;
+      }
+    }
+    level =
+        TestLevel(ctx, current.solution.residuals, current.solution.valid, options.significance);
     result.log.push_back(level_line("with " + added, level));
   }
 

@@ -1,6 +1,7 @@
 #include "estimate/effect_fit.h"
 
 #include "estimate/effect_model.h"
+#include "estimate/least_squares.h"
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
 #include "sim/so3.h"
@@ -401,6 +402,96 @@ TEST(CloseTheLoop, GyroBiasAboutXIsRecoveredOrAmbiguousWithVelocity) {
               e.ambiguous_with.end())
         << Explain(c.result);
   }
+}
+
+TEST(CloseTheLoop, TwoEffectsAreBothFound) {
+  // A time offset and a wrong readout at once: two rounds, each adds one, and the joint fit gets
+  // both values.
+  Case both;
+  both.truth.rig = both.declared;
+  ApplyInjection("time_offset=0.006", &both.truth);
+  ApplyInjection("readout_time=0.025", &both.truth);
+  both.gyro = FlightTrace(22.0, 12);
+  both.frames = GridFrames(both.declared, EverySecond(10));
+  Measure(both.truth, both.gyro, &both.frames, 112);
+  const LoopResult r = CloseTheLoop(both.declared, both.gyro, both.frames, kNoisePx);
+  if (std::getenv("SHUTTERLAB_FIT_LOG")) std::printf("%s", Explain(r).c_str());
+  ASSERT_EQ(r.effects.size(), 2u) << Explain(r);
+  EXPECT_FALSE(r.unexplained) << Explain(r);
+  EXPECT_LE(r.after.rms_px, 1.5 * r.noise_px) << Explain(r);
+  for (const IdentifiedEffect& e : r.effects) {
+    if (e.name == "time_offset") {
+      EXPECT_NEAR(e.value.get<double>(), 0.006, 0.0003);
+    } else {
+      EXPECT_EQ(e.name, "readout_time") << Explain(r);
+      EXPECT_NEAR(e.value.get<double>(), 0.025, 0.02 * 0.025);
+    }
+  }
+  // The first round's residual is above the final one.
+  EXPECT_GT(r.effects[0].after.rms_px, r.effects[1].after.rms_px);
+}
+
+TEST(CloseTheLoop, ZeroWeightPointsAreIgnored) {
+  // A tenth of the points are garbage (100 px off) but marked unmeasured-like with weight 0: the
+  // answer is that of the good points.
+  RigModel declared = IssueRig();
+  TrueModel truth;
+  truth.rig = declared;
+  truth.rig.shutter.readout_s = 0.026;
+  const GyroTrace gyro = FlightTrace(22.0, 13);
+  std::vector<FramePoints> frames = GridFrames(declared, EverySecond(10));
+  Measure(truth, gyro, &frames, 113);
+  size_t k = 0;
+  for (FramePoints& f : frames) {
+    for (MeasuredPoint& p : f.points) {
+      if (++k % 10 == 0) {
+        p.dx += 100.0;
+        p.weight = 0.0;
+      }
+    }
+  }
+  LoopOptions options;
+  options.candidates = {"time_offset", "readout_time", "gyro_scale"};
+  const LoopResult r = CloseTheLoop(declared, gyro, frames, kNoisePx, options);
+  ASSERT_EQ(r.effects.size(), 1u) << Explain(r);
+  EXPECT_EQ(r.effects[0].name, "readout_time");
+  EXPECT_NEAR(r.effects[0].value.get<double>(), 0.026, 0.02 * 0.026);
+  EXPECT_FALSE(r.unexplained) << Explain(r);
+}
+
+TEST(SolveRobust, FitsACurveThroughOutliers) {
+  // predicted(t) = (a t, b t^2) at 200 points, a = 2, b = -0.5, noise 0.01, 5 % outliers 1-3 off:
+  // the Huber fit recovers a and b (plain least squares would put b ~0.05 too high).
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const int n = 200;
+  Eigen::VectorXd t(n), mx(n), my(n);
+  for (int i = 0; i < n; ++i) {
+    t[i] = -1.0 + 2.0 * i / (n - 1);
+    mx[i] = 2.0 * t[i] + noise(rng);
+    my[i] = -0.5 * t[i] * t[i] + noise(rng);
+    if (i % 20 == 3) my[i] += 1.0 + 2.0 * uniform(rng);
+  }
+  RobustProblem problem;
+  problem.residuals = [&](const Eigen::VectorXd& x, Eigen::VectorXd* r,
+                          std::vector<uint8_t>* valid) {
+    r->resize(2 * n);
+    valid->assign(n, 1);
+    for (int i = 0; i < n; ++i) {
+      (*r)[2 * i] = mx[i] - x[0] * t[i];
+      (*r)[2 * i + 1] = my[i] - x[1] * t[i] * t[i];
+    }
+  };
+  problem.weights = Eigen::VectorXd::Ones(n);
+  problem.steps = Eigen::Vector2d(1e-4, 1e-4);
+  problem.huber_delta = 0.03;
+  const RobustSolution s = SolveRobust(problem, Eigen::Vector2d(0.0, 0.0));
+  EXPECT_NEAR(s.x[0], 2.0, 0.005);
+  EXPECT_NEAR(s.x[1], -0.5, 0.01);
+  EXPECT_EQ(s.normal.rows(), 2);
+  EXPECT_EQ(s.jacobian.rows(), 2 * n);
+  EXPECT_GT(s.iterations, 0);
 }
 
 TEST(LoopToJson, HasTheFormatsKeys) {
