@@ -38,7 +38,7 @@
 //    first absorbed by a gyro scale is replaced, not kept beside the readout). A dropped effect is
 //    not tried again. Repeat until the residual passes test 1, no candidate qualifies, or
 //    max_effects.
-// 5. unexplained = test 1 still rejects AND the trimmed RMS is above material_ratio (1.25) x
+// 5. unexplained = test 1 still rejects AND the trimmed RMS is above material_ratio (1.15) x
 //    noise_px (noise_px is itself an estimate). So a candidate that removes a sliver of a residual
 //    that stays far above noise is not added (rule 2), and a residual left far above noise is
 //    always flagged: a wrong effect never stands as a confident answer.

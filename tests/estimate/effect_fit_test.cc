@@ -277,6 +277,35 @@ TEST(CloseTheLoop, TriggerJitterIsNotAConfidentWrongEffect) {
   }
 }
 
+TEST(CloseTheLoop, LowPassFilteredGyroIsNotAConfidentWrongEffect) {
+  // The logged gyro went through a first-order low-pass filter (cut-off 15 Hz) that the camera
+  // did not: the images follow the raw rates. Not in the candidate list. The closest candidate is
+  // a time offset (the filter's ~10 ms group delay at low frequencies); the loop must not report
+  // it (or anything else) as the explanation while the residual stays above the noise.
+  const RigModel declared = IssueRig();
+  const GyroTrace raw = FlightTrace(22.0, 14);
+  std::vector<GyroSample> filtered = raw.samples();
+  const double rc_s = 1.0 / (2 * M_PI * 15.0);
+  for (size_t k = 1; k < filtered.size(); ++k) {
+    const double dt_s = (filtered[k].t_ns - filtered[k - 1].t_ns) * 1e-9;
+    const double a = dt_s / (rc_s + dt_s);
+    filtered[k].omega_rad_s =
+        filtered[k - 1].omega_rad_s + a * (raw[k].omega_rad_s - filtered[k - 1].omega_rad_s);
+  }
+  const GyroTrace logged(std::move(filtered));
+  TrueModel truth;
+  truth.rig = declared;
+  std::vector<FramePoints> frames = GridFrames(declared, EverySecond(10));
+  Measure(truth, raw, &frames, 114);
+  const LoopResult r = CloseTheLoop(declared, logged, frames, kNoisePx);
+  if (std::getenv("SHUTTERLAB_FIT_LOG")) std::printf("%s", Explain(r).c_str());
+  EXPECT_GT(r.before.rms_px, 1.5 * kNoisePx);
+  // A time offset near the group delay removes most of the residual but leaves it 1.2x the noise
+  // (significant over 7680 points): flagged.
+  EXPECT_TRUE(r.unexplained) << Explain(r);
+  for (const IdentifiedEffect& e : r.effects) EXPECT_EQ(e.name, "time_offset") << Explain(r);
+}
+
 TEST(CloseTheLoop, OutliersDoNotSteerTheFit) {
   // 3 % of the points wildly wrong (a bad match: 5-30 px off): the time offset is still found.
   RigModel declared = IssueRig();
