@@ -334,14 +334,16 @@ DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& i
 
   // Validity and a first confidence per pixel.
   cv::Mat weight(height, width, CV_32F, cv::Scalar(0));
-  cv::Mat saturated(height, width, CV_8U, cv::Scalar(0));  // never filled, not even in gaps
+  // Black / saturated pixels and those whose match is: never filled, not even in short gaps.
+  cv::Mat never_fill(height, width, CV_8U, cv::Scalar(0));
   for (int v = 0; v < height; ++v) {
     const cv::Vec2f* fw = forward.ptr<cv::Vec2f>(v);
     const uchar* bi = bad_img.ptr<uchar>(v);
     const float* g = gradient.ptr<float>(v);
     float* wr = weight.ptr<float>(v);
-    uchar* sat = saturated.ptr<uchar>(v);
+    uchar* sat = never_fill.ptr<uchar>(v);
     for (int u = 0; u < width; ++u) {
+      if (!std::isfinite(fw[u][0]) || !std::isfinite(fw[u][1])) continue;
       const float qx = u + fw[u][0], qy = v + fw[u][1];
       const int qu = static_cast<int>(std::lround(qx)), qv = static_cast<int>(std::lround(qy));
       const bool inside = qu >= 0 && qv >= 0 && qu < width && qv < height;
@@ -371,13 +373,14 @@ DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& i
     if (!model.RowValid(v)) continue;
     const float* wr = weight.ptr<float>(v);
     const float* rw = robust.ptr<float>(v);
-    const uchar* sat = saturated.ptr<uchar>(v);
+    const uchar* sat = never_fill.ptr<uchar>(v);
     cv::Vec2f* out = result.field.ptr<cv::Vec2f>(v);
     float* conf = result.confidence.ptr<float>(v);
     int last = -1;  // last measured column
     for (int u = 0; u < width; ++u) {
       if (wr[u] <= 0) continue;
-      // Bridge a short gap since the last measured pixel, skipping saturated ones.
+      // Bridge a short gap since the last measured pixel (confidence 0.1), skipping black and
+      // saturated pixels.
       if (last >= 0 && u - last > 1 && u - last <= kMaxGapPx) {
         for (int g = last + 1; g < u; ++g) {
           if (sat[g]) continue;
@@ -411,7 +414,8 @@ DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& i
   if (!result.points.empty()) {
     // Degrees of freedom: each band's 2 x 12 parameters are shared by (2h + 1) * width pixels, of
     // which a point is one; the share of a fitted model in one point's residual is that ratio.
-    const double band_pixels = (2.0 * kBandHalfRows + 1) * width * std::max(0.05, result.measured_fraction);
+    const double band_pixels =
+        (2.0 * kBandHalfRows + 1) * width * std::max(0.05, result.measured_fraction);
     const double leverage = std::min(0.5, RowBandModel::kP / band_pixels);
     result.noise_px = std::sqrt(sum_sq / result.points.size() / (1.0 - leverage));
   }

@@ -31,6 +31,7 @@ struct MeasureOptions {
 struct DisplacementMeasurement {
   cv::Mat field;       // CV_32FC2 (dx, dy) per rolling-shutter pixel; NaN where unmeasured
   cv::Mat confidence;  // CV_32F, 0..1, 0 where unmeasured (textureless, saturated, inconsistent)
+                       // (0.1 in short gaps that the per-row model bridges, see measure.cc)
   std::vector<MeasuredPoint> points;  // independent measurements on the grid, unmeasured left out
   // The measurement's own noise: the RMS length of (measured - true) over `points` as estimated from
   // the data, i.e. the rms_px that a perfect model would leave on these points, px.
