@@ -155,6 +155,15 @@ Confusion Confuse(const std::vector<FrameValidation>& frames, size_t limit, doub
   return c;
 }
 
+// The value with every number at 4 significant digits, for the table (the JSON keeps them all).
+nlohmann::json Rounded(const nlohmann::json& value) {
+  if (value.is_number_float()) return std::stod(Format("%.4g", value.get<double>()));
+  if (!value.is_structured()) return value;
+  nlohmann::json out = value;
+  for (auto& item : out.items()) item.value() = Rounded(item.value());
+  return out;
+}
+
 }  // namespace
 
 void ValidateOptions::Check() const {
@@ -450,11 +459,11 @@ std::string ValidationReport(const ValidationResult& result) {
     const std::string name =
         g.axis == 0   ? "about x (image rows shift up/down)"
         : g.axis == 1 ? "about y (image rows shift sideways)"
-        : g.axis == 2 ? "z (yaw about the optical axis)"
+        : g.axis == 2 ? "about z (yaw about the optical axis)"
                       : "all frames";
     char line[320];
     std::snprintf(line, sizeof(line),
-                  "  %-32s %2d frames: paper %.2f (%.2f-%.2f)  vector %.2f  full %.2f;"
+                  "  %-36s %2d frames: paper %.2f (%.2f-%.2f)  vector %.2f  full %.2f;"
                   " nadir column holds %.0f%% of D\n",
                   name.c_str(), g.frames, g.paper_median, g.paper_min, g.paper_max,
                   g.vector_median, g.full_median, 100 * g.centre_median);
@@ -476,7 +485,8 @@ std::string ValidationReport(const ValidationResult& result) {
   out << "  before: rms " << Format("%.3f", loop.before.rms_px) << " px, max "
       << Format("%.3f", loop.before.max_px) << " px\n";
   for (const IdentifiedEffect& e : loop.effects) {
-    out << "  + " << e.name << " = " << e.value.dump() << " +- " << e.stderr_value.dump() << " "
+    out << "  + " << e.name << " = " << Rounded(e.value).dump() << " +- "
+        << Rounded(e.stderr_value).dump() << " "
         << e.unit << " -> rms " << Format("%.3f", e.after.rms_px) << " px, max "
         << Format("%.3f", e.after.max_px) << " px";
     if (!e.ambiguous_with.empty()) {

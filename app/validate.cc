@@ -1,0 +1,94 @@
+// `shutterlab validate DATASET`: the paper's threshold model and the declared full model against
+// the measured displacement, then the loop over undeclared effects (estimate/validate.h).
+
+#include "estimate/validate.h"
+
+#include "app/command.h"
+#include "estimate/flight.h"
+#include "sim/check.h"
+#include "sim/text_file.h"
+
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace shutterlab::app {
+namespace {
+
+struct ValidateCommand {
+  std::string dataset;
+  std::string report_path;
+  std::vector<std::string> limits{"5cm", "10cm"};
+  std::string out_dir;
+  std::vector<std::string> candidates;
+  int grid_step_px = MeasureOptions{}.grid_step_px;
+  bool json = false;
+};
+
+void Run(const ValidateCommand& command) {
+  ValidateOptions options;
+  options.limits_m.clear();
+  for (const std::string& text : command.limits) options.limits_m.push_back(ParseLengthM(text));
+  options.loop.candidates = command.candidates;
+  options.measure.grid_step_px = command.grid_step_px;
+  options.keep_residuals = !command.out_dir.empty();
+  options.Check();
+  // Where the report goes must exist before the long stages: outputs are whole or absent.
+  if (!command.report_path.empty()) {
+    const std::filesystem::path parent =
+        std::filesystem::absolute(command.report_path).parent_path();
+    if (!std::filesystem::is_directory(parent)) {
+      throw IoError(IoMessage(command.report_path, 0, "its folder does not exist"));
+    }
+  }
+  std::unique_ptr<Progress> bar;
+  std::string stage;
+  const ValidationResult result = ValidateDataset(
+      command.dataset, options, [&](const std::string& name, size_t done, size_t total) {
+        if (name != stage) {
+          bar = std::make_unique<Progress>(name, total);
+          stage = name;
+        }
+        bar->Update(done);
+      });
+  bar.reset();
+  const nlohmann::json json = ValidationToJson(result);
+  if (!command.out_dir.empty()) WriteValidationPlots(command.out_dir, result);
+  if (!command.report_path.empty()) WriteFileAtomically(command.report_path, json.dump(2) + "\n");
+  if (command.json) {
+    std::cout << json.dump(2) << "\n";
+  } else {
+    std::cout << ValidationReport(result);
+  }
+}
+
+const CommandRegistration kRegistration(70, [](CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "validate",
+      "measure a rig dataset's distortion, test the paper's threshold model and the declared model "
+      "against it, and identify undeclared effects");
+  auto command = std::make_shared<ValidateCommand>();
+  cmd->add_option("DATASET", command->dataset,
+                  "rig dataset folder (camera.json, gyro.csv, frames.csv, images)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--report", command->report_path,
+                  "write the validation report JSON (FORMATS.md validation/1) here");
+  cmd->add_option("--limit", command->limits, "ground limits, e.g. 5cm,10cm")
+      ->delimiter(',')
+      ->capture_default_str();
+  cmd->add_option("--out", command->out_dir,
+                  "write residual pictures before/after (per frame, per row) to DIR");
+  cmd->add_option("--candidates", command->candidates,
+                  "effects to try, e.g. time_offset,readout_time (default: all of FORMATS.md's)")
+      ->delimiter(',');
+  cmd->add_option("--grid-step", command->grid_step_px, "spacing of the measured points, px")
+      ->capture_default_str();
+  cmd->add_flag("--json", command->json, "print the report JSON instead of the table");
+  return std::function<void()>([command] { Run(*command); });
+});
+
+}  // namespace
+}  // namespace shutterlab::app

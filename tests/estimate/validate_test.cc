@@ -1,0 +1,282 @@
+// End-to-end tests of issue 4 ("Test on data with an undeclared effect in it"): each test renders a
+// rig dataset (render/render_dataset.h) from a real aerial photo and a multirotor-like gyro trace
+// with ONE effect in the truth that camera.json does not declare, runs ValidateDataset on it (which
+// sees only what FORMATS.md's dataset holds) and checks what the loop recovers.
+//
+// Sizes: 8 frames of 1280x960, fx = 1100 px, 30 ms readout, 50 m, as the issue asks. Under
+// AddressSanitizer (3-5x slower) the frames are 640x480 (same field of view) and only the
+// cases marked kAlsoUnderAsan run, so that the CI stage stays short.
+
+#include "estimate/validate.h"
+
+#include "render/frames_csv.h"
+#include "render/image_io.h"
+#include "render/render_dataset.h"
+#include "sim/gyro_io.h"
+#include "sim/so3.h"
+#include "sim/synth.h"
+#include "sim/text_file.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kAsan = true;
+constexpr int kWidth = 640, kHeight = 480, kFrames = 6;
+#else
+constexpr bool kAsan = false;
+constexpr int kWidth = 1280, kHeight = 960, kFrames = 8;
+#endif
+constexpr double kFocalPx = 1100.0 * kWidth / 1280.0;  // same field of view at either size
+constexpr double kReadoutS = 0.030;
+constexpr double kAltitudeM = 50.0;
+// The issue's acceptance: in identified cases the residual after the loop is at the noise level.
+constexpr double kAfterOverNoise = 1.5;
+
+struct DatasetSpec {
+  std::vector<std::string> injections;  // render --inject NAME=VALUE ("" none)
+  double log_s = 30.0;                   // gyro log length, s (motion starts after 6 s still + 1 s)
+  double first_frame_s = 8.0, last_frame_s = 28.0;  // frame times spread evenly between these
+  uint64_t seed = 3;                     // the flight motion's seed
+  std::string scene = "assets/scenes/siyi_zr10_img0100.jpg";
+};
+
+RigModel DeclaredRig() {
+  RigModel rig;
+  rig.camera.width = kWidth;
+  rig.camera.height = kHeight;
+  rig.camera.fx = rig.camera.fy = kFocalPx;
+  rig.camera.cx = 0.5 * (kWidth - 1);
+  rig.camera.cy = 0.5 * (kHeight - 1);
+  rig.shutter.readout_s = kReadoutS;
+  rig.altitude_m = kAltitudeM;
+  return rig;
+}
+
+// A perfect gyro (no noise or bias: the only undeclared effect is the injected one) on a
+// multirotor-like motion (sim/motion.h defaults), 1 kHz.
+GyroTrace FlightGyro(const DatasetSpec& spec) {
+  SynthOptions synth;
+  synth.profile = MotionProfile::kFlight;
+  synth.rate_hz = 1000.0;
+  synth.duration_s = spec.log_s;
+  synth.seed = spec.seed;
+  synth.imu = ImuErrorModel::Ideal();
+  return SynthesizeTrace(synth);
+}
+
+// Renders the dataset into dir/ds and returns that folder.
+std::string MakeDataset(const test::TempDir& dir, const DatasetSpec& spec) {
+  WriteRigModel(dir / "camera.json", DeclaredRig());
+  WriteGyroCsv(dir / "gyro.csv", FlightGyro(spec));
+  std::string times = "frame,t_first_row\n";
+  for (int i = 0; i < kFrames; ++i) {
+    const double t_s =
+        spec.first_frame_s + (spec.last_frame_s - spec.first_frame_s) * i / (kFrames - 1);
+    times += std::to_string(i) + "," + std::to_string(t_s) + "\n";
+  }
+  WriteFileAtomically(dir / "times.csv", times);
+  RenderOptions render;
+  render.scene_path = test::SourcePath(spec.scene);
+  render.camera_path = dir / "camera.json";
+  render.gyro_path = dir / "gyro.csv";
+  render.frames_path = dir / "times.csv";
+  render.out_dir = dir / "ds";
+  render.injections = spec.injections;
+  render.pictures = false;
+  RenderDataset(render);
+  return dir / "ds";
+}
+
+ValidationResult Validate(const std::string& dataset) {
+  ValidateOptions options;
+  options.keep_residuals = false;
+  return ValidateDataset(dataset, options);
+}
+
+std::string Summary(const ValidationResult& result) { return ValidationReport(result); }
+
+// The one effect the loop must have added first, with the after/noise acceptance of the issue.
+void ExpectIdentified(const ValidationResult& result, const std::string& name) {
+  const LoopResult& loop = result.loop;
+  ASSERT_FALSE(loop.effects.empty()) << Summary(result);
+  EXPECT_EQ(loop.effects.front().name, name) << Summary(result);
+  EXPECT_FALSE(loop.unexplained) << Summary(result);
+  EXPECT_LE(loop.after.rms_px, kAfterOverNoise * loop.noise_px) << Summary(result);
+  EXPECT_GT(loop.before.rms_px, 2.0 * loop.after.rms_px) << Summary(result);
+}
+
+bool SkipUnderAsan() { return kAsan; }
+
+// time_offset_s = 4 ms undeclared -> recovered within 0.3 ms (the issue).
+TEST(ValidateEndToEnd, RecoversTimeOffset) {
+  test::TempDir dir;
+  const ValidationResult result = Validate(MakeDataset(dir, {{"time_offset=0.004"}}));
+  ExpectIdentified(result, "time_offset");
+  EXPECT_NEAR(result.loop.model.rig.time_offset_s, 0.004, 0.3e-3) << Summary(result);
+}
+
+// A readout 20 % longer than declared (36 ms vs 30 ms) -> within 2 %.
+TEST(ValidateEndToEnd, RecoversReadoutTime) {
+  if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
+  test::TempDir dir;
+  const ValidationResult result = Validate(MakeDataset(dir, {{"readout_time=0.036"}}));
+  ExpectIdentified(result, "readout_time");
+  EXPECT_NEAR(result.loop.model.rig.shutter.readout_s, 0.036, 0.02 * 0.036) << Summary(result);
+}
+
+// The gyro is mounted 4 degrees off about a tilted axis -> R_CG within 0.5 degrees.
+TEST(ValidateEndToEnd, RecoversGyroToCameraMisalignment) {
+  if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
+  const Eigen::Vector3d axis = Eigen::Vector3d(0.5, -0.3, 0.81).normalized();
+  const Eigen::Matrix3d r_cg = ExpSO3(axis * (4.0 * M_PI / 180.0)).toRotationMatrix();
+  std::string value = "gyro_to_camera=";
+  for (int i = 0; i < 9; ++i) value += (i ? "," : "") + std::to_string(r_cg(i / 3, i % 3));
+  test::TempDir dir;
+  const ValidationResult result = Validate(MakeDataset(dir, {{value}}));
+  ExpectIdentified(result, "gyro_to_camera");
+  const Eigen::Quaterniond found(result.loop.model.rig.cam_from_gyro);
+  EXPECT_LE(AngularDistance(found, Eigen::Quaterniond(r_cg)) * 180.0 / M_PI, 0.5)
+      << Summary(result);
+}
+
+// Per-axis gyro scale about 5 % off -> each axis within 1 %.
+TEST(ValidateEndToEnd, RecoversGyroScale) {
+  if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
+  test::TempDir dir;
+  const ValidationResult result = Validate(MakeDataset(dir, {{"gyro_scale=1.05,0.95,1.04"}}));
+  ExpectIdentified(result, "gyro_scale");
+  const Eigen::Vector3d truth(1.05, 0.95, 1.04);
+  for (int axis = 0; axis < 3; ++axis) {
+    EXPECT_NEAR(result.loop.model.gyro_scale[axis], truth[axis], 0.01)
+        << "axis " << axis << "\n" << Summary(result);
+  }
+}
+
+// The gyro clock runs 300 ppm fast over a 2-minute log (frames from 10 s to 110 s: the offset
+// grows from 3 to 33 ms) -> within 20 % of 300 ppm.
+TEST(ValidateEndToEnd, RecoversClockRate) {
+  if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
+  test::TempDir dir;
+  DatasetSpec spec;
+  spec.injections = {"clock_rate=300"};
+  spec.log_s = 120.0;
+  spec.first_frame_s = 10.0;
+  spec.last_frame_s = 110.0;
+  const ValidationResult result = Validate(MakeDataset(dir, spec));
+  ExpectIdentified(result, "clock_rate");
+  EXPECT_NEAR(result.loop.model.clock_rate_ppm, 300.0, 60.0) << Summary(result);
+}
+
+// 4 m/s along camera x at 50 m -> within 10 %, or reported ambiguous with gyro_bias (on flat ground
+// a constant rate about y leaves almost the same signature as a velocity along x).
+TEST(ValidateEndToEnd, RecoversVelocityOrFlagsAmbiguity) {
+  if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
+  test::TempDir dir;
+  const ValidationResult result = Validate(MakeDataset(dir, {{"velocity=4,0,0"}}));
+  const LoopResult& loop = result.loop;
+  ASSERT_FALSE(loop.effects.empty()) << Summary(result);
+  const IdentifiedEffect& first = loop.effects.front();
+  const auto ambiguous_with = [&](const std::string& name) {
+    return std::find(first.ambiguous_with.begin(), first.ambiguous_with.end(), name) !=
+           first.ambiguous_with.end();
+  };
+  EXPECT_FALSE(loop.unexplained) << Summary(result);
+  EXPECT_LE(loop.after.rms_px, kAfterOverNoise * loop.noise_px) << Summary(result);
+  if (first.name == "velocity") {
+    const Eigen::Vector3d truth(4, 0, 0);
+    const double error = (loop.model.rig.velocity_mps - truth).norm() / truth.norm();
+    EXPECT_TRUE(error <= 0.10 || ambiguous_with("gyro_bias"))
+        << "velocity off by " << 100 * error << " %\n" << Summary(result);
+  } else {
+    EXPECT_EQ(first.name, "gyro_bias") << Summary(result);
+    EXPECT_TRUE(ambiguous_with("velocity")) << Summary(result);
+  }
+}
+
+// Nothing undeclared -> no effect added, nothing unexplained.
+TEST(ValidateEndToEnd, CleanDatasetAddsNothing) {
+  test::TempDir dir;
+  const ValidationResult result = Validate(MakeDataset(dir, {}));
+  EXPECT_TRUE(result.loop.effects.empty()) << Summary(result);
+  EXPECT_FALSE(result.loop.unexplained) << Summary(result);
+  EXPECT_LE(result.loop.before.rms_px, kAfterOverNoise * result.loop.noise_px) << Summary(result);
+  // The declared full model then predicts the measured D (the measurement's own D is noisier).
+  for (const FrameValidation& f : result.frames) {
+    EXPECT_NEAR(f.d_full_px, f.d_meas_px, 0.1 * f.d_meas_px + 0.3) << "frame " << f.frame;
+  }
+}
+
+// An effect outside the candidate list: each rolling-shutter image shifted by a whole number of
+// pixels, different per frame (what optical or electronic image stabilisation does). No candidate
+// moves row 0 (every model's d is zero on the reference row), so the loop must say "unexplained"
+// rather than fit a wrong effect with confidence.
+TEST(ValidateEndToEnd, EffectOutsideTheListIsUnexplained) {
+  test::TempDir dir;
+  const std::string dataset = MakeDataset(dir, {});
+  const std::vector<FrameEntry> frames = ReadFramesCsv(dataset + "/frames.csv");
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const std::string path = dataset + "/" + frames[i].image;
+    const cv::Mat image = ReadImage(path);
+    const double shift_x = (i % 2 == 0 ? 2.0 : -1.0), shift_y = (i % 3 == 0 ? 1.0 : -2.0);
+    const cv::Mat affine = (cv::Mat_<double>(2, 3) << 1, 0, shift_x, 0, 1, shift_y);
+    cv::Mat shifted;
+    cv::warpAffine(image, shifted, affine, image.size(), cv::INTER_NEAREST);
+    WriteImage(path, shifted);
+  }
+  const ValidationResult result = Validate(dataset);
+  EXPECT_TRUE(result.loop.unexplained) << Summary(result);
+}
+
+// The table's bookkeeping on one dataset: flags follow D against each limit, the confusion matrix
+// counts every frame once per limit, and the JSON has FORMATS.md's keys.
+TEST(ValidateEndToEnd, TableAndReportAreConsistent) {
+  if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
+  test::TempDir dir;
+  const ValidationResult result = Validate(MakeDataset(dir, {{"time_offset=0.004"}}));
+  ASSERT_EQ(result.frames.size(), static_cast<size_t>(kFrames));
+  for (size_t l = 0; l < result.limits_m.size(); ++l) {
+    const Confusion& c = result.confusion_paper[l];
+    EXPECT_EQ(c.true_positive + c.false_positive + c.false_negative + c.true_negative, kFrames);
+    for (const FrameValidation& f : result.frames) {
+      EXPECT_EQ(f.flag_meas[l], f.d_meas_m > result.limits_m[l]);
+      EXPECT_EQ(f.flag_paper[l], f.d_paper_m > result.limits_m[l]);
+    }
+  }
+  const nlohmann::json json = ValidationToJson(result);
+  for (const char* key :
+       {"format", "frames", "before", "effects", "after", "noise_px", "unexplained"}) {
+    EXPECT_TRUE(json.contains(key)) << key;
+  }
+  EXPECT_EQ(json["format"], "validation/1");
+  EXPECT_EQ(json["frames"], kFrames);
+  EXPECT_EQ(json["frames_detail"].size(), static_cast<size_t>(kFrames));
+}
+
+TEST(ValidateDataset, RefusesVideoDatasets) {
+  test::TempDir dir;
+  WriteRigModel(dir / "camera.json", DeclaredRig());
+  WriteGyroCsv(dir / "gyro.csv", FlightGyro({}));
+  WriteFileAtomically(dir / "frames.csv", "frame,t_first_row,ref,image\n0,8.0,,a.png\n");
+  try {
+    Validate(dir.path().string());
+    FAIL() << "no error";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("video datasets are not supported yet (issue 6)"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("frames.csv:2"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace shutterlab
