@@ -1,0 +1,154 @@
+// `shutterlab validate` through the CLI: the report JSON has FORMATS.md's keys, --out writes the
+// residual pictures, and bad input gives one line "error: PATH[:LINE]: problem", exit code 2 and no
+// output. The dataset is small (3 frames of 320x240) so the whole file stays fast under ASan.
+
+#include "render/camera.h"
+#include "render/render_dataset.h"
+#include "sim/gyro_io.h"
+#include "sim/synth.h"
+#include "sim/text_file.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace shutterlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Renders dir/ds: 3 frames of 320x240 (f 275 px, 30 ms, 50 m), 3 ms undeclared time offset.
+std::string SmallDataset(const test::TempDir& dir) {
+  RigModel rig;
+  rig.camera.width = 320;
+  rig.camera.height = 240;
+  rig.camera.fx = rig.camera.fy = 275.0;
+  rig.camera.cx = 159.5;
+  rig.camera.cy = 119.5;
+  rig.shutter.readout_s = 0.030;
+  rig.altitude_m = 50.0;
+  WriteRigModel(dir / "camera.json", rig);
+  SynthOptions synth;
+  synth.profile = MotionProfile::kFlight;
+  synth.rate_hz = 1000.0;
+  synth.duration_s = 14.0;
+  synth.seed = 5;
+  synth.imu = ImuErrorModel::Ideal();
+  WriteGyroCsv(dir / "gyro.csv", SynthesizeTrace(synth));
+  WriteFileAtomically(dir / "times.csv", "frame,t_first_row\n0,8.5\n1,10.0\n2,12.0\n");
+  RenderOptions render;
+  render.scene_path = test::SourcePath("assets/scenes/siyi_zr10_img0150.jpg");
+  render.camera_path = dir / "camera.json";
+  render.gyro_path = dir / "gyro.csv";
+  render.frames_path = dir / "times.csv";
+  render.out_dir = dir / "ds";
+  render.injections = {"time_offset=0.003"};
+  render.pictures = false;
+  RenderDataset(render);
+  return dir / "ds";
+}
+
+void ExpectOneLineError(const test::CommandResult& r, const std::string& where,
+                        const std::string& problem) {
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_EQ(r.output.rfind("error: ", 0), 0u) << r.output;
+  EXPECT_EQ(r.output.find('\n'), r.output.size() - 1) << "one line: " << r.output;
+  EXPECT_NE(r.output.find(where), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(problem), std::string::npos) << r.output;
+}
+
+TEST(ValidateCli, WritesReportAndPlots) {
+  test::TempDir dir;
+  const std::string dataset = SmallDataset(dir);
+  const std::string report = dir / "report.json";
+  const std::string out = dir / "plots";
+  const test::CommandResult r = test::RunShutterlab("validate '" + dataset + "' --report '" +
+                                                    report + "' --out '" + out +
+                                                    "' --limit 5cm,10cm");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("D_meas"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("closing the loop"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("time: read"), std::string::npos) << r.output;
+  std::ifstream in(report);
+  const nlohmann::json json = nlohmann::json::parse(in);
+  for (const char* key : {"format", "frames", "before", "effects", "after", "noise_px",
+                          "unexplained", "frames_detail", "confusion", "timing_s"}) {
+    EXPECT_TRUE(json.contains(key)) << key;
+  }
+  EXPECT_EQ(json["format"], "validation/1");
+  EXPECT_EQ(json["frames"], 3);
+  EXPECT_TRUE(json["before"].contains("rms_px") && json["before"].contains("max_px"));
+  EXPECT_TRUE(json["after"].contains("rms_px") && json["after"].contains("max_px"));
+  for (const nlohmann::json& effect : json["effects"]) {
+    for (const char* key : {"name", "value", "stderr", "unit"}) EXPECT_TRUE(effect.contains(key));
+  }
+  for (const char* file : {"0000_residual.png", "0001_residual.png", "0002_residual.png",
+                           "residual_rows.png", "residual_rows.csv"}) {
+    EXPECT_TRUE(fs::exists(fs::path(out) / file)) << file;
+  }
+}
+
+TEST(ValidateCli, MissingCameraJson) {
+  test::TempDir dir;
+  const std::string dataset = SmallDataset(dir);
+  fs::remove(fs::path(dataset) / "camera.json");
+  const std::string report = dir / "report.json";
+  const test::CommandResult r =
+      test::RunShutterlab("validate '" + dataset + "' --report '" + report + "'");
+  ExpectOneLineError(r, dataset + "/camera.json", "missing");
+  EXPECT_FALSE(fs::exists(report));
+}
+
+TEST(ValidateCli, VideoDatasetIsRefused) {
+  test::TempDir dir;
+  const std::string dataset = SmallDataset(dir);
+  WriteFileAtomically(fs::path(dataset) / "frames.csv",
+                      "frame,t_first_row,ref,image\n0,8.5,,images/0000_rs.png\n");
+  const std::string report = dir / "report.json";
+  const test::CommandResult r =
+      test::RunShutterlab("validate '" + dataset + "' --report '" + report + "'");
+  ExpectOneLineError(r, dataset + "/frames.csv:2:", "video datasets are not supported yet");
+  EXPECT_FALSE(fs::exists(report));
+}
+
+TEST(ValidateCli, WrongImageSize) {
+  test::TempDir dir;
+  const std::string dataset = SmallDataset(dir);
+  // camera.json now declares a size the images do not have.
+  RigModel rig = ReadRigModel(fs::path(dataset) / "camera.json");
+  rig.camera.width = 330;
+  WriteRigModel(fs::path(dataset) / "camera.json", rig);
+  const std::string report = dir / "report.json";
+  const std::string out = dir / "plots";
+  const test::CommandResult r = test::RunShutterlab("validate '" + dataset + "' --report '" +
+                                                    report + "' --out '" + out + "'");
+  ExpectOneLineError(r, dataset + "/frames.csv:2:", "camera.json declares 330x240");
+  EXPECT_FALSE(fs::exists(report));
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(ValidateCli, FrameOutsideGyroLog) {
+  test::TempDir dir;
+  const std::string dataset = SmallDataset(dir);
+  WriteFileAtomically(fs::path(dataset) / "frames.csv",
+                      "frame,t_first_row,ref,image\n0,8.5,images/0000_ref.png,images/0000_rs.png\n"
+                      "1,99.0,images/0001_ref.png,images/0001_rs.png\n");
+  const test::CommandResult r = test::RunShutterlab("validate '" + dataset + "'");
+  ExpectOneLineError(r, dataset + "/frames.csv:3:", "frame 1");
+}
+
+TEST(ValidateCli, BadLimitAndCandidate) {
+  test::TempDir dir;
+  const std::string dataset = SmallDataset(dir);
+  ExpectOneLineError(test::RunShutterlab("validate '" + dataset + "' --limit 5parsecs"), "",
+                     "5parsecs");
+  ExpectOneLineError(test::RunShutterlab("validate '" + dataset + "' --candidates warp_drive"),
+                     "", "warp_drive");
+}
+
+}  // namespace
+}  // namespace shutterlab
