@@ -4,6 +4,7 @@
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "render/pictures.h"
+#include "estimate/html_report.h"
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
 #include "sim/check.h"
@@ -577,6 +578,7 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
   }
   const cv::Size cells((width + step - 1) / step, (height + step - 1) / step);
   const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::vector<cv::Mat> panels;
   for (const FrameValidation& f : result.frames) {
     cv::Mat before(cells, CV_32FC2, cv::Scalar(nan, nan)), after = before.clone();
     for (const PointResidual& r : f.residuals) {
@@ -598,6 +600,7 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
     const std::string path = (fs::path(dir) / (FrameName(f.frame) + "_residual.png")).string();
     WriteImage(path, panel);
     written.push_back(path);
+    panels.push_back(panel);
   }
 
   // Per-row profile over all frames: mean residual dx, dy and RMS per band of `step` rows.
@@ -648,6 +651,65 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
   const std::string chart_path = (fs::path(dir) / "residual_rows.png").string();
   WriteImage(chart_path, charts);
   written.push_back(chart_path);
+
+  // DIR/validate.html: the table, the charts before/after, the residual pictures.
+  HtmlPage page("shutterlab validate: " + result.dataset);
+  page.Heading("Summary");
+  page.Preformatted(ValidationReport(result));
+  page.Heading("Residual per image row (all frames)");
+  Chart rows_chart;
+  rows_chart.title = "RMS residual per row band, before and after the loop";
+  rows_chart.x_label = "image row";
+  rows_chart.y_label = "px";
+  rows_chart.x = row;
+  rows_chart.series = {ChartSeries("before rms", mean[2]), ChartSeries("after rms", mean[5]),
+                       ChartSeries("before mean dx", mean[0]),
+                       ChartSeries("before mean dy", mean[1]),
+                       ChartSeries("after mean dx", mean[3]), ChartSeries("after mean dy", mean[4])};
+  page.AddChart(rows_chart);
+  page.Heading("Per frame");
+  Chart frames_chart, d_chart;
+  frames_chart.title = "RMS residual per frame";
+  frames_chart.kind = d_chart.kind = ChartKind::kPoints;
+  frames_chart.x_label = d_chart.x_label = "frame";
+  frames_chart.y_label = "px";
+  d_chart.title = "frame distortion D on the ground";
+  d_chart.y_label = "cm";
+  std::vector<double> ids, before_rms, after_rms, noise, d_meas, d_full, d_paper;
+  for (const FrameValidation& f : result.frames) {
+    ids.push_back(static_cast<double>(f.frame));
+    before_rms.push_back(f.before.rms_px);
+    after_rms.push_back(f.after.rms_px);
+    noise.push_back(f.noise_px);
+    d_meas.push_back(100 * f.d_meas_m);
+    d_full.push_back(100 * f.d_full_m);
+    d_paper.push_back(100 * f.d_paper_m);
+  }
+  // uPlot wants x ascending: frames.csv lists frames in any order.
+  std::vector<size_t> order(ids.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return ids[a] < ids[b]; });
+  const auto sorted = [&](const std::vector<double>& v) {
+    std::vector<double> out;
+    for (size_t i : order) out.push_back(v[i]);
+    return out;
+  };
+  frames_chart.x = d_chart.x = sorted(ids);
+  frames_chart.series = {ChartSeries("before", sorted(before_rms)),
+                         ChartSeries("after", sorted(after_rms)),
+                         ChartSeries("measurement noise", sorted(noise))};
+  d_chart.series = {ChartSeries("measured", sorted(d_meas)),
+                    ChartSeries("full model", sorted(d_full)),
+                    ChartSeries("paper's model", sorted(d_paper))};
+  page.AddChart(frames_chart);
+  page.AddChart(d_chart);
+  for (size_t i = 0; i < panels.size(); ++i) {
+    page.Image(panels[i], "frame " + FrameName(result.frames[i].frame) +
+                              ": |residual| at the measured points, before and after");
+  }
+  const std::string html_path = (fs::path(dir) / "validate.html").string();
+  page.Write(html_path);
+  written.push_back(html_path);
   return written;
 }
 

@@ -87,7 +87,7 @@ TEST(ValidateCli, WritesReportAndPlots) {
     for (const char* key : {"name", "value", "stderr", "unit"}) EXPECT_TRUE(effect.contains(key));
   }
   for (const char* file : {"0000_residual.png", "0001_residual.png", "0002_residual.png",
-                           "residual_rows.png", "residual_rows.csv"}) {
+                           "residual_rows.png", "residual_rows.csv", "validate.html"}) {
     EXPECT_TRUE(fs::exists(fs::path(out) / file)) << file;
   }
 }
