@@ -3,12 +3,16 @@
 
 #include "estimate/analyze.h"
 
+#include "estimate/analyze_report.h"
+#include "render/image_io.h"
+#include "render/pictures.h"
 #include "app/command.h"
 #include "estimate/flight.h"
 #include "sim/check.h"
 #include "sim/flight_log_io.h"
 #include "sim/gyro_io.h"
 
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <stdexcept>
@@ -35,6 +39,7 @@ struct AnalyzeCommand {
   std::vector<std::string> limits{"5cm", "10cm"};
   double noise_allowance_arcsec = 20.0;
   std::string out_dir;
+  std::string scene_path;
   bool json = false;
   bool altitude_given = false;
 };
@@ -83,6 +88,16 @@ void Run(const AnalyzeCommand& command) {
   read.Check();
   options.Check();  // before the (possibly long) read
   if (!command.triggers_path.empty()) options.triggers = ReadTriggersCsv(command.triggers_path);
+  SHUTTERLAB_CHECK(command.scene_path.empty() || !command.out_dir.empty())
+      << "--scene is for the report: give --out DIR too";
+  AnalyzeReportOptions report;
+  report.log_name = std::filesystem::path(command.log_path).filename().string();
+  if (!command.scene_path.empty()) {
+    report.scene = ToRgb8(ReadImage(command.scene_path));
+    report.scene_name = std::filesystem::path(command.scene_path).filename().string();
+  }
+  // The report shades the flagged windows and draws their histograms from the flight series.
+  options.flight_series = !command.out_dir.empty();
   const FlightLog log = ReadFlightLog(command.log_path, read);
   Progress progress("analyze", 1000);
   options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
@@ -92,7 +107,10 @@ void Run(const AnalyzeCommand& command) {
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(command.log_path + ": " + e.what());
   }
-  if (!command.out_dir.empty()) WriteAnalyzeOutputs(command.out_dir, result);
+  if (!command.out_dir.empty()) {
+    WriteAnalyzeOutputs(command.out_dir, result);
+    AnalyzeReportPage(log, options, result, report).Write(command.out_dir + "/report.html");
+  }
   if (command.json) {
     std::cout << AnalyzeToJson(result).dump(2) << "\n";
   } else {
@@ -136,7 +154,8 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
                   "CSV 'image,t' or 't': trigger times in seconds on the log clock")
       ->check(CLI::ExistingFile);
   cmd->add_option("--every", command->every,
-                  "simulated triggers at this cadence (e.g. 2s) when the log has no camera events");
+                  "simulated triggers at this cadence (e.g. 2s); with --triggers or --every the "
+                  "log's camera events are not used");
   cmd->add_option("--latency", command->latency, "trigger-to-exposure latency (s, ms, us)")
       ->capture_default_str();
   cmd->add_option("--limit", command->limits, "ground limits, e.g. 5cm,10cm")
@@ -145,7 +164,11 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
   cmd->add_option("--noise-allowance", command->noise_allowance_arcsec,
                   "flight table: added to each threshold for the gyro's own noise, arcsec")
       ->capture_default_str();
-  cmd->add_option("--out", command->out_dir, "write DIR/images.csv and DIR/exclude.txt");
+  cmd->add_option("--out", command->out_dir,
+                  "write DIR/images.csv, DIR/exclude.txt and DIR/report.html");
+  cmd->add_option("--scene", command->scene_path,
+                  "nadir image for the report's worst-image pictures (with --out)")
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--json", command->json, "print JSON (FORMATS.md `analyze`)");
   return std::function<void()>([command, altitude] {
     command->altitude_given = altitude->count() > 0;

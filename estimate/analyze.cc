@@ -69,16 +69,6 @@ double GridDistortionPx(const FrameGeometry& geometry) {
   return d_px;
 }
 
-// The renderer's true model for the declared rig: the triggers are on the log clock (no time
-// offset) and the bias (camera axes) is removed as the renderer's gyro bias (gyro axes).
-TrueModel AnalyzeTrueModel(const RigModel& rig, const Eigen::Vector3d& bias_cam_rad_s) {
-  TrueModel model;
-  model.rig = rig;
-  model.rig.time_offset_s = 0.0;
-  model.gyro_bias_rad_s = rig.cam_from_gyro.transpose() * bias_cam_rad_s;
-  return model;
-}
-
 struct ImageContext {
   const PerAxisAngles* angles;
   const CameraMotion* motion;  // null: skip D_full
@@ -179,6 +169,14 @@ std::string ImageName(size_t index) {
 }
 
 }  // namespace
+
+TrueModel AnalyzeTrueModel(const RigModel& rig, const Eigen::Vector3d& bias_cam_rad_s) {
+  TrueModel model;
+  model.rig = rig;
+  model.rig.time_offset_s = 0.0;
+  model.gyro_bias_rad_s = rig.cam_from_gyro.transpose() * bias_cam_rad_s;
+  return model;
+}
 
 void AnalyzeOptions::Check() const {
   rig.Check();

@@ -24,6 +24,7 @@
 
 #include "estimate/flight.h"
 #include "render/camera.h"
+#include "render/truth_model.h"
 #include "sim/flight_log.h"
 
 #include <nlohmann/json.hpp>
@@ -115,6 +116,10 @@ struct AnalyzeResult {
 };
 
 AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& options);
+
+// The renderer's true model that D_full uses: the declared rig with no time offset (triggers are
+// on the log clock) and the bias (camera axes) removed as the gyro bias (gyro axes).
+TrueModel AnalyzeTrueModel(const RigModel& rig, const Eigen::Vector3d& bias_cam_rad_s);
 
 // Reads a trigger file: CSV "image,t" or "t" (seconds on the log clock), optional header line
 // naming those columns; unnamed images become IMG_0001, ... Throws IoError(path:line: problem).

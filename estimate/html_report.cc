@@ -73,7 +73,7 @@ constexpr const char* kChartScript = R"js(
       series.push(entry);
     });
     var plugins = [];
-    if (spec.shaded.length > 0) plugins.push(shade(spec.shaded, "rgba(255, 140, 0, 0.28)"));
+    spec.shadings.forEach(function (s) { plugins.push(shade(s.intervals, s.color)); });
     var options = {
       title: spec.title,
       width: Math.max(480, holder.clientWidth),
@@ -108,7 +108,9 @@ td:first-child, th:first-child { text-align: left; }
 tr:nth-child(even) td { background: #f8fafc; }
 .table-wrap { max-height: 520px; overflow: auto; display: inline-block; max-width: 100%; }
 .chart { margin: 6px 0 14px; }
-.chart-note { font-size: 12px; color: #6a7482; margin: -8px 0 12px; }
+.chart-note { font-size: 12px; color: #4a5462; margin: -8px 0 10px; }
+.swatch { display: inline-block; width: 22px; height: 11px; margin-right: 6px;
+          vertical-align: -1px; border: 1px solid #c5ccd6; }
 figure { display: inline-block; margin: 6px 12px 12px 0; vertical-align: top; }
 figure img { max-width: 100%; border: 1px solid #d5dbe3; }
 figcaption { font-size: 13px; color: #4a5462; margin-top: 3px; }
@@ -259,10 +261,14 @@ std::string ChartJson(const Chart& chart) {
   }
   json["series"] = std::move(series);
   json["data"] = std::move(data);
-  nlohmann::json shaded = nlohmann::json::array();
-  for (const auto& [a, b] : chart.shaded) shaded.push_back({a, b});
-  json["shaded"] = std::move(shaded);
-  json["shaded_label"] = chart.shaded_label;
+  nlohmann::json shadings = nlohmann::json::array();
+  for (const ChartShading& shading : chart.shadings) {
+    nlohmann::json intervals = nlohmann::json::array();
+    for (const auto& [a, b] : shading.intervals) intervals.push_back({a, b});
+    shadings.push_back(
+        {{"label", shading.label}, {"color", shading.color}, {"intervals", std::move(intervals)}});
+  }
+  json["shadings"] = std::move(shadings);
   // Invalid UTF-8 in a label becomes U+FFFD rather than an exception.
   std::string text = json.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
   // "</script" or "<!--" inside the block would change how HTML parses it; "\u003c" is the same
@@ -316,8 +322,9 @@ void HtmlPage::AddChart(const Chart& chart) {
   }
   const std::string id = "chart-" + std::to_string(charts_++);
   body_ += "<div class=\"chart\" id=\"" + id + "\"></div>\n";
-  if (!chart.shaded_label.empty()) {
-    body_ += "<p class=\"chart-note\">shaded: " + EscapeHtml(chart.shaded_label) + "</p>\n";
+  for (const ChartShading& shading : chart.shadings) {
+    body_ += "<p class=\"chart-note\"><span class=\"swatch\" style=\"background:" +
+             EscapeHtml(shading.color) + "\"></span>" + EscapeHtml(shading.label) + "</p>\n";
   }
   body_ += "<script type=\"application/json\" class=\"chart-data\" data-target=\"" + id + "\">" +
            ChartJson(chart) + "</script>\n";

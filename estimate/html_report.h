@@ -42,12 +42,20 @@ enum class ChartKind {
 };
 
 struct ChartSeries {
+  explicit ChartSeries(std::string label_ = "", std::vector<double> y_ = {}, std::string color_ = "")
+      : label(std::move(label_)), y(std::move(y_)), color(std::move(color_)) {}
   std::string label;
   std::vector<double> y;  // one per Chart::x; NaN = no value
   std::string color;      // "#rrggbb"; empty: the builder's palette
   bool dashed = false;    // e.g. limit lines
   // Drawn as a line even in a kPoints chart (e.g. a limit line beside points).
   bool line = false;
+};
+
+struct ChartShading {
+  std::string label;  // said in a note under the chart
+  std::string color;  // CSS colour, e.g. "rgba(255, 140, 0, 0.25)"
+  std::vector<std::pair<double, double>> intervals;
 };
 
 struct Chart {
@@ -57,9 +65,8 @@ struct Chart {
   bool log_x = false, log_y = false;  // base 10; values <= 0 are not drawn
   std::vector<double> x;              // ascending
   std::vector<ChartSeries> series;
-  // [x0, x1] intervals shaded behind the data (e.g. flagged time windows).
-  std::vector<std::pair<double, double>> shaded;
-  std::string shaded_label;  // legend text for the shading; empty: none
+  // Sets of [x0, x1] intervals shaded behind the data (e.g. flagged time windows), drawn in order.
+  std::vector<ChartShading> shadings;
   int height_px = 260;
 };
 

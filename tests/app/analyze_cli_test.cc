@@ -1,4 +1,5 @@
 #include "sim/text_file.h"
+#include "tests/estimate/report_test_util.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -41,6 +42,53 @@ TEST(AnalyzeCli, BlackboxEveryTwoSecondsJsonAndOutputs) {
   const std::string csv = ReadFileToString(dir / "out/images.csv");
   EXPECT_EQ(LineCount(csv), json["images"].size() + 1);
   EXPECT_TRUE(std::filesystem::exists(dir / "out/exclude.txt"));
+}
+
+TEST(AnalyzeCli, ReportWithSceneIsSelfContainedAndMatchesTheTable) {
+  test::TempDir dir;
+  const auto r = RunShutterlab("analyze " + Bbl() + " --every 4s --out " + (dir / "out") +
+                               " --scene " + SourcePath("assets/scenes/siyi_zr10_img0100.jpg") +
+                               " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json json = nlohmann::json::parse(r.output);
+  const std::string html = ReadFileToString(dir / "out/report.html");
+  EXPECT_TRUE(test::SelfContained(html));
+  EXPECT_NE(html.find("var uPlot="), std::string::npos);
+  EXPECT_EQ(html.rfind("</html>\n"), html.size() - 8);  // written whole
+  const auto charts = test::ChartBlocks(html);
+  ASSERT_EQ(charts.size(), 5u);
+  // The per-image chart holds the JSON's images and values.
+  const auto& d = charts[2]["data"];
+  ASSERT_EQ(d[0].size(), json["images"].size());
+  for (size_t i = 0; i < d[0].size(); ++i) {
+    EXPECT_NEAR(d[1][i].get<double>(), json["images"][i]["D_paper_m"].get<double>() * 100, 1e-9);
+    EXPECT_NEAR(d[2][i].get<double>(), json["images"][i]["D_full_m"].get<double>() * 100, 1e-9);
+  }
+  // 3 worst images over the scene; the rate chart's 25k samples enveloped to at most 8000 points.
+  size_t pictures = 0;
+  for (size_t at = html.find("data:image/png;base64,"); at != std::string::npos;
+       at = html.find("data:image/png;base64,", at + 1)) {
+    ++pictures;
+  }
+  EXPECT_EQ(pictures, 3u);
+  EXPECT_NE(html.find("blended over siyi_zr10_img0100.jpg"), std::string::npos);
+  EXPECT_LE(charts[0]["data"][0].size(), 8000u);
+  EXPECT_LT(html.size(), 6u << 20);
+}
+
+TEST(AnalyzeCli, SceneWithoutOutIsExitTwo) {
+  const auto r = RunShutterlab("analyze " + Bbl() + " --every 4s --scene " +
+                               SourcePath("assets/scenes/siyi_zr10_img0100.jpg"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--out"), std::string::npos) << r.output;
+}
+
+TEST(AnalyzeCli, EveryTakesPrecedenceAndOneImageIsSingular) {
+  test::TempDir dir;
+  const auto r = RunShutterlab("analyze " + Bbl() + " --every 40s");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("triggers: every 40 s"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("verdict: 1 image,"), std::string::npos) << r.output;
 }
 
 TEST(AnalyzeCli, TableHasVerdict) {
