@@ -22,6 +22,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <filesystem>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -275,6 +276,24 @@ TEST(ValidateDataset, RefusesVideoDatasets) {
               std::string::npos)
         << e.what();
     EXPECT_NE(std::string(e.what()).find("frames.csv:2"), std::string::npos) << e.what();
+  }
+}
+
+// The demo's helper: a small dataset with a 4 ms offset, validated, outputs written.
+TEST(ValidateDemo, RenderAndValidateFindsTheInjectedOffset) {
+  test::TempDir dir;
+  InjectedDemoOptions options;
+  options.scene_path = test::SourcePath("assets/scenes/siyi_zr10_img0150.jpg");
+  options.out_dir = dir / "demo";
+  options.frames = 4;
+  options.width = 320;
+  options.height = 240;
+  const ValidationResult result = RenderAndValidate(options);
+  ASSERT_FALSE(result.loop.effects.empty()) << Summary(result);
+  EXPECT_EQ(result.loop.effects.front().name, "time_offset") << Summary(result);
+  EXPECT_NEAR(result.loop.model.rig.time_offset_s, 0.004, 0.3e-3) << Summary(result);
+  for (const char* file : {"report.json", "plots/validate.html", "dataset/truth.json"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir.path() / "demo" / file)) << file;
   }
 }
 
