@@ -1,9 +1,12 @@
 // shutterlab demo: the main job on the bundled assets, in seconds.
 //  1. the source paper's static noise and accuracy analyses (Tables 1-3) on synthetic MPU-9250 traces;
 //  2. its flight analysis (Table 4) on a real Betaflight flight log;
-//  3. that log's gyro driving the rolling-shutter renderer over a real nadir photo, frames every few
+//  3. `analyze` of that log for a typical mapping camera with simulated triggers every 2 s: the
+//     per-image table, the flagged images and shutterlab-demo/report.html;
+//  4. that log's gyro driving the rolling-shutter renderer over a real nadir photo, frames every few
 //     seconds as a mapping camera would take them: images, exact displacement truth and pictures.
-// Orchestration only: every step is one library call that the other subcommands also make.
+// Orchestration only: every step is one library call that the other subcommands also make. Each
+// step is a function of the shared DemoContext, run in order by RunDemo (add a step there).
 
 #include <cstdio>
 #include <filesystem>
@@ -11,9 +14,13 @@
 
 #include "app/command.h"
 #include "estimate/accuracy.h"
+#include "estimate/analyze.h"
+#include "estimate/analyze_report.h"
 #include "estimate/flight.h"
 #include "estimate/noise.h"
 #include "render/camera.h"
+#include "render/image_io.h"
+#include "render/pictures.h"
 #include "render/render_dataset.h"
 #include "sim/check.h"
 #include "sim/blackbox.h"
@@ -53,25 +60,28 @@ RigModel DemoCamera() {
   return rig;
 }
 
-void RunDemo(const DemoOptions& options) {
-  namespace fs = std::filesystem;
-  const fs::path out(options.out_dir);
-  fs::create_directories(out / "inputs");
+struct DemoContext {
+  DemoOptions options;
+  std::filesystem::path out;
+  std::string log_path;  // the bundled real flight log
+  FlightLog log;
+};
 
-  Section("1. Static noise of a synthetic MPU-9250 at 3 kHz (paper Tables 1-2)");
+void StepStaticNoise(DemoContext&) {
   SynthOptions still;
   still.profile = MotionProfile::kStill;
   still.duration_s = 20.0;
   std::cout << NoiseTable(AnalyzeNoise(SynthesizeTrace(still), NoiseOptions{}));
+}
 
-  Section("2. Accuracy against a synthetic total station turning 1 deg steps (paper Table 3)");
+void StepAccuracy(DemoContext&) {
   SynthOptions steps;
   steps.profile = MotionProfile::kSteps;
   std::cout << AccuracyTable(AnalyzeAccuracy(SynthesizeTrace(steps), AccuracyOptions{}));
+}
 
-  Section("3. A real flight: Betaflight blackbox btfl_001.bbl, 50 s at 500 Hz (paper Table 4)");
-  const std::string log_path = options.assets_dir + "/logs/btfl_001.bbl";
-  const FlightLog log = ReadBlackbox(log_path);
+void StepFlightTable(DemoContext& context) {
+  const FlightLog& log = context.log;
   std::cout << log.gyro.size() << " gyro samples over " << log.gyro.DurationS() << " s at "
             << log.gyro.sampling().RateHz() << " Hz (" << log.gyro_source << ")\n";
   FlightOptions flight;
@@ -79,13 +89,61 @@ void RunDemo(const DemoOptions& options) {
   // Betaflight calibrates the gyro at arming and this log starts in flight (no still stretch), so
   // the logged rates are taken as bias-free.
   flight.known_bias_rad_s = Eigen::Vector3d::Zero();
-  {
-    Progress progress("flight windows", 100);
-    flight.progress = [&progress](double fraction) { progress.Update(static_cast<size_t>(fraction * 100)); };
-    std::cout << FlightTable(Flight(log.gyro, flight));
-  }
+  Progress progress("flight windows", 100);
+  flight.progress = [&progress](double fraction) {
+    progress.Update(static_cast<size_t>(fraction * 100));
+  };
+  std::cout << FlightTable(Flight(log.gyro, flight));
+}
 
-  Section("4. The same flight's gyro through a 30 ms rolling shutter over a real nadir photo");
+// The analyze camera: a typical mapping camera (1280x960, f = 1100 px, 30 ms readout, 50 m),
+// mounted as DemoCamera.
+RigModel AnalyzeCamera() {
+  RigModel rig = DemoCamera();
+  rig.camera.height = 960;
+  rig.camera.fx = rig.camera.fy = 1100.0;
+  rig.camera.cy = (rig.camera.height - 1) / 2.0;
+  return rig;
+}
+
+void StepAnalyze(DemoContext& context) {
+  AnalyzeOptions options;
+  options.rig = AnalyzeCamera();
+  options.every_s = 2.0;  // simulated triggers at a mapping cadence
+  options.estimate_bias = false;  // calibrated at arming, as in the flight table above
+  options.flight_series = true;   // the report's shading and histograms
+  AnalyzeResult result;
+  {
+    Progress progress("analyze", 1000);
+    options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
+    result = Analyze(context.log, options);
+  }
+  std::cout << AnalyzeReport(result);
+  std::string flagged;
+  for (const ImageResult& image : result.images) {
+    if (image.in_trace && image.flagged.back()) flagged += (flagged.empty() ? "" : " ") + image.name;
+  }
+  std::cout << "flagged over " << LimitKey(options.limits_m.back() * 100) << " cm: "
+            << (flagged.empty() ? "none" : flagged) << "\n";
+  AnalyzeReportOptions report;
+  report.log_name = std::filesystem::path(context.log_path).filename().string();
+  const std::string scene = context.options.assets_dir + "/scenes/siyi_zr10_img0100.jpg";
+  report.scene = ToRgb8(ReadImage(scene));
+  report.scene_name = std::filesystem::path(scene).filename().string();
+  WriteAnalyzeOutputs(context.out.string(), result);
+  {
+    Progress progress("report", 1);
+    AnalyzeReportPage(context.log, options, result, report)
+        .Write((context.out / "report.html").string());
+  }
+  std::cout << "Report: " << (context.out / "report.html").string() << "; "
+            << (context.out / "images.csv").string() << ", "
+            << (context.out / "exclude.txt").string() << "\n";
+}
+
+void StepRender(DemoContext& context) {
+  const FlightLog& log = context.log;
+  const std::filesystem::path& out = context.out;
   const RigModel rig = DemoCamera();
   WriteRigModel((out / "inputs/camera.json").string(), rig);
   WriteGyroCsv((out / "inputs/gyro.csv").string(), log.gyro);
@@ -93,14 +151,14 @@ void RunDemo(const DemoOptions& options) {
   int frame_count = 0;
   const int64_t first_ns = log.gyro.t_begin_ns() + SecondsToNs(2.0);
   for (int64_t t = first_ns; t + SecondsToNs(rig.shutter.readout_s + 0.1) < log.gyro.t_end_ns();
-       t += SecondsToNs(options.frame_every_s)) {
+       t += SecondsToNs(context.options.frame_every_s)) {
     frames += std::to_string(frame_count++) + ",";
     AppendSecondsFromNs(t, &frames);
     frames += "\n";
   }
   WriteFileAtomically((out / "inputs/frames.csv").string(), frames);
   RenderOptions render;
-  render.scene_path = options.assets_dir + "/scenes/siyi_zr10_img0100.jpg";
+  render.scene_path = context.options.assets_dir + "/scenes/siyi_zr10_img0100.jpg";
   render.camera_path = (out / "inputs/camera.json").string();
   render.gyro_path = (out / "inputs/gyro.csv").string();
   render.frames_path = (out / "inputs/frames.csv").string();
@@ -119,6 +177,36 @@ void RunDemo(const DemoOptions& options) {
   std::cout << "\nPictures: " << (out / "render").string()
             << "/ (side-by-side reference | rolling shutter | displacement heatmap per frame, and an overview)\n"
             << "Dataset with exact truth: " << (out / "render").string() << "/ (camera.json, gyro.csv, frames.csv, truth/)\n";
+}
+
+void RunDemo(const DemoOptions& options) {
+  DemoContext context;
+  context.options = options;
+  context.out = options.out_dir;
+  std::filesystem::create_directories(context.out / "inputs");
+  context.log_path = options.assets_dir + "/logs/btfl_001.bbl";
+  context.log = ReadBlackbox(context.log_path);
+  struct Step {
+    const char* title;
+    void (*run)(DemoContext&);
+  };
+  const Step steps[] = {
+      {"Static noise of a synthetic MPU-9250 at 3 kHz (paper Tables 1-2)", StepStaticNoise},
+      {"Accuracy against a synthetic total station turning 1 deg steps (paper Table 3)",
+       StepAccuracy},
+      {"A real flight: Betaflight blackbox btfl_001.bbl, 50 s at 500 Hz (paper Table 4)",
+       StepFlightTable},
+      {"Which photos of that flight are distorted: analyze for a 1280x960, f 1100 px, 30 ms "
+       "camera at 50 m, a photo every 2 s",
+       StepAnalyze},
+      {"The same flight's gyro through a 30 ms rolling shutter over a real nadir photo",
+       StepRender},
+  };
+  int number = 0;
+  for (const Step& step : steps) {
+    Section(std::to_string(++number) + ". " + step.title);
+    step.run(context);
+  }
 }
 
 const CommandRegistration kRegistration(5, [](CLI::App& app) {
