@@ -344,7 +344,9 @@ void HtmlPage::Image(const cv::Mat& rgb8, const std::string& caption) {
   }
   std::vector<uchar> png;
   SHUTTERLAB_CHECK(cv::imencode(".png", bgr, png)) << "image '" << caption << "': PNG encoding failed";
-  body_ += "<figure><img alt=\"" + EscapeHtml(caption) + "\" width=\"" + std::to_string(rgb8.cols) +
+  // The figure as wide as its image, so a long caption wraps instead of widening it.
+  body_ += "<figure style=\"width:" + std::to_string(rgb8.cols) + "px\"><img alt=\"" +
+           EscapeHtml(caption) + "\" width=\"" + std::to_string(rgb8.cols) +
            "\" src=\"data:image/png;base64," +
            Base64(std::string_view(reinterpret_cast<const char*>(png.data()), png.size())) +
            "\"><figcaption>" + EscapeHtml(caption) + "</figcaption></figure>\n";
