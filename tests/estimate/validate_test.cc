@@ -24,6 +24,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -141,7 +142,12 @@ TEST(ValidateEndToEnd, RecoversGyroToCameraMisalignment) {
   const Eigen::Vector3d axis = Eigen::Vector3d(0.5, -0.3, 0.81).normalized();
   const Eigen::Matrix3d r_cg = ExpSO3(axis * (4.0 * M_PI / 180.0)).toRotationMatrix();
   std::string value = "gyro_to_camera=";
-  for (int i = 0; i < 9; ++i) value += (i ? "," : "") + std::to_string(r_cg(i / 3, i % 3));
+  // Full precision: ApplyInjection checks the matrix is a rotation to 1e-6.
+  for (int i = 0; i < 9; ++i) {
+    char number[32];
+    std::snprintf(number, sizeof(number), "%s%.17g", i ? "," : "", r_cg(i / 3, i % 3));
+    value += number;
+  }
   test::TempDir dir;
   const ValidationResult result = Validate(MakeDataset(dir, {{value}}));
   ExpectIdentified(result, "gyro_to_camera");
