@@ -247,6 +247,7 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
   flight_options.noise_allowance_arcsec = options.noise_allowance_arcsec;
   flight_options.progress = [&progress](double f) { progress(0.7 * f); };
   flight_options.series = options.flight_series;
+  flight_options.series_vector = false;  // the report plots the per-axis ranges only
   try {
     // The still segment may lie anywhere (often after landing), so its bias is applied to every
     // sample rather than starting the statistics after the segment as `flight --bias` does.

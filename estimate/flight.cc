@@ -339,7 +339,7 @@ FlightResult Flight(const GyroTrace& trace, const FlightOptions& options) {
       for (size_t i = 0; options.series && wi == 0 && i < m; ++i) {
         result.series.t_ns.push_back(t(k0 + i));
         for (int a = 0; a < 3; ++a) result.series.range_arcsec[a].push_back(range[a][i] * kArcsecPerRad);
-        if (options.vector_criterion) {
+        if (options.vector_criterion && options.series_vector) {
           result.series.vector_arcsec.push_back(MaxPairwiseAngle(q, i, ends[i], &scratch) *
                                                 kArcsecPerRad);
         }

@@ -37,6 +37,9 @@ struct FlightOptions {
   std::optional<Eigen::Vector3d> known_bias_rad_s;
   bool vector_criterion = true;                // also flag by the SO(3) angle (costs ~2x)
   bool series = false;                         // fill FlightResult::series for windows_s[0]
+  // The series' exact per-window vector angle too (O(samples x window samples): slow at kHz rates;
+  // the per-axis ranges cost nothing extra).
+  bool series_vector = true;
   // Called now and then with the fraction done (0..1); may be empty.
   std::function<void(double)> progress;
   // Throws std::invalid_argument naming the first bad field.
@@ -65,7 +68,7 @@ struct FlightSeries {
   std::vector<int64_t> t_ns;                   // window start, gyro clock
   std::array<std::vector<double>, 3> range_arcsec;
   std::vector<double> vector_arcsec;           // largest pairwise rotation angle; empty without
-                                               // the vector criterion
+                                               // the vector criterion or series_vector
 };
 
 struct FlightResult {
