@@ -3,11 +3,11 @@
 
 #include "estimate/analyze.h"
 
+#include "app/command.h"
 #include "estimate/analyze_report.h"
+#include "estimate/flight.h"
 #include "render/image_io.h"
 #include "render/pictures.h"
-#include "app/command.h"
-#include "estimate/flight.h"
 #include "sim/check.h"
 #include "sim/flight_log_io.h"
 #include "sim/gyro_io.h"

@@ -1,16 +1,14 @@
 // shutterlab demo: the main job on the bundled assets, in seconds.
-//  1. the source paper's static noise and accuracy analyses (Tables 1-3) on synthetic MPU-9250 traces;
+//  1. the source paper's static noise and accuracy analyses (Tables 1-3) on synthetic MPU-9250
+//  traces;
 //  2. its flight analysis (Table 4) on a real Betaflight flight log;
 //  3. `analyze` of that log for a typical mapping camera with simulated triggers every 2 s: the
 //     per-image table, the flagged images and shutterlab-demo/report.html;
-//  4. that log's gyro driving the rolling-shutter renderer over a real nadir photo, frames every few
+//  4. that log's gyro driving the rolling-shutter renderer over a real nadir photo, frames every
+//  few
 //     seconds as a mapping camera would take them: images, exact displacement truth and pictures.
 // Orchestration only: every step is one library call that the other subcommands also make. Each
 // step is a function of the shared DemoContext, run in order by RunDemo (add a step there).
-
-#include <cstdio>
-#include <filesystem>
-#include <iostream>
 
 #include "app/command.h"
 #include "estimate/accuracy.h"
@@ -22,11 +20,15 @@
 #include "render/image_io.h"
 #include "render/pictures.h"
 #include "render/render_dataset.h"
-#include "sim/check.h"
 #include "sim/blackbox.h"
+#include "sim/check.h"
 #include "sim/gyro_io.h"
 #include "sim/synth.h"
 #include "sim/text_file.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
 
 namespace shutterlab::app {
 namespace {
@@ -109,7 +111,7 @@ RigModel AnalyzeCamera() {
 void StepAnalyze(DemoContext& context) {
   AnalyzeOptions options;
   options.rig = AnalyzeCamera();
-  options.every_s = 2.0;  // simulated triggers at a mapping cadence
+  options.every_s = 2.0;          // simulated triggers at a mapping cadence
   options.estimate_bias = false;  // calibrated at arming, as in the flight table above
   options.flight_series = true;   // the report's shading and histograms
   AnalyzeResult result;
@@ -121,10 +123,11 @@ void StepAnalyze(DemoContext& context) {
   std::cout << AnalyzeReport(result);
   std::string flagged;
   for (const ImageResult& image : result.images) {
-    if (image.in_trace && image.flagged.back()) flagged += (flagged.empty() ? "" : " ") + image.name;
+    if (image.in_trace && image.flagged.back())
+      flagged += (flagged.empty() ? "" : " ") + image.name;
   }
-  std::cout << "flagged over " << LimitKey(options.limits_m.back() * 100) << " cm: "
-            << (flagged.empty() ? "none" : flagged) << "\n";
+  std::cout << "flagged over " << LimitKey(options.limits_m.back() * 100)
+            << " cm: " << (flagged.empty() ? "none" : flagged) << "\n";
   AnalyzeReportOptions report;
   report.log_name = std::filesystem::path(context.log_path).filename().string();
   const std::string scene = context.options.assets_dir + "/scenes/siyi_zr10_img0100.jpg";
@@ -175,8 +178,10 @@ void StepRender(DemoContext& context) {
                 f.d_m > 0.05 ? "yes" : "no");
   }
   std::cout << "\nPictures: " << (out / "render").string()
-            << "/ (side-by-side reference | rolling shutter | displacement heatmap per frame, and an overview)\n"
-            << "Dataset with exact truth: " << (out / "render").string() << "/ (camera.json, gyro.csv, frames.csv, truth/)\n";
+            << "/ (side-by-side reference | rolling shutter | displacement heatmap per frame, and "
+               "an overview)\n"
+            << "Dataset with exact truth: " << (out / "render").string()
+            << "/ (camera.json, gyro.csv, frames.csv, truth/)\n";
 }
 
 void RunDemo(const DemoOptions& options) {
@@ -210,11 +215,14 @@ void RunDemo(const DemoOptions& options) {
 }
 
 const CommandRegistration kRegistration(5, [](CLI::App& app) {
-  auto* cmd = app.add_subcommand("demo", "run the main job on the bundled assets (real log, real nadir photo)");
+  auto* cmd = app.add_subcommand(
+      "demo", "run the main job on the bundled assets (real log, real nadir photo)");
   auto options = std::make_shared<DemoOptions>();
   cmd->add_option("--out", options->out_dir, "output folder")->capture_default_str();
-  cmd->add_option("--assets", options->assets_dir, "the bundled assets folder")->capture_default_str();
-  cmd->add_option("--every", options->frame_every_s, "seconds between rendered frames")->capture_default_str();
+  cmd->add_option("--assets", options->assets_dir, "the bundled assets folder")
+      ->capture_default_str();
+  cmd->add_option("--every", options->frame_every_s, "seconds between rendered frames")
+      ->capture_default_str();
   return std::function<void()>([options] {
     options->Check();
     RunDemo(*options);

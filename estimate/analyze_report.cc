@@ -51,9 +51,9 @@ std::vector<ChartShading> FlaggedShadings(const AnalyzeResult& result) {
   // Loosest limit first so the stricter, wider shading lies below it.
   for (size_t r = 0; r < result.flight->rows.size(); ++r) {
     const FlightRow& row = result.flight->rows[r];
-    const size_t l = static_cast<size_t>(
-        std::find(result.limits_m.begin(), result.limits_m.end(), row.limit_m) -
-        result.limits_m.begin());
+    const size_t l =
+        static_cast<size_t>(std::find(result.limits_m.begin(), result.limits_m.end(), row.limit_m) -
+                            result.limits_m.begin());
     ChartShading shading;
     shading.label = "readout windows (" + Fmt("%g", row.window_s * 1e3) + " ms) over " +
                     Cm(row.limit_m) + " (" + Fmt("%.1f", row.threshold_arcsec) +
@@ -125,11 +125,14 @@ void AddDistortionChart(HtmlPage* page, const AnalyzeResult& result) {
   page->AddChart(chart);
 }
 
-void AddWindowHistograms(HtmlPage* page, const FlightResult& flight, const AnalyzeReportOptions& report) {
+void AddWindowHistograms(HtmlPage* page, const FlightResult& flight,
+                         const AnalyzeReportOptions& report) {
   const FlightSeries& series = flight.series;
-  // Upper edge: past the largest threshold and the bulk of the windows; the rest go in the last bin.
+  // Upper edge: past the largest threshold and the bulk of the windows; the rest go in the last
+  // bin.
   std::vector<double> all;
-  for (int a = 0; a < 3; ++a) all.insert(all.end(), series.range_arcsec[a].begin(), series.range_arcsec[a].end());
+  for (int a = 0; a < 3; ++a)
+    all.insert(all.end(), series.range_arcsec[a].begin(), series.range_arcsec[a].end());
   const size_t p = std::min(all.size() - 1, static_cast<size_t>(0.995 * all.size()));
   std::nth_element(all.begin(), all.begin() + p, all.end());
   double upper = all[p];
@@ -157,18 +160,19 @@ void AddWindowHistograms(HtmlPage* page, const FlightResult& flight, const Analy
   // Shade what lies over each limit's threshold.
   for (size_t r = 0; r < flight.rows.size(); ++r) {
     const FlightRow& row = flight.rows[r];
-    chart.shadings.push_back({"over " + Cm(row.limit_m) + " (threshold " +
-                                  Fmt("%.1f", row.threshold_arcsec) + "\")",
-                              kShades[std::min<size_t>(r, std::size(kShades) - 1)],
-                              {{row.threshold_arcsec, upper}}});
+    chart.shadings.push_back(
+        {"over " + Cm(row.limit_m) + " (threshold " + Fmt("%.1f", row.threshold_arcsec) + "\")",
+         kShades[std::min<size_t>(r, std::size(kShades) - 1)],
+         {{row.threshold_arcsec, upper}}});
   }
   page->AddChart(chart);
 }
 
 void AddAllan(HtmlPage* page, const GyroTrace& rates, const AnalyzeResult& result) {
   GyroTrace segment = rates;
-  std::string on = "the whole log (no still segment found: the flight's motion dominates, so this "
-                   "bounds the gyro's noise from above)";
+  std::string on =
+      "the whole log (no still segment found: the flight's motion dominates, so this "
+      "bounds the gyro's noise from above)";
   if (!result.bias_estimated) {
     on = "the whole log (bias not estimated, no still segment searched: the flight's motion "
          "dominates, so this bounds the gyro's noise from above)";
@@ -178,7 +182,8 @@ void AddAllan(HtmlPage* page, const GyroTrace& rates, const AnalyzeResult& resul
     std::vector<GyroSample> still;
     for (const GyroSample& s : rates.samples()) {
       const double t_s = (s.t_ns - t0) * 1e-9;
-      if (t_s >= result.still_segment.begin_s && t_s <= result.still_segment.end_s) still.push_back(s);
+      if (t_s >= result.still_segment.begin_s && t_s <= result.still_segment.end_s)
+        still.push_back(s);
     }
     if (still.size() >= 20) {
       segment = GyroTrace(std::move(still));
@@ -207,10 +212,10 @@ void AddAllan(HtmlPage* page, const GyroTrace& rates, const AnalyzeResult& resul
   std::vector<std::vector<std::string>> rows;
   for (int a = 0; a < 3; ++a) {
     const AllanCoefficients& c = allan.axes[a];
-    rows.push_back({kAxisLabels[a], Fmt("%.3g", c.arw_deg_sqrt_h),
-                    (c.bias_instability_upper_bound ? "< " : "") +
-                        Fmt("%.3g", c.bias_instability_deg_h),
-                    Fmt("%.3g", c.bias_instability_tau_s)});
+    rows.push_back(
+        {kAxisLabels[a], Fmt("%.3g", c.arw_deg_sqrt_h),
+         (c.bias_instability_upper_bound ? "< " : "") + Fmt("%.3g", c.bias_instability_deg_h),
+         Fmt("%.3g", c.bias_instability_tau_s)});
   }
   page->Table({"axis", "angle random walk (deg/sqrt(h))", "bias instability (deg/h)", "at tau (s)"},
               rows);
@@ -222,16 +227,19 @@ void AddFlightTable(HtmlPage* page, const AnalyzeResult& result) {
     return;
   }
   const FlightResult& flight = *result.flight;
-  std::vector<std::string> header = {"limit", "window", "threshold", "windows", "x %", "y %",
-                                     "z %", "per-axis %"};
+  std::vector<std::string> header = {"limit", "window", "threshold", "windows",
+                                     "x %",   "y %",    "z %",       "per-axis %"};
   if (flight.vector_criterion) header.push_back("vector %");
   std::vector<std::vector<std::string>> rows;
   for (const FlightRow& row : flight.rows) {
-    std::vector<std::string> cells = {
-        Cm(row.limit_m), Fmt("%g ms", row.window_s * 1e3), Fmt("%.1f\"", row.threshold_arcsec),
-        std::to_string(row.windows), Fmt("%.2f", row.flagged_percent_axis[0]),
-        Fmt("%.2f", row.flagged_percent_axis[1]), Fmt("%.2f", row.flagged_percent_axis[2]),
-        Fmt("%.2f", row.flagged_percent)};
+    std::vector<std::string> cells = {Cm(row.limit_m),
+                                      Fmt("%g ms", row.window_s * 1e3),
+                                      Fmt("%.1f\"", row.threshold_arcsec),
+                                      std::to_string(row.windows),
+                                      Fmt("%.2f", row.flagged_percent_axis[0]),
+                                      Fmt("%.2f", row.flagged_percent_axis[1]),
+                                      Fmt("%.2f", row.flagged_percent_axis[2]),
+                                      Fmt("%.2f", row.flagged_percent)};
     if (flight.vector_criterion) cells.push_back(Fmt("%.2f", row.flagged_percent_vector));
     rows.push_back(std::move(cells));
   }
@@ -244,9 +252,9 @@ void AddFlightTable(HtmlPage* page, const AnalyzeResult& result) {
 }
 
 void AddImageTable(HtmlPage* page, const AnalyzeResult& result) {
-  std::vector<std::string> header = {"image", "t (s)", "D paper (cm)", "D full (cm)",
-                                     "D full (px)", "range x (\")", "range y (\")",
-                                     "range z (\")", "axis"};
+  std::vector<std::string> header = {"image",        "t (s)",        "D paper (cm)",
+                                     "D full (cm)",  "D full (px)",  "range x (\")",
+                                     "range y (\")", "range z (\")", "axis"};
   for (double limit : result.limits_m) header.push_back("> " + Cm(limit));
   std::vector<std::vector<std::string>> rows;
   for (const ImageResult& image : result.images) {
@@ -269,8 +277,8 @@ void AddImageTable(HtmlPage* page, const AnalyzeResult& result) {
 }
 
 // |d| heatmap of one frame under the full model, over the rendered scene when there is one.
-cv::Mat WorstImagePicture(const CameraMotion& motion, const RigModel& rig,
-                          const ImageResult& image, const AnalyzeReportOptions& report) {
+cv::Mat WorstImagePicture(const CameraMotion& motion, const RigModel& rig, const ImageResult& image,
+                          const AnalyzeReportOptions& report) {
   const PinholeCamera& camera = rig.camera;
   const cv::Size scene_size =
       report.scene.empty() ? cv::Size(camera.width, camera.height) : report.scene.size();
@@ -293,9 +301,8 @@ void AddWorstImages(HtmlPage* page, const FlightLog& log, const RigModel& rig,
   for (const ImageResult& image : result.images) {
     if (image.in_trace) worst.push_back(&image);
   }
-  std::sort(worst.begin(), worst.end(), [](const ImageResult* a, const ImageResult* b) {
-    return a->d_full_m > b->d_full_m;
-  });
+  std::sort(worst.begin(), worst.end(),
+            [](const ImageResult* a, const ImageResult* b) { return a->d_full_m > b->d_full_m; });
   if (worst.size() > report.worst_images) worst.resize(report.worst_images);
   if (worst.empty()) {
     page->Paragraph("No image lies inside the log.");
@@ -304,18 +311,17 @@ void AddWorstImages(HtmlPage* page, const FlightLog& log, const RigModel& rig,
   page->Paragraph(
       "Expected displacement |d| of every pixel from where a global shutter would have put it "
       "(the full model: the renderer's geometry of the declared camera), colour scale in pixels" +
-      std::string(report.scene.empty()
-                      ? "."
-                      : ", blended over " + (report.scene_name.empty() ? std::string("the scene")
-                                                                      : report.scene_name) +
-                            " rendered through the same rolling-shutter frame."));
+      std::string(report.scene.empty() ? "."
+                                       : ", blended over " +
+                                             (report.scene_name.empty() ? std::string("the scene")
+                                                                        : report.scene_name) +
+                                             " rendered through the same rolling-shutter frame."));
   const CameraMotion motion(log.gyro, AnalyzeTrueModel(rig, result.bias_rad_s));
   for (const ImageResult* image : worst) {
     page->Image(WorstImagePicture(motion, rig, *image, report),
                 image->name + " at " + Fmt("%.2f", image->t_ns * 1e-9) + " s: D full " +
-                    Fmt("%.1f", image->d_full_m * 100) + " cm (" +
-                    Fmt("%.1f", image->d_full_px) + " px), D paper " +
-                    Fmt("%.1f", image->d_paper_m * 100) + " cm, axis " +
+                    Fmt("%.1f", image->d_full_m * 100) + " cm (" + Fmt("%.1f", image->d_full_px) +
+                    " px), D paper " + Fmt("%.1f", image->d_paper_m * 100) + " cm, axis " +
                     kAxisNames[image->dominant_axis]);
   }
 }
@@ -349,32 +355,34 @@ HtmlPage AnalyzeReportPage(const FlightLog& log, const AnalyzeOptions& options,
     bias = result.bias_estimated ? "none found: zero bias assumed" : "zero (not estimated)";
   }
   const Eigen::Vector3d b = result.bias_rad_s * kDegPerRad;
-  page.Table({"", ""},
-             {{"log", report.log_name},
-              {"format", result.format},
-              {"gyro", result.gyro_source},
-              {"samples", std::to_string(result.samples)},
-              {"duration", Fmt("%.1f s", result.duration_s)},
-              {"rate", Fmt("%.1f Hz", result.rate_hz)},
-              {"gaps", std::to_string(result.gaps)},
-              {"bias", bias},
-              {"bias (deg/s, camera x y z)", Fmt("%.4f", b.x()) + " " + Fmt("%.4f", b.y()) + " " +
-                                                 Fmt("%.4f", b.z())},
-              {"camera", std::to_string(cam.width) + "x" + std::to_string(cam.height) + ", f " +
-                             Fmt("%.0f px", 0.5 * (cam.fx + cam.fy)) +
-                             (cam.HasDistortion() ? ", lens distortion" : "")},
-              {"readout", Fmt("%g ms", result.readout_s * 1e3)},
-              {"altitude", Fmt("%g m", result.altitude_m) + " (" + result.altitude_source + ")"},
-              {"ground sample", Fmt("%.2f cm/px", 100.0 * result.altitude_m / (0.5 * (cam.fx + cam.fy)))},
-              {"triggers", result.trigger_source},
-              {"images", std::to_string(result.images.size()) + " (" +
-                             std::to_string(result.verdict.images_in_trace) + " inside the log)"}});
+  page.Table(
+      {"", ""},
+      {{"log", report.log_name},
+       {"format", result.format},
+       {"gyro", result.gyro_source},
+       {"samples", std::to_string(result.samples)},
+       {"duration", Fmt("%.1f s", result.duration_s)},
+       {"rate", Fmt("%.1f Hz", result.rate_hz)},
+       {"gaps", std::to_string(result.gaps)},
+       {"bias", bias},
+       {"bias (deg/s, camera x y z)",
+        Fmt("%.4f", b.x()) + " " + Fmt("%.4f", b.y()) + " " + Fmt("%.4f", b.z())},
+       {"camera", std::to_string(cam.width) + "x" + std::to_string(cam.height) + ", f " +
+                      Fmt("%.0f px", 0.5 * (cam.fx + cam.fy)) +
+                      (cam.HasDistortion() ? ", lens distortion" : "")},
+       {"readout", Fmt("%g ms", result.readout_s * 1e3)},
+       {"altitude", Fmt("%g m", result.altitude_m) + " (" + result.altitude_source + ")"},
+       {"ground sample", Fmt("%.2f cm/px", 100.0 * result.altitude_m / (0.5 * (cam.fx + cam.fy)))},
+       {"triggers", result.trigger_source},
+       {"images", std::to_string(result.images.size()) + " (" +
+                      std::to_string(result.verdict.images_in_trace) + " inside the log)"}});
 
   page.Heading("Rotation during the flight");
   const GyroTrace rates = CameraRates(log.gyro, options.rig.cam_from_gyro, result.bias_rad_s);
   if (!result.flight || result.flight->series.t_ns.empty()) {
-    page.Paragraph("Flagged windows are not shaded: the flight table's per-window series was not "
-                   "computed.");
+    page.Paragraph(
+        "Flagged windows are not shaded: the flight table's per-window series was not "
+        "computed.");
   }
   AddRateAndAngleCharts(&page, rates, result, report);
 

@@ -26,7 +26,7 @@ struct AnalyzeReportOptions {
   size_t worst_images = 3;
   size_t chart_buckets = 4000;  // DownsampleMinMax buckets of the time charts
   int histogram_bins = 60;
-  int picture_width_px = 380;   // pictures are scaled to this width (scale bar included): 3 a row
+  int picture_width_px = 380;  // pictures are scaled to this width (scale bar included): 3 a row
   void Check() const;
 };
 

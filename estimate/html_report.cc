@@ -177,7 +177,8 @@ std::string Base64(std::string_view bytes) {
   size_t i = 0;
   for (; i + 2 < bytes.size(); i += 3) {
     const uint32_t n = (static_cast<uint8_t>(bytes[i]) << 16) |
-                       (static_cast<uint8_t>(bytes[i + 1]) << 8) | static_cast<uint8_t>(bytes[i + 2]);
+                       (static_cast<uint8_t>(bytes[i + 1]) << 8) |
+                       static_cast<uint8_t>(bytes[i + 2]);
     out += kAlphabet[(n >> 18) & 63];
     out += kAlphabet[(n >> 12) & 63];
     out += kAlphabet[(n >> 6) & 63];
@@ -203,9 +204,10 @@ Chart DownsampleMinMax(const Chart& chart, size_t buckets) {
   size_t begin = 0;
   while (begin < chart.x.size()) {
     // [begin, end): the samples of one bucket.
-    const size_t bucket = span > 0 ? std::min(buckets - 1, static_cast<size_t>(
-                                                               (chart.x[begin] - x0) / span * buckets))
-                                   : 0;
+    const size_t bucket =
+        span > 0
+            ? std::min(buckets - 1, static_cast<size_t>((chart.x[begin] - x0) / span * buckets))
+            : 0;
     size_t end = begin + 1;
     while (end < chart.x.size() &&
            (span <= 0 || std::min(buckets - 1, static_cast<size_t>((chart.x[end] - x0) / span *
@@ -289,8 +291,8 @@ HtmlPage::HtmlPage(std::string title) : title_(std::move(title)) {}
 
 void HtmlPage::Heading(const std::string& text, int level) {
   level = std::clamp(level, 1, 4);
-  body_ += "<h" + std::to_string(level) + ">" + EscapeHtml(text) + "</h" + std::to_string(level) +
-           ">\n";
+  body_ +=
+      "<h" + std::to_string(level) + ">" + EscapeHtml(text) + "</h" + std::to_string(level) + ">\n";
 }
 
 void HtmlPage::Paragraph(const std::string& text) { body_ += "<p>" + EscapeHtml(text) + "</p>\n"; }
@@ -343,7 +345,8 @@ void HtmlPage::Image(const cv::Mat& rgb8, const std::string& caption) {
     bgr = rgb8;
   }
   std::vector<uchar> png;
-  SHUTTERLAB_CHECK(cv::imencode(".png", bgr, png)) << "image '" << caption << "': PNG encoding failed";
+  SHUTTERLAB_CHECK(cv::imencode(".png", bgr, png))
+      << "image '" << caption << "': PNG encoding failed";
   // The figure as wide as its image, so a long caption wraps instead of widening it.
   body_ += "<figure style=\"width:" + std::to_string(rgb8.cols) + "px\"><img alt=\"" +
            EscapeHtml(caption) + "\" width=\"" + std::to_string(rgb8.cols) +

@@ -42,7 +42,8 @@ enum class ChartKind {
 };
 
 struct ChartSeries {
-  explicit ChartSeries(std::string label_ = "", std::vector<double> y_ = {}, std::string color_ = "")
+  explicit ChartSeries(std::string label_ = "", std::vector<double> y_ = {},
+                       std::string color_ = "")
       : label(std::move(label_)), y(std::move(y_)), color(std::move(color_)) {}
   std::string label;
   std::vector<double> y;  // one per Chart::x; NaN = no value

@@ -141,8 +141,7 @@ TEST(AnalyzeReport, LongTracesAreEnveloped) {
   AnalyzeReportOptions report;
   report.chart_buckets = 100;
   report.worst_images = 0;
-  const auto charts =
-      test::ChartBlocks(AnalyzeReportPage(log, options, result, report).Html());
+  const auto charts = test::ChartBlocks(AnalyzeReportPage(log, options, result, report).Html());
   ASSERT_GE(charts.size(), 2u);
   EXPECT_EQ(charts[0]["data"][0].size(), 200u);  // 100 buckets, min and max each
   EXPECT_EQ(charts[1]["data"][0].size(), 200u);

@@ -118,7 +118,8 @@ TEST(HtmlPage, WriteIsAtomicAndWhole) {
   EXPECT_ANY_THROW(page.Write(dir / "missing/report.html"));
   EXPECT_FALSE(std::filesystem::exists(dir / "missing"));
   size_t files = 0;
-  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path())) ++files;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    ++files;
   EXPECT_EQ(files, 1u);  // no temporary left beside the report
 }
 
