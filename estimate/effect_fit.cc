@@ -202,7 +202,11 @@ double CorrelationFactor(const Context& ctx, const Eigen::VectorXd& r,
         std::max(1.0, std::sqrt((u1 - u0 + 1) * (v1 - v0 + 1) / static_cast<double>(idx.size())));
     const double radius = 4.0 * spacing;
     std::unordered_map<int64_t, std::vector<size_t>> cells;
-    auto key = [](int64_t cu, int64_t cv) { return (cu << 32) ^ (cv & 0xffffffff); };
+    // Unsigned shift: shifting a negative cell index is undefined behaviour.
+    auto key = [](int64_t cu, int64_t cv) {
+      return static_cast<int64_t>((static_cast<uint64_t>(cu) << 32) ^
+                                  (static_cast<uint64_t>(cv) & 0xffffffffu));
+    };
     for (size_t k = 0; k < idx.size(); ++k) {
       const Eigen::Vector2d& p = ctx.px[idx[k]];
       cells[key(static_cast<int64_t>(std::floor(p.x() / radius)),
