@@ -5,11 +5,12 @@
 // Exit codes: 0 success; 2 bad input or usage (one line on stderr naming file, line and problem);
 // 1 an internal error.
 
+#include <CLI/CLI.hpp>
+
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
-
-#include <CLI/CLI.hpp>
 
 namespace shutterlab::app {
 
@@ -39,6 +40,24 @@ class Progress {
   size_t total_;
   int last_percent_ = -1;
   bool enabled_;
+};
+
+// Progress of work in named stages ("render", "measure", ...): a new bar when the stage changes.
+// Call it as the library's (stage, done, total) callback.
+class StagedProgress {
+ public:
+  void operator()(const std::string& stage, size_t done, size_t total) {
+    if (!bar_ || stage != stage_) {
+      bar_.reset();
+      bar_ = std::make_unique<Progress>(stage, total);
+      stage_ = stage;
+    }
+    bar_->Update(done);
+  }
+
+ private:
+  std::string stage_;
+  std::unique_ptr<Progress> bar_;
 };
 
 }  // namespace shutterlab::app

@@ -43,17 +43,11 @@ void Run(const ValidateCommand& command) {
       throw IoError(IoMessage(command.report_path, 0, "its folder does not exist"));
     }
   }
-  std::unique_ptr<Progress> bar;
-  std::string stage;
-  const ValidationResult result = ValidateDataset(
-      command.dataset, options, [&](const std::string& name, size_t done, size_t total) {
-        if (name != stage) {
-          bar = std::make_unique<Progress>(name, total);
-          stage = name;
-        }
-        bar->Update(done);
-      });
-  bar.reset();
+  ValidationResult result;
+  {
+    StagedProgress progress;
+    result = ValidateDataset(command.dataset, options, std::ref(progress));
+  }
   const nlohmann::json json = ValidationToJson(result);
   if (!command.out_dir.empty()) WriteValidationPlots(command.out_dir, result);
   if (!command.report_path.empty()) WriteFileAtomically(command.report_path, json.dump(2) + "\n");
