@@ -22,7 +22,8 @@
 //    noise, 0 with noise correlated over 3x3 neighbouring points (c ~ 9).
 // 2. Candidates: each effect not yet added is fitted jointly with the added ones (robust LM;
 //    time_offset and clock_rate start from the best of a scan of +-0.25 s of shift in 4 ms steps,
-//    since the cost is not convex over shifts longer than the motion's ~0.1 s time scale). Each is
+//    since the cost is not convex over shifts longer than the motion's ~0.1 s time scale; for
+//    clock_rate, the line through each frame's best shift). Each is
 //    scored by BIC in its Gaussian form with the variance of the best candidate of the round (an
 //    F-test's denominator, so it does not depend on noise_px being exact):
 //      dBIC = (RSS_j - RSS_current) / (s^2 c) + (p_j - p_current) ln(n / c),
@@ -31,8 +32,10 @@
 //    sum w^2 (readout_direction counts as one parameter). The candidate with the lowest dBIC is
 //    added when dBIC < -bic_margin (10) and it explains >= min_explained_share (30 %) of the
 //    residual's excess over the noise (RSS - noise_px^2 sum w).
+//    clock_rate (rate and offset) nests time_offset: it is chosen over time_offset only when its
+//    rate is 3 standard errors from zero.
 // 3. Ambiguity: other candidates within ambiguity_margin (10) of the chosen one's dBIC that explain
-//    as much are named in ambiguous_with.
+//    as much are named in ambiguous_with (not clock_rate beside time_offset: it holds the offset).
 // 4. Backward step (stepwise selection): after an addition, each earlier effect is refitted away;
 //    the one whose removal costs least is dropped if that is less than bic_margin (a readout error
 //    first absorbed by a gyro scale is replaced, not kept beside the readout). A dropped effect is
@@ -116,12 +119,16 @@ double ChiSquareQuantileOverDof(double alpha, double k) {
 }
 
 // Everything a fit needs about the data.
+// A fitted clock rate counts only when it is this many standard errors from zero (see the loop).
+constexpr double kRateSignificance = 3.0;
+
 struct Context {
   TrueModel declared;
   const DisplacementPredictor* predictor = nullptr;
   std::vector<Eigen::Vector2d> measured;
   std::vector<Eigen::Vector2d> px;
   std::vector<std::pair<size_t, size_t>> frame_ranges;  // [begin, end) per frame
+  std::vector<double> frame_t_s;                        // t_first_row per frame, camera clock
   Eigen::VectorXd weights;  // per point; 0 for points the declared model cannot predict
   double noise_px = 0.0;
   double huber_delta = 0.0;
@@ -362,29 +369,62 @@ Fit FitHypothesis(const Context& ctx, Hypothesis hypothesis) {
     const std::string& last = hypothesis.effects.back();
     std::vector<double> starts;
     if (last == "time_offset" || last == "clock_rate") {
-      // Shifts (of the latest frame, for clock_rate) within +-kScanS in steps of kScanStepS: finer
-      // than the ~0.1 s over which a multirotor's rotation rate changes, so one start lies in the
-      // true minimum's basin.
+      // Shifts of the offset within +-kScanS in steps of kScanStepS: finer than the ~0.1 s over
+      // which a multirotor's rotation rate changes, so one start lies in the true minimum's basin.
+      // Each frame's cost is kept per shift: time_offset starts at the shift best for all frames;
+      // clock_rate (offset + rate * t) at the line through each frame's best shift against its
+      // time, so a rate that shifts the frames differently needs no second scan.
       constexpr double kScanS = 0.25, kScanStepS = 0.004;
-      const double to_param = last == "time_offset" ? 1.0 : 1e6 / std::max(ctx.span_s, 1.0);
       const int steps = static_cast<int>(std::lround(kScanS / kScanStepS));
-      for (int k = -steps; k <= steps; ++k) starts.push_back(k * kScanStepS * to_param);
-      double best_cost = std::numeric_limits<double>::infinity();
-      const double base = hypothesis.x[p - 1];
-      double best = base;
+      const size_t frame_count = ctx.frame_ranges.size();
+      std::vector<double> frame_best_cost(frame_count, std::numeric_limits<double>::infinity());
+      std::vector<double> frame_best_shift(frame_count, 0.0);
+      double best_cost = std::numeric_limits<double>::infinity(), best_shift = 0.0;
       Eigen::VectorXd r;
       std::vector<uint8_t> valid;
-      for (double s : starts) {
+      for (int k = -steps; k <= steps; ++k) {
+        const double shift = k * kScanStepS;
         Eigen::VectorXd x = hypothesis.x;
-        x[p - 1] = base + s;
+        x[p - 1] += shift;
         problem.residuals(x, &r, &valid);
-        const double cost = RobustCost(problem, r, valid);
+        double cost = 0.0;
+        for (size_t f = 0; f < frame_count; ++f) {
+          const auto [begin, end] = ctx.frame_ranges[f];
+          const double frame_cost = RobustCost(problem, r, valid, begin, end);
+          cost += frame_cost;
+          if (frame_cost < frame_best_cost[f]) {
+            frame_best_cost[f] = frame_cost;
+            frame_best_shift[f] = shift;
+          }
+        }
         if (cost < best_cost) {
           best_cost = cost;
-          best = base + s;
+          best_shift = shift;
         }
       }
-      hypothesis.x[p - 1] = best;
+      hypothesis.x[p - 1] += best_shift;
+      if (last == "clock_rate" && frame_count >= 2) {
+        // Theil-Sen line shift = a + b t through the frames' best shifts (the median of the
+        // pairwise slopes, then of the intercepts): a frame whose own best shift is an alias of
+        // its motion does not tilt it.
+        std::vector<double> slopes, intercepts;
+        for (size_t f = 0; f < frame_count; ++f) {
+          for (size_t g = f + 1; g < frame_count; ++g) {
+            const double dt = ctx.frame_t_s[g] - ctx.frame_t_s[f];
+            if (dt != 0.0) slopes.push_back((frame_best_shift[g] - frame_best_shift[f]) / dt);
+          }
+        }
+        const auto median = [](std::vector<double> v) {
+          std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+          return v[v.size() / 2];
+        };
+        const double rate = slopes.empty() ? 0.0 : median(slopes);
+        for (size_t f = 0; f < frame_count; ++f) {
+          intercepts.push_back(frame_best_shift[f] - rate * ctx.frame_t_s[f]);
+        }
+        hypothesis.x[p - 1] += median(intercepts) - best_shift;
+        hypothesis.x[p - 2] += rate * 1e6;
+      }
     }
   }
   Fit fit;
@@ -485,6 +525,7 @@ LoopResult CloseTheLoop(const RigModel& declared, const GyroTrace& gyro,
       ctx.px.emplace_back(p.u, p.v);
     }
     ctx.frame_ranges.emplace_back(begin, ctx.measured.size());
+    ctx.frame_t_s.push_back(f.t_first_row_ns * 1e-9);
   }
 
   LoopResult result;
@@ -580,9 +621,35 @@ LoopResult CloseTheLoop(const RigModel& declared, const GyroTrace& gyro,
                            " % of the excess; stop");
       break;
     }
+    // clock_rate nests time_offset (its rate fixed at 0). When it wins by a rate that its own
+    // (cluster-robust) standard error cannot tell from 0, the simpler offset is the explanation:
+    // BIC alone favours the rate when frame-coherent measurement errors make a drift look real.
+    if (fits[chosen].hypothesis.effects.back() == "clock_rate") {
+      for (size_t j = 0; j < fits.size(); ++j) {
+        if (fits[j].hypothesis.effects.back() != "time_offset" ||
+            share[j] < options.min_explained_share || dbic[j] >= -options.bic_margin) {
+          continue;
+        }
+        const Fit& rate_fit = fits[chosen];
+        const Eigen::Index rate_index = rate_fit.solution.x.size() - 2;
+        const double rate_sd = std::sqrt(Covariance(ctx, rate_fit)(rate_index, rate_index));
+        if (!(std::abs(rate_fit.solution.x[rate_index]) > kRateSignificance * rate_sd)) {
+          result.log.push_back("round " + std::to_string(round) + ": clock_rate's rate is " +
+                               Format("%.3g", rate_fit.solution.x[rate_index]) + " +- " +
+                               Format("%.3g", rate_sd) + " ppm, not significant: time_offset");
+          chosen = static_cast<int>(j);
+        }
+      }
+    }
     std::vector<std::string> ambiguous;
+    const std::string& chosen_name = fits[chosen].hypothesis.effects.back();
     for (size_t j = 0; j < fits.size(); ++j) {
       if (static_cast<int>(j) == chosen) continue;
+      // clock_rate holds time_offset (rate and offset): when the offset alone is chosen, the rate
+      // fitted to ~0 beside it is the same explanation, not another one.
+      if (chosen_name == "time_offset" && fits[j].hypothesis.effects.back() == "clock_rate") {
+        continue;
+      }
       if (dbic[j] - dbic[chosen] < options.ambiguity_margin &&
           share[j] >= options.min_explained_share) {
         ambiguous.push_back(fits[j].hypothesis.effects.back());

@@ -28,8 +28,8 @@ void CheckName(const std::string& name) {
 
 int EffectParameterCount(const std::string& name) {
   CheckName(name);
-  if (name == "time_offset" || name == "readout_time" || name == "clock_rate") return 1;
-  if (name == "lens_distortion") return 2;
+  if (name == "time_offset" || name == "readout_time") return 1;
+  if (name == "lens_distortion" || name == "clock_rate") return 2;
   if (name == "readout_direction") return 0;
   return 3;  // gyro_to_camera, gyro_scale, gyro_bias, velocity
 }
@@ -57,13 +57,16 @@ void ApplyEffect(const std::string& name, const double* x, TrueModel* model) {
                                 ? ReadoutDirection::kBottomToTop
                                 : ReadoutDirection::kTopToBottom;
   } else if (name == "clock_rate") {
+    // A clock rate is only defined together with an offset: FORMATS.md counts it from camera time
+    // 0, which a log's clock may have passed long ago (frames at t = 1000 s: 3 ppm is 3 ms).
     model->clock_rate_ppm += x[0];
+    rig.time_offset_s += x[1];
   } else {
     CheckName(name);
   }
 }
 
-double EffectStep(const std::string& name, int /*i*/, double frames_span_s) {
+double EffectStep(const std::string& name, int i, double frames_span_s) {
   // Steps small enough that the model is linear over them (the displacements move by ~1e-3 px) and
   // large enough that rounding (~1e-13 px) is far below the differences.
   if (name == "time_offset" || name == "readout_time") return 1e-5;  // s
@@ -72,7 +75,9 @@ double EffectStep(const std::string& name, int /*i*/, double frames_span_s) {
   if (name == "gyro_bias") return 1e-4;  // rad/s
   if (name == "velocity") return 1e-2;   // m/s
   if (name == "lens_distortion") return 1e-4;
-  if (name == "clock_rate") return 1e-5 / std::max(frames_span_s, 1.0) * 1e6;  // ppm
+  if (name == "clock_rate") {
+    return i == 0 ? 1e-5 / std::max(frames_span_s, 1.0) * 1e6 : 1e-5;  // ppm, s
+  }
   CheckName(name);
   return 1.0;
 }
@@ -127,7 +132,7 @@ json EffectStderr(const std::string& name, const TrueModel& model,
     }
     return m;
   }
-  if (n == 1) return sd[0];
+  if (n == 1 || name == "clock_rate") return sd[0];  // clock_rate: the rate's, not the offset's
   if (name == "lens_distortion") return {{"k1", sd[0]}, {"k2", sd[1]}};
   return json::array({sd[0], sd[1], sd[2]});
 }

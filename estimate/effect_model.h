@@ -26,7 +26,8 @@ namespace shutterlab {
 // Number of continuous parameters of a FORMATS.md effect when it is fitted:
 //   time_offset 1 (s), readout_time 1 (s), gyro_to_camera 3 (rotation vector, rad, applied on the
 //   camera side: R_CG = Exp(x) * R_CG_declared), gyro_scale 3, gyro_bias 3 (rad/s), velocity 3
-//   (m/s), lens_distortion 2 (k1, k2), clock_rate 1 (ppm), readout_direction 0 (a discrete flip).
+//   (m/s), lens_distortion 2 (k1, k2), clock_rate 2 (ppm, and the time offset that goes with it,
+//   s), readout_direction 0 (a discrete flip).
 // Throws std::invalid_argument for a name that is not in the table.
 int EffectParameterCount(const std::string& name);
 

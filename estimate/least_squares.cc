@@ -17,9 +17,13 @@ double HuberWeight(double s, double delta) { return s <= delta ? 1.0 : delta / s
 
 double RobustCost(const RobustProblem& problem, const Eigen::VectorXd& r,
                   const std::vector<uint8_t>& valid) {
+  return RobustCost(problem, r, valid, 0, static_cast<size_t>(problem.weights.size()));
+}
+
+double RobustCost(const RobustProblem& problem, const Eigen::VectorXd& r,
+                  const std::vector<uint8_t>& valid, size_t begin, size_t end) {
   double cost = 0.0;
-  const Eigen::Index n = problem.weights.size();
-  for (Eigen::Index i = 0; i < n; ++i) {
+  for (size_t i = begin; i < end; ++i) {
     const double w = problem.weights[i];
     if (w <= 0) continue;
     if (!valid[i]) {

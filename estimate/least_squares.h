@@ -49,9 +49,12 @@ struct RobustSolution {
 double HuberRho(double s, double delta);
 double HuberWeight(double s, double delta);
 
-// Robust cost of a residual vector (as the solver defines it).
+// Robust cost of a residual vector (as the solver defines it); the second form sums only the
+// points [begin, end).
 double RobustCost(const RobustProblem& problem, const Eigen::VectorXd& r,
                   const std::vector<uint8_t>& valid);
+double RobustCost(const RobustProblem& problem, const Eigen::VectorXd& r,
+                  const std::vector<uint8_t>& valid, size_t begin, size_t end);
 
 // Minimises from x0. With no parameters (x0 empty) it only evaluates.
 RobustSolution SolveRobust(const RobustProblem& problem, const Eigen::VectorXd& x0,

@@ -303,7 +303,11 @@ TEST(CloseTheLoop, LowPassFilteredGyroIsNotAConfidentWrongEffect) {
   // A time offset near the group delay removes most of the residual but leaves it 1.2x the noise
   // (significant over 7680 points): flagged.
   EXPECT_TRUE(r.unexplained) << Explain(r);
-  for (const IdentifiedEffect& e : r.effects) EXPECT_EQ(e.name, "time_offset") << Explain(r);
+  // Only the delay may be named: time_offset, or clock_rate, which holds an offset (its rate then
+  // bends the delay a little further; the flag says the explanation is incomplete).
+  for (const IdentifiedEffect& e : r.effects) {
+    EXPECT_TRUE(e.name == "time_offset" || e.name == "clock_rate") << Explain(r);
+  }
 }
 
 TEST(CloseTheLoop, OutliersDoNotSteerTheFit) {
