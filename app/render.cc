@@ -37,6 +37,9 @@ const CommandRegistration kRegistration(50, [](CLI::App& app) {
       ->check(CLI::IsMember({"bilinear", "bicubic"}));
   cmd->add_flag("!--no-pictures", options->pictures,
                 "skip heatmaps, side-by-side panels and overview");
+  cmd->add_flag("--video", options->video,
+                "a video dataset: consecutive rolling-shutter frames of one flight, no reference "
+                "images; the truth of each frame is its match in the previous one");
   return std::function<void()>([options, interpolation] {
     options->interpolation =
         *interpolation == "bicubic" ? Interpolation::kBicubic : Interpolation::kBilinear;

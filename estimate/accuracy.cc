@@ -3,6 +3,7 @@
 #include "sim/check.h"
 #include "sim/integrate.h"
 #include "sim/so3.h"
+#include "sim/text_file.h"
 
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
@@ -21,12 +22,6 @@ struct Segment {
   size_t begin;  // first sample of the motion
   size_t end;    // one past its last sample
 };
-
-std::string Format(const char* format, double value) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), format, value);
-  return buffer;
-}
 
 // Mean of x[begin, end).
 double Mean(const std::vector<double>& x, size_t begin, size_t end) {
@@ -219,8 +214,8 @@ std::string AccuracyJson(const AccuracyResult& result) {
 
 std::string AccuracyTable(const AccuracyResult& result) {
   std::string out = "Turns detected: " + std::to_string(result.rotations.size()) + "; reference " +
-                    Format("%g", result.reference_deg) +
-                    " deg = " + Format("%g", result.reference_deg * 3600.0) + " arcsec; " +
+                    FormatNumber("%g", result.reference_deg) +
+                    " deg = " + FormatNumber("%g", result.reference_deg * 3600.0) + " arcsec; " +
                     std::to_string(result.average_samples) +
                     " samples averaged before and after each turn\n\n";
   out +=
@@ -228,22 +223,24 @@ std::string AccuracyTable(const AccuracyResult& result) {
       "      theta  difference |  theta SO(3)   (arcsec)\n";
   for (size_t i = 0; i < result.rotations.size(); ++i) {
     const DetectedRotation& r = result.rotations[i];
-    out += Format("%4.0f", static_cast<double>(i + 1)) + Format(" %6.2f |", r.t_start_s);
-    for (int a = 0; a < 3; ++a) out += Format(" %10.1f", r.before_arcsec[a]);
+    out +=
+        FormatNumber("%4.0f", static_cast<double>(i + 1)) + FormatNumber(" %6.2f |", r.t_start_s);
+    for (int a = 0; a < 3; ++a) out += FormatNumber(" %10.1f", r.before_arcsec[a]);
     out += " |";
-    for (int a = 0; a < 3; ++a) out += Format(" %10.1f", r.after_arcsec[a]);
-    out += " |" + Format(" %10.1f", r.theta_arcsec) + Format(" %11.1f", r.difference_arcsec) +
-           " |" + Format(" %12.1f", r.theta_so3_arcsec) + "\n";
+    for (int a = 0; a < 3; ++a) out += FormatNumber(" %10.1f", r.after_arcsec[a]);
+    out += " |" + FormatNumber(" %10.1f", r.theta_arcsec) +
+           FormatNumber(" %11.1f", r.difference_arcsec) + " |" +
+           FormatNumber(" %12.1f", r.theta_so3_arcsec) + "\n";
   }
-  out += "\ndifference: mean " + Format("%.1f", result.difference_mean_arcsec) + " arcsec, std " +
-         Format("%.1f", result.difference_std_arcsec) + " arcsec over " +
+  out += "\ndifference: mean " + FormatNumber("%.1f", result.difference_mean_arcsec) +
+         " arcsec, std " + FormatNumber("%.1f", result.difference_std_arcsec) + " arcsec over " +
          std::to_string(result.rotations.size()) + " turn(s)\n";
-  out += "detection: still noise " + Format("%.3g", result.noise_level_rad_s) +
-         " rad/s (smoothed magnitude), enter " + Format("%.3g", result.enter_rad_s) + ", exit " +
-         Format("%.3g", result.exit_rad_s) + " rad/s\n";
+  out += "detection: still noise " + FormatNumber("%.3g", result.noise_level_rad_s) +
+         " rad/s (smoothed magnitude), enter " + FormatNumber("%.3g", result.enter_rad_s) +
+         ", exit " + FormatNumber("%.3g", result.exit_rad_s) + " rad/s\n";
   if (!result.skipped_t_s.empty()) {
     out += "skipped (too little still time around them to average): motions at";
-    for (double t : result.skipped_t_s) out += Format(" %.2f", t) + " s";
+    for (double t : result.skipped_t_s) out += FormatNumber(" %.2f", t) + " s";
     out += "\n";
   }
   return out;

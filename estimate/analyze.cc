@@ -136,21 +136,15 @@ std::vector<double> SharesPercent(const std::vector<ImageResult>& images, size_t
   return shares;
 }
 
-std::string Format(const char* format, double value) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), format, value);
-  return buffer;
-}
-
 std::string LengthText(double m) {
-  return m < 1.0 ? Format("%.3g cm", m * 100.0) : Format("%.3g m", m);
+  return m < 1.0 ? FormatNumber("%.3g cm", m * 100.0) : FormatNumber("%.3g m", m);
 }
 
 std::string SharesText(const std::vector<double>& shares, const std::vector<double>& limits_m) {
   std::string text;
   for (size_t l = 0; l < shares.size(); ++l) {
     if (l > 0) text += ", ";
-    text += Format("%.1f%%", shares[l]) + " over " + LengthText(limits_m[l]);
+    text += FormatNumber("%.1f%%", shares[l]) + " over " + LengthText(limits_m[l]);
   }
   return text;
 }
@@ -264,7 +258,7 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
   std::vector<ImageTrigger> triggers = options.triggers;
   result.trigger_source = "triggers";
   if (triggers.empty() && options.every_s > 0) {
-    result.trigger_source = Format("every %g s", options.every_s);
+    result.trigger_source = FormatNumber("every %g s", options.every_s);
     const int64_t every_ns = SecondsToNs(options.every_s);
     const int64_t t0_ns = gyro.samples().front().t_ns;
     const int64_t span_ns = gyro.samples().back().t_ns - t0_ns;
@@ -294,8 +288,8 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
   }
   if (!options.triggers.empty() || options.every_s > 0) {
     if (!log.camera_events.empty()) {
-      result.trigger_source += " (the log's " + std::to_string(log.camera_events.size()) +
-                               " camera events not used)";
+      result.trigger_source +=
+          " (the log's " + std::to_string(log.camera_events.size()) + " camera events not used)";
     }
   }
 
@@ -363,9 +357,9 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
     line << (any_flagged ? "; stabilise camera axis " : "; largest rotation about camera axis ")
          << kAxisNames[verdict.axis_to_stabilise];
     if (options.what_if) {
-      line << "; with a " << Format("%g", verdict.fast_readout_s * 1e3)
+      line << "; with a " << FormatNumber("%g", verdict.fast_readout_s * 1e3)
            << " ms readout: " << SharesText(verdict.share_fast_readout_percent, options.limits_m)
-           << "; at " << Format("%g", 0.5 * options.rig.altitude_m)
+           << "; at " << FormatNumber("%g", 0.5 * options.rig.altitude_m)
            << " m altitude: " << SharesText(verdict.share_half_altitude_percent, options.limits_m);
     }
     verdict.line = line.str();
@@ -426,7 +420,7 @@ std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path) {
   return triggers;
 }
 
-std::string LimitKey(double limit_m) { return Format("%.12g", limit_m); }
+std::string LimitKey(double limit_m) { return FormatNumber("%.12g", limit_m); }
 
 nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
   nlohmann::json json;
@@ -487,18 +481,18 @@ nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
 std::string AnalyzeReport(const AnalyzeResult& result) {
   std::ostringstream out;
   out << "source: " << result.format << ", gyro " << result.gyro_source << ", " << result.samples
-      << " samples, " << Format("%.1f", result.duration_s) << " s at "
-      << Format("%.1f", result.rate_hz) << " Hz, " << result.gaps << " gaps\n";
+      << " samples, " << FormatNumber("%.1f", result.duration_s) << " s at "
+      << FormatNumber("%.1f", result.rate_hz) << " Hz, " << result.gaps << " gaps\n";
   if (result.bias_from_still) {
-    out << "bias: still segment " << Format("%.2f", result.still_segment.begin_s) << ":"
-        << Format("%.2f", result.still_segment.end_s) << " s\n";
+    out << "bias: still segment " << FormatNumber("%.2f", result.still_segment.begin_s) << ":"
+        << FormatNumber("%.2f", result.still_segment.end_s) << " s\n";
   } else if (!result.bias_estimated) {
     out << "bias: zero (not estimated)\n";
   } else {
     out << "bias: none (no still segment found; zero bias assumed)\n";
   }
-  out << "camera: readout " << Format("%g", result.readout_s * 1e3) << " ms, altitude "
-      << Format("%g", result.altitude_m) << " m (" << result.altitude_source
+  out << "camera: readout " << FormatNumber("%g", result.readout_s * 1e3) << " ms, altitude "
+      << FormatNumber("%g", result.altitude_m) << " m (" << result.altitude_source
       << "); triggers: " << result.trigger_source << "\n\n";
   if (result.flight) {
     out << FlightTable(*result.flight) << "\n";
@@ -510,8 +504,8 @@ std::string AnalyzeReport(const AnalyzeResult& result) {
     for (const ImageResult& image : result.images) {
       char line[256];
       if (!image.in_trace) {
-        std::snprintf(line, sizeof(line), "%-12s %9.3f  outside the log\n",
-                      image.name.c_str(), image.t_ns * 1e-9);
+        std::snprintf(line, sizeof(line), "%-12s %9.3f  outside the log\n", image.name.c_str(),
+                      image.t_ns * 1e-9);
       } else {
         std::string flags;
         for (size_t l = 0; l < result.limits_m.size(); ++l) {

@@ -15,16 +15,27 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace shutterlab {
+
+// The earlier frame of a video pair (FORMATS.md "Video datasets").
+struct EarlierFrame {
+  int64_t frame = 0;
+  int64_t t_first_row_ns = 0;  // camera clock (frames.csv)
+};
 
 // The measured points of one frame of a rig dataset.
 struct FramePoints {
   int64_t frame = 0;
   int64_t t_first_row_ns = 0;  // camera clock (frames.csv)
   std::vector<MeasuredPoint> points;
+  // Video pairs: the points' matches lie in this earlier frame, and (dx, dy) of each point is its
+  // match q minus the point p (both rolling shutter). Absent for reference datasets, where (dx, dy)
+  // is d(p) = p_ref - p.
+  std::optional<EarlierFrame> earlier;
 };
 
 struct ResidualStats {
@@ -32,6 +43,8 @@ struct ResidualStats {
   double max_px = 0.0;
   size_t points = 0;
 };
+// The statistics of residuals given as squared lengths, px^2.
+ResidualStats ResidualStatsOf(const std::vector<double>& squared_norms);
 
 // One identified effect, FORMATS.md names, values and units.
 struct IdentifiedEffect {
@@ -41,6 +54,10 @@ struct IdentifiedEffect {
   std::string unit;             // "s", "ppm", "rad/s", "m/s", "" ...
   std::vector<std::string> ambiguous_with;  // effects that explain the data as well
   ResidualStats after;                      // residual once this effect is added
+  // The fitted parameters (EffectParameterCount of them, deltas from the declared model as
+  // ApplyEffect takes them) and their covariance, as the standard errors come from.
+  Eigen::VectorXd parameters;
+  Eigen::MatrixXd covariance;
 };
 
 struct LoopOptions {
@@ -59,10 +76,15 @@ struct LoopOptions {
   double min_explained_share = 0.3;
   // Other candidates whose BIC is within this of the chosen one's are reported in ambiguous_with.
   double ambiguity_margin = 10.0;
-  // unexplained needs the residual to be significantly above noise (the test above) AND its
-  // trimmed RMS above material_ratio * noise_px: noise_px is itself an estimate (on rendered
-  // datasets measure's noise_px was 1.0-1.4x the RMS that the true model left, never below).
+  // The search goes on, and unexplained is set, only while the residual is significantly above
+  // noise (the test above) AND its trimmed RMS is above material_ratio * noise_px: noise_px is
+  // itself an estimate (on rendered reference datasets measure's noise_px was 1.0-1.4x the RMS that
+  // the true model left, never below; on rendered video pairs the true model left 1.04-1.13x).
   double material_ratio = 1.15;
+  // Video pairs only: each pair's camera translation is an unknown direction (Gyroflow rs-sync's
+  // epipolar constraint with per-row poses). Only each match's distance from its epipolar line is
+  // fitted then; the translation directions are solved inside every prediction (effect_model.h).
+  bool pair_translation = false;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };
@@ -75,12 +97,22 @@ struct LoopResult {
   // The level test on the declared model's residual (the loop searches only when it is true).
   bool above_noise_before = false;
   TrueModel model;  // the declared model plus the identified effects
+  // Measured minus predicted per point (input order, all frames), declared model and final model;
+  // NaN where there is no prediction. With pair_translation only the part across the epipolar
+  // line is a residual.
+  std::vector<Eigen::Vector2d> residuals_before, residuals_after;
+  // Residual components per point that carry information (2; 1 with pair_translation).
+  int residual_components = 2;
+  // With pair_translation: each frame's fitted translation direction (unit, in the world of the
+  // integrated gyro at the frame's time; sign arbitrary), input order.
+  std::vector<Eigen::Vector3d> pair_translation_dirs;
   // For a person: each round's candidates with their fitted residual and criterion.
   std::vector<std::string> log;
 };
 
-// Predicted d(p) = p_ref - p at each point of `frame` under `model` (FORMATS.md "The model"), with
-// the logged gyro trace; NaN where the ray misses the ground or leaves the trace.
+// Predicted displacement at each point of `frame` under `model`, with the logged gyro trace: d(p) =
+// p_ref - p (FORMATS.md "The model"), or for a video pair the rotation-only match q - p; NaN where
+// the ray misses the ground, the match leaves the frame or an instant leaves the trace.
 std::vector<Eigen::Vector2d> PredictDisplacements(const TrueModel& model, const GyroTrace& gyro,
                                                   const FramePoints& frame);
 
@@ -88,6 +120,13 @@ std::vector<Eigen::Vector2d> PredictDisplacements(const TrueModel& model, const 
 LoopResult CloseTheLoop(const RigModel& declared, const GyroTrace& gyro,
                         const std::vector<FramePoints>& frames, double noise_px,
                         const LoopOptions& options = {});
+
+// Fits a given list of effects (no selection), each started as the loop starts it, and reports
+// them as the loop would: values, standard errors, residuals. For the stability check on subsets of
+// the frames (the two halves of a clip).
+LoopResult FitEffects(const RigModel& declared, const GyroTrace& gyro,
+                      const std::vector<FramePoints>& frames, double noise_px,
+                      const std::vector<std::string>& effects, const LoopOptions& options = {});
 
 // FORMATS.md "Validation report" keys (format, frames, before, effects, after, noise_px,
 // unexplained) for a loop result.

@@ -18,6 +18,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -46,25 +47,42 @@ nlohmann::json EffectValue(const std::string& name, const TrueModel& model);
 // readout_direction.
 nlohmann::json EffectStderr(const std::string& name, const TrueModel& model,
                             const Eigen::MatrixXd& covariance);
+// The 24 rotations among the signed permutation matrices (det +1): every way of labelling a
+// sensor's axes with camera axes, signs included. gyro_to_camera fits start at the best of them.
+const std::vector<Eigen::Matrix3d>& AxisRotations();
+
 // FORMATS.md unit of the value ("s", "rad/s", "m/s", "ppm", "" when dimensionless).
 std::string EffectUnit(const std::string& name);
 
-// Predicts the displacement of every measured point of a set of frames under any TrueModel.
+// What the loop fits: a prediction of every measured point of a set of frames under any TrueModel,
+// frame after frame in the order given, points in their order; NaN where there is none.
+class PointPredictor {
+ public:
+  virtual ~PointPredictor() = default;
+  virtual void Predict(const TrueModel& model, std::vector<Eigen::Vector2d>* out) const = 0;
+  virtual size_t point_count() const = 0;
+  // Largest |t_first_row| of the frames, s (camera clock).
+  virtual double frames_span_s() const = 0;
+  // Components of (measured - predicted) per point that carry information: 2, or 1 where the
+  // prediction is the measured point's foot on a line (the other component is fitted away).
+  virtual int residual_components() const { return 2; }
+  // Parameters solved inside Predict (not the loop's), for the degrees of freedom.
+  virtual int nuisance_parameters() const { return 0; }
+};
+
+// Reference datasets: d(p) = p_ref - p of every measured point.
 // Rays (K^-1 p, undistorted) are cached while the intrinsics and distortion do not change, so an
 // evaluation that only changes gyro-side or timing parameters re-integrates the frames' readout
 // spans and re-projects, nothing else. Not thread-safe (the ray cache).
-class DisplacementPredictor {
+class DisplacementPredictor : public PointPredictor {
  public:
   DisplacementPredictor(const GyroTrace& gyro, const std::vector<FramePoints>& frames);
 
-  // d(p) for every point, frame after frame in the order given, points in their order; NaN where
-  // the ray misses the ground, the reference point is behind the camera, or a needed instant lies
-  // outside the gyro trace.
-  void Predict(const TrueModel& model, std::vector<Eigen::Vector2d>* out) const;
-
-  size_t point_count() const { return points_; }
-  // Largest |t_first_row| of the frames, s (camera clock).
-  double frames_span_s() const { return frames_span_s_; }
+  // NaN where the ray misses the ground, the reference point is behind the camera, or a needed
+  // instant lies outside the gyro trace.
+  void Predict(const TrueModel& model, std::vector<Eigen::Vector2d>* out) const override;
+  size_t point_count() const override { return points_; }
+  double frames_span_s() const override { return frames_span_s_; }
 
  private:
   struct Frame {
@@ -84,5 +102,68 @@ class DisplacementPredictor {
   mutable PinholeCamera rays_camera_;
   mutable std::vector<Eigen::Vector3d> rays_;  // CamFromImg of every point, output order
 };
+
+// Video pairs (every frame has FramePoints::earlier): the match q of each point p of the later
+// frame in the earlier one, both rolling shutter (FORMATS.md "Video datasets"), as q - p.
+//  - Rotation only (the default): q ~ K R(t_w)^T R(t_v) K^-1 p with K^-1 / K undistorting /
+//    distorting, t_v the point's row time, t_w the time of q's own row w = q.y: a fixed point,
+//    iterated from w = v (the contraction is the image rate times the row time, far below 1).
+//    render/rs_warp.h VideoMatch computes the same from the rendered scene (its brute-force twin).
+//    declared velocity is not used: translation is pair_translation's.
+//  - pair_translation: each pair's camera moves along an unknown direction V (world frame) during
+//    the pair (per-row poses, as Gyroflow's rs-sync). The ray of p at t_v and of q at t_w then
+//    lie in one plane with V: V . ((R_w x_q) x (R_v x_p)) = 0, x the undistorted rays, w the
+//    MEASURED match's row. V is the eigenvector of the smallest eigenvalue of the weighted sum of
+//    those cross products' outer products, weighted to pixel distances from the epipolar line and
+//    made robust by Huber IRLS (robust_delta_px); the prediction is the measured match's foot on
+//    its epipolar line, so measured - predicted is the distance across the line (1 component).
+// Not thread-safe (ray caches).
+class VideoPairPredictor : public PointPredictor {
+ public:
+  VideoPairPredictor(const GyroTrace& gyro, const std::vector<FramePoints>& frames,
+                     bool pair_translation, double robust_delta_px);
+
+  void Predict(const TrueModel& model, std::vector<Eigen::Vector2d>* out) const override;
+  size_t point_count() const override { return points_; }
+  double frames_span_s() const override { return frames_span_s_; }
+  int residual_components() const override { return pair_translation_ ? 1 : 2; }
+  int nuisance_parameters() const override {
+    return pair_translation_ ? 2 * static_cast<int>(pairs_.size()) : 0;
+  }
+  // pair_translation: each pair's V (unit, sign arbitrary) from the last Predict.
+  const std::vector<Eigen::Vector3d>& translation_dirs() const { return translation_dirs_; }
+
+ private:
+  struct Pair {
+    int64_t t_later_ns = 0, t_earlier_ns = 0;  // t_first_row of both frames, camera clock
+    std::vector<double> rows;                  // distinct v of the points, ascending
+    std::vector<int> row_of_point;
+    std::vector<Eigen::Vector2d> px;     // p (later frame)
+    std::vector<Eigen::Vector2d> match;  // measured q = p + (dx, dy) (earlier frame)
+    std::vector<double> weight;
+    size_t first = 0;
+  };
+  void RefreshRays(const PinholeCamera& camera) const;
+  // Predict for pair k (its points in *out, its direction in translation_dirs_).
+  void PredictPair(const TrueModel& model, size_t k, std::vector<Eigen::Vector2d>* out) const;
+
+  const GyroTrace& gyro_;
+  std::vector<Pair> pairs_;
+  bool pair_translation_ = false;
+  double robust_delta_px_ = 0.0;
+  size_t points_ = 0;
+  double frames_span_s_ = 0.0;
+  mutable bool rays_valid_ = false;
+  mutable PinholeCamera rays_camera_;
+  mutable std::vector<Eigen::Vector3d> rays_, match_rays_;  // K^-1 p, K^-1 q (z = 1)
+  mutable std::vector<Eigen::Vector3d> translation_dirs_;
+};
+
+// The predictor for a set of frames: VideoPairPredictor when they are video pairs (all of them:
+// mixing throws std::invalid_argument), DisplacementPredictor otherwise. robust_delta_px: Huber
+// threshold of the pair translation's inner fit (only used with pair_translation).
+std::unique_ptr<PointPredictor> MakePredictor(const GyroTrace& gyro,
+                                              const std::vector<FramePoints>& frames,
+                                              bool pair_translation, double robust_delta_px);
 
 }  // namespace shutterlab

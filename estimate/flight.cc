@@ -1,15 +1,15 @@
 #include "estimate/flight.h"
 
+#include "estimate/window_stats.h"
+#include "sim/check.h"
+#include "sim/so3.h"
+#include "sim/text_file.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
-
-#include "estimate/window_stats.h"
-#include "sim/check.h"
-#include "sim/so3.h"
-#include "sim/text_file.h"
 
 namespace shutterlab {
 namespace {
@@ -63,7 +63,8 @@ class AngleStream {
     const size_t size = new_end - new_base;
     for (auto* v : Buffers()) {
       if (keep > 0 && keep_from > base_) {
-        std::copy(v->begin() + (keep_from - base_), v->begin() + (keep_from - base_) + keep, v->begin());
+        std::copy(v->begin() + (keep_from - base_), v->begin() + (keep_from - base_) + keep,
+                  v->begin());
       }
       if (v->size() < size) v->resize(size);
     }
@@ -78,7 +79,8 @@ class AngleStream {
 
  private:
   std::vector<std::vector<double>*> Buffers() {
-    std::vector<std::vector<double>*> out = {&angle_buffer_[0], &angle_buffer_[1], &angle_buffer_[2]};
+    std::vector<std::vector<double>*> out = {&angle_buffer_[0], &angle_buffer_[1],
+                                             &angle_buffer_[2]};
     if (with_q_) out.insert(out.end(), {&q_.w, &q_.x, &q_.y, &q_.z});
     return out;
   }
@@ -125,8 +127,8 @@ class AngleStream {
 // (a_(1) is the whole sweep); the middle sample gives the best upper bound (the sweep splits in
 // halves). Only windows whose bounds straddle a threshold pay for the O(n^2) pairwise test,
 // which compares |q_i . q_j| with cos(threshold / 2): four multiply-adds per pair.
-void VectorFlags(const Quaternions& q, size_t begin, size_t end, const std::vector<double>& cos_half,
-                 bool* flags) {
+void VectorFlags(const Quaternions& q, size_t begin, size_t end,
+                 const std::vector<double>& cos_half, bool* flags) {
   const size_t mid = begin + (end - 1 - begin) / 2;
   double lower_cos = 1.0;  // cos(lower bound / 2): smallest |dot| with an anchor
   for (size_t i = begin + 1; i < end; ++i) lower_cos = std::min(lower_cos, q.AbsDot(begin, i));
@@ -168,7 +170,8 @@ void VectorFlags(const Quaternions& q, size_t begin, size_t end, const std::vect
 
 // The largest pairwise rotation angle in [begin, end), rad: exact, pruned with the middle anchor
 // (a pair can beat the best so far only if a_i + a_j does). For --series only.
-double MaxPairwiseAngle(const Quaternions& q, size_t begin, size_t end, std::vector<double>* scratch) {
+double MaxPairwiseAngle(const Quaternions& q, size_t begin, size_t end,
+                        std::vector<double>* scratch) {
   const size_t mid = begin + (end - 1 - begin) / 2;
   std::vector<double>& a = *scratch;
   a.resize(end - begin);
@@ -196,12 +199,6 @@ std::pair<double, std::string> SplitNumberUnit(const std::string& text, const ch
   return {*value, ToLower(text.substr(split))};
 }
 
-std::string FormatDouble(const char* format, double value) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), format, value);
-  return buffer;
-}
-
 }  // namespace
 
 void FlightOptions::Check() const {
@@ -209,8 +206,8 @@ void FlightOptions::Check() const {
       << "altitude must be positive (got " << altitude_m << " m)";
   SHUTTERLAB_CHECK(!limits_m.empty()) << "give at least one ground limit";
   for (double limit : limits_m) {
-    SHUTTERLAB_CHECK(std::isfinite(limit) && limit > 0) << "ground limit must be positive (got "
-                                                        << limit << " m)";
+    SHUTTERLAB_CHECK(std::isfinite(limit) && limit > 0)
+        << "ground limit must be positive (got " << limit << " m)";
   }
   SHUTTERLAB_CHECK(!windows_s.empty()) << "give at least one window duration";
   for (double w : windows_s) {
@@ -254,7 +251,8 @@ FlightResult Flight(const GyroTrace& trace, const FlightOptions& options) {
     const double w = options.windows_s[wi];
     window_ns[wi] = SecondsToNs(w);
     SHUTTERLAB_CHECK(t(0) + window_ns[wi] <= t_last)
-        << "window " << w << " s is longer than the " << span_s << " s of trace after the bias segment";
+        << "window " << w << " s is longer than the " << span_s
+        << " s of trace after the bias segment";
     windows[wi] = trace.LowerBound(t_last - window_ns[wi] + 1) - first;
     windows_max = std::max(windows_max, windows[wi]);
   }
@@ -268,7 +266,9 @@ FlightResult Flight(const GyroTrace& trace, const FlightOptions& options) {
     cos_half[l] = std::cos(0.5 * threshold_rad[l]);
   }
   result.rows.resize(limits * windows_count);
-  auto row_of = [&](size_t l, size_t w) -> FlightRow& { return result.rows[l * windows_count + w]; };
+  auto row_of = [&](size_t l, size_t w) -> FlightRow& {
+    return result.rows[l * windows_count + w];
+  };
   if (options.series) result.series.window_s = options.windows_s[0];
 
   AngleStream stream(trace, first, result.bias.bias_rad_s, options.vector_criterion);
@@ -338,7 +338,8 @@ FlightResult Flight(const GyroTrace& trace, const FlightOptions& options) {
       }
       for (size_t i = 0; options.series && wi == 0 && i < m; ++i) {
         result.series.t_ns.push_back(t(k0 + i));
-        for (int a = 0; a < 3; ++a) result.series.range_arcsec[a].push_back(range[a][i] * kArcsecPerRad);
+        for (int a = 0; a < 3; ++a)
+          result.series.range_arcsec[a].push_back(range[a][i] * kArcsecPerRad);
         if (options.vector_criterion && options.series_vector) {
           result.series.vector_arcsec.push_back(MaxPairwiseAngle(q, i, ends[i], &scratch) *
                                                 kArcsecPerRad);
@@ -399,8 +400,8 @@ std::string FlightTable(const FlightResult& result) {
   // A known bias (FlightOptions::known_bias_rad_s) leaves no segment: every sample is analysed.
   out << "flight: " << result.samples
       << (result.bias.samples > 0 ? " samples after the bias segment" : " samples (known bias)")
-      << ", altitude "
-      << result.altitude_m << " m, noise allowance " << result.noise_allowance_arcsec << "\"\n";
+      << ", altitude " << result.altitude_m << " m, noise allowance "
+      << result.noise_allowance_arcsec << "\"\n";
   out << "limit    window   threshold   windows      x %      y %      z %   per-axis %";
   if (result.vector_criterion) out << "   vector %";
   out << "\n";
@@ -411,7 +412,7 @@ std::string FlightTable(const FlightResult& result) {
                   row.flagged_percent_axis[0], row.flagged_percent_axis[1],
                   row.flagged_percent_axis[2], row.flagged_percent);
     out << line;
-    if (result.vector_criterion) out << FormatDouble("%11.2f", row.flagged_percent_vector);
+    if (result.vector_criterion) out << FormatNumber("%11.2f", row.flagged_percent_vector);
     out << "\n";
   }
   if (result.vector_criterion) {
@@ -479,9 +480,12 @@ void WriteFlightSeriesCsv(const std::string& path, const FlightSeries& series) {
 double ParseLengthM(const std::string& text) {
   const auto [value, unit] = SplitNumberUnit(text, "length");
   double scale = 0;
-  if (unit.empty() || unit == "m") scale = 1.0;
-  else if (unit == "cm") scale = 0.01;
-  else if (unit == "mm") scale = 0.001;
+  if (unit.empty() || unit == "m")
+    scale = 1.0;
+  else if (unit == "cm")
+    scale = 0.01;
+  else if (unit == "mm")
+    scale = 0.001;
   SHUTTERLAB_CHECK(scale > 0) << "unknown length unit '" << unit << "' in '" << text
                               << "' (m, cm, mm)";
   return value * scale;
@@ -490,9 +494,12 @@ double ParseLengthM(const std::string& text) {
 double ParseDurationS(const std::string& text) {
   const auto [value, unit] = SplitNumberUnit(text, "duration");
   double scale = 0;
-  if (unit.empty() || unit == "s") scale = 1.0;
-  else if (unit == "ms") scale = 1e-3;
-  else if (unit == "us") scale = 1e-6;
+  if (unit.empty() || unit == "s")
+    scale = 1.0;
+  else if (unit == "ms")
+    scale = 1e-3;
+  else if (unit == "us")
+    scale = 1e-6;
   SHUTTERLAB_CHECK(scale > 0) << "unknown duration unit '" << unit << "' in '" << text
                               << "' (s, ms, us)";
   return value * scale;

@@ -1,21 +1,21 @@
 #include "estimate/validate.h"
 
 #include "estimate/analyze.h"
+#include "estimate/html_report.h"
+#include "estimate/validate_video.h"
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "render/pictures.h"
 #include "render/render_dataset.h"
-#include "sim/synth.h"
-#include "estimate/html_report.h"
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
 #include "sim/check.h"
 #include "sim/gyro_io.h"
+#include "sim/synth.h"
 #include "sim/text_file.h"
 
-#include <opencv2/imgproc.hpp>
-
 #include <Eigen/Geometry>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -39,18 +39,6 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-std::string Format(const char* format, double value) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), format, value);
-  return buffer;
-}
-
-std::string FrameName(int64_t frame) {
-  char name[32];
-  std::snprintf(name, sizeof(name), "%04lld", static_cast<long long>(frame));
-  return name;
-}
-
 // Grid rows or columns: every kGridStepPx-th plus the last one (as analyze's D_full).
 std::vector<int> GridLines(int size) {
   std::vector<int> lines;
@@ -60,8 +48,8 @@ std::vector<int> GridLines(int size) {
 }
 
 struct FullModelD {
-  double d_px = 0.0;         // FORMATS.md D of the grid
-  double d_centre_px = 0.0;  // D of the grid column nearest the principal point
+  double d_px = 0.0;           // FORMATS.md D of the grid
+  double d_centre_px = 0.0;    // D of the grid column nearest the principal point
   double max_angle_rad = 0.0;  // largest rotation between any two grid rows' orientations
 };
 
@@ -97,18 +85,6 @@ FullModelD FullModel(const RigModel& rig, const FrameMotion& motion) {
     }
   }
   return out;
-}
-
-ResidualStats Stats(const std::vector<double>& squared_norms) {
-  ResidualStats stats;
-  double sum = 0.0;
-  for (double s : squared_norms) {
-    sum += s;
-    stats.max_px = std::max(stats.max_px, std::sqrt(s));
-  }
-  stats.points = squared_norms.size();
-  stats.rms_px = stats.points > 0 ? std::sqrt(sum / stats.points) : 0.0;
-  return stats;
 }
 
 double Median(std::vector<double> values) {
@@ -158,15 +134,6 @@ Confusion Confuse(const std::vector<FrameValidation>& frames, size_t limit, doub
   return c;
 }
 
-// The value with every number at 4 significant digits, for the table (the JSON keeps them all).
-nlohmann::json Rounded(const nlohmann::json& value) {
-  if (value.is_number_float()) return std::stod(Format("%.4g", value.get<double>()));
-  if (!value.is_structured()) return value;
-  nlohmann::json out = value;
-  for (auto& item : out.items()) item.value() = Rounded(item.value());
-  return out;
-}
-
 }  // namespace
 
 void ValidateOptions::Check() const {
@@ -202,18 +169,29 @@ ValidationResult ValidateDataset(const std::string& dataset_dir, const ValidateO
   if (gyro.size() < 2) throw IoError(IoMessage(gyro_path, 0, "fewer than two samples"));
   const std::vector<FrameEntry> entries = ReadFramesCsv(frames_path);
   if (entries.empty()) throw IoError(IoMessage(frames_path, 0, "no frames"));
+  // FORMATS.md: a video dataset leaves ref empty on every line.
+  const bool video = entries.front().ref.empty();
   for (size_t i = 0; i < entries.size(); ++i) {
     // frames.csv: a header line, then one frame a line.
     const long line = static_cast<long>(i) + 2;
-    if (entries[i].ref.empty()) {
+    if (entries[i].ref.empty() != video) {
       throw IoError(IoMessage(frames_path, line,
-                              "no ref image: video datasets are not supported yet (issue 6)"));
+                              video ? "a ref image in a video dataset (line 2 has none)"
+                                    : "no ref image (a video dataset leaves ref empty on every "
+                                      "line, line 2 has one)"));
     }
-    for (const std::string& name : {entries[i].ref, entries[i].image}) {
+    std::vector<std::string> images = {entries[i].image};
+    if (!video) images.push_back(entries[i].ref);
+    for (const std::string& name : images) {
       if (name.empty() || !fs::is_regular_file(dir / name)) {
         throw IoError(IoMessage(frames_path, line, "image '" + name + "' not found"));
       }
     }
+  }
+  if (video) {
+    result.read_s = SecondsSince(start);
+    ValidateVideoDataset(dataset_dir, gyro, entries, options, progress, &result);
+    return result;
   }
   TrueModel declared_model;
   declared_model.rig = rig;
@@ -239,7 +217,8 @@ ValidationResult ValidateDataset(const std::string& dataset_dir, const ValidateO
     const long line = static_cast<long>(i) + 2;
     const cv::Mat ref = ReadImage((dir / entries[i].ref).string());
     const cv::Mat image = ReadImage((dir / entries[i].image).string());
-    for (const auto& [name, picture] : {std::pair{entries[i].ref, ref}, {entries[i].image, image}}) {
+    for (const auto& [name, picture] :
+         {std::pair{entries[i].ref, ref}, {entries[i].image, image}}) {
       if (picture.cols != rig.camera.width || picture.rows != rig.camera.height) {
         throw IoError(IoMessage(frames_path, line,
                                 "image '" + name + "' is " + std::to_string(picture.cols) + "x" +
@@ -262,7 +241,7 @@ ValidationResult ValidateDataset(const std::string& dataset_dir, const ValidateO
     f.noise_px = measured.noise_px;
     f.d_meas_px = measured.d_px;
     f.d_meas_m = measured.d_px * m_per_px;
-    frame_points[i] = {entries[i].frame, entries[i].t_first_row_ns, measured.points};
+    frame_points[i] = {entries[i].frame, entries[i].t_first_row_ns, measured.points, std::nullopt};
     if (progress) progress("measure", i + 1, entries.size());
   }
 
@@ -322,34 +301,83 @@ ValidationResult ValidateDataset(const std::string& dataset_dir, const ValidateO
   }
   const double noise_px = noise_points > 0 ? std::sqrt(noise_sum / noise_points) : 0.0;
   result.loop = CloseTheLoop(rig, gyro, frame_points, noise_px, options.loop);
-  for (size_t i = 0; i < entries.size(); ++i) {
-    FrameValidation& f = result.frames[i];
-    const std::vector<Eigen::Vector2d> before =
-        PredictDisplacements(declared_model, gyro, frame_points[i]);
-    const std::vector<Eigen::Vector2d> after =
-        PredictDisplacements(result.loop.model, gyro, frame_points[i]);
-    std::vector<double> before_sq, after_sq;
-    for (size_t k = 0; k < frame_points[i].points.size(); ++k) {
-      const MeasuredPoint& p = frame_points[i].points[k];
-      if (!before[k].allFinite() || !after[k].allFinite()) continue;
-      const Eigen::Vector2d measured(p.dx, p.dy);
-      const Eigen::Vector2d rb = measured - before[k], ra = measured - after[k];
-      before_sq.push_back(rb.squaredNorm());
-      after_sq.push_back(ra.squaredNorm());
-      if (options.keep_residuals) {
-        f.residuals.push_back({static_cast<float>(p.u), static_cast<float>(p.v),
-                               static_cast<float>(rb.x()), static_cast<float>(rb.y()),
-                               static_cast<float>(ra.x()), static_cast<float>(ra.y())});
-      }
-    }
-    f.before = Stats(before_sq);
-    f.after = Stats(after_sq);
-  }
+  FillFrameResiduals(frame_points, result.loop, nullptr, options.keep_residuals, &result.frames);
   result.loop_s = SecondsSince(start);
   return result;
 }
 
+void FillFrameResiduals(const std::vector<FramePoints>& frames, const LoopResult& loop,
+                        const LoopResult* translation, bool keep_residuals,
+                        std::vector<FrameValidation>* out) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  size_t offset = 0;
+  for (size_t k = 0; k < frames.size(); ++k) {
+    FrameValidation& f = (*out)[k];
+    std::vector<double> before_sq, after_sq, translation_sq;
+    for (size_t i = 0; i < frames[k].points.size(); ++i) {
+      const size_t at = offset + i;
+      const Eigen::Vector2d& rb = loop.residuals_before[at];
+      const Eigen::Vector2d& ra = loop.residuals_after[at];
+      if (!rb.allFinite() || !ra.allFinite()) continue;
+      before_sq.push_back(rb.squaredNorm());
+      after_sq.push_back(ra.squaredNorm());
+      Eigen::Vector2f rt(nan, nan);
+      if (translation != nullptr && translation->residuals_after[at].allFinite()) {
+        rt = translation->residuals_after[at].cast<float>();
+        translation_sq.push_back(translation->residuals_after[at].squaredNorm());
+      }
+      if (keep_residuals) {
+        const MeasuredPoint& p = frames[k].points[i];
+        f.residuals.push_back({static_cast<float>(p.u), static_cast<float>(p.v),
+                               static_cast<float>(rb.x()), static_cast<float>(rb.y()),
+                               static_cast<float>(ra.x()), static_cast<float>(ra.y()), rt.x(),
+                               rt.y()});
+      }
+    }
+    f.before = ResidualStatsOf(before_sq);
+    f.after = ResidualStatsOf(after_sq);
+    if (translation != nullptr) {
+      f.translation_after = ResidualStatsOf(translation_sq);
+      if (k < translation->pair_translation_dirs.size()) {
+        f.translation_dir = translation->pair_translation_dirs[k];
+      }
+    }
+    offset += frames[k].points.size();
+  }
+}
+
+nlohmann::json Rounded(const nlohmann::json& value) {
+  if (value.is_number_float()) return std::stod(FormatNumber("%.4g", value.get<double>()));
+  if (!value.is_structured()) return value;
+  nlohmann::json out = value;
+  for (auto& item : out.items()) item.value() = Rounded(item.value());
+  return out;
+}
+
+void WriteLoopSummary(const LoopResult& loop, std::ostream& out) {
+  out << "  before: rms " << FormatNumber("%.3f", loop.before.rms_px) << " px, max "
+      << FormatNumber("%.3f", loop.before.max_px) << " px\n";
+  for (const IdentifiedEffect& e : loop.effects) {
+    out << "  + " << e.name << " = " << Rounded(e.value).dump() << " +- "
+        << Rounded(e.stderr_value).dump() << " " << e.unit << " -> rms "
+        << FormatNumber("%.3f", e.after.rms_px) << " px, max "
+        << FormatNumber("%.3f", e.after.max_px) << " px";
+    if (!e.ambiguous_with.empty()) {
+      out << " (ambiguous with";
+      for (const std::string& other : e.ambiguous_with) out << " " << other;
+      out << ")";
+    }
+    out << "\n";
+  }
+  if (loop.effects.empty()) out << "  no effect added\n";
+  out << "  after: rms " << FormatNumber("%.3f", loop.after.rms_px) << " px, max "
+      << FormatNumber("%.3f", loop.after.max_px) << " px ("
+      << FormatNumber("%.2f", loop.noise_px > 0 ? loop.after.rms_px / loop.noise_px : 0.0)
+      << "x noise); " << (loop.unexplained ? "UNEXPLAINED residual remains" : "explained") << "\n";
+}
+
 nlohmann::json ValidationToJson(const ValidationResult& result) {
+  if (result.video) return VideoValidationToJson(result);
   nlohmann::json json = LoopToJson(result.loop, result.frames.size());
   json["dataset"] = result.dataset;
   json["limits_m"] = result.limits_m;
@@ -357,9 +385,9 @@ nlohmann::json ValidationToJson(const ValidationResult& result) {
   for (const FrameValidation& f : result.frames) {
     nlohmann::json flags = nlohmann::json::object();
     for (size_t l = 0; l < result.limits_m.size(); ++l) {
-      flags[LimitKey(result.limits_m[l])] = {
-          {"measured", bool(f.flag_meas[l])}, {"full", bool(f.flag_full[l])},
-          {"paper", bool(f.flag_paper[l])}};
+      flags[LimitKey(result.limits_m[l])] = {{"measured", bool(f.flag_meas[l])},
+                                             {"full", bool(f.flag_full[l])},
+                                             {"paper", bool(f.flag_paper[l])}};
     }
     frames.push_back({{"frame", f.frame},
                       {"image", f.image},
@@ -415,16 +443,17 @@ nlohmann::json ValidationToJson(const ValidationResult& result) {
 }
 
 std::string ValidationReport(const ValidationResult& result) {
+  if (result.video) return VideoValidationReport(result);
   std::ostringstream out;
   const auto& limits = result.limits_m;
   out << "dataset " << result.dataset << ": " << result.frames.size() << " frames, "
       << result.declared.camera.width << "x" << result.declared.camera.height << ", f "
-      << Format("%.1f", 0.5 * (result.declared.camera.fx + result.declared.camera.fy))
-      << " px, readout " << Format("%.2f", result.declared.shutter.readout_s * 1e3) << " ms, "
-      << Format("%g", result.declared.altitude_m) << " m\n\n";
+      << FormatNumber("%.1f", 0.5 * (result.declared.camera.fx + result.declared.camera.fy))
+      << " px, readout " << FormatNumber("%.2f", result.declared.shutter.readout_s * 1e3) << " ms, "
+      << FormatNumber("%g", result.declared.altitude_m) << " m\n\n";
   out << "frame  points  noise |  D_meas        |  D_full        | D_paper | D_vector | axis |"
          " flags M F P at";
-  for (double l : limits) out << " " << Format("%g", l * 100) << "cm";
+  for (double l : limits) out << " " << FormatNumber("%g", l * 100) << "cm";
   out << "\n";
   out << "                  px |    px      cm  |    px      cm  |    cm   |    cm    |      |\n";
   for (const FrameValidation& f : result.frames) {
@@ -448,66 +477,46 @@ std::string ValidationReport(const ValidationResult& result) {
     const Confusion& p = result.confusion_paper[l];
     const Confusion& f = result.confusion_full[l];
     char line[256];
-    std::snprintf(line, sizeof(line),
-                  "  %5g cm: paper %d / %d / %d / %d   full model %d / %d / %d / %d\n",
-                  limits[l] * 100, p.true_positive, p.false_positive, p.false_negative,
-                  p.true_negative, f.true_positive, f.false_positive, f.false_negative,
-                  f.true_negative);
+    std::snprintf(
+        line, sizeof(line), "  %5g cm: paper %d / %d / %d / %d   full model %d / %d / %d / %d\n",
+        limits[l] * 100, p.true_positive, p.false_positive, p.false_negative, p.true_negative,
+        f.true_positive, f.false_positive, f.false_negative, f.true_negative);
     out << line;
   }
   out << "\nD_model / D_meas by dominant axis (frames with D_meas >= " << kMinRatioDPx
       << " px; > 1: conservative):\n";
   for (const RatioGroup& g : result.ratios) {
     if (g.frames == 0) continue;
-    const std::string name =
-        g.axis == 0   ? "about x (image rows shift up/down)"
-        : g.axis == 1 ? "about y (image rows shift sideways)"
-        : g.axis == 2 ? "about z (yaw about the optical axis)"
-                      : "all frames";
+    const std::string name = g.axis == 0   ? "about x (image rows shift up/down)"
+                             : g.axis == 1 ? "about y (image rows shift sideways)"
+                             : g.axis == 2 ? "about z (yaw about the optical axis)"
+                                           : "all frames";
     char line[320];
     std::snprintf(line, sizeof(line),
                   "  %-36s %2d frames: paper %.2f (%.2f-%.2f)  vector %.2f  full %.2f;"
                   " nadir column holds %.0f%% of D\n",
-                  name.c_str(), g.frames, g.paper_median, g.paper_min, g.paper_max,
-                  g.vector_median, g.full_median, 100 * g.centre_median);
+                  name.c_str(), g.frames, g.paper_median, g.paper_min, g.paper_max, g.vector_median,
+                  g.full_median, 100 * g.centre_median);
     out << line;
   }
   const RatioGroup& all = result.ratios.back();
   if (all.frames > 0) {
     out << "  -> the paper's per-axis model is "
-        << (all.paper_max < 1.0   ? "NOT conservative on any frame"
+        << (all.paper_max < 1.0    ? "NOT conservative on any frame"
             : all.paper_min >= 1.0 ? "conservative on every frame"
                                    : "conservative on some frames only")
-        << "; the vector angle gives " << Format("%.2f", all.vector_median / all.paper_median)
+        << "; the vector angle gives " << FormatNumber("%.2f", all.vector_median / all.paper_median)
         << "x the per-axis D (median)\n";
   }
 
   const LoopResult& loop = result.loop;
   out << "\nclosing the loop over " << loop.before.points << " points (noise "
-      << Format("%.3f", loop.noise_px) << " px):\n";
-  out << "  before: rms " << Format("%.3f", loop.before.rms_px) << " px, max "
-      << Format("%.3f", loop.before.max_px) << " px\n";
-  for (const IdentifiedEffect& e : loop.effects) {
-    out << "  + " << e.name << " = " << Rounded(e.value).dump() << " +- "
-        << Rounded(e.stderr_value).dump() << " "
-        << e.unit << " -> rms " << Format("%.3f", e.after.rms_px) << " px, max "
-        << Format("%.3f", e.after.max_px) << " px";
-    if (!e.ambiguous_with.empty()) {
-      out << " (ambiguous with";
-      for (const std::string& other : e.ambiguous_with) out << " " << other;
-      out << ")";
-    }
-    out << "\n";
-  }
-  if (loop.effects.empty()) out << "  no effect added\n";
-  out << "  after: rms " << Format("%.3f", loop.after.rms_px) << " px, max "
-      << Format("%.3f", loop.after.max_px) << " px ("
-      << Format("%.2f", loop.noise_px > 0 ? loop.after.rms_px / loop.noise_px : 0.0)
-      << "x noise); " << (loop.unexplained ? "UNEXPLAINED residual remains" : "explained")
-      << "\n";
-  out << "\ntime: read " << Format("%.2f", result.read_s) << " s, measure "
-      << Format("%.2f", result.measure_s) << " s, predict " << Format("%.2f", result.predict_s)
-      << " s, loop " << Format("%.2f", result.loop_s) << " s\n";
+      << FormatNumber("%.3f", loop.noise_px) << " px):\n";
+  WriteLoopSummary(loop, out);
+  out << "\ntime: read " << FormatNumber("%.2f", result.read_s) << " s, measure "
+      << FormatNumber("%.2f", result.measure_s) << " s, predict "
+      << FormatNumber("%.2f", result.predict_s) << " s, loop "
+      << FormatNumber("%.2f", result.loop_s) << " s\n";
   return out.str();
 }
 
@@ -537,15 +546,14 @@ cv::Mat LineChart(const std::vector<double>& x, const std::vector<std::vector<do
   cv::rectangle(chart, to_px(x0, hi), to_px(x1, lo), grey, 1);
   cv::line(chart, to_px(x0, 0.0), to_px(x1, 0.0), cv::Scalar(200, 200, 200), 1);
   const auto text = [&](const std::string& s, cv::Point at, double scale = 0.45) {
-    cv::putText(chart, s, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 0, 0), 1,
-                cv::LINE_AA);
+    cv::putText(chart, s, at, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   };
   text(title, cv::Point(left, 25), 0.6);
-  text(Format("%.3g", hi), cv::Point(5, top + 5));
-  text(Format("%.3g", lo), cv::Point(5, height - bottom));
+  text(FormatNumber("%.3g", hi), cv::Point(5, top + 5));
+  text(FormatNumber("%.3g", lo), cv::Point(5, height - bottom));
   text("0", cv::Point(left - 15, to_px(x0, 0.0).y + 5));
-  text(Format("%g", x0), cv::Point(left, height - bottom + 20));
-  text(Format("%g", x1), cv::Point(width - right - 40, height - bottom + 20));
+  text(FormatNumber("%g", x0), cv::Point(left, height - bottom + 20));
+  text(FormatNumber("%g", x1), cv::Point(width - right - 40, height - bottom + 20));
   text(x_label, cv::Point(width / 2 - 40, height - bottom + 20));
   for (size_t s = 0; s < series.size(); ++s) {
     for (size_t i = 1; i < x.size(); ++i) {
@@ -582,23 +590,46 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
   const float nan = std::numeric_limits<float>::quiet_NaN();
   std::vector<cv::Mat> panels;
   for (const FrameValidation& f : result.frames) {
-    cv::Mat before(cells, CV_32FC2, cv::Scalar(nan, nan)), after = before.clone();
+    cv::Mat before(cells, CV_32FC2, cv::Scalar(nan, nan)), after = before.clone(),
+                                                           translation = before.clone();
     for (const PointResidual& r : f.residuals) {
       const int c = std::clamp(static_cast<int>(std::lround(r.u / step)), 0, cells.width - 1);
       const int w = std::clamp(static_cast<int>(std::lround(r.v / step)), 0, cells.height - 1);
       before.at<cv::Vec2f>(w, c) = cv::Vec2f(r.before_dx, r.before_dy);
       after.at<cv::Vec2f>(w, c) = cv::Vec2f(r.after_dx, r.after_dy);
+      translation.at<cv::Vec2f>(w, c) = cv::Vec2f(r.translation_dx, r.translation_dy);
     }
     // Display at about 640 px wide, nearest neighbour so each cell stays one measured point.
     const double scale = 640.0 / cells.width;
     const cv::Size shown(640, std::max(1, static_cast<int>(std::lround(cells.height * scale))));
-    cv::resize(before, before, shown, 0, 0, cv::INTER_NEAREST);
-    cv::resize(after, after, shown, 0, 0, cv::INTER_NEAREST);
-    const double max_px = std::max(f.before.max_px, 1e-3);
-    const cv::Mat panel = SideBySide(
-        {DisplacementHeatmap(before, max_px), DisplacementHeatmap(after, max_px)},
-        {"residual before: rms " + Format("%.3f", f.before.rms_px) + " px",
-         "after: rms " + Format("%.3f", f.after.rms_px) + " px"});
+    // One colour scale for all panels of a frame: the largest residual before (robust: the 99th
+    // percentile, so one bad match does not wash the picture out).
+    std::vector<float> lengths;
+    for (const PointResidual& r : f.residuals)
+      lengths.push_back(std::hypot(r.before_dx, r.before_dy));
+    double max_px = f.before.max_px;
+    if (!lengths.empty()) {
+      const size_t at = std::min(lengths.size() - 1, static_cast<size_t>(0.99 * lengths.size()));
+      std::nth_element(lengths.begin(), lengths.begin() + at, lengths.end());
+      max_px = lengths[at];
+    }
+    max_px = std::max(max_px, 1e-3);
+    std::vector<cv::Mat> shown_panels;
+    std::vector<std::string> labels = {
+        "residual before: rms " + FormatNumber("%.3f", f.before.rms_px) + " px",
+        (result.video ? "rotation only, after: rms " : "after: rms ") +
+            FormatNumber("%.3f", f.after.rms_px) + " px"};
+    std::vector<cv::Mat> fields = {before, after};
+    if (result.video) {
+      fields.push_back(translation);
+      labels.push_back("with translation (across): rms " +
+                       FormatNumber("%.3f", f.translation_after.rms_px) + " px");
+    }
+    for (cv::Mat& field : fields) {
+      cv::resize(field, field, shown, 0, 0, cv::INTER_NEAREST);
+      shown_panels.push_back(DisplacementHeatmap(field, max_px));
+    }
+    const cv::Mat panel = SideBySide(shown_panels, labels);
     const std::string path = (fs::path(dir) / (FrameName(f.frame) + "_residual.png")).string();
     WriteImage(path, panel);
     written.push_back(path);
@@ -607,7 +638,7 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
 
   // Per-row profile over all frames: mean residual dx, dy and RMS per band of `step` rows.
   const int bands = (height + step - 1) / step;
-  std::vector<double> sum[6], count(bands, 0.0);
+  std::vector<double> sum[7], count(bands, 0.0), translation_count(bands, 0.0);
   for (auto& s : sum) s.assign(bands, 0.0);
   for (const FrameValidation& f : result.frames) {
     for (const PointResidual& r : f.residuals) {
@@ -619,35 +650,44 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
       sum[3][b] += r.after_dx;
       sum[4][b] += r.after_dy;
       sum[5][b] += r.after_dx * r.after_dx + r.after_dy * r.after_dy;
+      if (std::isfinite(r.translation_dx) && std::isfinite(r.translation_dy)) {
+        sum[6][b] += r.translation_dx * r.translation_dx + r.translation_dy * r.translation_dy;
+        translation_count[b] += 1;
+      }
     }
   }
   std::vector<double> row(bands);
-  std::vector<std::vector<double>> mean(6, std::vector<double>(bands));
-  std::string csv = "row_px,points,before_dx_px,before_dy_px,before_rms_px,after_dx_px,"
-                    "after_dy_px,after_rms_px\n";
+  std::vector<std::vector<double>> mean(7, std::vector<double>(bands));
+  std::string csv =
+      "row_px,points,before_dx_px,before_dy_px,before_rms_px,after_dx_px,"
+      "after_dy_px,after_rms_px";
+  csv += result.video ? ",translation_rms_px\n" : "\n";
+  const int columns = result.video ? 7 : 6;
   for (int b = 0; b < bands; ++b) {
     row[b] = std::min(height - 1.0, (b + 0.5) * step);
-    const double n = count[b];
-    for (int s = 0; s < 6; ++s) {
+    for (int s = 0; s < 7; ++s) {
+      const double n = s == 6 ? translation_count[b] : count[b];
       const double m = n > 0 ? sum[s][b] / n : std::numeric_limits<double>::quiet_NaN();
-      mean[s][b] = (s == 2 || s == 5) ? std::sqrt(m) : m;
+      mean[s][b] = (s == 2 || s == 5 || s == 6) ? std::sqrt(m) : m;
     }
-    csv += Format("%.1f", row[b]) + "," + std::to_string(static_cast<long long>(n));
-    for (int s = 0; s < 6; ++s) csv += "," + (n > 0 ? Format("%.5f", mean[s][b]) : "");
+    csv += FormatNumber("%.1f", row[b]) + "," + std::to_string(static_cast<long long>(count[b]));
+    for (int s = 0; s < columns; ++s) {
+      csv += "," + (std::isfinite(mean[s][b]) ? FormatNumber("%.5f", mean[s][b]) : "");
+    }
     csv += "\n";
   }
   const std::string csv_path = (fs::path(dir) / "residual_rows.csv").string();
   WriteFileAtomically(csv_path, csv);
   written.push_back(csv_path);
   // Colours in R, G, B order (image_io writes the file's channel order).
-  const cv::Mat chart_before = LineChart(
-      row, {mean[0], mean[1], mean[2]}, {"mean dx", "mean dy", "rms"},
-      {cv::Scalar(31, 119, 180), cv::Scalar(255, 127, 14), cv::Scalar(60, 60, 60)},
-      "residual per row, before (declared model), px", "image row");
-  const cv::Mat chart_after = LineChart(
-      row, {mean[3], mean[4], mean[5]}, {"mean dx", "mean dy", "rms"},
-      {cv::Scalar(31, 119, 180), cv::Scalar(255, 127, 14), cv::Scalar(60, 60, 60)},
-      "residual per row, after (declared + identified effects), px", "image row");
+  const cv::Mat chart_before =
+      LineChart(row, {mean[0], mean[1], mean[2]}, {"mean dx", "mean dy", "rms"},
+                {cv::Scalar(31, 119, 180), cv::Scalar(255, 127, 14), cv::Scalar(60, 60, 60)},
+                "residual per row, before (declared model), px", "image row");
+  const cv::Mat chart_after =
+      LineChart(row, {mean[3], mean[4], mean[5]}, {"mean dx", "mean dy", "rms"},
+                {cv::Scalar(31, 119, 180), cv::Scalar(255, 127, 14), cv::Scalar(60, 60, 60)},
+                "residual per row, after (declared + identified effects), px", "image row");
   cv::Mat charts;
   cv::vconcat(chart_before, chart_after, charts);
   const std::string chart_path = (fs::path(dir) / "residual_rows.png").string();
@@ -664,10 +704,13 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
   rows_chart.x_label = "image row";
   rows_chart.y_label = "px";
   rows_chart.x = row;
-  rows_chart.series = {ChartSeries("before rms", mean[2]), ChartSeries("after rms", mean[5]),
-                       ChartSeries("before mean dx", mean[0]),
-                       ChartSeries("before mean dy", mean[1]),
-                       ChartSeries("after mean dx", mean[3]), ChartSeries("after mean dy", mean[4])};
+  rows_chart.series = {
+      ChartSeries("before rms", mean[2]),     ChartSeries("after rms", mean[5]),
+      ChartSeries("before mean dx", mean[0]), ChartSeries("before mean dy", mean[1]),
+      ChartSeries("after mean dx", mean[3]),  ChartSeries("after mean dy", mean[4])};
+  if (result.video) {
+    rows_chart.series.push_back(ChartSeries("with translation rms (across the line)", mean[6]));
+  }
   page.AddChart(rows_chart);
   page.Heading("Per frame");
   Chart frames_chart, d_chart;
@@ -677,11 +720,12 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
   frames_chart.y_label = "px";
   d_chart.title = "frame distortion D on the ground";
   d_chart.y_label = "cm";
-  std::vector<double> ids, before_rms, after_rms, noise, d_meas, d_full, d_paper;
+  std::vector<double> ids, before_rms, after_rms, translation_rms, noise, d_meas, d_full, d_paper;
   for (const FrameValidation& f : result.frames) {
     ids.push_back(static_cast<double>(f.frame));
     before_rms.push_back(f.before.rms_px);
     after_rms.push_back(f.after.rms_px);
+    translation_rms.push_back(f.translation_after.rms_px);
     noise.push_back(f.noise_px);
     d_meas.push_back(100 * f.d_meas_m);
     d_full.push_back(100 * f.d_full_m);
@@ -703,8 +747,14 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
   d_chart.series = {ChartSeries("measured", sorted(d_meas)),
                     ChartSeries("full model", sorted(d_full)),
                     ChartSeries("paper's model", sorted(d_paper))};
+  if (result.video) {
+    frames_chart.title = "RMS residual per pair (x: the later frame)";
+    frames_chart.series.insert(frames_chart.series.begin() + 2,
+                               ChartSeries("with translation", sorted(translation_rms)));
+  }
   page.AddChart(frames_chart);
-  page.AddChart(d_chart);
+  // D needs a global-shutter reference: video datasets have none.
+  if (!result.video) page.AddChart(d_chart);
   for (size_t i = 0; i < panels.size(); ++i) {
     page.Image(panels[i], "frame " + FrameName(result.frames[i].frame) +
                               ": |residual| at the measured points, before and after");
@@ -718,7 +768,8 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
 void InjectedDemoOptions::Check() const {
   SHUTTERLAB_CHECK(!scene_path.empty()) << "a scene image is required";
   SHUTTERLAB_CHECK(!out_dir.empty()) << "an output folder is required";
-  SHUTTERLAB_CHECK(frames >= 2 && frames <= 100) << "frames must be in 2..100 (got " << frames << ")";
+  SHUTTERLAB_CHECK(frames >= 2 && frames <= 100)
+      << "frames must be in 2..100 (got " << frames << ")";
   SHUTTERLAB_CHECK(width >= 64 && height >= 48) << "image must be at least 64x48";
 }
 
@@ -749,7 +800,7 @@ ValidationResult RenderAndValidate(const InjectedDemoOptions& options,
   WriteGyroCsv((out / "gyro.csv").string(), SynthesizeTrace(synth));
   std::string times = "frame,t_first_row\n";
   for (int i = 0; i < options.frames; ++i) {
-    times += std::to_string(i) + "," + Format("%.6f", first_s + every_s * i) + "\n";
+    times += std::to_string(i) + "," + FormatNumber("%.6f", first_s + every_s * i) + "\n";
   }
   WriteFileAtomically((out / "times.csv").string(), times);
   RenderOptions render;

@@ -5,6 +5,7 @@
 #include "sim/text_file.h"
 
 #include <cmath>
+#include <cstdio>
 #include <set>
 
 namespace shutterlab {
@@ -82,6 +83,12 @@ void WriteFramesCsv(const std::string& path, const std::vector<FrameEntry>& fram
     out += ',' + f.ref + ',' + f.image + '\n';
   }
   WriteFileAtomically(path, out);
+}
+
+std::string FrameName(int64_t frame) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "%04lld", static_cast<long long>(frame));
+  return name;
 }
 
 }  // namespace shutterlab

@@ -11,6 +11,14 @@
 //   truth.json                     {"injected": {...}, "frames": [{"frame", "D_px", "D_m"}, ...]}
 //   truth/NNNN_heat.png, truth/NNNN_side.png, overview.png   pictures (unless pictures = false)
 // The truth differs from camera.json by the --inject effects only (render/truth_model.h).
+//
+// With `video`, DIR is a video rig dataset (FORMATS.md "Video datasets"): consecutive
+// rolling-shutter frames of one continuing flight, all in the world of the first frame's row 0
+// (CameraMotion::Frame with that anchor), `ref` empty, no reference images. truth/NNNN_disp.exr of
+// every frame but the first holds q - p: for each pixel p of the frame, its match q in the previous
+// frame of frames.csv (VideoDisplacementField). truth.json marks "video": true and names each
+// frame's "previous"; D_px / D_m stay each frame's own distortion against a global shutter at its
+// row 0.
 
 #include "render/rs_warp.h"
 
@@ -32,6 +40,7 @@ struct RenderOptions {
   std::vector<std::string> injections;  // "NAME=VALUE", FORMATS.md effect names
   Interpolation interpolation = Interpolation::kBilinear;
   bool pictures = true;  // heatmaps, side-by-side panels and the overview
+  bool video = false;    // a video dataset (above); frame times must increase
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };

@@ -445,6 +445,52 @@ cv::Mat DisplacementField(const FrameGeometry& geometry) {
   return field;
 }
 
+std::optional<Eigen::Vector2d> VideoMatch(const FrameGeometry& later, const FrameGeometry& earlier,
+                                          double u, int v) {
+  const std::optional<Eigen::Vector3d> x = later.GroundPoint(u, v);
+  if (!x) return std::nullopt;
+  const PinholeCamera& camera = earlier.camera();
+  const FrameMotion& motion = earlier.motion();
+  const double last_row = camera.height - 1;
+  // The match's row moves by (image rate x row time) per row of w: a contraction far below 1 for
+  // any camera that stays sharp, so plain iteration from the point's own row converges quickly.
+  constexpr int kMaxIterations = 100;
+  double w = std::clamp(static_cast<double>(v), 0.0, last_row);
+  for (int it = 0; it < kMaxIterations; ++it) {
+    const std::optional<Eigen::Vector2d> q = camera.ImgFromCam(
+        motion.WorldFromCamAtRow(w).transpose() * (*x - motion.CamCenterAtRow(w)));
+    if (!q || !q->allFinite()) return std::nullopt;
+    const double next = std::clamp(q->y(), 0.0, last_row);
+    if (std::abs(next - w) <= kVideoMatchTolPx) {
+      // A clamped row means the match lies above or below the earlier frame (beyond rounding).
+      if (q->y() < -kVideoMatchTolPx || q->y() > last_row + kVideoMatchTolPx) return std::nullopt;
+      return q;
+    }
+    w = next;
+  }
+  return std::nullopt;
+}
+
+cv::Mat VideoDisplacementField(const FrameGeometry& later, const FrameGeometry& earlier) {
+  SHUTTERLAB_CHECK(later.camera().width == earlier.camera().width &&
+                   later.camera().height == earlier.camera().height)
+      << "video pair: frames of different sizes";
+  const int width = later.camera().width, height = later.camera().height;
+  cv::Mat field(height, width, CV_32FC2);
+  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+    constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+    for (int v = rows.start; v < rows.end; ++v) {
+      auto* d = field.ptr<cv::Vec2f>(v);
+      for (int u = 0; u < width; ++u) {
+        const std::optional<Eigen::Vector2d> q = VideoMatch(later, earlier, u, v);
+        d[u] = q ? cv::Vec2f(static_cast<float>(q->x() - u), static_cast<float>(q->y() - v))
+                 : cv::Vec2f(kNaN, kNaN);
+      }
+    }
+  });
+  return field;
+}
+
 namespace {
 
 double ConvexPolygonDiameter(const std::vector<cv::Point2f>& hull) {

@@ -84,6 +84,18 @@ void RenderFrame(const cv::Mat& scene, const FrameGeometry& geometry, Interpolat
 // The displacement field d(p) = p_ref - p of every pixel, CV_32FC2 (dx, dy), NaN where undefined.
 cv::Mat DisplacementField(const FrameGeometry& geometry);
 
+// Video pairs (FORMATS.md "Video datasets"): for every pixel p of the later frame, the match q in
+// the earlier frame of the ground point it sees, both frames rolling shutter and in one world
+// (CameraMotion::Frame with a shared anchor). q's row w sets the earlier frame's pose, so q solves
+// q = project(X, pose(w)), w = q.y: a fixed point iterated to kVideoMatchTolPx. The field is
+// q - p, CV_32FC2, NaN where the ray misses the ground, the match falls outside the earlier frame's
+// rows [0, height - 1], or the iteration does not settle.
+cv::Mat VideoDisplacementField(const FrameGeometry& later, const FrameGeometry& earlier);
+// The same for one pixel of the later frame.
+std::optional<Eigen::Vector2d> VideoMatch(const FrameGeometry& later, const FrameGeometry& earlier,
+                                          double u, int v);
+constexpr double kVideoMatchTolPx = 1e-7;
+
 // FORMATS.md "Frame distortion D" of a displacement field: the largest, over columns, diameter of
 // the column's displacement vectors, px (NaN entries are skipped).
 double FrameDistortionPx(const cv::Mat& displacement);

@@ -20,6 +20,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,12 @@ nlohmann::json ApplyInjection(const std::string& name_equals_value, TrueModel* m
 
 // Per-row camera pose of one frame (see the header comment for the frame anchoring).
 struct FrameMotion {
+  // world_from_cam and cam_center_m at a fractional image row (0 <= row <= height - 1): slerp and
+  // lerp between the two neighbouring rows (rows ~30 us apart: the second-order difference from the
+  // integrated trace is ~1e-8 rad). Video pairs match at fractional rows.
+  Eigen::Matrix3d WorldFromCamAtRow(double row) const;
+  Eigen::Vector3d CamCenterAtRow(double row) const;
+
   std::vector<Eigen::Matrix3d> world_from_cam;  // one per image row v, at the row's capture time
   std::vector<Eigen::Vector3d> cam_center_m;    // one per image row: c(t_v), world frame, m
   Eigen::Matrix3d world_from_ref = Eigen::Matrix3d::Identity();  // R(t_0), the reference view
@@ -67,9 +74,14 @@ struct FrameMotion {
 class CameraMotion {
  public:
   CameraMotion(const GyroTrace& logged, const TrueModel& model);
-  // The motion of a frame whose first-read row is captured at camera time t_first_row_ns.
-  // Throws std::out_of_range when the frame's readout lies outside the gyro trace.
-  FrameMotion Frame(int64_t t_first_row_ns) const;
+  // The motion of a frame whose first-read row is captured at camera time t_first_row_ns, in the
+  // world of its own row 0 (the header's anchoring). With anchor_first_row_ns, in the world of
+  // that frame's row 0 instead: every frame of a video shares one world (the first frame's), so
+  // consecutive frames see the same ground from continuing poses; world_from_ref / ref_center_m
+  // are then this frame's row-0 pose in that world. Throws std::out_of_range when the readout (or
+  // the anchor) lies outside the gyro trace.
+  FrameMotion Frame(int64_t t_first_row_ns,
+                    std::optional<int64_t> anchor_first_row_ns = std::nullopt) const;
   const TrueModel& model() const { return model_; }
 
  private:

@@ -44,12 +44,6 @@ constexpr double kPhoneFx = 573.8534, kPhoneFy = 575.0448, kPhoneCx = 406.0101, 
 constexpr double kPhoneSkew = -0.6974;
 constexpr double kPhoneFullFrameS = 0.033312;
 
-std::string FrameName(int64_t frame) {
-  char name[32];
-  std::snprintf(name, sizeof(name), "%04lld", static_cast<long long>(frame));
-  return name;
-}
-
 nlohmann::json MatrixJson(const Eigen::Matrix3d& m) {
   nlohmann::json rows = nlohmann::json::array();
   for (int r = 0; r < 3; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2)});

@@ -1,19 +1,18 @@
 #include "sim/text_file.h"
 
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
+#include "sim/check.h"
 
 #include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fcntl.h>
 #include <fstream>
 #include <random>
-
-#include "sim/check.h"
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace shutterlab {
 
@@ -31,11 +30,12 @@ std::string ReadFileToString(const std::string& path) {
 
 MappedFile::MappedFile(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDONLY);
-  if (fd < 0) throw IoError(IoMessage(path, 0, std::string("cannot open: ") + std::strerror(errno)));
+  if (fd < 0)
+    throw IoError(IoMessage(path, 0, std::string("cannot open: ") + std::strerror(errno)));
   struct stat info {};
   if (::fstat(fd, &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0) {
-    void* p = ::mmap(nullptr, static_cast<size_t>(info.st_size), PROT_READ, MAP_PRIVATE | MAP_POPULATE,
-                     fd, 0);
+    void* p = ::mmap(nullptr, static_cast<size_t>(info.st_size), PROT_READ,
+                     MAP_PRIVATE | MAP_POPULATE, fd, 0);
     if (p != MAP_FAILED) {
       data_ = static_cast<const char*>(p);
       size_ = static_cast<size_t>(info.st_size);
@@ -69,8 +69,8 @@ void AdviseHugePages(const void* data, size_t bytes) {
 void WriteFileAtomically(const std::string& path, std::string_view content) {
   // A unique temporary name beside the target: rename() is atomic only within one file system.
   std::random_device entropy;
-  const std::string tmp = path + ".tmp" + std::to_string(::getpid()) + "_" +
-                          std::to_string(entropy() % 1000000);
+  const std::string tmp =
+      path + ".tmp" + std::to_string(::getpid()) + "_" + std::to_string(entropy() % 1000000);
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) throw IoError(IoMessage(path, 0, std::string("cannot write: ") + std::strerror(errno)));
   const bool written = std::fwrite(content.data(), 1, content.size(), f) == content.size();
@@ -100,7 +100,8 @@ void SplitFields(std::string_view line, char delimiter, std::vector<std::string_
     size_t end = line.find(delimiter, start);
     std::string_view field =
         line.substr(start, end == std::string_view::npos ? std::string_view::npos : end - start);
-    while (!field.empty() && (field.front() == ' ' || field.front() == '\t')) field.remove_prefix(1);
+    while (!field.empty() && (field.front() == ' ' || field.front() == '\t'))
+      field.remove_prefix(1);
     while (!field.empty() && (field.back() == ' ' || field.back() == '\t')) field.remove_suffix(1);
     fields->push_back(field);
     if (end == std::string_view::npos) break;
@@ -148,6 +149,12 @@ std::string ToLower(std::string_view s) {
   std::string out(s);
   for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return out;
+}
+
+std::string FormatNumber(const char* format, double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), format, value);
+  return buffer;
 }
 
 }  // namespace shutterlab

@@ -71,4 +71,7 @@ void AppendSecondsFromNs(int64_t t_ns, std::string* out);
 // Lowercase copy of a string (ASCII).
 std::string ToLower(std::string_view s);
 
+// One number through a printf format ("%.3f"), for tables and messages.
+std::string FormatNumber(const char* format, double value);
+
 }  // namespace shutterlab

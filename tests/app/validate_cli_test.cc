@@ -66,9 +66,8 @@ TEST(ValidateCli, WritesReportAndPlots) {
   const std::string dataset = SmallDataset(dir);
   const std::string report = dir / "report.json";
   const std::string out = dir / "plots";
-  const test::CommandResult r = test::RunShutterlab("validate '" + dataset + "' --report '" +
-                                                    report + "' --out '" + out +
-                                                    "' --limit 5cm,10cm");
+  const test::CommandResult r = test::RunShutterlab(
+      "validate '" + dataset + "' --report '" + report + "' --out '" + out + "' --limit 5cm,10cm");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("D_meas"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("closing the loop"), std::string::npos) << r.output;
@@ -103,15 +102,23 @@ TEST(ValidateCli, MissingCameraJson) {
   EXPECT_FALSE(fs::exists(report));
 }
 
-TEST(ValidateCli, VideoDatasetIsRefused) {
+// Video datasets (ref empty on every line): one line with a ref, one frame, two frames at one time.
+TEST(ValidateCli, BadVideoDatasets) {
   test::TempDir dir;
   const std::string dataset = SmallDataset(dir);
-  WriteFileAtomically(fs::path(dataset) / "frames.csv",
-                      "frame,t_first_row,ref,image\n0,8.5,,images/0000_rs.png\n");
   const std::string report = dir / "report.json";
-  const test::CommandResult r =
-      test::RunShutterlab("validate '" + dataset + "' --report '" + report + "'");
-  ExpectOneLineError(r, dataset + "/frames.csv:2:", "video datasets are not supported yet");
+  const auto run = [&](const std::string& frames_csv) {
+    WriteFileAtomically(fs::path(dataset) / "frames.csv", frames_csv);
+    return test::RunShutterlab("validate '" + dataset + "' --report '" + report + "'");
+  };
+  ExpectOneLineError(run("frame,t_first_row,ref,image\n0,8.5,,images/0000_rs.png\n"
+                         "1,10.0,images/0001_ref.png,images/0001_rs.png\n"),
+                     dataset + "/frames.csv:3:", "a ref image in a video dataset");
+  ExpectOneLineError(run("frame,t_first_row,ref,image\n0,8.5,,images/0000_rs.png\n"),
+                     dataset + "/frames.csv", "a video dataset needs at least two frames");
+  ExpectOneLineError(run("frame,t_first_row,ref,image\n0,8.5,,images/0000_rs.png\n"
+                         "1,8.5,,images/0001_rs.png\n"),
+                     dataset + "/frames.csv:3:", "the same t_first_row as frame 0");
   EXPECT_FALSE(fs::exists(report));
 }
 
@@ -146,8 +153,8 @@ TEST(ValidateCli, BadLimitAndCandidate) {
   const std::string dataset = SmallDataset(dir);
   ExpectOneLineError(test::RunShutterlab("validate '" + dataset + "' --limit 5parsecs"), "",
                      "5parsecs");
-  ExpectOneLineError(test::RunShutterlab("validate '" + dataset + "' --candidates warp_drive"),
-                     "", "warp_drive");
+  ExpectOneLineError(test::RunShutterlab("validate '" + dataset + "' --candidates warp_drive"), "",
+                     "warp_drive");
 }
 
 }  // namespace

@@ -30,6 +30,17 @@ inline RigModel IssueRig() {
   return rig;
 }
 
+// The video tests' rig: the issue's field of view at 640x480 (f = 550 px), 30 ms readout, 50 m.
+inline RigModel VideoRig() {
+  RigModel rig = IssueRig();
+  rig.camera.width = 640;
+  rig.camera.height = 480;
+  rig.camera.fx = rig.camera.fy = 550.0;
+  rig.camera.cx = 319.5;
+  rig.camera.cy = 239.5;
+  return rig;
+}
+
 // A multirotor-like logged trace (sim/motion.h flight profile, ideal sensor: the fit only sees the
 // logged rates, and the truth is defined on them), 1 kHz.
 inline GyroTrace FlightTrace(double duration_s, uint64_t seed) {

@@ -22,9 +22,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
-#include <filesystem>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -46,9 +46,9 @@ constexpr double kAfterOverNoise = 1.5;
 
 struct DatasetSpec {
   std::vector<std::string> injections;  // render --inject NAME=VALUE ("" none)
-  double log_s = 30.0;                   // gyro log length, s (motion starts after 6 s still + 1 s)
+  double log_s = 30.0;                  // gyro log length, s (motion starts after 6 s still + 1 s)
   double first_frame_s = 8.0, last_frame_s = 28.0;  // frame times spread evenly between these
-  uint64_t seed = 3;                     // the flight motion's seed
+  uint64_t seed = 3;                                // the flight motion's seed
   std::string scene = "assets/scenes/siyi_zr10_img0100.jpg";
 };
 
@@ -164,8 +164,8 @@ TEST(ValidateEndToEnd, RecoversGyroScale) {
   ExpectIdentified(result, "gyro_scale");
   const Eigen::Vector3d truth(1.05, 0.95, 1.04);
   for (int axis = 0; axis < 3; ++axis) {
-    EXPECT_NEAR(result.loop.model.gyro_scale[axis], truth[axis], 0.01)
-        << "axis " << axis << "\n" << Summary(result);
+    EXPECT_NEAR(result.loop.model.gyro_scale[axis], truth[axis], 0.01) << "axis " << axis << "\n"
+                                                                       << Summary(result);
   }
 }
 
@@ -203,7 +203,8 @@ TEST(ValidateEndToEnd, RecoversVelocityOrFlagsAmbiguity) {
     const Eigen::Vector3d truth(4, 0, 0);
     const double error = (loop.model.rig.velocity_mps - truth).norm() / truth.norm();
     EXPECT_TRUE(error <= 0.10 || ambiguous_with("gyro_bias"))
-        << "velocity off by " << 100 * error << " %\n" << Summary(result);
+        << "velocity off by " << 100 * error << " %\n"
+        << Summary(result);
   } else {
     EXPECT_EQ(first.name, "gyro_bias") << Summary(result);
     EXPECT_TRUE(ambiguous_with("velocity")) << Summary(result);
@@ -269,19 +270,21 @@ TEST(ValidateEndToEnd, TableAndReportAreConsistent) {
   EXPECT_EQ(json["frames_detail"].size(), static_cast<size_t>(kFrames));
 }
 
-TEST(ValidateDataset, RefusesVideoDatasets) {
+// FORMATS.md: a video dataset leaves ref empty on every line; a mix is an error on its first line.
+TEST(ValidateDataset, RefusesAVideoDatasetWithARef) {
   test::TempDir dir;
   WriteRigModel(dir / "camera.json", DeclaredRig());
   WriteGyroCsv(dir / "gyro.csv", FlightGyro({}));
-  WriteFileAtomically(dir / "frames.csv", "frame,t_first_row,ref,image\n0,8.0,,a.png\n");
+  WriteFileAtomically(dir / "a.png", "");
+  WriteFileAtomically(dir / "frames.csv",
+                      "frame,t_first_row,ref,image\n0,8.0,,a.png\n1,8.1,a.png,a.png\n");
   try {
     Validate(dir.path().string());
     FAIL() << "no error";
   } catch (const std::exception& e) {
-    EXPECT_NE(std::string(e.what()).find("video datasets are not supported yet (issue 6)"),
-              std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("a ref image in a video dataset"), std::string::npos)
         << e.what();
-    EXPECT_NE(std::string(e.what()).find("frames.csv:2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("frames.csv:3"), std::string::npos) << e.what();
   }
 }
 
