@@ -570,10 +570,10 @@ Eigen::MatrixXd Covariance(const Context& ctx, const Fit& fit) {
 // 3 noise_px on the residual's length: a Gaussian point passes with probability 1 - e^-9.
 double HuberDelta(double noise_px) { return 3.0 * noise_px; }
 
-Context MakeContext(const RigModel& declared, const PointPredictor& predictor,
+Context MakeContext(const TrueModel& declared, const PointPredictor& predictor,
                     const std::vector<FramePoints>& frames, double noise_px) {
   Context ctx;
-  ctx.declared.rig = declared;
+  ctx.declared = declared;
   ctx.predictor = &predictor;
   ctx.noise_px = noise_px;
   ctx.components = predictor.residual_components();
@@ -645,8 +645,9 @@ struct Start {
   Context ctx;
   Fit declared;
 };
-Start Begin(const RigModel& declared, const GyroTrace& gyro, const std::vector<FramePoints>& frames,
-            double noise_px, const LoopOptions& options, LoopResult* result) {
+Start Begin(const TrueModel& declared, const GyroTrace& gyro,
+            const std::vector<FramePoints>& frames, double noise_px, const LoopOptions& options,
+            LoopResult* result) {
   options.Check();
   declared.Check();
   SHUTTERLAB_CHECK(std::isfinite(noise_px) && noise_px > 0)
@@ -673,6 +674,14 @@ Start Begin(const RigModel& declared, const GyroTrace& gyro, const std::vector<F
 }  // namespace
 
 LoopResult CloseTheLoop(const RigModel& declared, const GyroTrace& gyro,
+                        const std::vector<FramePoints>& frames, double noise_px,
+                        const LoopOptions& options) {
+  TrueModel start;
+  start.rig = declared;
+  return CloseTheLoop(start, gyro, frames, noise_px, options);
+}
+
+LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
                         const std::vector<FramePoints>& frames, double noise_px,
                         const LoopOptions& options) {
   LoopResult result;
@@ -918,6 +927,14 @@ LoopResult CloseTheLoop(const RigModel& declared, const GyroTrace& gyro,
 }
 
 LoopResult FitEffects(const RigModel& declared, const GyroTrace& gyro,
+                      const std::vector<FramePoints>& frames, double noise_px,
+                      const std::vector<std::string>& effects, const LoopOptions& options) {
+  TrueModel start;
+  start.rig = declared;
+  return FitEffects(start, gyro, frames, noise_px, effects, options);
+}
+
+LoopResult FitEffects(const TrueModel& declared, const GyroTrace& gyro,
                       const std::vector<FramePoints>& frames, double noise_px,
                       const std::vector<std::string>& effects, const LoopOptions& options) {
   LoopResult result;

@@ -128,6 +128,15 @@ LoopResult FitEffects(const RigModel& declared, const GyroTrace& gyro,
                       const std::vector<FramePoints>& frames, double noise_px,
                       const std::vector<std::string>& effects, const LoopOptions& options = {});
 
+// The same from a model that already holds errors beyond camera.json (a gyro scale or bias found
+// by another fit): the effects are fitted on top of `start`, and `before` is start's residual.
+LoopResult CloseTheLoop(const TrueModel& start, const GyroTrace& gyro,
+                        const std::vector<FramePoints>& frames, double noise_px,
+                        const LoopOptions& options = {});
+LoopResult FitEffects(const TrueModel& start, const GyroTrace& gyro,
+                      const std::vector<FramePoints>& frames, double noise_px,
+                      const std::vector<std::string>& effects, const LoopOptions& options = {});
+
 // FORMATS.md "Validation report" keys (format, frames, before, effects, after, noise_px,
 // unexplained) for a loop result.
 nlohmann::json LoopToJson(const LoopResult& result, size_t frame_count);

@@ -320,6 +320,7 @@ VideoPairPredictor::VideoPairPredictor(const GyroTrace& gyro,
     pair.rows.erase(std::unique(pair.rows.begin(), pair.rows.end()), pair.rows.end());
     for (const MeasuredPoint& p : f.points) {
       pair.px.emplace_back(p.u, p.v);
+      pair.measured.emplace_back(p.dx, p.dy);
       pair.match.emplace_back(p.u + p.dx, p.v + p.dy);
       pair.weight.push_back(std::isfinite(p.weight) ? std::max(0.0, p.weight) : 0.0);
       pair.row_of_point.push_back(static_cast<int>(
@@ -330,6 +331,8 @@ VideoPairPredictor::VideoPairPredictor(const GyroTrace& gyro,
                                std::abs(f.earlier->t_first_row_ns * 1e-9)});
     pairs_.push_back(std::move(pair));
   }
+  previous_normals_.assign(points_,
+                           Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN()));
 }
 
 void VideoPairPredictor::RefreshRays(const PinholeCamera& camera) const {
@@ -364,6 +367,10 @@ void VideoPairPredictor::Predict(const TrueModel& model, std::vector<Eigen::Vect
     for (int k = range.start; k < range.end; ++k) PredictPair(model, k, out);
   });
 }
+
+// The epipole's neighbourhood that pair translation's distances are weighted down in, as a share of
+// the image diagonal (PredictPair).
+constexpr double kEpipoleRadiusShare = 0.05;
 
 void VideoPairPredictor::PredictPair(const TrueModel& model, size_t k,
                                      std::vector<Eigen::Vector2d>* out) const {
@@ -513,22 +520,56 @@ void VideoPairPredictor::PredictPair(const TrueModel& model, size_t k,
   // Report the direction in the earlier frame's row-0 camera frame.
   Eigen::Vector3d v_cam;
   translation_dirs_[k] = cam_from_world_at(0.0, v_dir, &v_cam) ? v_cam.normalized() : v_dir;
-  // Each measured match's foot on its epipolar line (undistorted pixels), then distorted.
+  // Each measured match's signed distance from its epipolar line, px: across the line in
+  // undistorted pixels, or (with a lens) from the match to its foot on the line, distorted. The
+  // "prediction" is the measured match moved by that distance along x, so that measured -
+  // predicted is (distance, 0): a residual whose second component is always 0, and whose
+  // derivatives are the distance's alone. (The foot itself would turn the residual vector with the
+  // line, and Gauss-Newton would count that turning, which changes no distance, as information.)
   const Eigen::Matrix3d k_mat = camera.K();
   for (size_t i = 0; i < n; ++i) {
     if (w_row[i] < 0) continue;
     Eigen::Vector3d n_cam;
     const double g = normal_px(i, v_dir, &n_cam);
     if (!(g > 0)) continue;
-    const double distance_px = v_dir.dot(a[i]) / g;
-    const Eigen::Vector2d normal(n_cam.x() / camera.fx / g, n_cam.y() / camera.fy / g);
+    double distance_px = v_dir.dot(a[i]) / g;
+    Eigen::Vector2d normal(n_cam.x() / camera.fx / g, n_cam.y() / camera.fy / g);
+    // The distance's sign follows the normal's, which follows V's arbitrary sign: orient the normal
+    // as the point's previous one. A solver's evaluations come in small steps (central differences
+    // of each parameter), so the sign stays put from one to the next and the distance's
+    // derivatives stay finite; a fixed reference would not do: the line of a point near the
+    // epipole may turn a quarter turn between the declared model and the fitted one.
+    Eigen::Vector2d& previous = previous_normals_[pair.first + i];
+    if (previous.allFinite() && normal.dot(previous) < 0) {
+      normal = -normal;
+      distance_px = -distance_px;
+    }
+    previous = normal;
     const Eigen::Vector3d& xq = match_rays_[pair.first + i];
     const Eigen::Vector2d q_undistorted = (k_mat * xq).hnormalized();
     const Eigen::Vector2d foot = q_undistorted - distance_px * normal;
-    const std::optional<Eigen::Vector2d> q =
-        camera.HasDistortion() ? camera.ImgFromCam(k_mat.inverse() * foot.homogeneous())
-                               : std::optional<Eigen::Vector2d>(foot);
-    if (q && q->allFinite()) (*out)[pair.first + i] = *q - pair.px[i];
+    double across_px = distance_px;
+    if (camera.HasDistortion()) {
+      const std::optional<Eigen::Vector2d> q =
+          camera.ImgFromCam(k_mat.inverse() * foot.homogeneous());
+      if (!q || !q->allFinite()) continue;
+      across_px = std::copysign((pair.match[i] - *q).norm(), distance_px);
+    }
+    // Near the epipole a point's line turns fast with V, so its distance depends on the model far
+    // beyond what it says (one such point held a fifth of all the information on a readout time
+    // in karma.mp4). Its distance counts the less the nearer it is: weight rho / sqrt(rho^2 + R^2),
+    // rho its distance from the epipole (the projection of V at the match's row), R a twentieth of
+    // the image diagonal: 1 far away (the noise level stays that of one component), smooth, so the
+    // solver's derivatives stay honest.
+    Eigen::Vector3d epipole;
+    if (cam_from_world_at(w_row[i], v_dir, &epipole) && std::abs(epipole.z()) > 1e-12) {
+      const double rho = (q_undistorted - (k_mat * (epipole / epipole.z())).head<2>()).norm();
+      const double radius = kEpipoleRadiusShare * std::hypot(camera.width, camera.height);
+      across_px *= rho / std::hypot(rho, radius);
+    }
+    if (std::isfinite(across_px)) {
+      (*out)[pair.first + i] = pair.measured[i] - Eigen::Vector2d(across_px, 0.0);
+    }
   }
 }
 

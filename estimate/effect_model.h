@@ -115,8 +115,9 @@ class DisplacementPredictor : public PointPredictor {
 //    lie in one plane with V: V . ((R_w x_q) x (R_v x_p)) = 0, x the undistorted rays, w the
 //    MEASURED match's row. V is the eigenvector of the smallest eigenvalue of the weighted sum of
 //    those cross products' outer products, weighted to pixel distances from the epipolar line and
-//    made robust by Huber IRLS (robust_delta_px); the prediction is the measured match's foot on
-//    its epipolar line, so measured - predicted is the distance across the line (1 component).
+//    made robust by Huber IRLS (robust_delta_px); measured - predicted is (d, 0), d the measured
+//    match's signed distance across its epipolar line, px (1 component: the "prediction" is the
+//    measured match shifted by d along x, not a point on the line; see PredictPair).
 // Not thread-safe (ray caches).
 class VideoPairPredictor : public PointPredictor {
  public:
@@ -138,8 +139,9 @@ class VideoPairPredictor : public PointPredictor {
     int64_t t_later_ns = 0, t_earlier_ns = 0;  // t_first_row of both frames, camera clock
     std::vector<double> rows;                  // distinct v of the points, ascending
     std::vector<int> row_of_point;
-    std::vector<Eigen::Vector2d> px;     // p (later frame)
-    std::vector<Eigen::Vector2d> match;  // measured q = p + (dx, dy) (earlier frame)
+    std::vector<Eigen::Vector2d> px;        // p (later frame)
+    std::vector<Eigen::Vector2d> measured;  // (dx, dy) = q - p as measured
+    std::vector<Eigen::Vector2d> match;     // measured q = p + (dx, dy) (earlier frame)
     std::vector<double> weight;
     size_t first = 0;
   };
@@ -156,6 +158,9 @@ class VideoPairPredictor : public PointPredictor {
   mutable bool rays_valid_ = false;
   mutable PinholeCamera rays_camera_;
   mutable std::vector<Eigen::Vector3d> rays_, match_rays_;  // K^-1 p, K^-1 q (z = 1)
+  // pair_translation: each point's epipolar-line normal at the previous prediction, which orients
+  // the sign of its distance in the next one (PredictPair).
+  mutable std::vector<Eigen::Vector2d> previous_normals_;
   mutable std::vector<Eigen::Vector3d> translation_dirs_;
 };
 

@@ -112,7 +112,7 @@ tr:nth-child(even) td { background: #f8fafc; }
 .swatch { display: inline-block; width: 22px; height: 11px; margin-right: 6px;
           vertical-align: -1px; border: 1px solid #c5ccd6; }
 figure { display: inline-block; margin: 6px 12px 12px 0; vertical-align: top; }
-figure img { max-width: 100%; border: 1px solid #d5dbe3; }
+figure img { max-width: 100%; height: auto; border: 1px solid #d5dbe3; }
 figcaption { font-size: 13px; color: #4a5462; margin-top: 3px; }
 pre { background: #f5f7fa; padding: 8px; font-size: 12px; overflow: auto; }
 )css";
@@ -347,10 +347,11 @@ void HtmlPage::Image(const cv::Mat& rgb8, const std::string& caption) {
   std::vector<uchar> png;
   SHUTTERLAB_CHECK(cv::imencode(".png", bgr, png))
       << "image '" << caption << "': PNG encoding failed";
-  // The figure as wide as its image, so a long caption wraps instead of widening it.
-  body_ += "<figure style=\"width:" + std::to_string(rgb8.cols) + "px\"><img alt=\"" +
-           EscapeHtml(caption) + "\" width=\"" + std::to_string(rgb8.cols) +
-           "\" src=\"data:image/png;base64," +
+  // The figure as wide as its image, so a long caption wraps instead of widening it, but no wider
+  // than the page: a wide picture (three residual panels side by side) shrinks to fit.
+  body_ += "<figure style=\"width:" + std::to_string(rgb8.cols) +
+           "px; max-width:100%\"><img alt=\"" + EscapeHtml(caption) + "\" width=\"" +
+           std::to_string(rgb8.cols) + "\" src=\"data:image/png;base64," +
            Base64(std::string_view(reinterpret_cast<const char*>(png.data()), png.size())) +
            "\"><figcaption>" + EscapeHtml(caption) + "</figcaption></figure>\n";
 }

@@ -371,8 +371,12 @@ void WriteLoopSummary(const LoopResult& loop, std::ostream& out) {
   }
   if (loop.effects.empty()) out << "  no effect added\n";
   out << "  after: rms " << FormatNumber("%.3f", loop.after.rms_px) << " px, max "
-      << FormatNumber("%.3f", loop.after.max_px) << " px ("
-      << FormatNumber("%.2f", loop.noise_px > 0 ? loop.after.rms_px / loop.noise_px : 0.0)
+      << FormatNumber("%.3f", loop.after.max_px)
+      << " px ("
+      // The noise of the residual's own components (1 of 2 across an epipolar line).
+      << FormatNumber("%.2f", loop.noise_px > 0 ? loop.after.rms_px / loop.noise_px /
+                                                      std::sqrt(loop.residual_components / 2.0)
+                                                : 0.0)
       << "x noise); " << (loop.unexplained ? "UNEXPLAINED residual remains" : "explained") << "\n";
 }
 
@@ -756,8 +760,13 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
   // D needs a global-shutter reference: video datasets have none.
   if (!result.video) page.AddChart(d_chart);
   for (size_t i = 0; i < panels.size(); ++i) {
-    page.Image(panels[i], "frame " + FrameName(result.frames[i].frame) +
-                              ": |residual| at the measured points, before and after");
+    const FrameValidation& f = result.frames[i];
+    page.Image(panels[i], f.previous
+                              ? "pair " + FrameName(*f.previous) + " -> " + FrameName(f.frame) +
+                                    ": |residual| at the measured points: declared model, rotation "
+                                    "only after the loop, with each pair's translation"
+                              : "frame " + FrameName(f.frame) +
+                                    ": |residual| at the measured points, before and after");
   }
   const std::string html_path = (fs::path(dir) / "validate.html").string();
   page.Write(html_path);

@@ -20,7 +20,9 @@
 // twice over the pairs' points:
 //  - rotation only (FORMATS.md's video model; the baseline, and the report's top-level keys);
 //  - with each pair's translation as an unknown direction (LoopOptions::pair_translation, the
-//    epipolar constraint), which parallax from a moving camera needs.
+//    epipolar constraint), which parallax from a moving camera needs. Its candidates leave out the
+//    gyro's mounting, scale and bias (IdentifiableWithPairTranslation); it starts from the
+//    rotation-only loop's values of those when that loop left the noise.
 // Both are reported, with the share of the rotation-only residual that translation explains. Then:
 //  - stability: the preferred model's effects refitted on the first and the second half of the
 //    pairs (FitEffects), each effect's two values compared against their standard errors;
@@ -146,9 +148,14 @@ struct ValidationResult {
   // Video datasets (see the top): `loop` is the rotation-only baseline.
   bool video = false;
   LoopResult translation_loop;
+  // The rotation-only loop's gyro-side effects (gyro_to_camera, gyro_scale, gyro_bias) the
+  // translation loop started from: those it cannot tell from translation, taken when the
+  // rotation-only loop left the noise.
+  std::vector<std::string> translation_inherits;
   std::string preferred = "rotation_only";  // or "translation": the model that explains the data
   // Share of the rotation-only residual's excess over the noise (mean square per component, over
-  // the same trimmed points) that per-pair translation explains.
+  // the same trimmed points) that per-pair translation explains; 0 when the rotation-only loop
+  // ends at the noise (unexplained false).
   double translation_explains = 0.0;
   double rotation_ms_per_component = 0.0, translation_ms_per_component = 0.0;  // px^2
   std::vector<HalfCheck> halves;

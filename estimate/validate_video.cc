@@ -167,12 +167,14 @@ TrimmedComparison CompareTrimmed(const std::vector<FramePoints>& pairs,
   return out;
 }
 
-// Share of a's excess over the noise (mean square per component) that b removes, in [0, 1].
+// Share of a's excess over the noise (mean square per component) that b removes, in [0, 1]; when a
+// is within the noise, what b removes is measured against the noise itself (a below-noise residual
+// has no excess, and moving it by a sliver of the noise decides nothing).
 double ExplainedShare(const TrimmedComparison& c, double noise_px) {
   const double noise_ms = noise_px * noise_px / 2.0;
   const double excess = c.a - noise_ms;
-  if (!(excess > 0)) return 0.0;
-  return std::clamp((c.a - std::max(noise_ms, c.b)) / excess, 0.0, 1.0);
+  if (excess > noise_ms) return std::clamp((c.a - std::max(noise_ms, c.b)) / excess, 0.0, 1.0);
+  return std::clamp((c.a - c.b) / noise_ms, 0.0, 1.0);
 }
 
 // Below this share of the residual's excess that the best value removes, the data do not pin a
@@ -184,12 +186,14 @@ constexpr double kMinClaimShare = 0.1;
 // effect fitted beside the model's identified ones, against the claim in standard errors, and how
 // much of the residual fitting it removes. direction: both readings. gyro_to_camera: the rotation-
 // only residual of each of the 24 axis mappings against the claimed one's.
-std::vector<ClaimCheck> CheckClaims(const fs::path& import_json, const RigModel& declared,
-                                    const GyroTrace& gyro, const std::vector<FramePoints>& pairs,
-                                    double noise_px, const LoopResult& preferred,
+// Each model's fits start where its loop started (preferred_start, rotation_start).
+std::vector<ClaimCheck> CheckClaims(const fs::path& import_json, const GyroTrace& gyro,
+                                    const std::vector<FramePoints>& pairs, double noise_px,
+                                    const TrueModel& preferred_start, const LoopResult& preferred,
                                     const LoopOptions& preferred_options,
-                                    const LoopResult& rotation,
+                                    const TrueModel& rotation_start, const LoopResult& rotation,
                                     const LoopOptions& rotation_options) {
+  const RigModel& declared = rotation_start.rig;
   std::vector<ClaimCheck> checks;
   if (!fs::is_regular_file(import_json)) return checks;
   json record;
@@ -277,8 +281,9 @@ std::vector<ClaimCheck> CheckClaims(const fs::path& import_json, const RigModel&
     }
     std::vector<std::string> with_effect = base;
     with_effect.push_back(check.effect);
-    const LoopResult without = FitEffects(declared, gyro, pairs, noise_px, base, loop_options);
-    const LoopResult with = FitEffects(declared, gyro, pairs, noise_px, with_effect, loop_options);
+    const TrueModel& start = by_rotation ? rotation_start : preferred_start;
+    const LoopResult without = FitEffects(start, gyro, pairs, noise_px, base, loop_options);
+    const LoopResult with = FitEffects(start, gyro, pairs, noise_px, with_effect, loop_options);
     const TrimmedComparison c =
         CompareTrimmed(pairs, without.residuals_after, without.residual_components,
                        with.residuals_after, with.residual_components);
@@ -466,9 +471,23 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
     if (IdentifiableWithPairTranslation(name)) translation_options.candidates.push_back(name);
   }
   if (progress) progress("loop", 0, 2);
-  result->loop = CloseTheLoop(rig, gyro, pairs, noise_px, rotation_options);
+  TrueModel rotation_start;
+  rotation_start.rig = rig;
+  result->loop = CloseTheLoop(rotation_start, gyro, pairs, noise_px, rotation_options);
   if (progress) progress("loop", 1, 2);
-  result->translation_loop = CloseTheLoop(rig, gyro, pairs, noise_px, translation_options);
+  // The pair-translation model cannot tell the gyro's own calibration (mounting, scale, bias): it
+  // takes the rotation-only loop's when that one left the noise (its fit is then trustworthy),
+  // camera.json's otherwise (parallax may have bent it).
+  TrueModel translation_start = rotation_start;
+  if (!result->loop.unexplained) {
+    for (const IdentifiedEffect& e : result->loop.effects) {
+      if (IdentifiableWithPairTranslation(e.name)) continue;
+      result->translation_inherits.push_back(e.name);
+      ApplyEffect(e.name, e.parameters.data(), &translation_start);
+    }
+  }
+  result->translation_loop =
+      CloseTheLoop(translation_start, gyro, pairs, noise_px, translation_options);
   if (progress) progress("loop", 2, 2);
 
   const LoopResult& rot = result->loop;
@@ -480,13 +499,16 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
                      trans.residual_components);
   result->rotation_ms_per_component = compared.a;
   result->translation_ms_per_component = compared.b;
-  result->translation_explains = ExplainedShare(compared, noise_px);
+  // Nothing for translation to explain when rotation alone leaves the noise.
+  result->translation_explains = rot.unexplained ? ExplainedShare(compared, noise_px) : 0.0;
   result->preferred = rot.unexplained && result->translation_explains >= kPreferTranslationShare
                           ? "translation"
                           : "rotation_only";
   const LoopResult& preferred = result->preferred == "translation" ? trans : rot;
   const LoopOptions& preferred_options =
       result->preferred == "translation" ? translation_options : rotation_options;
+  const TrueModel& preferred_start =
+      result->preferred == "translation" ? translation_start : rotation_start;
 
   // --- stability: the preferred model's effects on each half of the pairs
   if (!preferred.effects.empty() && pairs.size() >= 4) {
@@ -498,8 +520,10 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
     check.model = result->preferred;
     check.first_pairs = first.size();
     check.second_pairs = second.size();
-    const LoopResult a = FitEffects(rig, gyro, first, noise_px, names, preferred_options);
-    const LoopResult b = FitEffects(rig, gyro, second, noise_px, names, preferred_options);
+    const LoopResult a =
+        FitEffects(preferred_start, gyro, first, noise_px, names, preferred_options);
+    const LoopResult b =
+        FitEffects(preferred_start, gyro, second, noise_px, names, preferred_options);
     check.first_after = a.after;
     check.second_after = b.after;
     check.first_model = a.model;
@@ -511,8 +535,8 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
   }
 
   // --- the source's claims, when the dataset came from `shutterlab import`
-  result->claims = CheckClaims(dir / "import.json", rig, gyro, pairs, noise_px, preferred,
-                               preferred_options, rot, rotation_options);
+  result->claims = CheckClaims(dir / "import.json", gyro, pairs, noise_px, preferred_start,
+                               preferred, preferred_options, rotation_start, rot, rotation_options);
   result->loop_s = SecondsSince(start);
 }
 
@@ -526,6 +550,7 @@ json VideoValidationToJson(const ValidationResult& result) {
   out["rotation_only"] = LoopToJson(result.loop, result.frames.size());
   json trans = LoopToJson(result.translation_loop, result.frames.size());
   trans["explains_share"] = result.translation_explains;
+  trans["inherits"] = result.translation_inherits;
   trans["mean_square_per_component_px2"] = {
       {"rotation_only", result.rotation_ms_per_component},
       {"translation", result.translation_ms_per_component},
@@ -609,16 +634,28 @@ std::string VideoValidationReport(const ValidationResult& result) {
       << " points, noise " << FormatNumber("%.3f", noise) << " px:\n";
   WriteLoopSummary(result.loop, out);
   out << "with each pair's translation as an unknown direction (distance across the epipolar "
-         "line):\n";
+         "line)";
+  if (!result.translation_inherits.empty()) {
+    out << ", the gyro's calibration from the rotation-only fit (";
+    for (size_t i = 0; i < result.translation_inherits.size(); ++i) {
+      out << (i ? ", " : "") << result.translation_inherits[i];
+    }
+    out << ")";
+  }
+  out << ":\n";
   WriteLoopSummary(result.translation_loop, out);
   out << "  mean square per residual component over the same points (largest "
       << FormatNumber("%.0f", 100 * kCompareTrimShare) << " % of either left out): rotation only "
       << FormatNumber("%.4f", result.rotation_ms_per_component) << " px^2, with translation "
       << FormatNumber("%.4f", result.translation_ms_per_component) << " px^2, noise "
       << FormatNumber("%.4f", noise * noise / 2) << " px^2\n";
-  out << "  translation explains " << FormatNumber("%.0f", 100 * result.translation_explains)
-      << " % of the rotation-only residual's excess over the noise; preferred model: "
-      << result.preferred << "\n";
+  if (result.loop.unexplained) {
+    out << "  translation explains " << FormatNumber("%.0f", 100 * result.translation_explains)
+        << " % of the rotation-only residual's excess over the noise";
+  } else {
+    out << "  rotation alone leaves the noise: nothing for translation to explain";
+  }
+  out << "; preferred model: " << result.preferred << "\n";
   for (const HalfCheck& h : result.halves) {
     out << "\nstability: " << h.model << " effects on pairs 1-" << h.first_pairs << " and "
         << h.first_pairs + 1 << "-" << h.first_pairs + h.second_pairs << ":\n";

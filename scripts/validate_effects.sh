@@ -50,11 +50,5 @@ for injection in "${cases[@]}"; do
     sed -n '/^closing the loop/,/^  after:/p' | tee "$out/$name.txt"
 done
 
-# The misalignment's error as an angle: theta of R_found^T R_true (trace = 1 + 2 cos theta).
-grep -o 'gyro_to_camera = \[\[[^]]*\],\[[^]]*\],\[[^]]*\]\]' "$out/gyro_to_camera.txt" |
-  tr -d '[]' | sed 's/gyro_to_camera = //' |
-  awk -F, -v truth="$misaligned" '{
-    split(truth, t, ","); trace = 0
-    for (i = 1; i <= 9; i++) trace += $i * t[i]
-    c = (trace - 1) / 2; if (c > 1) c = 1
-    printf "gyro_to_camera found within %.2f deg of the injected rotation\n", atan2(sqrt(1 - c*c), c) * 180 / atan2(0, -1) }'
+# The misalignment's error as an angle, from the report at full precision.
+python3 scripts/rotation_error.py "$out/gyro_to_camera.json" "$misaligned"

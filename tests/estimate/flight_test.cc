@@ -1,17 +1,17 @@
 #include "estimate/flight.h"
 
+#include "estimate/window_stats.h"
+#include "sim/integrate.h"
+#include "sim/so3.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <functional>
 #include <random>
 #include <stdexcept>
 #include <vector>
-
-#include <gtest/gtest.h>
-
-#include "estimate/window_stats.h"
-#include "sim/integrate.h"
-#include "sim/so3.h"
-#include "tests/test_util.h"
 
 namespace shutterlab {
 namespace {
@@ -194,7 +194,8 @@ TEST(Flight, MatchesBruteForceOnRandomMotion) {
     std::vector<double> vector(ends.size(), 0.0);
     for (size_t k = 0; k < ends.size(); ++k) {
       for (size_t i = k; i < ends[k]; ++i) {
-        for (size_t j = i + 1; j < ends[k]; ++j) vector[k] = std::max(vector[k], AngularDistance(q[i], q[j]));
+        for (size_t j = i + 1; j < ends[k]; ++j)
+          vector[k] = std::max(vector[k], AngularDistance(q[i], q[j]));
       }
     }
     for (size_t l = 0; l < options.limits_m.size(); ++l) {
@@ -215,7 +216,8 @@ TEST(Flight, MatchesBruteForceOnRandomMotion) {
       ASSERT_EQ(r.series.t_ns.size(), ends.size());
       for (size_t k = 0; k < ends.size(); ++k) {
         ASSERT_NEAR(r.series.vector_arcsec[k], vector[k] * kArcsecPerRad, 1e-5) << k;
-        for (int a = 0; a < 3; ++a) ASSERT_EQ(r.series.range_arcsec[a][k], range[a][k] * kArcsecPerRad);
+        for (int a = 0; a < 3; ++a)
+          ASSERT_EQ(r.series.range_arcsec[a][k], range[a][k] * kArcsecPerRad);
       }
     }
   }
@@ -265,8 +267,8 @@ TEST(Flight, JsonHasFormatsKeysAndTableSaysWhichFlagsMore) {
   EXPECT_EQ(j.at("noise_allowance_arcsec"), 20.0);
   EXPECT_EQ(j.at("windows_total"), r.windows_total);
   ASSERT_EQ(j.at("rows").size(), 4u);
-  for (const char* key : {"limit_m", "window_s", "threshold_arcsec", "flagged_percent",
-                          "flagged_percent_vector"}) {
+  for (const char* key :
+       {"limit_m", "window_s", "threshold_arcsec", "flagged_percent", "flagged_percent_vector"}) {
     EXPECT_TRUE(j["rows"][0].contains(key)) << key;
   }
   EXPECT_EQ(j["rows"][1]["window_s"], 0.020);

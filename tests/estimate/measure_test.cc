@@ -73,8 +73,8 @@ const std::vector<RenderedPair>& Pairs(const std::string& scene_name) {
   const CameraMotion motion(trace, truth);
   std::vector<RenderedPair> pairs;
   // Capture times picked from this trace for D of about 2, 6, 10, 15 and 24 px (full size).
-  const std::vector<double> times_s =
-      kSanitized ? std::vector<double>{10.1, 17.0} : std::vector<double>{8.7, 7.9, 10.1, 17.0, 23.7};
+  const std::vector<double> times_s = kSanitized ? std::vector<double>{10.1, 17.0}
+                                                 : std::vector<double>{8.7, 7.9, 10.1, 17.0, 23.7};
   for (double t_s : times_s) {
     const FrameMotion fm = motion.Frame(SecondsToNs(t_s));
     const FrameGeometry geometry(truth.rig.camera, truth.rig.altitude_m, fm, scene.size());
@@ -134,10 +134,11 @@ void ExpectAccurateOnScene(const std::string& scene_name) {
     const DisplacementMeasurement m = MeasureDisplacement(pair.ref, pair.rs);
     const FieldError e = ErrorAgainstTruth(m.field, pair.truth);
     const double point_rms = PointRmsAgainstTruth(m, pair.truth);
-    std::printf("%s D %.2f px (measured %.2f): field rms %.4f max %.3f px over %.1f%%; points %zu "
-                "rms %.4f, noise_px %.4f\n",
-                scene_name.c_str(), pair.d_px, m.d_px, e.rms_px, e.max_px,
-                100.0 * m.measured_fraction, m.points.size(), point_rms, m.noise_px);
+    std::printf(
+        "%s D %.2f px (measured %.2f): field rms %.4f max %.3f px over %.1f%%; points %zu "
+        "rms %.4f, noise_px %.4f\n",
+        scene_name.c_str(), pair.d_px, m.d_px, e.rms_px, e.max_px, 100.0 * m.measured_fraction,
+        m.points.size(), point_rms, m.noise_px);
     EXPECT_LE(e.rms_px, kMaxRmsPx);
     EXPECT_GT(m.measured_fraction, 0.85);
     EXPECT_NEAR(m.d_px, pair.d_px, 0.05 * pair.d_px + 0.1);
@@ -147,7 +148,6 @@ void ExpectAccurateOnScene(const std::string& scene_name) {
 
 TEST(Measure, AccurateOnRenderedGrassAndRoofs) { ExpectAccurateOnScene("siyi_zr10_img0100.jpg"); }
 TEST(Measure, AccurateOnRenderedTreeCanopy) { ExpectAccurateOnScene("siyi_zr10_img0150.jpg"); }
-
 
 // A 480x360 crop of a rendered pair (and its truth): the cheap pair for the type and mask tests.
 RenderedPair CroppedPair() {
@@ -164,7 +164,8 @@ TEST(Measure, IdenticalImagesGiveZeroField) {
   const cv::Mat texture = test::SmoothTexture({320, 240}, CV_8UC1);
   const DisplacementMeasurement m = MeasureDisplacement(texture, texture);
   EXPECT_GT(m.measured_fraction, 0.9);
-  const FieldError e = ErrorAgainstTruth(m.field, cv::Mat(texture.size(), CV_32FC2, cv::Scalar(0, 0)));
+  const FieldError e =
+      ErrorAgainstTruth(m.field, cv::Mat(texture.size(), CV_32FC2, cv::Scalar(0, 0)));
   EXPECT_LT(e.max_px, 1e-3);
   EXPECT_LT(m.d_px, 1e-3);
   EXPECT_LT(m.noise_px, 1e-3);
@@ -184,9 +185,9 @@ TEST(Measure, RecoversKnownAffineWarp) {
   cv::Mat truth(ref.size(), CV_32FC2);
   for (int v = 0; v < ref.rows; ++v) {
     for (int u = 0; u < ref.cols; ++u) {
-      truth.at<cv::Vec2f>(v, u) = cv::Vec2f(
-          static_cast<float>(m(0, 0) * u + m(0, 1) * v + m(0, 2) - u),
-          static_cast<float>(m(1, 0) * u + m(1, 1) * v + m(1, 2) - v));
+      truth.at<cv::Vec2f>(v, u) =
+          cv::Vec2f(static_cast<float>(m(0, 0) * u + m(0, 1) * v + m(0, 2) - u),
+                    static_cast<float>(m(1, 0) * u + m(1, 1) * v + m(1, 2) - v));
     }
   }
   // Only the border (reflected, not warped) may be left unmeasured.

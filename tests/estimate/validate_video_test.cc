@@ -140,6 +140,11 @@ TEST(ValidateVideo, RecoversAWronglyLabelledGyro) {
   ExpectIdentified(result, "gyro_to_camera", [&](const TrueModel& m) {
     return DegreesBetween(m.rig.cam_from_gyro, truth) <= 0.5;
   });
+  // The translation model cannot tell the mounting from translation: it takes the rotation-only
+  // fit's and has nothing left to fit.
+  EXPECT_EQ(result.translation_inherits, std::vector<std::string>{"gyro_to_camera"});
+  EXPECT_TRUE(result.translation_loop.effects.empty()) << ValidationReport(result);
+  EXPECT_FALSE(result.translation_loop.unexplained) << ValidationReport(result);
 }
 
 // A per-axis scale about 5 % off -> each axis within 1 %. The clip starts at 11.4 s, where the yaw

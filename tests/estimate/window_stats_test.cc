@@ -1,5 +1,7 @@
 #include "estimate/window_stats.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -7,8 +9,6 @@
 #include <random>
 #include <stdexcept>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 namespace shutterlab {
 namespace {
@@ -35,9 +35,9 @@ std::vector<int64_t> IrregularTimes(size_t n, uint64_t seed) {
   int64_t base = 1000000000;
   for (size_t i = 0; i < n; ++i) {
     const double r = u(rng);
-    if (r < 0.002) base += 50000000;             // 50 ms logging gap
-    int64_t step = 1000000 + jitter(rng);        // 1 kHz +- 20 %
-    if (r > 0.995) step = 0;                     // duplicate timestamp
+    if (r < 0.002) base += 50000000;       // 50 ms logging gap
+    int64_t step = 1000000 + jitter(rng);  // 1 kHz +- 20 %
+    if (r > 0.995) step = 0;               // duplicate timestamp
     base += step;
     t[i] = base;
   }
@@ -123,9 +123,9 @@ TEST(WindowStats, WindowLongerThanTraceIsAnError) {
 
 TEST(WindowStats, MalformedWindowEndsAreRejected) {
   const auto x = RandomSignal(10, 7);
-  EXPECT_THROW(SlidingRange(x, {5, 4}), std::invalid_argument);    // decreasing
-  EXPECT_THROW(SlidingRange(x, {0}), std::invalid_argument);       // empty window
-  EXPECT_THROW(SlidingRange(x, {11}), std::invalid_argument);      // past the end
+  EXPECT_THROW(SlidingRange(x, {5, 4}), std::invalid_argument);  // decreasing
+  EXPECT_THROW(SlidingRange(x, {0}), std::invalid_argument);     // empty window
+  EXPECT_THROW(SlidingRange(x, {11}), std::invalid_argument);    // past the end
   EXPECT_THROW(SlidingStdDev(x, {5, 4}), std::invalid_argument);
 }
 
