@@ -572,6 +572,9 @@ cv::Mat LineChart(const std::vector<double>& x, const std::vector<std::vector<do
   return chart;
 }
 
+// Residual pictures inlined in validate.html; the rest stay files beside it.
+constexpr size_t kMaxPagePictures = 24;
+
 }  // namespace
 
 std::vector<std::string> WriteValidationPlots(const std::string& dir,
@@ -592,8 +595,19 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
   }
   const cv::Size cells((width + step - 1) / step, (height + step - 1) / step);
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  std::vector<cv::Mat> panels;
-  for (const FrameValidation& f : result.frames) {
+  // Every frame's picture goes to a file; the page inlines only the kMaxPagePictures frames with
+  // the largest residual before (a 360-pair clip would make a page of 85 MB), in frame order.
+  std::vector<size_t> by_residual(result.frames.size());
+  for (size_t i = 0; i < by_residual.size(); ++i) by_residual[i] = i;
+  std::stable_sort(by_residual.begin(), by_residual.end(), [&](size_t a, size_t b) {
+    return result.frames[a].before.rms_px > result.frames[b].before.rms_px;
+  });
+  by_residual.resize(std::min(by_residual.size(), kMaxPagePictures));
+  std::vector<bool> on_page(result.frames.size(), false);
+  for (size_t i : by_residual) on_page[i] = true;
+  std::vector<std::pair<size_t, cv::Mat>> panels;  // (frame index, picture) of those on the page
+  for (size_t frame_index = 0; frame_index < result.frames.size(); ++frame_index) {
+    const FrameValidation& f = result.frames[frame_index];
     cv::Mat before(cells, CV_32FC2, cv::Scalar(nan, nan)), after = before.clone(),
                                                            translation = before.clone();
     for (const PointResidual& r : f.residuals) {
@@ -637,7 +651,7 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
     const std::string path = (fs::path(dir) / (FrameName(f.frame) + "_residual.png")).string();
     WriteImage(path, panel);
     written.push_back(path);
-    panels.push_back(panel);
+    if (on_page[frame_index]) panels.emplace_back(frame_index, panel);
   }
 
   // Per-row profile over all frames: mean residual dx, dy and RMS per band of `step` rows.
@@ -759,14 +773,20 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
   page.AddChart(frames_chart);
   // D needs a global-shutter reference: video datasets have none.
   if (!result.video) page.AddChart(d_chart);
-  for (size_t i = 0; i < panels.size(); ++i) {
-    const FrameValidation& f = result.frames[i];
-    page.Image(panels[i], f.previous
-                              ? "pair " + FrameName(*f.previous) + " -> " + FrameName(f.frame) +
-                                    ": |residual| at the measured points: declared model, rotation "
-                                    "only after the loop, with each pair's translation"
-                              : "frame " + FrameName(f.frame) +
-                                    ": |residual| at the measured points, before and after");
+  if (panels.size() < result.frames.size()) {
+    page.Paragraph("The " + std::to_string(panels.size()) + " of " +
+                   std::to_string(result.frames.size()) + (result.video ? " pairs" : " frames") +
+                   " with the largest residual before; every one's picture is NNNN_residual.png "
+                   "beside this page.");
+  }
+  for (const auto& [frame_index, panel] : panels) {
+    const FrameValidation& f = result.frames[frame_index];
+    page.Image(panel, f.previous
+                          ? "pair " + FrameName(*f.previous) + " -> " + FrameName(f.frame) +
+                                ": |residual| at the measured points: declared model, rotation "
+                                "only after the loop, with each pair's translation"
+                          : "frame " + FrameName(f.frame) +
+                                ": |residual| at the measured points, before and after");
   }
   const std::string html_path = (fs::path(dir) / "validate.html").string();
   page.Write(html_path);

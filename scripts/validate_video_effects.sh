@@ -58,3 +58,4 @@ done
 
 # The misalignment's error as an angle, from the report at full precision.
 python3 scripts/rotation_error.py "$out/gyro_to_camera.json" "$misaligned"
+python3 scripts/rotation_error.py "$out/gyro_axes.json" 0,1,0,1,0,0,0,0,-1

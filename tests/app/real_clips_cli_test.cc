@@ -79,8 +79,9 @@ TEST(RealClips, PhoneClipReadoutAndAxes) {
 
 TEST(RealClips, GoproKarmaIsMostlyTranslation) {
   test::TempDir dir;
-  const json report = ImportAndValidate(dir, test::SourcePath("tests/data/gopro/karma.mp4"),
-                                        "--start-frame 100 --max-frames 31");
+  const json report =
+      ImportAndValidate(dir, test::SourcePath("tests/data/gopro/karma.mp4"),
+                        "--start-frame 100 --max-frames 31", "--out '" + (dir / "plots") + "'");
   EXPECT_EQ(report["frames"], 30);
   EXPECT_EQ(report["rotation_only"]["unexplained"], true);
   EXPECT_GT(report["translation"]["explains_share"].get<double>(), 0.8);
@@ -88,6 +89,17 @@ TEST(RealClips, GoproKarmaIsMostlyTranslation) {
   ASSERT_NE(direction, nullptr);
   EXPECT_EQ((*direction)["verdict"].get<std::string>().rfind("not determined", 0), 0u)
       << direction->dump();
+  // Every pair's residual picture is a file; the page inlines the 24 with the largest residual.
+  for (int frame = 101; frame <= 130; ++frame) {
+    EXPECT_TRUE(fs::exists(dir / ("plots/0" + std::to_string(frame) + "_residual.png")));
+  }
+  const std::string page = ReadFileToString(dir / "plots/validate.html");
+  size_t images = 0;
+  for (size_t at = page.find("<img "); at != std::string::npos; at = page.find("<img ", at + 1)) {
+    ++images;
+  }
+  EXPECT_EQ(images, 24u);
+  EXPECT_NE(page.find("The 24 of 30 pairs with the largest residual before"), std::string::npos);
 }
 
 }  // namespace
