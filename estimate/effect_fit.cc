@@ -28,10 +28,12 @@
 //    F-test's denominator, so it does not depend on noise_px being exact):
 //      dBIC = (RSS_j - RSS_current) / (s^2 c) + (p_j - p_current) ln(n / c),
 //    RSS = sum w |r|^2 over the round's points (outliers of the best candidate left out),
-//    s^2 = RSS_best / (2 sum w - p_best), c from the best candidate's residual, n = 2 (sum w)^2 /
-//    sum w^2 (readout_direction counts as one parameter). The candidate with the lowest dBIC is
-//    added when dBIC < -bic_margin (10) and it explains >= min_explained_share (30 %) of the
-//    residual's excess over the noise (RSS - noise_px^2 sum w).
+//    s^2 = RSS_best / (m sum w - p_best - nuisance), m the residual components per point (2; 1
+//    with pair_translation, whose per-pair directions are the nuisance parameters), c from the
+//    best candidate's residual, n = m (sum w)^2 / sum w^2 (readout_direction counts as one
+//    parameter). The candidate with the lowest dBIC is added when dBIC < -bic_margin (10) and it
+//    explains >= min_explained_share (30 %) of the residual's excess over the noise
+//    (RSS - noise_sq sum w, noise_sq = noise_px^2 m / 2).
 //    clock_rate (rate and offset) nests time_offset: it is chosen over time_offset only when its
 //    rate is 3 standard errors from zero.
 // 3. Ambiguity: other candidates within ambiguity_margin (10) of the chosen one's dBIC that explain
@@ -204,10 +206,14 @@ bool MonotonicDistortion(const PinholeCamera& camera) {
   return true;
 }
 
-bool Plausible(const TrueModel& model) {
+// The declared lens is the user's calibration and is taken as it is (a wide lens may fold just
+// beyond the corners); only a fitted change must keep the image in one piece.
+bool Plausible(const Context& ctx, const TrueModel& model) {
   return model.rig.shutter.readout_s > 0 && (model.gyro_scale.array() > 0).all() &&
          std::abs(model.clock_rate_ppm) < 1e5 && model.gyro_bias_rad_s.allFinite() &&
-         model.rig.velocity_mps.allFinite() && MonotonicDistortion(model.rig.camera);
+         model.rig.velocity_mps.allFinite() &&
+         (model.rig.camera.dist == ctx.declared.rig.camera.dist ||
+          MonotonicDistortion(model.rig.camera));
 }
 
 void Residuals(const Context& ctx, const TrueModel& model, Eigen::VectorXd* r,
@@ -215,7 +221,7 @@ void Residuals(const Context& ctx, const TrueModel& model, Eigen::VectorXd* r,
   const size_t n = ctx.measured.size();
   r->setZero(2 * n);
   valid->assign(n, 0);
-  if (!Plausible(model)) return;
+  if (!Plausible(ctx, model)) return;
   std::vector<Eigen::Vector2d> predicted;
   ctx.predictor->Predict(model, &predicted);
   for (size_t i = 0; i < n; ++i) {
@@ -295,6 +301,8 @@ constexpr double kMaxLostShare = 0.01;
 // below this leaves a parameter combination undetermined: two parameters correlated beyond
 // 1 - 1e-9 (numeric Jacobians carry ~1e-8 relative error).
 constexpr double kMinInformationRatio = 1e-9;
+// A parameter whose unit-scaled loading on such a combination exceeds this takes part in it.
+constexpr double kMinUndeterminedLoading = 1e-4;
 
 std::vector<uint8_t> KeepMask(const Context& ctx, const Eigen::VectorXd& r,
                               const std::vector<uint8_t>& valid) {
@@ -519,23 +527,33 @@ Eigen::MatrixXd Covariance(const Context& ctx, const Fit& fit) {
   const double dof = std::max(1.0, ctx.components * sums.w - static_cast<double>(p) - ctx.nuisance);
   const double s2 = MaskedRss(ctx, sol.residuals, sol.valid, keep) / dof;
   const double c = CorrelationFactor(ctx, sol.residuals, keep);
-  // A parameter combination the data do not determine (the information matrix, scaled to unit
-  // diagonal so that units do not matter, near singular) has no standard error: NaN, never a
-  // made-up number.
-  const Eigen::MatrixXd undetermined =
-      Eigen::MatrixXd::Constant(p, p, std::numeric_limits<double>::quiet_NaN());
+  // A parameter combination the data do not determine (an eigenvalue of the information matrix,
+  // scaled to unit diagonal so that units do not matter, near zero) has no standard error: the
+  // parameters that take part in it get NaN, never a made-up number; the others keep theirs (the
+  // inverse over the determined combinations).
+  const double nan = std::numeric_limits<double>::quiet_NaN();
   const Eigen::VectorXd diagonal = sol.normal.diagonal();
-  if (!sol.normal.allFinite() || !(diagonal.array() > 0).all()) return undetermined;
+  if (!sol.normal.allFinite() || !(diagonal.array() > 0).all()) {
+    return Eigen::MatrixXd::Constant(p, p, nan);
+  }
   const Eigen::VectorXd unit = diagonal.cwiseSqrt().cwiseInverse();
   const Eigen::MatrixXd scaled = unit.asDiagonal() * sol.normal * unit.asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled);
-  if (eig.info() != Eigen::Success || !(eig.eigenvalues().minCoeff() > kMinInformationRatio)) {
-    return undetermined;
+  if (eig.info() != Eigen::Success) return Eigen::MatrixXd::Constant(p, p, nan);
+  Eigen::VectorXd inverse_eigenvalues = Eigen::VectorXd::Zero(p);
+  std::vector<bool> undetermined(p, false);
+  for (Eigen::Index j = 0; j < p; ++j) {
+    if (eig.eigenvalues()[j] > kMinInformationRatio) {
+      inverse_eigenvalues[j] = 1.0 / eig.eigenvalues()[j];
+      continue;
+    }
+    for (Eigen::Index i = 0; i < p; ++i) {
+      if (std::abs(eig.eigenvectors()(i, j)) > kMinUndeterminedLoading) undetermined[i] = true;
+    }
   }
   const Eigen::MatrixXd a_inv =
       unit.asDiagonal() *
-      (eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
-       eig.eigenvectors().transpose()) *
+      (eig.eigenvectors() * inverse_eigenvalues.asDiagonal() * eig.eigenvectors().transpose()) *
       unit.asDiagonal();
   const Eigen::MatrixXd model = a_inv * s2 * c;
   // Cluster-robust (Liang & Zeger 1986, with the G / (G - 1) small-sample factor): the scatter of
@@ -564,7 +582,13 @@ Eigen::MatrixXd Covariance(const Context& ctx, const Fit& fit) {
   }
   const Eigen::VectorXd model_sd = model.diagonal().cwiseMax(1e-300).cwiseSqrt();
   const Eigen::VectorXd scale = sd.cwiseQuotient(model_sd);
-  return scale.asDiagonal() * model * scale.asDiagonal();
+  Eigen::MatrixXd covariance = scale.asDiagonal() * model * scale.asDiagonal();
+  for (Eigen::Index i = 0; i < p; ++i) {
+    if (!undetermined[i]) continue;
+    covariance.row(i).setConstant(nan);
+    covariance.col(i).setConstant(nan);
+  }
+  return covariance;
 }
 
 // 3 noise_px on the residual's length: a Gaussian point passes with probability 1 - e^-9.
@@ -974,10 +998,14 @@ nlohmann::json LoopToJson(const LoopResult& result, size_t frame_count) {
     j["after"] = stats(e.after);
     effects.push_back(std::move(j));
   }
-  return json{{"format", "validation/1"},          {"frames", frame_count},
-              {"before", stats(result.before)},    {"effects", std::move(effects)},
-              {"after", stats(result.after)},      {"noise_px", result.noise_px},
-              {"unexplained", result.unexplained}, {"log", result.log}};
+  json out{{"format", "validation/1"},          {"frames", frame_count},
+           {"before", stats(result.before)},    {"effects", std::move(effects)},
+           {"after", stats(result.after)},      {"noise_px", result.noise_px},
+           {"unexplained", result.unexplained}, {"log", result.log}};
+  // Beyond FORMATS.md: with pair_translation the residual is one component (the distance across
+  // the epipolar line), to be read against noise_px / sqrt(2), not noise_px.
+  if (result.residual_components != 2) out["residual_components"] = result.residual_components;
+  return out;
 }
 
 }  // namespace shutterlab

@@ -103,8 +103,8 @@ struct LoopResult {
   std::vector<Eigen::Vector2d> residuals_before, residuals_after;
   // Residual components per point that carry information (2; 1 with pair_translation).
   int residual_components = 2;
-  // With pair_translation: each frame's fitted translation direction (unit, in the world of the
-  // integrated gyro at the frame's time; sign arbitrary), input order.
+  // With pair_translation: each frame's fitted translation direction (unit, in the earlier
+  // frame's row-0 camera axes; sign arbitrary), input order.
   std::vector<Eigen::Vector3d> pair_translation_dirs;
   // For a person: each round's candidates with their fitted residual and criterion.
   std::vector<std::string> log;

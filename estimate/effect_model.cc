@@ -331,8 +331,8 @@ VideoPairPredictor::VideoPairPredictor(const GyroTrace& gyro,
                                std::abs(f.earlier->t_first_row_ns * 1e-9)});
     pairs_.push_back(std::move(pair));
   }
-  previous_normals_.assign(points_,
-                           Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN()));
+  previous_dirs_.assign(pairs_.size(),
+                        Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
 }
 
 void VideoPairPredictor::RefreshRays(const PinholeCamera& camera) const {
@@ -517,6 +517,13 @@ void VideoPairPredictor::PredictPair(const TrueModel& model, size_t k,
     v_dir = eig.eigenvectors().col(0).normalized();  // eigenvalues ascending
   }
   if (!v_dir.allFinite() || v_dir.isZero(0.0)) return;
+  // V's sign is the eigen-solver's choice, and every distance's sign follows it: orient V as the
+  // pair's previous one. A solver's evaluations come in small steps, V turns little from one to
+  // the next, and each distance then stays a continuous function of the model (a point's line
+  // may turn fast near the epipole, its distance does not jump).
+  Eigen::Vector3d& previous_dir = previous_dirs_[k];
+  if (previous_dir.allFinite() && v_dir.dot(previous_dir) < 0) v_dir = -v_dir;
+  previous_dir = v_dir;
   // Report the direction in the earlier frame's row-0 camera frame.
   Eigen::Vector3d v_cam;
   translation_dirs_[k] = cam_from_world_at(0.0, v_dir, &v_cam) ? v_cam.normalized() : v_dir;
@@ -532,19 +539,8 @@ void VideoPairPredictor::PredictPair(const TrueModel& model, size_t k,
     Eigen::Vector3d n_cam;
     const double g = normal_px(i, v_dir, &n_cam);
     if (!(g > 0)) continue;
-    double distance_px = v_dir.dot(a[i]) / g;
-    Eigen::Vector2d normal(n_cam.x() / camera.fx / g, n_cam.y() / camera.fy / g);
-    // The distance's sign follows the normal's, which follows V's arbitrary sign: orient the normal
-    // as the point's previous one. A solver's evaluations come in small steps (central differences
-    // of each parameter), so the sign stays put from one to the next and the distance's
-    // derivatives stay finite; a fixed reference would not do: the line of a point near the
-    // epipole may turn a quarter turn between the declared model and the fitted one.
-    Eigen::Vector2d& previous = previous_normals_[pair.first + i];
-    if (previous.allFinite() && normal.dot(previous) < 0) {
-      normal = -normal;
-      distance_px = -distance_px;
-    }
-    previous = normal;
+    const double distance_px = v_dir.dot(a[i]) / g;
+    const Eigen::Vector2d normal(n_cam.x() / camera.fx / g, n_cam.y() / camera.fy / g);
     const Eigen::Vector3d& xq = match_rays_[pair.first + i];
     const Eigen::Vector2d q_undistorted = (k_mat * xq).hnormalized();
     const Eigen::Vector2d foot = q_undistorted - distance_px * normal;

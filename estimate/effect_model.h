@@ -131,7 +131,8 @@ class VideoPairPredictor : public PointPredictor {
   int nuisance_parameters() const override {
     return pair_translation_ ? 2 * static_cast<int>(pairs_.size()) : 0;
   }
-  // pair_translation: each pair's V (unit, sign arbitrary) from the last Predict.
+  // pair_translation: each pair's V (unit; its sign arbitrary, kept from one Predict to the next)
+  // from the last Predict, in the earlier frame's row-0 camera axes.
   const std::vector<Eigen::Vector3d>& translation_dirs() const { return translation_dirs_; }
 
  private:
@@ -158,9 +159,9 @@ class VideoPairPredictor : public PointPredictor {
   mutable bool rays_valid_ = false;
   mutable PinholeCamera rays_camera_;
   mutable std::vector<Eigen::Vector3d> rays_, match_rays_;  // K^-1 p, K^-1 q (z = 1)
-  // pair_translation: each point's epipolar-line normal at the previous prediction, which orients
-  // the sign of its distance in the next one (PredictPair).
-  mutable std::vector<Eigen::Vector2d> previous_normals_;
+  // pair_translation: each pair's V at the previous prediction, which orients the next one's
+  // arbitrary sign, and with it the sign of every distance (PredictPair).
+  mutable std::vector<Eigen::Vector3d> previous_dirs_;
   mutable std::vector<Eigen::Vector3d> translation_dirs_;
 };
 

@@ -18,7 +18,7 @@
 // pair: frames in time order, each against the one before it (MeasureDisplacement(earlier, later)
 // gives q - p). There is no global-shutter reference, so no D and no paper's model; the loop runs
 // twice over the pairs' points:
-//  - rotation only (FORMATS.md's video model; the baseline, and the report's top-level keys);
+//  - rotation only (FORMATS.md's video model; the baseline);
 //  - with each pair's translation as an unknown direction (LoopOptions::pair_translation, the
 //    epipolar constraint), which parallax from a moving camera needs. Its candidates leave out the
 //    gyro's mounting, scale and bias (IdentifiableWithPairTranslation); it starts from the
@@ -96,10 +96,13 @@ struct HalfAgreement {
   std::string effect;
   nlohmann::json first, first_stderr, second, second_stderr;  // FORMATS.md values
   // Mahalanobis distance of the two fits' parameters under the sum of their covariances
-  // (gyro_to_camera: the rotation between them), and whether it is below the 99 % quantile of
-  // chi-square with the effect's parameter count (readout_direction: the same direction).
+  // (gyro_to_camera: its parameters are rotation vectors about the same declared mounting, so
+  // they are compared directly), and whether it is below the 99 % quantile of chi-square with the
+  // effect's parameter count (readout_direction: the same direction). Not determined where a half
+  // has no standard error (a parameter combination its data do not pin down).
   double distance = 0.0;
   bool agree = true;
+  bool determined = true;
 };
 struct HalfCheck {
   std::string model;  // "rotation_only" or "translation"

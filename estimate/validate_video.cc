@@ -67,6 +67,11 @@ HalfAgreement CompareHalves(const IdentifiedEffect& a, const IdentifiedEffect& b
   // gyro_to_camera a rotation vector on the same side of the same R_CG) compare directly.
   const Eigen::VectorXd d = a.parameters - b.parameters;
   const Eigen::MatrixXd c = a.covariance + b.covariance;
+  if (!d.allFinite() || !c.allFinite()) {
+    out.determined = out.agree = false;
+    out.distance = std::numeric_limits<double>::quiet_NaN();
+    return out;
+  }
   const Eigen::FullPivLU<Eigen::MatrixXd> lu(c);
   double d2 = std::numeric_limits<double>::infinity();
   if (lu.isInvertible()) d2 = d.dot(lu.solve(d));
@@ -177,6 +182,10 @@ double ExplainedShare(const TrimmedComparison& c, double noise_px) {
   return std::clamp((c.a - c.b) / noise_ms, 0.0, 1.0);
 }
 
+// The loop's rule for candidates (effect_fit.cc): one that loses more than this share of the points
+// is not considered; the same for the axis mappings a gyro_to_camera claim is tested against.
+constexpr double kMaxMappingLostShare = 0.01;
+
 // Below this share of the residual's excess that the best value removes, the data do not pin a
 // claim down: it is reported as not determined rather than held or contradicted.
 constexpr double kMinClaimShare = 0.1;
@@ -187,7 +196,57 @@ constexpr double kMinClaimShare = 0.1;
 // much of the residual fitting it removes. direction: both readings. gyro_to_camera: the rotation-
 // only residual of each of the 24 axis mappings against the claimed one's.
 // Each model's fits start where its loop started (preferred_start, rotation_start).
-std::vector<ClaimCheck> CheckClaims(const fs::path& import_json, const GyroTrace& gyro,
+// The claims of import.json that validate can test, read and checked before any work is done (a
+// broken file is named at once, not after minutes of measuring); none without the file. Each
+// claim an object with a string "what"; "status" a string when present; a gyro_to_camera value a
+// 3x3 array of numbers, readout_s and time_offset_s numbers, direction a string.
+json ReadClaims(const fs::path& import_json) {
+  json claims = json::array();
+  if (!fs::is_regular_file(import_json)) return claims;
+  const std::string path = import_json.string();
+  json record;
+  try {
+    record = json::parse(ReadFileToString(path));
+  } catch (const json::exception& e) {
+    throw IoError(IoMessage(path, 0, std::string("not JSON: ") + e.what()));
+  }
+  if (!record.is_object() || !record.contains("claims")) return claims;
+  if (!record["claims"].is_array()) throw IoError(IoMessage(path, 0, "\"claims\" is not an array"));
+  for (size_t k = 0; k < record["claims"].size(); ++k) {
+    const json& claim = record["claims"][k];
+    const std::string where = "claim " + std::to_string(k + 1) + ": ";
+    if (!claim.is_object() || !claim.contains("what") || !claim["what"].is_string()) {
+      throw IoError(IoMessage(path, 0, where + "not an object with a string \"what\""));
+    }
+    if (claim.contains("status") && !claim["status"].is_string()) {
+      throw IoError(IoMessage(path, 0, where + "\"status\" is not a string"));
+    }
+    const std::string effect = EffectForClaim(claim["what"].get<std::string>());
+    if (effect.empty()) continue;  // a claim validate cannot test (exposure, say)
+    const json value = claim.value("value", json());
+    bool ok = false;
+    if (effect == "gyro_to_camera") {
+      ok = value.is_array() && value.size() == 3;
+      for (size_t r = 0; ok && r < 3; ++r) {
+        ok = value[r].is_array() && value[r].size() == 3;
+        for (size_t c = 0; ok && c < 3; ++c) ok = value[r][c].is_number();
+      }
+    } else if (effect == "readout_direction") {
+      ok = value == "top_to_bottom" || value == "bottom_to_top";
+    } else {
+      ok = value.is_number() && std::isfinite(value.get<double>());
+    }
+    if (!ok) {
+      throw IoError(IoMessage(path, 0,
+                              where + "\"" + claim["what"].get<std::string>() +
+                                  "\" has an unusable value " + value.dump()));
+    }
+    claims.push_back(claim);
+  }
+  return claims;
+}
+
+std::vector<ClaimCheck> CheckClaims(const json& claims, const GyroTrace& gyro,
                                     const std::vector<FramePoints>& pairs, double noise_px,
                                     const TrueModel& preferred_start, const LoopResult& preferred,
                                     const LoopOptions& preferred_options,
@@ -195,25 +254,14 @@ std::vector<ClaimCheck> CheckClaims(const fs::path& import_json, const GyroTrace
                                     const LoopOptions& rotation_options) {
   const RigModel& declared = rotation_start.rig;
   std::vector<ClaimCheck> checks;
-  if (!fs::is_regular_file(import_json)) return checks;
-  json record;
-  try {
-    record = json::parse(ReadFileToString(import_json.string()));
-  } catch (const json::exception& e) {
-    throw IoError(IoMessage(import_json.string(), 0, std::string("not JSON: ") + e.what()));
-  }
-  if (!record.contains("claims") || !record["claims"].is_array()) return checks;
-  for (const json& claim : record["claims"]) {
-    if (!claim.is_object() || !claim.contains("what") || !claim["what"].is_string()) continue;
+  for (const json& claim : claims) {  // as ReadClaims checked them
     ClaimCheck check;
     check.claim = claim["what"].get<std::string>();
     check.effect = EffectForClaim(check.claim);
-    if (check.effect.empty()) continue;
     check.status = claim.value("status", "");
     check.claimed = claim.value("value", json());
 
     if (check.effect == "gyro_to_camera") {
-      if (!check.claimed.is_array()) continue;
       const Eigen::Matrix3d claimed = MatrixFromJson(check.claimed);
       const std::unique_ptr<PointPredictor> predictor =
           MakePredictor(gyro, pairs, /*pair_translation=*/false, 1.0);
@@ -232,21 +280,35 @@ std::vector<ClaimCheck> CheckClaims(const fs::path& import_json, const GyroTrace
         }
         return r;
       };
-      // Each mapping on its own best (1 - kCompareTrimShare) of the points, mean square per
-      // component: a fair score whatever the mapping gets wrong.
-      const auto score = [&](const Eigen::Matrix3d& cam_from_gyro) {
-        const std::vector<Eigen::Vector2d> r = residuals(cam_from_gyro);
-        return CompareTrimmed(pairs, r, 2, r, 2).a;
-      };
-      // The claimed axes against the best other mapping of the 24.
-      const double claimed_ms = score(claimed);
+      // The claimed axes against the best other mapping of the 24, each pair of them over the
+      // points both predict (CompareTrimmed: mean square per component, the largest of either
+      // left out). A mapping that sends more than kMaxMappingLostShare of the claimed one's
+      // points out of the frame, where the measurement found them inside, is out.
+      const std::vector<Eigen::Vector2d> r_claimed = residuals(claimed);
+      std::vector<double> weights;
+      for (const FramePoints& f : pairs) {
+        for (const MeasuredPoint& p : f.points) weights.push_back(p.weight);
+      }
+      size_t claimed_points = 0;
+      for (size_t i = 0; i < r_claimed.size(); ++i) {
+        claimed_points += weights[i] > 0 && r_claimed[i].allFinite();
+      }
+      double claimed_ms = CompareTrimmed(pairs, r_claimed, 2, r_claimed, 2).a;
       double other_ms = std::numeric_limits<double>::infinity();
       Eigen::Matrix3d other = claimed;
       for (const Eigen::Matrix3d& axes : AxisRotations()) {
         if (NearestAxes(axes) == NearestAxes(claimed)) continue;
-        const double ms = score(axes);
-        if (ms < other_ms) {
-          other_ms = ms;
+        const std::vector<Eigen::Vector2d> r = residuals(axes);
+        size_t lost = 0;
+        for (size_t i = 0; i < r.size(); ++i) {
+          lost += weights[i] > 0 && r_claimed[i].allFinite() && !r[i].allFinite();
+        }
+        if (lost > kMaxMappingLostShare * static_cast<double>(claimed_points)) continue;
+        const TrimmedComparison c = CompareTrimmed(pairs, r_claimed, 2, r, 2);
+        if (c.points == 0 || !(c.a > 0)) continue;
+        if (!std::isfinite(other_ms) || c.b / c.a < other_ms / claimed_ms) {
+          claimed_ms = c.a;
+          other_ms = c.b;
           other = axes;
         }
       }
@@ -385,6 +447,7 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
   if (order.size() < 2) {
     throw IoError(IoMessage(frames_path, 0, "a video dataset needs at least two frames"));
   }
+  const json claims = ReadClaims(dir / "import.json");
   // Frames whose declared readout lies inside the gyro log.
   const auto covered = [&](const FrameEntry& e) {
     const int64_t t0 = e.t_first_row_ns + SecondsToNs(rig.time_offset_s);
@@ -454,13 +517,7 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
 
   // --- the loop twice: rotation only (the baseline), then with each pair's translation
   start = std::chrono::steady_clock::now();
-  double noise_sum = 0.0;
-  size_t noise_points = 0;
-  for (const FrameValidation& f : result->frames) {
-    noise_sum += f.noise_px * f.noise_px * static_cast<double>(f.points);
-    noise_points += f.points;
-  }
-  const double noise_px = std::sqrt(noise_sum / std::max<size_t>(1, noise_points));
+  const double noise_px = PooledNoisePx(result->frames);
   LoopOptions rotation_options = options.loop;
   if (rotation_options.candidates.empty()) rotation_options.candidates = VideoCandidates();
   rotation_options.pair_translation = false;
@@ -535,8 +592,8 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
   }
 
   // --- the source's claims, when the dataset came from `shutterlab import`
-  result->claims = CheckClaims(dir / "import.json", gyro, pairs, noise_px, preferred_start,
-                               preferred, preferred_options, rotation_start, rot, rotation_options);
+  result->claims = CheckClaims(claims, gyro, pairs, noise_px, preferred_start, preferred,
+                               preferred_options, rotation_start, rot, rotation_options);
   result->loop_s = SecondsSince(start);
 }
 
@@ -582,7 +639,8 @@ json VideoValidationToJson(const ValidationResult& result) {
                          {"second", a.second},
                          {"second_stderr", a.second_stderr},
                          {"distance", std::isfinite(a.distance) ? json(a.distance) : json()},
-                         {"agree", a.agree}});
+                         {"agree", a.agree},
+                         {"determined", a.determined}});
     }
     halves.push_back({{"model", h.model},
                       {"first_pairs", h.first_pairs},
@@ -662,8 +720,12 @@ std::string VideoValidationReport(const ValidationResult& result) {
     for (const HalfAgreement& a : h.effects) {
       out << "  " << a.effect << ": " << Rounded(a.first).dump() << " +- "
           << Rounded(a.first_stderr).dump() << " | " << Rounded(a.second).dump() << " +- "
-          << Rounded(a.second_stderr).dump() << " -> "
-          << (std::isfinite(a.distance) ? FormatNumber("%.2f", a.distance) : std::string("inf"))
+          << Rounded(a.second_stderr).dump() << " -> ";
+      if (!a.determined) {
+        out << "not determined (a half has no standard error)\n";
+        continue;
+      }
+      out << (std::isfinite(a.distance) ? FormatNumber("%.2f", a.distance) : std::string("inf"))
           << " (Mahalanobis), " << (a.agree ? "agree" : "DISAGREE") << "\n";
     }
   }

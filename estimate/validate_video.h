@@ -24,6 +24,11 @@ void FillFrameResiduals(const std::vector<FramePoints>& frames, const LoopResult
                         const LoopResult* translation, bool keep_residuals,
                         std::vector<FrameValidation>* out);
 
+// The noise of all frames' points pooled (RMS over points), px, never below kMinNoisePx: identical
+// images measure exactly 0, against which every residual would be infinitely significant.
+inline constexpr double kMinNoisePx = 1e-3;
+double PooledNoisePx(const std::vector<FrameValidation>& frames);
+
 // The value with every number at 4 significant digits, for tables (the JSON keeps them all).
 nlohmann::json Rounded(const nlohmann::json& value);
 

@@ -119,7 +119,37 @@ TEST(ValidateCli, BadVideoDatasets) {
   ExpectOneLineError(run("frame,t_first_row,ref,image\n0,8.5,,images/0000_rs.png\n"
                          "1,8.5,,images/0001_rs.png\n"),
                      dataset + "/frames.csv:3:", "the same t_first_row as frame 0");
+  // import.json (the source's claims) is checked before any measuring.
+  const std::string video =
+      "frame,t_first_row,ref,image\n0,8.5,,images/0000_rs.png\n"
+      "1,10.0,,images/0001_rs.png\n";
+  WriteFileAtomically(fs::path(dataset) / "import.json", "{\"claims\": [");
+  ExpectOneLineError(run(video), dataset + "/import.json", "not JSON");
+  WriteFileAtomically(fs::path(dataset) / "import.json",
+                      R"({"claims": [{"what": "readout_s", "value": "fast"}]})");
+  ExpectOneLineError(run(video), dataset + "/import.json",
+                     "claim 1: \"readout_s\" has an unusable value \"fast\"");
+  WriteFileAtomically(fs::path(dataset) / "import.json",
+                      R"({"claims": [{"what": "gyro_to_camera", "value": [[1, 0], [0, 1]]}]})");
+  ExpectOneLineError(run(video), dataset + "/import.json", "claim 1: \"gyro_to_camera\"");
   EXPECT_FALSE(fs::exists(report));
+}
+
+// A clip whose frames are one image (a camera on a tripod, duplicated decoded frames) measures
+// exactly no motion, so no measurement noise: the loop still runs against a floor of the noise.
+TEST(ValidateCli, VideoOfIdenticalFrames) {
+  test::TempDir dir;
+  const std::string dataset = SmallDataset(dir);
+  const std::string report = dir / "report.json";
+  WriteFileAtomically(fs::path(dataset) / "frames.csv",
+                      "frame,t_first_row,ref,image\n0,8.5,,images/0000_rs.png\n"
+                      "1,8.6,,images/0000_rs.png\n2,8.7,,images/0000_rs.png\n");
+  const auto r = test::RunShutterlab("validate '" + dataset + "' --report '" + report +
+                                     "' --candidates time_offset");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(ReadFileToString(report));
+  EXPECT_GE(j["noise_px"].get<double>(), 1e-3);
+  EXPECT_EQ(j["frames"], 2);
 }
 
 TEST(ValidateCli, WrongImageSize) {

@@ -170,6 +170,43 @@ TEST(CloseTheLoop, CleanDataAddsNothing) {
   EXPECT_NEAR(c.result.before.rms_px, kNoisePx, 0.1 * kNoisePx);
 }
 
+TEST(CloseTheLoop, TakesADeclaredWideLensThatFoldsBeyondTheCorners) {
+  // k1 = -0.35 keeps r (1 + k1 r^2) increasing out to r = 0.98, beyond this image's corners
+  // (0.73) but not beyond every radius a fit checks: the user's calibration is taken as it is.
+  RigModel declared = IssueRig();
+  declared.camera.dist[0] = -0.35;
+  TrueModel truth;
+  truth.rig = declared;
+  const GyroTrace gyro = FlightTrace(22.0, 3);
+  std::vector<FramePoints> frames = GridFrames(declared, EverySecond(10));
+  Measure(truth, gyro, &frames, 103);
+  const LoopResult r = CloseTheLoop(declared, gyro, frames, kNoisePx);
+  EXPECT_TRUE(r.effects.empty()) << Explain(r);
+  EXPECT_FALSE(r.unexplained) << Explain(r);
+  EXPECT_NEAR(r.before.rms_px, kNoisePx, 0.1 * kNoisePx);
+}
+
+TEST(FitEffects, OnlyTheRedundantParametersLoseTheirStandardErrors) {
+  // clock_rate carries its own offset, which time_offset repeats exactly: that combination is
+  // undetermined (both offsets' standard errors null), while the rate keeps its own.
+  const Case c = RunCase("time_offset=0.004");
+  const LoopResult r =
+      FitEffects(c.declared, c.gyro, c.frames, kNoisePx, {"time_offset", "clock_rate"});
+  ASSERT_EQ(r.effects.size(), 2u);
+  // NaN in the value (written as null in the report).
+  EXPECT_TRUE(r.effects[0].stderr_value.is_number() &&
+              std::isnan(r.effects[0].stderr_value.get<double>()))
+      << r.effects[0].stderr_value;
+  const Eigen::MatrixXd& rate_cov = r.effects[1].covariance;
+  ASSERT_EQ(rate_cov.rows(), 2);
+  EXPECT_TRUE(std::isfinite(rate_cov(0, 0)) && rate_cov(0, 0) > 0) << rate_cov;
+  EXPECT_TRUE(std::isnan(rate_cov(1, 1))) << rate_cov;
+  // The well-determined fit of time_offset alone keeps its standard error.
+  const LoopResult alone = FitEffects(c.declared, c.gyro, c.frames, kNoisePx, {"time_offset"});
+  ASSERT_EQ(alone.effects.size(), 1u);
+  EXPECT_TRUE(std::isfinite(alone.effects[0].stderr_value.get<double>()));
+}
+
 TEST(CloseTheLoop, RecoversTimeOffset) {
   // 4 ms; the issue: within 0.3 ms.
   const Case c = RunCase("time_offset=0.004");
