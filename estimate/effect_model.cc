@@ -91,13 +91,7 @@ json EffectValue(const std::string& name, const TrueModel& model) {
   const RigModel& rig = model.rig;
   if (name == "time_offset") return rig.time_offset_s;
   if (name == "readout_time") return rig.shutter.readout_s;
-  if (name == "gyro_to_camera") {
-    json m = json::array();
-    for (int r = 0; r < 3; ++r) {
-      m.push_back({rig.cam_from_gyro(r, 0), rig.cam_from_gyro(r, 1), rig.cam_from_gyro(r, 2)});
-    }
-    return m;
-  }
+  if (name == "gyro_to_camera") return MatrixJson(rig.cam_from_gyro);
   if (name == "gyro_scale") return Array3(model.gyro_scale);
   if (name == "gyro_bias") return Array3(model.gyro_bias_rad_s);
   if (name == "velocity") return Array3(rig.velocity_mps);
@@ -533,7 +527,8 @@ void VideoPairPredictor::PredictPair(const TrueModel& model, size_t k,
   // predicted is (distance, 0): a residual whose second component is always 0, and whose
   // derivatives are the distance's alone. (The foot itself would turn the residual vector with the
   // line, and Gauss-Newton would count that turning, which changes no distance, as information.)
-  const Eigen::Matrix3d k_mat = camera.K();
+  const Eigen::Matrix3d k_mat = camera.K(), k_inv = k_mat.inverse();
+  const double epipole_radius_px = kEpipoleRadiusShare * std::hypot(camera.width, camera.height);
   for (size_t i = 0; i < n; ++i) {
     if (w_row[i] < 0) continue;
     Eigen::Vector3d n_cam;
@@ -546,8 +541,7 @@ void VideoPairPredictor::PredictPair(const TrueModel& model, size_t k,
     const Eigen::Vector2d foot = q_undistorted - distance_px * normal;
     double across_px = distance_px;
     if (camera.HasDistortion()) {
-      const std::optional<Eigen::Vector2d> q =
-          camera.ImgFromCam(k_mat.inverse() * foot.homogeneous());
+      const std::optional<Eigen::Vector2d> q = camera.ImgFromCam(k_inv * foot.homogeneous());
       if (!q || !q->allFinite()) continue;
       across_px = std::copysign((pair.match[i] - *q).norm(), distance_px);
     }
@@ -560,8 +554,7 @@ void VideoPairPredictor::PredictPair(const TrueModel& model, size_t k,
     Eigen::Vector3d epipole;
     if (cam_from_world_at(w_row[i], v_dir, &epipole) && std::abs(epipole.z()) > 1e-12) {
       const double rho = (q_undistorted - (k_mat * (epipole / epipole.z())).head<2>()).norm();
-      const double radius = kEpipoleRadiusShare * std::hypot(camera.width, camera.height);
-      across_px *= rho / std::hypot(rho, radius);
+      across_px *= rho / std::hypot(rho, epipole_radius_px);
     }
     if (std::isfinite(across_px)) {
       (*out)[pair.first + i] = pair.measured[i] - Eigen::Vector2d(across_px, 0.0);

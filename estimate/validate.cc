@@ -35,10 +35,6 @@ constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 // near the noise says nothing about a model.
 constexpr double kMinRatioDPx = 1.0;
 
-double SecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 // Grid rows or columns: every kGridStepPx-th plus the last one (as analyze's D_full).
 std::vector<int> GridLines(int size) {
   std::vector<int> lines;
@@ -297,6 +293,10 @@ ValidationResult ValidateDataset(const std::string& dataset_dir, const ValidateO
   FillFrameResiduals(frame_points, result.loop, nullptr, options.keep_residuals, &result.frames);
   result.loop_s = SecondsSince(start);
   return result;
+}
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 double PooledNoisePx(const std::vector<FrameValidation>& frames) {

@@ -160,7 +160,7 @@ struct ValidationResult {
   // the same trimmed points) that per-pair translation explains; 0 when the rotation-only loop
   // ends at the noise (unexplained false).
   double translation_explains = 0.0;
-  double rotation_ms_per_component = 0.0, translation_ms_per_component = 0.0;  // px^2
+  double rotation_mean_sq_px2 = 0.0, translation_mean_sq_px2 = 0.0;  // px^2
   std::vector<HalfCheck> halves;
   std::vector<ClaimCheck> claims;
   std::vector<std::string> skipped;  // pairs left out, and why

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <sstream>
 
 namespace shutterlab {
@@ -22,11 +23,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-double SecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-constexpr double kPi = 3.14159265358979323846;
 // 99 % quantiles of chi-square with 1, 2, 3 degrees of freedom: two fits of an effect on disjoint
 // halves agree when their difference, in the metric of the sum of their covariances, is below.
 constexpr double kChi2Quantile99[4] = {0.0, 6.635, 9.210, 11.345};
@@ -109,13 +105,7 @@ Eigen::Matrix3d NearestAxes(const Eigen::Matrix3d& r) {
 }
 
 double AngleDeg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
-  return LogSO3(Eigen::Quaterniond(a * b.transpose())).norm() * 180.0 / kPi;
-}
-
-json MatrixJson(const Eigen::Matrix3d& m) {
-  json rows = json::array();
-  for (int r = 0; r < 3; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2)});
-  return rows;
+  return AngularDistance(Eigen::Quaterniond(a), Eigen::Quaterniond(b)) * 180.0 / M_PI;
 }
 
 std::string MatrixText(const Eigen::Matrix3d& m) {
@@ -128,7 +118,6 @@ std::string MatrixText(const Eigen::Matrix3d& m) {
   return out + "]";
 }
 
-// Tests the source's claims in dir/import.json (when present) against fits on all pairs.
 // Mean squares per residual component of two sets of per-point residuals over the same points:
 // weighted points where both predict, less the kCompareTrimShare largest of either (moving objects,
 // bad matches), px^2.
@@ -176,10 +165,11 @@ TrimmedComparison CompareTrimmed(const std::vector<FramePoints>& pairs,
 // is within the noise, what b removes is measured against the noise itself (a below-noise residual
 // has no excess, and moving it by a sliver of the noise decides nothing).
 double ExplainedShare(const TrimmedComparison& c, double noise_px) {
-  const double noise_ms = noise_px * noise_px / 2.0;
-  const double excess = c.a - noise_ms;
-  if (excess > noise_ms) return std::clamp((c.a - std::max(noise_ms, c.b)) / excess, 0.0, 1.0);
-  return std::clamp((c.a - c.b) / noise_ms, 0.0, 1.0);
+  const double noise_mean_sq_px2 = noise_px * noise_px / 2.0;
+  const double excess = c.a - noise_mean_sq_px2;
+  if (excess > noise_mean_sq_px2)
+    return std::clamp((c.a - std::max(noise_mean_sq_px2, c.b)) / excess, 0.0, 1.0);
+  return std::clamp((c.a - c.b) / noise_mean_sq_px2, 0.0, 1.0);
 }
 
 // The loop's rule for candidates (effect_fit.cc): one that loses more than this share of the points
@@ -190,12 +180,6 @@ constexpr double kMaxMappingLostShare = 0.01;
 // claim down: it is reported as not determined rather than held or contradicted.
 constexpr double kMinClaimShare = 0.1;
 
-// A claim is tested by the preferred model, or by the rotation-only one where the pair translation
-// cannot tell the effect (IdentifiableWithPairTranslation). Scalars (readout_s, time_offset_s): the
-// effect fitted beside the model's identified ones, against the claim in standard errors, and how
-// much of the residual fitting it removes. direction: both readings. gyro_to_camera: the rotation-
-// only residual of each of the 24 axis mappings against the claimed one's.
-// Each model's fits start where its loop started (preferred_start, rotation_start).
 // The claims of import.json that validate can test, read and checked before any work is done (a
 // broken file is named at once, not after minutes of measuring); none without the file. Each
 // claim an object with a string "what"; "status" a string when present; a gyro_to_camera value a
@@ -246,6 +230,12 @@ json ReadClaims(const fs::path& import_json) {
   return claims;
 }
 
+// A claim is tested by the preferred model, or by the rotation-only one where the pair translation
+// cannot tell the effect (IdentifiableWithPairTranslation). Scalars (readout_s, time_offset_s): the
+// effect fitted beside the model's identified ones, against the claim in standard errors, and how
+// much of the residual fitting it removes. direction: both readings. gyro_to_camera: the rotation-
+// only residual of each of the 24 axis mappings against the claimed one's.
+// Each model's fits start where its loop started (preferred_start, rotation_start).
 std::vector<ClaimCheck> CheckClaims(const json& claims, const GyroTrace& gyro,
                                     const std::vector<FramePoints>& pairs, double noise_px,
                                     const TrueModel& preferred_start, const LoopResult& preferred,
@@ -254,6 +244,8 @@ std::vector<ClaimCheck> CheckClaims(const json& claims, const GyroTrace& gyro,
                                     const LoopOptions& rotation_options) {
   const RigModel& declared = rotation_start.rig;
   std::vector<ClaimCheck> checks;
+  std::map<std::pair<bool, std::vector<std::string>>, LoopResult>
+      fits;                           // by (by_rotation, effects)
   for (const json& claim : claims) {  // as ReadClaims checked them
     ClaimCheck check;
     check.claim = claim["what"].get<std::string>();
@@ -293,11 +285,12 @@ std::vector<ClaimCheck> CheckClaims(const json& claims, const GyroTrace& gyro,
       for (size_t i = 0; i < r_claimed.size(); ++i) {
         claimed_points += weights[i] > 0 && r_claimed[i].allFinite();
       }
-      double claimed_ms = CompareTrimmed(pairs, r_claimed, 2, r_claimed, 2).a;
-      double other_ms = std::numeric_limits<double>::infinity();
+      double claimed_mean_sq_px2 = CompareTrimmed(pairs, r_claimed, 2, r_claimed, 2).a;
+      double other_mean_sq_px2 = std::numeric_limits<double>::infinity();
       Eigen::Matrix3d other = claimed;
-      for (const Eigen::Matrix3d& axes : AxisRotations()) {
-        if (NearestAxes(axes) == NearestAxes(claimed)) continue;
+      const Eigen::Matrix3d claimed_axes = NearestAxes(claimed);
+      for (const Eigen::Matrix3d& axes : AxisRotations()) {  // signed permutations already
+        if (axes == claimed_axes) continue;
         const std::vector<Eigen::Vector2d> r = residuals(axes);
         size_t lost = 0;
         for (size_t i = 0; i < r.size(); ++i) {
@@ -306,23 +299,25 @@ std::vector<ClaimCheck> CheckClaims(const json& claims, const GyroTrace& gyro,
         if (lost > kMaxMappingLostShare * static_cast<double>(claimed_points)) continue;
         const TrimmedComparison c = CompareTrimmed(pairs, r_claimed, 2, r, 2);
         if (c.points == 0 || !(c.a > 0)) continue;
-        if (!std::isfinite(other_ms) || c.b / c.a < other_ms / claimed_ms) {
-          claimed_ms = c.a;
-          other_ms = c.b;
+        if (!std::isfinite(other_mean_sq_px2) ||
+            c.b / c.a < other_mean_sq_px2 / claimed_mean_sq_px2) {
+          claimed_mean_sq_px2 = c.a;
+          other_mean_sq_px2 = c.b;
           other = axes;
         }
       }
-      const bool claimed_best = claimed_ms <= other_ms;
+      const bool claimed_best = claimed_mean_sq_px2 <= other_mean_sq_px2;
       check.found = MatrixJson(claimed_best ? NearestAxes(claimed) : other);
       check.difference = claimed_best ? 0.0 : AngleDeg(other, claimed);
       // How much of the worse one's excess over the noise the better one removes.
-      const double margin =
-          ExplainedShare(claimed_best ? TrimmedComparison{other_ms, claimed_ms, 1}
-                                      : TrimmedComparison{claimed_ms, other_ms, 1},
-                         noise_px);
+      const double margin = ExplainedShare(
+          claimed_best ? TrimmedComparison{other_mean_sq_px2, claimed_mean_sq_px2, 1}
+                       : TrimmedComparison{claimed_mean_sq_px2, other_mean_sq_px2, 1},
+          noise_px);
       const std::string numbers =
-          "rotation-only rms per component " + FormatNumber("%.3f", std::sqrt(claimed_ms)) +
-          " px with the claimed axes, " + FormatNumber("%.3f", std::sqrt(other_ms)) +
+          "rotation-only rms per component " +
+          FormatNumber("%.3f", std::sqrt(claimed_mean_sq_px2)) + " px with the claimed axes, " +
+          FormatNumber("%.3f", std::sqrt(other_mean_sq_px2)) +
           " px with the best other of the 24 mappings " + MatrixText(other) + " (" +
           FormatNumber("%.0f", 100 * margin) + " % of the worse one's excess)";
       if (margin < kMinClaimShare) {
@@ -344,8 +339,18 @@ std::vector<ClaimCheck> CheckClaims(const json& claims, const GyroTrace& gyro,
     std::vector<std::string> with_effect = base;
     with_effect.push_back(check.effect);
     const TrueModel& start = by_rotation ? rotation_start : preferred_start;
-    const LoopResult without = FitEffects(start, gyro, pairs, noise_px, base, loop_options);
-    const LoopResult with = FitEffects(start, gyro, pairs, noise_px, with_effect, loop_options);
+    // Claims share fits (the model's own effects are every claim's "without"): each once.
+    const auto fit = [&](const std::vector<std::string>& effects) -> const LoopResult& {
+      const auto key = std::make_pair(by_rotation, effects);
+      auto it = fits.find(key);
+      if (it == fits.end()) {
+        it = fits.emplace(key, FitEffects(start, gyro, pairs, noise_px, effects, loop_options))
+                 .first;
+      }
+      return it->second;
+    };
+    const LoopResult& without = fit(base);
+    const LoopResult& with = fit(with_effect);
     const TrimmedComparison c =
         CompareTrimmed(pairs, without.residuals_after, without.residual_components,
                        with.residuals_after, with.residual_components);
@@ -554,8 +559,8 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
   const TrimmedComparison compared =
       CompareTrimmed(pairs, rot.residuals_after, rot.residual_components, trans.residuals_after,
                      trans.residual_components);
-  result->rotation_ms_per_component = compared.a;
-  result->translation_ms_per_component = compared.b;
+  result->rotation_mean_sq_px2 = compared.a;
+  result->translation_mean_sq_px2 = compared.b;
   // Nothing for translation to explain when rotation alone leaves the noise.
   result->translation_explains = rot.unexplained ? ExplainedShare(compared, noise_px) : 0.0;
   result->preferred = rot.unexplained && result->translation_explains >= kPreferTranslationShare
@@ -609,8 +614,8 @@ json VideoValidationToJson(const ValidationResult& result) {
   trans["explains_share"] = result.translation_explains;
   trans["inherits"] = result.translation_inherits;
   trans["mean_square_per_component_px2"] = {
-      {"rotation_only", result.rotation_ms_per_component},
-      {"translation", result.translation_ms_per_component},
+      {"rotation_only", result.rotation_mean_sq_px2},
+      {"translation", result.translation_mean_sq_px2},
       {"noise", result.loop.noise_px * result.loop.noise_px / 2.0}};
   out["translation"] = trans;
   json pairs = json::array();
@@ -665,7 +670,6 @@ json VideoValidationToJson(const ValidationResult& result) {
   out["skipped"] = result.skipped;
   out["timing_s"] = {
       {"read", result.read_s}, {"measure", result.measure_s}, {"loop", result.loop_s}};
-  out["log"] = {{"rotation_only", result.loop.log}, {"translation", result.translation_loop.log}};
   return out;
 }
 
@@ -704,8 +708,8 @@ std::string VideoValidationReport(const ValidationResult& result) {
   WriteLoopSummary(result.translation_loop, out);
   out << "  mean square per residual component over the same points (largest "
       << FormatNumber("%.0f", 100 * kCompareTrimShare) << " % of either left out): rotation only "
-      << FormatNumber("%.4f", result.rotation_ms_per_component) << " px^2, with translation "
-      << FormatNumber("%.4f", result.translation_ms_per_component) << " px^2, noise "
+      << FormatNumber("%.4f", result.rotation_mean_sq_px2) << " px^2, with translation "
+      << FormatNumber("%.4f", result.translation_mean_sq_px2) << " px^2, noise "
       << FormatNumber("%.4f", noise * noise / 2) << " px^2\n";
   if (result.loop.unexplained) {
     out << "  translation explains " << FormatNumber("%.0f", 100 * result.translation_explains)

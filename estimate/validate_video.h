@@ -5,6 +5,7 @@
 #include "render/frames_csv.h"
 #include "sim/gyro_trace.h"
 
+#include <chrono>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -23,6 +24,9 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
 void FillFrameResiduals(const std::vector<FramePoints>& frames, const LoopResult& loop,
                         const LoopResult* translation, bool keep_residuals,
                         std::vector<FrameValidation>* out);
+
+// Wall-clock seconds since start, for the report's timings.
+double SecondsSince(std::chrono::steady_clock::time_point start);
 
 // The noise of all frames' points pooled (RMS over points), px, never below kMinNoisePx: identical
 // images measure exactly 0, against which every residual would be infinitely significant.

@@ -182,13 +182,17 @@ void WriteRigModel(const std::string& path, const RigModel& rig) {
   j["rolling_shutter"] = {{"readout_s", rig.shutter.readout_s},
                           {"direction", rig.shutter.direction == ReadoutDirection::kTopToBottom
                                             ? "top_to_bottom" : "bottom_to_top"}};
-  json m = json::array();
-  for (int r = 0; r < 3; ++r) m.push_back({rig.cam_from_gyro(r, 0), rig.cam_from_gyro(r, 1), rig.cam_from_gyro(r, 2)});
-  j["gyro_to_camera"] = m;
+  j["gyro_to_camera"] = MatrixJson(rig.cam_from_gyro);
   j["time_offset_s"] = rig.time_offset_s;
   j["scene"] = {{"altitude_m", rig.altitude_m}};
   j["velocity_mps"] = {rig.velocity_mps.x(), rig.velocity_mps.y(), rig.velocity_mps.z()};
   WriteFileAtomically(path, j.dump(2) + "\n");
+}
+
+json MatrixJson(const Eigen::Matrix3d& m) {
+  json rows = json::array();
+  for (int r = 0; r < 3; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2)});
+  return rows;
 }
 
 }  // namespace shutterlab

@@ -9,6 +9,7 @@
 #include <string>
 
 #include <Eigen/Core>
+#include <nlohmann/json_fwd.hpp>
 
 namespace shutterlab {
 
@@ -53,5 +54,7 @@ struct RigModel {
 RigModel ReadRigModel(const std::string& path);
 // Writes camera.json whole or not at all.
 void WriteRigModel(const std::string& path, const RigModel& rig);
+// A 3x3 matrix as camera.json writes gyro_to_camera: an array of its rows.
+nlohmann::json MatrixJson(const Eigen::Matrix3d& m);
 
 }  // namespace shutterlab

@@ -44,12 +44,6 @@ constexpr double kPhoneFx = 573.8534, kPhoneFy = 575.0448, kPhoneCx = 406.0101, 
 constexpr double kPhoneSkew = -0.6974;
 constexpr double kPhoneFullFrameS = 0.033312;
 
-nlohmann::json MatrixJson(const Eigen::Matrix3d& m) {
-  nlohmann::json rows = nlohmann::json::array();
-  for (int r = 0; r < 3; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2)});
-  return rows;
-}
-
 nlohmann::json Claim(const std::string& what, nlohmann::json value, const std::string& status,
                      const std::string& source) {
   return {{"what", what}, {"value", std::move(value)}, {"status", status}, {"source", source}};
