@@ -374,17 +374,20 @@ LevelTest TestLevel(const Context& ctx, const Eigen::VectorXd& r, const std::vec
 }
 
 ResidualStats Stats(const Eigen::VectorXd& r, const std::vector<uint8_t>& valid) {
-  ResidualStats s;
-  double sum = 0.0;
+  std::vector<double> squared_norms;
   for (size_t i = 0; i < valid.size(); ++i) {
-    if (!valid[i]) continue;
-    const double sq = r.segment<2>(2 * i).squaredNorm();
-    sum += sq;
-    s.max_px = std::max(s.max_px, std::sqrt(sq));
-    ++s.points;
+    if (valid[i]) squared_norms.push_back(r.segment<2>(2 * i).squaredNorm());
   }
-  s.rms_px = s.points > 0 ? std::sqrt(sum / s.points) : 0.0;
-  return s;
+  return ResidualStatsOf(squared_norms);
+}
+
+// The search goes on only while the residual is materially above the noise as well: noise_px is
+// an estimate, and a residual within material_ratio of it is as much the measurement's own
+// systematic error (on rendered video pairs the true model leaves 1.04-1.13x noise_px) as any
+// effect's; candidates fitted to it pick up the measurement, not the rig. The same test says
+// "unexplained" after the loop.
+bool Material(const Context& ctx, const LoopOptions& options, const LevelTest& t) {
+  return t.above && t.rms_px > options.material_ratio * std::sqrt(ctx.noise_sq);
 }
 
 struct Fit {
@@ -727,18 +730,11 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
   };
   result.log.push_back(level_line("declared model", level));
   result.above_noise_before = level.above;
-  // The search goes on only while the residual is materially above the noise as well: noise_px is
-  // an estimate, and a residual within material_ratio of it is as much the measurement's own
-  // systematic error (on rendered video pairs the true model leaves 1.04-1.13x noise_px) as any
-  // effect's; candidates fitted to it pick up the measurement, not the rig.
-  const auto material = [&](const LevelTest& t) {
-    return t.above && t.rms_px > options.material_ratio * std::sqrt(ctx.noise_sq);
-  };
 
   std::vector<ResidualStats> after_each;
   std::vector<std::vector<std::string>> ambiguous_each;
   std::vector<std::string> removed;  // dropped by the backward step; not tried again
-  for (int round = 1; material(level) &&
+  for (int round = 1; Material(ctx, options, level) &&
                       static_cast<int>(current.hypothesis.effects.size()) < options.max_effects &&
                       round <= 2 * options.max_effects;
        ++round) {
@@ -839,7 +835,8 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
         if (!(std::abs(rate) > kRateSignificance * rate_sd)) {
           result.log.push_back(prefix + ", not significant: time_offset");
           chosen = static_cast<int>(j);
-        } else if (!material(TestLevel(ctx, fits[j].solution.residuals, fits[j].solution.valid,
+        } else if (!Material(ctx, options,
+                             TestLevel(ctx, fits[j].solution.residuals, fits[j].solution.valid,
                                        options.significance))) {
           result.log.push_back(prefix + ", but time_offset alone leaves the noise: time_offset");
           chosen = static_cast<int>(j);
@@ -939,13 +936,12 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
   result.after = current.stats;
   result.model = current.model;
   result.residuals_after = PointResiduals(current);
-  if (const auto* video = dynamic_cast<const VideoPairPredictor*>(predictor.get());
-      video != nullptr && options.pair_translation) {
+  if (options.pair_translation) {  // the directions of the final model, not of a trial step
     std::vector<Eigen::Vector2d> unused;
-    video->Predict(current.model, &unused);
-    result.pair_translation_dirs = video->translation_dirs();
+    predictor->Predict(current.model, &unused);
+    result.pair_translation_dirs = predictor->translation_dirs();
   }
-  result.unexplained = material(level);
+  result.unexplained = Material(ctx, options, level);
   result.log.push_back(std::string("unexplained: ") + (result.unexplained ? "yes" : "no"));
   return result;
 }
@@ -982,8 +978,7 @@ LoopResult FitEffects(const TrueModel& declared, const GyroTrace& gyro,
   result.after = current.stats;
   result.model = current.model;
   result.residuals_after = PointResiduals(current);
-  result.unexplained =
-      level.above && level.rms_px > options.material_ratio * std::sqrt(ctx.noise_sq);
+  result.unexplained = Material(ctx, options, level);
   return result;
 }
 

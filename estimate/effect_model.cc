@@ -19,6 +19,11 @@ namespace shutterlab {
 
 namespace {
 
+// The rays K^-1 p depend on these alone: a cache of them stays valid while they do not change.
+bool SameIntrinsics(const PinholeCamera& a, const PinholeCamera& b) {
+  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.dist == b.dist;
+}
+
 using nlohmann::json;
 
 json Array3(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
@@ -187,11 +192,7 @@ DisplacementPredictor::DisplacementPredictor(const GyroTrace& gyro,
 }
 
 void DisplacementPredictor::RefreshRays(const PinholeCamera& camera) const {
-  if (rays_valid_ && camera.fx == rays_camera_.fx && camera.fy == rays_camera_.fy &&
-      camera.cx == rays_camera_.cx && camera.cy == rays_camera_.cy &&
-      camera.dist == rays_camera_.dist) {
-    return;
-  }
+  if (rays_valid_ && SameIntrinsics(camera, rays_camera_)) return;
   rays_.resize(points_);
   for (const Frame& frame : frames_) {
     for (size_t i = 0; i < frame.px.size(); ++i)
@@ -330,11 +331,7 @@ VideoPairPredictor::VideoPairPredictor(const GyroTrace& gyro,
 }
 
 void VideoPairPredictor::RefreshRays(const PinholeCamera& camera) const {
-  if (rays_valid_ && camera.fx == rays_camera_.fx && camera.fy == rays_camera_.fy &&
-      camera.cx == rays_camera_.cx && camera.cy == rays_camera_.cy &&
-      camera.dist == rays_camera_.dist) {
-    return;
-  }
+  if (rays_valid_ && SameIntrinsics(camera, rays_camera_)) return;
   const Eigen::Vector3d nan = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   rays_.resize(points_);
   match_rays_.resize(points_);

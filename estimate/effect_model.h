@@ -68,6 +68,11 @@ class PointPredictor {
   virtual int residual_components() const { return 2; }
   // Parameters solved inside Predict (not the loop's), for the degrees of freedom.
   virtual int nuisance_parameters() const { return 0; }
+  // Translation directions solved inside the last Predict, one per frame (none by default).
+  virtual const std::vector<Eigen::Vector3d>& translation_dirs() const {
+    static const std::vector<Eigen::Vector3d> kNone;
+    return kNone;
+  }
 };
 
 // Reference datasets: d(p) = p_ref - p of every measured point.
@@ -133,7 +138,9 @@ class VideoPairPredictor : public PointPredictor {
   }
   // pair_translation: each pair's V (unit; its sign arbitrary, kept from one Predict to the next)
   // from the last Predict, in the earlier frame's row-0 camera axes.
-  const std::vector<Eigen::Vector3d>& translation_dirs() const { return translation_dirs_; }
+  const std::vector<Eigen::Vector3d>& translation_dirs() const override {
+    return translation_dirs_;
+  }
 
  private:
   struct Pair {

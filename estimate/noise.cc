@@ -3,6 +3,7 @@
 #include "estimate/window_stats.h"
 #include "sim/check.h"
 #include "sim/integrate.h"
+#include "sim/text_file.h"
 
 #include <nlohmann/json.hpp>
 
@@ -16,12 +17,6 @@ namespace {
 
 constexpr double kRadToArcsec = 180.0 / M_PI * 3600.0;
 constexpr const char* kAxisNames[3] = {"x", "y", "z"};
-
-std::string Format(const char* format, double value) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), format, value);
-  return buffer;
-}
 
 }  // namespace
 
@@ -114,32 +109,34 @@ std::string NoiseTable(const NoiseResult& result) {
   std::string out;
   out += "Noise of the per-axis integrated angle, sliding windows of " +
          std::to_string(result.window_samples) + " samples (" +
-         Format("%.1f", result.rate_hz > 0 ? 1e3 * result.window_samples / result.rate_hz : 0.0) +
-         " ms at " + Format("%.1f", result.rate_hz) + " Hz), " + std::to_string(result.windows) +
-         " windows\n";
+         FormatNumber("%.1f",
+                      result.rate_hz > 0 ? 1e3 * result.window_samples / result.rate_hz : 0.0) +
+         " ms at " + FormatNumber("%.1f", result.rate_hz) + " Hz), " +
+         std::to_string(result.windows) + " windows\n";
   out += "bias from " + std::to_string(result.bias.samples) + " samples; statistics over the " +
          std::to_string(result.samples_analysed) + " samples after it\n\n";
   out += "axis   sigma mean   sigma max   range mean   range max   (arcsec)\n";
   for (int a = 0; a < 3; ++a) {
     const AxisNoise& n = result.axes[a];
-    out += std::string("  ") + kAxisNames[a] + Format("  %11.2f", n.sigma_mean_arcsec) +
-           Format(" %11.2f", n.sigma_max_arcsec) + Format("  %11.2f", n.range_mean_arcsec) +
-           Format(" %11.2f", n.range_max_arcsec) + "\n";
+    out += std::string("  ") + kAxisNames[a] + FormatNumber("  %11.2f", n.sigma_mean_arcsec) +
+           FormatNumber(" %11.2f", n.sigma_max_arcsec) +
+           FormatNumber("  %11.2f", n.range_mean_arcsec) +
+           FormatNumber(" %11.2f", n.range_max_arcsec) + "\n";
   }
   if (result.allan.empty()) {
     out += "\nAllan deviation: record too short\n";
     return out;
   }
-  out += "\nAllan deviation (tau " + Format("%.3g", result.allan.tau_s.front()) + " .. " +
-         Format("%.3g", result.allan.tau_s.back()) + " s)\n";
+  out += "\nAllan deviation (tau " + FormatNumber("%.3g", result.allan.tau_s.front()) + " .. " +
+         FormatNumber("%.3g", result.allan.tau_s.back()) + " s)\n";
   out += "axis   ARW deg/sqrt(h)   ARW rad/s/sqrt(Hz)   bias instability deg/h (at tau s)\n";
   for (int a = 0; a < 3; ++a) {
     const AllanCoefficients& c = result.allan.axes[a];
-    out += std::string("  ") + kAxisNames[a] + Format("  %15.4f", c.arw_deg_sqrt_h) +
-           Format("   %18.3e", c.arw_rad_s_sqrt_hz) +
-           Format("   %10.3f", c.bias_instability_deg_h) +
+    out += std::string("  ") + kAxisNames[a] + FormatNumber("  %15.4f", c.arw_deg_sqrt_h) +
+           FormatNumber("   %18.3e", c.arw_rad_s_sqrt_hz) +
+           FormatNumber("   %10.3f", c.bias_instability_deg_h) +
            (c.bias_instability_upper_bound ? " <=" : "   ") +
-           Format(" (%.3g)", c.bias_instability_tau_s) + "\n";
+           FormatNumber(" (%.3g)", c.bias_instability_tau_s) + "\n";
   }
   bool any_upper = false;
   for (const auto& c : result.allan.axes) any_upper |= c.bias_instability_upper_bound;

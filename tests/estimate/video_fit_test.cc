@@ -21,7 +21,7 @@ namespace {
 
 // The predictor and the renderer differ only in where integration starts and in interpolating
 // between rows (rotated vectors vs slerp of poses): ~1e-8 px.
-constexpr double kTwinTolPx = 1e-5;
+constexpr double kTwinTolPx = 1e-7;
 constexpr double kClipStartS = 12.6, kFps = 30.0;
 
 double FrameTime(int k) { return kClipStartS + k / kFps; }
