@@ -1,6 +1,6 @@
 // `shutterlab accuracy`: the source paper's total-station test; each turn detected and measured.
 
-#include "estimate/accuracy.h"
+#include "estimate/paper/accuracy.h"
 
 #include "app/command.h"
 #include "app/trace_options.h"

@@ -1,16 +1,16 @@
 // `shutterlab analyze LOG`: per-image rolling-shutter distortion from a real flight log, with the
 // flight table for the camera's readout and a verdict (estimate/analyze.h).
 
-#include "estimate/analyze.h"
+#include "estimate/paper/analyze.h"
 
 #include "app/command.h"
-#include "estimate/analyze_report.h"
-#include "estimate/flight.h"
+#include "estimate/report/analyze_report.h"
+#include "estimate/paper/flight.h"
 #include "render/image_io.h"
 #include "render/pictures.h"
 #include "sim/check.h"
-#include "sim/flight_log_io.h"
-#include "sim/gyro_io.h"
+#include "sim/logs/flight_log_io.h"
+#include "sim/logs/gyro_io.h"
 
 #include <filesystem>
 #include <iostream>

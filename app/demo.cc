@@ -1,10 +1,13 @@
-// shutterlab demo: the main job on the bundled assets, in seconds.
+// shutterlab demo: the main job, in seconds, on data it makes itself (nothing is read from outside):
+//  0. the inputs: a synthetic multirotor survey flight written as a PX4 ULog with a camera trigger
+//     every 2 s and its altitude (the file any user's own log would be), and a procedural nadir
+//     ground texture (fields, roads, roofs, trees) as the scene;
 //  1. the source paper's static noise and accuracy analyses (Tables 1-3) on synthetic MPU-9250
 //  traces;
-//  2. its flight analysis (Table 4) on a real Betaflight flight log;
-//  3. `analyze` of that log for a typical mapping camera with simulated triggers every 2 s: the
+//  2. its flight analysis (Table 4) on that flight log, read back through the ULog reader;
+//  3. `analyze` of that log for a typical mapping camera at its own camera triggers: the
 //     per-image table, the flagged images and shutterlab-demo/report.html;
-//  4. that log's gyro driving the rolling-shutter renderer over a real nadir photo, frames every
+//  4. that log's gyro driving the rolling-shutter renderer over the ground texture, frames every
 //     few seconds as a mapping camera would take them: images, exact displacement truth, pictures;
 //  5. closing the loop: a small dataset rendered with a 4 ms clock offset that camera.json does
 //     not declare; validate measures it, finds the residual, names and fits the effect, and writes
@@ -13,20 +16,23 @@
 // step is a function of the shared DemoContext, run in order by RunDemo (add a step there).
 
 #include "app/command.h"
-#include "estimate/accuracy.h"
-#include "estimate/analyze.h"
-#include "estimate/analyze_report.h"
-#include "estimate/flight.h"
-#include "estimate/noise.h"
-#include "estimate/validate.h"
+#include "estimate/paper/accuracy.h"
+#include "estimate/paper/analyze.h"
+#include "estimate/report/analyze_report.h"
+#include "estimate/paper/flight.h"
+#include "estimate/paper/noise.h"
+#include "estimate/loop/validate.h"
+#include "estimate/demo_dataset.h"
+#include "estimate/report/validate_report.h"
 #include "render/camera.h"
 #include "render/image_io.h"
 #include "render/pictures.h"
+#include "render/ground_texture.h"
 #include "render/render_dataset.h"
-#include "sim/blackbox.h"
+#include "sim/logs/flight_log_io.h"
 #include "sim/check.h"
-#include "sim/gyro_io.h"
-#include "sim/synth.h"
+#include "sim/logs/gyro_io.h"
+#include "sim/synth/synth.h"
 #include "sim/text_file.h"
 
 #include <cstdio>
@@ -38,20 +44,16 @@ namespace {
 
 struct DemoOptions {
   std::string out_dir = "shutterlab-demo";
-  std::string assets_dir = SHUTTERLAB_ASSET_DIR;
   double frame_every_s = 4.0;  // a mapping camera's trigger cadence
-  void Check() const {
-    SHUTTERLAB_CHECK(std::filesystem::is_directory(assets_dir))
-        << "assets folder " << assets_dir << " not found (give --assets)";
-    SHUTTERLAB_CHECK(frame_every_s > 0) << "--every must be positive";
-  }
+  void Check() const { SHUTTERLAB_CHECK(frame_every_s > 0) << "--every must be positive"; }
 };
 
 void Section(const std::string& title) { std::cout << "\n== " << title << " ==\n"; }
 
 // The demo camera: a 1280x720 mapping camera, 30 ms readout, 50 m above ground, looking down with
-// the image top towards the nose. Betaflight logs gyro about roll, pitch, yaw (x forward, y right,
-// z down assumed), so camera x (right) = body y, camera y (down the image) = -body x.
+// the image top towards the nose. The flight log's gyro is about the body's roll, pitch, yaw axes
+// (x forward, y right, z down, as PX4 logs it), so camera x (right) = body y, camera y (down the
+// image) = -body x.
 RigModel DemoCamera() {
   RigModel rig;
   rig.camera.width = 1280;
@@ -68,9 +70,46 @@ RigModel DemoCamera() {
 struct DemoContext {
   DemoOptions options;
   std::filesystem::path out;
-  std::string log_path;  // the bundled real flight log
+  std::string log_path;    // the synthetic flight, written as a PX4 ULog
+  std::string scene_path;  // the procedural ground texture
   FlightLog log;
 };
+
+// The demo's altitude above ground, m, and its survey flight: a multirotor with an MPU-9250-like
+// gyro at 1 kHz, a still lead for the bias, a camera trigger every 2 s.
+constexpr double kDemoAltitudeM = 50.0;
+constexpr double kTriggerEveryS = 2.0;
+
+void StepInputs(DemoContext& context) {
+  SynthOptions flight;
+  flight.profile = MotionProfile::kFlight;
+  flight.rate_hz = 1000.0;
+  flight.duration_s = 60.0;
+  flight.t0_s = 1.0;  // ULog times start after 0
+  flight.seed = 7;
+  SynthOutputOptions output;
+  output.out_path = context.log_path;
+  output.ulog = true;
+  output.trigger_every_s = kTriggerEveryS;
+  output.altitude_m = kDemoAltitudeM;
+  WriteSynthetic(flight, output);
+  context.log = ReadFlightLog(context.log_path);
+  std::cout << "flight log " << context.log_path << ": " << context.log.gyro.size()
+            << " gyro samples over " << FormatNumber("%.1f", context.log.gyro.DurationS())
+            << " s, " << context.log.camera_events.size() << " camera triggers, altitude "
+            << FormatNumber("%.0f", context.log.altitude_above_ground_m.value_or(0.0)) << " m\n";
+  // The scene at the render camera's ground sample distance (FORMATS.md "The scene image": seen
+  // by a pinhole with the rig's focal length from the world origin), twice the frame's size.
+  const RigModel rig = DemoCamera();
+  GroundTextureOptions scene;
+  scene.width_px = 2 * rig.camera.width;
+  scene.height_px = 2 * rig.camera.height;
+  scene.ground_sample_distance_m = kDemoAltitudeM / rig.camera.fx;
+  WriteImage(context.scene_path, MakeGroundTexture(scene));
+  std::cout << "scene " << context.scene_path << ": " << scene.width_px << "x" << scene.height_px
+            << " px at " << FormatNumber("%.1f", 100 * scene.ground_sample_distance_m)
+            << " cm/px\n";
+}
 
 void StepStaticNoise(DemoContext&) {
   SynthOptions still;
@@ -90,10 +129,7 @@ void StepFlightTable(DemoContext& context) {
   std::cout << log.gyro.size() << " gyro samples over " << log.gyro.DurationS() << " s at "
             << log.gyro.sampling().RateHz() << " Hz (" << log.gyro_source << ")\n";
   FlightOptions flight;
-  flight.windows_s = {0.010, 0.020, 0.030};
-  // Betaflight calibrates the gyro at arming and this log starts in flight (no still stretch), so
-  // the logged rates are taken as bias-free.
-  flight.known_bias_rad_s = Eigen::Vector3d::Zero();
+  flight.windows_s = {0.010, 0.020, 0.030};  // the bias: the paper's mean over the still 0..5 s
   Progress progress("flight windows", 100);
   flight.progress = [&progress](double fraction) {
     progress.Update(static_cast<size_t>(fraction * 100));
@@ -114,9 +150,7 @@ RigModel AnalyzeCamera() {
 void StepAnalyze(DemoContext& context) {
   AnalyzeOptions options;
   options.rig = AnalyzeCamera();
-  options.every_s = 2.0;          // simulated triggers at a mapping cadence
-  options.estimate_bias = false;  // calibrated at arming, as in the flight table above
-  options.flight_series = true;   // the report's shading and histograms
+  options.flight_series = true;  // the report's shading and histograms; triggers: the log's own
   AnalyzeResult result;
   {
     Progress progress("analyze", 1000);
@@ -133,9 +167,8 @@ void StepAnalyze(DemoContext& context) {
             << " cm: " << (flagged.empty() ? "none" : flagged) << "\n";
   AnalyzeReportOptions report;
   report.log_name = std::filesystem::path(context.log_path).filename().string();
-  const std::string scene = context.options.assets_dir + "/scenes/siyi_zr10_img0100.jpg";
-  report.scene = ToRgb8(ReadImage(scene));
-  report.scene_name = std::filesystem::path(scene).filename().string();
+  report.scene = ToRgb8(ReadImage(context.scene_path));
+  report.scene_name = std::filesystem::path(context.scene_path).filename().string();
   WriteAnalyzeOutputs(context.out.string(), result);
   {
     Progress progress("report", 1);
@@ -164,7 +197,7 @@ void StepRender(DemoContext& context) {
   }
   WriteFileAtomically((out / "inputs/frames.csv").string(), frames);
   RenderOptions render;
-  render.scene_path = context.options.assets_dir + "/scenes/siyi_zr10_img0100.jpg";
+  render.scene_path = context.scene_path;
   render.camera_path = (out / "inputs/camera.json").string();
   render.gyro_path = (out / "inputs/gyro.csv").string();
   render.frames_path = (out / "inputs/frames.csv").string();
@@ -189,7 +222,7 @@ void StepRender(DemoContext& context) {
 
 void StepCloseTheLoop(DemoContext& context) {
   InjectedDemoOptions options;
-  options.scene_path = context.options.assets_dir + "/scenes/siyi_zr10_img0150.jpg";
+  options.scene_path = context.scene_path;
   options.out_dir = (context.out / "validate").string();
   options.injection = "time_offset=0.004";
   ValidationResult result;
@@ -207,22 +240,23 @@ void RunDemo(const DemoOptions& options) {
   context.options = options;
   context.out = options.out_dir;
   std::filesystem::create_directories(context.out / "inputs");
-  context.log_path = options.assets_dir + "/logs/btfl_001.bbl";
-  context.log = ReadBlackbox(context.log_path);
+  context.log_path = (context.out / "inputs/flight.ulg").string();
+  context.scene_path = (context.out / "inputs/ground.png").string();
   struct Step {
     const char* title;
     void (*run)(DemoContext&);
   };
   const Step steps[] = {
+      {"The inputs, made here: a survey flight as a PX4 ULog and a nadir ground texture",
+       StepInputs},
       {"Static noise of a synthetic MPU-9250 at 3 kHz (paper Tables 1-2)", StepStaticNoise},
       {"Accuracy against a synthetic total station turning 1 deg steps (paper Table 3)",
        StepAccuracy},
-      {"A real flight: Betaflight blackbox btfl_001.bbl, 50 s at 500 Hz (paper Table 4)",
-       StepFlightTable},
+      {"The flight log: 60 s of a multirotor survey at 1 kHz (paper Table 4)", StepFlightTable},
       {"Which photos of that flight are distorted: analyze for a 1280x960, f 1100 px, 30 ms "
-       "camera at 50 m, a photo every 2 s",
+       "camera at 50 m, at the log's camera triggers",
        StepAnalyze},
-      {"The same flight's gyro through a 30 ms rolling shutter over a real nadir photo",
+      {"The same flight's gyro through a 30 ms rolling shutter over the ground texture",
        StepRender},
       {"Closing the loop: a dataset rendered with a 4 ms clock offset camera.json does not "
        "declare",
@@ -230,18 +264,17 @@ void RunDemo(const DemoOptions& options) {
   };
   int number = 0;
   for (const Step& step : steps) {
-    Section(std::to_string(++number) + ". " + step.title);
+    Section(std::to_string(number++) + ". " + step.title);
     step.run(context);
   }
 }
 
 const CommandRegistration kRegistration(5, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "demo", "run the main job on the bundled assets (real log, real nadir photo)");
+      "demo", "run the main job on data it makes itself (a synthetic ULog flight, a procedural "
+              "nadir ground texture)");
   auto options = std::make_shared<DemoOptions>();
   cmd->add_option("--out", options->out_dir, "output folder")->capture_default_str();
-  cmd->add_option("--assets", options->assets_dir, "the bundled assets folder")
-      ->capture_default_str();
   cmd->add_option("--every", options->frame_every_s, "seconds between rendered frames")
       ->capture_default_str();
   return std::function<void()>([options] {

@@ -9,7 +9,7 @@
 
 #include "app/command.h"
 #include "app/trace_options.h"
-#include "estimate/flight.h"
+#include "estimate/paper/flight.h"
 #include "sim/check.h"
 
 namespace shutterlab::app {

@@ -2,7 +2,7 @@
 // rolling-shutter image, D, the measurement noise and, with --truth, the error against a render's
 // exact field (estimate/measure.h).
 
-#include "estimate/measure.h"
+#include "estimate/loop/measure.h"
 
 #include "app/command.h"
 #include "render/camera.h"

@@ -1,7 +1,7 @@
 // `shutterlab noise`: the source paper's static-noise tables and the Allan deviation of a still
 // trace.
 
-#include "estimate/noise.h"
+#include "estimate/paper/noise.h"
 
 #include "app/command.h"
 #include "app/trace_options.h"

@@ -1,7 +1,7 @@
 // shutterlab synth: deterministic synthetic gyro traces (still, total-station steps, multirotor
 // flight) through an IMU error model. Thin: fills SynthOptions, calls WriteSynthetic, prints.
 
-#include "sim/synth.h"
+#include "sim/synth/synth.h"
 
 #include "app/command.h"
 #include "sim/check.h"
@@ -23,6 +23,7 @@ struct SynthCliOptions {
   std::string format = "csv";
   bool raw = false;
   std::string time_unit = "s";
+  double altitude_m = 0.0;
   bool ideal = false;
   bool no_quantize = false;
   bool no_saturate = false;
@@ -45,7 +46,11 @@ Eigen::Vector3d Triple(const std::vector<double>& v) { return {v[0], v[1], v[2]}
 void Run(SynthCliOptions& o) {
   SynthOptions& s = o.synth;
   s.profile = ParseMotionProfile(o.profile);
-  o.output.format = o.raw ? GyroFormat::kRaw : ParseGyroFormat(o.format);
+  o.output.ulog = !o.raw && o.format == "ulog";
+  o.output.format = o.raw ? GyroFormat::kRaw
+                    : o.output.ulog ? GyroFormat::kGyroCsv
+                                    : ParseGyroFormat(o.format);
+  if (o.altitude_m > 0.0) o.output.altitude_m = o.altitude_m;
   o.output.time_unit = ParseTimeUnit(o.time_unit);
   // The sensor: the MPU-9250-like default, or a perfect one with --ideal; options given on the
   // command line override either.
@@ -98,7 +103,14 @@ const CommandRegistration kRegistration(10, [](CLI::App& app) {
                   "output file (required): gyro.csv, or raw counts with --raw");
   cmd->add_option("--out2", o->output.out2_path,
                   "second sensor's file: same motion, independent noise (the two-gyro idea)");
-  cmd->add_option("--format", o->format, "csv (gyro.csv: s, rad/s) or raw (int16 counts)")
+  cmd->add_option("--trigger-every", o->output.trigger_every_s,
+                  "ulog: a camera_capture event every this many seconds (0: none)")
+      ->capture_default_str();
+  cmd->add_option("--altitude", o->altitude_m,
+                  "ulog: altitude above ground, m, written as vehicle_local_position.dist_bottom");
+  cmd->add_option("--format", o->format,
+                  "csv (gyro.csv: s, rad/s), raw (int16 counts) or ulog (a PX4 flight log that "
+                  "every command reads)")
       ->capture_default_str();
   cmd->add_flag("--raw", o->raw, "shorthand for --format raw");
   cmd->add_option("--time-unit", o->time_unit,

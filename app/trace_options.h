@@ -2,8 +2,8 @@
 // CLI options shared by every command that reads a gyro trace: format selection and bias segment.
 
 #include "sim/bias.h"
-#include "sim/flight_log_io.h"
-#include "sim/gyro_io.h"
+#include "sim/logs/flight_log_io.h"
+#include "sim/logs/gyro_io.h"
 #include "sim/still_detect.h"
 
 #include <CLI/CLI.hpp>

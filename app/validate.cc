@@ -1,10 +1,11 @@
 // `shutterlab validate DATASET`: the paper's threshold model and the declared full model against
 // the measured displacement, then the loop over undeclared effects (estimate/validate.h).
 
-#include "estimate/validate.h"
+#include "estimate/loop/validate.h"
+#include "estimate/report/validate_report.h"
 
 #include "app/command.h"
-#include "estimate/flight.h"
+#include "estimate/paper/flight.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
 

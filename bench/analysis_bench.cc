@@ -22,10 +22,10 @@
 #include <string>
 #include <vector>
 
-#include "estimate/flight.h"
-#include "estimate/window_stats.h"
+#include "estimate/paper/flight.h"
+#include "estimate/paper/window_stats.h"
 #include "sim/bias.h"
-#include "sim/gyro_io.h"
+#include "sim/logs/gyro_io.h"
 #include "sim/integrate.h"
 #include "sim/text_file.h"
 

@@ -2,7 +2,7 @@
 // Run: build/bin/blackbox_bench  (reports bytes_per_second; the log is read once, outside the
 // loop).
 
-#include "sim/blackbox.h"
+#include "sim/logs/blackbox.h"
 #include "sim/text_file.h"
 
 #include <benchmark/benchmark.h>

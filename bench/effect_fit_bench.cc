@@ -15,10 +15,10 @@
 // level test on clean data (white and spatially correlated noise, 200 data sets each).
 // Run: build/bin/effect_fit_bench
 
-#include "estimate/effect_fit.h"
+#include "estimate/loop/effect_fit.h"
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
-#include "tests/estimate/effect_fixtures.h"
+#include "tests/estimate/loop/effect_fixtures.h"
 
 #include <benchmark/benchmark.h>
 #include <opencv2/core.hpp>

@@ -9,11 +9,11 @@
 // The budget is about 1.5 s per frame on one core (validate: 12 frames and the fit in 60 s on 2).
 // Run: build/bin/measure_bench [--benchmark_repetitions=3]
 
-#include "estimate/measure.h"
+#include "estimate/loop/measure.h"
 #include "render/image_io.h"
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
-#include "sim/synth.h"
+#include "sim/synth/synth.h"
 
 #include <benchmark/benchmark.h>
 #include <opencv2/imgproc.hpp>

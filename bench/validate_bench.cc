@@ -5,7 +5,8 @@
 //
 //   build/bin/validate_bench [--frames N] [--keep DIR]     (run from the repository root)
 
-#include "estimate/validate.h"
+#include "estimate/loop/validate.h"
+#include "estimate/demo_dataset.h"
 
 #include <cstdio>
 #include <cstdlib>

@@ -5,7 +5,7 @@
 #include "render/pictures.h"
 #include "render/truth_model.h"
 #include "sim/check.h"
-#include "sim/gyro_io.h"
+#include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
 
 #include <opencv2/imgproc.hpp>

@@ -4,9 +4,9 @@
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "sim/check.h"
-#include "sim/gpmf.h"
-#include "sim/gyro_io.h"
-#include "sim/mp4.h"
+#include "sim/logs/gpmf.h"
+#include "sim/logs/gyro_io.h"
+#include "sim/logs/mp4.h"
 #include "sim/text_file.h"
 
 #include <opencv2/core/utility.hpp>

@@ -43,25 +43,6 @@ class TempDir {
   std::filesystem::path path_;
 };
 
-struct CommandResult {
-  int exit_code;
-  std::string output;  // stdout and stderr together
-};
-
-// Runs the shutterlab executable with the given argument string (shell syntax).
-inline CommandResult RunShutterlab(const std::string& args) {
-  const std::string command = std::string(SHUTTERLAB_BINARY) + " " + args + " 2>&1";
-  CommandResult result{-1, ""};
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (!pipe) return result;
-  char buffer[4096];
-  size_t n;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) result.output.append(buffer, n);
-  const int status = ::pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
-
 // Appends a plain value's bytes in host (little-endian on our targets) order: the binary log
 // formats (ULog, DataFlash) that the reader tests write byte by byte.
 template <typename T>
@@ -74,5 +55,40 @@ void PutLittleEndian(std::string* out, T value) {
 inline std::string SourcePath(const std::string& relative) {
   return std::string(SHUTTERLAB_SOURCE_DIR) + "/" + relative;
 }
+
+// The real recorded data (logs, photos, clips) is not ours and is not in the repository: it lives
+// in the shared data folder beside the checkout, ../shared/data, or wherever SHUTTERLAB_DATA_DIR
+// points. RealDataPath gives a file or folder there.
+inline std::string RealDataDir() {
+  const char* dir = std::getenv("SHUTTERLAB_DATA_DIR");
+  if (dir != nullptr && *dir != '\0') return dir;
+  return std::string(SHUTTERLAB_SOURCE_DIR) + "/../shared/data";
+}
+inline std::string RealDataPath(const std::string& relative) { return RealDataDir() + "/" + relative; }
+
+// Under CI (CI=true) missing real data is a failure; elsewhere the test is skipped.
+inline bool RealDataRequired() {
+  const char* ci = std::getenv("CI");
+  return ci != nullptr && std::string(ci) == "true";
+}
+
+}  // namespace shutterlab::test
+
+// Declares `const std::string var` = the real-data path `relative`; when it does not exist, the
+// test stops here: skipped with a one-line reason, or failed under CI=true.
+#define SHUTTERLAB_REAL_DATA(var, relative)                                                   \
+  const std::string var = ::shutterlab::test::RealDataPath(relative);                         \
+  if (!std::filesystem::exists(var)) {                                                        \
+    if (::shutterlab::test::RealDataRequired()) {                                             \
+      FAIL() << "real data " << var << " is missing (CI=true needs the shared data folder)"; \
+    }                                                                                         \
+    GTEST_SKIP() << "real data " << var                                                       \
+                 << " is absent (set SHUTTERLAB_DATA_DIR or put ../shared/data beside the checkout)"; \
+  }
+
+// The same for a test that reads several real files: stops unless the real-data folder is there.
+#define SHUTTERLAB_NEED_REAL_DATA() SHUTTERLAB_REAL_DATA(real_data_dir_, "")
+
+namespace shutterlab::test {
 
 }  // namespace shutterlab::test

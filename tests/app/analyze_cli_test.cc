@@ -1,5 +1,7 @@
 #include "sim/text_file.h"
-#include "tests/estimate/report_test_util.h"
+#include "tests/estimate/report/report_test_util.h"
+#include "tests/app/cli_test_util.h"
+#include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -16,13 +18,14 @@ namespace {
 using test::RunShutterlab;
 using test::SourcePath;
 
-std::string Bbl() { return SourcePath("tests/data/betaflight/btfl_001.bbl"); }
+std::string Bbl() { return test::RealDataPath("gyro/betaflight_blackbox/btfl_001.bbl"); }
 
 size_t LineCount(const std::string& text) {
   return static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
 }
 
 TEST(AnalyzeCli, BlackboxEveryTwoSecondsJsonAndOutputs) {
+  SHUTTERLAB_NEED_REAL_DATA();
   test::TempDir dir;
   const auto r =
       RunShutterlab("analyze " + Bbl() + " --every 2s --readout 20ms --altitude 40 --json --out " +
@@ -45,9 +48,10 @@ TEST(AnalyzeCli, BlackboxEveryTwoSecondsJsonAndOutputs) {
 }
 
 TEST(AnalyzeCli, ReportWithSceneIsSelfContainedAndMatchesTheTable) {
+  SHUTTERLAB_NEED_REAL_DATA();
   test::TempDir dir;
   const auto r = RunShutterlab("analyze " + Bbl() + " --every 4s --out " + (dir / "out") +
-                               " --scene " + SourcePath("assets/scenes/siyi_zr10_img0100.jpg") +
+                               " --scene " + test::GroundScenePath(1) +
                                " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json json = nlohmann::json::parse(r.output);
@@ -77,13 +81,15 @@ TEST(AnalyzeCli, ReportWithSceneIsSelfContainedAndMatchesTheTable) {
 }
 
 TEST(AnalyzeCli, SceneWithoutOutIsExitTwo) {
+  SHUTTERLAB_NEED_REAL_DATA();
   const auto r = RunShutterlab("analyze " + Bbl() + " --every 4s --scene " +
-                               SourcePath("assets/scenes/siyi_zr10_img0100.jpg"));
+                               test::GroundScenePath(1));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("--out"), std::string::npos) << r.output;
 }
 
 TEST(AnalyzeCli, EveryTakesPrecedenceAndOneImageIsSingular) {
+  SHUTTERLAB_NEED_REAL_DATA();
   test::TempDir dir;
   const auto r = RunShutterlab("analyze " + Bbl() + " --every 40s");
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -92,6 +98,7 @@ TEST(AnalyzeCli, EveryTakesPrecedenceAndOneImageIsSingular) {
 }
 
 TEST(AnalyzeCli, TableHasVerdict) {
+  SHUTTERLAB_NEED_REAL_DATA();
   const auto r = RunShutterlab("analyze " + Bbl() + " --every 5s --limit 5cm");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("verdict: "), std::string::npos) << r.output;
@@ -99,6 +106,7 @@ TEST(AnalyzeCli, TableHasVerdict) {
 }
 
 TEST(AnalyzeCli, BadTriggersCsvIsOneLineExitTwoAndNoOutput) {
+  SHUTTERLAB_NEED_REAL_DATA();
   test::TempDir dir;
   std::ofstream(dir / "times.csv") << "image,t\nIMG_1,1.0\nIMG_2,abc\n";
   const auto r = RunShutterlab("analyze " + Bbl() + " --triggers " + (dir / "times.csv") +

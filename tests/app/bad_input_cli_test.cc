@@ -2,6 +2,7 @@
 // 2, and no output file left behind. One test per case, so that ctest can run them in parallel
 // (each starts the executable once).
 
+#include "tests/app/cli_test_util.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>

@@ -1,6 +1,7 @@
 // `shutterlab demo`, the README's main command, end to end on the bundled assets: every step runs,
 // writes what it says, and the closing-the-loop step finds the clock offset it hid.
 
+#include "tests/app/cli_test_util.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>

@@ -7,8 +7,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "sim/gyro_io.h"
+#include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
+#include "tests/app/cli_test_util.h"
 #include "tests/test_util.h"
 
 namespace shutterlab {

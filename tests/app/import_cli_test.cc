@@ -1,7 +1,8 @@
 #include "render/camera.h"
 #include "render/frames_csv.h"
-#include "sim/gyro_io.h"
+#include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
+#include "tests/app/cli_test_util.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -20,8 +21,8 @@ namespace fs = std::filesystem;
 using test::RunShutterlab;
 using test::SourcePath;
 
-const std::string kKarma = SourcePath("tests/data/gopro/karma.mp4");
-const std::string kPhone = SourcePath("tests/data/phone");
+const std::string kKarma = test::RealDataPath("rs/gopro_karma/karma.mp4");
+const std::string kPhone = test::RealDataPath("rs/phone_gyro_video_20200109_145447");
 
 size_t LineCount(const std::string& text) {
   return static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
@@ -39,6 +40,7 @@ double PeakRate(const GyroTrace& trace) {
 
 // The one test that decodes all 362 frames of karma.mp4.
 TEST(ImportCli, GoproKarmaWholeClip) {
+  SHUTTERLAB_NEED_REAL_DATA();
   test::TempDir dir;
   const std::string out = dir / "karma";
   const auto r = RunShutterlab("import " + kKarma + " --out " + out);
@@ -94,6 +96,7 @@ TEST(ImportCli, GoproKarmaWholeClip) {
 }
 
 TEST(ImportCli, GoproSelectionAndReimport) {
+  SHUTTERLAB_NEED_REAL_DATA();
   test::TempDir dir;
   const std::string out = dir / "karma";
   const auto r =
@@ -115,6 +118,7 @@ TEST(ImportCli, GoproSelectionAndReimport) {
 }
 
 TEST(ImportCli, PhoneClip) {
+  SHUTTERLAB_NEED_REAL_DATA();
   test::TempDir dir;
   const std::string out = dir / "phone";
   const auto r = RunShutterlab("import " + kPhone + " --out " + out);
@@ -195,6 +199,7 @@ void ExpectOneLineError(const std::string& args, const std::string& needle,
 }
 
 TEST(ImportCli, BadInputsAreOneLineExitTwoAndNoOutput) {
+  SHUTTERLAB_NEED_REAL_DATA();
   test::TempDir dir;
   const std::string out = dir / "out";
   ExpectOneLineError("import " + (dir / "missing.mp4") + " --out " + out,

@@ -1,11 +1,12 @@
 // `shutterlab measure` end to end: outputs exist and parse, --truth prints the error, bad input
 // gives one line and exit code 2 with nothing written.
 
-#include "estimate/measure.h"
+#include "estimate/loop/measure.h"
 #include "render/image_io.h"
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
 #include "tests/render/render_fixtures.h"
+#include "tests/app/cli_test_util.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -31,7 +32,7 @@ struct PairFiles {
 
 // A 480x360 pair rendered from a real scene (halved) under a constant rate; files in dir.
 PairFiles WritePair(const test::TempDir& dir) {
-  cv::Mat scene = ReadImage(test::SourcePath("assets/scenes/siyi_zr10_img0150.jpg"));
+  cv::Mat scene = ReadImage(test::GroundScenePath(2));
   cv::resize(scene, scene, {}, 0.5, 0.5, cv::INTER_AREA);
   TrueModel truth;
   truth.rig.camera.width = 480;

@@ -1,7 +1,8 @@
 // CLI tests of `shutterlab noise` and `shutterlab accuracy`: output formats, exit codes, bad input.
 
-#include "sim/gyro_io.h"
+#include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
+#include "tests/app/cli_test_util.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
 // Issue 6 on data nobody here made: `shutterlab import` then `shutterlab validate` on the two real
-// rolling-shutter clips bundled in tests/data (provenance in their PROVENANCE.md), through the CLI
+// rolling-shutter clips in the shared real-data folder (provenance in its SOURCES.md), through the CLI
 // as a user runs them. What is asserted is what the clips show robustly (README, "Real footage"):
 //  - the phone clip, filmed from a moving car: rotation alone leaves pixels of parallax that
 //    per-pair translation explains; with it, the readout is ~24 ms, not the 33.3 ms the source's
@@ -9,6 +9,7 @@
 //    motion and the camera hardly turns, so the data cannot settle the readout direction.
 
 #include "sim/text_file.h"
+#include "tests/app/cli_test_util.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -43,8 +44,9 @@ const json* Claim(const json& report, const std::string& name) {
 }
 
 TEST(RealClips, PhoneClipReadoutAndAxes) {
+  SHUTTERLAB_REAL_DATA(clip, "rs/phone_gyro_video_20200109_145447");
   test::TempDir dir;
-  const json report = ImportAndValidate(dir, test::SourcePath("tests/data/phone"), "",
+  const json report = ImportAndValidate(dir, clip, "",
                                         "--out '" + (dir / "plots") + "'");
   EXPECT_EQ(report["video"], true);
   EXPECT_EQ(report["frames"], 19);  // 20 frames, 19 pairs
@@ -78,9 +80,10 @@ TEST(RealClips, PhoneClipReadoutAndAxes) {
 }
 
 TEST(RealClips, GoproKarmaIsMostlyTranslation) {
+  SHUTTERLAB_REAL_DATA(karma, "rs/gopro_karma/karma.mp4");
   test::TempDir dir;
   const json report =
-      ImportAndValidate(dir, test::SourcePath("tests/data/gopro/karma.mp4"),
+      ImportAndValidate(dir, karma,
                         "--start-frame 100 --max-frames 31", "--out '" + (dir / "plots") + "'");
   EXPECT_EQ(report["frames"], 30);
   EXPECT_EQ(report["rotation_only"]["unexplained"], true);

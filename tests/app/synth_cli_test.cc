@@ -1,6 +1,7 @@
-#include "sim/gyro_io.h"
-#include "sim/raw_csv.h"
+#include "sim/logs/gyro_io.h"
+#include "sim/logs/raw_csv.h"
 #include "sim/text_file.h"
+#include "tests/app/cli_test_util.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>

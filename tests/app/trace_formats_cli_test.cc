@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "tests/app/cli_test_util.h"
 #include "tests/test_util.h"
 
 namespace shutterlab {
@@ -19,8 +20,8 @@ nlohmann::json RunJson(const std::string& args) {
 
 TEST(TraceFormatsCli, NoiseReadsARealULog) {
   // sample_log_small.ulg: a stationary PX4 board, vehicle_angular_velocity at ~280 Hz over ~6.5 s.
-  const nlohmann::json j =
-      RunJson("noise " + test::SourcePath("tests/data/px4/sample_log_small.ulg") + " --bias 0:2 --json");
+  SHUTTERLAB_REAL_DATA(log, "gyro/px4_ulog/sample_log_small.ulg");
+  const nlohmann::json j = RunJson("noise " + log + " --bias 0:2 --json");
   ASSERT_TRUE(j.is_object());
   EXPECT_EQ(j["window_samples"], 120);
   for (const char* axis : {"x", "y", "z"}) {
@@ -32,8 +33,8 @@ TEST(TraceFormatsCli, NoiseReadsARealULog) {
 
 TEST(TraceFormatsCli, FlightReadsARealBlackboxLog) {
   // btfl_001.bbl log 1: 24,893 frames at 500 Hz; with --zero-bias every sample is analysed.
-  const nlohmann::json j = RunJson("flight " + test::SourcePath("tests/data/betaflight/btfl_001.bbl") +
-                                   " --zero-bias --no-vector --json");
+  SHUTTERLAB_REAL_DATA(log, "gyro/betaflight_blackbox/btfl_001.bbl");
+  const nlohmann::json j = RunJson("flight " + log + " --zero-bias --no-vector --json");
   ASSERT_TRUE(j.is_object());
   EXPECT_EQ(j["samples"], 24893);
   ASSERT_EQ(j["rows"].size(), 4u);

@@ -4,9 +4,11 @@
 
 #include "render/camera.h"
 #include "render/render_dataset.h"
-#include "sim/gyro_io.h"
-#include "sim/synth.h"
+#include "sim/logs/gyro_io.h"
+#include "sim/synth/synth.h"
 #include "sim/text_file.h"
+#include "tests/app/cli_test_util.h"
+#include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -41,7 +43,7 @@ std::string SmallDataset(const test::TempDir& dir) {
   WriteGyroCsv(dir / "gyro.csv", SynthesizeTrace(synth));
   WriteFileAtomically(dir / "times.csv", "frame,t_first_row\n0,8.5\n1,10.0\n2,12.0\n");
   RenderOptions render;
-  render.scene_path = test::SourcePath("assets/scenes/siyi_zr10_img0150.jpg");
+  render.scene_path = test::GroundScenePath(2);
   render.camera_path = dir / "camera.json";
   render.gyro_path = dir / "gyro.csv";
   render.frames_path = dir / "times.csv";

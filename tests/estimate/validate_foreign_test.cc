@@ -8,8 +8,10 @@
 // The truth differs from camera.json by 3 ms of time offset; validate must find that, and nothing
 // on the twin whose camera.json is right.
 
-#include "estimate/validate.h"
+#include "estimate/loop/validate.h"
+#include "estimate/report/validate_report.h"
 #include "sim/text_file.h"
+#include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
 #include <Eigen/Geometry>
@@ -117,7 +119,7 @@ std::string WriteForeignDataset(const test::TempDir& dir, double true_offset_s) 
   const fs::path root = dir.path() / "foreign";
   fs::create_directories(root / "cam0");
   cv::Mat scene8 =
-      cv::imread(test::SourcePath("assets/scenes/siyi_zr10_img0150.jpg"), cv::IMREAD_GRAYSCALE);
+      cv::imread(test::GroundScenePath(2), cv::IMREAD_GRAYSCALE);
   cv::Mat scene;
   scene8.convertTo(scene, CV_16U, 257.0);
   const Orientation orientation;

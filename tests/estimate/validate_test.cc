@@ -7,15 +7,18 @@
 // AddressSanitizer (3-5x slower) the frames are 640x480 (same field of view) and only the
 // cases marked kAlsoUnderAsan run, so that the CI stage stays short.
 
-#include "estimate/validate.h"
+#include "estimate/loop/validate.h"
+#include "estimate/demo_dataset.h"
+#include "estimate/report/validate_report.h"
 
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "render/render_dataset.h"
-#include "sim/gyro_io.h"
+#include "sim/logs/gyro_io.h"
 #include "sim/so3.h"
-#include "sim/synth.h"
+#include "sim/synth/synth.h"
 #include "sim/text_file.h"
+#include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -49,7 +52,7 @@ struct DatasetSpec {
   double log_s = 30.0;                  // gyro log length, s (motion starts after 6 s still + 1 s)
   double first_frame_s = 8.0, last_frame_s = 28.0;  // frame times spread evenly between these
   uint64_t seed = 3;                                // the flight motion's seed
-  std::string scene = "assets/scenes/siyi_zr10_img0100.jpg";
+  uint64_t scene_seed = 1;  // the procedural ground texture's
 };
 
 RigModel DeclaredRig() {
@@ -88,7 +91,7 @@ std::string MakeDataset(const test::TempDir& dir, const DatasetSpec& spec) {
   }
   WriteFileAtomically(dir / "times.csv", times);
   RenderOptions render;
-  render.scene_path = test::SourcePath(spec.scene);
+  render.scene_path = test::GroundScenePath(spec.scene_seed);
   render.camera_path = dir / "camera.json";
   render.gyro_path = dir / "gyro.csv";
   render.frames_path = dir / "times.csv";
@@ -292,7 +295,7 @@ TEST(ValidateDataset, RefusesAVideoDatasetWithARef) {
 TEST(ValidateDemo, RenderAndValidateFindsTheInjectedOffset) {
   test::TempDir dir;
   InjectedDemoOptions options;
-  options.scene_path = test::SourcePath("assets/scenes/siyi_zr10_img0150.jpg");
+  options.scene_path = test::GroundScenePath(2);
   options.out_dir = dir / "demo";
   options.frames = 4;
   options.width = 320;

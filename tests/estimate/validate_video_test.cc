@@ -8,14 +8,16 @@
 // readout, half a second of a multirotor-like flight (sim/motion.h, seed 3, from 12.6 s, its
 // liveliest stretch: up to 0.8 rad/s). Under AddressSanitizer only the cases marked so run.
 
-#include "estimate/validate.h"
+#include "estimate/loop/validate.h"
+#include "estimate/report/validate_report.h"
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "render/render_dataset.h"
-#include "sim/gyro_io.h"
+#include "sim/logs/gyro_io.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
-#include "tests/estimate/effect_fixtures.h"
+#include "tests/estimate/loop/effect_fixtures.h"
+#include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -53,7 +55,7 @@ std::string MakeClip(const test::TempDir& dir, const ClipSpec& spec) {
   }
   WriteFileAtomically(dir / "times.csv", times);
   RenderOptions render;
-  render.scene_path = test::SourcePath("assets/scenes/siyi_zr10_img0150.jpg");
+  render.scene_path = test::GroundScenePath(2);
   render.camera_path = dir / "camera.json";
   render.gyro_path = dir / "gyro.csv";
   render.frames_path = dir / "times.csv";

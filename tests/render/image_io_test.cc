@@ -72,7 +72,7 @@ TEST(ImageIo, ExrKeepsFloatsAndChannelNames) {
 }
 
 TEST(ImageIo, ReadsRealJpegWithoutReorienting) {
-  const cv::Mat scene = ReadImage(test::SourcePath("assets/scenes/siyi_zr10_img0150.jpg"));
+  const cv::Mat scene = ReadImage(test::GroundScenePath(2));
   EXPECT_EQ(scene.cols, 2560);
   EXPECT_EQ(scene.rows, 1440);
   EXPECT_EQ(scene.type(), CV_8UC3);

@@ -2,6 +2,8 @@
 // Small fixtures shared by the render tests: rigs, constant-rate gyro traces, synthetic textures.
 
 #include "render/camera.h"
+#include "render/ground_texture.h"
+#include "render/image_io.h"
 #include "sim/gyro_trace.h"
 
 #include <Eigen/Core>
@@ -10,10 +12,28 @@
 
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
+#include <string>
 #include <random>
 #include <vector>
 
 namespace shutterlab::test {
+
+// The project's own nadir scene (render/ground_texture.h), 2560x1440 at 4 cm per pixel (about a
+// 1280-wide mapping camera's at 50 m), written once as a PNG under the temp folder for the tests
+// that take a scene file. The same seed gives the same bytes, so concurrent tests may share it.
+inline std::string GroundScenePath(uint64_t seed = 1) {
+  GroundTextureOptions options;
+  options.width_px = 2560;
+  options.height_px = 1440;
+  options.ground_sample_distance_m = 0.04;
+  options.seed = seed;
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("shutterlab_ground_2560x1440_" + std::to_string(seed) + ".png"))
+                               .string();
+  if (!std::filesystem::exists(path)) WriteImage(path, MakeGroundTexture(options));
+  return path;
+}
 
 // A small nadir rig: width x height, f = 300 px, principal point at the centre, 20 ms readout.
 inline RigModel SmallRig(int width = 96, int height = 72) {

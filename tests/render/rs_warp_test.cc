@@ -492,9 +492,9 @@ namespace shutterlab {
 namespace {
 
 TEST(RsWarp, DenseOpticalFlowOnARealSceneAgreesWithTheTruth) {
-  // Real aerial texture (assets/scenes), a rendered rolling-shutter/reference pair, and OpenCV's
+  // The procedural aerial texture (render/ground_texture.h), a rendered rolling-shutter/reference pair, and OpenCV's
   // DIS optical flow from the rolling-shutter image to the reference: it must find d(p).
-  const cv::Mat scene = ReadImage(test::SourcePath("assets/scenes/siyi_zr10_img0150.jpg"));
+  const cv::Mat scene = ReadImage(test::GroundScenePath(2));
   RigModel rig = SmallRig(480, 360);
   rig.camera.fx = rig.camera.fy = 900.0;
   rig.shutter.readout_s = 0.030;

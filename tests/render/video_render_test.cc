@@ -8,7 +8,7 @@
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
 #include "sim/check.h"
-#include "sim/gyro_io.h"
+#include "sim/logs/gyro_io.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
 #include "tests/render/render_fixtures.h"

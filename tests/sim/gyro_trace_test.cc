@@ -8,7 +8,6 @@
 #include <gtest/gtest.h>
 
 #include "sim/check.h"
-#include "sim/gyro_io.h"
 #include "sim/text_file.h"
 #include "tests/test_util.h"
 
@@ -40,67 +39,6 @@ TEST(GyroTrace, ReportsGapsAndDuplicates) {
   EXPECT_NEAR(trace.sampling().RateHz(), 1000.0, 1e-9);
 }
 
-TEST(GyroCsv, WriteReadRoundTripIsExact) {
-  test::TempDir dir;
-  std::vector<GyroSample> s = {{1'234'567'890'123, {0.1, -1e-7, 3.14159}},
-                               {1'234'568'890'124, {1.0 / 3.0, 2e-300, -0.0}}};
-  WriteGyroCsv(dir / "g.csv", GyroTrace(s));
-  const GyroTrace back = ReadGyroCsv(dir / "g.csv");
-  ASSERT_EQ(back.size(), 2u);
-  for (size_t i = 0; i < 2; ++i) {
-    EXPECT_EQ(back[i].t_ns, s[i].t_ns);
-    EXPECT_EQ(back[i].omega_rad_s, s[i].omega_rad_s);
-  }
-}
-
-TEST(GyroCsv, ToleratesExtraColumnsAndCrLf) {
-  test::TempDir dir;
-  WriteFileAtomically(dir / "g.csv", "t,gx,gy,gz,temp\r\n0.0,1,2,3,25\r\n0.001,4,5,6,25\r\n");
-  const GyroTrace trace = ReadGyroCsv(dir / "g.csv");
-  ASSERT_EQ(trace.size(), 2u);
-  EXPECT_EQ(trace[1].t_ns, 1'000'000);
-  EXPECT_EQ(trace[1].omega_rad_s, Eigen::Vector3d(4, 5, 6));
-}
-
-// Each bad file gives an IoError whose message names the file, the line and the problem.
-struct BadCsvCase {
-  const char* name;
-  const char* content;
-  const char* expected_fragment;
-};
-
-TEST(GyroCsv, BadInputNamesFileLineAndProblem) {
-  const BadCsvCase cases[] = {
-      {"missing_header", "0,1,2,3\n", ":1: missing header"},
-      {"columns", "t,gx,gy,gz\n0,1,2,3\n0.1,1,2\n", ":3: expected 4 columns"},
-      {"non_numeric", "t,gx,gy,gz\n0,1,abc,3\n", ":2: gy is not a finite number: 'abc'"},
-      {"non_finite", "t,gx,gy,gz\n0,1,2,inf\n", ":2: gz is not a finite number"},
-      {"decreasing", "t,gx,gy,gz\n1,0,0,0\n0.5,0,0,0\n", ":3: timestamp decreases"},
-      {"empty", "t,gx,gy,gz\n", "no samples"},
-  };
-  test::TempDir dir;
-  for (const auto& c : cases) {
-    const std::string path = dir / (std::string(c.name) + ".csv");
-    WriteFileAtomically(path, c.content);
-    try {
-      ReadGyroCsv(path);
-      ADD_FAILURE() << c.name << ": no error";
-    } catch (const IoError& e) {
-      const std::string what = e.what();
-      EXPECT_NE(what.find(path), std::string::npos) << what;
-      EXPECT_NE(what.find(c.expected_fragment), std::string::npos) << c.name << ": " << what;
-    }
-  }
-}
-
-}  // namespace
-}  // namespace shutterlab
-
-namespace shutterlab {
-namespace {
-
-// The median interval is exact on both paths: few distinct intervals (histogram) and many
-// (nth_element); both are checked against a sort.
 TEST(GyroTrace, MedianIntervalIsExactForRegularAndIrregularClocks) {
   std::mt19937_64 rng(7);
   for (int distinct : {3, 1000}) {

@@ -1,0 +1,576 @@
+#include "estimate/loop/effect_model.h"
+
+#include "estimate/loop/least_squares.h"
+#include "render/rs_warp.h"
+#include "sim/check.h"
+#include "sim/integrate.h"
+#include "sim/so3.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <opencv2/core/utility.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+namespace shutterlab {
+
+namespace {
+
+// The rays K^-1 p depend on these alone: a cache of them stays valid while they do not change.
+bool SameIntrinsics(const PinholeCamera& a, const PinholeCamera& b) {
+  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.dist == b.dist;
+}
+
+using nlohmann::json;
+
+json Array3(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
+
+void CheckName(const std::string& name) {
+  const std::vector<std::string>& names = InjectionNames();
+  SHUTTERLAB_CHECK(std::find(names.begin(), names.end(), name) != names.end())
+      << "unknown effect '" << name << "'";
+}
+
+}  // namespace
+
+int EffectParameterCount(const std::string& name) {
+  CheckName(name);
+  if (name == "time_offset" || name == "readout_time") return 1;
+  if (name == "lens_distortion" || name == "clock_rate") return 2;
+  if (name == "readout_direction") return 0;
+  return 3;  // gyro_to_camera, gyro_scale, gyro_bias, velocity
+}
+
+void ApplyEffect(const std::string& name, const double* x, TrueModel* model) {
+  RigModel& rig = model->rig;
+  if (name == "time_offset") {
+    rig.time_offset_s += x[0];
+  } else if (name == "readout_time") {
+    rig.shutter.readout_s += x[0];
+  } else if (name == "gyro_to_camera") {
+    rig.cam_from_gyro =
+        ExpSO3(Eigen::Vector3d(x[0], x[1], x[2])).toRotationMatrix() * rig.cam_from_gyro;
+  } else if (name == "gyro_scale") {
+    model->gyro_scale += Eigen::Vector3d(x[0], x[1], x[2]);
+  } else if (name == "gyro_bias") {
+    model->gyro_bias_rad_s += Eigen::Vector3d(x[0], x[1], x[2]);
+  } else if (name == "velocity") {
+    rig.velocity_mps += Eigen::Vector3d(x[0], x[1], x[2]);
+  } else if (name == "lens_distortion") {
+    rig.camera.dist[0] += x[0];
+    rig.camera.dist[1] += x[1];
+  } else if (name == "readout_direction") {
+    rig.shutter.direction = rig.shutter.direction == ReadoutDirection::kTopToBottom
+                                ? ReadoutDirection::kBottomToTop
+                                : ReadoutDirection::kTopToBottom;
+  } else if (name == "clock_rate") {
+    // A clock rate is only defined together with an offset: FORMATS.md counts it from camera time
+    // 0, which a log's clock may have passed long ago (frames at t = 1000 s: 3 ppm is 3 ms).
+    model->clock_rate_ppm += x[0];
+    rig.time_offset_s += x[1];
+  } else {
+    CheckName(name);
+  }
+}
+
+double EffectStep(const std::string& name, int i, double frames_span_s) {
+  // Steps small enough that the model is linear over them (the displacements move by ~1e-3 px) and
+  // large enough that rounding (~1e-13 px) is far below the differences.
+  if (name == "time_offset" || name == "readout_time") return 1e-5;  // s
+  if (name == "gyro_to_camera") return 1e-4;                         // rad
+  if (name == "gyro_scale") return 1e-4;
+  if (name == "gyro_bias") return 1e-4;  // rad/s
+  if (name == "velocity") return 1e-2;   // m/s
+  if (name == "lens_distortion") return 1e-4;
+  if (name == "clock_rate") {
+    return i == 0 ? 1e-5 / std::max(frames_span_s, 1.0) * 1e6 : 1e-5;  // ppm, s
+  }
+  CheckName(name);
+  return 1.0;
+}
+
+json EffectValue(const std::string& name, const TrueModel& model) {
+  const RigModel& rig = model.rig;
+  if (name == "time_offset") return rig.time_offset_s;
+  if (name == "readout_time") return rig.shutter.readout_s;
+  if (name == "gyro_to_camera") return MatrixJson(rig.cam_from_gyro);
+  if (name == "gyro_scale") return Array3(model.gyro_scale);
+  if (name == "gyro_bias") return Array3(model.gyro_bias_rad_s);
+  if (name == "velocity") return Array3(rig.velocity_mps);
+  if (name == "lens_distortion") return {{"k1", rig.camera.dist[0]}, {"k2", rig.camera.dist[1]}};
+  if (name == "readout_direction") {
+    return rig.shutter.direction == ReadoutDirection::kTopToBottom ? "top_to_bottom"
+                                                                   : "bottom_to_top";
+  }
+  if (name == "clock_rate") return model.clock_rate_ppm;
+  CheckName(name);
+  return nullptr;
+}
+
+json EffectStderr(const std::string& name, const TrueModel& model,
+                  const Eigen::MatrixXd& covariance) {
+  const int n = EffectParameterCount(name);
+  if (n == 0) return nullptr;
+  SHUTTERLAB_CHECK(covariance.rows() == n && covariance.cols() == n)
+      << name << ": covariance is " << covariance.rows() << "x" << covariance.cols();
+  // A negative or NaN variance is an undetermined parameter: NaN (null in JSON), not 0.
+  const Eigen::VectorXd sd = covariance.diagonal().unaryExpr(
+      [](double v) { return v >= 0 ? std::sqrt(v) : std::numeric_limits<double>::quiet_NaN(); });
+  if (name == "gyro_to_camera") {
+    // R = Exp(x) R_0 with x near 0: dR/dx_k = Hat(e_k) R (first order), entry by entry.
+    const Eigen::Matrix3d& r = model.rig.cam_from_gyro;
+    Eigen::Matrix<double, 9, 3> d_entries_d_x;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Matrix3d d = Hat(Eigen::Vector3d::Unit(k)) * r;
+      for (int i = 0; i < 9; ++i) d_entries_d_x(i, k) = d(i / 3, i % 3);
+    }
+    const Eigen::Matrix<double, 9, 9> cov = d_entries_d_x * covariance * d_entries_d_x.transpose();
+    json m = json::array();
+    for (int row = 0; row < 3; ++row) {
+      json line = json::array();
+      for (int col = 0; col < 3; ++col) {
+        const double v = cov(3 * row + col, 3 * row + col);
+        line.push_back(v >= 0 ? std::sqrt(v) : std::numeric_limits<double>::quiet_NaN());
+      }
+      m.push_back(line);
+    }
+    return m;
+  }
+  if (n == 1 || name == "clock_rate") return sd[0];  // clock_rate: the rate's, not the offset's
+  if (name == "lens_distortion") return {{"k1", sd[0]}, {"k2", sd[1]}};
+  return json::array({sd[0], sd[1], sd[2]});
+}
+
+const std::vector<Eigen::Matrix3d>& AxisRotations() {
+  static const std::vector<Eigen::Matrix3d> rotations = [] {
+    std::vector<Eigen::Matrix3d> out;
+    const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+    for (const auto& perm : perms) {
+      for (int signs = 0; signs < 8; ++signs) {
+        Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+        for (int row = 0; row < 3; ++row) m(row, perm[row]) = (signs >> row) & 1 ? -1.0 : 1.0;
+        if (m.determinant() > 0) out.push_back(m);
+      }
+    }
+    return out;
+  }();
+  return rotations;
+}
+
+std::string EffectUnit(const std::string& name) {
+  CheckName(name);
+  if (name == "time_offset" || name == "readout_time") return "s";
+  if (name == "gyro_bias") return "rad/s";
+  if (name == "velocity") return "m/s";
+  if (name == "clock_rate") return "ppm";
+  return "";
+}
+
+DisplacementPredictor::DisplacementPredictor(const GyroTrace& gyro,
+                                             const std::vector<FramePoints>& frames)
+    : gyro_(gyro) {
+  SHUTTERLAB_CHECK(gyro.size() >= 2) << "the gyro trace needs at least two samples";
+  for (const FramePoints& f : frames) {
+    Frame frame;
+    frame.t_first_row_ns = f.t_first_row_ns;
+    frame.first = points_;
+    for (const MeasuredPoint& p : f.points) frame.rows.push_back(p.v);
+    std::sort(frame.rows.begin(), frame.rows.end());
+    frame.rows.erase(std::unique(frame.rows.begin(), frame.rows.end()), frame.rows.end());
+    for (const MeasuredPoint& p : f.points) {
+      frame.px.emplace_back(p.u, p.v);
+      frame.row_of_point.push_back(static_cast<int>(
+          std::lower_bound(frame.rows.begin(), frame.rows.end(), p.v) - frame.rows.begin()));
+    }
+    points_ += f.points.size();
+    frames_span_s_ = std::max(frames_span_s_, std::abs(f.t_first_row_ns * 1e-9));
+    frames_.push_back(std::move(frame));
+  }
+}
+
+void DisplacementPredictor::RefreshRays(const PinholeCamera& camera) const {
+  if (rays_valid_ && SameIntrinsics(camera, rays_camera_)) return;
+  rays_.resize(points_);
+  for (const Frame& frame : frames_) {
+    for (size_t i = 0; i < frame.px.size(); ++i)
+      rays_[frame.first + i] = camera.CamFromImg(frame.px[i]);
+  }
+  rays_camera_ = camera;
+  rays_valid_ = true;
+}
+
+namespace {
+
+// The camera-frame orientation, integrated from the true rates of the gyro samples that cover the
+// instants t_ns + [lo_s, hi_s] (gyro clock): from the last sample at or before lo to the first at
+// or after hi, one more on each side so that the lookup's whole-ns rounding stays inside. nullopt
+// when the span is absurd or the trace has nothing there.
+std::optional<OrientationTrace> CoveringTrace(const GyroTrace& gyro, const TrueModel& model,
+                                              int64_t t_ns, double lo_s, double hi_s) {
+  if (!std::isfinite(lo_s) || !std::isfinite(hi_s) || std::abs(lo_s) > 1e9 ||
+      std::abs(hi_s) > 1e9) {
+    return std::nullopt;
+  }
+  const std::vector<GyroSample>& samples = gyro.samples();
+  const int64_t lo_ns = t_ns + static_cast<int64_t>(std::floor(lo_s * 1e9));
+  const int64_t hi_ns = t_ns + static_cast<int64_t>(std::ceil(hi_s * 1e9));
+  size_t begin = gyro.LowerBound(lo_ns);
+  begin = begin > 0 ? begin - 1 : 0;
+  size_t end = std::min(gyro.LowerBound(hi_ns) + 1, samples.size() - 1);
+  if (end <= begin) end = std::min(begin + 1, samples.size() - 1);
+  if (end <= begin) return std::nullopt;
+  std::vector<GyroSample> span(samples.begin() + begin, samples.begin() + end + 1);
+  for (GyroSample& s : span) s.omega_rad_s = model.CamRate(s.omega_rad_s);
+  return OrientationTrace(GyroTrace(std::move(span)));
+}
+
+// True when OrientationTrace::WorldFromBodyAt(t_ns, offset_s) over samples [front, back] would
+// answer (the same whole-ns / fraction split, so the two agree at the ends).
+bool InSpan(int64_t t_ns, double offset_s, int64_t front_ns, int64_t back_ns) {
+  const double offset_ns = offset_s * 1e9;
+  if (!std::isfinite(offset_ns) || std::abs(offset_ns) >= 9e18) return false;
+  const int64_t whole_ns = static_cast<int64_t>(std::floor(offset_ns));
+  const int64_t t = t_ns + whole_ns;
+  const double frac_ns = offset_ns - static_cast<double>(whole_ns);
+  return !(t < front_ns || t > back_ns || (t == back_ns && frac_ns > 0.0));
+}
+
+}  // namespace
+
+void DisplacementPredictor::Predict(const TrueModel& model,
+                                    std::vector<Eigen::Vector2d>* out) const {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  out->assign(points_, Eigen::Vector2d(kNaN, kNaN));
+  const PinholeCamera& camera = model.rig.camera;
+  RefreshRays(camera);
+  std::vector<double> row_offset_s;
+  std::vector<Eigen::Matrix3d> row_rotation;
+  std::vector<uint8_t> row_ok;
+  for (const Frame& frame : frames_) {
+    if (frame.px.empty()) continue;
+    const int64_t t_first = frame.t_first_row_ns;
+    // Gyro-clock offsets (from t_first on the camera clock) of row 0 and of every point row.
+    const double t0_offset_s = model.RowGyroOffsetS(t_first, 0);
+    row_offset_s.resize(frame.rows.size());
+    double lo_s = t0_offset_s, hi_s = t0_offset_s;
+    for (size_t r = 0; r < frame.rows.size(); ++r) {
+      row_offset_s[r] = model.RowGyroOffsetS(t_first, frame.rows[r]);
+      lo_s = std::min(lo_s, row_offset_s[r]);
+      hi_s = std::max(hi_s, row_offset_s[r]);
+    }
+    const std::optional<OrientationTrace> covering =
+        CoveringTrace(gyro_, model, t_first, lo_s, hi_s);
+    if (!covering) continue;
+    const OrientationTrace& trace = *covering;
+    const int64_t front_ns = trace.t_ns().front(), back_ns = trace.t_ns().back();
+    // Whole frame undefined when row 0 (the reference) is outside the trace (the renderer throws);
+    // single rows outside are undefined on their own.
+    if (!InSpan(t_first, t0_offset_s, front_ns, back_ns)) continue;
+    // As CameraMotion::Frame: R_v = R(t_0)^-1 R(t_v), c_v = velocity * (t_v - t_0).
+    const Eigen::Quaterniond ref_from_world =
+        trace.WorldFromBodyAt(t_first, t0_offset_s).conjugate();
+    row_rotation.resize(frame.rows.size());
+    row_ok.assign(frame.rows.size(), 0);
+    for (size_t r = 0; r < frame.rows.size(); ++r) {
+      if (!InSpan(t_first, row_offset_s[r], front_ns, back_ns)) continue;
+      const Eigen::Quaterniond q = ref_from_world * trace.WorldFromBodyAt(t_first, row_offset_s[r]);
+      row_rotation[r] = q.normalized().toRotationMatrix();
+      row_ok[r] = 1;
+    }
+    // As FrameGeometry::GroundPoint / RefPixel (the reference pose is the identity at c(t_0) = 0).
+    const double altitude_m = model.rig.altitude_m;
+    for (size_t i = 0; i < frame.px.size(); ++i) {
+      const int r = frame.row_of_point[i];
+      if (!row_ok[r]) continue;
+      const Eigen::Vector3d ray_w = row_rotation[r] * rays_[frame.first + i];
+      const Eigen::Vector3d c = model.rig.velocity_mps * (row_offset_s[r] - t0_offset_s);
+      const double s = (altitude_m - c.z()) / ray_w.z();
+      if (!(s > 0) || !std::isfinite(s)) continue;
+      const Eigen::Vector3d x = c + s * ray_w;
+      const std::optional<Eigen::Vector2d> ref = camera.ImgFromCam(x);
+      if (!ref) continue;
+      (*out)[frame.first + i] = *ref - frame.px[i];
+    }
+  }
+}
+
+VideoPairPredictor::VideoPairPredictor(const GyroTrace& gyro,
+                                       const std::vector<FramePoints>& frames,
+                                       bool pair_translation, double robust_delta_px)
+    : gyro_(gyro), pair_translation_(pair_translation), robust_delta_px_(robust_delta_px) {
+  SHUTTERLAB_CHECK(gyro.size() >= 2) << "the gyro trace needs at least two samples";
+  SHUTTERLAB_CHECK(!pair_translation || robust_delta_px > 0)
+      << "pair translation needs a positive robust threshold";
+  for (const FramePoints& f : frames) {
+    SHUTTERLAB_CHECK(f.earlier) << "frame " << f.frame << " is not a video pair";
+    Pair pair;
+    pair.t_later_ns = f.t_first_row_ns;
+    pair.t_earlier_ns = f.earlier->t_first_row_ns;
+    pair.first = points_;
+    for (const MeasuredPoint& p : f.points) pair.rows.push_back(p.v);
+    std::sort(pair.rows.begin(), pair.rows.end());
+    pair.rows.erase(std::unique(pair.rows.begin(), pair.rows.end()), pair.rows.end());
+    for (const MeasuredPoint& p : f.points) {
+      pair.px.emplace_back(p.u, p.v);
+      pair.measured.emplace_back(p.dx, p.dy);
+      pair.match.emplace_back(p.u + p.dx, p.v + p.dy);
+      pair.weight.push_back(std::isfinite(p.weight) ? std::max(0.0, p.weight) : 0.0);
+      pair.row_of_point.push_back(static_cast<int>(
+          std::lower_bound(pair.rows.begin(), pair.rows.end(), p.v) - pair.rows.begin()));
+    }
+    points_ += f.points.size();
+    frames_span_s_ = std::max({frames_span_s_, std::abs(f.t_first_row_ns * 1e-9),
+                               std::abs(f.earlier->t_first_row_ns * 1e-9)});
+    pairs_.push_back(std::move(pair));
+  }
+  previous_dirs_.assign(pairs_.size(),
+                        Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+}
+
+void VideoPairPredictor::RefreshRays(const PinholeCamera& camera) const {
+  if (rays_valid_ && SameIntrinsics(camera, rays_camera_)) return;
+  const Eigen::Vector3d nan = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  rays_.resize(points_);
+  match_rays_.resize(points_);
+  for (const Pair& pair : pairs_) {
+    for (size_t i = 0; i < pair.px.size(); ++i) {
+      rays_[pair.first + i] = camera.CamFromImg(pair.px[i]);
+      // Only pair_translation reads the measured matches.
+      match_rays_[pair.first + i] =
+          pair_translation_ && pair.match[i].allFinite() ? camera.CamFromImg(pair.match[i]) : nan;
+    }
+  }
+  rays_camera_ = camera;
+  rays_valid_ = true;
+}
+
+void VideoPairPredictor::Predict(const TrueModel& model, std::vector<Eigen::Vector2d>* out) const {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  out->assign(points_, Eigen::Vector2d(kNaN, kNaN));
+  RefreshRays(model.rig.camera);
+  translation_dirs_.assign(pair_translation_ ? pairs_.size() : 0, Eigen::Vector3d::Zero());
+  // Pairs are independent and each writes only its own points and direction: the same numbers
+  // whatever the thread count.
+  cv::parallel_for_(cv::Range(0, static_cast<int>(pairs_.size())), [&](const cv::Range& range) {
+    for (int k = range.start; k < range.end; ++k) PredictPair(model, k, out);
+  });
+}
+
+// The epipole's neighbourhood that pair translation's distances are weighted down in, as a share of
+// the image diagonal (PredictPair).
+constexpr double kEpipoleRadiusShare = 0.05;
+
+void VideoPairPredictor::PredictPair(const TrueModel& model, size_t k,
+                                     std::vector<Eigen::Vector2d>* out) const {
+  const PinholeCamera& camera = model.rig.camera;
+  const int height = camera.height;
+  const double last_row = height - 1;
+  std::vector<Eigen::Matrix3d> earlier_rot(height);  // world_from_cam per earlier row, on demand
+  std::vector<uint8_t> earlier_state(height, 0);     // 0 not yet, 1 known, 2 outside the trace
+  std::vector<Eigen::Matrix3d> later_rot;
+  std::vector<uint8_t> later_ok;
+  const Pair& pair = pairs_[k];
+  if (pair.px.empty()) return;
+  // Everything relative to the earlier frame's t_first_row (camera clock) on the gyro clock.
+  const int64_t t_e = pair.t_earlier_ns, t_l = pair.t_later_ns;
+  const double dt_s = (t_l - t_e) * 1e-9;
+  const double e0 = model.RowGyroOffsetS(t_e, 0), e1 = model.RowGyroOffsetS(t_e, last_row);
+  double lo_s = std::min(e0, e1), hi_s = std::max(e0, e1);
+  std::vector<double> later_offset_s(pair.rows.size());
+  for (size_t r = 0; r < pair.rows.size(); ++r) {
+    later_offset_s[r] = model.RowGyroOffsetS(t_l, pair.rows[r]);
+    lo_s = std::min(lo_s, dt_s + later_offset_s[r]);
+    hi_s = std::max(hi_s, dt_s + later_offset_s[r]);
+  }
+  const std::optional<OrientationTrace> covering = CoveringTrace(gyro_, model, t_e, lo_s, hi_s);
+  if (!covering) return;
+  const OrientationTrace& trace = *covering;
+  const int64_t front_ns = trace.t_ns().front(), back_ns = trace.t_ns().back();
+  later_rot.resize(pair.rows.size());
+  later_ok.assign(pair.rows.size(), 0);
+  for (size_t r = 0; r < pair.rows.size(); ++r) {
+    if (!InSpan(t_l, later_offset_s[r], front_ns, back_ns)) continue;
+    later_rot[r] = trace.WorldFromBodyAt(t_l, later_offset_s[r]).normalized().toRotationMatrix();
+    later_ok[r] = 1;
+  }
+  const auto earlier_row = [&](int row) -> const Eigen::Matrix3d* {
+    if (earlier_state[row] == 0) {
+      const double offset_s = model.RowGyroOffsetS(t_e, row);
+      earlier_state[row] = 2;
+      if (InSpan(t_e, offset_s, front_ns, back_ns)) {
+        earlier_rot[row] = trace.WorldFromBodyAt(t_e, offset_s).normalized().toRotationMatrix();
+        earlier_state[row] = 1;
+      }
+    }
+    return earlier_state[row] == 1 ? &earlier_rot[row] : nullptr;
+  };
+  // R(w)^T y (inverse) or R(w) y at a fractional row w: linear between the neighbouring rows'
+  // products (rows ~30 us apart: ~1e-10 from the integrated trace). False when a row is outside
+  // the trace.
+  const auto rotate_at = [&](double w, const Eigen::Vector3d& y, bool inverse, Eigen::Vector3d* z) {
+    const int r0 = std::min(static_cast<int>(w), std::max(0, height - 2));
+    const double a = w - r0;
+    const auto apply = [&](int row, Eigen::Vector3d* out) {
+      const Eigen::Matrix3d* m = earlier_row(row);
+      if (m == nullptr) return false;
+      *out = inverse ? Eigen::Vector3d(m->transpose() * y) : Eigen::Vector3d(*m * y);
+      return true;
+    };
+    if (!apply(r0, z)) return false;
+    if (a > 0) {
+      Eigen::Vector3d z1;
+      if (!apply(r0 + 1, &z1)) return false;
+      *z = (1 - a) * *z + a * z1;
+    }
+    return true;
+  };
+  const auto cam_from_world_at = [&](double w, const Eigen::Vector3d& y, Eigen::Vector3d* z) {
+    return rotate_at(w, y, true, z);
+  };
+  const auto world_from_cam_at = [&](double w, const Eigen::Vector3d& x, Eigen::Vector3d* z) {
+    return rotate_at(w, x, false, z);
+  };
+
+  if (!pair_translation_) {
+    for (size_t i = 0; i < pair.px.size(); ++i) {
+      const int r = pair.row_of_point[i];
+      if (!later_ok[r]) continue;
+      const Eigen::Vector3d y = later_rot[r] * rays_[pair.first + i];  // world direction
+      constexpr int kMaxIterations = 50;
+      double w = std::clamp(pair.px[i].y(), 0.0, last_row);
+      for (int it = 0; it < kMaxIterations; ++it) {
+        Eigen::Vector3d z;
+        if (!cam_from_world_at(w, y, &z)) break;
+        const std::optional<Eigen::Vector2d> q = camera.ImgFromCam(z);
+        if (!q || !q->allFinite()) break;
+        const double next = std::clamp(q->y(), 0.0, last_row);
+        if (std::abs(next - w) <= kVideoMatchTolPx) {
+          // A clamped row: the match lies above or below the earlier frame (beyond rounding).
+          if (q->y() >= -kVideoMatchTolPx && q->y() <= last_row + kVideoMatchTolPx) {
+            (*out)[pair.first + i] = *q - pair.px[i];
+          }
+          break;
+        }
+        w = next;
+      }
+    }
+    return;
+  }
+
+  // pair_translation: the cross products a_i = (R_w x_q) x (R_v x_p) at the measured matches.
+  const size_t n = pair.px.size();
+  std::vector<Eigen::Vector3d> a(n), y(n);
+  std::vector<double> w_row(n, -1.0);  // the measured match's row; < 0: no constraint
+  for (size_t i = 0; i < n; ++i) {
+    const int r = pair.row_of_point[i];
+    const Eigen::Vector3d& xq = match_rays_[pair.first + i];
+    const double w = pair.match[i].y();
+    if (!later_ok[r] || !xq.allFinite() || !(w >= 0.0 && w <= last_row)) continue;
+    Eigen::Vector3d zq;
+    if (!world_from_cam_at(w, xq, &zq)) continue;
+    y[i] = later_rot[r] * rays_[pair.first + i];
+    a[i] = zq.cross(y[i]);
+    w_row[i] = w;
+  }
+  // Pixel length of the epipolar line's normal for direction v: the algebraic error v . a_i over
+  // it is the distance of the measured match from the line, px.
+  const auto normal_px = [&](size_t i, const Eigen::Vector3d& v, Eigen::Vector3d* n_cam) {
+    if (!cam_from_world_at(w_row[i], y[i].cross(v), n_cam)) return 0.0;
+    return std::hypot(n_cam->x() / camera.fx, n_cam->y() / camera.fy);
+  };
+  const double f_px = 0.5 * (camera.fx + camera.fy);
+  Eigen::Vector3d v_dir = Eigen::Vector3d::Zero();
+  constexpr int kIrlsRounds = 4;
+  for (int round = 0; round < kIrlsRounds; ++round) {
+    Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+    for (size_t i = 0; i < n; ++i) {
+      if (w_row[i] < 0 || pair.weight[i] <= 0) continue;
+      double g;
+      Eigen::Vector3d n_cam;
+      if (round == 0) {
+        g = a[i].norm() * f_px > 0 ? a[i].norm() / f_px : 0.0;  // before any v: |a_i| / f
+      } else {
+        g = normal_px(i, v_dir, &n_cam);
+      }
+      if (!(g > 0)) continue;
+      double alpha = pair.weight[i] / (g * g);
+      if (round > 0) alpha *= HuberWeight(std::abs(v_dir.dot(a[i])) / g, robust_delta_px_);
+      m.noalias() += alpha * a[i] * a[i].transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m);
+    if (eig.info() != Eigen::Success || !m.allFinite() || m.isZero(0.0)) {
+      v_dir.setZero();
+      break;
+    }
+    v_dir = eig.eigenvectors().col(0).normalized();  // eigenvalues ascending
+  }
+  if (!v_dir.allFinite() || v_dir.isZero(0.0)) return;
+  // V's sign is the eigen-solver's choice, and every distance's sign follows it: orient V as the
+  // pair's previous one. A solver's evaluations come in small steps, V turns little from one to
+  // the next, and each distance then stays a continuous function of the model (a point's line
+  // may turn fast near the epipole, its distance does not jump).
+  Eigen::Vector3d& previous_dir = previous_dirs_[k];
+  if (previous_dir.allFinite() && v_dir.dot(previous_dir) < 0) v_dir = -v_dir;
+  previous_dir = v_dir;
+  // Report the direction in the earlier frame's row-0 camera frame.
+  Eigen::Vector3d v_cam;
+  translation_dirs_[k] = cam_from_world_at(0.0, v_dir, &v_cam) ? v_cam.normalized() : v_dir;
+  // Each measured match's signed distance from its epipolar line, px: across the line in
+  // undistorted pixels, or (with a lens) from the match to its foot on the line, distorted. The
+  // "prediction" is the measured match moved by that distance along x, so that measured -
+  // predicted is (distance, 0): a residual whose second component is always 0, and whose
+  // derivatives are the distance's alone. (The foot itself would turn the residual vector with the
+  // line, and Gauss-Newton would count that turning, which changes no distance, as information.)
+  const Eigen::Matrix3d k_mat = camera.K(), k_inv = k_mat.inverse();
+  const double epipole_radius_px = kEpipoleRadiusShare * std::hypot(camera.width, camera.height);
+  for (size_t i = 0; i < n; ++i) {
+    if (w_row[i] < 0) continue;
+    Eigen::Vector3d n_cam;
+    const double g = normal_px(i, v_dir, &n_cam);
+    if (!(g > 0)) continue;
+    const double distance_px = v_dir.dot(a[i]) / g;
+    const Eigen::Vector2d normal(n_cam.x() / camera.fx / g, n_cam.y() / camera.fy / g);
+    const Eigen::Vector3d& xq = match_rays_[pair.first + i];
+    const Eigen::Vector2d q_undistorted = (k_mat * xq).hnormalized();
+    const Eigen::Vector2d foot = q_undistorted - distance_px * normal;
+    double across_px = distance_px;
+    if (camera.HasDistortion()) {
+      const std::optional<Eigen::Vector2d> q = camera.ImgFromCam(k_inv * foot.homogeneous());
+      if (!q || !q->allFinite()) continue;
+      across_px = std::copysign((pair.match[i] - *q).norm(), distance_px);
+    }
+    // Near the epipole a point's line turns fast with V, so its distance depends on the model far
+    // beyond what it says (one such point held a fifth of all the information on a readout time
+    // in karma.mp4). Its distance counts the less the nearer it is: weight rho / sqrt(rho^2 + R^2),
+    // rho its distance from the epipole (the projection of V at the match's row), R a twentieth of
+    // the image diagonal: 1 far away (the noise level stays that of one component), smooth, so the
+    // solver's derivatives stay honest.
+    Eigen::Vector3d epipole;
+    if (cam_from_world_at(w_row[i], v_dir, &epipole) && std::abs(epipole.z()) > 1e-12) {
+      const double rho = (q_undistorted - (k_mat * (epipole / epipole.z())).head<2>()).norm();
+      across_px *= rho / std::hypot(rho, epipole_radius_px);
+    }
+    if (std::isfinite(across_px)) {
+      (*out)[pair.first + i] = pair.measured[i] - Eigen::Vector2d(across_px, 0.0);
+    }
+  }
+}
+
+std::unique_ptr<PointPredictor> MakePredictor(const GyroTrace& gyro,
+                                              const std::vector<FramePoints>& frames,
+                                              bool pair_translation, double robust_delta_px) {
+  size_t video = 0;
+  for (const FramePoints& f : frames) video += f.earlier ? 1 : 0;
+  SHUTTERLAB_CHECK(video == 0 || video == frames.size())
+      << "frames mix video pairs and reference frames";
+  if (video > 0) {
+    return std::make_unique<VideoPairPredictor>(gyro, frames, pair_translation, robust_delta_px);
+  }
+  SHUTTERLAB_CHECK(!pair_translation) << "pair translation needs video pairs";
+  return std::make_unique<DisplacementPredictor>(gyro, frames);
+}
+
+}  // namespace shutterlab

@@ -1,0 +1,24 @@
+#pragma once
+// Per-frame residual statistics and the pooled measurement noise, shared by the still and the
+// video branches of `validate`.
+
+#include "estimate/loop/frame_points.h"
+#include "estimate/loop/validation_result.h"
+
+#include <vector>
+
+namespace shutterlab {
+
+// The noise of all frames' points pooled (RMS over points), px, never below kMinNoisePx: identical
+// images measure exactly 0, against which every residual would be infinitely significant.
+inline constexpr double kMinNoisePx = 1e-3;
+double PooledNoisePx(const std::vector<FrameValidation>& frames);
+
+// Each frame's residual statistics (and, with keep_residuals, its points' residuals) from the
+// loop's per-point residuals; frames[k] holds out[k]'s points. translation: the video
+// pair-translation loop, or null.
+void FillFrameResiduals(const std::vector<FramePoints>& frames, const LoopResult& loop,
+                        const LoopResult* translation, bool keep_residuals,
+                        std::vector<FrameValidation>* out);
+
+}  // namespace shutterlab

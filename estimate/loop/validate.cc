@@ -1,0 +1,294 @@
+#include "estimate/loop/validate.h"
+
+#include "estimate/paper/analyze.h"
+#include "estimate/loop/frame_residuals.h"
+#include "estimate/loop/validate_video.h"
+#include "render/frames_csv.h"
+#include "render/image_io.h"
+#include "render/pictures.h"
+#include "render/rs_warp.h"
+#include "render/truth_model.h"
+#include "sim/check.h"
+#include "sim/logs/gyro_io.h"
+#include "sim/units.h"
+#include "sim/text_file.h"
+
+#include <Eigen/Geometry>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+#include <utility>
+
+namespace shutterlab {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr const char* kAxisNames[3] = {"x", "y", "z"};
+
+// Grid rows or columns: every kGridStepPx-th plus the last one (as analyze's D_full).
+std::vector<int> GridLines(int size) {
+  std::vector<int> lines;
+  for (int i = 0; i < size; i += kGridStepPx) lines.push_back(i);
+  if (lines.back() != size - 1) lines.push_back(size - 1);
+  return lines;
+}
+
+struct FullModelD {
+  double d_px = 0.0;           // FORMATS.md D of the grid
+  double d_centre_px = 0.0;    // D of the grid column nearest the principal point
+  double max_angle_rad = 0.0;  // largest rotation between any two grid rows' orientations
+};
+
+// The declared full model's D for one frame, on the grid.
+FullModelD FullModel(const RigModel& rig, const FrameMotion& motion) {
+  const PinholeCamera& cam = rig.camera;
+  const FrameGeometry geometry(cam, rig.altitude_m, motion, cv::Size(cam.width, cam.height));
+  const std::vector<int> rows = GridLines(cam.height), cols = GridLines(cam.width);
+  cv::Mat field(static_cast<int>(rows.size()), static_cast<int>(cols.size()), CV_32FC2);
+  for (size_t r = 0; r < rows.size(); ++r) {
+    for (size_t c = 0; c < cols.size(); ++c) {
+      const std::optional<Eigen::Vector2d> ref = geometry.RefPixel(cols[c], rows[r]);
+      const float nan = std::numeric_limits<float>::quiet_NaN();
+      field.at<cv::Vec2f>(static_cast<int>(r), static_cast<int>(c)) =
+          ref ? cv::Vec2f(static_cast<float>(ref->x() - cols[c]),
+                          static_cast<float>(ref->y() - rows[r]))
+              : cv::Vec2f(nan, nan);
+    }
+  }
+  FullModelD out;
+  out.d_px = FrameDistortionPx(field);
+  size_t centre = 0;
+  for (size_t c = 0; c < cols.size(); ++c) {
+    if (std::abs(cols[c] - cam.cx) < std::abs(cols[centre] - cam.cx)) centre = c;
+  }
+  out.d_centre_px = FrameDistortionPx(field.col(static_cast<int>(centre)).clone());
+  // Vector criterion: the largest angle between the orientations of any two rows.
+  std::vector<Eigen::Quaterniond> q;
+  for (int v : rows) q.emplace_back(motion.world_from_cam[static_cast<size_t>(v)]);
+  for (size_t a = 0; a < q.size(); ++a) {
+    for (size_t b = a + 1; b < q.size(); ++b) {
+      out.max_angle_rad = std::max(out.max_angle_rad, q[a].angularDistance(q[b]));
+    }
+  }
+  return out;
+}
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + mid, values.end());
+  const double hi = values[mid];
+  if (values.size() % 2 == 1) return hi;
+  return 0.5 * (hi + *std::max_element(values.begin(), values.begin() + mid));
+}
+
+RatioGroup Ratios(const std::vector<FrameValidation>& frames, int axis) {
+  RatioGroup group;
+  group.axis = axis;
+  std::vector<double> paper, vector, full, centre;
+  for (const FrameValidation& f : frames) {
+    if (axis < 3 && f.dominant_axis != axis) continue;
+    if (f.d_meas_px < kMinRatioDPx) continue;
+    paper.push_back(f.d_paper_m / f.d_meas_m);
+    vector.push_back(f.d_vector_m / f.d_meas_m);
+    full.push_back(f.d_full_px / f.d_meas_px);
+    if (f.d_full_px > 0) centre.push_back(f.d_centre_px / f.d_full_px);
+  }
+  group.frames = static_cast<int>(paper.size());
+  if (paper.empty()) return group;
+  group.paper_min = *std::min_element(paper.begin(), paper.end());
+  group.paper_max = *std::max_element(paper.begin(), paper.end());
+  group.paper_median = Median(paper);
+  group.vector_median = Median(vector);
+  group.full_median = Median(full);
+  group.centre_median = Median(centre);
+  return group;
+}
+
+Confusion Confuse(const std::vector<FrameValidation>& frames, size_t limit, double limit_m,
+                  bool full) {
+  Confusion c;
+  c.limit_m = limit_m;
+  for (const FrameValidation& f : frames) {
+    const bool truth = f.flag_meas[limit];
+    const bool predicted = full ? f.flag_full[limit] : f.flag_paper[limit];
+    if (truth && predicted) ++c.true_positive;
+    if (!truth && predicted) ++c.false_positive;
+    if (truth && !predicted) ++c.false_negative;
+    if (!truth && !predicted) ++c.true_negative;
+  }
+  return c;
+}
+
+}  // namespace
+
+void ValidateOptions::Check() const {
+  SHUTTERLAB_CHECK(!limits_m.empty()) << "give at least one ground limit";
+  for (double limit : limits_m) {
+    SHUTTERLAB_CHECK(std::isfinite(limit) && limit > 0)
+        << "ground limit must be positive (got " << limit << " m)";
+  }
+  measure.Check();
+  loop.Check();
+}
+
+ValidationResult ValidateDataset(const std::string& dataset_dir, const ValidateOptions& options,
+                                 const ValidateProgress& progress) {
+  options.Check();
+  auto start = std::chrono::steady_clock::now();
+  ValidationResult result;
+  result.dataset = dataset_dir;
+  result.limits_m = options.limits_m;
+
+  // --- read and check everything that is cheap to check before the long stages
+  const fs::path dir(dataset_dir);
+  if (!fs::is_directory(dir)) throw IoError(IoMessage(dataset_dir, 0, "not a dataset folder"));
+  const std::string camera_path = (dir / "camera.json").string();
+  const std::string gyro_path = (dir / "gyro.csv").string();
+  const std::string frames_path = (dir / "frames.csv").string();
+  for (const std::string& path : {camera_path, gyro_path, frames_path}) {
+    if (!fs::is_regular_file(path)) throw IoError(IoMessage(path, 0, "missing"));
+  }
+  result.declared = ReadRigModel(camera_path);
+  const RigModel& rig = result.declared;
+  const GyroTrace gyro = ReadGyroCsv(gyro_path);
+  if (gyro.size() < 2) throw IoError(IoMessage(gyro_path, 0, "fewer than two samples"));
+  const std::vector<FrameEntry> entries = ReadFramesCsv(frames_path);
+  if (entries.empty()) throw IoError(IoMessage(frames_path, 0, "no frames"));
+  // FORMATS.md: a video dataset leaves ref empty on every line.
+  const bool video = entries.front().ref.empty();
+  for (size_t i = 0; i < entries.size(); ++i) {
+    // frames.csv: a header line, then one frame a line.
+    const long line = static_cast<long>(i) + 2;
+    if (entries[i].ref.empty() != video) {
+      throw IoError(IoMessage(frames_path, line,
+                              video ? "a ref image in a video dataset (line 2 has none)"
+                                    : "no ref image (a video dataset leaves ref empty on every "
+                                      "line, line 2 has one)"));
+    }
+    std::vector<std::string> images = {entries[i].image};
+    if (!video) images.push_back(entries[i].ref);
+    for (const std::string& name : images) {
+      if (name.empty() || !fs::is_regular_file(dir / name)) {
+        throw IoError(IoMessage(frames_path, line, "image '" + name + "' not found"));
+      }
+    }
+  }
+  if (video) {
+    result.read_s = SecondsSince(start);
+    ValidateVideoDataset(dataset_dir, gyro, entries, options, progress, &result);
+    return result;
+  }
+  TrueModel declared_model;
+  declared_model.rig = rig;
+  const CameraMotion motion(gyro, declared_model);
+  std::vector<FrameMotion> motions;
+  for (size_t i = 0; i < entries.size(); ++i) {
+    try {
+      motions.push_back(motion.Frame(entries[i].t_first_row_ns));
+    } catch (const std::out_of_range& e) {
+      throw IoError(IoMessage(frames_path, static_cast<long>(i) + 2,
+                              "frame " + std::to_string(entries[i].frame) + ": " + e.what()));
+    }
+  }
+  result.read_s = SecondsSince(start);
+
+  // --- measure every frame
+  const double f_px = 0.5 * (rig.camera.fx + rig.camera.fy);
+  const double m_per_px = rig.altitude_m / f_px;
+  std::vector<FramePoints> frame_points(entries.size());
+  result.frames.resize(entries.size());
+  for (size_t i = 0; i < entries.size(); ++i) {
+    start = std::chrono::steady_clock::now();
+    const long line = static_cast<long>(i) + 2;
+    const cv::Mat ref = ReadImage((dir / entries[i].ref).string());
+    const cv::Mat image = ReadImage((dir / entries[i].image).string());
+    for (const auto& [name, picture] :
+         {std::pair{entries[i].ref, ref}, {entries[i].image, image}}) {
+      if (picture.cols != rig.camera.width || picture.rows != rig.camera.height) {
+        throw IoError(IoMessage(frames_path, line,
+                                "image '" + name + "' is " + std::to_string(picture.cols) + "x" +
+                                    std::to_string(picture.rows) + ", camera.json declares " +
+                                    std::to_string(rig.camera.width) + "x" +
+                                    std::to_string(rig.camera.height)));
+      }
+    }
+    result.read_s += SecondsSince(start);
+    start = std::chrono::steady_clock::now();
+    const DisplacementMeasurement measured = MeasureDisplacement(ref, image, options.measure);
+    result.measure_s += SecondsSince(start);
+
+    FrameValidation& f = result.frames[i];
+    f.frame = entries[i].frame;
+    f.image = entries[i].image;
+    f.t_gyro_s = entries[i].t_first_row_ns * 1e-9 + rig.time_offset_s;
+    f.points = measured.points.size();
+    f.measured_fraction = measured.measured_fraction;
+    f.noise_px = measured.noise_px;
+    f.d_meas_px = measured.d_px;
+    f.d_meas_m = measured.d_px * m_per_px;
+    frame_points[i] = {entries[i].frame, entries[i].t_first_row_ns, measured.points, std::nullopt};
+    if (progress) progress("measure", i + 1, entries.size());
+  }
+
+  // --- predict: the declared full model and the paper's threshold model
+  start = std::chrono::steady_clock::now();
+  AnalyzeOptions analyze;
+  analyze.rig = rig;
+  analyze.limits_m = options.limits_m;
+  analyze.what_if = false;
+  analyze.estimate_bias = false;  // gyro.csv is the calibrated log the dataset declares
+  for (const FrameEntry& e : entries) {
+    analyze.triggers.push_back(
+        {FrameName(e.frame), e.t_first_row_ns + SecondsToNs(rig.time_offset_s)});
+  }
+  FlightLog log;
+  log.gyro = gyro;
+  log.format = "gyro.csv";
+  const AnalyzeResult paper = Analyze(log, analyze);
+  for (size_t i = 0; i < entries.size(); ++i) {
+    FrameValidation& f = result.frames[i];
+    const ImageResult& image = paper.images[i];
+    SHUTTERLAB_CHECK(image.in_trace) << frames_path << ":" << i + 2 << ": frame " << f.frame
+                                     << ": the readout is outside the gyro log";
+    f.d_paper_m = image.d_paper_m;
+    f.range_arcsec = image.range_arcsec;
+    f.dominant_axis = image.dominant_axis;
+    const FullModelD full = FullModel(rig, motions[i]);
+    f.d_full_px = full.d_px;
+    f.d_full_m = full.d_px * m_per_px;
+    f.d_centre_px = full.d_centre_px;
+    f.d_vector_m = rig.altitude_m * std::tan(full.max_angle_rad);
+    for (double limit : options.limits_m) {
+      f.flag_meas.push_back(f.d_meas_m > limit);
+      f.flag_full.push_back(f.d_full_m > limit);
+      f.flag_paper.push_back(f.d_paper_m > limit);
+    }
+    if (progress) progress("predict", i + 1, entries.size());
+  }
+  for (size_t l = 0; l < options.limits_m.size(); ++l) {
+    result.confusion_paper.push_back(Confuse(result.frames, l, options.limits_m[l], false));
+    result.confusion_full.push_back(Confuse(result.frames, l, options.limits_m[l], true));
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    const RatioGroup group = Ratios(result.frames, axis);
+    if (group.frames > 0) result.ratios.push_back(group);
+  }
+  result.ratios.push_back(Ratios(result.frames, 3));
+  result.predict_s = SecondsSince(start);
+
+  // --- close the loop over all frames' points
+  start = std::chrono::steady_clock::now();
+  result.loop = CloseTheLoop(rig, gyro, frame_points, PooledNoisePx(result.frames), options.loop);
+  FillFrameResiduals(frame_points, result.loop, nullptr, options.keep_residuals, &result.frames);
+  result.loop_s = SecondsSince(start);
+  return result;
+}
+
+}  // namespace shutterlab

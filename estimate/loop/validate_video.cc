@@ -1,0 +1,594 @@
+#include "estimate/loop/validate_video.h"
+
+#include "estimate/loop/effect_model.h"
+#include "estimate/loop/frame_residuals.h"
+#include "render/image_io.h"
+#include "sim/check.h"
+#include "sim/so3.h"
+#include "sim/text_file.h"
+#include "sim/units.h"
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <sstream>
+
+namespace shutterlab {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// 99 % quantiles of chi-square with 1, 2, 3 degrees of freedom: two fits of an effect on disjoint
+// halves agree when their difference, in the metric of the sum of their covariances, is below.
+constexpr double kChi2Quantile99[4] = {0.0, 6.635, 9.210, 11.345};
+// A source's scalar claim holds when the fitted value is within this many standard errors of it.
+constexpr double kClaimSigmas = 3.0;
+// Translation is the preferred model when the rotation-only residual stays above the noise and
+// translation removes at least this share of its excess.
+constexpr double kPreferTranslationShare = 0.5;
+
+// The two halves' fits of one effect against each other.
+HalfAgreement CompareHalves(const IdentifiedEffect& a, const IdentifiedEffect& b) {
+  HalfAgreement out;
+  out.effect = a.name;
+  out.first = a.value;
+  out.first_stderr = a.stderr_value;
+  out.second = b.value;
+  out.second_stderr = b.stderr_value;
+  const Eigen::Index n = a.parameters.size();
+  if (n == 0) {  // readout_direction: a discrete choice
+    out.agree = a.value == b.value;
+    out.distance = out.agree ? 0.0 : std::numeric_limits<double>::infinity();
+    return out;
+  }
+  // Both halves start from the same declared model, so their parameters (deltas from it; for
+  // gyro_to_camera a rotation vector on the same side of the same R_CG) compare directly.
+  const Eigen::VectorXd d = a.parameters - b.parameters;
+  const Eigen::MatrixXd c = a.covariance + b.covariance;
+  if (!d.allFinite() || !c.allFinite()) {
+    out.determined = out.agree = false;
+    out.distance = std::numeric_limits<double>::quiet_NaN();
+    return out;
+  }
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(c);
+  double d2 = std::numeric_limits<double>::infinity();
+  if (lu.isInvertible()) d2 = d.dot(lu.solve(d));
+  out.distance = std::sqrt(std::max(0.0, d2));
+  out.agree = d2 < kChi2Quantile99[std::min<Eigen::Index>(n, 3)];
+  return out;
+}
+
+// The claim names of import.json that a fitted effect tests.
+std::string EffectForClaim(const std::string& claim) {
+  if (claim == "readout_s") return "readout_time";
+  if (claim == "gyro_to_camera") return "gyro_to_camera";
+  if (claim == "time_offset_s") return "time_offset";
+  if (claim == "direction") return "readout_direction";
+  return "";
+}
+
+Eigen::Matrix3d MatrixFromJson(const json& m) {
+  Eigen::Matrix3d out;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) out(r, c) = m.at(r).at(c).get<double>();
+  }
+  return out;
+}
+
+// The signed permutation nearest to a rotation: each row's largest entry, rounded to +-1.
+Eigen::Matrix3d NearestAxes(const Eigen::Matrix3d& r) {
+  Eigen::Matrix3d out = Eigen::Matrix3d::Zero();
+  for (int row = 0; row < 3; ++row) {
+    Eigen::Index col;
+    r.row(row).cwiseAbs().maxCoeff(&col);
+    out(row, col) = r(row, col) < 0 ? -1.0 : 1.0;
+  }
+  return out;
+}
+
+double AngleDeg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  return AngularDistance(Eigen::Quaterniond(a), Eigen::Quaterniond(b)) * 180.0 / M_PI;
+}
+
+std::string MatrixText(const Eigen::Matrix3d& m) {
+  std::string out = "[";
+  for (int r = 0; r < 3; ++r) {
+    out += r ? ", [" : "[";
+    for (int c = 0; c < 3; ++c) out += (c ? "," : "") + FormatNumber("%g", m(r, c));
+    out += "]";
+  }
+  return out + "]";
+}
+
+// Mean squares per residual component of two sets of per-point residuals over the same points:
+// weighted points where both predict, less the kCompareTrimShare largest of either (moving objects,
+// bad matches), px^2.
+struct TrimmedComparison {
+  double a = 0.0, b = 0.0;
+  size_t points = 0;
+};
+TrimmedComparison CompareTrimmed(const std::vector<FramePoints>& pairs,
+                                 const std::vector<Eigen::Vector2d>& a, int a_components,
+                                 const std::vector<Eigen::Vector2d>& b, int b_components) {
+  std::vector<double> sq_a, sq_b;
+  size_t at = 0;
+  for (const FramePoints& f : pairs) {
+    for (const MeasuredPoint& p : f.points) {
+      if (p.weight > 0 && a[at].allFinite() && b[at].allFinite()) {
+        sq_a.push_back(a[at].squaredNorm() / a_components);
+        sq_b.push_back(b[at].squaredNorm() / b_components);
+      }
+      ++at;
+    }
+  }
+  TrimmedComparison out;
+  if (sq_a.empty()) return out;
+  const auto cut = [](std::vector<double> v) {
+    const size_t k =
+        std::min(v.size() - 1, static_cast<size_t>((1.0 - kCompareTrimShare) * v.size()));
+    std::nth_element(v.begin(), v.begin() + k, v.end());
+    return v[k];
+  };
+  const double cut_a = cut(sq_a), cut_b = cut(sq_b);
+  for (size_t i = 0; i < sq_a.size(); ++i) {
+    if (sq_a[i] > cut_a || sq_b[i] > cut_b) continue;
+    out.a += sq_a[i];
+    out.b += sq_b[i];
+    ++out.points;
+  }
+  if (out.points > 0) {
+    out.a /= out.points;
+    out.b /= out.points;
+  }
+  return out;
+}
+
+// Share of a's excess over the noise (mean square per component) that b removes, in [0, 1]; when a
+// is within the noise, what b removes is measured against the noise itself (a below-noise residual
+// has no excess, and moving it by a sliver of the noise decides nothing).
+double ExplainedShare(const TrimmedComparison& c, double noise_px) {
+  const double noise_mean_sq_px2 = noise_px * noise_px / 2.0;
+  const double excess = c.a - noise_mean_sq_px2;
+  if (excess > noise_mean_sq_px2)
+    return std::clamp((c.a - std::max(noise_mean_sq_px2, c.b)) / excess, 0.0, 1.0);
+  return std::clamp((c.a - c.b) / noise_mean_sq_px2, 0.0, 1.0);
+}
+
+// The loop's rule for candidates (effect_fit.cc): one that loses more than this share of the points
+// is not considered; the same for the axis mappings a gyro_to_camera claim is tested against.
+constexpr double kMaxMappingLostShare = 0.01;
+
+// Below this share of the residual's excess that the best value removes, the data do not pin a
+// claim down: it is reported as not determined rather than held or contradicted.
+constexpr double kMinClaimShare = 0.1;
+
+// The claims of import.json that validate can test, read and checked before any work is done (a
+// broken file is named at once, not after minutes of measuring); none without the file. Each
+// claim an object with a string "what"; "status" a string when present; a gyro_to_camera value a
+// 3x3 array of numbers, readout_s and time_offset_s numbers, direction a string.
+json ReadClaims(const fs::path& import_json) {
+  json claims = json::array();
+  if (!fs::is_regular_file(import_json)) return claims;
+  const std::string path = import_json.string();
+  json record;
+  try {
+    record = json::parse(ReadFileToString(path));
+  } catch (const json::exception& e) {
+    throw IoError(IoMessage(path, 0, std::string("not JSON: ") + e.what()));
+  }
+  if (!record.is_object() || !record.contains("claims")) return claims;
+  if (!record["claims"].is_array()) throw IoError(IoMessage(path, 0, "\"claims\" is not an array"));
+  for (size_t k = 0; k < record["claims"].size(); ++k) {
+    const json& claim = record["claims"][k];
+    const std::string where = "claim " + std::to_string(k + 1) + ": ";
+    if (!claim.is_object() || !claim.contains("what") || !claim["what"].is_string()) {
+      throw IoError(IoMessage(path, 0, where + "not an object with a string \"what\""));
+    }
+    if (claim.contains("status") && !claim["status"].is_string()) {
+      throw IoError(IoMessage(path, 0, where + "\"status\" is not a string"));
+    }
+    const std::string effect = EffectForClaim(claim["what"].get<std::string>());
+    if (effect.empty()) continue;  // a claim validate cannot test (exposure, say)
+    const json value = claim.value("value", json());
+    bool ok = false;
+    if (effect == "gyro_to_camera") {
+      ok = value.is_array() && value.size() == 3;
+      for (size_t r = 0; ok && r < 3; ++r) {
+        ok = value[r].is_array() && value[r].size() == 3;
+        for (size_t c = 0; ok && c < 3; ++c) ok = value[r][c].is_number();
+      }
+    } else if (effect == "readout_direction") {
+      ok = value == "top_to_bottom" || value == "bottom_to_top";
+    } else {
+      ok = value.is_number() && std::isfinite(value.get<double>());
+    }
+    if (!ok) {
+      throw IoError(IoMessage(path, 0,
+                              where + "\"" + claim["what"].get<std::string>() +
+                                  "\" has an unusable value " + value.dump()));
+    }
+    claims.push_back(claim);
+  }
+  return claims;
+}
+
+// A claim is tested by the preferred model, or by the rotation-only one where the pair translation
+// cannot tell the effect (IdentifiableWithPairTranslation). Scalars (readout_s, time_offset_s): the
+// effect fitted beside the model's identified ones, against the claim in standard errors, and how
+// much of the residual fitting it removes. direction: both readings. gyro_to_camera: the rotation-
+// only residual of each of the 24 axis mappings against the claimed one's.
+// Each model's fits start where its loop started (preferred_start, rotation_start).
+std::vector<ClaimCheck> CheckClaims(const json& claims, const GyroTrace& gyro,
+                                    const std::vector<FramePoints>& pairs, double noise_px,
+                                    const TrueModel& preferred_start, const LoopResult& preferred,
+                                    const LoopOptions& preferred_options,
+                                    const TrueModel& rotation_start, const LoopResult& rotation,
+                                    const LoopOptions& rotation_options) {
+  const RigModel& declared = rotation_start.rig;
+  std::vector<ClaimCheck> checks;
+  std::map<std::pair<bool, std::vector<std::string>>, LoopResult>
+      fits;                           // by (by_rotation, effects)
+  for (const json& claim : claims) {  // as ReadClaims checked them
+    ClaimCheck check;
+    check.claim = claim["what"].get<std::string>();
+    check.effect = EffectForClaim(check.claim);
+    check.status = claim.value("status", "");
+    check.claimed = claim.value("value", json());
+
+    if (check.effect == "gyro_to_camera") {
+      const Eigen::Matrix3d claimed = MatrixFromJson(check.claimed);
+      const std::unique_ptr<PointPredictor> predictor =
+          MakePredictor(gyro, pairs, /*pair_translation=*/false, 1.0);
+      std::vector<Eigen::Vector2d> predicted;
+      const auto residuals = [&](const Eigen::Matrix3d& cam_from_gyro) {
+        TrueModel model = rotation.model;
+        model.rig.cam_from_gyro = cam_from_gyro;
+        predictor->Predict(model, &predicted);
+        std::vector<Eigen::Vector2d> r(predicted.size());
+        size_t at = 0;
+        for (const FramePoints& f : pairs) {
+          for (const MeasuredPoint& p : f.points) {
+            r[at] = Eigen::Vector2d(p.dx, p.dy) - predicted[at];
+            ++at;
+          }
+        }
+        return r;
+      };
+      // The claimed axes against the best other mapping of the 24, each pair of them over the
+      // points both predict (CompareTrimmed: mean square per component, the largest of either
+      // left out). A mapping that sends more than kMaxMappingLostShare of the claimed one's
+      // points out of the frame, where the measurement found them inside, is out.
+      const std::vector<Eigen::Vector2d> r_claimed = residuals(claimed);
+      std::vector<double> weights;
+      for (const FramePoints& f : pairs) {
+        for (const MeasuredPoint& p : f.points) weights.push_back(p.weight);
+      }
+      size_t claimed_points = 0;
+      for (size_t i = 0; i < r_claimed.size(); ++i) {
+        claimed_points += weights[i] > 0 && r_claimed[i].allFinite();
+      }
+      double claimed_mean_sq_px2 = CompareTrimmed(pairs, r_claimed, 2, r_claimed, 2).a;
+      double other_mean_sq_px2 = std::numeric_limits<double>::infinity();
+      Eigen::Matrix3d other = claimed;
+      const Eigen::Matrix3d claimed_axes = NearestAxes(claimed);
+      for (const Eigen::Matrix3d& axes : AxisRotations()) {  // signed permutations already
+        if (axes == claimed_axes) continue;
+        const std::vector<Eigen::Vector2d> r = residuals(axes);
+        size_t lost = 0;
+        for (size_t i = 0; i < r.size(); ++i) {
+          lost += weights[i] > 0 && r_claimed[i].allFinite() && !r[i].allFinite();
+        }
+        if (lost > kMaxMappingLostShare * static_cast<double>(claimed_points)) continue;
+        const TrimmedComparison c = CompareTrimmed(pairs, r_claimed, 2, r, 2);
+        if (c.points == 0 || !(c.a > 0)) continue;
+        if (!std::isfinite(other_mean_sq_px2) ||
+            c.b / c.a < other_mean_sq_px2 / claimed_mean_sq_px2) {
+          claimed_mean_sq_px2 = c.a;
+          other_mean_sq_px2 = c.b;
+          other = axes;
+        }
+      }
+      const bool claimed_best = claimed_mean_sq_px2 <= other_mean_sq_px2;
+      check.found = MatrixJson(claimed_best ? NearestAxes(claimed) : other);
+      check.difference = claimed_best ? 0.0 : AngleDeg(other, claimed);
+      // How much of the worse one's excess over the noise the better one removes.
+      const double margin = ExplainedShare(
+          claimed_best ? TrimmedComparison{other_mean_sq_px2, claimed_mean_sq_px2, 1}
+                       : TrimmedComparison{claimed_mean_sq_px2, other_mean_sq_px2, 1},
+          noise_px);
+      const std::string numbers =
+          "rotation-only rms per component " +
+          FormatNumber("%.3f", std::sqrt(claimed_mean_sq_px2)) + " px with the claimed axes, " +
+          FormatNumber("%.3f", std::sqrt(other_mean_sq_px2)) +
+          " px with the best other of the 24 mappings " + MatrixText(other) + " (" +
+          FormatNumber("%.0f", 100 * margin) + " % of the worse one's excess)";
+      if (margin < kMinClaimShare) {
+        check.verdict = "not determined: " + numbers;
+      } else {
+        check.verdict = (claimed_best ? "claim holds: " : "claim contradicted: ") + numbers;
+      }
+      checks.push_back(std::move(check));
+      continue;
+    }
+
+    const bool by_rotation =
+        preferred_options.pair_translation && !IdentifiableWithPairTranslation(check.effect);
+    const LoopOptions& loop_options = by_rotation ? rotation_options : preferred_options;
+    std::vector<std::string> base;
+    for (const std::string& e : EffectNames(by_rotation ? rotation : preferred)) {
+      if (e != check.effect) base.push_back(e);
+    }
+    std::vector<std::string> with_effect = base;
+    with_effect.push_back(check.effect);
+    const TrueModel& start = by_rotation ? rotation_start : preferred_start;
+    // Claims share fits (the model's own effects are every claim's "without"): each once.
+    const auto fit = [&](const std::vector<std::string>& effects) -> const LoopResult& {
+      const auto key = std::make_pair(by_rotation, effects);
+      auto it = fits.find(key);
+      if (it == fits.end()) {
+        it = fits.emplace(key, FitEffects(start, gyro, pairs, noise_px, effects, loop_options))
+                 .first;
+      }
+      return it->second;
+    };
+    const LoopResult& without = fit(base);
+    const LoopResult& with = fit(with_effect);
+    const TrimmedComparison c =
+        CompareTrimmed(pairs, without.residuals_after, without.residual_components,
+                       with.residuals_after, with.residual_components);
+    const double share = ExplainedShare(c, noise_px);
+    const std::string removes = "fitting it removes " + FormatNumber("%.0f", 100 * share) +
+                                " % of the residual's excess over the noise";
+    if (check.effect == "readout_direction") {
+      // A discrete claim: the model read as declared (without) and flipped (with).
+      const std::string declared_word = declared.shutter.direction == ReadoutDirection::kTopToBottom
+                                            ? "top_to_bottom"
+                                            : "bottom_to_top";
+      const std::string other_word =
+          declared_word == "top_to_bottom" ? "bottom_to_top" : "top_to_bottom";
+      const bool flip_better = c.b < c.a;
+      check.found = flip_better ? other_word : declared_word;
+      // How much of the worse reading's excess over the noise the better one removes.
+      const double margin =
+          ExplainedShare(flip_better ? c : TrimmedComparison{c.b, c.a, c.points}, noise_px);
+      const std::string numbers =
+          "rms per component " + FormatNumber("%.4f", std::sqrt(c.a)) + " px read " +
+          declared_word + ", " + FormatNumber("%.4f", std::sqrt(c.b)) + " px read " + other_word +
+          " (" + FormatNumber("%.0f", 100 * margin) + " % of the worse reading's excess)";
+      if (margin < kMinClaimShare) {
+        check.verdict = "not determined: " + numbers;
+      } else {
+        check.verdict =
+            (check.found == check.claimed ? "claim holds: " : "claim contradicted: ") + numbers;
+      }
+      checks.push_back(std::move(check));
+      continue;
+    }
+    const IdentifiedEffect* effect = nullptr;
+    for (const IdentifiedEffect& e : with.effects) {
+      if (e.name == check.effect) effect = &e;
+    }
+    if (effect == nullptr || !check.claimed.is_number() || !effect->value.is_number()) continue;
+    check.found = effect->value;
+    check.found_stderr = effect->stderr_value;
+    const double claimed = check.claimed.get<double>(), found = effect->value.get<double>();
+    const double se = effect->stderr_value.is_number() ? effect->stderr_value.get<double>()
+                                                       : std::numeric_limits<double>::quiet_NaN();
+    check.difference = std::abs(found - claimed) / se;
+    const std::string numbers =
+        FormatNumber("%.3f", found * 1e3) + " +- " + FormatNumber("%.3f", se * 1e3) +
+        " ms against " + FormatNumber("%.3f", claimed * 1e3) + " ms (" +
+        FormatNumber("%.1f", check.difference) + " standard errors); " + removes;
+    if (!std::isfinite(se)) {
+      check.verdict = "not determined (no standard error): " + numbers;
+    } else if (check.difference <= kClaimSigmas) {
+      check.verdict = "claim holds: " + numbers;
+    } else if (share < kMinClaimShare) {
+      check.verdict = "not determined: " + numbers;
+    } else {
+      check.verdict = "claim contradicted: " + numbers;
+    }
+    checks.push_back(std::move(check));
+  }
+  return checks;
+}
+
+}  // namespace
+
+std::vector<std::string> VideoCandidates() {
+  std::vector<std::string> names;
+  for (const std::string& name : InjectionNames()) {
+    if (name != "velocity") names.push_back(name);
+  }
+  return names;
+}
+
+bool IdentifiableWithPairTranslation(const std::string& effect) {
+  return effect != "gyro_to_camera" && effect != "gyro_scale" && effect != "gyro_bias" &&
+         effect != "velocity";
+}
+
+void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
+                          const std::vector<FrameEntry>& entries, const ValidateOptions& options,
+                          const ValidateProgress& progress, ValidationResult* result) {
+  auto start = std::chrono::steady_clock::now();
+  const fs::path dir(dataset_dir);
+  const std::string frames_path = (dir / "frames.csv").string();
+  const RigModel& rig = result->declared;
+  result->video = true;
+
+  // Frames in time order; frames.csv line numbers kept for messages.
+  std::vector<size_t> order(entries.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return entries[a].t_first_row_ns < entries[b].t_first_row_ns;
+  });
+  for (size_t k = 1; k < order.size(); ++k) {
+    if (entries[order[k]].t_first_row_ns == entries[order[k - 1]].t_first_row_ns) {
+      throw IoError(IoMessage(frames_path, static_cast<long>(order[k]) + 2,
+                              "frame " + std::to_string(entries[order[k]].frame) +
+                                  " has the same t_first_row as frame " +
+                                  std::to_string(entries[order[k - 1]].frame)));
+    }
+  }
+  if (order.size() < 2) {
+    throw IoError(IoMessage(frames_path, 0, "a video dataset needs at least two frames"));
+  }
+  const json claims = ReadClaims(dir / "import.json");
+  // Frames whose declared readout lies inside the gyro log.
+  const auto covered = [&](const FrameEntry& e) {
+    const int64_t t0 = e.t_first_row_ns + SecondsToNs(rig.time_offset_s);
+    return t0 >= gyro.t_begin_ns() && t0 + SecondsToNs(rig.shutter.readout_s) <= gyro.t_end_ns();
+  };
+  result->read_s += SecondsSince(start);
+
+  // --- measure every pair: frame k against frame k-1
+  std::vector<FramePoints> pairs;
+  cv::Mat previous;
+  const size_t pair_total = order.size() - 1;
+  for (size_t k = 0; k < order.size(); ++k) {
+    start = std::chrono::steady_clock::now();
+    const FrameEntry& entry = entries[order[k]];
+    const long line = static_cast<long>(order[k]) + 2;
+    cv::Mat image = ReadImage((dir / entry.image).string());
+    if (image.cols != rig.camera.width || image.rows != rig.camera.height) {
+      throw IoError(IoMessage(frames_path, line,
+                              "image '" + entry.image + "' is " + std::to_string(image.cols) + "x" +
+                                  std::to_string(image.rows) + ", camera.json declares " +
+                                  std::to_string(rig.camera.width) + "x" +
+                                  std::to_string(rig.camera.height)));
+    }
+    result->read_s += SecondsSince(start);
+    if (k > 0) {
+      const FrameEntry& earlier = entries[order[k - 1]];
+      const std::string pair_name =
+          "pair " + std::to_string(earlier.frame) + " -> " + std::to_string(entry.frame);
+      if (!covered(earlier) || !covered(entry)) {
+        result->skipped.push_back(pair_name + ": a readout lies outside the gyro log");
+      } else {
+        start = std::chrono::steady_clock::now();
+        // The earlier frame is the "reference": the flow from the later frame's pixel p to it is
+        // q - p.
+        const DisplacementMeasurement measured =
+            MeasureDisplacement(previous, image, options.measure);
+        result->measure_s += SecondsSince(start);
+        if (measured.points.empty()) {
+          result->skipped.push_back(pair_name + ": no point could be measured");
+        } else {
+          FrameValidation f;
+          f.frame = entry.frame;
+          f.previous = earlier.frame;
+          f.image = entry.image;
+          f.t_gyro_s = entry.t_first_row_ns * 1e-9 + rig.time_offset_s;
+          f.points = measured.points.size();
+          f.measured_fraction = measured.measured_fraction;
+          f.noise_px = measured.noise_px;
+          f.d_meas_px = measured.d_px;
+          result->frames.push_back(std::move(f));
+          FramePoints points;
+          points.frame = entry.frame;
+          points.t_first_row_ns = entry.t_first_row_ns;
+          points.points = measured.points;
+          points.earlier = EarlierFrame{earlier.frame, earlier.t_first_row_ns};
+          pairs.push_back(std::move(points));
+        }
+      }
+      if (progress) progress("measure", k, pair_total);
+    }
+    previous = std::move(image);
+  }
+  if (pairs.empty()) {
+    throw IoError(IoMessage(frames_path, 0,
+                            "no pair of consecutive frames could be measured inside the gyro log"));
+  }
+
+  // --- the loop twice: rotation only (the baseline), then with each pair's translation
+  start = std::chrono::steady_clock::now();
+  const double noise_px = PooledNoisePx(result->frames);
+  LoopOptions rotation_options = options.loop;
+  if (rotation_options.candidates.empty()) rotation_options.candidates = VideoCandidates();
+  rotation_options.pair_translation = false;
+  LoopOptions translation_options = rotation_options;
+  translation_options.pair_translation = true;
+  translation_options.candidates.clear();
+  for (const std::string& name : rotation_options.candidates) {
+    if (IdentifiableWithPairTranslation(name)) translation_options.candidates.push_back(name);
+  }
+  if (progress) progress("loop", 0, 2);
+  TrueModel rotation_start;
+  rotation_start.rig = rig;
+  result->loop = CloseTheLoop(rotation_start, gyro, pairs, noise_px, rotation_options);
+  if (progress) progress("loop", 1, 2);
+  // The pair-translation model cannot tell the gyro's own calibration (mounting, scale, bias): it
+  // takes the rotation-only loop's when that one left the noise (its fit is then trustworthy),
+  // camera.json's otherwise (parallax may have bent it).
+  TrueModel translation_start = rotation_start;
+  if (!result->loop.unexplained) {
+    for (const IdentifiedEffect& e : result->loop.effects) {
+      if (IdentifiableWithPairTranslation(e.name)) continue;
+      result->translation_inherits.push_back(e.name);
+      ApplyEffect(e.name, e.parameters.data(), &translation_start);
+    }
+  }
+  result->translation_loop =
+      CloseTheLoop(translation_start, gyro, pairs, noise_px, translation_options);
+  if (progress) progress("loop", 2, 2);
+
+  const LoopResult& rot = result->loop;
+  const LoopResult& trans = result->translation_loop;
+  FillFrameResiduals(pairs, rot, &trans, options.keep_residuals, &result->frames);
+  // The two models over the same trimmed points, per residual component.
+  const TrimmedComparison compared =
+      CompareTrimmed(pairs, rot.residuals_after, rot.residual_components, trans.residuals_after,
+                     trans.residual_components);
+  result->rotation_mean_sq_px2 = compared.a;
+  result->translation_mean_sq_px2 = compared.b;
+  // Nothing for translation to explain when rotation alone leaves the noise.
+  result->translation_explains = rot.unexplained ? ExplainedShare(compared, noise_px) : 0.0;
+  result->preferred = rot.unexplained && result->translation_explains >= kPreferTranslationShare
+                          ? "translation"
+                          : "rotation_only";
+  const LoopResult& preferred = result->preferred == "translation" ? trans : rot;
+  const LoopOptions& preferred_options =
+      result->preferred == "translation" ? translation_options : rotation_options;
+  const TrueModel& preferred_start =
+      result->preferred == "translation" ? translation_start : rotation_start;
+
+  // --- stability: the preferred model's effects on each half of the pairs
+  if (!preferred.effects.empty() && pairs.size() >= 4) {
+    const size_t half = pairs.size() / 2;
+    const std::vector<FramePoints> first(pairs.begin(), pairs.begin() + half);
+    const std::vector<FramePoints> second(pairs.begin() + half, pairs.end());
+    const std::vector<std::string> names = EffectNames(preferred);
+    HalfCheck check;
+    check.model = result->preferred;
+    check.first_pairs = first.size();
+    check.second_pairs = second.size();
+    const LoopResult a =
+        FitEffects(preferred_start, gyro, first, noise_px, names, preferred_options);
+    const LoopResult b =
+        FitEffects(preferred_start, gyro, second, noise_px, names, preferred_options);
+    check.first_after = a.after;
+    check.second_after = b.after;
+    check.first_model = a.model;
+    check.second_model = b.model;
+    for (size_t e = 0; e < a.effects.size() && e < b.effects.size(); ++e) {
+      check.effects.push_back(CompareHalves(a.effects[e], b.effects[e]));
+    }
+    result->halves.push_back(std::move(check));
+  }
+
+  // --- the source's claims, when the dataset came from `shutterlab import`
+  result->claims = CheckClaims(claims, gyro, pairs, noise_px, preferred_start, preferred,
+                               preferred_options, rotation_start, rot, rotation_options);
+  result->loop_s = SecondsSince(start);
+}
+
+}  // namespace shutterlab

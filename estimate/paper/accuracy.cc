@@ -1,0 +1,249 @@
+#include "estimate/paper/accuracy.h"
+
+#include "sim/check.h"
+#include "sim/integrate.h"
+#include "sim/so3.h"
+#include "sim/text_file.h"
+
+#include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace shutterlab {
+namespace {
+
+constexpr double kRadToArcsec = 180.0 / M_PI * 3600.0;
+
+struct Segment {
+  size_t begin;  // first sample of the motion
+  size_t end;    // one past its last sample
+};
+
+// Mean of x[begin, end).
+double Mean(const std::vector<double>& x, size_t begin, size_t end) {
+  double sum = 0.0;
+  for (size_t i = begin; i < end; ++i) sum += x[i];
+  return sum / static_cast<double>(end - begin);
+}
+
+// Chordal mean of unit quaternions q[begin, end), signs aligned to the first: fine for the tiny
+// spread of a still window (Markley et al. 2007 would be the general answer).
+Eigen::Quaterniond MeanOrientation(const std::vector<Eigen::Quaterniond>& q, size_t begin,
+                                   size_t end) {
+  Eigen::Vector4d sum = Eigen::Vector4d::Zero();
+  for (size_t i = begin; i < end; ++i) {
+    const Eigen::Vector4d c = q[i].coeffs();
+    sum += c.dot(q[begin].coeffs()) < 0.0 ? -c : c;
+  }
+  Eigen::Quaterniond mean;
+  mean.coeffs() = sum.normalized();
+  return mean;
+}
+
+}  // namespace
+
+void AccuracyOptions::Check() const {
+  SHUTTERLAB_CHECK(std::isfinite(reference_deg) && reference_deg > 0.0 && reference_deg < 180.0)
+      << "reference angle must be in (0, 180) degrees (got " << reference_deg << ")";
+  SHUTTERLAB_CHECK(average_samples >= 1)
+      << "samples to average must be at least 1 (got " << average_samples << ")";
+  SHUTTERLAB_CHECK(bias.begin_s >= 0.0 && bias.end_s > bias.begin_s)
+      << "bias segment " << bias.begin_s << ":" << bias.end_s << " must satisfy 0 <= A < B";
+  SHUTTERLAB_CHECK(smooth_s >= 0.0 && std::isfinite(smooth_s)) << "smoothing time must be >= 0";
+  SHUTTERLAB_CHECK(exit_factor > 0.0 && enter_factor > exit_factor)
+      << "detection factors must satisfy enter > exit > 0 (got " << enter_factor << ", "
+      << exit_factor << ")";
+  SHUTTERLAB_CHECK(min_noise_rad_s > 0.0) << "noise floor must be positive";
+  SHUTTERLAB_CHECK(guard_s >= 0.0 && std::isfinite(guard_s)) << "guard time must be >= 0";
+  SHUTTERLAB_CHECK(min_still_s >= 0.0 && std::isfinite(min_still_s))
+      << "minimum still time must be >= 0";
+}
+
+AccuracyResult AnalyzeAccuracy(const GyroTrace& trace, const AccuracyOptions& options) {
+  options.Check();
+  AccuracyResult result;
+  result.reference_deg = options.reference_deg;
+  result.average_samples = options.average_samples;
+  const BiasEstimate bias = EstimateBias(trace, options.bias);
+  const size_t n = trace.size();
+  const size_t first = bias.first_after;
+  SHUTTERLAB_CHECK(first < n) << "no samples after the bias segment " << options.bias.begin_s << ":"
+                              << options.bias.end_s << " s (the trace lasts " << trace.DurationS()
+                              << " s)";
+  const int64_t t0_ns = trace.t_begin_ns();
+
+  // Smoothed bias-corrected rate magnitude: centred moving average of the vector via prefix sums
+  // (averaging the vector, not the magnitude, is what lowers the noise).
+  std::vector<Eigen::Vector3d> prefix(n + 1, Eigen::Vector3d::Zero());
+  for (size_t i = 0; i < n; ++i)
+    prefix[i + 1] = prefix[i] + (trace[i].omega_rad_s - bias.bias_rad_s);
+  const double rate_hz = trace.sampling().RateHz();
+  const size_t half = static_cast<size_t>(std::llround(0.5 * options.smooth_s * rate_hz));
+  std::vector<double> magnitude(n);
+  for (size_t k = 0; k < n; ++k) {
+    const size_t lo = k >= half ? k - half : 0;
+    const size_t hi = std::min(n, k + half + 1);
+    magnitude[k] = ((prefix[hi] - prefix[lo]) / static_cast<double>(hi - lo)).norm();
+  }
+
+  // Still noise level over the bias segment, where the smoothing window lies inside it.
+  const size_t bias_begin = trace.LowerBound(t0_ns + SecondsToNs(options.bias.begin_s));
+  size_t lo = bias_begin + half, hi = first >= half ? first - half : 0;
+  if (lo >= hi) lo = bias_begin, hi = first;
+  double sum_sq = 0.0;
+  for (size_t k = lo; k < hi; ++k) sum_sq += magnitude[k] * magnitude[k];
+  result.noise_level_rad_s =
+      std::max(options.min_noise_rad_s, std::sqrt(sum_sq / static_cast<double>(hi - lo)));
+  result.enter_rad_s = options.enter_factor * result.noise_level_rad_s;
+  result.exit_rad_s = options.exit_factor * result.noise_level_rad_s;
+
+  // Hysteresis, then merge motions closer than min_still_s.
+  std::vector<Segment> segments;
+  for (size_t k = first; k < n; ++k) {
+    if (magnitude[k] <= result.enter_rad_s) continue;
+    size_t begin = k;
+    while (begin > first && magnitude[begin - 1] > result.exit_rad_s) --begin;
+    size_t end = k + 1;
+    while (end < n && magnitude[end] > result.exit_rad_s) ++end;
+    const int64_t min_still_ns = SecondsToNs(options.min_still_s);
+    if (!segments.empty() &&
+        trace[begin].t_ns - trace[segments.back().end - 1].t_ns < min_still_ns) {
+      segments.back().end = end;
+    } else {
+      segments.push_back({begin, end});
+    }
+    k = end;  // the loop's ++k then skips the sample at end, which is at or below exit
+  }
+  SHUTTERLAB_CHECK(!segments.empty())
+      << "no rotation found after the bias segment: the smoothed rate never exceeded "
+      << result.enter_rad_s << " rad/s (" << options.enter_factor << " x the still noise level "
+      << result.noise_level_rad_s << " rad/s)";
+
+  // Per-axis angles and SO(3) orientations of the bias-corrected samples after the bias segment.
+  const PerAxisAngles angles = IntegratePerAxis(trace, bias.bias_rad_s, first);
+  std::vector<GyroSample> corrected;
+  corrected.reserve(n - first);
+  for (size_t i = first; i < n; ++i) {
+    corrected.push_back({trace[i].t_ns, trace[i].omega_rad_s - bias.bias_rad_s});
+  }
+  const OrientationTrace orientation{GyroTrace(std::move(corrected))};
+
+  const size_t average = static_cast<size_t>(options.average_samples);
+  const int64_t guard_ns = SecondsToNs(options.guard_s);
+  for (size_t s = 0; s < segments.size(); ++s) {
+    const Segment& seg = segments[s];
+    const size_t lower = s == 0 ? first : segments[s - 1].end;
+    const size_t upper = s + 1 == segments.size() ? n : segments[s + 1].begin;
+    const size_t before_end = trace.LowerBound(trace[seg.begin].t_ns - guard_ns);
+    const size_t after_begin = trace.LowerBound(trace[seg.end - 1].t_ns + guard_ns + 1);
+    if (before_end < lower + average || after_begin + average > upper) {
+      result.skipped_t_s.push_back((trace[seg.begin].t_ns - t0_ns) * 1e-9);
+      continue;
+    }
+    DetectedRotation r;
+    r.t_start_s = (trace[seg.begin].t_ns - t0_ns) * 1e-9;
+    r.t_end_s = (trace[seg.end - 1].t_ns - t0_ns) * 1e-9;
+    const size_t b0 = before_end - average - first, a0 = after_begin - first;
+    Eigen::Vector3d before_rad, after_rad;
+    for (int a = 0; a < 3; ++a) {
+      before_rad[a] = Mean(angles.angle_rad[a], b0, b0 + average);
+      after_rad[a] = Mean(angles.angle_rad[a], a0, a0 + average);
+    }
+    const Eigen::Vector3d d = after_rad - before_rad;
+    r.before_arcsec = before_rad * kRadToArcsec;
+    r.after_arcsec = after_rad * kRadToArcsec;
+    r.theta_arcsec = AngleFromTrace(RotationZYX(d.z(), d.y(), d.x())) * kRadToArcsec;
+    r.difference_arcsec = r.theta_arcsec - options.reference_deg * 3600.0;
+    r.theta_vector_arcsec = d.norm() * kRadToArcsec;
+    const auto& q = orientation.world_from_body();
+    r.theta_so3_arcsec = AngularDistance(MeanOrientation(q, b0, b0 + average),
+                                         MeanOrientation(q, a0, a0 + average)) *
+                         kRadToArcsec;
+    result.rotations.push_back(r);
+  }
+  SHUTTERLAB_CHECK(!result.rotations.empty())
+      << "found " << segments.size() << " motion(s) after the bias segment but none has "
+      << options.guard_s << " s + " << average
+      << " samples of still time on both sides to average (first motion at "
+      << (trace[segments[0].begin].t_ns - t0_ns) * 1e-9 << " s)";
+
+  double sum = 0.0;
+  for (const auto& r : result.rotations) sum += r.difference_arcsec;
+  result.difference_mean_arcsec = sum / result.rotations.size();
+  if (result.rotations.size() > 1) {
+    double ss = 0.0;
+    for (const auto& r : result.rotations) {
+      ss += (r.difference_arcsec - result.difference_mean_arcsec) *
+            (r.difference_arcsec - result.difference_mean_arcsec);
+    }
+    result.difference_std_arcsec = std::sqrt(ss / (result.rotations.size() - 1));
+  }
+  return result;
+}
+
+std::string AccuracyJson(const AccuracyResult& result) {
+  nlohmann::ordered_json j;
+  j["reference_deg"] = result.reference_deg;
+  nlohmann::ordered_json rotations = nlohmann::ordered_json::array();
+  for (const auto& r : result.rotations) {
+    nlohmann::ordered_json item;
+    item["before_arcsec"] = {r.before_arcsec.x(), r.before_arcsec.y(), r.before_arcsec.z()};
+    item["after_arcsec"] = {r.after_arcsec.x(), r.after_arcsec.y(), r.after_arcsec.z()};
+    item["theta_arcsec"] = r.theta_arcsec;
+    item["difference_arcsec"] = r.difference_arcsec;
+    item["theta_vector_arcsec"] = r.theta_vector_arcsec;
+    item["theta_so3_arcsec"] = r.theta_so3_arcsec;
+    item["t_start_s"] = r.t_start_s;
+    item["t_end_s"] = r.t_end_s;
+    rotations.push_back(item);
+  }
+  j["rotations"] = rotations;
+  j["average_samples"] = result.average_samples;
+  j["difference_mean_arcsec"] = result.difference_mean_arcsec;
+  j["difference_std_arcsec"] = result.difference_std_arcsec;
+  j["noise_level_rad_s"] = result.noise_level_rad_s;
+  j["enter_rad_s"] = result.enter_rad_s;
+  j["exit_rad_s"] = result.exit_rad_s;
+  j["skipped_t_s"] = result.skipped_t_s;
+  return j.dump(2) + "\n";
+}
+
+std::string AccuracyTable(const AccuracyResult& result) {
+  std::string out = "Turns detected: " + std::to_string(result.rotations.size()) + "; reference " +
+                    FormatNumber("%g", result.reference_deg) +
+                    " deg = " + FormatNumber("%g", result.reference_deg * 3600.0) + " arcsec; " +
+                    std::to_string(result.average_samples) +
+                    " samples averaged before and after each turn\n\n";
+  out +=
+      "turn  t (s)  |   before x   before y   before z |    after x    after y    after z |"
+      "      theta  difference |  theta SO(3)   (arcsec)\n";
+  for (size_t i = 0; i < result.rotations.size(); ++i) {
+    const DetectedRotation& r = result.rotations[i];
+    out +=
+        FormatNumber("%4.0f", static_cast<double>(i + 1)) + FormatNumber(" %6.2f |", r.t_start_s);
+    for (int a = 0; a < 3; ++a) out += FormatNumber(" %10.1f", r.before_arcsec[a]);
+    out += " |";
+    for (int a = 0; a < 3; ++a) out += FormatNumber(" %10.1f", r.after_arcsec[a]);
+    out += " |" + FormatNumber(" %10.1f", r.theta_arcsec) +
+           FormatNumber(" %11.1f", r.difference_arcsec) + " |" +
+           FormatNumber(" %12.1f", r.theta_so3_arcsec) + "\n";
+  }
+  out += "\ndifference: mean " + FormatNumber("%.1f", result.difference_mean_arcsec) +
+         " arcsec, std " + FormatNumber("%.1f", result.difference_std_arcsec) + " arcsec over " +
+         std::to_string(result.rotations.size()) + " turn(s)\n";
+  out += "detection: still noise " + FormatNumber("%.3g", result.noise_level_rad_s) +
+         " rad/s (smoothed magnitude), enter " + FormatNumber("%.3g", result.enter_rad_s) +
+         ", exit " + FormatNumber("%.3g", result.exit_rad_s) + " rad/s\n";
+  if (!result.skipped_t_s.empty()) {
+    out += "skipped (too little still time around them to average): motions at";
+    for (double t : result.skipped_t_s) out += FormatNumber(" %.2f", t) + " s";
+    out += "\n";
+  }
+  return out;
+}
+
+}  // namespace shutterlab

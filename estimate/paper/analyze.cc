@@ -1,0 +1,560 @@
+#include "estimate/paper/analyze.h"
+
+#include "render/rs_warp.h"
+#include "render/truth_model.h"
+#include "sim/bias.h"
+#include "sim/check.h"
+#include "sim/integrate.h"
+#include "sim/still_detect.h"
+#include "sim/text_file.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+
+namespace shutterlab {
+namespace {
+
+constexpr double kArcsecPerRad = 180.0 * 3600.0 / M_PI;
+constexpr const char* kAxisNames[3] = {"x", "y", "z"};
+
+GyroTrace RotateTrace(const GyroTrace& trace, const Eigen::Matrix3d& cam_from_gyro,
+                      const Eigen::Vector3d& bias_rad_s) {
+  std::vector<GyroSample> samples = trace.samples();
+  for (GyroSample& s : samples) s.omega_rad_s = cam_from_gyro * s.omega_rad_s - bias_rad_s;
+  return GyroTrace(std::move(samples));
+}
+
+// Per-axis angle at t_ns, linear between samples (the rectangle rule holds w_i over
+// (t_{i-1}, t_i]). Requires t_ns within the trace.
+double AngleAt(const PerAxisAngles& angles, int axis, int64_t t_ns) {
+  const auto& t = angles.t_ns;
+  const size_t k = static_cast<size_t>(std::lower_bound(t.begin(), t.end(), t_ns) - t.begin());
+  const auto& a = angles.angle_rad[axis];
+  if (k == 0) return a[0];
+  if (k >= t.size()) return a.back();
+  if (t[k] == t_ns) return a[k];
+  const double w = static_cast<double>(t_ns - t[k - 1]) / static_cast<double>(t[k] - t[k - 1]);
+  return a[k - 1] + (a[k] - a[k - 1]) * w;
+}
+
+// FORMATS.md frame distortion D on the coarse grid (kGridStepPx), pixels: per grid column, the
+// largest distance between two rows' displacements RefPixel - p.
+double GridDistortionPx(const FrameGeometry& geometry) {
+  const PinholeCamera& cam = geometry.camera();
+  std::vector<int> rows, cols;
+  for (int v = 0; v < cam.height; v += kGridStepPx) rows.push_back(v);
+  if (rows.back() != cam.height - 1) rows.push_back(cam.height - 1);
+  for (int u = 0; u < cam.width; u += kGridStepPx) cols.push_back(u);
+  if (cols.back() != cam.width - 1) cols.push_back(cam.width - 1);
+  double d_px = 0.0;
+  std::vector<Eigen::Vector2d> displacement;
+  for (int u : cols) {
+    displacement.clear();
+    for (int v : rows) {
+      const std::optional<Eigen::Vector2d> ref = geometry.RefPixel(u, v);
+      if (ref) displacement.push_back(*ref - Eigen::Vector2d(u, v));
+    }
+    for (size_t a = 0; a < displacement.size(); ++a) {
+      for (size_t b = a + 1; b < displacement.size(); ++b) {
+        d_px = std::max(d_px, (displacement[a] - displacement[b]).norm());
+      }
+    }
+  }
+  return d_px;
+}
+
+struct ImageContext {
+  const PerAxisAngles* angles;
+  const CameraMotion* motion;  // null: skip D_full
+  RigModel rig;
+  std::vector<double> limits_m;
+};
+
+ImageResult AnalyzeImage(const ImageContext& context, const ImageTrigger& trigger,
+                         int64_t latency_ns) {
+  ImageResult image;
+  image.name = trigger.name;
+  image.trigger_t_ns = trigger.t_ns;
+  image.t_ns = trigger.t_ns + latency_ns;
+  image.flagged.assign(context.limits_m.size(), false);
+  const PerAxisAngles& angles = *context.angles;
+  const int64_t readout_ns = SecondsToNs(context.rig.shutter.readout_s);
+  const int64_t end_ns = image.t_ns + readout_ns;
+  if (angles.size() < 2 || image.t_ns < angles.t_ns.front() || end_ns > angles.t_ns.back()) {
+    return image;
+  }
+  image.in_trace = true;
+  const auto first = std::upper_bound(angles.t_ns.begin(), angles.t_ns.end(), image.t_ns);
+  const auto last = std::lower_bound(angles.t_ns.begin(), angles.t_ns.end(), end_ns);
+  const size_t i0 = static_cast<size_t>(first - angles.t_ns.begin());
+  const size_t i1 = static_cast<size_t>(last - angles.t_ns.begin());
+  double max_range_rad = 0.0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double a_begin = AngleAt(angles, axis, image.t_ns);
+    const double a_end = AngleAt(angles, axis, end_ns);
+    double lo = std::min(a_begin, a_end), hi = std::max(a_begin, a_end);
+    for (size_t i = i0; i < i1; ++i) {
+      lo = std::min(lo, angles.angle_rad[axis][i]);
+      hi = std::max(hi, angles.angle_rad[axis][i]);
+    }
+    image.range_arcsec[axis] = (hi - lo) * kArcsecPerRad;
+    if (hi - lo > max_range_rad) {
+      max_range_rad = hi - lo;
+      image.dominant_axis = axis;
+    }
+  }
+  image.d_paper_m = context.rig.altitude_m * std::tan(max_range_rad);
+  for (size_t l = 0; l < context.limits_m.size(); ++l) {
+    image.flagged[l] = image.d_paper_m > context.limits_m[l];
+  }
+  if (context.motion != nullptr) {
+    const FrameGeometry geometry(context.rig.camera, context.rig.altitude_m,
+                                 context.motion->Frame(image.t_ns),
+                                 cv::Size(context.rig.camera.width, context.rig.camera.height));
+    image.d_full_px = GridDistortionPx(geometry);
+    const double f_px = 0.5 * (context.rig.camera.fx + context.rig.camera.fy);
+    image.d_full_m = image.d_full_px * context.rig.altitude_m / f_px;
+  }
+  return image;
+}
+
+std::vector<double> SharesPercent(const std::vector<ImageResult>& images, size_t limits) {
+  std::vector<double> shares(limits, 0.0);
+  size_t in_trace = 0;
+  for (const ImageResult& image : images) {
+    if (!image.in_trace) continue;
+    ++in_trace;
+    for (size_t l = 0; l < limits; ++l) shares[l] += image.flagged[l] ? 1.0 : 0.0;
+  }
+  for (double& s : shares) s = in_trace > 0 ? 100.0 * s / in_trace : 0.0;
+  return shares;
+}
+
+std::string LengthText(double m) {
+  return m < 1.0 ? FormatNumber("%.3g cm", m * 100.0) : FormatNumber("%.3g m", m);
+}
+
+std::string SharesText(const std::vector<double>& shares, const std::vector<double>& limits_m) {
+  std::string text;
+  for (size_t l = 0; l < shares.size(); ++l) {
+    if (l > 0) text += ", ";
+    text += FormatNumber("%.1f%%", shares[l]) + " over " + LengthText(limits_m[l]);
+  }
+  return text;
+}
+
+std::string Trim(std::string_view s) {
+  size_t b = 0, e = s.size();
+  while (b < e && (s[b] == ' ' || s[b] == '\t')) ++b;
+  while (e > b && (s[e - 1] == ' ' || s[e - 1] == '\t')) --e;
+  return std::string(s.substr(b, e - b));
+}
+
+std::string ImageName(size_t index) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "IMG_%04zu", index + 1);
+  return buffer;
+}
+
+}  // namespace
+
+TrueModel AnalyzeTrueModel(const RigModel& rig, const Eigen::Vector3d& bias_cam_rad_s) {
+  TrueModel model;
+  model.rig = rig;
+  model.rig.time_offset_s = 0.0;
+  model.gyro_bias_rad_s = rig.cam_from_gyro.transpose() * bias_cam_rad_s;
+  return model;
+}
+
+void AnalyzeOptions::Check() const {
+  rig.Check();
+  SHUTTERLAB_CHECK(rig.shutter.readout_s > 0 && rig.shutter.readout_s < 10.0)
+      << "readout must be in (0, 10) s (got " << rig.shutter.readout_s << " s)";
+  SHUTTERLAB_CHECK(std::isfinite(rig.altitude_m) && rig.altitude_m > 0)
+      << "altitude must be positive (got " << rig.altitude_m << " m)";
+  SHUTTERLAB_CHECK(!limits_m.empty()) << "give at least one ground limit";
+  for (double limit : limits_m) {
+    SHUTTERLAB_CHECK(std::isfinite(limit) && limit > 0)
+        << "ground limit must be positive (got " << limit << " m)";
+  }
+  SHUTTERLAB_CHECK(std::isfinite(noise_allowance_arcsec) && noise_allowance_arcsec >= 0)
+      << "noise allowance must be >= 0 (got " << noise_allowance_arcsec << " arcsec)";
+  SHUTTERLAB_CHECK(std::isfinite(every_s) && every_s >= 0 && every_s < 1e6)
+      << "trigger interval must be >= 0 (got " << every_s << " s)";
+  SHUTTERLAB_CHECK(every_s == 0 || SecondsToNs(every_s) > 0)
+      << "trigger interval " << every_s << " s is below 1 ns";
+  SHUTTERLAB_CHECK(std::isfinite(trigger_latency_s) && std::abs(trigger_latency_s) < 1e3)
+      << "trigger latency must be finite and below 1000 s (got " << trigger_latency_s << " s)";
+}
+
+AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options) {
+  given_options.Check();
+  AnalyzeOptions options = given_options;
+  std::string altitude_source = "camera";
+  if (options.use_log_altitude && log.altitude_above_ground_m && *log.altitude_above_ground_m > 0) {
+    options.rig.altitude_m = *log.altitude_above_ground_m;
+    altitude_source = "log";
+  }
+  const GyroTrace& gyro = log.gyro;
+  SHUTTERLAB_CHECK(gyro.samples().size() >= 2) << "the log's gyro trace has fewer than 2 samples";
+  const auto progress = [&options](double fraction) {
+    if (options.progress) options.progress(fraction);
+  };
+
+  AnalyzeResult result;
+  result.format = log.format;
+  result.gyro_source = log.gyro_source;
+  result.samples = gyro.samples().size();
+  result.duration_s = (gyro.samples().back().t_ns - gyro.samples().front().t_ns) * 1e-9;
+  result.rate_hz = gyro.sampling().RateHz();
+  result.gaps = gyro.sampling().gap_indices.size();
+  result.limits_m = options.limits_m;
+  result.altitude_m = options.rig.altitude_m;
+  result.altitude_source = altitude_source;
+  result.readout_s = options.rig.shutter.readout_s;
+
+  const GyroTrace camera_rates =
+      RotateTrace(gyro, options.rig.cam_from_gyro, Eigen::Vector3d::Zero());
+  result.bias_estimated = options.estimate_bias;
+  if (options.estimate_bias) {
+    try {
+      const StillSegment still = DetectStillSegment(camera_rates);
+      result.still_segment = still.segment;
+      result.bias_rad_s = EstimateBias(camera_rates, still.segment).bias_rad_s;
+      result.bias_from_still = true;
+    } catch (const std::invalid_argument&) {
+      result.bias_from_still = false;  // no still stretch: zero bias, said so in the output
+    }
+  }
+
+  // The flight table for this camera's readout.
+  FlightOptions flight_options;
+  flight_options.altitude_m = options.rig.altitude_m;
+  flight_options.limits_m = options.limits_m;
+  flight_options.windows_s = {options.rig.shutter.readout_s};
+  flight_options.noise_allowance_arcsec = options.noise_allowance_arcsec;
+  flight_options.progress = [&progress](double f) { progress(0.7 * f); };
+  flight_options.series = options.flight_series;
+  flight_options.series_vector = false;  // the report plots the per-axis ranges only
+  try {
+    // The still segment may lie anywhere (often after landing), so its bias is applied to every
+    // sample rather than starting the statistics after the segment as `flight --bias` does.
+    flight_options.known_bias_rad_s = result.bias_rad_s;
+    result.flight = Flight(camera_rates, flight_options);
+  } catch (const std::invalid_argument& e) {
+    result.flight_problem = e.what();
+  }
+
+  // Per-image distortion.
+  const PerAxisAngles angles = IntegratePerAxis(camera_rates, result.bias_rad_s);
+  const CameraMotion motion(gyro, AnalyzeTrueModel(options.rig, result.bias_rad_s));
+
+  std::vector<ImageTrigger> triggers = options.triggers;
+  result.trigger_source = "triggers";
+  if (triggers.empty() && options.every_s > 0) {
+    result.trigger_source = FormatNumber("every %g s", options.every_s);
+    const int64_t every_ns = SecondsToNs(options.every_s);
+    const int64_t t0_ns = gyro.samples().front().t_ns;
+    const int64_t span_ns = gyro.samples().back().t_ns - t0_ns;
+    const int64_t count = span_ns / every_ns;
+    for (int64_t k = 0; k < count; ++k) {
+      triggers.push_back({ImageName(static_cast<size_t>(k)), t0_ns + k * every_ns});
+    }
+  } else if (triggers.empty() && !log.camera_events.empty()) {
+    // A log may record each image twice (PX4 camera_trigger and camera_capture): use the most
+    // frequent kind only.
+    std::map<std::string, size_t> kinds;
+    for (const CameraEvent& event : log.camera_events) ++kinds[event.kind];
+    const std::string kind =
+        std::max_element(kinds.begin(), kinds.end(), [](const auto& a, const auto& b) {
+          return a.second < b.second;
+        })->first;
+    result.trigger_source = "camera events (" + kind + ")";
+    for (size_t i = 0; i < log.camera_events.size(); ++i) {
+      const CameraEvent& event = log.camera_events[i];
+      if (event.kind != kind) continue;
+      triggers.push_back(
+          {event.sequence >= 0 ? "IMG_" + std::to_string(event.sequence) : ImageName(i),
+           event.t_ns});
+    }
+  } else if (triggers.empty()) {
+    result.trigger_source = "none";
+  }
+  if (!options.triggers.empty() || options.every_s > 0) {
+    if (!log.camera_events.empty()) {
+      result.trigger_source +=
+          " (the log's " + std::to_string(log.camera_events.size()) + " camera events not used)";
+    }
+  }
+
+  ImageContext context{&angles, &motion, options.rig, options.limits_m};
+  const int64_t latency_ns = SecondsToNs(options.trigger_latency_s);
+  result.images.reserve(triggers.size());
+  for (size_t i = 0; i < triggers.size(); ++i) {
+    result.images.push_back(AnalyzeImage(context, triggers[i], latency_ns));
+    progress(0.7 + 0.25 * (i + 1) / triggers.size());
+  }
+
+  // The verdict, with the what-if shares recomputed (not scaled) under the changed camera.
+  AnalyzeVerdict& verdict = result.verdict;
+  for (const ImageResult& image : result.images) verdict.images_in_trace += image.in_trace;
+  verdict.share_percent = SharesPercent(result.images, options.limits_m.size());
+  std::array<size_t, 3> dominant{};
+  for (const ImageResult& image : result.images) {
+    if (image.in_trace && image.flagged[0]) ++dominant[image.dominant_axis];
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    if (dominant[axis] > 0 &&
+        (verdict.axis_to_stabilise < 0 || dominant[axis] > dominant[verdict.axis_to_stabilise])) {
+      verdict.axis_to_stabilise = axis;
+    }
+  }
+  // Flags at the strictest limit decide the axis; with none flagged at the first limit, the most
+  // frequent dominant axis overall is still the best advice.
+  if (verdict.axis_to_stabilise < 0) {
+    std::array<size_t, 3> all{};
+    for (const ImageResult& image : result.images) {
+      if (image.in_trace) ++all[image.dominant_axis];
+    }
+    if (verdict.images_in_trace > 0) {
+      verdict.axis_to_stabilise =
+          static_cast<int>(std::max_element(all.begin(), all.end()) - all.begin());
+    }
+  }
+  if (options.what_if && verdict.images_in_trace > 0) {
+    ImageContext fast = context;
+    fast.motion = nullptr;
+    fast.rig.shutter.readout_s = verdict.fast_readout_s;
+    ImageContext low = context;
+    low.motion = nullptr;
+    low.rig.altitude_m = 0.5 * options.rig.altitude_m;
+    std::vector<ImageResult> fast_images, low_images;
+    for (const ImageTrigger& trigger : triggers) {
+      fast_images.push_back(AnalyzeImage(fast, trigger, latency_ns));
+      low_images.push_back(AnalyzeImage(low, trigger, latency_ns));
+    }
+    verdict.share_fast_readout_percent = SharesPercent(fast_images, options.limits_m.size());
+    verdict.share_half_altitude_percent = SharesPercent(low_images, options.limits_m.size());
+  }
+  if (verdict.images_in_trace == 0) {
+    verdict.line = result.images.empty()
+                       ? "verdict: no images to judge (the log has no camera events; give "
+                         "--triggers or --every)"
+                       : "verdict: no image lies inside the gyro trace";
+  } else {
+    std::ostringstream line;
+    line << "verdict: " << verdict.images_in_trace
+         << (verdict.images_in_trace == 1 ? " image, " : " images, ")
+         << SharesText(verdict.share_percent, options.limits_m);
+    const bool any_flagged = std::any_of(verdict.share_percent.begin(), verdict.share_percent.end(),
+                                         [](double s) { return s > 0; });
+    line << (any_flagged ? "; stabilise camera axis " : "; largest rotation about camera axis ")
+         << kAxisNames[verdict.axis_to_stabilise];
+    if (options.what_if) {
+      line << "; with a " << FormatNumber("%g", verdict.fast_readout_s * 1e3)
+           << " ms readout: " << SharesText(verdict.share_fast_readout_percent, options.limits_m)
+           << "; at " << FormatNumber("%g", 0.5 * options.rig.altitude_m)
+           << " m altitude: " << SharesText(verdict.share_half_altitude_percent, options.limits_m);
+    }
+    verdict.line = line.str();
+  }
+  progress(1.0);
+  return result;
+}
+
+std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path) {
+  const std::string text = ReadFileToString(path);
+  LineCursor cursor(text);
+  std::vector<std::string_view> fields;
+  std::vector<ImageTrigger> triggers;
+  int columns = 0;  // 1: t; 2: image,t; 0: not known yet
+  bool first_line = true;
+  while (const auto line = cursor.Next()) {
+    const std::string trimmed = Trim(*line);
+    if (trimmed.empty() || trimmed[0] == '#') continue;
+    SplitFields(trimmed, ',', &fields);
+    const long line_number = cursor.line_number();
+    if (first_line) {
+      first_line = false;
+      const std::string last = ToLower(fields.back());
+      if (!ParseDouble(fields.back())) {
+        const bool time_name = last == "t" || last == "time" || last == "t_s";
+        const bool image_name =
+            fields.size() == 2 && (ToLower(fields[0]) == "image" || ToLower(fields[0]) == "name");
+        if (!time_name || (fields.size() == 2 && !image_name) || fields.size() > 2) {
+          throw IoError(IoMessage(
+              path, line_number,
+              "expected a header 'image,t' or 't', or a time in seconds (got '" + trimmed + "')"));
+        }
+        columns = static_cast<int>(fields.size());
+        continue;
+      }
+    }
+    if (columns == 0) columns = static_cast<int>(fields.size());
+    if (static_cast<int>(fields.size()) != columns || columns > 2) {
+      throw IoError(IoMessage(path, line_number,
+                              "expected " +
+                                  std::string(columns == 1 ? "1 field (t)" : "2 fields (image,t)") +
+                                  ", got " + std::to_string(fields.size())));
+    }
+    const std::optional<double> t_s = ParseDouble(fields.back());
+    if (!t_s || std::abs(*t_s) > 9e9) {
+      throw IoError(IoMessage(path, line_number,
+                              "bad time '" + std::string(fields.back()) + "' (seconds expected)"));
+    }
+    ImageTrigger trigger;
+    trigger.t_ns = SecondsToNs(*t_s);
+    trigger.name = columns == 2 ? std::string(fields[0]) : ImageName(triggers.size());
+    if (trigger.name.empty()) {
+      throw IoError(IoMessage(path, line_number, "empty image name"));
+    }
+    triggers.push_back(std::move(trigger));
+  }
+  if (triggers.empty()) throw IoError(IoMessage(path, 0, "no trigger times in the file"));
+  return triggers;
+}
+
+std::string LimitKey(double limit_m) { return FormatNumber("%.12g", limit_m); }
+
+nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
+  nlohmann::json json;
+  json["source"] = {{"format", result.format},   {"gyro", result.gyro_source},
+                    {"samples", result.samples}, {"duration_s", result.duration_s},
+                    {"rate_hz", result.rate_hz}, {"gaps", result.gaps}};
+  json["flight"] = result.flight ? FlightToJson(*result.flight) : nlohmann::json(nullptr);
+  if (!result.flight) json["flight_problem"] = result.flight_problem;
+  json["bias"] = {{"estimated", result.bias_estimated},
+                  {"from_still_segment", result.bias_from_still},
+                  {"rad_s", {result.bias_rad_s.x(), result.bias_rad_s.y(), result.bias_rad_s.z()}}};
+  if (result.bias_from_still) {
+    json["bias"]["segment_s"] = {result.still_segment.begin_s, result.still_segment.end_s};
+  }
+  json["camera"] = {{"altitude_m", result.altitude_m},
+                    {"altitude_source", result.altitude_source},
+                    {"readout_s", result.readout_s}};
+  json["triggers"] = result.trigger_source;
+  nlohmann::json images = nlohmann::json::array();
+  for (const ImageResult& image : result.images) {
+    nlohmann::json entry;
+    entry["name"] = image.name;
+    entry["t"] = image.t_ns * 1e-9;
+    entry["trigger_t"] = image.trigger_t_ns * 1e-9;
+    entry["in_trace"] = image.in_trace;
+    nlohmann::json flagged = nlohmann::json::object();
+    if (image.in_trace) {
+      entry["D_paper_m"] = image.d_paper_m;
+      entry["D_full_m"] = image.d_full_m;
+      entry["D_full_px"] = image.d_full_px;
+      entry["range_arcsec"] = image.range_arcsec;
+      entry["dominant_axis"] = kAxisNames[image.dominant_axis];
+      for (size_t l = 0; l < result.limits_m.size(); ++l) {
+        flagged[LimitKey(result.limits_m[l])] = static_cast<bool>(image.flagged[l]);
+      }
+    } else {
+      entry["D_paper_m"] = nullptr;
+      entry["D_full_m"] = nullptr;
+      for (double limit : result.limits_m) flagged[LimitKey(limit)] = nullptr;
+    }
+    entry["flagged"] = flagged;
+    images.push_back(std::move(entry));
+  }
+  json["images"] = std::move(images);
+  const AnalyzeVerdict& v = result.verdict;
+  json["verdict"] = {{"images_in_trace", v.images_in_trace},
+                     {"flagged_percent", v.share_percent},
+                     {"axis_to_stabilise", v.axis_to_stabilise < 0
+                                               ? nlohmann::json(nullptr)
+                                               : nlohmann::json(kAxisNames[v.axis_to_stabilise])},
+                     {"fast_readout_s", v.fast_readout_s},
+                     {"flagged_percent_fast_readout", v.share_fast_readout_percent},
+                     {"flagged_percent_half_altitude", v.share_half_altitude_percent},
+                     {"line", v.line}};
+  return json;
+}
+
+std::string AnalyzeReport(const AnalyzeResult& result) {
+  std::ostringstream out;
+  out << "source: " << result.format << ", gyro " << result.gyro_source << ", " << result.samples
+      << " samples, " << FormatNumber("%.1f", result.duration_s) << " s at "
+      << FormatNumber("%.1f", result.rate_hz) << " Hz, " << result.gaps << " gaps\n";
+  if (result.bias_from_still) {
+    out << "bias: still segment " << FormatNumber("%.2f", result.still_segment.begin_s) << ":"
+        << FormatNumber("%.2f", result.still_segment.end_s) << " s\n";
+  } else if (!result.bias_estimated) {
+    out << "bias: zero (not estimated)\n";
+  } else {
+    out << "bias: none (no still segment found; zero bias assumed)\n";
+  }
+  out << "camera: readout " << FormatNumber("%g", result.readout_s * 1e3) << " ms, altitude "
+      << FormatNumber("%g", result.altitude_m) << " m (" << result.altitude_source
+      << "); triggers: " << result.trigger_source << "\n\n";
+  if (result.flight) {
+    out << FlightTable(*result.flight) << "\n";
+  } else {
+    out << "flight table: not computed (" << result.flight_problem << ")\n\n";
+  }
+  if (!result.images.empty()) {
+    out << "image          t (s)   D_paper (cm)  D_full (cm)  axis  flagged\n";
+    for (const ImageResult& image : result.images) {
+      char line[256];
+      if (!image.in_trace) {
+        std::snprintf(line, sizeof(line), "%-12s %9.3f  outside the log\n", image.name.c_str(),
+                      image.t_ns * 1e-9);
+      } else {
+        std::string flags;
+        for (size_t l = 0; l < result.limits_m.size(); ++l) {
+          if (image.flagged[l])
+            flags += (flags.empty() ? ">" : ", >") + LengthText(result.limits_m[l]);
+        }
+        std::snprintf(line, sizeof(line), "%-12s %9.3f  %12.2f %12.2f  %4s  %s\n",
+                      image.name.c_str(), image.t_ns * 1e-9, image.d_paper_m * 100.0,
+                      image.d_full_m * 100.0, kAxisNames[image.dominant_axis], flags.c_str());
+      }
+      out << line;
+    }
+    out << "\n";
+  }
+  out << result.verdict.line << "\n";
+  return out.str();
+}
+
+void WriteAnalyzeOutputs(const std::string& dir, const AnalyzeResult& result) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw IoError(IoMessage(dir, 0, "cannot create folder: " + ec.message()));
+  std::string csv = "name,t,D_paper_m,D_full_m";
+  for (double limit : result.limits_m) csv += ",flag_" + LimitKey(limit);
+  csv += ",dominant_axis\n";
+  std::string exclude;
+  for (const ImageResult& image : result.images) {
+    csv += image.name + ",";
+    AppendDouble(image.t_ns * 1e-9, &csv);
+    if (!image.in_trace) {
+      csv += ",,";
+      for (size_t l = 0; l < result.limits_m.size(); ++l) csv += ",";
+      csv += ",outside\n";
+      continue;
+    }
+    csv += ",";
+    AppendDouble(image.d_paper_m, &csv);
+    csv += ",";
+    AppendDouble(image.d_full_m, &csv);
+    bool any = false;
+    for (size_t l = 0; l < result.limits_m.size(); ++l) {
+      csv += image.flagged[l] ? ",1" : ",0";
+      any = any || image.flagged[l];
+    }
+    csv += std::string(",") + kAxisNames[image.dominant_axis] + "\n";
+    if (any) exclude += image.name + "\n";
+  }
+  WriteFileAtomically(dir + "/images.csv", csv);
+  WriteFileAtomically(dir + "/exclude.txt", exclude);
+}
+
+}  // namespace shutterlab

@@ -1,0 +1,140 @@
+#pragma once
+// `analyze`: per-image rolling-shutter distortion from a real flight log (issue 5).
+//
+// For each image, exposed at t = trigger + trigger_latency_s (the capture time of row 0, on the
+// log's gyro clock; camera.json's time_offset_s is not applied because the triggers are already on
+// the log clock):
+//  - D_paper_m = altitude_m * tan(max over camera axes of the range of the per-axis integrated
+//    angle within [t, t + readout_s]) — the source paper's threshold model (FORMATS.md). The angle
+//    is the paper's rectangle-rule sum (sim/integrate.h IntegratePerAxis), linear between samples,
+//    so the window's end points are interpolated: a constant rate w gives exactly w * readout_s.
+//  - D_full_m = FORMATS.md's frame distortion D under the renderer's model of the declared rig
+//    (render/truth_model.h CameraMotion, render/rs_warp.h FrameGeometry::RefPixel): lens distortion
+//    and camera.json's velocity count; the bias-corrected rates are the truth (TrueModel with
+//    gyro_bias = the bias, time_offset_s 0 since the triggers are on the log clock). D is evaluated
+//    on a coarse grid, every kGridStepPx-th column and row plus the last ones, and converted to the
+//    ground as D_px * altitude_m / f, f = (fx + fy) / 2.
+//  - flagged[i] = D_paper_m > limits_m[i] (no noise allowance: the allowance belongs to the
+//    flight table's windows, whose flags it reproduces).
+// The gyro rates are rotated into camera axes with rig.cam_from_gyro before anything else, so
+// "axis" means camera x (right), y (down), z (optical axis). Bias: the still segment that
+// DetectStillSegment finds, else zero (AnalyzeResult::bias_from_still says which; with
+// AnalyzeOptions::estimate_bias false, zero without a search); it applies to
+// every sample, the flight table's included (FlightOptions::known_bias_rad_s).
+
+#include "estimate/paper/flight.h"
+#include "render/camera.h"
+#include "render/truth_model.h"
+#include "sim/logs/flight_log.h"
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace shutterlab {
+
+// Grid step of the D_full evaluation, pixels (columns and rows). The first and last rows and
+// columns are always on the grid, so the frame's extremes, where a smooth rotation's D peaks, are
+// included; interior peaks (rare) can be missed by a fraction of the displacement over 16 px.
+inline constexpr int kGridStepPx = 16;
+
+struct ImageTrigger {
+  std::string name;  // image name (e.g. "IMG_0001")
+  int64_t t_ns = 0;  // trigger time on the log's gyro clock
+};
+
+struct AnalyzeOptions {
+  RigModel rig;                              // camera, readout, altitude_m, cam_from_gyro
+  std::vector<double> limits_m{0.05, 0.10};  // acceptable smear on the ground
+  double noise_allowance_arcsec = 20.0;      // for the flight table (FORMATS.md `flight`)
+  // Image triggers, first match wins: these; else, when every_s > 0, simulated triggers every
+  // every_s seconds from the first gyro sample (a mapping cadence); else the log's camera events.
+  std::vector<ImageTrigger> triggers;
+  double every_s = 0.0;
+  double trigger_latency_s = 0.0;  // trigger to exposure of row 0, s (may be negative)
+  // Use the log's altitude above ground (FlightLog::altitude_above_ground_m) instead of
+  // rig.altitude_m when the log has one.
+  bool use_log_altitude = false;
+  bool what_if = true;  // compute the verdict's faster-readout / half-altitude shares
+  // false: zero bias and no still-segment search (calibrated flight-controller rates, or a
+  // caller that removed the bias itself, e.g. `validate` on synthetic truth).
+  bool estimate_bias = true;
+  // Keep the flight table's per-window ranges (FlightResult::series, readout window) for plots.
+  bool flight_series = false;
+  std::function<void(double)> progress;  // fraction done (0..1); may be empty
+  // Throws std::invalid_argument naming the first bad field.
+  void Check() const;
+};
+
+struct ImageResult {
+  std::string name;
+  int64_t trigger_t_ns = 0;
+  int64_t t_ns = 0;        // exposure of row 0 = trigger + latency
+  bool in_trace = false;   // false: [t, t + readout] is not covered by the gyro trace
+  double d_paper_m = 0.0;  // meaningful only when in_trace
+  double d_full_m = 0.0;
+  double d_full_px = 0.0;
+  std::array<double, 3> range_arcsec{};  // per camera axis within the readout
+  int dominant_axis = 0;                 // 0 x, 1 y, 2 z: largest range
+  std::vector<bool> flagged;             // one per limit
+};
+
+struct AnalyzeVerdict {
+  size_t images_in_trace = 0;
+  std::vector<double> share_percent;  // per limit: images over the limit / images in the trace
+  int axis_to_stabilise = -1;         // most frequent dominant axis of flagged images; -1 none
+  double fast_readout_s = 0.010;
+  std::vector<double> share_fast_readout_percent;   // recomputed with readout fast_readout_s
+  std::vector<double> share_half_altitude_percent;  // recomputed with half the altitude
+  std::string line;                                 // the one-line verdict for a person
+};
+
+struct AnalyzeResult {
+  // source
+  std::string format, gyro_source;
+  size_t samples = 0;
+  double duration_s = 0.0, rate_hz = 0.0;
+  size_t gaps = 0;
+  // analysis
+  std::optional<FlightResult> flight;  // empty when the trace is too short for one window
+  std::string flight_problem;          // why flight is empty
+  bool bias_estimated = true;  // AnalyzeOptions::estimate_bias
+  bool bias_from_still = false;
+  BiasSegment still_segment;
+  Eigen::Vector3d bias_rad_s = Eigen::Vector3d::Zero();  // camera axes
+  std::string trigger_source;  // "none", "camera events (KIND)", "triggers", "every N s"
+  std::vector<double> limits_m;
+  double altitude_m = 0.0, readout_s = 0.0;
+  std::string altitude_source;  // "camera" (the options) or "log"
+  std::vector<ImageResult> images;
+  AnalyzeVerdict verdict;
+};
+
+AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& options);
+
+// The renderer's true model that D_full uses: the declared rig with no time offset (triggers are
+// on the log clock) and the bias (camera axes) removed as the gyro bias (gyro axes).
+TrueModel AnalyzeTrueModel(const RigModel& rig, const Eigen::Vector3d& bias_cam_rad_s);
+
+// Reads a trigger file: CSV "image,t" or "t" (seconds on the log clock), optional header line
+// naming those columns; unnamed images become IMG_0001, ... Throws IoError(path:line: problem).
+std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path);
+
+// FORMATS.md `analyze` JSON (plus bias, verdict and per-image detail).
+nlohmann::json AnalyzeToJson(const AnalyzeResult& result);
+// Report for a person: source, bias, flight table, per-image table, verdict.
+std::string AnalyzeReport(const AnalyzeResult& result);
+// DIR/images.csv (name,t,D_paper_m,D_full_m,flag_<limit>...,dominant_axis; images outside the
+// trace have empty values and dominant_axis "outside") and DIR/exclude.txt (flagged names at any
+// limit, one a line), each written whole. Creates DIR when missing.
+void WriteAnalyzeOutputs(const std::string& dir, const AnalyzeResult& result);
+
+// The key used for a limit in JSON and CSV: shortest round-trip decimal ("0.05", "0.1").
+std::string LimitKey(double limit_m);
+
+}  // namespace shutterlab

@@ -1,0 +1,152 @@
+#include "estimate/paper/noise.h"
+
+#include "estimate/paper/window_stats.h"
+#include "sim/check.h"
+#include "sim/integrate.h"
+#include "sim/text_file.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+constexpr double kRadToArcsec = 180.0 / M_PI * 3600.0;
+constexpr const char* kAxisNames[3] = {"x", "y", "z"};
+
+}  // namespace
+
+void NoiseOptions::Check() const {
+  SHUTTERLAB_CHECK(window_samples >= 2)
+      << "window must hold at least 2 samples (got " << window_samples << ")";
+  SHUTTERLAB_CHECK(bias.begin_s >= 0.0 && bias.end_s > bias.begin_s)
+      << "bias segment " << bias.begin_s << ":" << bias.end_s << " must satisfy 0 <= A < B";
+  SHUTTERLAB_CHECK(allan_points_per_decade >= 1 && allan_points_per_decade <= 100)
+      << "Allan points per decade must be in 1..100 (got " << allan_points_per_decade << ")";
+}
+
+NoiseResult AnalyzeNoise(const GyroTrace& trace, const NoiseOptions& options) {
+  options.Check();
+  NoiseResult result;
+  result.window_samples = options.window_samples;
+  result.bias = EstimateBias(trace, options.bias);
+  result.rate_hz = trace.sampling().RateHz();
+  const size_t first = result.bias.first_after;
+  result.samples_analysed = trace.size() - first;
+  const size_t n_window = static_cast<size_t>(options.window_samples);
+  SHUTTERLAB_CHECK(result.samples_analysed >= n_window)
+      << "window of " << n_window << " samples is longer than the " << result.samples_analysed
+      << " samples after the bias segment (" << options.bias.begin_s << ":" << options.bias.end_s
+      << " s)";
+  SHUTTERLAB_CHECK(result.samples_analysed < (1ull << 32)) << "trace too long for 32-bit windows";
+
+  const PerAxisAngles angles = IntegratePerAxis(trace, result.bias.bias_rad_s, first);
+  result.windows = result.samples_analysed - n_window + 1;
+
+  for (int a = 0; a < 3; ++a) {
+    // O(N) sliding statistics (estimate/window_stats.h); their brute-force twins are the
+    // definition.
+    const std::vector<double> sigma = SlidingStdDevByCount(angles.angle_rad[a], n_window);
+    const std::vector<double> range = SlidingRangeByCount(angles.angle_rad[a], n_window);
+    SHUTTERLAB_CHECK(sigma.size() == result.windows && range.size() == result.windows)
+        << "window statistics returned " << sigma.size() << " windows, expected " << result.windows;
+    double sigma_sum = 0.0, sigma_sq_sum = 0.0, range_sum = 0.0;
+    double sigma_max = 0.0, range_max = 0.0;
+    for (size_t k = 0; k < result.windows; ++k) {
+      sigma_sum += sigma[k];
+      sigma_sq_sum += sigma[k] * sigma[k];
+      range_sum += range[k];
+      sigma_max = std::max(sigma_max, sigma[k]);
+      range_max = std::max(range_max, range[k]);
+    }
+    const double count = static_cast<double>(result.windows);
+    AxisNoise& axis = result.axes[a];
+    axis.sigma_mean_arcsec = sigma_sum / count * kRadToArcsec;
+    axis.sigma_max_arcsec = sigma_max * kRadToArcsec;
+    axis.sigma_rms_arcsec = std::sqrt(sigma_sq_sum / count) * kRadToArcsec;
+    axis.range_mean_arcsec = range_sum / count * kRadToArcsec;
+    axis.range_max_arcsec = range_max * kRadToArcsec;
+  }
+  result.allan = AllanAnalysis(trace, first, options.allan_points_per_decade);
+  return result;
+}
+
+std::string NoiseJson(const NoiseResult& result) {
+  nlohmann::ordered_json j;
+  j["window_samples"] = result.window_samples;
+  j["windows"] = result.windows;
+  j["samples"] = result.samples_analysed;
+  j["rate_hz"] = result.rate_hz;
+  nlohmann::ordered_json axes;
+  for (int a = 0; a < 3; ++a) {
+    const AxisNoise& n = result.axes[a];
+    nlohmann::ordered_json axis;
+    axis["sigma_mean_arcsec"] = n.sigma_mean_arcsec;
+    axis["sigma_max_arcsec"] = n.sigma_max_arcsec;
+    axis["range_mean_arcsec"] = n.range_mean_arcsec;
+    axis["range_max_arcsec"] = n.range_max_arcsec;
+    axis["sigma_rms_arcsec"] = n.sigma_rms_arcsec;
+    axis["bias_rad_s"] = result.bias.bias_rad_s[a];
+    if (!result.allan.empty()) {
+      const AllanCoefficients& c = result.allan.axes[a];
+      axis["arw_deg_sqrt_h"] = c.arw_deg_sqrt_h;
+      axis["arw_rad_s_sqrt_hz"] = c.arw_rad_s_sqrt_hz;
+      axis["bias_instability_deg_h"] = c.bias_instability_deg_h;
+      axis["bias_instability_tau_s"] = c.bias_instability_tau_s;
+      axis["bias_instability_upper_bound"] = c.bias_instability_upper_bound;
+    }
+    axes[kAxisNames[a]] = axis;
+  }
+  j["axes"] = axes;
+  return j.dump(2) + "\n";
+}
+
+std::string NoiseTable(const NoiseResult& result) {
+  std::string out;
+  out += "Noise of the per-axis integrated angle, sliding windows of " +
+         std::to_string(result.window_samples) + " samples (" +
+         FormatNumber("%.1f",
+                      result.rate_hz > 0 ? 1e3 * result.window_samples / result.rate_hz : 0.0) +
+         " ms at " + FormatNumber("%.1f", result.rate_hz) + " Hz), " +
+         std::to_string(result.windows) + " windows\n";
+  out += "bias from " + std::to_string(result.bias.samples) + " samples; statistics over the " +
+         std::to_string(result.samples_analysed) + " samples after it\n\n";
+  out += "axis   sigma mean   sigma max   range mean   range max   (arcsec)\n";
+  for (int a = 0; a < 3; ++a) {
+    const AxisNoise& n = result.axes[a];
+    out += std::string("  ") + kAxisNames[a] + FormatNumber("  %11.2f", n.sigma_mean_arcsec) +
+           FormatNumber(" %11.2f", n.sigma_max_arcsec) +
+           FormatNumber("  %11.2f", n.range_mean_arcsec) +
+           FormatNumber(" %11.2f", n.range_max_arcsec) + "\n";
+  }
+  if (result.allan.empty()) {
+    out += "\nAllan deviation: record too short\n";
+    return out;
+  }
+  out += "\nAllan deviation (tau " + FormatNumber("%.3g", result.allan.tau_s.front()) + " .. " +
+         FormatNumber("%.3g", result.allan.tau_s.back()) + " s)\n";
+  out += "axis   ARW deg/sqrt(h)   ARW rad/s/sqrt(Hz)   bias instability deg/h (at tau s)\n";
+  for (int a = 0; a < 3; ++a) {
+    const AllanCoefficients& c = result.allan.axes[a];
+    out += std::string("  ") + kAxisNames[a] + FormatNumber("  %15.4f", c.arw_deg_sqrt_h) +
+           FormatNumber("   %18.3e", c.arw_rad_s_sqrt_hz) +
+           FormatNumber("   %10.3f", c.bias_instability_deg_h) +
+           (c.bias_instability_upper_bound ? " <=" : "   ") +
+           FormatNumber(" (%.3g)", c.bias_instability_tau_s) + "\n";
+  }
+  bool any_upper = false;
+  for (const auto& c : result.allan.axes) any_upper |= c.bias_instability_upper_bound;
+  if (any_upper) {
+    out +=
+        "  <= : upper bound: the minimum is still on the -1/2 (white-noise) line; the record is "
+        "too "
+        "short to reach the floor\n";
+  }
+  return out;
+}
+
+}  // namespace shutterlab

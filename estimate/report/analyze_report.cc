@@ -1,0 +1,413 @@
+#include "estimate/report/analyze_report.h"
+
+#include "estimate/paper/allan.h"
+#include "estimate/paper/flight.h"
+#include "render/pictures.h"
+#include "render/rs_warp.h"
+#include "render/truth_model.h"
+#include "sim/check.h"
+#include "sim/integrate.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numeric>
+#include <sstream>
+
+namespace shutterlab {
+namespace {
+
+constexpr double kDegPerRad = 180.0 / M_PI;
+constexpr double kArcsecPerRad = kDegPerRad * 3600.0;
+constexpr const char* kAxisLabels[3] = {"x (right)", "y (down)", "z (optical axis)"};
+constexpr const char* kAxisNames[3] = {"x", "y", "z"};
+// One shade per limit, the strictest (smallest) limit lightest: stricter flags cover looser ones.
+constexpr const char* kShades[] = {"rgba(255, 170, 0, 0.22)", "rgba(230, 60, 30, 0.30)",
+                                   "rgba(150, 0, 90, 0.35)"};
+constexpr const char* kLimitColors[] = {"#e08a00", "#c0301a", "#80005a"};
+
+std::string Fmt(const char* format, double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), format, value);
+  return buffer;
+}
+
+std::string Cm(double m) { return Fmt("%.0f cm", m * 100.0); }
+
+// Camera-axis rates with the bias removed, as Analyze uses them.
+GyroTrace CameraRates(const GyroTrace& gyro, const Eigen::Matrix3d& cam_from_gyro,
+                      const Eigen::Vector3d& bias_rad_s) {
+  std::vector<GyroSample> samples = gyro.samples();
+  for (GyroSample& s : samples) s.omega_rad_s = cam_from_gyro * s.omega_rad_s - bias_rad_s;
+  return GyroTrace(std::move(samples));
+}
+
+std::vector<ChartShading> FlaggedShadings(const AnalyzeResult& result) {
+  std::vector<ChartShading> shadings;
+  if (!result.flight || result.flight->series.t_ns.empty()) return shadings;
+  // Loosest limit first so the stricter, wider shading lies below it.
+  for (size_t r = 0; r < result.flight->rows.size(); ++r) {
+    const FlightRow& row = result.flight->rows[r];
+    const size_t l =
+        static_cast<size_t>(std::find(result.limits_m.begin(), result.limits_m.end(), row.limit_m) -
+                            result.limits_m.begin());
+    ChartShading shading;
+    shading.label = "readout windows (" + Fmt("%g", row.window_s * 1e3) + " ms) over " +
+                    Cm(row.limit_m) + " (" + Fmt("%.1f", row.threshold_arcsec) +
+                    "\" on any axis): " + Fmt("%.1f", row.flagged_percent) + " % of windows";
+    shading.color = kShades[std::min<size_t>(l, std::size(kShades) - 1)];
+    shading.intervals = FlaggedIntervalsS(result.flight->series, row.threshold_arcsec);
+    shadings.push_back(std::move(shading));
+  }
+  return shadings;
+}
+
+void AddRateAndAngleCharts(HtmlPage* page, const GyroTrace& rates, const AnalyzeResult& result,
+                           const AnalyzeReportOptions& report) {
+  const auto& samples = rates.samples();
+  Chart rate;
+  rate.title = "Rotation rate, camera axes (bias removed)";
+  rate.x_label = "time on the log clock (s)";
+  rate.y_label = "rate (deg/s)";
+  rate.x.reserve(samples.size());
+  rate.series.resize(3);
+  for (int a = 0; a < 3; ++a) {
+    rate.series[a].label = kAxisLabels[a];
+    rate.series[a].y.reserve(samples.size());
+  }
+  for (const GyroSample& s : samples) {
+    rate.x.push_back(s.t_ns * 1e-9);
+    for (int a = 0; a < 3; ++a) rate.series[a].y.push_back(s.omega_rad_s[a] * kDegPerRad);
+  }
+  const std::vector<ChartShading> shadings = FlaggedShadings(result);
+  rate.shadings = shadings;
+  page->AddChart(DownsampleMinMax(rate, report.chart_buckets));
+
+  Chart angle = rate;  // the same x; the per-axis angles of the paper's model
+  angle.title = "Integrated angle per camera axis (the paper's per-axis sum)";
+  angle.y_label = "angle (deg)";
+  const PerAxisAngles angles = IntegratePerAxis(rates, Eigen::Vector3d::Zero());
+  for (int a = 0; a < 3; ++a) {
+    for (size_t i = 0; i < angle.x.size(); ++i) {
+      angle.series[a].y[i] = angles.angle_rad[a][i] * kDegPerRad;
+    }
+  }
+  angle.shadings.clear();  // the rate chart says which windows are flagged; keep this one clear
+  page->AddChart(DownsampleMinMax(angle, report.chart_buckets));
+}
+
+void AddDistortionChart(HtmlPage* page, const AnalyzeResult& result) {
+  Chart chart;
+  chart.title = "Predicted distortion per image";
+  chart.kind = ChartKind::kPoints;
+  chart.x_label = "exposure time on the log clock (s)";
+  chart.y_label = "D on the ground (cm)";
+  ChartSeries paper("D paper model", {}, "#1f77b4");
+  ChartSeries full("D full model", {}, "#d62728");
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const ImageResult& image : result.images) {
+    chart.x.push_back(image.t_ns * 1e-9);
+    paper.y.push_back(image.in_trace ? image.d_paper_m * 100.0 : nan);
+    full.y.push_back(image.in_trace ? image.d_full_m * 100.0 : nan);
+  }
+  chart.series = {paper, full};
+  for (size_t l = 0; l < result.limits_m.size(); ++l) {
+    ChartSeries limit("limit " + Cm(result.limits_m[l]), {},
+                      kLimitColors[std::min<size_t>(l, std::size(kLimitColors) - 1)]);
+    limit.y.assign(chart.x.size(), result.limits_m[l] * 100.0);
+    limit.dashed = true;
+    limit.line = true;
+    chart.series.push_back(std::move(limit));
+  }
+  page->AddChart(chart);
+}
+
+void AddWindowHistograms(HtmlPage* page, const FlightResult& flight,
+                         const AnalyzeReportOptions& report) {
+  const FlightSeries& series = flight.series;
+  // Upper edge: past the largest threshold and the bulk of the windows; the rest go in the last
+  // bin.
+  std::vector<double> all;
+  for (int a = 0; a < 3; ++a)
+    all.insert(all.end(), series.range_arcsec[a].begin(), series.range_arcsec[a].end());
+  const size_t p = std::min(all.size() - 1, static_cast<size_t>(0.995 * all.size()));
+  std::nth_element(all.begin(), all.begin() + p, all.end());
+  double upper = all[p];
+  for (const FlightRow& row : flight.rows) upper = std::max(upper, 1.15 * row.threshold_arcsec);
+  const int bins = report.histogram_bins;
+  const double width = upper / bins;
+  Chart chart;
+  chart.title = "Readout windows (" + Fmt("%g", series.window_s * 1e3) +
+                " ms) by the range of each axis's angle";
+  chart.kind = ChartKind::kHistogram;
+  chart.x_label = "range within the window (arcsec); the last bin holds everything above";
+  chart.y_label = "windows (%)";
+  for (int b = 0; b <= bins; ++b) chart.x.push_back(b * width);
+  const double n = static_cast<double>(series.t_ns.size());
+  for (int a = 0; a < 3; ++a) {
+    std::vector<double> counts(bins, 0.0);
+    for (double r : series.range_arcsec[a]) {
+      counts[std::min(bins - 1, static_cast<int>(r / width))] += 1.0;
+    }
+    ChartSeries s(kAxisLabels[a]);
+    for (double c : counts) s.y.push_back(100.0 * c / n);
+    s.y.push_back(s.y.back());  // the right edge of the last bin
+    chart.series.push_back(std::move(s));
+  }
+  // Shade what lies over each limit's threshold.
+  for (size_t r = 0; r < flight.rows.size(); ++r) {
+    const FlightRow& row = flight.rows[r];
+    chart.shadings.push_back(
+        {"over " + Cm(row.limit_m) + " (threshold " + Fmt("%.1f", row.threshold_arcsec) + "\")",
+         kShades[std::min<size_t>(r, std::size(kShades) - 1)],
+         {{row.threshold_arcsec, upper}}});
+  }
+  page->AddChart(chart);
+}
+
+void AddAllan(HtmlPage* page, const GyroTrace& rates, const AnalyzeResult& result) {
+  GyroTrace segment = rates;
+  std::string on =
+      "the whole log (no still segment found: the flight's motion dominates, so this "
+      "bounds the gyro's noise from above)";
+  if (!result.bias_estimated) {
+    on = "the whole log (bias not estimated, no still segment searched: the flight's motion "
+         "dominates, so this bounds the gyro's noise from above)";
+  }
+  if (result.bias_from_still) {
+    const int64_t t0 = rates.samples().front().t_ns;
+    std::vector<GyroSample> still;
+    for (const GyroSample& s : rates.samples()) {
+      const double t_s = (s.t_ns - t0) * 1e-9;
+      if (t_s >= result.still_segment.begin_s && t_s <= result.still_segment.end_s)
+        still.push_back(s);
+    }
+    if (still.size() >= 20) {
+      segment = GyroTrace(std::move(still));
+      on = "the still segment " + Fmt("%.2f", result.still_segment.begin_s) + "-" +
+           Fmt("%.2f", result.still_segment.end_s) + " s after the first sample";
+    }
+  }
+  const AllanResult allan = AllanAnalysis(segment);
+  if (allan.empty()) {
+    page->Paragraph("Allan deviation: too few samples on " + on + ".");
+    return;
+  }
+  page->Paragraph("Allan deviation of the camera-axis rates on " + on + ".");
+  Chart chart;
+  chart.title = "Allan deviation";
+  chart.log_x = chart.log_y = true;
+  chart.x_label = "cluster time tau (s)";
+  chart.y_label = "Allan deviation (deg/h)";
+  chart.x = allan.tau_s;
+  for (int a = 0; a < 3; ++a) {
+    ChartSeries s(kAxisLabels[a]);
+    for (double v : allan.adev_rad_s[a]) s.y.push_back(v * kDegPerRad * 3600.0);
+    chart.series.push_back(std::move(s));
+  }
+  page->AddChart(chart);
+  std::vector<std::vector<std::string>> rows;
+  for (int a = 0; a < 3; ++a) {
+    const AllanCoefficients& c = allan.axes[a];
+    rows.push_back(
+        {kAxisLabels[a], Fmt("%.3g", c.arw_deg_sqrt_h),
+         (c.bias_instability_upper_bound ? "< " : "") + Fmt("%.3g", c.bias_instability_deg_h),
+         Fmt("%.3g", c.bias_instability_tau_s)});
+  }
+  page->Table({"axis", "angle random walk (deg/sqrt(h))", "bias instability (deg/h)", "at tau (s)"},
+              rows);
+}
+
+void AddFlightTable(HtmlPage* page, const AnalyzeResult& result) {
+  if (!result.flight) {
+    page->Paragraph("Flight table not computed: " + result.flight_problem);
+    return;
+  }
+  const FlightResult& flight = *result.flight;
+  std::vector<std::string> header = {"limit", "window", "threshold", "windows",
+                                     "x %",   "y %",    "z %",       "per-axis %"};
+  if (flight.vector_criterion) header.push_back("vector %");
+  std::vector<std::vector<std::string>> rows;
+  for (const FlightRow& row : flight.rows) {
+    std::vector<std::string> cells = {Cm(row.limit_m),
+                                      Fmt("%g ms", row.window_s * 1e3),
+                                      Fmt("%.1f\"", row.threshold_arcsec),
+                                      std::to_string(row.windows),
+                                      Fmt("%.2f", row.flagged_percent_axis[0]),
+                                      Fmt("%.2f", row.flagged_percent_axis[1]),
+                                      Fmt("%.2f", row.flagged_percent_axis[2]),
+                                      Fmt("%.2f", row.flagged_percent)};
+    if (flight.vector_criterion) cells.push_back(Fmt("%.2f", row.flagged_percent_vector));
+    rows.push_back(std::move(cells));
+  }
+  page->Table(header, rows);
+  // The table's closing line (which criterion flags more) as the text version prints it.
+  std::istringstream text(FlightTable(flight));
+  for (std::string line; std::getline(text, line);) {
+    if (line.rfind("criteria:", 0) == 0 || line.rfind("flight:", 0) == 0) page->Paragraph(line);
+  }
+}
+
+void AddImageTable(HtmlPage* page, const AnalyzeResult& result) {
+  std::vector<std::string> header = {"image",        "t (s)",        "D paper (cm)",
+                                     "D full (cm)",  "D full (px)",  "range x (\")",
+                                     "range y (\")", "range z (\")", "axis"};
+  for (double limit : result.limits_m) header.push_back("> " + Cm(limit));
+  std::vector<std::vector<std::string>> rows;
+  for (const ImageResult& image : result.images) {
+    std::vector<std::string> cells = {image.name, Fmt("%.3f", image.t_ns * 1e-9)};
+    if (!image.in_trace) {
+      cells.push_back("outside the log");
+    } else {
+      cells.insert(cells.end(),
+                   {Fmt("%.2f", image.d_paper_m * 100), Fmt("%.2f", image.d_full_m * 100),
+                    Fmt("%.2f", image.d_full_px), Fmt("%.1f", image.range_arcsec[0]),
+                    Fmt("%.1f", image.range_arcsec[1]), Fmt("%.1f", image.range_arcsec[2]),
+                    kAxisNames[image.dominant_axis]});
+      for (size_t l = 0; l < result.limits_m.size(); ++l) {
+        cells.push_back(image.flagged[l] ? "flagged" : "ok");
+      }
+    }
+    rows.push_back(std::move(cells));
+  }
+  page->Table(header, rows);
+}
+
+// |d| heatmap of one frame under the full model, over the rendered scene when there is one.
+cv::Mat WorstImagePicture(const CameraMotion& motion, const RigModel& rig, const ImageResult& image,
+                          const AnalyzeReportOptions& report) {
+  const PinholeCamera& camera = rig.camera;
+  const cv::Size scene_size =
+      report.scene.empty() ? cv::Size(camera.width, camera.height) : report.scene.size();
+  const FrameGeometry geometry(camera, rig.altitude_m, motion.Frame(image.t_ns), scene_size);
+  cv::Mat picture = DisplacementHeatmap(DisplacementField(geometry));
+  if (!report.scene.empty()) {
+    cv::Mat rendered;
+    RenderFrame(report.scene, geometry, Interpolation::kBilinear, &rendered);
+    cv::Mat frame = picture(cv::Rect(0, 0, camera.width, camera.height));
+    cv::addWeighted(ToRgb8(rendered), 0.5, frame, 0.5, 0.0, frame);
+  }
+  const double scale = static_cast<double>(report.picture_width_px) / picture.cols;
+  if (scale < 1.0) cv::resize(picture, picture, cv::Size(), scale, scale, cv::INTER_AREA);
+  return picture;
+}
+
+void AddWorstImages(HtmlPage* page, const FlightLog& log, const RigModel& rig,
+                    const AnalyzeResult& result, const AnalyzeReportOptions& report) {
+  std::vector<const ImageResult*> worst;
+  for (const ImageResult& image : result.images) {
+    if (image.in_trace) worst.push_back(&image);
+  }
+  std::sort(worst.begin(), worst.end(),
+            [](const ImageResult* a, const ImageResult* b) { return a->d_full_m > b->d_full_m; });
+  if (worst.size() > report.worst_images) worst.resize(report.worst_images);
+  if (worst.empty()) {
+    page->Paragraph("No image lies inside the log.");
+    return;
+  }
+  page->Paragraph(
+      "Expected displacement |d| of every pixel from where a global shutter would have put it "
+      "(the full model: the renderer's geometry of the declared camera), colour scale in pixels" +
+      std::string(report.scene.empty() ? "."
+                                       : ", blended over " +
+                                             (report.scene_name.empty() ? std::string("the scene")
+                                                                        : report.scene_name) +
+                                             " rendered through the same rolling-shutter frame."));
+  const CameraMotion motion(log.gyro, AnalyzeTrueModel(rig, result.bias_rad_s));
+  for (const ImageResult* image : worst) {
+    page->Image(WorstImagePicture(motion, rig, *image, report),
+                image->name + " at " + Fmt("%.2f", image->t_ns * 1e-9) + " s: D full " +
+                    Fmt("%.1f", image->d_full_m * 100) + " cm (" + Fmt("%.1f", image->d_full_px) +
+                    " px), D paper " + Fmt("%.1f", image->d_paper_m * 100) + " cm, axis " +
+                    kAxisNames[image->dominant_axis]);
+  }
+}
+
+}  // namespace
+
+void AnalyzeReportOptions::Check() const {
+  SHUTTERLAB_CHECK(scene.empty() || (scene.depth() == CV_8U && scene.channels() == 3))
+      << "the report's scene must be an 8-bit RGB image";
+  SHUTTERLAB_CHECK(chart_buckets >= 10) << "chart_buckets must be >= 10";
+  SHUTTERLAB_CHECK(histogram_bins >= 2) << "histogram_bins must be >= 2";
+  SHUTTERLAB_CHECK(picture_width_px >= 64) << "picture_width_px must be >= 64";
+}
+
+HtmlPage AnalyzeReportPage(const FlightLog& log, const AnalyzeOptions& options,
+                           const AnalyzeResult& result, const AnalyzeReportOptions& report) {
+  report.Check();
+  RigModel rig = options.rig;
+  rig.altitude_m = result.altitude_m;
+  HtmlPage page("Rolling-shutter flight report" +
+                (report.log_name.empty() ? std::string() : ": " + report.log_name));
+  page.Paragraph(result.verdict.line);
+
+  page.Heading("Source and camera");
+  const PinholeCamera& cam = rig.camera;
+  std::string bias;
+  if (result.bias_from_still) {
+    bias = "still segment " + Fmt("%.2f", result.still_segment.begin_s) + "-" +
+           Fmt("%.2f", result.still_segment.end_s) + " s after the first sample";
+  } else {
+    bias = result.bias_estimated ? "none found: zero bias assumed" : "zero (not estimated)";
+  }
+  const Eigen::Vector3d b = result.bias_rad_s * kDegPerRad;
+  page.Table(
+      {"", ""},
+      {{"log", report.log_name},
+       {"format", result.format},
+       {"gyro", result.gyro_source},
+       {"samples", std::to_string(result.samples)},
+       {"duration", Fmt("%.1f s", result.duration_s)},
+       {"rate", Fmt("%.1f Hz", result.rate_hz)},
+       {"gaps", std::to_string(result.gaps)},
+       {"bias", bias},
+       {"bias (deg/s, camera x y z)",
+        Fmt("%.4f", b.x()) + " " + Fmt("%.4f", b.y()) + " " + Fmt("%.4f", b.z())},
+       {"camera", std::to_string(cam.width) + "x" + std::to_string(cam.height) + ", f " +
+                      Fmt("%.0f px", 0.5 * (cam.fx + cam.fy)) +
+                      (cam.HasDistortion() ? ", lens distortion" : "")},
+       {"readout", Fmt("%g ms", result.readout_s * 1e3)},
+       {"altitude", Fmt("%g m", result.altitude_m) + " (" + result.altitude_source + ")"},
+       {"ground sample", Fmt("%.2f cm/px", 100.0 * result.altitude_m / (0.5 * (cam.fx + cam.fy)))},
+       {"triggers", result.trigger_source},
+       {"images", std::to_string(result.images.size()) + " (" +
+                      std::to_string(result.verdict.images_in_trace) + " inside the log)"}});
+
+  page.Heading("Rotation during the flight");
+  const GyroTrace rates = CameraRates(log.gyro, options.rig.cam_from_gyro, result.bias_rad_s);
+  if (!result.flight || result.flight->series.t_ns.empty()) {
+    page.Paragraph(
+        "Flagged windows are not shaded: the flight table's per-window series was not "
+        "computed.");
+  }
+  AddRateAndAngleCharts(&page, rates, result, report);
+
+  page.Heading("Distortion per image");
+  page.Paragraph(
+      "D paper: altitude x tan(largest per-axis angle range within the readout). D full: "
+      "FORMATS.md's frame distortion under the declared camera (rotation, lens, velocity) on a " +
+      std::to_string(kGridStepPx) + " px grid. Dashed lines: the limits.");
+  AddDistortionChart(&page, result);
+
+  page.Heading("Readout windows (flight table)");
+  AddFlightTable(&page, result);
+  if (result.flight && !result.flight->series.t_ns.empty()) {
+    AddWindowHistograms(&page, *result.flight, report);
+  }
+
+  page.Heading("Gyro noise");
+  AddAllan(&page, rates, result);
+
+  page.Heading("Images");
+  AddImageTable(&page, result);
+
+  page.Heading("Worst images");
+  AddWorstImages(&page, log, rig, result, report);
+  return page;
+}
+
+}  // namespace shutterlab

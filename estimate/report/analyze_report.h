@@ -1,0 +1,39 @@
+#pragma once
+// DIR/report.html for `shutterlab analyze`: the verdict, the source and bias, camera-axis rate and
+// integrated angle against time with the flagged readout windows shaded (one shade per limit),
+// D per image (paper and full model) against the limit lines, histograms of the readout windows'
+// per-axis ranges, the Allan deviation (of the still segment when one was found, else of the whole
+// log), the flight and per-image tables, and for the worst images (by D_full) a heatmap of the
+// expected displacement |d| (render/rs_warp.h DisplacementField), blended over the nadir scene
+// rendered through the same frame when a scene is given. Built with estimate/html_report.h.
+//
+// Long traces are cut to min/max envelopes (DownsampleMinMax) so the page stays a few MB.
+
+#include "estimate/paper/analyze.h"
+#include "estimate/report/html_report.h"
+#include "sim/logs/flight_log.h"
+
+#include <opencv2/core.hpp>
+
+#include <string>
+
+namespace shutterlab {
+
+struct AnalyzeReportOptions {
+  std::string log_name;    // shown in the title (e.g. the log's file name)
+  cv::Mat scene;           // 8-bit RGB nadir image for the pictures; empty: heatmaps alone
+  std::string scene_name;  // said in the captions
+  size_t worst_images = 3;
+  size_t chart_buckets = 4000;  // DownsampleMinMax buckets of the time charts
+  int histogram_bins = 60;
+  int picture_width_px = 380;  // pictures are scaled to this width (scale bar included): 3 a row
+  void Check() const;
+};
+
+// options: those given to Analyze (the rig; the altitude used is result.altitude_m). result should
+// come from Analyze with AnalyzeOptions::flight_series set, else the window histograms and the
+// shading are left out (said on the page).
+HtmlPage AnalyzeReportPage(const FlightLog& log, const AnalyzeOptions& options,
+                           const AnalyzeResult& result, const AnalyzeReportOptions& report);
+
+}  // namespace shutterlab

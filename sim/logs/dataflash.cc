@@ -1,0 +1,445 @@
+#include "sim/logs/dataflash.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "sim/check.h"
+#include "sim/text_file.h"
+#include "sim/logs/ulog.h"
+
+namespace shutterlab {
+namespace {
+
+constexpr uint8_t kHead1 = 0xA3;
+constexpr uint8_t kHead2 = 0x95;
+constexpr uint8_t kFmtType = 128;
+constexpr size_t kHeaderBytes = 3;
+constexpr size_t kFmtLength = 89;  // 3 + type + length + name[4] + format[16] + labels[64]
+constexpr size_t kBatchSamples = 32;  // int16[32] per ISBD axis ('a')
+constexpr size_t kMaxDetailedWarnings = 8;
+
+uint64_t LoadLE(const char* p, size_t bytes) {
+  uint64_t v = 0;
+  for (size_t i = 0; i < bytes; ++i) v |= static_cast<uint64_t>(static_cast<uint8_t>(p[i])) << (8 * i);
+  return v;
+}
+
+// Bytes of one format character; 0 when unknown.
+size_t CharBytes(char c) {
+  switch (c) {
+    case 'b': case 'B': case 'M': return 1;
+    case 'h': case 'H': case 'c': case 'C': case 'g': return 2;
+    case 'i': case 'I': case 'f': case 'e': case 'E': case 'L': case 'n': return 4;
+    case 'd': case 'q': case 'Q': return 8;
+    case 'N': return 16;
+    case 'Z': case 'a': return 64;
+    default: return 0;
+  }
+}
+
+double HalfToDouble(uint16_t h) {
+  const int exponent = (h >> 10) & 0x1f;
+  const int mantissa = h & 0x3ff;
+  const double sign = (h & 0x8000) ? -1.0 : 1.0;
+  if (exponent == 0) return sign * std::ldexp(mantissa, -24);
+  if (exponent == 31) return mantissa ? std::numeric_limits<double>::quiet_NaN() : sign * INFINITY;
+  return sign * std::ldexp(mantissa + 1024, exponent - 25);
+}
+
+// A logged number as an integer; 0 when it is not finite or out of int range (corrupt data).
+int64_t ToInt(double v) {
+  return std::isfinite(v) && std::abs(v) < 9.0e15 ? static_cast<int64_t>(v) : 0;
+}
+
+struct Field {
+  char type = 0;
+  size_t offset = 0;  // within the payload (after the 3 header bytes)
+};
+
+// Reads a numeric field with ArduPilot's fixed multipliers applied; NaN for text fields.
+double ReadNumber(std::string_view payload, const Field& f, size_t element = 0) {
+  const size_t at = f.offset + (f.type == 'a' ? 2 * element : 0);
+  auto raw = [&](size_t bytes) { return LoadLE(payload.data() + at, bytes); };
+  switch (f.type) {
+    case 'b': return static_cast<int8_t>(raw(1));
+    case 'B': case 'M': return static_cast<uint8_t>(raw(1));
+    case 'h': case 'a': return static_cast<int16_t>(raw(2));
+    case 'H': return static_cast<uint16_t>(raw(2));
+    case 'c': return static_cast<int16_t>(raw(2)) * 0.01;
+    case 'C': return static_cast<uint16_t>(raw(2)) * 0.01;
+    case 'i': return static_cast<int32_t>(raw(4));
+    case 'I': return static_cast<uint32_t>(raw(4));
+    case 'e': return static_cast<int32_t>(raw(4)) * 0.01;
+    case 'E': return static_cast<uint32_t>(raw(4)) * 0.01;
+    case 'L': return static_cast<int32_t>(raw(4)) * 1e-7;
+    case 'q': return static_cast<double>(static_cast<int64_t>(raw(8)));
+    case 'Q': return static_cast<double>(raw(8));
+    case 'g': return HalfToDouble(static_cast<uint16_t>(raw(2)));
+    case 'f': {
+      const uint32_t bits = static_cast<uint32_t>(raw(4));
+      float v;
+      std::memcpy(&v, &bits, 4);
+      return v;
+    }
+    case 'd': {
+      const uint64_t bits = raw(8);
+      double v;
+      std::memcpy(&v, &bits, 8);
+      return v;
+    }
+    default: return std::numeric_limits<double>::quiet_NaN();
+  }
+}
+
+// A microsecond time field as ns; nullopt unless an integer type in range.
+std::optional<int64_t> ReadTimeNs(std::string_view payload, const Field& f) {
+  int64_t us = 0;
+  switch (f.type) {
+    case 'Q': {
+      const uint64_t v = LoadLE(payload.data() + f.offset, 8);
+      if (v > static_cast<uint64_t>(std::numeric_limits<int64_t>::max())) return std::nullopt;
+      us = static_cast<int64_t>(v);
+      break;
+    }
+    case 'q': us = static_cast<int64_t>(LoadLE(payload.data() + f.offset, 8)); break;
+    case 'I': us = static_cast<uint32_t>(LoadLE(payload.data() + f.offset, 4)); break;
+    case 'i': us = static_cast<int32_t>(LoadLE(payload.data() + f.offset, 4)); break;
+    default: return std::nullopt;
+  }
+  if (us < 0 || us > std::numeric_limits<int64_t>::max() / 1000) return std::nullopt;
+  return us * 1000;
+}
+
+std::string TrimmedText(std::string_view s) {
+  const size_t nul = s.find('\0');
+  s = s.substr(0, nul);
+  while (!s.empty() && s.back() == ' ') s.remove_suffix(1);
+  return std::string(s);
+}
+
+struct Format {
+  std::string name;
+  bool relevant = false;  // a message this reader decodes; most of a real log is not
+  size_t length = 0;  // whole message, header included
+  std::map<std::string, Field> fields;
+  const Field* Find(const std::string& label) const {
+    auto it = fields.find(label);
+    return it == fields.end() ? nullptr : &it->second;
+  }
+};
+
+// Builds a format from an FMT payload; an error text when it is inconsistent.
+std::optional<Format> ParseFmt(std::string_view p, std::string* error) {
+  Format fmt;
+  fmt.length = static_cast<uint8_t>(p[1]);
+  fmt.name = TrimmedText(p.substr(2, 4));
+  const std::string format = TrimmedText(p.substr(6, 16));
+  const std::string labels = TrimmedText(p.substr(22, 64));
+  std::vector<std::string> names;
+  size_t start = 0;
+  while (start <= labels.size()) {
+    const size_t comma = labels.find(',', start);
+    names.push_back(labels.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (labels.empty()) names.clear();
+  if (names.size() != format.size()) {
+    *error = "FMT for '" + fmt.name + "' has " + std::to_string(format.size()) + " format characters but " +
+             std::to_string(names.size()) + " labels";
+    return std::nullopt;
+  }
+  size_t offset = 0;
+  for (size_t i = 0; i < format.size(); ++i) {
+    const size_t bytes = CharBytes(format[i]);
+    if (bytes == 0) {
+      *error = "FMT for '" + fmt.name + "' has unknown format character '" + std::string(1, format[i]) + "'";
+      return std::nullopt;
+    }
+    fmt.fields.emplace(names[i], Field{format[i], offset});
+    offset += bytes;
+  }
+  static const char* kRelevant[] = {"GYR", "IMU", "IMU2", "IMU3", "ISBH", "ISBD", "CAM", "TRIG"};
+  fmt.relevant = std::any_of(std::begin(kRelevant), std::end(kRelevant),
+                             [&](const char* n) { return fmt.name == n; });
+  if (offset + kHeaderBytes != fmt.length) {
+    *error = "FMT for '" + fmt.name + "' declares length " + std::to_string(fmt.length) + " but its format '" +
+             format + "' needs " + std::to_string(offset + kHeaderBytes);
+    return std::nullopt;
+  }
+  return fmt;
+}
+
+struct BatchHeader {
+  int instance = 0;
+  int64_t sample_ns = 0;
+  double rate_hz = 0.0;
+  double mul = 0.0;
+  size_t count = 0;
+};
+
+class DataFlashParser {
+ public:
+  DataFlashParser(std::string_view bytes, const std::string& path) : bytes_(bytes), path_(path) {}
+  FlightLog Run();
+
+ private:
+  void Warn(const std::string& kind, size_t offset, const std::string& text) {
+    size_t& count = warning_counts_[kind];
+    ++count;
+    if (count <= kMaxDetailedWarnings) log_.warnings.push_back("byte " + std::to_string(offset) + ": " + text);
+  }
+  // Message length at q when a known message starts there, else 0.
+  size_t KnownAt(size_t q) const;
+  size_t Resync(size_t from) const;
+  // True when q is the end of the file, too close to it for a header (the loop reports that), or
+  // a known message starts there (possibly cut off by the end of the file).
+  bool NextHeaderOk(size_t q) const {
+    return q + kHeaderBytes > bytes_.size() || KnownAt(q) != 0;
+  }
+  // Decodes the known message of len bytes at pos (FMT or data).
+  void Accept(size_t pos, size_t len);
+  void Handle(const Format& fmt, std::string_view payload);
+  internal::GyroCandidate& Candidate(const std::string& base, int instance, int preference) {
+    const std::string name = base + (instance ? "/" + std::to_string(instance) : "");
+    auto& c = candidates_[name];
+    c.name = name;
+    c.preference = preference;
+    return c;
+  }
+
+  std::string_view bytes_;
+  std::string path_;
+  FlightLog log_;
+  std::array<std::optional<Format>, 256> formats_;
+  std::map<std::string, size_t> warning_counts_;
+  std::map<std::string, internal::GyroCandidate> candidates_;
+  std::map<int64_t, BatchHeader> batches_;  // by ISBH.N
+  std::vector<double> cam_rel_alt_m_;
+  size_t skipped_bytes_ = 0;
+};
+
+size_t DataFlashParser::KnownAt(size_t q) const {
+  if (bytes_.size() - q < kHeaderBytes) return 0;
+  if (static_cast<uint8_t>(bytes_[q]) != kHead1 || static_cast<uint8_t>(bytes_[q + 1]) != kHead2) return 0;
+  const uint8_t type = static_cast<uint8_t>(bytes_[q + 2]);
+  if (type == kFmtType) return kFmtLength;
+  return formats_[type] ? formats_[type]->length : 0;
+}
+
+// Next offset after `from` where a known message starts and is followed by another one (or by the
+// end of the file). Linear in the bytes scanned.
+size_t DataFlashParser::Resync(size_t from) const {
+  const size_t n = bytes_.size();
+  for (size_t q = from; q + kHeaderBytes <= n; ++q) {
+    const size_t len = KnownAt(q);
+    if (len == 0 || len > n - q) continue;
+    if (q + len == n || KnownAt(q + len) != 0) return q;
+  }
+  return n;
+}
+
+void DataFlashParser::Accept(size_t pos, size_t len) {
+  const std::string_view payload = bytes_.substr(pos + kHeaderBytes, len - kHeaderBytes);
+  const uint8_t type = static_cast<uint8_t>(bytes_[pos + 2]);
+  if (type != kFmtType) {
+    Handle(*formats_[type], payload);
+    return;
+  }
+  std::string error;
+  auto fmt = ParseFmt(payload, &error);
+  const uint8_t defined = static_cast<uint8_t>(payload[0]);
+  if (!fmt) {
+    ++log_.records_skipped;
+    Warn("fmt", pos, error + "; skipped");
+  } else if (defined == kFmtType) {
+    if (fmt->length != kFmtLength) Warn("fmt", pos, "FMT redefines itself with another length; ignored");
+  } else {
+    formats_[defined] = std::move(fmt);
+  }
+}
+
+void DataFlashParser::Handle(const Format& fmt, std::string_view p) {
+  if (!fmt.relevant) return;
+  const std::string& name = fmt.name;
+  const Field* time_us = fmt.Find("TimeUS");
+  if (name == "GYR" || name == "IMU" || name == "IMU2" || name == "IMU3") {
+    const Field* x = fmt.Find("GyrX");
+    const Field* y = fmt.Find("GyrY");
+    const Field* z = fmt.Find("GyrZ");
+    const Field* sample_us = fmt.Find("SampleUS");
+    const Field* t_field = sample_us && name == "GYR" ? sample_us : time_us;
+    if (!x || !y || !z || !t_field) return;
+    int instance = name == "IMU2" ? 1 : name == "IMU3" ? 2 : 0;
+    if (const Field* i = fmt.Find("I")) instance = static_cast<int>(ToInt(ReadNumber(p, *i)) & 0xff);
+    const auto t_ns = ReadTimeNs(p, *t_field);
+    auto& c = Candidate(name == "GYR" ? "GYR" : "IMU", instance, name == "GYR" ? 0 : 2);
+    c.samples.push_back({t_ns.value_or(0), Eigen::Vector3d(ReadNumber(p, *x), ReadNumber(p, *y), ReadNumber(p, *z))});
+  } else if (name == "ISBH") {
+    const Field* n = fmt.Find("N");
+    const Field* type = fmt.Find("type");
+    const Field* mul = fmt.Find("mul");
+    const Field* cnt = fmt.Find("smp_cnt");
+    const Field* sus = fmt.Find("SampleUS");
+    const Field* rate = fmt.Find("smp_rate");
+    if (!n || !type || !mul || !cnt || !sus || !rate) return;
+    const int64_t key = ToInt(ReadNumber(p, *n));
+    batches_.erase(key);
+    if (ReadNumber(p, *type) != 1.0) return;  // 0 accelerometer, 1 gyro
+    BatchHeader h;
+    if (const Field* inst = fmt.Find("instance")) h.instance = static_cast<int>(ToInt(ReadNumber(p, *inst)) & 0xff);
+    h.mul = ReadNumber(p, *mul);
+    h.rate_hz = ReadNumber(p, *rate);
+    h.count = static_cast<size_t>(std::max<int64_t>(0, ToInt(ReadNumber(p, *cnt))));
+    const auto t = ReadTimeNs(p, *sus);
+    // Bounds that keep sample-time arithmetic far from int64 overflow on corrupt headers.
+    constexpr size_t kMaxBatchSamples = 1'000'000;
+    constexpr int64_t kMaxSampleNs = 4'000'000'000'000'000'000;  // 127 years of boot time
+    if (!t || *t > kMaxSampleNs || !(h.mul > 0.0) || !(h.rate_hz >= 1.0 && h.rate_hz < 1e6) ||
+        h.count > kMaxBatchSamples) {
+      ++log_.records_skipped;
+      return;
+    }
+    h.sample_ns = *t;
+    batches_[key] = h;
+  } else if (name == "ISBD") {
+    const Field* n = fmt.Find("N");
+    const Field* seq = fmt.Find("seqno");
+    const Field* x = fmt.Find("x");
+    const Field* y = fmt.Find("y");
+    const Field* z = fmt.Find("z");
+    if (!n || !seq || !x || !y || !z || x->type != 'a' || y->type != 'a' || z->type != 'a') return;
+    auto it = batches_.find(ToInt(ReadNumber(p, *n)));
+    if (it == batches_.end()) return;  // an accelerometer batch, or its header was lost
+    const BatchHeader& h = it->second;
+    const int64_t seqno = ToInt(ReadNumber(p, *seq));
+    if (seqno < 0 || static_cast<uint64_t>(seqno) * kBatchSamples >= h.count) return;
+    auto& c = Candidate("ISBD", h.instance, 1);
+    for (size_t k = 0; k < kBatchSamples; ++k) {
+      const size_t index = static_cast<size_t>(seqno) * kBatchSamples + k;
+      if (index >= h.count) break;
+      const int64_t t_ns = h.sample_ns + std::llround(static_cast<double>(index) * 1e9 / h.rate_hz);
+      c.samples.push_back({t_ns, Eigen::Vector3d(ReadNumber(p, *x, k), ReadNumber(p, *y, k), ReadNumber(p, *z, k)) / h.mul});
+    }
+  } else if (name == "CAM" || name == "TRIG") {
+    if (!time_us) return;
+    const auto t = ReadTimeNs(p, *time_us);
+    if (!t || *t <= 0) return;
+    CameraEvent e;
+    e.t_ns = *t;
+    e.kind = name;
+    if (const Field* img = fmt.Find("Img")) e.sequence = ToInt(ReadNumber(p, *img));
+    log_.camera_events.push_back(e);
+    if (name == "CAM") {
+      if (const Field* rel = fmt.Find("RelAlt")) {
+        const double h = ReadNumber(p, *rel);
+        if (std::isfinite(h)) cam_rel_alt_m_.push_back(h);
+      }
+    }
+  }
+}
+
+FlightLog DataFlashParser::Run() {
+  log_.format = "dataflash";
+  if (!LooksLikeDataFlash(bytes_)) {
+    throw IoError(IoMessage(path_, 0, "byte 0: not an ArduPilot DataFlash log (expected 0xA3 0x95 0x80)"));
+  }
+  const size_t n = bytes_.size();
+  size_t pos = 0;
+  while (pos < n) {
+    if (n - pos < kHeaderBytes) {
+      Warn("truncated", pos, "file ends inside a message header (truncated?)");
+      break;
+    }
+    const size_t len = KnownAt(pos);
+    if (len == 0) {
+      const size_t next = Resync(pos + 1);
+      ++log_.records_skipped;
+      skipped_bytes_ += next - pos;
+      Warn("corrupt", pos, "no known message starts here (type " + std::to_string(static_cast<uint8_t>(bytes_[pos + 2])) +
+                               "); skipped " + std::to_string(next - pos) + " bytes");
+      pos = next;
+      continue;
+    }
+    if (len > n - pos) {
+      Warn("truncated", pos, "file ends inside a message of " + std::to_string(len) + " bytes (truncated?)");
+      break;
+    }
+    const uint8_t type = static_cast<uint8_t>(bytes_[pos + 2]);
+    const bool defines_next = type == kFmtType && pos + len + kHeaderBytes <= n &&
+                              bytes_[pos + len + 2] == bytes_[pos + kHeaderBytes];
+    if (!defines_next && !NextHeaderOk(pos + len)) {
+      // A damaged type byte makes a message of another length: what follows no longer starts
+      // with a header, and a valid message starts inside this one. Decoding it would turn
+      // payload bytes into samples. (When no valid message starts inside it, only what follows
+      // is damaged; the next pass of the loop skips that.)
+      const size_t next = Resync(pos + 1);
+      if (next >= pos + len) {
+        Accept(pos, len);
+        pos += len;
+        continue;
+      }
+      ++log_.records_skipped;
+      skipped_bytes_ += next - pos;
+      Warn("corrupt", pos, "message (type " + std::to_string(static_cast<uint8_t>(bytes_[pos + 2])) +
+                               ") not followed by a valid message; skipped " + std::to_string(next - pos) + " bytes");
+      pos = next;
+      continue;
+    }
+    Accept(pos, len);
+    pos += len;
+  }
+
+  for (const auto& [kind, count] : warning_counts_) {
+    if (count > kMaxDetailedWarnings) {
+      log_.warnings.push_back(std::to_string(count - kMaxDetailedWarnings) + " more warnings of kind '" + kind + "' not listed");
+    }
+  }
+  if (skipped_bytes_ > 0) log_.warnings.push_back(std::to_string(skipped_bytes_) + " corrupt bytes skipped in total");
+
+  std::stable_sort(log_.camera_events.begin(), log_.camera_events.end(),
+                   [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
+  std::vector<double> airborne;
+  for (double h : cam_rel_alt_m_) {
+    if (h > kAirborneAltitudeM) airborne.push_back(h);
+  }
+  if (auto m = internal::Median(std::move(airborne))) {
+    log_.altitude_above_ground_m = m;
+    log_.warnings.push_back("altitude above ground: median CAM.RelAlt above 1 m (height above home at each picture)");
+  }
+
+  std::vector<internal::GyroCandidate> candidates;
+  for (auto& [name, c] : candidates_) candidates.push_back(std::move(c));
+  if (!internal::ChooseGyroSource(std::move(candidates), &log_)) {
+    throw IoError(IoMessage(path_, 0, "no usable gyro data (looked for GYR, ISBH/ISBD gyro batches, IMU)"));
+  }
+  return std::move(log_);
+}
+
+}  // namespace
+
+bool LooksLikeDataFlash(std::string_view first_bytes) {
+  if (first_bytes.size() < 3) return false;
+  const auto* b = reinterpret_cast<const uint8_t*>(first_bytes.data());
+  if (b[0] != kHead1 || b[1] != kHead2 || b[2] != kFmtType) return false;
+  if (first_bytes.size() >= 5 && (b[3] != kFmtType || b[4] != kFmtLength)) return false;
+  return true;
+}
+
+FlightLog ParseDataFlash(std::string_view bytes, const std::string& path) {
+  return DataFlashParser(bytes, path).Run();
+}
+
+FlightLog ReadDataFlash(const std::string& path) {
+  const std::string bytes = ReadFileToString(path);
+  return ParseDataFlash(bytes, path);
+}
+
+}  // namespace shutterlab

@@ -1,0 +1,308 @@
+#include "sim/logs/gcsv.h"
+
+#include "sim/check.h"
+#include "sim/text_file.h"
+
+#include <cmath>
+#include <string_view>
+
+namespace shutterlab {
+namespace {
+
+// The exact time unit a tscale names, if it is one of 1, 1e-3, 1e-6, 1e-9 (these parse to the same
+// doubles as the literals below, so == is the right test).
+std::optional<TimeUnit> ExactUnit(double tscale) {
+  if (tscale == 1.0) return TimeUnit::kSeconds;
+  if (tscale == 1e-3) return TimeUnit::kMilliseconds;
+  if (tscale == 1e-6) return TimeUnit::kMicroseconds;
+  if (tscale == 1e-9) return TimeUnit::kNanoseconds;
+  return std::nullopt;
+}
+
+const char* TscaleText(TimeUnit unit) {
+  switch (unit) {
+    case TimeUnit::kSeconds:
+      return "1";
+    case TimeUnit::kMilliseconds:
+      return "0.001";
+    case TimeUnit::kMicroseconds:
+      return "0.000001";
+    case TimeUnit::kNanoseconds:
+      return "0.000000001";
+  }
+  return "1";
+}
+
+// Gyroflow's frame_readout_direction codes and names (telemetry-parser src/gyroflow/gcsv.rs).
+std::optional<std::string> ReadoutDirectionWord(const std::string& value) {
+  if (value == "0" || value == "TopToBottom") return "top_to_bottom";
+  if (value == "1" || value == "180" || value == "BottomToTop") return "bottom_to_top";
+  if (value == "2" || value == "270" || value == "LeftToRight") return "left_to_right";
+  if (value == "3" || value == "90" || value == "RightToLeft") return "right_to_left";
+  return std::nullopt;
+}
+
+int ReadoutDirectionCode(const std::string& word) {
+  if (word == "bottom_to_top") return 1;
+  if (word == "left_to_right") return 2;
+  if (word == "right_to_left") return 3;
+  return 0;
+}
+
+// Value of a "key,value" line: everything after the first comma, trimmed (a note may hold commas).
+std::string ValueAfterKey(std::string_view line) {
+  const size_t comma = line.find(',');
+  std::string_view value =
+      comma == std::string_view::npos ? std::string_view() : line.substr(comma + 1);
+  while (!value.empty() && (value.front() == ' ' || value.front() == '\t')) value.remove_prefix(1);
+  while (!value.empty() && (value.back() == ' ' || value.back() == '\t')) value.remove_suffix(1);
+  return std::string(value);
+}
+
+std::string_view StripBom(std::string_view line) {
+  if (line.size() >= 3 && line.substr(0, 3) == "\xEF\xBB\xBF") line.remove_prefix(3);
+  return line;
+}
+
+bool IsReservedKey(const std::string& key) {
+  static const char* const kReserved[] = {"version",
+                                          "id",
+                                          "orientation",
+                                          "tscale",
+                                          "gscale",
+                                          "frame_readout_time",
+                                          "frame_readout_direction",
+                                          "t",
+                                          "time"};
+  for (const char* reserved : kReserved) {
+    if (ToLower(key) == reserved) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+Eigen::Matrix3d GcsvOrientationMatrix(const std::string& orientation) {
+  SHUTTERLAB_CHECK(orientation.size() == 3)
+      << "orientation '" << orientation << "' must be three letters of xXyYzZ, e.g. XYZ or yXz";
+  Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+  bool used[3] = {false, false, false};
+  for (int out = 0; out < 3; ++out) {
+    const char c = orientation[out];
+    const char lower = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    SHUTTERLAB_CHECK(lower == 'x' || lower == 'y' || lower == 'z')
+        << "orientation '" << orientation << "' must be three letters of xXyYzZ, e.g. XYZ or yXz";
+    const int in = lower - 'x';
+    SHUTTERLAB_CHECK(!used[in]) << "orientation '" << orientation << "' names an axis twice";
+    used[in] = true;
+    m(out, in) = c == lower ? -1.0 : 1.0;  // lowercase: negated
+  }
+  return m;
+}
+
+GcsvLog ReadGcsv(const std::string& path) {
+  const std::string text = ReadFileToString(path);
+  LineCursor cursor(text);
+  const auto first = cursor.Next();
+  std::vector<std::string_view> fields;
+  if (first) SplitFields(StripBom(*first), '\x01', &fields);  // no split: just trim
+  if (!first || (fields[0] != "GYROFLOW IMU LOG" && fields[0] != "CAMERA IMU LOG")) {
+    throw IoError(IoMessage(path, 1, "missing first line 'GYROFLOW IMU LOG' (not a .gcsv)"));
+  }
+
+  GcsvLog log;
+  std::optional<double> tscale, gscale, readout_ms;
+  long orientation_line = 0, readout_line = 0;
+  std::string orientation, direction_value;
+  long column_line = 0;
+  std::vector<std::string_view> columns;
+  while (auto line = cursor.Next()) {
+    const long n = cursor.line_number();
+    SplitFields(*line, ',', &fields);
+    if (fields.size() == 1 && fields[0].empty()) continue;
+    const std::string key = ToLower(fields[0]);
+    if (key == "t" || key == "time") {
+      column_line = n;
+      columns = fields;
+      break;
+    }
+    if (fields.size() < 2) {
+      throw IoError(
+          IoMessage(path, n, "header line is not 'key,value': '" + std::string(*line) + "'"));
+    }
+    const std::string value = ValueAfterKey(*line);
+    log.header.emplace_back(std::string(fields[0]), value);
+    auto positive = [&](const char* name) {
+      const auto v = ParseDouble(value);
+      if (!v || !(*v > 0.0)) {
+        throw IoError(IoMessage(
+            path, n, std::string(name) + " must be a positive number, found '" + value + "'"));
+      }
+      return *v;
+    };
+    if (key == "tscale") {
+      tscale = positive("tscale");
+    } else if (key == "gscale") {
+      gscale = positive("gscale");
+    } else if (key == "orientation") {
+      orientation = value;
+      orientation_line = n;
+    } else if (key == "frame_readout_time") {
+      readout_ms = ParseDouble(value);
+      if (!readout_ms) {
+        throw IoError(
+            IoMessage(path, n, "frame_readout_time is not a finite number: '" + value + "'"));
+      }
+      readout_line = n;
+    } else if (key == "frame_readout_direction") {
+      direction_value = value;
+      const auto word = ReadoutDirectionWord(value);
+      if (!word) {
+        throw IoError(IoMessage(path, n,
+                                "unknown frame_readout_direction '" + value +
+                                    "' (0-3, TopToBottom, BottomToTop, LeftToRight, RightToLeft)"));
+      }
+      log.frame_readout_direction = *word;
+    }
+  }
+  if (column_line == 0) {
+    throw IoError(IoMessage(path, cursor.line_number(),
+                            "header ends before the column line 't,gx,gy,gz' (truncated file?)"));
+  }
+  if (!tscale) throw IoError(IoMessage(path, column_line, "no tscale line before the column line"));
+  if (!gscale) throw IoError(IoMessage(path, column_line, "no gscale line before the column line"));
+  log.tscale = *tscale;
+  log.gscale = *gscale;
+  if (orientation_line == 0) {
+    orientation = "xzY";
+    log.warnings.push_back("no orientation line: assumed 'xzY', as Gyroflow's parser does");
+  }
+  Eigen::Matrix3d to_out;
+  try {
+    to_out = GcsvOrientationMatrix(orientation);
+  } catch (const std::invalid_argument&) {
+    throw IoError(IoMessage(
+        path, orientation_line,
+        "orientation '" + orientation + "' is not three letters of xXyYzZ naming each axis once"));
+  }
+  log.orientation = orientation;
+  if (readout_ms) {
+    // Gyroflow's legacy files encode bottom-to-top as a negative readout time.
+    if (*readout_ms < 0) {
+      log.frame_readout_direction =
+          log.frame_readout_direction == "bottom_to_top" ? "top_to_bottom" : "bottom_to_top";
+      log.warnings.push_back("negative frame_readout_time on line " + std::to_string(readout_line) +
+                             ": read as the opposite readout direction");
+    }
+    log.frame_readout_s = std::abs(*readout_ms) * 1e-3;
+  }
+  if (columns.size() < 4 || ToLower(columns[1]) != "gx" || ToLower(columns[2]) != "gy" ||
+      ToLower(columns[3]) != "gz") {
+    throw IoError(IoMessage(path, column_line, "column line must start with t,gx,gy,gz"));
+  }
+
+  const std::optional<TimeUnit> exact_unit = ExactUnit(*tscale);
+  std::vector<GyroSample> samples;
+  while (auto line = cursor.Next()) {
+    const long n = cursor.line_number();
+    if (line->empty()) continue;
+    SplitFields(*line, ',', &fields);
+    if (fields.size() != columns.size()) {
+      throw IoError(IoMessage(path, n,
+                              "expected " + std::to_string(columns.size()) +
+                                  " columns as on line " + std::to_string(column_line) +
+                                  ", found " + std::to_string(fields.size())));
+    }
+    GyroSample s;
+    std::optional<int64_t> t_ns;
+    if (exact_unit) {
+      t_ns = ParseTimeInUnitNs(fields[0], *exact_unit);
+    } else if (const auto t = ParseDouble(fields[0]); t && std::abs(*t * *tscale) < 9.2e9) {
+      t_ns = SecondsToNs(*t * *tscale);
+    }
+    if (!t_ns) {
+      throw IoError(IoMessage(
+          path, n, "t is not a finite number in range: '" + std::string(fields[0]) + "'"));
+    }
+    s.t_ns = *t_ns;
+    Eigen::Vector3d in;
+    for (int axis = 0; axis < 3; ++axis) {
+      const auto value = ParseDouble(fields[axis + 1]);
+      if (!value || !std::isfinite(*value * *gscale)) {
+        throw IoError(IoMessage(path, n,
+                                std::string("g") + "xyz"[axis] + " is not a finite number: '" +
+                                    std::string(fields[axis + 1]) + "'"));
+      }
+      in[axis] = *value * *gscale;
+    }
+    s.omega_rad_s = to_out * in;
+    if (!samples.empty() && s.t_ns < samples.back().t_ns) {
+      throw IoError(IoMessage(
+          path, n,
+          "timestamp decreases (" + std::string(fields[0]) + " after an earlier, larger one)"));
+    }
+    samples.push_back(s);
+  }
+  if (samples.empty()) throw IoError(IoMessage(path, 0, "no samples after the column line"));
+  log.trace = GyroTrace(std::move(samples));
+  return log;
+}
+
+void GcsvWriteOptions::Check() const {
+  GcsvOrientationMatrix(orientation);
+  SHUTTERLAB_CHECK(std::isfinite(gscale) && gscale >= 0.0) << "gscale must be >= 0, got " << gscale;
+  SHUTTERLAB_CHECK(!frame_readout_s || (std::isfinite(*frame_readout_s) && *frame_readout_s > 0.0))
+      << "frame_readout_s must be positive";
+  SHUTTERLAB_CHECK(
+      frame_readout_direction == "top_to_bottom" || frame_readout_direction == "bottom_to_top" ||
+      frame_readout_direction == "left_to_right" || frame_readout_direction == "right_to_left")
+      << "unknown frame_readout_direction '" << frame_readout_direction << "'";
+  SHUTTERLAB_CHECK(id.find_first_of(",\r\n") == std::string::npos)
+      << "id must not hold ',' or a newline";
+  for (const auto& [key, value] : extra_header) {
+    SHUTTERLAB_CHECK(!key.empty() && key.find_first_of(",\r\n") == std::string::npos)
+        << "header key '" << key << "' must be non-empty without ',' or newlines";
+    SHUTTERLAB_CHECK(!IsReservedKey(key))
+        << "header key '" << key << "' is written by WriteGcsv itself";
+    SHUTTERLAB_CHECK(value.find_first_of("\r\n") == std::string::npos)
+        << "header value of '" << key << "' must not hold a newline";
+  }
+}
+
+void WriteGcsv(const std::string& path, const GyroTrace& trace, const GcsvWriteOptions& options) {
+  options.Check();
+  // The reader applies M (out = M * in); M is a signed permutation, so its inverse is M^T.
+  const Eigen::Matrix3d in_from_out = GcsvOrientationMatrix(options.orientation).transpose();
+  std::string out = "GYROFLOW IMU LOG\nversion,1.3\nid," + options.id + "\norientation," +
+                    options.orientation + "\n";
+  for (const auto& [key, value] : options.extra_header) out += key + "," + value + "\n";
+  if (options.frame_readout_s) {
+    out += "frame_readout_time,";
+    AppendDouble(*options.frame_readout_s * 1e3, &out);
+    out += "\nframe_readout_direction," +
+           std::to_string(ReadoutDirectionCode(options.frame_readout_direction)) + "\n";
+  }
+  out += std::string("tscale,") + TscaleText(options.time_unit) + "\ngscale,";
+  AppendDouble(options.gscale > 0 ? options.gscale : 1.0, &out);
+  out += "\nt,gx,gy,gz\n";
+  out.reserve(out.size() + trace.size() * 72);
+  for (const GyroSample& s : trace.samples()) {
+    AppendTimeInUnit(s.t_ns, options.time_unit, &out);
+    const Eigen::Vector3d in = in_from_out * s.omega_rad_s;
+    for (int axis = 0; axis < 3; ++axis) {
+      out += ',';
+      if (options.gscale > 0) {
+        const double count = std::round(in[axis] / options.gscale);
+        SHUTTERLAB_CHECK(std::abs(count) < 9e15)
+            << "rate " << in[axis] << " rad/s is too large for gscale " << options.gscale;
+        out += std::to_string(static_cast<int64_t>(count));
+      } else {
+        AppendDouble(in[axis], &out);
+      }
+    }
+    out += '\n';
+  }
+  WriteFileAtomically(path, out);
+}
+
+}  // namespace shutterlab

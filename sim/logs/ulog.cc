@@ -1,0 +1,977 @@
+#include "sim/logs/ulog.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <memory>
+#include <optional>
+#include <unordered_map>
+#include <utility>
+
+#include "sim/check.h"
+#include "sim/text_file.h"
+
+namespace shutterlab {
+
+// ---------------------------------------------------------------------------------------------
+// Shared with the DataFlash reader: candidate cleaning and ranking.
+namespace internal {
+
+std::optional<double> Median(std::vector<double> values) {
+  if (values.empty()) return std::nullopt;
+  const size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + mid, values.end());
+  double upper = values[mid];
+  if (values.size() % 2 == 1) return upper;
+  const double lower = *std::max_element(values.begin(), values.begin() + mid);
+  return 0.5 * (lower + upper);
+}
+
+namespace {
+
+struct CleanedCandidate {
+  GyroCandidate candidate;
+  double rate_hz = 0.0;
+  size_t dropped_time = 0;     // t <= 0
+  size_t dropped_value = 0;    // non-finite rate
+  size_t dropped_spike = 0;    // isolated timestamp spike
+  size_t out_of_order = 0;     // samples that had to be moved by the sort
+  size_t dropped_outlier_end = 0;
+};
+
+int64_t MedianInterval(const std::vector<GyroSample>& s) {
+  if (s.size() < 2) return 0;
+  std::vector<int64_t> d(s.size() - 1);
+  for (size_t i = 0; i + 1 < s.size(); ++i) d[i] = s[i + 1].t_ns - s[i].t_ns;
+  auto mid = d.begin() + d.size() / 2;
+  std::nth_element(d.begin(), mid, d.end());
+  return *mid;
+}
+
+CleanedCandidate Clean(GyroCandidate in) {
+  CleanedCandidate out;
+  std::vector<GyroSample> kept;
+  kept.reserve(in.samples.size());
+  for (const GyroSample& s : in.samples) {
+    if (s.t_ns <= 0) {
+      ++out.dropped_time;
+    } else if (!s.omega_rad_s.allFinite()) {
+      ++out.dropped_value;
+    } else {
+      kept.push_back(s);
+    }
+  }
+  // A corrupted timestamp shows as one sample outside the span of its two neighbours, which
+  // themselves are in order (logs are written in time order per topic instance).
+  std::vector<GyroSample> despiked;
+  despiked.reserve(kept.size());
+  const size_t n = kept.size();
+  for (size_t i = 0; i < n; ++i) {
+    const int64_t t = kept[i].t_ns;
+    bool spike = false;
+    if (i > 0 && i + 1 < n) {
+      const int64_t a = kept[i - 1].t_ns, b = kept[i + 1].t_ns;
+      spike = a <= b && (t < a || t > b);
+    } else if (i == 0 && n >= 3) {
+      spike = t > kept[1].t_ns && kept[1].t_ns <= kept[2].t_ns;
+    } else if (i + 1 == n && n >= 3) {
+      spike = t < kept[n - 2].t_ns && kept[n - 3].t_ns <= kept[n - 2].t_ns;
+    }
+    if (spike) {
+      ++out.dropped_spike;
+    } else {
+      despiked.push_back(kept[i]);
+    }
+  }
+  for (size_t i = 1; i < despiked.size(); ++i) {
+    if (despiked[i].t_ns < despiked[i - 1].t_ns) ++out.out_of_order;
+  }
+  std::stable_sort(despiked.begin(), despiked.end(),
+                   [](const GyroSample& a, const GyroSample& b) { return a.t_ns < b.t_ns; });
+  // An end sample far beyond the rest (a corrupted time that sorted to an end) would stretch the
+  // trace by minutes; gaps above this are not a logger pause.
+  constexpr int64_t kMaxEndGapNs = 60'000'000'000;  // 60 s
+  while (despiked.size() >= 3 && despiked.back().t_ns - despiked[despiked.size() - 2].t_ns > kMaxEndGapNs) {
+    despiked.pop_back();
+    ++out.dropped_outlier_end;
+  }
+  while (despiked.size() >= 3 && despiked[1].t_ns - despiked[0].t_ns > kMaxEndGapNs) {
+    despiked.erase(despiked.begin());
+    ++out.dropped_outlier_end;
+  }
+  const int64_t median = MedianInterval(despiked);
+  out.rate_hz = median > 0 ? 1e9 / static_cast<double>(median) : 0.0;
+  out.candidate = std::move(in);
+  out.candidate.samples = std::move(despiked);
+  return out;
+}
+
+std::string Describe(const CleanedCandidate& c) {
+  char rate[64];
+  std::snprintf(rate, sizeof(rate), "%.1f Hz", c.rate_hz);
+  return c.candidate.name + " (" + rate + ", " + std::to_string(c.candidate.samples.size()) +
+         " samples)";
+}
+
+}  // namespace
+
+bool ChooseGyroSource(std::vector<GyroCandidate> candidates, FlightLog* log) {
+  std::vector<CleanedCandidate> usable;
+  for (GyroCandidate& c : candidates) {
+    CleanedCandidate cleaned = Clean(std::move(c));
+    if (cleaned.candidate.samples.size() >= 2 && cleaned.rate_hz > 0.0) {
+      usable.push_back(std::move(cleaned));
+    }
+  }
+  if (usable.empty()) return false;
+  std::stable_sort(usable.begin(), usable.end(), [](const CleanedCandidate& a, const CleanedCandidate& b) {
+    return a.rate_hz > b.rate_hz;
+  });
+  // Rates of the same sensor differ by a few percent between topics (jitter, dropped messages);
+  // within that band the rawer topic is the better source.
+  constexpr double kSimilarRate = 0.9;
+  const double best_rate = usable.front().rate_hz;
+  size_t chosen = 0;
+  for (size_t i = 1; i < usable.size(); ++i) {
+    if (usable[i].rate_hz < kSimilarRate * best_rate) break;
+    const auto& a = usable[i].candidate;
+    const auto& b = usable[chosen].candidate;
+    if (a.preference < b.preference ||
+        (a.preference == b.preference && a.samples.size() > b.samples.size())) {
+      chosen = i;
+    }
+  }
+  std::rotate(usable.begin(), usable.begin() + chosen, usable.begin() + chosen + 1);
+  log->gyro_sources_available.clear();
+  for (const CleanedCandidate& c : usable) log->gyro_sources_available.push_back(Describe(c));
+
+  CleanedCandidate& best = usable.front();
+  const std::string& name = best.candidate.name;
+  auto warn = [&](size_t count, const char* what) {
+    if (count == 0) return;
+    log->records_skipped += count;
+    log->warnings.push_back(name + ": " + std::to_string(count) + " " + what);
+  };
+  warn(best.dropped_time, "samples with a zero timestamp dropped");
+  warn(best.dropped_value, "samples with a non-finite rate dropped");
+  warn(best.dropped_spike, "samples with a timestamp out of line with their neighbours dropped");
+  warn(best.dropped_outlier_end, "samples more than 60 s beyond the rest dropped");
+  if (best.out_of_order > 0) {
+    log->warnings.push_back(name + ": " + std::to_string(best.out_of_order) +
+                            " samples were out of time order and were sorted");
+  }
+  log->gyro_source = name;
+  log->gyro = GyroTrace(std::move(best.candidate.samples));
+  return true;
+}
+
+}  // namespace internal
+
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+constexpr char kMagic[7] = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35};
+constexpr size_t kFileHeaderBytes = 16;
+constexpr size_t kMessageHeaderBytes = 3;
+constexpr int kMaxNestingDepth = 16;             // PX4 nests two or three deep
+constexpr size_t kMaxFlatFields = 1 << 16;       // guards against absurd nested arrays
+constexpr size_t kMaxMessageBytes = 65535 + 3;   // uint16 size + header
+constexpr int kResyncChain = 4;                  // consecutive plausible messages to trust a resync
+constexpr size_t kMaxPlausibleNonDataBytes = 8192;  // formats, infos, log text are far smaller
+constexpr int kMsgIdSlack = 16;                  // unsubscribed msg_ids believed above the largest seen
+constexpr size_t kMaxDetailedWarnings = 8;       // per kind; the rest are summed up
+
+// Little-endian loads, independent of the host's byte order.
+uint64_t LoadLE(const char* p, size_t bytes) {
+  uint64_t v = 0;
+  for (size_t i = 0; i < bytes; ++i) v |= static_cast<uint64_t>(static_cast<uint8_t>(p[i])) << (8 * i);
+  return v;
+}
+uint16_t LoadU16(const char* p) { return static_cast<uint16_t>(LoadLE(p, 2)); }
+
+enum class Scalar : uint8_t { kInt8, kUInt8, kInt16, kUInt16, kInt32, kUInt32, kInt64, kUInt64, kFloat, kDouble, kBool, kChar };
+
+std::optional<std::pair<Scalar, size_t>> ScalarFromName(std::string_view name) {
+  static const std::pair<const char*, std::pair<Scalar, size_t>> kTable[] = {
+      {"int8_t", {Scalar::kInt8, 1}},     {"uint8_t", {Scalar::kUInt8, 1}},
+      {"int16_t", {Scalar::kInt16, 2}},   {"uint16_t", {Scalar::kUInt16, 2}},
+      {"int32_t", {Scalar::kInt32, 4}},   {"uint32_t", {Scalar::kUInt32, 4}},
+      {"int64_t", {Scalar::kInt64, 8}},   {"uint64_t", {Scalar::kUInt64, 8}},
+      {"float", {Scalar::kFloat, 4}},     {"double", {Scalar::kDouble, 8}},
+      {"bool", {Scalar::kBool, 1}},       {"char", {Scalar::kChar, 1}}};
+  for (const auto& [n, v] : kTable) {
+    if (name == n) return v;
+  }
+  return std::nullopt;
+}
+
+size_t ScalarBytes(Scalar s) {
+  switch (s) {
+    case Scalar::kInt8: case Scalar::kUInt8: case Scalar::kBool: case Scalar::kChar: return 1;
+    case Scalar::kInt16: case Scalar::kUInt16: return 2;
+    case Scalar::kInt32: case Scalar::kUInt32: case Scalar::kFloat: return 4;
+    default: return 8;
+  }
+}
+
+struct FieldDef {
+  std::string type;  // scalar type name or a nested format name
+  size_t count = 1;  // array length; 1 for a scalar
+  std::string name;
+};
+
+struct FlatField {
+  Scalar type;
+  size_t offset;
+};
+
+// A topic's flattened layout: "a.b[2]" style names to byte offsets within the data payload (the
+// bytes after msg_id).
+struct Layout {
+  std::unordered_map<std::string, FlatField> fields;
+  size_t min_bytes = 0;  // up to the end of the last field that is not trailing _padding
+  size_t max_bytes = 0;  // with trailing padding
+};
+
+// Reads a field as a double; NaN when it lies outside data.
+double ReadNumber(std::string_view data, const FlatField& f) {
+  const size_t bytes = ScalarBytes(f.type);
+  if (f.offset + bytes > data.size()) return std::numeric_limits<double>::quiet_NaN();
+  const uint64_t raw = LoadLE(data.data() + f.offset, bytes);
+  switch (f.type) {
+    case Scalar::kInt8: return static_cast<int8_t>(raw);
+    case Scalar::kUInt8: case Scalar::kBool: case Scalar::kChar: return static_cast<uint8_t>(raw);
+    case Scalar::kInt16: return static_cast<int16_t>(raw);
+    case Scalar::kUInt16: return static_cast<uint16_t>(raw);
+    case Scalar::kInt32: return static_cast<int32_t>(raw);
+    case Scalar::kUInt32: return static_cast<uint32_t>(raw);
+    case Scalar::kInt64: return static_cast<double>(static_cast<int64_t>(raw));
+    case Scalar::kUInt64: return static_cast<double>(raw);
+    case Scalar::kFloat: {
+      const uint32_t bits = static_cast<uint32_t>(raw);
+      float v;
+      std::memcpy(&v, &bits, 4);
+      return v;
+    }
+    case Scalar::kDouble: {
+      double v;
+      std::memcpy(&v, &raw, 8);
+      return v;
+    }
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+// Reads an integer microsecond time as ns; nullopt for a non-integer field, out of range, or
+// outside data.
+std::optional<int64_t> ReadTimeNs(std::string_view data, const FlatField& f) {
+  if (f.type == Scalar::kFloat || f.type == Scalar::kDouble) return std::nullopt;
+  const size_t bytes = ScalarBytes(f.type);
+  if (f.offset + bytes > data.size()) return std::nullopt;
+  const uint64_t us = LoadLE(data.data() + f.offset, bytes);
+  if (us > static_cast<uint64_t>(std::numeric_limits<int64_t>::max() / 1000)) return std::nullopt;
+  return static_cast<int64_t>(us) * 1000;
+}
+
+// Parses "name:type name;type[n] name;..." ('F' payload). nullopt when malformed.
+std::optional<std::pair<std::string, std::vector<FieldDef>>> ParseFormat(std::string_view text) {
+  const size_t colon = text.find(':');
+  if (colon == std::string_view::npos || colon == 0) return std::nullopt;
+  std::string name(text.substr(0, colon));
+  std::vector<FieldDef> fields;
+  std::string_view rest = text.substr(colon + 1);
+  while (!rest.empty()) {
+    const size_t semi = rest.find(';');
+    std::string_view item = rest.substr(0, semi);
+    rest = semi == std::string_view::npos ? std::string_view() : rest.substr(semi + 1);
+    while (!item.empty() && (item.front() == ' ' || item.front() == '\0')) item.remove_prefix(1);
+    while (!item.empty() && (item.back() == ' ' || item.back() == '\0')) item.remove_suffix(1);
+    if (item.empty()) continue;
+    const size_t space = item.find(' ');
+    if (space == std::string_view::npos) return std::nullopt;
+    std::string_view type = item.substr(0, space);
+    std::string_view field_name = item.substr(space + 1);
+    if (field_name.empty() || field_name.find(' ') != std::string_view::npos) return std::nullopt;
+    FieldDef def;
+    def.name = std::string(field_name);
+    const size_t bracket = type.find('[');
+    if (bracket != std::string_view::npos) {
+      if (type.back() != ']' || bracket == 0) return std::nullopt;
+      const auto count = ParseInt(type.substr(bracket + 1, type.size() - bracket - 2));
+      if (!count || *count < 1 || *count > 65535) return std::nullopt;
+      def.count = static_cast<size_t>(*count);
+      type = type.substr(0, bracket);
+    }
+    def.type = std::string(type);
+    fields.push_back(std::move(def));
+  }
+  return std::make_pair(std::move(name), std::move(fields));
+}
+
+using FormatMap = std::unordered_map<std::string, std::vector<FieldDef>>;
+
+// Flattens a (possibly nested) format into out; returns an error text or "".
+std::string Flatten(const FormatMap& formats, const std::string& type, const std::string& prefix,
+                    int depth, size_t* offset, Layout* out) {
+  if (depth > kMaxNestingDepth) return "nesting deeper than " + std::to_string(kMaxNestingDepth);
+  auto it = formats.find(type);
+  if (it == formats.end()) return "no format definition for type '" + type + "'";
+  for (const FieldDef& f : it->second) {
+    const bool top_level = depth == 0;
+    const bool padding = f.name.rfind("_padding", 0) == 0;
+    const auto scalar = ScalarFromName(f.type);
+    if (scalar && *offset + f.count * scalar->second > kMaxMessageBytes) {
+      return "message larger than a ULog message can be";
+    }
+    if (scalar && padding) {
+      *offset += f.count * scalar->second;
+      continue;  // padding is not a field, and never ends the part a data message must carry
+    }
+    for (size_t i = 0; i < f.count; ++i) {
+      const std::string name = prefix + f.name + (f.count > 1 ? "[" + std::to_string(i) + "]" : "");
+      if (scalar) {
+        if (out->fields.size() >= kMaxFlatFields) return "too many fields";
+        out->fields.emplace(name, FlatField{scalar->first, *offset});
+        *offset += scalar->second;
+      } else {
+        const size_t before = *offset;
+        const std::string err = Flatten(formats, f.type, name + ".", depth + 1, offset, out);
+        if (!err.empty()) return err;
+        // An empty nested type would let a large array spin without growing the message.
+        if (*offset == before) return "nested type '" + f.type + "' has no bytes";
+      }
+      if (*offset > kMaxMessageBytes) return "message larger than a ULog message can be";
+    }
+    if (top_level && !padding) out->min_bytes = *offset;
+  }
+  if (depth == 0) out->max_bytes = *offset;
+  return "";
+}
+
+struct Subscription {
+  std::string topic;
+  int multi_id = 0;
+  std::shared_ptr<const Layout> layout;  // null when the format could not be resolved
+  std::vector<std::string_view> payloads;  // data after msg_id, in file order
+  bool gyro_topic = false;  // IsGyroTopic(topic), cached: tested for every data message
+  bool wanted = false;      // WantedTopic(topic), cached
+};
+
+bool IsGyroTopic(const std::string& topic) {
+  return topic == "sensor_gyro_fifo" || topic == "sensor_gyro" || topic == "vehicle_angular_velocity" ||
+         topic == "sensor_combined";
+}
+
+// Topics whose data the reader keeps.
+bool WantedTopic(const std::string& topic) {
+  static const char* kTopics[] = {"sensor_gyro_fifo", "sensor_gyro", "vehicle_angular_velocity",
+                                  "sensor_combined", "camera_trigger", "camera_capture",
+                                  "vehicle_local_position", "home_position"};
+  for (const char* t : kTopics) {
+    if (topic == t) return true;
+  }
+  return false;
+}
+
+size_t MinPayload(uint8_t type) {
+  switch (type) {
+    case 'B': return 40;
+    case 'F': return 2;
+    case 'I': return 2;
+    case 'M': return 3;
+    case 'P': return 2;
+    case 'Q': return 3;
+    case 'A': return 4;
+    case 'R': return 2;
+    case 'D': return 2;
+    case 'L': return 10;
+    case 'C': return 12;
+    case 'S': return 8;
+    case 'O': return 2;
+    default: return 0;  // unknown type
+  }
+}
+
+class ULogParser {
+ public:
+  ULogParser(std::string_view bytes, const std::string& path) : bytes_(bytes), path_(path) {}
+
+  FlightLog Run();
+
+ private:
+  std::string Where(size_t offset) const {
+    return IoMessage(path_, 0, "byte " + std::to_string(offset) + ": ");
+  }
+  [[noreturn]] void Fail(size_t offset, const std::string& problem) const {
+    throw IoError(Where(offset) + problem);
+  }
+  void Warn(const std::string& kind, size_t offset, const std::string& text) {
+    size_t& count = warning_counts_[kind];
+    ++count;
+    if (count <= kMaxDetailedWarnings) log_.warnings.push_back("byte " + std::to_string(offset) + ": " + text);
+  }
+
+  // A message header at q with a known type, a size that fits, and for 'D' a subscribed msg_id
+  // (or pending_id, the id of an 'A' just before it that is not handled yet; -1 for none).
+  bool Plausible(size_t q, size_t end, int pending_id = -1) const;
+  // True when a message may start at q: the segment ends there, too few bytes are left for a
+  // header (the loop reports that), a plausible header follows, or one that runs past the end of
+  // the segment (cut off there).
+  bool NextHeaderOk(size_t q, size_t end, int pending_id) const;
+  size_t Resync(size_t from, size_t end);
+  void ReadFlagBits(std::string_view payload, size_t offset);
+  void Handle(uint8_t type, std::string_view payload, size_t offset);
+  // For a 'D' payload: false only when its topic's format is known and its size does not fit it
+  // (an unsubscribed msg_id or an unresolved format cannot be judged by size).
+  bool DataSizeFits(std::string_view payload) const;
+  // For a 'D' payload: its topic's layout is known, so DataSizeFits was a real check.
+  bool SizeCheckedAgainstFormat(std::string_view payload) const {
+    auto it = by_msg_id_.find(LoadU16(payload.data()));
+    return it != by_msg_id_.end() && subscriptions_[it->second].layout != nullptr;
+  }
+  std::string DataMismatch(std::string_view payload) const;
+  std::shared_ptr<const Layout> LayoutFor(const std::string& topic, std::string* error);
+  void Decode();
+
+  std::string_view bytes_;
+  std::string path_;
+  FlightLog log_;
+  FormatMap formats_;
+  std::unordered_map<std::string, std::shared_ptr<const Layout>> layouts_;
+  std::vector<Subscription> subscriptions_;
+  std::unordered_map<uint16_t, size_t> by_msg_id_;
+  std::vector<uint64_t> appended_offsets_;
+  int max_msg_id_ = -1;  // largest msg_id subscribed so far
+  std::map<std::string, size_t> warning_counts_;
+  std::map<std::string, size_t> skipped_by_topic_;
+  std::vector<std::pair<uint64_t, uint16_t>> dropouts_;  // (gyro-topic timestamp before it, us; duration ms)
+  uint64_t last_timestamp_us_ = 0;
+  size_t skipped_bytes_ = 0;
+};
+
+bool ULogParser::Plausible(size_t q, size_t end, int pending_id) const {
+  if (end - q < kMessageHeaderBytes) return false;
+  const uint16_t size = LoadU16(bytes_.data() + q);
+  const uint8_t type = static_cast<uint8_t>(bytes_[q + 2]);
+  const size_t min = MinPayload(type);
+  if (min == 0 || size < min || size > end - q - kMessageHeaderBytes) return false;
+  // Payload bytes can look like a header by chance; what each type must contain rules most of
+  // those out, which keeps resynchronisation from locking onto the middle of a message.
+  const std::string_view p = bytes_.substr(q + kMessageHeaderBytes, size);
+  // 'I', 'P', 'M', 'Q' carry a key "type name": printable, with a space.
+  auto key_fits = [&](size_t at) {
+    if (at >= p.size()) return false;
+    const size_t len = static_cast<uint8_t>(p[at]);
+    if (len < 3 || at + 1 + len > p.size()) return false;
+    const std::string_view key = p.substr(at + 1, len);
+    return key.find(' ') != std::string_view::npos &&
+           std::all_of(key.begin(), key.end(), [](char c) { return c >= 0x20 && c < 0x7f; });
+  };
+  if (type != 'D' && size > kMaxPlausibleNonDataBytes) return false;
+  switch (type) {
+    case 'D': {
+      const uint16_t msg_id = LoadU16(p.data());
+      auto it = by_msg_id_.find(msg_id);
+      // An id that was never subscribed may still be real when its 'A' was damaged; PX4 numbers
+      // subscriptions from 0 upwards, so only ids near the known ones are believed.
+      if (it == by_msg_id_.end()) return msg_id == pending_id || msg_id <= max_msg_id_ + kMsgIdSlack;
+      const Layout* layout = subscriptions_[it->second].layout.get();
+      return !layout || (size - 2u >= layout->min_bytes && size - 2u <= layout->max_bytes);
+    }
+    case 'O': case 'R': return size == 2;
+    case 'S': return size == 8;
+    case 'I': case 'P': return key_fits(0);
+    case 'M': case 'Q': return key_fits(1);
+    case 'L': case 'C': return p[0] >= '0' && p[0] <= '7';
+    case 'F': return p.find(':') != std::string_view::npos;
+    case 'A': return size <= 3 + 255;  // a topic name, not a long text
+    default: return true;
+  }
+}
+
+bool ULogParser::NextHeaderOk(size_t q, size_t end, int pending_id) const {
+  if (q >= end || end - q < kMessageHeaderBytes) return true;
+  if (Plausible(q, end, pending_id)) return true;
+  // A header whose message runs past the end of the segment: the file (or the part before
+  // appended data) was cut inside it. The loop deals with it.
+  const uint8_t type = static_cast<uint8_t>(bytes_[q + 2]);
+  const size_t min = MinPayload(type);
+  const size_t size = LoadU16(bytes_.data() + q);
+  return min != 0 && size >= min && size > end - q - kMessageHeaderBytes;
+}
+
+// Finds the next offset after `from` where kResyncChain plausible messages follow each other (or
+// run exactly to the end). Returns end when there is none. Linear in the bytes scanned.
+size_t ULogParser::Resync(size_t from, size_t end) {
+  for (size_t q = from; q < end; ++q) {
+    size_t p = q;
+    int chain = 0;
+    int pending_id = -1;
+    while (chain < kResyncChain && p < end && Plausible(p, end, pending_id)) {
+      pending_id = bytes_[p + 2] == 'A' ? LoadU16(bytes_.data() + p + 4) : -1;
+      p += kMessageHeaderBytes + LoadU16(bytes_.data() + p);
+      ++chain;
+    }
+    if (chain == kResyncChain || (chain > 0 && p == end)) return q;
+  }
+  return end;
+}
+
+void ULogParser::ReadFlagBits(std::string_view payload, size_t offset) {
+  const uint8_t* flags = reinterpret_cast<const uint8_t*>(payload.data());
+  // incompat_flags[0] bit 0 is DATA_APPENDED; any other incompatible bit means a layout we
+  // cannot read (the spec says a parser must refuse such a file).
+  const uint8_t* incompat = flags + 8;
+  if ((incompat[0] & ~1u) != 0) Fail(offset, "unknown incompatible ULog flag set in incompat_flags[0]; cannot parse");
+  for (int i = 1; i < 8; ++i) {
+    if (incompat[i] != 0) Fail(offset, "unknown incompatible ULog flag set in incompat_flags[" + std::to_string(i) + "]; cannot parse");
+  }
+  if ((incompat[0] & 1u) == 0) return;
+  for (int i = 0; i < 3; ++i) {
+    const uint64_t at = LoadLE(payload.data() + 16 + 8 * i, 8);
+    if (at == 0) continue;
+    if (at >= bytes_.size()) {
+      Warn("appended", offset, "appended data offset " + std::to_string(at) + " lies beyond the end of the file (truncated?); ignored");
+      continue;
+    }
+    if (!appended_offsets_.empty() && at <= appended_offsets_.back()) {
+      Warn("appended", offset, "appended data offsets not increasing; " + std::to_string(at) + " ignored");
+      continue;
+    }
+    appended_offsets_.push_back(at);
+  }
+}
+
+std::shared_ptr<const Layout> ULogParser::LayoutFor(const std::string& topic, std::string* error) {
+  auto it = layouts_.find(topic);
+  if (it != layouts_.end()) return it->second;
+  auto layout = std::make_shared<Layout>();
+  size_t offset = 0;
+  *error = Flatten(formats_, topic, "", 0, &offset, layout.get());
+  if (!error->empty()) return nullptr;
+  layouts_.emplace(topic, layout);
+  return layout;
+}
+
+bool ULogParser::DataSizeFits(std::string_view payload) const {
+  auto it = by_msg_id_.find(LoadU16(payload.data()));
+  if (it == by_msg_id_.end()) return true;  // judged by the header after it; Handle skips it
+  const Subscription& sub = subscriptions_[it->second];
+  if (!sub.layout) return true;
+  const size_t bytes = payload.size() - 2;
+  return bytes >= sub.layout->min_bytes && bytes <= sub.layout->max_bytes;
+}
+
+std::string ULogParser::DataMismatch(std::string_view payload) const {
+  const uint16_t msg_id = LoadU16(payload.data());
+  auto it = by_msg_id_.find(msg_id);
+  if (it == by_msg_id_.end()) return "data message for unsubscribed msg_id " + std::to_string(msg_id);
+  const Subscription& sub = subscriptions_[it->second];
+  return "data message of '" + sub.topic + "' has " + std::to_string(payload.size() - 2) + " bytes, its format " +
+         std::to_string(sub.layout->min_bytes) + ".." + std::to_string(sub.layout->max_bytes);
+}
+
+void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
+  switch (type) {
+    case 'F': {
+      auto parsed = ParseFormat(payload);
+      if (!parsed) {
+        ++log_.records_skipped;
+        Warn("format", offset, "malformed format definition skipped");
+        return;
+      }
+      formats_[parsed->first] = std::move(parsed->second);
+      layouts_.clear();  // a (re)definition can change any cached layout that nests it
+      return;
+    }
+    case 'A': {
+      Subscription sub;
+      sub.multi_id = static_cast<uint8_t>(payload[0]);
+      const uint16_t msg_id = LoadU16(payload.data() + 1);
+      sub.topic = std::string(payload.substr(3));
+      while (!sub.topic.empty() && sub.topic.back() == '\0') sub.topic.pop_back();
+      sub.gyro_topic = IsGyroTopic(sub.topic);
+      sub.wanted = WantedTopic(sub.topic);
+      std::string error;
+      sub.layout = LayoutFor(sub.topic, &error);
+      if (!sub.layout) {
+        ++log_.records_skipped;
+        Warn("subscription", offset, "topic '" + sub.topic + "': " + error + "; its data is skipped");
+      }
+      by_msg_id_[msg_id] = subscriptions_.size();
+      max_msg_id_ = std::max<int>(max_msg_id_, msg_id);
+      subscriptions_.push_back(std::move(sub));
+      return;
+    }
+    case 'R': {
+      by_msg_id_.erase(LoadU16(payload.data()));
+      return;
+    }
+    case 'D': {
+      // The main loop has checked the size against the format (DataSizeFits).
+      const uint16_t msg_id = LoadU16(payload.data());
+      auto it = by_msg_id_.find(msg_id);
+      if (it == by_msg_id_.end()) {
+        ++log_.records_skipped;
+        Warn("msg_id", offset, "data message for unsubscribed msg_id " + std::to_string(msg_id) + " skipped");
+        return;
+      }
+      Subscription& sub = subscriptions_[it->second];
+      if (!sub.layout) {
+        ++log_.records_skipped;
+        ++skipped_by_topic_[sub.topic];
+        return;
+      }
+      const std::string_view data = payload.substr(2);
+      // A dropout is placed at the time of the last gyro-topic message before it: these come at
+      // hundreds of Hz, and a single odd timestamp in a slow topic cannot drag the time away.
+      if (sub.gyro_topic) {
+        auto ts = sub.layout->fields.find("timestamp");
+        if (ts != sub.layout->fields.end()) {
+          if (auto t_ns = ReadTimeNs(data, ts->second)) last_timestamp_us_ = static_cast<uint64_t>(*t_ns / 1000);
+        }
+      }
+      if (sub.wanted) sub.payloads.push_back(data);
+      return;
+    }
+    case 'O': {
+      dropouts_.emplace_back(last_timestamp_us_, LoadU16(payload.data()));
+      return;
+    }
+    case 'B':
+      Warn("flags", offset, "flag-bits message not at the start of the file; ignored");
+      return;
+    default:
+      return;  // I, M, P, Q, L, C, S: nothing the gyro analysis needs
+  }
+}
+
+FlightLog ULogParser::Run() {
+  log_.format = "ulog";
+  if (bytes_.size() < kFileHeaderBytes) Fail(0, "file too short for a ULog header (" + std::to_string(bytes_.size()) + " bytes)");
+  if (!LooksLikeULog(bytes_)) Fail(0, "not a ULog file (bad magic)");
+  const int version = static_cast<uint8_t>(bytes_[7]);
+  if (version > 1) log_.warnings.push_back("ULog file version " + std::to_string(version) + " is newer than 1; read as version 1");
+
+  size_t pos = kFileHeaderBytes;
+  const size_t n = bytes_.size();
+  // 'B' must be the first message; it decides how the rest is read.
+  if (n - pos >= kMessageHeaderBytes && bytes_[pos + 2] == 'B') {
+    const uint16_t size = LoadU16(bytes_.data() + pos);
+    if (size >= MinPayload('B') && size <= n - pos - kMessageHeaderBytes) {
+      ReadFlagBits(bytes_.substr(pos + kMessageHeaderBytes, size), pos);
+      pos += kMessageHeaderBytes + size;
+    }
+  }
+
+  // Segments: [pos, appended[0]), [appended[0], appended[1]), ..., [last, n). A message that
+  // straddles a segment end was cut off when the logger moved on to appended data.
+  std::vector<std::pair<size_t, size_t>> segments;
+  size_t start = pos;
+  for (uint64_t at : appended_offsets_) {
+    if (at <= start) {
+      Warn("appended", pos, "appended data offset " + std::to_string(at) + " lies inside the header; ignored");
+      continue;
+    }
+    segments.emplace_back(start, static_cast<size_t>(at));
+    start = static_cast<size_t>(at);
+  }
+  segments.emplace_back(start, n);
+
+  for (size_t s = 0; s < segments.size(); ++s) {
+    const size_t end = segments[s].second;
+    const bool last_segment = s + 1 == segments.size();
+    pos = segments[s].first;
+    while (pos < end) {
+      if (end - pos < kMessageHeaderBytes) {
+        if (last_segment) Warn("truncated", pos, "file ends inside a message header (truncated?)");
+        break;
+      }
+      const uint16_t size = LoadU16(bytes_.data() + pos);
+      const uint8_t type = static_cast<uint8_t>(bytes_[pos + 2]);
+      const size_t min = MinPayload(type);
+      if (min == 0 || size < min) {
+        const size_t next = Resync(pos + 1, end);
+        skipped_bytes_ += next - pos;
+        ++log_.records_skipped;
+        Warn("corrupt", pos, std::string("corrupt message header (type ") + std::to_string(type) + ", size " +
+                                 std::to_string(size) + "); skipped " + std::to_string(next - pos) + " bytes");
+        pos = next;
+        continue;
+      }
+      if (size > end - pos - kMessageHeaderBytes) {
+        if (last_segment) {
+          // Either the file was cut here, or this size field is corrupt: try to read on.
+          const size_t next = Resync(pos + 1, end);
+          if (next == end) {
+            Warn("truncated", pos, "file ends inside a message of " + std::to_string(size) + " bytes (truncated?)");
+            break;
+          }
+          skipped_bytes_ += next - pos;
+          ++log_.records_skipped;
+          Warn("corrupt", pos, "message size " + std::to_string(size) + " runs past the end; skipped " +
+                                   std::to_string(next - pos) + " bytes");
+          pos = next;
+          continue;
+        }
+        break;  // cut off at the start of appended data
+      }
+      const std::string_view payload = bytes_.substr(pos + kMessageHeaderBytes, size);
+      const size_t after = pos + kMessageHeaderBytes + size;
+      const bool data_fits = type != 'D' || DataSizeFits(payload);
+      const int pending_id = type == 'A' ? LoadU16(payload.data() + 1) : -1;
+      // A data message whose size matches its topic's format is trusted as it is; any other
+      // message must be followed by a plausible header, or its size field may be corrupt.
+      const bool size_verified = type == 'D' && data_fits && SizeCheckedAgainstFormat(payload);
+      if (!data_fits || (!size_verified && !NextHeaderOk(after, end, pending_id))) {
+        // A data message whose msg_id is unknown or whose size contradicts its format, or any
+        // message not followed by a plausible header, most likely has a corrupt size or type;
+        // skipping `size` bytes would silently throw away the good messages after it.
+        const size_t next = Resync(pos + 1, end);
+        if (data_fits && next >= after) {
+          // No valid message starts inside this one: only what follows it is damaged, and the
+          // next pass of the loop skips that.
+          Handle(type, payload, pos);
+          pos = after;
+          continue;
+        }
+        skipped_bytes_ += next - pos;
+        ++log_.records_skipped;
+        Warn("corrupt", pos,
+             (data_fits ? std::string("message (type ") + std::to_string(type) + ", size " + std::to_string(size) +
+                              ") not followed by a valid message"
+                        : DataMismatch(payload)) +
+                 "; skipped " + std::to_string(next - pos) + " bytes");
+        pos = next;
+        continue;
+      }
+      Handle(type, payload, pos);
+      pos += kMessageHeaderBytes + size;
+    }
+  }
+
+  Decode();
+  for (const auto& [kind, count] : warning_counts_) {
+    if (count > kMaxDetailedWarnings) {
+      log_.warnings.push_back(std::to_string(count - kMaxDetailedWarnings) + " more warnings of kind '" + kind + "' not listed");
+    }
+  }
+  for (const auto& [topic, count] : skipped_by_topic_) {
+    log_.warnings.push_back("topic '" + topic + "': " + std::to_string(count) + " data messages skipped");
+  }
+  if (skipped_bytes_ > 0) log_.warnings.push_back(std::to_string(skipped_bytes_) + " corrupt bytes skipped in total");
+  if (!dropouts_.empty()) {
+    uint64_t total_ms = 0;
+    std::string where;
+    for (size_t i = 0; i < dropouts_.size(); ++i) {
+      total_ms += dropouts_[i].second;
+      if (i < kMaxDetailedWarnings) {
+        char buf[64];
+        if (dropouts_[i].first == 0) {
+          std::snprintf(buf, sizeof(buf), "%s%u ms before the first gyro message", i ? ", " : "", dropouts_[i].second);
+        } else {
+          std::snprintf(buf, sizeof(buf), "%s%u ms at %.3f s", i ? ", " : "", dropouts_[i].second,
+                        dropouts_[i].first * 1e-6);
+        }
+        where += buf;
+      }
+    }
+    log_.warnings.push_back(std::to_string(dropouts_.size()) + " logging dropouts totalling " +
+                            std::to_string(total_ms) + " ms (" + where + (dropouts_.size() > kMaxDetailedWarnings ? ", ..." : "") + ")");
+  }
+  return std::move(log_);
+}
+
+// Looks up fields of one layout once, then reads them per message.
+struct Fields {
+  const Layout& layout;
+  const FlatField* Find(const std::string& name) const {
+    auto it = layout.fields.find(name);
+    return it == layout.fields.end() ? nullptr : &it->second;
+  }
+  // name[0], name[1], ... as far as they exist.
+  std::vector<const FlatField*> Array(const std::string& name, size_t max) const {
+    std::vector<const FlatField*> out;
+    for (size_t i = 0; i < max; ++i) {
+      const FlatField* f = Find(name + "[" + std::to_string(i) + "]");
+      if (!f) break;
+      out.push_back(f);
+    }
+    return out;
+  }
+};
+
+std::string CandidateName(const std::string& topic, int multi_id, const std::string& field) {
+  return topic + (multi_id ? "/" + std::to_string(multi_id) : "") + "." + field;
+}
+
+void ULogParser::Decode() {
+  std::vector<internal::GyroCandidate> candidates;
+  std::vector<CameraEvent> events;
+  std::vector<double> dist_bottom_m;
+  std::vector<double> local_z_m;
+  std::optional<double> home_z_m;
+
+  // Subscriptions of the same topic and instance (a topic removed and added again) share one
+  // stream.
+  std::map<std::pair<std::string, int>, std::vector<const Subscription*>> streams;
+  for (const Subscription& sub : subscriptions_) {
+    if (sub.layout && !sub.payloads.empty()) streams[{sub.topic, sub.multi_id}].push_back(&sub);
+  }
+
+  for (const auto& [key, subs] : streams) {
+    const std::string& topic = key.first;
+    const int multi_id = key.second;
+    internal::GyroCandidate cand;
+    for (const Subscription* sub : subs) {
+      const Fields f{*sub->layout};
+      const FlatField* t_sample = f.Find("timestamp_sample");
+      const FlatField* t_plain = f.Find("timestamp");
+      const FlatField* t_field = t_sample ? t_sample : t_plain;
+      if (!t_field) continue;
+      if (topic == "sensor_gyro_fifo") {
+        cand.name = CandidateName(topic, multi_id, "x,y,z");
+        cand.preference = 0;
+        const FlatField* dt = f.Find("dt");
+        const FlatField* scale = f.Find("scale");
+        const FlatField* count = f.Find("samples");
+        auto x = f.Array("x", 256), y = f.Array("y", 256), z = f.Array("z", 256);
+        const size_t max_n = std::min({x.size(), y.size(), z.size()});
+        if (!dt || !scale || !count || max_n == 0) continue;
+        for (std::string_view data : sub->payloads) {
+          const auto t_ns = ReadTimeNs(data, *t_field);
+          const double dt_us = ReadNumber(data, *dt);
+          const double sc = ReadNumber(data, *scale);
+          const double k = ReadNumber(data, *count);
+          if (!t_ns || !(dt_us > 0.0 && dt_us < 1e6) || !std::isfinite(sc) || !(k >= 0)) {
+            ++log_.records_skipped;
+            ++skipped_by_topic_[topic];
+            continue;
+          }
+          const size_t nk = static_cast<size_t>(std::min(k, static_cast<double>(max_n)));
+          for (size_t i = 0; i < nk; ++i) {
+            // timestamp_sample is the newest sample's time; older ones are dt apart before it.
+            const int64_t back_ns = std::llround(static_cast<double>(nk - 1 - i) * dt_us * 1e3);
+            cand.samples.push_back({*t_ns - back_ns, Eigen::Vector3d(ReadNumber(data, *x[i]) * sc,
+                                                                     ReadNumber(data, *y[i]) * sc,
+                                                                     ReadNumber(data, *z[i]) * sc)});
+          }
+        }
+      } else if (topic == "sensor_gyro" || topic == "vehicle_angular_velocity" || topic == "sensor_combined") {
+        std::array<const FlatField*, 3> axes{};
+        if (topic == "sensor_gyro") {
+          cand.name = CandidateName(topic, multi_id, "x,y,z");
+          cand.preference = 1;
+          axes = {f.Find("x"), f.Find("y"), f.Find("z")};
+        } else if (topic == "vehicle_angular_velocity") {
+          cand.name = CandidateName(topic, multi_id, "xyz");
+          cand.preference = 2;
+          axes = {f.Find("xyz[0]"), f.Find("xyz[1]"), f.Find("xyz[2]")};
+        } else {
+          // sensor_combined.timestamp is the gyro sample's time (the accelerometer's is relative).
+          t_field = t_plain;
+          cand.preference = 3;
+          std::string field = f.Find("gyro_rad[0]") ? "gyro_rad" : "gyro_rad_s";
+          cand.name = CandidateName(topic, multi_id, field);
+          axes = {f.Find(field + "[0]"), f.Find(field + "[1]"), f.Find(field + "[2]")};
+        }
+        if (!t_field || !axes[0] || !axes[1] || !axes[2]) continue;
+        cand.samples.reserve(cand.samples.size() + sub->payloads.size());
+        for (std::string_view data : sub->payloads) {
+          const auto t_ns = ReadTimeNs(data, *t_field);
+          cand.samples.push_back({t_ns.value_or(0), Eigen::Vector3d(ReadNumber(data, *axes[0]),
+                                                                    ReadNumber(data, *axes[1]),
+                                                                    ReadNumber(data, *axes[2]))});
+        }
+      } else if (topic == "camera_trigger" || topic == "camera_capture") {
+        const FlatField* seq = f.Find("seq");
+        for (std::string_view data : sub->payloads) {
+          const auto t_ns = ReadTimeNs(data, t_plain ? *t_plain : *t_field);
+          if (!t_ns || *t_ns <= 0) continue;
+          CameraEvent e;
+          e.t_ns = *t_ns;
+          e.kind = topic;
+          if (seq) {
+            const double v = ReadNumber(data, *seq);
+            if (std::isfinite(v) && std::abs(v) < 9.0e15) e.sequence = static_cast<int64_t>(v);
+          }
+          events.push_back(e);
+        }
+      } else if (topic == "vehicle_local_position") {
+        const FlatField* dist = f.Find("dist_bottom");
+        const FlatField* dist_valid = f.Find("dist_bottom_valid");
+        const FlatField* z = f.Find("z");
+        const FlatField* z_valid = f.Find("z_valid");
+        for (std::string_view data : sub->payloads) {
+          if (dist && dist_valid && ReadNumber(data, *dist_valid) != 0.0) {
+            const double d = ReadNumber(data, *dist);
+            if (std::isfinite(d)) dist_bottom_m.push_back(d);
+          }
+          if (z && (!z_valid || ReadNumber(data, *z_valid) != 0.0)) {
+            const double v = ReadNumber(data, *z);
+            if (std::isfinite(v)) local_z_m.push_back(v);
+          }
+        }
+      } else if (topic == "home_position") {
+        if (const FlatField* z = f.Find("z")) {
+          const double v = ReadNumber(sub->payloads.back(), *z);
+          if (std::isfinite(v)) home_z_m = v;
+        }
+      }
+    }
+    if (!cand.name.empty() && !cand.samples.empty()) candidates.push_back(std::move(cand));
+  }
+
+  std::stable_sort(events.begin(), events.end(),
+                   [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
+  log_.camera_events = std::move(events);
+
+  auto airborne_median = [](const std::vector<double>& heights) {
+    std::vector<double> up;
+    for (double h : heights) {
+      if (h > kAirborneAltitudeM) up.push_back(h);
+    }
+    return internal::Median(std::move(up));
+  };
+  if (auto m = airborne_median(dist_bottom_m)) {
+    log_.altitude_above_ground_m = m;
+    log_.warnings.push_back("altitude above ground: median vehicle_local_position.dist_bottom (valid, above 1 m)");
+  } else if (!local_z_m.empty()) {
+    const double z_home = home_z_m.value_or(local_z_m.front());
+    std::vector<double> heights;
+    for (double z : local_z_m) heights.push_back(-(z - z_home));
+    if (auto h = airborne_median(heights)) {
+      log_.altitude_above_ground_m = h;
+      log_.warnings.push_back(std::string("altitude above ground: median -(vehicle_local_position.z - ") +
+                              (home_z_m ? "home_position.z" : "first local z") +
+                              ") above 1 m (height above home, not a ground-distance measurement)");
+    }
+  }
+
+  if (!internal::ChooseGyroSource(std::move(candidates), &log_)) {
+    throw IoError(IoMessage(path_, 0,
+                            "no usable gyro data (looked for sensor_gyro_fifo, sensor_gyro, "
+                            "vehicle_angular_velocity, sensor_combined)"));
+  }
+}
+
+}  // namespace
+
+bool LooksLikeULog(std::string_view first_bytes) {
+  return first_bytes.size() >= sizeof(kMagic) && std::memcmp(first_bytes.data(), kMagic, sizeof(kMagic)) == 0;
+}
+
+FlightLog ParseULog(std::string_view bytes, const std::string& path) {
+  return ULogParser(bytes, path).Run();
+}
+
+FlightLog ReadULog(const std::string& path) {
+  const std::string bytes = ReadFileToString(path);
+  return ParseULog(bytes, path);
+}
+
+}  // namespace shutterlab

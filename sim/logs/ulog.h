@@ -1,0 +1,66 @@
+#pragma once
+// PX4 ULog reader (file versions 0 and 1): the best gyro trace, camera events and altitude above
+// ground, parsed from the file's own format definitions ('F' messages).
+//
+// Spec: PX4 "ULog File Format" (docs.px4.io, dev_log/ulog_file_format); behaviour on corrupt data
+// follows PX4/pyulog core.py where the spec is silent (data messages may omit trailing _padding
+// fields; an unknown message type means corruption).
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "sim/logs/flight_log.h"
+
+namespace shutterlab {
+
+// True when first_bytes begins with the ULog magic "ULog" 0x01 0x12 0x35 (needs 7 bytes or more).
+bool LooksLikeULog(std::string_view first_bytes);
+
+// Reads a .ulg file. Times: the log's boot clock (PX4 microseconds since boot) as int64 ns.
+// Gyro candidates, best raw source first: sensor_gyro_fifo (int16 * scale, up to 32 samples a
+// message at timestamp_sample - (n-1-i)*dt, so timestamp_sample is the newest sample's time),
+// sensor_gyro (x,y,z at timestamp_sample), vehicle_angular_velocity (xyz at timestamp_sample),
+// sensor_combined (gyro_rad at timestamp). Each topic instance (multi_id) is one candidate, named
+// "topic.field" for instance 0 and "topic/N.field" for instance N. The one with the highest
+// measured rate wins; candidates within 10% of that rate are ranked by the order above.
+// gyro_sources_available lists every candidate as "NAME (RATE Hz, N samples)", chosen one first.
+// Camera events: camera_trigger and camera_capture (timestamp, seq).
+// Altitude above ground: median of vehicle_local_position.dist_bottom where dist_bottom_valid,
+// over the samples above kAirborneAltitudeM; else median of -(z - z_home) (home_position.z when
+// logged, else the first local z) over the samples above kAirborneAltitudeM; a warning says which.
+// Dropouts ('O') become warnings; the gaps they leave show in gyro.sampling().
+// Throws IoError (path, byte offset, problem) when the file is not ULog, sets an unknown
+// incompatible flag, or holds no usable gyro data. Corrupt or truncated stretches are skipped
+// (records_skipped, warnings) and reading resumes at the next plausible message.
+FlightLog ReadULog(const std::string& path);
+
+// The same on bytes already in memory; path is used in messages only.
+FlightLog ParseULog(std::string_view bytes, const std::string& path);
+
+// A vehicle below this height is taken to be on the ground when the altitude median is formed.
+inline constexpr double kAirborneAltitudeM = 1.0;
+
+namespace internal {
+
+// One gyro stream found in a log, before the best one is chosen. Shared by the ULog and DataFlash
+// readers so that both clean and rank their candidates in the same way.
+struct GyroCandidate {
+  std::string name;                 // e.g. "sensor_gyro_fifo.x,y,z" or "GYR/1"
+  int preference = 0;               // lower is better among candidates of similar rate
+  std::vector<GyroSample> samples;  // in log order; cleaned by ChooseGyroSource
+};
+
+// Cleans every candidate (drops t <= 0, non-finite rates and isolated timestamp spikes, i.e. a
+// sample outside the span of both its neighbours in log order; sorts what is left by time), then
+// picks the one with the highest median rate, preferring lower `preference` among those within
+// 10% of the best rate. Fills log->gyro, gyro_source, gyro_sources_available, and adds warnings
+// and records_skipped for what was dropped. Returns false when no candidate has 2 samples.
+bool ChooseGyroSource(std::vector<GyroCandidate> candidates, FlightLog* log);
+
+// Median of values (copy); nullopt when empty.
+std::optional<double> Median(std::vector<double> values);
+
+}  // namespace internal
+}  // namespace shutterlab

@@ -1,0 +1,99 @@
+#pragma once
+// Synthetic measurements for the effect-fitting tests and bench: the issue's rig, a multirotor-like
+// gyro trace, grid points with the exact displacement of a TrueModel plus Gaussian noise.
+
+#include "estimate/loop/effect_fit.h"
+#include "render/camera.h"
+#include "render/truth_model.h"
+#include "sim/gyro_trace.h"
+#include "sim/synth/synth.h"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+namespace shutterlab::test {
+
+// The issue's rig: 1280x960, f = 1100 px, 30 ms readout, 50 m over flat ground.
+inline RigModel IssueRig() {
+  RigModel rig;
+  rig.camera.width = 1280;
+  rig.camera.height = 960;
+  rig.camera.fx = rig.camera.fy = 1100.0;
+  rig.camera.cx = 639.5;
+  rig.camera.cy = 479.5;
+  rig.shutter.readout_s = 0.030;
+  rig.altitude_m = 50.0;
+  return rig;
+}
+
+// The video tests' rig: the issue's field of view at 640x480 (f = 550 px), 30 ms readout, 50 m.
+inline RigModel VideoRig() {
+  RigModel rig = IssueRig();
+  rig.camera.width = 640;
+  rig.camera.height = 480;
+  rig.camera.fx = rig.camera.fy = 550.0;
+  rig.camera.cx = 319.5;
+  rig.camera.cy = 239.5;
+  return rig;
+}
+
+// A multirotor-like logged trace (sim/motion.h flight profile, ideal sensor: the fit only sees the
+// logged rates, and the truth is defined on them), 1 kHz.
+inline GyroTrace FlightTrace(double duration_s, uint64_t seed) {
+  SynthOptions options;
+  options.profile = MotionProfile::kFlight;
+  options.rate_hz = 1000.0;
+  options.duration_s = duration_s;
+  options.seed = seed;
+  options.imu = ImuErrorModel::Ideal();
+  return SynthesizeTrace(options);
+}
+
+// Frames with points on a grid of step_px (offset step_px / 2), t_first_row at t_first_s.
+inline std::vector<FramePoints> GridFrames(const RigModel& rig,
+                                           const std::vector<double>& t_first_s, int step_px) {
+  std::vector<FramePoints> frames;
+  for (size_t k = 0; k < t_first_s.size(); ++k) {
+    FramePoints f;
+    f.frame = static_cast<int64_t>(k);
+    f.t_first_row_ns = SecondsToNs(t_first_s[k]);
+    for (int v = step_px / 2; v < rig.camera.height; v += step_px) {
+      for (int u = step_px / 2; u < rig.camera.width; u += step_px) {
+        MeasuredPoint p;
+        p.u = u;
+        p.v = v;
+        f.points.push_back(p);
+      }
+    }
+    frames.push_back(std::move(f));
+  }
+  return frames;
+}
+
+inline std::vector<double> EverySecond(int frames, double first_s = 8.0, double spacing_s = 1.0) {
+  std::vector<double> t;
+  for (int k = 0; k < frames; ++k) t.push_back(first_s + k * spacing_s);
+  return t;
+}
+
+// Sets every point's measurement to the truth's displacement plus Gaussian noise of sigma_px per
+// component (fixed seed). Throws std::runtime_error where the truth is undefined.
+inline void MeasureExactly(const TrueModel& truth, const GyroTrace& gyro,
+                           std::vector<FramePoints>* frames, uint64_t seed, double sigma_px) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma_px);
+  for (FramePoints& f : *frames) {
+    const std::vector<Eigen::Vector2d> d = PredictDisplacements(truth, gyro, f);
+    for (size_t i = 0; i < f.points.size(); ++i) {
+      if (!d[i].allFinite()) throw std::runtime_error("truth undefined at a test point");
+      f.points[i].dx = d[i].x() + noise(rng);
+      f.points[i].dy = d[i].y() + noise(rng);
+    }
+  }
+}
+
+}  // namespace shutterlab::test

@@ -1,0 +1,304 @@
+#include "estimate/paper/flight.h"
+
+#include "estimate/paper/window_stats.h"
+#include "sim/integrate.h"
+#include "sim/so3.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kArcsecPerRad = 180.0 * 3600.0 / kPi;
+constexpr int64_t kPeriodNs = 1000000;  // 1 kHz, the paper's logging rate
+constexpr double kDtS = 1e-3;
+// Bias segment: the first second, still (zero rates, so the bias is exactly zero).
+constexpr double kStillS = 1.0;
+// Angles summed over a few thousand samples carry ~1e-15 rad of rounding; 1e-9 arcsec is far above
+// that and far below anything that matters.
+constexpr double kAngleTolArcsec = 1e-9;
+
+// A trace at 1 kHz: still for kStillS, then rate(t_s) for motion_s seconds (t_s from motion start).
+GyroTrace MakeTrace(double motion_s, const std::function<Eigen::Vector3d(size_t)>& rate_of_index) {
+  std::vector<GyroSample> samples;
+  const size_t still = static_cast<size_t>(std::llround(kStillS / kDtS));
+  const size_t motion = static_cast<size_t>(std::llround(motion_s / kDtS));
+  for (size_t i = 0; i < still + motion; ++i) {
+    GyroSample s;
+    s.t_ns = 2000000000 + static_cast<int64_t>(i) * kPeriodNs;
+    s.omega_rad_s = i < still ? Eigen::Vector3d::Zero() : rate_of_index(i - still);
+    samples.push_back(s);
+  }
+  return GyroTrace(std::move(samples));
+}
+
+FlightOptions Options() {
+  FlightOptions options;
+  options.bias = {0.0, kStillS};
+  return options;
+}
+
+double ThresholdRad(double limit_m, double altitude_m = 50.0, double allowance_arcsec = 20.0) {
+  return std::atan(limit_m / altitude_m) + allowance_arcsec / kArcsecPerRad;
+}
+
+TEST(Flight, ThresholdMatchesPaper) {
+  // 5 cm at 50 m is atan(0.001) = 206.26", plus the 20" allowance.
+  const auto trace = MakeTrace(1.0, [](size_t) { return Eigen::Vector3d::Zero(); });
+  const FlightResult r = Flight(trace, Options());
+  ASSERT_EQ(r.rows.size(), 4u);
+  EXPECT_NEAR(r.rows[0].threshold_arcsec, 226.2648, 1e-4);
+  EXPECT_NEAR(r.rows[2].threshold_arcsec, 432.5291, 1e-4);  // atan(0.002) + 20"
+  EXPECT_EQ(r.rows[0].flagged, 0u);
+}
+
+// Constant rate w on one axis: a 10 ms window at 1 kHz holds exactly 10 samples ([t_k, t_k + W)
+// excludes t_k + W), so its range is w * 9 ms. Just above the threshold every window is flagged,
+// just below none.
+TEST(Flight, ConstantRateFlagsAllOrNothing) {
+  const double threshold = ThresholdRad(0.05);
+  for (const double factor : {1.0001, 0.9999}) {
+    const double rate = threshold / (9 * kDtS) * factor;
+    const auto trace = MakeTrace(2.0, [&](size_t) { return Eigen::Vector3d(0, rate, 0); });
+    FlightOptions options = Options();
+    options.limits_m = {0.05};
+    options.windows_s = {0.010};
+    options.series = true;
+    const FlightResult r = Flight(trace, options);
+    ASSERT_EQ(r.rows.size(), 1u);
+    // 2000 samples after the segment; windows start where t_k + 10 ms <= t_last.
+    EXPECT_EQ(r.windows_total, 2000u - 10u);
+    const double expected = factor > 1 ? 100.0 : 0.0;
+    EXPECT_EQ(r.rows[0].flagged_percent, expected);
+    EXPECT_EQ(r.rows[0].flagged_percent_axis[1], expected);
+    EXPECT_EQ(r.rows[0].flagged_percent_axis[0], 0.0);
+    EXPECT_EQ(r.rows[0].flagged_percent_vector, expected);
+    ASSERT_EQ(r.series.t_ns.size(), r.windows_total);
+    for (size_t k = 0; k < r.series.t_ns.size(); k += 97) {
+      EXPECT_NEAR(r.series.range_arcsec[1][k], rate * 9 * kDtS * kArcsecPerRad, kAngleTolArcsec);
+      EXPECT_NEAR(r.series.vector_arcsec[k], rate * 9 * kDtS * kArcsecPerRad, 1e-6);
+    }
+  }
+}
+
+// Isolated one-sample rate spikes on x: the per-axis angle steps by w dt at the spike sample j, so
+// exactly the windows holding both j-1 and j see the step: N-1 windows of N samples per spike. The
+// SO(3) trapezoid spreads the spike over the intervals (j-1, j) and (j, j+1), half each: N-2
+// windows see the whole step and 2 see half of it. With the step between the two thresholds' and
+// half of it below both, the counts are exact.
+TEST(Flight, SpikesFlagAKnownShare) {
+  const double step = 1.2 * ThresholdRad(0.05);  // above the 5 cm threshold, below 10 cm's
+  ASSERT_LT(step, ThresholdRad(0.10));
+  const size_t spikes = 37;
+  const size_t spacing = 53;  // longer than any window
+  const auto trace = MakeTrace(2.0, [&](size_t i) {
+    const bool spike = i % spacing == 25 && i / spacing < spikes;
+    return Eigen::Vector3d(spike ? step / kDtS : 0.0, 0, 0);
+  });
+  const FlightResult r = Flight(trace, Options());
+  const size_t total10 = 2000 - 10, total20 = 2000 - 20;
+  ASSERT_EQ(r.rows.size(), 4u);  // 5cm x {10, 20} ms, 10cm x {10, 20} ms
+  EXPECT_EQ(r.rows[0].windows, total10);
+  EXPECT_EQ(r.rows[1].windows, total20);
+  EXPECT_EQ(r.rows[0].flagged, spikes * 9);
+  EXPECT_EQ(r.rows[1].flagged, spikes * 19);
+  EXPECT_DOUBLE_EQ(r.rows[0].flagged_percent, 100.0 * spikes * 9 / total10);
+  EXPECT_EQ(r.rows[0].flagged_vector, spikes * 8);
+  EXPECT_EQ(r.rows[1].flagged_vector, spikes * 18);
+  EXPECT_EQ(r.rows[0].flagged_axis_only, spikes);
+  EXPECT_EQ(r.rows[0].flagged_vector_only, 0u);
+  EXPECT_EQ(r.rows[2].flagged, 0u);
+  EXPECT_EQ(r.rows[3].flagged_vector, 0u);
+}
+
+// Rotation at a constant rate about the diagonal: each axis turns by w W'/sqrt(3), the rotation
+// angle is w W' (W' = 9 ms): the vector criterion flags where per-axis does not.
+TEST(Flight, DiagonalRotationVectorIsSqrt3TimesPerAxis) {
+  const double threshold = ThresholdRad(0.05);
+  const double rate = 1.2 * threshold / (9 * kDtS);  // vector 1.2x over, per axis 0.69x
+  const Eigen::Vector3d axis = Eigen::Vector3d::Ones().normalized();
+  const auto trace = MakeTrace(1.0, [&](size_t) -> Eigen::Vector3d { return rate * axis; });
+  FlightOptions options = Options();
+  options.limits_m = {0.05};
+  options.windows_s = {0.010};
+  options.series = true;
+  const FlightResult r = Flight(trace, options);
+  EXPECT_EQ(r.rows[0].flagged_percent, 0.0);
+  EXPECT_EQ(r.rows[0].flagged_percent_vector, 100.0);
+  EXPECT_EQ(r.rows[0].flagged_vector_only, r.windows_total);
+  for (size_t k = 0; k < r.series.t_ns.size(); k += 31) {
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_NEAR(r.series.vector_arcsec[k] / r.series.range_arcsec[a][k], std::sqrt(3.0), 1e-9);
+    }
+  }
+}
+
+// Rotation about one axis with a varying rate: the two criteria agree (up to the rectangle-vs-
+// trapezoid difference of the two integrations, half a rate change times dt per window).
+TEST(Flight, SingleAxisMotionCriteriaAgree) {
+  const double amplitude = 0.2;  // rad/s, so windows straddle the thresholds
+  const auto trace = MakeTrace(3.0, [&](size_t i) {
+    return Eigen::Vector3d(0, 0, amplitude * std::sin(2 * kPi * 1.3 * i * kDtS));
+  });
+  FlightOptions options = Options();
+  options.series = true;
+  const FlightResult r = Flight(trace, options);
+  bool some_flagged = false, some_clear = false;
+  for (const FlightRow& row : r.rows) {
+    EXPECT_NEAR(row.flagged_percent, row.flagged_percent_vector, 1.0);
+    some_flagged |= row.flagged > 0;
+    some_clear |= row.flagged < row.windows;
+  }
+  EXPECT_TRUE(some_flagged && some_clear) << "the signal does not exercise the thresholds";
+  // Per window, the angle differs by at most |w_end - w_start| dt / 2 <= amplitude * dt.
+  for (size_t k = 0; k < r.series.t_ns.size(); ++k) {
+    ASSERT_NEAR(r.series.vector_arcsec[k], r.series.range_arcsec[2][k],
+                amplitude * kDtS * kArcsecPerRad);
+  }
+}
+
+// Brute-force twin of everything on a random three-axis motion: per-axis counts against
+// SlidingRangeBruteForce of IntegratePerAxis; vector counts and series against all-pairs
+// AngularDistance of OrientationTrace.
+TEST(Flight, MatchesBruteForceOnRandomMotion) {
+  std::mt19937_64 rng(42);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  // Smooth random rates: a random walk, large enough to straddle both thresholds.
+  Eigen::Vector3d w = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> rates(2500);
+  for (auto& r : rates) {
+    w = 0.98 * w + 0.02 * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+    r = w + 0.005 * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+  }
+  const auto trace = MakeTrace(2.5, [&](size_t i) { return rates[i]; });
+  FlightOptions options = Options();
+  options.series = true;
+  const FlightResult r = Flight(trace, options);
+
+  const auto angles = IntegratePerAxis(trace, Eigen::Vector3d::Zero(), 1000);
+  std::vector<GyroSample> motion(trace.samples().begin() + 1000, trace.samples().end());
+  const OrientationTrace orientation{GyroTrace(motion)};
+  const auto& q = orientation.world_from_body();
+  for (size_t wi = 0; wi < options.windows_s.size(); ++wi) {
+    const auto ends = WindowEndsByDuration(angles.t_ns, SecondsToNs(options.windows_s[wi]));
+    std::array<std::vector<double>, 3> range;
+    for (int a = 0; a < 3; ++a) range[a] = SlidingRangeBruteForce(angles.angle_rad[a], ends);
+    std::vector<double> vector(ends.size(), 0.0);
+    for (size_t k = 0; k < ends.size(); ++k) {
+      for (size_t i = k; i < ends[k]; ++i) {
+        for (size_t j = i + 1; j < ends[k]; ++j)
+          vector[k] = std::max(vector[k], AngularDistance(q[i], q[j]));
+      }
+    }
+    for (size_t l = 0; l < options.limits_m.size(); ++l) {
+      const double th = ThresholdRad(options.limits_m[l]);
+      size_t axis = 0, vec = 0;
+      for (size_t k = 0; k < ends.size(); ++k) {
+        axis += std::max({range[0][k], range[1][k], range[2][k]}) > th;
+        vec += vector[k] > th;
+      }
+      const FlightRow& row = r.rows[l * options.windows_s.size() + wi];
+      EXPECT_EQ(row.windows, ends.size());
+      EXPECT_EQ(row.flagged, axis) << "limit " << l << " window " << wi;
+      EXPECT_EQ(row.flagged_vector, vec) << "limit " << l << " window " << wi;
+      EXPECT_GT(vec, 0u);
+      EXPECT_LT(vec, ends.size());
+    }
+    if (wi == 0) {
+      ASSERT_EQ(r.series.t_ns.size(), ends.size());
+      for (size_t k = 0; k < ends.size(); ++k) {
+        ASSERT_NEAR(r.series.vector_arcsec[k], vector[k] * kArcsecPerRad, 1e-5) << k;
+        for (int a = 0; a < 3; ++a)
+          ASSERT_EQ(r.series.range_arcsec[a][k], range[a][k] * kArcsecPerRad);
+      }
+    }
+  }
+}
+
+TEST(Flight, BadInputIsRejected) {
+  const auto trace = MakeTrace(0.5, [](size_t) { return Eigen::Vector3d::Zero(); });
+  FlightOptions options = Options();
+  options.windows_s = {0.6};  // longer than the 0.5 s after the bias segment
+  EXPECT_THROW(Flight(trace, options), std::invalid_argument);
+  options = Options();
+  options.bias = {0.0, 0.005};  // 5 samples: too few for a bias
+  EXPECT_THROW(Flight(trace, options), std::invalid_argument);
+  options = Options();
+  options.bias = {0.0, 10.0};  // past the end of the trace: no samples after it
+  EXPECT_THROW(Flight(trace, options), std::invalid_argument);
+  options = Options();
+  options.altitude_m = 0;
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+  options = Options();
+  options.limits_m.clear();
+  EXPECT_THROW(options.Check(), std::invalid_argument);
+}
+
+TEST(Flight, ParsesLengthsAndDurations) {
+  EXPECT_DOUBLE_EQ(ParseLengthM("5cm"), 0.05);
+  EXPECT_DOUBLE_EQ(ParseLengthM("0.05m"), 0.05);
+  EXPECT_DOUBLE_EQ(ParseLengthM("0.05"), 0.05);
+  EXPECT_DOUBLE_EQ(ParseLengthM("50mm"), 0.05);
+  EXPECT_DOUBLE_EQ(ParseDurationS("10ms"), 0.010);
+  EXPECT_DOUBLE_EQ(ParseDurationS("0.01s"), 0.010);
+  EXPECT_DOUBLE_EQ(ParseDurationS("0.01"), 0.010);
+  EXPECT_DOUBLE_EQ(ParseDurationS("10000us"), 0.010);
+  EXPECT_THROW(ParseLengthM("5in"), std::invalid_argument);
+  EXPECT_THROW(ParseLengthM("cm"), std::invalid_argument);
+  EXPECT_THROW(ParseDurationS("10min"), std::invalid_argument);
+  EXPECT_THROW(ParseDurationS("ten ms"), std::invalid_argument);
+}
+
+TEST(Flight, JsonHasFormatsKeysAndTableSaysWhichFlagsMore) {
+  const double rate = 1.2 * ThresholdRad(0.05) / (9 * kDtS);
+  const Eigen::Vector3d axis = Eigen::Vector3d::Ones().normalized();
+  const auto trace = MakeTrace(1.0, [&](size_t) -> Eigen::Vector3d { return rate * axis; });
+  const FlightResult r = Flight(trace, Options());
+  const nlohmann::json j = FlightToJson(r);
+  EXPECT_EQ(j.at("altitude_m"), 50.0);
+  EXPECT_EQ(j.at("noise_allowance_arcsec"), 20.0);
+  EXPECT_EQ(j.at("windows_total"), r.windows_total);
+  ASSERT_EQ(j.at("rows").size(), 4u);
+  for (const char* key :
+       {"limit_m", "window_s", "threshold_arcsec", "flagged_percent", "flagged_percent_vector"}) {
+    EXPECT_TRUE(j["rows"][0].contains(key)) << key;
+  }
+  EXPECT_EQ(j["rows"][1]["window_s"], 0.020);
+  const std::string table = FlightTable(r);
+  EXPECT_NE(table.find("NOT on the safe side"), std::string::npos) << table;
+}
+
+}  // namespace
+}  // namespace shutterlab
+
+namespace shutterlab {
+namespace {
+
+// A known bias replaces the segment: every sample is analysed and the bias is taken off exactly,
+// so a constant rate equal to the bias flags nothing.
+TEST(Flight, KnownBiasAnalysesEverySample) {
+  const Eigen::Vector3d bias(0.3, -0.2, 0.1);  // far above any threshold if left in
+  std::vector<GyroSample> samples;
+  for (int64_t i = 0; i < 1000; ++i) samples.push_back({i * 1000000, bias});
+  FlightOptions options;
+  options.known_bias_rad_s = bias;
+  options.limits_m = {0.05};
+  options.windows_s = {0.010};
+  const FlightResult r = Flight(GyroTrace(samples), options);
+  EXPECT_EQ(r.samples, 1000u);
+  EXPECT_EQ(r.windows_total, 1000u - 10u);
+  EXPECT_EQ(r.rows[0].flagged, 0u);
+  options.known_bias_rad_s = Eigen::Vector3d::Zero();
+  EXPECT_EQ(Flight(GyroTrace(samples), options).rows[0].flagged_percent, 100.0);
+}
+
+}  // namespace
+}  // namespace shutterlab

@@ -1,0 +1,168 @@
+#include "estimate/report/analyze_report.h"
+
+#include "estimate/paper/flight.h"
+#include "sim/text_file.h"
+#include "tests/estimate/report/report_test_util.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+constexpr int64_t kDtNs = 1'000'000;  // 1 kHz
+constexpr double kDegPerRad = 180.0 / M_PI;
+
+// Still for 4 s, then about camera x a rate that is `fast` during [6, 7) s and slow elsewhere.
+FlightLog StepLog(double total_s, double slow_rad_s, double fast_rad_s) {
+  std::vector<GyroSample> samples;
+  const int64_t n = static_cast<int64_t>(total_s * 1e9) / kDtNs + 1;
+  for (int64_t k = 0; k < n; ++k) {
+    const double t_s = k * kDtNs * 1e-9;
+    const double w = t_s <= 4.0 ? 0.0 : (t_s >= 6.0 && t_s < 7.0 ? fast_rad_s : slow_rad_s);
+    samples.push_back({k * kDtNs, Eigen::Vector3d(w, 0, 0)});
+  }
+  FlightLog log;
+  log.gyro = GyroTrace(std::move(samples));
+  log.format = "test";
+  log.gyro_source = "step";
+  return log;
+}
+
+AnalyzeOptions SmallCamera() {
+  AnalyzeOptions options;
+  // A small frame keeps the heatmaps cheap (under sanitizers too).
+  options.rig.camera.width = 160;
+  options.rig.camera.height = 120;
+  options.rig.camera.fx = options.rig.camera.fy = 140.0;
+  options.rig.camera.cx = 79.5;
+  options.rig.camera.cy = 59.5;
+  options.rig.shutter.readout_s = 0.030;
+  options.rig.altitude_m = 50.0;
+  options.flight_series = true;
+  return options;
+}
+
+// The rate whose 30 ms readout smears d_m on the ground at 50 m (paper model).
+double RateFor(double d_m) { return std::atan(d_m / 50.0) / 0.030; }
+
+TEST(AnalyzeReport, ChartsHoldTheAnalysedValues) {
+  const FlightLog log = StepLog(10.0, RateFor(0.02), RateFor(0.07));
+  AnalyzeOptions options = SmallCamera();
+  options.triggers = {{"quiet", SecondsToNs(5.0)},
+                      {"shaken", SecondsToNs(6.5)},
+                      {"late", SecondsToNs(9.99)}};  // readout past the log's end
+  const AnalyzeResult result = Analyze(log, options);
+  AnalyzeReportOptions report;
+  report.log_name = "flight<1>.bbl";
+  report.worst_images = 1;
+  const std::string html = AnalyzeReportPage(log, options, result, report).Html();
+  EXPECT_TRUE(test::SelfContained(html));
+  EXPECT_NE(html.find("var uPlot="), std::string::npos);
+  EXPECT_NE(html.find("flight&lt;1&gt;.bbl"), std::string::npos);
+  EXPECT_EQ(html.find("flight<1>"), std::string::npos);
+  EXPECT_NE(html.find("outside the log"), std::string::npos);
+
+  const std::vector<nlohmann::json> charts = test::ChartBlocks(html);
+  ASSERT_EQ(charts.size(), 5u);  // rate, angle, D per image, window histogram, Allan
+  // Rate: 10001 samples > 2 * 4000 buckets, so enveloped; the peak rate survives exactly.
+  const nlohmann::json& rate = charts[0];
+  ASSERT_EQ(rate["data"].size(), 4u);
+  EXPECT_LE(rate["data"][0].size(), 8000u);
+  double peak = 0;
+  for (const auto& v : rate["data"][1]) peak = std::max(peak, v.get<double>());
+  EXPECT_NEAR(peak, RateFor(0.07) * kDegPerRad, 1e-9);
+  // Shading per limit: at 5 cm, the windows that overlap the fast second by a share f whose range
+  // f * fast + (1 - f) * slow passes the threshold (20" noise allowance included); none at 10 cm.
+  ASSERT_EQ(rate["shadings"].size(), 2u);
+  const auto& at5 = rate["shadings"][0]["intervals"];
+  ASSERT_EQ(at5.size(), 1u);
+  const double arcsec = 180.0 * 3600.0 / M_PI;
+  const double threshold = std::atan(0.05 / 50.0) * arcsec + 20.0;
+  const double slow = RateFor(0.02) * 0.030 * arcsec, fast = RateFor(0.07) * 0.030 * arcsec;
+  const double overlap_s = 0.030 * (threshold - slow) / (fast - slow);
+  // Within 3 samples: the rectangle rule and the sample-bounded windows shift the edges by 1-2 ms.
+  EXPECT_NEAR(at5[0][0].get<double>(), 6.0 - (0.030 - overlap_s), 0.003);
+  EXPECT_NEAR(at5[0][1].get<double>(), 7.0 + (0.030 - overlap_s), 0.003);
+  EXPECT_EQ(rate["shadings"][1]["intervals"].size(), 0u);
+
+  // D per image: one x per image, the paper model's values in cm, null outside the log.
+  const nlohmann::json& d = charts[2];
+  ASSERT_EQ(d["data"][0].size(), 3u);
+  EXPECT_NEAR(d["data"][1][0].get<double>(), 2.0, 1e-6);
+  EXPECT_NEAR(d["data"][1][1].get<double>(), 7.0, 1e-6);
+  EXPECT_TRUE(d["data"][1][2].is_null());
+  EXPECT_NEAR(d["data"][2][1].get<double>(), result.images[1].d_full_m * 100, 1e-9);
+  EXPECT_EQ(d["data"][3][0], 5.0);  // limit line at 5 cm
+  EXPECT_EQ(d["data"][4][0], 10.0);
+
+  // Window histogram: each axis's bins add up to 100 % of the windows.
+  const nlohmann::json& histogram = charts[3];
+  EXPECT_EQ(histogram["kind"], "histogram");
+  for (int axis = 1; axis <= 3; ++axis) {
+    const auto& y = histogram["data"][axis];
+    double sum = 0;
+    for (size_t b = 0; b + 1 < y.size(); ++b) sum += y[b].get<double>();
+    EXPECT_NEAR(sum, 100.0, 1e-9) << axis;
+  }
+  // The Allan plot is log-log on the still segment.
+  EXPECT_TRUE(charts[4]["log_x"].get<bool>());
+  EXPECT_NE(html.find("still segment"), std::string::npos);
+  // One worst image, the shaken one, as an inline PNG.
+  EXPECT_EQ(html.find("data:image/png;base64,", html.find("data:image/png;base64,") + 1),
+            std::string::npos);
+  EXPECT_NE(html.find("<figcaption>shaken at 6.50 s"), std::string::npos);
+}
+
+TEST(AnalyzeReport, SceneIsRenderedUnderTheHeatmap) {
+  const FlightLog log = StepLog(8.0, RateFor(0.02), RateFor(0.07));
+  AnalyzeOptions options = SmallCamera();
+  options.triggers = {{"shaken", SecondsToNs(6.5)}};
+  const AnalyzeResult result = Analyze(log, options);
+  AnalyzeReportOptions report;
+  report.worst_images = 1;
+  const std::string plain = AnalyzeReportPage(log, options, result, report).Html();
+  report.scene = cv::Mat(240, 320, CV_8UC3, cv::Scalar(250, 250, 250));
+  report.scene_name = "white.png";
+  const std::string blended = AnalyzeReportPage(log, options, result, report).Html();
+  EXPECT_NE(blended.find("blended over white.png"), std::string::npos);
+  EXPECT_NE(plain, blended);  // the picture differs
+}
+
+TEST(AnalyzeReport, LongTracesAreEnveloped) {
+  const FlightLog log = StepLog(30.0, RateFor(0.02), RateFor(0.07));
+  AnalyzeOptions options = SmallCamera();
+  options.every_s = 5.0;
+  const AnalyzeResult result = Analyze(log, options);
+  AnalyzeReportOptions report;
+  report.chart_buckets = 100;
+  report.worst_images = 0;
+  const auto charts = test::ChartBlocks(AnalyzeReportPage(log, options, result, report).Html());
+  ASSERT_GE(charts.size(), 2u);
+  EXPECT_EQ(charts[0]["data"][0].size(), 200u);  // 100 buckets, min and max each
+  EXPECT_EQ(charts[1]["data"][0].size(), 200u);
+  EXPECT_EQ(charts[2]["data"][0].size(), 6u);  // images every 5 s of 30 s: 0, 5, ..., 25 s
+}
+
+TEST(FlaggedIntervalsS, MergesOverlappingWindows) {
+  FlightSeries series;
+  series.window_s = 0.5;
+  series.t_ns = {0, SecondsToNs(0.25), SecondsToNs(1.0), SecondsToNs(2.0), SecondsToNs(2.5)};
+  series.range_arcsec[0] = {10, 0, 0, 0, 0};
+  series.range_arcsec[1] = {0, 10, 0, 10, 0};
+  series.range_arcsec[2] = {0, 0, 1, 0, 10};
+  const auto intervals = FlaggedIntervalsS(series, 5.0);
+  ASSERT_EQ(intervals.size(), 2u);
+  EXPECT_DOUBLE_EQ(intervals[0].first, 0.0);
+  EXPECT_DOUBLE_EQ(intervals[0].second, 0.75);
+  EXPECT_DOUBLE_EQ(intervals[1].first, 2.0);  // touching windows merge
+  EXPECT_DOUBLE_EQ(intervals[1].second, 3.0);
+  EXPECT_TRUE(FlaggedIntervalsS(series, 10.0).empty());  // strictly above the threshold
+}
+
+}  // namespace
+}  // namespace shutterlab

@@ -1,0 +1,155 @@
+#include "estimate/report/html_report.h"
+
+#include "sim/text_file.h"
+#include "tests/estimate/report/report_test_util.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <regex>
+#include <string>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+using test::ChartBlocks;
+
+TEST(EscapeHtml, EscapesTheFiveSpecialCharacters) {
+  EXPECT_EQ(EscapeHtml("a<b>&\"c\"'d'"), "a&lt;b&gt;&amp;&quot;c&quot;&#39;d&#39;");
+  EXPECT_EQ(EscapeHtml("plain text"), "plain text");
+}
+
+TEST(Base64, KnownAnswers) {
+  // RFC 4648 section 10.
+  EXPECT_EQ(Base64(""), "");
+  EXPECT_EQ(Base64("f"), "Zg==");
+  EXPECT_EQ(Base64("fo"), "Zm8=");
+  EXPECT_EQ(Base64("foo"), "Zm9v");
+  EXPECT_EQ(Base64("foob"), "Zm9vYg==");
+  EXPECT_EQ(Base64("fooba"), "Zm9vYmE=");
+  EXPECT_EQ(Base64("foobar"), "Zm9vYmFy");
+  EXPECT_EQ(Base64(std::string("\xff\x00\x10", 3)), "/wAQ");
+}
+
+TEST(Uplot, EmbeddedCopyIsTheVendoredFile) {
+  EXPECT_EQ(std::string(UplotJs()),
+            ReadFileToString(test::SourcePath("third_party/uplot/uPlot.iife.min.js")));
+  EXPECT_EQ(std::string(UplotCss()),
+            ReadFileToString(test::SourcePath("third_party/uplot/uPlot.min.css")));
+  EXPECT_NE(std::string(UplotLicense()).find("MIT"), std::string::npos);
+}
+
+TEST(HtmlPage, SelfContainedWithEscapedTextAndParsableChartData) {
+  HtmlPage page("Report <1> & \"two\"");
+  page.Heading("Section </h2><script>alert(1)</script>");
+  page.Paragraph("x < y && y > z");
+  page.Table({"name", "value"}, {{"<b>bold</b>", "1"}, {"short"}});
+  Chart chart;
+  chart.title = "rates </script><script>alert(2)</script>";
+  chart.x = {0.0, 1.0, 2.0};
+  ChartSeries dashed("y", {-1, 0, 1}, "#123456");
+  dashed.dashed = true;
+  chart.series = {ChartSeries("x </script>", {1.5, std::nan(""), 3.0}), dashed};
+  chart.shadings = {{"flagged <5 cm>", "rgba(255, 140, 0, 0.25)", {{0.5, 1.5}}}};
+  page.AddChart(chart);
+  Chart histogram;
+  histogram.kind = ChartKind::kHistogram;
+  histogram.log_y = true;
+  histogram.x = {0, 10, 20};
+  histogram.series = {ChartSeries("count", {5, 0, 2})};
+  page.AddChart(histogram);
+  page.Image(cv::Mat(4, 6, CV_8UC3, cv::Scalar(10, 200, 30)), "heat <map>");
+  const std::string html = page.Html();
+
+  // No raw markup from the text, and no external loads.
+  EXPECT_EQ(html.find("<script>alert"), std::string::npos);
+  EXPECT_EQ(html.find("<b>bold"), std::string::npos);
+  EXPECT_NE(html.find("&lt;b&gt;bold&lt;/b&gt;"), std::string::npos);
+  EXPECT_NE(html.find("<title>Report &lt;1&gt; &amp; &quot;two&quot;</title>"), std::string::npos);
+  EXPECT_NE(html.find("x &lt; y &amp;&amp; y &gt; z"), std::string::npos);
+  EXPECT_TRUE(test::SelfContained(html));
+  EXPECT_FALSE(std::regex_search(html, std::regex(R"((src|href)\s*=\s*["']?(https?:)?//)")));
+  // uPlot inlined, once, and the chart driver after it.
+  EXPECT_NE(html.find(std::string(UplotJs()).substr(0, 200)), std::string::npos);
+  EXPECT_LT(html.find("var uPlot="), html.find("new uPlot("));
+  EXPECT_NE(html.find("data:image/png;base64,iVBORw0KGgo"), std::string::npos);  // PNG magic
+  EXPECT_NE(html.find("<figcaption>heat &lt;map&gt;</figcaption>"), std::string::npos);
+
+  const std::vector<nlohmann::json> blocks = ChartBlocks(html);
+  ASSERT_EQ(blocks.size(), 2u);
+  EXPECT_EQ(page.charts(), 2u);
+  const nlohmann::json& a = blocks[0];
+  EXPECT_EQ(a["title"], chart.title);  // "</script>" survived as JSON, not as markup
+  ASSERT_EQ(a["data"].size(), 3u);
+  EXPECT_EQ(a["data"][0], nlohmann::json({0.0, 1.0, 2.0}));
+  EXPECT_EQ(a["data"][1][0], 1.5);
+  EXPECT_TRUE(a["data"][1][1].is_null());  // NaN -> null
+  EXPECT_EQ(a["series"][0]["label"], "x </script>");
+  EXPECT_EQ(a["series"][1]["color"], "#123456");
+  EXPECT_TRUE(a["series"][1]["dashed"].get<bool>());
+  EXPECT_EQ(a["shadings"][0]["intervals"], nlohmann::json::parse("[[0.5, 1.5]]"));
+  EXPECT_NE(html.find("flagged &lt;5 cm&gt;"), std::string::npos);
+  const nlohmann::json& h = blocks[1];
+  EXPECT_EQ(h["kind"], "histogram");
+  EXPECT_TRUE(h["data"][1][1].is_null());  // 0 on a log axis is not drawn
+  EXPECT_EQ(h["data"][1][0], 5);
+}
+
+TEST(HtmlPage, ChartRejectsMismatchedSeries) {
+  HtmlPage page("t");
+  Chart chart;
+  chart.x = {1, 2, 3};
+  chart.series = {ChartSeries("short", {1, 2})};
+  EXPECT_THROW(page.AddChart(chart), std::invalid_argument);
+}
+
+TEST(HtmlPage, WriteIsAtomicAndWhole) {
+  test::TempDir dir;
+  HtmlPage page("t");
+  page.Paragraph("hello");
+  page.Write(dir / "report.html");
+  EXPECT_EQ(ReadFileToString(dir / "report.html"), page.Html());
+  // A path whose folder does not exist: an error, and nothing left behind.
+  EXPECT_ANY_THROW(page.Write(dir / "missing/report.html"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "missing"));
+  size_t files = 0;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    ++files;
+  EXPECT_EQ(files, 1u);  // no temporary left beside the report
+}
+
+TEST(DownsampleMinMax, KeepsEachBucketsExtremesInOrder) {
+  Chart chart;
+  const size_t n = 10000;
+  ChartSeries s("s");
+  for (size_t i = 0; i < n; ++i) {
+    chart.x.push_back(static_cast<double>(i));
+    s.y.push_back(std::sin(i * 0.01) + (i == 5003 ? 7.0 : 0.0) - (i == 777 ? 9.0 : 0.0));
+  }
+  chart.series = {s};
+  const Chart small = DownsampleMinMax(chart, 100);
+  ASSERT_EQ(small.x.size(), 200u);
+  ASSERT_EQ(small.series[0].y.size(), 200u);
+  double lo = 1e9, hi = -1e9;
+  for (double v : small.series[0].y) {
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  EXPECT_DOUBLE_EQ(hi, std::sin(5003 * 0.01) + 7.0);  // a one-sample spike survives
+  EXPECT_DOUBLE_EQ(lo, std::sin(777 * 0.01) - 9.0);
+  // Bucket 0 holds samples 0..99: its first x, its last x; sin rises there, so min then max.
+  EXPECT_EQ(small.x[0], 0.0);
+  EXPECT_EQ(small.x[1], 99.0);
+  EXPECT_DOUBLE_EQ(small.series[0].y[0], 0.0);
+  EXPECT_DOUBLE_EQ(small.series[0].y[1], std::sin(0.99));
+  // Short charts are left alone.
+  EXPECT_EQ(DownsampleMinMax(chart, 5000).x.size(), n);
+}
+
+}  // namespace
+}  // namespace shutterlab

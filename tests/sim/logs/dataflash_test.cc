@@ -1,0 +1,316 @@
+#include "sim/logs/dataflash.h"
+
+#include <algorithm>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "sim/check.h"
+#include "sim/text_file.h"
+#include "tests/test_util.h"
+
+// No real ArduPilot .bin with a usable licence is available to the project, so every file here is
+// written by the test from FMT definitions laid out as ArduPilot's AP_Logger writes them.
+
+namespace shutterlab {
+namespace {
+
+void PutText(std::string* out, const std::string& text, size_t width) {
+  std::string padded = text.substr(0, width);
+  padded.resize(width, '\0');
+  *out += padded;
+}
+
+// Message type numbers as in ArduPilot's LogStructure.h are arbitrary per build; these are ours.
+enum : uint8_t { kGyr = 10, kImu = 11, kIsbh = 12, kIsbd = 13, kCam = 14, kTrig = 15, kParm = 16 };
+
+class DataFlashBuilder {
+ public:
+  DataFlashBuilder() {
+    Fmt(128, 89, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns");
+    Fmt(kGyr, 3 + 8 + 1 + 8 + 12, "GYR", "QBQfff", "TimeUS,I,SampleUS,GyrX,GyrY,GyrZ");
+    Fmt(kImu, 3 + 8 + 1 + 24, "IMU", "QBffffff", "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ");
+    Fmt(kIsbh, 3 + 8 + 2 + 1 + 1 + 2 + 2 + 8 + 4, "ISBH", "QHBBHHQf",
+        "TimeUS,N,type,instance,mul,smp_cnt,SampleUS,smp_rate");
+    Fmt(kIsbd, 3 + 8 + 2 + 2 + 3 * 64, "ISBD", "QHHaaa", "TimeUS,N,seqno,x,y,z");
+    const std::string cam_labels = "TimeUS,I,Img,GPSTime,GPSWeek,Lat,Lng,Alt,RelAlt,GPSAlt,R,P,Y";
+    Fmt(kCam, 46, "CAM", "QBHIHLLeeeccC", cam_labels);
+    Fmt(kTrig, 46, "TRIG", "QBHIHLLeeeccC", cam_labels);
+    Fmt(kParm, 3 + 8 + 16 + 4, "PARM", "QNf", "TimeUS,Name,Value");
+  }
+  void Fmt(uint8_t type, uint8_t length, const std::string& name, const std::string& format,
+           const std::string& labels) {
+    Header(128);
+    test::PutLittleEndian<uint8_t>(&bytes_, type);
+    test::PutLittleEndian<uint8_t>(&bytes_, length);
+    PutText(&bytes_, name, 4);
+    PutText(&bytes_, format, 16);
+    PutText(&bytes_, labels, 64);
+  }
+  void Gyr(uint64_t t_us, uint8_t instance, uint64_t sample_us, float x, float y, float z) {
+    Header(kGyr);
+    test::PutLittleEndian(&bytes_, t_us);
+    test::PutLittleEndian(&bytes_, instance);
+    test::PutLittleEndian(&bytes_, sample_us);
+    test::PutLittleEndian(&bytes_, x);
+    test::PutLittleEndian(&bytes_, y);
+    test::PutLittleEndian(&bytes_, z);
+  }
+  void Imu(uint64_t t_us, uint8_t instance, float x, float y, float z) {
+    Header(kImu);
+    test::PutLittleEndian(&bytes_, t_us);
+    test::PutLittleEndian(&bytes_, instance);
+    test::PutLittleEndian(&bytes_, x);
+    test::PutLittleEndian(&bytes_, y);
+    test::PutLittleEndian(&bytes_, z);
+    for (int i = 0; i < 3; ++i) test::PutLittleEndian(&bytes_, 9.81f);
+  }
+  void Isbh(uint16_t n, uint8_t type, uint8_t instance, uint16_t mul, uint16_t count, uint64_t sample_us,
+            float rate_hz) {
+    Header(kIsbh);
+    test::PutLittleEndian<uint64_t>(&bytes_, sample_us + 100);
+    test::PutLittleEndian(&bytes_, n);
+    test::PutLittleEndian(&bytes_, type);
+    test::PutLittleEndian(&bytes_, instance);
+    test::PutLittleEndian(&bytes_, mul);
+    test::PutLittleEndian(&bytes_, count);
+    test::PutLittleEndian(&bytes_, sample_us);
+    test::PutLittleEndian(&bytes_, rate_hz);
+  }
+  void Isbd(uint16_t n, uint16_t seqno, const std::vector<int16_t>& x, const std::vector<int16_t>& y,
+            const std::vector<int16_t>& z) {
+    Header(kIsbd);
+    test::PutLittleEndian<uint64_t>(&bytes_, 1);
+    test::PutLittleEndian(&bytes_, n);
+    test::PutLittleEndian(&bytes_, seqno);
+    for (const auto* axis : {&x, &y, &z}) {
+      for (size_t i = 0; i < 32; ++i) test::PutLittleEndian<int16_t>(&bytes_, i < axis->size() ? (*axis)[i] : int16_t{0});
+    }
+  }
+  void Cam(uint8_t type, uint64_t t_us, uint16_t image, double rel_alt_m) {
+    Header(type);
+    test::PutLittleEndian(&bytes_, t_us);
+    test::PutLittleEndian<uint8_t>(&bytes_, 0);
+    test::PutLittleEndian(&bytes_, image);
+    test::PutLittleEndian<uint32_t>(&bytes_, 0);
+    test::PutLittleEndian<uint16_t>(&bytes_, 0);
+    test::PutLittleEndian<int32_t>(&bytes_, 473'977'000);
+    test::PutLittleEndian<int32_t>(&bytes_, 85'456'000);
+    test::PutLittleEndian<int32_t>(&bytes_, 50'000);
+    test::PutLittleEndian<int32_t>(&bytes_, static_cast<int32_t>(std::lround(rel_alt_m * 100)));
+    test::PutLittleEndian<int32_t>(&bytes_, 50'000);
+    test::PutLittleEndian<int16_t>(&bytes_, 0);
+    test::PutLittleEndian<int16_t>(&bytes_, 0);
+    test::PutLittleEndian<uint16_t>(&bytes_, 0);
+  }
+  void Parm(uint64_t t_us, const std::string& name, float value) {
+    Header(kParm);
+    test::PutLittleEndian(&bytes_, t_us);
+    PutText(&bytes_, name, 16);
+    test::PutLittleEndian(&bytes_, value);
+  }
+  std::string& bytes() { return bytes_; }
+
+ private:
+  void Header(uint8_t type) {
+    bytes_.push_back(static_cast<char>(0xA3));
+    bytes_.push_back(static_cast<char>(0x95));
+    bytes_.push_back(static_cast<char>(type));
+  }
+  std::string bytes_;
+};
+
+bool AnyWarningContains(const FlightLog& log, const std::string& text) {
+  return std::any_of(log.warnings.begin(), log.warnings.end(),
+                     [&](const std::string& w) { return w.find(text) != std::string::npos; });
+}
+
+// A 1 kHz GYR stream (instance 0 and a 500 Hz instance 1), a 400 Hz IMU stream, parameters and
+// camera events. Values are exact in float32, so they must come back exactly.
+DataFlashBuilder FlightFile(int gyr_samples) {
+  DataFlashBuilder b;
+  b.Parm(1000, "INS_LOG_BAT_OPT", 4.0f);
+  for (int k = 0; k < gyr_samples; ++k) {
+    const uint64_t sample_us = 2'000'000 + k * 1000;
+    b.Gyr(sample_us + 250, 0, sample_us, 0.5f * (k % 7), -0.25f * (k % 5), 0.125f * k);
+    if (k % 2 == 0) b.Gyr(sample_us + 300, 1, sample_us + 10, 1.0f, 1.0f, 1.0f);
+    if (k % 5 == 0) b.Imu(sample_us + 500, 0, 0.1f, 0.2f, 0.3f);
+    if (k % 100 == 50) b.Cam(kCam, sample_us + 700, static_cast<uint16_t>(k / 100 + 1), 40.0 + k / 100);
+    if (k % 100 == 49) b.Cam(kTrig, sample_us + 600, static_cast<uint16_t>(k / 100 + 1), 0.0);
+  }
+  return b;
+}
+
+TEST(DataFlash, ReadsGyrBackExactly) {
+  DataFlashBuilder b = FlightFile(1000);
+  ASSERT_TRUE(LooksLikeDataFlash(b.bytes()));
+  const FlightLog log = ParseDataFlash(b.bytes(), "flight.bin");
+  EXPECT_EQ(log.format, "dataflash");
+  EXPECT_EQ(log.gyro_source, "GYR");
+  ASSERT_EQ(log.gyro.size(), 1000u);
+  for (int k = 0; k < 1000; ++k) {
+    EXPECT_EQ(log.gyro[k].t_ns, (2'000'000 + k * 1000) * int64_t{1000}) << "SampleUS, not TimeUS";
+    EXPECT_EQ(log.gyro[k].omega_rad_s, Eigen::Vector3d(0.5 * (k % 7), -0.25 * (k % 5), 0.125 * k)) << k;
+  }
+  ASSERT_EQ(log.gyro_sources_available.size(), 3u);
+  EXPECT_EQ(log.gyro_sources_available[0], "GYR (1000.0 Hz, 1000 samples)");
+  EXPECT_EQ(log.gyro_sources_available[1], "GYR/1 (500.0 Hz, 500 samples)");
+  EXPECT_EQ(log.gyro_sources_available[2], "IMU (200.0 Hz, 200 samples)");
+  EXPECT_EQ(log.records_skipped, 0u);
+  EXPECT_TRUE(log.warnings.size() == 1u) << "only the altitude note: " << log.warnings.front();
+}
+
+TEST(DataFlash, ReadsCameraEventsAndAltitude) {
+  DataFlashBuilder b = FlightFile(1000);
+  const FlightLog log = ParseDataFlash(b.bytes(), "flight.bin");
+  ASSERT_EQ(log.camera_events.size(), 20u);
+  EXPECT_EQ(log.camera_events[0].kind, "TRIG");
+  EXPECT_EQ(log.camera_events[0].t_ns, (2'049'000 + 600) * int64_t{1000});
+  EXPECT_EQ(log.camera_events[1].kind, "CAM");
+  EXPECT_EQ(log.camera_events[1].t_ns, (2'050'000 + 700) * int64_t{1000});
+  EXPECT_EQ(log.camera_events[1].sequence, 1);
+  EXPECT_EQ(log.camera_events[19].sequence, 10);
+  ASSERT_TRUE(log.altitude_above_ground_m.has_value());
+  // CAM RelAlt 40..49 m ('e': centimetres); the TRIG copies say 0 m and are not used.
+  constexpr double kCentimetre = 1e-9;  // 'e' is int32 * 0.01: exact to rounding only
+  EXPECT_NEAR(*log.altitude_above_ground_m, 44.5, kCentimetre);
+  EXPECT_TRUE(AnyWarningContains(log, "CAM.RelAlt"));
+}
+
+TEST(DataFlash, ReadsBatchSamplerGyroBatches) {
+  DataFlashBuilder b;
+  const uint16_t mul = 938;  // int16 full scale 34.9 rad/s: the MPU6000's 2000 deg/s
+  const float rate_hz = 2000.0f;
+  std::vector<double> expected_x;
+  std::vector<int64_t> expected_t_ns;
+  for (uint16_t batch = 0; batch < 3; ++batch) {
+    const uint64_t start_us = 5'000'000 + batch * 100'000;
+    b.Isbh(batch * 2, 0, 0, 2000, 64, start_us, rate_hz);  // accelerometer: ignored
+    b.Isbd(batch * 2, 0, std::vector<int16_t>(32, 99), {}, {});
+    b.Isbh(batch * 2 + 1, 1, 0, mul, 40, start_us, rate_hz);  // 40 of the 64 slots are valid
+    for (uint16_t seq = 0; seq < 2; ++seq) {
+      std::vector<int16_t> x, y, z;
+      for (int i = 0; i < 32; ++i) {
+        const int index = seq * 32 + i;
+        x.push_back(static_cast<int16_t>(batch * 1000 + index));
+        y.push_back(static_cast<int16_t>(-index));
+        z.push_back(static_cast<int16_t>(mul));
+        if (index < 40) {
+          expected_x.push_back((batch * 1000 + index) / static_cast<double>(mul));
+          expected_t_ns.push_back(static_cast<int64_t>(start_us) * 1000 + index * 500'000);
+        }
+      }
+      b.Isbd(batch * 2 + 1, seq, x, y, z);
+    }
+    for (int k = 0; k < 40; ++k) b.Imu(start_us + k * 2500, 0, 0, 0, 0);  // 400 Hz
+  }
+  const FlightLog log = ParseDataFlash(b.bytes(), "batch.bin");
+  EXPECT_EQ(log.gyro_source, "ISBD");
+  ASSERT_EQ(log.gyro.size(), expected_x.size());
+  for (size_t k = 0; k < expected_x.size(); ++k) {
+    EXPECT_EQ(log.gyro[k].t_ns, expected_t_ns[k]) << k;
+    EXPECT_EQ(log.gyro[k].omega_rad_s.x(), expected_x[k]) << k;
+    EXPECT_EQ(log.gyro[k].omega_rad_s.z(), 1.0) << k;
+  }
+  EXPECT_EQ(log.gyro.sampling().median_interval_ns, 500'000);
+  EXPECT_EQ(log.gyro.sampling().gap_indices.size(), 2u) << "between the three batches";
+}
+
+TEST(DataFlash, TruncatedCopyKeepsWhatCameBefore) {
+  DataFlashBuilder b = FlightFile(1000);
+  const std::string& bytes = b.bytes();
+  const std::string cut = bytes.substr(0, bytes.size() / 2 + 7);
+  const FlightLog log = ParseDataFlash(cut, "cut.bin");
+  EXPECT_TRUE(AnyWarningContains(log, "truncated")) << log.warnings.size();
+  EXPECT_GT(log.gyro.size(), 400u);
+  EXPECT_LT(log.gyro.size(), 1000u);
+  for (size_t k = 0; k < log.gyro.size(); ++k) {
+    ASSERT_EQ(log.gyro[k].t_ns, (2'000'000 + static_cast<int64_t>(k) * 1000) * 1000) << k;
+  }
+}
+
+TEST(DataFlash, CorruptedCopySkipsDamageAndReadsOn) {
+  DataFlashBuilder b = FlightFile(1000);
+  std::string bytes = b.bytes();
+  // Destroy the header of one GYR message in the middle and scribble over another's header.
+  const size_t first_gyr = bytes.find(std::string("\xA3\x95\x0A", 3));
+  size_t damaged = first_gyr;
+  for (int i = 0; i < 300; ++i) damaged = bytes.find(std::string("\xA3\x95\x0A", 3), damaged + 1);
+  bytes[damaged] = 0x00;
+  size_t second = damaged;
+  for (int i = 0; i < 200; ++i) second = bytes.find(std::string("\xA3\x95\x0A", 3), second + 1);
+  bytes.replace(second + 1, 3, "xyz");
+  const FlightLog log = ParseDataFlash(bytes, "corrupt.bin");
+  EXPECT_EQ(log.gyro_source, "GYR");
+  EXPECT_EQ(log.records_skipped, 2u);
+  EXPECT_TRUE(AnyWarningContains(log, "corrupt bytes skipped in total"));
+  // The two damaged GYR messages are lost (of instance 0 or 1), nothing else.
+  EXPECT_GE(log.gyro.size(), 998u);
+  EXPECT_EQ(log.camera_events.size(), 20u);
+}
+
+TEST(DataFlash, RandomDamageGivesErrorOrPartialResult) {
+  const std::string bytes = FlightFile(400).bytes();
+  std::mt19937_64 rng(99);
+  std::uniform_int_distribution<size_t> where(0, bytes.size() - 1);
+  std::uniform_int_distribution<int> value(0, 255);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::string copy = bytes.substr(0, where(rng));
+    for (int k = 0; k < 16 && !copy.empty(); ++k) {
+      const size_t at = where(rng) % copy.size();
+      copy[at] = static_cast<char>(value(rng));
+    }
+    const std::string name = "damaged_" + std::to_string(trial) + ".bin";
+    try {
+      const FlightLog log = ParseDataFlash(copy, name);
+      EXPECT_GE(log.gyro.size(), 2u);
+      EXPECT_LE(log.gyro.size(), 400u);
+    } catch (const IoError& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(DataFlash, SkipsInconsistentFmt) {
+  DataFlashBuilder b;
+  b.Fmt(20, 50, "GYR2", "QBQfff", "TimeUS,I,SampleUS,GyrX,GyrY,GyrZ");  // needs 32, says 50
+  b.Fmt(21, 14, "BAD", "QX", "TimeUS,What");                             // unknown format char
+  b.Fmt(22, 11, "LBL", "Q", "TimeUS,Extra");                             // label count mismatch
+  for (int k = 0; k < 10; ++k) b.Gyr(1000 + k * 1000, 0, 1000 + k * 1000, 0, 0, 0);
+  const FlightLog log = ParseDataFlash(b.bytes(), "fmt.bin");
+  EXPECT_EQ(log.records_skipped, 3u);
+  EXPECT_TRUE(AnyWarningContains(log, "declares length 50 but its format 'QBQfff' needs 32"));
+  EXPECT_TRUE(AnyWarningContains(log, "unknown format character 'X'"));
+  EXPECT_TRUE(AnyWarningContains(log, "2 labels"));
+  EXPECT_EQ(log.gyro.size(), 10u);
+}
+
+TEST(DataFlash, RejectsWhatIsNotDataFlash) {
+  EXPECT_FALSE(LooksLikeDataFlash(std::string("\xA3\x95", 2)));
+  EXPECT_FALSE(LooksLikeDataFlash("ULog\x01\x12\x35\x01"));
+  EXPECT_FALSE(LooksLikeDataFlash(std::string("\xA3\x95\x80\x80\x10", 5)));
+  EXPECT_TRUE(LooksLikeDataFlash(std::string("\xA3\x95\x80\x80\x59", 5)));
+  EXPECT_THROW(ParseDataFlash("H Product:Blackbox flight data recorder", "bf.bin"), IoError);
+  DataFlashBuilder b;
+  b.Parm(1, "X", 1.0f);
+  try {
+    ParseDataFlash(b.bytes(), "nogyro.bin");
+    FAIL() << "a log without gyro data must throw";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("nogyro.bin: no usable gyro data"), std::string::npos) << e.what();
+  }
+}
+
+TEST(DataFlash, ReadsFromDisk) {
+  test::TempDir dir;
+  const std::string path = dir / "flight.bin";
+  WriteFileAtomically(path, FlightFile(50).bytes());
+  EXPECT_EQ(ReadDataFlash(path).gyro.size(), 50u);
+  EXPECT_THROW(ReadDataFlash(dir / "missing.bin"), IoError);
+}
+
+}  // namespace
+}  // namespace shutterlab

@@ -1,0 +1,84 @@
+#include "sim/logs/flight_log_io.h"
+
+#include "sim/check.h"
+#include "sim/logs/gyro_io.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
+namespace shutterlab {
+namespace {
+
+TEST(ReadFlightLog, DetectsAndReadsEveryRealLog) {
+  struct Case {
+    std::string path, format;
+  };
+  SHUTTERLAB_REAL_DATA(gyro_dir, "gyro");
+  const Case cases[] = {{"betaflight_blackbox/btfl_001.bbl", "betaflight"},
+                        {"betaflight_blackbox/btfl_002.bbl", "betaflight"},
+                        {"betaflight_blackbox/LOG00037.BFL", "betaflight"},
+                        {"px4_ulog/sample.ulg", "ulog"},
+                        {"px4_ulog/sample_log_small.ulg", "ulog"}};
+  for (const Case& c : cases) {
+    const FlightLog log = ReadFlightLog(gyro_dir + "/" + c.path);
+    EXPECT_EQ(log.format, c.format) << c.path;
+    EXPECT_GT(log.gyro.samples().size(), 1000u) << c.path;
+    EXPECT_FALSE(log.gyro_source.empty()) << c.path;
+  }
+}
+
+TEST(ReadFlightLog, WrapsGyroCsv) {
+  test::TempDir dir;
+  std::ofstream(dir / "gyro.csv") << "t,gx,gy,gz\n0.0,0.1,0.2,0.3\n0.001,0.1,0.2,0.3\n";
+  const FlightLog log = ReadFlightLog(dir / "gyro.csv");
+  EXPECT_EQ(log.format, "gyro.csv");
+  EXPECT_EQ(log.gyro.samples().size(), 2u);
+  EXPECT_TRUE(log.camera_events.empty());
+  EXPECT_FALSE(log.altitude_above_ground_m.has_value());
+}
+
+TEST(ReadFlightLog, HonoursTheLogIndex) {
+  // btfl_001.bbl holds two logs of different lengths.
+  SHUTTERLAB_REAL_DATA(bbl, "gyro/betaflight_blackbox/btfl_001.bbl");
+  FlightLogReadOptions first, second;
+  first.log_index = 0;
+  second.log_index = 1;
+  EXPECT_NE(ReadFlightLog(bbl, first).gyro.samples().size(),
+            ReadFlightLog(bbl, second).gyro.samples().size());
+}
+
+TEST(ReadFlightLog, UnknownFileIsAClearIoError) {
+  test::TempDir dir;
+  std::ofstream(dir / "photo.jpg", std::ios::binary)
+      << std::string("\xff\xd8\xff\xe0\0\x10JFIF", 10);
+  std::ofstream(dir / "notes.txt") << "hello world\n";
+  for (const std::string name : {"photo.jpg", "notes.txt"}) {
+    try {
+      ReadFlightLog(dir / name);
+      FAIL() << name;
+    } catch (const IoError& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find(name), std::string::npos) << message;
+      EXPECT_NE(message.find("not ULog, DataFlash"), std::string::npos) << message;
+    }
+  }
+  EXPECT_THROW(ReadFlightLog(dir / "missing.bin"), IoError);
+}
+
+TEST(ReadFlightLog, FormatOverrideAndNames) {
+  test::TempDir dir;
+  std::ofstream(dir / "gyro.csv") << "t,gx,gy,gz\n0.0,0.1,0.2,0.3\n0.001,0.1,0.2,0.3\n";
+  FlightLogReadOptions options;
+  options.format = ParseFlightLogFormat("ulog");
+  EXPECT_THROW(ReadFlightLog(dir / "gyro.csv", options), IoError);
+  EXPECT_EQ(ParseFlightLogFormat("Blackbox"), FlightLogFormat::kBlackbox);
+  EXPECT_STREQ(FlightLogFormatName(FlightLogFormat::kDataFlash), "dataflash");
+  EXPECT_THROW(ParseFlightLogFormat("jpeg"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace shutterlab

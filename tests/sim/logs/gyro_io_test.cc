@@ -1,0 +1,225 @@
+#include "sim/logs/gyro_io.h"
+
+#include "sim/check.h"
+#include "sim/text_file.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace shutterlab {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::string WriteText(const test::TempDir& dir, const std::string& name, const std::string& text) {
+  const std::string path = dir / name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+GyroFormat Detect(const std::string& text) { return DetectGyroFormat(text, "mem.csv"); }
+
+// Expects DetectGyroFormat to throw IoError naming mem.csv:line and containing problem.
+void ExpectDetectError(const std::string& text, long line, const std::string& problem) {
+  try {
+    Detect(text);
+    ADD_FAILURE() << "no error for:\n" << text;
+  } catch (const IoError& e) {
+    const std::string what = e.what();
+    const std::string where = line > 0 ? "mem.csv:" + std::to_string(line) + ":" : "mem.csv: ";
+    EXPECT_NE(what.find(where), std::string::npos) << what;
+    EXPECT_NE(what.find(problem), std::string::npos) << what;
+  }
+}
+
+TEST(GyroIo, DetectsGcsvFromTheFirstLine) {
+  EXPECT_EQ(Detect("GYROFLOW IMU LOG\nversion,1.3\n"), GyroFormat::kGcsv);
+  EXPECT_EQ(Detect("\xEF\xBB\xBFGYROFLOW IMU LOG\r\nversion,1.3\r\n"),
+            GyroFormat::kGcsv);  // BOM, CRLF
+  EXPECT_EQ(Detect("\nCAMERA IMU LOG\n"), GyroFormat::kGcsv);
+}
+
+TEST(GyroIo, DetectsGyroCsvByAnyNonIntegerRate) {
+  EXPECT_EQ(Detect("t,gx,gy,gz\n0.0,0.01,-0.02,0.5\n"), GyroFormat::kGyroCsv);
+  // Integers first, one fraction late in the file: still gyro.csv (the whole file is scanned).
+  EXPECT_EQ(Detect("t,gx,gy,gz\n0.0,0,0,0\n0.1,1,2,3\n0.2,0,1e-3,0\n"), GyroFormat::kGyroCsv);
+  EXPECT_EQ(Detect("T,GX,GY,GZ,extra\n0,1,2,3.5,x\n"), GyroFormat::kGyroCsv);
+  // A header and no rows: gyro.csv, whose reader then reports "no samples".
+  EXPECT_EQ(Detect("t,gx,gy,gz\n"), GyroFormat::kGyroCsv);
+  // A non-numeric rate after the header goes to the gyro.csv reader, which names it.
+  EXPECT_EQ(Detect("t,gx,gy,gz\n0,1,abc,3\n"), GyroFormat::kGyroCsv);
+}
+
+TEST(GyroIo, DetectsRawCountsByIntegerRates) {
+  // Another header with integer rates only: raw counts (t may still be fractional).
+  EXPECT_EQ(Detect("t,gx_counts,gy_counts,gz_counts\n0.001,12,-7,3\n0.002,11,-8,2\n"),
+            GyroFormat::kRaw);
+  EXPECT_EQ(Detect("time_us,x,y,z\n1000,12,-7,3\n"), GyroFormat::kRaw);
+  // No header, integers: raw.
+  EXPECT_EQ(Detect("1000,12,-7,3\n2000,11,-8,2\n"), GyroFormat::kRaw);
+  // FORMATS.md's header always means gyro.csv, even with whole-number rates (--raw overrides).
+  EXPECT_EQ(Detect("t,gx,gy,gz\n0,0,0,0\n0.01,0,0,0\n"), GyroFormat::kGyroCsv);
+  EXPECT_EQ(Detect("t,gx,gy,gz\n0.001,12,-7,3\n"), GyroFormat::kGyroCsv);
+}
+
+TEST(GyroIo, DetectionRejectsNeitherFormat) {
+  // No header and fractional rates: neither a raw log nor a gyro.csv.
+  ExpectDetectError("0.0,1,2,3\n0.1,0.5,2,3\n", 2, "no header line and a non-integer rate '0.5'");
+  // The real phone log's layout gx,gy,gz,t with exponents.
+  ExpectDetectError("3.97e-03,3.83e-02,1.47e-02,4.328040426741000265e+06\n", 1, "non-integer rate");
+  // Some other header.
+  ExpectDetectError("time,x,y,z\n0,1,2,3.5\n", 2, "unrecognised header 'time,x,y,z'");
+  ExpectDetectError("\n\n", 0, "empty file");
+}
+
+TEST(GyroIo, ReadGyroDispatchesOnDetectionAndOverride) {
+  test::TempDir dir;
+  const std::string raw =
+      WriteText(dir, "raw.csv", "t,gx_counts,gy_counts,gz_counts\n0,131,0,0\n0.01,0,262,0\n");
+  // Auto: raw counts at the default +-250 deg/s: 131 counts = 1 deg/s.
+  const GyroTrace as_raw = ReadGyro(raw);
+  EXPECT_NEAR(as_raw[0].omega_rad_s.x(), kPi / 180.0, 1e-15);
+  // --format csv insists on gyro.csv's header.
+  GyroReadOptions csv;
+  csv.format = GyroFormat::kGyroCsv;
+  EXPECT_THROW(ReadGyro(raw, csv), IoError);
+  // --raw reads FORMATS.md's header as counts when told to.
+  const std::string counts_with_csv_header =
+      WriteText(dir, "counts.csv", "t,gx,gy,gz\n0,131,0,0\n0.01,0,262,0\n");
+  GyroReadOptions raw_forced;
+  raw_forced.format = GyroFormat::kRaw;
+  EXPECT_NEAR(ReadGyro(counts_with_csv_header, raw_forced)[0].omega_rad_s.x(), kPi / 180.0, 1e-15);
+  EXPECT_EQ(ReadGyro(counts_with_csv_header)[0].omega_rad_s.x(), 131.0);
+  // --range 2000 --time-unit ms.
+  GyroReadOptions wide;
+  wide.raw_range_dps = 2000;
+  wide.raw_time_unit = TimeUnit::kMilliseconds;
+  const GyroTrace as_wide = ReadGyro(raw, wide);
+  EXPECT_NEAR(as_wide[0].omega_rad_s.x(), 131.0 / 16.4 * kPi / 180.0, 1e-15);
+  EXPECT_EQ(as_wide[1].t_ns, 10000);  // 0.01 ms
+  // Gcsv.
+  const GyroTrace trace(
+      {{0, Eigen::Vector3d(0.1, 0.2, 0.3)}, {1000000, Eigen::Vector3d(-0.1, 0, 1)}});
+  WriteGcsv(dir / "a.gcsv", trace);
+  const GyroTrace as_gcsv = ReadGyro(dir / "a.gcsv");
+  EXPECT_EQ(as_gcsv[1].omega_rad_s, trace[1].omega_rad_s);
+  // Gyro.csv.
+  WriteGyroCsv(dir / "g.csv", trace);
+  EXPECT_EQ(ReadGyro(dir / "g.csv")[0].omega_rad_s, trace[0].omega_rad_s);
+  // Unknown range.
+  GyroReadOptions bad;
+  bad.raw_range_dps = 300;
+  EXPECT_THROW(ReadGyro(raw, bad), std::invalid_argument);
+}
+
+TEST(GyroIo, GyroCsvTimesAreExactAtLargeEpochs) {
+  test::TempDir dir;
+  // 1.7e9 s with 9 decimals is beyond double's ns resolution; the decimal parser keeps every ns.
+  const GyroTrace trace({{1700000000123456789LL, Eigen::Vector3d(1e-3, -2e-3, 0.5)},
+                         {1700000000124456790LL, Eigen::Vector3d(0, 0, 0)}});
+  WriteGyroCsv(dir / "g.csv", trace);
+  const GyroTrace back = ReadGyroCsv(dir / "g.csv");
+  EXPECT_EQ(back[0].t_ns, trace[0].t_ns);
+  EXPECT_EQ(back[1].t_ns, trace[1].t_ns);
+  EXPECT_EQ(back[0].omega_rad_s, trace[0].omega_rad_s);
+}
+
+TEST(GyroIo, GyroCsvRejectsBadInputNamingTheLine) {
+  test::TempDir dir;
+  const auto expect = [&](const std::string& text, long line, const std::string& problem) {
+    const std::string path = WriteText(dir, "bad.csv", text);
+    try {
+      ReadGyroCsv(path);
+      ADD_FAILURE() << text;
+    } catch (const IoError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(path + ":" + std::to_string(line) + ":"), std::string::npos) << what;
+      EXPECT_NE(what.find(problem), std::string::npos) << what;
+    }
+  };
+  expect("0,1,2,3\n", 1, "missing header");
+  expect("t,gx,gy,gz\n0,1,2\n", 2, "expected 4 columns");
+  expect("t,gx,gy,gz\n0,1,2,3\n1,1,x,3\n", 3, "gy is not a finite number: 'x'");
+  expect("t,gx,gy,gz\n0,1,2,3\n1,1,2,inf\n", 3, "gz is not a finite number");
+  expect("t,gx,gy,gz\n0,1,2,3\nnan,1,2,3\n", 3, "t is not a finite number");
+  expect("t,gx,gy,gz\n1,1,2,3\n0.5,1,2,3\n", 3, "timestamp decreases");
+}
+
+TEST(GyroIo, ParsesFormatNames) {
+  EXPECT_EQ(ParseGyroFormat("AUTO"), GyroFormat::kAuto);
+  EXPECT_EQ(ParseGyroFormat("gyro.csv"), GyroFormat::kGyroCsv);
+  EXPECT_EQ(ParseGyroFormat("gcsv"), GyroFormat::kGcsv);
+  EXPECT_EQ(ParseGyroFormat("raw"), GyroFormat::kRaw);
+  EXPECT_THROW(ParseGyroFormat("ulog"), std::invalid_argument);
+  EXPECT_EQ(ParseTimeUnit("us"), TimeUnit::kMicroseconds);
+  EXPECT_THROW(ParseTimeUnit("min"), std::invalid_argument);
+}
+
+TEST(GyroCsv, WriteReadRoundTripIsExact) {
+  test::TempDir dir;
+  std::vector<GyroSample> s = {{1'234'567'890'123, {0.1, -1e-7, 3.14159}},
+                               {1'234'568'890'124, {1.0 / 3.0, 2e-300, -0.0}}};
+  WriteGyroCsv(dir / "g.csv", GyroTrace(s));
+  const GyroTrace back = ReadGyroCsv(dir / "g.csv");
+  ASSERT_EQ(back.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(back[i].t_ns, s[i].t_ns);
+    EXPECT_EQ(back[i].omega_rad_s, s[i].omega_rad_s);
+  }
+}
+
+TEST(GyroCsv, ToleratesExtraColumnsAndCrLf) {
+  test::TempDir dir;
+  WriteFileAtomically(dir / "g.csv", "t,gx,gy,gz,temp\r\n0.0,1,2,3,25\r\n0.001,4,5,6,25\r\n");
+  const GyroTrace trace = ReadGyroCsv(dir / "g.csv");
+  ASSERT_EQ(trace.size(), 2u);
+  EXPECT_EQ(trace[1].t_ns, 1'000'000);
+  EXPECT_EQ(trace[1].omega_rad_s, Eigen::Vector3d(4, 5, 6));
+}
+
+// Each bad file gives an IoError whose message names the file, the line and the problem.
+struct BadCsvCase {
+  const char* name;
+  const char* content;
+  const char* expected_fragment;
+};
+
+TEST(GyroCsv, BadInputNamesFileLineAndProblem) {
+  const BadCsvCase cases[] = {
+      {"missing_header", "0,1,2,3\n", ":1: missing header"},
+      {"columns", "t,gx,gy,gz\n0,1,2,3\n0.1,1,2\n", ":3: expected 4 columns"},
+      {"non_numeric", "t,gx,gy,gz\n0,1,abc,3\n", ":2: gy is not a finite number: 'abc'"},
+      {"non_finite", "t,gx,gy,gz\n0,1,2,inf\n", ":2: gz is not a finite number"},
+      {"decreasing", "t,gx,gy,gz\n1,0,0,0\n0.5,0,0,0\n", ":3: timestamp decreases"},
+      {"empty", "t,gx,gy,gz\n", "no samples"},
+  };
+  test::TempDir dir;
+  for (const auto& c : cases) {
+    const std::string path = dir / (std::string(c.name) + ".csv");
+    WriteFileAtomically(path, c.content);
+    try {
+      ReadGyroCsv(path);
+      ADD_FAILURE() << c.name << ": no error";
+    } catch (const IoError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(path), std::string::npos) << what;
+      EXPECT_NE(what.find(c.expected_fragment), std::string::npos) << c.name << ": " << what;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace shutterlab
+
+namespace shutterlab {
+namespace {
+
+// The median interval is exact on both paths: few distinct intervals (histogram) and many
+// (nth_element); both are checked against a sort.
+}  // namespace
+}  // namespace shutterlab
