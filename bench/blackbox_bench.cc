@@ -5,6 +5,8 @@
 #include "sim/logs/blackbox.h"
 #include "sim/text_file.h"
 
+#include "bench/bench_util.h"
+
 #include <benchmark/benchmark.h>
 
 #include <string>
@@ -12,15 +14,8 @@
 namespace shutterlab {
 namespace {
 
-// The repository root, from this file's own path (CMake compiles it by absolute path).
-std::string RepoPath(const std::string& relative) {
-  std::string here = __FILE__;
-  const size_t cut = here.rfind("bench/");
-  return (cut == std::string::npos ? std::string() : here.substr(0, cut)) + relative;
-}
-
 void BM_DecodeBlackbox(benchmark::State& state, const std::string& leaf) {
-  const std::string bytes = ReadFileToString(RepoPath("tests/data/betaflight/" + leaf));
+  const std::string bytes = ReadFileToString(bench::RealDataPath("gyro/betaflight_blackbox/" + leaf));
   size_t samples = 0;
   for (auto _ : state) {
     const FlightLog log = DecodeBlackbox(bytes, leaf);

@@ -20,6 +20,8 @@
 #include "render/truth_model.h"
 #include "tests/estimate/loop/effect_fixtures.h"
 
+#include "bench/bench_util.h"
+
 #include <benchmark/benchmark.h>
 #include <opencv2/core.hpp>
 
@@ -32,6 +34,9 @@
 
 namespace shutterlab {
 namespace {
+
+using bench::MeanSeconds;
+using bench::Timed;
 
 constexpr int kStepPx = 28;  // 46 x 34 = 1564 points a frame
 constexpr double kSigmaPx = 0.1;
@@ -66,33 +71,6 @@ struct Fixture {
 Fixture& Shared() {
   static Fixture fixture;
   return fixture;
-}
-
-std::map<std::string, double>& MeanSeconds() {
-  static std::map<std::string, double> seconds;
-  return seconds;
-}
-
-double ThreadCpuSeconds() {
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-template <typename Body>
-void Timed(benchmark::State& state, const std::string& name, Body body) {
-  cv::setNumThreads(1);
-  body();  // warm-up
-  double total_s = 0.0;
-  for (auto _ : state) {
-    const double start_s = ThreadCpuSeconds();
-    body();
-    total_s += ThreadCpuSeconds() - start_s;
-    benchmark::ClobberMemory();
-  }
-  const double mean_s = total_s / static_cast<double>(state.iterations());
-  auto& best = MeanSeconds()[name];
-  if (best == 0.0 || mean_s < best) best = mean_s;
 }
 
 void BM_Prediction(benchmark::State& state) {
@@ -212,7 +190,7 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
-  const auto& seconds = shutterlab::MeanSeconds();
+  const auto& seconds = shutterlab::bench::MeanSeconds();
   const auto reference = seconds.find("DisplacementField (1 frame)");
   if (reference != seconds.end() && reference->second > 0) {
     std::printf(

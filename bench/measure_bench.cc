@@ -15,6 +15,8 @@
 #include "render/truth_model.h"
 #include "sim/synth/synth.h"
 
+#include "bench/bench_util.h"
+
 #include <benchmark/benchmark.h>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
@@ -28,23 +30,11 @@
 namespace shutterlab {
 namespace {
 
-std::string RepoPath(const std::string& relative) {
-  std::string here = __FILE__;
-  const size_t cut = here.rfind("bench/");
-  return (cut == std::string::npos ? std::string() : here.substr(0, cut)) + relative;
-}
-
-double ThreadCpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
 struct Fixture {
   cv::Mat ref, rs, ref_grey, rs_grey, flow;
   double d_px = 0.0;
   Fixture() {
-    const cv::Mat scene = ReadImage(RepoPath("assets/scenes/siyi_zr10_img0100.jpg"));
+    const cv::Mat scene = ReadImage(bench::RealDataPath("images/siyi_zr10/IMG_0100.jpg"));
     SynthOptions synth;
     synth.profile = MotionProfile::kFlight;
     synth.rate_hz = 1000.0;
@@ -92,9 +82,9 @@ void Timed(benchmark::State& state, Body body) {
   body(f);  // warm-up
   double total_s = 0.0;
   for (auto _ : state) {
-    const double start_s = ThreadCpuSeconds();
+    const double start_s = bench::ThreadCpuSeconds();
     body(f);
-    total_s += ThreadCpuSeconds() - start_s;
+    total_s += bench::ThreadCpuSeconds() - start_s;
   }
   state.counters["cpu_ms"] = 1e3 * total_s / static_cast<double>(state.iterations());
 }
@@ -113,9 +103,9 @@ void PrintPairedRatios(int runs) {
   Fixture& f = Shared();
   std::vector<double> measure_s, ultrafast_s, medium_s;
   auto time = [&f](void (*body)(Fixture&)) {
-    const double start_s = ThreadCpuSeconds();
+    const double start_s = bench::ThreadCpuSeconds();
     body(f);
-    return ThreadCpuSeconds() - start_s;
+    return bench::ThreadCpuSeconds() - start_s;
   };
   for (int i = 0; i < runs; ++i) {
     ultrafast_s.push_back(time(RunDisUltrafast));

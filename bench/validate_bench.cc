@@ -6,6 +6,7 @@
 //   build/bin/validate_bench [--frames N] [--keep DIR]     (run from the repository root)
 
 #include "estimate/loop/validate.h"
+#include "bench/bench_util.h"
 #include "estimate/demo_dataset.h"
 
 #include <cstdio>
@@ -20,7 +21,7 @@ int main(int argc, char** argv) {
   options.frames = 12;
   options.width = 1280;
   options.height = 960;
-  options.scene_path = "assets/scenes/siyi_zr10_img0100.jpg";
+  options.scene_path = bench::RealDataPath("images/siyi_zr10/IMG_0100.jpg");
   std::string keep;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];

@@ -13,6 +13,8 @@
 #include "render/truth_model.h"
 #include "sim/so3.h"
 
+#include "bench/bench_util.h"
+
 #include <benchmark/benchmark.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -27,12 +29,15 @@
 namespace shutterlab {
 namespace {
 
+using bench::MeanSeconds;
+
 constexpr int kWidth = 5472, kHeight = 3648;
 
-std::string RepoPath(const std::string& relative) {
-  std::string here = __FILE__;
-  const size_t cut = here.rfind("bench/");
-  return (cut == std::string::npos ? std::string() : here.substr(0, cut)) + relative;
+// bench::Timed plus the throughput in megapixels per second.
+template <typename Body>
+void Timed(benchmark::State& state, const std::string& name, Body body) {
+  const double mean_s = bench::Timed(state, name, body);
+  state.counters["Mpix/s"] = benchmark::Counter(1e-6 * kWidth * kHeight / mean_s);
 }
 
 // Everything allocated and touched once, outside the timed loops (first-touch page faults cost
@@ -45,7 +50,7 @@ struct Fixture {
   cv::Mat map1, map2;
   cv::Matx33d homography;
   Fixture() {
-    cv::resize(ReadImage(RepoPath("assets/scenes/siyi_zr10_img0150.jpg")), scene,
+    cv::resize(ReadImage(bench::RealDataPath("images/siyi_zr10/IMG_0150.jpg")), scene,
                cv::Size(6000, 4000), 0, 0, cv::INTER_LINEAR);
     camera.width = kWidth;
     camera.height = kHeight;
@@ -80,38 +85,6 @@ struct Fixture {
 Fixture& Shared() {
   static Fixture fixture;
   return fixture;
-}
-
-std::map<std::string, double>& MeanSeconds() {
-  static std::map<std::string, double> seconds;
-  return seconds;
-}
-
-// This thread's CPU time: the build machine is shared, and wall time there measures the queue, not
-// the code. With cv::setNumThreads(1) OpenCV runs everything in the calling thread.
-double ThreadCpuSeconds() {
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-// Runs body once as warm-up, then times the benchmark loop with this thread's CPU clock, kept for
-// the ratios printed at the end.
-template <typename Body>
-void Timed(benchmark::State& state, const std::string& name, Body body) {
-  cv::setNumThreads(1);
-  body();  // warm-up: caches, lazy initialisation, page faults of the output
-  double total_s = 0.0;
-  for (auto _ : state) {
-    const double start_s = ThreadCpuSeconds();
-    body();
-    total_s += ThreadCpuSeconds() - start_s;
-    benchmark::ClobberMemory();
-  }
-  const double mean_s = total_s / static_cast<double>(state.iterations());
-  auto& best = MeanSeconds()[name];
-  if (best == 0.0 || mean_s < best) best = mean_s;  // best of the repetitions
-  state.counters["Mpix/s"] = benchmark::Counter(1e-6 * kWidth * kHeight / mean_s);
 }
 
 void BM_RenderRollingShutter(benchmark::State& state) {
@@ -152,9 +125,9 @@ void PrintPairedRatios(int runs) {
   const FrameGeometry geometry(f.camera, 50.0, f.motion, f.scene.size());
   std::vector<double> render_s, warp_s, remap_s;
   auto time = [](auto&& body) {
-    const double start_s = ThreadCpuSeconds();
+    const double start_s = bench::ThreadCpuSeconds();
     body();
-    return ThreadCpuSeconds() - start_s;
+    return bench::ThreadCpuSeconds() - start_s;
   };
   for (int i = 0; i < runs; ++i) {
     warp_s.push_back(time([&] {
@@ -187,7 +160,7 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
-  const auto& seconds = shutterlab::MeanSeconds();
+  const auto& seconds = shutterlab::bench::MeanSeconds();
   const auto reference = seconds.find("warpPerspective");
   if (reference != seconds.end() && reference->second > 0) {
     std::printf("\n20 MP RGB, 1 thread, bilinear, thread CPU time (best mean per repetition):\n");

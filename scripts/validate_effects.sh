@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Closing the loop on every candidate effect, through the command line only: renders one rig dataset
-# per effect (8 frames of 1280x960 over a real aerial scene, f 1100 px, 30 ms readout, 50 m, a
+# per effect (8 frames of 1280x960 over a real aerial photo, f 1100 px, 30 ms readout, 50 m, a
 # perfect multirotor-like gyro) with the effect in the truth but not in camera.json, runs
 # `shutterlab validate` on it and prints what was injected next to what the loop found.
 #   scripts/validate_effects.sh [OUT_DIR]      (default /tmp/shutterlab_effects; about 2 minutes)
@@ -9,6 +9,11 @@ cd "$(dirname "$0")/.."
 shutterlab=${SHUTTERLAB:-build/bin/shutterlab}
 out=${1:-/tmp/shutterlab_effects}
 mkdir -p "$out"
+# The scene: a real nadir photo from the shared data folder (not in the repository), or SCENE=FILE
+# (e.g. one written by `shutterlab scene`).
+data=${SHUTTERLAB_DATA_DIR:-../shared/data}
+scene=${SCENE:-$data/images/siyi_zr10/IMG_0100.jpg}
+[ -f "$scene" ] || { echo "$0: scene $scene not found (set SHUTTERLAB_DATA_DIR or SCENE)" >&2; exit 2; }
 
 cat >"$out/camera.json" <<'EOF'
 {"format": "rig/1", "image": {"width": 1280, "height": 960},
@@ -43,7 +48,7 @@ for injection in "${cases[@]}"; do
   if [ "$name" = clock_rate ]; then gyro="$out/gyro_long.csv" times="$out/frames_long.csv"; fi
   inject=()
   [ "$injection" != none ] && inject=(--inject "$injection")
-  "$shutterlab" render --scene assets/scenes/siyi_zr10_img0100.jpg --camera "$out/camera.json" \
+  "$shutterlab" render --scene "$scene" --camera "$out/camera.json" \
     --gyro "$gyro" --frames "$times" --out "$out/$name" --no-pictures "${inject[@]}" >/dev/null
   echo "== injected: ${injection:0:60}"
   "$shutterlab" validate "$out/$name" --report "$out/$name.json" |

@@ -10,6 +10,11 @@ cd "$(dirname "$0")/.."
 shutterlab=${SHUTTERLAB:-build/bin/shutterlab}
 out=${1:-/tmp/shutterlab_video_effects}
 mkdir -p "$out"
+# The scene: a real nadir photo from the shared data folder (not in the repository), or SCENE=FILE
+# (e.g. one written by `shutterlab scene`).
+data=${SHUTTERLAB_DATA_DIR:-../shared/data}
+scene=${SCENE:-$data/images/siyi_zr10/IMG_0150.jpg}
+[ -f "$scene" ] || { echo "$0: scene $scene not found (set SHUTTERLAB_DATA_DIR or SCENE)" >&2; exit 2; }
 
 cat >"$out/camera.json" <<'EOF'
 {"format": "rig/1", "image": {"width": 640, "height": 480},
@@ -48,7 +53,7 @@ for injection in "${cases[@]}"; do
   [ "$name" = gyro_scale ] && times="$out/frames_yaw.csv"
   inject=()
   [ "$injection" != none ] && inject=(--inject "$injection")
-  "$shutterlab" render --video --scene assets/scenes/siyi_zr10_img0150.jpg \
+  "$shutterlab" render --video --scene "$scene" \
     --camera "$out/camera.json" --gyro "$out/gyro.csv" --frames "$times" --out "$out/$name" \
     --no-pictures "${inject[@]}" >/dev/null
   echo "== injected: ${injection:0:60}"

@@ -159,7 +159,7 @@ TEST(Measure, AccurateOnARealTreeCanopyPhoto) {
 
 // A 480x360 crop of a rendered pair (and its truth): the cheap pair for the type and mask tests.
 RenderedPair CroppedPair() {
-  const RenderedPair& full = Pairs("siyi_zr10_img0100.jpg").back();
+  const RenderedPair& full = Pairs(test::GroundScenePath(1)).back();
   const cv::Rect crop(full.rs.cols / 2 - 240, full.rs.rows / 2 - 180, 480, 360);
   RenderedPair pair;
   pair.ref = full.ref(crop).clone();

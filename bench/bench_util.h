@@ -1,0 +1,73 @@
+#pragma once
+// Shared by the benchmarks: where the repository and the real data are, and a per-thread CPU
+// clock with a warm-up, so that ratios against a reference measured in the same run are stable
+// on a shared machine.
+
+#include <benchmark/benchmark.h>
+#include <opencv2/core.hpp>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <time.h>
+
+namespace shutterlab::bench {
+
+// A path inside the repository (this file's folder's parent).
+inline std::string RepoPath(const std::string& relative) {
+  const std::string here = __FILE__;
+  const size_t cut = here.rfind("bench/");
+  return (cut == std::string::npos ? std::string() : here.substr(0, cut)) + relative;
+}
+
+// A real recorded file: the shared data folder beside the checkout (../shared/data) or
+// SHUTTERLAB_DATA_DIR. Exits with a one-line message when it is not there.
+inline std::string RealDataPath(const std::string& relative) {
+  const char* dir = std::getenv("SHUTTERLAB_DATA_DIR");
+  const std::string root = dir != nullptr && *dir != '\0' ? dir : RepoPath("../shared/data");
+  const std::string path = root + "/" + relative;
+  if (!std::filesystem::exists(path)) {
+    std::fprintf(stderr, "real data %s not found (set SHUTTERLAB_DATA_DIR)\n", path.c_str());
+    std::exit(2);
+  }
+  return path;
+}
+
+// This thread's CPU time: the machine is shared, and wall time there measures the queue, not the
+// code. With cv::setNumThreads(1) OpenCV runs everything in the calling thread.
+inline double ThreadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+// Mean seconds per iteration of each timed benchmark, for the ratios printed at the end.
+inline std::map<std::string, double>& MeanSeconds() {
+  static std::map<std::string, double> seconds;
+  return seconds;
+}
+
+// Runs body once as warm-up (caches, lazy initialisation, page faults of the output), then times
+// the benchmark loop with this thread's CPU clock on one OpenCV thread. Keeps the best mean of the
+// repetitions under `name` (MeanSeconds) and returns this run's mean, s.
+template <typename Body>
+double Timed(benchmark::State& state, const std::string& name, Body body) {
+  cv::setNumThreads(1);
+  body();
+  double total_s = 0.0;
+  for (auto _ : state) {
+    const double start_s = ThreadCpuSeconds();
+    body();
+    total_s += ThreadCpuSeconds() - start_s;
+    benchmark::ClobberMemory();
+  }
+  const double mean_s = total_s / static_cast<double>(state.iterations());
+  double& best = MeanSeconds()[name];
+  if (best == 0.0 || mean_s < best) best = mean_s;
+  return mean_s;
+}
+
+}  // namespace shutterlab::bench
