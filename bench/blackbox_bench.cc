@@ -1,4 +1,4 @@
-// Decoding speed of the blackbox reader on the real 1.9 MB Betaflight log (issue 5 asks for MB/s).
+// Decoding speed of the blackbox reader on the real 1.9 MB Betaflight log in MB/s.
 // Run: build/bin/blackbox_bench  (reports bytes_per_second; the log is read once, outside the
 // loop).
 

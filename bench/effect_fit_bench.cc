@@ -1,4 +1,4 @@
-// Speed of the effect fit (estimate/effect_fit.h) on the case: 12 frames of 1280x960
+// Speed of the effect fit (estimate/effect_fit.h) on a mapping camera's case: 12 frames of 1280x960
 // (f = 1100 px, 30 ms readout, 50 m), ~1500 measured points a frame (grid step 28 px), a
 // multirotor-like 1 kHz trace, 0.1 px noise per component. One thread, thread CPU time.
 //   - Prediction:        one PredictDisplacements pass over all 12 frames' points (what the solver

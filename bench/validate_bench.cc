@@ -1,4 +1,4 @@
-// validate_bench: the issue-4 speed target. Renders a 12-frame 1280x960 rig dataset (real aerial
+// validate_bench: validate's speed target (under 60 s). Renders a 12-frame 1280x960 rig dataset (real aerial
 // scene, multirotor-like ideal gyro, 30 ms readout, 50 m, a 4 ms undeclared time offset) with
 // RenderAndValidate and prints ValidateDataset's time per stage, every candidate effect tried.
 // Target: validate under 60 s on the project's 2-core machine (rendering and plots not counted).

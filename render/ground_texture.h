@@ -26,7 +26,8 @@ struct GroundTextureOptions {
   void Check() const;
 };
 
-// The texture as CV_8UC3, B, G, R channel order (OpenCV's), height_px rows of width_px.
+// The texture as CV_8UC3 in R, G, B channel order (as render/image_io.h reads and writes images),
+// height_px rows of width_px.
 cv::Mat MakeGroundTexture(const GroundTextureOptions& options);
 
 }  // namespace shutterlab

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Closing the loop on video (issue 6), through the command line only: renders one VIDEO rig dataset
+# Closing the loop on video, through the command line only: renders one VIDEO rig dataset
 # per effect (`render --video`: 16 consecutive rolling-shutter frames of 640x480 at 30 fps over a
 # real aerial scene, f 550 px, 30 ms readout, 50 m, a perfect multirotor-like gyro; no reference
 # images) with the effect in the truth but not in camera.json, runs `shutterlab validate` on it and

@@ -75,7 +75,9 @@ TEST(AnalyzeCli, ReportWithSceneIsSelfContainedAndMatchesTheTable) {
     ++pictures;
   }
   EXPECT_EQ(pictures, 3u);
-  EXPECT_NE(html.find("blended over siyi_zr10_img0100.jpg"), std::string::npos);
+  EXPECT_NE(html.find("blended over " +
+                      std::filesystem::path(test::GroundScenePath(1)).filename().string()),
+            std::string::npos);
   EXPECT_LE(charts[0]["data"][0].size(), 8000u);
   EXPECT_LT(html.size(), 6u << 20);
 }
@@ -123,6 +125,25 @@ TEST(AnalyzeCli, UnknownLogIsOneLineExitTwo) {
   const auto r = RunShutterlab("analyze " + (dir / "notes.txt"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_EQ(LineCount(r.output), 1u) << r.output;
+}
+
+// A flight log the project writes itself (synth --format ulog): analyze takes its camera triggers
+// and its altitude, with no option but the log.
+TEST(AnalyzeCli, SyntheticULogWithItsOwnTriggersAndAltitude) {
+  test::TempDir dir;
+  const std::string log = dir / "flight.ulg";
+  const auto synth = RunShutterlab("synth flight --rate 500 --duration 30 --t0 1 --format ulog "
+                                   "--trigger-every 2 --altitude 40 --out " + log);
+  ASSERT_EQ(synth.exit_code, 0) << synth.output;
+  const auto r = RunShutterlab("analyze " + log + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json json = nlohmann::json::parse(r.output);
+  // Triggers at 3, 5, ..., 29 s on the log's clock (every 2 s from the first sample at 1 s, the
+  // last a full interval before the log ends).
+  ASSERT_EQ(json["images"].size(), 14u) << r.output;
+  EXPECT_NEAR(json["images"][0]["trigger_t"].get<double>(), 3.0, 1e-6);
+  EXPECT_EQ(json["camera"]["altitude_m"].get<double>(), 40.0);
+  EXPECT_EQ(json["triggers"].get<std::string>().rfind("camera events", 0), 0u) << json["triggers"];
 }
 
 }  // namespace

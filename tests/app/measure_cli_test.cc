@@ -21,7 +21,7 @@
 namespace shutterlab {
 namespace {
 
-// The accuracy requirement, px.
+// The accuracy measure must reach on rendered pairs: RMS of |field - truth|, px.
 constexpr double kMaxRmsPx = 0.08;
 
 struct PairFiles {

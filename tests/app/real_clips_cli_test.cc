@@ -1,4 +1,4 @@
-// Issue 6 on data nobody here made: `shutterlab import` then `shutterlab validate` on the two real
+// Video validation on data nobody here made: `shutterlab import` then `shutterlab validate` on the two real
 // rolling-shutter clips in the shared real-data folder (provenance in its SOURCES.md), through the CLI
 // as a user runs them. What is asserted is what the clips show robustly (README, "Real footage"):
 //  - the phone clip, filmed from a moving car: rotation alone leaves pixels of parallax that

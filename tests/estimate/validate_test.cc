@@ -1,9 +1,9 @@
-// End-to-end tests of issue 4 ("Test on data with an undeclared effect in it"): each test renders a
-// rig dataset (render/render_dataset.h) from a real aerial photo and a multirotor-like gyro trace
+// End-to-end tests of closing the loop on data with an undeclared effect in it: each test renders a
+// rig dataset (render/render_dataset.h) over the procedural ground texture and a multirotor-like gyro trace
 // with ONE effect in the truth that camera.json does not declare, runs ValidateDataset on it (which
-// sees only what FORMATS.md's dataset holds) and checks what the loop recovers.
+// sees only what docs/FORMATS.md's dataset holds) and checks what the loop recovers.
 //
-// Sizes: 8 frames of 1280x960, fx = 1100 px, 30 ms readout, 50 m, as the issue asks. Under
+// Sizes: 8 frames of 1280x960, fx = 1100 px, 30 ms readout, 50 m (a typical mapping camera). Under
 // AddressSanitizer (3-5x slower) the frames are 640x480 (same field of view) and only the
 // cases marked kAlsoUnderAsan run, so that the CI stage stays short.
 
@@ -44,7 +44,7 @@ constexpr int kWidth = 1280, kHeight = 960, kFrames = 8;
 constexpr double kFocalPx = 1100.0 * kWidth / 1280.0;  // same field of view at either size
 constexpr double kReadoutS = 0.030;
 constexpr double kAltitudeM = 50.0;
-// The issue's acceptance: in identified cases the residual after the loop is at the noise level.
+// Acceptance: in identified cases the residual after the loop is at the noise level.
 constexpr double kAfterOverNoise = 1.5;
 
 struct DatasetSpec {
@@ -110,7 +110,7 @@ ValidationResult Validate(const std::string& dataset) {
 
 std::string Summary(const ValidationResult& result) { return ValidationReport(result); }
 
-// The one effect the loop must have added first, with the after/noise acceptance of the issue.
+// The one effect the loop must have added first, with the after/noise acceptance above.
 void ExpectIdentified(const ValidationResult& result, const std::string& name) {
   const LoopResult& loop = result.loop;
   ASSERT_FALSE(loop.effects.empty()) << Summary(result);
@@ -122,7 +122,7 @@ void ExpectIdentified(const ValidationResult& result, const std::string& name) {
 
 bool SkipUnderAsan() { return kAsan; }
 
-// time_offset_s = 4 ms undeclared -> recovered within 0.3 ms (the issue).
+// time_offset_s = 4 ms undeclared -> recovered within 0.3 ms.
 TEST(ValidateEndToEnd, RecoversTimeOffset) {
   test::TempDir dir;
   const ValidationResult result = Validate(MakeDataset(dir, {{"time_offset=0.004"}}));

@@ -1,4 +1,4 @@
-// Video rendering (issue 6): frames of one flight in one world (CameraMotion::Frame with an
+// Video rendering: frames of one flight in one world (CameraMotion::Frame with an
 // anchor), the match of a pixel in the previous rolling-shutter frame (VideoMatch), and
 // `render --video` datasets.
 

@@ -28,7 +28,7 @@ constexpr bool kSanitized = true;
 constexpr bool kSanitized = false;
 #endif
 
-// The accuracy requirement: RMS of |field - truth| over measured pixels, px.
+// The accuracy measure must reach: RMS of |field - truth| over measured pixels, px.
 constexpr double kMaxRmsPx = 0.08;
 // noise_px / RMS(point - truth): an estimate of a noise level from a few thousand points, allowing
 // for the row model's own small error.
