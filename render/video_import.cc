@@ -8,6 +8,7 @@
 #include "sim/logs/gyro_io.h"
 #include "sim/logs/mp4.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
@@ -29,7 +30,6 @@ namespace {
 // The lens is a fisheye; an equidistant projection over that field gives the focal length declared
 // as a pinhole with no distortion (a guess: karma.mp4 is an 854x480 copy and states no lens).
 constexpr double kHero5WideHfovDeg = 118.2;
-constexpr double kPi = 3.14159265358979323846;
 // Full-frame readout of the HERO5 in this mode is not published; a guess of the usual order for
 // its 1080p/30 modes, to be fitted by validate.
 constexpr double kHero5ReadoutGuessS = 0.015;

@@ -4,6 +4,7 @@
 #include "sim/check.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <algorithm>
 #include <cctype>
@@ -14,8 +15,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kArcsecPerRad = 180.0 * 3600.0 / kPi;
 // Window starts per chunk: the chunk's ends, ranges and kernel buffers stay in L2.
 constexpr size_t kChunkWindows = 8192;
 // The vector criterion's cheap upper bound skips the exact pairwise test only when it clears the

@@ -1,8 +1,9 @@
 #include "sim/logs/blackbox.h"
 
-#include "sim/logs/blackbox_codec.h"
 #include "sim/check.h"
+#include "sim/logs/blackbox_codec.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <algorithm>
 #include <array>
@@ -357,8 +358,7 @@ double GyroRadPerSecondPerLsb(const LogHeader& h, std::vector<std::string>* warn
     scale = 1.0f;
   }
   const bool baseflight = h.firmware_type && *h.firmware_type != "Cleanflight";
-  return baseflight ? static_cast<double>(scale) * 1e6
-                    : static_cast<double>(scale) * (M_PI / 180.0);
+  return baseflight ? static_cast<double>(scale) * 1e6 : static_cast<double>(scale) * kRadPerDeg;
 }
 
 // Identifies the fields the reader uses (blackbox-tools identifyMainFields).
@@ -928,7 +928,7 @@ struct CsvColumns {
   int time = -1;
   double time_to_ns = 1000.0;  // µs unless the header says otherwise
   std::array<int, 3> gyro{-1, -1, -1};
-  double gyro_to_rad_s = M_PI / 180.0;
+  double gyro_to_rad_s = kRadPerDeg;
   bool gyro_unit_stated = false;
   bool has_loop_iteration = false;
 };

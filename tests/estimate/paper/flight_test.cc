@@ -3,6 +3,7 @@
 #include "estimate/paper/window_stats.h"
 #include "sim/integrate.h"
 #include "sim/so3.h"
+#include "sim/units.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -16,8 +17,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kArcsecPerRad = 180.0 * 3600.0 / kPi;
 constexpr int64_t kPeriodNs = 1000000;  // 1 kHz, the paper's logging rate
 constexpr double kDtS = 1e-3;
 // Bias segment: the first second, still (zero rates, so the bias is exactly zero).

@@ -2,6 +2,7 @@
 
 #include "sim/check.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -13,8 +14,6 @@
 
 namespace shutterlab {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 std::string WriteText(const test::TempDir& dir, const std::string& name, const std::string& text) {
   const std::string path = dir / name;
@@ -83,7 +82,7 @@ TEST(GyroIo, ReadGyroDispatchesOnDetectionAndOverride) {
       WriteText(dir, "raw.csv", "t,gx_counts,gy_counts,gz_counts\n0,131,0,0\n0.01,0,262,0\n");
   // Auto: raw counts at the default +-250 deg/s: 131 counts = 1 deg/s.
   const GyroTrace as_raw = ReadGyro(raw);
-  EXPECT_NEAR(as_raw[0].omega_rad_s.x(), kPi / 180.0, 1e-15);
+  EXPECT_NEAR(as_raw[0].omega_rad_s.x(), kRadPerDeg, 1e-15);
   // --format csv insists on gyro.csv's header.
   GyroReadOptions csv;
   csv.format = GyroFormat::kGyroCsv;
@@ -93,7 +92,7 @@ TEST(GyroIo, ReadGyroDispatchesOnDetectionAndOverride) {
       WriteText(dir, "counts.csv", "t,gx,gy,gz\n0,131,0,0\n0.01,0,262,0\n");
   GyroReadOptions raw_forced;
   raw_forced.format = GyroFormat::kRaw;
-  EXPECT_NEAR(ReadGyro(counts_with_csv_header, raw_forced)[0].omega_rad_s.x(), kPi / 180.0, 1e-15);
+  EXPECT_NEAR(ReadGyro(counts_with_csv_header, raw_forced)[0].omega_rad_s.x(), kRadPerDeg, 1e-15);
   EXPECT_EQ(ReadGyro(counts_with_csv_header)[0].omega_rad_s.x(), 131.0);
   // --range 2000 --time-unit ms.
   GyroReadOptions wide;
