@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <stdexcept>
 #include <vector>
 
 namespace shutterlab {
@@ -19,6 +20,21 @@ inline constexpr double kRadPerArcsec = kPi / (180.0 * 3600.0);
 // Wall-clock seconds since start, for reports' timings.
 inline double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Median of values (a copy, reordered): the middle value for an odd count, the mean of the two
+// middle values for an even count; NaN when empty.
+double Median(std::vector<double> values);
+
+// The value at sorted position size() / 2 (for an even count the upper of the two middle values),
+// for callers that want a value that occurs in the data (a sampling interval, a residual).
+// Throws std::invalid_argument when values is empty.
+template <typename T>
+T UpperMedian(std::vector<T> values) {
+  if (values.empty()) throw std::invalid_argument("median of no values");
+  const auto mid = values.begin() + values.size() / 2;
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
 }
 
 }  // namespace shutterlab

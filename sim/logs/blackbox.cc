@@ -846,9 +846,8 @@ DecodedLog DecodeLog(const uint8_t* data, size_t begin, size_t end, int index,
     std::vector<int64_t> dt(out.samples.size() - 1);
     for (size_t k = 0; k + 1 < out.samples.size(); ++k)
       dt[k] = out.samples[k + 1].t_ns - out.samples[k].t_ns;
-    auto mid = dt.begin() + dt.size() / 2;
-    std::nth_element(dt.begin(), mid, dt.end());
-    if (*mid > 0) out.info.rate_hz = 1e9 / static_cast<double>(*mid);
+    const int64_t median_dt = UpperMedian(std::move(dt));
+    if (median_dt > 0) out.info.rate_hz = 1e9 / static_cast<double>(median_dt);
   }
   return out;
 }
