@@ -4,13 +4,14 @@
 #include "estimate/paper/analyze.h"
 
 #include "app/command.h"
-#include "estimate/report/analyze_report.h"
 #include "estimate/paper/flight.h"
+#include "estimate/report/analyze_report.h"
 #include "render/image_io.h"
 #include "render/pictures.h"
 #include "sim/check.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/logs/gyro_io.h"
+#include "sim/units.h"
 
 #include <filesystem>
 #include <iostream>

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace shutterlab {
@@ -21,6 +22,13 @@ inline constexpr double kRadPerArcsec = kPi / (180.0 * 3600.0);
 inline double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
+
+// "5cm", "50mm", "0.05m", "0.05" (metres) -> metres. Throws std::invalid_argument
+// naming the text otherwise.
+double ParseLengthM(const std::string& text);
+// "10ms", "0.01s", "10000us", "0.01" (seconds) -> seconds. Throws std::invalid_argument
+// naming the text otherwise.
+double ParseDurationS(const std::string& text);
 
 // Median of values (a copy, reordered): the middle value for an odd count, the mean of the two
 // middle values for an even count; NaN when empty.

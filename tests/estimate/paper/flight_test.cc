@@ -241,21 +241,6 @@ TEST(Flight, BadInputIsRejected) {
   EXPECT_THROW(options.Check(), std::invalid_argument);
 }
 
-TEST(Flight, ParsesLengthsAndDurations) {
-  EXPECT_DOUBLE_EQ(ParseLengthM("5cm"), 0.05);
-  EXPECT_DOUBLE_EQ(ParseLengthM("0.05m"), 0.05);
-  EXPECT_DOUBLE_EQ(ParseLengthM("0.05"), 0.05);
-  EXPECT_DOUBLE_EQ(ParseLengthM("50mm"), 0.05);
-  EXPECT_DOUBLE_EQ(ParseDurationS("10ms"), 0.010);
-  EXPECT_DOUBLE_EQ(ParseDurationS("0.01s"), 0.010);
-  EXPECT_DOUBLE_EQ(ParseDurationS("0.01"), 0.010);
-  EXPECT_DOUBLE_EQ(ParseDurationS("10000us"), 0.010);
-  EXPECT_THROW(ParseLengthM("5in"), std::invalid_argument);
-  EXPECT_THROW(ParseLengthM("cm"), std::invalid_argument);
-  EXPECT_THROW(ParseDurationS("10min"), std::invalid_argument);
-  EXPECT_THROW(ParseDurationS("ten ms"), std::invalid_argument);
-}
-
 TEST(Flight, JsonHasFormatsKeysAndTableSaysWhichFlagsMore) {
   const double rate = 1.2 * ThresholdRad(0.05) / (9 * kDtS);
   const Eigen::Vector3d axis = Eigen::Vector3d::Ones().normalized();
