@@ -293,7 +293,7 @@ ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
              "importer was written). "
              "x forward, y left is a guess: the gimbal holds pitch and roll, so the clip cannot "
              "tell x from y"),
-       Claim("direction", "top_to_bottom", "guess", "CMOS default"),
+       Claim("direction", ReadoutDirectionName(rig.shutter.direction), "guess", "CMOS default"),
        Claim("time_offset_s", 0.0, "guess", "telemetry and video share the MP4 timeline")});
 
   return WriteDataset(dir, ImportSource::kGoproMp4, rig, telemetry.gyro, entries, record);
@@ -389,7 +389,7 @@ ImportSummary ImportPhone(const ImportOptions& options, const fs::path& dir,
              "for v)"),
        Claim("frame_images", "RE_frame-N is frame N of framestamp.txt", "source claim",
              "inferred from the example, not verified"),
-       Claim("direction", "top_to_bottom", "guess", "CMOS default"),
+       Claim("direction", ReadoutDirectionName(rig.shutter.direction), "guess", "CMOS default"),
        Claim("time_offset_s", 0.0, "guess",
              "gyro and SOF times are on the same device clock; SOF marks the start of the frame")});
 
