@@ -82,10 +82,10 @@ void Run(const AnalyzeCommand& command) {
   if (!command.every.empty()) options.every_s = ParseDurationS(command.every);
   options.trigger_latency_s = ParseDurationS(command.latency);
   FlightLogReadOptions read;
-  read.format = ParseFlightLogFormat(command.format);
+  read.format = ParseLogFormat(command.format);
   read.log_index = command.log_index;
-  read.raw_range_dps = command.range_dps;
-  read.raw_time_unit = ParseTimeUnit(command.time_unit);
+  read.raw.range_dps = command.range_dps;
+  read.raw.time_unit = ParseTimeUnit(command.time_unit);
   read.Check();
   options.Check();  // before the (possibly long) read
   if (!command.triggers_path.empty()) options.triggers = ReadTriggersCsv(command.triggers_path);

@@ -121,7 +121,7 @@ TEST(WriteSynthetic, RawCountsRoundTripExactly) {
   for (TimeUnit unit : {TimeUnit::kSeconds, TimeUnit::kMilliseconds, TimeUnit::kNanoseconds}) {
     SynthOutputOptions out;
     out.out_path = dir / "raw.csv";
-    out.format = GyroFormat::kRaw;
+    out.format = LogFormat::kRaw;
     out.time_unit = unit;
     WriteSynthetic(o, out);
     const GyroTrace expected = SynthesizeTrace(o);
