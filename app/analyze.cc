@@ -4,13 +4,14 @@
 #include "estimate/paper/analyze.h"
 
 #include "app/command.h"
-#include "estimate/report/analyze_report.h"
 #include "estimate/paper/flight.h"
+#include "estimate/report/analyze_report.h"
 #include "render/image_io.h"
 #include "render/pictures.h"
 #include "sim/check.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/logs/gyro_io.h"
+#include "sim/units.h"
 
 #include <filesystem>
 #include <iostream>
@@ -81,10 +82,10 @@ void Run(const AnalyzeCommand& command) {
   if (!command.every.empty()) options.every_s = ParseDurationS(command.every);
   options.trigger_latency_s = ParseDurationS(command.latency);
   FlightLogReadOptions read;
-  read.format = ParseFlightLogFormat(command.format);
+  read.format = ParseLogFormat(command.format);
   read.log_index = command.log_index;
-  read.raw_range_dps = command.range_dps;
-  read.raw_time_unit = ParseTimeUnit(command.time_unit);
+  read.raw.range_dps = command.range_dps;
+  read.raw.time_unit = ParseTimeUnit(command.time_unit);
   read.Check();
   options.Check();  // before the (possibly long) read
   if (!command.triggers_path.empty()) options.triggers = ReadTriggersCsv(command.triggers_path);

@@ -1,16 +1,18 @@
 // `shutterlab flight`: the source paper's flight analysis (Table 4): the share of readout-long
 // windows in which the camera turned more than a ground limit allows.
 
+#include "estimate/paper/flight.h"
+
+#include "app/command.h"
+#include "app/trace_options.h"
+#include "sim/check.h"
+#include "sim/units.h"
+
 #include <iostream>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include "app/command.h"
-#include "app/trace_options.h"
-#include "estimate/paper/flight.h"
-#include "sim/check.h"
 
 namespace shutterlab::app {
 namespace {
@@ -37,7 +39,9 @@ void Run(const FlightCommand& command) {
   // A known (zero) bias takes precedence over the segment in Flight().
   if (command.zero_bias) options.known_bias_rad_s = Eigen::Vector3d::Zero();
   Progress progress("flight", 1000);
-  options.progress = [&progress](double fraction) { progress.Update(static_cast<size_t>(fraction * 1000)); };
+  options.progress = [&progress](double fraction) {
+    progress.Update(static_cast<size_t>(fraction * 1000));
+  };
   const FlightResult result = AnalyzeTrace(command.trace, options, Flight);
   if (options.series) WriteFlightSeriesCsv(command.series_path, result.series);
   if (command.json) {
@@ -49,7 +53,8 @@ void Run(const FlightCommand& command) {
 
 const CommandRegistration kRegistration(40, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "flight", "share of time windows whose rotation smears the image beyond a ground limit (Table 4)");
+      "flight",
+      "share of time windows whose rotation smears the image beyond a ground limit (Table 4)");
   auto command = std::make_shared<FlightCommand>();
   command->trace.Add(cmd, /*with_bias=*/true);
   cmd->add_option("--altitude", command->flight.altitude_m, "height above flat ground, m")
@@ -57,8 +62,9 @@ const CommandRegistration kRegistration(40, [](CLI::App& app) {
   cmd->add_option("--limit", command->limits, "ground limits, e.g. 5cm,10cm (m, cm, mm; bare = m)")
       ->delimiter(',')
       ->capture_default_str();
-  cmd->add_option("--window", command->windows,
-                  "window durations (the rolling-shutter readout), e.g. 10ms,20ms (s, ms, us; bare = s)")
+  cmd->add_option(
+         "--window", command->windows,
+         "window durations (the rolling-shutter readout), e.g. 10ms,20ms (s, ms, us; bare = s)")
       ->delimiter(',')
       ->capture_default_str();
   cmd->add_option("--noise-allowance", command->flight.noise_allowance_arcsec,
@@ -66,9 +72,10 @@ const CommandRegistration kRegistration(40, [](CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--no-vector", command->no_vector,
                 "skip the vector (SO(3) rotation angle) criterion, about halving the run time");
-  cmd->add_flag("--zero-bias", command->zero_bias,
-                "take the logged rates as bias-free and analyse every sample (flight-controller logs, "
-                "calibrated at arming)");
+  cmd->add_flag(
+      "--zero-bias", command->zero_bias,
+      "take the logged rates as bias-free and analyse every sample (flight-controller logs, "
+      "calibrated at arming)");
   cmd->add_flag("--json", command->json, "print JSON (FORMATS.md `flight`) instead of a table");
   cmd->add_option("--series", command->series_path,
                   "write per-window ranges for the FIRST --window duration to this CSV: "

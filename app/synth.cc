@@ -5,6 +5,7 @@
 
 #include "app/command.h"
 #include "sim/check.h"
+#include "sim/units.h"
 
 #include <cstdio>
 #include <memory>
@@ -13,8 +14,6 @@
 
 namespace shutterlab::app {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 struct SynthCliOptions {
   std::string profile = "still";
@@ -47,8 +46,8 @@ void Run(SynthCliOptions& o) {
   SynthOptions& s = o.synth;
   s.profile = ParseMotionProfile(o.profile);
   o.output.ulog = !o.raw && o.format == "ulog";
-  o.output.format = o.raw ? GyroFormat::kRaw
-                    : o.output.ulog ? GyroFormat::kGyroCsv
+  o.output.format = o.raw           ? LogFormat::kRaw
+                    : o.output.ulog ? LogFormat::kGyroCsv
                                     : ParseGyroFormat(o.format);
   if (o.altitude_m > 0.0) o.output.altitude_m = o.altitude_m;
   o.output.time_unit = ParseTimeUnit(o.time_unit);

@@ -5,12 +5,15 @@
 namespace shutterlab::app {
 
 void TraceOptions::Add(CLI::App* command, bool with_bias) {
-  command->add_option("TRACE", path,
-                      "gyro log: gyro.csv, Gyroflow .gcsv, raw-count CSV, PX4 ULog, Betaflight "
-                      "blackbox, ArduPilot DataFlash")
+  command
+      ->add_option("TRACE", path,
+                   "gyro log: gyro.csv, Gyroflow .gcsv, raw-count CSV, PX4 ULog, Betaflight "
+                   "blackbox, ArduPilot DataFlash")
       ->required()
       ->check(CLI::ExistingFile);
-  command->add_option("--format", format, "log format: auto, csv, gcsv, raw, ulog, blackbox, dataflash")
+  command
+      ->add_option("--format", format,
+                   "log format: auto, csv, gcsv, raw, ulog, blackbox, dataflash")
       ->capture_default_str();
   command->add_flag("--raw", raw, "the log holds raw int16 counts (the source paper's logger)");
   command
@@ -34,9 +37,9 @@ void TraceOptions::Add(CLI::App* command, bool with_bias) {
 
 FlightLogReadOptions TraceOptions::ReadOptions() const {
   FlightLogReadOptions options;
-  options.format = raw ? FlightLogFormat::kRaw : ParseFlightLogFormat(format);
-  options.raw_range_dps = range_dps;
-  options.raw_time_unit = ParseTimeUnit(time_unit);
+  options.format = raw ? LogFormat::kRaw : ParseLogFormat(format);
+  options.raw.range_dps = range_dps;
+  options.raw.time_unit = ParseTimeUnit(time_unit);
   options.Check();
   return options;
 }

@@ -2,12 +2,12 @@
 // the measured displacement, then the loop over undeclared effects (estimate/validate.h).
 
 #include "estimate/loop/validate.h"
-#include "estimate/report/validate_report.h"
 
 #include "app/command.h"
-#include "estimate/paper/flight.h"
+#include "estimate/report/validate_report.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <filesystem>
 #include <iostream>

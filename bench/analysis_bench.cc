@@ -9,7 +9,13 @@
 // Generates PATH (default /tmp/shutterlab_bench_gyro.csv) when it does not exist with N lines.
 // A table, not Google Benchmark: one run of each step is long enough (seconds) to need no repeats.
 
-#include <time.h>
+#include "estimate/paper/flight.h"
+#include "estimate/paper/window_stats.h"
+#include "sim/bias.h"
+#include "sim/integrate.h"
+#include "sim/logs/gyro_io.h"
+#include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <charconv>
 #include <cmath>
@@ -20,19 +26,11 @@
 #include <fstream>
 #include <random>
 #include <string>
+#include <time.h>
 #include <vector>
-
-#include "estimate/paper/flight.h"
-#include "estimate/paper/window_stats.h"
-#include "sim/bias.h"
-#include "sim/logs/gyro_io.h"
-#include "sim/integrate.h"
-#include "sim/text_file.h"
 
 namespace shutterlab {
 namespace {
-
-constexpr double kArcsecPerRad = 180.0 * 3600.0 / 3.14159265358979323846;
 
 // This thread's CPU time (user + system), s: on a shared machine wall time measures the neighbours.
 double Now() {
@@ -59,7 +57,8 @@ void GenerateCsv(const std::string& path, size_t lines) {
     for (int a = 0; a < 3; ++a) {
       if (i >= 5000) w[a] = 0.999 * w[a] + 0.003 * normal(rng);
       const double rate = 0.002 + w[a] + 0.01 * normal(rng);  // bias + motion + noise, rad/s
-      const auto r = std::to_chars(number, number + sizeof(number), rate, std::chars_format::fixed, 6);
+      const auto r =
+          std::to_chars(number, number + sizeof(number), rate, std::chars_format::fixed, 6);
       buffer += ',';
       buffer.append(number, r.ptr);
     }
@@ -114,8 +113,10 @@ std::vector<size_t> DequeFlagged(const PerAxisAngles& angles, int64_t window_ns,
       while (hi.front() < k) hi.pop_front();
       while (lo.front() < k) lo.pop_front();
       const double r = x[hi.front()] - x[lo.front()];
-      if (a == 0) max_range.push_back(r);
-      else max_range[k] = std::max(max_range[k], r);
+      if (a == 0)
+        max_range.push_back(r);
+      else
+        max_range[k] = std::max(max_range[k], r);
     }
   }
   *windows = max_range.size();
@@ -131,8 +132,10 @@ int Main(int argc, char** argv) {
   std::string path = "/tmp/shutterlab_bench_gyro.csv";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--lines" && i + 1 < argc) lines = std::stoull(argv[++i]);
-    else if (arg == "--file" && i + 1 < argc) path = argv[++i];
+    if (arg == "--lines" && i + 1 < argc)
+      lines = std::stoull(argv[++i]);
+    else if (arg == "--file" && i + 1 < argc)
+      path = argv[++i];
     else {
       std::fprintf(stderr, "usage: %s [--lines N] [--file PATH]\n", argv[0]);
       return 2;
@@ -153,7 +156,8 @@ int Main(int argc, char** argv) {
   double t0 = Now();
   const std::string text = ReadFileToString(path);
   const double t_file = Now() - t0;
-  std::printf("%-58s %10.3f %10.0f\n", "ReadFileToString (whole file into memory)", t_file, file_mb / t_file);
+  std::printf("%-58s %10.3f %10.0f\n", "ReadFileToString (whole file into memory)", t_file,
+              file_mb / t_file);
   // Splitting lines and fields only (LineCursor + SplitFields, no number parsing).
   t0 = Now();
   size_t fields_seen = 0;
@@ -209,13 +213,15 @@ int Main(int argc, char** argv) {
   // --- 2. Flight analysis -----------------------------------------------------------------------
   FlightOptions options;  // 50 m, 5 cm and 10 cm, 10 ms and 20 ms, 20", bias 0:5
   const size_t n = trace.size();
-  std::printf("%-58s %10s %10s\n", "flight step (2 limits x 2 windows, CPU time)", "seconds", "Msamples/s");
+  std::printf("%-58s %10s %10s\n", "flight step (2 limits x 2 windows, CPU time)", "seconds",
+              "Msamples/s");
   options.vector_criterion = false;
   t0 = Now();
   const FlightResult axis = Flight(trace, options);
   const double t_axis = Now() - t0;
-  std::printf("%-58s %10.3f %10.1f\n", "Flight per-axis (bias, streamed integration, ranges, counts)",
-              t_axis, n / t_axis / 1e6);
+  std::printf("%-58s %10.3f %10.1f\n",
+              "Flight per-axis (bias, streamed integration, ranges, counts)", t_axis,
+              n / t_axis / 1e6);
   // The reference's input: the whole angle arrays (not timed against it; allocating 1 GB of fresh
   // pages is itself slow on a VM, which is why Flight streams).
   t0 = Now();
@@ -234,22 +240,24 @@ int Main(int argc, char** argv) {
   bool counts_match = true;
   for (size_t wi = 0; wi < options.windows_s.size(); ++wi) {
     size_t windows = 0;
-    const auto flagged = DequeFlagged(angles, SecondsToNs(options.windows_s[wi]), threshold_rad, &windows);
+    const auto flagged =
+        DequeFlagged(angles, SecondsToNs(options.windows_s[wi]), threshold_rad, &windows);
     for (size_t l = 0; l < flagged.size(); ++l) {
       const FlightRow& row = axis.rows[l * options.windows_s.size() + wi];
       counts_match &= row.flagged == flagged[l] && row.windows == windows;
     }
   }
   const double t_deque = Now() - t0;
-  std::printf("%-58s %10.3f %10.1f   counts %s\n", "reference: std::deque sliding range (ranges only)",
-              t_deque, n / t_deque / 1e6, counts_match ? "identical" : "DIFFER");
+  std::printf("%-58s %10.3f %10.1f   counts %s\n",
+              "reference: std::deque sliding range (ranges only)", t_deque, n / t_deque / 1e6,
+              counts_match ? "identical" : "DIFFER");
 
   options.vector_criterion = true;
   t0 = Now();
   const FlightResult both = Flight(trace, options);
   const double t_both = Now() - t0;
-  std::printf("%-58s %10.3f %10.1f\n", "Flight per-axis + vector (SO(3) integration + pruning)", t_both,
-              n / t_both / 1e6);
+  std::printf("%-58s %10.3f %10.1f\n", "Flight per-axis + vector (SO(3) integration + pruning)",
+              t_both, n / t_both / 1e6);
   std::printf("\n%s", FlightTable(both).c_str());
   return counts_match ? 0 : 1;
 }

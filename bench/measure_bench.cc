@@ -3,7 +3,8 @@
 // thread CPU time, after a warm-up, against references measured in the same run:
 //   - Measure:            MeasureDisplacement, everything (both flow directions, masks, row model,
 //                         points);
-//   - DisUltrafastFull:   cv::DISOpticalFlow ULTRAFAST at finest scale 0, one direction, on the grey
+//   - DisUltrafastFull:   cv::DISOpticalFlow ULTRAFAST at finest scale 0, one direction, on the
+//   grey
 //                         pair: the flow that Measure runs twice;
 //   - DisMediumDefault:   cv::DISOpticalFlow MEDIUM as shipped (finest scale 1), one direction.
 // The budget is about 1.5 s per frame on one core (validate: 12 frames and the fit in 60 s on 2).
@@ -14,13 +15,13 @@
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
 #include "sim/synth/synth.h"
-
-#include "bench/bench_util.h"
+#include "sim/units.h"
 
 #include <benchmark/benchmark.h>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "bench/bench_util.h"
 #include <algorithm>
 #include <cstdio>
 #include <string>
@@ -72,7 +73,8 @@ void RunDisUltrafast(Fixture& f) {
   dis->calc(f.rs_grey, f.ref_grey, f.flow);
 }
 void RunDisMedium(Fixture& f) {
-  cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM)->calc(f.rs_grey, f.ref_grey, f.flow);
+  cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM)
+      ->calc(f.rs_grey, f.ref_grey, f.flow);
 }
 
 template <typename Body>
@@ -112,14 +114,12 @@ void PrintPairedRatios(int runs) {
     measure_s.push_back(time(RunMeasure));
     medium_s.push_back(time(RunDisMedium));
   }
-  auto median = [](std::vector<double> v) {
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
-  const double ultrafast = median(ultrafast_s), measure = median(measure_s),
-               medium = median(medium_s);
-  std::printf("\nPaired, %d alternating runs, median thread CPU time (1280x960 RGB, D %.1f px, "
-              "1 thread):\n", runs, f.d_px);
+  const double ultrafast = UpperMedian(ultrafast_s), measure = UpperMedian(measure_s),
+               medium = UpperMedian(medium_s);
+  std::printf(
+      "\nPaired, %d alternating runs, median thread CPU time (1280x960 RGB, D %.1f px, "
+      "1 thread):\n",
+      runs, f.d_px);
   std::printf("  DIS ULTRAFAST finest 0, one way  %7.1f ms   1.00x\n", ultrafast * 1e3);
   std::printf("  measure (all)                    %7.1f ms   %.2fx\n", measure * 1e3,
               measure / ultrafast);

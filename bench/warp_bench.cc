@@ -12,13 +12,13 @@
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
 #include "sim/so3.h"
-
-#include "bench/bench_util.h"
+#include "sim/units.h"
 
 #include <benchmark/benchmark.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "bench/bench_util.h"
 #include <algorithm>
 #include <cstdio>
 #include <map>
@@ -139,11 +139,8 @@ void PrintPairedRatios(int runs) {
     remap_s.push_back(time(
         [&] { cv::remap(f.scene, f.out, f.map1, f.map2, cv::INTER_LINEAR, cv::BORDER_CONSTANT); }));
   }
-  auto median = [](std::vector<double> v) {
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
-  const double warp = median(warp_s), render = median(render_s), remap = median(remap_s);
+  const double warp = UpperMedian(warp_s), render = UpperMedian(render_s),
+               remap = UpperMedian(remap_s);
   std::printf(
       "\nPaired, %d alternating runs, median thread CPU time (20 MP RGB, 1 thread, bilinear):\n",
       runs);

@@ -1,13 +1,13 @@
 #include "render/camera.h"
 
-#include <cmath>
-#include <fstream>
-
-#include <nlohmann/json.hpp>
-
 #include "sim/check.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
 
 namespace shutterlab {
 
@@ -74,16 +74,22 @@ double RollingShutter::RowTimeOffsetS(double row, int height) const {
 void RigModel::Check() const {
   SHUTTERLAB_CHECK(camera.width > 0 && camera.height > 0)
       << "image size " << camera.width << "x" << camera.height << " must be positive";
-  SHUTTERLAB_CHECK(camera.fx > 0 && camera.fy > 0 && std::isfinite(camera.fx) && std::isfinite(camera.fy))
+  SHUTTERLAB_CHECK(camera.fx > 0 && camera.fy > 0 && std::isfinite(camera.fx) &&
+                   std::isfinite(camera.fy))
       << "focal length fx=" << camera.fx << " fy=" << camera.fy << " must be positive";
-  SHUTTERLAB_CHECK(std::isfinite(camera.cx) && std::isfinite(camera.cy)) << "principal point is not finite";
+  SHUTTERLAB_CHECK(std::isfinite(camera.cx) && std::isfinite(camera.cy))
+      << "principal point is not finite";
   for (double d : camera.dist) SHUTTERLAB_CHECK(std::isfinite(d)) << "distortion is not finite";
   SHUTTERLAB_CHECK(shutter.readout_s > 0 && shutter.readout_s < 10)
       << "readout_s=" << shutter.readout_s << " must be positive (and below 10 s)";
+  SHUTTERLAB_CHECK(IsRowReadout(shutter.direction))
+      << "readout direction " << ReadoutDirectionName(shutter.direction)
+      << " is not top_to_bottom or bottom_to_top";
   SHUTTERLAB_CHECK(IsRotationMatrix(cam_from_gyro, 1e-6))
       << "gyro_to_camera is not a rotation matrix (orthonormal, det +1)";
   SHUTTERLAB_CHECK(std::isfinite(time_offset_s)) << "time_offset_s is not finite";
-  SHUTTERLAB_CHECK(altitude_m > 0 && std::isfinite(altitude_m)) << "altitude_m=" << altitude_m << " must be positive";
+  SHUTTERLAB_CHECK(altitude_m > 0 && std::isfinite(altitude_m))
+      << "altitude_m=" << altitude_m << " must be positive";
   SHUTTERLAB_CHECK(velocity_mps.allFinite()) << "velocity_mps is not finite";
 }
 
@@ -127,25 +133,27 @@ RigModel ReadRigModel(const std::string& path) {
     if (j.contains("distortion")) {
       const char* names[5] = {"k1", "k2", "p1", "p2", "k3"};
       for (int i = 0; i < 5; ++i) {
-        if (j["distortion"].contains(names[i])) rig.camera.dist[i] = Number(j["distortion"], names[i], "distortion");
+        if (j["distortion"].contains(names[i]))
+          rig.camera.dist[i] = Number(j["distortion"], names[i], "distortion");
       }
     }
     const json& rs = j.at("rolling_shutter");
     rig.shutter.readout_s = Number(rs, "readout_s", "rolling_shutter");
-    const std::string direction = rs.value("direction", "top_to_bottom");
-    if (direction == "top_to_bottom") {
-      rig.shutter.direction = ReadoutDirection::kTopToBottom;
-    } else if (direction == "bottom_to_top") {
-      rig.shutter.direction = ReadoutDirection::kBottomToTop;
-    } else {
+    const std::string direction =
+        rs.value("direction", ReadoutDirectionName(ReadoutDirection::kTopToBottom));
+    const std::optional<ReadoutDirection> parsed = ParseReadoutDirection(direction);
+    if (!parsed || !IsRowReadout(*parsed)) {
       throw std::invalid_argument("rolling_shutter.direction '" + direction +
                                   "' is not top_to_bottom or bottom_to_top");
     }
+    rig.shutter.direction = *parsed;
     if (j.contains("gyro_to_camera")) {
       const json& m = j["gyro_to_camera"];
-      if (!m.is_array() || m.size() != 3) throw std::invalid_argument("gyro_to_camera is not a 3x3 array");
+      if (!m.is_array() || m.size() != 3)
+        throw std::invalid_argument("gyro_to_camera is not a 3x3 array");
       for (int r = 0; r < 3; ++r) {
-        if (!m[r].is_array() || m[r].size() != 3) throw std::invalid_argument("gyro_to_camera is not a 3x3 array");
+        if (!m[r].is_array() || m[r].size() != 3)
+          throw std::invalid_argument("gyro_to_camera is not a 3x3 array");
         for (int c = 0; c < 3; ++c) {
           if (!m[r][c].is_number()) throw std::invalid_argument("gyro_to_camera has a non-number");
           rig.cam_from_gyro(r, c) = m[r][c].get<double>();
@@ -156,7 +164,8 @@ RigModel ReadRigModel(const std::string& path) {
     if (j.contains("scene")) rig.altitude_m = Number(j["scene"], "altitude_m", "scene");
     if (j.contains("velocity_mps")) {
       const json& v = j["velocity_mps"];
-      if (!v.is_array() || v.size() != 3) throw std::invalid_argument("velocity_mps is not [vx, vy, vz]");
+      if (!v.is_array() || v.size() != 3)
+        throw std::invalid_argument("velocity_mps is not [vx, vy, vz]");
       for (int i = 0; i < 3; ++i) {
         if (!v[i].is_number()) throw std::invalid_argument("velocity_mps has a non-number");
         rig.velocity_mps[i] = v[i].get<double>();
@@ -176,12 +185,15 @@ void WriteRigModel(const std::string& path, const RigModel& rig) {
   json j;
   j["format"] = "rig/1";
   j["image"] = {{"width", rig.camera.width}, {"height", rig.camera.height}};
-  j["intrinsics"] = {{"fx", rig.camera.fx}, {"fy", rig.camera.fy}, {"cx", rig.camera.cx}, {"cy", rig.camera.cy}};
-  j["distortion"] = {{"k1", rig.camera.dist[0]}, {"k2", rig.camera.dist[1]}, {"p1", rig.camera.dist[2]},
-                     {"p2", rig.camera.dist[3]}, {"k3", rig.camera.dist[4]}};
+  j["intrinsics"] = {
+      {"fx", rig.camera.fx}, {"fy", rig.camera.fy}, {"cx", rig.camera.cx}, {"cy", rig.camera.cy}};
+  j["distortion"] = {{"k1", rig.camera.dist[0]},
+                     {"k2", rig.camera.dist[1]},
+                     {"p1", rig.camera.dist[2]},
+                     {"p2", rig.camera.dist[3]},
+                     {"k3", rig.camera.dist[4]}};
   j["rolling_shutter"] = {{"readout_s", rig.shutter.readout_s},
-                          {"direction", rig.shutter.direction == ReadoutDirection::kTopToBottom
-                                            ? "top_to_bottom" : "bottom_to_top"}};
+                          {"direction", ReadoutDirectionName(rig.shutter.direction)}};
   j["gyro_to_camera"] = MatrixJson(rig.cam_from_gyro);
   j["time_offset_s"] = rig.time_offset_s;
   j["scene"] = {{"altitude_m", rig.altitude_m}};

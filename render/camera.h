@@ -4,20 +4,22 @@
 // Pixel convention (OpenCV): pixel (u, v) = (column, row); the centre of the top-left pixel is
 // (0, 0). Camera frame: x right, y down, z along the optical axis into the scene.
 
-#include <array>
-#include <optional>
-#include <string>
+#include "sim/readout_direction.h"
 
 #include <Eigen/Core>
 #include <nlohmann/json_fwd.hpp>
+
+#include <array>
+#include <optional>
+#include <string>
 
 namespace shutterlab {
 
 // Pinhole intrinsics with OpenCV's Brown-Conrady distortion (k1, k2, p1, p2, k3).
 struct PinholeCamera {
-  int width = 0, height = 0;           // pixels
+  int width = 0, height = 0;              // pixels
   double fx = 0, fy = 0, cx = 0, cy = 0;  // pixels
-  std::array<double, 5> dist{};         // k1, k2, p1, p2, k3 (dimensionless)
+  std::array<double, 5> dist{};           // k1, k2, p1, p2, k3 (dimensionless)
 
   bool HasDistortion() const;
   Eigen::Matrix3d K() const;
@@ -27,12 +29,10 @@ struct PinholeCamera {
   Eigen::Vector3d CamFromImg(const Eigen::Vector2d& px) const;
 };
 
-enum class ReadoutDirection { kTopToBottom, kBottomToTop };
-
 // Rolling-shutter timing. The only place that knows how a row maps to a time.
 struct RollingShutter {
   double readout_s = 0.0;  // s; row v is read at v * readout_s / height after row 0 (FORMATS.md)
-  ReadoutDirection direction = ReadoutDirection::kTopToBottom;
+  ReadoutDirection direction = ReadoutDirection::kTopToBottom;  // a row order (IsRowReadout)
   // Seconds after t_first_row at which image row `row` of an image `height` rows tall is captured.
   double RowTimeOffsetS(double row, int height) const;
 };
@@ -42,8 +42,8 @@ struct RigModel {
   PinholeCamera camera;
   RollingShutter shutter;
   Eigen::Matrix3d cam_from_gyro = Eigen::Matrix3d::Identity();  // R_CG: w_C = R_CG * w_G
-  double time_offset_s = 0.0;   // gyro clock = camera clock + time_offset_s
-  double altitude_m = 50.0;     // ground plane z_W = altitude_m
+  double time_offset_s = 0.0;  // gyro clock = camera clock + time_offset_s
+  double altitude_m = 50.0;    // ground plane z_W = altitude_m
   Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();  // world frame, constant within a frame
 
   // Throws std::invalid_argument naming the first nonsensical field.

@@ -152,14 +152,12 @@ nlohmann::json ApplyInjection(const std::string& name_equals_value, TrueModel* m
     }
   } else if (name == "readout_direction") {
     const std::string word = value.is_string() ? value.get<std::string>() : value.dump();
-    if (word == "top_to_bottom") {
-      rig.shutter.direction = ReadoutDirection::kTopToBottom;
-    } else if (word == "bottom_to_top") {
-      rig.shutter.direction = ReadoutDirection::kBottomToTop;
-    } else {
+    const std::optional<ReadoutDirection> parsed = ParseReadoutDirection(word);
+    if (!parsed || !IsRowReadout(*parsed)) {
       throw std::invalid_argument("--inject readout_direction: '" + word +
                                   "' is not top_to_bottom or bottom_to_top");
     }
+    rig.shutter.direction = *parsed;
     recorded = word;
   } else if (name == "clock_rate") {
     model->clock_rate_ppm = Scalar(value, name);

@@ -8,6 +8,7 @@
 #include "sim/logs/gyro_io.h"
 #include "sim/logs/mp4.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
@@ -29,7 +30,6 @@ namespace {
 // The lens is a fisheye; an equidistant projection over that field gives the focal length declared
 // as a pinhole with no distortion (a guess: karma.mp4 is an 854x480 copy and states no lens).
 constexpr double kHero5WideHfovDeg = 118.2;
-constexpr double kPi = 3.14159265358979323846;
 // Full-frame readout of the HERO5 in this mode is not published; a guess of the usual order for
 // its 1080p/30 modes, to be fitted by validate.
 constexpr double kHero5ReadoutGuessS = 0.015;
@@ -293,7 +293,7 @@ ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
              "importer was written). "
              "x forward, y left is a guess: the gimbal holds pitch and roll, so the clip cannot "
              "tell x from y"),
-       Claim("direction", "top_to_bottom", "guess", "CMOS default"),
+       Claim("direction", ReadoutDirectionName(rig.shutter.direction), "guess", "CMOS default"),
        Claim("time_offset_s", 0.0, "guess", "telemetry and video share the MP4 timeline")});
 
   return WriteDataset(dir, ImportSource::kGoproMp4, rig, telemetry.gyro, entries, record);
@@ -389,7 +389,7 @@ ImportSummary ImportPhone(const ImportOptions& options, const fs::path& dir,
              "for v)"),
        Claim("frame_images", "RE_frame-N is frame N of framestamp.txt", "source claim",
              "inferred from the example, not verified"),
-       Claim("direction", "top_to_bottom", "guess", "CMOS default"),
+       Claim("direction", ReadoutDirectionName(rig.shutter.direction), "guess", "CMOS default"),
        Claim("time_offset_s", 0.0, "guess",
              "gyro and SOF times are on the same device clock; SOF marks the start of the frame")});
 

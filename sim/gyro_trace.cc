@@ -1,9 +1,10 @@
 #include "sim/gyro_trace.h"
 
+#include "sim/check.h"
+#include "sim/units.h"
+
 #include <algorithm>
 #include <cmath>
-
-#include "sim/check.h"
 
 namespace shutterlab {
 
@@ -11,7 +12,7 @@ namespace {
 
 // Exact median of the sampling intervals. Logs hold few distinct intervals (a clock tick or two),
 // so a small sorted histogram answers in one pass with no copy of the trace; irregular clocks fall
-// back to nth_element on a copy.
+// back to UpperMedian on a copy.
 int64_t MedianInterval(const std::vector<GyroSample>& samples) {
   constexpr size_t kMaxDistinct = 64;
   std::vector<std::pair<int64_t, size_t>> histogram;  // interval -> count, sorted by interval
@@ -27,12 +28,10 @@ int64_t MedianInterval(const std::vector<GyroSample>& samples) {
     } else {
       std::vector<int64_t> intervals(n);
       for (size_t i = 0; i < n; ++i) intervals[i] = samples[i + 1].t_ns - samples[i].t_ns;
-      auto mid = intervals.begin() + n / 2;
-      std::nth_element(intervals.begin(), mid, intervals.end());
-      return *mid;
+      return UpperMedian(std::move(intervals));
     }
   }
-  // The element at sorted position n / 2, as nth_element would give.
+  // The element at sorted position n / 2, as UpperMedian would give.
   size_t seen = 0;
   for (const auto& [interval, count] : histogram) {
     seen += count;
@@ -56,7 +55,8 @@ GyroTrace::GyroTrace(std::vector<GyroSample> samples) : samples_(std::move(sampl
   }
   if (n < 2) return;
   sampling_.median_interval_ns = MedianInterval(samples_);
-  const double gap_ns = SamplingReport::kGapFactor * static_cast<double>(sampling_.median_interval_ns);
+  const double gap_ns =
+      SamplingReport::kGapFactor * static_cast<double>(sampling_.median_interval_ns);
   for (size_t k = 0; k + 1 < n; ++k) {
     if (static_cast<double>(samples_[k + 1].t_ns - samples_[k].t_ns) > gap_ns) {
       sampling_.gap_indices.push_back(k);
@@ -71,7 +71,8 @@ size_t GyroTrace::LowerBound(int64_t t_ns) const {
 }
 
 int64_t SecondsToNs(double t_s) {
-  SHUTTERLAB_CHECK(std::isfinite(t_s) && std::abs(t_s) < 9.2e9) << "time " << t_s << " s out of range";
+  SHUTTERLAB_CHECK(std::isfinite(t_s) && std::abs(t_s) < 9.2e9)
+      << "time " << t_s << " s out of range";
   return std::llround(t_s * 1e9);
 }
 

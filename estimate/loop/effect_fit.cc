@@ -60,6 +60,7 @@
 #include "sim/check.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -472,15 +473,11 @@ Fit FitHypothesis(const Context& ctx, Hypothesis hypothesis) {
             if (dt != 0.0) slopes.push_back((frame_best_shift[g] - frame_best_shift[f]) / dt);
           }
         }
-        const auto median = [](std::vector<double> v) {
-          std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-          return v[v.size() / 2];
-        };
-        const double rate = slopes.empty() ? 0.0 : median(slopes);
+        const double rate = slopes.empty() ? 0.0 : UpperMedian(slopes);
         for (size_t f = 0; f < frame_count; ++f) {
           intercepts.push_back(frame_best_shift[f] - rate * ctx.frame_t_s[f]);
         }
-        hypothesis.x[p - 1] += median(intercepts) - best_shift;
+        hypothesis.x[p - 1] += UpperMedian(intercepts) - best_shift;
         hypothesis.x[p - 2] += rate * 1e6;
       }
     }

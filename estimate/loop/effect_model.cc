@@ -102,8 +102,7 @@ json EffectValue(const std::string& name, const TrueModel& model) {
   if (name == "velocity") return Array3(rig.velocity_mps);
   if (name == "lens_distortion") return {{"k1", rig.camera.dist[0]}, {"k2", rig.camera.dist[1]}};
   if (name == "readout_direction") {
-    return rig.shutter.direction == ReadoutDirection::kTopToBottom ? "top_to_bottom"
-                                                                   : "bottom_to_top";
+    return ReadoutDirectionName(rig.shutter.direction);
   }
   if (name == "clock_rate") return model.clock_rate_ppm;
   CheckName(name);

@@ -22,8 +22,8 @@
 //     corrected for the model's degrees of freedom.
 //
 // Accuracy, RMS of |flow - truth| over the measured pixels, px, on rendered 1280x960 pairs of both
-// real scenes (tests/estimate/measure_test.cc, fx 1100, 30 ms readout, D = 1.8 .. 24.4 px), one core;
-// raw flow alone unless "+ model":
+// real scenes (tests/estimate/measure_test.cc, fx 1100, 30 ms readout, D = 1.8 .. 24.4 px), one
+// core; raw flow alone unless "+ model":
 //   DIS ULTRAFAST finest scale 0 + row model (chosen)       0.0012 .. 0.0055   0.85 s / frame (both
 //                                                                               directions + model)
 //   DIS MEDIUM finest 0 (variational refinement) + model    0.0019 .. 0.0042   2.75 s
@@ -46,6 +46,7 @@
 #include "render/rs_warp.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <Eigen/Dense>
 #include <opencv2/imgproc.hpp>
@@ -143,8 +144,8 @@ bool SampleField(const cv::Mat& field, float x, float y, cv::Vec2f* out) {
 class RowBandModel {
  public:
   static constexpr int kU = 4;        // 1, u, u^2, u^3
-  static constexpr int kV = 3;          // 1, dv, dv^2
-  static constexpr int kP = kU * kV;    // parameters per component per band
+  static constexpr int kV = 3;        // 1, dv, dv^2
+  static constexpr int kP = kU * kV;  // parameters per component per band
 
   RowBandModel(int width, int height) : width_(width), height_(height) {
     coeff_.assign(height, {});
@@ -174,10 +175,9 @@ class RowBandModel {
         }
       }
       if (residuals.empty()) return;
-      auto mid = residuals.begin() + residuals.size() / 2;
-      std::nth_element(residuals.begin(), mid, residuals.end());
       // |r| of a 2D Gaussian is Rayleigh: median = sigma * sqrt(2 ln 2).
-      const double sigma = std::max(1e-3, *mid / std::sqrt(2.0 * std::log(2.0)));
+      const double sigma =
+          std::max(1e-3, UpperMedian(std::move(residuals)) / std::sqrt(2.0 * std::log(2.0)));
       scale_px_ = sigma;
       const double c = kTukeyC * sigma;
       for (int v = 0; v < height_; ++v) {
@@ -447,10 +447,8 @@ FieldComparison CompareFields(const cv::Mat& measured, const cv::Mat& truth) {
 
 nlohmann::json MeasureToJson(const MeasureReport& report) {
   const DisplacementMeasurement& m = report.measurement;
-  nlohmann::json j = {{"format", "measure/1"},
-                      {"width", m.field.cols},
-                      {"height", m.field.rows},
-                      {"D_px", m.d_px}};
+  nlohmann::json j = {
+      {"format", "measure/1"}, {"width", m.field.cols}, {"height", m.field.rows}, {"D_px", m.d_px}};
   if (report.ground_m_per_px) j["D_m"] = m.d_px * *report.ground_m_per_px;
   j["noise_px"] = m.noise_px;
   j["measured_fraction"] = m.measured_fraction;
@@ -490,8 +488,9 @@ std::string MeasureText(const MeasureReport& report) {
 std::string RowProfileCsv(const DisplacementMeasurement& measurement) {
   const cv::Mat& field = measurement.field;
   const int width = field.cols;
-  std::string csv = "row,measured_columns,mean_dx,mean_dy,left_dx,left_dy,centre_dx,centre_dy,"
-                    "right_dx,right_dy\n";
+  std::string csv =
+      "row,measured_columns,mean_dx,mean_dy,left_dx,left_dy,centre_dx,centre_dy,"
+      "right_dx,right_dy\n";
   // Mean of the finite entries of row v in columns [u0, u1); false when there are none.
   auto mean = [&](int v, int u0, int u1, cv::Vec2d* out, int* count) {
     cv::Vec2d sum(0, 0);

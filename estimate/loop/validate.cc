@@ -1,8 +1,8 @@
 #include "estimate/loop/validate.h"
 
-#include "estimate/paper/analyze.h"
 #include "estimate/loop/frame_residuals.h"
 #include "estimate/loop/validate_video.h"
+#include "estimate/paper/analyze.h"
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "render/pictures.h"
@@ -10,8 +10,8 @@
 #include "render/truth_model.h"
 #include "sim/check.h"
 #include "sim/logs/gyro_io.h"
-#include "sim/units.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <Eigen/Geometry>
 #include <opencv2/imgproc.hpp>
@@ -77,15 +77,6 @@ FullModelD FullModel(const RigModel& rig, const FrameMotion& motion) {
     }
   }
   return out;
-}
-
-double Median(std::vector<double> values) {
-  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  const double hi = values[mid];
-  if (values.size() % 2 == 1) return hi;
-  return 0.5 * (hi + *std::max_element(values.begin(), values.begin() + mid));
 }
 
 RatioGroup Ratios(const std::vector<FrameValidation>& frames, int axis) {

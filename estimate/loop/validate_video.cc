@@ -205,7 +205,9 @@ json ReadClaims(const fs::path& import_json) {
         for (size_t c = 0; ok && c < 3; ++c) ok = value[r][c].is_number();
       }
     } else if (effect == "readout_direction") {
-      ok = value == "top_to_bottom" || value == "bottom_to_top";
+      const auto parsed = value.is_string() ? ParseReadoutDirection(value.get<std::string>())
+                                            : std::optional<ReadoutDirection>();
+      ok = parsed && IsRowReadout(*parsed);
     } else {
       ok = value.is_number() && std::isfinite(value.get<double>());
     }
@@ -348,11 +350,11 @@ std::vector<ClaimCheck> CheckClaims(const json& claims, const GyroTrace& gyro,
                                 " % of the residual's excess over the noise";
     if (check.effect == "readout_direction") {
       // A discrete claim: the model read as declared (without) and flipped (with).
-      const std::string declared_word = declared.shutter.direction == ReadoutDirection::kTopToBottom
-                                            ? "top_to_bottom"
-                                            : "bottom_to_top";
-      const std::string other_word =
-          declared_word == "top_to_bottom" ? "bottom_to_top" : "top_to_bottom";
+      const ReadoutDirection other = declared.shutter.direction == ReadoutDirection::kTopToBottom
+                                         ? ReadoutDirection::kBottomToTop
+                                         : ReadoutDirection::kTopToBottom;
+      const std::string declared_word = ReadoutDirectionName(declared.shutter.direction);
+      const std::string other_word = ReadoutDirectionName(other);
       const bool flip_better = c.b < c.a;
       check.found = flip_better ? other_word : declared_word;
       // How much of the worse reading's excess over the noise the better one removes.

@@ -4,6 +4,7 @@
 #include "sim/integrate.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
@@ -15,8 +16,6 @@
 
 namespace shutterlab {
 namespace {
-
-constexpr double kRadToArcsec = 180.0 / M_PI * 3600.0;
 
 struct Segment {
   size_t begin;  // first sample of the motion
@@ -154,15 +153,15 @@ AccuracyResult AnalyzeAccuracy(const GyroTrace& trace, const AccuracyOptions& op
       after_rad[a] = Mean(angles.angle_rad[a], a0, a0 + average);
     }
     const Eigen::Vector3d d = after_rad - before_rad;
-    r.before_arcsec = before_rad * kRadToArcsec;
-    r.after_arcsec = after_rad * kRadToArcsec;
-    r.theta_arcsec = AngleFromTrace(RotationZYX(d.z(), d.y(), d.x())) * kRadToArcsec;
+    r.before_arcsec = before_rad * kArcsecPerRad;
+    r.after_arcsec = after_rad * kArcsecPerRad;
+    r.theta_arcsec = AngleFromTrace(RotationZYX(d.z(), d.y(), d.x())) * kArcsecPerRad;
     r.difference_arcsec = r.theta_arcsec - options.reference_deg * 3600.0;
-    r.theta_vector_arcsec = d.norm() * kRadToArcsec;
+    r.theta_vector_arcsec = d.norm() * kArcsecPerRad;
     const auto& q = orientation.world_from_body();
     r.theta_so3_arcsec = AngularDistance(MeanOrientation(q, b0, b0 + average),
                                          MeanOrientation(q, a0, a0 + average)) *
-                         kRadToArcsec;
+                         kArcsecPerRad;
     result.rotations.push_back(r);
   }
   SHUTTERLAB_CHECK(!result.rotations.empty())

@@ -3,6 +3,7 @@
 #include "sim/check.h"
 #include "sim/integrate.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +11,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / M_PI;
 // sigma(tau) of bias instability (flicker rate noise) flattens at sqrt(2 ln2 / pi) B (IEEE 952,
 // C.4).
 constexpr double kFlickerFloorFactor = 0.664;
@@ -103,7 +103,8 @@ AllanCoefficients ReadAllanCoefficients(const std::vector<double>& tau_s,
 
   // Bias instability: the flat minimum.
   const size_t i_min = std::min_element(log_adev.begin(), log_adev.end()) - log_adev.begin();
-  out.bias_instability_deg_h = std::exp(log_adev[i_min]) / kFlickerFloorFactor * kRadToDeg * 3600.0;
+  out.bias_instability_deg_h =
+      std::exp(log_adev[i_min]) / kFlickerFloorFactor * kDegPerRad * 3600.0;
   out.bias_instability_tau_s = tau[i_min];
 
   // Angle random walk: local slopes by differences over the neighbours.
@@ -141,7 +142,7 @@ AllanCoefficients ReadAllanCoefficients(const std::vector<double>& tau_s,
     }
     out.arw_rad_s_sqrt_hz = std::exp(sum / sum_w);
   }
-  out.arw_deg_sqrt_h = out.arw_rad_s_sqrt_hz * kRadToDeg * 60.0;  // sqrt(3600 s) = 60 sqrt(s)
+  out.arw_deg_sqrt_h = out.arw_rad_s_sqrt_hz * kDegPerRad * 60.0;  // sqrt(3600 s) = 60 sqrt(s)
 
   out.bias_instability_upper_bound = (i_min + 1 == n);
   if (record_s > 0.0) {

@@ -7,6 +7,7 @@
 #include "sim/integrate.h"
 #include "sim/still_detect.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <algorithm>
 #include <cmath>
@@ -20,7 +21,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kArcsecPerRad = 180.0 * 3600.0 / M_PI;
 constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 
 GyroTrace RotateTrace(const GyroTrace& trace, const Eigen::Matrix3d& cam_from_gyro,

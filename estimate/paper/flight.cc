@@ -4,9 +4,9 @@
 #include "sim/check.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -14,8 +14,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kArcsecPerRad = 180.0 * 3600.0 / kPi;
 // Window starts per chunk: the chunk's ends, ranges and kernel buffers stay in L2.
 constexpr size_t kChunkWindows = 8192;
 // The vector criterion's cheap upper bound skips the exact pairwise test only when it clears the
@@ -191,14 +189,6 @@ double MaxPairwiseAngle(const Quaternions& q, size_t begin, size_t end,
 }
 
 // Splits "12.5cm" into number and lower-case unit.
-std::pair<double, std::string> SplitNumberUnit(const std::string& text, const char* what) {
-  size_t split = text.size();
-  while (split > 0 && std::isalpha(static_cast<unsigned char>(text[split - 1]))) --split;
-  const auto value = ParseDouble(std::string_view(text).substr(0, split));
-  SHUTTERLAB_CHECK(value.has_value()) << what << " '" << text << "' is not a number with a unit";
-  return {*value, ToLower(text.substr(split))};
-}
-
 }  // namespace
 
 void FlightOptions::Check() const {
@@ -475,34 +465,6 @@ void WriteFlightSeriesCsv(const std::string& path, const FlightSeries& series) {
     out += '\n';
   }
   WriteFileAtomically(path, out);
-}
-
-double ParseLengthM(const std::string& text) {
-  const auto [value, unit] = SplitNumberUnit(text, "length");
-  double scale = 0;
-  if (unit.empty() || unit == "m")
-    scale = 1.0;
-  else if (unit == "cm")
-    scale = 0.01;
-  else if (unit == "mm")
-    scale = 0.001;
-  SHUTTERLAB_CHECK(scale > 0) << "unknown length unit '" << unit << "' in '" << text
-                              << "' (m, cm, mm)";
-  return value * scale;
-}
-
-double ParseDurationS(const std::string& text) {
-  const auto [value, unit] = SplitNumberUnit(text, "duration");
-  double scale = 0;
-  if (unit.empty() || unit == "s")
-    scale = 1.0;
-  else if (unit == "ms")
-    scale = 1e-3;
-  else if (unit == "us")
-    scale = 1e-6;
-  SHUTTERLAB_CHECK(scale > 0) << "unknown duration unit '" << unit << "' in '" << text
-                              << "' (s, ms, us)";
-  return value * scale;
 }
 
 }  // namespace shutterlab

@@ -11,6 +11,11 @@
 // The vector criterion flags a window when the rotation angle between any two orientations in it
 // (SO(3) trapezoid integration of the same bias-corrected rates) exceeds the same threshold.
 
+#include "sim/bias.h"
+#include "sim/gyro_trace.h"
+
+#include <nlohmann/json.hpp>
+
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -19,24 +24,19 @@
 #include <utility>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
-#include "sim/bias.h"
-#include "sim/gyro_trace.h"
-
 namespace shutterlab {
 
 struct FlightOptions {
-  double altitude_m = 50.0;                    // camera height above flat ground
-  std::vector<double> limits_m{0.05, 0.10};    // acceptable smear on the ground
+  double altitude_m = 50.0;                     // camera height above flat ground
+  std::vector<double> limits_m{0.05, 0.10};     // acceptable smear on the ground
   std::vector<double> windows_s{0.010, 0.020};  // rolling-shutter readout durations to test
-  double noise_allowance_arcsec = 20.0;        // the paper's allowance for the gyro's own noise
-  BiasSegment bias;                            // default 0:5 s, as in the paper
+  double noise_allowance_arcsec = 20.0;         // the paper's allowance for the gyro's own noise
+  BiasSegment bias;                             // default 0:5 s, as in the paper
   // When set, this bias (rad/s, gyro axes) is used instead of the segment's mean, and every sample
   // is analysed: flight-controller logs are calibrated at arming and rarely hold a still stretch.
   std::optional<Eigen::Vector3d> known_bias_rad_s;
-  bool vector_criterion = true;                // also flag by the SO(3) angle (costs ~2x)
-  bool series = false;                         // fill FlightResult::series for windows_s[0]
+  bool vector_criterion = true;  // also flag by the SO(3) angle (costs ~2x)
+  bool series = false;           // fill FlightResult::series for windows_s[0]
   // The series' exact per-window vector angle too (O(samples x window samples): slow at kHz rates;
   // the per-axis ranges cost nothing extra).
   bool series_vector = true;
@@ -51,12 +51,12 @@ struct FlightRow {
   double limit_m = 0;
   double window_s = 0;
   double threshold_arcsec = 0;
-  size_t windows = 0;                      // windows of this duration
-  size_t flagged = 0;                      // per-axis criterion: any axis over the threshold
-  std::array<size_t, 3> flagged_axis{};    // that axis over the threshold
-  size_t flagged_vector = 0;               // vector criterion (0 when not computed)
-  size_t flagged_vector_only = 0;          // vector flags, per-axis does not
-  size_t flagged_axis_only = 0;            // per-axis flags, vector does not
+  size_t windows = 0;                    // windows of this duration
+  size_t flagged = 0;                    // per-axis criterion: any axis over the threshold
+  std::array<size_t, 3> flagged_axis{};  // that axis over the threshold
+  size_t flagged_vector = 0;             // vector criterion (0 when not computed)
+  size_t flagged_vector_only = 0;        // vector flags, per-axis does not
+  size_t flagged_axis_only = 0;          // per-axis flags, vector does not
   double flagged_percent = 0;
   std::array<double, 3> flagged_percent_axis{};
   double flagged_percent_vector = 0;
@@ -65,10 +65,10 @@ struct FlightRow {
 // Per-window values for plotting, for the windows of windows_s[0] (arcsec).
 struct FlightSeries {
   double window_s = 0;
-  std::vector<int64_t> t_ns;                   // window start, gyro clock
+  std::vector<int64_t> t_ns;  // window start, gyro clock
   std::array<std::vector<double>, 3> range_arcsec;
-  std::vector<double> vector_arcsec;           // largest pairwise rotation angle; empty without
-                                               // the vector criterion or series_vector
+  std::vector<double> vector_arcsec;  // largest pairwise rotation angle; empty without
+                                      // the vector criterion or series_vector
 };
 
 struct FlightResult {
@@ -101,10 +101,5 @@ void WriteFlightSeriesCsv(const std::string& path, const FlightSeries& series);
 // and ascending.
 std::vector<std::pair<double, double>> FlaggedIntervalsS(const FlightSeries& series,
                                                          double threshold_arcsec);
-
-// "5cm", "50mm", "0.05m", "0.05" (metres) -> metres. Throws std::invalid_argument otherwise.
-double ParseLengthM(const std::string& text);
-// "10ms", "0.01s", "10000us", "0.01" (seconds) -> seconds. Throws std::invalid_argument otherwise.
-double ParseDurationS(const std::string& text);
 
 }  // namespace shutterlab

@@ -4,6 +4,7 @@
 #include "sim/check.h"
 #include "sim/integrate.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <nlohmann/json.hpp>
 
@@ -15,7 +16,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kRadToArcsec = 180.0 / M_PI * 3600.0;
 constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 
 }  // namespace
@@ -65,11 +65,11 @@ NoiseResult AnalyzeNoise(const GyroTrace& trace, const NoiseOptions& options) {
     }
     const double count = static_cast<double>(result.windows);
     AxisNoise& axis = result.axes[a];
-    axis.sigma_mean_arcsec = sigma_sum / count * kRadToArcsec;
-    axis.sigma_max_arcsec = sigma_max * kRadToArcsec;
-    axis.sigma_rms_arcsec = std::sqrt(sigma_sq_sum / count) * kRadToArcsec;
-    axis.range_mean_arcsec = range_sum / count * kRadToArcsec;
-    axis.range_max_arcsec = range_max * kRadToArcsec;
+    axis.sigma_mean_arcsec = sigma_sum / count * kArcsecPerRad;
+    axis.sigma_max_arcsec = sigma_max * kArcsecPerRad;
+    axis.sigma_rms_arcsec = std::sqrt(sigma_sq_sum / count) * kArcsecPerRad;
+    axis.range_mean_arcsec = range_sum / count * kArcsecPerRad;
+    axis.range_max_arcsec = range_max * kArcsecPerRad;
   }
   result.allan = AllanAnalysis(trace, first, options.allan_points_per_decade);
   return result;

@@ -7,6 +7,7 @@
 #include "render/truth_model.h"
 #include "sim/check.h"
 #include "sim/integrate.h"
+#include "sim/units.h"
 
 #include <opencv2/imgproc.hpp>
 
@@ -20,8 +21,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kDegPerRad = 180.0 / M_PI;
-constexpr double kArcsecPerRad = kDegPerRad * 3600.0;
 constexpr const char* kAxisLabels[3] = {"x (right)", "y (down)", "z (optical axis)"};
 constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 // One shade per limit, the strictest (smallest) limit lightest: stricter flags cover looser ones.

@@ -1,8 +1,9 @@
 #include "sim/logs/blackbox.h"
 
-#include "sim/logs/blackbox_codec.h"
 #include "sim/check.h"
+#include "sim/logs/blackbox_codec.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <algorithm>
 #include <array>
@@ -357,8 +358,7 @@ double GyroRadPerSecondPerLsb(const LogHeader& h, std::vector<std::string>* warn
     scale = 1.0f;
   }
   const bool baseflight = h.firmware_type && *h.firmware_type != "Cleanflight";
-  return baseflight ? static_cast<double>(scale) * 1e6
-                    : static_cast<double>(scale) * (M_PI / 180.0);
+  return baseflight ? static_cast<double>(scale) * 1e6 : static_cast<double>(scale) * kRadPerDeg;
 }
 
 // Identifies the fields the reader uses (blackbox-tools identifyMainFields).
@@ -846,9 +846,8 @@ DecodedLog DecodeLog(const uint8_t* data, size_t begin, size_t end, int index,
     std::vector<int64_t> dt(out.samples.size() - 1);
     for (size_t k = 0; k + 1 < out.samples.size(); ++k)
       dt[k] = out.samples[k + 1].t_ns - out.samples[k].t_ns;
-    auto mid = dt.begin() + dt.size() / 2;
-    std::nth_element(dt.begin(), mid, dt.end());
-    if (*mid > 0) out.info.rate_hz = 1e9 / static_cast<double>(*mid);
+    const int64_t median_dt = UpperMedian(std::move(dt));
+    if (median_dt > 0) out.info.rate_hz = 1e9 / static_cast<double>(median_dt);
   }
   return out;
 }
@@ -928,7 +927,7 @@ struct CsvColumns {
   int time = -1;
   double time_to_ns = 1000.0;  // µs unless the header says otherwise
   std::array<int, 3> gyro{-1, -1, -1};
-  double gyro_to_rad_s = M_PI / 180.0;
+  double gyro_to_rad_s = kRadPerDeg;
   bool gyro_unit_stated = false;
   bool has_loop_iteration = false;
 };

@@ -1,5 +1,10 @@
 #include "sim/logs/dataflash.h"
 
+#include "sim/check.h"
+#include "sim/logs/ulog.h"
+#include "sim/text_file.h"
+#include "sim/units.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -10,10 +15,6 @@
 #include <utility>
 #include <vector>
 
-#include "sim/check.h"
-#include "sim/text_file.h"
-#include "sim/logs/ulog.h"
-
 namespace shutterlab {
 namespace {
 
@@ -21,26 +22,49 @@ constexpr uint8_t kHead1 = 0xA3;
 constexpr uint8_t kHead2 = 0x95;
 constexpr uint8_t kFmtType = 128;
 constexpr size_t kHeaderBytes = 3;
-constexpr size_t kFmtLength = 89;  // 3 + type + length + name[4] + format[16] + labels[64]
+constexpr size_t kFmtLength = 89;     // 3 + type + length + name[4] + format[16] + labels[64]
 constexpr size_t kBatchSamples = 32;  // int16[32] per ISBD axis ('a')
 constexpr size_t kMaxDetailedWarnings = 8;
 
 uint64_t LoadLE(const char* p, size_t bytes) {
   uint64_t v = 0;
-  for (size_t i = 0; i < bytes; ++i) v |= static_cast<uint64_t>(static_cast<uint8_t>(p[i])) << (8 * i);
+  for (size_t i = 0; i < bytes; ++i)
+    v |= static_cast<uint64_t>(static_cast<uint8_t>(p[i])) << (8 * i);
   return v;
 }
 
 // Bytes of one format character; 0 when unknown.
 size_t CharBytes(char c) {
   switch (c) {
-    case 'b': case 'B': case 'M': return 1;
-    case 'h': case 'H': case 'c': case 'C': case 'g': return 2;
-    case 'i': case 'I': case 'f': case 'e': case 'E': case 'L': case 'n': return 4;
-    case 'd': case 'q': case 'Q': return 8;
-    case 'N': return 16;
-    case 'Z': case 'a': return 64;
-    default: return 0;
+    case 'b':
+    case 'B':
+    case 'M':
+      return 1;
+    case 'h':
+    case 'H':
+    case 'c':
+    case 'C':
+    case 'g':
+      return 2;
+    case 'i':
+    case 'I':
+    case 'f':
+    case 'e':
+    case 'E':
+    case 'L':
+    case 'n':
+      return 4;
+    case 'd':
+    case 'q':
+    case 'Q':
+      return 8;
+    case 'N':
+      return 16;
+    case 'Z':
+    case 'a':
+      return 64;
+    default:
+      return 0;
   }
 }
 
@@ -68,20 +92,36 @@ double ReadNumber(std::string_view payload, const Field& f, size_t element = 0) 
   const size_t at = f.offset + (f.type == 'a' ? 2 * element : 0);
   auto raw = [&](size_t bytes) { return LoadLE(payload.data() + at, bytes); };
   switch (f.type) {
-    case 'b': return static_cast<int8_t>(raw(1));
-    case 'B': case 'M': return static_cast<uint8_t>(raw(1));
-    case 'h': case 'a': return static_cast<int16_t>(raw(2));
-    case 'H': return static_cast<uint16_t>(raw(2));
-    case 'c': return static_cast<int16_t>(raw(2)) * 0.01;
-    case 'C': return static_cast<uint16_t>(raw(2)) * 0.01;
-    case 'i': return static_cast<int32_t>(raw(4));
-    case 'I': return static_cast<uint32_t>(raw(4));
-    case 'e': return static_cast<int32_t>(raw(4)) * 0.01;
-    case 'E': return static_cast<uint32_t>(raw(4)) * 0.01;
-    case 'L': return static_cast<int32_t>(raw(4)) * 1e-7;
-    case 'q': return static_cast<double>(static_cast<int64_t>(raw(8)));
-    case 'Q': return static_cast<double>(raw(8));
-    case 'g': return HalfToDouble(static_cast<uint16_t>(raw(2)));
+    case 'b':
+      return static_cast<int8_t>(raw(1));
+    case 'B':
+    case 'M':
+      return static_cast<uint8_t>(raw(1));
+    case 'h':
+    case 'a':
+      return static_cast<int16_t>(raw(2));
+    case 'H':
+      return static_cast<uint16_t>(raw(2));
+    case 'c':
+      return static_cast<int16_t>(raw(2)) * 0.01;
+    case 'C':
+      return static_cast<uint16_t>(raw(2)) * 0.01;
+    case 'i':
+      return static_cast<int32_t>(raw(4));
+    case 'I':
+      return static_cast<uint32_t>(raw(4));
+    case 'e':
+      return static_cast<int32_t>(raw(4)) * 0.01;
+    case 'E':
+      return static_cast<uint32_t>(raw(4)) * 0.01;
+    case 'L':
+      return static_cast<int32_t>(raw(4)) * 1e-7;
+    case 'q':
+      return static_cast<double>(static_cast<int64_t>(raw(8)));
+    case 'Q':
+      return static_cast<double>(raw(8));
+    case 'g':
+      return HalfToDouble(static_cast<uint16_t>(raw(2)));
     case 'f': {
       const uint32_t bits = static_cast<uint32_t>(raw(4));
       float v;
@@ -94,7 +134,8 @@ double ReadNumber(std::string_view payload, const Field& f, size_t element = 0) 
       std::memcpy(&v, &bits, 8);
       return v;
     }
-    default: return std::numeric_limits<double>::quiet_NaN();
+    default:
+      return std::numeric_limits<double>::quiet_NaN();
   }
 }
 
@@ -108,10 +149,17 @@ std::optional<int64_t> ReadTimeNs(std::string_view payload, const Field& f) {
       us = static_cast<int64_t>(v);
       break;
     }
-    case 'q': us = static_cast<int64_t>(LoadLE(payload.data() + f.offset, 8)); break;
-    case 'I': us = static_cast<uint32_t>(LoadLE(payload.data() + f.offset, 4)); break;
-    case 'i': us = static_cast<int32_t>(LoadLE(payload.data() + f.offset, 4)); break;
-    default: return std::nullopt;
+    case 'q':
+      us = static_cast<int64_t>(LoadLE(payload.data() + f.offset, 8));
+      break;
+    case 'I':
+      us = static_cast<uint32_t>(LoadLE(payload.data() + f.offset, 4));
+      break;
+    case 'i':
+      us = static_cast<int32_t>(LoadLE(payload.data() + f.offset, 4));
+      break;
+    default:
+      return std::nullopt;
   }
   if (us < 0 || us > std::numeric_limits<int64_t>::max() / 1000) return std::nullopt;
   return us * 1000;
@@ -127,7 +175,7 @@ std::string TrimmedText(std::string_view s) {
 struct Format {
   std::string name;
   bool relevant = false;  // a message this reader decodes; most of a real log is not
-  size_t length = 0;  // whole message, header included
+  size_t length = 0;      // whole message, header included
   std::map<std::string, Field> fields;
   const Field* Find(const std::string& label) const {
     auto it = fields.find(label);
@@ -146,21 +194,23 @@ std::optional<Format> ParseFmt(std::string_view p, std::string* error) {
   size_t start = 0;
   while (start <= labels.size()) {
     const size_t comma = labels.find(',', start);
-    names.push_back(labels.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    names.push_back(
+        labels.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
   if (labels.empty()) names.clear();
   if (names.size() != format.size()) {
-    *error = "FMT for '" + fmt.name + "' has " + std::to_string(format.size()) + " format characters but " +
-             std::to_string(names.size()) + " labels";
+    *error = "FMT for '" + fmt.name + "' has " + std::to_string(format.size()) +
+             " format characters but " + std::to_string(names.size()) + " labels";
     return std::nullopt;
   }
   size_t offset = 0;
   for (size_t i = 0; i < format.size(); ++i) {
     const size_t bytes = CharBytes(format[i]);
     if (bytes == 0) {
-      *error = "FMT for '" + fmt.name + "' has unknown format character '" + std::string(1, format[i]) + "'";
+      *error = "FMT for '" + fmt.name + "' has unknown format character '" +
+               std::string(1, format[i]) + "'";
       return std::nullopt;
     }
     fmt.fields.emplace(names[i], Field{format[i], offset});
@@ -170,8 +220,8 @@ std::optional<Format> ParseFmt(std::string_view p, std::string* error) {
   fmt.relevant = std::any_of(std::begin(kRelevant), std::end(kRelevant),
                              [&](const char* n) { return fmt.name == n; });
   if (offset + kHeaderBytes != fmt.length) {
-    *error = "FMT for '" + fmt.name + "' declares length " + std::to_string(fmt.length) + " but its format '" +
-             format + "' needs " + std::to_string(offset + kHeaderBytes);
+    *error = "FMT for '" + fmt.name + "' declares length " + std::to_string(fmt.length) +
+             " but its format '" + format + "' needs " + std::to_string(offset + kHeaderBytes);
     return std::nullopt;
   }
   return fmt;
@@ -194,16 +244,15 @@ class DataFlashParser {
   void Warn(const std::string& kind, size_t offset, const std::string& text) {
     size_t& count = warning_counts_[kind];
     ++count;
-    if (count <= kMaxDetailedWarnings) log_.warnings.push_back("byte " + std::to_string(offset) + ": " + text);
+    if (count <= kMaxDetailedWarnings)
+      log_.warnings.push_back("byte " + std::to_string(offset) + ": " + text);
   }
   // Message length at q when a known message starts there, else 0.
   size_t KnownAt(size_t q) const;
   size_t Resync(size_t from) const;
   // True when q is the end of the file, too close to it for a header (the loop reports that), or
   // a known message starts there (possibly cut off by the end of the file).
-  bool NextHeaderOk(size_t q) const {
-    return q + kHeaderBytes > bytes_.size() || KnownAt(q) != 0;
-  }
+  bool NextHeaderOk(size_t q) const { return q + kHeaderBytes > bytes_.size() || KnownAt(q) != 0; }
   // Decodes the known message of len bytes at pos (FMT or data).
   void Accept(size_t pos, size_t len);
   void Handle(const Format& fmt, std::string_view payload);
@@ -228,7 +277,8 @@ class DataFlashParser {
 
 size_t DataFlashParser::KnownAt(size_t q) const {
   if (bytes_.size() - q < kHeaderBytes) return 0;
-  if (static_cast<uint8_t>(bytes_[q]) != kHead1 || static_cast<uint8_t>(bytes_[q + 1]) != kHead2) return 0;
+  if (static_cast<uint8_t>(bytes_[q]) != kHead1 || static_cast<uint8_t>(bytes_[q + 1]) != kHead2)
+    return 0;
   const uint8_t type = static_cast<uint8_t>(bytes_[q + 2]);
   if (type == kFmtType) return kFmtLength;
   return formats_[type] ? formats_[type]->length : 0;
@@ -260,7 +310,8 @@ void DataFlashParser::Accept(size_t pos, size_t len) {
     ++log_.records_skipped;
     Warn("fmt", pos, error + "; skipped");
   } else if (defined == kFmtType) {
-    if (fmt->length != kFmtLength) Warn("fmt", pos, "FMT redefines itself with another length; ignored");
+    if (fmt->length != kFmtLength)
+      Warn("fmt", pos, "FMT redefines itself with another length; ignored");
   } else {
     formats_[defined] = std::move(fmt);
   }
@@ -278,10 +329,12 @@ void DataFlashParser::Handle(const Format& fmt, std::string_view p) {
     const Field* t_field = sample_us && name == "GYR" ? sample_us : time_us;
     if (!x || !y || !z || !t_field) return;
     int instance = name == "IMU2" ? 1 : name == "IMU3" ? 2 : 0;
-    if (const Field* i = fmt.Find("I")) instance = static_cast<int>(ToInt(ReadNumber(p, *i)) & 0xff);
+    if (const Field* i = fmt.Find("I"))
+      instance = static_cast<int>(ToInt(ReadNumber(p, *i)) & 0xff);
     const auto t_ns = ReadTimeNs(p, *t_field);
     auto& c = Candidate(name == "GYR" ? "GYR" : "IMU", instance, name == "GYR" ? 0 : 2);
-    c.samples.push_back({t_ns.value_or(0), Eigen::Vector3d(ReadNumber(p, *x), ReadNumber(p, *y), ReadNumber(p, *z))});
+    c.samples.push_back({t_ns.value_or(0),
+                         Eigen::Vector3d(ReadNumber(p, *x), ReadNumber(p, *y), ReadNumber(p, *z))});
   } else if (name == "ISBH") {
     const Field* n = fmt.Find("N");
     const Field* type = fmt.Find("type");
@@ -294,7 +347,8 @@ void DataFlashParser::Handle(const Format& fmt, std::string_view p) {
     batches_.erase(key);
     if (ReadNumber(p, *type) != 1.0) return;  // 0 accelerometer, 1 gyro
     BatchHeader h;
-    if (const Field* inst = fmt.Find("instance")) h.instance = static_cast<int>(ToInt(ReadNumber(p, *inst)) & 0xff);
+    if (const Field* inst = fmt.Find("instance"))
+      h.instance = static_cast<int>(ToInt(ReadNumber(p, *inst)) & 0xff);
     h.mul = ReadNumber(p, *mul);
     h.rate_hz = ReadNumber(p, *rate);
     h.count = static_cast<size_t>(std::max<int64_t>(0, ToInt(ReadNumber(p, *cnt))));
@@ -326,7 +380,9 @@ void DataFlashParser::Handle(const Format& fmt, std::string_view p) {
       const size_t index = static_cast<size_t>(seqno) * kBatchSamples + k;
       if (index >= h.count) break;
       const int64_t t_ns = h.sample_ns + std::llround(static_cast<double>(index) * 1e9 / h.rate_hz);
-      c.samples.push_back({t_ns, Eigen::Vector3d(ReadNumber(p, *x, k), ReadNumber(p, *y, k), ReadNumber(p, *z, k)) / h.mul});
+      c.samples.push_back(
+          {t_ns, Eigen::Vector3d(ReadNumber(p, *x, k), ReadNumber(p, *y, k), ReadNumber(p, *z, k)) /
+                     h.mul});
     }
   } else if (name == "CAM" || name == "TRIG") {
     if (!time_us) return;
@@ -349,7 +405,8 @@ void DataFlashParser::Handle(const Format& fmt, std::string_view p) {
 FlightLog DataFlashParser::Run() {
   log_.format = "dataflash";
   if (!LooksLikeDataFlash(bytes_)) {
-    throw IoError(IoMessage(path_, 0, "byte 0: not an ArduPilot DataFlash log (expected 0xA3 0x95 0x80)"));
+    throw IoError(
+        IoMessage(path_, 0, "byte 0: not an ArduPilot DataFlash log (expected 0xA3 0x95 0x80)"));
   }
   const size_t n = bytes_.size();
   size_t pos = 0;
@@ -363,13 +420,16 @@ FlightLog DataFlashParser::Run() {
       const size_t next = Resync(pos + 1);
       ++log_.records_skipped;
       skipped_bytes_ += next - pos;
-      Warn("corrupt", pos, "no known message starts here (type " + std::to_string(static_cast<uint8_t>(bytes_[pos + 2])) +
-                               "); skipped " + std::to_string(next - pos) + " bytes");
+      Warn("corrupt", pos,
+           "no known message starts here (type " +
+               std::to_string(static_cast<uint8_t>(bytes_[pos + 2])) + "); skipped " +
+               std::to_string(next - pos) + " bytes");
       pos = next;
       continue;
     }
     if (len > n - pos) {
-      Warn("truncated", pos, "file ends inside a message of " + std::to_string(len) + " bytes (truncated?)");
+      Warn("truncated", pos,
+           "file ends inside a message of " + std::to_string(len) + " bytes (truncated?)");
       break;
     }
     const uint8_t type = static_cast<uint8_t>(bytes_[pos + 2]);
@@ -388,8 +448,10 @@ FlightLog DataFlashParser::Run() {
       }
       ++log_.records_skipped;
       skipped_bytes_ += next - pos;
-      Warn("corrupt", pos, "message (type " + std::to_string(static_cast<uint8_t>(bytes_[pos + 2])) +
-                               ") not followed by a valid message; skipped " + std::to_string(next - pos) + " bytes");
+      Warn("corrupt", pos,
+           "message (type " + std::to_string(static_cast<uint8_t>(bytes_[pos + 2])) +
+               ") not followed by a valid message; skipped " + std::to_string(next - pos) +
+               " bytes");
       pos = next;
       continue;
     }
@@ -399,10 +461,12 @@ FlightLog DataFlashParser::Run() {
 
   for (const auto& [kind, count] : warning_counts_) {
     if (count > kMaxDetailedWarnings) {
-      log_.warnings.push_back(std::to_string(count - kMaxDetailedWarnings) + " more warnings of kind '" + kind + "' not listed");
+      log_.warnings.push_back(std::to_string(count - kMaxDetailedWarnings) +
+                              " more warnings of kind '" + kind + "' not listed");
     }
   }
-  if (skipped_bytes_ > 0) log_.warnings.push_back(std::to_string(skipped_bytes_) + " corrupt bytes skipped in total");
+  if (skipped_bytes_ > 0)
+    log_.warnings.push_back(std::to_string(skipped_bytes_) + " corrupt bytes skipped in total");
 
   std::stable_sort(log_.camera_events.begin(), log_.camera_events.end(),
                    [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
@@ -410,15 +474,17 @@ FlightLog DataFlashParser::Run() {
   for (double h : cam_rel_alt_m_) {
     if (h > kAirborneAltitudeM) airborne.push_back(h);
   }
-  if (auto m = internal::Median(std::move(airborne))) {
-    log_.altitude_above_ground_m = m;
-    log_.warnings.push_back("altitude above ground: median CAM.RelAlt above 1 m (height above home at each picture)");
+  if (!airborne.empty()) {
+    log_.altitude_above_ground_m = Median(std::move(airborne));
+    log_.warnings.push_back(
+        "altitude above ground: median CAM.RelAlt above 1 m (height above home at each picture)");
   }
 
   std::vector<internal::GyroCandidate> candidates;
   for (auto& [name, c] : candidates_) candidates.push_back(std::move(c));
   if (!internal::ChooseGyroSource(std::move(candidates), &log_)) {
-    throw IoError(IoMessage(path_, 0, "no usable gyro data (looked for GYR, ISBH/ISBD gyro batches, IMU)"));
+    throw IoError(
+        IoMessage(path_, 0, "no usable gyro data (looked for GYR, ISBH/ISBD gyro batches, IMU)"));
   }
   return std::move(log_);
 }

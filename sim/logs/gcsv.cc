@@ -34,18 +34,28 @@ const char* TscaleText(TimeUnit unit) {
 }
 
 // Gyroflow's frame_readout_direction codes and names (telemetry-parser src/gyroflow/gcsv.rs).
-std::optional<std::string> ReadoutDirectionWord(const std::string& value) {
-  if (value == "0" || value == "TopToBottom") return "top_to_bottom";
-  if (value == "1" || value == "180" || value == "BottomToTop") return "bottom_to_top";
-  if (value == "2" || value == "270" || value == "LeftToRight") return "left_to_right";
-  if (value == "3" || value == "90" || value == "RightToLeft") return "right_to_left";
+std::optional<ReadoutDirection> GyroflowReadoutDirection(const std::string& value) {
+  if (value == "0" || value == "TopToBottom") return ReadoutDirection::kTopToBottom;
+  if (value == "1" || value == "180" || value == "BottomToTop")
+    return ReadoutDirection::kBottomToTop;
+  if (value == "2" || value == "270" || value == "LeftToRight")
+    return ReadoutDirection::kLeftToRight;
+  if (value == "3" || value == "90" || value == "RightToLeft")
+    return ReadoutDirection::kRightToLeft;
   return std::nullopt;
 }
 
-int ReadoutDirectionCode(const std::string& word) {
-  if (word == "bottom_to_top") return 1;
-  if (word == "left_to_right") return 2;
-  if (word == "right_to_left") return 3;
+int GyroflowReadoutCode(ReadoutDirection direction) {
+  switch (direction) {
+    case ReadoutDirection::kTopToBottom:
+      return 0;
+    case ReadoutDirection::kBottomToTop:
+      return 1;
+    case ReadoutDirection::kLeftToRight:
+      return 2;
+    case ReadoutDirection::kRightToLeft:
+      return 3;
+  }
   return 0;
 }
 
@@ -156,13 +166,13 @@ GcsvLog ReadGcsv(const std::string& path) {
       readout_line = n;
     } else if (key == "frame_readout_direction") {
       direction_value = value;
-      const auto word = ReadoutDirectionWord(value);
-      if (!word) {
+      const auto direction = GyroflowReadoutDirection(value);
+      if (!direction) {
         throw IoError(IoMessage(path, n,
                                 "unknown frame_readout_direction '" + value +
                                     "' (0-3, TopToBottom, BottomToTop, LeftToRight, RightToLeft)"));
       }
-      log.frame_readout_direction = *word;
+      log.frame_readout_direction = *direction;
     }
   }
   if (column_line == 0) {
@@ -189,8 +199,9 @@ GcsvLog ReadGcsv(const std::string& path) {
   if (readout_ms) {
     // Gyroflow's legacy files encode bottom-to-top as a negative readout time.
     if (*readout_ms < 0) {
-      log.frame_readout_direction =
-          log.frame_readout_direction == "bottom_to_top" ? "top_to_bottom" : "bottom_to_top";
+      log.frame_readout_direction = log.frame_readout_direction == ReadoutDirection::kBottomToTop
+                                        ? ReadoutDirection::kTopToBottom
+                                        : ReadoutDirection::kBottomToTop;
       log.warnings.push_back("negative frame_readout_time on line " + std::to_string(readout_line) +
                              ": read as the opposite readout direction");
     }
@@ -253,10 +264,6 @@ void GcsvWriteOptions::Check() const {
   SHUTTERLAB_CHECK(std::isfinite(gscale) && gscale >= 0.0) << "gscale must be >= 0, got " << gscale;
   SHUTTERLAB_CHECK(!frame_readout_s || (std::isfinite(*frame_readout_s) && *frame_readout_s > 0.0))
       << "frame_readout_s must be positive";
-  SHUTTERLAB_CHECK(
-      frame_readout_direction == "top_to_bottom" || frame_readout_direction == "bottom_to_top" ||
-      frame_readout_direction == "left_to_right" || frame_readout_direction == "right_to_left")
-      << "unknown frame_readout_direction '" << frame_readout_direction << "'";
   SHUTTERLAB_CHECK(id.find_first_of(",\r\n") == std::string::npos)
       << "id must not hold ',' or a newline";
   for (const auto& [key, value] : extra_header) {
@@ -280,7 +287,7 @@ void WriteGcsv(const std::string& path, const GyroTrace& trace, const GcsvWriteO
     out += "frame_readout_time,";
     AppendDouble(*options.frame_readout_s * 1e3, &out);
     out += "\nframe_readout_direction," +
-           std::to_string(ReadoutDirectionCode(options.frame_readout_direction)) + "\n";
+           std::to_string(GyroflowReadoutCode(options.frame_readout_direction)) + "\n";
   }
   out += std::string("tscale,") + TscaleText(options.time_unit) + "\ngscale,";
   AppendDouble(options.gscale > 0 ? options.gscale : 1.0, &out);

@@ -20,6 +20,7 @@
 
 #include "sim/gyro_trace.h"
 #include "sim/logs/raw_csv.h"
+#include "sim/readout_direction.h"
 
 #include <Eigen/Core>
 
@@ -36,9 +37,9 @@ struct GcsvLog {
   GyroTrace trace;
   std::string orientation = "XYZ";        // as applied (the file's, or the default "xzY")
   std::optional<double> frame_readout_s;  // frame_readout_time (Gyroflow writes milliseconds)
-  // frame_readout_direction as a word: "top_to_bottom" (also when absent), "bottom_to_top",
-  // "left_to_right", "right_to_left". Gyroflow's codes 0/1/2/3 (and 180/270/90) are mapped.
-  std::string frame_readout_direction = "top_to_bottom";
+  // frame_readout_direction: top to bottom also when absent. Gyroflow's codes 0/1/2/3 (and
+  // 180/270/90) and names (TopToBottom, ...) are mapped.
+  ReadoutDirection frame_readout_direction = ReadoutDirection::kTopToBottom;
   double tscale = 0.001;
   double gscale = 1.0;
   // Every "key,value" line of the header block in file order, scales and orientation included.
@@ -63,7 +64,7 @@ struct GcsvWriteOptions {
   // > 0: rates quantised to integer multiples of gscale rad/s, as a logger would write them.
   double gscale = 0.0;
   std::optional<double> frame_readout_s;  // written as frame_readout_time in ms when set
-  std::string frame_readout_direction = "top_to_bottom";
+  ReadoutDirection frame_readout_direction = ReadoutDirection::kTopToBottom;
   // Further "key,value" header lines (note, vendor, lensprofile, ...), written as given.
   std::vector<std::pair<std::string, std::string>> extra_header;
   void Check() const;  // throws std::invalid_argument naming the first bad field

@@ -1,12 +1,12 @@
 #include "sim/logs/gyro_io.h"
 
+#include "sim/check.h"
+#include "sim/text_file.h"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstring>
-
-#include "sim/check.h"
-#include "sim/text_file.h"
 
 namespace shutterlab {
 namespace {
@@ -139,9 +139,9 @@ GyroTrace ReadRows(const std::string& path, std::string_view text, size_t begin)
 }  // namespace
 
 void GyroReadOptions::Check() const {
-  SHUTTERLAB_CHECK(raw_range_dps == 250 || raw_range_dps == 500 || raw_range_dps == 1000 ||
-                   raw_range_dps == 2000)
-      << "unknown gyro range " << raw_range_dps << " deg/s (expected 250, 500, 1000 or 2000)";
+  SHUTTERLAB_CHECK(format == LogFormat::kAuto || IsPlainGyroFormat(format))
+      << "ReadGyro reads gyro.csv, gcsv or raw counts, not " << LogFormatName(format);
+  raw.Check();
 }
 
 GyroTrace ReadGyroCsv(const std::string& path) {
@@ -172,7 +172,7 @@ void WriteGyroCsv(const std::string& path, const GyroTrace& trace) {
   WriteFileAtomically(path, out);
 }
 
-GyroFormat DetectGyroFormat(std::string_view text, const std::string& path) {
+LogFormat DetectGyroFormat(std::string_view text, const std::string& path) {
   LineCursor cursor(text);
   std::vector<std::string_view> fields;
   std::optional<std::string_view> first;
@@ -182,12 +182,12 @@ GyroFormat DetectGyroFormat(std::string_view text, const std::string& path) {
   const long first_line = cursor.line_number();
   SplitFields(StripBom(*first), ',', &fields);
   if (fields.size() == 1 && (fields[0] == "GYROFLOW IMU LOG" || fields[0] == "CAMERA IMU LOG")) {
-    return GyroFormat::kGcsv;
+    return LogFormat::kGcsv;
   }
   const bool has_header = !ParseDouble(fields[0]);
   // FORMATS.md is the contract: its header means gyro.csv, whatever the values look like (an
   // ideal still trace writes every rate as "0"). Raw counts carry another header or none.
-  if (has_header && IsGyroCsvHeader(fields)) return GyroFormat::kGyroCsv;
+  if (has_header && IsGyroCsvHeader(fields)) return LogFormat::kGyroCsv;
   // Scan the rows of a headerless file from its first line, else from the line after the header.
   LineCursor rows(text);
   if (has_header) {
@@ -200,7 +200,7 @@ GyroFormat DetectGyroFormat(std::string_view text, const std::string& path) {
       if (ParseInt(fields[axis])) continue;
       // A non-number is left to the raw reader, which names it; a fractional number is neither
       // format.
-      if (!ParseDouble(fields[axis])) return GyroFormat::kRaw;
+      if (!ParseDouble(fields[axis])) return LogFormat::kRaw;
       throw IoError(IoMessage(
           path, rows.line_number(),
           std::string(has_header ? "unrecognised header '" + std::string(*first) + "' and"
@@ -211,33 +211,27 @@ GyroFormat DetectGyroFormat(std::string_view text, const std::string& path) {
     }
   }
   // Every rate an integer: raw counts (whatever their header says).
-  return GyroFormat::kRaw;
+  return LogFormat::kRaw;
 }
 
 GyroTrace ReadGyro(const std::string& path, const GyroReadOptions& options) {
   options.Check();
-  GyroFormat format = options.format;
-  if (format == GyroFormat::kAuto) format = DetectGyroFormat(ReadFileToString(path), path);
+  LogFormat format = options.format;
+  if (format == LogFormat::kAuto) format = DetectGyroFormat(ReadFileToString(path), path);
   switch (format) {
-    case GyroFormat::kAuto:
-    case GyroFormat::kGyroCsv:
+    case LogFormat::kAuto:
+    case LogFormat::kGyroCsv:
       return ReadGyroCsv(path);
-    case GyroFormat::kGcsv:
+    case LogFormat::kGcsv:
       return ReadGcsv(path).trace;
-    case GyroFormat::kRaw:
-      return ReadRawCsv(path, options.raw_range_dps, options.raw_time_unit);
+    case LogFormat::kRaw:
+      return ReadRawCsv(path, options.raw.range_dps, options.raw.time_unit);
+    case LogFormat::kULog:
+    case LogFormat::kBlackbox:
+    case LogFormat::kDataFlash:
+      break;  // refused by options.Check()
   }
   return ReadGyroCsv(path);
-}
-
-GyroFormat ParseGyroFormat(const std::string& name) {
-  const std::string n = ToLower(name);
-  if (n == "auto") return GyroFormat::kAuto;
-  if (n == "gyro.csv" || n == "csv") return GyroFormat::kGyroCsv;
-  if (n == "gcsv") return GyroFormat::kGcsv;
-  if (n == "raw") return GyroFormat::kRaw;
-  SHUTTERLAB_CHECK(false) << "unknown gyro format '" << name << "' (auto, csv, gcsv, raw)";
-  return GyroFormat::kAuto;
 }
 
 TimeUnit ParseTimeUnit(const std::string& name) {
@@ -247,20 +241,6 @@ TimeUnit ParseTimeUnit(const std::string& name) {
   if (name == "ns") return TimeUnit::kNanoseconds;
   SHUTTERLAB_CHECK(false) << "unknown time unit '" << name << "' (s, ms, us, ns)";
   return TimeUnit::kSeconds;
-}
-
-const char* GyroFormatName(GyroFormat format) {
-  switch (format) {
-    case GyroFormat::kAuto:
-      return "auto";
-    case GyroFormat::kGyroCsv:
-      return "gyro.csv";
-    case GyroFormat::kGcsv:
-      return "gcsv";
-    case GyroFormat::kRaw:
-      return "raw";
-  }
-  return "?";
 }
 
 }  // namespace shutterlab

@@ -2,28 +2,19 @@
 // Readers and writers of gyro logs. Every reader throws IoError("PATH:LINE: problem") on bad input
 // and never returns a partial trace.
 
-#include "sim/logs/gcsv.h"  // GcsvLog, ReadGcsv, WriteGcsv
 #include "sim/gyro_trace.h"
-#include "sim/logs/raw_csv.h"  // TimeUnit, ReadRawCsv, WriteRawCsv
+#include "sim/logs/gcsv.h"        // GcsvLog, ReadGcsv, WriteGcsv
+#include "sim/logs/log_format.h"  // LogFormat, RawCountOptions, ParseGyroFormat
+#include "sim/logs/raw_csv.h"     // TimeUnit, ReadRawCsv, WriteRawCsv
 
 #include <string>
 #include <string_view>
 
 namespace shutterlab {
 
-enum class GyroFormat {
-  kAuto,     // detect from the content
-  kGyroCsv,  // FORMATS.md gyro.csv: header t,gx,gy,gz[,...]; seconds and rad/s
-  kGcsv,     // Gyroflow .gcsv ("GYROFLOW IMU LOG" header block)
-  kRaw,      // the source paper's raw-count CSV: time and three int16 counts per line
-};
-
 struct GyroReadOptions {
-  GyroFormat format = GyroFormat::kAuto;
-  // Raw-count logs only: full-scale range in deg/s (250, 500, 1000 or 2000 -> 131, 65.5, 32.8,
-  // 16.4 LSB per deg/s, the MPU-9250 sensitivities) and the unit of the time column.
-  int raw_range_dps = 250;
-  TimeUnit raw_time_unit = TimeUnit::kSeconds;
+  LogFormat format = LogFormat::kAuto;  // kAuto or a plain gyro format (IsPlainGyroFormat)
+  RawCountOptions raw;                  // raw-count logs only
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };
@@ -47,16 +38,13 @@ GyroTrace ReadGyro(const std::string& path, const GyroReadOptions& options = {})
 // Rule 2's ambiguity: a gyro.csv whose every rate is a whole number of rad/s (in practice: all
 // zero) reads as raw counts; with the default --range/--time-unit an all-zero trace is the same
 // either way. Override with --format.
-GyroFormat DetectGyroFormat(std::string_view text, const std::string& path);
+LogFormat DetectGyroFormat(std::string_view text, const std::string& path);
 
 // FORMATS.md gyro.csv. Extra columns after gz are ignored.
 GyroTrace ReadGyroCsv(const std::string& path);
 // Writes gyro.csv whole or not at all; times exact to the nanosecond, rates round-trip exact.
 void WriteGyroCsv(const std::string& path, const GyroTrace& trace);
 
-// Parses a name such as "gyro.csv", "gcsv", "raw", "auto"; throws std::invalid_argument otherwise.
-GyroFormat ParseGyroFormat(const std::string& name);
 TimeUnit ParseTimeUnit(const std::string& name);  // "s", "ms", "us", "ns"
-const char* GyroFormatName(GyroFormat format);
 
 }  // namespace shutterlab

@@ -2,6 +2,7 @@
 
 #include "sim/check.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <cmath>
 #include <cstdio>
@@ -11,9 +12,6 @@
 
 namespace shutterlab {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kRadPerDeg = kPi / 180.0;
 
 // Decimal digits of the fraction needed to write t_ns exactly in a unit: 9, 6, 3, 0.
 int FractionDigits(TimeUnit unit) {

@@ -6,12 +6,12 @@
 // follows PX4/pyulog core.py where the spec is silent (data messages may omit trailing _padding
 // fields; an unknown message type means corruption).
 
+#include "sim/logs/flight_log.h"
+
 #include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include "sim/logs/flight_log.h"
 
 namespace shutterlab {
 
@@ -58,9 +58,6 @@ struct GyroCandidate {
 // 10% of the best rate. Fills log->gyro, gyro_source, gyro_sources_available, and adds warnings
 // and records_skipped for what was dropped. Returns false when no candidate has 2 samples.
 bool ChooseGyroSource(std::vector<GyroCandidate> candidates, FlightLog* log);
-
-// Median of values (copy); nullopt when empty.
-std::optional<double> Median(std::vector<double> values);
 
 }  // namespace internal
 }  // namespace shutterlab

@@ -2,6 +2,7 @@
 
 #include "sim/check.h"
 #include "sim/logs/raw_csv.h"
+#include "sim/units.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,8 +10,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kRadPerDeg = kPi / 180.0;
 // The sensor's output register is int16.
 constexpr double kMinCount = -32768.0;
 constexpr double kMaxCount = 32767.0;

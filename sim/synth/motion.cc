@@ -1,19 +1,16 @@
 #include "sim/synth/motion.h"
 
 #include "sim/check.h"
-#include "sim/synth/imu_model.h"
 #include "sim/so3.h"
+#include "sim/synth/imu_model.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <algorithm>
 #include <cmath>
 
 namespace shutterlab {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kTwoPi = 2.0 * kPi;
-constexpr double kRadPerDeg = kPi / 180.0;
 
 // Random-stream ids (NoiseSource) of the motion; sensors use others (sim/synth.cc).
 constexpr uint64_t kStepsStream = 1;

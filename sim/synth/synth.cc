@@ -1,8 +1,8 @@
 #include "sim/synth/synth.h"
 
 #include "sim/check.h"
-#include "sim/logs/ulog_write.h"
 #include "sim/logs/raw_csv.h"
+#include "sim/logs/ulog_write.h"
 
 #include <algorithm>
 #include <cmath>
@@ -135,11 +135,12 @@ GyroTrace SynthesizeTruth(const SynthOptions& options) {
 void SynthOutputOptions::Check() const {
   SHUTTERLAB_CHECK(!out_path.empty()) << "an output file is required (--out)";
   SHUTTERLAB_CHECK(out2_path != out_path) << "the second sensor's file must differ from the first";
-  SHUTTERLAB_CHECK(format == GyroFormat::kGyroCsv || format == GyroFormat::kRaw)
-      << "synth writes gyro.csv or raw counts, not " << GyroFormatName(format);
-  SHUTTERLAB_CHECK(!ulog || format == GyroFormat::kGyroCsv) << "a ULog holds rates, not raw counts";
+  SHUTTERLAB_CHECK(format == LogFormat::kGyroCsv || format == LogFormat::kRaw)
+      << "synth writes gyro.csv or raw counts, not " << LogFormatName(format);
+  SHUTTERLAB_CHECK(!ulog || format == LogFormat::kGyroCsv) << "a ULog holds rates, not raw counts";
   SHUTTERLAB_CHECK(trigger_every_s >= 0.0) << "the trigger interval must not be negative";
-  SHUTTERLAB_CHECK(trigger_every_s == 0.0 || ulog) << "camera triggers are written into a ULog only";
+  SHUTTERLAB_CHECK(trigger_every_s == 0.0 || ulog)
+      << "camera triggers are written into a ULog only";
   SHUTTERLAB_CHECK(!altitude_m || ulog) << "an altitude is written into a ULog only";
 }
 
@@ -151,7 +152,8 @@ void WriteOne(const std::string& path, const GyroTrace& trace, const SynthOption
     std::vector<CameraEvent> triggers;
     if (output.trigger_every_s > 0.0 && !trace.empty()) {
       const int64_t every_ns = SecondsToNs(output.trigger_every_s);
-      for (int64_t t = trace.t_begin_ns() + every_ns; t + every_ns <= trace.t_end_ns(); t += every_ns) {
+      for (int64_t t = trace.t_begin_ns() + every_ns; t + every_ns <= trace.t_end_ns();
+           t += every_ns) {
         CameraEvent event;
         event.t_ns = t;
         event.sequence = static_cast<int64_t>(triggers.size());
@@ -162,7 +164,7 @@ void WriteOne(const std::string& path, const GyroTrace& trace, const SynthOption
     ULogWriteOptions ulog;
     ulog.altitude_above_ground_m = output.altitude_m;
     WriteULog(path, trace, triggers, ulog);
-  } else if (output.format == GyroFormat::kRaw) {
+  } else if (output.format == LogFormat::kRaw) {
     WriteRawCsv(path, trace, options.imu.range_dps, output.time_unit);
   } else {
     WriteGyroCsv(path, trace);

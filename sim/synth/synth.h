@@ -16,8 +16,8 @@
 //    21-31 % / 50-60 % at 5 cm and 9-14 % / 23-33 % at 10 cm over seeds 1-5 (seed 1: 21 / 54 and
 //    9 / 23 %); the paper's flight had 25 / 56 % and 11 / 25 %.
 
-#include "sim/logs/gyro_io.h"
 #include "sim/gyro_trace.h"
+#include "sim/logs/gyro_io.h"
 #include "sim/synth/imu_model.h"
 #include "sim/synth/motion.h"
 
@@ -71,7 +71,7 @@ struct SynthOutputOptions {
   // kGyroCsv (FORMATS.md gyro.csv, seconds and rad/s) or kRaw (the paper's logger: header
   // t,gx,gy,gz, int16 counts of imu.range_dps, time in time_unit; read back with --raw --range
   // --time-unit).
-  GyroFormat format = GyroFormat::kGyroCsv;
+  LogFormat format = LogFormat::kGyroCsv;
   TimeUnit time_unit = TimeUnit::kSeconds;  // raw only
   // Instead of the above: a PX4 ULog flight log (sim/logs/ulog_write.h), with a camera_capture
   // event every trigger_every_s (0: none) from one interval after the first sample, and the

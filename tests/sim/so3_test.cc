@@ -1,16 +1,16 @@
 #include "sim/so3.h"
 
-#include <cmath>
-#include <random>
+#include "sim/units.h"
+#include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 
-#include "tests/test_util.h"
+#include <cmath>
+#include <random>
 
 namespace shutterlab {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // Double rounding over a handful of operations.
 constexpr double kTightTol = 1e-12;
 

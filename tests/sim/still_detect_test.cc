@@ -1,5 +1,7 @@
 #include "sim/still_detect.h"
 
+#include "sim/units.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,7 +12,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // The brief's requirement for a recovered still segment's ends.
 constexpr double kEdgeTolS = 0.050;
 
@@ -95,7 +96,7 @@ TEST(StillDetect, CorrelatedAndQuantisedNoise) {
   // A 41 Hz-like low pass at 1 kHz (alpha 0.2) and MPU-9250 counts at +-250 deg/s.
   Synth o;
   o.lowpass_alpha = 0.2;
-  o.count_rad_s = kPi / 180.0 / 131.0;
+  o.count_rad_s = kRadPerDeg / 131.0;
   o.noise_rad_s = 0.0015;
   for (uint64_t seed = 1; seed <= 3; ++seed) {
     o.seed = seed;

@@ -1,6 +1,7 @@
 #include "estimate/paper/accuracy.h"
 
 #include "sim/so3.h"
+#include "sim/units.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -12,8 +13,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kRadToArcsec = 180.0 / M_PI * 3600.0;
-constexpr double kDegToRad = M_PI / 180.0;
 constexpr int64_t kPeriodNs = 333'333;  // 3 kHz
 constexpr double kDt = kPeriodNs * 1e-9;
 // Per-sample rate noise of an MPU-9250 at 3 kHz (the paper's ~1.1" sigma over 120-sample windows).
@@ -40,7 +39,7 @@ GyroTrace MakeSession(const Session& session) {
   std::vector<Eigen::Vector3d> rate(static_cast<size_t>(5.5 / kDt), Eigen::Vector3d::Zero());
   const double pulse_s = kPulseSamples * kDt;
   for (size_t i = 0; i < session.turn_deg.size(); ++i) {
-    const double peak = 2.0 * session.turn_deg[i] * kDegToRad / pulse_s;  // mean of sin^2 is 1/2
+    const double peak = 2.0 * session.turn_deg[i] * kRadPerDeg / pulse_s;  // mean of sin^2 is 1/2
     for (size_t j = 0; j < kPulseSamples; ++j) {
       const double s = std::sin(M_PI * static_cast<double>(j) / kPulseSamples);
       rate.push_back(session.axis * (peak * s * s));
@@ -70,7 +69,7 @@ Session Turns(int n, double turn_deg, const Eigen::Vector3d& axis, double sigma_
 
 // A total station's vertical axis seen by a sensor mounted 5 degrees off level (azimuth 30 deg).
 Eigen::Vector3d TiltedAxis(double tilt_deg) {
-  const double t = tilt_deg * kDegToRad, az = 30.0 * kDegToRad;
+  const double t = tilt_deg * kRadPerDeg, az = 30.0 * kRadPerDeg;
   return Eigen::Vector3d(std::sin(t) * std::cos(az), std::sin(t) * std::sin(az), std::cos(t));
 }
 
@@ -110,10 +109,10 @@ TEST(AnalyzeAccuracy, PerAxisAnglesAreExactButTheZyxCompositionIsNot) {
   // angle is phi. R = Rz(phi n_z) Ry(phi n_y) Rx(phi n_x) is not Exp(phi n): by BCH its angle is
   // phi - phi^2 n_x n_y n_z / 2 + O(phi^3), 6" short of 1 deg for n = (1,1,1)/sqrt(3).
   const Eigen::Vector3d axis = Eigen::Vector3d(1, 1, 1).normalized();
-  const double phi = 1.0 * kDegToRad;
+  const double phi = 1.0 * kRadPerDeg;
   const AccuracyResult r = AnalyzeAccuracy(MakeSession(Turns(2, 1.0, axis, 0.0)), Options());
   ASSERT_EQ(r.rotations.size(), 2u);
-  const double bch_arcsec = (phi - 0.5 * phi * phi * axis.prod()) * kRadToArcsec;
+  const double bch_arcsec = (phi - 0.5 * phi * phi * axis.prod()) * kArcsecPerRad;
   for (const DetectedRotation& rot : r.rotations) {
     EXPECT_NEAR(rot.theta_so3_arcsec, 3600.0, 1e-6);
     EXPECT_NEAR(rot.theta_vector_arcsec, 3600.0, 1e-6);

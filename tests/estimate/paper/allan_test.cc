@@ -1,6 +1,7 @@
 #include "estimate/paper/allan.h"
 
 #include "sim/check.h"
+#include "sim/units.h"
 
 #include <gtest/gtest.h>
 
@@ -10,8 +11,6 @@
 
 namespace shutterlab {
 namespace {
-
-constexpr double kRadToDeg = 180.0 / M_PI;
 
 // Angle (phase) form of a rate series: theta_0 = 0, theta_{k+1} = theta_k + rate_k * tau0.
 std::vector<double> AngleOf(const std::vector<double>& rate, double tau0_s) {
@@ -129,7 +128,7 @@ TEST(AllanAnalysis, WhiteNoiseGivesArwAndUnaffectedByBias) {
     const double n_expected = sigma[axis] * std::sqrt(1.0 / kRateHz);
     constexpr double kArwTol = 0.03;  // the fit leans on short taus with ~1e5 clusters: <1% seen
     EXPECT_NEAR(a.axes[axis].arw_rad_s_sqrt_hz / n_expected, 1.0, kArwTol);
-    EXPECT_NEAR(a.axes[axis].arw_deg_sqrt_h, a.axes[axis].arw_rad_s_sqrt_hz * kRadToDeg * 60.0,
+    EXPECT_NEAR(a.axes[axis].arw_deg_sqrt_h, a.axes[axis].arw_rad_s_sqrt_hz * kDegPerRad * 60.0,
                 1e-12);
     // White noise only: the minimum is on the -1/2 line (within its scatter), not a floor.
     EXPECT_TRUE(a.axes[axis].bias_instability_upper_bound);
@@ -159,7 +158,7 @@ TEST(ReadAllanCoefficients, RecoversArwAndBiasInstabilityFromAnalyticCurve) {
       0.02;  // the floor term bends the -1/2 region by < 2% where slope ~ -1/2
   EXPECT_NEAR(c.arw_rad_s_sqrt_hz / n_arw, 1.0, kArwTol);
   constexpr double kBiTol = 0.02;  // the minimum sits on the floor plus a little N and K
-  EXPECT_NEAR(c.bias_instability_deg_h / (b_rad_s * kRadToDeg * 3600.0), 1.0, kBiTol);
+  EXPECT_NEAR(c.bias_instability_deg_h / (b_rad_s * kDegPerRad * 3600.0), 1.0, kBiTol);
   EXPECT_FALSE(c.bias_instability_upper_bound);
   EXPECT_GT(c.bias_instability_tau_s, 1.0);
   EXPECT_LT(c.bias_instability_tau_s, 1e5);

@@ -3,6 +3,7 @@
 #include "estimate/paper/window_stats.h"
 #include "sim/integrate.h"
 #include "sim/so3.h"
+#include "sim/units.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -16,8 +17,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kArcsecPerRad = 180.0 * 3600.0 / kPi;
 constexpr int64_t kPeriodNs = 1000000;  // 1 kHz, the paper's logging rate
 constexpr double kDtS = 1e-3;
 // Bias segment: the first second, still (zero rates, so the bias is exactly zero).
@@ -240,21 +239,6 @@ TEST(Flight, BadInputIsRejected) {
   options = Options();
   options.limits_m.clear();
   EXPECT_THROW(options.Check(), std::invalid_argument);
-}
-
-TEST(Flight, ParsesLengthsAndDurations) {
-  EXPECT_DOUBLE_EQ(ParseLengthM("5cm"), 0.05);
-  EXPECT_DOUBLE_EQ(ParseLengthM("0.05m"), 0.05);
-  EXPECT_DOUBLE_EQ(ParseLengthM("0.05"), 0.05);
-  EXPECT_DOUBLE_EQ(ParseLengthM("50mm"), 0.05);
-  EXPECT_DOUBLE_EQ(ParseDurationS("10ms"), 0.010);
-  EXPECT_DOUBLE_EQ(ParseDurationS("0.01s"), 0.010);
-  EXPECT_DOUBLE_EQ(ParseDurationS("0.01"), 0.010);
-  EXPECT_DOUBLE_EQ(ParseDurationS("10000us"), 0.010);
-  EXPECT_THROW(ParseLengthM("5in"), std::invalid_argument);
-  EXPECT_THROW(ParseLengthM("cm"), std::invalid_argument);
-  EXPECT_THROW(ParseDurationS("10min"), std::invalid_argument);
-  EXPECT_THROW(ParseDurationS("ten ms"), std::invalid_argument);
 }
 
 TEST(Flight, JsonHasFormatsKeysAndTableSaysWhichFlagsMore) {

@@ -2,6 +2,7 @@
 
 #include "estimate/paper/window_stats.h"
 #include "sim/integrate.h"
+#include "sim/units.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -14,7 +15,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kRadToArcsec = 180.0 / M_PI * 3600.0;
 constexpr double kRateHz = 3000.0;
 constexpr int64_t kPeriodNs = 333'333;  // 3 kHz, an integer period as a logger would stamp it
 // Per-sample rate noise of an MPU-9250 at 3 kHz that gives the paper's ~1.1" window sigma.
@@ -52,7 +52,7 @@ TEST(AnalyzeNoise, ConstantRateGivesExactWindowStatistics) {
   // 1 s at 333333 ns holds samples 0..3000 (t = 0.999999 s), so 2999 remain after it.
   EXPECT_EQ(r.samples_analysed, 2999u);
   EXPECT_EQ(r.windows, 2999u - 120u + 1u);
-  const double step = kW * kPeriodNs * 1e-9 * kRadToArcsec;
+  const double step = kW * kPeriodNs * 1e-9 * kArcsecPerRad;
   constexpr double kTol = 1e-9;  // arcsec: rounding of the running angle only
   EXPECT_NEAR(r.axes[0].range_mean_arcsec, step * 119, kTol);
   EXPECT_NEAR(r.axes[0].range_max_arcsec, step * 119, kTol);
@@ -77,9 +77,9 @@ TEST(AnalyzeNoise, WhiteNoiseWindowSigmaAndRangeMatchTheory) {
   options.window_samples = kN;
   const NoiseResult r = AnalyzeNoise(trace, options);
   const double dt = kPeriodNs * 1e-9;
-  const double s = kSigmaRadS * dt * kRadToArcsec;
+  const double s = kSigmaRadS * dt * kArcsecPerRad;
   for (int a = 0; a < 3; ++a) {
-    const double db = (r.bias.bias_rad_s[a] - true_bias[a]) * dt * kRadToArcsec;
+    const double db = (r.bias.bias_rad_s[a] - true_bias[a]) * dt * kArcsecPerRad;
     const double var = s * s * (kN * kN - 1.0) / (6.0 * kN) + db * db * (kN * kN - 1.0) / 12.0;
     // 180k samples, ~1500 independent windows: the mean square scatters by ~2.5% (1 sigma, seen
     // over 45 seeded runs); 10% is 4 sigma.
@@ -123,9 +123,9 @@ TEST(AnalyzeNoise, AgreesWithTheBruteForceWindowTwins) {
       range_max = std::max(range_max, range[k]);
     }
     constexpr double kRelTol = 1e-9;  // the O(N) sigma's running sums: ~1e-12 relative
-    EXPECT_NEAR(r.axes[a].sigma_mean_arcsec, sigma_sum / ends.size() * kRadToArcsec,
+    EXPECT_NEAR(r.axes[a].sigma_mean_arcsec, sigma_sum / ends.size() * kArcsecPerRad,
                 kRelTol * r.axes[a].sigma_mean_arcsec);
-    EXPECT_DOUBLE_EQ(r.axes[a].range_max_arcsec, range_max * kRadToArcsec);
+    EXPECT_DOUBLE_EQ(r.axes[a].range_max_arcsec, range_max * kArcsecPerRad);
   }
 }
 

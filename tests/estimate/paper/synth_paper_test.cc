@@ -4,6 +4,7 @@
 #include "sim/bias.h"
 #include "sim/integrate.h"
 #include "sim/synth/synth.h"
+#include "sim/units.h"
 
 #include <gtest/gtest.h>
 
@@ -13,9 +14,6 @@
 
 namespace shutterlab {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kArcsecPerRad = 180.0 / kPi * 3600.0;
 
 // Window ends of fixed-count windows (k + n) over m samples.
 std::vector<uint32_t> CountWindows(size_t m, size_t n) {

@@ -2,6 +2,7 @@
 
 #include "estimate/paper/flight.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 #include "tests/estimate/report/report_test_util.h"
 #include "tests/test_util.h"
 
@@ -15,7 +16,6 @@ namespace shutterlab {
 namespace {
 
 constexpr int64_t kDtNs = 1'000'000;  // 1 kHz
-constexpr double kDegPerRad = 180.0 / M_PI;
 
 // Still for 4 s, then about camera x a rate that is `fast` during [6, 7) s and slow elsewhere.
 FlightLog StepLog(double total_s, double slow_rad_s, double fast_rad_s) {

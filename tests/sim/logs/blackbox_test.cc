@@ -1,8 +1,9 @@
 #include "sim/logs/blackbox.h"
 
-#include "sim/logs/blackbox_codec.h"
 #include "sim/check.h"
+#include "sim/logs/blackbox_codec.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -21,7 +22,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
 // Rates are integer counts times one double factor: the reader must reproduce them to rounding.
 constexpr double kRateTolRadS = 1e-12;
 // Durations and rates quoted in SOURCES.md / PROVENANCE.md to four decimals.
@@ -574,7 +574,7 @@ void ExpectMatchesSynthetic(const FlightLog& log, const Synthetic& s, double rad
 TEST(Blackbox, DecodesEveryEncodingAndPredictorOfASyntheticLogExactly) {
   const Synthetic s = MakeSyntheticLog({});
   const FlightLog log = DecodeBlackbox(s.bytes, "synthetic.bbl");
-  ExpectMatchesSynthetic(log, s, kDegToRad);
+  ExpectMatchesSynthetic(log, s, kRadPerDeg);
   EXPECT_EQ(log.format, "betaflight");
   EXPECT_EQ(log.gyro_source, "gyroADC");
   EXPECT_EQ(log.records_skipped, 0u);
@@ -589,7 +589,7 @@ TEST(Blackbox, OldSlashPIntervalSyntaxMeansTheSame) {
   o.slash_p_interval = true;
   o.p_denom = 8;
   const Synthetic s = MakeSyntheticLog(o);
-  ExpectMatchesSynthetic(DecodeBlackbox(s.bytes, "slash.bbl"), s, kDegToRad);
+  ExpectMatchesSynthetic(DecodeBlackbox(s.bytes, "slash.bbl"), s, kRadPerDeg);
 }
 
 TEST(Blackbox, UndoesThe32BitMicrosecondRollover) {
@@ -599,7 +599,7 @@ TEST(Blackbox, UndoesThe32BitMicrosecondRollover) {
   const Synthetic s = MakeSyntheticLog(o);
   ASSERT_GT(s.t_us.back(), int64_t{1} << 32);
   const FlightLog log = DecodeBlackbox(s.bytes, "rollover.bbl");
-  ExpectMatchesSynthetic(log, s, kDegToRad);
+  ExpectMatchesSynthetic(log, s, kRadPerDeg);
 }
 
 TEST(Blackbox, GyroScaleFollowsBlackboxToolsRule) {
@@ -608,7 +608,7 @@ TEST(Blackbox, GyroScaleFollowsBlackboxToolsRule) {
   half.gyro_scale_bits = 0x3f000000;  // 0.5f
   half.frames_after_resume = 0;
   const Synthetic a = MakeSyntheticLog(half);
-  ExpectMatchesSynthetic(DecodeBlackbox(a.bytes, "half.bbl"), a, 0.5 * kDegToRad);
+  ExpectMatchesSynthetic(DecodeBlackbox(a.bytes, "half.bbl"), a, 0.5 * kRadPerDeg);
   // Baseflight: rad/µs per count.
   SyntheticOptions base = half;
   const float scale = 1.0642251e-9f;  // an MPU6050's 2000 deg/s range: 1/16.4 deg/s in rad/µs
@@ -641,8 +641,8 @@ TEST(Blackbox, ChoosesTheLongestLogOrTheOneAskedFor) {
   EXPECT_EQ(infos[1].firmware, "Synthetic 1.0");
   EXPECT_NEAR(infos[1].rate_hz, 1e6 / (4 * kLoopUs), 30.0);  // ±3 µs jitter on 500 µs
 
-  ExpectMatchesSynthetic(DecodeBlackbox(file, "multi.bbl"), b, kDegToRad);
-  ExpectMatchesSynthetic(DecodeBlackbox(file, "multi.bbl", 2), a, kDegToRad);
+  ExpectMatchesSynthetic(DecodeBlackbox(file, "multi.bbl"), b, kRadPerDeg);
+  ExpectMatchesSynthetic(DecodeBlackbox(file, "multi.bbl", 2), a, kRadPerDeg);
   EXPECT_THROW(DecodeBlackbox(file, "multi.bbl", 3), IoError);
   EXPECT_THROW(DecodeBlackbox(file, "multi.bbl", -2), IoError);
   const FlightLog log = DecodeBlackbox(file, "multi.bbl");
@@ -728,7 +728,7 @@ std::string DataPath(const std::string& leaf) {
 Eigen::Vector3d PeakDegS(const FlightLog& log) {
   Eigen::Vector3d peak = Eigen::Vector3d::Zero();
   for (const GyroSample& s : log.gyro.samples()) peak = peak.cwiseMax(s.omega_rad_s.cwiseAbs());
-  return peak / kDegToRad;
+  return peak / kRadPerDeg;
 }
 
 void ExpectPeakDegS(const FlightLog& log, double x, double y, double z) {
@@ -889,9 +889,9 @@ TEST(BlackboxCsv, ReadsTheBlackboxDecodeExport) {
   EXPECT_EQ(log.format, "betaflight_csv");
   for (int k = 0; k < 5; ++k) {
     EXPECT_EQ(log.gyro[k].t_ns, (17433272 + 2000 * k) * int64_t{1000});
-    EXPECT_NEAR(log.gyro[k].omega_rad_s.x(), (10 * k - 7) * kDegToRad, kRateTolRadS);
-    EXPECT_NEAR(log.gyro[k].omega_rad_s.y(), -k * kDegToRad, kRateTolRadS);
-    EXPECT_NEAR(log.gyro[k].omega_rad_s.z(), 732 * kDegToRad, kRateTolRadS);
+    EXPECT_NEAR(log.gyro[k].omega_rad_s.x(), (10 * k - 7) * kRadPerDeg, kRateTolRadS);
+    EXPECT_NEAR(log.gyro[k].omega_rad_s.y(), -k * kRadPerDeg, kRateTolRadS);
+    EXPECT_NEAR(log.gyro[k].omega_rad_s.z(), 732 * kRadPerDeg, kRateTolRadS);
   }
   EXPECT_FALSE(log.warnings.empty()) << "the unit-less gyroADC assumption is stated";
   const std::vector<BlackboxLogInfo> infos = ListBlackboxLogs(path);

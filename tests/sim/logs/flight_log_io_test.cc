@@ -73,11 +73,11 @@ TEST(ReadFlightLog, FormatOverrideAndNames) {
   test::TempDir dir;
   std::ofstream(dir / "gyro.csv") << "t,gx,gy,gz\n0.0,0.1,0.2,0.3\n0.001,0.1,0.2,0.3\n";
   FlightLogReadOptions options;
-  options.format = ParseFlightLogFormat("ulog");
+  options.format = ParseLogFormat("ulog");
   EXPECT_THROW(ReadFlightLog(dir / "gyro.csv", options), IoError);
-  EXPECT_EQ(ParseFlightLogFormat("Blackbox"), FlightLogFormat::kBlackbox);
-  EXPECT_STREQ(FlightLogFormatName(FlightLogFormat::kDataFlash), "dataflash");
-  EXPECT_THROW(ParseFlightLogFormat("jpeg"), std::invalid_argument);
+  EXPECT_EQ(ParseLogFormat("Blackbox"), LogFormat::kBlackbox);
+  EXPECT_STREQ(LogFormatName(LogFormat::kDataFlash), "dataflash");
+  EXPECT_THROW(ParseLogFormat("jpeg"), std::invalid_argument);
 }
 
 }  // namespace

@@ -79,7 +79,7 @@ TEST(Gcsv, ReadsTheDocumentedExample) {
   EXPECT_EQ(log.orientation, "XYZ");
   ASSERT_TRUE(log.frame_readout_s.has_value());
   EXPECT_DOUBLE_EQ(*log.frame_readout_s, 0.01523);  // Gyroflow writes milliseconds
-  EXPECT_EQ(log.frame_readout_direction, "top_to_bottom");
+  EXPECT_EQ(log.frame_readout_direction, ReadoutDirection::kTopToBottom);
   EXPECT_EQ(log.tscale, 0.001);
   ASSERT_EQ(log.header.size(), 15u);
   EXPECT_EQ(log.header[3].first, "note");
@@ -125,14 +125,17 @@ TEST(Gcsv, ReadoutDirectionCodes) {
     const std::string text = Replace(kHeader, "frame_readout_direction,0",
                                      std::string("frame_readout_direction,") + c.code) +
                              "t,gx,gy,gz\n0,1,2,3\n";
-    EXPECT_EQ(ReadGcsv(WriteText(dir, "d.gcsv", text)).frame_readout_direction, c.word) << c.code;
+    EXPECT_STREQ(
+        ReadoutDirectionName(ReadGcsv(WriteText(dir, "d.gcsv", text)).frame_readout_direction),
+        c.word)
+        << c.code;
   }
   // Legacy sign encoding: a negative time means the other direction.
   const std::string negative =
       Replace(kHeader, "frame_readout_time,15.23", "frame_readout_time,-15.23") +
       "t,gx,gy,gz\n0,1,2,3\n";
   const GcsvLog log = ReadGcsv(WriteText(dir, "n.gcsv", negative));
-  EXPECT_EQ(log.frame_readout_direction, "bottom_to_top");
+  EXPECT_EQ(log.frame_readout_direction, ReadoutDirection::kBottomToTop);
   EXPECT_DOUBLE_EQ(*log.frame_readout_s, 0.01523);
   // No readout line: none.
   const std::string none =
@@ -166,14 +169,14 @@ TEST(Gcsv, WriterRoundTripsLosslessAndQuantised) {
       options.orientation = orientation;
       options.time_unit = unit;
       options.frame_readout_s = 0.0213;
-      options.frame_readout_direction = "bottom_to_top";
+      options.frame_readout_direction = ReadoutDirection::kBottomToTop;
       options.extra_header = {{"note", "synthetic, seed 7"}, {"vendor", "shutterlab"}};
       const std::string path = dir / "rt.gcsv";
       WriteGcsv(path, trace, options);
       const GcsvLog log = ReadGcsv(path);
       EXPECT_EQ(log.orientation, orientation);
       EXPECT_DOUBLE_EQ(*log.frame_readout_s, 0.0213);
-      EXPECT_EQ(log.frame_readout_direction, "bottom_to_top");
+      EXPECT_EQ(log.frame_readout_direction, ReadoutDirection::kBottomToTop);
       ASSERT_EQ(log.trace.size(), trace.size());
       for (size_t i = 0; i < trace.size(); ++i) {
         EXPECT_EQ(log.trace[i].t_ns, trace[i].t_ns);

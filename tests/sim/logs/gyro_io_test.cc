@@ -2,6 +2,7 @@
 
 #include "sim/check.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -14,15 +15,13 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 std::string WriteText(const test::TempDir& dir, const std::string& name, const std::string& text) {
   const std::string path = dir / name;
   std::ofstream(path) << text;
   return path;
 }
 
-GyroFormat Detect(const std::string& text) { return DetectGyroFormat(text, "mem.csv"); }
+LogFormat Detect(const std::string& text) { return DetectGyroFormat(text, "mem.csv"); }
 
 // Expects DetectGyroFormat to throw IoError naming mem.csv:line and containing problem.
 void ExpectDetectError(const std::string& text, long line, const std::string& problem) {
@@ -38,33 +37,33 @@ void ExpectDetectError(const std::string& text, long line, const std::string& pr
 }
 
 TEST(GyroIo, DetectsGcsvFromTheFirstLine) {
-  EXPECT_EQ(Detect("GYROFLOW IMU LOG\nversion,1.3\n"), GyroFormat::kGcsv);
+  EXPECT_EQ(Detect("GYROFLOW IMU LOG\nversion,1.3\n"), LogFormat::kGcsv);
   EXPECT_EQ(Detect("\xEF\xBB\xBFGYROFLOW IMU LOG\r\nversion,1.3\r\n"),
-            GyroFormat::kGcsv);  // BOM, CRLF
-  EXPECT_EQ(Detect("\nCAMERA IMU LOG\n"), GyroFormat::kGcsv);
+            LogFormat::kGcsv);  // BOM, CRLF
+  EXPECT_EQ(Detect("\nCAMERA IMU LOG\n"), LogFormat::kGcsv);
 }
 
 TEST(GyroIo, DetectsGyroCsvByAnyNonIntegerRate) {
-  EXPECT_EQ(Detect("t,gx,gy,gz\n0.0,0.01,-0.02,0.5\n"), GyroFormat::kGyroCsv);
+  EXPECT_EQ(Detect("t,gx,gy,gz\n0.0,0.01,-0.02,0.5\n"), LogFormat::kGyroCsv);
   // Integers first, one fraction late in the file: still gyro.csv (the whole file is scanned).
-  EXPECT_EQ(Detect("t,gx,gy,gz\n0.0,0,0,0\n0.1,1,2,3\n0.2,0,1e-3,0\n"), GyroFormat::kGyroCsv);
-  EXPECT_EQ(Detect("T,GX,GY,GZ,extra\n0,1,2,3.5,x\n"), GyroFormat::kGyroCsv);
+  EXPECT_EQ(Detect("t,gx,gy,gz\n0.0,0,0,0\n0.1,1,2,3\n0.2,0,1e-3,0\n"), LogFormat::kGyroCsv);
+  EXPECT_EQ(Detect("T,GX,GY,GZ,extra\n0,1,2,3.5,x\n"), LogFormat::kGyroCsv);
   // A header and no rows: gyro.csv, whose reader then reports "no samples".
-  EXPECT_EQ(Detect("t,gx,gy,gz\n"), GyroFormat::kGyroCsv);
+  EXPECT_EQ(Detect("t,gx,gy,gz\n"), LogFormat::kGyroCsv);
   // A non-numeric rate after the header goes to the gyro.csv reader, which names it.
-  EXPECT_EQ(Detect("t,gx,gy,gz\n0,1,abc,3\n"), GyroFormat::kGyroCsv);
+  EXPECT_EQ(Detect("t,gx,gy,gz\n0,1,abc,3\n"), LogFormat::kGyroCsv);
 }
 
 TEST(GyroIo, DetectsRawCountsByIntegerRates) {
   // Another header with integer rates only: raw counts (t may still be fractional).
   EXPECT_EQ(Detect("t,gx_counts,gy_counts,gz_counts\n0.001,12,-7,3\n0.002,11,-8,2\n"),
-            GyroFormat::kRaw);
-  EXPECT_EQ(Detect("time_us,x,y,z\n1000,12,-7,3\n"), GyroFormat::kRaw);
+            LogFormat::kRaw);
+  EXPECT_EQ(Detect("time_us,x,y,z\n1000,12,-7,3\n"), LogFormat::kRaw);
   // No header, integers: raw.
-  EXPECT_EQ(Detect("1000,12,-7,3\n2000,11,-8,2\n"), GyroFormat::kRaw);
+  EXPECT_EQ(Detect("1000,12,-7,3\n2000,11,-8,2\n"), LogFormat::kRaw);
   // FORMATS.md's header always means gyro.csv, even with whole-number rates (--raw overrides).
-  EXPECT_EQ(Detect("t,gx,gy,gz\n0,0,0,0\n0.01,0,0,0\n"), GyroFormat::kGyroCsv);
-  EXPECT_EQ(Detect("t,gx,gy,gz\n0.001,12,-7,3\n"), GyroFormat::kGyroCsv);
+  EXPECT_EQ(Detect("t,gx,gy,gz\n0,0,0,0\n0.01,0,0,0\n"), LogFormat::kGyroCsv);
+  EXPECT_EQ(Detect("t,gx,gy,gz\n0.001,12,-7,3\n"), LogFormat::kGyroCsv);
 }
 
 TEST(GyroIo, DetectionRejectsNeitherFormat) {
@@ -83,22 +82,22 @@ TEST(GyroIo, ReadGyroDispatchesOnDetectionAndOverride) {
       WriteText(dir, "raw.csv", "t,gx_counts,gy_counts,gz_counts\n0,131,0,0\n0.01,0,262,0\n");
   // Auto: raw counts at the default +-250 deg/s: 131 counts = 1 deg/s.
   const GyroTrace as_raw = ReadGyro(raw);
-  EXPECT_NEAR(as_raw[0].omega_rad_s.x(), kPi / 180.0, 1e-15);
+  EXPECT_NEAR(as_raw[0].omega_rad_s.x(), kRadPerDeg, 1e-15);
   // --format csv insists on gyro.csv's header.
   GyroReadOptions csv;
-  csv.format = GyroFormat::kGyroCsv;
+  csv.format = LogFormat::kGyroCsv;
   EXPECT_THROW(ReadGyro(raw, csv), IoError);
   // --raw reads FORMATS.md's header as counts when told to.
   const std::string counts_with_csv_header =
       WriteText(dir, "counts.csv", "t,gx,gy,gz\n0,131,0,0\n0.01,0,262,0\n");
   GyroReadOptions raw_forced;
-  raw_forced.format = GyroFormat::kRaw;
-  EXPECT_NEAR(ReadGyro(counts_with_csv_header, raw_forced)[0].omega_rad_s.x(), kPi / 180.0, 1e-15);
+  raw_forced.format = LogFormat::kRaw;
+  EXPECT_NEAR(ReadGyro(counts_with_csv_header, raw_forced)[0].omega_rad_s.x(), kRadPerDeg, 1e-15);
   EXPECT_EQ(ReadGyro(counts_with_csv_header)[0].omega_rad_s.x(), 131.0);
   // --range 2000 --time-unit ms.
   GyroReadOptions wide;
-  wide.raw_range_dps = 2000;
-  wide.raw_time_unit = TimeUnit::kMilliseconds;
+  wide.raw.range_dps = 2000;
+  wide.raw.time_unit = TimeUnit::kMilliseconds;
   const GyroTrace as_wide = ReadGyro(raw, wide);
   EXPECT_NEAR(as_wide[0].omega_rad_s.x(), 131.0 / 16.4 * kPi / 180.0, 1e-15);
   EXPECT_EQ(as_wide[1].t_ns, 10000);  // 0.01 ms
@@ -113,7 +112,7 @@ TEST(GyroIo, ReadGyroDispatchesOnDetectionAndOverride) {
   EXPECT_EQ(ReadGyro(dir / "g.csv")[0].omega_rad_s, trace[0].omega_rad_s);
   // Unknown range.
   GyroReadOptions bad;
-  bad.raw_range_dps = 300;
+  bad.raw.range_dps = 300;
   EXPECT_THROW(ReadGyro(raw, bad), std::invalid_argument);
 }
 
@@ -151,10 +150,10 @@ TEST(GyroIo, GyroCsvRejectsBadInputNamingTheLine) {
 }
 
 TEST(GyroIo, ParsesFormatNames) {
-  EXPECT_EQ(ParseGyroFormat("AUTO"), GyroFormat::kAuto);
-  EXPECT_EQ(ParseGyroFormat("gyro.csv"), GyroFormat::kGyroCsv);
-  EXPECT_EQ(ParseGyroFormat("gcsv"), GyroFormat::kGcsv);
-  EXPECT_EQ(ParseGyroFormat("raw"), GyroFormat::kRaw);
+  EXPECT_EQ(ParseGyroFormat("AUTO"), LogFormat::kAuto);
+  EXPECT_EQ(ParseGyroFormat("gyro.csv"), LogFormat::kGyroCsv);
+  EXPECT_EQ(ParseGyroFormat("gcsv"), LogFormat::kGcsv);
+  EXPECT_EQ(ParseGyroFormat("raw"), LogFormat::kRaw);
   EXPECT_THROW(ParseGyroFormat("ulog"), std::invalid_argument);
   EXPECT_EQ(ParseTimeUnit("us"), TimeUnit::kMicroseconds);
   EXPECT_THROW(ParseTimeUnit("min"), std::invalid_argument);

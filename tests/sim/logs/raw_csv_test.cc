@@ -2,6 +2,7 @@
 
 #include "sim/check.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -15,7 +16,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // Counts are exact integers and the conversion is one multiply: only double rounding remains.
 constexpr double kConversionTolRadS = 1e-15;
 
@@ -57,7 +57,7 @@ TEST(RawCsv, ConvertsCountsToRadPerSecond) {
   ASSERT_EQ(trace.size(), 2u);
   EXPECT_EQ(trace[0].t_ns, 0);
   EXPECT_EQ(trace[1].t_ns, 1000000);
-  const double deg = kPi / 180.0;
+  const double deg = kRadPerDeg;
   EXPECT_NEAR(trace[0].omega_rad_s.x(), 1.0 * deg, kConversionTolRadS);
   EXPECT_NEAR(trace[0].omega_rad_s.y(), -2.0 * deg, kConversionTolRadS);
   EXPECT_EQ(trace[0].omega_rad_s.z(), 0.0);
@@ -69,7 +69,7 @@ TEST(RawCsv, RangeScalesTheCounts) {
   test::TempDir dir;
   const std::string path = WriteText(dir, "a.csv", "0,164,328,-164\n1,0,0,0\n");
   const GyroTrace trace = ReadRawCsv(path, 2000, TimeUnit::kSeconds);
-  const double deg = kPi / 180.0;
+  const double deg = kRadPerDeg;
   EXPECT_NEAR(trace[0].omega_rad_s.x(), 10.0 * deg, kConversionTolRadS);
   EXPECT_NEAR(trace[0].omega_rad_s.y(), 20.0 * deg, kConversionTolRadS);
   EXPECT_NEAR(trace[0].omega_rad_s.z(), -10.0 * deg, kConversionTolRadS);
@@ -111,7 +111,7 @@ TEST(RawCsv, WriterRoundTripsQuantisedTraces) {
   test::TempDir dir;
   // Rates on the count grid come back exactly (to double rounding); times exactly in every unit.
   std::vector<GyroSample> samples;
-  const double rad_s_per_count = kPi / 180.0 / 65.5;
+  const double rad_s_per_count = kRadPerDeg / 65.5;
   for (int k = 0; k < 200; ++k) {
     const int64_t t_ns = 1700000000000000000LL + k * 1000123LL;  // 1 kHz with a ragged period
     samples.push_back({t_ns, Eigen::Vector3d(k - 100, 3 * k - 32000, -k) * rad_s_per_count});
@@ -132,7 +132,7 @@ TEST(RawCsv, WriterRoundTripsQuantisedTraces) {
 
 TEST(RawCsv, WriterQuantisesAndSaturates) {
   test::TempDir dir;
-  const double deg = kPi / 180.0;
+  const double deg = kRadPerDeg;
   // 0.4 count rounds down, 0.6 rounds up; 300 deg/s exceeds the 250 deg/s range on both sides.
   const GyroTrace trace({{0, Eigen::Vector3d(0.4 / 131 * deg, 0.6 / 131 * deg, 300 * deg)},
                          {1000000, Eigen::Vector3d(-300 * deg, 0, 0)}});

@@ -1,6 +1,7 @@
 #include "sim/synth/imu_model.h"
 
 #include "sim/logs/raw_csv.h"
+#include "sim/units.h"
 
 #include <gtest/gtest.h>
 
@@ -11,8 +12,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kRadPerDeg = kPi / 180.0;
 // Operations on rad/s values of order 1: a few ulps.
 constexpr double kRoundingTol = 1e-15;
 

@@ -4,6 +4,7 @@
 #include "sim/integrate.h"
 #include "sim/logs/raw_csv.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -15,8 +16,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kRadPerDeg = kPi / 180.0;
 // The brief's bar for the noiseless steps profile: the rectangle rule on a Hann pulse sampled at
 // kHz is exact to ~1e-11 rad, far below this.
 constexpr double kStepsAngleTol = 1e-6;
@@ -122,7 +121,7 @@ TEST(WriteSynthetic, RawCountsRoundTripExactly) {
   for (TimeUnit unit : {TimeUnit::kSeconds, TimeUnit::kMilliseconds, TimeUnit::kNanoseconds}) {
     SynthOutputOptions out;
     out.out_path = dir / "raw.csv";
-    out.format = GyroFormat::kRaw;
+    out.format = LogFormat::kRaw;
     out.time_unit = unit;
     WriteSynthetic(o, out);
     const GyroTrace expected = SynthesizeTrace(o);

@@ -1,0 +1,46 @@
+#pragma once
+// The log formats the readers know, with one name table for --format and for messages, and the
+// options of the source paper's raw-count logs shared by every reader that may meet one.
+
+#include "sim/logs/raw_csv.h"  // TimeUnit
+
+#include <string>
+
+namespace shutterlab {
+
+enum class LogFormat {
+  kAuto,       // detect from the content (sim/logs/gyro_io.h DetectGyroFormat, or
+               // sim/logs/flight_log_io.h DetectFlightLogFormat for every format)
+  kGyroCsv,    // FORMATS.md gyro.csv: header t,gx,gy,gz[,...]; seconds and rad/s
+  kGcsv,       // Gyroflow .gcsv ("GYROFLOW IMU LOG" header block)
+  kRaw,        // the source paper's raw-count CSV: time and three int16 counts per line
+  kULog,       // PX4 .ulg
+  kBlackbox,   // Betaflight / INAV blackbox, native or CSV export
+  kDataFlash,  // ArduPilot .bin
+};
+
+// kGyroCsv, kGcsv and kRaw: the plain gyro logs that ReadGyro reads.
+bool IsPlainGyroFormat(LogFormat format);
+
+// "auto", "gyro.csv", "gcsv", "raw", "ulog", "blackbox", "dataflash".
+const char* LogFormatName(LogFormat format);
+
+// Any name of the table, case-insensitive: "auto", "ulog" / "ulg" / "px4", "dataflash" / "bin" /
+// "ardupilot", "blackbox" / "betaflight" / "bbl", "gyro.csv" / "csv", "gcsv", "raw"; throws
+// std::invalid_argument naming the text otherwise.
+LogFormat ParseLogFormat(const std::string& name);
+
+// "auto" or a plain gyro format ("gyro.csv" / "csv", "gcsv", "raw"), case-insensitive; throws
+// std::invalid_argument naming the text otherwise (a flight-log format too).
+LogFormat ParseGyroFormat(const std::string& name);
+
+// Raw-count logs only: full-scale range in deg/s (250, 500, 1000 or 2000 -> 131, 65.5, 32.8,
+// 16.4 LSB per deg/s, the MPU-9250 sensitivities) and the unit of the time column.
+struct RawCountOptions {
+  int range_dps = 250;
+  TimeUnit time_unit = TimeUnit::kSeconds;
+  // Throws std::invalid_argument naming an unknown range.
+  void Check() const;
+};
+
+}  // namespace shutterlab
