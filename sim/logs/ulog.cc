@@ -396,6 +396,8 @@ size_t MinPayload(uint8_t type) {
   }
 }
 
+struct DecodedTopics;  // defined with Decode
+
 class ULogParser {
  public:
   ULogParser(std::string_view bytes, const std::string& path) : bytes_(bytes), path_(path) {}
@@ -435,7 +437,17 @@ class ULogParser {
   }
   std::string DataMismatch(std::string_view payload) const;
   std::shared_ptr<const Layout> LayoutFor(const std::string& topic, std::string* error);
+  // Run's steps: the flag bits when they come first (returns where the messages start), the
+  // segments of the file between appended-data offsets, one message (false: stop reading this
+  // segment), the warnings that sum up what was skipped.
+  size_t ReadLeadingFlagBits(size_t pos);
+  std::vector<std::pair<size_t, size_t>> Segments(size_t pos);
+  bool ReadMessage(size_t* at, size_t end, bool last_segment);
+  void SummariseWarnings();
   void Decode();
+  // Decode's step per topic instance: its gyro candidate, camera events or altitude data.
+  void DecodeStream(const std::string& topic, int multi_id,
+                    const std::vector<const Subscription*>& subs, DecodedTopics* out);
 
   std::string_view bytes_;
   std::string path_;
@@ -650,14 +662,7 @@ void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
   }
 }
 
-FlightLog ULogParser::Run() {
-  log_.format = "ulog";
-  if (bytes_.size() < kFileHeaderBytes) Fail(0, "file too short for a ULog header (" + std::to_string(bytes_.size()) + " bytes)");
-  if (!LooksLikeULog(bytes_)) Fail(0, "not a ULog file (bad magic)");
-  const int version = static_cast<uint8_t>(bytes_[7]);
-  if (version > 1) log_.warnings.push_back("ULog file version " + std::to_string(version) + " is newer than 1; read as version 1");
-
-  size_t pos = kFileHeaderBytes;
+size_t ULogParser::ReadLeadingFlagBits(size_t pos) {
   const size_t n = bytes_.size();
   // 'B' must be the first message; it decides how the rest is read.
   if (n - pos >= kMessageHeaderBytes && bytes_[pos + 2] == 'B') {
@@ -667,9 +672,12 @@ FlightLog ULogParser::Run() {
       pos += kMessageHeaderBytes + size;
     }
   }
+  return pos;
+}
 
-  // Segments: [pos, appended[0]), [appended[0], appended[1]), ..., [last, n). A message that
-  // straddles a segment end was cut off when the logger moved on to appended data.
+// Segments: [pos, appended[0]), [appended[0], appended[1]), ..., [last, n). A message that
+// straddles a segment end was cut off when the logger moved on to appended data.
+std::vector<std::pair<size_t, size_t>> ULogParser::Segments(size_t pos) {
   std::vector<std::pair<size_t, size_t>> segments;
   size_t start = pos;
   for (uint64_t at : appended_offsets_) {
@@ -680,81 +688,81 @@ FlightLog ULogParser::Run() {
     segments.emplace_back(start, static_cast<size_t>(at));
     start = static_cast<size_t>(at);
   }
-  segments.emplace_back(start, n);
+  segments.emplace_back(start, bytes_.size());
+  return segments;
+}
 
-  for (size_t s = 0; s < segments.size(); ++s) {
-    const size_t end = segments[s].second;
-    const bool last_segment = s + 1 == segments.size();
-    pos = segments[s].first;
-    while (pos < end) {
-      if (end - pos < kMessageHeaderBytes) {
-        if (last_segment) Warn("truncated", pos, "file ends inside a message header (truncated?)");
-        break;
-      }
-      const uint16_t size = LoadU16(bytes_.data() + pos);
-      const uint8_t type = static_cast<uint8_t>(bytes_[pos + 2]);
-      const size_t min = MinPayload(type);
-      if (min == 0 || size < min) {
-        const size_t next = Resync(pos + 1, end);
-        skipped_bytes_ += next - pos;
-        ++log_.records_skipped;
-        Warn("corrupt", pos, std::string("corrupt message header (type ") + std::to_string(type) + ", size " +
-                                 std::to_string(size) + "); skipped " + std::to_string(next - pos) + " bytes");
-        pos = next;
-        continue;
-      }
-      if (size > end - pos - kMessageHeaderBytes) {
-        if (last_segment) {
-          // Either the file was cut here, or this size field is corrupt: try to read on.
-          const size_t next = Resync(pos + 1, end);
-          if (next == end) {
-            Warn("truncated", pos, "file ends inside a message of " + std::to_string(size) + " bytes (truncated?)");
-            break;
-          }
-          skipped_bytes_ += next - pos;
-          ++log_.records_skipped;
-          Warn("corrupt", pos, "message size " + std::to_string(size) + " runs past the end; skipped " +
-                                   std::to_string(next - pos) + " bytes");
-          pos = next;
-          continue;
-        }
-        break;  // cut off at the start of appended data
-      }
-      const std::string_view payload = bytes_.substr(pos + kMessageHeaderBytes, size);
-      const size_t after = pos + kMessageHeaderBytes + size;
-      const bool data_fits = type != 'D' || DataSizeFits(payload);
-      const int pending_id = type == 'A' ? LoadU16(payload.data() + 1) : -1;
-      // A data message whose size matches its topic's format is trusted as it is; any other
-      // message must be followed by a plausible header, or its size field may be corrupt.
-      const bool size_verified = type == 'D' && data_fits && SizeCheckedAgainstFormat(payload);
-      if (!data_fits || (!size_verified && !NextHeaderOk(after, end, pending_id))) {
-        // A data message whose msg_id is unknown or whose size contradicts its format, or any
-        // message not followed by a plausible header, most likely has a corrupt size or type;
-        // skipping `size` bytes would silently throw away the good messages after it.
-        const size_t next = Resync(pos + 1, end);
-        if (data_fits && next >= after) {
-          // No valid message starts inside this one: only what follows it is damaged, and the
-          // next pass of the loop skips that.
-          Handle(type, payload, pos);
-          pos = after;
-          continue;
-        }
-        skipped_bytes_ += next - pos;
-        ++log_.records_skipped;
-        Warn("corrupt", pos,
-             (data_fits ? std::string("message (type ") + std::to_string(type) + ", size " + std::to_string(size) +
-                              ") not followed by a valid message"
-                        : DataMismatch(payload)) +
-                 "; skipped " + std::to_string(next - pos) + " bytes");
-        pos = next;
-        continue;
-      }
-      Handle(type, payload, pos);
-      pos += kMessageHeaderBytes + size;
-    }
+bool ULogParser::ReadMessage(size_t* at, size_t end, bool last_segment) {
+  size_t& pos = *at;
+  if (end - pos < kMessageHeaderBytes) {
+    if (last_segment) Warn("truncated", pos, "file ends inside a message header (truncated?)");
+    return false;
   }
+  const uint16_t size = LoadU16(bytes_.data() + pos);
+  const uint8_t type = static_cast<uint8_t>(bytes_[pos + 2]);
+  const size_t min = MinPayload(type);
+  if (min == 0 || size < min) {
+    const size_t next = Resync(pos + 1, end);
+    skipped_bytes_ += next - pos;
+    ++log_.records_skipped;
+    Warn("corrupt", pos,
+         std::string("corrupt message header (type ") + std::to_string(type) + ", size " +
+             std::to_string(size) + "); skipped " + std::to_string(next - pos) + " bytes");
+    pos = next;
+    return true;
+  }
+  if (size > end - pos - kMessageHeaderBytes) {
+    if (!last_segment) return false;  // cut off at the start of appended data
+    // Either the file was cut here, or this size field is corrupt: try to read on.
+    const size_t next = Resync(pos + 1, end);
+    if (next == end) {
+      Warn("truncated", pos,
+           "file ends inside a message of " + std::to_string(size) + " bytes (truncated?)");
+      return false;
+    }
+    skipped_bytes_ += next - pos;
+    ++log_.records_skipped;
+    Warn("corrupt", pos,
+         "message size " + std::to_string(size) + " runs past the end; skipped " +
+             std::to_string(next - pos) + " bytes");
+    pos = next;
+    return true;
+  }
+  const std::string_view payload = bytes_.substr(pos + kMessageHeaderBytes, size);
+  const size_t after = pos + kMessageHeaderBytes + size;
+  const bool data_fits = type != 'D' || DataSizeFits(payload);
+  const int pending_id = type == 'A' ? LoadU16(payload.data() + 1) : -1;
+  // A data message whose size matches its topic's format is trusted as it is; any other
+  // message must be followed by a plausible header, or its size field may be corrupt.
+  const bool size_verified = type == 'D' && data_fits && SizeCheckedAgainstFormat(payload);
+  if (!data_fits || (!size_verified && !NextHeaderOk(after, end, pending_id))) {
+    // A data message whose msg_id is unknown or whose size contradicts its format, or any
+    // message not followed by a plausible header, most likely has a corrupt size or type;
+    // skipping `size` bytes would silently throw away the good messages after it.
+    const size_t next = Resync(pos + 1, end);
+    if (data_fits && next >= after) {
+      // No valid message starts inside this one: only what follows it is damaged, and the
+      // next pass of the loop skips that.
+      Handle(type, payload, pos);
+      pos = after;
+      return true;
+    }
+    skipped_bytes_ += next - pos;
+    ++log_.records_skipped;
+    Warn("corrupt", pos,
+         (data_fits ? std::string("message (type ") + std::to_string(type) + ", size " +
+                          std::to_string(size) + ") not followed by a valid message"
+                    : DataMismatch(payload)) +
+             "; skipped " + std::to_string(next - pos) + " bytes");
+    pos = next;
+    return true;
+  }
+  Handle(type, payload, pos);
+  pos += kMessageHeaderBytes + size;
+  return true;
+}
 
-  Decode();
+void ULogParser::SummariseWarnings() {
   for (const auto& [kind, count] : warning_counts_) {
     if (count > kMaxDetailedWarnings) {
       log_.warnings.push_back(std::to_string(count - kMaxDetailedWarnings) + " more warnings of kind '" + kind + "' not listed");
@@ -764,25 +772,48 @@ FlightLog ULogParser::Run() {
     log_.warnings.push_back("topic '" + topic + "': " + std::to_string(count) + " data messages skipped");
   }
   if (skipped_bytes_ > 0) log_.warnings.push_back(std::to_string(skipped_bytes_) + " corrupt bytes skipped in total");
-  if (!dropouts_.empty()) {
-    uint64_t total_ms = 0;
-    std::string where;
-    for (size_t i = 0; i < dropouts_.size(); ++i) {
-      total_ms += dropouts_[i].second;
-      if (i < kMaxDetailedWarnings) {
-        char buf[64];
-        if (dropouts_[i].first == 0) {
-          std::snprintf(buf, sizeof(buf), "%s%u ms before the first gyro message", i ? ", " : "", dropouts_[i].second);
-        } else {
-          std::snprintf(buf, sizeof(buf), "%s%u ms at %.3f s", i ? ", " : "", dropouts_[i].second,
-                        dropouts_[i].first * 1e-6);
-        }
-        where += buf;
+  if (dropouts_.empty()) return;
+  uint64_t total_ms = 0;
+  std::string where;
+  for (size_t i = 0; i < dropouts_.size(); ++i) {
+    total_ms += dropouts_[i].second;
+    if (i < kMaxDetailedWarnings) {
+      char buf[64];
+      if (dropouts_[i].first == 0) {
+        std::snprintf(buf, sizeof(buf), "%s%u ms before the first gyro message", i ? ", " : "",
+                      dropouts_[i].second);
+      } else {
+        std::snprintf(buf, sizeof(buf), "%s%u ms at %.3f s", i ? ", " : "", dropouts_[i].second,
+                      dropouts_[i].first * 1e-6);
       }
+      where += buf;
     }
-    log_.warnings.push_back(std::to_string(dropouts_.size()) + " logging dropouts totalling " +
-                            std::to_string(total_ms) + " ms (" + where + (dropouts_.size() > kMaxDetailedWarnings ? ", ..." : "") + ")");
   }
+  log_.warnings.push_back(std::to_string(dropouts_.size()) + " logging dropouts totalling " +
+                          std::to_string(total_ms) + " ms (" + where +
+                          (dropouts_.size() > kMaxDetailedWarnings ? ", ..." : "") + ")");
+}
+
+FlightLog ULogParser::Run() {
+  log_.format = "ulog";
+  if (bytes_.size() < kFileHeaderBytes)
+    Fail(0, "file too short for a ULog header (" + std::to_string(bytes_.size()) + " bytes)");
+  if (!LooksLikeULog(bytes_)) Fail(0, "not a ULog file (bad magic)");
+  const int version = static_cast<uint8_t>(bytes_[7]);
+  if (version > 1)
+    log_.warnings.push_back("ULog file version " + std::to_string(version) +
+                            " is newer than 1; read as version 1");
+
+  const size_t pos = ReadLeadingFlagBits(kFileHeaderBytes);
+  const std::vector<std::pair<size_t, size_t>> segments = Segments(pos);
+  for (size_t s = 0; s < segments.size(); ++s) {
+    const bool last_segment = s + 1 == segments.size();
+    size_t at = segments[s].first;
+    while (at < segments[s].second && ReadMessage(&at, segments[s].second, last_segment)) continue;
+  }
+
+  Decode();
+  SummariseWarnings();
   return std::move(log_);
 }
 
@@ -809,127 +840,120 @@ std::string CandidateName(const std::string& topic, int multi_id, const std::str
   return topic + (multi_id ? "/" + std::to_string(multi_id) : "") + "." + field;
 }
 
-void ULogParser::Decode() {
+// What Decode gathers from the data messages before choosing the gyro source.
+struct DecodedTopics {
   std::vector<internal::GyroCandidate> candidates;
   std::vector<CameraEvent> events;
   std::vector<double> dist_bottom_m;
   std::vector<double> local_z_m;
   std::optional<double> home_z_m;
+};
 
-  // Subscriptions of the same topic and instance (a topic removed and added again) share one
-  // stream.
-  std::map<std::pair<std::string, int>, std::vector<const Subscription*>> streams;
-  for (const Subscription& sub : subscriptions_) {
-    if (sub.layout && !sub.payloads.empty()) streams[{sub.topic, sub.multi_id}].push_back(&sub);
-  }
-
-  for (const auto& [key, subs] : streams) {
-    const std::string& topic = key.first;
-    const int multi_id = key.second;
-    internal::GyroCandidate cand;
-    for (const Subscription* sub : subs) {
-      const Fields f{*sub->layout};
-      const FlatField* t_sample = f.Find("timestamp_sample");
-      const FlatField* t_plain = f.Find("timestamp");
-      const FlatField* t_field = t_sample ? t_sample : t_plain;
-      if (!t_field) continue;
-      if (topic == "sensor_gyro_fifo") {
-        cand.name = CandidateName(topic, multi_id, "x,y,z");
-        cand.preference = 0;
-        const FlatField* dt = f.Find("dt");
-        const FlatField* scale = f.Find("scale");
-        const FlatField* count = f.Find("samples");
-        auto x = f.Array("x", 256), y = f.Array("y", 256), z = f.Array("z", 256);
-        const size_t max_n = std::min({x.size(), y.size(), z.size()});
-        if (!dt || !scale || !count || max_n == 0) continue;
-        for (std::string_view data : sub->payloads) {
-          const auto t_ns = ReadTimeNs(data, *t_field);
-          const double dt_us = ReadNumber(data, *dt);
-          const double sc = ReadNumber(data, *scale);
-          const double k = ReadNumber(data, *count);
-          if (!t_ns || !(dt_us > 0.0 && dt_us < 1e6) || !std::isfinite(sc) || !(k >= 0)) {
-            ++log_.records_skipped;
-            ++skipped_by_topic_[topic];
-            continue;
-          }
-          const size_t nk = static_cast<size_t>(std::min(k, static_cast<double>(max_n)));
-          for (size_t i = 0; i < nk; ++i) {
-            // timestamp_sample is the newest sample's time; older ones are dt apart before it.
-            const int64_t back_ns = std::llround(static_cast<double>(nk - 1 - i) * dt_us * 1e3);
-            cand.samples.push_back({*t_ns - back_ns, Eigen::Vector3d(ReadNumber(data, *x[i]) * sc,
-                                                                     ReadNumber(data, *y[i]) * sc,
-                                                                     ReadNumber(data, *z[i]) * sc)});
-          }
-        }
-      } else if (topic == "sensor_gyro" || topic == "vehicle_angular_velocity" || topic == "sensor_combined") {
-        std::array<const FlatField*, 3> axes{};
-        if (topic == "sensor_gyro") {
-          cand.name = CandidateName(topic, multi_id, "x,y,z");
-          cand.preference = 1;
-          axes = {f.Find("x"), f.Find("y"), f.Find("z")};
-        } else if (topic == "vehicle_angular_velocity") {
-          cand.name = CandidateName(topic, multi_id, "xyz");
-          cand.preference = 2;
-          axes = {f.Find("xyz[0]"), f.Find("xyz[1]"), f.Find("xyz[2]")};
-        } else {
-          // sensor_combined.timestamp is the gyro sample's time (the accelerometer's is relative).
-          t_field = t_plain;
-          cand.preference = 3;
-          std::string field = f.Find("gyro_rad[0]") ? "gyro_rad" : "gyro_rad_s";
-          cand.name = CandidateName(topic, multi_id, field);
-          axes = {f.Find(field + "[0]"), f.Find(field + "[1]"), f.Find(field + "[2]")};
-        }
-        if (!t_field || !axes[0] || !axes[1] || !axes[2]) continue;
-        cand.samples.reserve(cand.samples.size() + sub->payloads.size());
-        for (std::string_view data : sub->payloads) {
-          const auto t_ns = ReadTimeNs(data, *t_field);
-          cand.samples.push_back({t_ns.value_or(0), Eigen::Vector3d(ReadNumber(data, *axes[0]),
-                                                                    ReadNumber(data, *axes[1]),
-                                                                    ReadNumber(data, *axes[2]))});
-        }
-      } else if (topic == "camera_trigger" || topic == "camera_capture") {
-        const FlatField* seq = f.Find("seq");
-        for (std::string_view data : sub->payloads) {
-          const auto t_ns = ReadTimeNs(data, t_plain ? *t_plain : *t_field);
-          if (!t_ns || *t_ns <= 0) continue;
-          CameraEvent e;
-          e.t_ns = *t_ns;
-          e.kind = topic;
-          if (seq) {
-            const double v = ReadNumber(data, *seq);
-            if (std::isfinite(v) && std::abs(v) < 9.0e15) e.sequence = static_cast<int64_t>(v);
-          }
-          events.push_back(e);
-        }
-      } else if (topic == "vehicle_local_position") {
-        const FlatField* dist = f.Find("dist_bottom");
-        const FlatField* dist_valid = f.Find("dist_bottom_valid");
-        const FlatField* z = f.Find("z");
-        const FlatField* z_valid = f.Find("z_valid");
-        for (std::string_view data : sub->payloads) {
-          if (dist && dist_valid && ReadNumber(data, *dist_valid) != 0.0) {
-            const double d = ReadNumber(data, *dist);
-            if (std::isfinite(d)) dist_bottom_m.push_back(d);
-          }
-          if (z && (!z_valid || ReadNumber(data, *z_valid) != 0.0)) {
-            const double v = ReadNumber(data, *z);
-            if (std::isfinite(v)) local_z_m.push_back(v);
-          }
-        }
-      } else if (topic == "home_position") {
-        if (const FlatField* z = f.Find("z")) {
-          const double v = ReadNumber(sub->payloads.back(), *z);
-          if (std::isfinite(v)) home_z_m = v;
-        }
-      }
+// sensor_gyro_fifo: up to 256 samples a message, dt apart, scaled. Returns how many messages were
+// skipped (no time, or a dt, scale or count out of range).
+size_t DecodeGyroFifo(const std::string& topic, int multi_id, const Fields& f,
+                      const FlatField& t_field, const Subscription& sub,
+                      internal::GyroCandidate* cand) {
+  cand->name = CandidateName(topic, multi_id, "x,y,z");
+  cand->preference = 0;
+  const FlatField* dt = f.Find("dt");
+  const FlatField* scale = f.Find("scale");
+  const FlatField* count = f.Find("samples");
+  auto x = f.Array("x", 256), y = f.Array("y", 256), z = f.Array("z", 256);
+  const size_t max_n = std::min({x.size(), y.size(), z.size()});
+  if (!dt || !scale || !count || max_n == 0) return 0;
+  size_t skipped = 0;
+  for (std::string_view data : sub.payloads) {
+    const auto t_ns = ReadTimeNs(data, t_field);
+    const double dt_us = ReadNumber(data, *dt);
+    const double sc = ReadNumber(data, *scale);
+    const double k = ReadNumber(data, *count);
+    if (!t_ns || !(dt_us > 0.0 && dt_us < 1e6) || !std::isfinite(sc) || !(k >= 0)) {
+      ++skipped;
+      continue;
     }
-    if (!cand.name.empty() && !cand.samples.empty()) candidates.push_back(std::move(cand));
+    const size_t nk = static_cast<size_t>(std::min(k, static_cast<double>(max_n)));
+    for (size_t i = 0; i < nk; ++i) {
+      // timestamp_sample is the newest sample's time; older ones are dt apart before it.
+      const int64_t back_ns = std::llround(static_cast<double>(nk - 1 - i) * dt_us * 1e3);
+      cand->samples.push_back({*t_ns - back_ns, Eigen::Vector3d(ReadNumber(data, *x[i]) * sc,
+                                                                ReadNumber(data, *y[i]) * sc,
+                                                                ReadNumber(data, *z[i]) * sc)});
+    }
   }
+  return skipped;
+}
 
-  std::stable_sort(events.begin(), events.end(),
-                   [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
-  log_.camera_events = std::move(events);
+// sensor_gyro, vehicle_angular_velocity, sensor_combined: one rate sample a message.
+void DecodeGyroRates(const std::string& topic, int multi_id, const Fields& f,
+                     const FlatField* t_plain, const FlatField* t_field, const Subscription& sub,
+                     internal::GyroCandidate* cand) {
+  std::array<const FlatField*, 3> axes{};
+  if (topic == "sensor_gyro") {
+    cand->name = CandidateName(topic, multi_id, "x,y,z");
+    cand->preference = 1;
+    axes = {f.Find("x"), f.Find("y"), f.Find("z")};
+  } else if (topic == "vehicle_angular_velocity") {
+    cand->name = CandidateName(topic, multi_id, "xyz");
+    cand->preference = 2;
+    axes = {f.Find("xyz[0]"), f.Find("xyz[1]"), f.Find("xyz[2]")};
+  } else {
+    // sensor_combined.timestamp is the gyro sample's time (the accelerometer's is relative).
+    t_field = t_plain;
+    cand->preference = 3;
+    std::string field = f.Find("gyro_rad[0]") ? "gyro_rad" : "gyro_rad_s";
+    cand->name = CandidateName(topic, multi_id, field);
+    axes = {f.Find(field + "[0]"), f.Find(field + "[1]"), f.Find(field + "[2]")};
+  }
+  if (!t_field || !axes[0] || !axes[1] || !axes[2]) return;
+  cand->samples.reserve(cand->samples.size() + sub.payloads.size());
+  for (std::string_view data : sub.payloads) {
+    const auto t_ns = ReadTimeNs(data, *t_field);
+    cand->samples.push_back(
+        {t_ns.value_or(0), Eigen::Vector3d(ReadNumber(data, *axes[0]), ReadNumber(data, *axes[1]),
+                                           ReadNumber(data, *axes[2]))});
+  }
+}
 
+// camera_trigger, camera_capture: one event a message with a positive time.
+void DecodeCameraEvents(const std::string& topic, const Fields& f, const FlatField& t_field,
+                        const Subscription& sub, std::vector<CameraEvent>* events) {
+  const FlatField* seq = f.Find("seq");
+  for (std::string_view data : sub.payloads) {
+    const auto t_ns = ReadTimeNs(data, t_field);
+    if (!t_ns || *t_ns <= 0) continue;
+    CameraEvent e;
+    e.t_ns = *t_ns;
+    e.kind = topic;
+    if (seq) {
+      const double v = ReadNumber(data, *seq);
+      if (std::isfinite(v) && std::abs(v) < 9.0e15) e.sequence = static_cast<int64_t>(v);
+    }
+    events->push_back(e);
+  }
+}
+
+// vehicle_local_position: the valid distances to the ground and local z values, m.
+void DecodeLocalPosition(const Fields& f, const Subscription& sub, DecodedTopics* out) {
+  const FlatField* dist = f.Find("dist_bottom");
+  const FlatField* dist_valid = f.Find("dist_bottom_valid");
+  const FlatField* z = f.Find("z");
+  const FlatField* z_valid = f.Find("z_valid");
+  for (std::string_view data : sub.payloads) {
+    if (dist && dist_valid && ReadNumber(data, *dist_valid) != 0.0) {
+      const double d = ReadNumber(data, *dist);
+      if (std::isfinite(d)) out->dist_bottom_m.push_back(d);
+    }
+    if (z && (!z_valid || ReadNumber(data, *z_valid) != 0.0)) {
+      const double v = ReadNumber(data, *z);
+      if (std::isfinite(v)) out->local_z_m.push_back(v);
+    }
+  }
+}
+
+// The altitude above ground: the airborne median of dist_bottom, else of the height above home
+// (or above the first local z); with the warning that says which.
+void SetAltitudeAboveGround(const DecodedTopics& topics, FlightLog* log) {
   auto airborne_median = [](const std::vector<double>& heights) {
     std::vector<double> up;
     for (double h : heights) {
@@ -937,22 +961,71 @@ void ULogParser::Decode() {
     }
     return internal::Median(std::move(up));
   };
-  if (auto m = airborne_median(dist_bottom_m)) {
-    log_.altitude_above_ground_m = m;
-    log_.warnings.push_back("altitude above ground: median vehicle_local_position.dist_bottom (valid, above 1 m)");
-  } else if (!local_z_m.empty()) {
-    const double z_home = home_z_m.value_or(local_z_m.front());
+  if (auto m = airborne_median(topics.dist_bottom_m)) {
+    log->altitude_above_ground_m = m;
+    log->warnings.push_back(
+        "altitude above ground: median vehicle_local_position.dist_bottom (valid, above 1 m)");
+  } else if (!topics.local_z_m.empty()) {
+    const double z_home = topics.home_z_m.value_or(topics.local_z_m.front());
     std::vector<double> heights;
-    for (double z : local_z_m) heights.push_back(-(z - z_home));
+    for (double z : topics.local_z_m) heights.push_back(-(z - z_home));
     if (auto h = airborne_median(heights)) {
-      log_.altitude_above_ground_m = h;
-      log_.warnings.push_back(std::string("altitude above ground: median -(vehicle_local_position.z - ") +
-                              (home_z_m ? "home_position.z" : "first local z") +
-                              ") above 1 m (height above home, not a ground-distance measurement)");
+      log->altitude_above_ground_m = h;
+      log->warnings.push_back(
+          std::string("altitude above ground: median -(vehicle_local_position.z - ") +
+          (topics.home_z_m ? "home_position.z" : "first local z") +
+          ") above 1 m (height above home, not a ground-distance measurement)");
     }
   }
+}
 
-  if (!internal::ChooseGyroSource(std::move(candidates), &log_)) {
+void ULogParser::DecodeStream(const std::string& topic, int multi_id,
+                              const std::vector<const Subscription*>& subs, DecodedTopics* out) {
+  internal::GyroCandidate cand;
+  for (const Subscription* sub : subs) {
+    const Fields f{*sub->layout};
+    const FlatField* t_sample = f.Find("timestamp_sample");
+    const FlatField* t_plain = f.Find("timestamp");
+    const FlatField* t_field = t_sample ? t_sample : t_plain;
+    if (!t_field) continue;
+    if (topic == "sensor_gyro_fifo") {
+      const size_t skipped = DecodeGyroFifo(topic, multi_id, f, *t_field, *sub, &cand);
+      if (skipped > 0) {
+        log_.records_skipped += skipped;
+        skipped_by_topic_[topic] += skipped;
+      }
+    } else if (topic == "sensor_gyro" || topic == "vehicle_angular_velocity" ||
+               topic == "sensor_combined") {
+      DecodeGyroRates(topic, multi_id, f, t_plain, t_field, *sub, &cand);
+    } else if (topic == "camera_trigger" || topic == "camera_capture") {
+      DecodeCameraEvents(topic, f, t_plain ? *t_plain : *t_field, *sub, &out->events);
+    } else if (topic == "vehicle_local_position") {
+      DecodeLocalPosition(f, *sub, out);
+    } else if (topic == "home_position") {
+      if (const FlatField* z = f.Find("z")) {
+        const double v = ReadNumber(sub->payloads.back(), *z);
+        if (std::isfinite(v)) out->home_z_m = v;
+      }
+    }
+  }
+  if (!cand.name.empty() && !cand.samples.empty()) out->candidates.push_back(std::move(cand));
+}
+
+void ULogParser::Decode() {
+  DecodedTopics topics;
+  // Subscriptions of the same topic and instance (a topic removed and added again) share one
+  // stream.
+  std::map<std::pair<std::string, int>, std::vector<const Subscription*>> streams;
+  for (const Subscription& sub : subscriptions_) {
+    if (sub.layout && !sub.payloads.empty()) streams[{sub.topic, sub.multi_id}].push_back(&sub);
+  }
+  for (const auto& [key, subs] : streams) DecodeStream(key.first, key.second, subs, &topics);
+
+  std::stable_sort(topics.events.begin(), topics.events.end(),
+                   [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
+  log_.camera_events = std::move(topics.events);
+  SetAltitudeAboveGround(topics, &log_);
+  if (!internal::ChooseGyroSource(std::move(topics.candidates), &log_)) {
     throw IoError(IoMessage(path_, 0,
                             "no usable gyro data (looked for sensor_gyro_fifo, sensor_gyro, "
                             "vehicle_angular_velocity, sensor_combined)"));
