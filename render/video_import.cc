@@ -139,70 +139,98 @@ ImportSummary WriteDataset(const fs::path& dir, ImportSource kind, const RigMode
   return summary;
 }
 
-ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
-                          const std::function<void(size_t, size_t)>& progress) {
-  const std::string& path = options.source;
-  const GoproTelemetry telemetry = ReadGoproTelemetry(path);
+// The presentation times of the MP4's video track, ascending (OpenCV returns frames in
+// presentation order), s.
+std::vector<double> VideoFrameTimesS(const std::string& path) {
   Mp4File mp4(path);
   const Mp4Track* video = mp4.FindTrack("vide", "");
   if (!video || video->size() == 0) throw IoError(IoMessage(path, -1, "no video track"));
-  // OpenCV returns frames in presentation order.
   std::vector<double> frame_times_s;
   for (size_t i = 0; i < video->size(); ++i) frame_times_s.push_back(video->PresentationTimeS(i));
   std::sort(frame_times_s.begin(), frame_times_s.end());
-  std::vector<int64_t> ids(frame_times_s.size());
-  for (size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<int64_t>(i);
-  const std::vector<int64_t> selected = SelectFrames(ids, options);
+  return frame_times_s;
+}
 
-  cv::VideoCapture capture(path);
-  if (!capture.isOpened()) throw IoError(IoMessage(path, -1, "OpenCV cannot open the video"));
+// Writes (path, RGB image) pairs in parallel and empties *pending: encoding a PNG takes several
+// times longer than decoding the frame. The first failure is thrown once all are done.
+void WriteImagesInParallel(std::vector<std::pair<std::string, cv::Mat>>* pending) {
+  std::mutex mutex;
+  std::string error;
+  cv::parallel_for_(cv::Range(0, static_cast<int>(pending->size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      try {
+        WriteImage((*pending)[i].first, (*pending)[i].second);
+      } catch (const std::exception& e) {  // exceptions must not cross the worker threads
+        std::lock_guard<std::mutex> lock(mutex);
+        if (error.empty()) error = e.what();
+      }
+    }
+  });
+  pending->clear();
+  if (!error.empty()) throw IoError(error);
+}
+
+// Exposure at t_s: the SHUT value nearest in time (SHUT is written once per video frame), null
+// when none lies within a frame period.
+nlohmann::json NearestExposureS(const GoproTelemetry& telemetry, double t_s, double period_s) {
+  nlohmann::json exposure = nullptr;
+  const auto& ts = telemetry.shutter_t_s;
+  if (!ts.empty()) {
+    const size_t k = std::lower_bound(ts.begin(), ts.end(), t_s) - ts.begin();
+    size_t best = std::min(k, ts.size() - 1);
+    if (k > 0 && std::abs(ts[k - 1] - t_s) < std::abs(ts[best] - t_s)) best = k - 1;
+    if (std::abs(ts[best] - t_s) <= period_s) exposure = telemetry.shutter_s[best];
+  }
+  return exposure;
+}
+
+// The selected frames as OpenCV decoded them, written under the dataset folder, with what the
+// decoding met.
+struct DecodedFrames {
   std::vector<FrameEntry> entries;
   nlohmann::json exposures = nlohmann::json::array();
-  cv::Mat frame;
   cv::Size size;
-  // Encoding a PNG takes several times longer than decoding the frame: frames are written in
-  // batches, in parallel.
-  std::vector<std::pair<std::string, cv::Mat>> pending;
-  auto flush = [&] {
-    std::mutex mutex;
-    std::string error;
-    cv::parallel_for_(cv::Range(0, static_cast<int>(pending.size())), [&](const cv::Range& range) {
-      for (int i = range.start; i < range.end; ++i) {
-        try {
-          WriteImage(pending[i].first, pending[i].second);
-        } catch (const std::exception& e) {  // exceptions must not cross the worker threads
-          std::lock_guard<std::mutex> lock(mutex);
-          if (error.empty()) error = e.what();
-        }
-      }
-    });
-    pending.clear();
-    if (!error.empty()) throw IoError(error);
-    if (progress) progress(entries.size(), selected.size());
-  };
   int64_t decoded = 0;  // index of the next frame the reader returns
-  int failures = 0, consecutive = 0, time_mismatches = 0;
+  int failures = 0, time_mismatches = 0;
+};
+
+DecodedFrames DecodeSelectedFrames(const std::string& path, const fs::path& dir,
+                                   const GoproTelemetry& telemetry,
+                                   const std::vector<double>& frame_times_s,
+                                   const std::vector<int64_t>& selected,
+                                   const std::function<void(size_t, size_t)>& progress) {
+  cv::VideoCapture capture(path);
+  if (!capture.isOpened()) throw IoError(IoMessage(path, -1, "OpenCV cannot open the video"));
+  DecodedFrames out;
+  cv::Mat frame;
+  // Frames are written in batches of kWriteBatch, in parallel.
+  std::vector<std::pair<std::string, cv::Mat>> pending;
+  const auto flush = [&] {
+    WriteImagesInParallel(&pending);
+    if (progress) progress(out.entries.size(), selected.size());
+  };
+  int consecutive = 0;
   const double period_s =
       frame_times_s.size() > 1
           ? (frame_times_s.back() - frame_times_s.front()) / (frame_times_s.size() - 1)
           : 0.0;
-  while (decoded <= selected.back() && consecutive < kMaxConsecutiveGrabFailures) {
+  while (out.decoded <= selected.back() && consecutive < kMaxConsecutiveGrabFailures) {
     if (!capture.read(frame) || frame.empty()) {
-      ++failures;
+      ++out.failures;
       ++consecutive;
       continue;
     }
     consecutive = 0;
-    const int64_t index = decoded++;
+    const int64_t index = out.decoded++;
     // After a read OpenCV reports the time of the frame it returned (not for the first or last);
     // a disagreement with the sample table would mean a frame was dropped.
     const double reader_s = capture.get(cv::CAP_PROP_POS_MSEC) * 1e-3;
     if (index > 0 && index + 1 < static_cast<int64_t>(frame_times_s.size()) && period_s > 0 &&
         std::abs(reader_s - frame_times_s[index]) > 0.5 * period_s)
-      ++time_mismatches;
+      ++out.time_mismatches;
     if (index < selected.front()) continue;
-    if (size.empty()) size = frame.size();
-    if (frame.size() != size)
+    if (out.size.empty()) out.size = frame.size();
+    if (frame.size() != out.size)
       throw IoError(IoMessage(path, -1, "frame " + std::to_string(index) + " changes size"));
     FrameEntry entry;
     entry.frame = index;
@@ -211,29 +239,19 @@ ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
     cv::Mat rgb;
     cv::cvtColor(frame, rgb, frame.channels() == 4 ? cv::COLOR_BGRA2RGB : cv::COLOR_BGR2RGB);
     pending.emplace_back((dir / entry.image).string(), rgb);
-    entries.push_back(entry);
-    // Exposure: the SHUT value nearest in time (SHUT is written once per video frame).
-    nlohmann::json exposure = nullptr;
-    const auto& ts = telemetry.shutter_t_s;
-    if (!ts.empty()) {
-      const size_t k = std::lower_bound(ts.begin(), ts.end(), frame_times_s[index]) - ts.begin();
-      size_t best = std::min(k, ts.size() - 1);
-      if (k > 0 &&
-          std::abs(ts[k - 1] - frame_times_s[index]) < std::abs(ts[best] - frame_times_s[index]))
-        best = k - 1;
-      if (std::abs(ts[best] - frame_times_s[index]) <= period_s)
-        exposure = telemetry.shutter_s[best];
-    }
-    exposures.push_back({{"frame", index}, {"exposure_s", exposure}});
+    out.entries.push_back(entry);
+    out.exposures.push_back(
+        {{"frame", index},
+         {"exposure_s", NearestExposureS(telemetry, frame_times_s[index], period_s)}});
     if (pending.size() >= kWriteBatch) flush();
   }
   flush();
-  if (entries.empty())
-    throw IoError(IoMessage(path, -1, "OpenCV decoded no frame of the selection"));
-  if (static_cast<int64_t>(entries.size()) < static_cast<int64_t>(selected.size()))
-    std::fprintf(stderr, "warning: %s: OpenCV decoded %zu of the %zu frames selected\n",
-                 path.c_str(), entries.size(), selected.size());
+  return out;
+}
 
+// The HERO5 Black's declared rig for frames of `size`: the Wide field of view's focal length, the
+// readout guess and the sensor-to-camera axes.
+RigModel Hero5Rig(const cv::Size& size) {
   RigModel rig = BaseRig(size.width, size.height);
   const double f_px = 0.5 * rig.camera.width / (0.5 * kHero5WideHfovDeg * kPi / 180.0);
   rig.camera.fx = rig.camera.fy = f_px;
@@ -250,7 +268,14 @@ ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
       0, 0, -1,               //
       1, 0, 0;
   rig.cam_from_gyro = cam_from_gyro;
+  return rig;
+}
 
+// import.json for a GoPro clip: the source, the clock, the gyro stream and frames as read, and the
+// claims (all guesses or inferences: GoPro publishes none of them).
+nlohmann::json GoproRecord(const std::string& path, const GoproTelemetry& telemetry,
+                           const RigModel& rig, const DecodedFrames& frames, size_t video_samples) {
+  const double f_px = rig.camera.fx;
   nlohmann::json record;
   record["format"] = "import/1";
   record["source"] = {{"kind", "gopro_mp4"}, {"path", path}, {"device", telemetry.device}};
@@ -270,14 +295,14 @@ ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
       {"fit_max_residual_s", telemetry.gyro_fit_max_residual_s},
       {"columns", "gyro.csv gx,gy,gz = the sensor's x, y, z (GPMF storage reordered)"}};
   record["frames"] = {
-      {"count", entries.size()},
-      {"video_samples", frame_times_s.size()},
-      {"decoded", decoded},
-      {"failed_grabs", failures},
-      {"reader_time_mismatches", time_mismatches},
+      {"count", frames.entries.size()},
+      {"video_samples", video_samples},
+      {"decoded", frames.decoded},
+      {"failed_grabs", frames.failures},
+      {"reader_time_mismatches", frames.time_mismatches},
       {"times", "presentation times of the MP4 video track (stts/ctts/elst)"},
       {"t_first_row", "frame presentation time; what it marks in the exposure is unknown"}};
-  record["exposure_s"] = exposures;
+  record["exposure_s"] = frames.exposures;
   record["claims"] = nlohmann::json::array(
       {Claim("intrinsics",
              {{"fx", f_px}, {"fy", f_px}, {"cx", rig.camera.cx}, {"cy", rig.camera.cy}}, "guess",
@@ -286,7 +311,7 @@ ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
              "Black, Wide); pinhole with no distortion declared although the lens is a fisheye"),
        Claim("readout_s", kHero5ReadoutGuessS, "guess",
              "not published for the HERO5; order of magnitude only"),
-       Claim("gyro_to_camera", MatrixJson(cam_from_gyro), "inferred",
+       Claim("gyro_to_camera", MatrixJson(rig.cam_from_gyro), "inferred",
              "camera y = -sensor z: the accelerometer's mean is +9.7 m/s^2 on z, and the "
              "horizontal image shift "
              "between frames follows the integrated z rate (correlation 0.99, checked when this "
@@ -295,8 +320,29 @@ ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
              "tell x from y"),
        Claim("direction", ReadoutDirectionName(rig.shutter.direction), "guess", "CMOS default"),
        Claim("time_offset_s", 0.0, "guess", "telemetry and video share the MP4 timeline")});
+  return record;
+}
 
-  return WriteDataset(dir, ImportSource::kGoproMp4, rig, telemetry.gyro, entries, record);
+ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
+                          const std::function<void(size_t, size_t)>& progress) {
+  const std::string& path = options.source;
+  const GoproTelemetry telemetry = ReadGoproTelemetry(path);
+  const std::vector<double> frame_times_s = VideoFrameTimesS(path);
+  std::vector<int64_t> ids(frame_times_s.size());
+  for (size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<int64_t>(i);
+  const std::vector<int64_t> selected = SelectFrames(ids, options);
+
+  const DecodedFrames frames =
+      DecodeSelectedFrames(path, dir, telemetry, frame_times_s, selected, progress);
+  if (frames.entries.empty())
+    throw IoError(IoMessage(path, -1, "OpenCV decoded no frame of the selection"));
+  if (static_cast<int64_t>(frames.entries.size()) < static_cast<int64_t>(selected.size()))
+    std::fprintf(stderr, "warning: %s: OpenCV decoded %zu of the %zu frames selected\n",
+                 path.c_str(), frames.entries.size(), selected.size());
+
+  const RigModel rig = Hero5Rig(frames.size);
+  const nlohmann::json record = GoproRecord(path, telemetry, rig, frames, frame_times_s.size());
+  return WriteDataset(dir, ImportSource::kGoproMp4, rig, telemetry.gyro, frames.entries, record);
 }
 
 ImportSummary ImportPhone(const ImportOptions& options, const fs::path& dir,

@@ -117,6 +117,185 @@ Confusion Confuse(const std::vector<FrameValidation>& frames, size_t limit, doub
   return c;
 }
 
+// A dataset folder's three files, each checked to be there.
+struct DatasetFiles {
+  fs::path dir;
+  std::string camera_path, gyro_path, frames_path;
+};
+
+DatasetFiles FindDatasetFiles(const std::string& dataset_dir) {
+  DatasetFiles files;
+  files.dir = fs::path(dataset_dir);
+  if (!fs::is_directory(files.dir)) {
+    throw IoError(IoMessage(dataset_dir, 0, "not a dataset folder"));
+  }
+  files.camera_path = (files.dir / "camera.json").string();
+  files.gyro_path = (files.dir / "gyro.csv").string();
+  files.frames_path = (files.dir / "frames.csv").string();
+  for (const std::string& path : {files.camera_path, files.gyro_path, files.frames_path}) {
+    if (!fs::is_regular_file(path)) throw IoError(IoMessage(path, 0, "missing"));
+  }
+  return files;
+}
+
+// Whether the dataset is a video (FORMATS.md: a video dataset leaves ref empty on every line),
+// after checking that every line agrees and every image it names is there.
+bool CheckFrameImages(const DatasetFiles& files, const std::vector<FrameEntry>& entries) {
+  const bool video = entries.front().ref.empty();
+  for (size_t i = 0; i < entries.size(); ++i) {
+    // frames.csv: a header line, then one frame a line.
+    const long line = static_cast<long>(i) + 2;
+    if (entries[i].ref.empty() != video) {
+      throw IoError(IoMessage(files.frames_path, line,
+                              video ? "a ref image in a video dataset (line 2 has none)"
+                                    : "no ref image (a video dataset leaves ref empty on every "
+                                      "line, line 2 has one)"));
+    }
+    std::vector<std::string> images = {entries[i].image};
+    if (!video) images.push_back(entries[i].ref);
+    for (const std::string& name : images) {
+      if (name.empty() || !fs::is_regular_file(files.dir / name)) {
+        throw IoError(IoMessage(files.frames_path, line, "image '" + name + "' not found"));
+      }
+    }
+  }
+  return video;
+}
+
+// Each frame's motion under the declared model; a frame outside the gyro log is an error.
+std::vector<FrameMotion> DeclaredMotions(const RigModel& rig, const GyroTrace& gyro,
+                                         const std::vector<FrameEntry>& entries,
+                                         const std::string& frames_path) {
+  TrueModel declared_model;
+  declared_model.rig = rig;
+  const CameraMotion motion(gyro, declared_model);
+  std::vector<FrameMotion> motions;
+  for (size_t i = 0; i < entries.size(); ++i) {
+    try {
+      motions.push_back(motion.Frame(entries[i].t_first_row_ns));
+    } catch (const std::out_of_range& e) {
+      throw IoError(IoMessage(frames_path, static_cast<long>(i) + 2,
+                              "frame " + std::to_string(entries[i].frame) + ": " + e.what()));
+    }
+  }
+  return motions;
+}
+
+// Ground metres per pixel at the declared altitude, from the mean focal length.
+double GroundMetresPerPx(const RigModel& rig) {
+  const double f_px = 0.5 * (rig.camera.fx + rig.camera.fy);
+  return rig.altitude_m / f_px;
+}
+
+// Measures every still frame against its ref image: fills result->frames' measured columns and
+// returns each frame's points.
+std::vector<FramePoints> MeasureStillFrames(const DatasetFiles& files,
+                                            const std::vector<FrameEntry>& entries,
+                                            const ValidateOptions& options,
+                                            const ValidateProgress& progress,
+                                            ValidationResult* result) {
+  const RigModel& rig = result->declared;
+  const double m_per_px = GroundMetresPerPx(rig);
+  std::vector<FramePoints> frame_points(entries.size());
+  result->frames.resize(entries.size());
+  for (size_t i = 0; i < entries.size(); ++i) {
+    auto start = std::chrono::steady_clock::now();
+    const long line = static_cast<long>(i) + 2;
+    const cv::Mat ref = ReadImage((files.dir / entries[i].ref).string());
+    const cv::Mat image = ReadImage((files.dir / entries[i].image).string());
+    for (const auto& [name, picture] :
+         {std::pair{entries[i].ref, ref}, {entries[i].image, image}}) {
+      if (picture.cols != rig.camera.width || picture.rows != rig.camera.height) {
+        throw IoError(IoMessage(files.frames_path, line,
+                                "image '" + name + "' is " + std::to_string(picture.cols) + "x" +
+                                    std::to_string(picture.rows) + ", camera.json declares " +
+                                    std::to_string(rig.camera.width) + "x" +
+                                    std::to_string(rig.camera.height)));
+      }
+    }
+    result->read_s += SecondsSince(start);
+    start = std::chrono::steady_clock::now();
+    const DisplacementMeasurement measured = MeasureDisplacement(ref, image, options.measure);
+    result->measure_s += SecondsSince(start);
+
+    FrameValidation& f = result->frames[i];
+    f.frame = entries[i].frame;
+    f.image = entries[i].image;
+    f.t_gyro_s = entries[i].t_first_row_ns * 1e-9 + rig.time_offset_s;
+    f.points = measured.points.size();
+    f.measured_fraction = measured.measured_fraction;
+    f.noise_px = measured.noise_px;
+    f.d_meas_px = measured.d_px;
+    f.d_meas_m = measured.d_px * m_per_px;
+    frame_points[i] = {entries[i].frame, entries[i].t_first_row_ns, measured.points, std::nullopt};
+    if (progress) progress("measure", i + 1, entries.size());
+  }
+  return frame_points;
+}
+
+// The paper's threshold model over the frames' readouts: `analyze` on the gyro log as given.
+AnalyzeResult PaperModel(const RigModel& rig, const GyroTrace& gyro,
+                         const std::vector<FrameEntry>& entries, const ValidateOptions& options) {
+  AnalyzeOptions analyze;
+  analyze.rig = rig;
+  analyze.limits_m = options.limits_m;
+  analyze.what_if = false;
+  analyze.estimate_bias = false;  // gyro.csv is the calibrated log the dataset declares
+  for (const FrameEntry& e : entries) {
+    analyze.triggers.push_back(
+        {FrameName(e.frame), e.t_first_row_ns + SecondsToNs(rig.time_offset_s)});
+  }
+  FlightLog log;
+  log.gyro = gyro;
+  log.format = "gyro.csv";
+  return Analyze(log, analyze);
+}
+
+// Predict: the declared full model and the paper's threshold model for every frame, each frame's
+// flags at every limit (result->frames' predicted columns).
+void PredictStillFrames(const GyroTrace& gyro, const std::vector<FrameEntry>& entries,
+                        const std::vector<FrameMotion>& motions, const std::string& frames_path,
+                        const ValidateOptions& options, const ValidateProgress& progress,
+                        ValidationResult* result) {
+  const RigModel& rig = result->declared;
+  const double m_per_px = GroundMetresPerPx(rig);
+  const AnalyzeResult paper = PaperModel(rig, gyro, entries, options);
+  for (size_t i = 0; i < entries.size(); ++i) {
+    FrameValidation& f = result->frames[i];
+    const ImageResult& image = paper.images[i];
+    SHUTTERLAB_CHECK(image.in_trace) << frames_path << ":" << i + 2 << ": frame " << f.frame
+                                     << ": the readout is outside the gyro log";
+    f.d_paper_m = image.d_paper_m;
+    f.range_arcsec = image.range_arcsec;
+    f.dominant_axis = image.dominant_axis;
+    const FullModelD full = FullModel(rig, motions[i]);
+    f.d_full_px = full.d_px;
+    f.d_full_m = full.d_px * m_per_px;
+    f.d_centre_px = full.d_centre_px;
+    f.d_vector_m = rig.altitude_m * std::tan(full.max_angle_rad);
+    for (double limit : options.limits_m) {
+      f.flag_meas.push_back(f.d_meas_m > limit);
+      f.flag_full.push_back(f.d_full_m > limit);
+      f.flag_paper.push_back(f.d_paper_m > limit);
+    }
+    if (progress) progress("predict", i + 1, entries.size());
+  }
+}
+
+// The flags against the measured truth at every limit, and the ratios per dominant axis (those
+// with frames) and over all frames.
+void SummarisePredictions(const ValidateOptions& options, ValidationResult* result) {
+  for (size_t l = 0; l < options.limits_m.size(); ++l) {
+    result->confusion_paper.push_back(Confuse(result->frames, l, options.limits_m[l], false));
+    result->confusion_full.push_back(Confuse(result->frames, l, options.limits_m[l], true));
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    const RatioGroup group = Ratios(result->frames, axis);
+    if (group.frames > 0) result->ratios.push_back(group);
+  }
+  result->ratios.push_back(Ratios(result->frames, 3));
+}
+
 }  // namespace
 
 void ValidateOptions::Check() const {
@@ -138,140 +317,27 @@ ValidationResult ValidateDataset(const std::string& dataset_dir, const ValidateO
   result.limits_m = options.limits_m;
 
   // --- read and check everything that is cheap to check before the long stages
-  const fs::path dir(dataset_dir);
-  if (!fs::is_directory(dir)) throw IoError(IoMessage(dataset_dir, 0, "not a dataset folder"));
-  const std::string camera_path = (dir / "camera.json").string();
-  const std::string gyro_path = (dir / "gyro.csv").string();
-  const std::string frames_path = (dir / "frames.csv").string();
-  for (const std::string& path : {camera_path, gyro_path, frames_path}) {
-    if (!fs::is_regular_file(path)) throw IoError(IoMessage(path, 0, "missing"));
-  }
-  result.declared = ReadRigModel(camera_path);
+  const DatasetFiles files = FindDatasetFiles(dataset_dir);
+  result.declared = ReadRigModel(files.camera_path);
   const RigModel& rig = result.declared;
-  const GyroTrace gyro = ReadGyroCsv(gyro_path);
-  if (gyro.size() < 2) throw IoError(IoMessage(gyro_path, 0, "fewer than two samples"));
-  const std::vector<FrameEntry> entries = ReadFramesCsv(frames_path);
-  if (entries.empty()) throw IoError(IoMessage(frames_path, 0, "no frames"));
-  // FORMATS.md: a video dataset leaves ref empty on every line.
-  const bool video = entries.front().ref.empty();
-  for (size_t i = 0; i < entries.size(); ++i) {
-    // frames.csv: a header line, then one frame a line.
-    const long line = static_cast<long>(i) + 2;
-    if (entries[i].ref.empty() != video) {
-      throw IoError(IoMessage(frames_path, line,
-                              video ? "a ref image in a video dataset (line 2 has none)"
-                                    : "no ref image (a video dataset leaves ref empty on every "
-                                      "line, line 2 has one)"));
-    }
-    std::vector<std::string> images = {entries[i].image};
-    if (!video) images.push_back(entries[i].ref);
-    for (const std::string& name : images) {
-      if (name.empty() || !fs::is_regular_file(dir / name)) {
-        throw IoError(IoMessage(frames_path, line, "image '" + name + "' not found"));
-      }
-    }
-  }
-  if (video) {
+  const GyroTrace gyro = ReadGyroCsv(files.gyro_path);
+  if (gyro.size() < 2) throw IoError(IoMessage(files.gyro_path, 0, "fewer than two samples"));
+  const std::vector<FrameEntry> entries = ReadFramesCsv(files.frames_path);
+  if (entries.empty()) throw IoError(IoMessage(files.frames_path, 0, "no frames"));
+  if (CheckFrameImages(files, entries)) {
     result.read_s = SecondsSince(start);
     ValidateVideoDataset(dataset_dir, gyro, entries, options, progress, &result);
     return result;
   }
-  TrueModel declared_model;
-  declared_model.rig = rig;
-  const CameraMotion motion(gyro, declared_model);
-  std::vector<FrameMotion> motions;
-  for (size_t i = 0; i < entries.size(); ++i) {
-    try {
-      motions.push_back(motion.Frame(entries[i].t_first_row_ns));
-    } catch (const std::out_of_range& e) {
-      throw IoError(IoMessage(frames_path, static_cast<long>(i) + 2,
-                              "frame " + std::to_string(entries[i].frame) + ": " + e.what()));
-    }
-  }
+  const std::vector<FrameMotion> motions = DeclaredMotions(rig, gyro, entries, files.frames_path);
   result.read_s = SecondsSince(start);
 
-  // --- measure every frame
-  const double f_px = 0.5 * (rig.camera.fx + rig.camera.fy);
-  const double m_per_px = rig.altitude_m / f_px;
-  std::vector<FramePoints> frame_points(entries.size());
-  result.frames.resize(entries.size());
-  for (size_t i = 0; i < entries.size(); ++i) {
-    start = std::chrono::steady_clock::now();
-    const long line = static_cast<long>(i) + 2;
-    const cv::Mat ref = ReadImage((dir / entries[i].ref).string());
-    const cv::Mat image = ReadImage((dir / entries[i].image).string());
-    for (const auto& [name, picture] :
-         {std::pair{entries[i].ref, ref}, {entries[i].image, image}}) {
-      if (picture.cols != rig.camera.width || picture.rows != rig.camera.height) {
-        throw IoError(IoMessage(frames_path, line,
-                                "image '" + name + "' is " + std::to_string(picture.cols) + "x" +
-                                    std::to_string(picture.rows) + ", camera.json declares " +
-                                    std::to_string(rig.camera.width) + "x" +
-                                    std::to_string(rig.camera.height)));
-      }
-    }
-    result.read_s += SecondsSince(start);
-    start = std::chrono::steady_clock::now();
-    const DisplacementMeasurement measured = MeasureDisplacement(ref, image, options.measure);
-    result.measure_s += SecondsSince(start);
+  const std::vector<FramePoints> frame_points =
+      MeasureStillFrames(files, entries, options, progress, &result);
 
-    FrameValidation& f = result.frames[i];
-    f.frame = entries[i].frame;
-    f.image = entries[i].image;
-    f.t_gyro_s = entries[i].t_first_row_ns * 1e-9 + rig.time_offset_s;
-    f.points = measured.points.size();
-    f.measured_fraction = measured.measured_fraction;
-    f.noise_px = measured.noise_px;
-    f.d_meas_px = measured.d_px;
-    f.d_meas_m = measured.d_px * m_per_px;
-    frame_points[i] = {entries[i].frame, entries[i].t_first_row_ns, measured.points, std::nullopt};
-    if (progress) progress("measure", i + 1, entries.size());
-  }
-
-  // --- predict: the declared full model and the paper's threshold model
   start = std::chrono::steady_clock::now();
-  AnalyzeOptions analyze;
-  analyze.rig = rig;
-  analyze.limits_m = options.limits_m;
-  analyze.what_if = false;
-  analyze.estimate_bias = false;  // gyro.csv is the calibrated log the dataset declares
-  for (const FrameEntry& e : entries) {
-    analyze.triggers.push_back(
-        {FrameName(e.frame), e.t_first_row_ns + SecondsToNs(rig.time_offset_s)});
-  }
-  FlightLog log;
-  log.gyro = gyro;
-  log.format = "gyro.csv";
-  const AnalyzeResult paper = Analyze(log, analyze);
-  for (size_t i = 0; i < entries.size(); ++i) {
-    FrameValidation& f = result.frames[i];
-    const ImageResult& image = paper.images[i];
-    SHUTTERLAB_CHECK(image.in_trace) << frames_path << ":" << i + 2 << ": frame " << f.frame
-                                     << ": the readout is outside the gyro log";
-    f.d_paper_m = image.d_paper_m;
-    f.range_arcsec = image.range_arcsec;
-    f.dominant_axis = image.dominant_axis;
-    const FullModelD full = FullModel(rig, motions[i]);
-    f.d_full_px = full.d_px;
-    f.d_full_m = full.d_px * m_per_px;
-    f.d_centre_px = full.d_centre_px;
-    f.d_vector_m = rig.altitude_m * std::tan(full.max_angle_rad);
-    for (double limit : options.limits_m) {
-      f.flag_meas.push_back(f.d_meas_m > limit);
-      f.flag_full.push_back(f.d_full_m > limit);
-      f.flag_paper.push_back(f.d_paper_m > limit);
-    }
-    if (progress) progress("predict", i + 1, entries.size());
-  }
-  for (size_t l = 0; l < options.limits_m.size(); ++l) {
-    result.confusion_paper.push_back(Confuse(result.frames, l, options.limits_m[l], false));
-    result.confusion_full.push_back(Confuse(result.frames, l, options.limits_m[l], true));
-  }
-  for (int axis = 0; axis < 3; ++axis) {
-    const RatioGroup group = Ratios(result.frames, axis);
-    if (group.frames > 0) result.ratios.push_back(group);
-  }
-  result.ratios.push_back(Ratios(result.frames, 3));
+  PredictStillFrames(gyro, entries, motions, files.frames_path, options, progress, &result);
+  SummarisePredictions(options, &result);
   result.predict_s = SecondsSince(start);
 
   // --- close the loop over all frames' points

@@ -221,185 +221,448 @@ json ReadClaims(const fs::path& import_json) {
   return claims;
 }
 
+// What the claims are tested against: the data, and both models with where their loops started.
+struct ClaimInputs {
+  const GyroTrace& gyro;
+  const std::vector<FramePoints>& pairs;
+  double noise_px;
+  const TrueModel& preferred_start;
+  const LoopResult& preferred;
+  const LoopOptions& preferred_options;
+  const TrueModel& rotation_start;
+  const LoopResult& rotation;
+  const LoopOptions& rotation_options;
+};
+
+// Fits shared between claims (the model's own effects are every claim's "without"), by
+// (by_rotation, effects): each is fitted once.
+using ClaimFits = std::map<std::pair<bool, std::vector<std::string>>, LoopResult>;
+
+// The claimed gyro axes against the best other of the 24 mappings, rotation-only mean squares per
+// component over the points both predict, px^2.
+struct AxesComparison {
+  double claimed_mean_sq_px2 = 0.0;
+  double other_mean_sq_px2 = std::numeric_limits<double>::infinity();
+  Eigen::Matrix3d other;
+};
+
+// The measured flow less the rotation-only model's prediction with the rotation loop's model and
+// the given mounting, per point of the pairs.
+std::vector<Eigen::Vector2d> MappingResiduals(const ClaimInputs& in, PointPredictor* predictor,
+                                              const Eigen::Matrix3d& cam_from_gyro) {
+  TrueModel model = in.rotation.model;
+  model.rig.cam_from_gyro = cam_from_gyro;
+  std::vector<Eigen::Vector2d> predicted;
+  predictor->Predict(model, &predicted);
+  std::vector<Eigen::Vector2d> r(predicted.size());
+  size_t at = 0;
+  for (const FramePoints& f : in.pairs) {
+    for (const MeasuredPoint& p : f.points) {
+      r[at] = Eigen::Vector2d(p.dx, p.dy) - predicted[at];
+      ++at;
+    }
+  }
+  return r;
+}
+
+// The claimed axes against the best other mapping of the 24, each pair of them over the points
+// both predict (CompareTrimmed: mean square per component, the largest of either left out). A
+// mapping that sends more than kMaxMappingLostShare of the claimed one's points out of the frame,
+// where the measurement found them inside, is out.
+AxesComparison CompareAxisMappings(const ClaimInputs& in, const Eigen::Matrix3d& claimed) {
+  const std::unique_ptr<PointPredictor> predictor =
+      MakePredictor(in.gyro, in.pairs, /*pair_translation=*/false, 1.0);
+  const std::vector<Eigen::Vector2d> r_claimed = MappingResiduals(in, predictor.get(), claimed);
+  std::vector<double> weights;
+  for (const FramePoints& f : in.pairs) {
+    for (const MeasuredPoint& p : f.points) weights.push_back(p.weight);
+  }
+  size_t claimed_points = 0;
+  for (size_t i = 0; i < r_claimed.size(); ++i) {
+    claimed_points += weights[i] > 0 && r_claimed[i].allFinite();
+  }
+  AxesComparison out;
+  out.claimed_mean_sq_px2 = CompareTrimmed(in.pairs, r_claimed, 2, r_claimed, 2).a;
+  out.other = claimed;
+  const Eigen::Matrix3d claimed_axes = NearestAxes(claimed);
+  for (const Eigen::Matrix3d& axes : AxisRotations()) {  // signed permutations already
+    if (axes == claimed_axes) continue;
+    const std::vector<Eigen::Vector2d> r = MappingResiduals(in, predictor.get(), axes);
+    size_t lost = 0;
+    for (size_t i = 0; i < r.size(); ++i) {
+      lost += weights[i] > 0 && r_claimed[i].allFinite() && !r[i].allFinite();
+    }
+    if (lost > kMaxMappingLostShare * static_cast<double>(claimed_points)) continue;
+    const TrimmedComparison c = CompareTrimmed(in.pairs, r_claimed, 2, r, 2);
+    if (c.points == 0 || !(c.a > 0)) continue;
+    if (!std::isfinite(out.other_mean_sq_px2) ||
+        c.b / c.a < out.other_mean_sq_px2 / out.claimed_mean_sq_px2) {
+      out.claimed_mean_sq_px2 = c.a;
+      out.other_mean_sq_px2 = c.b;
+      out.other = axes;
+    }
+  }
+  return out;
+}
+
+// gyro_to_camera: the rotation-only residual of each of the 24 axis mappings against the claimed
+// one's.
+void CheckAxesClaim(const ClaimInputs& in, ClaimCheck* check) {
+  const Eigen::Matrix3d claimed = MatrixFromJson(check->claimed);
+  const AxesComparison axes = CompareAxisMappings(in, claimed);
+  const bool claimed_best = axes.claimed_mean_sq_px2 <= axes.other_mean_sq_px2;
+  check->found = MatrixJson(claimed_best ? NearestAxes(claimed) : axes.other);
+  check->difference = claimed_best ? 0.0 : AngleDeg(axes.other, claimed);
+  // How much of the worse one's excess over the noise the better one removes.
+  const double margin = ExplainedShare(
+      claimed_best ? TrimmedComparison{axes.other_mean_sq_px2, axes.claimed_mean_sq_px2, 1}
+                   : TrimmedComparison{axes.claimed_mean_sq_px2, axes.other_mean_sq_px2, 1},
+      in.noise_px);
+  const std::string numbers =
+      "rotation-only rms per component " +
+      FormatNumber("%.3f", std::sqrt(axes.claimed_mean_sq_px2)) + " px with the claimed axes, " +
+      FormatNumber("%.3f", std::sqrt(axes.other_mean_sq_px2)) +
+      " px with the best other of the 24 mappings " + MatrixText(axes.other) + " (" +
+      FormatNumber("%.0f", 100 * margin) + " % of the worse one's excess)";
+  if (margin < kMinClaimShare) {
+    check->verdict = "not determined: " + numbers;
+  } else {
+    check->verdict = (claimed_best ? "claim holds: " : "claim contradicted: ") + numbers;
+  }
+}
+
+// direction, a discrete claim: the model read as declared (c.a, without) and flipped (c.b, with).
+void CheckDirectionClaim(const TrimmedComparison& c, const RigModel& declared, double noise_px,
+                         ClaimCheck* check) {
+  const ReadoutDirection other = declared.shutter.direction == ReadoutDirection::kTopToBottom
+                                     ? ReadoutDirection::kBottomToTop
+                                     : ReadoutDirection::kTopToBottom;
+  const std::string declared_word = ReadoutDirectionName(declared.shutter.direction);
+  const std::string other_word = ReadoutDirectionName(other);
+  const bool flip_better = c.b < c.a;
+  check->found = flip_better ? other_word : declared_word;
+  // How much of the worse reading's excess over the noise the better one removes.
+  const double margin =
+      ExplainedShare(flip_better ? c : TrimmedComparison{c.b, c.a, c.points}, noise_px);
+  const std::string numbers =
+      "rms per component " + FormatNumber("%.4f", std::sqrt(c.a)) + " px read " + declared_word +
+      ", " + FormatNumber("%.4f", std::sqrt(c.b)) + " px read " + other_word + " (" +
+      FormatNumber("%.0f", 100 * margin) + " % of the worse reading's excess)";
+  if (margin < kMinClaimShare) {
+    check->verdict = "not determined: " + numbers;
+  } else {
+    check->verdict =
+        (check->found == check->claimed ? "claim holds: " : "claim contradicted: ") + numbers;
+  }
+}
+
+// A scalar claim (readout_s, time_offset_s): the effect as fitted in `with` against the claim in
+// standard errors; `share` is how much of the residual fitting it removes, `removes` that in words.
+// False when `with` has no number for the effect (the claim is then not reported).
+bool CheckScalarClaim(const LoopResult& with, double share, const std::string& removes,
+                      ClaimCheck* check) {
+  const IdentifiedEffect* effect = nullptr;
+  for (const IdentifiedEffect& e : with.effects) {
+    if (e.name == check->effect) effect = &e;
+  }
+  if (effect == nullptr || !check->claimed.is_number() || !effect->value.is_number()) return false;
+  check->found = effect->value;
+  check->found_stderr = effect->stderr_value;
+  const double claimed = check->claimed.get<double>(), found = effect->value.get<double>();
+  const double se = effect->stderr_value.is_number() ? effect->stderr_value.get<double>()
+                                                     : std::numeric_limits<double>::quiet_NaN();
+  check->difference = std::abs(found - claimed) / se;
+  const std::string numbers =
+      FormatNumber("%.3f", found * 1e3) + " +- " + FormatNumber("%.3f", se * 1e3) + " ms against " +
+      FormatNumber("%.3f", claimed * 1e3) + " ms (" + FormatNumber("%.1f", check->difference) +
+      " standard errors); " + removes;
+  if (!std::isfinite(se)) {
+    check->verdict = "not determined (no standard error): " + numbers;
+  } else if (check->difference <= kClaimSigmas) {
+    check->verdict = "claim holds: " + numbers;
+  } else if (share < kMinClaimShare) {
+    check->verdict = "not determined: " + numbers;
+  } else {
+    check->verdict = "claim contradicted: " + numbers;
+  }
+  return true;
+}
+
+// A fitted claim (scalars, direction): tested by the preferred model, or by the rotation-only one
+// where the pair translation cannot tell the effect (IdentifiableWithPairTranslation), with the
+// effect fitted beside the model's identified ones and without it. False when the claim is not
+// reported.
+bool CheckFittedClaim(const ClaimInputs& in, ClaimFits* fits, ClaimCheck* check) {
+  const bool by_rotation =
+      in.preferred_options.pair_translation && !IdentifiableWithPairTranslation(check->effect);
+  const LoopOptions& loop_options = by_rotation ? in.rotation_options : in.preferred_options;
+  std::vector<std::string> base;
+  for (const std::string& e : EffectNames(by_rotation ? in.rotation : in.preferred)) {
+    if (e != check->effect) base.push_back(e);
+  }
+  std::vector<std::string> with_effect = base;
+  with_effect.push_back(check->effect);
+  const TrueModel& start = by_rotation ? in.rotation_start : in.preferred_start;
+  const auto fit = [&](const std::vector<std::string>& effects) -> const LoopResult& {
+    const auto key = std::make_pair(by_rotation, effects);
+    auto it = fits->find(key);
+    if (it == fits->end()) {
+      it = fits->emplace(key,
+                         FitEffects(start, in.gyro, in.pairs, in.noise_px, effects, loop_options))
+               .first;
+    }
+    return it->second;
+  };
+  const LoopResult& without = fit(base);
+  const LoopResult& with = fit(with_effect);
+  const TrimmedComparison c =
+      CompareTrimmed(in.pairs, without.residuals_after, without.residual_components,
+                     with.residuals_after, with.residual_components);
+  if (check->effect == "readout_direction") {
+    CheckDirectionClaim(c, in.rotation_start.rig, in.noise_px, check);
+    return true;
+  }
+  const double share = ExplainedShare(c, in.noise_px);
+  const std::string removes = "fitting it removes " + FormatNumber("%.0f", 100 * share) +
+                              " % of the residual's excess over the noise";
+  return CheckScalarClaim(with, share, removes, check);
+}
+
 // A claim is tested by the preferred model, or by the rotation-only one where the pair translation
 // cannot tell the effect (IdentifiableWithPairTranslation). Scalars (readout_s, time_offset_s): the
 // effect fitted beside the model's identified ones, against the claim in standard errors, and how
 // much of the residual fitting it removes. direction: both readings. gyro_to_camera: the rotation-
 // only residual of each of the 24 axis mappings against the claimed one's.
 // Each model's fits start where its loop started (preferred_start, rotation_start).
-std::vector<ClaimCheck> CheckClaims(const json& claims, const GyroTrace& gyro,
-                                    const std::vector<FramePoints>& pairs, double noise_px,
-                                    const TrueModel& preferred_start, const LoopResult& preferred,
-                                    const LoopOptions& preferred_options,
-                                    const TrueModel& rotation_start, const LoopResult& rotation,
-                                    const LoopOptions& rotation_options) {
-  const RigModel& declared = rotation_start.rig;
+std::vector<ClaimCheck> CheckClaims(const json& claims, const ClaimInputs& in) {
   std::vector<ClaimCheck> checks;
-  std::map<std::pair<bool, std::vector<std::string>>, LoopResult>
-      fits;                           // by (by_rotation, effects)
+  ClaimFits fits;
   for (const json& claim : claims) {  // as ReadClaims checked them
     ClaimCheck check;
     check.claim = claim["what"].get<std::string>();
     check.effect = EffectForClaim(check.claim);
     check.status = claim.value("status", "");
     check.claimed = claim.value("value", json());
-
     if (check.effect == "gyro_to_camera") {
-      const Eigen::Matrix3d claimed = MatrixFromJson(check.claimed);
-      const std::unique_ptr<PointPredictor> predictor =
-          MakePredictor(gyro, pairs, /*pair_translation=*/false, 1.0);
-      std::vector<Eigen::Vector2d> predicted;
-      const auto residuals = [&](const Eigen::Matrix3d& cam_from_gyro) {
-        TrueModel model = rotation.model;
-        model.rig.cam_from_gyro = cam_from_gyro;
-        predictor->Predict(model, &predicted);
-        std::vector<Eigen::Vector2d> r(predicted.size());
-        size_t at = 0;
-        for (const FramePoints& f : pairs) {
-          for (const MeasuredPoint& p : f.points) {
-            r[at] = Eigen::Vector2d(p.dx, p.dy) - predicted[at];
-            ++at;
-          }
-        }
-        return r;
-      };
-      // The claimed axes against the best other mapping of the 24, each pair of them over the
-      // points both predict (CompareTrimmed: mean square per component, the largest of either
-      // left out). A mapping that sends more than kMaxMappingLostShare of the claimed one's
-      // points out of the frame, where the measurement found them inside, is out.
-      const std::vector<Eigen::Vector2d> r_claimed = residuals(claimed);
-      std::vector<double> weights;
-      for (const FramePoints& f : pairs) {
-        for (const MeasuredPoint& p : f.points) weights.push_back(p.weight);
-      }
-      size_t claimed_points = 0;
-      for (size_t i = 0; i < r_claimed.size(); ++i) {
-        claimed_points += weights[i] > 0 && r_claimed[i].allFinite();
-      }
-      double claimed_mean_sq_px2 = CompareTrimmed(pairs, r_claimed, 2, r_claimed, 2).a;
-      double other_mean_sq_px2 = std::numeric_limits<double>::infinity();
-      Eigen::Matrix3d other = claimed;
-      const Eigen::Matrix3d claimed_axes = NearestAxes(claimed);
-      for (const Eigen::Matrix3d& axes : AxisRotations()) {  // signed permutations already
-        if (axes == claimed_axes) continue;
-        const std::vector<Eigen::Vector2d> r = residuals(axes);
-        size_t lost = 0;
-        for (size_t i = 0; i < r.size(); ++i) {
-          lost += weights[i] > 0 && r_claimed[i].allFinite() && !r[i].allFinite();
-        }
-        if (lost > kMaxMappingLostShare * static_cast<double>(claimed_points)) continue;
-        const TrimmedComparison c = CompareTrimmed(pairs, r_claimed, 2, r, 2);
-        if (c.points == 0 || !(c.a > 0)) continue;
-        if (!std::isfinite(other_mean_sq_px2) ||
-            c.b / c.a < other_mean_sq_px2 / claimed_mean_sq_px2) {
-          claimed_mean_sq_px2 = c.a;
-          other_mean_sq_px2 = c.b;
-          other = axes;
-        }
-      }
-      const bool claimed_best = claimed_mean_sq_px2 <= other_mean_sq_px2;
-      check.found = MatrixJson(claimed_best ? NearestAxes(claimed) : other);
-      check.difference = claimed_best ? 0.0 : AngleDeg(other, claimed);
-      // How much of the worse one's excess over the noise the better one removes.
-      const double margin = ExplainedShare(
-          claimed_best ? TrimmedComparison{other_mean_sq_px2, claimed_mean_sq_px2, 1}
-                       : TrimmedComparison{claimed_mean_sq_px2, other_mean_sq_px2, 1},
-          noise_px);
-      const std::string numbers =
-          "rotation-only rms per component " +
-          FormatNumber("%.3f", std::sqrt(claimed_mean_sq_px2)) + " px with the claimed axes, " +
-          FormatNumber("%.3f", std::sqrt(other_mean_sq_px2)) +
-          " px with the best other of the 24 mappings " + MatrixText(other) + " (" +
-          FormatNumber("%.0f", 100 * margin) + " % of the worse one's excess)";
-      if (margin < kMinClaimShare) {
-        check.verdict = "not determined: " + numbers;
-      } else {
-        check.verdict = (claimed_best ? "claim holds: " : "claim contradicted: ") + numbers;
-      }
-      checks.push_back(std::move(check));
+      CheckAxesClaim(in, &check);
+    } else if (!CheckFittedClaim(in, &fits, &check)) {
       continue;
-    }
-
-    const bool by_rotation =
-        preferred_options.pair_translation && !IdentifiableWithPairTranslation(check.effect);
-    const LoopOptions& loop_options = by_rotation ? rotation_options : preferred_options;
-    std::vector<std::string> base;
-    for (const std::string& e : EffectNames(by_rotation ? rotation : preferred)) {
-      if (e != check.effect) base.push_back(e);
-    }
-    std::vector<std::string> with_effect = base;
-    with_effect.push_back(check.effect);
-    const TrueModel& start = by_rotation ? rotation_start : preferred_start;
-    // Claims share fits (the model's own effects are every claim's "without"): each once.
-    const auto fit = [&](const std::vector<std::string>& effects) -> const LoopResult& {
-      const auto key = std::make_pair(by_rotation, effects);
-      auto it = fits.find(key);
-      if (it == fits.end()) {
-        it = fits.emplace(key, FitEffects(start, gyro, pairs, noise_px, effects, loop_options))
-                 .first;
-      }
-      return it->second;
-    };
-    const LoopResult& without = fit(base);
-    const LoopResult& with = fit(with_effect);
-    const TrimmedComparison c =
-        CompareTrimmed(pairs, without.residuals_after, without.residual_components,
-                       with.residuals_after, with.residual_components);
-    const double share = ExplainedShare(c, noise_px);
-    const std::string removes = "fitting it removes " + FormatNumber("%.0f", 100 * share) +
-                                " % of the residual's excess over the noise";
-    if (check.effect == "readout_direction") {
-      // A discrete claim: the model read as declared (without) and flipped (with).
-      const ReadoutDirection other = declared.shutter.direction == ReadoutDirection::kTopToBottom
-                                         ? ReadoutDirection::kBottomToTop
-                                         : ReadoutDirection::kTopToBottom;
-      const std::string declared_word = ReadoutDirectionName(declared.shutter.direction);
-      const std::string other_word = ReadoutDirectionName(other);
-      const bool flip_better = c.b < c.a;
-      check.found = flip_better ? other_word : declared_word;
-      // How much of the worse reading's excess over the noise the better one removes.
-      const double margin =
-          ExplainedShare(flip_better ? c : TrimmedComparison{c.b, c.a, c.points}, noise_px);
-      const std::string numbers =
-          "rms per component " + FormatNumber("%.4f", std::sqrt(c.a)) + " px read " +
-          declared_word + ", " + FormatNumber("%.4f", std::sqrt(c.b)) + " px read " + other_word +
-          " (" + FormatNumber("%.0f", 100 * margin) + " % of the worse reading's excess)";
-      if (margin < kMinClaimShare) {
-        check.verdict = "not determined: " + numbers;
-      } else {
-        check.verdict =
-            (check.found == check.claimed ? "claim holds: " : "claim contradicted: ") + numbers;
-      }
-      checks.push_back(std::move(check));
-      continue;
-    }
-    const IdentifiedEffect* effect = nullptr;
-    for (const IdentifiedEffect& e : with.effects) {
-      if (e.name == check.effect) effect = &e;
-    }
-    if (effect == nullptr || !check.claimed.is_number() || !effect->value.is_number()) continue;
-    check.found = effect->value;
-    check.found_stderr = effect->stderr_value;
-    const double claimed = check.claimed.get<double>(), found = effect->value.get<double>();
-    const double se = effect->stderr_value.is_number() ? effect->stderr_value.get<double>()
-                                                       : std::numeric_limits<double>::quiet_NaN();
-    check.difference = std::abs(found - claimed) / se;
-    const std::string numbers =
-        FormatNumber("%.3f", found * 1e3) + " +- " + FormatNumber("%.3f", se * 1e3) +
-        " ms against " + FormatNumber("%.3f", claimed * 1e3) + " ms (" +
-        FormatNumber("%.1f", check.difference) + " standard errors); " + removes;
-    if (!std::isfinite(se)) {
-      check.verdict = "not determined (no standard error): " + numbers;
-    } else if (check.difference <= kClaimSigmas) {
-      check.verdict = "claim holds: " + numbers;
-    } else if (share < kMinClaimShare) {
-      check.verdict = "not determined: " + numbers;
-    } else {
-      check.verdict = "claim contradicted: " + numbers;
     }
     checks.push_back(std::move(check));
   }
   return checks;
+}
+
+// What every step of a video dataset's validation reads.
+struct VideoInputs {
+  fs::path dir;
+  std::string frames_path;  // for messages
+  const GyroTrace& gyro;
+  const std::vector<FrameEntry>& entries;
+  const ValidateOptions& options;
+  const ValidateProgress& progress;
+};
+
+// Frames in time order, as indices into the entries (frames.csv line numbers kept for messages:
+// entry i is line i + 2); two frames at the same time, or fewer than two, are an error.
+std::vector<size_t> FramesInTimeOrder(const VideoInputs& in) {
+  const std::vector<FrameEntry>& entries = in.entries;
+  std::vector<size_t> order(entries.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return entries[a].t_first_row_ns < entries[b].t_first_row_ns;
+  });
+  for (size_t k = 1; k < order.size(); ++k) {
+    if (entries[order[k]].t_first_row_ns == entries[order[k - 1]].t_first_row_ns) {
+      throw IoError(IoMessage(in.frames_path, static_cast<long>(order[k]) + 2,
+                              "frame " + std::to_string(entries[order[k]].frame) +
+                                  " has the same t_first_row as frame " +
+                                  std::to_string(entries[order[k - 1]].frame)));
+    }
+  }
+  if (order.size() < 2) {
+    throw IoError(IoMessage(in.frames_path, 0, "a video dataset needs at least two frames"));
+  }
+  return order;
+}
+
+// Whether a frame's declared readout lies inside the gyro log.
+bool ReadoutInsideGyro(const RigModel& rig, const GyroTrace& gyro, const FrameEntry& e) {
+  const int64_t t0 = e.t_first_row_ns + SecondsToNs(rig.time_offset_s);
+  return t0 >= gyro.t_begin_ns() && t0 + SecondsToNs(rig.shutter.readout_s) <= gyro.t_end_ns();
+}
+
+// A frame's image, of the size camera.json declares (`line`: its frames.csv line).
+cv::Mat ReadFrameImage(const VideoInputs& in, const RigModel& rig, const FrameEntry& entry,
+                       long line) {
+  cv::Mat image = ReadImage((in.dir / entry.image).string());
+  if (image.cols != rig.camera.width || image.rows != rig.camera.height) {
+    throw IoError(IoMessage(in.frames_path, line,
+                            "image '" + entry.image + "' is " + std::to_string(image.cols) + "x" +
+                                std::to_string(image.rows) + ", camera.json declares " +
+                                std::to_string(rig.camera.width) + "x" +
+                                std::to_string(rig.camera.height)));
+  }
+  return image;
+}
+
+// One pair, frame `entry` (image) against the earlier one (previous): its points appended to
+// *pairs and its row to result->frames, or the reason it is skipped to result->skipped.
+void MeasurePair(const VideoInputs& in, const FrameEntry& earlier, const cv::Mat& previous,
+                 const FrameEntry& entry, const cv::Mat& image, std::vector<FramePoints>* pairs,
+                 ValidationResult* result) {
+  const RigModel& rig = result->declared;
+  const std::string pair_name =
+      "pair " + std::to_string(earlier.frame) + " -> " + std::to_string(entry.frame);
+  if (!ReadoutInsideGyro(rig, in.gyro, earlier) || !ReadoutInsideGyro(rig, in.gyro, entry)) {
+    result->skipped.push_back(pair_name + ": a readout lies outside the gyro log");
+    return;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  // The earlier frame is the "reference": the flow from the later frame's pixel p to it is q - p.
+  const DisplacementMeasurement measured = MeasureDisplacement(previous, image, in.options.measure);
+  result->measure_s += SecondsSince(start);
+  if (measured.points.empty()) {
+    result->skipped.push_back(pair_name + ": no point could be measured");
+    return;
+  }
+  FrameValidation f;
+  f.frame = entry.frame;
+  f.previous = earlier.frame;
+  f.image = entry.image;
+  f.t_gyro_s = entry.t_first_row_ns * 1e-9 + rig.time_offset_s;
+  f.points = measured.points.size();
+  f.measured_fraction = measured.measured_fraction;
+  f.noise_px = measured.noise_px;
+  f.d_meas_px = measured.d_px;
+  result->frames.push_back(std::move(f));
+  FramePoints points;
+  points.frame = entry.frame;
+  points.t_first_row_ns = entry.t_first_row_ns;
+  points.points = measured.points;
+  points.earlier = EarlierFrame{earlier.frame, earlier.t_first_row_ns};
+  pairs->push_back(std::move(points));
+}
+
+// Every pair of consecutive frames (in time order): frame k against frame k-1. None measured is
+// an error.
+std::vector<FramePoints> MeasurePairs(const VideoInputs& in, const std::vector<size_t>& order,
+                                      ValidationResult* result) {
+  std::vector<FramePoints> pairs;
+  cv::Mat previous;
+  const size_t pair_total = order.size() - 1;
+  for (size_t k = 0; k < order.size(); ++k) {
+    const auto start = std::chrono::steady_clock::now();
+    const FrameEntry& entry = in.entries[order[k]];
+    cv::Mat image = ReadFrameImage(in, result->declared, entry, static_cast<long>(order[k]) + 2);
+    result->read_s += SecondsSince(start);
+    if (k > 0) {
+      MeasurePair(in, in.entries[order[k - 1]], previous, entry, image, &pairs, result);
+      if (in.progress) in.progress("measure", k, pair_total);
+    }
+    previous = std::move(image);
+  }
+  if (pairs.empty()) {
+    throw IoError(IoMessage(in.frames_path, 0,
+                            "no pair of consecutive frames could be measured inside the gyro log"));
+  }
+  return pairs;
+}
+
+// The two models' options and where their loops start.
+struct VideoModels {
+  LoopOptions rotation_options, translation_options;
+  TrueModel rotation_start, translation_start;
+};
+
+// Rotation only's candidates are the options' (VideoCandidates when none); the pair-translation
+// model's are those of them that it can tell from translation.
+VideoModels PrepareModels(const ValidateOptions& options, const RigModel& rig) {
+  VideoModels models;
+  models.rotation_options = options.loop;
+  if (models.rotation_options.candidates.empty()) {
+    models.rotation_options.candidates = VideoCandidates();
+  }
+  models.rotation_options.pair_translation = false;
+  models.translation_options = models.rotation_options;
+  models.translation_options.pair_translation = true;
+  models.translation_options.candidates.clear();
+  for (const std::string& name : models.rotation_options.candidates) {
+    if (IdentifiableWithPairTranslation(name)) {
+      models.translation_options.candidates.push_back(name);
+    }
+  }
+  models.rotation_start.rig = rig;
+  return models;
+}
+
+// The loop twice: rotation only (the baseline, result->loop), then with each pair's translation
+// (result->translation_loop); models->translation_start is set between them.
+void RunBothLoops(const VideoInputs& in, const std::vector<FramePoints>& pairs, double noise_px,
+                  VideoModels* models, ValidationResult* result) {
+  if (in.progress) in.progress("loop", 0, 2);
+  result->loop =
+      CloseTheLoop(models->rotation_start, in.gyro, pairs, noise_px, models->rotation_options);
+  if (in.progress) in.progress("loop", 1, 2);
+  // The pair-translation model cannot tell the gyro's own calibration (mounting, scale, bias): it
+  // takes the rotation-only loop's when that one left the noise (its fit is then trustworthy),
+  // camera.json's otherwise (parallax may have bent it).
+  models->translation_start = models->rotation_start;
+  if (!result->loop.unexplained) {
+    for (const IdentifiedEffect& e : result->loop.effects) {
+      if (IdentifiableWithPairTranslation(e.name)) continue;
+      result->translation_inherits.push_back(e.name);
+      ApplyEffect(e.name, e.parameters.data(), &models->translation_start);
+    }
+  }
+  result->translation_loop = CloseTheLoop(models->translation_start, in.gyro, pairs, noise_px,
+                                          models->translation_options);
+  if (in.progress) in.progress("loop", 2, 2);
+}
+
+// The two models over the same trimmed points, per residual component, and which is preferred
+// (result->preferred).
+void PreferModel(const std::vector<FramePoints>& pairs, double noise_px, ValidationResult* result) {
+  const LoopResult& rot = result->loop;
+  const LoopResult& trans = result->translation_loop;
+  const TrimmedComparison compared =
+      CompareTrimmed(pairs, rot.residuals_after, rot.residual_components, trans.residuals_after,
+                     trans.residual_components);
+  result->rotation_mean_sq_px2 = compared.a;
+  result->translation_mean_sq_px2 = compared.b;
+  // Nothing for translation to explain when rotation alone leaves the noise.
+  result->translation_explains = rot.unexplained ? ExplainedShare(compared, noise_px) : 0.0;
+  result->preferred = rot.unexplained && result->translation_explains >= kPreferTranslationShare
+                          ? "translation"
+                          : "rotation_only";
+}
+
+// Stability: the preferred model's effects fitted on each half of the pairs, appended to
+// result->halves (when it has effects and there are at least four pairs).
+void CheckHalves(const ClaimInputs& in, ValidationResult* result) {
+  const LoopResult& preferred = in.preferred;
+  const std::vector<FramePoints>& pairs = in.pairs;
+  if (preferred.effects.empty() || pairs.size() < 4) return;
+  const size_t half = pairs.size() / 2;
+  const std::vector<FramePoints> first(pairs.begin(), pairs.begin() + half);
+  const std::vector<FramePoints> second(pairs.begin() + half, pairs.end());
+  const std::vector<std::string> names = EffectNames(preferred);
+  HalfCheck check;
+  check.model = result->preferred;
+  check.first_pairs = first.size();
+  check.second_pairs = second.size();
+  const LoopResult a =
+      FitEffects(in.preferred_start, in.gyro, first, in.noise_px, names, in.preferred_options);
+  const LoopResult b =
+      FitEffects(in.preferred_start, in.gyro, second, in.noise_px, names, in.preferred_options);
+  check.first_after = a.after;
+  check.second_after = b.after;
+  check.first_model = a.model;
+  check.second_model = b.model;
+  for (size_t e = 0; e < a.effects.size() && e < b.effects.size(); ++e) {
+    check.effects.push_back(CompareHalves(a.effects[e], b.effects[e]));
+  }
+  result->halves.push_back(std::move(check));
 }
 
 }  // namespace
@@ -422,174 +685,35 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
                           const ValidateProgress& progress, ValidationResult* result) {
   auto start = std::chrono::steady_clock::now();
   const fs::path dir(dataset_dir);
-  const std::string frames_path = (dir / "frames.csv").string();
-  const RigModel& rig = result->declared;
+  const VideoInputs in{dir, (dir / "frames.csv").string(), gyro, entries, options, progress};
   result->video = true;
-
-  // Frames in time order; frames.csv line numbers kept for messages.
-  std::vector<size_t> order(entries.size());
-  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    return entries[a].t_first_row_ns < entries[b].t_first_row_ns;
-  });
-  for (size_t k = 1; k < order.size(); ++k) {
-    if (entries[order[k]].t_first_row_ns == entries[order[k - 1]].t_first_row_ns) {
-      throw IoError(IoMessage(frames_path, static_cast<long>(order[k]) + 2,
-                              "frame " + std::to_string(entries[order[k]].frame) +
-                                  " has the same t_first_row as frame " +
-                                  std::to_string(entries[order[k - 1]].frame)));
-    }
-  }
-  if (order.size() < 2) {
-    throw IoError(IoMessage(frames_path, 0, "a video dataset needs at least two frames"));
-  }
+  const std::vector<size_t> order = FramesInTimeOrder(in);
   const json claims = ReadClaims(dir / "import.json");
-  // Frames whose declared readout lies inside the gyro log.
-  const auto covered = [&](const FrameEntry& e) {
-    const int64_t t0 = e.t_first_row_ns + SecondsToNs(rig.time_offset_s);
-    return t0 >= gyro.t_begin_ns() && t0 + SecondsToNs(rig.shutter.readout_s) <= gyro.t_end_ns();
-  };
   result->read_s += SecondsSince(start);
 
-  // --- measure every pair: frame k against frame k-1
-  std::vector<FramePoints> pairs;
-  cv::Mat previous;
-  const size_t pair_total = order.size() - 1;
-  for (size_t k = 0; k < order.size(); ++k) {
-    start = std::chrono::steady_clock::now();
-    const FrameEntry& entry = entries[order[k]];
-    const long line = static_cast<long>(order[k]) + 2;
-    cv::Mat image = ReadImage((dir / entry.image).string());
-    if (image.cols != rig.camera.width || image.rows != rig.camera.height) {
-      throw IoError(IoMessage(frames_path, line,
-                              "image '" + entry.image + "' is " + std::to_string(image.cols) + "x" +
-                                  std::to_string(image.rows) + ", camera.json declares " +
-                                  std::to_string(rig.camera.width) + "x" +
-                                  std::to_string(rig.camera.height)));
-    }
-    result->read_s += SecondsSince(start);
-    if (k > 0) {
-      const FrameEntry& earlier = entries[order[k - 1]];
-      const std::string pair_name =
-          "pair " + std::to_string(earlier.frame) + " -> " + std::to_string(entry.frame);
-      if (!covered(earlier) || !covered(entry)) {
-        result->skipped.push_back(pair_name + ": a readout lies outside the gyro log");
-      } else {
-        start = std::chrono::steady_clock::now();
-        // The earlier frame is the "reference": the flow from the later frame's pixel p to it is
-        // q - p.
-        const DisplacementMeasurement measured =
-            MeasureDisplacement(previous, image, options.measure);
-        result->measure_s += SecondsSince(start);
-        if (measured.points.empty()) {
-          result->skipped.push_back(pair_name + ": no point could be measured");
-        } else {
-          FrameValidation f;
-          f.frame = entry.frame;
-          f.previous = earlier.frame;
-          f.image = entry.image;
-          f.t_gyro_s = entry.t_first_row_ns * 1e-9 + rig.time_offset_s;
-          f.points = measured.points.size();
-          f.measured_fraction = measured.measured_fraction;
-          f.noise_px = measured.noise_px;
-          f.d_meas_px = measured.d_px;
-          result->frames.push_back(std::move(f));
-          FramePoints points;
-          points.frame = entry.frame;
-          points.t_first_row_ns = entry.t_first_row_ns;
-          points.points = measured.points;
-          points.earlier = EarlierFrame{earlier.frame, earlier.t_first_row_ns};
-          pairs.push_back(std::move(points));
-        }
-      }
-      if (progress) progress("measure", k, pair_total);
-    }
-    previous = std::move(image);
-  }
-  if (pairs.empty()) {
-    throw IoError(IoMessage(frames_path, 0,
-                            "no pair of consecutive frames could be measured inside the gyro log"));
-  }
+  const std::vector<FramePoints> pairs = MeasurePairs(in, order, result);
 
-  // --- the loop twice: rotation only (the baseline), then with each pair's translation
   start = std::chrono::steady_clock::now();
   const double noise_px = PooledNoisePx(result->frames);
-  LoopOptions rotation_options = options.loop;
-  if (rotation_options.candidates.empty()) rotation_options.candidates = VideoCandidates();
-  rotation_options.pair_translation = false;
-  LoopOptions translation_options = rotation_options;
-  translation_options.pair_translation = true;
-  translation_options.candidates.clear();
-  for (const std::string& name : rotation_options.candidates) {
-    if (IdentifiableWithPairTranslation(name)) translation_options.candidates.push_back(name);
-  }
-  if (progress) progress("loop", 0, 2);
-  TrueModel rotation_start;
-  rotation_start.rig = rig;
-  result->loop = CloseTheLoop(rotation_start, gyro, pairs, noise_px, rotation_options);
-  if (progress) progress("loop", 1, 2);
-  // The pair-translation model cannot tell the gyro's own calibration (mounting, scale, bias): it
-  // takes the rotation-only loop's when that one left the noise (its fit is then trustworthy),
-  // camera.json's otherwise (parallax may have bent it).
-  TrueModel translation_start = rotation_start;
-  if (!result->loop.unexplained) {
-    for (const IdentifiedEffect& e : result->loop.effects) {
-      if (IdentifiableWithPairTranslation(e.name)) continue;
-      result->translation_inherits.push_back(e.name);
-      ApplyEffect(e.name, e.parameters.data(), &translation_start);
-    }
-  }
-  result->translation_loop =
-      CloseTheLoop(translation_start, gyro, pairs, noise_px, translation_options);
-  if (progress) progress("loop", 2, 2);
-
+  VideoModels models = PrepareModels(options, result->declared);
+  RunBothLoops(in, pairs, noise_px, &models, result);
   const LoopResult& rot = result->loop;
   const LoopResult& trans = result->translation_loop;
   FillFrameResiduals(pairs, rot, &trans, options.keep_residuals, &result->frames);
-  // The two models over the same trimmed points, per residual component.
-  const TrimmedComparison compared =
-      CompareTrimmed(pairs, rot.residuals_after, rot.residual_components, trans.residuals_after,
-                     trans.residual_components);
-  result->rotation_mean_sq_px2 = compared.a;
-  result->translation_mean_sq_px2 = compared.b;
-  // Nothing for translation to explain when rotation alone leaves the noise.
-  result->translation_explains = rot.unexplained ? ExplainedShare(compared, noise_px) : 0.0;
-  result->preferred = rot.unexplained && result->translation_explains >= kPreferTranslationShare
-                          ? "translation"
-                          : "rotation_only";
-  const LoopResult& preferred = result->preferred == "translation" ? trans : rot;
-  const LoopOptions& preferred_options =
-      result->preferred == "translation" ? translation_options : rotation_options;
-  const TrueModel& preferred_start =
-      result->preferred == "translation" ? translation_start : rotation_start;
-
-  // --- stability: the preferred model's effects on each half of the pairs
-  if (!preferred.effects.empty() && pairs.size() >= 4) {
-    const size_t half = pairs.size() / 2;
-    const std::vector<FramePoints> first(pairs.begin(), pairs.begin() + half);
-    const std::vector<FramePoints> second(pairs.begin() + half, pairs.end());
-    const std::vector<std::string> names = EffectNames(preferred);
-    HalfCheck check;
-    check.model = result->preferred;
-    check.first_pairs = first.size();
-    check.second_pairs = second.size();
-    const LoopResult a =
-        FitEffects(preferred_start, gyro, first, noise_px, names, preferred_options);
-    const LoopResult b =
-        FitEffects(preferred_start, gyro, second, noise_px, names, preferred_options);
-    check.first_after = a.after;
-    check.second_after = b.after;
-    check.first_model = a.model;
-    check.second_model = b.model;
-    for (size_t e = 0; e < a.effects.size() && e < b.effects.size(); ++e) {
-      check.effects.push_back(CompareHalves(a.effects[e], b.effects[e]));
-    }
-    result->halves.push_back(std::move(check));
-  }
-
-  // --- the source's claims, when the dataset came from `shutterlab import`
-  result->claims = CheckClaims(claims, gyro, pairs, noise_px, preferred_start, preferred,
-                               preferred_options, rotation_start, rot, rotation_options);
+  PreferModel(pairs, noise_px, result);
+  const bool translation = result->preferred == "translation";
+  const ClaimInputs claim_inputs{gyro,
+                                 pairs,
+                                 noise_px,
+                                 translation ? models.translation_start : models.rotation_start,
+                                 translation ? trans : rot,
+                                 translation ? models.translation_options : models.rotation_options,
+                                 models.rotation_start,
+                                 rot,
+                                 models.rotation_options};
+  CheckHalves(claim_inputs, result);
+  // The source's claims, when the dataset came from `shutterlab import`.
+  result->claims = CheckClaims(claims, claim_inputs);
   result->loop_s = SecondsSince(start);
 }
 

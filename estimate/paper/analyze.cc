@@ -162,6 +162,180 @@ std::string ImageName(size_t index) {
   return buffer;
 }
 
+// Reports a fraction done (0..1) when the options ask for progress.
+void ReportProgress(const AnalyzeOptions& options, double fraction) {
+  if (options.progress) options.progress(fraction);
+}
+
+// The log's size, rate and gaps and the camera the analysis uses.
+void DescribeSource(const FlightLog& log, const AnalyzeOptions& options,
+                    const std::string& altitude_source, AnalyzeResult* result) {
+  const GyroTrace& gyro = log.gyro;
+  result->format = log.format;
+  result->gyro_source = log.gyro_source;
+  result->samples = gyro.samples().size();
+  result->duration_s = (gyro.samples().back().t_ns - gyro.samples().front().t_ns) * 1e-9;
+  result->rate_hz = gyro.sampling().RateHz();
+  result->gaps = gyro.sampling().gap_indices.size();
+  result->limits_m = options.limits_m;
+  result->altitude_m = options.rig.altitude_m;
+  result->altitude_source = altitude_source;
+  result->readout_s = options.rig.shutter.readout_s;
+}
+
+// The bias (camera axes) from the log's still stretch when asked; zero, and said so in the output,
+// when there is none.
+void EstimateStillBias(const GyroTrace& camera_rates, bool estimate_bias, AnalyzeResult* result) {
+  result->bias_estimated = estimate_bias;
+  if (!estimate_bias) return;
+  try {
+    const StillSegment still = DetectStillSegment(camera_rates);
+    result->still_segment = still.segment;
+    result->bias_rad_s = EstimateBias(camera_rates, still.segment).bias_rad_s;
+    result->bias_from_still = true;
+  } catch (const std::invalid_argument&) {
+    result->bias_from_still = false;  // no still stretch: zero bias, said so in the output
+  }
+}
+
+// The flight table for this camera's readout (result->flight), or why there is none
+// (result->flight_problem). Progress 0 to 0.7.
+void FlightTableForReadout(const GyroTrace& camera_rates, const AnalyzeOptions& options,
+                           AnalyzeResult* result) {
+  FlightOptions flight_options;
+  flight_options.altitude_m = options.rig.altitude_m;
+  flight_options.limits_m = options.limits_m;
+  flight_options.windows_s = {options.rig.shutter.readout_s};
+  flight_options.noise_allowance_arcsec = options.noise_allowance_arcsec;
+  flight_options.progress = [&options](double f) { ReportProgress(options, 0.7 * f); };
+  flight_options.series = options.flight_series;
+  flight_options.series_vector = false;  // the report plots the per-axis ranges only
+  try {
+    // The still segment may lie anywhere (often after landing), so its bias is applied to every
+    // sample rather than starting the statistics after the segment as `flight --bias` does.
+    flight_options.known_bias_rad_s = result->bias_rad_s;
+    result->flight = Flight(camera_rates, flight_options);
+  } catch (const std::invalid_argument& e) {
+    result->flight_problem = e.what();
+  }
+}
+
+// The images to analyse: the options' triggers, else one every options.every_s over the log, else
+// the log's camera events; *trigger_source says which.
+std::vector<ImageTrigger> ChooseTriggers(const FlightLog& log, const AnalyzeOptions& options,
+                                         std::string* trigger_source) {
+  const GyroTrace& gyro = log.gyro;
+  std::vector<ImageTrigger> triggers = options.triggers;
+  *trigger_source = "triggers";
+  if (triggers.empty() && options.every_s > 0) {
+    *trigger_source = FormatNumber("every %g s", options.every_s);
+    const int64_t every_ns = SecondsToNs(options.every_s);
+    const int64_t t0_ns = gyro.samples().front().t_ns;
+    const int64_t span_ns = gyro.samples().back().t_ns - t0_ns;
+    const int64_t count = span_ns / every_ns;
+    for (int64_t k = 0; k < count; ++k) {
+      triggers.push_back({ImageName(static_cast<size_t>(k)), t0_ns + k * every_ns});
+    }
+  } else if (triggers.empty() && !log.camera_events.empty()) {
+    // A log may record each image twice (PX4 camera_trigger and camera_capture): use the most
+    // frequent kind only.
+    std::map<std::string, size_t> kinds;
+    for (const CameraEvent& event : log.camera_events) ++kinds[event.kind];
+    const std::string kind =
+        std::max_element(kinds.begin(), kinds.end(), [](const auto& a, const auto& b) {
+          return a.second < b.second;
+        })->first;
+    *trigger_source = "camera events (" + kind + ")";
+    for (size_t i = 0; i < log.camera_events.size(); ++i) {
+      const CameraEvent& event = log.camera_events[i];
+      if (event.kind != kind) continue;
+      triggers.push_back(
+          {event.sequence >= 0 ? "IMG_" + std::to_string(event.sequence) : ImageName(i),
+           event.t_ns});
+    }
+  } else if (triggers.empty()) {
+    *trigger_source = "none";
+  }
+  if (!options.triggers.empty() || options.every_s > 0) {
+    if (!log.camera_events.empty()) {
+      *trigger_source +=
+          " (the log's " + std::to_string(log.camera_events.size()) + " camera events not used)";
+    }
+  }
+  return triggers;
+}
+
+// The most frequent dominant axis of the images flagged at the strictest (first) limit; with none
+// flagged there, the most frequent dominant axis overall is still the best advice. -1 with no
+// image in the trace.
+int AxisToStabilise(const std::vector<ImageResult>& images, size_t images_in_trace) {
+  int axis_to_stabilise = -1;
+  std::array<size_t, 3> dominant{};
+  for (const ImageResult& image : images) {
+    if (image.in_trace && image.flagged[0]) ++dominant[image.dominant_axis];
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    if (dominant[axis] > 0 &&
+        (axis_to_stabilise < 0 || dominant[axis] > dominant[axis_to_stabilise])) {
+      axis_to_stabilise = axis;
+    }
+  }
+  if (axis_to_stabilise < 0) {
+    std::array<size_t, 3> all{};
+    for (const ImageResult& image : images) {
+      if (image.in_trace) ++all[image.dominant_axis];
+    }
+    if (images_in_trace > 0) {
+      axis_to_stabilise = static_cast<int>(std::max_element(all.begin(), all.end()) - all.begin());
+    }
+  }
+  return axis_to_stabilise;
+}
+
+// The what-if shares, recomputed (not scaled) with a fast readout and at half the altitude
+// (without D_full).
+void WhatIfShares(const ImageContext& context, const std::vector<ImageTrigger>& triggers,
+                  int64_t latency_ns, AnalyzeVerdict* verdict) {
+  ImageContext fast = context;
+  fast.motion = nullptr;
+  fast.rig.shutter.readout_s = verdict->fast_readout_s;
+  ImageContext low = context;
+  low.motion = nullptr;
+  low.rig.altitude_m = 0.5 * context.rig.altitude_m;
+  std::vector<ImageResult> fast_images, low_images;
+  for (const ImageTrigger& trigger : triggers) {
+    fast_images.push_back(AnalyzeImage(fast, trigger, latency_ns));
+    low_images.push_back(AnalyzeImage(low, trigger, latency_ns));
+  }
+  verdict->share_fast_readout_percent = SharesPercent(fast_images, context.limits_m.size());
+  verdict->share_half_altitude_percent = SharesPercent(low_images, context.limits_m.size());
+}
+
+// The one-line verdict for a person.
+std::string VerdictLine(const AnalyzeVerdict& verdict, bool no_images,
+                        const AnalyzeOptions& options) {
+  if (verdict.images_in_trace == 0) {
+    return no_images ? "verdict: no images to judge (the log has no camera events; give "
+                       "--triggers or --every)"
+                     : "verdict: no image lies inside the gyro trace";
+  }
+  std::ostringstream line;
+  line << "verdict: " << verdict.images_in_trace
+       << (verdict.images_in_trace == 1 ? " image, " : " images, ")
+       << SharesText(verdict.share_percent, options.limits_m);
+  const bool any_flagged = std::any_of(verdict.share_percent.begin(), verdict.share_percent.end(),
+                                       [](double s) { return s > 0; });
+  line << (any_flagged ? "; stabilise camera axis " : "; largest rotation about camera axis ")
+       << kAxisNames[verdict.axis_to_stabilise];
+  if (options.what_if) {
+    line << "; with a " << FormatNumber("%g", verdict.fast_readout_s * 1e3)
+         << " ms readout: " << SharesText(verdict.share_fast_readout_percent, options.limits_m)
+         << "; at " << FormatNumber("%g", 0.5 * options.rig.altitude_m)
+         << " m altitude: " << SharesText(verdict.share_half_altitude_percent, options.limits_m);
+  }
+  return line.str();
+}
+
 }  // namespace
 
 TrueModel AnalyzeTrueModel(const RigModel& rig, const Eigen::Vector3d& bias_cam_rad_s) {
@@ -203,168 +377,36 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
   }
   const GyroTrace& gyro = log.gyro;
   SHUTTERLAB_CHECK(gyro.samples().size() >= 2) << "the log's gyro trace has fewer than 2 samples";
-  const auto progress = [&options](double fraction) {
-    if (options.progress) options.progress(fraction);
-  };
 
   AnalyzeResult result;
-  result.format = log.format;
-  result.gyro_source = log.gyro_source;
-  result.samples = gyro.samples().size();
-  result.duration_s = (gyro.samples().back().t_ns - gyro.samples().front().t_ns) * 1e-9;
-  result.rate_hz = gyro.sampling().RateHz();
-  result.gaps = gyro.sampling().gap_indices.size();
-  result.limits_m = options.limits_m;
-  result.altitude_m = options.rig.altitude_m;
-  result.altitude_source = altitude_source;
-  result.readout_s = options.rig.shutter.readout_s;
-
+  DescribeSource(log, options, altitude_source, &result);
   const GyroTrace camera_rates =
       RotateTrace(gyro, options.rig.cam_from_gyro, Eigen::Vector3d::Zero());
-  result.bias_estimated = options.estimate_bias;
-  if (options.estimate_bias) {
-    try {
-      const StillSegment still = DetectStillSegment(camera_rates);
-      result.still_segment = still.segment;
-      result.bias_rad_s = EstimateBias(camera_rates, still.segment).bias_rad_s;
-      result.bias_from_still = true;
-    } catch (const std::invalid_argument&) {
-      result.bias_from_still = false;  // no still stretch: zero bias, said so in the output
-    }
-  }
-
-  // The flight table for this camera's readout.
-  FlightOptions flight_options;
-  flight_options.altitude_m = options.rig.altitude_m;
-  flight_options.limits_m = options.limits_m;
-  flight_options.windows_s = {options.rig.shutter.readout_s};
-  flight_options.noise_allowance_arcsec = options.noise_allowance_arcsec;
-  flight_options.progress = [&progress](double f) { progress(0.7 * f); };
-  flight_options.series = options.flight_series;
-  flight_options.series_vector = false;  // the report plots the per-axis ranges only
-  try {
-    // The still segment may lie anywhere (often after landing), so its bias is applied to every
-    // sample rather than starting the statistics after the segment as `flight --bias` does.
-    flight_options.known_bias_rad_s = result.bias_rad_s;
-    result.flight = Flight(camera_rates, flight_options);
-  } catch (const std::invalid_argument& e) {
-    result.flight_problem = e.what();
-  }
+  EstimateStillBias(camera_rates, options.estimate_bias, &result);
+  FlightTableForReadout(camera_rates, options, &result);
 
   // Per-image distortion.
   const PerAxisAngles angles = IntegratePerAxis(camera_rates, result.bias_rad_s);
   const CameraMotion motion(gyro, AnalyzeTrueModel(options.rig, result.bias_rad_s));
-
-  std::vector<ImageTrigger> triggers = options.triggers;
-  result.trigger_source = "triggers";
-  if (triggers.empty() && options.every_s > 0) {
-    result.trigger_source = FormatNumber("every %g s", options.every_s);
-    const int64_t every_ns = SecondsToNs(options.every_s);
-    const int64_t t0_ns = gyro.samples().front().t_ns;
-    const int64_t span_ns = gyro.samples().back().t_ns - t0_ns;
-    const int64_t count = span_ns / every_ns;
-    for (int64_t k = 0; k < count; ++k) {
-      triggers.push_back({ImageName(static_cast<size_t>(k)), t0_ns + k * every_ns});
-    }
-  } else if (triggers.empty() && !log.camera_events.empty()) {
-    // A log may record each image twice (PX4 camera_trigger and camera_capture): use the most
-    // frequent kind only.
-    std::map<std::string, size_t> kinds;
-    for (const CameraEvent& event : log.camera_events) ++kinds[event.kind];
-    const std::string kind =
-        std::max_element(kinds.begin(), kinds.end(), [](const auto& a, const auto& b) {
-          return a.second < b.second;
-        })->first;
-    result.trigger_source = "camera events (" + kind + ")";
-    for (size_t i = 0; i < log.camera_events.size(); ++i) {
-      const CameraEvent& event = log.camera_events[i];
-      if (event.kind != kind) continue;
-      triggers.push_back(
-          {event.sequence >= 0 ? "IMG_" + std::to_string(event.sequence) : ImageName(i),
-           event.t_ns});
-    }
-  } else if (triggers.empty()) {
-    result.trigger_source = "none";
-  }
-  if (!options.triggers.empty() || options.every_s > 0) {
-    if (!log.camera_events.empty()) {
-      result.trigger_source +=
-          " (the log's " + std::to_string(log.camera_events.size()) + " camera events not used)";
-    }
-  }
-
+  const std::vector<ImageTrigger> triggers = ChooseTriggers(log, options, &result.trigger_source);
   ImageContext context{&angles, &motion, options.rig, options.limits_m};
   const int64_t latency_ns = SecondsToNs(options.trigger_latency_s);
   result.images.reserve(triggers.size());
   for (size_t i = 0; i < triggers.size(); ++i) {
     result.images.push_back(AnalyzeImage(context, triggers[i], latency_ns));
-    progress(0.7 + 0.25 * (i + 1) / triggers.size());
+    ReportProgress(options, 0.7 + 0.25 * (i + 1) / triggers.size());
   }
 
   // The verdict, with the what-if shares recomputed (not scaled) under the changed camera.
   AnalyzeVerdict& verdict = result.verdict;
   for (const ImageResult& image : result.images) verdict.images_in_trace += image.in_trace;
   verdict.share_percent = SharesPercent(result.images, options.limits_m.size());
-  std::array<size_t, 3> dominant{};
-  for (const ImageResult& image : result.images) {
-    if (image.in_trace && image.flagged[0]) ++dominant[image.dominant_axis];
-  }
-  for (int axis = 0; axis < 3; ++axis) {
-    if (dominant[axis] > 0 &&
-        (verdict.axis_to_stabilise < 0 || dominant[axis] > dominant[verdict.axis_to_stabilise])) {
-      verdict.axis_to_stabilise = axis;
-    }
-  }
-  // Flags at the strictest limit decide the axis; with none flagged at the first limit, the most
-  // frequent dominant axis overall is still the best advice.
-  if (verdict.axis_to_stabilise < 0) {
-    std::array<size_t, 3> all{};
-    for (const ImageResult& image : result.images) {
-      if (image.in_trace) ++all[image.dominant_axis];
-    }
-    if (verdict.images_in_trace > 0) {
-      verdict.axis_to_stabilise =
-          static_cast<int>(std::max_element(all.begin(), all.end()) - all.begin());
-    }
-  }
+  verdict.axis_to_stabilise = AxisToStabilise(result.images, verdict.images_in_trace);
   if (options.what_if && verdict.images_in_trace > 0) {
-    ImageContext fast = context;
-    fast.motion = nullptr;
-    fast.rig.shutter.readout_s = verdict.fast_readout_s;
-    ImageContext low = context;
-    low.motion = nullptr;
-    low.rig.altitude_m = 0.5 * options.rig.altitude_m;
-    std::vector<ImageResult> fast_images, low_images;
-    for (const ImageTrigger& trigger : triggers) {
-      fast_images.push_back(AnalyzeImage(fast, trigger, latency_ns));
-      low_images.push_back(AnalyzeImage(low, trigger, latency_ns));
-    }
-    verdict.share_fast_readout_percent = SharesPercent(fast_images, options.limits_m.size());
-    verdict.share_half_altitude_percent = SharesPercent(low_images, options.limits_m.size());
+    WhatIfShares(context, triggers, latency_ns, &verdict);
   }
-  if (verdict.images_in_trace == 0) {
-    verdict.line = result.images.empty()
-                       ? "verdict: no images to judge (the log has no camera events; give "
-                         "--triggers or --every)"
-                       : "verdict: no image lies inside the gyro trace";
-  } else {
-    std::ostringstream line;
-    line << "verdict: " << verdict.images_in_trace
-         << (verdict.images_in_trace == 1 ? " image, " : " images, ")
-         << SharesText(verdict.share_percent, options.limits_m);
-    const bool any_flagged = std::any_of(verdict.share_percent.begin(), verdict.share_percent.end(),
-                                         [](double s) { return s > 0; });
-    line << (any_flagged ? "; stabilise camera axis " : "; largest rotation about camera axis ")
-         << kAxisNames[verdict.axis_to_stabilise];
-    if (options.what_if) {
-      line << "; with a " << FormatNumber("%g", verdict.fast_readout_s * 1e3)
-           << " ms readout: " << SharesText(verdict.share_fast_readout_percent, options.limits_m)
-           << "; at " << FormatNumber("%g", 0.5 * options.rig.altitude_m)
-           << " m altitude: " << SharesText(verdict.share_half_altitude_percent, options.limits_m);
-    }
-    verdict.line = line.str();
-  }
-  progress(1.0);
+  verdict.line = VerdictLine(verdict, result.images.empty(), options);
+  ReportProgress(options, 1.0);
   return result;
 }
 

@@ -188,7 +188,203 @@ double MaxPairwiseAngle(const Quaternions& q, size_t begin, size_t end,
   return best;
 }
 
-// Splits "12.5cm" into number and lower-case unit.
+
+// What the pass over the windows needs: where the samples after the bias segment start, the
+// windows per duration and the thresholds per limit.
+struct FlightPlan {
+  size_t first = 0;                // first sample after the bias segment
+  size_t n = 0;                    // samples from there to the end
+  std::vector<int64_t> window_ns;  // per duration
+  std::vector<size_t> windows;     // window starts per duration
+  size_t windows_max = 0;
+  std::vector<double> threshold_rad, cos_half;  // per limit; cos_half: cos(threshold / 2)
+};
+
+// The bias removed from every sample: the options' known one, or estimated on their segment.
+BiasEstimate FlightBias(const GyroTrace& trace, const FlightOptions& options) {
+  BiasEstimate bias;
+  if (options.known_bias_rad_s) {
+    bias.bias_rad_s = *options.known_bias_rad_s;
+    bias.first_after = 0;
+  } else {
+    bias = EstimateBias(trace, options.bias);
+  }
+  return bias;
+}
+
+// Windows per duration: starts k with t_k + W <= t_last (FORMATS.md: the rest run past the end);
+// thresholds per limit, with the noise allowance.
+FlightPlan PlanFlight(const GyroTrace& trace, const FlightOptions& options, size_t first) {
+  FlightPlan plan;
+  plan.first = first;
+  plan.n = trace.size() - first;
+  SHUTTERLAB_CHECK(plan.n >= 2) << "no samples after the bias segment (it ends at "
+                                << options.bias.end_s << " s; the trace lasts " << trace.DurationS()
+                                << " s)";
+  const int64_t t0 = trace[first].t_ns;
+  const int64_t t_last = trace.t_end_ns();
+  const double span_s = (t_last - t0) * 1e-9;
+  const size_t windows_count = options.windows_s.size();
+  plan.window_ns.resize(windows_count);
+  plan.windows.resize(windows_count);
+  for (size_t wi = 0; wi < windows_count; ++wi) {
+    const double w = options.windows_s[wi];
+    plan.window_ns[wi] = SecondsToNs(w);
+    SHUTTERLAB_CHECK(t0 + plan.window_ns[wi] <= t_last)
+        << "window " << w << " s is longer than the " << span_s
+        << " s of trace after the bias segment";
+    plan.windows[wi] = trace.LowerBound(t_last - plan.window_ns[wi] + 1) - first;
+    plan.windows_max = std::max(plan.windows_max, plan.windows[wi]);
+  }
+  const size_t limits = options.limits_m.size();
+  SHUTTERLAB_CHECK(limits <= 64) << "at most 64 ground limits";
+  plan.threshold_rad.resize(limits);
+  plan.cos_half.resize(limits);
+  for (size_t l = 0; l < limits; ++l) {
+    plan.threshold_rad[l] = std::atan(options.limits_m[l] / options.altitude_m) +
+                            options.noise_allowance_arcsec / kArcsecPerRad;
+    plan.cos_half[l] = std::cos(0.5 * plan.threshold_rad[l]);
+  }
+  return plan;
+}
+
+// Each duration's windows starting in [k0, k1): their ends (local indices: the stream's buffer
+// starts at sample k0) into chunk_end, their number into count; e is the running window end per
+// duration (global index). Returns the end of the samples the chunk needs.
+size_t ChunkWindowEnds(const GyroTrace& trace, const FlightPlan& plan, size_t k0, size_t k1,
+                       std::vector<size_t>* e, std::vector<std::vector<uint32_t>>* chunk_end,
+                       std::vector<size_t>* count) {
+  const auto t = [&](size_t g) { return trace[plan.first + g].t_ns; };
+  size_t region_end = k0 + 1;
+  for (size_t wi = 0; wi < plan.windows.size(); ++wi) {
+    const size_t k_stop = std::min(k1, plan.windows[wi]);
+    size_t& end = (*e)[wi];
+    for (size_t k = k0; k < k_stop; ++k) {
+      const int64_t t_end = t(k) + plan.window_ns[wi];
+      while (end < plan.n && t(end) < t_end) ++end;
+      // Local index: the stream's buffer starts at sample k0.
+      (*chunk_end)[wi][(*count)[wi]++] = static_cast<uint32_t>(end - k0);
+    }
+    if ((*count)[wi] > 0) region_end = std::max(region_end, end);
+  }
+  return region_end;
+}
+
+// The m windows' per-axis ranges (rad) against each limit: flagged on any axis and per axis, added
+// to the duration's rows (rows[l]: limit l's row of this duration, `stride` rows apart).
+void CountAxisFlags(const std::array<std::vector<double>, 3>& range, size_t m,
+                    const std::vector<double>& threshold_rad, FlightRow* rows, size_t stride) {
+  // Per-axis counts: limit-outer loops with local counters in doubles (exact below 2^53), a
+  // form the compiler vectorises (compare, blend, add), unlike bool-to-integer sums.
+  const double* rx = range[0].data();
+  const double* ry = range[1].data();
+  const double* rz = range[2].data();
+  for (size_t l = 0; l < threshold_rad.size(); ++l) {
+    const double th = threshold_rad[l];
+    double any = 0, fx = 0, fy = 0, fz = 0;
+    for (size_t i = 0; i < m; ++i) {
+      const double x = rx[i], y = ry[i], z = rz[i];
+      fx += x > th ? 1.0 : 0.0;
+      fy += y > th ? 1.0 : 0.0;
+      fz += z > th ? 1.0 : 0.0;
+      any += (x > th || y > th || z > th) ? 1.0 : 0.0;
+    }
+    FlightRow& row = rows[l * stride];
+    row.flagged += static_cast<size_t>(any);
+    row.flagged_axis[0] += static_cast<size_t>(fx);
+    row.flagged_axis[1] += static_cast<size_t>(fy);
+    row.flagged_axis[2] += static_cast<size_t>(fz);
+  }
+}
+
+// The m windows (window i: stream samples [i, ends[i])) by the vector criterion against each
+// limit, and where it and the per-axis one disagree, added to the duration's rows as above.
+void CountVectorFlags(const Quaternions& q, const uint32_t* ends, size_t m,
+                      const std::array<std::vector<double>, 3>& range, const FlightPlan& plan,
+                      FlightRow* rows, size_t stride) {
+  bool vector_flag[64];
+  for (size_t i = 0; i < m; ++i) {
+    VectorFlags(q, i, ends[i], plan.cos_half, vector_flag);
+    const double r_max = std::max(range[0][i], std::max(range[1][i], range[2][i]));
+    for (size_t l = 0; l < plan.threshold_rad.size(); ++l) {
+      FlightRow& row = rows[l * stride];
+      const bool flagged = r_max > plan.threshold_rad[l];
+      row.flagged_vector += vector_flag[l];
+      row.flagged_vector_only += vector_flag[l] && !flagged;
+      row.flagged_axis_only += flagged && !vector_flag[l];
+    }
+  }
+}
+
+// The first duration's m windows starting at k0 appended to the --series output.
+void AppendSeries(const GyroTrace& trace, const FlightOptions& options, const FlightPlan& plan,
+                  size_t k0, const Quaternions& q, const uint32_t* ends, size_t m,
+                  const std::array<std::vector<double>, 3>& range, std::vector<double>* scratch,
+                  FlightSeries* series) {
+  for (size_t i = 0; i < m; ++i) {
+    series->t_ns.push_back(trace[plan.first + k0 + i].t_ns);
+    for (int a = 0; a < 3; ++a) series->range_arcsec[a].push_back(range[a][i] * kArcsecPerRad);
+    if (options.vector_criterion && options.series_vector) {
+      series->vector_arcsec.push_back(MaxPairwiseAngle(q, i, ends[i], scratch) * kArcsecPerRad);
+    }
+  }
+}
+
+// One pass over chunks of window starts; every duration's windows of the chunk are done together
+// so the angles are integrated once. Counts into result->rows (limit-major), the series.
+void SweepWindows(const GyroTrace& trace, const FlightOptions& options, const FlightPlan& plan,
+                  FlightResult* result) {
+  const size_t windows_count = plan.windows.size();
+  AngleStream stream(trace, plan.first, result->bias.bias_rad_s, options.vector_criterion);
+  SlidingRangeKernel kernel;
+  std::vector<std::vector<uint32_t>> chunk_end(windows_count, std::vector<uint32_t>(kChunkWindows));
+  std::vector<size_t> e(windows_count, 0);  // running window end per duration (global index)
+  std::array<std::vector<double>, 3> range;
+  for (auto& r : range) r.resize(kChunkWindows);
+  std::vector<double> scratch;
+  for (size_t k0 = 0; k0 < plan.windows_max; k0 += kChunkWindows) {
+    const size_t k1 = std::min(plan.windows_max, k0 + kChunkWindows);
+    std::vector<size_t> count(windows_count, 0);
+    const size_t region_end = ChunkWindowEnds(trace, plan, k0, k1, &e, &chunk_end, &count);
+    stream.Advance(k0, region_end);
+    const Quaternions& q = stream.q();
+    for (size_t wi = 0; wi < windows_count; ++wi) {
+      const size_t m = count[wi];
+      if (m == 0) continue;
+      const uint32_t* ends = chunk_end[wi].data();
+      kernel.Run3({stream.angle(0), stream.angle(1), stream.angle(2)}, ends, 0, m,
+                  {range[0].data(), range[1].data(), range[2].data()});
+      FlightRow* rows = &result->rows[wi];  // limit l's row: rows[l * windows_count]
+      CountAxisFlags(range, m, plan.threshold_rad, rows, windows_count);
+      if (options.vector_criterion) {
+        CountVectorFlags(q, ends, m, range, plan, rows, windows_count);
+      }
+      if (options.series && wi == 0) {
+        AppendSeries(trace, options, plan, k0, q, ends, m, range, &scratch, &result->series);
+      }
+    }
+    if (options.progress) options.progress(static_cast<double>(k1) / plan.windows_max);
+  }
+}
+
+// Each row's limit, window, threshold and shares of the windows.
+void FinishRows(const FlightOptions& options, const FlightPlan& plan, FlightResult* result) {
+  const size_t windows_count = plan.windows.size();
+  for (size_t wi = 0; wi < windows_count; ++wi) {
+    for (size_t l = 0; l < plan.threshold_rad.size(); ++l) {
+      FlightRow& row = result->rows[l * windows_count + wi];
+      row.limit_m = options.limits_m[l];
+      row.window_s = options.windows_s[wi];
+      row.threshold_arcsec = plan.threshold_rad[l] * kArcsecPerRad;
+      row.windows = plan.windows[wi];
+      const double to_percent = 100.0 / static_cast<double>(plan.windows[wi]);
+      row.flagged_percent = row.flagged * to_percent;
+      for (int a = 0; a < 3; ++a) row.flagged_percent_axis[a] = row.flagged_axis[a] * to_percent;
+      row.flagged_percent_vector = row.flagged_vector * to_percent;
+    }
+  }
+}
+
 }  // namespace
 
 void FlightOptions::Check() const {
@@ -218,140 +414,14 @@ FlightResult Flight(const GyroTrace& trace, const FlightOptions& options) {
   result.altitude_m = options.altitude_m;
   result.noise_allowance_arcsec = options.noise_allowance_arcsec;
   result.vector_criterion = options.vector_criterion;
-  if (options.known_bias_rad_s) {
-    result.bias.bias_rad_s = *options.known_bias_rad_s;
-    result.bias.first_after = 0;
-  } else {
-    result.bias = EstimateBias(trace, options.bias);
-  }
-  const size_t first = result.bias.first_after;
-  const size_t n = trace.size() - first;
-  result.samples = n;
-  SHUTTERLAB_CHECK(n >= 2) << "no samples after the bias segment (it ends at " << options.bias.end_s
-                           << " s; the trace lasts " << trace.DurationS() << " s)";
-  auto t = [&](size_t g) { return trace[first + g].t_ns; };
-  const int64_t t_last = trace.t_end_ns();
-  const double span_s = (t_last - t(0)) * 1e-9;
-  const size_t windows_count = options.windows_s.size();
-  // Windows per duration: starts k with t_k + W <= t_last (FORMATS.md: the rest run past the end).
-  std::vector<int64_t> window_ns(windows_count);
-  std::vector<size_t> windows(windows_count);
-  size_t windows_max = 0;
-  for (size_t wi = 0; wi < windows_count; ++wi) {
-    const double w = options.windows_s[wi];
-    window_ns[wi] = SecondsToNs(w);
-    SHUTTERLAB_CHECK(t(0) + window_ns[wi] <= t_last)
-        << "window " << w << " s is longer than the " << span_s
-        << " s of trace after the bias segment";
-    windows[wi] = trace.LowerBound(t_last - window_ns[wi] + 1) - first;
-    windows_max = std::max(windows_max, windows[wi]);
-  }
-
-  const size_t limits = options.limits_m.size();
-  SHUTTERLAB_CHECK(limits <= 64) << "at most 64 ground limits";
-  std::vector<double> threshold_rad(limits), cos_half(limits);
-  for (size_t l = 0; l < limits; ++l) {
-    threshold_rad[l] = std::atan(options.limits_m[l] / options.altitude_m) +
-                       options.noise_allowance_arcsec / kArcsecPerRad;
-    cos_half[l] = std::cos(0.5 * threshold_rad[l]);
-  }
-  result.rows.resize(limits * windows_count);
-  auto row_of = [&](size_t l, size_t w) -> FlightRow& {
-    return result.rows[l * windows_count + w];
-  };
+  result.bias = FlightBias(trace, options);
+  const FlightPlan plan = PlanFlight(trace, options, result.bias.first_after);
+  result.samples = plan.n;
+  result.rows.resize(options.limits_m.size() * options.windows_s.size());
   if (options.series) result.series.window_s = options.windows_s[0];
-
-  AngleStream stream(trace, first, result.bias.bias_rad_s, options.vector_criterion);
-  SlidingRangeKernel kernel;
-  std::vector<std::vector<uint32_t>> chunk_end(windows_count, std::vector<uint32_t>(kChunkWindows));
-  std::vector<size_t> e(windows_count, 0);  // running window end per duration (global index)
-  std::array<std::vector<double>, 3> range;
-  for (auto& r : range) r.resize(kChunkWindows);
-  bool vector_flag[64];
-  std::vector<double> scratch;
-
-  // One pass over chunks of window starts; every duration's windows of the chunk are done together
-  // so the angles are integrated once.
-  for (size_t k0 = 0; k0 < windows_max; k0 += kChunkWindows) {
-    const size_t k1 = std::min(windows_max, k0 + kChunkWindows);
-    size_t region_end = k0 + 1;
-    std::vector<size_t> count(windows_count, 0);
-    for (size_t wi = 0; wi < windows_count; ++wi) {
-      const size_t k_stop = std::min(k1, windows[wi]);
-      for (size_t k = k0; k < k_stop; ++k) {
-        const int64_t t_end = t(k) + window_ns[wi];
-        while (e[wi] < n && t(e[wi]) < t_end) ++e[wi];
-        // Local index: the stream's buffer starts at sample k0.
-        chunk_end[wi][count[wi]++] = static_cast<uint32_t>(e[wi] - k0);
-      }
-      if (count[wi] > 0) region_end = std::max(region_end, e[wi]);
-    }
-    stream.Advance(k0, region_end);
-    const Quaternions& q = stream.q();
-    for (size_t wi = 0; wi < windows_count; ++wi) {
-      const size_t m = count[wi];
-      if (m == 0) continue;
-      const uint32_t* ends = chunk_end[wi].data();
-      kernel.Run3({stream.angle(0), stream.angle(1), stream.angle(2)}, ends, 0, m,
-                  {range[0].data(), range[1].data(), range[2].data()});
-      // Per-axis counts: limit-outer loops with local counters in doubles (exact below 2^53), a
-      // form the compiler vectorises (compare, blend, add), unlike bool-to-integer sums.
-      const double* rx = range[0].data();
-      const double* ry = range[1].data();
-      const double* rz = range[2].data();
-      for (size_t l = 0; l < limits; ++l) {
-        const double th = threshold_rad[l];
-        double any = 0, fx = 0, fy = 0, fz = 0;
-        for (size_t i = 0; i < m; ++i) {
-          const double x = rx[i], y = ry[i], z = rz[i];
-          fx += x > th ? 1.0 : 0.0;
-          fy += y > th ? 1.0 : 0.0;
-          fz += z > th ? 1.0 : 0.0;
-          any += (x > th || y > th || z > th) ? 1.0 : 0.0;
-        }
-        FlightRow& row = row_of(l, wi);
-        row.flagged += static_cast<size_t>(any);
-        row.flagged_axis[0] += static_cast<size_t>(fx);
-        row.flagged_axis[1] += static_cast<size_t>(fy);
-        row.flagged_axis[2] += static_cast<size_t>(fz);
-      }
-      for (size_t i = 0; options.vector_criterion && i < m; ++i) {
-        VectorFlags(q, i, ends[i], cos_half, vector_flag);
-        const double r_max = std::max(rx[i], std::max(ry[i], rz[i]));
-        for (size_t l = 0; l < limits; ++l) {
-          FlightRow& row = row_of(l, wi);
-          const bool flagged = r_max > threshold_rad[l];
-          row.flagged_vector += vector_flag[l];
-          row.flagged_vector_only += vector_flag[l] && !flagged;
-          row.flagged_axis_only += flagged && !vector_flag[l];
-        }
-      }
-      for (size_t i = 0; options.series && wi == 0 && i < m; ++i) {
-        result.series.t_ns.push_back(t(k0 + i));
-        for (int a = 0; a < 3; ++a)
-          result.series.range_arcsec[a].push_back(range[a][i] * kArcsecPerRad);
-        if (options.vector_criterion && options.series_vector) {
-          result.series.vector_arcsec.push_back(MaxPairwiseAngle(q, i, ends[i], &scratch) *
-                                                kArcsecPerRad);
-        }
-      }
-    }
-    if (options.progress) options.progress(static_cast<double>(k1) / windows_max);
-  }
-  result.windows_total = windows[0];
-  for (size_t wi = 0; wi < windows_count; ++wi) {
-    for (size_t l = 0; l < limits; ++l) {
-      FlightRow& row = row_of(l, wi);
-      row.limit_m = options.limits_m[l];
-      row.window_s = options.windows_s[wi];
-      row.threshold_arcsec = threshold_rad[l] * kArcsecPerRad;
-      row.windows = windows[wi];
-      const double to_percent = 100.0 / static_cast<double>(windows[wi]);
-      row.flagged_percent = row.flagged * to_percent;
-      for (int a = 0; a < 3; ++a) row.flagged_percent_axis[a] = row.flagged_axis[a] * to_percent;
-      row.flagged_percent_vector = row.flagged_vector * to_percent;
-    }
-  }
+  SweepWindows(trace, options, plan, &result);
+  result.windows_total = plan.windows[0];
+  FinishRows(options, plan, &result);
   return result;
 }
 
@@ -466,5 +536,7 @@ void WriteFlightSeriesCsv(const std::string& path, const FlightSeries& series) {
   }
   WriteFileAtomically(path, out);
 }
+
+
 
 }  // namespace shutterlab

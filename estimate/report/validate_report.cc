@@ -256,16 +256,9 @@ cv::Mat LineChart(const std::vector<double>& x, const std::vector<std::vector<do
 // Residual pictures inlined in validate.html; the rest stay files beside it.
 constexpr size_t kMaxPagePictures = 24;
 
-}  // namespace
-
-std::vector<std::string> WriteValidationPlots(const std::string& dir,
-                                              const ValidationResult& result) {
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw IoError(IoMessage(dir, 0, "cannot create folder: " + ec.message()));
-  std::vector<std::string> written;
-  const int width = result.declared.camera.width, height = result.declared.camera.height;
-  // Residual pictures: one cell per measure grid step, before and after on one colour scale.
+// The measure grid step, px: the spacing of the first frame's first residual points (kGridStepPx
+// when they do not tell).
+int ResidualGridStepPx(const ValidationResult& result) {
   int step = kGridStepPx;
   for (const FrameValidation& f : result.frames) {
     for (size_t k = 1; k < f.residuals.size() && k < 4; ++k) {
@@ -274,10 +267,13 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
     }
     break;
   }
-  const cv::Size cells((width + step - 1) / step, (height + step - 1) / step);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  // Every frame's picture goes to a file; the page inlines only the kMaxPagePictures frames with
-  // the largest residual before (a 360-pair clip would make a page of 85 MB), in frame order.
+  return step;
+}
+
+// Every frame's picture goes to a file; the page inlines only the kMaxPagePictures frames with the
+// largest residual before (a 360-pair clip would make a page of 85 MB). Per frame: whether it is
+// on the page.
+std::vector<bool> FramesOnPage(const ValidationResult& result) {
   std::vector<size_t> by_residual(result.frames.size());
   for (size_t i = 0; i < by_residual.size(); ++i) by_residual[i] = i;
   std::stable_sort(by_residual.begin(), by_residual.end(), [&](size_t a, size_t b) {
@@ -286,62 +282,95 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
   by_residual.resize(std::min(by_residual.size(), kMaxPagePictures));
   std::vector<bool> on_page(result.frames.size(), false);
   for (size_t i : by_residual) on_page[i] = true;
-  std::vector<std::pair<size_t, cv::Mat>> panels;  // (frame index, picture) of those on the page
+  return on_page;
+}
+
+// One colour scale for all panels of a frame: the largest residual before (robust: the 99th
+// percentile, so one bad match does not wash the picture out), px.
+double PanelScalePx(const FrameValidation& f) {
+  std::vector<float> lengths;
+  for (const PointResidual& r : f.residuals)
+    lengths.push_back(std::hypot(r.before_dx, r.before_dy));
+  double max_px = f.before.max_px;
+  if (!lengths.empty()) {
+    const size_t at = std::min(lengths.size() - 1, static_cast<size_t>(0.99 * lengths.size()));
+    std::nth_element(lengths.begin(), lengths.begin() + at, lengths.end());
+    max_px = lengths[at];
+  }
+  return std::max(max_px, 1e-3);
+}
+
+// A frame's residual picture: one cell per measure grid step (`cells` of `step_px`), before and
+// after (and, for a video, with translation) side by side on one colour scale.
+cv::Mat ResidualPanel(const FrameValidation& f, bool video, int step_px, const cv::Size& cells) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cv::Mat before(cells, CV_32FC2, cv::Scalar(nan, nan)), after = before.clone(),
+                                                         translation = before.clone();
+  for (const PointResidual& r : f.residuals) {
+    const int c = std::clamp(static_cast<int>(std::lround(r.u / step_px)), 0, cells.width - 1);
+    const int w = std::clamp(static_cast<int>(std::lround(r.v / step_px)), 0, cells.height - 1);
+    before.at<cv::Vec2f>(w, c) = cv::Vec2f(r.before_dx, r.before_dy);
+    after.at<cv::Vec2f>(w, c) = cv::Vec2f(r.after_dx, r.after_dy);
+    translation.at<cv::Vec2f>(w, c) = cv::Vec2f(r.translation_dx, r.translation_dy);
+  }
+  // Display at about 640 px wide, nearest neighbour so each cell stays one measured point.
+  const double scale = 640.0 / cells.width;
+  const cv::Size shown(640, std::max(1, static_cast<int>(std::lround(cells.height * scale))));
+  const double max_px = PanelScalePx(f);
+  std::vector<cv::Mat> shown_panels;
+  std::vector<std::string> labels = {
+      "residual before: rms " + FormatNumber("%.3f", f.before.rms_px) + " px",
+      (video ? "rotation only, after: rms " : "after: rms ") +
+          FormatNumber("%.3f", f.after.rms_px) + " px"};
+  std::vector<cv::Mat> fields = {before, after};
+  if (video) {
+    fields.push_back(translation);
+    labels.push_back("with translation (across): rms " +
+                     FormatNumber("%.3f", f.translation_after.rms_px) + " px");
+  }
+  for (cv::Mat& field : fields) {
+    cv::resize(field, field, shown, 0, 0, cv::INTER_NEAREST);
+    shown_panels.push_back(DisplacementHeatmap(field, max_px));
+  }
+  return SideBySide(shown_panels, labels);
+}
+
+// Writes every frame's residual picture (DIR/NNNN_residual.png, appended to *written); returns
+// (frame index, picture) of those on the page, in frame order.
+std::vector<std::pair<size_t, cv::Mat>> WriteResidualPictures(const std::string& dir,
+                                                              const ValidationResult& result,
+                                                              int step_px,
+                                                              std::vector<std::string>* written) {
+  const int width = result.declared.camera.width, height = result.declared.camera.height;
+  const cv::Size cells((width + step_px - 1) / step_px, (height + step_px - 1) / step_px);
+  const std::vector<bool> on_page = FramesOnPage(result);
+  std::vector<std::pair<size_t, cv::Mat>> panels;
   for (size_t frame_index = 0; frame_index < result.frames.size(); ++frame_index) {
     const FrameValidation& f = result.frames[frame_index];
-    cv::Mat before(cells, CV_32FC2, cv::Scalar(nan, nan)), after = before.clone(),
-                                                           translation = before.clone();
-    for (const PointResidual& r : f.residuals) {
-      const int c = std::clamp(static_cast<int>(std::lround(r.u / step)), 0, cells.width - 1);
-      const int w = std::clamp(static_cast<int>(std::lround(r.v / step)), 0, cells.height - 1);
-      before.at<cv::Vec2f>(w, c) = cv::Vec2f(r.before_dx, r.before_dy);
-      after.at<cv::Vec2f>(w, c) = cv::Vec2f(r.after_dx, r.after_dy);
-      translation.at<cv::Vec2f>(w, c) = cv::Vec2f(r.translation_dx, r.translation_dy);
-    }
-    // Display at about 640 px wide, nearest neighbour so each cell stays one measured point.
-    const double scale = 640.0 / cells.width;
-    const cv::Size shown(640, std::max(1, static_cast<int>(std::lround(cells.height * scale))));
-    // One colour scale for all panels of a frame: the largest residual before (robust: the 99th
-    // percentile, so one bad match does not wash the picture out).
-    std::vector<float> lengths;
-    for (const PointResidual& r : f.residuals)
-      lengths.push_back(std::hypot(r.before_dx, r.before_dy));
-    double max_px = f.before.max_px;
-    if (!lengths.empty()) {
-      const size_t at = std::min(lengths.size() - 1, static_cast<size_t>(0.99 * lengths.size()));
-      std::nth_element(lengths.begin(), lengths.begin() + at, lengths.end());
-      max_px = lengths[at];
-    }
-    max_px = std::max(max_px, 1e-3);
-    std::vector<cv::Mat> shown_panels;
-    std::vector<std::string> labels = {
-        "residual before: rms " + FormatNumber("%.3f", f.before.rms_px) + " px",
-        (result.video ? "rotation only, after: rms " : "after: rms ") +
-            FormatNumber("%.3f", f.after.rms_px) + " px"};
-    std::vector<cv::Mat> fields = {before, after};
-    if (result.video) {
-      fields.push_back(translation);
-      labels.push_back("with translation (across): rms " +
-                       FormatNumber("%.3f", f.translation_after.rms_px) + " px");
-    }
-    for (cv::Mat& field : fields) {
-      cv::resize(field, field, shown, 0, 0, cv::INTER_NEAREST);
-      shown_panels.push_back(DisplacementHeatmap(field, max_px));
-    }
-    const cv::Mat panel = SideBySide(shown_panels, labels);
+    const cv::Mat panel = ResidualPanel(f, result.video, step_px, cells);
     const std::string path = (fs::path(dir) / (FrameName(f.frame) + "_residual.png")).string();
     WriteImage(path, panel);
-    written.push_back(path);
+    written->push_back(path);
     if (on_page[frame_index]) panels.emplace_back(frame_index, panel);
   }
+  return panels;
+}
 
-  // Per-row profile over all frames: mean residual dx, dy and RMS per band of `step` rows.
-  const int bands = (height + step - 1) / step;
+// Per-row profile over all frames, per band of `step` rows: its centre row, px, the points in it,
+// and 7 series: mean residual dx, dy and RMS before (0-2), after (3-5), RMS with translation (6).
+struct RowProfile {
+  std::vector<double> row, count;
+  std::vector<std::vector<double>> mean;
+};
+
+RowProfile ProfileRows(const ValidationResult& result, int step_px) {
+  const int height = result.declared.camera.height;
+  const int bands = (height + step_px - 1) / step_px;
   std::vector<double> sum[7], count(bands, 0.0), translation_count(bands, 0.0);
   for (auto& s : sum) s.assign(bands, 0.0);
   for (const FrameValidation& f : result.frames) {
     for (const PointResidual& r : f.residuals) {
-      const int b = std::clamp(static_cast<int>(r.v) / step, 0, bands - 1);
+      const int b = std::clamp(static_cast<int>(r.v) / step_px, 0, bands - 1);
       count[b] += 1;
       sum[0][b] += r.before_dx;
       sum[1][b] += r.before_dy;
@@ -355,21 +384,34 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
       }
     }
   }
-  std::vector<double> row(bands);
-  std::vector<std::vector<double>> mean(7, std::vector<double>(bands));
-  std::string csv =
-      "row_px,points,before_dx_px,before_dy_px,before_rms_px,after_dx_px,"
-      "after_dy_px,after_rms_px";
-  csv += result.video ? ",translation_rms_px\n" : "\n";
-  const int columns = result.video ? 7 : 6;
+  RowProfile profile;
+  profile.row.resize(bands);
+  profile.count = count;
+  profile.mean.assign(7, std::vector<double>(bands));
   for (int b = 0; b < bands; ++b) {
-    row[b] = std::min(height - 1.0, (b + 0.5) * step);
+    profile.row[b] = std::min(height - 1.0, (b + 0.5) * step_px);
     for (int s = 0; s < 7; ++s) {
       const double n = s == 6 ? translation_count[b] : count[b];
       const double m = n > 0 ? sum[s][b] / n : std::numeric_limits<double>::quiet_NaN();
-      mean[s][b] = (s == 2 || s == 5 || s == 6) ? std::sqrt(m) : m;
+      profile.mean[s][b] = (s == 2 || s == 5 || s == 6) ? std::sqrt(m) : m;
     }
-    csv += FormatNumber("%.1f", row[b]) + "," + std::to_string(static_cast<long long>(count[b]));
+  }
+  return profile;
+}
+
+// DIR/residual_rows.csv and DIR/residual_rows.png (the before and after charts), appended to
+// *written.
+void WriteRowProfile(const std::string& dir, bool video, const RowProfile& profile,
+                     std::vector<std::string>* written) {
+  const std::vector<std::vector<double>>& mean = profile.mean;
+  std::string csv =
+      "row_px,points,before_dx_px,before_dy_px,before_rms_px,after_dx_px,"
+      "after_dy_px,after_rms_px";
+  csv += video ? ",translation_rms_px\n" : "\n";
+  const int columns = video ? 7 : 6;
+  for (size_t b = 0; b < profile.row.size(); ++b) {
+    csv += FormatNumber("%.1f", profile.row[b]) + "," +
+           std::to_string(static_cast<long long>(profile.count[b]));
     for (int s = 0; s < columns; ++s) {
       csv += "," + (std::isfinite(mean[s][b]) ? FormatNumber("%.5f", mean[s][b]) : "");
     }
@@ -377,41 +419,44 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
   }
   const std::string csv_path = (fs::path(dir) / "residual_rows.csv").string();
   WriteFileAtomically(csv_path, csv);
-  written.push_back(csv_path);
+  written->push_back(csv_path);
   // Colours in R, G, B order (image_io writes the file's channel order).
   const cv::Mat chart_before =
-      LineChart(row, {mean[0], mean[1], mean[2]}, {"mean dx", "mean dy", "rms"},
+      LineChart(profile.row, {mean[0], mean[1], mean[2]}, {"mean dx", "mean dy", "rms"},
                 {cv::Scalar(31, 119, 180), cv::Scalar(255, 127, 14), cv::Scalar(60, 60, 60)},
                 "residual per row, before (declared model), px", "image row");
   const cv::Mat chart_after =
-      LineChart(row, {mean[3], mean[4], mean[5]}, {"mean dx", "mean dy", "rms"},
+      LineChart(profile.row, {mean[3], mean[4], mean[5]}, {"mean dx", "mean dy", "rms"},
                 {cv::Scalar(31, 119, 180), cv::Scalar(255, 127, 14), cv::Scalar(60, 60, 60)},
                 "residual per row, after (declared + identified effects), px", "image row");
   cv::Mat charts;
   cv::vconcat(chart_before, chart_after, charts);
   const std::string chart_path = (fs::path(dir) / "residual_rows.png").string();
   WriteImage(chart_path, charts);
-  written.push_back(chart_path);
+  written->push_back(chart_path);
+}
 
-  // DIR/validate.html: the table, the charts before/after, the residual pictures.
-  HtmlPage page("shutterlab validate: " + result.dataset);
-  page.Heading("Summary");
-  page.Preformatted(ValidationReport(result));
-  page.Heading("Residual per image row (all frames)");
+// The page's chart of the row profile: RMS and mean residual per row band, before and after.
+Chart RowsChart(bool video, const RowProfile& profile) {
+  const std::vector<std::vector<double>>& mean = profile.mean;
   Chart rows_chart;
   rows_chart.title = "RMS residual per row band, before and after the loop";
   rows_chart.x_label = "image row";
   rows_chart.y_label = "px";
-  rows_chart.x = row;
+  rows_chart.x = profile.row;
   rows_chart.series = {
       ChartSeries("before rms", mean[2]),     ChartSeries("after rms", mean[5]),
       ChartSeries("before mean dx", mean[0]), ChartSeries("before mean dy", mean[1]),
       ChartSeries("after mean dx", mean[3]),  ChartSeries("after mean dy", mean[4])};
-  if (result.video) {
+  if (video) {
     rows_chart.series.push_back(ChartSeries("with translation rms (across the line)", mean[6]));
   }
-  page.AddChart(rows_chart);
-  page.Heading("Per frame");
+  return rows_chart;
+}
+
+// The page's per-frame charts: RMS residual per frame (per pair for a video) and, for a still
+// dataset, the distortion D on the ground (a video has no global-shutter reference for it).
+void AddFrameCharts(const ValidationResult& result, HtmlPage* page) {
   Chart frames_chart, d_chart;
   frames_chart.title = "RMS residual per frame";
   frames_chart.kind = d_chart.kind = ChartKind::kPoints;
@@ -456,9 +501,22 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
     for (double& v : component_noise) v /= std::sqrt(2.0);
     frames_chart.series.push_back(ChartSeries("noise of one component", component_noise));
   }
-  page.AddChart(frames_chart);
+  page->AddChart(frames_chart);
   // D needs a global-shutter reference: video datasets have none.
-  if (!result.video) page.AddChart(d_chart);
+  if (!result.video) page->AddChart(d_chart);
+}
+
+// DIR/validate.html: the table, the charts before/after, the residual pictures on the page.
+std::string WriteValidationPage(const std::string& dir, const ValidationResult& result,
+                                const RowProfile& profile,
+                                const std::vector<std::pair<size_t, cv::Mat>>& panels) {
+  HtmlPage page("shutterlab validate: " + result.dataset);
+  page.Heading("Summary");
+  page.Preformatted(ValidationReport(result));
+  page.Heading("Residual per image row (all frames)");
+  page.AddChart(RowsChart(result.video, profile));
+  page.Heading("Per frame");
+  AddFrameCharts(result, &page);
   if (panels.size() < result.frames.size()) {
     page.Paragraph("The " + std::to_string(panels.size()) + " of " +
                    std::to_string(result.frames.size()) + (result.video ? " pairs" : " frames") +
@@ -476,7 +534,23 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
   }
   const std::string html_path = (fs::path(dir) / "validate.html").string();
   page.Write(html_path);
-  written.push_back(html_path);
+  return html_path;
+}
+
+}  // namespace
+
+std::vector<std::string> WriteValidationPlots(const std::string& dir,
+                                              const ValidationResult& result) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw IoError(IoMessage(dir, 0, "cannot create folder: " + ec.message()));
+  std::vector<std::string> written;
+  const int step_px = ResidualGridStepPx(result);
+  const std::vector<std::pair<size_t, cv::Mat>> panels =
+      WriteResidualPictures(dir, result, step_px, &written);
+  const RowProfile profile = ProfileRows(result, step_px);
+  WriteRowProfile(dir, result.video, profile, &written);
+  written.push_back(WriteValidationPage(dir, result, profile, panels));
   return written;
 }
 

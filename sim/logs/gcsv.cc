@@ -110,143 +110,188 @@ Eigen::Matrix3d GcsvOrientationMatrix(const std::string& orientation) {
   return m;
 }
 
-GcsvLog ReadGcsv(const std::string& path) {
-  const std::string text = ReadFileToString(path);
-  LineCursor cursor(text);
-  const auto first = cursor.Next();
+namespace {
+
+// What the header lines before the column line say (line numbers 0 when absent).
+struct GcsvHeader {
+  std::optional<double> tscale, gscale, readout_ms;
+  long orientation_line = 0, readout_line = 0;
+  std::string orientation;
+  long column_line = 0;
+  std::vector<std::string_view> columns;  // the column line's fields
+};
+
+// The first line names the format.
+void CheckFirstLine(const std::string& path, LineCursor* cursor) {
+  const auto first = cursor->Next();
   std::vector<std::string_view> fields;
   if (first) SplitFields(StripBom(*first), '\x01', &fields);  // no split: just trim
   if (!first || (fields[0] != "GYROFLOW IMU LOG" && fields[0] != "CAMERA IMU LOG")) {
     throw IoError(IoMessage(path, 1, "missing first line 'GYROFLOW IMU LOG' (not a .gcsv)"));
   }
+}
 
-  GcsvLog log;
-  std::optional<double> tscale, gscale, readout_ms;
-  long orientation_line = 0, readout_line = 0;
-  std::string orientation, direction_value;
-  long column_line = 0;
-  std::vector<std::string_view> columns;
-  while (auto line = cursor.Next()) {
-    const long n = cursor.line_number();
+// One 'key,value' header line (line n): kept in log->header, and the keys the reader uses checked
+// into *header (frame_readout_direction straight into the log).
+void ReadHeaderLine(const std::string& path, long n, std::string_view line,
+                    const std::vector<std::string_view>& fields, GcsvHeader* header, GcsvLog* log) {
+  if (fields.size() < 2) {
+    throw IoError(
+        IoMessage(path, n, "header line is not 'key,value': '" + std::string(line) + "'"));
+  }
+  const std::string key = ToLower(fields[0]);
+  const std::string value = ValueAfterKey(line);
+  log->header.emplace_back(std::string(fields[0]), value);
+  auto positive = [&](const char* name) {
+    const auto v = ParseDouble(value);
+    if (!v || !(*v > 0.0)) {
+      throw IoError(IoMessage(
+          path, n, std::string(name) + " must be a positive number, found '" + value + "'"));
+    }
+    return *v;
+  };
+  if (key == "tscale") {
+    header->tscale = positive("tscale");
+  } else if (key == "gscale") {
+    header->gscale = positive("gscale");
+  } else if (key == "orientation") {
+    header->orientation = value;
+    header->orientation_line = n;
+  } else if (key == "frame_readout_time") {
+    header->readout_ms = ParseDouble(value);
+    if (!header->readout_ms) {
+      throw IoError(
+          IoMessage(path, n, "frame_readout_time is not a finite number: '" + value + "'"));
+    }
+    header->readout_line = n;
+  } else if (key == "frame_readout_direction") {
+    const auto direction = GyroflowReadoutDirection(value);
+    if (!word) {
+      throw IoError(IoMessage(path, n,
+                              "unknown frame_readout_direction '" + value +
+                                  "' (0-3, TopToBottom, BottomToTop, LeftToRight, RightToLeft)"));
+    }
+    log->frame_readout_direction = *direction;
+  }
+}
+
+// The header lines up to and including the column line ('t,...' or 'time,...'), which must come.
+GcsvHeader ReadHeader(const std::string& path, LineCursor* cursor, GcsvLog* log) {
+  GcsvHeader header;
+  std::vector<std::string_view> fields;
+  while (auto line = cursor->Next()) {
+    const long n = cursor->line_number();
     SplitFields(*line, ',', &fields);
     if (fields.size() == 1 && fields[0].empty()) continue;
     const std::string key = ToLower(fields[0]);
     if (key == "t" || key == "time") {
-      column_line = n;
-      columns = fields;
+      header.column_line = n;
+      header.columns = fields;
       break;
     }
-    if (fields.size() < 2) {
-      throw IoError(
-          IoMessage(path, n, "header line is not 'key,value': '" + std::string(*line) + "'"));
-    }
-    const std::string value = ValueAfterKey(*line);
-    log.header.emplace_back(std::string(fields[0]), value);
-    auto positive = [&](const char* name) {
-      const auto v = ParseDouble(value);
-      if (!v || !(*v > 0.0)) {
-        throw IoError(IoMessage(
-            path, n, std::string(name) + " must be a positive number, found '" + value + "'"));
-      }
-      return *v;
-    };
-    if (key == "tscale") {
-      tscale = positive("tscale");
-    } else if (key == "gscale") {
-      gscale = positive("gscale");
-    } else if (key == "orientation") {
-      orientation = value;
-      orientation_line = n;
-    } else if (key == "frame_readout_time") {
-      readout_ms = ParseDouble(value);
-      if (!readout_ms) {
-        throw IoError(
-            IoMessage(path, n, "frame_readout_time is not a finite number: '" + value + "'"));
-      }
-      readout_line = n;
-    } else if (key == "frame_readout_direction") {
-      direction_value = value;
-      const auto direction = GyroflowReadoutDirection(value);
-      if (!direction) {
-        throw IoError(IoMessage(path, n,
-                                "unknown frame_readout_direction '" + value +
-                                    "' (0-3, TopToBottom, BottomToTop, LeftToRight, RightToLeft)"));
-      }
-      log.frame_readout_direction = *direction;
-    }
+    ReadHeaderLine(path, n, *line, fields, &header, log);
   }
-  if (column_line == 0) {
-    throw IoError(IoMessage(path, cursor.line_number(),
+  if (header.column_line == 0) {
+    throw IoError(IoMessage(path, cursor->line_number(),
                             "header ends before the column line 't,gx,gy,gz' (truncated file?)"));
   }
-  if (!tscale) throw IoError(IoMessage(path, column_line, "no tscale line before the column line"));
-  if (!gscale) throw IoError(IoMessage(path, column_line, "no gscale line before the column line"));
-  log.tscale = *tscale;
-  log.gscale = *gscale;
-  if (orientation_line == 0) {
-    orientation = "xzY";
-    log.warnings.push_back("no orientation line: assumed 'xzY', as Gyroflow's parser does");
+  return header;
+}
+
+// The header's scales, orientation and readout into the log, checked; returns the orientation's
+// matrix from the file's axes to the output's.
+Eigen::Matrix3d ApplyHeader(const std::string& path, GcsvHeader* header, GcsvLog* log) {
+  const long column_line = header->column_line;
+  if (!header->tscale) {
+    throw IoError(IoMessage(path, column_line, "no tscale line before the column line"));
+  }
+  if (!header->gscale) {
+    throw IoError(IoMessage(path, column_line, "no gscale line before the column line"));
+  }
+  log->tscale = *header->tscale;
+  log->gscale = *header->gscale;
+  if (header->orientation_line == 0) {
+    header->orientation = "xzY";
+    log->warnings.push_back("no orientation line: assumed 'xzY', as Gyroflow's parser does");
   }
   Eigen::Matrix3d to_out;
   try {
-    to_out = GcsvOrientationMatrix(orientation);
+    to_out = GcsvOrientationMatrix(header->orientation);
   } catch (const std::invalid_argument&) {
-    throw IoError(IoMessage(
-        path, orientation_line,
-        "orientation '" + orientation + "' is not three letters of xXyYzZ naming each axis once"));
+    throw IoError(IoMessage(path, header->orientation_line,
+                            "orientation '" + header->orientation +
+                                "' is not three letters of xXyYzZ naming each axis once"));
   }
-  log.orientation = orientation;
-  if (readout_ms) {
+  log->orientation = header->orientation;
+  if (header->readout_ms) {
     // Gyroflow's legacy files encode bottom-to-top as a negative readout time.
-    if (*readout_ms < 0) {
-      log.frame_readout_direction = log.frame_readout_direction == ReadoutDirection::kBottomToTop
-                                        ? ReadoutDirection::kTopToBottom
-                                        : ReadoutDirection::kBottomToTop;
-      log.warnings.push_back("negative frame_readout_time on line " + std::to_string(readout_line) +
-                             ": read as the opposite readout direction");
+    if (*header->readout_ms < 0) {
+      log->frame_readout_direction = log->frame_readout_direction == ReadoutDirection::kBottomToTop
+                                         ? ReadoutDirection::kTopToBottom
+                                         : ReadoutDirection::kBottomToTop;
+      log->warnings.push_back("negative frame_readout_time on line " +
+                              std::to_string(header->readout_line) +
+                              ": read as the opposite readout direction");
     }
-    log.frame_readout_s = std::abs(*readout_ms) * 1e-3;
+    log->frame_readout_s = std::abs(*header->readout_ms) * 1e-3;
   }
+  const std::vector<std::string_view>& columns = header->columns;
   if (columns.size() < 4 || ToLower(columns[1]) != "gx" || ToLower(columns[2]) != "gy" ||
       ToLower(columns[3]) != "gz") {
     throw IoError(IoMessage(path, column_line, "column line must start with t,gx,gy,gz"));
   }
+  return to_out;
+}
 
-  const std::optional<TimeUnit> exact_unit = ExactUnit(*tscale);
+// One sample line (line n, already split into as many fields as columns): t scaled by tscale
+// (exactly when tscale is a unit), the rates by gscale and turned into the output axes.
+GyroSample ParseSample(const std::string& path, long n, const std::vector<std::string_view>& fields,
+                       const GcsvHeader& header, const std::optional<TimeUnit>& exact_unit,
+                       const Eigen::Matrix3d& to_out) {
+  const double tscale = *header.tscale, gscale = *header.gscale;
+  GyroSample s;
+  std::optional<int64_t> t_ns;
+  if (exact_unit) {
+    t_ns = ParseTimeInUnitNs(fields[0], *exact_unit);
+  } else if (const auto t = ParseDouble(fields[0]); t && std::abs(*t * tscale) < 9.2e9) {
+    t_ns = SecondsToNs(*t * tscale);
+  }
+  if (!t_ns) {
+    throw IoError(
+        IoMessage(path, n, "t is not a finite number in range: '" + std::string(fields[0]) + "'"));
+  }
+  s.t_ns = *t_ns;
+  Eigen::Vector3d in;
+  for (int axis = 0; axis < 3; ++axis) {
+    const auto value = ParseDouble(fields[axis + 1]);
+    if (!value || !std::isfinite(*value * gscale)) {
+      throw IoError(IoMessage(path, n,
+                              std::string("g") + "xyz"[axis] + " is not a finite number: '" +
+                                  std::string(fields[axis + 1]) + "'"));
+    }
+    in[axis] = *value * gscale;
+  }
+  s.omega_rad_s = to_out * in;
+  return s;
+}
+
+// The sample lines after the column line, in non-decreasing time; at least one.
+std::vector<GyroSample> ReadSamples(const std::string& path, LineCursor* cursor,
+                                    const GcsvHeader& header, const Eigen::Matrix3d& to_out) {
+  const std::optional<TimeUnit> exact_unit = ExactUnit(*header.tscale);
+  std::vector<std::string_view> fields;
   std::vector<GyroSample> samples;
-  while (auto line = cursor.Next()) {
-    const long n = cursor.line_number();
+  while (auto line = cursor->Next()) {
+    const long n = cursor->line_number();
     if (line->empty()) continue;
     SplitFields(*line, ',', &fields);
-    if (fields.size() != columns.size()) {
+    if (fields.size() != header.columns.size()) {
       throw IoError(IoMessage(path, n,
-                              "expected " + std::to_string(columns.size()) +
-                                  " columns as on line " + std::to_string(column_line) +
+                              "expected " + std::to_string(header.columns.size()) +
+                                  " columns as on line " + std::to_string(header.column_line) +
                                   ", found " + std::to_string(fields.size())));
     }
-    GyroSample s;
-    std::optional<int64_t> t_ns;
-    if (exact_unit) {
-      t_ns = ParseTimeInUnitNs(fields[0], *exact_unit);
-    } else if (const auto t = ParseDouble(fields[0]); t && std::abs(*t * *tscale) < 9.2e9) {
-      t_ns = SecondsToNs(*t * *tscale);
-    }
-    if (!t_ns) {
-      throw IoError(IoMessage(
-          path, n, "t is not a finite number in range: '" + std::string(fields[0]) + "'"));
-    }
-    s.t_ns = *t_ns;
-    Eigen::Vector3d in;
-    for (int axis = 0; axis < 3; ++axis) {
-      const auto value = ParseDouble(fields[axis + 1]);
-      if (!value || !std::isfinite(*value * *gscale)) {
-        throw IoError(IoMessage(path, n,
-                                std::string("g") + "xyz"[axis] + " is not a finite number: '" +
-                                    std::string(fields[axis + 1]) + "'"));
-      }
-      in[axis] = *value * *gscale;
-    }
-    s.omega_rad_s = to_out * in;
+    const GyroSample s = ParseSample(path, n, fields, header, exact_unit, to_out);
     if (!samples.empty() && s.t_ns < samples.back().t_ns) {
       throw IoError(IoMessage(
           path, n,
@@ -255,7 +300,19 @@ GcsvLog ReadGcsv(const std::string& path) {
     samples.push_back(s);
   }
   if (samples.empty()) throw IoError(IoMessage(path, 0, "no samples after the column line"));
-  log.trace = GyroTrace(std::move(samples));
+  return samples;
+}
+
+}  // namespace
+
+GcsvLog ReadGcsv(const std::string& path) {
+  const std::string text = ReadFileToString(path);
+  LineCursor cursor(text);
+  CheckFirstLine(path, &cursor);
+  GcsvLog log;
+  GcsvHeader header = ReadHeader(path, &cursor, &log);
+  const Eigen::Matrix3d to_out = ApplyHeader(path, &header, &log);
+  log.trace = GyroTrace(ReadSamples(path, &cursor, header, to_out));
   return log;
 }
 

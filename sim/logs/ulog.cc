@@ -1,9 +1,5 @@
 #include "sim/logs/ulog.h"
 
-#include "sim/check.h"
-#include "sim/text_file.h"
-#include "sim/units.h"
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -16,6 +12,10 @@
 #include <unordered_map>
 #include <utility>
 
+#include "sim/check.h"
+#include "sim/text_file.h"
+#include "sim/units.h"
+
 namespace shutterlab {
 
 // ---------------------------------------------------------------------------------------------
@@ -27,10 +27,10 @@ namespace {
 struct CleanedCandidate {
   GyroCandidate candidate;
   double rate_hz = 0.0;
-  size_t dropped_time = 0;   // t <= 0
-  size_t dropped_value = 0;  // non-finite rate
-  size_t dropped_spike = 0;  // isolated timestamp spike
-  size_t out_of_order = 0;   // samples that had to be moved by the sort
+  size_t dropped_time = 0;     // t <= 0
+  size_t dropped_value = 0;    // non-finite rate
+  size_t dropped_spike = 0;    // isolated timestamp spike
+  size_t out_of_order = 0;     // samples that had to be moved by the sort
   size_t dropped_outlier_end = 0;
 };
 
@@ -84,8 +84,7 @@ CleanedCandidate Clean(GyroCandidate in) {
   // An end sample far beyond the rest (a corrupted time that sorted to an end) would stretch the
   // trace by minutes; gaps above this are not a logger pause.
   constexpr int64_t kMaxEndGapNs = 60'000'000'000;  // 60 s
-  while (despiked.size() >= 3 &&
-         despiked.back().t_ns - despiked[despiked.size() - 2].t_ns > kMaxEndGapNs) {
+  while (despiked.size() >= 3 && despiked.back().t_ns - despiked[despiked.size() - 2].t_ns > kMaxEndGapNs) {
     despiked.pop_back();
     ++out.dropped_outlier_end;
   }
@@ -118,9 +117,9 @@ bool ChooseGyroSource(std::vector<GyroCandidate> candidates, FlightLog* log) {
     }
   }
   if (usable.empty()) return false;
-  std::stable_sort(
-      usable.begin(), usable.end(),
-      [](const CleanedCandidate& a, const CleanedCandidate& b) { return a.rate_hz > b.rate_hz; });
+  std::stable_sort(usable.begin(), usable.end(), [](const CleanedCandidate& a, const CleanedCandidate& b) {
+    return a.rate_hz > b.rate_hz;
+  });
   // Rates of the same sensor differ by a few percent between topics (jitter, dropped messages);
   // within that band the rawer topic is the better source.
   constexpr double kSimilarRate = 0.9;
@@ -167,46 +166,32 @@ namespace {
 constexpr char kMagic[7] = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35};
 constexpr size_t kFileHeaderBytes = 16;
 constexpr size_t kMessageHeaderBytes = 3;
-constexpr int kMaxNestingDepth = 16;            // PX4 nests two or three deep
-constexpr size_t kMaxFlatFields = 1 << 16;      // guards against absurd nested arrays
-constexpr size_t kMaxMessageBytes = 65535 + 3;  // uint16 size + header
-constexpr int kResyncChain = 4;                 // consecutive plausible messages to trust a resync
+constexpr int kMaxNestingDepth = 16;             // PX4 nests two or three deep
+constexpr size_t kMaxFlatFields = 1 << 16;       // guards against absurd nested arrays
+constexpr size_t kMaxMessageBytes = 65535 + 3;   // uint16 size + header
+constexpr int kResyncChain = 4;                  // consecutive plausible messages to trust a resync
 constexpr size_t kMaxPlausibleNonDataBytes = 8192;  // formats, infos, log text are far smaller
-constexpr int kMsgIdSlack = 16;             // unsubscribed msg_ids believed above the largest seen
-constexpr size_t kMaxDetailedWarnings = 8;  // per kind; the rest are summed up
+constexpr int kMsgIdSlack = 16;                  // unsubscribed msg_ids believed above the largest seen
+constexpr size_t kMaxDetailedWarnings = 8;       // per kind; the rest are summed up
 
 // Little-endian loads, independent of the host's byte order.
 uint64_t LoadLE(const char* p, size_t bytes) {
   uint64_t v = 0;
-  for (size_t i = 0; i < bytes; ++i)
-    v |= static_cast<uint64_t>(static_cast<uint8_t>(p[i])) << (8 * i);
+  for (size_t i = 0; i < bytes; ++i) v |= static_cast<uint64_t>(static_cast<uint8_t>(p[i])) << (8 * i);
   return v;
 }
 uint16_t LoadU16(const char* p) { return static_cast<uint16_t>(LoadLE(p, 2)); }
 
-enum class Scalar : uint8_t {
-  kInt8,
-  kUInt8,
-  kInt16,
-  kUInt16,
-  kInt32,
-  kUInt32,
-  kInt64,
-  kUInt64,
-  kFloat,
-  kDouble,
-  kBool,
-  kChar
-};
+enum class Scalar : uint8_t { kInt8, kUInt8, kInt16, kUInt16, kInt32, kUInt32, kInt64, kUInt64, kFloat, kDouble, kBool, kChar };
 
 std::optional<std::pair<Scalar, size_t>> ScalarFromName(std::string_view name) {
   static const std::pair<const char*, std::pair<Scalar, size_t>> kTable[] = {
-      {"int8_t", {Scalar::kInt8, 1}},   {"uint8_t", {Scalar::kUInt8, 1}},
-      {"int16_t", {Scalar::kInt16, 2}}, {"uint16_t", {Scalar::kUInt16, 2}},
-      {"int32_t", {Scalar::kInt32, 4}}, {"uint32_t", {Scalar::kUInt32, 4}},
-      {"int64_t", {Scalar::kInt64, 8}}, {"uint64_t", {Scalar::kUInt64, 8}},
-      {"float", {Scalar::kFloat, 4}},   {"double", {Scalar::kDouble, 8}},
-      {"bool", {Scalar::kBool, 1}},     {"char", {Scalar::kChar, 1}}};
+      {"int8_t", {Scalar::kInt8, 1}},     {"uint8_t", {Scalar::kUInt8, 1}},
+      {"int16_t", {Scalar::kInt16, 2}},   {"uint16_t", {Scalar::kUInt16, 2}},
+      {"int32_t", {Scalar::kInt32, 4}},   {"uint32_t", {Scalar::kUInt32, 4}},
+      {"int64_t", {Scalar::kInt64, 8}},   {"uint64_t", {Scalar::kUInt64, 8}},
+      {"float", {Scalar::kFloat, 4}},     {"double", {Scalar::kDouble, 8}},
+      {"bool", {Scalar::kBool, 1}},       {"char", {Scalar::kChar, 1}}};
   for (const auto& [n, v] : kTable) {
     if (name == n) return v;
   }
@@ -215,20 +200,10 @@ std::optional<std::pair<Scalar, size_t>> ScalarFromName(std::string_view name) {
 
 size_t ScalarBytes(Scalar s) {
   switch (s) {
-    case Scalar::kInt8:
-    case Scalar::kUInt8:
-    case Scalar::kBool:
-    case Scalar::kChar:
-      return 1;
-    case Scalar::kInt16:
-    case Scalar::kUInt16:
-      return 2;
-    case Scalar::kInt32:
-    case Scalar::kUInt32:
-    case Scalar::kFloat:
-      return 4;
-    default:
-      return 8;
+    case Scalar::kInt8: case Scalar::kUInt8: case Scalar::kBool: case Scalar::kChar: return 1;
+    case Scalar::kInt16: case Scalar::kUInt16: return 2;
+    case Scalar::kInt32: case Scalar::kUInt32: case Scalar::kFloat: return 4;
+    default: return 8;
   }
 }
 
@@ -257,24 +232,14 @@ double ReadNumber(std::string_view data, const FlatField& f) {
   if (f.offset + bytes > data.size()) return std::numeric_limits<double>::quiet_NaN();
   const uint64_t raw = LoadLE(data.data() + f.offset, bytes);
   switch (f.type) {
-    case Scalar::kInt8:
-      return static_cast<int8_t>(raw);
-    case Scalar::kUInt8:
-    case Scalar::kBool:
-    case Scalar::kChar:
-      return static_cast<uint8_t>(raw);
-    case Scalar::kInt16:
-      return static_cast<int16_t>(raw);
-    case Scalar::kUInt16:
-      return static_cast<uint16_t>(raw);
-    case Scalar::kInt32:
-      return static_cast<int32_t>(raw);
-    case Scalar::kUInt32:
-      return static_cast<uint32_t>(raw);
-    case Scalar::kInt64:
-      return static_cast<double>(static_cast<int64_t>(raw));
-    case Scalar::kUInt64:
-      return static_cast<double>(raw);
+    case Scalar::kInt8: return static_cast<int8_t>(raw);
+    case Scalar::kUInt8: case Scalar::kBool: case Scalar::kChar: return static_cast<uint8_t>(raw);
+    case Scalar::kInt16: return static_cast<int16_t>(raw);
+    case Scalar::kUInt16: return static_cast<uint16_t>(raw);
+    case Scalar::kInt32: return static_cast<int32_t>(raw);
+    case Scalar::kUInt32: return static_cast<uint32_t>(raw);
+    case Scalar::kInt64: return static_cast<double>(static_cast<int64_t>(raw));
+    case Scalar::kUInt64: return static_cast<double>(raw);
     case Scalar::kFloat: {
       const uint32_t bits = static_cast<uint32_t>(raw);
       float v;
@@ -379,22 +344,22 @@ std::string Flatten(const FormatMap& formats, const std::string& type, const std
 struct Subscription {
   std::string topic;
   int multi_id = 0;
-  std::shared_ptr<const Layout> layout;    // null when the format could not be resolved
+  std::shared_ptr<const Layout> layout;  // null when the format could not be resolved
   std::vector<std::string_view> payloads;  // data after msg_id, in file order
   bool gyro_topic = false;  // IsGyroTopic(topic), cached: tested for every data message
   bool wanted = false;      // WantedTopic(topic), cached
 };
 
 bool IsGyroTopic(const std::string& topic) {
-  return topic == "sensor_gyro_fifo" || topic == "sensor_gyro" ||
-         topic == "vehicle_angular_velocity" || topic == "sensor_combined";
+  return topic == "sensor_gyro_fifo" || topic == "sensor_gyro" || topic == "vehicle_angular_velocity" ||
+         topic == "sensor_combined";
 }
 
 // Topics whose data the reader keeps.
 bool WantedTopic(const std::string& topic) {
-  static const char* kTopics[] = {
-      "sensor_gyro_fifo", "sensor_gyro",    "vehicle_angular_velocity", "sensor_combined",
-      "camera_trigger",   "camera_capture", "vehicle_local_position",   "home_position"};
+  static const char* kTopics[] = {"sensor_gyro_fifo", "sensor_gyro", "vehicle_angular_velocity",
+                                  "sensor_combined", "camera_trigger", "camera_capture",
+                                  "vehicle_local_position", "home_position"};
   for (const char* t : kTopics) {
     if (topic == t) return true;
   }
@@ -403,36 +368,24 @@ bool WantedTopic(const std::string& topic) {
 
 size_t MinPayload(uint8_t type) {
   switch (type) {
-    case 'B':
-      return 40;
-    case 'F':
-      return 2;
-    case 'I':
-      return 2;
-    case 'M':
-      return 3;
-    case 'P':
-      return 2;
-    case 'Q':
-      return 3;
-    case 'A':
-      return 4;
-    case 'R':
-      return 2;
-    case 'D':
-      return 2;
-    case 'L':
-      return 10;
-    case 'C':
-      return 12;
-    case 'S':
-      return 8;
-    case 'O':
-      return 2;
-    default:
-      return 0;  // unknown type
+    case 'B': return 40;
+    case 'F': return 2;
+    case 'I': return 2;
+    case 'M': return 3;
+    case 'P': return 2;
+    case 'Q': return 3;
+    case 'A': return 4;
+    case 'R': return 2;
+    case 'D': return 2;
+    case 'L': return 10;
+    case 'C': return 12;
+    case 'S': return 8;
+    case 'O': return 2;
+    default: return 0;  // unknown type
   }
 }
+
+struct DecodedTopics;  // defined with Decode
 
 class ULogParser {
  public:
@@ -450,8 +403,7 @@ class ULogParser {
   void Warn(const std::string& kind, size_t offset, const std::string& text) {
     size_t& count = warning_counts_[kind];
     ++count;
-    if (count <= kMaxDetailedWarnings)
-      log_.warnings.push_back("byte " + std::to_string(offset) + ": " + text);
+    if (count <= kMaxDetailedWarnings) log_.warnings.push_back("byte " + std::to_string(offset) + ": " + text);
   }
 
   // A message header at q with a known type, a size that fits, and for 'D' a subscribed msg_id
@@ -474,7 +426,17 @@ class ULogParser {
   }
   std::string DataMismatch(std::string_view payload) const;
   std::shared_ptr<const Layout> LayoutFor(const std::string& topic, std::string* error);
+  // Run's steps: the flag bits when they come first (returns where the messages start), the
+  // segments of the file between appended-data offsets, one message (false: stop reading this
+  // segment), the warnings that sum up what was skipped.
+  size_t ReadLeadingFlagBits(size_t pos);
+  std::vector<std::pair<size_t, size_t>> Segments(size_t pos);
+  bool ReadMessage(size_t* at, size_t end, bool last_segment);
+  void SummariseWarnings();
   void Decode();
+  // Decode's step per topic instance: its gyro candidate, camera events or altitude data.
+  void DecodeStream(const std::string& topic, int multi_id,
+                    const std::vector<const Subscription*>& subs, DecodedTopics* out);
 
   std::string_view bytes_;
   std::string path_;
@@ -487,8 +449,7 @@ class ULogParser {
   int max_msg_id_ = -1;  // largest msg_id subscribed so far
   std::map<std::string, size_t> warning_counts_;
   std::map<std::string, size_t> skipped_by_topic_;
-  std::vector<std::pair<uint64_t, uint16_t>>
-      dropouts_;  // (gyro-topic timestamp before it, us; duration ms)
+  std::vector<std::pair<uint64_t, uint16_t>> dropouts_;  // (gyro-topic timestamp before it, us; duration ms)
   uint64_t last_timestamp_us_ = 0;
   size_t skipped_bytes_ = 0;
 };
@@ -518,31 +479,18 @@ bool ULogParser::Plausible(size_t q, size_t end, int pending_id) const {
       auto it = by_msg_id_.find(msg_id);
       // An id that was never subscribed may still be real when its 'A' was damaged; PX4 numbers
       // subscriptions from 0 upwards, so only ids near the known ones are believed.
-      if (it == by_msg_id_.end())
-        return msg_id == pending_id || msg_id <= max_msg_id_ + kMsgIdSlack;
+      if (it == by_msg_id_.end()) return msg_id == pending_id || msg_id <= max_msg_id_ + kMsgIdSlack;
       const Layout* layout = subscriptions_[it->second].layout.get();
       return !layout || (size - 2u >= layout->min_bytes && size - 2u <= layout->max_bytes);
     }
-    case 'O':
-    case 'R':
-      return size == 2;
-    case 'S':
-      return size == 8;
-    case 'I':
-    case 'P':
-      return key_fits(0);
-    case 'M':
-    case 'Q':
-      return key_fits(1);
-    case 'L':
-    case 'C':
-      return p[0] >= '0' && p[0] <= '7';
-    case 'F':
-      return p.find(':') != std::string_view::npos;
-    case 'A':
-      return size <= 3 + 255;  // a topic name, not a long text
-    default:
-      return true;
+    case 'O': case 'R': return size == 2;
+    case 'S': return size == 8;
+    case 'I': case 'P': return key_fits(0);
+    case 'M': case 'Q': return key_fits(1);
+    case 'L': case 'C': return p[0] >= '0' && p[0] <= '7';
+    case 'F': return p.find(':') != std::string_view::npos;
+    case 'A': return size <= 3 + 255;  // a topic name, not a long text
+    default: return true;
   }
 }
 
@@ -579,26 +527,20 @@ void ULogParser::ReadFlagBits(std::string_view payload, size_t offset) {
   // incompat_flags[0] bit 0 is DATA_APPENDED; any other incompatible bit means a layout we
   // cannot read (the spec says a parser must refuse such a file).
   const uint8_t* incompat = flags + 8;
-  if ((incompat[0] & ~1u) != 0)
-    Fail(offset, "unknown incompatible ULog flag set in incompat_flags[0]; cannot parse");
+  if ((incompat[0] & ~1u) != 0) Fail(offset, "unknown incompatible ULog flag set in incompat_flags[0]; cannot parse");
   for (int i = 1; i < 8; ++i) {
-    if (incompat[i] != 0)
-      Fail(offset, "unknown incompatible ULog flag set in incompat_flags[" + std::to_string(i) +
-                       "]; cannot parse");
+    if (incompat[i] != 0) Fail(offset, "unknown incompatible ULog flag set in incompat_flags[" + std::to_string(i) + "]; cannot parse");
   }
   if ((incompat[0] & 1u) == 0) return;
   for (int i = 0; i < 3; ++i) {
     const uint64_t at = LoadLE(payload.data() + 16 + 8 * i, 8);
     if (at == 0) continue;
     if (at >= bytes_.size()) {
-      Warn("appended", offset,
-           "appended data offset " + std::to_string(at) +
-               " lies beyond the end of the file (truncated?); ignored");
+      Warn("appended", offset, "appended data offset " + std::to_string(at) + " lies beyond the end of the file (truncated?); ignored");
       continue;
     }
     if (!appended_offsets_.empty() && at <= appended_offsets_.back()) {
-      Warn("appended", offset,
-           "appended data offsets not increasing; " + std::to_string(at) + " ignored");
+      Warn("appended", offset, "appended data offsets not increasing; " + std::to_string(at) + " ignored");
       continue;
     }
     appended_offsets_.push_back(at);
@@ -628,12 +570,10 @@ bool ULogParser::DataSizeFits(std::string_view payload) const {
 std::string ULogParser::DataMismatch(std::string_view payload) const {
   const uint16_t msg_id = LoadU16(payload.data());
   auto it = by_msg_id_.find(msg_id);
-  if (it == by_msg_id_.end())
-    return "data message for unsubscribed msg_id " + std::to_string(msg_id);
+  if (it == by_msg_id_.end()) return "data message for unsubscribed msg_id " + std::to_string(msg_id);
   const Subscription& sub = subscriptions_[it->second];
-  return "data message of '" + sub.topic + "' has " + std::to_string(payload.size() - 2) +
-         " bytes, its format " + std::to_string(sub.layout->min_bytes) + ".." +
-         std::to_string(sub.layout->max_bytes);
+  return "data message of '" + sub.topic + "' has " + std::to_string(payload.size() - 2) + " bytes, its format " +
+         std::to_string(sub.layout->min_bytes) + ".." + std::to_string(sub.layout->max_bytes);
 }
 
 void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
@@ -661,8 +601,7 @@ void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
       sub.layout = LayoutFor(sub.topic, &error);
       if (!sub.layout) {
         ++log_.records_skipped;
-        Warn("subscription", offset,
-             "topic '" + sub.topic + "': " + error + "; its data is skipped");
+        Warn("subscription", offset, "topic '" + sub.topic + "': " + error + "; its data is skipped");
       }
       by_msg_id_[msg_id] = subscriptions_.size();
       max_msg_id_ = std::max<int>(max_msg_id_, msg_id);
@@ -679,8 +618,7 @@ void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
       auto it = by_msg_id_.find(msg_id);
       if (it == by_msg_id_.end()) {
         ++log_.records_skipped;
-        Warn("msg_id", offset,
-             "data message for unsubscribed msg_id " + std::to_string(msg_id) + " skipped");
+        Warn("msg_id", offset, "data message for unsubscribed msg_id " + std::to_string(msg_id) + " skipped");
         return;
       }
       Subscription& sub = subscriptions_[it->second];
@@ -695,8 +633,7 @@ void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
       if (sub.gyro_topic) {
         auto ts = sub.layout->fields.find("timestamp");
         if (ts != sub.layout->fields.end()) {
-          if (auto t_ns = ReadTimeNs(data, ts->second))
-            last_timestamp_us_ = static_cast<uint64_t>(*t_ns / 1000);
+          if (auto t_ns = ReadTimeNs(data, ts->second)) last_timestamp_us_ = static_cast<uint64_t>(*t_ns / 1000);
         }
       }
       if (sub.wanted) sub.payloads.push_back(data);
@@ -714,6 +651,138 @@ void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
   }
 }
 
+size_t ULogParser::ReadLeadingFlagBits(size_t pos) {
+  const size_t n = bytes_.size();
+  // 'B' must be the first message; it decides how the rest is read.
+  if (n - pos >= kMessageHeaderBytes && bytes_[pos + 2] == 'B') {
+    const uint16_t size = LoadU16(bytes_.data() + pos);
+    if (size >= MinPayload('B') && size <= n - pos - kMessageHeaderBytes) {
+      ReadFlagBits(bytes_.substr(pos + kMessageHeaderBytes, size), pos);
+      pos += kMessageHeaderBytes + size;
+    }
+  }
+  return pos;
+}
+
+// Segments: [pos, appended[0]), [appended[0], appended[1]), ..., [last, n). A message that
+// straddles a segment end was cut off when the logger moved on to appended data.
+std::vector<std::pair<size_t, size_t>> ULogParser::Segments(size_t pos) {
+  std::vector<std::pair<size_t, size_t>> segments;
+  size_t start = pos;
+  for (uint64_t at : appended_offsets_) {
+    if (at <= start) {
+      Warn("appended", pos, "appended data offset " + std::to_string(at) + " lies inside the header; ignored");
+      continue;
+    }
+    segments.emplace_back(start, static_cast<size_t>(at));
+    start = static_cast<size_t>(at);
+  }
+  segments.emplace_back(start, bytes_.size());
+  return segments;
+}
+
+bool ULogParser::ReadMessage(size_t* at, size_t end, bool last_segment) {
+  size_t& pos = *at;
+  if (end - pos < kMessageHeaderBytes) {
+    if (last_segment) Warn("truncated", pos, "file ends inside a message header (truncated?)");
+    return false;
+  }
+  const uint16_t size = LoadU16(bytes_.data() + pos);
+  const uint8_t type = static_cast<uint8_t>(bytes_[pos + 2]);
+  const size_t min = MinPayload(type);
+  if (min == 0 || size < min) {
+    const size_t next = Resync(pos + 1, end);
+    skipped_bytes_ += next - pos;
+    ++log_.records_skipped;
+    Warn("corrupt", pos,
+         std::string("corrupt message header (type ") + std::to_string(type) + ", size " +
+             std::to_string(size) + "); skipped " + std::to_string(next - pos) + " bytes");
+    pos = next;
+    return true;
+  }
+  if (size > end - pos - kMessageHeaderBytes) {
+    if (!last_segment) return false;  // cut off at the start of appended data
+    // Either the file was cut here, or this size field is corrupt: try to read on.
+    const size_t next = Resync(pos + 1, end);
+    if (next == end) {
+      Warn("truncated", pos,
+           "file ends inside a message of " + std::to_string(size) + " bytes (truncated?)");
+      return false;
+    }
+    skipped_bytes_ += next - pos;
+    ++log_.records_skipped;
+    Warn("corrupt", pos,
+         "message size " + std::to_string(size) + " runs past the end; skipped " +
+             std::to_string(next - pos) + " bytes");
+    pos = next;
+    return true;
+  }
+  const std::string_view payload = bytes_.substr(pos + kMessageHeaderBytes, size);
+  const size_t after = pos + kMessageHeaderBytes + size;
+  const bool data_fits = type != 'D' || DataSizeFits(payload);
+  const int pending_id = type == 'A' ? LoadU16(payload.data() + 1) : -1;
+  // A data message whose size matches its topic's format is trusted as it is; any other
+  // message must be followed by a plausible header, or its size field may be corrupt.
+  const bool size_verified = type == 'D' && data_fits && SizeCheckedAgainstFormat(payload);
+  if (!data_fits || (!size_verified && !NextHeaderOk(after, end, pending_id))) {
+    // A data message whose msg_id is unknown or whose size contradicts its format, or any
+    // message not followed by a plausible header, most likely has a corrupt size or type;
+    // skipping `size` bytes would silently throw away the good messages after it.
+    const size_t next = Resync(pos + 1, end);
+    if (data_fits && next >= after) {
+      // No valid message starts inside this one: only what follows it is damaged, and the
+      // next pass of the loop skips that.
+      Handle(type, payload, pos);
+      pos = after;
+      return true;
+    }
+    skipped_bytes_ += next - pos;
+    ++log_.records_skipped;
+    Warn("corrupt", pos,
+         (data_fits ? std::string("message (type ") + std::to_string(type) + ", size " +
+                          std::to_string(size) + ") not followed by a valid message"
+                    : DataMismatch(payload)) +
+             "; skipped " + std::to_string(next - pos) + " bytes");
+    pos = next;
+    return true;
+  }
+  Handle(type, payload, pos);
+  pos += kMessageHeaderBytes + size;
+  return true;
+}
+
+void ULogParser::SummariseWarnings() {
+  for (const auto& [kind, count] : warning_counts_) {
+    if (count > kMaxDetailedWarnings) {
+      log_.warnings.push_back(std::to_string(count - kMaxDetailedWarnings) + " more warnings of kind '" + kind + "' not listed");
+    }
+  }
+  for (const auto& [topic, count] : skipped_by_topic_) {
+    log_.warnings.push_back("topic '" + topic + "': " + std::to_string(count) + " data messages skipped");
+  }
+  if (skipped_bytes_ > 0) log_.warnings.push_back(std::to_string(skipped_bytes_) + " corrupt bytes skipped in total");
+  if (dropouts_.empty()) return;
+  uint64_t total_ms = 0;
+  std::string where;
+  for (size_t i = 0; i < dropouts_.size(); ++i) {
+    total_ms += dropouts_[i].second;
+    if (i < kMaxDetailedWarnings) {
+      char buf[64];
+      if (dropouts_[i].first == 0) {
+        std::snprintf(buf, sizeof(buf), "%s%u ms before the first gyro message", i ? ", " : "",
+                      dropouts_[i].second);
+      } else {
+        std::snprintf(buf, sizeof(buf), "%s%u ms at %.3f s", i ? ", " : "", dropouts_[i].second,
+                      dropouts_[i].first * 1e-6);
+      }
+      where += buf;
+    }
+  }
+  log_.warnings.push_back(std::to_string(dropouts_.size()) + " logging dropouts totalling " +
+                          std::to_string(total_ms) + " ms (" + where +
+                          (dropouts_.size() > kMaxDetailedWarnings ? ", ..." : "") + ")");
+}
+
 FlightLog ULogParser::Run() {
   log_.format = "ulog";
   if (bytes_.size() < kFileHeaderBytes)
@@ -724,141 +793,16 @@ FlightLog ULogParser::Run() {
     log_.warnings.push_back("ULog file version " + std::to_string(version) +
                             " is newer than 1; read as version 1");
 
-  size_t pos = kFileHeaderBytes;
-  const size_t n = bytes_.size();
-  // 'B' must be the first message; it decides how the rest is read.
-  if (n - pos >= kMessageHeaderBytes && bytes_[pos + 2] == 'B') {
-    const uint16_t size = LoadU16(bytes_.data() + pos);
-    if (size >= MinPayload('B') && size <= n - pos - kMessageHeaderBytes) {
-      ReadFlagBits(bytes_.substr(pos + kMessageHeaderBytes, size), pos);
-      pos += kMessageHeaderBytes + size;
-    }
-  }
-
-  // Segments: [pos, appended[0]), [appended[0], appended[1]), ..., [last, n). A message that
-  // straddles a segment end was cut off when the logger moved on to appended data.
-  std::vector<std::pair<size_t, size_t>> segments;
-  size_t start = pos;
-  for (uint64_t at : appended_offsets_) {
-    if (at <= start) {
-      Warn("appended", pos,
-           "appended data offset " + std::to_string(at) + " lies inside the header; ignored");
-      continue;
-    }
-    segments.emplace_back(start, static_cast<size_t>(at));
-    start = static_cast<size_t>(at);
-  }
-  segments.emplace_back(start, n);
-
+  const size_t pos = ReadLeadingFlagBits(kFileHeaderBytes);
+  const std::vector<std::pair<size_t, size_t>> segments = Segments(pos);
   for (size_t s = 0; s < segments.size(); ++s) {
-    const size_t end = segments[s].second;
     const bool last_segment = s + 1 == segments.size();
-    pos = segments[s].first;
-    while (pos < end) {
-      if (end - pos < kMessageHeaderBytes) {
-        if (last_segment) Warn("truncated", pos, "file ends inside a message header (truncated?)");
-        break;
-      }
-      const uint16_t size = LoadU16(bytes_.data() + pos);
-      const uint8_t type = static_cast<uint8_t>(bytes_[pos + 2]);
-      const size_t min = MinPayload(type);
-      if (min == 0 || size < min) {
-        const size_t next = Resync(pos + 1, end);
-        skipped_bytes_ += next - pos;
-        ++log_.records_skipped;
-        Warn("corrupt", pos,
-             std::string("corrupt message header (type ") + std::to_string(type) + ", size " +
-                 std::to_string(size) + "); skipped " + std::to_string(next - pos) + " bytes");
-        pos = next;
-        continue;
-      }
-      if (size > end - pos - kMessageHeaderBytes) {
-        if (last_segment) {
-          // Either the file was cut here, or this size field is corrupt: try to read on.
-          const size_t next = Resync(pos + 1, end);
-          if (next == end) {
-            Warn("truncated", pos,
-                 "file ends inside a message of " + std::to_string(size) + " bytes (truncated?)");
-            break;
-          }
-          skipped_bytes_ += next - pos;
-          ++log_.records_skipped;
-          Warn("corrupt", pos,
-               "message size " + std::to_string(size) + " runs past the end; skipped " +
-                   std::to_string(next - pos) + " bytes");
-          pos = next;
-          continue;
-        }
-        break;  // cut off at the start of appended data
-      }
-      const std::string_view payload = bytes_.substr(pos + kMessageHeaderBytes, size);
-      const size_t after = pos + kMessageHeaderBytes + size;
-      const bool data_fits = type != 'D' || DataSizeFits(payload);
-      const int pending_id = type == 'A' ? LoadU16(payload.data() + 1) : -1;
-      // A data message whose size matches its topic's format is trusted as it is; any other
-      // message must be followed by a plausible header, or its size field may be corrupt.
-      const bool size_verified = type == 'D' && data_fits && SizeCheckedAgainstFormat(payload);
-      if (!data_fits || (!size_verified && !NextHeaderOk(after, end, pending_id))) {
-        // A data message whose msg_id is unknown or whose size contradicts its format, or any
-        // message not followed by a plausible header, most likely has a corrupt size or type;
-        // skipping `size` bytes would silently throw away the good messages after it.
-        const size_t next = Resync(pos + 1, end);
-        if (data_fits && next >= after) {
-          // No valid message starts inside this one: only what follows it is damaged, and the
-          // next pass of the loop skips that.
-          Handle(type, payload, pos);
-          pos = after;
-          continue;
-        }
-        skipped_bytes_ += next - pos;
-        ++log_.records_skipped;
-        Warn("corrupt", pos,
-             (data_fits ? std::string("message (type ") + std::to_string(type) + ", size " +
-                              std::to_string(size) + ") not followed by a valid message"
-                        : DataMismatch(payload)) +
-                 "; skipped " + std::to_string(next - pos) + " bytes");
-        pos = next;
-        continue;
-      }
-      Handle(type, payload, pos);
-      pos += kMessageHeaderBytes + size;
-    }
+    size_t at = segments[s].first;
+    while (at < segments[s].second && ReadMessage(&at, segments[s].second, last_segment)) continue;
   }
 
   Decode();
-  for (const auto& [kind, count] : warning_counts_) {
-    if (count > kMaxDetailedWarnings) {
-      log_.warnings.push_back(std::to_string(count - kMaxDetailedWarnings) +
-                              " more warnings of kind '" + kind + "' not listed");
-    }
-  }
-  for (const auto& [topic, count] : skipped_by_topic_) {
-    log_.warnings.push_back("topic '" + topic + "': " + std::to_string(count) +
-                            " data messages skipped");
-  }
-  if (skipped_bytes_ > 0)
-    log_.warnings.push_back(std::to_string(skipped_bytes_) + " corrupt bytes skipped in total");
-  if (!dropouts_.empty()) {
-    uint64_t total_ms = 0;
-    std::string where;
-    for (size_t i = 0; i < dropouts_.size(); ++i) {
-      total_ms += dropouts_[i].second;
-      if (i < kMaxDetailedWarnings) {
-        char buf[64];
-        if (dropouts_[i].first == 0) {
-          std::snprintf(buf, sizeof(buf), "%s%u ms before the first gyro message", i ? ", " : "",
-                        dropouts_[i].second);
-        } else {
-          std::snprintf(buf, sizeof(buf), "%s%u ms at %.3f s", i ? ", " : "", dropouts_[i].second,
-                        dropouts_[i].first * 1e-6);
-        }
-        where += buf;
-      }
-    }
-    log_.warnings.push_back(std::to_string(dropouts_.size()) + " logging dropouts totalling " +
-                            std::to_string(total_ms) + " ms (" + where +
-                            (dropouts_.size() > kMaxDetailedWarnings ? ", ..." : "") + ")");
-  }
+  SummariseWarnings();
   return std::move(log_);
 }
 
@@ -885,129 +829,120 @@ std::string CandidateName(const std::string& topic, int multi_id, const std::str
   return topic + (multi_id ? "/" + std::to_string(multi_id) : "") + "." + field;
 }
 
-void ULogParser::Decode() {
+// What Decode gathers from the data messages before choosing the gyro source.
+struct DecodedTopics {
   std::vector<internal::GyroCandidate> candidates;
   std::vector<CameraEvent> events;
   std::vector<double> dist_bottom_m;
   std::vector<double> local_z_m;
   std::optional<double> home_z_m;
+};
 
-  // Subscriptions of the same topic and instance (a topic removed and added again) share one
-  // stream.
-  std::map<std::pair<std::string, int>, std::vector<const Subscription*>> streams;
-  for (const Subscription& sub : subscriptions_) {
-    if (sub.layout && !sub.payloads.empty()) streams[{sub.topic, sub.multi_id}].push_back(&sub);
-  }
-
-  for (const auto& [key, subs] : streams) {
-    const std::string& topic = key.first;
-    const int multi_id = key.second;
-    internal::GyroCandidate cand;
-    for (const Subscription* sub : subs) {
-      const Fields f{*sub->layout};
-      const FlatField* t_sample = f.Find("timestamp_sample");
-      const FlatField* t_plain = f.Find("timestamp");
-      const FlatField* t_field = t_sample ? t_sample : t_plain;
-      if (!t_field) continue;
-      if (topic == "sensor_gyro_fifo") {
-        cand.name = CandidateName(topic, multi_id, "x,y,z");
-        cand.preference = 0;
-        const FlatField* dt = f.Find("dt");
-        const FlatField* scale = f.Find("scale");
-        const FlatField* count = f.Find("samples");
-        auto x = f.Array("x", 256), y = f.Array("y", 256), z = f.Array("z", 256);
-        const size_t max_n = std::min({x.size(), y.size(), z.size()});
-        if (!dt || !scale || !count || max_n == 0) continue;
-        for (std::string_view data : sub->payloads) {
-          const auto t_ns = ReadTimeNs(data, *t_field);
-          const double dt_us = ReadNumber(data, *dt);
-          const double sc = ReadNumber(data, *scale);
-          const double k = ReadNumber(data, *count);
-          if (!t_ns || !(dt_us > 0.0 && dt_us < 1e6) || !std::isfinite(sc) || !(k >= 0)) {
-            ++log_.records_skipped;
-            ++skipped_by_topic_[topic];
-            continue;
-          }
-          const size_t nk = static_cast<size_t>(std::min(k, static_cast<double>(max_n)));
-          for (size_t i = 0; i < nk; ++i) {
-            // timestamp_sample is the newest sample's time; older ones are dt apart before it.
-            const int64_t back_ns = std::llround(static_cast<double>(nk - 1 - i) * dt_us * 1e3);
-            cand.samples.push_back(
-                {*t_ns - back_ns,
-                 Eigen::Vector3d(ReadNumber(data, *x[i]) * sc, ReadNumber(data, *y[i]) * sc,
-                                 ReadNumber(data, *z[i]) * sc)});
-          }
-        }
-      } else if (topic == "sensor_gyro" || topic == "vehicle_angular_velocity" ||
-                 topic == "sensor_combined") {
-        std::array<const FlatField*, 3> axes{};
-        if (topic == "sensor_gyro") {
-          cand.name = CandidateName(topic, multi_id, "x,y,z");
-          cand.preference = 1;
-          axes = {f.Find("x"), f.Find("y"), f.Find("z")};
-        } else if (topic == "vehicle_angular_velocity") {
-          cand.name = CandidateName(topic, multi_id, "xyz");
-          cand.preference = 2;
-          axes = {f.Find("xyz[0]"), f.Find("xyz[1]"), f.Find("xyz[2]")};
-        } else {
-          // sensor_combined.timestamp is the gyro sample's time (the accelerometer's is relative).
-          t_field = t_plain;
-          cand.preference = 3;
-          std::string field = f.Find("gyro_rad[0]") ? "gyro_rad" : "gyro_rad_s";
-          cand.name = CandidateName(topic, multi_id, field);
-          axes = {f.Find(field + "[0]"), f.Find(field + "[1]"), f.Find(field + "[2]")};
-        }
-        if (!t_field || !axes[0] || !axes[1] || !axes[2]) continue;
-        cand.samples.reserve(cand.samples.size() + sub->payloads.size());
-        for (std::string_view data : sub->payloads) {
-          const auto t_ns = ReadTimeNs(data, *t_field);
-          cand.samples.push_back({t_ns.value_or(0), Eigen::Vector3d(ReadNumber(data, *axes[0]),
-                                                                    ReadNumber(data, *axes[1]),
-                                                                    ReadNumber(data, *axes[2]))});
-        }
-      } else if (topic == "camera_trigger" || topic == "camera_capture") {
-        const FlatField* seq = f.Find("seq");
-        for (std::string_view data : sub->payloads) {
-          const auto t_ns = ReadTimeNs(data, t_plain ? *t_plain : *t_field);
-          if (!t_ns || *t_ns <= 0) continue;
-          CameraEvent e;
-          e.t_ns = *t_ns;
-          e.kind = topic;
-          if (seq) {
-            const double v = ReadNumber(data, *seq);
-            if (std::isfinite(v) && std::abs(v) < 9.0e15) e.sequence = static_cast<int64_t>(v);
-          }
-          events.push_back(e);
-        }
-      } else if (topic == "vehicle_local_position") {
-        const FlatField* dist = f.Find("dist_bottom");
-        const FlatField* dist_valid = f.Find("dist_bottom_valid");
-        const FlatField* z = f.Find("z");
-        const FlatField* z_valid = f.Find("z_valid");
-        for (std::string_view data : sub->payloads) {
-          if (dist && dist_valid && ReadNumber(data, *dist_valid) != 0.0) {
-            const double d = ReadNumber(data, *dist);
-            if (std::isfinite(d)) dist_bottom_m.push_back(d);
-          }
-          if (z && (!z_valid || ReadNumber(data, *z_valid) != 0.0)) {
-            const double v = ReadNumber(data, *z);
-            if (std::isfinite(v)) local_z_m.push_back(v);
-          }
-        }
-      } else if (topic == "home_position") {
-        if (const FlatField* z = f.Find("z")) {
-          const double v = ReadNumber(sub->payloads.back(), *z);
-          if (std::isfinite(v)) home_z_m = v;
-        }
-      }
+// sensor_gyro_fifo: up to 256 samples a message, dt apart, scaled. Returns how many messages were
+// skipped (no time, or a dt, scale or count out of range).
+size_t DecodeGyroFifo(const std::string& topic, int multi_id, const Fields& f,
+                      const FlatField& t_field, const Subscription& sub,
+                      internal::GyroCandidate* cand) {
+  cand->name = CandidateName(topic, multi_id, "x,y,z");
+  cand->preference = 0;
+  const FlatField* dt = f.Find("dt");
+  const FlatField* scale = f.Find("scale");
+  const FlatField* count = f.Find("samples");
+  auto x = f.Array("x", 256), y = f.Array("y", 256), z = f.Array("z", 256);
+  const size_t max_n = std::min({x.size(), y.size(), z.size()});
+  if (!dt || !scale || !count || max_n == 0) return 0;
+  size_t skipped = 0;
+  for (std::string_view data : sub.payloads) {
+    const auto t_ns = ReadTimeNs(data, t_field);
+    const double dt_us = ReadNumber(data, *dt);
+    const double sc = ReadNumber(data, *scale);
+    const double k = ReadNumber(data, *count);
+    if (!t_ns || !(dt_us > 0.0 && dt_us < 1e6) || !std::isfinite(sc) || !(k >= 0)) {
+      ++skipped;
+      continue;
     }
-    if (!cand.name.empty() && !cand.samples.empty()) candidates.push_back(std::move(cand));
+    const size_t nk = static_cast<size_t>(std::min(k, static_cast<double>(max_n)));
+    for (size_t i = 0; i < nk; ++i) {
+      // timestamp_sample is the newest sample's time; older ones are dt apart before it.
+      const int64_t back_ns = std::llround(static_cast<double>(nk - 1 - i) * dt_us * 1e3);
+      cand->samples.push_back({*t_ns - back_ns, Eigen::Vector3d(ReadNumber(data, *x[i]) * sc,
+                                                                ReadNumber(data, *y[i]) * sc,
+                                                                ReadNumber(data, *z[i]) * sc)});
+    }
   }
+  return skipped;
+}
 
-  std::stable_sort(events.begin(), events.end(),
-                   [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
-  log_.camera_events = std::move(events);
+// sensor_gyro, vehicle_angular_velocity, sensor_combined: one rate sample a message.
+void DecodeGyroRates(const std::string& topic, int multi_id, const Fields& f,
+                     const FlatField* t_plain, const FlatField* t_field, const Subscription& sub,
+                     internal::GyroCandidate* cand) {
+  std::array<const FlatField*, 3> axes{};
+  if (topic == "sensor_gyro") {
+    cand->name = CandidateName(topic, multi_id, "x,y,z");
+    cand->preference = 1;
+    axes = {f.Find("x"), f.Find("y"), f.Find("z")};
+  } else if (topic == "vehicle_angular_velocity") {
+    cand->name = CandidateName(topic, multi_id, "xyz");
+    cand->preference = 2;
+    axes = {f.Find("xyz[0]"), f.Find("xyz[1]"), f.Find("xyz[2]")};
+  } else {
+    // sensor_combined.timestamp is the gyro sample's time (the accelerometer's is relative).
+    t_field = t_plain;
+    cand->preference = 3;
+    std::string field = f.Find("gyro_rad[0]") ? "gyro_rad" : "gyro_rad_s";
+    cand->name = CandidateName(topic, multi_id, field);
+    axes = {f.Find(field + "[0]"), f.Find(field + "[1]"), f.Find(field + "[2]")};
+  }
+  if (!t_field || !axes[0] || !axes[1] || !axes[2]) return;
+  cand->samples.reserve(cand->samples.size() + sub.payloads.size());
+  for (std::string_view data : sub.payloads) {
+    const auto t_ns = ReadTimeNs(data, *t_field);
+    cand->samples.push_back(
+        {t_ns.value_or(0), Eigen::Vector3d(ReadNumber(data, *axes[0]), ReadNumber(data, *axes[1]),
+                                           ReadNumber(data, *axes[2]))});
+  }
+}
 
+// camera_trigger, camera_capture: one event a message with a positive time.
+void DecodeCameraEvents(const std::string& topic, const Fields& f, const FlatField& t_field,
+                        const Subscription& sub, std::vector<CameraEvent>* events) {
+  const FlatField* seq = f.Find("seq");
+  for (std::string_view data : sub.payloads) {
+    const auto t_ns = ReadTimeNs(data, t_field);
+    if (!t_ns || *t_ns <= 0) continue;
+    CameraEvent e;
+    e.t_ns = *t_ns;
+    e.kind = topic;
+    if (seq) {
+      const double v = ReadNumber(data, *seq);
+      if (std::isfinite(v) && std::abs(v) < 9.0e15) e.sequence = static_cast<int64_t>(v);
+    }
+    events->push_back(e);
+  }
+}
+
+// vehicle_local_position: the valid distances to the ground and local z values, m.
+void DecodeLocalPosition(const Fields& f, const Subscription& sub, DecodedTopics* out) {
+  const FlatField* dist = f.Find("dist_bottom");
+  const FlatField* dist_valid = f.Find("dist_bottom_valid");
+  const FlatField* z = f.Find("z");
+  const FlatField* z_valid = f.Find("z_valid");
+  for (std::string_view data : sub.payloads) {
+    if (dist && dist_valid && ReadNumber(data, *dist_valid) != 0.0) {
+      const double d = ReadNumber(data, *dist);
+      if (std::isfinite(d)) out->dist_bottom_m.push_back(d);
+    }
+    if (z && (!z_valid || ReadNumber(data, *z_valid) != 0.0)) {
+      const double v = ReadNumber(data, *z);
+      if (std::isfinite(v)) out->local_z_m.push_back(v);
+    }
+  }
+}
+
+// The altitude above ground: the airborne median of dist_bottom, else of the height above home
+// (or above the first local z); with the warning that says which.
+void SetAltitudeAboveGround(const DecodedTopics& topics, FlightLog* log) {
   auto airborne_median = [](const std::vector<double>& heights) {
     std::vector<double> up;
     for (double h : heights) {
@@ -1015,24 +950,71 @@ void ULogParser::Decode() {
     }
     return up.empty() ? std::nullopt : std::optional<double>(Median(std::move(up)));
   };
-  if (auto m = airborne_median(dist_bottom_m)) {
-    log_.altitude_above_ground_m = m;
-    log_.warnings.push_back(
+  if (auto m = airborne_median(topics.dist_bottom_m)) {
+    log->altitude_above_ground_m = m;
+    log->warnings.push_back(
         "altitude above ground: median vehicle_local_position.dist_bottom (valid, above 1 m)");
-  } else if (!local_z_m.empty()) {
-    const double z_home = home_z_m.value_or(local_z_m.front());
+  } else if (!topics.local_z_m.empty()) {
+    const double z_home = topics.home_z_m.value_or(topics.local_z_m.front());
     std::vector<double> heights;
-    for (double z : local_z_m) heights.push_back(-(z - z_home));
+    for (double z : topics.local_z_m) heights.push_back(-(z - z_home));
     if (auto h = airborne_median(heights)) {
-      log_.altitude_above_ground_m = h;
-      log_.warnings.push_back(
+      log->altitude_above_ground_m = h;
+      log->warnings.push_back(
           std::string("altitude above ground: median -(vehicle_local_position.z - ") +
-          (home_z_m ? "home_position.z" : "first local z") +
+          (topics.home_z_m ? "home_position.z" : "first local z") +
           ") above 1 m (height above home, not a ground-distance measurement)");
     }
   }
+}
 
-  if (!internal::ChooseGyroSource(std::move(candidates), &log_)) {
+void ULogParser::DecodeStream(const std::string& topic, int multi_id,
+                              const std::vector<const Subscription*>& subs, DecodedTopics* out) {
+  internal::GyroCandidate cand;
+  for (const Subscription* sub : subs) {
+    const Fields f{*sub->layout};
+    const FlatField* t_sample = f.Find("timestamp_sample");
+    const FlatField* t_plain = f.Find("timestamp");
+    const FlatField* t_field = t_sample ? t_sample : t_plain;
+    if (!t_field) continue;
+    if (topic == "sensor_gyro_fifo") {
+      const size_t skipped = DecodeGyroFifo(topic, multi_id, f, *t_field, *sub, &cand);
+      if (skipped > 0) {
+        log_.records_skipped += skipped;
+        skipped_by_topic_[topic] += skipped;
+      }
+    } else if (topic == "sensor_gyro" || topic == "vehicle_angular_velocity" ||
+               topic == "sensor_combined") {
+      DecodeGyroRates(topic, multi_id, f, t_plain, t_field, *sub, &cand);
+    } else if (topic == "camera_trigger" || topic == "camera_capture") {
+      DecodeCameraEvents(topic, f, t_plain ? *t_plain : *t_field, *sub, &out->events);
+    } else if (topic == "vehicle_local_position") {
+      DecodeLocalPosition(f, *sub, out);
+    } else if (topic == "home_position") {
+      if (const FlatField* z = f.Find("z")) {
+        const double v = ReadNumber(sub->payloads.back(), *z);
+        if (std::isfinite(v)) out->home_z_m = v;
+      }
+    }
+  }
+  if (!cand.name.empty() && !cand.samples.empty()) out->candidates.push_back(std::move(cand));
+}
+
+void ULogParser::Decode() {
+  DecodedTopics topics;
+  // Subscriptions of the same topic and instance (a topic removed and added again) share one
+  // stream.
+  std::map<std::pair<std::string, int>, std::vector<const Subscription*>> streams;
+  for (const Subscription& sub : subscriptions_) {
+    if (sub.layout && !sub.payloads.empty()) streams[{sub.topic, sub.multi_id}].push_back(&sub);
+  }
+  for (const auto& [key, subs] : streams) DecodeStream(key.first, key.second, subs, &topics);
+
+  std::stable_sort(topics.events.begin(), topics.events.end(),
+                   [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
+  log_.camera_events = std::move(topics.events);
+  SetAltitudeAboveGround(topics, &log_);
+  if (!internal::ChooseGyroSource(std::move(topics.candidates), &log_)) {
     throw IoError(IoMessage(path_, 0,
                             "no usable gyro data (looked for sensor_gyro_fifo, sensor_gyro, "
                             "vehicle_angular_velocity, sensor_combined)"));
@@ -1042,8 +1024,7 @@ void ULogParser::Decode() {
 }  // namespace
 
 bool LooksLikeULog(std::string_view first_bytes) {
-  return first_bytes.size() >= sizeof(kMagic) &&
-         std::memcmp(first_bytes.data(), kMagic, sizeof(kMagic)) == 0;
+  return first_bytes.size() >= sizeof(kMagic) && std::memcmp(first_bytes.data(), kMagic, sizeof(kMagic)) == 0;
 }
 
 FlightLog ParseULog(std::string_view bytes, const std::string& path) {
