@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 
 namespace shutterlab {
@@ -37,7 +38,7 @@ constexpr double kPreferTranslationShare = 0.5;
 // The two halves' fits of one effect against each other.
 HalfAgreement CompareHalves(const IdentifiedEffect& a, const IdentifiedEffect& b) {
   HalfAgreement out;
-  out.effect = a.name;
+  out.effect = Spec(a.effect).name;
   out.first = a.value;
   out.first_stderr = a.stderr_value;
   out.second = b.value;
@@ -65,13 +66,12 @@ HalfAgreement CompareHalves(const IdentifiedEffect& a, const IdentifiedEffect& b
   return out;
 }
 
-// The claim names of import.json that a fitted effect tests.
-std::string EffectForClaim(const std::string& claim) {
-  if (claim == "readout_s") return "readout_time";
-  if (claim == "gyro_to_camera") return "gyro_to_camera";
-  if (claim == "time_offset_s") return "time_offset";
-  if (claim == "direction") return "readout_direction";
-  return "";
+// The effect whose fit tests a claim of import.json (EffectSpec::claim); none for the others.
+std::optional<Effect> EffectForClaim(const std::string& claim) {
+  for (const EffectSpec& spec : AllEffects()) {
+    if (!spec.claim.empty() && spec.claim == claim) return spec.effect;
+  }
+  return std::nullopt;
 }
 
 Eigen::Matrix3d MatrixFromJson(const json& m) {
@@ -194,17 +194,17 @@ json ReadClaims(const fs::path& import_json) {
     if (claim.contains("status") && !claim["status"].is_string()) {
       throw IoError(IoMessage(path, 0, where + "\"status\" is not a string"));
     }
-    const std::string effect = EffectForClaim(claim["what"].get<std::string>());
-    if (effect.empty()) continue;  // a claim validate cannot test (exposure, say)
+    const std::optional<Effect> effect = EffectForClaim(claim["what"].get<std::string>());
+    if (!effect) continue;  // a claim validate cannot test (exposure, say)
     const json value = claim.value("value", json());
     bool ok = false;
-    if (effect == "gyro_to_camera") {
+    if (*effect == Effect::kGyroToCamera) {
       ok = value.is_array() && value.size() == 3;
       for (size_t r = 0; ok && r < 3; ++r) {
         ok = value[r].is_array() && value[r].size() == 3;
         for (size_t c = 0; ok && c < 3; ++c) ok = value[r][c].is_number();
       }
-    } else if (effect == "readout_direction") {
+    } else if (*effect == Effect::kReadoutDirection) {
       ok = value == "top_to_bottom" || value == "bottom_to_top";
     } else {
       ok = value.is_number() && std::isfinite(value.get<double>());
@@ -220,11 +220,11 @@ json ReadClaims(const fs::path& import_json) {
 }
 
 // A claim is tested by the preferred model, or by the rotation-only one where the pair translation
-// cannot tell the effect (IdentifiableWithPairTranslation). Scalars (readout_s, time_offset_s): the
-// effect fitted beside the model's identified ones, against the claim in standard errors, and how
-// much of the residual fitting it removes. direction: both readings. gyro_to_camera: the rotation-
-// only residual of each of the 24 axis mappings against the claimed one's.
-// Each model's fits start where its loop started (preferred_start, rotation_start).
+// cannot tell the effect (EffectSpec::identifiable_with_pair_translation). Scalars (readout_s,
+// time_offset_s): the effect fitted beside the model's identified ones, against the claim in
+// standard errors, and how much of the residual fitting it removes. direction: both readings.
+// gyro_to_camera: the rotation-only residual of each of the 24 axis mappings against the claimed
+// one's. Each model's fits start where its loop started (preferred_start, rotation_start).
 std::vector<ClaimCheck> CheckClaims(const json& claims, const GyroTrace& gyro,
                                     const std::vector<FramePoints>& pairs, double noise_px,
                                     const TrueModel& preferred_start, const LoopResult& preferred,
@@ -233,16 +233,17 @@ std::vector<ClaimCheck> CheckClaims(const json& claims, const GyroTrace& gyro,
                                     const LoopOptions& rotation_options) {
   const RigModel& declared = rotation_start.rig;
   std::vector<ClaimCheck> checks;
-  std::map<std::pair<bool, std::vector<std::string>>, LoopResult>
-      fits;                           // by (by_rotation, effects)
+  // Fits by (by_rotation, effects).
+  std::map<std::pair<bool, std::vector<Effect>>, LoopResult> fits;
   for (const json& claim : claims) {  // as ReadClaims checked them
     ClaimCheck check;
     check.claim = claim["what"].get<std::string>();
-    check.effect = EffectForClaim(check.claim);
+    const Effect tested = *EffectForClaim(check.claim);  // ReadClaims kept only those
+    check.effect = Spec(tested).name;
     check.status = claim.value("status", "");
     check.claimed = claim.value("value", json());
 
-    if (check.effect == "gyro_to_camera") {
+    if (tested == Effect::kGyroToCamera) {
       const Eigen::Matrix3d claimed = MatrixFromJson(check.claimed);
       const std::unique_ptr<PointPredictor> predictor =
           MakePredictor(gyro, pairs, /*pair_translation=*/false, 1.0);
@@ -319,17 +320,17 @@ std::vector<ClaimCheck> CheckClaims(const json& claims, const GyroTrace& gyro,
     }
 
     const bool by_rotation =
-        preferred_options.pair_translation && !IdentifiableWithPairTranslation(check.effect);
+        preferred_options.pair_translation && !Spec(tested).identifiable_with_pair_translation;
     const LoopOptions& loop_options = by_rotation ? rotation_options : preferred_options;
-    std::vector<std::string> base;
-    for (const std::string& e : EffectNames(by_rotation ? rotation : preferred)) {
-      if (e != check.effect) base.push_back(e);
+    std::vector<Effect> base;
+    for (Effect e : EffectsOf(by_rotation ? rotation : preferred)) {
+      if (e != tested) base.push_back(e);
     }
-    std::vector<std::string> with_effect = base;
-    with_effect.push_back(check.effect);
+    std::vector<Effect> with_effect = base;
+    with_effect.push_back(tested);
     const TrueModel& start = by_rotation ? rotation_start : preferred_start;
     // Claims share fits (the model's own effects are every claim's "without"): each once.
-    const auto fit = [&](const std::vector<std::string>& effects) -> const LoopResult& {
+    const auto fit = [&](const std::vector<Effect>& effects) -> const LoopResult& {
       const auto key = std::make_pair(by_rotation, effects);
       auto it = fits.find(key);
       if (it == fits.end()) {
@@ -346,7 +347,7 @@ std::vector<ClaimCheck> CheckClaims(const json& claims, const GyroTrace& gyro,
     const double share = ExplainedShare(c, noise_px);
     const std::string removes = "fitting it removes " + FormatNumber("%.0f", 100 * share) +
                                 " % of the residual's excess over the noise";
-    if (check.effect == "readout_direction") {
+    if (tested == Effect::kReadoutDirection) {
       // A discrete claim: the model read as declared (without) and flipped (with).
       const std::string declared_word = declared.shutter.direction == ReadoutDirection::kTopToBottom
                                             ? "top_to_bottom"
@@ -373,7 +374,7 @@ std::vector<ClaimCheck> CheckClaims(const json& claims, const GyroTrace& gyro,
     }
     const IdentifiedEffect* effect = nullptr;
     for (const IdentifiedEffect& e : with.effects) {
-      if (e.name == check.effect) effect = &e;
+      if (e.effect == tested) effect = &e;
     }
     if (effect == nullptr || !check.claimed.is_number() || !effect->value.is_number()) continue;
     check.found = effect->value;
@@ -402,17 +403,12 @@ std::vector<ClaimCheck> CheckClaims(const json& claims, const GyroTrace& gyro,
 
 }  // namespace
 
-std::vector<std::string> VideoCandidates() {
-  std::vector<std::string> names;
-  for (const std::string& name : InjectionNames()) {
-    if (name != "velocity") names.push_back(name);
+std::vector<Effect> VideoCandidates() {
+  std::vector<Effect> effects;
+  for (const EffectSpec& spec : AllEffects()) {
+    if (spec.effect != Effect::kVelocity) effects.push_back(spec.effect);
   }
-  return names;
-}
-
-bool IdentifiableWithPairTranslation(const std::string& effect) {
-  return effect != "gyro_to_camera" && effect != "gyro_scale" && effect != "gyro_bias" &&
-         effect != "velocity";
+  return effects;
 }
 
 void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
@@ -518,8 +514,8 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
   LoopOptions translation_options = rotation_options;
   translation_options.pair_translation = true;
   translation_options.candidates.clear();
-  for (const std::string& name : rotation_options.candidates) {
-    if (IdentifiableWithPairTranslation(name)) translation_options.candidates.push_back(name);
+  for (Effect e : rotation_options.candidates) {
+    if (Spec(e).identifiable_with_pair_translation) translation_options.candidates.push_back(e);
   }
   if (progress) progress("loop", 0, 2);
   TrueModel rotation_start;
@@ -532,9 +528,10 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
   TrueModel translation_start = rotation_start;
   if (!result->loop.unexplained) {
     for (const IdentifiedEffect& e : result->loop.effects) {
-      if (IdentifiableWithPairTranslation(e.name)) continue;
-      result->translation_inherits.push_back(e.name);
-      ApplyEffect(e.name, e.parameters.data(), &translation_start);
+      const EffectSpec& spec = Spec(e.effect);
+      if (spec.identifiable_with_pair_translation) continue;
+      result->translation_inherits.push_back(spec.name);
+      spec.apply_delta(e.parameters.data(), &translation_start);
     }
   }
   result->translation_loop =
@@ -566,15 +563,15 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
     const size_t half = pairs.size() / 2;
     const std::vector<FramePoints> first(pairs.begin(), pairs.begin() + half);
     const std::vector<FramePoints> second(pairs.begin() + half, pairs.end());
-    const std::vector<std::string> names = EffectNames(preferred);
+    const std::vector<Effect> effects = EffectsOf(preferred);
     HalfCheck check;
     check.model = result->preferred;
     check.first_pairs = first.size();
     check.second_pairs = second.size();
     const LoopResult a =
-        FitEffects(preferred_start, gyro, first, noise_px, names, preferred_options);
+        FitEffects(preferred_start, gyro, first, noise_px, effects, preferred_options);
     const LoopResult b =
-        FitEffects(preferred_start, gyro, second, noise_px, names, preferred_options);
+        FitEffects(preferred_start, gyro, second, noise_px, effects, preferred_options);
     check.first_after = a.after;
     check.second_after = b.after;
     check.first_model = a.model;
