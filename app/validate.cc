@@ -5,6 +5,7 @@
 
 #include "app/command.h"
 #include "estimate/report/validate_report.h"
+#include "render/effects.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
@@ -32,7 +33,9 @@ void Run(const ValidateCommand& command) {
   ValidateOptions options;
   options.limits_m.clear();
   for (const std::string& text : command.limits) options.limits_m.push_back(ParseLengthM(text));
-  options.loop.candidates = command.candidates;
+  for (const std::string& name : command.candidates) {
+    options.loop.candidates.push_back(RequireEffect(name, "candidates"));
+  }
   options.measure.grid_step_px = command.grid_step_px;
   options.keep_residuals = !command.out_dir.empty();
   options.Check();

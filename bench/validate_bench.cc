@@ -5,9 +5,9 @@
 //
 //   build/bin/validate_bench [--frames N] [--keep DIR]     (run from the repository root)
 
-#include "estimate/loop/validate.h"
 #include "bench/bench_util.h"
 #include "estimate/demo_dataset.h"
+#include "estimate/loop/validate.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -28,8 +28,8 @@ int main(int argc, char** argv) {
     if (flag == "--frames") options.frames = std::atoi(argv[i + 1]);
     if (flag == "--keep") keep = argv[i + 1];
   }
-  options.out_dir = keep.empty() ? (fs::temp_directory_path() / "shutterlab_validate_bench").string()
-                                 : keep;
+  options.out_dir =
+      keep.empty() ? (fs::temp_directory_path() / "shutterlab_validate_bench").string() : keep;
   std::printf("rendering and validating %d frames of 1280x960 in %s ...\n", options.frames,
               options.out_dir.c_str());
   const ValidationResult result = RenderAndValidate(options);
@@ -40,7 +40,8 @@ int main(int argc, char** argv) {
               result.read_s, result.measure_s, result.measure_s / result.frames.size(),
               result.predict_s, result.loop_s);
   std::printf("  found:");
-  for (const IdentifiedEffect& e : result.loop.effects) std::printf(" %s", e.name.c_str());
+  for (const IdentifiedEffect& e : result.loop.effects)
+    std::printf(" %s", Spec(e.effect).name.c_str());
   std::printf(" (time_offset %.5f s, truth 0.00400 s); after %.3f px, noise %.3f px\n",
               result.loop.model.rig.time_offset_s, result.loop.after.rms_px, result.loop.noise_px);
   if (keep.empty()) fs::remove_all(options.out_dir);

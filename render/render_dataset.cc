@@ -1,5 +1,6 @@
 #include "render/render_dataset.h"
 
+#include "render/effects.h"
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "render/pictures.h"

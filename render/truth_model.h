@@ -2,8 +2,9 @@
 // The TRUE sensor model a render uses, and the camera motion it implies for each frame.
 //
 // The declared model (camera.json, RigModel) is what a dataset says about itself; `render --inject`
-// makes the truth differ from it by the effects of FORMATS.md's table. Everything the renderer and
-// its ground truth need about time and motion is computed here, once per frame.
+// makes the truth differ from it by the effects of FORMATS.md's table (render/effects.h).
+// Everything the renderer and its ground truth need about time and motion is computed here, once
+// per frame.
 //
 // Orientation choice (documented in FORMATS.md terms): the world frame is re-anchored for every
 // frame so that the frame's row 0 (the top row) looks exactly nadir:
@@ -43,15 +44,6 @@ struct TrueModel {
   // captured, for a frame whose first-read row is at camera time t_first_row_ns.
   double RowGyroOffsetS(int64_t t_first_row_ns, double row) const;
 };
-
-// The effect names of FORMATS.md's table, in its order.
-const std::vector<std::string>& InjectionNames();
-
-// Applies one `NAME=VALUE` effect to the true model and returns the value as truth.json records it
-// (FORMATS.md units). VALUE is JSON ("[1.01,1,1]", "{\"k1\":-0.1}") or comma-separated numbers
-// ("1.01,1,1"; gyro_to_camera: 9 numbers, row-major; lens_distortion: k1[,k2[,p1,p2[,k3]]]) or, for
-// readout_direction, a bare word. Throws std::invalid_argument for an unknown name or a bad value.
-nlohmann::json ApplyInjection(const std::string& name_equals_value, TrueModel* model);
 
 // Per-row camera pose of one frame (see the header comment for the frame anchoring).
 struct FrameMotion {

@@ -75,11 +75,6 @@
 namespace shutterlab {
 
 void LoopOptions::Check() const {
-  for (const std::string& name : candidates) {
-    const std::vector<std::string>& known = InjectionNames();
-    SHUTTERLAB_CHECK(std::find(known.begin(), known.end(), name) != known.end())
-        << "candidates: unknown effect '" << name << "'";
-  }
   SHUTTERLAB_CHECK(max_effects >= 0 && max_effects <= 9)
       << "max_effects must be in [0, 9], got " << max_effects;
   SHUTTERLAB_CHECK(significance > 0 && significance < 0.5)
@@ -161,30 +156,30 @@ struct Context {
 };
 
 struct Hypothesis {
-  std::vector<std::string> effects;  // in the order added
-  Eigen::VectorXd x;                 // continuous parameters, concatenated in that order
+  std::vector<Effect> effects;  // in the order added
+  Eigen::VectorXd x;            // continuous parameters, concatenated in that order
 };
 
-int ParameterCount(const std::vector<std::string>& effects) {
+int ParameterCount(const std::vector<Effect>& effects) {
   int n = 0;
-  for (const std::string& e : effects) n += EffectParameterCount(e);
+  for (Effect e : effects) n += Spec(e).parameter_count;
   return n;
 }
 
 // For the information criterion: a discrete choice is one decision.
-int CriterionParameters(const std::vector<std::string>& effects) {
+int CriterionParameters(const std::vector<Effect>& effects) {
   int n = 0;
-  for (const std::string& e : effects) n += std::max(1, EffectParameterCount(e));
+  for (Effect e : effects) n += std::max(1, Spec(e).parameter_count);
   return n;
 }
 
-TrueModel ModelOf(const Context& ctx, const std::vector<std::string>& effects,
+TrueModel ModelOf(const Context& ctx, const std::vector<Effect>& effects,
                   const Eigen::VectorXd& x) {
   TrueModel model = ctx.declared;
   int offset = 0;
-  for (const std::string& e : effects) {
-    ApplyEffect(e, x.data() + offset, &model);
-    offset += EffectParameterCount(e);
+  for (Effect e : effects) {
+    Spec(e).apply_delta(x.data() + offset, &model);
+    offset += Spec(e).parameter_count;
   }
   return model;
 }
@@ -399,7 +394,7 @@ struct Fit {
   ResidualStats stats;
 };
 
-RobustProblem MakeProblem(const Context& ctx, const std::vector<std::string>& effects) {
+RobustProblem MakeProblem(const Context& ctx, const std::vector<Effect>& effects) {
   RobustProblem problem;
   problem.residuals = [&ctx, effects](const Eigen::VectorXd& x, Eigen::VectorXd* r,
                                       std::vector<uint8_t>* valid) {
@@ -408,9 +403,9 @@ RobustProblem MakeProblem(const Context& ctx, const std::vector<std::string>& ef
   problem.weights = ctx.weights;
   problem.steps.resize(ParameterCount(effects));
   int k = 0;
-  for (const std::string& e : effects) {
-    for (int i = 0; i < EffectParameterCount(e); ++i)
-      problem.steps[k++] = EffectStep(e, i, ctx.span_s);
+  for (Effect e : effects) {
+    for (int i = 0; i < Spec(e).parameter_count; ++i)
+      problem.steps[k++] = Spec(e).step(i, ctx.span_s);
   }
   problem.huber_delta = ctx.huber_delta;
   // Far above any point's real cost: the solver does not fit by pushing points off the trace, and
@@ -425,9 +420,8 @@ Fit FitHypothesis(const Context& ctx, Hypothesis hypothesis) {
   const RobustProblem problem = MakeProblem(ctx, hypothesis.effects);
   const Eigen::Index p = problem.steps.size();
   if (!hypothesis.effects.empty() && p > 0) {
-    const std::string& last = hypothesis.effects.back();
-    std::vector<double> starts;
-    if (last == "time_offset" || last == "clock_rate") {
+    const Effect last = hypothesis.effects.back();
+    if (last == Effect::kTimeOffset || last == Effect::kClockRate) {
       // Shifts of the offset within +-kScanS in steps of kScanStepS: finer than the ~0.1 s over
       // which a multirotor's rotation rate changes, so one start lies in the true minimum's basin.
       // Each frame's cost is kept per shift: time_offset starts at the shift best for all frames;
@@ -462,7 +456,7 @@ Fit FitHypothesis(const Context& ctx, Hypothesis hypothesis) {
         }
       }
       hypothesis.x[p - 1] += best_shift;
-      if (last == "clock_rate" && frame_count >= 2) {
+      if (last == Effect::kClockRate && frame_count >= 2) {
         // Theil-Sen line shift = a + b t through the frames' best shifts (the median of the
         // pairwise slopes, then of the intercepts): a frame whose own best shift is an alias of
         // its motion does not tilt it.
@@ -482,11 +476,11 @@ Fit FitHypothesis(const Context& ctx, Hypothesis hypothesis) {
       }
     }
   }
-  if (!hypothesis.effects.empty() && hypothesis.effects.back() == "gyro_to_camera") {
+  if (!hypothesis.effects.empty() && hypothesis.effects.back() == Effect::kGyroToCamera) {
     // A wrongly mounted or differently labelled sensor is off by a quarter or half turn, far
     // outside the basin of a fit started at the declared mounting: start at the best of the 24
     // axis permutations with signs (the rotations among them) and the declared mounting itself.
-    // R_CG = Exp(x) R_declared (ApplyEffect), so x = Log(S R_declared^T) reaches S.
+    // R_CG = Exp(x) R_declared (EffectSpec::apply_delta), so x = Log(S R_declared^T) reaches S.
     const Eigen::Matrix3d declared = ctx.declared.rig.cam_from_gyro;
     Eigen::VectorXd r;
     std::vector<uint8_t> valid;
@@ -627,14 +621,13 @@ std::vector<IdentifiedEffect> IdentifiedEffects(const Context& ctx, const Fit& f
   const Eigen::MatrixXd cov = Covariance(ctx, fit);
   std::vector<IdentifiedEffect> effects;
   int offset = 0;
-  for (const std::string& name : fit.hypothesis.effects) {
-    const int n = EffectParameterCount(name);
+  for (Effect e : fit.hypothesis.effects) {
+    const int n = Spec(e).parameter_count;
     IdentifiedEffect effect;
-    effect.name = name;
-    effect.value = EffectValue(name, fit.model);
+    effect.effect = e;
+    effect.value = Spec(e).value(fit.model);
     effect.covariance = cov.block(offset, offset, n, n);
-    effect.stderr_value = EffectStderr(name, fit.model, effect.covariance);
-    effect.unit = EffectUnit(name);
+    effect.stderr_value = EffectStderr(e, fit.model, effect.covariance);
     effect.parameters = fit.hypothesis.x.segment(offset, n);
     effect.after = fit.stats;
     effects.push_back(std::move(effect));
@@ -653,10 +646,10 @@ std::vector<Eigen::Vector2d> PointResiduals(const Fit& fit) {
   return out;
 }
 
-std::string Describe(const std::vector<std::string>& effects, const TrueModel& model) {
+std::string Describe(const std::vector<Effect>& effects, const TrueModel& model) {
   std::string out;
-  for (const std::string& e : effects) {
-    out += (out.empty() ? "" : "; ") + e + " = " + EffectValue(e, model).dump();
+  for (Effect e : effects) {
+    out += (out.empty() ? "" : "; ") + Spec(e).name + " = " + Spec(e).value(model).dump();
   }
   return out;
 }
@@ -713,8 +706,10 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
   Context& ctx = start.ctx;
   Fit current = std::move(start.declared);
   const std::unique_ptr<PointPredictor>& predictor = start.predictor;
-  const std::vector<std::string>& names =
-      options.candidates.empty() ? InjectionNames() : options.candidates;
+  std::vector<Effect> candidates = options.candidates;
+  if (candidates.empty()) {
+    for (const EffectSpec& spec : AllEffects()) candidates.push_back(spec.effect);
+  }
 
   LevelTest level =
       TestLevel(ctx, current.solution.residuals, current.solution.valid, options.significance);
@@ -729,22 +724,22 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
   result.above_noise_before = level.above;
 
   std::vector<ResidualStats> after_each;
-  std::vector<std::vector<std::string>> ambiguous_each;
-  std::vector<std::string> removed;  // dropped by the backward step; not tried again
+  std::vector<std::vector<Effect>> ambiguous_each;
+  std::vector<Effect> removed;  // dropped by the backward step; not tried again
   for (int round = 1; Material(ctx, options, level) &&
                       static_cast<int>(current.hypothesis.effects.size()) < options.max_effects &&
                       round <= 2 * options.max_effects;
        ++round) {
     std::vector<Fit> fits;
-    for (const std::string& name : names) {
-      if (std::find(current.hypothesis.effects.begin(), current.hypothesis.effects.end(), name) !=
-              current.hypothesis.effects.end() ||
-          std::find(removed.begin(), removed.end(), name) != removed.end()) {
+    for (Effect candidate : candidates) {
+      if (std::find(current.hypothesis.effects.begin(), current.hypothesis.effects.end(),
+                    candidate) != current.hypothesis.effects.end() ||
+          std::find(removed.begin(), removed.end(), candidate) != removed.end()) {
         continue;
       }
       Hypothesis h = current.hypothesis;
-      h.effects.push_back(name);
-      const int n_new = EffectParameterCount(name);
+      h.effects.push_back(candidate);
+      const int n_new = Spec(candidate).parameter_count;
       h.x.conservativeResize(h.x.size() + n_new);
       h.x.tail(n_new).setZero();
       fits.push_back(FitHypothesis(ctx, std::move(h)));
@@ -779,7 +774,8 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
       dbic[j] = (rss_j - rss_cur) / (s2 * c) + (p_j - p_cur) * std::log(n_eff);
       share[j] =
           excess_cur > 0 ? (excess_cur - std::max(0.0, rss_j - noise_rss)) / excess_cur : 0.0;
-      const std::string& name = fits[j].hypothesis.effects.back();
+      const Effect effect = fits[j].hypothesis.effects.back();
+      const std::string& name = Spec(effect).name;
       // A model that predicts nothing for many points would be scored on the rest (MaskedRss
       // charges a lost point only the trimming level): it is no explanation of the data.
       size_t kept = 0, lost = 0;
@@ -790,7 +786,7 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
       if (lost > kMaxLostShare * kept) {
         result.log.push_back("round " + std::to_string(round) + ": " + name + ": predicts " +
                              std::to_string(kept - lost) + " of " + std::to_string(kept) +
-                             " points; " + Describe({name}, fits[j].model) + "; not a candidate");
+                             " points; " + Describe({effect}, fits[j].model) + "; not a candidate");
         dbic[j] = std::numeric_limits<double>::infinity();
         share[j] = 0.0;
         continue;
@@ -799,7 +795,7 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
                            FormatNumber("%.4f", fits[j].stats.rms_px) + " px, dBIC " +
                            FormatNumber("%.1f", dbic[j]) + ", explains " +
                            FormatNumber("%.1f", 100.0 * share[j]) + " % of the excess; " +
-                           Describe({name}, fits[j].model));
+                           Describe({effect}, fits[j].model));
       if (share[j] >= options.min_explained_share && (chosen < 0 || dbic[j] < dbic[chosen])) {
         chosen = static_cast<int>(j);
       }
@@ -816,9 +812,9 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
     // alone already leaves the residual at the noise level (rule 5's material test): BIC alone
     // favours the rate when frame-coherent measurement errors make a drift look real (a 0.5 s clip
     // "drifts" by a few hundred ppm on the measurement's own systematic error).
-    if (fits[chosen].hypothesis.effects.back() == "clock_rate") {
+    if (fits[chosen].hypothesis.effects.back() == Effect::kClockRate) {
       for (size_t j = 0; j < fits.size(); ++j) {
-        if (fits[j].hypothesis.effects.back() != "time_offset" ||
+        if (fits[j].hypothesis.effects.back() != Effect::kTimeOffset ||
             share[j] < options.min_explained_share || dbic[j] >= -options.bic_margin) {
           continue;
         }
@@ -840,13 +836,14 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
         }
       }
     }
-    std::vector<std::string> ambiguous;
-    const std::string& chosen_name = fits[chosen].hypothesis.effects.back();
+    std::vector<Effect> ambiguous;
+    const Effect chosen_effect = fits[chosen].hypothesis.effects.back();
     for (size_t j = 0; j < fits.size(); ++j) {
       if (static_cast<int>(j) == chosen) continue;
       // clock_rate holds time_offset (rate and offset): when the offset alone is chosen, the rate
       // fitted to ~0 beside it is the same explanation, not another one.
-      if (chosen_name == "time_offset" && fits[j].hypothesis.effects.back() == "clock_rate") {
+      if (chosen_effect == Effect::kTimeOffset &&
+          fits[j].hypothesis.effects.back() == Effect::kClockRate) {
         continue;
       }
       if (dbic[j] - dbic[chosen] < options.ambiguity_margin &&
@@ -855,11 +852,11 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
       }
     }
     current = std::move(fits[chosen]);
-    const std::string added = current.hypothesis.effects.back();
+    const std::string added = Spec(current.hypothesis.effects.back()).name;
     after_each.push_back(current.stats);
     ambiguous_each.push_back(ambiguous);
     std::string line = "round " + std::to_string(round) + ": added " + added;
-    for (const std::string& a : ambiguous) line += " (ambiguous with " + a + ")";
+    for (Effect a : ambiguous) line += " (ambiguous with " + Spec(a).name + ")";
     result.log.push_back(line);
     // Backward step (stepwise selection): an effect added earlier may be redundant now (a readout
     // error first absorbed by a gyro scale, say). Refit without each earlier effect; drop the one
@@ -880,12 +877,12 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
       int drop = -1;
       double drop_dbic = options.bic_margin;
       Fit drop_fit;
-      const std::vector<std::string>& effects = current.hypothesis.effects;
+      const std::vector<Effect>& effects = current.hypothesis.effects;
       for (size_t k = 0; k + 1 < effects.size(); ++k) {
         Hypothesis h;
         int offset = 0;
         for (size_t m = 0; m < effects.size(); ++m) {
-          const int n = EffectParameterCount(effects[m]);
+          const int n = Spec(effects[m]).parameter_count;
           if (m != k) {
             h.effects.push_back(effects[m]);
             h.x.conservativeResize(h.x.size() + n);
@@ -899,9 +896,10 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
             (MaskedRss(ctx, without.solution.residuals, without.solution.valid, keep_now) -
              rss_now) /
                 (s2_now * c_now) -
-            std::max(1, EffectParameterCount(effects[k])) * std::log(n_now);
-        result.log.push_back("round " + std::to_string(round) + ": without " + effects[k] +
-                             ": rms " + FormatNumber("%.4f", without.stats.rms_px) + " px, dBIC " +
+            std::max(1, Spec(effects[k]).parameter_count) * std::log(n_now);
+        result.log.push_back("round " + std::to_string(round) + ": without " +
+                             Spec(effects[k]).name + ": rms " +
+                             FormatNumber("%.4f", without.stats.rms_px) + " px, dBIC " +
                              FormatNumber("%+.1f", dbic_remove));
         if (dbic_remove < drop_dbic) {
           drop_dbic = dbic_remove;
@@ -910,8 +908,8 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
         }
       }
       if (drop >= 0) {
-        result.log.push_back("round " + std::to_string(round) + ": dropped " + effects[drop] +
-                             " (redundant now)");
+        result.log.push_back("round " + std::to_string(round) + ": dropped " +
+                             Spec(effects[drop]).name + " (redundant now)");
         removed.push_back(effects[drop]);
         after_each.erase(after_each.begin() + drop);
         ambiguous_each.erase(ambiguous_each.begin() + drop);
@@ -945,7 +943,7 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
 
 LoopResult FitEffects(const RigModel& declared, const GyroTrace& gyro,
                       const std::vector<FramePoints>& frames, double noise_px,
-                      const std::vector<std::string>& effects, const LoopOptions& options) {
+                      const std::vector<Effect>& effects, const LoopOptions& options) {
   TrueModel start;
   start.rig = declared;
   return FitEffects(start, gyro, frames, noise_px, effects, options);
@@ -953,16 +951,16 @@ LoopResult FitEffects(const RigModel& declared, const GyroTrace& gyro,
 
 LoopResult FitEffects(const TrueModel& declared, const GyroTrace& gyro,
                       const std::vector<FramePoints>& frames, double noise_px,
-                      const std::vector<std::string>& effects, const LoopOptions& options) {
+                      const std::vector<Effect>& effects, const LoopOptions& options) {
   LoopResult result;
   Start start = Begin(declared, gyro, frames, noise_px, options, &result);
   const Context& ctx = start.ctx;
   Fit current = std::move(start.declared);
   // One effect at a time, as the loop adds them, so each gets the loop's start (scans, axes).
-  for (const std::string& name : effects) {
+  for (Effect effect : effects) {
     Hypothesis h = current.hypothesis;
-    h.effects.push_back(name);
-    const int n = EffectParameterCount(name);
+    h.effects.push_back(effect);
+    const int n = Spec(effect).parameter_count;
     h.x.conservativeResize(h.x.size() + n);
     h.x.tail(n).setZero();
     current = FitHypothesis(ctx, std::move(h));
@@ -985,8 +983,14 @@ nlohmann::json LoopToJson(const LoopResult& result, size_t frame_count) {
   };
   json effects = json::array();
   for (const IdentifiedEffect& e : result.effects) {
-    json j = {{"name", e.name}, {"value", e.value}, {"stderr", e.stderr_value}, {"unit", e.unit}};
-    if (!e.ambiguous_with.empty()) j["ambiguous_with"] = e.ambiguous_with;
+    const EffectSpec& spec = Spec(e.effect);
+    json j = {
+        {"name", spec.name}, {"value", e.value}, {"stderr", e.stderr_value}, {"unit", spec.unit}};
+    if (!e.ambiguous_with.empty()) {
+      std::vector<std::string> names;
+      for (Effect a : e.ambiguous_with) names.push_back(Spec(a).name);
+      j["ambiguous_with"] = names;
+    }
     j["after"] = stats(e.after);
     effects.push_back(std::move(j));
   }
@@ -1000,10 +1004,10 @@ nlohmann::json LoopToJson(const LoopResult& result, size_t frame_count) {
   return out;
 }
 
-std::vector<std::string> EffectNames(const LoopResult& loop) {
-  std::vector<std::string> names;
-  for (const IdentifiedEffect& e : loop.effects) names.push_back(e.name);
-  return names;
+std::vector<Effect> EffectsOf(const LoopResult& loop) {
+  std::vector<Effect> effects;
+  for (const IdentifiedEffect& e : loop.effects) effects.push_back(e.effect);
+  return effects;
 }
 
 }  // namespace shutterlab

@@ -9,6 +9,7 @@
 #include "estimate/loop/frame_points.h"
 #include "estimate/loop/measure.h"
 #include "render/camera.h"
+#include "render/effects.h"
 #include "render/truth_model.h"
 #include "sim/gyro_trace.h"
 
@@ -32,21 +33,20 @@ ResidualStats ResidualStatsOf(const std::vector<double>& squared_norms);
 
 // One identified effect, FORMATS.md names, values and units.
 struct IdentifiedEffect {
-  std::string name;             // "time_offset", "readout_time", ...
-  nlohmann::json value;         // FORMATS.md value (number, [3], 3x3, {"k1","k2"}, string)
-  nlohmann::json stderr_value;  // same shape as value (null for readout_direction)
-  std::string unit;             // "s", "ppm", "rad/s", "m/s", "" ...
-  std::vector<std::string> ambiguous_with;  // effects that explain the data as well
-  ResidualStats after;                      // residual once this effect is added
-  // The fitted parameters (EffectParameterCount of them, deltas from the declared model as
-  // ApplyEffect takes them) and their covariance, as the standard errors come from.
+  Effect effect = Effect::kTimeOffset;  // its name and unit: Spec(effect)
+  nlohmann::json value;                 // FORMATS.md value (number, [3], 3x3, {"k1","k2"}, string)
+  nlohmann::json stderr_value;          // same shape as value (null for readout_direction)
+  std::vector<Effect> ambiguous_with;   // effects that explain the data as well
+  ResidualStats after;                  // residual once this effect is added
+  // The fitted parameters (EffectSpec::parameter_count of them, deltas from the declared model as
+  // EffectSpec::apply_delta takes them) and their covariance, as the standard errors come from.
   Eigen::VectorXd parameters;
   Eigen::MatrixXd covariance;
 };
 
 struct LoopOptions {
-  // Candidate effect names tried (FORMATS.md table); default: all of them.
-  std::vector<std::string> candidates;
+  // Candidate effects tried; default: all of them (AllEffects).
+  std::vector<Effect> candidates;
   int max_effects = 3;
   // False-alarm rate of the "residual above the measurement noise" test (a chi-square test of the
   // robust mean square residual against noise_px, degrees of freedom divided by the spatial
@@ -110,7 +110,7 @@ LoopResult CloseTheLoop(const RigModel& declared, const GyroTrace& gyro,
 // the frames (the two halves of a clip).
 LoopResult FitEffects(const RigModel& declared, const GyroTrace& gyro,
                       const std::vector<FramePoints>& frames, double noise_px,
-                      const std::vector<std::string>& effects, const LoopOptions& options = {});
+                      const std::vector<Effect>& effects, const LoopOptions& options = {});
 
 // The same from a model that already holds errors beyond camera.json (a gyro scale or bias found
 // by another fit): the effects are fitted on top of `start`, and `before` is start's residual.
@@ -119,10 +119,10 @@ LoopResult CloseTheLoop(const TrueModel& start, const GyroTrace& gyro,
                         const LoopOptions& options = {});
 LoopResult FitEffects(const TrueModel& start, const GyroTrace& gyro,
                       const std::vector<FramePoints>& frames, double noise_px,
-                      const std::vector<std::string>& effects, const LoopOptions& options = {});
+                      const std::vector<Effect>& effects, const LoopOptions& options = {});
 
-// The names of the loop's identified effects, in the order they were added.
-std::vector<std::string> EffectNames(const LoopResult& loop);
+// The loop's identified effects, in the order they were added.
+std::vector<Effect> EffectsOf(const LoopResult& loop);
 
 // FORMATS.md "Validation report" keys (format, frames, before, effects, after, noise_px,
 // unexplained) for a loop result.

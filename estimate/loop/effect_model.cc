@@ -24,124 +24,7 @@ bool SameIntrinsics(const PinholeCamera& a, const PinholeCamera& b) {
   return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.dist == b.dist;
 }
 
-using nlohmann::json;
-
-json Array3(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
-
-void CheckName(const std::string& name) {
-  const std::vector<std::string>& names = InjectionNames();
-  SHUTTERLAB_CHECK(std::find(names.begin(), names.end(), name) != names.end())
-      << "unknown effect '" << name << "'";
-}
-
 }  // namespace
-
-int EffectParameterCount(const std::string& name) {
-  CheckName(name);
-  if (name == "time_offset" || name == "readout_time") return 1;
-  if (name == "lens_distortion" || name == "clock_rate") return 2;
-  if (name == "readout_direction") return 0;
-  return 3;  // gyro_to_camera, gyro_scale, gyro_bias, velocity
-}
-
-void ApplyEffect(const std::string& name, const double* x, TrueModel* model) {
-  RigModel& rig = model->rig;
-  if (name == "time_offset") {
-    rig.time_offset_s += x[0];
-  } else if (name == "readout_time") {
-    rig.shutter.readout_s += x[0];
-  } else if (name == "gyro_to_camera") {
-    rig.cam_from_gyro =
-        ExpSO3(Eigen::Vector3d(x[0], x[1], x[2])).toRotationMatrix() * rig.cam_from_gyro;
-  } else if (name == "gyro_scale") {
-    model->gyro_scale += Eigen::Vector3d(x[0], x[1], x[2]);
-  } else if (name == "gyro_bias") {
-    model->gyro_bias_rad_s += Eigen::Vector3d(x[0], x[1], x[2]);
-  } else if (name == "velocity") {
-    rig.velocity_mps += Eigen::Vector3d(x[0], x[1], x[2]);
-  } else if (name == "lens_distortion") {
-    rig.camera.dist[0] += x[0];
-    rig.camera.dist[1] += x[1];
-  } else if (name == "readout_direction") {
-    rig.shutter.direction = rig.shutter.direction == ReadoutDirection::kTopToBottom
-                                ? ReadoutDirection::kBottomToTop
-                                : ReadoutDirection::kTopToBottom;
-  } else if (name == "clock_rate") {
-    // A clock rate is only defined together with an offset: FORMATS.md counts it from camera time
-    // 0, which a log's clock may have passed long ago (frames at t = 1000 s: 3 ppm is 3 ms).
-    model->clock_rate_ppm += x[0];
-    rig.time_offset_s += x[1];
-  } else {
-    CheckName(name);
-  }
-}
-
-double EffectStep(const std::string& name, int i, double frames_span_s) {
-  // Steps small enough that the model is linear over them (the displacements move by ~1e-3 px) and
-  // large enough that rounding (~1e-13 px) is far below the differences.
-  if (name == "time_offset" || name == "readout_time") return 1e-5;  // s
-  if (name == "gyro_to_camera") return 1e-4;                         // rad
-  if (name == "gyro_scale") return 1e-4;
-  if (name == "gyro_bias") return 1e-4;  // rad/s
-  if (name == "velocity") return 1e-2;   // m/s
-  if (name == "lens_distortion") return 1e-4;
-  if (name == "clock_rate") {
-    return i == 0 ? 1e-5 / std::max(frames_span_s, 1.0) * 1e6 : 1e-5;  // ppm, s
-  }
-  CheckName(name);
-  return 1.0;
-}
-
-json EffectValue(const std::string& name, const TrueModel& model) {
-  const RigModel& rig = model.rig;
-  if (name == "time_offset") return rig.time_offset_s;
-  if (name == "readout_time") return rig.shutter.readout_s;
-  if (name == "gyro_to_camera") return MatrixJson(rig.cam_from_gyro);
-  if (name == "gyro_scale") return Array3(model.gyro_scale);
-  if (name == "gyro_bias") return Array3(model.gyro_bias_rad_s);
-  if (name == "velocity") return Array3(rig.velocity_mps);
-  if (name == "lens_distortion") return {{"k1", rig.camera.dist[0]}, {"k2", rig.camera.dist[1]}};
-  if (name == "readout_direction") {
-    return ReadoutDirectionName(rig.shutter.direction);
-  }
-  if (name == "clock_rate") return model.clock_rate_ppm;
-  CheckName(name);
-  return nullptr;
-}
-
-json EffectStderr(const std::string& name, const TrueModel& model,
-                  const Eigen::MatrixXd& covariance) {
-  const int n = EffectParameterCount(name);
-  if (n == 0) return nullptr;
-  SHUTTERLAB_CHECK(covariance.rows() == n && covariance.cols() == n)
-      << name << ": covariance is " << covariance.rows() << "x" << covariance.cols();
-  // A negative or NaN variance is an undetermined parameter: NaN (null in JSON), not 0.
-  const Eigen::VectorXd sd = covariance.diagonal().unaryExpr(
-      [](double v) { return v >= 0 ? std::sqrt(v) : std::numeric_limits<double>::quiet_NaN(); });
-  if (name == "gyro_to_camera") {
-    // R = Exp(x) R_0 with x near 0: dR/dx_k = Hat(e_k) R (first order), entry by entry.
-    const Eigen::Matrix3d& r = model.rig.cam_from_gyro;
-    Eigen::Matrix<double, 9, 3> d_entries_d_x;
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Matrix3d d = Hat(Eigen::Vector3d::Unit(k)) * r;
-      for (int i = 0; i < 9; ++i) d_entries_d_x(i, k) = d(i / 3, i % 3);
-    }
-    const Eigen::Matrix<double, 9, 9> cov = d_entries_d_x * covariance * d_entries_d_x.transpose();
-    json m = json::array();
-    for (int row = 0; row < 3; ++row) {
-      json line = json::array();
-      for (int col = 0; col < 3; ++col) {
-        const double v = cov(3 * row + col, 3 * row + col);
-        line.push_back(v >= 0 ? std::sqrt(v) : std::numeric_limits<double>::quiet_NaN());
-      }
-      m.push_back(line);
-    }
-    return m;
-  }
-  if (n == 1 || name == "clock_rate") return sd[0];  // clock_rate: the rate's, not the offset's
-  if (name == "lens_distortion") return {{"k1", sd[0]}, {"k2", sd[1]}};
-  return json::array({sd[0], sd[1], sd[2]});
-}
 
 const std::vector<Eigen::Matrix3d>& AxisRotations() {
   static const std::vector<Eigen::Matrix3d> rotations = [] {
@@ -157,15 +40,6 @@ const std::vector<Eigen::Matrix3d>& AxisRotations() {
     return out;
   }();
   return rotations;
-}
-
-std::string EffectUnit(const std::string& name) {
-  CheckName(name);
-  if (name == "time_offset" || name == "readout_time") return "s";
-  if (name == "gyro_bias") return "rad/s";
-  if (name == "velocity") return "m/s";
-  if (name == "clock_rate") return "ppm";
-  return "";
 }
 
 DisplacementPredictor::DisplacementPredictor(const GyroTrace& gyro,

@@ -1,6 +1,7 @@
 #pragma once
-// The candidate effects of FORMATS.md's table as parameters of a TrueModel, and a fast predictor of
-// the displacement d(p) = p_ref - p of many measured points under any TrueModel.
+// The axis rotations that gyro_to_camera fits start from (the effects themselves are the table of
+// render/effects.h), and a fast predictor of the displacement d(p) = p_ref - p of many measured
+// points under any TrueModel.
 //
 // The predictor computes exactly what the renderer's truth computes (CameraMotion::Frame +
 // FrameGeometry::RefPixel): the same row times (TrueModel::RowGyroOffsetS), the same orientation
@@ -12,6 +13,7 @@
 
 #include "estimate/loop/frame_points.h"
 #include "render/camera.h"
+#include "render/effects.h"
 #include "render/truth_model.h"
 #include "sim/gyro_trace.h"
 
@@ -24,35 +26,9 @@
 
 namespace shutterlab {
 
-// Number of continuous parameters of a FORMATS.md effect when it is fitted:
-//   time_offset 1 (s), readout_time 1 (s), gyro_to_camera 3 (rotation vector, rad, applied on the
-//   camera side: R_CG = Exp(x) * R_CG_declared), gyro_scale 3, gyro_bias 3 (rad/s), velocity 3
-//   (m/s), lens_distortion 2 (k1, k2), clock_rate 2 (ppm, and the time offset that goes with it,
-//   s), readout_direction 0 (a discrete flip).
-// Throws std::invalid_argument for a name that is not in the table.
-int EffectParameterCount(const std::string& name);
-
-// Applies an effect's parameters to *model. x holds EffectParameterCount(name) values, each a delta
-// from the model's current value (readout_direction: flips the direction, x unused).
-void ApplyEffect(const std::string& name, const double* x, TrueModel* model);
-
-// Central-difference step of parameter i of the effect, in its own unit. frames_span_s: the largest
-// |camera time| of the frames (a clock-rate step moves the latest frame by ~10 us).
-double EffectStep(const std::string& name, int i, double frames_span_s);
-
-// The effect's FORMATS.md value read from a model (time_offset: the true time_offset_s, ...).
-nlohmann::json EffectValue(const std::string& name, const TrueModel& model);
-// Standard errors in the same shape as EffectValue, from the covariance of its parameters
-// (gyro_to_camera: per matrix entry, first order in the rotation vector). Null for
-// readout_direction.
-nlohmann::json EffectStderr(const std::string& name, const TrueModel& model,
-                            const Eigen::MatrixXd& covariance);
 // The 24 rotations among the signed permutation matrices (det +1): every way of labelling a
 // sensor's axes with camera axes, signs included. gyro_to_camera fits start at the best of them.
 const std::vector<Eigen::Matrix3d>& AxisRotations();
-
-// FORMATS.md unit of the value ("s", "rad/s", "m/s", "ppm", "" when dimensionless).
-std::string EffectUnit(const std::string& name);
 
 // What the loop fits: a prediction of every measured point of a set of frames under any TrueModel,
 // frame after frame in the order given, points in their order; NaN where there is none.

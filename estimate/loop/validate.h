@@ -21,8 +21,8 @@
 //  - rotation only (FORMATS.md's video model; the baseline);
 //  - with each pair's translation as an unknown direction (LoopOptions::pair_translation, the
 //    epipolar constraint), which parallax from a moving camera needs. Its candidates leave out the
-//    gyro's mounting, scale and bias (IdentifiableWithPairTranslation); it starts from the
-//    rotation-only loop's values of those when that loop left the noise.
+//    gyro's mounting, scale and bias (EffectSpec::identifiable_with_pair_translation); it starts
+//    from the rotation-only loop's values of those when that loop left the noise.
 // Both are reported, with the share of the rotation-only residual that translation explains. Then:
 //  - stability: the preferred model's effects refitted on the first and the second half of the
 //    pairs (FitEffects), each effect's two values compared against their standard errors;
@@ -32,7 +32,6 @@
 // Pairs whose declared readout the gyro log does not cover are left out and listed.
 // Default candidates for video: every FORMATS.md effect but velocity (translation is the pair
 // model's), unless options.loop.candidates names them.
-
 
 #include "estimate/loop/validation_result.h"
 

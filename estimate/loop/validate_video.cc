@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 
 namespace shutterlab {
@@ -37,7 +38,7 @@ constexpr double kPreferTranslationShare = 0.5;
 // The two halves' fits of one effect against each other.
 HalfAgreement CompareHalves(const IdentifiedEffect& a, const IdentifiedEffect& b) {
   HalfAgreement out;
-  out.effect = a.name;
+  out.effect = Spec(a.effect).name;
   out.first = a.value;
   out.first_stderr = a.stderr_value;
   out.second = b.value;
@@ -65,13 +66,12 @@ HalfAgreement CompareHalves(const IdentifiedEffect& a, const IdentifiedEffect& b
   return out;
 }
 
-// The claim names of import.json that a fitted effect tests.
-std::string EffectForClaim(const std::string& claim) {
-  if (claim == "readout_s") return "readout_time";
-  if (claim == "gyro_to_camera") return "gyro_to_camera";
-  if (claim == "time_offset_s") return "time_offset";
-  if (claim == "direction") return "readout_direction";
-  return "";
+// The effect whose fit tests a claim of import.json (EffectSpec::claim); none for the others.
+std::optional<Effect> EffectForClaim(const std::string& claim) {
+  for (const EffectSpec& spec : AllEffects()) {
+    if (!spec.claim.empty() && spec.claim == claim) return spec.effect;
+  }
+  return std::nullopt;
 }
 
 Eigen::Matrix3d MatrixFromJson(const json& m) {
@@ -194,17 +194,17 @@ json ReadClaims(const fs::path& import_json) {
     if (claim.contains("status") && !claim["status"].is_string()) {
       throw IoError(IoMessage(path, 0, where + "\"status\" is not a string"));
     }
-    const std::string effect = EffectForClaim(claim["what"].get<std::string>());
-    if (effect.empty()) continue;  // a claim validate cannot test (exposure, say)
+    const std::optional<Effect> effect = EffectForClaim(claim["what"].get<std::string>());
+    if (!effect) continue;  // a claim validate cannot test (exposure, say)
     const json value = claim.value("value", json());
     bool ok = false;
-    if (effect == "gyro_to_camera") {
+    if (*effect == Effect::kGyroToCamera) {
       ok = value.is_array() && value.size() == 3;
       for (size_t r = 0; ok && r < 3; ++r) {
         ok = value[r].is_array() && value[r].size() == 3;
         for (size_t c = 0; ok && c < 3; ++c) ok = value[r][c].is_number();
       }
-    } else if (effect == "readout_direction") {
+    } else if (*effect == Effect::kReadoutDirection) {
       const auto parsed = value.is_string() ? ParseReadoutDirection(value.get<std::string>())
                                             : std::optional<ReadoutDirection>();
       ok = parsed && IsRowReadout(*parsed);
@@ -236,7 +236,7 @@ struct ClaimInputs {
 
 // Fits shared between claims (the model's own effects are every claim's "without"), by
 // (by_rotation, effects): each is fitted once.
-using ClaimFits = std::map<std::pair<bool, std::vector<std::string>>, LoopResult>;
+using ClaimFits = std::map<std::pair<bool, std::vector<Effect>>, LoopResult>;
 
 // The claimed gyro axes against the best other of the 24 mappings, rotation-only mean squares per
 // component over the points both predict, px^2.
@@ -363,7 +363,7 @@ bool CheckScalarClaim(const LoopResult& with, double share, const std::string& r
                       ClaimCheck* check) {
   const IdentifiedEffect* effect = nullptr;
   for (const IdentifiedEffect& e : with.effects) {
-    if (e.name == check->effect) effect = &e;
+    if (Spec(e.effect).name == check->effect) effect = &e;
   }
   if (effect == nullptr || !check->claimed.is_number() || !effect->value.is_number()) return false;
   check->found = effect->value;
@@ -389,21 +389,22 @@ bool CheckScalarClaim(const LoopResult& with, double share, const std::string& r
 }
 
 // A fitted claim (scalars, direction): tested by the preferred model, or by the rotation-only one
-// where the pair translation cannot tell the effect (IdentifiableWithPairTranslation), with the
+// where the pair translation cannot tell the effect (EffectSpec::identifiable_with_pair_translation), with the
 // effect fitted beside the model's identified ones and without it. False when the claim is not
 // reported.
 bool CheckFittedClaim(const ClaimInputs& in, ClaimFits* fits, ClaimCheck* check) {
+  const Effect tested = *EffectForClaim(check->claim);  // ReadClaims kept only those
   const bool by_rotation =
-      in.preferred_options.pair_translation && !IdentifiableWithPairTranslation(check->effect);
+      in.preferred_options.pair_translation && !Spec(tested).identifiable_with_pair_translation;
   const LoopOptions& loop_options = by_rotation ? in.rotation_options : in.preferred_options;
-  std::vector<std::string> base;
-  for (const std::string& e : EffectNames(by_rotation ? in.rotation : in.preferred)) {
-    if (e != check->effect) base.push_back(e);
+  std::vector<Effect> base;
+  for (Effect e : EffectsOf(by_rotation ? in.rotation : in.preferred)) {
+    if (e != tested) base.push_back(e);
   }
-  std::vector<std::string> with_effect = base;
-  with_effect.push_back(check->effect);
+  std::vector<Effect> with_effect = base;
+  with_effect.push_back(tested);
   const TrueModel& start = by_rotation ? in.rotation_start : in.preferred_start;
-  const auto fit = [&](const std::vector<std::string>& effects) -> const LoopResult& {
+  const auto fit = [&](const std::vector<Effect>& effects) -> const LoopResult& {
     const auto key = std::make_pair(by_rotation, effects);
     auto it = fits->find(key);
     if (it == fits->end()) {
@@ -418,7 +419,7 @@ bool CheckFittedClaim(const ClaimInputs& in, ClaimFits* fits, ClaimCheck* check)
   const TrimmedComparison c =
       CompareTrimmed(in.pairs, without.residuals_after, without.residual_components,
                      with.residuals_after, with.residual_components);
-  if (check->effect == "readout_direction") {
+  if (tested == Effect::kReadoutDirection) {
     CheckDirectionClaim(c, in.rotation_start.rig, in.noise_px, check);
     return true;
   }
@@ -429,7 +430,7 @@ bool CheckFittedClaim(const ClaimInputs& in, ClaimFits* fits, ClaimCheck* check)
 }
 
 // A claim is tested by the preferred model, or by the rotation-only one where the pair translation
-// cannot tell the effect (IdentifiableWithPairTranslation). Scalars (readout_s, time_offset_s): the
+// cannot tell the effect (EffectSpec::identifiable_with_pair_translation). Scalars (readout_s, time_offset_s): the
 // effect fitted beside the model's identified ones, against the claim in standard errors, and how
 // much of the residual fitting it removes. direction: both readings. gyro_to_camera: the rotation-
 // only residual of each of the 24 axis mappings against the claimed one's.
@@ -440,10 +441,11 @@ std::vector<ClaimCheck> CheckClaims(const json& claims, const ClaimInputs& in) {
   for (const json& claim : claims) {  // as ReadClaims checked them
     ClaimCheck check;
     check.claim = claim["what"].get<std::string>();
-    check.effect = EffectForClaim(check.claim);
+    const Effect tested = *EffectForClaim(check.claim);  // ReadClaims kept only those
+    check.effect = Spec(tested).name;
     check.status = claim.value("status", "");
     check.claimed = claim.value("value", json());
-    if (check.effect == "gyro_to_camera") {
+    if (tested == Effect::kGyroToCamera) {
       CheckAxesClaim(in, &check);
     } else if (!CheckFittedClaim(in, &fits, &check)) {
       continue;
@@ -587,9 +589,9 @@ VideoModels PrepareModels(const ValidateOptions& options, const RigModel& rig) {
   models.translation_options = models.rotation_options;
   models.translation_options.pair_translation = true;
   models.translation_options.candidates.clear();
-  for (const std::string& name : models.rotation_options.candidates) {
-    if (IdentifiableWithPairTranslation(name)) {
-      models.translation_options.candidates.push_back(name);
+  for (Effect e : models.rotation_options.candidates) {
+    if (Spec(e).identifiable_with_pair_translation) {
+      models.translation_options.candidates.push_back(e);
     }
   }
   models.rotation_start.rig = rig;
@@ -610,9 +612,10 @@ void RunBothLoops(const VideoInputs& in, const std::vector<FramePoints>& pairs, 
   models->translation_start = models->rotation_start;
   if (!result->loop.unexplained) {
     for (const IdentifiedEffect& e : result->loop.effects) {
-      if (IdentifiableWithPairTranslation(e.name)) continue;
-      result->translation_inherits.push_back(e.name);
-      ApplyEffect(e.name, e.parameters.data(), &models->translation_start);
+      const EffectSpec& spec = Spec(e.effect);
+      if (spec.identifiable_with_pair_translation) continue;
+      result->translation_inherits.push_back(spec.name);
+      spec.apply_delta(e.parameters.data(), &models->translation_start);
     }
   }
   result->translation_loop = CloseTheLoop(models->translation_start, in.gyro, pairs, noise_px,
@@ -646,15 +649,15 @@ void CheckHalves(const ClaimInputs& in, ValidationResult* result) {
   const size_t half = pairs.size() / 2;
   const std::vector<FramePoints> first(pairs.begin(), pairs.begin() + half);
   const std::vector<FramePoints> second(pairs.begin() + half, pairs.end());
-  const std::vector<std::string> names = EffectNames(preferred);
+  const std::vector<Effect> effects = EffectsOf(preferred);
   HalfCheck check;
   check.model = result->preferred;
   check.first_pairs = first.size();
   check.second_pairs = second.size();
   const LoopResult a =
-      FitEffects(in.preferred_start, in.gyro, first, in.noise_px, names, in.preferred_options);
+      FitEffects(in.preferred_start, in.gyro, first, in.noise_px, effects, in.preferred_options);
   const LoopResult b =
-      FitEffects(in.preferred_start, in.gyro, second, in.noise_px, names, in.preferred_options);
+      FitEffects(in.preferred_start, in.gyro, second, in.noise_px, effects, in.preferred_options);
   check.first_after = a.after;
   check.second_after = b.after;
   check.first_model = a.model;
@@ -667,17 +670,12 @@ void CheckHalves(const ClaimInputs& in, ValidationResult* result) {
 
 }  // namespace
 
-std::vector<std::string> VideoCandidates() {
-  std::vector<std::string> names;
-  for (const std::string& name : InjectionNames()) {
-    if (name != "velocity") names.push_back(name);
+std::vector<Effect> VideoCandidates() {
+  std::vector<Effect> effects;
+  for (const EffectSpec& spec : AllEffects()) {
+    if (spec.effect != Effect::kVelocity) effects.push_back(spec.effect);
   }
-  return names;
-}
-
-bool IdentifiableWithPairTranslation(const std::string& effect) {
-  return effect != "gyro_to_camera" && effect != "gyro_scale" && effect != "gyro_bias" &&
-         effect != "velocity";
+  return effects;
 }
 
 void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,

@@ -2,6 +2,7 @@
 // The video branch of `validate` (estimate/validate.h describes it); called by ValidateDataset.
 
 #include "estimate/loop/validation_result.h"
+#include "render/effects.h"
 #include "render/frames_csv.h"
 #include "sim/gyro_trace.h"
 
@@ -21,13 +22,8 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
                           const ValidateProgress& progress, ValidationResult* result);
 
 // The effects FORMATS.md lists that a video's rotation-only or pair-translation model can fit:
-// all but velocity, which the pair translation replaces.
-std::vector<std::string> VideoCandidates();
-
-// False for the effects that the pair-translation model cannot tell from translation: over a scene
-// of nearly one depth a rotation about an image-plane axis moves the image as a sideways move does
-// (the epipole goes where the shift points), so a free translation per pair absorbs the gyro's
-// scale, bias and mounting about those axes. Those are fitted with the rotation-only model only.
-bool IdentifiableWithPairTranslation(const std::string& effect);
+// all but velocity, which the pair translation replaces. Those that the pair translation cannot
+// tell from translation are fitted rotation-only (EffectSpec::identifiable_with_pair_translation).
+std::vector<Effect> VideoCandidates();
 
 }  // namespace shutterlab

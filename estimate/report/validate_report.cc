@@ -39,13 +39,13 @@ void WriteLoopSummary(const LoopResult& loop, std::ostream& out) {
   out << "  before: rms " << FormatNumber("%.3f", loop.before.rms_px) << " px, max "
       << FormatNumber("%.3f", loop.before.max_px) << " px\n";
   for (const IdentifiedEffect& e : loop.effects) {
-    out << "  + " << e.name << " = " << Rounded(e.value).dump() << " +- "
-        << Rounded(e.stderr_value).dump() << " " << e.unit << " -> rms "
+    out << "  + " << Spec(e.effect).name << " = " << Rounded(e.value).dump() << " +- "
+        << Rounded(e.stderr_value).dump() << " " << Spec(e.effect).unit << " -> rms "
         << FormatNumber("%.3f", e.after.rms_px) << " px, max "
         << FormatNumber("%.3f", e.after.max_px) << " px";
     if (!e.ambiguous_with.empty()) {
       out << " (ambiguous with";
-      for (const std::string& other : e.ambiguous_with) out << " " << other;
+      for (Effect other : e.ambiguous_with) out << " " << Spec(other).name;
       out << ")";
     }
     out << "\n";

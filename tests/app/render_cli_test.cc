@@ -1,13 +1,13 @@
-#include "render/render_dataset.h"
-
+#include "render/effects.h"
 #include "render/frames_csv.h"
 #include "render/image_io.h"
+#include "render/render_dataset.h"
 #include "render/truth_model.h"
 #include "sim/check.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
-#include "tests/render/render_fixtures.h"
 #include "tests/app/cli_test_util.h"
+#include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>

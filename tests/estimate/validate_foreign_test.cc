@@ -118,8 +118,7 @@ std::string WriteForeignDataset(const test::TempDir& dir, double true_offset_s) 
   namespace fs = std::filesystem;
   const fs::path root = dir.path() / "foreign";
   fs::create_directories(root / "cam0");
-  cv::Mat scene8 =
-      cv::imread(test::GroundScenePath(2), cv::IMREAD_GRAYSCALE);
+  cv::Mat scene8 = cv::imread(test::GroundScenePath(2), cv::IMREAD_GRAYSCALE);
   cv::Mat scene;
   scene8.convertTo(scene, CV_16U, 257.0);
   const Orientation orientation;
@@ -179,7 +178,7 @@ TEST(ValidateForeignDataset, FindsTheUndeclaredThreeMilliseconds) {
   const LoopResult& loop = result.loop;
   ASSERT_EQ(result.frames.size(), static_cast<size_t>(kFrames));
   ASSERT_FALSE(loop.effects.empty()) << ValidationReport(result);
-  EXPECT_EQ(loop.effects.front().name, "time_offset") << ValidationReport(result);
+  EXPECT_EQ(Spec(loop.effects.front().effect).name, "time_offset") << ValidationReport(result);
   EXPECT_NEAR(loop.model.rig.time_offset_s, kDeclaredOffsetS + 0.003, 0.3e-3)
       << ValidationReport(result);
   EXPECT_FALSE(loop.unexplained) << ValidationReport(result);

@@ -8,9 +8,9 @@
 // cases marked kAlsoUnderAsan run, so that the CI stage stays short.
 
 #include "estimate/loop/validate.h"
+
 #include "estimate/demo_dataset.h"
 #include "estimate/report/validate_report.h"
-
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "render/render_dataset.h"
@@ -52,7 +52,7 @@ struct DatasetSpec {
   double log_s = 30.0;                  // gyro log length, s (motion starts after 6 s still + 1 s)
   double first_frame_s = 8.0, last_frame_s = 28.0;  // frame times spread evenly between these
   uint64_t seed = 3;                                // the flight motion's seed
-  uint64_t scene_seed = 1;  // the procedural ground texture's
+  uint64_t scene_seed = 1;                          // the procedural ground texture's
 };
 
 RigModel DeclaredRig() {
@@ -114,7 +114,7 @@ std::string Summary(const ValidationResult& result) { return ValidationReport(re
 void ExpectIdentified(const ValidationResult& result, const std::string& name) {
   const LoopResult& loop = result.loop;
   ASSERT_FALSE(loop.effects.empty()) << Summary(result);
-  EXPECT_EQ(loop.effects.front().name, name) << Summary(result);
+  EXPECT_EQ(Spec(loop.effects.front().effect).name, name) << Summary(result);
   EXPECT_FALSE(loop.unexplained) << Summary(result);
   EXPECT_LE(loop.after.rms_px, kAfterOverNoise * loop.noise_px) << Summary(result);
   EXPECT_GT(loop.before.rms_px, 2.0 * loop.after.rms_px) << Summary(result);
@@ -196,21 +196,21 @@ TEST(ValidateEndToEnd, RecoversVelocityOrFlagsAmbiguity) {
   const LoopResult& loop = result.loop;
   ASSERT_FALSE(loop.effects.empty()) << Summary(result);
   const IdentifiedEffect& first = loop.effects.front();
-  const auto ambiguous_with = [&](const std::string& name) {
-    return std::find(first.ambiguous_with.begin(), first.ambiguous_with.end(), name) !=
+  const auto ambiguous_with = [&](Effect other) {
+    return std::find(first.ambiguous_with.begin(), first.ambiguous_with.end(), other) !=
            first.ambiguous_with.end();
   };
   EXPECT_FALSE(loop.unexplained) << Summary(result);
   EXPECT_LE(loop.after.rms_px, kAfterOverNoise * loop.noise_px) << Summary(result);
-  if (first.name == "velocity") {
+  if (first.effect == Effect::kVelocity) {
     const Eigen::Vector3d truth(4, 0, 0);
     const double error = (loop.model.rig.velocity_mps - truth).norm() / truth.norm();
-    EXPECT_TRUE(error <= 0.10 || ambiguous_with("gyro_bias"))
+    EXPECT_TRUE(error <= 0.10 || ambiguous_with(Effect::kGyroBias))
         << "velocity off by " << 100 * error << " %\n"
         << Summary(result);
   } else {
-    EXPECT_EQ(first.name, "gyro_bias") << Summary(result);
-    EXPECT_TRUE(ambiguous_with("velocity")) << Summary(result);
+    EXPECT_EQ(Spec(first.effect).name, "gyro_bias") << Summary(result);
+    EXPECT_TRUE(ambiguous_with(Effect::kVelocity)) << Summary(result);
   }
 }
 
@@ -302,7 +302,7 @@ TEST(ValidateDemo, RenderAndValidateFindsTheInjectedOffset) {
   options.height = 240;
   const ValidationResult result = RenderAndValidate(options);
   ASSERT_FALSE(result.loop.effects.empty()) << Summary(result);
-  EXPECT_EQ(result.loop.effects.front().name, "time_offset") << Summary(result);
+  EXPECT_EQ(Spec(result.loop.effects.front().effect).name, "time_offset") << Summary(result);
   EXPECT_NEAR(result.loop.model.rig.time_offset_s, 0.004, 0.3e-3) << Summary(result);
   for (const char* file : {"report.json", "plots/validate.html", "dataset/truth.json"}) {
     EXPECT_TRUE(std::filesystem::exists(dir.path() / "demo" / file)) << file;

@@ -85,7 +85,7 @@ void ExpectIdentified(const ValidationResult& result, const std::string& name, C
   EXPECT_EQ(result.preferred, "rotation_only") << report;
   const LoopResult& loop = result.loop;
   ASSERT_EQ(loop.effects.size(), 1u) << report;
-  EXPECT_EQ(loop.effects.front().name, name) << report;
+  EXPECT_EQ(Spec(loop.effects.front().effect).name, name) << report;
   EXPECT_FALSE(loop.unexplained) << report;
   EXPECT_LE(loop.after.rms_px, kAfterOverNoise * loop.noise_px) << report;
   EXPECT_GT(loop.before.rms_px, 2.0 * loop.after.rms_px) << report;
@@ -263,7 +263,7 @@ TEST(ValidateVideo, EffectOutsideTheListIsNeverAConfidentWrongEffect) {
   for (const LoopResult* loop : {&result.loop, &result.translation_loop}) {
     if (loop->unexplained) continue;
     for (const IdentifiedEffect& e : loop->effects) {
-      EXPECT_EQ(e.name, "time_offset") << report;
+      EXPECT_EQ(Spec(e.effect).name, "time_offset") << report;
     }
   }
 }

@@ -1,5 +1,6 @@
 #include "render/rs_warp.h"
 
+#include "render/effects.h"
 #include "render/image_io.h"
 #include "render/truth_model.h"
 #include "tests/render/render_fixtures.h"
@@ -492,8 +493,9 @@ namespace shutterlab {
 namespace {
 
 TEST(RsWarp, DenseOpticalFlowOnARealSceneAgreesWithTheTruth) {
-  // The procedural aerial texture (render/ground_texture.h), a rendered rolling-shutter/reference pair, and OpenCV's
-  // DIS optical flow from the rolling-shutter image to the reference: it must find d(p).
+  // The procedural aerial texture (render/ground_texture.h), a rendered rolling-shutter/reference
+  // pair, and OpenCV's DIS optical flow from the rolling-shutter image to the reference: it must
+  // find d(p).
   const cv::Mat scene = ReadImage(test::GroundScenePath(2));
   RigModel rig = SmallRig(480, 360);
   rig.camera.fx = rig.camera.fy = 900.0;

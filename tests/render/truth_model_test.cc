@@ -1,5 +1,6 @@
 #include "render/truth_model.h"
 
+#include "render/effects.h"
 #include "sim/so3.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
@@ -43,7 +44,7 @@ TEST(ApplyInjection, EveryEffectOfTheTableIsKnown) {
     EXPECT_EQ(ApplyInjection(text, &model), recorded) << text;
     names.insert(text.substr(0, text.find('=')));
   }
-  EXPECT_EQ(names.size(), InjectionNames().size());
+  EXPECT_EQ(names.size(), AllEffects().size());
 }
 
 TEST(ApplyInjection, ChangesOnlyItsOwnField) {

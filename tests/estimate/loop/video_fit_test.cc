@@ -4,6 +4,7 @@
 
 #include "estimate/loop/effect_fit.h"
 #include "estimate/loop/effect_model.h"
+#include "render/effects.h"
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
 #include "sim/so3.h"
@@ -159,8 +160,8 @@ LoopResult Loop(const TrueModel& declared, const GyroTrace& gyro,
                 const std::vector<FramePoints>& pairs, bool translation, double noise_px) {
   LoopOptions options;
   options.pair_translation = translation;
-  for (const std::string& name : InjectionNames()) {
-    if (name != "velocity") options.candidates.push_back(name);
+  for (const EffectSpec& spec : AllEffects()) {
+    if (spec.effect != Effect::kVelocity) options.candidates.push_back(spec.effect);
   }
   return CloseTheLoop(declared.rig, gyro, pairs, noise_px, options);
 }
@@ -178,7 +179,7 @@ TEST(CloseTheLoopVideo, FindsAWronglyLabelledGyro) {
   const std::vector<FramePoints> pairs = RenderedPairs(truth, gyro, 8, 32, kNoisePx);
   const LoopResult loop = Loop(declared, gyro, pairs, false, kNoiseRmsPx);
   ASSERT_FALSE(loop.effects.empty());
-  EXPECT_EQ(loop.effects.front().name, "gyro_to_camera");
+  EXPECT_EQ(Spec(loop.effects.front().effect).name, "gyro_to_camera");
   const double angle_rad =
       LogSO3(Eigen::Quaterniond(loop.model.rig.cam_from_gyro * truth.rig.cam_from_gyro.transpose()))
           .norm();
@@ -197,7 +198,7 @@ TEST(CloseTheLoopVideo, RecoversTimeOffsetNotAClockRateOverAShortClip) {
   for (bool translation : {false, true}) {
     const LoopResult loop = Loop(declared, gyro, pairs, translation, kNoiseRmsPx);
     ASSERT_EQ(loop.effects.size(), 1u) << translation;
-    EXPECT_EQ(loop.effects[0].name, "time_offset") << translation;
+    EXPECT_EQ(Spec(loop.effects[0].effect).name, "time_offset") << translation;
     EXPECT_NEAR(loop.model.rig.time_offset_s, 0.004, 0.05e-3) << translation;
     EXPECT_EQ(loop.residual_components, translation ? 1 : 2);
   }
@@ -213,7 +214,7 @@ TEST(CloseTheLoopVideo, TranslationExplainsAMovingCameraThatRotationCannot) {
   const LoopResult translation = Loop(declared, gyro, pairs, true, kNoiseRmsPx);
   EXPECT_TRUE(rotation.unexplained) << rotation.after.rms_px;
   EXPECT_FALSE(translation.unexplained);
-  EXPECT_TRUE(translation.effects.empty()) << translation.effects.front().name;
+  EXPECT_TRUE(translation.effects.empty()) << Spec(translation.effects.front().effect).name;
   EXPECT_EQ(translation.pair_translation_dirs.size(), pairs.size());
   // Across the line the noise alone is left: one component of sigma.
   EXPECT_LT(translation.after.rms_px, 1.3 * kNoisePx);
@@ -227,7 +228,7 @@ TEST(CloseTheLoopVideo, RecoversPerAxisGyroScale) {
   const std::vector<FramePoints> pairs = RenderedPairs(truth, gyro, 15, 32, kNoisePx);
   const LoopResult loop = Loop(declared, gyro, pairs, false, kNoiseRmsPx);
   ASSERT_EQ(loop.effects.size(), 1u);
-  EXPECT_EQ(loop.effects[0].name, "gyro_scale");
+  EXPECT_EQ(Spec(loop.effects[0].effect).name, "gyro_scale");
   EXPECT_LT((loop.model.gyro_scale - Eigen::Vector3d(1.05, 0.95, 1.04)).cwiseAbs().maxCoeff(), 2e-3)
       << loop.model.gyro_scale.transpose();
 }
@@ -239,10 +240,10 @@ TEST(FitEffects, FitsTheGivenEffectsWithoutSelection) {
   truth.rig.shutter.readout_s = 0.036;
   const std::vector<FramePoints> pairs = RenderedPairs(truth, gyro, 8, 32, kNoisePx);
   LoopOptions options;
-  const LoopResult fit =
-      FitEffects(declared.rig, gyro, pairs, kNoiseRmsPx, {"readout_time", "time_offset"}, options);
+  const LoopResult fit = FitEffects(declared.rig, gyro, pairs, kNoiseRmsPx,
+                                    {Effect::kReadoutTime, Effect::kTimeOffset}, options);
   ASSERT_EQ(fit.effects.size(), 2u);
-  EXPECT_EQ(fit.effects[0].name, "readout_time");
+  EXPECT_EQ(Spec(fit.effects[0].effect).name, "readout_time");
   EXPECT_NEAR(fit.model.rig.shutter.readout_s, 0.036, 0.2e-3);
   EXPECT_NEAR(fit.model.rig.time_offset_s, 0.0, 0.1e-3);
   // The time offset is in the fit although the data do not need it, with its standard error.
