@@ -166,7 +166,7 @@ void ReadHeaderLine(const std::string& path, long n, std::string_view line,
     header->readout_line = n;
   } else if (key == "frame_readout_direction") {
     const auto direction = GyroflowReadoutDirection(value);
-    if (!word) {
+    if (!direction) {
       throw IoError(IoMessage(path, n,
                               "unknown frame_readout_direction '" + value +
                                   "' (0-3, TopToBottom, BottomToTop, LeftToRight, RightToLeft)"));
