@@ -137,7 +137,7 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--time-unit", command->time_unit, "raw counts: time column unit (s, ms, us, ns)")
       ->capture_default_str();
-  cmd->add_option("--camera", command->camera_path, "camera.json (FORMATS.md rig/1)")
+  cmd->add_option("--camera", command->camera_path, "camera.json (docs/FORMATS.md rig/1)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--readout", command->readout,
                   "rolling-shutter readout without --camera (s, ms, us)")
@@ -170,7 +170,7 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
   cmd->add_option("--scene", command->scene_path,
                   "nadir image for the report's worst-image pictures (with --out)")
       ->check(CLI::ExistingFile);
-  cmd->add_flag("--json", command->json, "print JSON (FORMATS.md `analyze`)");
+  cmd->add_flag("--json", command->json, "print JSON (docs/FORMATS.md `analyze`)");
   return std::function<void()>([command, altitude] {
     command->altitude_given = altitude->count() > 0;
     Run(*command);

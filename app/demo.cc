@@ -98,7 +98,7 @@ void StepInputs(DemoContext& context) {
             << " gyro samples over " << FormatNumber("%.1f", context.log.gyro.DurationS())
             << " s, " << context.log.camera_events.size() << " camera triggers, altitude "
             << FormatNumber("%.0f", context.log.altitude_above_ground_m.value_or(0.0)) << " m\n";
-  // The scene at the render camera's ground sample distance (FORMATS.md "The scene image": seen
+  // The scene at the render camera's ground sample distance (docs/FORMATS.md "The scene image": seen
   // by a pinhole with the rig's focal length from the world origin), twice the frame's size.
   const RigModel rig = DemoCamera();
   GroundTextureOptions scene;

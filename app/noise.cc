@@ -36,7 +36,7 @@ const CommandRegistration kRegistration(20, [](CLI::App& app) {
   command->trace.Add(cmd, /*with_bias=*/true);
   cmd->add_option("--window", command->noise.window_samples, "window length, samples")
       ->capture_default_str();
-  cmd->add_flag("--json", command->json, "print JSON (FORMATS.md `noise`) instead of a table");
+  cmd->add_flag("--json", command->json, "print JSON (docs/FORMATS.md `noise`) instead of a table");
   cmd->add_option("--allan", command->allan_path,
                   "write the Allan deviation to this CSV (tau_s,adev_x,adev_y,adev_z; rad/s)");
   return std::function<void()>([command] { Run(*command); });

@@ -73,14 +73,14 @@ const CommandRegistration kRegistration(70, [](CLI::App& app) {
       ->required()
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--report", command->report_path,
-                  "write the validation report JSON (FORMATS.md validation/1) here");
+                  "write the validation report JSON (docs/FORMATS.md validation/1) here");
   cmd->add_option("--limit", command->limits, "ground limits, e.g. 5cm,10cm")
       ->delimiter(',')
       ->capture_default_str();
   cmd->add_option("--out", command->out_dir,
                   "write residual pictures before/after (per frame, per row) to DIR");
   cmd->add_option("--candidates", command->candidates,
-                  "effects to try, e.g. time_offset,readout_time (default: all of FORMATS.md's)")
+                  "effects to try, e.g. time_offset,readout_time (default: all of docs/FORMATS.md's)")
       ->delimiter(',');
   cmd->add_option("--grid-step", command->grid_step_px, "spacing of the measured points, px")
       ->capture_default_str();

@@ -72,7 +72,7 @@ void GenerateCsv(const std::string& path, size_t lines) {
   std::fclose(f);
 }
 
-// Reference reader: the classic std::ifstream >> double loop (the issue's ~80 MB/s figure).
+// Reference reader: the classic std::ifstream >> double loop (about 80 MB/s is typical).
 size_t ReadWithIstream(const std::string& path, size_t max_bytes, size_t* bytes_read) {
   std::ifstream in(path);
   std::string header;

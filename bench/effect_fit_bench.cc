@@ -42,7 +42,7 @@ constexpr int kStepPx = 28;  // 46 x 34 = 1564 points a frame
 constexpr double kSigmaPx = 0.1;
 
 struct Fixture {
-  RigModel declared = test::IssueRig();
+  RigModel declared = test::MappingRig();
   GyroTrace gyro = test::FlightTrace(24.0, 3);
   std::vector<FramePoints> clean, offset, jitter;
   Fixture() {

@@ -1,5 +1,5 @@
 #pragma once
-// The declared camera and rig model (FORMATS.md camera.json, "rig/1").
+// The declared camera and rig model (docs/FORMATS.md camera.json, "rig/1").
 //
 // Pixel convention (OpenCV): pixel (u, v) = (column, row); the centre of the top-left pixel is
 // (0, 0). Camera frame: x right, y down, z along the optical axis into the scene.
@@ -31,7 +31,7 @@ struct PinholeCamera {
 
 // Rolling-shutter timing. The only place that knows how a row maps to a time.
 struct RollingShutter {
-  double readout_s = 0.0;  // s; row v is read at v * readout_s / height after row 0 (FORMATS.md)
+  double readout_s = 0.0;  // s; row v is read at v * readout_s / height after row 0 (docs/FORMATS.md)
   ReadoutDirection direction = ReadoutDirection::kTopToBottom;  // a row order (IsRowReadout)
   // Seconds after t_first_row at which image row `row` of an image `height` rows tall is captured.
   double RowTimeOffsetS(double row, int height) const;

@@ -84,7 +84,7 @@ json ThreeSd(const TrueModel&, const Eigen::MatrixXd&, const Eigen::VectorXd& sd
   return json::array({sd[0], sd[1], sd[2]});
 }
 
-// --- the table, one block per effect in FORMATS.md's order
+// --- the table, one block per effect in docs/FORMATS.md's order
 
 std::vector<EffectSpec> MakeTable() {
   std::vector<EffectSpec> table;
@@ -301,7 +301,7 @@ std::vector<EffectSpec> MakeTable() {
     s.effect = Effect::kClockRate;
     s.name = "clock_rate";
     s.unit = "ppm";
-    // A clock rate is only defined together with an offset: FORMATS.md counts it from camera time
+    // A clock rate is only defined together with an offset: docs/FORMATS.md counts it from camera time
     // 0, which a log's clock may have passed long ago (frames at t = 1000 s: 3 ppm is 3 ms).
     s.parameter_count = 2;  // ppm, s
     s.step = [](int i, double frames_span_s) {

@@ -1,5 +1,5 @@
 #pragma once
-// The effects of FORMATS.md's table ("Effect names, values and units"): what camera.json does not
+// The effects of docs/FORMATS.md's table ("Effect names, values and units"): what camera.json does not
 // declare, what `render --inject` puts into a truth and what the validation loop fits.
 //
 // Everything that differs from one effect to the next is one row of one table (effects.cc), so a
@@ -18,7 +18,7 @@
 
 namespace shutterlab {
 
-// In FORMATS.md's order (AllEffects() lists them in it).
+// In docs/FORMATS.md's order (AllEffects() lists them in it).
 enum class Effect {
   kTimeOffset,
   kReadoutTime,
@@ -38,7 +38,7 @@ enum class Effect {
 // with it, s), readout_direction 0 (a discrete flip).
 struct EffectSpec {
   Effect effect = Effect::kTimeOffset;
-  std::string name;  // FORMATS.md's name: "time_offset", ...
+  std::string name;  // docs/FORMATS.md's name: "time_offset", ...
   std::string unit;  // of the value: "s", "rad/s", "m/s", "ppm", "" when dimensionless
   int parameter_count = 0;
   // Central-difference (and so LM) step of parameter i, in its own unit. frames_span_s: the
@@ -49,7 +49,7 @@ struct EffectSpec {
   // Sets the absolute value of `--inject NAME=VALUE` (VALUE as ApplyInjection parsed it) and
   // returns it as truth.json records it. Throws std::invalid_argument for a bad value.
   nlohmann::json (*inject)(const nlohmann::json& value, TrueModel* model) = nullptr;
-  // The FORMATS.md value read from a model (time_offset: the true time_offset_s, ...).
+  // The docs/FORMATS.md value read from a model (time_offset: the true time_offset_s, ...).
   nlohmann::json (*value)(const TrueModel& model) = nullptr;
   // Standard errors in the value's shape from the parameters' covariance and standard deviations
   // sd (its diagonal's roots, NaN where negative). See EffectStderr.
@@ -64,18 +64,18 @@ struct EffectSpec {
   std::string claim;
 };
 
-// Every effect, in FORMATS.md's order.
+// Every effect, in docs/FORMATS.md's order.
 const std::vector<EffectSpec>& AllEffects();
 const EffectSpec& Spec(Effect effect);
 
-// The effect of a FORMATS.md name; nullopt for any other text.
+// The effect of a docs/FORMATS.md name; nullopt for any other text.
 std::optional<Effect> ParseEffect(std::string_view name);
 // The same where a name is required: throws std::invalid_argument
 // "<where>: unknown effect 'NAME' (known: time_offset, readout_time, ...)".
 Effect RequireEffect(std::string_view name, const std::string& where);
 
 // Applies one `NAME=VALUE` effect to the true model and returns the value as truth.json records it
-// (FORMATS.md units). VALUE is JSON ("[1.01,1,1]", "{\"k1\":-0.1}") or comma-separated numbers
+// (docs/FORMATS.md units). VALUE is JSON ("[1.01,1,1]", "{\"k1\":-0.1}") or comma-separated numbers
 // ("1.01,1,1"; gyro_to_camera: 9 numbers, row-major; lens_distortion: k1[,k2[,p1,p2[,k3]]]) or, for
 // readout_direction, a bare word. Throws std::invalid_argument for an unknown name or a bad value.
 nlohmann::json ApplyInjection(const std::string& name_equals_value, TrueModel* model);

@@ -1,6 +1,6 @@
 #pragma once
 // Frame lists: the capture-times file that `render` reads (frame,t_first_row) and a rig dataset's
-// frames.csv (FORMATS.md: frame,t_first_row,ref,image).
+// frames.csv (docs/FORMATS.md: frame,t_first_row,ref,image).
 
 #include <cstdint>
 #include <string>
@@ -10,7 +10,7 @@ namespace shutterlab {
 
 struct FrameEntry {
   int64_t frame = 0;           // frame id
-  int64_t t_first_row_ns = 0;  // camera clock: capture time of the first row READ (FORMATS.md)
+  int64_t t_first_row_ns = 0;  // camera clock: capture time of the first row READ (docs/FORMATS.md)
   std::string ref;    // reference image path relative to the dataset folder ("" in video datasets)
   std::string image;  // rolling-shutter image path relative to the dataset folder
 };
@@ -23,7 +23,7 @@ std::vector<FrameEntry> ReadFrameTimes(const std::string& path);
 // problem").
 std::vector<FrameEntry> ReadFramesCsv(const std::string& path);
 
-// A frame id zero-padded to 4 digits, as in truth/NNNN_disp.exr (FORMATS.md) and images/NNNN_*.
+// A frame id zero-padded to 4 digits, as in truth/NNNN_disp.exr (docs/FORMATS.md) and images/NNNN_*.
 std::string FrameName(int64_t frame);
 
 // Writes frames.csv whole or not at all; times with nine decimals, exact to the nanosecond.

@@ -1,6 +1,6 @@
 #pragma once
 // `shutterlab render`: renders a rig dataset with exact ground truth from a scene image, a declared
-// camera, a gyro log and capture times (FORMATS.md "Rig dataset", "Render output").
+// camera, a gyro log and capture times (docs/FORMATS.md "Rig dataset", "Render output").
 //
 // DIR receives:
 //   camera.json, gyro.csv          the DECLARED camera and the logged gyro, as given
@@ -12,7 +12,7 @@
 //   truth/NNNN_heat.png, truth/NNNN_side.png, overview.png   pictures (unless pictures = false)
 // The truth differs from camera.json by the --inject effects only (render/truth_model.h).
 //
-// With `video`, DIR is a video rig dataset (FORMATS.md "Video datasets"): consecutive
+// With `video`, DIR is a video rig dataset (docs/FORMATS.md "Video datasets"): consecutive
 // rolling-shutter frames of one continuing flight, all in the world of the first frame's row 0
 // (CameraMotion::Frame with that anchor), `ref` empty, no reference images. truth/NNNN_disp.exr of
 // every frame but the first holds q - p: for each pixel p of the frame, its match q in the previous
@@ -32,12 +32,12 @@
 namespace shutterlab {
 
 struct RenderOptions {
-  std::string scene_path;               // scene image (FORMATS.md "The scene image")
+  std::string scene_path;               // scene image (docs/FORMATS.md "The scene image")
   std::string camera_path;              // declared camera.json
   std::string gyro_path;                // gyro.csv (gyro clock, gyro axes)
   std::string frames_path;              // frame,t_first_row (camera clock, first row read)
   std::string out_dir;                  // created if missing
-  std::vector<std::string> injections;  // "NAME=VALUE", FORMATS.md effect names
+  std::vector<std::string> injections;  // "NAME=VALUE", docs/FORMATS.md effect names
   Interpolation interpolation = Interpolation::kBilinear;
   bool pictures = true;  // heatmaps, side-by-side panels and the overview
   bool video = false;    // a video dataset (above); frame times must increase
@@ -47,7 +47,7 @@ struct RenderOptions {
 
 struct RenderedFrame {
   int64_t frame = 0;
-  double d_px = 0.0;  // FORMATS.md frame distortion D, pixels
+  double d_px = 0.0;  // docs/FORMATS.md frame distortion D, pixels
   double d_m = 0.0;   // D on the ground, m
   double outside_fraction =
       0.0;  // share of rolling-shutter pixels that see outside the scene (black)

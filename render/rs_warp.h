@@ -1,5 +1,5 @@
 #pragma once
-// Rolling-shutter rendering from a scene image, and its exact ground truth (FORMATS.md "The model",
+// Rolling-shutter rendering from a scene image, and its exact ground truth (docs/FORMATS.md "The model",
 // "The scene image", "Frame distortion D").
 //
 // For a rolling-shutter pixel p = (u, v) the ray d_W = R_v K^-1 p (K^-1 undistorts when the true
@@ -84,7 +84,7 @@ void RenderFrame(const cv::Mat& scene, const FrameGeometry& geometry, Interpolat
 // The displacement field d(p) = p_ref - p of every pixel, CV_32FC2 (dx, dy), NaN where undefined.
 cv::Mat DisplacementField(const FrameGeometry& geometry);
 
-// Video pairs (FORMATS.md "Video datasets"): for every pixel p of the later frame, the match q in
+// Video pairs (docs/FORMATS.md "Video datasets"): for every pixel p of the later frame, the match q in
 // the earlier frame of the ground point it sees, both frames rolling shutter and in one world
 // (CameraMotion::Frame with a shared anchor). q's row w sets the earlier frame's pose, so q solves
 // q = project(X, pose(w)), w = q.y: a fixed point iterated to kVideoMatchTolPx. The field is
@@ -96,7 +96,7 @@ std::optional<Eigen::Vector2d> VideoMatch(const FrameGeometry& later, const Fram
                                           double u, int v);
 constexpr double kVideoMatchTolPx = 1e-7;
 
-// FORMATS.md "Frame distortion D" of a displacement field: the largest, over columns, diameter of
+// docs/FORMATS.md "Frame distortion D" of a displacement field: the largest, over columns, diameter of
 // the column's displacement vectors, px (NaN entries are skipped).
 double FrameDistortionPx(const cv::Mat& displacement);
 

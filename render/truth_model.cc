@@ -25,7 +25,8 @@ Eigen::Vector3d TrueModel::CamRate(const Eigen::Vector3d& logged_omega_rad_s) co
 double TrueModel::RowGyroOffsetS(int64_t t_first_row_ns, double row) const {
   const double row_offset_s = rig.shutter.RowTimeOffsetS(row, rig.camera.height);
   // gyro = camera * (1 + k) + offset; the camera instant is t_first_row_ns + row_offset_s. Only the
-  // small terms are in double: t_first_row_ns stays an exact integer (STYLE.md §3).
+  // small terms are in double: t_first_row_ns stays an exact integer (time is int64 ns; doubles only for
+  // small offsets).
   const double k = clock_rate_ppm * 1e-6;
   return row_offset_s + k * (t_first_row_ns * 1e-9 + row_offset_s) + rig.time_offset_s;
 }
@@ -79,7 +80,7 @@ FrameMotion CameraMotion::Frame(int64_t t_first_row_ns,
       (anchor_from_world * world_from_cam_.WorldFromBodyAt(t_first_row_ns, t0_gyro_s))
           .normalized()
           .toRotationMatrix();
-  // c(t) = velocity * (t - t_anchor) with t the gyro-clock time, as FORMATS.md's t_v (under
+  // c(t) = velocity * (t - t_anchor) with t the gyro-clock time, as docs/FORMATS.md's t_v (under
   // clock_rate the gyro clock runs (1 + ppm 1e-6) times the camera's). The anchor's centre is 0.
   motion.ref_center_m = model_.rig.velocity_mps * since_anchor_s(t0_gyro_s);
   for (int v = 0; v < height; ++v) {

@@ -2,17 +2,17 @@
 // The TRUE sensor model a render uses, and the camera motion it implies for each frame.
 //
 // The declared model (camera.json, RigModel) is what a dataset says about itself; `render --inject`
-// makes the truth differ from it by the effects of FORMATS.md's table (render/effects.h).
+// makes the truth differ from it by the effects of docs/FORMATS.md's table (render/effects.h).
 // Everything the renderer and its ground truth need about time and motion is computed here, once
 // per frame.
 //
-// Orientation choice (documented in FORMATS.md terms): the world frame is re-anchored for every
+// Orientation choice (documented in docs/FORMATS.md terms): the world frame is re-anchored for every
 // frame so that the frame's row 0 (the top row) looks exactly nadir:
 //   world_from_cam(t) = R_int(t_0)^-1 * R_int(t),
 // R_int the SO(3) integration of the true body rates from the first gyro sample, t_0 the true
 // capture time of row 0. A frame far into a flight therefore never drifts off the scene, and the
 // reference image of every frame is the same nadir view. The camera centre is likewise re-anchored:
-// c(t) = velocity_mps * (t - t_0) (t on the gyro clock, as FORMATS.md's t_v), zero at row 0.
+// c(t) = velocity_mps * (t - t_0) (t on the gyro clock, as docs/FORMATS.md's t_v), zero at row 0.
 
 #include "render/camera.h"
 #include "sim/gyro_trace.h"

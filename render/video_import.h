@@ -1,6 +1,6 @@
 #pragma once
 // `shutterlab import SOURCE --out DATASET`: real rolling-shutter footage with its own gyro, turned
-// into a video rig dataset (FORMATS.md: camera.json, gyro.csv, frames.csv with `ref` empty,
+// into a video rig dataset (docs/FORMATS.md: camera.json, gyro.csv, frames.csv with `ref` empty,
 // images/) plus import.json, which records where every number came from.
 //
 // Sources:

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The per-axis flight analysis (FORMATS.md `flight`) in pandas, to compare with `shutterlab flight`.
+"""The per-axis flight analysis (docs/FORMATS.md `flight`) in pandas, to compare with `shutterlab flight`.
 
 Same definitions as estimate/flight: bias = per-axis mean rate over the first 5 s; angles =
 cumulative sum of (w - b) * dt over the samples after the segment; a window of duration W starts at

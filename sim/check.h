@@ -1,5 +1,5 @@
 #pragma once
-// Error tiers (STYLE.md §6):
+// Error tiers:
 //  - SHUTTERLAB_CHECK(cond) << "msg": a violated precondition or invariant; throws std::invalid_argument.
 //  - IoError: bad input at an IO boundary; the message names the path, line or record, and the problem.
 //  - std::optional / status structs for per-item "no answer" during computation.

@@ -12,7 +12,7 @@
 namespace shutterlab {
 
 // Per-axis integrated angles, rad, structure-of-arrays for the window statistics.
-// angle[a][k] = sum over 0 < i <= k of (w_i[a] - bias[a]) * (t_i - t_{i-1})   (FORMATS.md),
+// angle[a][k] = sum over 0 < i <= k of (w_i[a] - bias[a]) * (t_i - t_{i-1})   (docs/FORMATS.md),
 // so angle[a][0] = 0: the first sample has no interval before it.
 struct PerAxisAngles {
   std::vector<int64_t> t_ns;
@@ -25,7 +25,7 @@ PerAxisAngles IntegratePerAxis(const GyroTrace& trace, const Eigen::Vector3d& bi
                                size_t first = 0, size_t last = static_cast<size_t>(-1));
 
 // Orientation over time from body rates: q(t) = world_from_body, Hamilton, unit norm.
-// Integration is by right multiplication (STYLE.md §4; basalt propagateState):
+// Integration is by right multiplication (as basalt's propagateState: the increment in the body frame):
 //   q_{k+1} = q_k * Exp(0.5 (w_k + w_{k+1}) dt)    (trapezoid on the rates).
 // Between samples the rate is taken as linear in time, so the orientation at t_k + tau is
 //   q_k * Exp(w_k tau + (w_{k+1} - w_k) tau^2 / (2 dt)),

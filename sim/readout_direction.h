@@ -1,6 +1,6 @@
 #pragma once
 // Which way a rolling shutter reads out, and its one spelling in files and messages
-// ("top_to_bottom", ...; FORMATS.md camera.json and .gcsv).
+// ("top_to_bottom", ...; docs/FORMATS.md camera.json and .gcsv).
 
 #include <optional>
 #include <string_view>

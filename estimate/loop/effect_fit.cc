@@ -1,6 +1,6 @@
 #include "estimate/loop/effect_fit.h"
 
-// How the loop decides (issue 4, "Close the loop"):
+// How the loop decides:
 //
 // Residual r_i = measured - predicted at every point (2 components). noise_px is the RMS length of
 // the measurement error, so each component has variance sigma^2 = noise_px^2 / 2.
@@ -614,7 +614,7 @@ Context MakeContext(const TrueModel& declared, const PointPredictor& predictor,
   return ctx;
 }
 
-// The fit's effects with their FORMATS.md values, standard errors, parameters and covariance; the
+// The fit's effects with their docs/FORMATS.md values, standard errors, parameters and covariance; the
 // residual after each is the fit's own (the loop overwrites it with the residual when it was
 // added).
 std::vector<IdentifiedEffect> IdentifiedEffects(const Context& ctx, const Fit& fit) {
@@ -998,7 +998,7 @@ nlohmann::json LoopToJson(const LoopResult& result, size_t frame_count) {
            {"before", stats(result.before)},    {"effects", std::move(effects)},
            {"after", stats(result.after)},      {"noise_px", result.noise_px},
            {"unexplained", result.unexplained}, {"log", result.log}};
-  // Beyond FORMATS.md: with pair_translation the residual is one component (the distance across
+  // Beyond docs/FORMATS.md: with pair_translation the residual is one component (the distance across
   // the epipolar line), to be read against noise_px / sqrt(2), not noise_px.
   if (result.residual_components != 2) out["residual_components"] = result.residual_components;
   return out;

@@ -1,6 +1,6 @@
 #pragma once
-// Closing the loop (issue 4): the residual between measured displacements and the declared model,
-// a statistical test of whether it is above the measurement noise, and the search over FORMATS.md's
+// Closing the loop: the residual between measured displacements and the declared model,
+// a statistical test of whether it is above the measurement noise, and the search over docs/FORMATS.md's
 // candidate effects (fit each by nonlinear least squares, pick by an information criterion, add,
 // repeat).
 //
@@ -31,10 +31,10 @@ struct ResidualStats {
 // The statistics of residuals given as squared lengths, px^2.
 ResidualStats ResidualStatsOf(const std::vector<double>& squared_norms);
 
-// One identified effect, FORMATS.md names, values and units.
+// One identified effect, docs/FORMATS.md names, values and units.
 struct IdentifiedEffect {
   Effect effect = Effect::kTimeOffset;  // its name and unit: Spec(effect)
-  nlohmann::json value;                 // FORMATS.md value (number, [3], 3x3, {"k1","k2"}, string)
+  nlohmann::json value;                 // docs/FORMATS.md value (number, [3], 3x3, {"k1","k2"}, string)
   nlohmann::json stderr_value;          // same shape as value (null for readout_direction)
   std::vector<Effect> ambiguous_with;   // effects that explain the data as well
   ResidualStats after;                  // residual once this effect is added
@@ -95,7 +95,7 @@ struct LoopResult {
 };
 
 // Predicted displacement at each point of `frame` under `model`, with the logged gyro trace: d(p) =
-// p_ref - p (FORMATS.md "The model"), or for a video pair the rotation-only match q - p; NaN where
+// p_ref - p (docs/FORMATS.md "The model"), or for a video pair the rotation-only match q - p; NaN where
 // the ray misses the ground, the match leaves the frame or an instant leaves the trace.
 std::vector<Eigen::Vector2d> PredictDisplacements(const TrueModel& model, const GyroTrace& gyro,
                                                   const FramePoints& frame);
@@ -124,7 +124,7 @@ LoopResult FitEffects(const TrueModel& start, const GyroTrace& gyro,
 // The loop's identified effects, in the order they were added.
 std::vector<Effect> EffectsOf(const LoopResult& loop);
 
-// FORMATS.md "Validation report" keys (format, frames, before, effects, after, noise_px,
+// docs/FORMATS.md "Validation report" keys (format, frames, before, effects, after, noise_px,
 // unexplained) for a loop result.
 nlohmann::json LoopToJson(const LoopResult& result, size_t frame_count);
 

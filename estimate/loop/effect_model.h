@@ -85,7 +85,7 @@ class DisplacementPredictor : public PointPredictor {
 };
 
 // Video pairs (every frame has FramePoints::earlier): the match q of each point p of the later
-// frame in the earlier one, both rolling shutter (FORMATS.md "Video datasets"), as q - p.
+// frame in the earlier one, both rolling shutter (docs/FORMATS.md "Video datasets"), as q - p.
 //  - Rotation only (the default): q ~ K R(t_w)^T R(t_v) K^-1 p with K^-1 / K undistorting /
 //    distorting, t_v the point's row time, t_w the time of q's own row w = q.y: a fixed point,
 //    iterated from w = v (the contraction is the image rate times the row time, far below 1).

@@ -9,7 +9,7 @@
 
 namespace shutterlab {
 
-// The earlier frame of a video pair (FORMATS.md "Video datasets").
+// The earlier frame of a video pair (docs/FORMATS.md "Video datasets").
 struct EarlierFrame {
   int64_t frame = 0;
   int64_t t_first_row_ns = 0;  // camera clock (frames.csv)

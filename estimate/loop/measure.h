@@ -1,6 +1,6 @@
 #pragma once
 // `measure`: the displacement field between a global-shutter reference and a rolling-shutter image
-// of the same view (FORMATS.md: d(p) = p_ref - p for every rolling-shutter pixel p).
+// of the same view (docs/FORMATS.md: d(p) = p_ref - p for every rolling-shutter pixel p).
 //
 // (Interface fixed first so that validate can be written against it; the method is documented in
 // measure.cc with the accuracy it was chosen by.)
@@ -36,7 +36,7 @@ struct DisplacementMeasurement {
   // The measurement's own noise: the RMS length of (measured - true) over `points` as estimated from
   // the data, i.e. the rms_px that a perfect model would leave on these points, px.
   double noise_px = 0.0;
-  double d_px = 0.0;                  // FORMATS.md frame distortion D of `field`, px
+  double d_px = 0.0;                  // docs/FORMATS.md frame distortion D of `field`, px
   double measured_fraction = 0.0;     // share of pixels with a measurement
 };
 

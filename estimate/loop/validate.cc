@@ -40,7 +40,7 @@ std::vector<int> GridLines(int size) {
 }
 
 struct FullModelD {
-  double d_px = 0.0;           // FORMATS.md D of the grid
+  double d_px = 0.0;           // docs/FORMATS.md D of the grid
   double d_centre_px = 0.0;    // D of the grid column nearest the principal point
   double max_angle_rad = 0.0;  // largest rotation between any two grid rows' orientations
 };
@@ -138,7 +138,7 @@ DatasetFiles FindDatasetFiles(const std::string& dataset_dir) {
   return files;
 }
 
-// Whether the dataset is a video (FORMATS.md: a video dataset leaves ref empty on every line),
+// Whether the dataset is a video (docs/FORMATS.md: a video dataset leaves ref empty on every line),
 // after checking that every line agrees and every image it names is there.
 bool CheckFrameImages(const DatasetFiles& files, const std::vector<FrameEntry>& entries) {
   const bool video = entries.front().ref.empty();

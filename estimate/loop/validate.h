@@ -1,11 +1,11 @@
 #pragma once
-// `validate` (issue 4): test the paper's threshold model and the declared full model against the
+// `validate`: test the paper's threshold model and the declared full model against the
 // displacement measured in a rig dataset, then close the loop on undeclared effects.
 //
-// For every frame of the dataset (FORMATS.md "Rig dataset"; truth/ and truth.json are never read):
+// For every frame of the dataset (docs/FORMATS.md "Rig dataset"; truth/ and truth.json are never read):
 //  - measured: MeasureDisplacement(ref, image): the points, their noise, D_meas (px), and
 //    D_meas_m = D_meas_px * altitude_m / f, f = (fx + fy) / 2;
-//  - full model: FORMATS.md's D of the declared model's d(p) (rotation, velocity, lens), evaluated
+//  - full model: docs/FORMATS.md's D of the declared model's d(p) (rotation, velocity, lens), evaluated
 //    on a grid (kGridStepPx, first and last rows and columns included);
 //  - paper's model: estimate/analyze.h Analyze() with a trigger at the frame's gyro time
 //    t_first_row + time_offset_s (no bias estimate: gyro.csv is taken as calibrated), which gives
@@ -14,11 +14,11 @@
 //    the vector criterion, for the per-axis vs vector question.
 // Then CloseTheLoop over all frames' points, noise_px = the RMS of the frames' noise over points.
 //
-// Video datasets (FORMATS.md "Video datasets": every ref empty; issue 6) are validated pair by
+// Video datasets (docs/FORMATS.md "Video datasets": every ref empty) are validated pair by
 // pair: frames in time order, each against the one before it (MeasureDisplacement(earlier, later)
 // gives q - p). There is no global-shutter reference, so no D and no paper's model; the loop runs
 // twice over the pairs' points:
-//  - rotation only (FORMATS.md's video model; the baseline);
+//  - rotation only (docs/FORMATS.md's video model; the baseline);
 //  - with each pair's translation as an unknown direction (LoopOptions::pair_translation, the
 //    epipolar constraint), which parallax from a moving camera needs. Its candidates leave out the
 //    gyro's mounting, scale and bias (EffectSpec::identifiable_with_pair_translation); it starts
@@ -30,7 +30,7 @@
 //    the loop can test (readout_s, gyro_to_camera, time_offset_s, direction) is fitted as an effect
 //    beside the identified ones and compared with what the source said.
 // Pairs whose declared readout the gyro log does not cover are left out and listed.
-// Default candidates for video: every FORMATS.md effect but velocity (translation is the pair
+// Default candidates for video: every docs/FORMATS.md effect but velocity (translation is the pair
 // model's), unless options.loop.candidates names them.
 
 #include "estimate/loop/validation_result.h"

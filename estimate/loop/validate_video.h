@@ -21,7 +21,7 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
                           const std::vector<FrameEntry>& entries, const ValidateOptions& options,
                           const ValidateProgress& progress, ValidationResult* result);
 
-// The effects FORMATS.md lists that a video's rotation-only or pair-translation model can fit:
+// The effects docs/FORMATS.md lists that a video's rotation-only or pair-translation model can fit:
 // all but velocity, which the pair translation replaces. Those that the pair translation cannot
 // tell from translation are fitted rotation-only (EffectSpec::identifiable_with_pair_translation).
 std::vector<Effect> VideoCandidates();

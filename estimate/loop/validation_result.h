@@ -67,7 +67,7 @@ struct FrameValidation {
 // Video: one effect of a model fitted on each half of the pairs.
 struct HalfAgreement {
   std::string effect;
-  nlohmann::json first, first_stderr, second, second_stderr;  // FORMATS.md values
+  nlohmann::json first, first_stderr, second, second_stderr;  // docs/FORMATS.md values
   // Mahalanobis distance of the two fits' parameters under the sum of their covariances
   // (gyro_to_camera: its parameters are rotation vectors about the same declared mounting, so
   // they are compared directly), and whether it is below the 99 % quantile of chi-square with the

@@ -37,7 +37,7 @@ struct AccuracyOptions {
   void Check() const;
 };
 
-// One detected turn. Angles are the per-axis integrated angles (FORMATS.md), arcsec, x y z.
+// One detected turn. Angles are the per-axis integrated angles (docs/FORMATS.md), arcsec, x y z.
 struct DetectedRotation {
   double t_start_s = 0.0;  // motion start and end, seconds after the trace's first sample
   double t_end_s = 0.0;
@@ -73,7 +73,7 @@ struct AccuracyResult {
 // says why and gives the threshold).
 AccuracyResult AnalyzeAccuracy(const GyroTrace& trace, const AccuracyOptions& options);
 
-// JSON exactly as FORMATS.md `accuracy`, plus extra keys per rotation (t_start_s, t_end_s,
+// JSON exactly as docs/FORMATS.md `accuracy`, plus extra keys per rotation (t_start_s, t_end_s,
 // theta_vector_arcsec, theta_so3_arcsec) and top level (average_samples, noise_level_rad_s,
 // enter_rad_s, exit_rad_s, skipped_t_s, difference_mean_arcsec, difference_std_arcsec).
 std::string AccuracyJson(const AccuracyResult& result);

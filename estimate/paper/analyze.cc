@@ -43,7 +43,7 @@ double AngleAt(const PerAxisAngles& angles, int axis, int64_t t_ns) {
   return a[k - 1] + (a[k] - a[k - 1]) * w;
 }
 
-// FORMATS.md frame distortion D on the coarse grid (kGridStepPx), pixels: per grid column, the
+// docs/FORMATS.md frame distortion D on the coarse grid (kGridStepPx), pixels: per grid column, the
 // largest distance between two rows' displacements RefPixel - p.
 double GridDistortionPx(const FrameGeometry& geometry) {
   const PinholeCamera& cam = geometry.camera();

@@ -1,14 +1,14 @@
 #pragma once
-// `analyze`: per-image rolling-shutter distortion from a real flight log (issue 5).
+// `analyze`: per-image rolling-shutter distortion from a flight log.
 //
 // For each image, exposed at t = trigger + trigger_latency_s (the capture time of row 0, on the
 // log's gyro clock; camera.json's time_offset_s is not applied because the triggers are already on
 // the log clock):
 //  - D_paper_m = altitude_m * tan(max over camera axes of the range of the per-axis integrated
-//    angle within [t, t + readout_s]) — the source paper's threshold model (FORMATS.md). The angle
+//    angle within [t, t + readout_s]) — the source paper's threshold model (docs/FORMATS.md). The angle
 //    is the paper's rectangle-rule sum (sim/integrate.h IntegratePerAxis), linear between samples,
 //    so the window's end points are interpolated: a constant rate w gives exactly w * readout_s.
-//  - D_full_m = FORMATS.md's frame distortion D under the renderer's model of the declared rig
+//  - D_full_m = docs/FORMATS.md's frame distortion D under the renderer's model of the declared rig
 //    (render/truth_model.h CameraMotion, render/rs_warp.h FrameGeometry::RefPixel): lens distortion
 //    and camera.json's velocity count; the bias-corrected rates are the truth (TrueModel with
 //    gyro_bias = the bias, time_offset_s 0 since the triggers are on the log clock). D is evaluated
@@ -51,7 +51,7 @@ struct ImageTrigger {
 struct AnalyzeOptions {
   RigModel rig;                              // camera, readout, altitude_m, cam_from_gyro
   std::vector<double> limits_m{0.05, 0.10};  // acceptable smear on the ground
-  double noise_allowance_arcsec = 20.0;      // for the flight table (FORMATS.md `flight`)
+  double noise_allowance_arcsec = 20.0;      // for the flight table (docs/FORMATS.md `flight`)
   // Image triggers, first match wins: these; else, when every_s > 0, simulated triggers every
   // every_s seconds from the first gyro sample (a mapping cadence); else the log's camera events.
   std::vector<ImageTrigger> triggers;
@@ -125,7 +125,7 @@ TrueModel AnalyzeTrueModel(const RigModel& rig, const Eigen::Vector3d& bias_cam_
 // naming those columns; unnamed images become IMG_0001, ... Throws IoError(path:line: problem).
 std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path);
 
-// FORMATS.md `analyze` JSON (plus bias, verdict and per-image detail).
+// docs/FORMATS.md `analyze` JSON (plus bias, verdict and per-image detail).
 nlohmann::json AnalyzeToJson(const AnalyzeResult& result);
 // Report for a person: source, bias, flight table, per-image table, verdict.
 std::string AnalyzeReport(const AnalyzeResult& result);

@@ -212,7 +212,7 @@ BiasEstimate FlightBias(const GyroTrace& trace, const FlightOptions& options) {
   return bias;
 }
 
-// Windows per duration: starts k with t_k + W <= t_last (FORMATS.md: the rest run past the end);
+// Windows per duration: starts k with t_k + W <= t_last (docs/FORMATS.md: the rest run past the end);
 // thresholds per limit, with the noise allowance.
 FlightPlan PlanFlight(const GyroTrace& trace, const FlightOptions& options, size_t first) {
   FlightPlan plan;

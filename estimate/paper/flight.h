@@ -2,7 +2,7 @@
 // The source paper's flight analysis (its Table 4): the share of sliding time windows in which the
 // camera rotated enough for the rolling shutter to smear the image by more than a ground limit.
 //
-// Definitions (FORMATS.md `flight`): bias b = per-axis mean rate over the bias segment; per-axis
+// Definitions (docs/FORMATS.md `flight`): bias b = per-axis mean rate over the bias segment; per-axis
 // angles angle_k = sum over i <= k of (w_i - b)(t_i - t_{i-1}) over the samples after the segment
 // (sim/integrate.h IntegratePerAxis); a window of duration W starts at every sample and holds the
 // samples with t in [t_k, t_k + W); windows that run past the last sample are left out. A window is
@@ -86,7 +86,7 @@ struct FlightResult {
 // is longer than the trace after the bias segment (no window fits).
 FlightResult Flight(const GyroTrace& trace, const FlightOptions& options);
 
-// FORMATS.md `flight` JSON (plus per-axis percentages, window counts and the bias).
+// docs/FORMATS.md `flight` JSON (plus per-axis percentages, window counts and the bias).
 nlohmann::json FlightToJson(const FlightResult& result);
 // The person-readable table in the paper's Table 4 layout, with a closing line saying which
 // criterion flags more on this data.

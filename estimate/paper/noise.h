@@ -15,7 +15,7 @@ namespace shutterlab {
 
 struct NoiseOptions {
   int window_samples = 120;  // N: consecutive samples per window (the paper: 120 at ~3 kHz = 40 ms)
-  BiasSegment bias;          // seconds after the first sample; default 0:5 (FORMATS.md)
+  BiasSegment bias;          // seconds after the first sample; default 0:5 (docs/FORMATS.md)
   int allan_points_per_decade = 10;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
@@ -40,14 +40,14 @@ struct NoiseResult {
   AllanResult allan;  // over the same samples
 };
 
-// FORMATS.md "Analysis outputs" / noise: bias = per-axis mean rate over the bias segment; the
+// docs/FORMATS.md "Analysis outputs" / noise: bias = per-axis mean rate over the bias segment; the
 // per-axis angles (sim/integrate.h IntegratePerAxis) of the samples after the segment's end;
 // sliding windows of window_samples consecutive samples, step one sample. Throws
 // std::invalid_argument when the bias segment is too short or the window is longer than the samples
 // after it.
 NoiseResult AnalyzeNoise(const GyroTrace& trace, const NoiseOptions& options);
 
-// JSON exactly as FORMATS.md `noise`, plus extra keys: per axis sigma_rms_arcsec, arw_deg_sqrt_h,
+// JSON exactly as docs/FORMATS.md `noise`, plus extra keys: per axis sigma_rms_arcsec, arw_deg_sqrt_h,
 // arw_rad_s_sqrt_hz, bias_instability_deg_h, bias_instability_tau_s,
 // bias_instability_upper_bound, bias_rad_s; top level windows, samples, rate_hz.
 std::string NoiseJson(const NoiseResult& result);

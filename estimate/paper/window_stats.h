@@ -3,7 +3,7 @@
 //
 // A window is given by its first sample k and its end e_k (one past its last sample):
 //  - fixed count N: e_k = k + N, windows k = 0 .. size-N (the paper's 120-sample windows);
-//  - fixed duration W: e_k = first index with t >= t_k + W (FORMATS.md `flight`); windows whose
+//  - fixed duration W: e_k = first index with t >= t_k + W (docs/FORMATS.md `flight`); windows whose
 //    span would run past the last sample are left out.
 //
 // Window ends must be non-decreasing with k < e_k <= size: that is what both constructions give,

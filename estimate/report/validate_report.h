@@ -12,7 +12,7 @@
 
 namespace shutterlab {
 
-// The report JSON: LoopToJson's FORMATS.md keys plus "dataset", "limits_m", "frames_detail",
+// The report JSON: LoopToJson's docs/FORMATS.md keys plus "dataset", "limits_m", "frames_detail",
 // "confusion", "ratios", "timing_s" and "log".
 nlohmann::json ValidationToJson(const ValidationResult& result);
 
@@ -25,7 +25,7 @@ std::string ValidationReport(const ValidationResult& result);
 std::vector<std::string> WriteValidationPlots(const std::string& dir,
                                               const ValidationResult& result);
 
-// The report JSON of a video validation: the preferred model's LoopToJson (FORMATS.md keys) with
+// The report JSON of a video validation: the preferred model's LoopToJson (docs/FORMATS.md keys) with
 // "model", then "rotation_only", "translation" (each LoopToJson), "pairs", "halves", "claims",
 // "skipped", "timing_s". ValidationToJson calls it for video datasets.
 nlohmann::json VideoValidationToJson(const ValidationResult& result);

@@ -109,7 +109,7 @@ std::string VideoValidationReport(const ValidationResult& result) {
     out << line;
   }
   const double noise = result.loop.noise_px;
-  out << "\nrotation only (FORMATS.md's video model), " << result.loop.before.points
+  out << "\nrotation only (docs/FORMATS.md's video model), " << result.loop.before.points
       << " points, noise " << FormatNumber("%.3f", noise) << " px:\n";
   WriteLoopSummary(result.loop, out);
   out << "with each pair's translation as an unknown direction (distance across the epipolar "

@@ -185,7 +185,7 @@ LogFormat DetectGyroFormat(std::string_view text, const std::string& path) {
     return LogFormat::kGcsv;
   }
   const bool has_header = !ParseDouble(fields[0]);
-  // FORMATS.md is the contract: its header means gyro.csv, whatever the values look like (an
+  // docs/FORMATS.md is the contract: its header means gyro.csv, whatever the values look like (an
   // ideal still trace writes every rate as "0"). Raw counts carry another header or none.
   if (has_header && IsGyroCsvHeader(fields)) return LogFormat::kGyroCsv;
   // Scan the rows of a headerless file from its first line, else from the line after the header.

@@ -40,7 +40,7 @@ GyroTrace ReadGyro(const std::string& path, const GyroReadOptions& options = {})
 // either way. Override with --format.
 LogFormat DetectGyroFormat(std::string_view text, const std::string& path);
 
-// FORMATS.md gyro.csv. Extra columns after gz are ignored.
+// docs/FORMATS.md gyro.csv. Extra columns after gz are ignored.
 GyroTrace ReadGyroCsv(const std::string& path);
 // Writes gyro.csv whole or not at all; times exact to the nanosecond, rates round-trip exact.
 void WriteGyroCsv(const std::string& path, const GyroTrace& trace);

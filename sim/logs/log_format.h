@@ -11,7 +11,7 @@ namespace shutterlab {
 enum class LogFormat {
   kAuto,       // detect from the content (sim/logs/gyro_io.h DetectGyroFormat, or
                // sim/logs/flight_log_io.h DetectFlightLogFormat for every format)
-  kGyroCsv,    // FORMATS.md gyro.csv: header t,gx,gy,gz[,...]; seconds and rad/s
+  kGyroCsv,    // docs/FORMATS.md gyro.csv: header t,gx,gy,gz[,...]; seconds and rad/s
   kGcsv,       // Gyroflow .gcsv ("GYROFLOW IMU LOG" header block)
   kRaw,        // the source paper's raw-count CSV: time and three int16 counts per line
   kULog,       // PX4 .ulg

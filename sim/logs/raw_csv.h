@@ -32,7 +32,7 @@ double RawSensitivityLsbPerDps(int range_dps);
 GyroTrace ReadRawCsv(const std::string& path, int range_dps, TimeUnit time_unit);
 
 // Header of the raw-count logs we write: not gyro.csv's "t,gx,gy,gz", so that detection can tell
-// counts from rad/s (a FORMATS.md header always means gyro.csv).
+// counts from rad/s (a docs/FORMATS.md header always means gyro.csv).
 inline constexpr const char* kRawCsvHeader = "t,gx_counts,gy_counts,gz_counts";
 
 // Writes a raw-count log with the header kRawCsvHeader: rates quantised to the nearest count of the

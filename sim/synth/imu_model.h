@@ -49,7 +49,7 @@ struct ImuErrorModel {
   // Constant bias (zero-rate offset) per sensor axis, rad/s.
   Eigen::Vector3d bias_rad_s{0.0105, -0.0070, 0.0044};  // ~0.6, -0.4, 0.25 deg/s
   // Scale-factor error per axis, dimensionless: measured_i = (1 + scale_error_i) * true_i.
-  // (FORMATS.md gyro_scale s_i, "true = s_i * logged", is 1 / (1 + scale_error_i).)
+  // (docs/FORMATS.md gyro_scale s_i, "true = s_i * logged", is 1 / (1 + scale_error_i).)
   Eigen::Vector3d scale_error{0.004, -0.003, 0.002};
   // Axis misalignment / cross-axis sensitivity, rad: entry (i, j), i != j, is the sensitivity of
   // sensor axis i to a rate about body axis j. The diagonal must be zero (scale goes above).

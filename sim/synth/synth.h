@@ -68,7 +68,7 @@ GyroTrace SynthesizeTruth(const SynthOptions& options);
 struct SynthOutputOptions {
   std::string out_path;   // first sensor
   std::string out2_path;  // second sensor (same motion, independent noise); empty for none
-  // kGyroCsv (FORMATS.md gyro.csv, seconds and rad/s) or kRaw (the paper's logger: header
+  // kGyroCsv (docs/FORMATS.md gyro.csv, seconds and rad/s) or kRaw (the paper's logger: header
   // t,gx,gy,gz, int16 counts of imu.range_dps, time in time_unit; read back with --raw --range
   // --time-unit).
   LogFormat format = LogFormat::kGyroCsv;

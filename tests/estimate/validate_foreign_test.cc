@@ -1,5 +1,5 @@
 // validate on a rig dataset that shutterlab's renderer did not make. The generator here follows
-// FORMATS.md only and shares no code with render/ or sim/: its own motion (analytic body rates,
+// docs/FORMATS.md only and shares no code with render/ or sim/: its own motion (analytic body rates,
 // integrated with a 20 us midpoint rule), its own rolling-shutter image synthesis (cv::remap of a
 // procedural ground texture through the rotation-only homography of each row), and choices our renderer
 // never makes: 16-bit grey TIFF images in a subfolder, frame ids that are not 0..N-1, clock times
@@ -50,7 +50,7 @@ Eigen::Vector3d CameraRate(double t_s) {
           0.4 * std::sin(two_pi * 0.6 * t + 2.1)};
 }
 
-// Camera-to-world orientation R(t) (FORMATS.md: R(t + dt) = R(t) Exp(w_C dt)), tabulated every
+// Camera-to-world orientation R(t) (docs/FORMATS.md: R(t + dt) = R(t) Exp(w_C dt)), tabulated every
 // 20 us from identity at kGyroStartS with the midpoint rate; between entries one more midpoint
 // step.
 class Orientation {
@@ -89,7 +89,7 @@ Eigen::Matrix3d CamFromGyro() {
 }
 
 // Renders one image: every row v seen at its own orientation, through the scene convention of
-// FORMATS.md (scene pixel = K_scene * ray / ray.z, principal point at the scene's centre).
+// docs/FORMATS.md (scene pixel = K_scene * ray / ray.z, principal point at the scene's centre).
 cv::Mat RenderGrey16(const cv::Mat& scene, const Orientation& orientation,
                      const std::vector<double>& row_time_s) {
   const Eigen::Matrix3d k = (Eigen::Matrix3d() << kFocalPx, 0, 0.5 * (kWidth - 1), 0, kFocalPx,

@@ -249,7 +249,7 @@ TEST(ValidateEndToEnd, EffectOutsideTheListIsUnexplained) {
 }
 
 // The table's bookkeeping on one dataset: flags follow D against each limit, the confusion matrix
-// counts every frame once per limit, and the JSON has FORMATS.md's keys.
+// counts every frame once per limit, and the JSON has docs/FORMATS.md's keys.
 TEST(ValidateEndToEnd, TableAndReportAreConsistent) {
   if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
@@ -273,7 +273,7 @@ TEST(ValidateEndToEnd, TableAndReportAreConsistent) {
   EXPECT_EQ(json["frames_detail"].size(), static_cast<size_t>(kFrames));
 }
 
-// FORMATS.md: a video dataset leaves ref empty on every line; a mix is an error on its first line.
+// docs/FORMATS.md: a video dataset leaves ref empty on every line; a mix is an error on its first line.
 TEST(ValidateDataset, RefusesAVideoDatasetWithARef) {
   test::TempDir dir;
   WriteRigModel(dir / "camera.json", DeclaredRig());

@@ -285,7 +285,7 @@ TEST(ValidateVideo, ReportAndJsonCarryBothModels) {
   EXPECT_EQ(json["pairs"].size(), 5u);
   EXPECT_EQ(json["pairs"][0]["previous"], 0);
   EXPECT_EQ(json["pairs"][0]["frame"], 1);
-  // The top level is the preferred model's loop, FORMATS.md's keys with their types.
+  // The top level is the preferred model's loop, docs/FORMATS.md's keys with their types.
   const LoopResult& preferred =
       result.preferred == "translation" ? result.translation_loop : result.loop;
   EXPECT_EQ(json["after"]["rms_px"].get<double>(), preferred.after.rms_px);

@@ -66,7 +66,7 @@ TEST(Effects, EachRoundTripsItsName) {
         << spec.name;
   }
   EXPECT_EQ(names.size(), AllEffects().size());
-  // FORMATS.md's names, in its order.
+  // docs/FORMATS.md's names, in its order.
   EXPECT_EQ(Spec(Effect::kTimeOffset).name, "time_offset");
   EXPECT_EQ(Spec(Effect::kReadoutDirection).name, "readout_direction");
   EXPECT_EQ(Spec(Effect::kClockRate).name, "clock_rate");

@@ -93,7 +93,7 @@ TEST(RsWarp, ConstantRateAboutXDisplacesPrincipalPointByFyTan) {
   }
 }
 
-// ---- An independent evaluation of FORMATS.md's model, written from the text, for a constant
+// ---- An independent evaluation of docs/FORMATS.md's model, written from the text, for a constant
 // logged rate (so that R(t) has a closed form), using OpenCV's own distortion code.
 struct OracleParams {
   Eigen::Matrix3d cam_from_gyro = Eigen::Matrix3d::Identity();

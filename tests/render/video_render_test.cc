@@ -177,7 +177,7 @@ TEST(VideoDisplacementField, EqualsVideoMatchAtEveryPixel) {
   EXPECT_GT(defined, 100);
 }
 
-// `render --video`: a dataset another tool could read by FORMATS.md alone.
+// `render --video`: a dataset another tool could read by docs/FORMATS.md alone.
 class RenderVideo : public ::testing::Test {
  protected:
   void SetUp() override {

@@ -21,7 +21,7 @@ namespace {
 
 using test::EverySecond;
 using test::FlightTrace;
-using test::IssueRig;
+using test::MappingRig;
 
 #if defined(__SANITIZE_ADDRESS__)
 constexpr int kGridStepPx = 80;  // ~190 points a frame keeps the ASan run short
@@ -42,7 +42,7 @@ void Measure(const TrueModel& truth, const GyroTrace& gyro, std::vector<FramePoi
 }
 
 struct Case {
-  RigModel declared = IssueRig();
+  RigModel declared = MappingRig();
   TrueModel truth;
   GyroTrace gyro;
   std::vector<FramePoints> frames;
@@ -77,7 +77,7 @@ const IdentifiedEffect& ExpectIdentified(const LoopResult& r, const std::string&
   EXPECT_EQ(Spec(r.effects[0].effect).name, name) << Explain(r);
   EXPECT_EQ(r.effects.size(), 1u) << Explain(r);
   EXPECT_FALSE(r.unexplained) << Explain(r);
-  // The issue's bound: after.rms_px within 1.5x noise_px.
+  // The bound: after.rms_px within 1.5x noise_px.
   EXPECT_LE(r.after.rms_px, 1.5 * r.noise_px) << Explain(r);
   EXPECT_GT(r.before.rms_px, 1.5 * r.noise_px) << "the injected effect should be visible";
   if (std::getenv("SHUTTERLAB_FIT_LOG")) std::printf("%s", Explain(r).c_str());
@@ -89,7 +89,7 @@ constexpr double kStderrFactor = 4.0;
 
 TEST(EffectModel, PredictionEqualsRendererTruth) {
   // Every effect at once, so every code path of the prediction is compared with the renderer's.
-  const RigModel declared = IssueRig();
+  const RigModel declared = MappingRig();
   TrueModel truth;
   truth.rig = declared;
   truth.rig.time_offset_s = 0.004;
@@ -135,7 +135,7 @@ TEST(EffectModel, PredictionEqualsRendererTruth) {
 TEST(EffectModel, OutsideTheTraceIsNaN) {
   const GyroTrace gyro = FlightTrace(10.0, 2);
   TrueModel model;
-  model.rig = IssueRig();
+  model.rig = MappingRig();
   std::vector<FramePoints> frames = GridFrames(model.rig, {-5.0, 9.99});
   const std::vector<Eigen::Vector2d> before = PredictDisplacements(model, gyro, frames[0]);
   for (const Eigen::Vector2d& d : before) EXPECT_FALSE(d.allFinite());
@@ -148,7 +148,7 @@ TEST(EffectModel, OutsideTheTraceIsNaN) {
 
 TEST(EffectModel, ParametersAndValues) {
   TrueModel model;
-  model.rig = IssueRig();
+  model.rig = MappingRig();
   const double x[3] = {0.002, 0.0, 0.0};
   Spec(Effect::kTimeOffset).apply_delta(x, &model);
   EXPECT_DOUBLE_EQ(Spec(Effect::kTimeOffset).value(model).get<double>(), 0.002);
@@ -173,7 +173,7 @@ TEST(CloseTheLoop, CleanDataAddsNothing) {
 TEST(CloseTheLoop, TakesADeclaredWideLensThatFoldsBeyondTheCorners) {
   // k1 = -0.35 keeps r (1 + k1 r^2) increasing out to r = 0.98, beyond this image's corners
   // (0.73) but not beyond every radius a fit checks: the user's calibration is taken as it is.
-  RigModel declared = IssueRig();
+  RigModel declared = MappingRig();
   declared.camera.dist[0] = -0.35;
   TrueModel truth;
   truth.rig = declared;
@@ -209,7 +209,7 @@ TEST(FitEffects, OnlyTheRedundantParametersLoseTheirStandardErrors) {
 }
 
 TEST(CloseTheLoop, RecoversTimeOffset) {
-  // 4 ms; the issue: within 0.3 ms.
+  // 4 ms; must be within 0.3 ms.
   const Case c = RunCase("time_offset=0.004");
   const IdentifiedEffect& e = ExpectIdentified(c.result, "time_offset");
   if (e.effect != Effect::kTimeOffset) return;
@@ -219,7 +219,7 @@ TEST(CloseTheLoop, RecoversTimeOffset) {
 }
 
 TEST(CloseTheLoop, RecoversReadoutTime) {
-  // 30 ms declared, 36 ms true (20 % off); the issue: within 2 %.
+  // 30 ms declared, 36 ms true (20 % off); must be within 2 %.
   const Case c = RunCase("readout_time=0.036");
   const IdentifiedEffect& e = ExpectIdentified(c.result, "readout_time");
   if (e.effect != Effect::kReadoutTime) return;
@@ -228,7 +228,7 @@ TEST(CloseTheLoop, RecoversReadoutTime) {
 }
 
 TEST(CloseTheLoop, RecoversMisalignment) {
-  // 5 degrees about a tilted axis; the issue: within 0.5 degrees.
+  // 5 degrees about a tilted axis; must be within 0.5 degrees.
   const Eigen::Matrix3d r_true =
       ExpSO3(Eigen::Vector3d(1.0, 2.0, -1.5).normalized() * (5.0 * M_PI / 180)).toRotationMatrix();
   std::string value;
@@ -242,7 +242,7 @@ TEST(CloseTheLoop, RecoversMisalignment) {
 }
 
 TEST(CloseTheLoop, RecoversGyroScale) {
-  // ~5 % per axis; the issue: within 1 %.
+  // ~5 % per axis; must be within 1 %.
   const Case c = RunCase("gyro_scale=1.05,0.96,1.04");
   const IdentifiedEffect& e = ExpectIdentified(c.result, "gyro_scale");
   if (e.effect != Effect::kGyroScale) return;
@@ -255,7 +255,7 @@ TEST(CloseTheLoop, RecoversGyroScale) {
 }
 
 TEST(CloseTheLoop, RecoversClockRate) {
-  // 400 ppm over a 300 s log (the last frame is 0.12 s late); the issue: within 20 %.
+  // 400 ppm over a 300 s log (the last frame is 0.12 s late); must be within 20 %.
   std::vector<double> t;
   for (int k = 0; k < 10; ++k) t.push_back(10.0 + k * 32.0);
   const Case c = RunCase("clock_rate=400", 4, 310.0, t);
@@ -267,7 +267,7 @@ TEST(CloseTheLoop, RecoversClockRate) {
 }
 
 TEST(CloseTheLoop, RecoversVelocityOrNamesTheAmbiguity) {
-  // 6 m/s at 50 m; the issue: within 10 %, or flagged ambiguous with gyro_bias.
+  // 6 m/s at 50 m; must be within 10 %, or flagged ambiguous with gyro_bias.
   const Case c = RunCase("velocity=4,-4.5,0");
   const IdentifiedEffect& e = ExpectIdentified(c.result, "velocity");
   if (e.effect != Effect::kVelocity) return;
@@ -293,7 +293,7 @@ TEST(CloseTheLoop, TriggerJitterIsNotAConfidentWrongEffect) {
   // Per-frame trigger jitter of several ms (not in the candidate list): each frame's true time
   // offset differs. The loop must say unexplained, or name time_offset (the closest thing) only if
   // the residual then is at noise level. Never another effect with a good-looking fit.
-  const RigModel declared = IssueRig();
+  const RigModel declared = MappingRig();
   const GyroTrace gyro = FlightTrace(22.0, 6);
   std::vector<FramePoints> frames = GridFrames(declared, EverySecond(10));
   std::mt19937_64 rng(11);
@@ -320,7 +320,7 @@ TEST(CloseTheLoop, LowPassFilteredGyroIsNotAConfidentWrongEffect) {
   // did not: the images follow the raw rates. Not in the candidate list. The closest candidate is
   // a time offset (the filter's ~10 ms group delay at low frequencies); the loop must not report
   // it (or anything else) as the explanation while the residual stays above the noise.
-  const RigModel declared = IssueRig();
+  const RigModel declared = MappingRig();
   const GyroTrace raw = FlightTrace(22.0, 14);
   std::vector<GyroSample> filtered = raw.samples();
   const double rc_s = 1.0 / (2 * M_PI * 15.0);
@@ -350,7 +350,7 @@ TEST(CloseTheLoop, LowPassFilteredGyroIsNotAConfidentWrongEffect) {
 
 TEST(CloseTheLoop, OutliersDoNotSteerTheFit) {
   // 3 % of the points wildly wrong (a bad match: 5-30 px off): the time offset is still found.
-  RigModel declared = IssueRig();
+  RigModel declared = MappingRig();
   TrueModel truth;
   truth.rig = declared;
   truth.rig.time_offset_s = -0.003;
@@ -412,7 +412,7 @@ void CorrelateNoise(const TrueModel& truth, const GyroTrace& gyro, std::vector<F
 TEST(CloseTheLoop, CorrelatedNoiseAddsNothing) {
   // Correlated noise makes every sum of squares ~9x more variable: the test's degrees of freedom
   // and BIC's sample size are divided by the estimated correlation factor, so nothing is added.
-  const RigModel declared = IssueRig();
+  const RigModel declared = MappingRig();
   TrueModel truth;
   truth.rig = declared;
   const GyroTrace gyro = FlightTrace(22.0, 8);
@@ -425,7 +425,7 @@ TEST(CloseTheLoop, CorrelatedNoiseAddsNothing) {
 }
 
 TEST(CloseTheLoop, CorrelatedNoiseTimeOffsetWithPlausibleStderr) {
-  const RigModel declared = IssueRig();
+  const RigModel declared = MappingRig();
   TrueModel truth;
   truth.rig = declared;
   truth.rig.time_offset_s = 0.005;
@@ -442,7 +442,7 @@ TEST(CloseTheLoop, CorrelatedNoiseTimeOffsetWithPlausibleStderr) {
 TEST(CloseTheLoop, FalseAlarmRateOnCleanData) {
   // alpha = 1e-3: over 30 clean data sets (independent noise, 4 frames each) the level test should
   // practically never fire, and no effect is ever added.
-  const RigModel declared = IssueRig();
+  const RigModel declared = MappingRig();
   TrueModel truth;
   truth.rig = declared;
   const GyroTrace gyro = FlightTrace(16.0, 10);
@@ -466,7 +466,7 @@ TEST(CloseTheLoop, GyroBiasAboutXIsRecoveredOrAmbiguousWithVelocity) {
   const IdentifiedEffect& e = ExpectIdentified(
       c.result, c.result.effects.empty() ? "gyro_bias" : Spec(c.result.effects[0].effect).name);
   if (e.effect == Effect::kGyroBias) {
-    EXPECT_NEAR(e.value[0].get<double>(), 0.03, 0.003);  // FORMATS.md: true = logged - b
+    EXPECT_NEAR(e.value[0].get<double>(), 0.03, 0.003);  // docs/FORMATS.md: true = logged - b
   } else {
     EXPECT_EQ(Spec(e.effect).name, "velocity");
     EXPECT_NE(std::find(e.ambiguous_with.begin(), e.ambiguous_with.end(), Effect::kGyroBias),
@@ -505,7 +505,7 @@ TEST(CloseTheLoop, TwoEffectsAreBothFound) {
 TEST(CloseTheLoop, ZeroWeightPointsAreIgnored) {
   // A tenth of the points are garbage (100 px off) but marked unmeasured-like with weight 0: the
   // answer is that of the good points.
-  RigModel declared = IssueRig();
+  RigModel declared = MappingRig();
   TrueModel truth;
   truth.rig = declared;
   truth.rig.shutter.readout_s = 0.026;

@@ -1,5 +1,5 @@
 #pragma once
-// Synthetic measurements for the effect-fitting tests and bench: the issue's rig, a multirotor-like
+// Synthetic measurements for the effect-fitting tests and bench: a mapping camera's rig, a multirotor-like
 // gyro trace, grid points with the exact displacement of a TrueModel plus Gaussian noise.
 
 #include "estimate/loop/effect_fit.h"
@@ -17,8 +17,8 @@
 
 namespace shutterlab::test {
 
-// The issue's rig: 1280x960, f = 1100 px, 30 ms readout, 50 m over flat ground.
-inline RigModel IssueRig() {
+// A mapping camera's rig: 1280x960, f = 1100 px, 30 ms readout, 50 m over flat ground.
+inline RigModel MappingRig() {
   RigModel rig;
   rig.camera.width = 1280;
   rig.camera.height = 960;
@@ -30,9 +30,9 @@ inline RigModel IssueRig() {
   return rig;
 }
 
-// The video tests' rig: the issue's field of view at 640x480 (f = 550 px), 30 ms readout, 50 m.
+// The video tests' rig: the mapping rig's field of view at 640x480 (f = 550 px), 30 ms readout, 50 m.
 inline RigModel VideoRig() {
-  RigModel rig = IssueRig();
+  RigModel rig = MappingRig();
   rig.camera.width = 640;
   rig.camera.height = 480;
   rig.camera.fx = rig.camera.fy = 550.0;

@@ -1,4 +1,4 @@
-// The video pair model (issue 6): VideoPairPredictor against the renderer's own match of rolling
+// The video pair model: VideoPairPredictor against the renderer's own match of rolling
 // shutter frames (its brute-force twin), the per-pair translation (epipolar) model, and the loop on
 // video pairs: axis permutations, time and readout, translation.
 
@@ -64,7 +64,7 @@ std::vector<FramePoints> RenderedPairs(const TrueModel& truth, const GyroTrace& 
   return out;
 }
 
-// The true models the twin test checks: each effect of FORMATS.md's table that a rotation-only
+// The true models the twin test checks: each effect of docs/FORMATS.md's table that a rotation-only
 // video model holds (velocity is the pair translation's).
 std::vector<std::pair<std::string, TrueModel>> TrueModels() {
   std::vector<std::pair<std::string, TrueModel>> out;

@@ -61,7 +61,7 @@ TEST(GyroIo, DetectsRawCountsByIntegerRates) {
   EXPECT_EQ(Detect("time_us,x,y,z\n1000,12,-7,3\n"), LogFormat::kRaw);
   // No header, integers: raw.
   EXPECT_EQ(Detect("1000,12,-7,3\n2000,11,-8,2\n"), LogFormat::kRaw);
-  // FORMATS.md's header always means gyro.csv, even with whole-number rates (--raw overrides).
+  // docs/FORMATS.md's header always means gyro.csv, even with whole-number rates (--raw overrides).
   EXPECT_EQ(Detect("t,gx,gy,gz\n0,0,0,0\n0.01,0,0,0\n"), LogFormat::kGyroCsv);
   EXPECT_EQ(Detect("t,gx,gy,gz\n0.001,12,-7,3\n"), LogFormat::kGyroCsv);
 }
@@ -87,7 +87,7 @@ TEST(GyroIo, ReadGyroDispatchesOnDetectionAndOverride) {
   GyroReadOptions csv;
   csv.format = LogFormat::kGyroCsv;
   EXPECT_THROW(ReadGyro(raw, csv), IoError);
-  // --raw reads FORMATS.md's header as counts when told to.
+  // --raw reads docs/FORMATS.md's header as counts when told to.
   const std::string counts_with_csv_header =
       WriteText(dir, "counts.csv", "t,gx,gy,gz\n0,131,0,0\n0.01,0,262,0\n");
   GyroReadOptions raw_forced;
