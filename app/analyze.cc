@@ -4,6 +4,7 @@
 #include "estimate/paper/analyze.h"
 
 #include "app/command.h"
+#include "estimate/report/analysis_json.h"
 #include "estimate/paper/flight.h"
 #include "estimate/report/analyze_report.h"
 #include "render/image_io.h"

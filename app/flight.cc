@@ -4,6 +4,7 @@
 #include "estimate/paper/flight.h"
 
 #include "app/command.h"
+#include "estimate/report/analysis_json.h"
 #include "app/trace_options.h"
 #include "sim/check.h"
 #include "sim/units.h"

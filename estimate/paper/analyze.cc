@@ -464,61 +464,6 @@ std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path) {
 
 std::string LimitKey(double limit_m) { return FormatNumber("%.12g", limit_m); }
 
-nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
-  nlohmann::json json;
-  json["source"] = {{"format", result.format},   {"gyro", result.gyro_source},
-                    {"samples", result.samples}, {"duration_s", result.duration_s},
-                    {"rate_hz", result.rate_hz}, {"gaps", result.gaps}};
-  json["flight"] = result.flight ? FlightToJson(*result.flight) : nlohmann::json(nullptr);
-  if (!result.flight) json["flight_problem"] = result.flight_problem;
-  json["bias"] = {{"estimated", result.bias_estimated},
-                  {"from_still_segment", result.bias_from_still},
-                  {"rad_s", {result.bias_rad_s.x(), result.bias_rad_s.y(), result.bias_rad_s.z()}}};
-  if (result.bias_from_still) {
-    json["bias"]["segment_s"] = {result.still_segment.begin_s, result.still_segment.end_s};
-  }
-  json["camera"] = {{"altitude_m", result.altitude_m},
-                    {"altitude_source", result.altitude_source},
-                    {"readout_s", result.readout_s}};
-  json["triggers"] = result.trigger_source;
-  nlohmann::json images = nlohmann::json::array();
-  for (const ImageResult& image : result.images) {
-    nlohmann::json entry;
-    entry["name"] = image.name;
-    entry["t"] = image.t_ns * 1e-9;
-    entry["trigger_t"] = image.trigger_t_ns * 1e-9;
-    entry["in_trace"] = image.in_trace;
-    nlohmann::json flagged = nlohmann::json::object();
-    if (image.in_trace) {
-      entry["D_paper_m"] = image.d_paper_m;
-      entry["D_full_m"] = image.d_full_m;
-      entry["D_full_px"] = image.d_full_px;
-      entry["range_arcsec"] = image.range_arcsec;
-      entry["dominant_axis"] = kAxisNames[image.dominant_axis];
-      for (size_t l = 0; l < result.limits_m.size(); ++l) {
-        flagged[LimitKey(result.limits_m[l])] = static_cast<bool>(image.flagged[l]);
-      }
-    } else {
-      entry["D_paper_m"] = nullptr;
-      entry["D_full_m"] = nullptr;
-      for (double limit : result.limits_m) flagged[LimitKey(limit)] = nullptr;
-    }
-    entry["flagged"] = flagged;
-    images.push_back(std::move(entry));
-  }
-  json["images"] = std::move(images);
-  const AnalyzeVerdict& v = result.verdict;
-  json["verdict"] = {{"images_in_trace", v.images_in_trace},
-                     {"flagged_percent", v.share_percent},
-                     {"axis_to_stabilise", v.axis_to_stabilise < 0
-                                               ? nlohmann::json(nullptr)
-                                               : nlohmann::json(kAxisNames[v.axis_to_stabilise])},
-                     {"fast_readout_s", v.fast_readout_s},
-                     {"flagged_percent_fast_readout", v.share_fast_readout_percent},
-                     {"flagged_percent_half_altitude", v.share_half_altitude_percent},
-                     {"line", v.line}};
-  return json;
-}
 
 std::string AnalyzeReport(const AnalyzeResult& result) {
   std::ostringstream out;

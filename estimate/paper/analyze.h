@@ -27,7 +27,6 @@
 #include "render/truth_model.h"
 #include "sim/logs/flight_log.h"
 
-#include <nlohmann/json.hpp>
 
 #include <array>
 #include <cstdint>
@@ -125,8 +124,6 @@ TrueModel AnalyzeTrueModel(const RigModel& rig, const Eigen::Vector3d& bias_cam_
 // naming those columns; unnamed images become IMG_0001, ... Throws IoError(path:line: problem).
 std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path);
 
-// docs/FORMATS.md `analyze` JSON (plus bias, verdict and per-image detail).
-nlohmann::json AnalyzeToJson(const AnalyzeResult& result);
 // Report for a person: source, bias, flight table, per-image table, verdict.
 std::string AnalyzeReport(const AnalyzeResult& result);
 // DIR/images.csv (name,t,D_paper_m,D_full_m,flag_<limit>...,dominant_axis; images outside the

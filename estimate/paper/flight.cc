@@ -425,35 +425,6 @@ FlightResult Flight(const GyroTrace& trace, const FlightOptions& options) {
   return result;
 }
 
-nlohmann::json FlightToJson(const FlightResult& result) {
-  nlohmann::json rows = nlohmann::json::array();
-  for (const FlightRow& row : result.rows) {
-    nlohmann::json r = {{"limit_m", row.limit_m},
-                        {"window_s", row.window_s},
-                        {"threshold_arcsec", row.threshold_arcsec},
-                        {"windows", row.windows},
-                        {"flagged_percent", row.flagged_percent},
-                        {"flagged_percent_axis",
-                         {{"x", row.flagged_percent_axis[0]},
-                          {"y", row.flagged_percent_axis[1]},
-                          {"z", row.flagged_percent_axis[2]}}}};
-    if (result.vector_criterion) {
-      r["flagged_percent_vector"] = row.flagged_percent_vector;
-      r["flagged_vector_only"] = row.flagged_vector_only;
-      r["flagged_axis_only"] = row.flagged_axis_only;
-    } else {
-      r["flagged_percent_vector"] = nullptr;
-    }
-    rows.push_back(std::move(r));
-  }
-  const auto& b = result.bias.bias_rad_s;
-  return {{"altitude_m", result.altitude_m},
-          {"noise_allowance_arcsec", result.noise_allowance_arcsec},
-          {"windows_total", result.windows_total},
-          {"samples", result.samples},
-          {"bias_rad_s", {b.x(), b.y(), b.z()}},
-          {"rows", rows}};
-}
 
 std::string FlightTable(const FlightResult& result) {
   std::ostringstream out;

@@ -14,7 +14,6 @@
 #include "sim/bias.h"
 #include "sim/gyro_trace.h"
 
-#include <nlohmann/json.hpp>
 
 #include <array>
 #include <cstdint>
@@ -86,8 +85,6 @@ struct FlightResult {
 // is longer than the trace after the bias segment (no window fits).
 FlightResult Flight(const GyroTrace& trace, const FlightOptions& options);
 
-// docs/FORMATS.md `flight` JSON (plus per-axis percentages, window counts and the bias).
-nlohmann::json FlightToJson(const FlightResult& result);
 // The person-readable table in the paper's Table 4 layout, with a closing line saying which
 // criterion flags more on this data.
 std::string FlightTable(const FlightResult& result);

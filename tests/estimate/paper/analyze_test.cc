@@ -283,11 +283,7 @@ TEST(Analyze, RealBetaflightLogEveryTwoSeconds) {
     EXPECT_TRUE(std::isfinite(image.d_full_m) && image.d_full_m >= 0) << image.name;
   }
   EXPECT_EQ(in_trace, result.images.size());
-  const nlohmann::json json = AnalyzeToJson(result);
-  EXPECT_EQ(json["source"]["format"], "betaflight");
-  EXPECT_EQ(json["images"].size(), result.images.size());
-  EXPECT_TRUE(json["images"][0]["flagged"].contains("0.05"));
-  EXPECT_TRUE(json["images"][0]["flagged"].contains("0.1"));
+  EXPECT_EQ(result.format, "betaflight");
 }
 
 TEST(Analyze, WritesImagesCsvAndExcludeList) {

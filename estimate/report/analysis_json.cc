@@ -1,0 +1,96 @@
+#include "estimate/report/analysis_json.h"
+
+namespace shutterlab {
+namespace {
+
+constexpr const char* kAxisNames[3] = {"x", "y", "z"};
+
+}  // namespace
+
+nlohmann::json FlightToJson(const FlightResult& result) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (const FlightRow& row : result.rows) {
+    nlohmann::json r = {{"limit_m", row.limit_m},
+                        {"window_s", row.window_s},
+                        {"threshold_arcsec", row.threshold_arcsec},
+                        {"windows", row.windows},
+                        {"flagged_percent", row.flagged_percent},
+                        {"flagged_percent_axis",
+                         {{"x", row.flagged_percent_axis[0]},
+                          {"y", row.flagged_percent_axis[1]},
+                          {"z", row.flagged_percent_axis[2]}}}};
+    if (result.vector_criterion) {
+      r["flagged_percent_vector"] = row.flagged_percent_vector;
+      r["flagged_vector_only"] = row.flagged_vector_only;
+      r["flagged_axis_only"] = row.flagged_axis_only;
+    } else {
+      r["flagged_percent_vector"] = nullptr;
+    }
+    rows.push_back(std::move(r));
+  }
+  const auto& b = result.bias.bias_rad_s;
+  return {{"altitude_m", result.altitude_m},
+          {"noise_allowance_arcsec", result.noise_allowance_arcsec},
+          {"windows_total", result.windows_total},
+          {"samples", result.samples},
+          {"bias_rad_s", {b.x(), b.y(), b.z()}},
+          {"rows", rows}};
+}
+
+nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
+  nlohmann::json json;
+  json["source"] = {{"format", result.format},   {"gyro", result.gyro_source},
+                    {"samples", result.samples}, {"duration_s", result.duration_s},
+                    {"rate_hz", result.rate_hz}, {"gaps", result.gaps}};
+  json["flight"] = result.flight ? FlightToJson(*result.flight) : nlohmann::json(nullptr);
+  if (!result.flight) json["flight_problem"] = result.flight_problem;
+  json["bias"] = {{"estimated", result.bias_estimated},
+                  {"from_still_segment", result.bias_from_still},
+                  {"rad_s", {result.bias_rad_s.x(), result.bias_rad_s.y(), result.bias_rad_s.z()}}};
+  if (result.bias_from_still) {
+    json["bias"]["segment_s"] = {result.still_segment.begin_s, result.still_segment.end_s};
+  }
+  json["camera"] = {{"altitude_m", result.altitude_m},
+                    {"altitude_source", result.altitude_source},
+                    {"readout_s", result.readout_s}};
+  json["triggers"] = result.trigger_source;
+  nlohmann::json images = nlohmann::json::array();
+  for (const ImageResult& image : result.images) {
+    nlohmann::json entry;
+    entry["name"] = image.name;
+    entry["t"] = image.t_ns * 1e-9;
+    entry["trigger_t"] = image.trigger_t_ns * 1e-9;
+    entry["in_trace"] = image.in_trace;
+    nlohmann::json flagged = nlohmann::json::object();
+    if (image.in_trace) {
+      entry["D_paper_m"] = image.d_paper_m;
+      entry["D_full_m"] = image.d_full_m;
+      entry["D_full_px"] = image.d_full_px;
+      entry["range_arcsec"] = image.range_arcsec;
+      entry["dominant_axis"] = kAxisNames[image.dominant_axis];
+      for (size_t l = 0; l < result.limits_m.size(); ++l) {
+        flagged[LimitKey(result.limits_m[l])] = static_cast<bool>(image.flagged[l]);
+      }
+    } else {
+      entry["D_paper_m"] = nullptr;
+      entry["D_full_m"] = nullptr;
+      for (double limit : result.limits_m) flagged[LimitKey(limit)] = nullptr;
+    }
+    entry["flagged"] = flagged;
+    images.push_back(std::move(entry));
+  }
+  json["images"] = std::move(images);
+  const AnalyzeVerdict& v = result.verdict;
+  json["verdict"] = {{"images_in_trace", v.images_in_trace},
+                     {"flagged_percent", v.share_percent},
+                     {"axis_to_stabilise", v.axis_to_stabilise < 0
+                                               ? nlohmann::json(nullptr)
+                                               : nlohmann::json(kAxisNames[v.axis_to_stabilise])},
+                     {"fast_readout_s", v.fast_readout_s},
+                     {"flagged_percent_fast_readout", v.share_fast_readout_percent},
+                     {"flagged_percent_half_altitude", v.share_half_altitude_percent},
+                     {"line", v.line}};
+  return json;
+}
+
+}  // namespace shutterlab
