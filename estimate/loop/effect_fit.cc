@@ -614,8 +614,8 @@ Context MakeContext(const TrueModel& declared, const PointPredictor& predictor,
   return ctx;
 }
 
-// The fit's effects with their docs/FORMATS.md values, standard errors, parameters and covariance; the
-// residual after each is the fit's own (the loop overwrites it with the residual when it was
+// The fit's effects with their docs/FORMATS.md values, standard errors, parameters and covariance;
+// the residual after each is the fit's own (the loop overwrites it with the residual when it was
 // added).
 std::vector<IdentifiedEffect> IdentifiedEffects(const Context& ctx, const Fit& fit) {
   const Eigen::MatrixXd cov = Covariance(ctx, fit);
@@ -688,6 +688,326 @@ Start Begin(const TrueModel& declared, const GyroTrace& gyro,
   return start;
 }
 
+// ---- The loop's rounds: a driver (CloseTheLoop) over the judged steps below, each reading and
+// filling one Round record; LogRound writes the round's log lines from that record.
+
+// How one fit's residual is judged (rules 1-2 at the top of this file), computed once per fit:
+// its points less gross outliers, their weight sums, its sum of squares over them, its residual
+// variance s^2, its correlation factor c and the effective number of observations n / c.
+struct Judged {
+  std::vector<uint8_t> keep;
+  MaskSums sums;
+  double rss = 0.0;
+  double s2 = 0.0;
+  double c = 1.0;
+  double n_eff = 2.0;
+};
+
+Judged Judge(const Context& ctx, const Fit& fit) {
+  const RobustSolution& sol = fit.solution;
+  Judged judged;
+  judged.keep = KeepMask(ctx, sol.residuals, sol.valid);
+  judged.sums = SumWeights(ctx, judged.keep);
+  judged.rss = MaskedRss(ctx, sol.residuals, sol.valid, judged.keep);
+  judged.s2 =
+      judged.rss / std::max(1.0, ctx.components * judged.sums.w -
+                                     CriterionParameters(fit.hypothesis.effects) - ctx.nuisance);
+  judged.c = CorrelationFactor(ctx, sol.residuals, judged.keep);
+  judged.n_eff =
+      std::max(2.0, ctx.components * judged.sums.w * judged.sums.w / judged.sums.w2 / judged.c);
+  return judged;
+}
+
+// Another fit's weighted sum of squares on the points `judged` keeps: models compared with each
+// other are judged on the same points.
+double RssOn(const Context& ctx, const Judged& judged, const Fit& fit) {
+  return MaskedRss(ctx, fit.solution.residuals, fit.solution.valid, judged.keep);
+}
+
+// One candidate of a round: the current effects plus `effect`, fitted jointly, and its scores.
+struct Candidate {
+  Effect effect = Effect::kTimeOffset;
+  Fit fit;  // moved into the loop's current fit when chosen
+  // The effect's fitted value and the fit's residual, for the log (the chosen fit moves away).
+  json value;
+  double rms_px = 0.0;
+  size_t kept = 0;       // the round's judged points
+  size_t lost = 0;       // of them, those this candidate predicts nothing for
+  bool predicts = true;  // false: it loses too many points to be a candidate (dbic infinite)
+  double dbic = 0.0;     // against the current model (rule 2)
+  double share = 0.0;    // of the residual's excess over the noise it explains
+};
+
+// The clock-rate rule choosing time_offset over the clock_rate that BIC chose.
+struct RateOverrule {
+  double rate_ppm = 0.0, rate_sd_ppm = 0.0;
+  bool rate_significant = false;  // true: time_offset alone already leaves the noise
+};
+
+// The backward step's refit of the current effects without one of the earlier ones.
+struct Removal {
+  Effect effect = Effect::kTimeOffset;
+  double rms_px = 0.0;
+  double dbic = 0.0;  // the change of BIC removing it: it is dropped when below bic_margin
+};
+
+struct Round {
+  int number = 0;
+  std::vector<Candidate> candidates;
+  int chosen = -1;    // index into candidates
+  bool stop = false;  // no candidate qualifies (rule 2): the loop ends
+  std::vector<RateOverrule> rate_overrules;
+  std::vector<Effect> ambiguous;  // with the chosen one (rule 3)
+  std::vector<Removal> removals;
+  std::optional<Effect> dropped;  // by the backward step
+  LevelTest level;                // the residual's level test after the round
+};
+
+// Rule 2's candidates: each effect neither added nor dropped, fitted jointly with the current ones
+// (the new one starts at zero; FitHypothesis scans its start where the cost is not convex).
+std::vector<Candidate> FitCandidates(const Context& ctx, const Fit& current,
+                                     const std::vector<Effect>& candidates,
+                                     const std::vector<Effect>& removed) {
+  auto contains = [](const std::vector<Effect>& effects, Effect e) {
+    return std::find(effects.begin(), effects.end(), e) != effects.end();
+  };
+  std::vector<Candidate> out;
+  for (Effect effect : candidates) {
+    if (contains(current.hypothesis.effects, effect) || contains(removed, effect)) continue;
+    Hypothesis h = current.hypothesis;
+    h.effects.push_back(effect);
+    const int n_new = Spec(effect).parameter_count;
+    h.x.conservativeResize(h.x.size() + n_new);
+    h.x.tail(n_new).setZero();
+    Candidate candidate;
+    candidate.effect = effect;
+    candidate.fit = FitHypothesis(ctx, std::move(h));
+    candidate.value = Spec(effect).value(candidate.fit.model);
+    candidate.rms_px = candidate.fit.stats.rms_px;
+    out.push_back(std::move(candidate));
+  }
+  return out;
+}
+
+// Rule 2's scores: each candidate's dBIC against the current model and its share of the excess
+// over the noise, every model judged on the same points (those the round's best candidate does not
+// call gross outliers). Chooses the lowest dBIC among the candidates that explain enough; stops the
+// loop when that does not lower BIC by bic_margin.
+void ScoreRound(const Context& ctx, const LoopOptions& options, const Fit& current, Round* round) {
+  std::vector<Candidate>& candidates = round->candidates;
+  const Fit* best_fit = &candidates[0].fit;
+  for (const Candidate& candidate : candidates) {
+    if (candidate.fit.rss < best_fit->rss) best_fit = &candidate.fit;
+  }
+  const Judged best = Judge(ctx, *best_fit);
+  const int p_cur = CriterionParameters(current.hypothesis.effects);
+  const double rss_cur = RssOn(ctx, best, current);
+  const double noise_rss = ctx.noise_sq * best.sums.w;
+  const double excess_cur = std::max(0.0, rss_cur - noise_rss);
+  for (size_t j = 0; j < candidates.size(); ++j) {
+    Candidate& candidate = candidates[j];
+    const int p_j = CriterionParameters(candidate.fit.hypothesis.effects);
+    const double rss_j = RssOn(ctx, best, candidate.fit);
+    candidate.dbic = (rss_j - rss_cur) / (best.s2 * best.c) + (p_j - p_cur) * std::log(best.n_eff);
+    candidate.share =
+        excess_cur > 0 ? (excess_cur - std::max(0.0, rss_j - noise_rss)) / excess_cur : 0.0;
+    for (size_t i = 0; i < best.keep.size(); ++i) {
+      candidate.kept += best.keep[i];
+      candidate.lost += best.keep[i] && !candidate.fit.solution.valid[i];
+    }
+    // A model that predicts nothing for many points would be scored on the rest (MaskedRss
+    // charges a lost point only the trimming level): it is no explanation of the data.
+    if (candidate.lost > kMaxLostShare * candidate.kept) {
+      candidate.predicts = false;
+      candidate.dbic = std::numeric_limits<double>::infinity();
+      candidate.share = 0.0;
+      continue;
+    }
+    if (candidate.share >= options.min_explained_share &&
+        (round->chosen < 0 || candidate.dbic < candidates[round->chosen].dbic)) {
+      round->chosen = static_cast<int>(j);
+    }
+  }
+  round->stop = round->chosen < 0 || candidates[round->chosen].dbic >= -options.bic_margin;
+}
+
+// clock_rate nests time_offset (its rate fixed at 0). The simpler offset is the explanation when
+// the rate's own (cluster-robust) standard error cannot tell it from 0, or when the offset alone
+// already leaves the residual at the noise level (rule 5's material test): BIC alone favours the
+// rate when frame-coherent measurement errors make a drift look real (a 0.5 s clip "drifts" by a
+// few hundred ppm on the measurement's own systematic error).
+void ApplyClockRateRule(const Context& ctx, const LoopOptions& options, Round* round) {
+  std::vector<Candidate>& candidates = round->candidates;
+  if (candidates[round->chosen].effect != Effect::kClockRate) return;
+  for (size_t j = 0; j < candidates.size(); ++j) {
+    const Candidate& offset = candidates[j];
+    if (offset.effect != Effect::kTimeOffset || offset.share < options.min_explained_share ||
+        offset.dbic >= -options.bic_margin) {
+      continue;
+    }
+    const Fit& rate_fit = candidates[round->chosen].fit;
+    const Eigen::Index rate_index = rate_fit.solution.x.size() - 2;
+    const double rate_sd = std::sqrt(Covariance(ctx, rate_fit)(rate_index, rate_index));
+    const double rate = rate_fit.solution.x[rate_index];
+    if (!(std::abs(rate) > kRateSignificance * rate_sd)) {
+      round->rate_overrules.push_back({rate, rate_sd, /*rate_significant=*/false});
+      round->chosen = static_cast<int>(j);
+    } else if (!Material(ctx, options,
+                         TestLevel(ctx, offset.fit.solution.residuals, offset.fit.solution.valid,
+                                   options.significance))) {
+      round->rate_overrules.push_back({rate, rate_sd, /*rate_significant=*/true});
+      round->chosen = static_cast<int>(j);
+    }
+  }
+}
+
+// Rule 3: the other candidates within ambiguity_margin of the chosen one's dBIC that explain
+// enough as well.
+std::vector<Effect> FindAmbiguous(const LoopOptions& options, const Round& round) {
+  const Candidate& chosen = round.candidates[round.chosen];
+  std::vector<Effect> ambiguous;
+  for (size_t j = 0; j < round.candidates.size(); ++j) {
+    if (static_cast<int>(j) == round.chosen) continue;
+    const Candidate& other = round.candidates[j];
+    // clock_rate holds time_offset (rate and offset): when the offset alone is chosen, the rate
+    // fitted to ~0 beside it is the same explanation, not another one.
+    if (chosen.effect == Effect::kTimeOffset && other.effect == Effect::kClockRate) continue;
+    if (other.dbic - chosen.dbic < options.ambiguity_margin &&
+        other.share >= options.min_explained_share) {
+      ambiguous.push_back(other.effect);
+    }
+  }
+  return ambiguous;
+}
+
+// Rule 4, the backward step (stepwise selection): an effect added earlier may be redundant now (a
+// readout error first absorbed by a gyro scale, say). Refits without each earlier effect and drops
+// the one whose removal costs least if that is less than bic_margin: *current becomes that refit.
+// Returns the dropped effect's index in the effects before the step, or -1.
+int TryDropOne(const Context& ctx, const LoopOptions& options, Fit* current, Round* round) {
+  const std::vector<Effect> effects = current->hypothesis.effects;
+  if (effects.size() < 2) return -1;
+  const Judged now = Judge(ctx, *current);
+  int drop = -1;
+  double drop_dbic = options.bic_margin;
+  Fit drop_fit;
+  for (size_t k = 0; k + 1 < effects.size(); ++k) {
+    Hypothesis h;
+    int offset = 0;
+    for (size_t m = 0; m < effects.size(); ++m) {
+      const int n = Spec(effects[m]).parameter_count;
+      if (m != k) {
+        h.effects.push_back(effects[m]);
+        h.x.conservativeResize(h.x.size() + n);
+        h.x.tail(n) = current->hypothesis.x.segment(offset, n);
+      }
+      offset += n;
+    }
+    // Keep the just-added effect last (its start is the current value, no scan needed).
+    Fit without = FitHypothesis(ctx, std::move(h));
+    const double dbic_remove = (RssOn(ctx, now, without) - now.rss) / (now.s2 * now.c) -
+                               std::max(1, Spec(effects[k]).parameter_count) * std::log(now.n_eff);
+    round->removals.push_back({effects[k], without.stats.rms_px, dbic_remove});
+    if (dbic_remove < drop_dbic) {
+      drop_dbic = dbic_remove;
+      drop = static_cast<int>(k);
+      drop_fit = std::move(without);
+    }
+  }
+  if (drop < 0) return -1;
+  round->dropped = effects[drop];
+  *current = std::move(drop_fit);
+  return drop;
+}
+
+// The level test's line: "<what>: rms ... (trimmed), ...: above the noise / at the noise level".
+std::string LevelLine(const std::string& what, const LevelTest& t, double significance) {
+  return what + ": rms " + FormatNumber("%.4f", t.rms_px) + " px (trimmed), mean square " +
+         FormatNumber("%.3f", t.ratio) + "x noise^2, threshold " +
+         FormatNumber("%.3f", t.threshold) + " (alpha " + FormatNumber("%g", significance) +
+         ", correlation factor " + FormatNumber("%.2f", t.c) +
+         "): " + (t.above ? "above the noise" : "at the noise level");
+}
+
+// A round's log lines, in the order of its steps: the candidates, then either the stop or the
+// clock-rate rule, the addition with its ambiguities, the backward step and the new level.
+void LogRound(const Round& round, const LoopOptions& options, std::vector<std::string>* log) {
+  const std::string at = "round " + std::to_string(round.number) + ": ";
+  for (const Candidate& c : round.candidates) {
+    const std::string& name = Spec(c.effect).name;
+    const std::string fitted = name + " = " + c.value.dump();
+    if (!c.predicts) {
+      log->push_back(at + name + ": predicts " + std::to_string(c.kept - c.lost) + " of " +
+                     std::to_string(c.kept) + " points; " + fitted + "; not a candidate");
+      continue;
+    }
+    log->push_back(at + name + ": rms " + FormatNumber("%.4f", c.rms_px) + " px, dBIC " +
+                   FormatNumber("%.1f", c.dbic) + ", explains " +
+                   FormatNumber("%.1f", 100.0 * c.share) + " % of the excess; " + fitted);
+  }
+  if (round.stop) {
+    log->push_back(at + "no candidate lowers BIC by " + FormatNumber("%g", options.bic_margin) +
+                   " while explaining " + FormatNumber("%g", 100.0 * options.min_explained_share) +
+                   " % of the excess; stop");
+    return;
+  }
+  for (const RateOverrule& o : round.rate_overrules) {
+    log->push_back(at + "clock_rate's rate is " + FormatNumber("%.3g", o.rate_ppm) + " +- " +
+                   FormatNumber("%.3g", o.rate_sd_ppm) + " ppm" +
+                   (o.rate_significant ? ", but time_offset alone leaves the noise: time_offset"
+                                       : ", not significant: time_offset"));
+  }
+  const std::string& added = Spec(round.candidates[round.chosen].effect).name;
+  std::string line = at + "added " + added;
+  for (Effect a : round.ambiguous) line += " (ambiguous with " + Spec(a).name + ")";
+  log->push_back(line);
+  for (const Removal& r : round.removals) {
+    log->push_back(at + "without " + Spec(r.effect).name + ": rms " +
+                   FormatNumber("%.4f", r.rms_px) + " px, dBIC " + FormatNumber("%+.1f", r.dbic));
+  }
+  if (round.dropped)
+    log->push_back(at + "dropped " + Spec(*round.dropped).name + " (redundant now)");
+  log->push_back(LevelLine("with " + added, round.level, options.significance));
+}
+
+// The candidates tried: options.candidates, or every effect.
+std::vector<Effect> CandidateEffects(const LoopOptions& options) {
+  std::vector<Effect> candidates = options.candidates;
+  if (candidates.empty()) {
+    for (const EffectSpec& spec : AllEffects()) candidates.push_back(spec.effect);
+  }
+  return candidates;
+}
+
+// What the loop keeps per effect of its current fit: the residual once it was added (or once the
+// backward step dropped an earlier one) and what it was ambiguous with then.
+struct Added {
+  ResidualStats after;
+  std::vector<Effect> ambiguous_with;
+};
+
+// The loop's result from its final joint fit: values and standard errors, residuals, and the
+// verdict of rule 5 on `level`, the final residual's level test.
+void Conclude(const Context& ctx, const LoopOptions& options, const Fit& current,
+              const std::vector<Added>& added, const LevelTest& level,
+              const PointPredictor& predictor, LoopResult* result) {
+  result->effects = IdentifiedEffects(ctx, current);
+  for (size_t k = 0; k < result->effects.size(); ++k) {
+    result->effects[k].ambiguous_with = added[k].ambiguous_with;
+    result->effects[k].after = added[k].after;
+  }
+  result->after = current.stats;
+  result->model = current.model;
+  result->residuals_after = PointResiduals(current);
+  if (options.pair_translation) {  // the directions of the final model, not of a trial step
+    std::vector<Eigen::Vector2d> unused;
+    predictor.Predict(current.model, &unused);
+    result->pair_translation_dirs = predictor.translation_dirs();
+  }
+  result->unexplained = Material(ctx, options, level);
+  result->log.push_back(std::string("unexplained: ") + (result->unexplained ? "yes" : "no"));
+}
+
 }  // namespace
 
 LoopResult CloseTheLoop(const RigModel& declared, const GyroTrace& gyro,
@@ -703,241 +1023,44 @@ LoopResult CloseTheLoop(const TrueModel& declared, const GyroTrace& gyro,
                         const LoopOptions& options) {
   LoopResult result;
   Start start = Begin(declared, gyro, frames, noise_px, options, &result);
-  Context& ctx = start.ctx;
+  const Context& ctx = start.ctx;
   Fit current = std::move(start.declared);
-  const std::unique_ptr<PointPredictor>& predictor = start.predictor;
-  std::vector<Effect> candidates = options.candidates;
-  if (candidates.empty()) {
-    for (const EffectSpec& spec : AllEffects()) candidates.push_back(spec.effect);
-  }
-
+  const std::vector<Effect> candidates = CandidateEffects(options);
   LevelTest level =
       TestLevel(ctx, current.solution.residuals, current.solution.valid, options.significance);
-  auto level_line = [&](const std::string& what, const LevelTest& t) {
-    return what + ": rms " + FormatNumber("%.4f", t.rms_px) + " px (trimmed), mean square " +
-           FormatNumber("%.3f", t.ratio) + "x noise^2, threshold " +
-           FormatNumber("%.3f", t.threshold) + " (alpha " +
-           FormatNumber("%g", options.significance) + ", correlation factor " +
-           FormatNumber("%.2f", t.c) + "): " + (t.above ? "above the noise" : "at the noise level");
-  };
-  result.log.push_back(level_line("declared model", level));
+  result.log.push_back(LevelLine("declared model", level, options.significance));
   result.above_noise_before = level.above;
 
-  std::vector<ResidualStats> after_each;
-  std::vector<std::vector<Effect>> ambiguous_each;
+  std::vector<Added> added;     // one per effect of current, in its order
   std::vector<Effect> removed;  // dropped by the backward step; not tried again
-  for (int round = 1; Material(ctx, options, level) &&
-                      static_cast<int>(current.hypothesis.effects.size()) < options.max_effects &&
-                      round <= 2 * options.max_effects;
-       ++round) {
-    std::vector<Fit> fits;
-    for (Effect candidate : candidates) {
-      if (std::find(current.hypothesis.effects.begin(), current.hypothesis.effects.end(),
-                    candidate) != current.hypothesis.effects.end() ||
-          std::find(removed.begin(), removed.end(), candidate) != removed.end()) {
-        continue;
-      }
-      Hypothesis h = current.hypothesis;
-      h.effects.push_back(candidate);
-      const int n_new = Spec(candidate).parameter_count;
-      h.x.conservativeResize(h.x.size() + n_new);
-      h.x.tail(n_new).setZero();
-      fits.push_back(FitHypothesis(ctx, std::move(h)));
-    }
-    if (fits.empty()) break;
-    const Fit* best_fit = &fits[0];
-    for (const Fit& f : fits) {
-      if (f.rss < best_fit->rss) best_fit = &f;
-    }
-    // Every model of the round is judged on the same points: those the best candidate does not
-    // call gross outliers.
-    const std::vector<uint8_t> keep =
-        KeepMask(ctx, best_fit->solution.residuals, best_fit->solution.valid);
-    const MaskSums sums = SumWeights(ctx, keep);
-    auto rss_of = [&](const Fit& f) {
-      return MaskedRss(ctx, f.solution.residuals, f.solution.valid, keep);
-    };
-    const int p_best = CriterionParameters(best_fit->hypothesis.effects);
-    const double s2 =
-        rss_of(*best_fit) / std::max(1.0, ctx.components * sums.w - p_best - ctx.nuisance);
-    const double c = CorrelationFactor(ctx, best_fit->solution.residuals, keep);
-    const double n_eff = std::max(2.0, ctx.components * sums.w * sums.w / sums.w2 / c);
-    const int p_cur = CriterionParameters(current.hypothesis.effects);
-    const double rss_cur = rss_of(current);
-    const double noise_rss = ctx.noise_sq * sums.w;
-    const double excess_cur = std::max(0.0, rss_cur - noise_rss);
-    std::vector<double> dbic(fits.size()), share(fits.size());
-    int chosen = -1;
-    for (size_t j = 0; j < fits.size(); ++j) {
-      const int p_j = CriterionParameters(fits[j].hypothesis.effects);
-      const double rss_j = rss_of(fits[j]);
-      dbic[j] = (rss_j - rss_cur) / (s2 * c) + (p_j - p_cur) * std::log(n_eff);
-      share[j] =
-          excess_cur > 0 ? (excess_cur - std::max(0.0, rss_j - noise_rss)) / excess_cur : 0.0;
-      const Effect effect = fits[j].hypothesis.effects.back();
-      const std::string& name = Spec(effect).name;
-      // A model that predicts nothing for many points would be scored on the rest (MaskedRss
-      // charges a lost point only the trimming level): it is no explanation of the data.
-      size_t kept = 0, lost = 0;
-      for (size_t i = 0; i < keep.size(); ++i) {
-        kept += keep[i];
-        lost += keep[i] && !fits[j].solution.valid[i];
-      }
-      if (lost > kMaxLostShare * kept) {
-        result.log.push_back("round " + std::to_string(round) + ": " + name + ": predicts " +
-                             std::to_string(kept - lost) + " of " + std::to_string(kept) +
-                             " points; " + Describe({effect}, fits[j].model) + "; not a candidate");
-        dbic[j] = std::numeric_limits<double>::infinity();
-        share[j] = 0.0;
-        continue;
-      }
-      result.log.push_back("round " + std::to_string(round) + ": " + name + ": rms " +
-                           FormatNumber("%.4f", fits[j].stats.rms_px) + " px, dBIC " +
-                           FormatNumber("%.1f", dbic[j]) + ", explains " +
-                           FormatNumber("%.1f", 100.0 * share[j]) + " % of the excess; " +
-                           Describe({effect}, fits[j].model));
-      if (share[j] >= options.min_explained_share && (chosen < 0 || dbic[j] < dbic[chosen])) {
-        chosen = static_cast<int>(j);
-      }
-    }
-    if (chosen < 0 || dbic[chosen] >= -options.bic_margin) {
-      result.log.push_back("round " + std::to_string(round) + ": no candidate lowers BIC by " +
-                           FormatNumber("%g", options.bic_margin) + " while explaining " +
-                           FormatNumber("%g", 100.0 * options.min_explained_share) +
-                           " % of the excess; stop");
+  for (int number = 1; Material(ctx, options, level) &&
+                       static_cast<int>(current.hypothesis.effects.size()) < options.max_effects &&
+                       number <= 2 * options.max_effects;
+       ++number) {
+    Round round;
+    round.number = number;
+    round.candidates = FitCandidates(ctx, current, candidates, removed);
+    if (round.candidates.empty()) break;
+    ScoreRound(ctx, options, current, &round);
+    if (round.stop) {
+      LogRound(round, options, &result.log);
       break;
     }
-    // clock_rate nests time_offset (its rate fixed at 0). The simpler offset is the explanation
-    // when the rate's own (cluster-robust) standard error cannot tell it from 0, or when the offset
-    // alone already leaves the residual at the noise level (rule 5's material test): BIC alone
-    // favours the rate when frame-coherent measurement errors make a drift look real (a 0.5 s clip
-    // "drifts" by a few hundred ppm on the measurement's own systematic error).
-    if (fits[chosen].hypothesis.effects.back() == Effect::kClockRate) {
-      for (size_t j = 0; j < fits.size(); ++j) {
-        if (fits[j].hypothesis.effects.back() != Effect::kTimeOffset ||
-            share[j] < options.min_explained_share || dbic[j] >= -options.bic_margin) {
-          continue;
-        }
-        const Fit& rate_fit = fits[chosen];
-        const Eigen::Index rate_index = rate_fit.solution.x.size() - 2;
-        const double rate_sd = std::sqrt(Covariance(ctx, rate_fit)(rate_index, rate_index));
-        const double rate = rate_fit.solution.x[rate_index];
-        const std::string prefix = "round " + std::to_string(round) + ": clock_rate's rate is " +
-                                   FormatNumber("%.3g", rate) + " +- " +
-                                   FormatNumber("%.3g", rate_sd) + " ppm";
-        if (!(std::abs(rate) > kRateSignificance * rate_sd)) {
-          result.log.push_back(prefix + ", not significant: time_offset");
-          chosen = static_cast<int>(j);
-        } else if (!Material(ctx, options,
-                             TestLevel(ctx, fits[j].solution.residuals, fits[j].solution.valid,
-                                       options.significance))) {
-          result.log.push_back(prefix + ", but time_offset alone leaves the noise: time_offset");
-          chosen = static_cast<int>(j);
-        }
-      }
+    ApplyClockRateRule(ctx, options, &round);
+    round.ambiguous = FindAmbiguous(options, round);
+    current = std::move(round.candidates[round.chosen].fit);
+    added.push_back({current.stats, round.ambiguous});
+    const int dropped = TryDropOne(ctx, options, &current, &round);
+    if (dropped >= 0) {
+      removed.push_back(*round.dropped);
+      added.erase(added.begin() + dropped);
+      added.back().after = current.stats;
     }
-    std::vector<Effect> ambiguous;
-    const Effect chosen_effect = fits[chosen].hypothesis.effects.back();
-    for (size_t j = 0; j < fits.size(); ++j) {
-      if (static_cast<int>(j) == chosen) continue;
-      // clock_rate holds time_offset (rate and offset): when the offset alone is chosen, the rate
-      // fitted to ~0 beside it is the same explanation, not another one.
-      if (chosen_effect == Effect::kTimeOffset &&
-          fits[j].hypothesis.effects.back() == Effect::kClockRate) {
-        continue;
-      }
-      if (dbic[j] - dbic[chosen] < options.ambiguity_margin &&
-          share[j] >= options.min_explained_share) {
-        ambiguous.push_back(fits[j].hypothesis.effects.back());
-      }
-    }
-    current = std::move(fits[chosen]);
-    const std::string added = Spec(current.hypothesis.effects.back()).name;
-    after_each.push_back(current.stats);
-    ambiguous_each.push_back(ambiguous);
-    std::string line = "round " + std::to_string(round) + ": added " + added;
-    for (Effect a : ambiguous) line += " (ambiguous with " + Spec(a).name + ")";
-    result.log.push_back(line);
-    // Backward step (stepwise selection): an effect added earlier may be redundant now (a readout
-    // error first absorbed by a gyro scale, say). Refit without each earlier effect; drop the one
-    // whose removal costs least if that is less than bic_margin.
-    if (current.hypothesis.effects.size() >= 2) {
-      const std::vector<uint8_t> keep_now =
-          KeepMask(ctx, current.solution.residuals, current.solution.valid);
-      const MaskSums sums_now = SumWeights(ctx, keep_now);
-      const double rss_now =
-          MaskedRss(ctx, current.solution.residuals, current.solution.valid, keep_now);
-      const double s2_now =
-          rss_now /
-          std::max(1.0, ctx.components * sums_now.w -
-                            CriterionParameters(current.hypothesis.effects) - ctx.nuisance);
-      const double c_now = CorrelationFactor(ctx, current.solution.residuals, keep_now);
-      const double n_now =
-          std::max(2.0, ctx.components * sums_now.w * sums_now.w / sums_now.w2 / c_now);
-      int drop = -1;
-      double drop_dbic = options.bic_margin;
-      Fit drop_fit;
-      const std::vector<Effect>& effects = current.hypothesis.effects;
-      for (size_t k = 0; k + 1 < effects.size(); ++k) {
-        Hypothesis h;
-        int offset = 0;
-        for (size_t m = 0; m < effects.size(); ++m) {
-          const int n = Spec(effects[m]).parameter_count;
-          if (m != k) {
-            h.effects.push_back(effects[m]);
-            h.x.conservativeResize(h.x.size() + n);
-            h.x.tail(n) = current.hypothesis.x.segment(offset, n);
-          }
-          offset += n;
-        }
-        // Keep the just-added effect last (its start is the current value, no scan needed).
-        Fit without = FitHypothesis(ctx, std::move(h));
-        const double dbic_remove =
-            (MaskedRss(ctx, without.solution.residuals, without.solution.valid, keep_now) -
-             rss_now) /
-                (s2_now * c_now) -
-            std::max(1, Spec(effects[k]).parameter_count) * std::log(n_now);
-        result.log.push_back("round " + std::to_string(round) + ": without " +
-                             Spec(effects[k]).name + ": rms " +
-                             FormatNumber("%.4f", without.stats.rms_px) + " px, dBIC " +
-                             FormatNumber("%+.1f", dbic_remove));
-        if (dbic_remove < drop_dbic) {
-          drop_dbic = dbic_remove;
-          drop = static_cast<int>(k);
-          drop_fit = std::move(without);
-        }
-      }
-      if (drop >= 0) {
-        result.log.push_back("round " + std::to_string(round) + ": dropped " +
-                             Spec(effects[drop]).name + " (redundant now)");
-        removed.push_back(effects[drop]);
-        after_each.erase(after_each.begin() + drop);
-        ambiguous_each.erase(ambiguous_each.begin() + drop);
-        current = std::move(drop_fit);
-        after_each.back() = current.stats;
-      }
-    }
-    level =
+    level = round.level =
         TestLevel(ctx, current.solution.residuals, current.solution.valid, options.significance);
-    result.log.push_back(level_line("with " + added, level));
+    LogRound(round, options, &result.log);
   }
-
-  // Values and standard errors from the final joint fit.
-  result.effects = IdentifiedEffects(ctx, current);
-  for (size_t k = 0; k < result.effects.size(); ++k) {
-    result.effects[k].ambiguous_with = ambiguous_each[k];
-    result.effects[k].after = after_each[k];
-  }
-  result.after = current.stats;
-  result.model = current.model;
-  result.residuals_after = PointResiduals(current);
-  if (options.pair_translation) {  // the directions of the final model, not of a trial step
-    std::vector<Eigen::Vector2d> unused;
-    predictor->Predict(current.model, &unused);
-    result.pair_translation_dirs = predictor->translation_dirs();
-  }
-  result.unexplained = Material(ctx, options, level);
-  result.log.push_back(std::string("unexplained: ") + (result.unexplained ? "yes" : "no"));
+  Conclude(ctx, options, current, added, level, *start.predictor, &result);
   return result;
 }
 
@@ -998,8 +1121,8 @@ nlohmann::json LoopToJson(const LoopResult& result, size_t frame_count) {
            {"before", stats(result.before)},    {"effects", std::move(effects)},
            {"after", stats(result.after)},      {"noise_px", result.noise_px},
            {"unexplained", result.unexplained}, {"log", result.log}};
-  // Beyond docs/FORMATS.md: with pair_translation the residual is one component (the distance across
-  // the epipolar line), to be read against noise_px / sqrt(2), not noise_px.
+  // Beyond docs/FORMATS.md: with pair_translation the residual is one component (the distance
+  // across the epipolar line), to be read against noise_px / sqrt(2), not noise_px.
   if (result.residual_components != 2) out["residual_components"] = result.residual_components;
   return out;
 }
