@@ -41,7 +41,8 @@ const CommandRegistration kRegistration(30, [](CLI::App& app) {
   cmd->add_option("--min-still", command->accuracy.min_still_s,
                   "motions closer than this are one turn, s")
       ->capture_default_str();
-  cmd->add_flag("--json", command->json, "print JSON (docs/FORMATS.md `accuracy`) instead of a table");
+  cmd->add_flag("--json", command->json,
+                "print JSON (docs/FORMATS.md `accuracy`) instead of a table");
   return std::function<void()>([command] { Run(*command); });
 });
 

@@ -4,8 +4,8 @@
 #include "estimate/paper/analyze.h"
 
 #include "app/command.h"
-#include "estimate/report/analysis_json.h"
 #include "estimate/paper/flight.h"
+#include "estimate/report/analysis_json.h"
 #include "estimate/report/analyze_report.h"
 #include "render/image_io.h"
 #include "render/pictures.h"

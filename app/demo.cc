@@ -1,4 +1,5 @@
-// shutterlab demo: the main job, in seconds, on data it makes itself (nothing is read from outside):
+// shutterlab demo: the main job, in seconds, on data it makes itself (nothing is read from
+// outside):
 //  0. the inputs: a synthetic multirotor survey flight written as a PX4 ULog with a camera trigger
 //     every 2 s and its altitude (the file any user's own log would be), and a procedural nadir
 //     ground texture (fields, roads, roofs, trees) as the scene;
@@ -16,21 +17,21 @@
 // step is a function of the shared DemoContext, run in order by RunDemo (add a step there).
 
 #include "app/command.h"
+#include "estimate/demo_dataset.h"
+#include "estimate/loop/validate.h"
 #include "estimate/paper/accuracy.h"
 #include "estimate/paper/analyze.h"
-#include "estimate/report/analyze_report.h"
 #include "estimate/paper/flight.h"
 #include "estimate/paper/noise.h"
-#include "estimate/loop/validate.h"
-#include "estimate/demo_dataset.h"
+#include "estimate/report/analyze_report.h"
 #include "estimate/report/validate_report.h"
 #include "render/camera.h"
+#include "render/ground_texture.h"
 #include "render/image_io.h"
 #include "render/pictures.h"
-#include "render/ground_texture.h"
 #include "render/render_dataset.h"
-#include "sim/logs/flight_log_io.h"
 #include "sim/check.h"
+#include "sim/logs/flight_log_io.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/synth/synth.h"
 #include "sim/text_file.h"
@@ -95,11 +96,11 @@ void StepInputs(DemoContext& context) {
   WriteSynthetic(flight, output);
   context.log = ReadFlightLog(context.log_path);
   std::cout << "flight log " << context.log_path << ": " << context.log.gyro.size()
-            << " gyro samples over " << FormatNumber("%.1f", context.log.gyro.DurationS())
-            << " s, " << context.log.camera_events.size() << " camera triggers, altitude "
+            << " gyro samples over " << FormatNumber("%.1f", context.log.gyro.DurationS()) << " s, "
+            << context.log.camera_events.size() << " camera triggers, altitude "
             << FormatNumber("%.0f", context.log.altitude_above_ground_m.value_or(0.0)) << " m\n";
-  // The scene at the render camera's ground sample distance (docs/FORMATS.md "The scene image": seen
-  // by a pinhole with the rig's focal length from the world origin), twice the frame's size.
+  // The scene at the render camera's ground sample distance (docs/FORMATS.md "The scene image":
+  // seen by a pinhole with the rig's focal length from the world origin), twice the frame's size.
   const RigModel rig = DemoCamera();
   GroundTextureOptions scene;
   scene.width_px = 2 * rig.camera.width;
@@ -271,8 +272,9 @@ void RunDemo(const DemoOptions& options) {
 
 const CommandRegistration kRegistration(5, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "demo", "run the main job on data it makes itself (a synthetic ULog flight, a procedural "
-              "nadir ground texture)");
+      "demo",
+      "run the main job on data it makes itself (a synthetic ULog flight, a procedural "
+      "nadir ground texture)");
   auto options = std::make_shared<DemoOptions>();
   cmd->add_option("--out", options->out_dir, "output folder")->capture_default_str();
   cmd->add_option("--every", options->frame_every_s, "seconds between rendered frames")

@@ -4,8 +4,8 @@
 #include "estimate/paper/flight.h"
 
 #include "app/command.h"
-#include "estimate/report/analysis_json.h"
 #include "app/trace_options.h"
+#include "estimate/report/analysis_json.h"
 #include "sim/check.h"
 #include "sim/units.h"
 
@@ -77,7 +77,8 @@ const CommandRegistration kRegistration(40, [](CLI::App& app) {
       "--zero-bias", command->zero_bias,
       "take the logged rates as bias-free and analyse every sample (flight-controller logs, "
       "calibrated at arming)");
-  cmd->add_flag("--json", command->json, "print JSON (docs/FORMATS.md `flight`) instead of a table");
+  cmd->add_flag("--json", command->json,
+                "print JSON (docs/FORMATS.md `flight`) instead of a table");
   cmd->add_option("--series", command->series_path,
                   "write per-window ranges for the FIRST --window duration to this CSV: "
                   "t,range_x,range_y,range_z,vector (window start in s; arcsec)");

@@ -1,14 +1,13 @@
 // shutterlab: rolling-shutter distortion from gyro traces. Thin CLI over the libraries.
 
-#include <unistd.h>
+#include "app/command.h"
+#include "sim/check.h"
 
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <stdexcept>
-
-#include "app/command.h"
-#include "sim/check.h"
+#include <unistd.h>
 
 namespace shutterlab::app {
 
@@ -45,8 +44,9 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "shutterlab 0.1");
   auto& registry = Registry();
-  std::sort(registry.begin(), registry.end(),
-            [](const RegisteredCommand& a, const RegisteredCommand& b) { return a.order < b.order; });
+  std::sort(
+      registry.begin(), registry.end(),
+      [](const RegisteredCommand& a, const RegisteredCommand& b) { return a.order < b.order; });
   std::vector<std::pair<CLI::App*, std::function<void()>>> runners;
   for (const auto& command : registry) {
     const size_t before = app.get_subcommands({}).size();

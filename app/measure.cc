@@ -61,9 +61,9 @@ void Run(const MeasureCommand& command) {
                               "a displacement field needs exactly the channels dx, dy"));
     }
     if (truth.size() != image.size()) {
-      throw IoError(IoMessage(command.truth_path, 0,
-                              "field is " + SizeText(truth) + " but the images are " +
-                                  SizeText(image)));
+      throw IoError(
+          IoMessage(command.truth_path, 0,
+                    "field is " + SizeText(truth) + " but the images are " + SizeText(image)));
     }
   }
   report.measurement = MeasureDisplacement(ref, image, command.options);
@@ -77,9 +77,10 @@ void Run(const MeasureCommand& command) {
 }
 
 const CommandRegistration kRegistration(60, [](CLI::App& app) {
-  auto* cmd = app.add_subcommand(
-      "measure", "measure the displacement field between a global-shutter reference and a "
-                 "rolling-shutter image");
+  auto* cmd =
+      app.add_subcommand("measure",
+                         "measure the displacement field between a global-shutter reference and a "
+                         "rolling-shutter image");
   auto command = std::make_shared<MeasureCommand>();
   cmd->add_option("REF", command->ref_path, "global-shutter reference image")
       ->required()

@@ -19,7 +19,8 @@ struct SceneCliOptions {
 
 const CommandRegistration kRegistration(45, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "scene", "write a procedural nadir ground texture (fields, roads, roofs, trees) to render over");
+      "scene",
+      "write a procedural nadir ground texture (fields, roads, roofs, trees) to render over");
   auto o = std::make_shared<SceneCliOptions>();
   cmd->add_option("--out", o->out_path, "output image (PNG, TIFF, JPEG, EXR by extension)")
       ->required();

@@ -79,8 +79,9 @@ const CommandRegistration kRegistration(70, [](CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--out", command->out_dir,
                   "write residual pictures before/after (per frame, per row) to DIR");
-  cmd->add_option("--candidates", command->candidates,
-                  "effects to try, e.g. time_offset,readout_time (default: all of docs/FORMATS.md's)")
+  cmd->add_option(
+         "--candidates", command->candidates,
+         "effects to try, e.g. time_offset,readout_time (default: all of docs/FORMATS.md's)")
       ->delimiter(',');
   cmd->add_option("--grid-step", command->grid_step_px, "spacing of the measured points, px")
       ->capture_default_str();

@@ -5,17 +5,17 @@
 #include "sim/logs/blackbox.h"
 #include "sim/text_file.h"
 
-#include "bench/bench_util.h"
-
 #include <benchmark/benchmark.h>
 
+#include "bench/bench_util.h"
 #include <string>
 
 namespace shutterlab {
 namespace {
 
 void BM_DecodeBlackbox(benchmark::State& state, const std::string& leaf) {
-  const std::string bytes = ReadFileToString(bench::RealDataPath("gyro/betaflight_blackbox/" + leaf));
+  const std::string bytes =
+      ReadFileToString(bench::RealDataPath("gyro/betaflight_blackbox/" + leaf));
   size_t samples = 0;
   for (auto _ : state) {
     const FlightLog log = DecodeBlackbox(bytes, leaf);

@@ -20,11 +20,10 @@
 #include "render/truth_model.h"
 #include "tests/estimate/loop/effect_fixtures.h"
 
-#include "bench/bench_util.h"
-
 #include <benchmark/benchmark.h>
 #include <opencv2/core.hpp>
 
+#include "bench/bench_util.h"
 #include <cstdio>
 #include <map>
 #include <random>

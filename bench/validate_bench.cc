@@ -1,14 +1,15 @@
-// validate_bench: validate's speed target (under 60 s). Renders a 12-frame 1280x960 rig dataset (real aerial
-// scene, multirotor-like ideal gyro, 30 ms readout, 50 m, a 4 ms undeclared time offset) with
-// RenderAndValidate and prints ValidateDataset's time per stage, every candidate effect tried.
-// Target: validate under 60 s on the project's 2-core machine (rendering and plots not counted).
+// validate_bench: validate's speed target (under 60 s). Renders a 12-frame 1280x960 rig dataset
+// (real aerial scene, multirotor-like ideal gyro, 30 ms readout, 50 m, a 4 ms undeclared time
+// offset) with RenderAndValidate and prints ValidateDataset's time per stage, every candidate
+// effect tried. Target: validate under 60 s on the project's 2-core machine (rendering and plots
+// not counted).
 //
 //   build/bin/validate_bench [--frames N] [--keep DIR]     (run from the repository root)
 
-#include "bench/bench_util.h"
 #include "estimate/demo_dataset.h"
 #include "estimate/loop/validate.h"
 
+#include "bench/bench_util.h"
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>

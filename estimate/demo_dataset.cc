@@ -32,7 +32,8 @@ ValidationResult RenderAndValidate(const InjectedDemoOptions& options,
   RigModel rig;
   rig.camera.width = options.width;
   rig.camera.height = options.height;
-  rig.camera.fx = rig.camera.fy = 1100.0 * options.width / 1280.0;  // a mapping camera's field of view
+  rig.camera.fx = rig.camera.fy =
+      1100.0 * options.width / 1280.0;  // a mapping camera's field of view
   rig.camera.cx = 0.5 * (options.width - 1);
   rig.camera.cy = 0.5 * (options.height - 1);
   rig.shutter.readout_s = 0.030;

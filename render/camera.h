@@ -31,7 +31,8 @@ struct PinholeCamera {
 
 // Rolling-shutter timing. The only place that knows how a row maps to a time.
 struct RollingShutter {
-  double readout_s = 0.0;  // s; row v is read at v * readout_s / height after row 0 (docs/FORMATS.md)
+  double readout_s =
+      0.0;  // s; row v is read at v * readout_s / height after row 0 (docs/FORMATS.md)
   ReadoutDirection direction = ReadoutDirection::kTopToBottom;  // a row order (IsRowReadout)
   // Seconds after t_first_row at which image row `row` of an image `height` rows tall is captured.
   double RowTimeOffsetS(double row, int height) const;

@@ -1,6 +1,6 @@
 #pragma once
-// The effects of docs/FORMATS.md's table ("Effect names, values and units"): what camera.json does not
-// declare, what `render --inject` puts into a truth and what the validation loop fits.
+// The effects of docs/FORMATS.md's table ("Effect names, values and units"): what camera.json does
+// not declare, what `render --inject` puts into a truth and what the validation loop fits.
 //
 // Everything that differs from one effect to the next is one row of one table (effects.cc), so a
 // new effect is one new row, and a misspelt one is a compile error, not a run-time throw. Names are

@@ -23,7 +23,8 @@ std::vector<FrameEntry> ReadFrameTimes(const std::string& path);
 // problem").
 std::vector<FrameEntry> ReadFramesCsv(const std::string& path);
 
-// A frame id zero-padded to 4 digits, as in truth/NNNN_disp.exr (docs/FORMATS.md) and images/NNNN_*.
+// A frame id zero-padded to 4 digits, as in truth/NNNN_disp.exr (docs/FORMATS.md) and
+// images/NNNN_*.
 std::string FrameName(int64_t frame);
 
 // Writes frames.csv whole or not at all; times with nine decimals, exact to the nanosecond.

@@ -1,6 +1,6 @@
 #pragma once
-// Rolling-shutter rendering from a scene image, and its exact ground truth (docs/FORMATS.md "The model",
-// "The scene image", "Frame distortion D").
+// Rolling-shutter rendering from a scene image, and its exact ground truth (docs/FORMATS.md "The
+// model", "The scene image", "Frame distortion D").
 //
 // For a rolling-shutter pixel p = (u, v) the ray d_W = R_v K^-1 p (K^-1 undistorts when the true
 // lens has distortion) leaves c_v and meets the ground z_W = altitude_m at X. The scene pixel is
@@ -84,8 +84,8 @@ void RenderFrame(const cv::Mat& scene, const FrameGeometry& geometry, Interpolat
 // The displacement field d(p) = p_ref - p of every pixel, CV_32FC2 (dx, dy), NaN where undefined.
 cv::Mat DisplacementField(const FrameGeometry& geometry);
 
-// Video pairs (docs/FORMATS.md "Video datasets"): for every pixel p of the later frame, the match q in
-// the earlier frame of the ground point it sees, both frames rolling shutter and in one world
+// Video pairs (docs/FORMATS.md "Video datasets"): for every pixel p of the later frame, the match q
+// in the earlier frame of the ground point it sees, both frames rolling shutter and in one world
 // (CameraMotion::Frame with a shared anchor). q's row w sets the earlier frame's pose, so q solves
 // q = project(X, pose(w)), w = q.y: a fixed point iterated to kVideoMatchTolPx. The field is
 // q - p, CV_32FC2, NaN where the ray misses the ground, the match falls outside the earlier frame's
@@ -96,8 +96,8 @@ std::optional<Eigen::Vector2d> VideoMatch(const FrameGeometry& later, const Fram
                                           double u, int v);
 constexpr double kVideoMatchTolPx = 1e-7;
 
-// docs/FORMATS.md "Frame distortion D" of a displacement field: the largest, over columns, diameter of
-// the column's displacement vectors, px (NaN entries are skipped).
+// docs/FORMATS.md "Frame distortion D" of a displacement field: the largest, over columns, diameter
+// of the column's displacement vectors, px (NaN entries are skipped).
 double FrameDistortionPx(const cv::Mat& displacement);
 
 }  // namespace shutterlab

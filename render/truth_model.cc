@@ -25,8 +25,8 @@ Eigen::Vector3d TrueModel::CamRate(const Eigen::Vector3d& logged_omega_rad_s) co
 double TrueModel::RowGyroOffsetS(int64_t t_first_row_ns, double row) const {
   const double row_offset_s = rig.shutter.RowTimeOffsetS(row, rig.camera.height);
   // gyro = camera * (1 + k) + offset; the camera instant is t_first_row_ns + row_offset_s. Only the
-  // small terms are in double: t_first_row_ns stays an exact integer (time is int64 ns; doubles only for
-  // small offsets).
+  // small terms are in double: t_first_row_ns stays an exact integer (time is int64 ns; doubles
+  // only for small offsets).
   const double k = clock_rate_ppm * 1e-6;
   return row_offset_s + k * (t_first_row_ns * 1e-9 + row_offset_s) + rig.time_offset_s;
 }

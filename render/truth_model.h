@@ -6,8 +6,8 @@
 // Everything the renderer and its ground truth need about time and motion is computed here, once
 // per frame.
 //
-// Orientation choice (documented in docs/FORMATS.md terms): the world frame is re-anchored for every
-// frame so that the frame's row 0 (the top row) looks exactly nadir:
+// Orientation choice (documented in docs/FORMATS.md terms): the world frame is re-anchored for
+// every frame so that the frame's row 0 (the top row) looks exactly nadir:
 //   world_from_cam(t) = R_int(t_0)^-1 * R_int(t),
 // R_int the SO(3) integration of the true body rates from the first gyro sample, t_0 the true
 // capture time of row 0. A frame far into a flight therefore never drifts off the scene, and the

@@ -39,7 +39,8 @@ constexpr int kMaxConsecutiveGrabFailures = 8;
 constexpr size_t kWriteBatch =
     32;  // frames held in memory for parallel PNG writing (~40 MB at 854x480)
 
-// The phone clip's calibration, as the source repository's example states it (the shared data folder's SOURCES.md).
+// The phone clip's calibration, as the source repository's example states it (the shared data
+// folder's SOURCES.md).
 constexpr double kPhoneFx = 573.8534, kPhoneFy = 575.0448, kPhoneCx = 406.0101, kPhoneCy = 309.0112;
 constexpr double kPhoneSkew = -0.6974;
 constexpr double kPhoneFullFrameS = 0.033312;
@@ -107,7 +108,8 @@ RigModel BaseRig(int width, int height) {
   rig.camera.width = width;
   rig.camera.height = height;
   rig.shutter.direction = ReadoutDirection::kTopToBottom;
-  rig.altitude_m = 50.0;  // not used by a rotation-only video comparison; docs/FORMATS.md requires one
+  rig.altitude_m =
+      50.0;  // not used by a rotation-only video comparison; docs/FORMATS.md requires one
   return rig;
 }
 

@@ -1,10 +1,10 @@
 #include "sim/bias.h"
 
-#include <cmath>
-#include <string>
-
 #include "sim/check.h"
 #include "sim/text_file.h"
+
+#include <cmath>
+#include <string>
 
 namespace shutterlab {
 
@@ -35,7 +35,8 @@ BiasEstimate EstimateBias(const GyroTrace& trace, const BiasSegment& segment) {
 
 BiasSegment ParseBiasSegment(const std::string& text) {
   const size_t colon = text.find(':');
-  SHUTTERLAB_CHECK(colon != std::string::npos) << "bias segment '" << text << "' is not A:B (seconds)";
+  SHUTTERLAB_CHECK(colon != std::string::npos)
+      << "bias segment '" << text << "' is not A:B (seconds)";
   const auto a = ParseDouble(std::string_view(text).substr(0, colon));
   const auto b = ParseDouble(std::string_view(text).substr(colon + 1));
   SHUTTERLAB_CHECK(a && b) << "bias segment '" << text << "' is not A:B (seconds)";

@@ -1,9 +1,9 @@
 #pragma once
 // Gyro bias from a still segment.
 
-#include <Eigen/Core>
-
 #include "sim/gyro_trace.h"
+
+#include <Eigen/Core>
 
 namespace shutterlab {
 
@@ -15,9 +15,10 @@ struct BiasSegment {
 
 struct BiasEstimate {
   Eigen::Vector3d bias_rad_s = Eigen::Vector3d::Zero();  // per-axis mean rate over the segment
-  Eigen::Vector3d stderr_rad_s = Eigen::Vector3d::Zero();  // standard error of that mean (white-noise assumption)
-  size_t samples = 0;             // samples inside the segment
-  size_t first_after = 0;         // index of the first sample at or after end_s: analyses start here
+  Eigen::Vector3d stderr_rad_s =
+      Eigen::Vector3d::Zero();  // standard error of that mean (white-noise assumption)
+  size_t samples = 0;           // samples inside the segment
+  size_t first_after = 0;       // index of the first sample at or after end_s: analyses start here
 };
 
 // Minimum samples a bias segment must hold to give a meaningful mean.

@@ -1,7 +1,9 @@
 #pragma once
 // Error tiers:
-//  - SHUTTERLAB_CHECK(cond) << "msg": a violated precondition or invariant; throws std::invalid_argument.
-//  - IoError: bad input at an IO boundary; the message names the path, line or record, and the problem.
+//  - SHUTTERLAB_CHECK(cond) << "msg": a violated precondition or invariant; throws
+//  std::invalid_argument.
+//  - IoError: bad input at an IO boundary; the message names the path, line or record, and the
+//  problem.
 //  - std::optional / status structs for per-item "no answer" during computation.
 
 #include <sstream>
@@ -10,7 +12,8 @@
 
 namespace shutterlab {
 
-// Thrown by readers and writers; what() is one line "PATH:LINE: problem" (":LINE" omitted when unknown).
+// Thrown by readers and writers; what() is one line "PATH:LINE: problem" (":LINE" omitted when
+// unknown).
 class IoError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

@@ -1,24 +1,24 @@
 #pragma once
 // A gyro trace: body angular rates with their sample times.
 
+#include <Eigen/Core>
+
 #include <cstdint>
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-
 namespace shutterlab {
 
 struct GyroSample {
-  int64_t t_ns;                // sensor (gyro) clock, nanoseconds; non-decreasing within a trace
+  int64_t t_ns;                 // sensor (gyro) clock, nanoseconds; non-decreasing within a trace
   Eigen::Vector3d omega_rad_s;  // angular rate about the sensor's own axes, rad/s
 };
 
 // Irregularities in the sampling of a trace, found once at construction.
 struct SamplingReport {
-  int64_t median_interval_ns = 0;    // median of t[k+1]-t[k]; 0 for fewer than 2 samples
-  std::vector<size_t> gap_indices;   // k such that t[k+1]-t[k] > kGapFactor * median interval
-  size_t duplicate_timestamps = 0;   // count of k with t[k+1] == t[k]
+  int64_t median_interval_ns = 0;   // median of t[k+1]-t[k]; 0 for fewer than 2 samples
+  std::vector<size_t> gap_indices;  // k such that t[k+1]-t[k] > kGapFactor * median interval
+  size_t duplicate_timestamps = 0;  // count of k with t[k+1] == t[k]
   double RateHz() const { return median_interval_ns > 0 ? 1e9 / median_interval_ns : 0.0; }
   static constexpr double kGapFactor = 3.0;  // the paper's logger pauses while it writes a buffer
 };

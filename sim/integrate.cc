@@ -1,12 +1,12 @@
 #include "sim/integrate.h"
 
+#include "sim/check.h"
+#include "sim/so3.h"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
-
-#include "sim/check.h"
-#include "sim/so3.h"
 
 namespace shutterlab {
 

@@ -1,13 +1,13 @@
 #pragma once
 // Integration of gyro rates: the source paper's per-axis angles and SO(3) orientation.
 
-#include <cstdint>
-#include <vector>
+#include "sim/gyro_trace.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "sim/gyro_trace.h"
+#include <cstdint>
+#include <vector>
 
 namespace shutterlab {
 
@@ -25,7 +25,8 @@ PerAxisAngles IntegratePerAxis(const GyroTrace& trace, const Eigen::Vector3d& bi
                                size_t first = 0, size_t last = static_cast<size_t>(-1));
 
 // Orientation over time from body rates: q(t) = world_from_body, Hamilton, unit norm.
-// Integration is by right multiplication (as basalt's propagateState: the increment in the body frame):
+// Integration is by right multiplication (as basalt's propagateState: the increment in the body
+// frame):
 //   q_{k+1} = q_k * Exp(0.5 (w_k + w_{k+1}) dt)    (trapezoid on the rates).
 // Between samples the rate is taken as linear in time, so the orientation at t_k + tau is
 //   q_k * Exp(w_k tau + (w_{k+1} - w_k) tau^2 / (2 dt)),

@@ -1,18 +1,18 @@
 #pragma once
 // Helpers shared by the test suites: rotation matchers, temporary folders, running the CLI.
 
+#include "sim/so3.h"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <random>
 #include <string>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
-#include <gtest/gtest.h>
-
-#include "sim/so3.h"
 
 namespace shutterlab::test {
 
@@ -28,8 +28,8 @@ class TempDir {
   TempDir() {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
     std::string name = info ? std::string(info->test_suite_name()) + "_" + info->name() : "tmp";
-    path_ = std::filesystem::temp_directory_path() / ("shutterlab_" + name + "_" +
-                                                      std::to_string(std::random_device{}()));
+    path_ = std::filesystem::temp_directory_path() /
+            ("shutterlab_" + name + "_" + std::to_string(std::random_device{}()));
     std::filesystem::create_directories(path_);
   }
   ~TempDir() {
@@ -64,7 +64,9 @@ inline std::string RealDataDir() {
   if (dir != nullptr && *dir != '\0') return dir;
   return std::string(SHUTTERLAB_SOURCE_DIR) + "/../shared/data";
 }
-inline std::string RealDataPath(const std::string& relative) { return RealDataDir() + "/" + relative; }
+inline std::string RealDataPath(const std::string& relative) {
+  return RealDataDir() + "/" + relative;
+}
 
 // Under CI (CI=true) missing real data is a failure; elsewhere the test is skipped.
 inline bool RealDataRequired() {
@@ -76,19 +78,18 @@ inline bool RealDataRequired() {
 
 // Declares `const std::string var` = the real-data path `relative`; when it does not exist, the
 // test stops here: skipped with a one-line reason, or failed under CI=true.
-#define SHUTTERLAB_REAL_DATA(var, relative)                                                   \
-  const std::string var = ::shutterlab::test::RealDataPath(relative);                         \
-  if (!std::filesystem::exists(var)) {                                                        \
-    if (::shutterlab::test::RealDataRequired()) {                                             \
+#define SHUTTERLAB_REAL_DATA(var, relative)                                                  \
+  const std::string var = ::shutterlab::test::RealDataPath(relative);                        \
+  if (!std::filesystem::exists(var)) {                                                       \
+    if (::shutterlab::test::RealDataRequired()) {                                            \
       FAIL() << "real data " << var << " is missing (CI=true needs the shared data folder)"; \
-    }                                                                                         \
-    GTEST_SKIP() << "real data " << var                                                       \
-                 << " is absent (set SHUTTERLAB_DATA_DIR or put ../shared/data beside the checkout)"; \
+    }                                                                                        \
+    GTEST_SKIP()                                                                             \
+        << "real data " << var                                                               \
+        << " is absent (set SHUTTERLAB_DATA_DIR or put ../shared/data beside the checkout)"; \
   }
 
 // The same for a test that reads several real files: stops unless the real-data folder is there.
 #define SHUTTERLAB_NEED_REAL_DATA() SHUTTERLAB_REAL_DATA(real_data_dir_, "")
 
-namespace shutterlab::test {
-
-}  // namespace shutterlab::test
+namespace shutterlab::test {}  // namespace shutterlab::test

@@ -1,8 +1,8 @@
 #pragma once
 // Closing the loop: the residual between measured displacements and the declared model,
-// a statistical test of whether it is above the measurement noise, and the search over docs/FORMATS.md's
-// candidate effects (fit each by nonlinear least squares, pick by an information criterion, add,
-// repeat).
+// a statistical test of whether it is above the measurement noise, and the search over
+// docs/FORMATS.md's candidate effects (fit each by nonlinear least squares, pick by an information
+// criterion, add, repeat).
 //
 // (Interface fixed first so that validate can be written against it; see effect_fit.cc.)
 
@@ -34,10 +34,10 @@ ResidualStats ResidualStatsOf(const std::vector<double>& squared_norms);
 // One identified effect, docs/FORMATS.md names, values and units.
 struct IdentifiedEffect {
   Effect effect = Effect::kTimeOffset;  // its name and unit: Spec(effect)
-  nlohmann::json value;                 // docs/FORMATS.md value (number, [3], 3x3, {"k1","k2"}, string)
-  nlohmann::json stderr_value;          // same shape as value (null for readout_direction)
-  std::vector<Effect> ambiguous_with;   // effects that explain the data as well
-  ResidualStats after;                  // residual once this effect is added
+  nlohmann::json value;         // docs/FORMATS.md value (number, [3], 3x3, {"k1","k2"}, string)
+  nlohmann::json stderr_value;  // same shape as value (null for readout_direction)
+  std::vector<Effect> ambiguous_with;  // effects that explain the data as well
+  ResidualStats after;                 // residual once this effect is added
   // The fitted parameters (EffectSpec::parameter_count of them, deltas from the declared model as
   // EffectSpec::apply_delta takes them) and their covariance, as the standard errors come from.
   Eigen::VectorXd parameters;
@@ -95,8 +95,8 @@ struct LoopResult {
 };
 
 // Predicted displacement at each point of `frame` under `model`, with the logged gyro trace: d(p) =
-// p_ref - p (docs/FORMATS.md "The model"), or for a video pair the rotation-only match q - p; NaN where
-// the ray misses the ground, the match leaves the frame or an instant leaves the trace.
+// p_ref - p (docs/FORMATS.md "The model"), or for a video pair the rotation-only match q - p; NaN
+// where the ray misses the ground, the match leaves the frame or an instant leaves the trace.
 std::vector<Eigen::Vector2d> PredictDisplacements(const TrueModel& model, const GyroTrace& gyro,
                                                   const FramePoints& frame);
 

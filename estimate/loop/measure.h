@@ -33,11 +33,11 @@ struct DisplacementMeasurement {
   cv::Mat confidence;  // CV_32F, 0..1, 0 where unmeasured (textureless, saturated, inconsistent)
                        // (0.1 in short gaps that the per-row model bridges, see measure.cc)
   std::vector<MeasuredPoint> points;  // independent measurements on the grid, unmeasured left out
-  // The measurement's own noise: the RMS length of (measured - true) over `points` as estimated from
-  // the data, i.e. the rms_px that a perfect model would leave on these points, px.
+  // The measurement's own noise: the RMS length of (measured - true) over `points` as estimated
+  // from the data, i.e. the rms_px that a perfect model would leave on these points, px.
   double noise_px = 0.0;
-  double d_px = 0.0;                  // docs/FORMATS.md frame distortion D of `field`, px
-  double measured_fraction = 0.0;     // share of pixels with a measurement
+  double d_px = 0.0;               // docs/FORMATS.md frame distortion D of `field`, px
+  double measured_fraction = 0.0;  // share of pixels with a measurement
 };
 
 // ref and image: same size, 8U/16U/32F, grey or RGB (any channel order). Throws

@@ -2,10 +2,12 @@
 // `validate`: test the paper's threshold model and the declared full model against the
 // displacement measured in a rig dataset, then close the loop on undeclared effects.
 //
-// For every frame of the dataset (docs/FORMATS.md "Rig dataset"; truth/ and truth.json are never read):
+// For every frame of the dataset (docs/FORMATS.md "Rig dataset"; truth/ and truth.json are never
+// read):
 //  - measured: MeasureDisplacement(ref, image): the points, their noise, D_meas (px), and
 //    D_meas_m = D_meas_px * altitude_m / f, f = (fx + fy) / 2;
-//  - full model: docs/FORMATS.md's D of the declared model's d(p) (rotation, velocity, lens), evaluated
+//  - full model: docs/FORMATS.md's D of the declared model's d(p) (rotation, velocity, lens),
+//  evaluated
 //    on a grid (kGridStepPx, first and last rows and columns included);
 //  - paper's model: estimate/analyze.h Analyze() with a trigger at the frame's gyro time
 //    t_first_row + time_offset_s (no bias estimate: gyro.csv is taken as calibrated), which gives

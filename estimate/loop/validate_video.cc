@@ -389,9 +389,9 @@ bool CheckScalarClaim(const LoopResult& with, double share, const std::string& r
 }
 
 // A fitted claim (scalars, direction): tested by the preferred model, or by the rotation-only one
-// where the pair translation cannot tell the effect (EffectSpec::identifiable_with_pair_translation), with the
-// effect fitted beside the model's identified ones and without it. False when the claim is not
-// reported.
+// where the pair translation cannot tell the effect
+// (EffectSpec::identifiable_with_pair_translation), with the effect fitted beside the model's
+// identified ones and without it. False when the claim is not reported.
 bool CheckFittedClaim(const ClaimInputs& in, ClaimFits* fits, ClaimCheck* check) {
   const Effect tested = *EffectForClaim(check->claim);  // ReadClaims kept only those
   const bool by_rotation =
@@ -430,11 +430,11 @@ bool CheckFittedClaim(const ClaimInputs& in, ClaimFits* fits, ClaimCheck* check)
 }
 
 // A claim is tested by the preferred model, or by the rotation-only one where the pair translation
-// cannot tell the effect (EffectSpec::identifiable_with_pair_translation). Scalars (readout_s, time_offset_s): the
-// effect fitted beside the model's identified ones, against the claim in standard errors, and how
-// much of the residual fitting it removes. direction: both readings. gyro_to_camera: the rotation-
-// only residual of each of the 24 axis mappings against the claimed one's.
-// Each model's fits start where its loop started (preferred_start, rotation_start).
+// cannot tell the effect (EffectSpec::identifiable_with_pair_translation). Scalars (readout_s,
+// time_offset_s): the effect fitted beside the model's identified ones, against the claim in
+// standard errors, and how much of the residual fitting it removes. direction: both readings.
+// gyro_to_camera: the rotation- only residual of each of the 24 axis mappings against the claimed
+// one's. Each model's fits start where its loop started (preferred_start, rotation_start).
 std::vector<ClaimCheck> CheckClaims(const json& claims, const ClaimInputs& in) {
   std::vector<ClaimCheck> checks;
   ClaimFits fits;

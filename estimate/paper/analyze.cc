@@ -464,7 +464,6 @@ std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path) {
 
 std::string LimitKey(double limit_m) { return FormatNumber("%.12g", limit_m); }
 
-
 std::string AnalyzeReport(const AnalyzeResult& result) {
   std::ostringstream out;
   out << "source: " << result.format << ", gyro " << result.gyro_source << ", " << result.samples

@@ -5,9 +5,10 @@
 // log's gyro clock; camera.json's time_offset_s is not applied because the triggers are already on
 // the log clock):
 //  - D_paper_m = altitude_m * tan(max over camera axes of the range of the per-axis integrated
-//    angle within [t, t + readout_s]) — the source paper's threshold model (docs/FORMATS.md). The angle
-//    is the paper's rectangle-rule sum (sim/integrate.h IntegratePerAxis), linear between samples,
-//    so the window's end points are interpolated: a constant rate w gives exactly w * readout_s.
+//    angle within [t, t + readout_s]) — the source paper's threshold model (docs/FORMATS.md). The
+//    angle is the paper's rectangle-rule sum (sim/integrate.h IntegratePerAxis), linear between
+//    samples, so the window's end points are interpolated: a constant rate w gives exactly w *
+//    readout_s.
 //  - D_full_m = docs/FORMATS.md's frame distortion D under the renderer's model of the declared rig
 //    (render/truth_model.h CameraMotion, render/rs_warp.h FrameGeometry::RefPixel): lens distortion
 //    and camera.json's velocity count; the bias-corrected rates are the truth (TrueModel with
@@ -26,7 +27,6 @@
 #include "render/camera.h"
 #include "render/truth_model.h"
 #include "sim/logs/flight_log.h"
-
 
 #include <array>
 #include <cstdint>
@@ -102,7 +102,7 @@ struct AnalyzeResult {
   // analysis
   std::optional<FlightResult> flight;  // empty when the trace is too short for one window
   std::string flight_problem;          // why flight is empty
-  bool bias_estimated = true;  // AnalyzeOptions::estimate_bias
+  bool bias_estimated = true;          // AnalyzeOptions::estimate_bias
   bool bias_from_still = false;
   BiasSegment still_segment;
   Eigen::Vector3d bias_rad_s = Eigen::Vector3d::Zero();  // camera axes

@@ -188,7 +188,6 @@ double MaxPairwiseAngle(const Quaternions& q, size_t begin, size_t end,
   return best;
 }
 
-
 // What the pass over the windows needs: where the samples after the bias segment start, the
 // windows per duration and the thresholds per limit.
 struct FlightPlan {
@@ -212,8 +211,8 @@ BiasEstimate FlightBias(const GyroTrace& trace, const FlightOptions& options) {
   return bias;
 }
 
-// Windows per duration: starts k with t_k + W <= t_last (docs/FORMATS.md: the rest run past the end);
-// thresholds per limit, with the noise allowance.
+// Windows per duration: starts k with t_k + W <= t_last (docs/FORMATS.md: the rest run past the
+// end); thresholds per limit, with the noise allowance.
 FlightPlan PlanFlight(const GyroTrace& trace, const FlightOptions& options, size_t first) {
   FlightPlan plan;
   plan.first = first;
@@ -425,7 +424,6 @@ FlightResult Flight(const GyroTrace& trace, const FlightOptions& options) {
   return result;
 }
 
-
 std::string FlightTable(const FlightResult& result) {
   std::ostringstream out;
   // A known bias (FlightOptions::known_bias_rad_s) leaves no segment: every sample is analysed.
@@ -507,7 +505,5 @@ void WriteFlightSeriesCsv(const std::string& path, const FlightSeries& series) {
   }
   WriteFileAtomically(path, out);
 }
-
-
 
 }  // namespace shutterlab

@@ -2,18 +2,17 @@
 // The source paper's flight analysis (its Table 4): the share of sliding time windows in which the
 // camera rotated enough for the rolling shutter to smear the image by more than a ground limit.
 //
-// Definitions (docs/FORMATS.md `flight`): bias b = per-axis mean rate over the bias segment; per-axis
-// angles angle_k = sum over i <= k of (w_i - b)(t_i - t_{i-1}) over the samples after the segment
-// (sim/integrate.h IntegratePerAxis); a window of duration W starts at every sample and holds the
-// samples with t in [t_k, t_k + W); windows that run past the last sample are left out. A window is
-// flagged when the range (max - min) of any axis's angle exceeds
+// Definitions (docs/FORMATS.md `flight`): bias b = per-axis mean rate over the bias segment;
+// per-axis angles angle_k = sum over i <= k of (w_i - b)(t_i - t_{i-1}) over the samples after the
+// segment (sim/integrate.h IntegratePerAxis); a window of duration W starts at every sample and
+// holds the samples with t in [t_k, t_k + W); windows that run past the last sample are left out. A
+// window is flagged when the range (max - min) of any axis's angle exceeds
 //   threshold = atan(limit_m / altitude_m) + noise allowance.
 // The vector criterion flags a window when the rotation angle between any two orientations in it
 // (SO(3) trapezoid integration of the same bias-corrected rates) exceeds the same threshold.
 
 #include "sim/bias.h"
 #include "sim/gyro_trace.h"
-
 
 #include <array>
 #include <cstdint>

@@ -47,8 +47,8 @@ struct NoiseResult {
 // after it.
 NoiseResult AnalyzeNoise(const GyroTrace& trace, const NoiseOptions& options);
 
-// JSON exactly as docs/FORMATS.md `noise`, plus extra keys: per axis sigma_rms_arcsec, arw_deg_sqrt_h,
-// arw_rad_s_sqrt_hz, bias_instability_deg_h, bias_instability_tau_s,
+// JSON exactly as docs/FORMATS.md `noise`, plus extra keys: per axis sigma_rms_arcsec,
+// arw_deg_sqrt_h, arw_rad_s_sqrt_hz, bias_instability_deg_h, bias_instability_tau_s,
 // bias_instability_upper_bound, bias_rad_s; top level windows, samples, rate_hz.
 std::string NoiseJson(const NoiseResult& result);
 

@@ -1,10 +1,10 @@
 #include "estimate/paper/window_stats.h"
 
+#include "sim/check.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include "sim/check.h"
 
 namespace shutterlab {
 namespace {
@@ -35,9 +35,9 @@ size_t CheckWindowEnds(size_t size, const std::vector<uint32_t>& window_end) {
   return longest;
 }
 
-// Block size for the van Herk / Gil-Werman scheme: a low quantile of the window sample counts in the
-// chunk. Windows at least this long span whole blocks and take O(1 + len/B); the rare shorter ones
-// (windows cut short by a logging gap) are scanned directly at cost len < B.
+// Block size for the van Herk / Gil-Werman scheme: a low quantile of the window sample counts in
+// the chunk. Windows at least this long span whole blocks and take O(1 + len/B); the rare shorter
+// ones (windows cut short by a logging gap) are scanned directly at cost len < B.
 size_t ChooseBlock(const uint32_t* chunk_end, size_t k_begin, size_t k_end) {
   constexpr size_t kProbes = 33;
   size_t lengths[kProbes];
@@ -69,8 +69,8 @@ std::vector<uint32_t> WindowEndsByDuration(const std::vector<int64_t>& t_ns, int
 
 std::vector<uint32_t> WindowEndsByCount(size_t size, size_t count) {
   SHUTTERLAB_CHECK(count > 0) << "window must hold at least one sample";
-  SHUTTERLAB_CHECK(count <= size) << "window of " << count << " samples is longer than the "
-                                  << size << " samples available";
+  SHUTTERLAB_CHECK(count <= size) << "window of " << count << " samples is longer than the " << size
+                                  << " samples available";
   SHUTTERLAB_CHECK(size < (1ull << 32)) << "trace too long for 32-bit window indices";
   std::vector<uint32_t> ends(size - count + 1);
   for (size_t k = 0; k < ends.size(); ++k) ends[k] = static_cast<uint32_t>(k + count);
@@ -193,8 +193,8 @@ void RangeKernel(const double* const* x, const uint32_t* chunk_end, size_t k_beg
   }
 }
 
-void SlidingRangeKernel::Run(const double* x, const uint32_t* chunk_end, size_t k_begin, size_t k_end,
-                             double* out) {
+void SlidingRangeKernel::Run(const double* x, const uint32_t* chunk_end, size_t k_begin,
+                             size_t k_end, double* out) {
   RangeKernel<1>(&x, chunk_end, k_begin, k_end, &out, buffers_);
 }
 
@@ -203,7 +203,8 @@ void SlidingRangeKernel::Run3(const std::array<const double*, 3>& x, const uint3
   RangeKernel<3>(x.data(), chunk_end, k_begin, k_end, out.data(), buffers_);
 }
 
-std::vector<double> SlidingRange(const std::vector<double>& x, const std::vector<uint32_t>& window_end) {
+std::vector<double> SlidingRange(const std::vector<double>& x,
+                                 const std::vector<uint32_t>& window_end) {
   const size_t longest = CheckWindowEnds(x.size(), window_end);
   std::vector<double> out(window_end.size());
   // A chunk at least as long as the longest window keeps the total work O(N): each sample is then
@@ -217,7 +218,8 @@ std::vector<double> SlidingRange(const std::vector<double>& x, const std::vector
   return out;
 }
 
-std::vector<double> SlidingStdDev(const std::vector<double>& x, const std::vector<uint32_t>& window_end) {
+std::vector<double> SlidingStdDev(const std::vector<double>& x,
+                                  const std::vector<uint32_t>& window_end) {
   CheckWindowEnds(x.size(), window_end);
   std::vector<double> out(window_end.size());
   constexpr double kEps = std::numeric_limits<double>::epsilon();

@@ -3,7 +3,8 @@
 //
 // A window is given by its first sample k and its end e_k (one past its last sample):
 //  - fixed count N: e_k = k + N, windows k = 0 .. size-N (the paper's 120-sample windows);
-//  - fixed duration W: e_k = first index with t >= t_k + W (docs/FORMATS.md `flight`); windows whose
+//  - fixed duration W: e_k = first index with t >= t_k + W (docs/FORMATS.md `flight`); windows
+//  whose
 //    span would run past the last sample are left out.
 //
 // Window ends must be non-decreasing with k < e_k <= size: that is what both constructions give,
@@ -17,7 +18,8 @@
 namespace shutterlab {
 
 // Window ends for windows of duration window_ns over sample times t_ns (non-decreasing): one entry
-// per window start k whose window [t_k, t_k + window_ns) fits inside the trace, i.e. t_k + window_ns
+// per window start k whose window [t_k, t_k + window_ns) fits inside the trace, i.e. t_k +
+// window_ns
 // <= t_last. Entry k is e_k (exclusive end index). Empty when window_ns exceeds the trace's span.
 std::vector<uint32_t> WindowEndsByDuration(const std::vector<int64_t>& t_ns, int64_t window_ns);
 
@@ -34,12 +36,14 @@ std::vector<double> SlidingStdDevBruteForce(const std::vector<double>& x,
 // O(N) sliding range, bit-identical to SlidingRangeBruteForce (max and min are exact). Van Herk /
 // Gil-Werman block prefix/suffix extrema, processed in chunks so the work memory is
 // O(chunk + longest window). Throws std::invalid_argument on malformed window ends.
-std::vector<double> SlidingRange(const std::vector<double>& x, const std::vector<uint32_t>& window_end);
+std::vector<double> SlidingRange(const std::vector<double>& x,
+                                 const std::vector<uint32_t>& window_end);
 // O(N) sliding population standard deviation (divide by n), by running sums about a local anchor
 // that is re-set periodically and whenever the window mean drifts far from it, so that a signal
 // far from zero (an integrated angle) with a tiny window sigma keeps full relative precision.
 // Agrees with SlidingStdDevBruteForce to ~1e-9 relative on such signals (see the tests).
-std::vector<double> SlidingStdDev(const std::vector<double>& x, const std::vector<uint32_t>& window_end);
+std::vector<double> SlidingStdDev(const std::vector<double>& x,
+                                  const std::vector<uint32_t>& window_end);
 
 // Fixed-count conveniences (the `noise` analysis): windows of `count` consecutive samples, step 1.
 // Throw std::invalid_argument when count is 0 or larger than x.size().

@@ -388,7 +388,8 @@ HtmlPage AnalyzeReportPage(const FlightLog& log, const AnalyzeOptions& options,
   page.Heading("Distortion per image");
   page.Paragraph(
       "D paper: altitude x tan(largest per-axis angle range within the readout). D full: "
-      "docs/FORMATS.md's frame distortion under the declared camera (rotation, lens, velocity) on a " +
+      "docs/FORMATS.md's frame distortion under the declared camera (rotation, lens, velocity) on "
+      "a " +
       std::to_string(kGridStepPx) + " px grid. Dashed lines: the limits.");
   AddDistortionChart(&page, result);
 

@@ -25,8 +25,8 @@ std::string ValidationReport(const ValidationResult& result);
 std::vector<std::string> WriteValidationPlots(const std::string& dir,
                                               const ValidationResult& result);
 
-// The report JSON of a video validation: the preferred model's LoopToJson (docs/FORMATS.md keys) with
-// "model", then "rotation_only", "translation" (each LoopToJson), "pairs", "halves", "claims",
+// The report JSON of a video validation: the preferred model's LoopToJson (docs/FORMATS.md keys)
+// with "model", then "rotation_only", "translation" (each LoopToJson), "pairs", "halves", "claims",
 // "skipped", "timing_s". ValidationToJson calls it for video datasets.
 nlohmann::json VideoValidationToJson(const ValidationResult& result);
 

@@ -1,7 +1,5 @@
-#include "estimate/report/validate_report.h"
-
 #include "estimate/loop/validate_video.h"
-
+#include "estimate/report/validate_report.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
 

@@ -8,10 +8,10 @@
 // N(char[16]) Z(char[64]) M(uint8 mode) c C(int16/uint16 * 0.01) e E(int32/uint32 * 0.01)
 // L(int32 * 1e-7 degrees) a(int16[32]) g(float16).
 
+#include "sim/logs/flight_log.h"
+
 #include <string>
 #include <string_view>
-
-#include "sim/logs/flight_log.h"
 
 namespace shutterlab {
 

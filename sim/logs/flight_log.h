@@ -2,12 +2,12 @@
 // What a flight-log reader (ULog, Betaflight blackbox, ArduPilot DataFlash, ...) hands on:
 // the best gyro trace in the log, camera events, and what was skipped on the way.
 
+#include "sim/gyro_trace.h"
+
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include "sim/gyro_trace.h"
 
 namespace shutterlab {
 
@@ -19,13 +19,14 @@ struct CameraEvent {
 };
 
 struct FlightLog {
-  GyroTrace gyro;                 // rad/s, sensor axes of the flight controller (FRD body for PX4 / ArduPilot)
-  std::string format;             // "ulog", "betaflight", "dataflash", "gyro.csv", ...
-  std::string gyro_source;        // which topic/field/message the trace came from, e.g. "sensor_combined.gyro_rad"
+  GyroTrace gyro;      // rad/s, sensor axes of the flight controller (FRD body for PX4 / ArduPilot)
+  std::string format;  // "ulog", "betaflight", "dataflash", "gyro.csv", ...
+  std::string gyro_source;  // which topic/field/message the trace came from, e.g.
+                            // "sensor_combined.gyro_rad"
   std::vector<std::string> gyro_sources_available;  // every candidate seen, best first
   std::vector<CameraEvent> camera_events;
   std::optional<double> altitude_above_ground_m;  // median over the flight when the log has it
-  size_t records_skipped = 0;     // corrupt / undecodable records or frames that were skipped
+  size_t records_skipped = 0;         // corrupt / undecodable records or frames that were skipped
   std::vector<std::string> warnings;  // one line each: what was skipped or odd, for the user
 };
 

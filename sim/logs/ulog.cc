@@ -1,5 +1,9 @@
 #include "sim/logs/ulog.h"
 
+#include "sim/check.h"
+#include "sim/text_file.h"
+#include "sim/units.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -12,10 +16,6 @@
 #include <unordered_map>
 #include <utility>
 
-#include "sim/check.h"
-#include "sim/text_file.h"
-#include "sim/units.h"
-
 namespace shutterlab {
 
 // ---------------------------------------------------------------------------------------------
@@ -27,10 +27,10 @@ namespace {
 struct CleanedCandidate {
   GyroCandidate candidate;
   double rate_hz = 0.0;
-  size_t dropped_time = 0;     // t <= 0
-  size_t dropped_value = 0;    // non-finite rate
-  size_t dropped_spike = 0;    // isolated timestamp spike
-  size_t out_of_order = 0;     // samples that had to be moved by the sort
+  size_t dropped_time = 0;   // t <= 0
+  size_t dropped_value = 0;  // non-finite rate
+  size_t dropped_spike = 0;  // isolated timestamp spike
+  size_t out_of_order = 0;   // samples that had to be moved by the sort
   size_t dropped_outlier_end = 0;
 };
 
@@ -84,7 +84,8 @@ CleanedCandidate Clean(GyroCandidate in) {
   // An end sample far beyond the rest (a corrupted time that sorted to an end) would stretch the
   // trace by minutes; gaps above this are not a logger pause.
   constexpr int64_t kMaxEndGapNs = 60'000'000'000;  // 60 s
-  while (despiked.size() >= 3 && despiked.back().t_ns - despiked[despiked.size() - 2].t_ns > kMaxEndGapNs) {
+  while (despiked.size() >= 3 &&
+         despiked.back().t_ns - despiked[despiked.size() - 2].t_ns > kMaxEndGapNs) {
     despiked.pop_back();
     ++out.dropped_outlier_end;
   }
@@ -117,9 +118,9 @@ bool ChooseGyroSource(std::vector<GyroCandidate> candidates, FlightLog* log) {
     }
   }
   if (usable.empty()) return false;
-  std::stable_sort(usable.begin(), usable.end(), [](const CleanedCandidate& a, const CleanedCandidate& b) {
-    return a.rate_hz > b.rate_hz;
-  });
+  std::stable_sort(
+      usable.begin(), usable.end(),
+      [](const CleanedCandidate& a, const CleanedCandidate& b) { return a.rate_hz > b.rate_hz; });
   // Rates of the same sensor differ by a few percent between topics (jitter, dropped messages);
   // within that band the rawer topic is the better source.
   constexpr double kSimilarRate = 0.9;
@@ -166,32 +167,46 @@ namespace {
 constexpr char kMagic[7] = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35};
 constexpr size_t kFileHeaderBytes = 16;
 constexpr size_t kMessageHeaderBytes = 3;
-constexpr int kMaxNestingDepth = 16;             // PX4 nests two or three deep
-constexpr size_t kMaxFlatFields = 1 << 16;       // guards against absurd nested arrays
-constexpr size_t kMaxMessageBytes = 65535 + 3;   // uint16 size + header
-constexpr int kResyncChain = 4;                  // consecutive plausible messages to trust a resync
+constexpr int kMaxNestingDepth = 16;            // PX4 nests two or three deep
+constexpr size_t kMaxFlatFields = 1 << 16;      // guards against absurd nested arrays
+constexpr size_t kMaxMessageBytes = 65535 + 3;  // uint16 size + header
+constexpr int kResyncChain = 4;                 // consecutive plausible messages to trust a resync
 constexpr size_t kMaxPlausibleNonDataBytes = 8192;  // formats, infos, log text are far smaller
-constexpr int kMsgIdSlack = 16;                  // unsubscribed msg_ids believed above the largest seen
-constexpr size_t kMaxDetailedWarnings = 8;       // per kind; the rest are summed up
+constexpr int kMsgIdSlack = 16;             // unsubscribed msg_ids believed above the largest seen
+constexpr size_t kMaxDetailedWarnings = 8;  // per kind; the rest are summed up
 
 // Little-endian loads, independent of the host's byte order.
 uint64_t LoadLE(const char* p, size_t bytes) {
   uint64_t v = 0;
-  for (size_t i = 0; i < bytes; ++i) v |= static_cast<uint64_t>(static_cast<uint8_t>(p[i])) << (8 * i);
+  for (size_t i = 0; i < bytes; ++i)
+    v |= static_cast<uint64_t>(static_cast<uint8_t>(p[i])) << (8 * i);
   return v;
 }
 uint16_t LoadU16(const char* p) { return static_cast<uint16_t>(LoadLE(p, 2)); }
 
-enum class Scalar : uint8_t { kInt8, kUInt8, kInt16, kUInt16, kInt32, kUInt32, kInt64, kUInt64, kFloat, kDouble, kBool, kChar };
+enum class Scalar : uint8_t {
+  kInt8,
+  kUInt8,
+  kInt16,
+  kUInt16,
+  kInt32,
+  kUInt32,
+  kInt64,
+  kUInt64,
+  kFloat,
+  kDouble,
+  kBool,
+  kChar
+};
 
 std::optional<std::pair<Scalar, size_t>> ScalarFromName(std::string_view name) {
   static const std::pair<const char*, std::pair<Scalar, size_t>> kTable[] = {
-      {"int8_t", {Scalar::kInt8, 1}},     {"uint8_t", {Scalar::kUInt8, 1}},
-      {"int16_t", {Scalar::kInt16, 2}},   {"uint16_t", {Scalar::kUInt16, 2}},
-      {"int32_t", {Scalar::kInt32, 4}},   {"uint32_t", {Scalar::kUInt32, 4}},
-      {"int64_t", {Scalar::kInt64, 8}},   {"uint64_t", {Scalar::kUInt64, 8}},
-      {"float", {Scalar::kFloat, 4}},     {"double", {Scalar::kDouble, 8}},
-      {"bool", {Scalar::kBool, 1}},       {"char", {Scalar::kChar, 1}}};
+      {"int8_t", {Scalar::kInt8, 1}},   {"uint8_t", {Scalar::kUInt8, 1}},
+      {"int16_t", {Scalar::kInt16, 2}}, {"uint16_t", {Scalar::kUInt16, 2}},
+      {"int32_t", {Scalar::kInt32, 4}}, {"uint32_t", {Scalar::kUInt32, 4}},
+      {"int64_t", {Scalar::kInt64, 8}}, {"uint64_t", {Scalar::kUInt64, 8}},
+      {"float", {Scalar::kFloat, 4}},   {"double", {Scalar::kDouble, 8}},
+      {"bool", {Scalar::kBool, 1}},     {"char", {Scalar::kChar, 1}}};
   for (const auto& [n, v] : kTable) {
     if (name == n) return v;
   }
@@ -200,10 +215,20 @@ std::optional<std::pair<Scalar, size_t>> ScalarFromName(std::string_view name) {
 
 size_t ScalarBytes(Scalar s) {
   switch (s) {
-    case Scalar::kInt8: case Scalar::kUInt8: case Scalar::kBool: case Scalar::kChar: return 1;
-    case Scalar::kInt16: case Scalar::kUInt16: return 2;
-    case Scalar::kInt32: case Scalar::kUInt32: case Scalar::kFloat: return 4;
-    default: return 8;
+    case Scalar::kInt8:
+    case Scalar::kUInt8:
+    case Scalar::kBool:
+    case Scalar::kChar:
+      return 1;
+    case Scalar::kInt16:
+    case Scalar::kUInt16:
+      return 2;
+    case Scalar::kInt32:
+    case Scalar::kUInt32:
+    case Scalar::kFloat:
+      return 4;
+    default:
+      return 8;
   }
 }
 
@@ -232,14 +257,24 @@ double ReadNumber(std::string_view data, const FlatField& f) {
   if (f.offset + bytes > data.size()) return std::numeric_limits<double>::quiet_NaN();
   const uint64_t raw = LoadLE(data.data() + f.offset, bytes);
   switch (f.type) {
-    case Scalar::kInt8: return static_cast<int8_t>(raw);
-    case Scalar::kUInt8: case Scalar::kBool: case Scalar::kChar: return static_cast<uint8_t>(raw);
-    case Scalar::kInt16: return static_cast<int16_t>(raw);
-    case Scalar::kUInt16: return static_cast<uint16_t>(raw);
-    case Scalar::kInt32: return static_cast<int32_t>(raw);
-    case Scalar::kUInt32: return static_cast<uint32_t>(raw);
-    case Scalar::kInt64: return static_cast<double>(static_cast<int64_t>(raw));
-    case Scalar::kUInt64: return static_cast<double>(raw);
+    case Scalar::kInt8:
+      return static_cast<int8_t>(raw);
+    case Scalar::kUInt8:
+    case Scalar::kBool:
+    case Scalar::kChar:
+      return static_cast<uint8_t>(raw);
+    case Scalar::kInt16:
+      return static_cast<int16_t>(raw);
+    case Scalar::kUInt16:
+      return static_cast<uint16_t>(raw);
+    case Scalar::kInt32:
+      return static_cast<int32_t>(raw);
+    case Scalar::kUInt32:
+      return static_cast<uint32_t>(raw);
+    case Scalar::kInt64:
+      return static_cast<double>(static_cast<int64_t>(raw));
+    case Scalar::kUInt64:
+      return static_cast<double>(raw);
     case Scalar::kFloat: {
       const uint32_t bits = static_cast<uint32_t>(raw);
       float v;
@@ -344,22 +379,22 @@ std::string Flatten(const FormatMap& formats, const std::string& type, const std
 struct Subscription {
   std::string topic;
   int multi_id = 0;
-  std::shared_ptr<const Layout> layout;  // null when the format could not be resolved
+  std::shared_ptr<const Layout> layout;    // null when the format could not be resolved
   std::vector<std::string_view> payloads;  // data after msg_id, in file order
   bool gyro_topic = false;  // IsGyroTopic(topic), cached: tested for every data message
   bool wanted = false;      // WantedTopic(topic), cached
 };
 
 bool IsGyroTopic(const std::string& topic) {
-  return topic == "sensor_gyro_fifo" || topic == "sensor_gyro" || topic == "vehicle_angular_velocity" ||
-         topic == "sensor_combined";
+  return topic == "sensor_gyro_fifo" || topic == "sensor_gyro" ||
+         topic == "vehicle_angular_velocity" || topic == "sensor_combined";
 }
 
 // Topics whose data the reader keeps.
 bool WantedTopic(const std::string& topic) {
-  static const char* kTopics[] = {"sensor_gyro_fifo", "sensor_gyro", "vehicle_angular_velocity",
-                                  "sensor_combined", "camera_trigger", "camera_capture",
-                                  "vehicle_local_position", "home_position"};
+  static const char* kTopics[] = {
+      "sensor_gyro_fifo", "sensor_gyro",    "vehicle_angular_velocity", "sensor_combined",
+      "camera_trigger",   "camera_capture", "vehicle_local_position",   "home_position"};
   for (const char* t : kTopics) {
     if (topic == t) return true;
   }
@@ -368,20 +403,34 @@ bool WantedTopic(const std::string& topic) {
 
 size_t MinPayload(uint8_t type) {
   switch (type) {
-    case 'B': return 40;
-    case 'F': return 2;
-    case 'I': return 2;
-    case 'M': return 3;
-    case 'P': return 2;
-    case 'Q': return 3;
-    case 'A': return 4;
-    case 'R': return 2;
-    case 'D': return 2;
-    case 'L': return 10;
-    case 'C': return 12;
-    case 'S': return 8;
-    case 'O': return 2;
-    default: return 0;  // unknown type
+    case 'B':
+      return 40;
+    case 'F':
+      return 2;
+    case 'I':
+      return 2;
+    case 'M':
+      return 3;
+    case 'P':
+      return 2;
+    case 'Q':
+      return 3;
+    case 'A':
+      return 4;
+    case 'R':
+      return 2;
+    case 'D':
+      return 2;
+    case 'L':
+      return 10;
+    case 'C':
+      return 12;
+    case 'S':
+      return 8;
+    case 'O':
+      return 2;
+    default:
+      return 0;  // unknown type
   }
 }
 
@@ -403,7 +452,8 @@ class ULogParser {
   void Warn(const std::string& kind, size_t offset, const std::string& text) {
     size_t& count = warning_counts_[kind];
     ++count;
-    if (count <= kMaxDetailedWarnings) log_.warnings.push_back("byte " + std::to_string(offset) + ": " + text);
+    if (count <= kMaxDetailedWarnings)
+      log_.warnings.push_back("byte " + std::to_string(offset) + ": " + text);
   }
 
   // A message header at q with a known type, a size that fits, and for 'D' a subscribed msg_id
@@ -449,7 +499,8 @@ class ULogParser {
   int max_msg_id_ = -1;  // largest msg_id subscribed so far
   std::map<std::string, size_t> warning_counts_;
   std::map<std::string, size_t> skipped_by_topic_;
-  std::vector<std::pair<uint64_t, uint16_t>> dropouts_;  // (gyro-topic timestamp before it, us; duration ms)
+  std::vector<std::pair<uint64_t, uint16_t>>
+      dropouts_;  // (gyro-topic timestamp before it, us; duration ms)
   uint64_t last_timestamp_us_ = 0;
   size_t skipped_bytes_ = 0;
 };
@@ -479,18 +530,31 @@ bool ULogParser::Plausible(size_t q, size_t end, int pending_id) const {
       auto it = by_msg_id_.find(msg_id);
       // An id that was never subscribed may still be real when its 'A' was damaged; PX4 numbers
       // subscriptions from 0 upwards, so only ids near the known ones are believed.
-      if (it == by_msg_id_.end()) return msg_id == pending_id || msg_id <= max_msg_id_ + kMsgIdSlack;
+      if (it == by_msg_id_.end())
+        return msg_id == pending_id || msg_id <= max_msg_id_ + kMsgIdSlack;
       const Layout* layout = subscriptions_[it->second].layout.get();
       return !layout || (size - 2u >= layout->min_bytes && size - 2u <= layout->max_bytes);
     }
-    case 'O': case 'R': return size == 2;
-    case 'S': return size == 8;
-    case 'I': case 'P': return key_fits(0);
-    case 'M': case 'Q': return key_fits(1);
-    case 'L': case 'C': return p[0] >= '0' && p[0] <= '7';
-    case 'F': return p.find(':') != std::string_view::npos;
-    case 'A': return size <= 3 + 255;  // a topic name, not a long text
-    default: return true;
+    case 'O':
+    case 'R':
+      return size == 2;
+    case 'S':
+      return size == 8;
+    case 'I':
+    case 'P':
+      return key_fits(0);
+    case 'M':
+    case 'Q':
+      return key_fits(1);
+    case 'L':
+    case 'C':
+      return p[0] >= '0' && p[0] <= '7';
+    case 'F':
+      return p.find(':') != std::string_view::npos;
+    case 'A':
+      return size <= 3 + 255;  // a topic name, not a long text
+    default:
+      return true;
   }
 }
 
@@ -527,20 +591,26 @@ void ULogParser::ReadFlagBits(std::string_view payload, size_t offset) {
   // incompat_flags[0] bit 0 is DATA_APPENDED; any other incompatible bit means a layout we
   // cannot read (the spec says a parser must refuse such a file).
   const uint8_t* incompat = flags + 8;
-  if ((incompat[0] & ~1u) != 0) Fail(offset, "unknown incompatible ULog flag set in incompat_flags[0]; cannot parse");
+  if ((incompat[0] & ~1u) != 0)
+    Fail(offset, "unknown incompatible ULog flag set in incompat_flags[0]; cannot parse");
   for (int i = 1; i < 8; ++i) {
-    if (incompat[i] != 0) Fail(offset, "unknown incompatible ULog flag set in incompat_flags[" + std::to_string(i) + "]; cannot parse");
+    if (incompat[i] != 0)
+      Fail(offset, "unknown incompatible ULog flag set in incompat_flags[" + std::to_string(i) +
+                       "]; cannot parse");
   }
   if ((incompat[0] & 1u) == 0) return;
   for (int i = 0; i < 3; ++i) {
     const uint64_t at = LoadLE(payload.data() + 16 + 8 * i, 8);
     if (at == 0) continue;
     if (at >= bytes_.size()) {
-      Warn("appended", offset, "appended data offset " + std::to_string(at) + " lies beyond the end of the file (truncated?); ignored");
+      Warn("appended", offset,
+           "appended data offset " + std::to_string(at) +
+               " lies beyond the end of the file (truncated?); ignored");
       continue;
     }
     if (!appended_offsets_.empty() && at <= appended_offsets_.back()) {
-      Warn("appended", offset, "appended data offsets not increasing; " + std::to_string(at) + " ignored");
+      Warn("appended", offset,
+           "appended data offsets not increasing; " + std::to_string(at) + " ignored");
       continue;
     }
     appended_offsets_.push_back(at);
@@ -570,10 +640,12 @@ bool ULogParser::DataSizeFits(std::string_view payload) const {
 std::string ULogParser::DataMismatch(std::string_view payload) const {
   const uint16_t msg_id = LoadU16(payload.data());
   auto it = by_msg_id_.find(msg_id);
-  if (it == by_msg_id_.end()) return "data message for unsubscribed msg_id " + std::to_string(msg_id);
+  if (it == by_msg_id_.end())
+    return "data message for unsubscribed msg_id " + std::to_string(msg_id);
   const Subscription& sub = subscriptions_[it->second];
-  return "data message of '" + sub.topic + "' has " + std::to_string(payload.size() - 2) + " bytes, its format " +
-         std::to_string(sub.layout->min_bytes) + ".." + std::to_string(sub.layout->max_bytes);
+  return "data message of '" + sub.topic + "' has " + std::to_string(payload.size() - 2) +
+         " bytes, its format " + std::to_string(sub.layout->min_bytes) + ".." +
+         std::to_string(sub.layout->max_bytes);
 }
 
 void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
@@ -601,7 +673,8 @@ void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
       sub.layout = LayoutFor(sub.topic, &error);
       if (!sub.layout) {
         ++log_.records_skipped;
-        Warn("subscription", offset, "topic '" + sub.topic + "': " + error + "; its data is skipped");
+        Warn("subscription", offset,
+             "topic '" + sub.topic + "': " + error + "; its data is skipped");
       }
       by_msg_id_[msg_id] = subscriptions_.size();
       max_msg_id_ = std::max<int>(max_msg_id_, msg_id);
@@ -618,7 +691,8 @@ void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
       auto it = by_msg_id_.find(msg_id);
       if (it == by_msg_id_.end()) {
         ++log_.records_skipped;
-        Warn("msg_id", offset, "data message for unsubscribed msg_id " + std::to_string(msg_id) + " skipped");
+        Warn("msg_id", offset,
+             "data message for unsubscribed msg_id " + std::to_string(msg_id) + " skipped");
         return;
       }
       Subscription& sub = subscriptions_[it->second];
@@ -633,7 +707,8 @@ void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
       if (sub.gyro_topic) {
         auto ts = sub.layout->fields.find("timestamp");
         if (ts != sub.layout->fields.end()) {
-          if (auto t_ns = ReadTimeNs(data, ts->second)) last_timestamp_us_ = static_cast<uint64_t>(*t_ns / 1000);
+          if (auto t_ns = ReadTimeNs(data, ts->second))
+            last_timestamp_us_ = static_cast<uint64_t>(*t_ns / 1000);
         }
       }
       if (sub.wanted) sub.payloads.push_back(data);
@@ -671,7 +746,8 @@ std::vector<std::pair<size_t, size_t>> ULogParser::Segments(size_t pos) {
   size_t start = pos;
   for (uint64_t at : appended_offsets_) {
     if (at <= start) {
-      Warn("appended", pos, "appended data offset " + std::to_string(at) + " lies inside the header; ignored");
+      Warn("appended", pos,
+           "appended data offset " + std::to_string(at) + " lies inside the header; ignored");
       continue;
     }
     segments.emplace_back(start, static_cast<size_t>(at));
@@ -754,13 +830,16 @@ bool ULogParser::ReadMessage(size_t* at, size_t end, bool last_segment) {
 void ULogParser::SummariseWarnings() {
   for (const auto& [kind, count] : warning_counts_) {
     if (count > kMaxDetailedWarnings) {
-      log_.warnings.push_back(std::to_string(count - kMaxDetailedWarnings) + " more warnings of kind '" + kind + "' not listed");
+      log_.warnings.push_back(std::to_string(count - kMaxDetailedWarnings) +
+                              " more warnings of kind '" + kind + "' not listed");
     }
   }
   for (const auto& [topic, count] : skipped_by_topic_) {
-    log_.warnings.push_back("topic '" + topic + "': " + std::to_string(count) + " data messages skipped");
+    log_.warnings.push_back("topic '" + topic + "': " + std::to_string(count) +
+                            " data messages skipped");
   }
-  if (skipped_bytes_ > 0) log_.warnings.push_back(std::to_string(skipped_bytes_) + " corrupt bytes skipped in total");
+  if (skipped_bytes_ > 0)
+    log_.warnings.push_back(std::to_string(skipped_bytes_) + " corrupt bytes skipped in total");
   if (dropouts_.empty()) return;
   uint64_t total_ms = 0;
   std::string where;
@@ -1024,7 +1103,8 @@ void ULogParser::Decode() {
 }  // namespace
 
 bool LooksLikeULog(std::string_view first_bytes) {
-  return first_bytes.size() >= sizeof(kMagic) && std::memcmp(first_bytes.data(), kMagic, sizeof(kMagic)) == 0;
+  return first_bytes.size() >= sizeof(kMagic) &&
+         std::memcmp(first_bytes.data(), kMagic, sizeof(kMagic)) == 0;
 }
 
 FlightLog ParseULog(std::string_view bytes, const std::string& path) {

@@ -1,8 +1,8 @@
 #include "sim/logs/ulog_write.h"
 
 #include "sim/check.h"
-#include "sim/text_file.h"
 #include "sim/logs/ulog.h"  // kAirborneAltitudeM
+#include "sim/text_file.h"
 
 #include <algorithm>
 #include <cmath>

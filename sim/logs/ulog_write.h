@@ -17,8 +17,8 @@
 //                          sample.
 // Times: the trace's int64 ns rounded to the nearest PX4 microsecond (uint64 since boot).
 
-#include "sim/logs/flight_log.h"
 #include "sim/gyro_trace.h"
+#include "sim/logs/flight_log.h"
 
 #include <optional>
 #include <string>

@@ -1,6 +1,6 @@
 #include "sim/text_file.h"
-#include "tests/estimate/report/report_test_util.h"
 #include "tests/app/cli_test_util.h"
+#include "tests/estimate/report/report_test_util.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
@@ -51,8 +51,7 @@ TEST(AnalyzeCli, ReportWithSceneIsSelfContainedAndMatchesTheTable) {
   SHUTTERLAB_NEED_REAL_DATA();
   test::TempDir dir;
   const auto r = RunShutterlab("analyze " + Bbl() + " --every 4s --out " + (dir / "out") +
-                               " --scene " + test::GroundScenePath(1) +
-                               " --json");
+                               " --scene " + test::GroundScenePath(1) + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json json = nlohmann::json::parse(r.output);
   const std::string html = ReadFileToString(dir / "out/report.html");
@@ -84,8 +83,8 @@ TEST(AnalyzeCli, ReportWithSceneIsSelfContainedAndMatchesTheTable) {
 
 TEST(AnalyzeCli, SceneWithoutOutIsExitTwo) {
   SHUTTERLAB_NEED_REAL_DATA();
-  const auto r = RunShutterlab("analyze " + Bbl() + " --every 4s --scene " +
-                               test::GroundScenePath(1));
+  const auto r =
+      RunShutterlab("analyze " + Bbl() + " --every 4s --scene " + test::GroundScenePath(1));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("--out"), std::string::npos) << r.output;
 }
@@ -132,8 +131,10 @@ TEST(AnalyzeCli, UnknownLogIsOneLineExitTwo) {
 TEST(AnalyzeCli, SyntheticULogWithItsOwnTriggersAndAltitude) {
   test::TempDir dir;
   const std::string log = dir / "flight.ulg";
-  const auto synth = RunShutterlab("synth flight --rate 500 --duration 30 --t0 1 --format ulog "
-                                   "--trigger-every 2 --altitude 40 --out " + log);
+  const auto synth = RunShutterlab(
+      "synth flight --rate 500 --duration 30 --t0 1 --format ulog "
+      "--trigger-every 2 --altitude 40 --out " +
+      log);
   ASSERT_EQ(synth.exit_code, 0) << synth.output;
   const auto r = RunShutterlab("analyze " + log + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;

@@ -1,10 +1,9 @@
 #pragma once
 // Running the shutterlab executable from the command-line tests.
 
-#include <sys/wait.h>
-
 #include <cstdio>
 #include <string>
+#include <sys/wait.h>
 
 namespace shutterlab::test {
 

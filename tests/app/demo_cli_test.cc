@@ -17,16 +17,15 @@ namespace {
 TEST(DemoCli, RunsEveryStepAndFindsTheHiddenOffset) {
   test::TempDir dir;
   const std::string out = dir / "demo";
-  const test::CommandResult result =
-      test::RunShutterlab("demo --out " + out);
+  const test::CommandResult result = test::RunShutterlab("demo --out " + out);
   ASSERT_EQ(result.exit_code, 0) << result.output;
   for (const char* section : {"== 0.", "== 1.", "== 2.", "== 3.", "== 4.", "== 5.", "== 6."}) {
     EXPECT_NE(result.output.find(section), std::string::npos) << section;
   }
   // The demo makes its own inputs: a flight log that the reader takes and a scene.
-  for (const char* file : {"inputs/flight.ulg", "inputs/ground.png", "report.html", "images.csv",
-                           "exclude.txt", "render/frames.csv",
-                           "validate/report.json", "validate/plots/validate.html"}) {
+  for (const char* file :
+       {"inputs/flight.ulg", "inputs/ground.png", "report.html", "images.csv", "exclude.txt",
+        "render/frames.csv", "validate/report.json", "validate/plots/validate.html"}) {
     EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(out) / file)) << file;
   }
   std::ifstream report_file(std::filesystem::path(out) / "validate/report.json");

@@ -1,16 +1,16 @@
+#include "sim/logs/gyro_io.h"
+#include "sim/text_file.h"
+#include "tests/app/cli_test_util.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
-
-#include "sim/logs/gyro_io.h"
-#include "sim/text_file.h"
-#include "tests/app/cli_test_util.h"
-#include "tests/test_util.h"
 
 namespace shutterlab {
 namespace {
@@ -24,8 +24,8 @@ std::string WriteTrace(const TempDir& dir) {
   const double rate = 300.0 / (180.0 * 3600.0 / M_PI) / 0.009;
   std::vector<GyroSample> samples;
   for (int i = 0; i < 7000; ++i) {
-    samples.push_back({static_cast<int64_t>(i) * 1000000,
-                       Eigen::Vector3d(0.0, i < 5000 ? 0.0 : rate, 0.0)});
+    samples.push_back(
+        {static_cast<int64_t>(i) * 1000000, Eigen::Vector3d(0.0, i < 5000 ? 0.0 : rate, 0.0)});
   }
   const std::string path = dir / "gyro.csv";
   WriteGyroCsv(path, GyroTrace(std::move(samples)));
@@ -38,7 +38,8 @@ size_t CountLines(const std::string& text) { return std::count(text.begin(), tex
 TEST(FlightCli, JsonFollowsFormats) {
   TempDir dir;
   const std::string trace = WriteTrace(dir);
-  const auto r = RunShutterlab("flight " + trace + " --altitude 50 --limit 5cm,0.10m --window 10ms,0.02 --json");
+  const auto r = RunShutterlab("flight " + trace +
+                               " --altitude 50 --limit 5cm,0.10m --window 10ms,0.02 --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = nlohmann::json::parse(r.output);
   EXPECT_EQ(j.at("altitude_m"), 50.0);
@@ -47,10 +48,10 @@ TEST(FlightCli, JsonFollowsFormats) {
   ASSERT_EQ(j.at("rows").size(), 4u);
   EXPECT_EQ(j["rows"][0]["limit_m"], 0.05);
   EXPECT_EQ(j["rows"][0]["window_s"], 0.010);
-  EXPECT_EQ(j["rows"][0]["flagged_percent"], 100.0);          // 300" > 226"
+  EXPECT_EQ(j["rows"][0]["flagged_percent"], 100.0);  // 300" > 226"
   EXPECT_EQ(j["rows"][0]["flagged_percent_vector"], 100.0);
-  EXPECT_EQ(j["rows"][2]["flagged_percent"], 0.0);            // 10 cm, 10 ms: 300" < 433"
-  EXPECT_EQ(j["rows"][3]["flagged_percent"], 100.0);          // 10 cm, 20 ms: 633" > 433"
+  EXPECT_EQ(j["rows"][2]["flagged_percent"], 0.0);    // 10 cm, 10 ms: 300" < 433"
+  EXPECT_EQ(j["rows"][3]["flagged_percent"], 100.0);  // 10 cm, 20 ms: 633" > 433"
 }
 
 TEST(FlightCli, TableAndSeries) {
@@ -79,7 +80,8 @@ TEST(FlightCli, BadInputExitsTwoWithOneLine) {
     EXPECT_FALSE(std::filesystem::exists(series)) << "partial output for " << args;
     if (args == "--window 3s") {
       EXPECT_NE(r.output.find("longer than"), std::string::npos) << r.output;
-      EXPECT_NE(r.output.find(trace), std::string::npos) << "error must name the file: " << r.output;
+      EXPECT_NE(r.output.find(trace), std::string::npos)
+          << "error must name the file: " << r.output;
     }
   }
 }

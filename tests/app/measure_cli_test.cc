@@ -5,8 +5,8 @@
 #include "render/image_io.h"
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
-#include "tests/render/render_fixtures.h"
 #include "tests/app/cli_test_util.h"
+#include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -51,8 +51,8 @@ PairFiles WritePair(const test::TempDir& dir) {
   RenderFrame(scene, geometry, Interpolation::kBilinear, &rs);
   RenderFrame(scene, reference, Interpolation::kBilinear, &ref);
   const cv::Mat field = DisplacementField(geometry);
-  PairFiles files{dir / "ref.png", dir / "rs.png", dir / "disp.exr", dir / "camera.json",
-                  FrameDistortionPx(field), truth.rig};
+  PairFiles files{dir / "ref.png",     dir / "rs.png",           dir / "disp.exr",
+                  dir / "camera.json", FrameDistortionPx(field), truth.rig};
   WriteImage(files.ref, ref);
   WriteImage(files.rs, rs);
   WriteImage(files.truth, field, {"dx", "dy"});
@@ -66,10 +66,9 @@ TEST(MeasureCli, JsonOutputsAndTruthError) {
   test::TempDir dir;
   const PairFiles files = WritePair(dir);
   const std::string out = dir / "out";
-  const test::CommandResult r =
-      test::RunShutterlab("measure " + Quote(files.ref) + " " + Quote(files.rs) + " --camera " +
-                          Quote(files.camera) + " --truth " + Quote(files.truth) + " --out " +
-                          Quote(out) + " --json");
+  const test::CommandResult r = test::RunShutterlab(
+      "measure " + Quote(files.ref) + " " + Quote(files.rs) + " --camera " + Quote(files.camera) +
+      " --truth " + Quote(files.truth) + " --out " + Quote(out) + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = nlohmann::json::parse(r.output);
   EXPECT_EQ(j.at("format"), "measure/1");

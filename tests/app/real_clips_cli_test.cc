@@ -1,6 +1,7 @@
-// Video validation on data nobody here made: `shutterlab import` then `shutterlab validate` on the two real
-// rolling-shutter clips in the shared real-data folder (provenance in its SOURCES.md), through the CLI
-// as a user runs them. What is asserted is what the clips show robustly (README, "Real footage"):
+// Video validation on data nobody here made: `shutterlab import` then `shutterlab validate` on the
+// two real rolling-shutter clips in the shared real-data folder (provenance in its SOURCES.md),
+// through the CLI as a user runs them. What is asserted is what the clips show robustly (README,
+// "Real footage"):
 //  - the phone clip, filmed from a moving car: rotation alone leaves pixels of parallax that
 //    per-pair translation explains; with it, the readout is ~24 ms, not the 33.3 ms the source's
 //    example assumes, the same on both halves of the clip; the claimed axis mapping is the best of
@@ -46,8 +47,7 @@ const json* Claim(const json& report, const std::string& name) {
 TEST(RealClips, PhoneClipReadoutAndAxes) {
   SHUTTERLAB_REAL_DATA(clip, "rs/phone_gyro_video_20200109_145447");
   test::TempDir dir;
-  const json report = ImportAndValidate(dir, clip, "",
-                                        "--out '" + (dir / "plots") + "'");
+  const json report = ImportAndValidate(dir, clip, "", "--out '" + (dir / "plots") + "'");
   EXPECT_EQ(report["video"], true);
   EXPECT_EQ(report["frames"], 19);  // 20 frames, 19 pairs
   EXPECT_EQ(report["model"], "translation");
@@ -82,9 +82,8 @@ TEST(RealClips, PhoneClipReadoutAndAxes) {
 TEST(RealClips, GoproKarmaIsMostlyTranslation) {
   SHUTTERLAB_REAL_DATA(karma, "rs/gopro_karma/karma.mp4");
   test::TempDir dir;
-  const json report =
-      ImportAndValidate(dir, karma,
-                        "--start-frame 100 --max-frames 31", "--out '" + (dir / "plots") + "'");
+  const json report = ImportAndValidate(dir, karma, "--start-frame 100 --max-frames 31",
+                                        "--out '" + (dir / "plots") + "'");
   EXPECT_EQ(report["frames"], 30);
   EXPECT_EQ(report["rotation_only"]["unexplained"], true);
   EXPECT_GT(report["translation"]["explains_share"].get<double>(), 0.8);

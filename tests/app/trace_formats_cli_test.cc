@@ -1,13 +1,13 @@
 // The trace commands read every supported log, not only gyro.csv: real flight logs go through the
 // same dispatcher as `analyze`.
 
-#include <string>
+#include "tests/app/cli_test_util.h"
+#include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "tests/app/cli_test_util.h"
-#include "tests/test_util.h"
+#include <string>
 
 namespace shutterlab {
 namespace {

@@ -1,6 +1,7 @@
-// `shutterlab validate` through the CLI: the report JSON has docs/FORMATS.md's keys, --out writes the
-// residual pictures, and bad input gives one line "error: PATH[:LINE]: problem", exit code 2 and no
-// output. The dataset is small (3 frames of 320x240) so the whole file stays fast under ASan.
+// `shutterlab validate` through the CLI: the report JSON has docs/FORMATS.md's keys, --out writes
+// the residual pictures, and bad input gives one line "error: PATH[:LINE]: problem", exit code 2
+// and no output. The dataset is small (3 frames of 320x240) so the whole file stays fast under
+// ASan.
 
 #include "render/camera.h"
 #include "render/render_dataset.h"

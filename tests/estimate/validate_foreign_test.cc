@@ -1,12 +1,12 @@
 // validate on a rig dataset that shutterlab's renderer did not make. The generator here follows
-// docs/FORMATS.md only and shares no code with render/ or sim/: its own motion (analytic body rates,
-// integrated with a 20 us midpoint rule), its own rolling-shutter image synthesis (cv::remap of a
-// procedural ground texture through the rotation-only homography of each row), and choices our renderer
-// never makes: 16-bit grey TIFF images in a subfolder, frame ids that are not 0..N-1, clock times
-// near 1000 s, a jittered 1.6 kHz gyro log with an extra column, a gyro mounted with its axes
-// swapped, a bottom-to-top readout, a declared non-zero time offset, and a minimal camera.json.
-// The truth differs from camera.json by 3 ms of time offset; validate must find that, and nothing
-// on the twin whose camera.json is right.
+// docs/FORMATS.md only and shares no code with render/ or sim/: its own motion (analytic body
+// rates, integrated with a 20 us midpoint rule), its own rolling-shutter image synthesis (cv::remap
+// of a procedural ground texture through the rotation-only homography of each row), and choices our
+// renderer never makes: 16-bit grey TIFF images in a subfolder, frame ids that are not 0..N-1,
+// clock times near 1000 s, a jittered 1.6 kHz gyro log with an extra column, a gyro mounted with
+// its axes swapped, a bottom-to-top readout, a declared non-zero time offset, and a minimal
+// camera.json. The truth differs from camera.json by 3 ms of time offset; validate must find that,
+// and nothing on the twin whose camera.json is right.
 
 #include "estimate/loop/validate.h"
 #include "estimate/report/validate_report.h"

@@ -1,7 +1,7 @@
 // End-to-end tests of closing the loop on data with an undeclared effect in it: each test renders a
-// rig dataset (render/render_dataset.h) over the procedural ground texture and a multirotor-like gyro trace
-// with ONE effect in the truth that camera.json does not declare, runs ValidateDataset on it (which
-// sees only what docs/FORMATS.md's dataset holds) and checks what the loop recovers.
+// rig dataset (render/render_dataset.h) over the procedural ground texture and a multirotor-like
+// gyro trace with ONE effect in the truth that camera.json does not declare, runs ValidateDataset
+// on it (which sees only what docs/FORMATS.md's dataset holds) and checks what the loop recovers.
 //
 // Sizes: 8 frames of 1280x960, fx = 1100 px, 30 ms readout, 50 m (a typical mapping camera). Under
 // AddressSanitizer (3-5x slower) the frames are 640x480 (same field of view) and only the
@@ -273,7 +273,8 @@ TEST(ValidateEndToEnd, TableAndReportAreConsistent) {
   EXPECT_EQ(json["frames_detail"].size(), static_cast<size_t>(kFrames));
 }
 
-// docs/FORMATS.md: a video dataset leaves ref empty on every line; a mix is an error on its first line.
+// docs/FORMATS.md: a video dataset leaves ref empty on every line; a mix is an error on its first
+// line.
 TEST(ValidateDataset, RefusesAVideoDatasetWithARef) {
   test::TempDir dir;
   WriteRigModel(dir / "camera.json", DeclaredRig());

@@ -4,8 +4,8 @@
 // runs ValidateDataset on it (pairs measured image against image) and checks what the loop
 // recovers, with the tolerances of the still-dataset tests (tests/estimate/validate_test.cc).
 //
-// Sizes: 16 frames of 640x480 at 30 fps (f = 550 px, the field of view of the still tests' rig), 30 ms
-// readout, half a second of a multirotor-like flight (sim/motion.h, seed 3, from 12.6 s, its
+// Sizes: 16 frames of 640x480 at 30 fps (f = 550 px, the field of view of the still tests' rig), 30
+// ms readout, half a second of a multirotor-like flight (sim/motion.h, seed 3, from 12.6 s, its
 // liveliest stretch: up to 0.8 rad/s). Under AddressSanitizer only the cases marked so run.
 
 #include "estimate/loop/validate.h"
@@ -132,9 +132,9 @@ TEST(ValidateVideo, RecoversGyroToCameraMisalignment) {
   });
 }
 
-// The still tests name no tolerance for these three: 10 % of the injected value (a bias of 0.01 rad/s
-// about x, with at most 0.0015 rad/s about the other axes; a k1 of -0.05) and the right readout
-// direction, on the whole clip and on each half.
+// The still tests name no tolerance for these three: 10 % of the injected value (a bias of 0.01
+// rad/s about x, with at most 0.0015 rad/s about the other axes; a k1 of -0.05) and the right
+// readout direction, on the whole clip and on each half.
 TEST(ValidateVideo, RecoversGyroBias) {
   if (kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;

@@ -1,7 +1,7 @@
-#include "render/render_dataset.h"
-
 #include "render/frames_csv.h"
+
 #include "render/image_io.h"
+#include "render/render_dataset.h"
 #include "render/truth_model.h"
 #include "sim/check.h"
 #include "sim/logs/gyro_io.h"

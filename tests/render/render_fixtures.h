@@ -13,8 +13,8 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
-#include <string>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace shutterlab::test {

@@ -1,15 +1,15 @@
 #include "sim/gyro_trace.h"
 
-#include <cmath>
-#include <algorithm>
-#include <limits>
-#include <random>
-
-#include <gtest/gtest.h>
-
 #include "sim/check.h"
 #include "sim/text_file.h"
 #include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
 
 namespace shutterlab {
 namespace {

@@ -1,11 +1,11 @@
 #include "sim/integrate.h"
 
-#include <cmath>
+#include "sim/bias.h"
+#include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 
-#include "sim/bias.h"
-#include "tests/test_util.h"
+#include <cmath>
 
 namespace shutterlab {
 namespace {

@@ -1,6 +1,7 @@
 #pragma once
-// Synthetic measurements for the effect-fitting tests and bench: a mapping camera's rig, a multirotor-like
-// gyro trace, grid points with the exact displacement of a TrueModel plus Gaussian noise.
+// Synthetic measurements for the effect-fitting tests and bench: a mapping camera's rig, a
+// multirotor-like gyro trace, grid points with the exact displacement of a TrueModel plus Gaussian
+// noise.
 
 #include "estimate/loop/effect_fit.h"
 #include "render/camera.h"
@@ -30,7 +31,8 @@ inline RigModel MappingRig() {
   return rig;
 }
 
-// The video tests' rig: the mapping rig's field of view at 640x480 (f = 550 px), 30 ms readout, 50 m.
+// The video tests' rig: the mapping rig's field of view at 640x480 (f = 550 px), 30 ms readout, 50
+// m.
 inline RigModel VideoRig() {
   RigModel rig = MappingRig();
   rig.camera.width = 640;

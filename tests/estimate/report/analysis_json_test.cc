@@ -11,7 +11,7 @@ namespace shutterlab {
 namespace {
 
 constexpr int64_t kDtNs = 1'000'000;  // 1 kHz
-constexpr double kStillS = 4.0;        // a still lead-in: the bias segment
+constexpr double kStillS = 4.0;       // a still lead-in: the bias segment
 
 // Still for kStillS, then a constant rate about (1, 1, 1) until total_s.
 GyroTrace ConstantRateTrace(double rate_rad_s, double total_s) {

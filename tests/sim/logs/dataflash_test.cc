@@ -1,16 +1,16 @@
 #include "sim/logs/dataflash.h"
 
+#include "sim/check.h"
+#include "sim/text_file.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cstring>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
-
-#include "sim/check.h"
-#include "sim/text_file.h"
-#include "tests/test_util.h"
 
 // No real ArduPilot .bin with a usable licence is available to the project, so every file here is
 // written by the test from FMT definitions laid out as ArduPilot's AP_Logger writes them.
@@ -68,8 +68,8 @@ class DataFlashBuilder {
     test::PutLittleEndian(&bytes_, z);
     for (int i = 0; i < 3; ++i) test::PutLittleEndian(&bytes_, 9.81f);
   }
-  void Isbh(uint16_t n, uint8_t type, uint8_t instance, uint16_t mul, uint16_t count, uint64_t sample_us,
-            float rate_hz) {
+  void Isbh(uint16_t n, uint8_t type, uint8_t instance, uint16_t mul, uint16_t count,
+            uint64_t sample_us, float rate_hz) {
     Header(kIsbh);
     test::PutLittleEndian<uint64_t>(&bytes_, sample_us + 100);
     test::PutLittleEndian(&bytes_, n);
@@ -80,14 +80,15 @@ class DataFlashBuilder {
     test::PutLittleEndian(&bytes_, sample_us);
     test::PutLittleEndian(&bytes_, rate_hz);
   }
-  void Isbd(uint16_t n, uint16_t seqno, const std::vector<int16_t>& x, const std::vector<int16_t>& y,
-            const std::vector<int16_t>& z) {
+  void Isbd(uint16_t n, uint16_t seqno, const std::vector<int16_t>& x,
+            const std::vector<int16_t>& y, const std::vector<int16_t>& z) {
     Header(kIsbd);
     test::PutLittleEndian<uint64_t>(&bytes_, 1);
     test::PutLittleEndian(&bytes_, n);
     test::PutLittleEndian(&bytes_, seqno);
     for (const auto* axis : {&x, &y, &z}) {
-      for (size_t i = 0; i < 32; ++i) test::PutLittleEndian<int16_t>(&bytes_, i < axis->size() ? (*axis)[i] : int16_t{0});
+      for (size_t i = 0; i < 32; ++i)
+        test::PutLittleEndian<int16_t>(&bytes_, i < axis->size() ? (*axis)[i] : int16_t{0});
     }
   }
   void Cam(uint8_t type, uint64_t t_us, uint16_t image, double rel_alt_m) {
@@ -138,7 +139,8 @@ DataFlashBuilder FlightFile(int gyr_samples) {
     b.Gyr(sample_us + 250, 0, sample_us, 0.5f * (k % 7), -0.25f * (k % 5), 0.125f * k);
     if (k % 2 == 0) b.Gyr(sample_us + 300, 1, sample_us + 10, 1.0f, 1.0f, 1.0f);
     if (k % 5 == 0) b.Imu(sample_us + 500, 0, 0.1f, 0.2f, 0.3f);
-    if (k % 100 == 50) b.Cam(kCam, sample_us + 700, static_cast<uint16_t>(k / 100 + 1), 40.0 + k / 100);
+    if (k % 100 == 50)
+      b.Cam(kCam, sample_us + 700, static_cast<uint16_t>(k / 100 + 1), 40.0 + k / 100);
     if (k % 100 == 49) b.Cam(kTrig, sample_us + 600, static_cast<uint16_t>(k / 100 + 1), 0.0);
   }
   return b;
@@ -153,7 +155,8 @@ TEST(DataFlash, ReadsGyrBackExactly) {
   ASSERT_EQ(log.gyro.size(), 1000u);
   for (int k = 0; k < 1000; ++k) {
     EXPECT_EQ(log.gyro[k].t_ns, (2'000'000 + k * 1000) * int64_t{1000}) << "SampleUS, not TimeUS";
-    EXPECT_EQ(log.gyro[k].omega_rad_s, Eigen::Vector3d(0.5 * (k % 7), -0.25 * (k % 5), 0.125 * k)) << k;
+    EXPECT_EQ(log.gyro[k].omega_rad_s, Eigen::Vector3d(0.5 * (k % 7), -0.25 * (k % 5), 0.125 * k))
+        << k;
   }
   ASSERT_EQ(log.gyro_sources_available.size(), 3u);
   EXPECT_EQ(log.gyro_sources_available[0], "GYR (1000.0 Hz, 1000 samples)");
@@ -277,8 +280,8 @@ TEST(DataFlash, RandomDamageGivesErrorOrPartialResult) {
 TEST(DataFlash, SkipsInconsistentFmt) {
   DataFlashBuilder b;
   b.Fmt(20, 50, "GYR2", "QBQfff", "TimeUS,I,SampleUS,GyrX,GyrY,GyrZ");  // needs 32, says 50
-  b.Fmt(21, 14, "BAD", "QX", "TimeUS,What");                             // unknown format char
-  b.Fmt(22, 11, "LBL", "Q", "TimeUS,Extra");                             // label count mismatch
+  b.Fmt(21, 14, "BAD", "QX", "TimeUS,What");                            // unknown format char
+  b.Fmt(22, 11, "LBL", "Q", "TimeUS,Extra");                            // label count mismatch
   for (int k = 0; k < 10; ++k) b.Gyr(1000 + k * 1000, 0, 1000 + k * 1000, 0, 0, 0);
   const FlightLog log = ParseDataFlash(b.bytes(), "fmt.bin");
   EXPECT_EQ(log.records_skipped, 3u);
@@ -300,7 +303,8 @@ TEST(DataFlash, RejectsWhatIsNotDataFlash) {
     ParseDataFlash(b.bytes(), "nogyro.bin");
     FAIL() << "a log without gyro data must throw";
   } catch (const IoError& e) {
-    EXPECT_NE(std::string(e.what()).find("nogyro.bin: no usable gyro data"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("nogyro.bin: no usable gyro data"), std::string::npos)
+        << e.what();
   }
 }
 

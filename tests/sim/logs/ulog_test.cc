@@ -1,17 +1,17 @@
 #include "sim/logs/ulog.h"
 
+#include "sim/check.h"
+#include "sim/text_file.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
-
-#include "sim/check.h"
-#include "sim/text_file.h"
-#include "tests/test_util.h"
 
 namespace shutterlab {
 namespace {
@@ -80,7 +80,8 @@ std::string FifoRecord(uint64_t t_us, uint64_t t_sample_us, float dt_us, float s
   test::PutLittleEndian<float>(&r, scale);
   test::PutLittleEndian<uint8_t>(&r, n);
   for (const auto* axis : {&x, &y, &z}) {
-    for (size_t i = 0; i < 32; ++i) test::PutLittleEndian<int16_t>(&r, i < axis->size() ? (*axis)[i] : int16_t{0});
+    for (size_t i = 0; i < 32; ++i)
+      test::PutLittleEndian<int16_t>(&r, i < axis->size() ? (*axis)[i] : int16_t{0});
   }
   return r;  // trailing _padding0 left out, as PX4 does
 }
@@ -102,7 +103,9 @@ bool AnyWarningContains(const FlightLog& log, const std::string& text) {
                      [&](const std::string& w) { return w.find(text) != std::string::npos; });
 }
 
-std::string SamplePath(const std::string& name) { return test::RealDataPath("gyro/px4_ulog/" + name); }
+std::string SamplePath(const std::string& name) {
+  return test::RealDataPath("gyro/px4_ulog/" + name);
+}
 
 double PeakRate(const GyroTrace& trace) {
   double peak = 0.0;
@@ -129,7 +132,8 @@ TEST(ULog, SampleV0MatchesItsDocumentedContents) {
   EXPECT_EQ(log.gyro.sampling().median_interval_ns, 4'000'000) << "median dt 4.0 ms";
   constexpr double kPeakTol = 0.005;  // SOURCES.md gives 3.29 rad/s to two decimals
   EXPECT_NEAR(PeakRate(log.gyro), 3.29, kPeakTol);
-  EXPECT_TRUE(AnyWarningContains(log, "4 logging dropouts totalling 119 ms")) << log.warnings.size();
+  EXPECT_TRUE(AnyWarningContains(log, "4 logging dropouts totalling 119 ms"))
+      << log.warnings.size();
   EXPECT_FALSE(log.gyro.sampling().gap_indices.empty()) << "the 62 ms dropout must show as a gap";
   EXPECT_TRUE(log.camera_events.empty());
   EXPECT_EQ(log.records_skipped, 0u);
@@ -152,10 +156,12 @@ TEST(ULog, SampleSmallV1MatchesItsDocumentedContents) {
   EXPECT_TRUE(AnyWarningContains(log, "1 logging dropouts totalling 30 ms"));
   ASSERT_GE(log.gyro_sources_available.size(), 3u);
   EXPECT_EQ(log.gyro_sources_available[0].rfind("vehicle_angular_velocity.xyz (", 0), 0u);
-  EXPECT_TRUE(std::any_of(log.gyro_sources_available.begin(), log.gyro_sources_available.end(),
-                          [](const std::string& s) { return s.rfind("sensor_combined.gyro_rad (", 0) == 0; }));
-  EXPECT_TRUE(std::any_of(log.gyro_sources_available.begin(), log.gyro_sources_available.end(),
-                          [](const std::string& s) { return s.rfind("sensor_gyro/2.x,y,z (1.0 Hz", 0) == 0; }))
+  EXPECT_TRUE(std::any_of(
+      log.gyro_sources_available.begin(), log.gyro_sources_available.end(),
+      [](const std::string& s) { return s.rfind("sensor_combined.gyro_rad (", 0) == 0; }));
+  EXPECT_TRUE(std::any_of(
+      log.gyro_sources_available.begin(), log.gyro_sources_available.end(),
+      [](const std::string& s) { return s.rfind("sensor_gyro/2.x,y,z (1.0 Hz", 0) == 0; }))
       << "three sensor_gyro instances at 1 Hz";
   constexpr double kStationaryPeak = 0.1;  // rad/s; a vehicle on the bench
   EXPECT_LT(PeakRate(log.gyro), kStationaryPeak);
@@ -177,8 +183,8 @@ std::string HideSubscription(std::string bytes, const std::string& topic) {
 
 TEST(ULog, SampleSmallSensorCombinedIsStationary) {
   SHUTTERLAB_NEED_REAL_DATA();
-  const std::string bytes =
-      HideSubscription(ReadFileToString(SamplePath("sample_log_small.ulg")), "vehicle_angular_velocity");
+  const std::string bytes = HideSubscription(ReadFileToString(SamplePath("sample_log_small.ulg")),
+                                             "vehicle_angular_velocity");
   const FlightLog log = ParseULog(bytes, "sample_log_small.ulg");
   EXPECT_EQ(log.gyro_source, "sensor_combined.gyro_rad");
   EXPECT_EQ(log.gyro.size(), 1298u);
@@ -197,7 +203,7 @@ TEST(ULog, UnpacksSensorGyroFifoWithScaleAndDt) {
   b.AddLogged(1, 1, "sensor_gyro_fifo");
   b.AddLogged(0, 2, "sensor_combined");
   const float scale = 0.0010652644f;  // 2000 deg/s over int16, as a ICM-42688 reports it
-  const float dt_us = 125.0f;          // 8 kHz
+  const float dt_us = 125.0f;         // 8 kHz
   std::vector<int64_t> expected_t_ns;
   std::vector<double> expected_x;
   for (int m = 0; m < 50; ++m) {
@@ -234,7 +240,8 @@ TEST(ULog, ReadsNestedTypesAndOmittedTrailingPadding) {
   ULogBuilder b(0);  // version 0: no flag bits message
   b.Format("meta:uint16_t a;float b;");
   b.Format(
-      "vehicle_angular_velocity:uint64_t timestamp;meta[2] m;uint64_t timestamp_sample;float[3] xyz;"
+      "vehicle_angular_velocity:uint64_t timestamp;meta[2] m;uint64_t timestamp_sample;float[3] "
+      "xyz;"
       "uint8_t[4] _padding0;");
   b.AddLogged(0, 7, "vehicle_angular_velocity");
   for (int k = 0; k < 20; ++k) {
@@ -255,7 +262,8 @@ TEST(ULog, ReadsNestedTypesAndOmittedTrailingPadding) {
   EXPECT_EQ(log.gyro_source, "vehicle_angular_velocity.xyz");
   ASSERT_EQ(log.gyro.size(), 20u);
   for (int k = 0; k < 20; ++k) {
-    EXPECT_EQ(log.gyro[k].t_ns, (5'000'000 + k * 2000) * int64_t{1000}) << "timestamp_sample, not timestamp";
+    EXPECT_EQ(log.gyro[k].t_ns, (5'000'000 + k * 2000) * int64_t{1000})
+        << "timestamp_sample, not timestamp";
     EXPECT_EQ(log.gyro[k].omega_rad_s, Eigen::Vector3d(0.5 * k, -0.25, 2.0));
   }
   EXPECT_EQ(log.records_skipped, 0u);
@@ -362,11 +370,13 @@ TEST(ULog, ChoosesRawerSourceOnlyAtSimilarRate) {
     b.AddLogged(0, 0, "sensor_gyro");
     b.AddLogged(0, 1, "vehicle_angular_velocity");
     for (int64_t t_us = 1'000'000; t_us < 4'000'000; t_us += 1900) b.Data(1, vav_record(t_us));
-    for (int64_t t_us = 1'000'000; t_us < 4'000'000; t_us += gyro_period_us) b.Data(0, gyro_record(t_us));
+    for (int64_t t_us = 1'000'000; t_us < 4'000'000; t_us += gyro_period_us)
+      b.Data(0, gyro_record(t_us));
     const FlightLog log = ParseULog(b.bytes(), "choice.ulg");
     // 500 Hz raw sensor_gyro is within 10% of 526 Hz vehicle_angular_velocity: the raw one wins;
     // at 1 Hz it does not.
-    EXPECT_EQ(log.gyro_source, gyro_period_us == 2000 ? "sensor_gyro.x,y,z" : "vehicle_angular_velocity.xyz")
+    EXPECT_EQ(log.gyro_source,
+              gyro_period_us == 2000 ? "sensor_gyro.x,y,z" : "vehicle_angular_velocity.xyz")
         << gyro_period_us;
     EXPECT_EQ(log.gyro_sources_available.size(), 2u);
   }
@@ -376,12 +386,16 @@ TEST(ULog, ReadsCameraEventsAndAltitude) {
   ULogBuilder b;
   b.FlagBits(0);
   b.Format(kCombinedFormat);
-  b.Format("camera_trigger:uint64_t timestamp;uint64_t timestamp_utc;uint32_t seq;bool feedback;uint8_t[3] _padding0;");
   b.Format(
-      "camera_capture:uint64_t timestamp;uint64_t timestamp_utc;int32_t seq;double lat;double lon;float alt;"
+      "camera_trigger:uint64_t timestamp;uint64_t timestamp_utc;uint32_t seq;bool "
+      "feedback;uint8_t[3] _padding0;");
+  b.Format(
+      "camera_capture:uint64_t timestamp;uint64_t timestamp_utc;int32_t seq;double lat;double "
+      "lon;float alt;"
       "float ground_distance;float[4] q;int8_t result;uint8_t[3] _padding0;");
   b.Format(
-      "vehicle_local_position:uint64_t timestamp;bool xy_valid;bool z_valid;uint8_t[2] _padding0;float x;"
+      "vehicle_local_position:uint64_t timestamp;bool xy_valid;bool z_valid;uint8_t[2] "
+      "_padding0;float x;"
       "float y;float z;float dist_bottom;bool dist_bottom_valid;uint8_t[7] _padding1;");
   b.AddLogged(0, 0, "sensor_combined");
   b.AddLogged(0, 1, "camera_trigger");
@@ -422,7 +436,8 @@ TEST(ULog, ReadsCameraEventsAndAltitude) {
     return r;
   };
   const float heights[] = {0.1f, 0.2f, 30.0f, 31.0f, 32.0f, 33.0f};
-  for (int i = 0; i < 6; ++i) b.Data(3, position(1'000'000 + i * 10'000, 2.0f - heights[i], heights[i], i >= 2));
+  for (int i = 0; i < 6; ++i)
+    b.Data(3, position(1'000'000 + i * 10'000, 2.0f - heights[i], heights[i], i >= 2));
   const FlightLog log = ParseULog(b.bytes(), "camera.ulg");
   ASSERT_EQ(log.camera_events.size(), 4u);
   EXPECT_EQ(log.camera_events[0].kind, "camera_trigger");
@@ -440,12 +455,14 @@ TEST(ULog, ReadsCameraEventsAndAltitude) {
   c.FlagBits(0);
   c.Format(kCombinedFormat);
   c.Format(
-      "vehicle_local_position:uint64_t timestamp;bool xy_valid;bool z_valid;uint8_t[2] _padding0;float x;"
+      "vehicle_local_position:uint64_t timestamp;bool xy_valid;bool z_valid;uint8_t[2] "
+      "_padding0;float x;"
       "float y;float z;float dist_bottom;bool dist_bottom_valid;uint8_t[7] _padding1;");
   c.AddLogged(0, 0, "sensor_combined");
   c.AddLogged(0, 3, "vehicle_local_position");
   for (int k = 0; k < 400; ++k) c.Data(0, CombinedRecord(1'000'000 + k * 4000, 0, 0, 0));
-  for (int i = 0; i < 6; ++i) c.Data(3, position(1'000'000 + i * 10'000, 2.0f - heights[i], 0.0f, false));
+  for (int i = 0; i < 6; ++i)
+    c.Data(3, position(1'000'000 + i * 10'000, 2.0f - heights[i], 0.0f, false));
   const FlightLog fallback = ParseULog(c.bytes(), "z.ulg");
   ASSERT_TRUE(fallback.altitude_above_ground_m.has_value());
   constexpr double kFloatTol = 1e-5;  // heights pass through float32
@@ -481,14 +498,16 @@ TEST(ULog, RejectsWhatIsNotULog) {
     ParseULog(b.bytes(), "empty.ulg");
     FAIL() << "a log without gyro data must throw";
   } catch (const IoError& e) {
-    EXPECT_NE(std::string(e.what()).find("empty.ulg: no usable gyro data"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("empty.ulg: no usable gyro data"), std::string::npos)
+        << e.what();
   }
   EXPECT_THROW(ReadULog(SamplePath("does_not_exist.ulg")), IoError);
 }
 
 // A damaged file gives a clear IoError or a partial result that says what was skipped. A result
 // may lose at most max_lost samples: resynchronisation must not silently swallow good messages.
-void ExpectGracefulOn(const std::string& bytes, size_t full_samples, size_t max_lost, const std::string& what) {
+void ExpectGracefulOn(const std::string& bytes, size_t full_samples, size_t max_lost,
+                      const std::string& what) {
   try {
     const FlightLog log = ParseULog(bytes, what);
     EXPECT_LE(log.gyro.size(), full_samples) << what;
@@ -513,12 +532,14 @@ TEST(ULog, TruncatedCopiesGiveErrorOrPartialResult) {
     ExpectGracefulOn(bytes.substr(0, at), full.gyro.size(), full.gyro.size(), name);
     if (at > bytes.size() / 2) {
       const FlightLog log = ParseULog(bytes.substr(0, at), name);
-      EXPECT_TRUE(AnyWarningContains(log, "truncated") || log.gyro.size() == full.gyro.size()) << name;
+      EXPECT_TRUE(AnyWarningContains(log, "truncated") || log.gyro.size() == full.gyro.size())
+          << name;
     }
   }
   // A cut right inside the header and right inside the definitions.
   for (size_t at : {size_t{5}, size_t{16}, size_t{17}, size_t{300}}) {
-    ExpectGracefulOn(bytes.substr(0, at), full.gyro.size(), full.gyro.size(), "cut_at_" + std::to_string(at));
+    ExpectGracefulOn(bytes.substr(0, at), full.gyro.size(), full.gyro.size(),
+                     "cut_at_" + std::to_string(at));
   }
 }
 

@@ -1,7 +1,7 @@
 #include "sim/logs/ulog_write.h"
 
-#include "sim/text_file.h"
 #include "sim/logs/ulog.h"
+#include "sim/text_file.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
