@@ -52,36 +52,36 @@ void CreateFolder(const std::filesystem::path& path) {
   if (ec) throw IoError(IoMessage(path.string(), 0, "cannot create folder: " + ec.message()));
 }
 
-}  // namespace
-
-RenderSummary RenderDataset(const RenderOptions& options,
-                            const std::function<void(size_t, size_t)>& progress) {
-  options.Check();
-  // --- read and check everything first: bad input must leave no output
-  const RigModel declared = ReadRigModel(options.camera_path);
+// The declared rig with every `--inject` applied; each injected value into summary->injected.
+TrueModel InjectedTruth(const RigModel& declared, const std::vector<std::string>& injections,
+                        RenderSummary* summary) {
   TrueModel truth;
   truth.rig = declared;
-  RenderSummary summary;
-  for (const std::string& injection : options.injections) {
+  for (const std::string& injection : injections) {
     const size_t eq = injection.find('=');
     const nlohmann::json value = ApplyInjection(injection, &truth);
-    summary.injected[injection.substr(0, eq)] = value;
+    summary->injected[injection.substr(0, eq)] = value;
   }
-  const GyroTrace logged = ReadGyroCsv(options.gyro_path);
-  SHUTTERLAB_CHECK(logged.size() >= 2)
-      << options.gyro_path << ": a gyro log needs at least two samples";
-  const std::vector<FrameEntry> times = ReadFrameTimes(options.frames_path);
-  if (options.video) {
-    SHUTTERLAB_CHECK(!times.empty()) << options.frames_path << ": no frames";
-    for (size_t i = 1; i < times.size(); ++i) {
-      if (times[i].t_first_row_ns <= times[i - 1].t_first_row_ns) {
-        throw IoError(IoMessage(
-            options.frames_path, static_cast<long>(i) + 2,
-            "frame " + std::to_string(times[i].frame) + ": a video's frame times must increase"));
-      }
+  return truth;
+}
+
+// A video needs frames, and their times must increase.
+void CheckVideoTimes(const RenderOptions& options, const std::vector<FrameEntry>& times) {
+  SHUTTERLAB_CHECK(!times.empty()) << options.frames_path << ": no frames";
+  for (size_t i = 1; i < times.size(); ++i) {
+    if (times[i].t_first_row_ns <= times[i - 1].t_first_row_ns) {
+      throw IoError(IoMessage(
+          options.frames_path, static_cast<long>(i) + 2,
+          "frame " + std::to_string(times[i].frame) + ": a video's frame times must increase"));
     }
   }
-  const cv::Mat scene = ReadImage(options.scene_path);
+}
+
+// Each frame's motion (a video's in the first frame's world); throws std::out_of_range naming the
+// frame whose readout lies outside the gyro trace.
+std::vector<FrameMotion> FrameMotions(const RenderOptions& options, const GyroTrace& logged,
+                                      const TrueModel& truth,
+                                      const std::vector<FrameEntry>& times) {
   const CameraMotion camera_motion(logged, truth);
   std::vector<FrameMotion> motions;
   std::optional<int64_t> anchor;
@@ -94,91 +94,156 @@ RenderSummary RenderDataset(const RenderOptions& options,
                               e.what());
     }
   }
+  return motions;
+}
 
-  // --- write
-  const std::filesystem::path out(options.out_dir);
-  CreateFolder(out / "images");
-  CreateFolder(out / "truth");
-  const PinholeCamera& camera = truth.rig.camera;
-  const double altitude_m = truth.rig.altitude_m;
-  const double f_px = (declared.camera.fx + declared.camera.fy) / 2;
+// What every frame of a render shares.
+struct RenderContext {
+  const RenderOptions& options;
+  const std::filesystem::path& out;
+  const cv::Mat& scene;
+  const PinholeCamera& camera;
+  double altitude_m;
+  double f_px;  // the declared camera's
+  const std::vector<FrameEntry>& times;
+  const std::vector<FrameMotion>& motions;
+};
+
+// What the frames add to as they are written.
+struct RenderState {
   std::vector<FrameEntry> entries;
   std::vector<cv::Mat> tiles;
   std::vector<std::string> captions;
   cv::Mat rs, ref, previous_rs;  // reused across frames: first-touch page faults are slow
   nlohmann::json frames_json = nlohmann::json::array();
-  for (size_t i = 0; i < times.size(); ++i) {
-    const std::string name = FrameName(times[i].frame);
-    const FrameGeometry geometry(camera, altitude_m, motions[i], scene.size());
-    RenderFrame(scene, geometry, options.interpolation, &rs);
-    // D: the frame against a global shutter at its own row 0 (world_from_ref), in both modes.
-    const cv::Mat own_field = DisplacementField(geometry);
-    RenderedFrame rendered;
-    rendered.frame = times[i].frame;
-    rendered.d_px = FrameDistortionPx(own_field);
-    rendered.d_m = rendered.d_px * altitude_m / f_px;
-    rendered.outside_fraction = OutsideSceneFraction(geometry, scene.size());
-    summary.frames.push_back(rendered);
+};
 
-    FrameEntry entry = times[i];
-    entry.image = "images/" + name + "_rs.png";
-    WriteImage((out / entry.image).string(), rs);
-    nlohmann::json frame_json = {
-        {"frame", rendered.frame}, {"D_px", rendered.d_px}, {"D_m", rendered.d_m}};
-    // The truth field and the pictures beside it: against the reference, or (video) against the
-    // previous frame, which the first frame of a video does not have.
-    cv::Mat field;
-    std::vector<cv::Mat> panels;
-    std::vector<std::string> labels;
-    if (!options.video) {
-      const FrameGeometry reference(camera, altitude_m, motions[i].Reference(), scene.size());
-      RenderFrame(scene, reference, options.interpolation, &ref);
-      entry.ref = "images/" + name + "_ref.png";
-      WriteImage((out / entry.ref).string(), ref);
-      field = own_field;
-      panels = {ref, rs};
-      labels = {"reference", "rolling shutter"};
-    } else if (i > 0) {
-      const FrameGeometry previous(camera, altitude_m, motions[i - 1], scene.size());
-      field = VideoDisplacementField(geometry, previous);
-      frame_json["previous"] = times[i - 1].frame;
-      panels = {previous_rs, rs};
-      labels = {"previous frame " + FrameName(times[i - 1].frame), "rolling shutter"};
-    } else {
-      frame_json["previous"] = nullptr;
-    }
-    entries.push_back(entry);
-    frames_json.push_back(frame_json);
-    if (!field.empty()) {
-      WriteImage((out / "truth" / (name + "_disp.exr")).string(), field, {"dx", "dy"});
-      if (options.pictures) {
-        const cv::Mat heat = DisplacementHeatmap(field);
-        WriteImage((out / "truth" / (name + "_heat.png")).string(), heat);
-        panels.push_back(heat);
-        labels.push_back(options.video ? "|q - p|" : "|d|");
-        const cv::Mat side = SideBySide(panels, labels);
-        WriteImage((out / "truth" / (name + "_side.png")).string(), side);
-        // Keep only a thumbnail for the overview: a flight may have hundreds of frames.
-        cv::Mat thumbnail;
-        cv::resize(side, thumbnail,
-                   cv::Size(kTileWidth, std::max(1, side.rows * kTileWidth / side.cols)), 0, 0,
-                   cv::INTER_AREA);
-        tiles.push_back(thumbnail);
-        char caption[96];
-        std::snprintf(caption, sizeof(caption), "frame %s  D = %.2f px = %.3f m", name.c_str(),
-                      rendered.d_px, rendered.d_m);
-        captions.emplace_back(caption);
-      }
-    }
-    if (options.video) rs.copyTo(previous_rs);
+// One frame's truth field and the pictures beside it.
+struct FrameTruth {
+  cv::Mat field;  // empty when there is none
+  std::vector<cv::Mat> panels;
+  std::vector<std::string> labels;
+};
+
+// The truth field and the pictures beside it: against the reference, or (video) against the
+// previous frame, which the first frame of a video does not have.
+FrameTruth TruthField(const RenderContext& ctx, size_t i, const FrameGeometry& geometry,
+                      const cv::Mat& own_field, FrameEntry* entry, nlohmann::json* frame_json,
+                      RenderState* state) {
+  const std::string name = FrameName(ctx.times[i].frame);
+  FrameTruth truth;
+  if (!ctx.options.video) {
+    const FrameGeometry reference(ctx.camera, ctx.altitude_m, ctx.motions[i].Reference(),
+                                  ctx.scene.size());
+    RenderFrame(ctx.scene, reference, ctx.options.interpolation, &state->ref);
+    entry->ref = "images/" + name + "_ref.png";
+    WriteImage((ctx.out / entry->ref).string(), state->ref);
+    truth.field = own_field;
+    truth.panels = {state->ref, state->rs};
+    truth.labels = {"reference", "rolling shutter"};
+  } else if (i > 0) {
+    const FrameGeometry previous(ctx.camera, ctx.altitude_m, ctx.motions[i - 1], ctx.scene.size());
+    truth.field = VideoDisplacementField(geometry, previous);
+    (*frame_json)["previous"] = ctx.times[i - 1].frame;
+    truth.panels = {state->previous_rs, state->rs};
+    truth.labels = {"previous frame " + FrameName(ctx.times[i - 1].frame), "rolling shutter"};
+  } else {
+    (*frame_json)["previous"] = nullptr;
+  }
+  return truth;
+}
+
+// The heat map, the side-by-side picture and the overview's thumbnail and caption of a frame.
+void WritePictures(const RenderContext& ctx, const std::string& name, const RenderedFrame& rendered,
+                   FrameTruth* truth, RenderState* state) {
+  const cv::Mat heat = DisplacementHeatmap(truth->field);
+  WriteImage((ctx.out / "truth" / (name + "_heat.png")).string(), heat);
+  truth->panels.push_back(heat);
+  truth->labels.push_back(ctx.options.video ? "|q - p|" : "|d|");
+  const cv::Mat side = SideBySide(truth->panels, truth->labels);
+  WriteImage((ctx.out / "truth" / (name + "_side.png")).string(), side);
+  // Keep only a thumbnail for the overview: a flight may have hundreds of frames.
+  cv::Mat thumbnail;
+  cv::resize(side, thumbnail, cv::Size(kTileWidth, std::max(1, side.rows * kTileWidth / side.cols)),
+             0, 0, cv::INTER_AREA);
+  state->tiles.push_back(thumbnail);
+  char caption[96];
+  std::snprintf(caption, sizeof(caption), "frame %s  D = %.2f px = %.3f m", name.c_str(),
+                rendered.d_px, rendered.d_m);
+  state->captions.emplace_back(caption);
+}
+
+// Renders and writes frame i, its truth and pictures.
+void WriteFrame(const RenderContext& ctx, size_t i, RenderSummary* summary, RenderState* state) {
+  const std::string name = FrameName(ctx.times[i].frame);
+  const FrameGeometry geometry(ctx.camera, ctx.altitude_m, ctx.motions[i], ctx.scene.size());
+  RenderFrame(ctx.scene, geometry, ctx.options.interpolation, &state->rs);
+  // D: the frame against a global shutter at its own row 0 (world_from_ref), in both modes.
+  const cv::Mat own_field = DisplacementField(geometry);
+  RenderedFrame rendered;
+  rendered.frame = ctx.times[i].frame;
+  rendered.d_px = FrameDistortionPx(own_field);
+  rendered.d_m = rendered.d_px * ctx.altitude_m / ctx.f_px;
+  rendered.outside_fraction = OutsideSceneFraction(geometry, ctx.scene.size());
+  summary->frames.push_back(rendered);
+
+  FrameEntry entry = ctx.times[i];
+  entry.image = "images/" + name + "_rs.png";
+  WriteImage((ctx.out / entry.image).string(), state->rs);
+  nlohmann::json frame_json = {
+      {"frame", rendered.frame}, {"D_px", rendered.d_px}, {"D_m", rendered.d_m}};
+  FrameTruth truth = TruthField(ctx, i, geometry, own_field, &entry, &frame_json, state);
+  state->entries.push_back(entry);
+  state->frames_json.push_back(frame_json);
+  if (!truth.field.empty()) {
+    WriteImage((ctx.out / "truth" / (name + "_disp.exr")).string(), truth.field, {"dx", "dy"});
+    if (ctx.options.pictures) WritePictures(ctx, name, rendered, &truth, state);
+  }
+  if (ctx.options.video) state->rs.copyTo(state->previous_rs);
+}
+
+}  // namespace
+
+RenderSummary RenderDataset(const RenderOptions& options,
+                            const std::function<void(size_t, size_t)>& progress) {
+  options.Check();
+  // --- read and check everything first: bad input must leave no output
+  const RigModel declared = ReadRigModel(options.camera_path);
+  RenderSummary summary;
+  const TrueModel truth = InjectedTruth(declared, options.injections, &summary);
+  const GyroTrace logged = ReadGyroCsv(options.gyro_path);
+  SHUTTERLAB_CHECK(logged.size() >= 2)
+      << options.gyro_path << ": a gyro log needs at least two samples";
+  const std::vector<FrameEntry> times = ReadFrameTimes(options.frames_path);
+  if (options.video) CheckVideoTimes(options, times);
+  const cv::Mat scene = ReadImage(options.scene_path);
+  const std::vector<FrameMotion> motions = FrameMotions(options, logged, truth, times);
+
+  // --- write
+  const std::filesystem::path out(options.out_dir);
+  CreateFolder(out / "images");
+  CreateFolder(out / "truth");
+  const RenderContext ctx{options,
+                          out,
+                          scene,
+                          truth.rig.camera,
+                          truth.rig.altitude_m,
+                          (declared.camera.fx + declared.camera.fy) / 2,
+                          times,
+                          motions};
+  RenderState state;
+  for (size_t i = 0; i < times.size(); ++i) {
+    WriteFrame(ctx, i, &summary, &state);
     if (progress) progress(i + 1, times.size());
   }
-  if (options.pictures && !tiles.empty())
-    WriteImage((out / "overview.png").string(), TiledOverview(tiles, captions, kTileWidth, 2));
+  if (options.pictures && !state.tiles.empty()) {
+    WriteImage((out / "overview.png").string(),
+               TiledOverview(state.tiles, state.captions, kTileWidth, 2));
+  }
   WriteRigModel((out / "camera.json").string(), declared);
   WriteGyroCsv((out / "gyro.csv").string(), logged);
-  WriteFramesCsv((out / "frames.csv").string(), entries);
-  nlohmann::json truth_json = {{"injected", summary.injected}, {"frames", frames_json}};
+  WriteFramesCsv((out / "frames.csv").string(), state.entries);
+  nlohmann::json truth_json = {{"injected", summary.injected}, {"frames", state.frames_json}};
   if (options.video) truth_json["video"] = true;
   WriteFileAtomically((out / "truth.json").string(), truth_json.dump(2) + "\n");
   return summary;

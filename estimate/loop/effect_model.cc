@@ -236,58 +236,98 @@ void VideoPairPredictor::Predict(const TrueModel& model, std::vector<Eigen::Vect
 // the image diagonal (PredictPair).
 constexpr double kEpipoleRadiusShare = 0.05;
 
-void VideoPairPredictor::PredictPair(const TrueModel& model, size_t k,
-                                     std::vector<Eigen::Vector2d>* out) const {
-  const PinholeCamera& camera = model.rig.camera;
-  const int height = camera.height;
-  const double last_row = height - 1;
-  std::vector<Eigen::Matrix3d> earlier_rot(height);  // world_from_cam per earlier row, on demand
-  std::vector<uint8_t> earlier_state(height, 0);     // 0 not yet, 1 known, 2 outside the trace
-  std::vector<Eigen::Matrix3d> later_rot;
-  std::vector<uint8_t> later_ok;
-  const Pair& pair = pairs_[k];
-  if (pair.px.empty()) return;
-  // Everything relative to the earlier frame's t_first_row (camera clock) on the gyro clock.
+namespace {
+
+// What PredictPair reads of one pair (VideoPairPredictor::Pair, its rays) and its points in *out.
+struct PairView {
+  int64_t t_earlier_ns;
+  int64_t t_later_ns;
+  const std::vector<double>& rows;
+  const std::vector<int>& row_of_point;
+  const std::vector<Eigen::Vector2d>& px;
+  const std::vector<Eigen::Vector2d>& measured;
+  const std::vector<Eigen::Vector2d>& match;
+  const std::vector<double>& weight;
+  const Eigen::Vector3d* rays;        // K^-1 p of the pair's points
+  const Eigen::Vector3d* match_rays;  // K^-1 q of the pair's points
+  Eigen::Vector2d* out;               // the pair's predictions
+};
+
+// The orientation trace that covers the pair: everything relative to the earlier frame's
+// t_first_row (camera clock) on the gyro clock. *later_offset_s: each later row's gyro offset.
+std::optional<OrientationTrace> PairTrace(const GyroTrace& gyro, const TrueModel& model,
+                                          const PairView& pair,
+                                          std::vector<double>* later_offset_s) {
+  const double last_row = model.rig.camera.height - 1;
   const int64_t t_e = pair.t_earlier_ns, t_l = pair.t_later_ns;
   const double dt_s = (t_l - t_e) * 1e-9;
   const double e0 = model.RowGyroOffsetS(t_e, 0), e1 = model.RowGyroOffsetS(t_e, last_row);
   double lo_s = std::min(e0, e1), hi_s = std::max(e0, e1);
-  std::vector<double> later_offset_s(pair.rows.size());
+  later_offset_s->resize(pair.rows.size());
   for (size_t r = 0; r < pair.rows.size(); ++r) {
-    later_offset_s[r] = model.RowGyroOffsetS(t_l, pair.rows[r]);
-    lo_s = std::min(lo_s, dt_s + later_offset_s[r]);
-    hi_s = std::max(hi_s, dt_s + later_offset_s[r]);
+    (*later_offset_s)[r] = model.RowGyroOffsetS(t_l, pair.rows[r]);
+    lo_s = std::min(lo_s, dt_s + (*later_offset_s)[r]);
+    hi_s = std::max(hi_s, dt_s + (*later_offset_s)[r]);
   }
-  const std::optional<OrientationTrace> covering = CoveringTrace(gyro_, model, t_e, lo_s, hi_s);
-  if (!covering) return;
-  const OrientationTrace& trace = *covering;
-  const int64_t front_ns = trace.t_ns().front(), back_ns = trace.t_ns().back();
-  later_rot.resize(pair.rows.size());
-  later_ok.assign(pair.rows.size(), 0);
-  for (size_t r = 0; r < pair.rows.size(); ++r) {
-    if (!InSpan(t_l, later_offset_s[r], front_ns, back_ns)) continue;
-    later_rot[r] = trace.WorldFromBodyAt(t_l, later_offset_s[r]).normalized().toRotationMatrix();
-    later_ok[r] = 1;
+  return CoveringTrace(gyro, model, t_e, lo_s, hi_s);
+}
+
+// The pair's world_from_cam rotations from its covering trace: the later frame's at its point
+// rows, the earlier frame's at any row (on demand).
+class PairRotations {
+ public:
+  PairRotations(const TrueModel& model, const OrientationTrace& trace, const PairView& pair,
+                const std::vector<double>& later_offset_s)
+      : model_(model),
+        trace_(trace),
+        t_e_(pair.t_earlier_ns),
+        height_(model.rig.camera.height),
+        front_ns_(trace.t_ns().front()),
+        back_ns_(trace.t_ns().back()),
+        earlier_rot_(height_),
+        earlier_state_(height_, 0),
+        later_rot_(pair.rows.size()),
+        later_ok_(pair.rows.size(), 0) {
+    for (size_t r = 0; r < pair.rows.size(); ++r) {
+      if (!InSpan(pair.t_later_ns, later_offset_s[r], front_ns_, back_ns_)) continue;
+      later_rot_[r] =
+          trace.WorldFromBodyAt(pair.t_later_ns, later_offset_s[r]).normalized().toRotationMatrix();
+      later_ok_[r] = 1;
+    }
   }
-  const auto earlier_row = [&](int row) -> const Eigen::Matrix3d* {
-    if (earlier_state[row] == 0) {
-      const double offset_s = model.RowGyroOffsetS(t_e, row);
-      earlier_state[row] = 2;
-      if (InSpan(t_e, offset_s, front_ns, back_ns)) {
-        earlier_rot[row] = trace.WorldFromBodyAt(t_e, offset_s).normalized().toRotationMatrix();
-        earlier_state[row] = 1;
+
+  // Whether later row r is inside the trace, and its rotation.
+  bool later_ok(int r) const { return later_ok_[r] != 0; }
+  const Eigen::Matrix3d& later_rot(int r) const { return later_rot_[r]; }
+
+  bool CamFromWorldAt(double w, const Eigen::Vector3d& y, Eigen::Vector3d* z) {
+    return RotateAt(w, y, true, z);
+  }
+  bool WorldFromCamAt(double w, const Eigen::Vector3d& x, Eigen::Vector3d* z) {
+    return RotateAt(w, x, false, z);
+  }
+
+ private:
+  const Eigen::Matrix3d* EarlierRow(int row) {
+    if (earlier_state_[row] == 0) {
+      const double offset_s = model_.RowGyroOffsetS(t_e_, row);
+      earlier_state_[row] = 2;
+      if (InSpan(t_e_, offset_s, front_ns_, back_ns_)) {
+        earlier_rot_[row] = trace_.WorldFromBodyAt(t_e_, offset_s).normalized().toRotationMatrix();
+        earlier_state_[row] = 1;
       }
     }
-    return earlier_state[row] == 1 ? &earlier_rot[row] : nullptr;
-  };
+    return earlier_state_[row] == 1 ? &earlier_rot_[row] : nullptr;
+  }
+
   // R(w)^T y (inverse) or R(w) y at a fractional row w: linear between the neighbouring rows'
   // products (rows ~30 us apart: ~1e-10 from the integrated trace). False when a row is outside
   // the trace.
-  const auto rotate_at = [&](double w, const Eigen::Vector3d& y, bool inverse, Eigen::Vector3d* z) {
-    const int r0 = std::min(static_cast<int>(w), std::max(0, height - 2));
+  bool RotateAt(double w, const Eigen::Vector3d& y, bool inverse, Eigen::Vector3d* z) {
+    const int r0 = std::min(static_cast<int>(w), std::max(0, height_ - 2));
     const double a = w - r0;
     const auto apply = [&](int row, Eigen::Vector3d* out) {
-      const Eigen::Matrix3d* m = earlier_row(row);
+      const Eigen::Matrix3d* m = EarlierRow(row);
       if (m == nullptr) return false;
       *out = inverse ? Eigen::Vector3d(m->transpose() * y) : Eigen::Vector3d(*m * y);
       return true;
@@ -299,78 +339,107 @@ void VideoPairPredictor::PredictPair(const TrueModel& model, size_t k,
       *z = (1 - a) * *z + a * z1;
     }
     return true;
-  };
-  const auto cam_from_world_at = [&](double w, const Eigen::Vector3d& y, Eigen::Vector3d* z) {
-    return rotate_at(w, y, true, z);
-  };
-  const auto world_from_cam_at = [&](double w, const Eigen::Vector3d& x, Eigen::Vector3d* z) {
-    return rotate_at(w, x, false, z);
-  };
-
-  if (!pair_translation_) {
-    for (size_t i = 0; i < pair.px.size(); ++i) {
-      const int r = pair.row_of_point[i];
-      if (!later_ok[r]) continue;
-      const Eigen::Vector3d y = later_rot[r] * rays_[pair.first + i];  // world direction
-      constexpr int kMaxIterations = 50;
-      double w = std::clamp(pair.px[i].y(), 0.0, last_row);
-      for (int it = 0; it < kMaxIterations; ++it) {
-        Eigen::Vector3d z;
-        if (!cam_from_world_at(w, y, &z)) break;
-        const std::optional<Eigen::Vector2d> q = camera.ImgFromCam(z);
-        if (!q || !q->allFinite()) break;
-        const double next = std::clamp(q->y(), 0.0, last_row);
-        if (std::abs(next - w) <= kVideoMatchTolPx) {
-          // A clamped row: the match lies above or below the earlier frame (beyond rounding).
-          if (q->y() >= -kVideoMatchTolPx && q->y() <= last_row + kVideoMatchTolPx) {
-            (*out)[pair.first + i] = *q - pair.px[i];
-          }
-          break;
-        }
-        w = next;
-      }
-    }
-    return;
   }
 
-  // pair_translation: the cross products a_i = (R_w x_q) x (R_v x_p) at the measured matches.
+  const TrueModel& model_;
+  const OrientationTrace& trace_;
+  int64_t t_e_;
+  int height_;
+  int64_t front_ns_, back_ns_;
+  std::vector<Eigen::Matrix3d> earlier_rot_;  // world_from_cam per earlier row, on demand
+  std::vector<uint8_t> earlier_state_;        // 0 not yet, 1 known, 2 outside the trace
+  std::vector<Eigen::Matrix3d> later_rot_;
+  std::vector<uint8_t> later_ok_;
+};
+
+// Rotation-only: each point's match in the earlier frame, the row it lies on found by fixed-point
+// iteration.
+void PredictRotationOnly(const PinholeCamera& camera, const PairView& pair, PairRotations* rot) {
+  const double last_row = camera.height - 1;
+  for (size_t i = 0; i < pair.px.size(); ++i) {
+    const int r = pair.row_of_point[i];
+    if (!rot->later_ok(r)) continue;
+    const Eigen::Vector3d y = rot->later_rot(r) * pair.rays[i];  // world direction
+    constexpr int kMaxIterations = 50;
+    double w = std::clamp(pair.px[i].y(), 0.0, last_row);
+    for (int it = 0; it < kMaxIterations; ++it) {
+      Eigen::Vector3d z;
+      if (!rot->CamFromWorldAt(w, y, &z)) break;
+      const std::optional<Eigen::Vector2d> q = camera.ImgFromCam(z);
+      if (!q || !q->allFinite()) break;
+      const double next = std::clamp(q->y(), 0.0, last_row);
+      if (std::abs(next - w) <= kVideoMatchTolPx) {
+        // A clamped row: the match lies above or below the earlier frame (beyond rounding).
+        if (q->y() >= -kVideoMatchTolPx && q->y() <= last_row + kVideoMatchTolPx) {
+          pair.out[i] = *q - pair.px[i];
+        }
+        break;
+      }
+      w = next;
+    }
+  }
+}
+
+// pair_translation: the cross products a_i = (R_w x_q) x (R_v x_p) at the measured matches.
+struct CrossProducts {
+  std::vector<Eigen::Vector3d> a, y;
+  std::vector<double> w_row;  // the measured match's row; < 0: no constraint
+};
+
+CrossProducts MatchCrossProducts(const PinholeCamera& camera, const PairView& pair,
+                                 PairRotations* rot) {
+  const double last_row = camera.height - 1;
   const size_t n = pair.px.size();
-  std::vector<Eigen::Vector3d> a(n), y(n);
-  std::vector<double> w_row(n, -1.0);  // the measured match's row; < 0: no constraint
+  CrossProducts c;
+  c.a.resize(n);
+  c.y.resize(n);
+  c.w_row.assign(n, -1.0);
   for (size_t i = 0; i < n; ++i) {
     const int r = pair.row_of_point[i];
-    const Eigen::Vector3d& xq = match_rays_[pair.first + i];
+    const Eigen::Vector3d& xq = pair.match_rays[i];
     const double w = pair.match[i].y();
-    if (!later_ok[r] || !xq.allFinite() || !(w >= 0.0 && w <= last_row)) continue;
+    if (!rot->later_ok(r) || !xq.allFinite() || !(w >= 0.0 && w <= last_row)) continue;
     Eigen::Vector3d zq;
-    if (!world_from_cam_at(w, xq, &zq)) continue;
-    y[i] = later_rot[r] * rays_[pair.first + i];
-    a[i] = zq.cross(y[i]);
-    w_row[i] = w;
+    if (!rot->WorldFromCamAt(w, xq, &zq)) continue;
+    c.y[i] = rot->later_rot(r) * pair.rays[i];
+    c.a[i] = zq.cross(c.y[i]);
+    c.w_row[i] = w;
   }
-  // Pixel length of the epipolar line's normal for direction v: the algebraic error v . a_i over
-  // it is the distance of the measured match from the line, px.
-  const auto normal_px = [&](size_t i, const Eigen::Vector3d& v, Eigen::Vector3d* n_cam) {
-    if (!cam_from_world_at(w_row[i], y[i].cross(v), n_cam)) return 0.0;
-    return std::hypot(n_cam->x() / camera.fx, n_cam->y() / camera.fy);
-  };
+  return c;
+}
+
+// Pixel length of the epipolar line's normal for direction v: the algebraic error v . a_i over
+// it is the distance of the measured match from the line, px.
+double NormalPx(const PinholeCamera& camera, const CrossProducts& c, size_t i,
+                const Eigen::Vector3d& v, PairRotations* rot, Eigen::Vector3d* n_cam) {
+  if (!rot->CamFromWorldAt(c.w_row[i], c.y[i].cross(v), n_cam)) return 0.0;
+  return std::hypot(n_cam->x() / camera.fx, n_cam->y() / camera.fy);
+}
+
+// The translation direction V (world axes, sign arbitrary): the least eigenvector of the cross
+// products' outer products, weighted to pixel distances and made robust by Huber IRLS. Zero when
+// the fit fails.
+Eigen::Vector3d TranslationDirection(const PinholeCamera& camera, const PairView& pair,
+                                     const CrossProducts& c, double robust_delta_px,
+                                     PairRotations* rot) {
+  const std::vector<Eigen::Vector3d>& a = c.a;
   const double f_px = 0.5 * (camera.fx + camera.fy);
   Eigen::Vector3d v_dir = Eigen::Vector3d::Zero();
   constexpr int kIrlsRounds = 4;
   for (int round = 0; round < kIrlsRounds; ++round) {
     Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
-    for (size_t i = 0; i < n; ++i) {
-      if (w_row[i] < 0 || pair.weight[i] <= 0) continue;
+    for (size_t i = 0; i < a.size(); ++i) {
+      if (c.w_row[i] < 0 || pair.weight[i] <= 0) continue;
       double g;
       Eigen::Vector3d n_cam;
       if (round == 0) {
         g = a[i].norm() * f_px > 0 ? a[i].norm() / f_px : 0.0;  // before any v: |a_i| / f
       } else {
-        g = normal_px(i, v_dir, &n_cam);
+        g = NormalPx(camera, c, i, v_dir, rot, &n_cam);
       }
       if (!(g > 0)) continue;
       double alpha = pair.weight[i] / (g * g);
-      if (round > 0) alpha *= HuberWeight(std::abs(v_dir.dot(a[i])) / g, robust_delta_px_);
+      if (round > 0) alpha *= HuberWeight(std::abs(v_dir.dot(a[i])) / g, robust_delta_px);
       m.noalias() += alpha * a[i] * a[i].transpose();
     }
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m);
@@ -380,33 +449,27 @@ void VideoPairPredictor::PredictPair(const TrueModel& model, size_t k,
     }
     v_dir = eig.eigenvectors().col(0).normalized();  // eigenvalues ascending
   }
-  if (!v_dir.allFinite() || v_dir.isZero(0.0)) return;
-  // V's sign is the eigen-solver's choice, and every distance's sign follows it: orient V as the
-  // pair's previous one. A solver's evaluations come in small steps, V turns little from one to
-  // the next, and each distance then stays a continuous function of the model (a point's line
-  // may turn fast near the epipole, its distance does not jump).
-  Eigen::Vector3d& previous_dir = previous_dirs_[k];
-  if (previous_dir.allFinite() && v_dir.dot(previous_dir) < 0) v_dir = -v_dir;
-  previous_dir = v_dir;
-  // Report the direction in the earlier frame's row-0 camera frame.
-  Eigen::Vector3d v_cam;
-  translation_dirs_[k] = cam_from_world_at(0.0, v_dir, &v_cam) ? v_cam.normalized() : v_dir;
-  // Each measured match's signed distance from its epipolar line, px: across the line in
-  // undistorted pixels, or (with a lens) from the match to its foot on the line, distorted. The
-  // "prediction" is the measured match moved by that distance along x, so that measured -
-  // predicted is (distance, 0): a residual whose second component is always 0, and whose
-  // derivatives are the distance's alone. (The foot itself would turn the residual vector with the
-  // line, and Gauss-Newton would count that turning, which changes no distance, as information.)
+  return v_dir;
+}
+
+// Each measured match's signed distance from its epipolar line, px: across the line in
+// undistorted pixels, or (with a lens) from the match to its foot on the line, distorted. The
+// "prediction" is the measured match moved by that distance along x, so that measured -
+// predicted is (distance, 0): a residual whose second component is always 0, and whose
+// derivatives are the distance's alone. (The foot itself would turn the residual vector with the
+// line, and Gauss-Newton would count that turning, which changes no distance, as information.)
+void PredictDistances(const PinholeCamera& camera, const PairView& pair, const CrossProducts& c,
+                      const Eigen::Vector3d& v_dir, PairRotations* rot) {
   const Eigen::Matrix3d k_mat = camera.K(), k_inv = k_mat.inverse();
   const double epipole_radius_px = kEpipoleRadiusShare * std::hypot(camera.width, camera.height);
-  for (size_t i = 0; i < n; ++i) {
-    if (w_row[i] < 0) continue;
+  for (size_t i = 0; i < c.a.size(); ++i) {
+    if (c.w_row[i] < 0) continue;
     Eigen::Vector3d n_cam;
-    const double g = normal_px(i, v_dir, &n_cam);
+    const double g = NormalPx(camera, c, i, v_dir, rot, &n_cam);
     if (!(g > 0)) continue;
-    const double distance_px = v_dir.dot(a[i]) / g;
+    const double distance_px = v_dir.dot(c.a[i]) / g;
     const Eigen::Vector2d normal(n_cam.x() / camera.fx / g, n_cam.y() / camera.fy / g);
-    const Eigen::Vector3d& xq = match_rays_[pair.first + i];
+    const Eigen::Vector3d& xq = pair.match_rays[i];
     const Eigen::Vector2d q_undistorted = (k_mat * xq).hnormalized();
     const Eigen::Vector2d foot = q_undistorted - distance_px * normal;
     double across_px = distance_px;
@@ -422,14 +485,56 @@ void VideoPairPredictor::PredictPair(const TrueModel& model, size_t k,
     // the image diagonal: 1 far away (the noise level stays that of one component), smooth, so the
     // solver's derivatives stay honest.
     Eigen::Vector3d epipole;
-    if (cam_from_world_at(w_row[i], v_dir, &epipole) && std::abs(epipole.z()) > 1e-12) {
+    if (rot->CamFromWorldAt(c.w_row[i], v_dir, &epipole) && std::abs(epipole.z()) > 1e-12) {
       const double rho = (q_undistorted - (k_mat * (epipole / epipole.z())).head<2>()).norm();
       across_px *= rho / std::hypot(rho, epipole_radius_px);
     }
     if (std::isfinite(across_px)) {
-      (*out)[pair.first + i] = pair.measured[i] - Eigen::Vector2d(across_px, 0.0);
+      pair.out[i] = pair.measured[i] - Eigen::Vector2d(across_px, 0.0);
     }
   }
+}
+
+}  // namespace
+
+void VideoPairPredictor::PredictPair(const TrueModel& model, size_t k,
+                                     std::vector<Eigen::Vector2d>* out) const {
+  const Pair& pair = pairs_[k];
+  if (pair.px.empty()) return;
+  const PairView view{pair.t_earlier_ns,
+                      pair.t_later_ns,
+                      pair.rows,
+                      pair.row_of_point,
+                      pair.px,
+                      pair.measured,
+                      pair.match,
+                      pair.weight,
+                      rays_.data() + pair.first,
+                      match_rays_.data() + pair.first,
+                      out->data() + pair.first};
+  std::vector<double> later_offset_s;
+  const std::optional<OrientationTrace> trace = PairTrace(gyro_, model, view, &later_offset_s);
+  if (!trace) return;
+  PairRotations rot(model, *trace, view, later_offset_s);
+  const PinholeCamera& camera = model.rig.camera;
+  if (!pair_translation_) {
+    PredictRotationOnly(camera, view, &rot);
+    return;
+  }
+  const CrossProducts c = MatchCrossProducts(camera, view, &rot);
+  Eigen::Vector3d v_dir = TranslationDirection(camera, view, c, robust_delta_px_, &rot);
+  if (!v_dir.allFinite() || v_dir.isZero(0.0)) return;
+  // V's sign is the eigen-solver's choice, and every distance's sign follows it: orient V as the
+  // pair's previous one. A solver's evaluations come in small steps, V turns little from one to
+  // the next, and each distance then stays a continuous function of the model (a point's line
+  // may turn fast near the epipole, its distance does not jump).
+  Eigen::Vector3d& previous_dir = previous_dirs_[k];
+  if (previous_dir.allFinite() && v_dir.dot(previous_dir) < 0) v_dir = -v_dir;
+  previous_dir = v_dir;
+  // Report the direction in the earlier frame's row-0 camera frame.
+  Eigen::Vector3d v_cam;
+  translation_dirs_[k] = rot.CamFromWorldAt(0.0, v_dir, &v_cam) ? v_cam.normalized() : v_dir;
+  PredictDistances(camera, view, c, v_dir, &rot);
 }
 
 std::unique_ptr<PointPredictor> MakePredictor(const GyroTrace& gyro,

@@ -292,16 +292,8 @@ class RowBandModel {
   double scale_px_ = 0.0;
 };
 
-}  // namespace
-
-void MeasureOptions::Check() const {
-  SHUTTERLAB_CHECK(grid_step_px >= 4 && grid_step_px <= 1024)
-      << "grid_step_px must be 4..1024, got " << grid_step_px;
-}
-
-DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& image,
-                                            const MeasureOptions& options) {
-  options.Check();
+// Throws unless both images are usable and of one size.
+void CheckImages(const cv::Mat& ref, const cv::Mat& image) {
   SHUTTERLAB_CHECK(!ref.empty() && !image.empty()) << "empty image";
   SHUTTERLAB_CHECK(ref.size() == image.size())
       << "image sizes differ: reference " << ref.cols << "x" << ref.rows << ", image " << image.cols
@@ -313,9 +305,11 @@ DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& i
         << "images must have 1, 3 or 4 channels";
   }
   SHUTTERLAB_CHECK(ref.cols >= 32 && ref.rows >= 32) << "images must be at least 32x32 pixels";
-  const int width = image.cols, height = image.rows;
+}
 
-  const cv::Mat grey_ref = GreyUnit(ref), grey_img = GreyUnit(image);
+// The dense flow image -> reference (*forward) and back (*backward) of the grey images.
+void DenseFlow(const cv::Mat& grey_ref, const cv::Mat& grey_img, cv::Mat* forward,
+               cv::Mat* backward) {
   cv::Mat ref8, img8;
   grey_ref.convertTo(ref8, CV_8U, 255.0);
   grey_img.convertTo(img8, CV_8U, 255.0);
@@ -325,23 +319,25 @@ DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& i
   cv::Ptr<cv::DISOpticalFlow> dis =
       cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_ULTRAFAST);
   dis->setFinestScale(0);
-  cv::Mat forward, backward;
-  dis->calc(img8, ref8, forward);
-  dis->calc(ref8, img8, backward);
+  dis->calc(img8, ref8, *forward);
+  dis->calc(ref8, img8, *backward);
+}
 
+// Validity and a first confidence per pixel (*weight, CV_32F), and the black / saturated pixels
+// and those whose match is (*never_fill, CV_8U 255): never filled, not even in short gaps.
+void FirstWeights(const cv::Mat& grey_ref, const cv::Mat& grey_img, const cv::Mat& forward,
+                  const cv::Mat& backward, cv::Mat* weight, cv::Mat* never_fill) {
+  const int width = grey_img.cols, height = grey_img.rows;
   const cv::Mat bad_img = BadMask(grey_img), bad_ref = BadMask(grey_ref);
   const cv::Mat gradient = WeakGradient(grey_img);
-
-  // Validity and a first confidence per pixel.
-  cv::Mat weight(height, width, CV_32F, cv::Scalar(0));
-  // Black / saturated pixels and those whose match is: never filled, not even in short gaps.
-  cv::Mat never_fill(height, width, CV_8U, cv::Scalar(0));
+  *weight = cv::Mat(height, width, CV_32F, cv::Scalar(0));
+  *never_fill = cv::Mat(height, width, CV_8U, cv::Scalar(0));
   for (int v = 0; v < height; ++v) {
     const cv::Vec2f* fw = forward.ptr<cv::Vec2f>(v);
     const uchar* bi = bad_img.ptr<uchar>(v);
     const float* g = gradient.ptr<float>(v);
-    float* wr = weight.ptr<float>(v);
-    uchar* sat = never_fill.ptr<uchar>(v);
+    float* wr = weight->ptr<float>(v);
+    uchar* sat = never_fill->ptr<uchar>(v);
     for (int u = 0; u < width; ++u) {
       if (!std::isfinite(fw[u][0]) || !std::isfinite(fw[u][1])) continue;
       const float qx = u + fw[u][0], qy = v + fw[u][1];
@@ -359,23 +355,24 @@ DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& i
       wr[u] = static_cast<float>(std::min(1.0, g[u] / (4 * kMinGradient)));
     }
   }
+}
 
-  RowBandModel model(width, height);
-  model.Fit(forward, weight);
-  const cv::Mat& robust = model.robust_weight().empty() ? weight : model.robust_weight();
-
-  DisplacementMeasurement result;
-  result.field.create(height, width, CV_32FC2);
-  result.field.setTo(cv::Scalar(kNaN, kNaN));
-  result.confidence = cv::Mat(height, width, CV_32F, cv::Scalar(0));
+// The model's field and confidence wherever measured (and across short gaps);
+// result->measured_fraction.
+void FillField(const RowBandModel& model, const cv::Mat& weight, const cv::Mat& robust,
+               const cv::Mat& never_fill, DisplacementMeasurement* result) {
+  const int width = weight.cols, height = weight.rows;
+  result->field.create(height, width, CV_32FC2);
+  result->field.setTo(cv::Scalar(kNaN, kNaN));
+  result->confidence = cv::Mat(height, width, CV_32F, cv::Scalar(0));
   size_t measured = 0;
   for (int v = 0; v < height; ++v) {
     if (!model.RowValid(v)) continue;
     const float* wr = weight.ptr<float>(v);
     const float* rw = robust.ptr<float>(v);
     const uchar* sat = never_fill.ptr<uchar>(v);
-    cv::Vec2f* out = result.field.ptr<cv::Vec2f>(v);
-    float* conf = result.confidence.ptr<float>(v);
+    cv::Vec2f* out = result->field.ptr<cv::Vec2f>(v);
+    float* conf = result->confidence.ptr<float>(v);
     int last = -1;  // last measured column
     for (int u = 0; u < width; ++u) {
       if (wr[u] <= 0) continue;
@@ -395,10 +392,14 @@ DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& i
       last = u;
     }
   }
-  result.measured_fraction = static_cast<double>(measured) / (static_cast<double>(width) * height);
+  result->measured_fraction = static_cast<double>(measured) / (static_cast<double>(width) * height);
+}
 
-  // Points: the raw flow on the grid where measured and consistent with the robust model.
-  const int step = options.grid_step_px;
+// Points: the raw flow on the grid where measured and consistent with the robust model; and the
+// noise of the flow about the model (result->points, result->noise_px).
+void GridPoints(const RowBandModel& model, const cv::Mat& forward, const cv::Mat& weight,
+                const cv::Mat& robust, int step, DisplacementMeasurement* result) {
+  const int width = weight.cols, height = weight.rows;
   double sum_sq = 0.0;
   for (int v = step / 2; v < height; v += step) {
     if (!model.RowValid(v)) continue;
@@ -407,18 +408,45 @@ DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& i
       const cv::Vec2f d = forward.at<cv::Vec2f>(v, u);
       const cv::Vec2f r = d - model.Eval(u, v);
       sum_sq += r.dot(r);
-      result.points.push_back({static_cast<double>(u), static_cast<double>(v), d[0], d[1],
-                               static_cast<double>(robust.at<float>(v, u))});
+      result->points.push_back({static_cast<double>(u), static_cast<double>(v), d[0], d[1],
+                                static_cast<double>(robust.at<float>(v, u))});
     }
   }
-  if (!result.points.empty()) {
+  if (!result->points.empty()) {
     // Degrees of freedom: each band's 2 x 12 parameters are shared by (2h + 1) * width pixels, of
     // which a point is one; the share of a fitted model in one point's residual is that ratio.
     const double band_pixels =
-        (2.0 * kBandHalfRows + 1) * width * std::max(0.05, result.measured_fraction);
+        (2.0 * kBandHalfRows + 1) * width * std::max(0.05, result->measured_fraction);
     const double leverage = std::min(0.5, RowBandModel::kP / band_pixels);
-    result.noise_px = std::sqrt(sum_sq / result.points.size() / (1.0 - leverage));
+    result->noise_px = std::sqrt(sum_sq / result->points.size() / (1.0 - leverage));
   }
+}
+
+}  // namespace
+
+void MeasureOptions::Check() const {
+  SHUTTERLAB_CHECK(grid_step_px >= 4 && grid_step_px <= 1024)
+      << "grid_step_px must be 4..1024, got " << grid_step_px;
+}
+
+DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& image,
+                                            const MeasureOptions& options) {
+  options.Check();
+  CheckImages(ref, image);
+  const int width = image.cols, height = image.rows;
+  const cv::Mat grey_ref = GreyUnit(ref), grey_img = GreyUnit(image);
+  cv::Mat forward, backward;
+  DenseFlow(grey_ref, grey_img, &forward, &backward);
+  cv::Mat weight, never_fill;
+  FirstWeights(grey_ref, grey_img, forward, backward, &weight, &never_fill);
+
+  RowBandModel model(width, height);
+  model.Fit(forward, weight);
+  const cv::Mat& robust = model.robust_weight().empty() ? weight : model.robust_weight();
+
+  DisplacementMeasurement result;
+  FillField(model, weight, robust, never_fill, &result);
+  GridPoints(model, forward, weight, robust, options.grid_step_px, &result);
   result.d_px = FrameDistortionPx(result.field);
   return result;
 }

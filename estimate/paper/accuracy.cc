@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <sstream>
 
 namespace shutterlab {
@@ -41,6 +42,131 @@ Eigen::Quaterniond MeanOrientation(const std::vector<Eigen::Quaterniond>& q, siz
   Eigen::Quaterniond mean;
   mean.coeffs() = sum.normalized();
   return mean;
+}
+
+// Smoothed bias-corrected rate magnitude: centred moving average of the vector (half samples on
+// each side) via prefix sums (averaging the vector, not the magnitude, is what lowers the noise).
+std::vector<double> SmoothedMagnitude(const GyroTrace& trace, const Eigen::Vector3d& bias_rad_s,
+                                      size_t half) {
+  const size_t n = trace.size();
+  std::vector<Eigen::Vector3d> prefix(n + 1, Eigen::Vector3d::Zero());
+  for (size_t i = 0; i < n; ++i) prefix[i + 1] = prefix[i] + (trace[i].omega_rad_s - bias_rad_s);
+  std::vector<double> magnitude(n);
+  for (size_t k = 0; k < n; ++k) {
+    const size_t lo = k >= half ? k - half : 0;
+    const size_t hi = std::min(n, k + half + 1);
+    magnitude[k] = ((prefix[hi] - prefix[lo]) / static_cast<double>(hi - lo)).norm();
+  }
+  return magnitude;
+}
+
+// Still noise level over the bias segment [bias_begin, first), where the smoothing window lies
+// inside it, and the detection thresholds from it.
+void SetNoiseLevel(const std::vector<double>& magnitude, size_t bias_begin, size_t first,
+                   size_t half, const AccuracyOptions& options, AccuracyResult* result) {
+  size_t lo = bias_begin + half, hi = first >= half ? first - half : 0;
+  if (lo >= hi) lo = bias_begin, hi = first;
+  double sum_sq = 0.0;
+  for (size_t k = lo; k < hi; ++k) sum_sq += magnitude[k] * magnitude[k];
+  result->noise_level_rad_s =
+      std::max(options.min_noise_rad_s, std::sqrt(sum_sq / static_cast<double>(hi - lo)));
+  result->enter_rad_s = options.enter_factor * result->noise_level_rad_s;
+  result->exit_rad_s = options.exit_factor * result->noise_level_rad_s;
+}
+
+// The motions from sample first on: hysteresis, then merge motions closer than min_still_s.
+std::vector<Segment> DetectMotions(const GyroTrace& trace, const std::vector<double>& magnitude,
+                                   size_t first, double min_still_s, const AccuracyResult& result) {
+  const size_t n = trace.size();
+  std::vector<Segment> segments;
+  for (size_t k = first; k < n; ++k) {
+    if (magnitude[k] <= result.enter_rad_s) continue;
+    size_t begin = k;
+    while (begin > first && magnitude[begin - 1] > result.exit_rad_s) --begin;
+    size_t end = k + 1;
+    while (end < n && magnitude[end] > result.exit_rad_s) ++end;
+    const int64_t min_still_ns = SecondsToNs(min_still_s);
+    if (!segments.empty() &&
+        trace[begin].t_ns - trace[segments.back().end - 1].t_ns < min_still_ns) {
+      segments.back().end = end;
+    } else {
+      segments.push_back({begin, end});
+    }
+    k = end;  // the loop's ++k then skips the sample at end, which is at or below exit
+  }
+  return segments;
+}
+
+// SO(3) orientations of the bias-corrected samples from sample first on.
+OrientationTrace CorrectedOrientation(const GyroTrace& trace, const Eigen::Vector3d& bias_rad_s,
+                                      size_t first) {
+  std::vector<GyroSample> corrected;
+  corrected.reserve(trace.size() - first);
+  for (size_t i = first; i < trace.size(); ++i) {
+    corrected.push_back({trace[i].t_ns, trace[i].omega_rad_s - bias_rad_s});
+  }
+  return OrientationTrace{GyroTrace(std::move(corrected))};
+}
+
+// What measuring each motion's turn needs.
+struct TurnContext {
+  const GyroTrace& trace;
+  const std::vector<Segment>& segments;
+  const PerAxisAngles& angles;  // per-axis angles from sample first on
+  const OrientationTrace& orientation;
+  size_t first;
+  size_t average;  // samples averaged before and after
+  int64_t guard_ns;
+  int64_t t0_ns;
+  double reference_deg;
+};
+
+// The turn of motion s from the still samples around it; nullopt when either side has too little
+// still time to average.
+std::optional<DetectedRotation> MeasureTurn(const TurnContext& c, size_t s) {
+  const GyroTrace& trace = c.trace;
+  const size_t n = trace.size(), average = c.average;
+  const Segment& seg = c.segments[s];
+  const size_t lower = s == 0 ? c.first : c.segments[s - 1].end;
+  const size_t upper = s + 1 == c.segments.size() ? n : c.segments[s + 1].begin;
+  const size_t before_end = trace.LowerBound(trace[seg.begin].t_ns - c.guard_ns);
+  const size_t after_begin = trace.LowerBound(trace[seg.end - 1].t_ns + c.guard_ns + 1);
+  if (before_end < lower + average || after_begin + average > upper) return std::nullopt;
+  DetectedRotation r;
+  r.t_start_s = (trace[seg.begin].t_ns - c.t0_ns) * 1e-9;
+  r.t_end_s = (trace[seg.end - 1].t_ns - c.t0_ns) * 1e-9;
+  const size_t b0 = before_end - average - c.first, a0 = after_begin - c.first;
+  Eigen::Vector3d before_rad, after_rad;
+  for (int a = 0; a < 3; ++a) {
+    before_rad[a] = Mean(c.angles.angle_rad[a], b0, b0 + average);
+    after_rad[a] = Mean(c.angles.angle_rad[a], a0, a0 + average);
+  }
+  const Eigen::Vector3d d = after_rad - before_rad;
+  r.before_arcsec = before_rad * kArcsecPerRad;
+  r.after_arcsec = after_rad * kArcsecPerRad;
+  r.theta_arcsec = AngleFromTrace(RotationZYX(d.z(), d.y(), d.x())) * kArcsecPerRad;
+  r.difference_arcsec = r.theta_arcsec - c.reference_deg * 3600.0;
+  r.theta_vector_arcsec = d.norm() * kArcsecPerRad;
+  const auto& q = c.orientation.world_from_body();
+  r.theta_so3_arcsec =
+      AngularDistance(MeanOrientation(q, b0, b0 + average), MeanOrientation(q, a0, a0 + average)) *
+      kArcsecPerRad;
+  return r;
+}
+
+// The mean and (with more than one turn) standard deviation of the turns' differences.
+void SetDifferenceStats(AccuracyResult* result) {
+  double sum = 0.0;
+  for (const auto& r : result->rotations) sum += r.difference_arcsec;
+  result->difference_mean_arcsec = sum / result->rotations.size();
+  if (result->rotations.size() > 1) {
+    double ss = 0.0;
+    for (const auto& r : result->rotations) {
+      ss += (r.difference_arcsec - result->difference_mean_arcsec) *
+            (r.difference_arcsec - result->difference_mean_arcsec);
+    }
+    result->difference_std_arcsec = std::sqrt(ss / (result->rotations.size() - 1));
+  }
 }
 
 }  // namespace
@@ -75,48 +201,13 @@ AccuracyResult AnalyzeAccuracy(const GyroTrace& trace, const AccuracyOptions& op
                               << " s)";
   const int64_t t0_ns = trace.t_begin_ns();
 
-  // Smoothed bias-corrected rate magnitude: centred moving average of the vector via prefix sums
-  // (averaging the vector, not the magnitude, is what lowers the noise).
-  std::vector<Eigen::Vector3d> prefix(n + 1, Eigen::Vector3d::Zero());
-  for (size_t i = 0; i < n; ++i)
-    prefix[i + 1] = prefix[i] + (trace[i].omega_rad_s - bias.bias_rad_s);
   const double rate_hz = trace.sampling().RateHz();
   const size_t half = static_cast<size_t>(std::llround(0.5 * options.smooth_s * rate_hz));
-  std::vector<double> magnitude(n);
-  for (size_t k = 0; k < n; ++k) {
-    const size_t lo = k >= half ? k - half : 0;
-    const size_t hi = std::min(n, k + half + 1);
-    magnitude[k] = ((prefix[hi] - prefix[lo]) / static_cast<double>(hi - lo)).norm();
-  }
-
-  // Still noise level over the bias segment, where the smoothing window lies inside it.
+  const std::vector<double> magnitude = SmoothedMagnitude(trace, bias.bias_rad_s, half);
   const size_t bias_begin = trace.LowerBound(t0_ns + SecondsToNs(options.bias.begin_s));
-  size_t lo = bias_begin + half, hi = first >= half ? first - half : 0;
-  if (lo >= hi) lo = bias_begin, hi = first;
-  double sum_sq = 0.0;
-  for (size_t k = lo; k < hi; ++k) sum_sq += magnitude[k] * magnitude[k];
-  result.noise_level_rad_s =
-      std::max(options.min_noise_rad_s, std::sqrt(sum_sq / static_cast<double>(hi - lo)));
-  result.enter_rad_s = options.enter_factor * result.noise_level_rad_s;
-  result.exit_rad_s = options.exit_factor * result.noise_level_rad_s;
-
-  // Hysteresis, then merge motions closer than min_still_s.
-  std::vector<Segment> segments;
-  for (size_t k = first; k < n; ++k) {
-    if (magnitude[k] <= result.enter_rad_s) continue;
-    size_t begin = k;
-    while (begin > first && magnitude[begin - 1] > result.exit_rad_s) --begin;
-    size_t end = k + 1;
-    while (end < n && magnitude[end] > result.exit_rad_s) ++end;
-    const int64_t min_still_ns = SecondsToNs(options.min_still_s);
-    if (!segments.empty() &&
-        trace[begin].t_ns - trace[segments.back().end - 1].t_ns < min_still_ns) {
-      segments.back().end = end;
-    } else {
-      segments.push_back({begin, end});
-    }
-    k = end;  // the loop's ++k then skips the sample at end, which is at or below exit
-  }
+  SetNoiseLevel(magnitude, bias_begin, first, half, options, &result);
+  const std::vector<Segment> segments =
+      DetectMotions(trace, magnitude, first, options.min_still_s, result);
   SHUTTERLAB_CHECK(!segments.empty())
       << "no rotation found after the bias segment: the smoothed rate never exceeded "
       << result.enter_rad_s << " rad/s (" << options.enter_factor << " x the still noise level "
@@ -124,45 +215,25 @@ AccuracyResult AnalyzeAccuracy(const GyroTrace& trace, const AccuracyOptions& op
 
   // Per-axis angles and SO(3) orientations of the bias-corrected samples after the bias segment.
   const PerAxisAngles angles = IntegratePerAxis(trace, bias.bias_rad_s, first);
-  std::vector<GyroSample> corrected;
-  corrected.reserve(n - first);
-  for (size_t i = first; i < n; ++i) {
-    corrected.push_back({trace[i].t_ns, trace[i].omega_rad_s - bias.bias_rad_s});
-  }
-  const OrientationTrace orientation{GyroTrace(std::move(corrected))};
+  const OrientationTrace orientation = CorrectedOrientation(trace, bias.bias_rad_s, first);
 
   const size_t average = static_cast<size_t>(options.average_samples);
-  const int64_t guard_ns = SecondsToNs(options.guard_s);
+  const TurnContext context{trace,
+                            segments,
+                            angles,
+                            orientation,
+                            first,
+                            average,
+                            SecondsToNs(options.guard_s),
+                            t0_ns,
+                            options.reference_deg};
   for (size_t s = 0; s < segments.size(); ++s) {
-    const Segment& seg = segments[s];
-    const size_t lower = s == 0 ? first : segments[s - 1].end;
-    const size_t upper = s + 1 == segments.size() ? n : segments[s + 1].begin;
-    const size_t before_end = trace.LowerBound(trace[seg.begin].t_ns - guard_ns);
-    const size_t after_begin = trace.LowerBound(trace[seg.end - 1].t_ns + guard_ns + 1);
-    if (before_end < lower + average || after_begin + average > upper) {
-      result.skipped_t_s.push_back((trace[seg.begin].t_ns - t0_ns) * 1e-9);
-      continue;
+    const std::optional<DetectedRotation> r = MeasureTurn(context, s);
+    if (r) {
+      result.rotations.push_back(*r);
+    } else {
+      result.skipped_t_s.push_back((trace[segments[s].begin].t_ns - t0_ns) * 1e-9);
     }
-    DetectedRotation r;
-    r.t_start_s = (trace[seg.begin].t_ns - t0_ns) * 1e-9;
-    r.t_end_s = (trace[seg.end - 1].t_ns - t0_ns) * 1e-9;
-    const size_t b0 = before_end - average - first, a0 = after_begin - first;
-    Eigen::Vector3d before_rad, after_rad;
-    for (int a = 0; a < 3; ++a) {
-      before_rad[a] = Mean(angles.angle_rad[a], b0, b0 + average);
-      after_rad[a] = Mean(angles.angle_rad[a], a0, a0 + average);
-    }
-    const Eigen::Vector3d d = after_rad - before_rad;
-    r.before_arcsec = before_rad * kArcsecPerRad;
-    r.after_arcsec = after_rad * kArcsecPerRad;
-    r.theta_arcsec = AngleFromTrace(RotationZYX(d.z(), d.y(), d.x())) * kArcsecPerRad;
-    r.difference_arcsec = r.theta_arcsec - options.reference_deg * 3600.0;
-    r.theta_vector_arcsec = d.norm() * kArcsecPerRad;
-    const auto& q = orientation.world_from_body();
-    r.theta_so3_arcsec = AngularDistance(MeanOrientation(q, b0, b0 + average),
-                                         MeanOrientation(q, a0, a0 + average)) *
-                         kArcsecPerRad;
-    result.rotations.push_back(r);
   }
   SHUTTERLAB_CHECK(!result.rotations.empty())
       << "found " << segments.size() << " motion(s) after the bias segment but none has "
@@ -170,17 +241,7 @@ AccuracyResult AnalyzeAccuracy(const GyroTrace& trace, const AccuracyOptions& op
       << " samples of still time on both sides to average (first motion at "
       << (trace[segments[0].begin].t_ns - t0_ns) * 1e-9 << " s)";
 
-  double sum = 0.0;
-  for (const auto& r : result.rotations) sum += r.difference_arcsec;
-  result.difference_mean_arcsec = sum / result.rotations.size();
-  if (result.rotations.size() > 1) {
-    double ss = 0.0;
-    for (const auto& r : result.rotations) {
-      ss += (r.difference_arcsec - result.difference_mean_arcsec) *
-            (r.difference_arcsec - result.difference_mean_arcsec);
-    }
-    result.difference_std_arcsec = std::sqrt(ss / (result.rotations.size() - 1));
-  }
+  SetDifferenceStats(&result);
   return result;
 }
 
