@@ -20,7 +20,9 @@ GyroTrace ConstantRateTrace(double rate_rad_s, double total_s) {
   const int64_t still_n = static_cast<int64_t>(kStillS * 1e9) / kDtNs;
   const Eigen::Vector3d axis = Eigen::Vector3d::Ones().normalized();
   for (int64_t k = 0; k < n; ++k) {
-    samples.push_back({k * kDtNs, k <= still_n ? Eigen::Vector3d::Zero() : rate_rad_s * axis});
+    const Eigen::Vector3d rate =
+        k <= still_n ? Eigen::Vector3d::Zero() : Eigen::Vector3d(rate_rad_s * axis);
+    samples.push_back({k * kDtNs, rate});
   }
   return GyroTrace(std::move(samples));
 }
