@@ -13,26 +13,40 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <random>
 #include <string>
+#include <unistd.h>
 #include <vector>
 
 namespace shutterlab::test {
 
 // The project's own nadir scene (render/ground_texture.h), 2560x1440 at 4 cm per pixel (about a
-// 1280-wide mapping camera's at 50 m), written once as a PNG under the temp folder for the tests
-// that take a scene file. The same seed gives the same bytes, so concurrent tests may share it.
+// 1280-wide mapping camera's at 50 m), written as a PNG under the temp folder for the tests that
+// take a scene file: once per process and seed (a file from another process or an older build is
+// never reused), and removed when the process ends.
 inline std::string GroundScenePath(uint64_t seed = 1) {
+  struct Written {
+    std::map<uint64_t, std::string> paths;
+    ~Written() {
+      std::error_code ec;
+      for (const auto& [seed, path] : paths) std::filesystem::remove(path, ec);
+    }
+  };
+  static Written written;
+  auto it = written.paths.find(seed);
+  if (it != written.paths.end()) return it->second;
   GroundTextureOptions options;
   options.width_px = 2560;
   options.height_px = 1440;
   options.ground_sample_distance_m = 0.04;
   options.seed = seed;
-  const std::string path = (std::filesystem::temp_directory_path() /
-                            ("shutterlab_ground_2560x1440_" + std::to_string(seed) + ".png"))
-                               .string();
-  if (!std::filesystem::exists(path)) WriteImage(path, MakeGroundTexture(options));
-  return path;
+  const std::string path =
+      (std::filesystem::temp_directory_path() /
+       ("shutterlab_ground_" + std::to_string(::getpid()) + "_" + std::to_string(seed) + ".png"))
+          .string();
+  WriteImage(path, MakeGroundTexture(options));
+  return written.paths[seed] = path;
 }
 
 // A small nadir rig: width x height, f = 300 px, principal point at the centre, 20 ms readout.
