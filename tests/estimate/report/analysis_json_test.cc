@@ -2,6 +2,8 @@
 // the typed results hold.
 #include "estimate/report/analysis_json.h"
 
+#include "tests/estimate/loop/effect_fixtures.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -57,13 +59,7 @@ TEST(AnalysisJson, AnalyzeHasTheContractsKeysAndOneEntryPerImage) {
   log.format = "test";
   log.gyro_source = "constant";
   AnalyzeOptions options;
-  options.rig.camera.width = 1280;
-  options.rig.camera.height = 960;
-  options.rig.camera.fx = options.rig.camera.fy = 1100.0;
-  options.rig.camera.cx = 639.5;
-  options.rig.camera.cy = 479.5;
-  options.rig.shutter.readout_s = 0.030;
-  options.rig.altitude_m = 50.0;
+  options.rig = test::MappingRig();  // 1280x960, f 1100 px, 30 ms, 50 m
   options.every_s = 2.0;
   const AnalyzeResult result = Analyze(log, options);
   const nlohmann::json json = AnalyzeToJson(result);
