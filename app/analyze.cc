@@ -4,6 +4,7 @@
 #include "estimate/paper/analyze.h"
 
 #include "app/command.h"
+#include "app/trace_options.h"
 #include "estimate/paper/flight.h"
 #include "estimate/report/analysis_json.h"
 #include "estimate/report/analyze_report.h"
@@ -101,6 +102,7 @@ void Run(const AnalyzeCommand& command) {
   // The report shades the flagged windows and draws their histograms from the flight series.
   options.flight_series = !command.out_dir.empty();
   const FlightLog log = ReadFlightLog(command.log_path, read);
+  PrintLogWarnings(command.log_path, log.warnings);
   Progress progress("analyze", 1000);
   options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
   AnalyzeResult result;

@@ -17,6 +17,7 @@
 // step is a function of the shared DemoContext, run in order by RunDemo (add a step there).
 
 #include "app/command.h"
+#include "app/trace_options.h"
 #include "estimate/demo_dataset.h"
 #include "estimate/loop/validate.h"
 #include "estimate/paper/accuracy.h"
@@ -95,6 +96,7 @@ void StepInputs(DemoContext& context) {
   output.altitude_m = kDemoAltitudeM;
   WriteSynthetic(flight, output);
   context.log = ReadFlightLog(context.log_path);
+  PrintLogWarnings(context.log_path, context.log.warnings);
   std::cout << "flight log " << context.log_path << ": " << context.log.gyro.size()
             << " gyro samples over " << FormatNumber("%.1f", context.log.gyro.DurationS()) << " s, "
             << context.log.camera_events.size() << " camera triggers, altitude "

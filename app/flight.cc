@@ -43,12 +43,16 @@ void Run(const FlightCommand& command) {
   options.progress = [&progress](double fraction) {
     progress.Update(static_cast<size_t>(fraction * 1000));
   };
-  const FlightResult result = AnalyzeTrace(command.trace, options, Flight);
+  std::vector<LogWarning> warnings;
+  const FlightResult result = AnalyzeTrace(command.trace, options, Flight, &warnings);
+  for (LogWarning& w : FlightWarnings(result)) warnings.push_back(std::move(w));
   if (options.series) WriteFlightSeriesCsv(command.series_path, result.series);
   if (command.json) {
-    std::cout << FlightToJson(result).dump(2) << "\n";
+    nlohmann::json json = FlightToJson(result);
+    json["warnings"] = WarningsToJson(warnings);
+    std::cout << json.dump(2) << "\n";
   } else {
-    std::cout << FlightTable(result);
+    std::cout << FlightTable(result);  // its own line says which rows had too few samples
   }
 }
 

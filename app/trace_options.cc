@@ -45,7 +45,16 @@ FlightLogReadOptions TraceOptions::ReadOptions() const {
 }
 
 // Any supported log: the gyro formats and the flight logs (ULog, blackbox, DataFlash) alike.
-GyroTrace TraceOptions::Load() const { return ReadFlightLog(path, ReadOptions()).gyro; }
+FlightLog TraceOptions::Load() const {
+  FlightLog log = ReadFlightLog(path, ReadOptions());
+  PrintLogWarnings(path, log.warnings);
+  return log;
+}
+
+void PrintLogWarnings(const std::string& path, const std::vector<LogWarning>& warnings) {
+  for (const LogWarning& w : warnings)
+    std::fprintf(stderr, "warning: %s: %s\n", path.c_str(), WarningLine(w).c_str());
+}
 
 BiasSegment TraceOptions::Segment(const GyroTrace& trace) const {
   if (!auto_bias) return ParseBiasSegment(bias);

@@ -10,6 +10,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace shutterlab::app {
 
@@ -25,21 +26,30 @@ struct TraceOptions {
   // Adds TRACE (positional) and the options above to a subcommand. with_bias: add --bias too.
   void Add(CLI::App* command, bool with_bias);
   FlightLogReadOptions ReadOptions() const;
-  GyroTrace Load() const;
+  // Reads the log and prints its warnings on stderr (PrintLogWarnings).
+  FlightLog Load() const;
   // The bias segment for this trace: with --auto-bias the detected still segment
   // (DetectStillSegment, default StillDetectOptions; one note "auto-bias: still segment A:B s" on
   // stderr), otherwise --bias A:B. Throws std::invalid_argument when neither gives a segment.
   BiasSegment Segment(const GyroTrace& trace) const;
 };
 
+// What the reader could not read or trust, one "warning: PATH: LINE" on stderr each, so that no
+// command analyses less than the file holds without saying so.
+void PrintLogWarnings(const std::string& path, const std::vector<LogWarning>& warnings);
+
 // Runs analysis(trace, options) the way every trace command does: --bias is parsed and the options
-// checked before the (possibly long) read, the segment is resolved after it (--auto-bias detects
-// the still segment), and the analysis's own errors are prefixed with the trace's path.
+// checked before the (possibly long) read, the log's warnings are printed (and handed back in
+// *warnings for --json), the segment is resolved after the read (--auto-bias detects the still
+// segment), and the analysis's own errors are prefixed with the trace's path.
 template <typename Options, typename Analysis>
-auto AnalyzeTrace(const TraceOptions& trace_options, Options options, const Analysis& analysis) {
+auto AnalyzeTrace(const TraceOptions& trace_options, Options options, const Analysis& analysis,
+                  std::vector<LogWarning>* warnings = nullptr) {
   if (!trace_options.auto_bias) options.bias = ParseBiasSegment(trace_options.bias);
   options.Check();
-  const GyroTrace trace = trace_options.Load();
+  FlightLog log = trace_options.Load();
+  if (warnings) *warnings = log.warnings;
+  const GyroTrace& trace = log.gyro;
   options.bias = trace_options.Segment(trace);
   try {
     return analysis(trace, options);

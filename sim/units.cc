@@ -4,6 +4,7 @@
 #include "sim/text_file.h"
 
 #include <cctype>
+#include <cstdio>
 #include <limits>
 #include <string_view>
 #include <utility>
@@ -20,6 +21,12 @@ std::pair<double, std::string> SplitNumberUnit(const std::string& text, const ch
 }
 
 }  // namespace
+
+std::string SecondsText(int64_t t_ns) {
+  char text[48];
+  std::snprintf(text, sizeof text, "%.3f s", static_cast<double>(t_ns) * 1e-9);
+  return text;
+}
 
 double ParseLengthM(const std::string& text) {
   const auto [value, unit] = SplitNumberUnit(text, "length");

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -22,6 +23,9 @@ inline constexpr double kRadPerArcsec = kPi / (180.0 * 3600.0);
 inline double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
+
+// An instant on a log's clock for a message: "140.184 s" (ms resolution).
+std::string SecondsText(int64_t t_ns);
 
 // "5cm", "50mm", "0.05m", "0.05" (metres) -> metres. Throws std::invalid_argument
 // naming the text otherwise.

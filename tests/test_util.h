@@ -1,18 +1,21 @@
 #pragma once
 // Helpers shared by the test suites: rotation matchers, temporary folders, running the CLI.
 
+#include "sim/log_warning.h"
 #include "sim/so3.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <random>
 #include <string>
+#include <vector>
 
 namespace shutterlab::test {
 
@@ -20,6 +23,20 @@ inline void ExpectRotationNear(const Eigen::Quaterniond& a, const Eigen::Quatern
                                double tol_rad) {
   EXPECT_LE(AngularDistance(a, b), tol_rad)
       << "a = " << a.coeffs().transpose() << "  b = " << b.coeffs().transpose();
+}
+
+// True when any warning's "kind: message" line contains text.
+inline bool AnyWarningContains(const std::vector<LogWarning>& warnings, const std::string& text) {
+  return std::any_of(warnings.begin(), warnings.end(), [&](const LogWarning& w) {
+    return WarningLine(w).find(text) != std::string::npos;
+  });
+}
+
+// Every warning's line, one a line, for failure messages.
+inline std::string JoinedWarnings(const std::vector<LogWarning>& warnings) {
+  std::string all;
+  for (const LogWarning& w : warnings) all += WarningLine(w) + "\n";
+  return all;
 }
 
 // A fresh folder under the build tree's temp dir, removed when the object dies.

@@ -177,6 +177,8 @@ void DescribeSource(const FlightLog& log, const AnalyzeOptions& options,
   result->duration_s = (gyro.samples().back().t_ns - gyro.samples().front().t_ns) * 1e-9;
   result->rate_hz = gyro.sampling().RateHz();
   result->gaps = gyro.sampling().gap_indices.size();
+  result->log_warnings = log.warnings;
+  result->altitude_method = log.altitude_source;
   result->limits_m = options.limits_m;
   result->altitude_m = options.rig.altitude_m;
   result->altitude_source = altitude_source;
@@ -215,6 +217,8 @@ void FlightTableForReadout(const GyroTrace& camera_rates, const AnalyzeOptions& 
     // sample rather than starting the statistics after the segment as `flight --bias` does.
     flight_options.known_bias_rad_s = result->bias_rad_s;
     result->flight = Flight(camera_rates, flight_options);
+    for (LogWarning& w : FlightWarnings(*result->flight))
+      result->log_warnings.push_back(std::move(w));
   } catch (const std::invalid_argument& e) {
     result->flight_problem = e.what();
   }
@@ -464,11 +468,18 @@ std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path) {
 
 std::string LimitKey(double limit_m) { return FormatNumber("%.12g", limit_m); }
 
+std::string AltitudeText(const AnalyzeResult& result) {
+  if (result.altitude_source != "log" || result.altitude_method.empty())
+    return result.altitude_source;
+  return "log: " + result.altitude_method;
+}
+
 std::string AnalyzeReport(const AnalyzeResult& result) {
   std::ostringstream out;
   out << "source: " << result.format << ", gyro " << result.gyro_source << ", " << result.samples
       << " samples, " << FormatNumber("%.1f", result.duration_s) << " s at "
       << FormatNumber("%.1f", result.rate_hz) << " Hz, " << result.gaps << " gaps\n";
+  for (const LogWarning& w : result.log_warnings) out << "log warning: " << WarningLine(w) << "\n";
   if (result.bias_from_still) {
     out << "bias: still segment " << FormatNumber("%.2f", result.still_segment.begin_s) << ":"
         << FormatNumber("%.2f", result.still_segment.end_s) << " s\n";
@@ -478,7 +489,7 @@ std::string AnalyzeReport(const AnalyzeResult& result) {
     out << "bias: none (no still segment found; zero bias assumed)\n";
   }
   out << "camera: readout " << FormatNumber("%g", result.readout_s * 1e3) << " ms, altitude "
-      << FormatNumber("%g", result.altitude_m) << " m (" << result.altitude_source
+      << FormatNumber("%g", result.altitude_m) << " m (" << AltitudeText(result)
       << "); triggers: " << result.trigger_source << "\n\n";
   if (result.flight) {
     out << FlightTable(*result.flight) << "\n";

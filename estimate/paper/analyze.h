@@ -99,6 +99,7 @@ struct AnalyzeResult {
   size_t samples = 0;
   double duration_s = 0.0, rate_hz = 0.0;
   size_t gaps = 0;
+  std::vector<LogWarning> log_warnings;  // FlightLog::warnings: what the log lost
   // analysis
   std::optional<FlightResult> flight;  // empty when the trace is too short for one window
   std::string flight_problem;          // why flight is empty
@@ -110,6 +111,7 @@ struct AnalyzeResult {
   std::vector<double> limits_m;
   double altitude_m = 0.0, readout_s = 0.0;
   std::string altitude_source;  // "camera" (the options) or "log"
+  std::string altitude_method;  // how the log's altitude was formed (FlightLog::altitude_source)
   std::vector<ImageResult> images;
   AnalyzeVerdict verdict;
 };
@@ -123,6 +125,9 @@ TrueModel AnalyzeTrueModel(const RigModel& rig, const Eigen::Vector3d& bias_cam_
 // Reads a trigger file: CSV "image,t" or "t" (seconds on the log clock), optional header line
 // naming those columns; unnamed images become IMG_0001, ... Throws IoError(path:line: problem).
 std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path);
+
+// Where the altitude came from, for a person: "camera", or "log: median CAM.RelAlt ...".
+std::string AltitudeText(const AnalyzeResult& result);
 
 // Report for a person: source, bias, flight table, per-image table, verdict.
 std::string AnalyzeReport(const AnalyzeResult& result);

@@ -9,7 +9,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <sstream>
+#include <stdexcept>
 
 namespace shutterlab {
 namespace {
@@ -196,8 +198,20 @@ struct FlightPlan {
   std::vector<int64_t> window_ns;  // per duration
   std::vector<size_t> windows;     // window starts per duration
   size_t windows_max = 0;
+  std::vector<bool> too_few_samples;            // per duration: not longer than 2 sample intervals
+  int64_t sample_interval_ns = 0;               // median, of the analysed samples
   std::vector<double> threshold_rad, cos_half;  // per limit; cos_half: cos(threshold / 2)
 };
+
+// Median interval between the samples from `first` on (the trace's own median covers the bias
+// segment too, which may be sampled differently).
+int64_t MedianIntervalNs(const GyroTrace& trace, size_t first) {
+  std::vector<int64_t> intervals;
+  intervals.reserve(trace.size() - first);
+  for (size_t k = first + 1; k < trace.size(); ++k)
+    intervals.push_back(trace[k].t_ns - trace[k - 1].t_ns);
+  return intervals.empty() ? 0 : UpperMedian(std::move(intervals));
+}
 
 // The bias removed from every sample: the options' known one, or estimated on their segment.
 BiasEstimate FlightBias(const GyroTrace& trace, const FlightOptions& options) {
@@ -217,21 +231,34 @@ FlightPlan PlanFlight(const GyroTrace& trace, const FlightOptions& options, size
   FlightPlan plan;
   plan.first = first;
   plan.n = trace.size() - first;
-  SHUTTERLAB_CHECK(plan.n >= 2) << "no samples after the bias segment (it ends at "
-                                << options.bias.end_s << " s; the trace lasts " << trace.DurationS()
-                                << " s)";
+  if (plan.n < 2) {
+    throw std::invalid_argument("only " + std::to_string(plan.n) +
+                                " sample(s) after the bias segment (it ends at " +
+                                FormatNumber("%g", options.bias.end_s) + " s; the trace lasts " +
+                                FormatNumber("%.3f", trace.DurationS()) +
+                                " s): give an earlier --bias A:B, --auto-bias, or a longer log");
+  }
   const int64_t t0 = trace[first].t_ns;
   const int64_t t_last = trace.t_end_ns();
   const double span_s = (t_last - t0) * 1e-9;
+  plan.sample_interval_ns = MedianIntervalNs(trace, first);
   const size_t windows_count = options.windows_s.size();
   plan.window_ns.resize(windows_count);
   plan.windows.resize(windows_count);
+  plan.too_few_samples.resize(windows_count);
   for (size_t wi = 0; wi < windows_count; ++wi) {
     const double w = options.windows_s[wi];
     plan.window_ns[wi] = SecondsToNs(w);
-    SHUTTERLAB_CHECK(t0 + plan.window_ns[wi] <= t_last)
-        << "window " << w << " s is longer than the " << span_s
-        << " s of trace after the bias segment";
+    if (plan.window_ns[wi] <= kMinWindowSampleIntervals * plan.sample_interval_ns) {
+      plan.too_few_samples[wi] = true;  // plan.windows[wi] stays 0: nothing to sweep
+      continue;
+    }
+    if (t0 + plan.window_ns[wi] > t_last) {
+      throw std::invalid_argument("window " + FormatNumber("%g", w) + " s is longer than the " +
+                                  FormatNumber("%.3f", span_s) +
+                                  " s of trace after the bias segment: give shorter --windows or "
+                                  "an earlier --bias A:B");
+    }
     plan.windows[wi] = trace.LowerBound(t_last - plan.window_ns[wi] + 1) - first;
     plan.windows_max = std::max(plan.windows_max, plan.windows[wi]);
   }
@@ -376,6 +403,13 @@ void FinishRows(const FlightOptions& options, const FlightPlan& plan, FlightResu
       row.window_s = options.windows_s[wi];
       row.threshold_arcsec = plan.threshold_rad[l] * kArcsecPerRad;
       row.windows = plan.windows[wi];
+      if (plan.too_few_samples[wi]) {
+        row.too_few_samples = true;
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        row.flagged_percent = row.flagged_percent_vector = nan;
+        row.flagged_percent_axis = {nan, nan, nan};
+        continue;
+      }
       const double to_percent = 100.0 / static_cast<double>(plan.windows[wi]);
       row.flagged_percent = row.flagged * to_percent;
       for (int a = 0; a < 3; ++a) row.flagged_percent_axis[a] = row.flagged_axis[a] * to_percent;
@@ -416,12 +450,33 @@ FlightResult Flight(const GyroTrace& trace, const FlightOptions& options) {
   result.bias = FlightBias(trace, options);
   const FlightPlan plan = PlanFlight(trace, options, result.bias.first_after);
   result.samples = plan.n;
+  result.sample_interval_s = plan.sample_interval_ns * 1e-9;
   result.rows.resize(options.limits_m.size() * options.windows_s.size());
   if (options.series) result.series.window_s = options.windows_s[0];
   SweepWindows(trace, options, plan, &result);
   result.windows_total = plan.windows[0];
   FinishRows(options, plan, &result);
   return result;
+}
+
+std::vector<LogWarning> FlightWarnings(const FlightResult& result) {
+  std::string windows;
+  size_t count = 0;
+  for (const FlightRow& row : result.rows) {
+    if (!row.too_few_samples) continue;
+    const std::string window = FormatNumber("%g", row.window_s * 1e3) + " ms";
+    if (windows.find(window) == std::string::npos)
+      windows += (windows.empty() ? "" : ", ") + window;
+    ++count;
+  }
+  if (count == 0) return {};
+  const double dt_s = result.sample_interval_s;
+  return {{"too_few_samples",
+           "windows of " + windows + " not analysed: at " + FormatNumber("%.4g", 1.0 / dt_s) +
+               " Hz a window must be longer than " +
+               FormatNumber("%.4g", kMinWindowSampleIntervals * dt_s * 1e3) +
+               " ms (2 sample intervals) to measure a range",
+           std::nullopt, count}};
 }
 
 std::string FlightTable(const FlightResult& result) {
@@ -434,8 +489,16 @@ std::string FlightTable(const FlightResult& result) {
   out << "limit    window   threshold   windows      x %      y %      z %   per-axis %";
   if (result.vector_criterion) out << "   vector %";
   out << "\n";
+  size_t too_few = 0;
   for (const FlightRow& row : result.rows) {
     char line[256];
+    if (row.too_few_samples) {
+      ++too_few;
+      std::snprintf(line, sizeof(line), "%5.1f cm %5.1f ms %9.1f\"   too few samples\n",
+                    row.limit_m * 100, row.window_s * 1000, row.threshold_arcsec);
+      out << line;
+      continue;
+    }
     std::snprintf(line, sizeof(line), "%5.1f cm %5.1f ms %9.1f\" %10zu %8.2f %8.2f %8.2f %12.2f",
                   row.limit_m * 100, row.window_s * 1000, row.threshold_arcsec, row.windows,
                   row.flagged_percent_axis[0], row.flagged_percent_axis[1],
@@ -444,7 +507,14 @@ std::string FlightTable(const FlightResult& result) {
     if (result.vector_criterion) out << FormatNumber("%11.2f", row.flagged_percent_vector);
     out << "\n";
   }
-  if (result.vector_criterion) {
+  if (too_few > 0) {
+    const double dt_s = result.sample_interval_s;
+    out << "too few samples: at " << FormatNumber("%.4g", 1.0 / dt_s)
+        << " Hz a window must be longer than "
+        << FormatNumber("%.4g", kMinWindowSampleIntervals * dt_s * 1000.0)
+        << " ms (2 sample intervals) to measure a range; those rows were not analysed\n";
+  }
+  if (result.vector_criterion && too_few < result.rows.size()) {
     size_t vector_more = 0, axis_more = 0, vector_only = 0, axis_only = 0;
     for (const FlightRow& row : result.rows) {
       vector_more += row.flagged_vector > row.flagged;

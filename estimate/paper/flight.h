@@ -13,6 +13,7 @@
 
 #include "sim/bias.h"
 #include "sim/gyro_trace.h"
+#include "sim/log_warning.h"
 
 #include <array>
 #include <cstdint>
@@ -44,11 +45,18 @@ struct FlightOptions {
   void Check() const;
 };
 
+// A window must be longer than this many sample intervals to hold a range: one no longer than two
+// intervals holds one or two samples, and its range says nothing about the motion in it.
+inline constexpr double kMinWindowSampleIntervals = 2.0;
+
 // One (limit, window) cell of the paper's Table 4.
 struct FlightRow {
   double limit_m = 0;
   double window_s = 0;
   double threshold_arcsec = 0;
+  // The window is not longer than kMinWindowSampleIntervals sample intervals: not analysed, its
+  // counts are 0 and its shares NaN ("too few samples" in the table and the JSON).
+  bool too_few_samples = false;
   size_t windows = 0;                    // windows of this duration
   size_t flagged = 0;                    // per-axis criterion: any axis over the threshold
   std::array<size_t, 3> flagged_axis{};  // that axis over the threshold
@@ -73,16 +81,23 @@ struct FlightResult {
   double altitude_m = 0;
   double noise_allowance_arcsec = 0;
   BiasEstimate bias;
-  size_t samples = 0;        // samples analysed (those after the bias segment)
-  size_t windows_total = 0;  // windows of windows_s[0] (each row has its own count)
+  size_t samples = 0;            // samples analysed (those after the bias segment)
+  double sample_interval_s = 0;  // median interval of the analysed samples
+  size_t windows_total = 0;      // windows of windows_s[0] (each row has its own count)
   bool vector_criterion = false;
   std::vector<FlightRow> rows;  // limit-major: for each limit, each window (Table 4 order)
   FlightSeries series;
 };
 
-// Runs the analysis. Throws std::invalid_argument when the bias segment is too short, or a window
-// is longer than the trace after the bias segment (no window fits).
+// Runs the analysis. Windows too short for the sampling rate are marked
+// (FlightRow::too_few_samples), not analysed. Throws std::invalid_argument, saying what to change,
+// when the bias segment leaves fewer than 2 samples, or a window is longer than the trace after the
+// bias segment (none fits).
 FlightResult Flight(const GyroTrace& trace, const FlightOptions& options);
+
+// A too_few_samples warning (docs/FORMATS.md "Warnings") naming the rows the sampling rate could
+// not answer and the shortest window it allows; empty when every row was analysed.
+std::vector<LogWarning> FlightWarnings(const FlightResult& result);
 
 // The person-readable table in the paper's Table 4 layout, with a closing line saying which
 // criterion flags more on this data.

@@ -13,6 +13,7 @@ nlohmann::json FlightToJson(const FlightResult& result) {
     nlohmann::json r = {{"limit_m", row.limit_m},
                         {"window_s", row.window_s},
                         {"threshold_arcsec", row.threshold_arcsec},
+                        {"too_few_samples", row.too_few_samples},
                         {"windows", row.windows},
                         {"flagged_percent", row.flagged_percent},
                         {"flagged_percent_axis",
@@ -33,8 +34,20 @@ nlohmann::json FlightToJson(const FlightResult& result) {
           {"noise_allowance_arcsec", result.noise_allowance_arcsec},
           {"windows_total", result.windows_total},
           {"samples", result.samples},
+          {"sample_interval_s", result.sample_interval_s},
           {"bias_rad_s", {b.x(), b.y(), b.z()}},
           {"rows", rows}};
+}
+
+nlohmann::json WarningsToJson(const std::vector<LogWarning>& warnings) {
+  nlohmann::json json = nlohmann::json::array();
+  for (const LogWarning& w : warnings) {
+    nlohmann::json item = {{"kind", w.kind}, {"message", w.message}};
+    if (w.t_s) item["t_s"] = *w.t_s;
+    if (w.count) item["count"] = *w.count;
+    json.push_back(std::move(item));
+  }
+  return json;
 }
 
 nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
@@ -42,6 +55,7 @@ nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
   json["source"] = {{"format", result.format},   {"gyro", result.gyro_source},
                     {"samples", result.samples}, {"duration_s", result.duration_s},
                     {"rate_hz", result.rate_hz}, {"gaps", result.gaps}};
+  json["warnings"] = WarningsToJson(result.log_warnings);
   json["flight"] = result.flight ? FlightToJson(*result.flight) : nlohmann::json(nullptr);
   if (!result.flight) json["flight_problem"] = result.flight_problem;
   json["bias"] = {{"estimated", result.bias_estimated},
@@ -52,6 +66,7 @@ nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
   }
   json["camera"] = {{"altitude_m", result.altitude_m},
                     {"altitude_source", result.altitude_source},
+                    {"altitude_method", result.altitude_method},
                     {"readout_s", result.readout_s}};
   json["triggers"] = result.trigger_source;
   nlohmann::json images = nlohmann::json::array();

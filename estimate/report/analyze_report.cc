@@ -50,6 +50,7 @@ std::vector<ChartShading> FlaggedShadings(const AnalyzeResult& result) {
   // Loosest limit first so the stricter, wider shading lies below it.
   for (size_t r = 0; r < result.flight->rows.size(); ++r) {
     const FlightRow& row = result.flight->rows[r];
+    if (row.too_few_samples) continue;
     const size_t l =
         static_cast<size_t>(std::find(result.limits_m.begin(), result.limits_m.end(), row.limit_m) -
                             result.limits_m.begin());
@@ -231,6 +232,11 @@ void AddFlightTable(HtmlPage* page, const AnalyzeResult& result) {
   if (flight.vector_criterion) header.push_back("vector %");
   std::vector<std::vector<std::string>> rows;
   for (const FlightRow& row : flight.rows) {
+    if (row.too_few_samples) {
+      rows.push_back({Cm(row.limit_m), Fmt("%g ms", row.window_s * 1e3),
+                      Fmt("%.1f\"", row.threshold_arcsec), "too few samples"});
+      continue;
+    }
     std::vector<std::string> cells = {Cm(row.limit_m),
                                       Fmt("%g ms", row.window_s * 1e3),
                                       Fmt("%.1f\"", row.threshold_arcsec),
@@ -246,7 +252,9 @@ void AddFlightTable(HtmlPage* page, const AnalyzeResult& result) {
   // The table's closing line (which criterion flags more) as the text version prints it.
   std::istringstream text(FlightTable(flight));
   for (std::string line; std::getline(text, line);) {
-    if (line.rfind("criteria:", 0) == 0 || line.rfind("flight:", 0) == 0) page->Paragraph(line);
+    if (line.rfind("criteria:", 0) == 0 || line.rfind("flight:", 0) == 0 ||
+        line.rfind("too few samples:", 0) == 0)
+      page->Paragraph(line);
   }
 }
 
@@ -370,11 +378,22 @@ HtmlPage AnalyzeReportPage(const FlightLog& log, const AnalyzeOptions& options,
                       Fmt("%.0f px", 0.5 * (cam.fx + cam.fy)) +
                       (cam.HasDistortion() ? ", lens distortion" : "")},
        {"readout", Fmt("%g ms", result.readout_s * 1e3)},
-       {"altitude", Fmt("%g m", result.altitude_m) + " (" + result.altitude_source + ")"},
+       {"altitude", Fmt("%g m", result.altitude_m) + " (" + AltitudeText(result) + ")"},
        {"ground sample", Fmt("%.2f cm/px", 100.0 * result.altitude_m / (0.5 * (cam.fx + cam.fy)))},
        {"triggers", result.trigger_source},
        {"images", std::to_string(result.images.size()) + " (" +
                       std::to_string(result.verdict.images_in_trace) + " inside the log)"}});
+
+  if (!result.log_warnings.empty()) {
+    page.Heading("What the log lost");
+    page.Paragraph("The reader could not read or trust everything in the log:");
+    std::vector<std::vector<std::string>> lines;
+    for (const LogWarning& w : result.log_warnings) {
+      lines.push_back({w.kind, w.count ? std::to_string(*w.count) : "",
+                       w.t_s ? Fmt("%.3f s", *w.t_s) : "", w.message});
+    }
+    page.Table({"kind", "count", "first at", "what"}, lines);
+  }
 
   page.Heading("Rotation during the flight");
   const GyroTrace rates = CameraRates(log.gyro, options.rig.cam_from_gyro, result.bias_rad_s);

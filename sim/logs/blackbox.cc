@@ -347,14 +347,14 @@ std::string CompileFrameDef(int kind, const LogHeader& h, FrameDef* def) {
 // `gyroScale * (M_PI / 180.0) * 0.000001`, and flightlogGyroToRadiansPerSecond then multiplies by
 // 1e6. So: Baseflight rad/s = raw * scale * 1e6; otherwise rad/s = raw * scale * pi / 180.
 // Betaflight >= 3 writes scale 1.0 (0x3f800000): gyroADC is in deg/s.
-double GyroRadPerSecondPerLsb(const LogHeader& h, std::vector<std::string>* warnings) {
+double GyroRadPerSecondPerLsb(const LogHeader& h, std::vector<LogWarning>* warnings) {
   float scale = 1.0f;
   if (h.gyro_scale_bits) {
     std::memcpy(&scale, &*h.gyro_scale_bits, sizeof(scale));
   }
   if (!h.gyro_scale_bits || !std::isfinite(scale) || scale <= 0.0f) {
     warnings->push_back(
-        "header has no usable gyro_scale; gyroADC taken as deg/s (Betaflight >= 3)");
+        {"unit", "header has no usable gyro_scale; gyroADC taken as deg/s (Betaflight >= 3)"});
     scale = 1.0f;
   }
   const bool baseflight = h.firmware_type && *h.firmware_type != "Cleanflight";
@@ -391,7 +391,7 @@ void IdentifyFields(LogHeader* h) {
 struct DecodedLog {
   BlackboxLogInfo info;
   std::vector<GyroSample> samples;
-  std::vector<std::string> warnings;
+  std::vector<LogWarning> warnings;
   size_t corrupt_frames = 0;
   size_t rejected_main_frames = 0;
   size_t unknown_events = 0;
@@ -829,7 +829,7 @@ DecodedLog DecodeLog(const uint8_t* data, size_t begin, size_t end, int index,
     // Only the gyro matters here: a broken GPS or slow definition makes those frames unreadable,
     // and the resynchronisation skips them.
     if (!problem.empty())
-      out.warnings.push_back(where + ": " + problem + "; those frames are skipped");
+      out.warnings.push_back({"format", where + ": " + problem + "; those frames are skipped"});
   }
   const double rad_per_lsb = GyroRadPerSecondPerLsb(h, &out.warnings);
   out.gyro_field =
@@ -1043,9 +1043,9 @@ FlightLog ReadBlackboxCsv(std::string_view text, const std::string& path) {
   log.gyro_source = "gyroADC";
   log.gyro_sources_available = {"gyroADC"};
   if (!columns->gyro_unit_stated) {
-    log.warnings.push_back(
-        "gyroADC has no unit in the CSV header; taken as deg/s (Betaflight >= 3 logs gyro_scale "
-        "1.0)");
+    log.warnings.push_back({"unit",
+                            "gyroADC has no unit in the CSV header; taken as deg/s (Betaflight >= "
+                            "3 logs gyro_scale 1.0)"});
   }
   return log;
 }
@@ -1095,32 +1095,44 @@ FlightLog ToFlightLog(DecodedFile file, int log_index, const std::string& path) 
                 Plural(other.info.main_frames, "frame") + ", " +
                 FormatSeconds(other.info.duration_s) + ")";
     }
-    out.warnings.push_back("the file holds " + Plural(count, "log") + "; read " + where +
-                           (log_index < 0 ? " (the longest)" : "") + " with " +
-                           Plural(log.info.main_frames, "main frame") + "; others: " + others);
+    out.warnings.push_back({"unused_source",
+                            "the file holds " + Plural(count, "log") + "; read " + where +
+                                (log_index < 0 ? " (the longest)" : "") + " with " +
+                                Plural(log.info.main_frames, "main frame") + "; others: " + others,
+                            std::nullopt, count - 1});
   }
   if (file.leading_garbage_bytes > 0) {
-    out.warnings.push_back(Plural(file.leading_garbage_bytes, "byte") +
-                           " before the first log ignored");
+    out.warnings.push_back(
+        {"corrupt", Plural(file.leading_garbage_bytes, "byte") + " before the first log ignored"});
   }
   if (log.corrupt_frames > 0) {
-    out.warnings.push_back(where + ": " + Plural(log.corrupt_frames, "corrupt frame") + " skipped");
+    out.warnings.push_back({"corrupt",
+                            where + ": " + Plural(log.corrupt_frames, "corrupt frame") + " skipped",
+                            std::nullopt, log.corrupt_frames});
   }
   if (log.rejected_main_frames > 0) {
-    out.warnings.push_back(where + ": " + Plural(log.rejected_main_frames, "main frame") +
-                           " dropped while resynchronising after corrupt data");
+    out.warnings.push_back({"corrupt",
+                            where + ": " + Plural(log.rejected_main_frames, "main frame") +
+                                " dropped while resynchronising after corrupt data",
+                            std::nullopt, log.rejected_main_frames});
   }
   if (log.unknown_events > 0) {
-    out.warnings.push_back(where + ": " + Plural(log.unknown_events, "unrecognised event frame") +
-                           " ignored");
+    out.warnings.push_back(
+        {"format",
+         where + ": " + Plural(log.unknown_events, "unrecognised event frame") + " ignored",
+         std::nullopt, log.unknown_events});
   }
   if (log.logging_resumes > 0) {
-    out.warnings.push_back(where + ": logging paused and resumed " +
-                           Plural(log.logging_resumes, "time") + " (gaps in the trace)");
+    out.warnings.push_back({"gap",
+                            where + ": logging paused and resumed " +
+                                Plural(log.logging_resumes, "time") + " (gaps in the trace)",
+                            std::nullopt, log.logging_resumes});
   }
   if (!log.info.ended_cleanly) {
-    out.warnings.push_back(where +
-                           ": no LOG_END event (the recording was cut off or the file truncated)");
+    out.warnings.push_back(
+        {"truncated",
+         where + ": no LOG_END event (the recording was cut off or the file truncated)",
+         out.gyro.empty() ? std::nullopt : std::optional<double>(out.gyro.t_end_ns() * 1e-9)});
   }
   return out;
 }

@@ -12,6 +12,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <utility>
 #include <vector>
 
@@ -139,30 +140,31 @@ double ReadNumber(std::string_view payload, const Field& f, size_t element = 0) 
   }
 }
 
-// A microsecond time field as ns; nullopt unless an integer type in range.
-std::optional<int64_t> ReadTimeNs(std::string_view payload, const Field& f) {
-  int64_t us = 0;
+// A time field as ns (ns_per_tick: 1000 for TimeUS / SampleUS, 1e6 for the TimeMS of old logs);
+// nullopt unless an integer type in range.
+std::optional<int64_t> ReadTimeNs(std::string_view payload, const Field& f, int64_t ns_per_tick) {
+  int64_t ticks = 0;
   switch (f.type) {
     case 'Q': {
       const uint64_t v = LoadLE(payload.data() + f.offset, 8);
       if (v > static_cast<uint64_t>(std::numeric_limits<int64_t>::max())) return std::nullopt;
-      us = static_cast<int64_t>(v);
+      ticks = static_cast<int64_t>(v);
       break;
     }
     case 'q':
-      us = static_cast<int64_t>(LoadLE(payload.data() + f.offset, 8));
+      ticks = static_cast<int64_t>(LoadLE(payload.data() + f.offset, 8));
       break;
     case 'I':
-      us = static_cast<uint32_t>(LoadLE(payload.data() + f.offset, 4));
+      ticks = static_cast<uint32_t>(LoadLE(payload.data() + f.offset, 4));
       break;
     case 'i':
-      us = static_cast<int32_t>(LoadLE(payload.data() + f.offset, 4));
+      ticks = static_cast<int32_t>(LoadLE(payload.data() + f.offset, 4));
       break;
     default:
       return std::nullopt;
   }
-  if (us < 0 || us > std::numeric_limits<int64_t>::max() / 1000) return std::nullopt;
-  return us * 1000;
+  if (ticks < 0 || ticks > std::numeric_limits<int64_t>::max() / ns_per_tick) return std::nullopt;
+  return ticks * ns_per_tick;
 }
 
 std::string TrimmedText(std::string_view s) {
@@ -177,9 +179,17 @@ struct Format {
   bool relevant = false;  // a message this reader decodes; most of a real log is not
   size_t length = 0;      // whole message, header included
   std::map<std::string, Field> fields;
+  std::vector<std::string> labels;  // in field order, for the FMTU unit and multiplier columns
+  // The boot-time column: TimeUS (µs), or TimeMS (ms) in logs before ArduPilot 3.4.
+  const Field* time = nullptr;
+  int64_t time_ns_per_tick = 1000;
   const Field* Find(const std::string& label) const {
     auto it = fields.find(label);
     return it == fields.end() ? nullptr : &it->second;
+  }
+  std::optional<int64_t> TimeNs(std::string_view payload) const {
+    if (!time) return std::nullopt;
+    return ReadTimeNs(payload, *time, time_ns_per_tick);
   }
 };
 
@@ -216,7 +226,11 @@ std::optional<Format> ParseFmt(std::string_view p, std::string* error) {
     fmt.fields.emplace(names[i], Field{format[i], offset});
     offset += bytes;
   }
-  static const char* kRelevant[] = {"GYR", "IMU", "IMU2", "IMU3", "ISBH", "ISBD", "CAM", "TRIG"};
+  fmt.labels = names;
+  if ((fmt.time = fmt.Find("TimeUS")) == nullptr && (fmt.time = fmt.Find("TimeMS")) != nullptr)
+    fmt.time_ns_per_tick = 1'000'000;
+  static const char* kRelevant[] = {"GYR", "IMU",  "IMU2", "IMU3", "ISBH", "ISBD",
+                                    "CAM", "TRIG", "FMTU", "UNIT", "MULT"};
   fmt.relevant = std::any_of(std::begin(kRelevant), std::end(kRelevant),
                              [&](const char* n) { return fmt.name == n; });
   if (offset + kHeaderBytes != fmt.length) {
@@ -232,7 +246,8 @@ struct BatchHeader {
   int64_t sample_ns = 0;
   double rate_hz = 0.0;
   double mul = 0.0;
-  size_t count = 0;
+  size_t count = 0;     // samples the header declares
+  size_t received = 0;  // samples its ISBD packets delivered
 };
 
 class DataFlashParser {
@@ -244,8 +259,11 @@ class DataFlashParser {
   void Warn(const std::string& kind, size_t offset, const std::string& text) {
     size_t& count = warning_counts_[kind];
     ++count;
-    if (count <= kMaxDetailedWarnings)
-      log_.warnings.push_back("byte " + std::to_string(offset) + ": " + text);
+    if (count > kMaxDetailedWarnings) return;
+    // A cut-off file: say how far into the flight the last whole message reached.
+    std::optional<double> t_s;
+    if (kind == "truncated" && last_t_ns_ > 0) t_s = last_t_ns_ * 1e-9;
+    log_.warnings.push_back({kind, "byte " + std::to_string(offset) + ": " + text, t_s});
   }
   // Message length at q when a known message starts there, else 0.
   size_t KnownAt(size_t q) const;
@@ -256,6 +274,14 @@ class DataFlashParser {
   // Decodes the known message of len bytes at pos (FMT or data).
   void Accept(size_t pos, size_t len);
   void Handle(const Format& fmt, std::string_view payload);
+  void HandleGyro(const Format& fmt, std::string_view payload);
+  void HandleBatchHeader(const Format& fmt, std::string_view payload);
+  void HandleBatchData(const Format& fmt, std::string_view payload);
+  void CloseBatch(int64_t key);
+  void HandleCamera(const Format& fmt, std::string_view payload);
+  void HandleUnits(const Format& fmt, std::string_view payload);
+  double GyroToRadPerS(const Format& fmt, uint8_t type, const std::string& label);
+  void Finish();
   internal::GyroCandidate& Candidate(const std::string& base, int instance, int preference) {
     const std::string name = base + (instance ? "/" + std::to_string(instance) : "");
     auto& c = candidates_[name];
@@ -273,6 +299,13 @@ class DataFlashParser {
   std::map<int64_t, BatchHeader> batches_;  // by ISBH.N
   std::vector<double> cam_rel_alt_m_;
   size_t skipped_bytes_ = 0;
+  uint8_t current_type_ = 0;                       // message type being handled
+  std::map<char, std::string> unit_labels_;        // UNIT: id -> label ("rad/s")
+  std::map<uint8_t, std::string> field_unit_ids_;  // FMTU: type -> one unit id per field
+  std::set<std::string> odd_gyro_units_;
+  size_t partial_batches_ = 0, missing_batch_samples_ = 0;
+  size_t camera_events_without_time_ = 0;
+  int64_t last_t_ns_ = 0;  // the latest gyro sample time read so far
 };
 
 size_t DataFlashParser::KnownAt(size_t q) const {
@@ -300,6 +333,7 @@ void DataFlashParser::Accept(size_t pos, size_t len) {
   const std::string_view payload = bytes_.substr(pos + kHeaderBytes, len - kHeaderBytes);
   const uint8_t type = static_cast<uint8_t>(bytes_[pos + 2]);
   if (type != kFmtType) {
+    current_type_ = type;
     Handle(*formats_[type], payload);
     return;
   }
@@ -320,85 +354,205 @@ void DataFlashParser::Accept(size_t pos, size_t len) {
 void DataFlashParser::Handle(const Format& fmt, std::string_view p) {
   if (!fmt.relevant) return;
   const std::string& name = fmt.name;
-  const Field* time_us = fmt.Find("TimeUS");
   if (name == "GYR" || name == "IMU" || name == "IMU2" || name == "IMU3") {
-    const Field* x = fmt.Find("GyrX");
-    const Field* y = fmt.Find("GyrY");
-    const Field* z = fmt.Find("GyrZ");
-    const Field* sample_us = fmt.Find("SampleUS");
-    const Field* t_field = sample_us && name == "GYR" ? sample_us : time_us;
-    if (!x || !y || !z || !t_field) return;
-    int instance = name == "IMU2" ? 1 : name == "IMU3" ? 2 : 0;
-    if (const Field* i = fmt.Find("I"))
-      instance = static_cast<int>(ToInt(ReadNumber(p, *i)) & 0xff);
-    const auto t_ns = ReadTimeNs(p, *t_field);
-    auto& c = Candidate(name == "GYR" ? "GYR" : "IMU", instance, name == "GYR" ? 0 : 2);
-    c.samples.push_back({t_ns.value_or(0),
-                         Eigen::Vector3d(ReadNumber(p, *x), ReadNumber(p, *y), ReadNumber(p, *z))});
+    HandleGyro(fmt, p);
   } else if (name == "ISBH") {
-    const Field* n = fmt.Find("N");
-    const Field* type = fmt.Find("type");
-    const Field* mul = fmt.Find("mul");
-    const Field* cnt = fmt.Find("smp_cnt");
-    const Field* sus = fmt.Find("SampleUS");
-    const Field* rate = fmt.Find("smp_rate");
-    if (!n || !type || !mul || !cnt || !sus || !rate) return;
-    const int64_t key = ToInt(ReadNumber(p, *n));
-    batches_.erase(key);
-    if (ReadNumber(p, *type) != 1.0) return;  // 0 accelerometer, 1 gyro
-    BatchHeader h;
-    if (const Field* inst = fmt.Find("instance"))
-      h.instance = static_cast<int>(ToInt(ReadNumber(p, *inst)) & 0xff);
-    h.mul = ReadNumber(p, *mul);
-    h.rate_hz = ReadNumber(p, *rate);
-    h.count = static_cast<size_t>(std::max<int64_t>(0, ToInt(ReadNumber(p, *cnt))));
-    const auto t = ReadTimeNs(p, *sus);
-    // Bounds that keep sample-time arithmetic far from int64 overflow on corrupt headers.
-    constexpr size_t kMaxBatchSamples = 1'000'000;
-    constexpr int64_t kMaxSampleNs = 4'000'000'000'000'000'000;  // 127 years of boot time
-    if (!t || *t > kMaxSampleNs || !(h.mul > 0.0) || !(h.rate_hz >= 1.0 && h.rate_hz < 1e6) ||
-        h.count > kMaxBatchSamples) {
-      ++log_.records_skipped;
-      return;
-    }
-    h.sample_ns = *t;
-    batches_[key] = h;
+    HandleBatchHeader(fmt, p);
   } else if (name == "ISBD") {
-    const Field* n = fmt.Find("N");
-    const Field* seq = fmt.Find("seqno");
-    const Field* x = fmt.Find("x");
-    const Field* y = fmt.Find("y");
-    const Field* z = fmt.Find("z");
-    if (!n || !seq || !x || !y || !z || x->type != 'a' || y->type != 'a' || z->type != 'a') return;
-    auto it = batches_.find(ToInt(ReadNumber(p, *n)));
-    if (it == batches_.end()) return;  // an accelerometer batch, or its header was lost
-    const BatchHeader& h = it->second;
-    const int64_t seqno = ToInt(ReadNumber(p, *seq));
-    if (seqno < 0 || static_cast<uint64_t>(seqno) * kBatchSamples >= h.count) return;
-    auto& c = Candidate("ISBD", h.instance, 1);
-    for (size_t k = 0; k < kBatchSamples; ++k) {
-      const size_t index = static_cast<size_t>(seqno) * kBatchSamples + k;
-      if (index >= h.count) break;
-      const int64_t t_ns = h.sample_ns + std::llround(static_cast<double>(index) * 1e9 / h.rate_hz);
-      c.samples.push_back(
-          {t_ns, Eigen::Vector3d(ReadNumber(p, *x, k), ReadNumber(p, *y, k), ReadNumber(p, *z, k)) /
-                     h.mul});
-    }
+    HandleBatchData(fmt, p);
   } else if (name == "CAM" || name == "TRIG") {
-    if (!time_us) return;
-    const auto t = ReadTimeNs(p, *time_us);
-    if (!t || *t <= 0) return;
-    CameraEvent e;
-    e.t_ns = *t;
-    e.kind = name;
-    if (const Field* img = fmt.Find("Img")) e.sequence = ToInt(ReadNumber(p, *img));
-    log_.camera_events.push_back(e);
-    if (name == "CAM") {
-      if (const Field* rel = fmt.Find("RelAlt")) {
-        const double h = ReadNumber(p, *rel);
-        if (std::isfinite(h)) cam_rel_alt_m_.push_back(h);
-      }
+    HandleCamera(fmt, p);
+  } else if (name == "UNIT" || name == "FMTU") {
+    HandleUnits(fmt, p);
+  }
+}
+
+// UNIT (Id, Label) names a unit; FMTU (FmtType, UnitIds) gives one unit id per field of a type.
+void DataFlashParser::HandleUnits(const Format& fmt, std::string_view p) {
+  if (fmt.name == "UNIT") {
+    const Field* id = fmt.Find("Id");
+    const Field* label = fmt.Find("Label");
+    if (!id || !label || label->type != 'Z') return;
+    unit_labels_[static_cast<char>(ToInt(ReadNumber(p, *id)))] =
+        TrimmedText(p.substr(label->offset, 64));
+    return;
+  }
+  const Field* type = fmt.Find("FmtType");
+  const Field* units = fmt.Find("UnitIds");
+  if (!type || !units || units->type != 'N') return;
+  field_unit_ids_[static_cast<uint8_t>(ToInt(ReadNumber(p, *type)))] =
+      TrimmedText(p.substr(units->offset, 16));
+}
+
+// The factor that turns a gyro field into rad/s: 1 unless the log's FMTU/UNIT tables say deg/s.
+double DataFlashParser::GyroToRadPerS(const Format& fmt, uint8_t type, const std::string& label) {
+  auto ids = field_unit_ids_.find(type);
+  if (ids == field_unit_ids_.end()) return 1.0;
+  const auto at = std::find(fmt.labels.begin(), fmt.labels.end(), label) - fmt.labels.begin();
+  if (static_cast<size_t>(at) >= ids->second.size()) return 1.0;
+  auto unit = unit_labels_.find(ids->second[at]);
+  if (unit == unit_labels_.end() || unit->second == "rad/s") return 1.0;
+  if (unit->second == "deg/s" || unit->second == "degs") return kRadPerDeg;
+  odd_gyro_units_.insert(fmt.name + "." + label + " in '" + unit->second + "'");
+  return 1.0;
+}
+
+void DataFlashParser::HandleGyro(const Format& fmt, std::string_view p) {
+  const std::string& name = fmt.name;
+  const Field* x = fmt.Find("GyrX");
+  const Field* y = fmt.Find("GyrY");
+  const Field* z = fmt.Find("GyrZ");
+  if (!x || !y || !z) return;
+  // GYR's SampleUS is when the sensor sampled; TimeUS is when the message was written.
+  const Field* sample_us = name == "GYR" ? fmt.Find("SampleUS") : nullptr;
+  const std::optional<int64_t> t_ns = sample_us ? ReadTimeNs(p, *sample_us, 1000) : fmt.TimeNs(p);
+  if (!sample_us && !fmt.time) return;
+  int instance = name == "IMU2" ? 1 : name == "IMU3" ? 2 : 0;
+  if (const Field* i = fmt.Find("I")) instance = static_cast<int>(ToInt(ReadNumber(p, *i)) & 0xff);
+  const uint8_t type = current_type_;
+  const Eigen::Vector3d scale(GyroToRadPerS(fmt, type, "GyrX"), GyroToRadPerS(fmt, type, "GyrY"),
+                              GyroToRadPerS(fmt, type, "GyrZ"));
+  auto& c = Candidate(name == "GYR" ? "GYR" : "IMU", instance, name == "GYR" ? 0 : 2);
+  last_t_ns_ = std::max(last_t_ns_, t_ns.value_or(0));
+  c.samples.push_back(
+      {t_ns.value_or(0), Eigen::Vector3d(ReadNumber(p, *x), ReadNumber(p, *y), ReadNumber(p, *z))
+                             .cwiseProduct(scale)});
+}
+
+void DataFlashParser::HandleBatchHeader(const Format& fmt, std::string_view p) {
+  const Field* n = fmt.Find("N");
+  const Field* type = fmt.Find("type");
+  const Field* mul = fmt.Find("mul");
+  const Field* cnt = fmt.Find("smp_cnt");
+  const Field* sus = fmt.Find("SampleUS");
+  const Field* rate = fmt.Find("smp_rate");
+  if (!n || !type || !mul || !cnt || !sus || !rate) return;
+  const int64_t key = ToInt(ReadNumber(p, *n));
+  CloseBatch(key);
+  if (ReadNumber(p, *type) != 1.0) return;  // 0 accelerometer, 1 gyro
+  BatchHeader h;
+  if (const Field* inst = fmt.Find("instance"))
+    h.instance = static_cast<int>(ToInt(ReadNumber(p, *inst)) & 0xff);
+  h.mul = ReadNumber(p, *mul);
+  h.rate_hz = ReadNumber(p, *rate);
+  h.count = static_cast<size_t>(std::max<int64_t>(0, ToInt(ReadNumber(p, *cnt))));
+  const auto t = ReadTimeNs(p, *sus, 1000);
+  // Bounds that keep sample-time arithmetic far from int64 overflow on corrupt headers.
+  constexpr size_t kMaxBatchSamples = 1'000'000;
+  constexpr int64_t kMaxSampleNs = 4'000'000'000'000'000'000;  // 127 years of boot time
+  if (!t || *t > kMaxSampleNs || !(h.mul > 0.0) || !(h.rate_hz >= 1.0 && h.rate_hz < 1e6) ||
+      h.count > kMaxBatchSamples) {
+    ++log_.records_skipped;
+    return;
+  }
+  h.sample_ns = *t;
+  batches_[key] = h;
+}
+
+void DataFlashParser::HandleBatchData(const Format& fmt, std::string_view p) {
+  const Field* n = fmt.Find("N");
+  const Field* seq = fmt.Find("seqno");
+  const Field* x = fmt.Find("x");
+  const Field* y = fmt.Find("y");
+  const Field* z = fmt.Find("z");
+  if (!n || !seq || !x || !y || !z || x->type != 'a' || y->type != 'a' || z->type != 'a') return;
+  auto it = batches_.find(ToInt(ReadNumber(p, *n)));
+  if (it == batches_.end()) return;  // an accelerometer batch, or its header was lost
+  BatchHeader& h = it->second;
+  const int64_t seqno = ToInt(ReadNumber(p, *seq));
+  if (seqno < 0 || static_cast<uint64_t>(seqno) * kBatchSamples >= h.count) return;
+  auto& c = Candidate("ISBD", h.instance, 1);
+  for (size_t k = 0; k < kBatchSamples; ++k) {
+    const size_t index = static_cast<size_t>(seqno) * kBatchSamples + k;
+    if (index >= h.count) break;
+    const int64_t t_ns = h.sample_ns + std::llround(static_cast<double>(index) * 1e9 / h.rate_hz);
+    c.samples.push_back(
+        {t_ns, Eigen::Vector3d(ReadNumber(p, *x, k), ReadNumber(p, *y, k), ReadNumber(p, *z, k)) /
+                   h.mul});
+    ++h.received;
+    last_t_ns_ = std::max(last_t_ns_, t_ns);
+  }
+}
+
+// Forgets batch `key`, first saying when it ended with fewer samples than its header declared.
+void DataFlashParser::CloseBatch(int64_t key) {
+  auto it = batches_.find(key);
+  if (it == batches_.end()) return;
+  const BatchHeader& h = it->second;
+  if (h.received < h.count) {
+    ++partial_batches_;
+    missing_batch_samples_ += h.count - h.received;
+    if (partial_batches_ <= kMaxDetailedWarnings) {
+      log_.warnings.push_back({"partial_batch",
+                               "gyro batch " + std::to_string(key) + " (ISBH at " +
+                                   SecondsText(h.sample_ns) + "): " + std::to_string(h.received) +
+                                   " of the " + std::to_string(h.count) + " samples it declares",
+                               h.sample_ns * 1e-9, h.count - h.received});
     }
+  }
+  batches_.erase(it);
+}
+
+void DataFlashParser::HandleCamera(const Format& fmt, std::string_view p) {
+  const auto t = fmt.TimeNs(p);
+  if (!t || *t <= 0) {
+    // Logs before ArduPilot 3.4 stamp CAM with GPS time only, which is not the gyro's clock.
+    ++camera_events_without_time_;
+    return;
+  }
+  CameraEvent e;
+  e.t_ns = *t;
+  e.kind = fmt.name;
+  if (const Field* img = fmt.Find("Img")) e.sequence = ToInt(ReadNumber(p, *img));
+  log_.camera_events.push_back(e);
+  if (fmt.name == "CAM") {
+    if (const Field* rel = fmt.Find("RelAlt")) {
+      const double h = ReadNumber(p, *rel);
+      if (std::isfinite(h)) cam_rel_alt_m_.push_back(h);
+    }
+  }
+}
+
+// Everything said once the whole file has been read: what was lost, the altitude, the gyro.
+void DataFlashParser::Finish() {
+  while (!batches_.empty()) CloseBatch(batches_.begin()->first);
+  if (partial_batches_ > 0) {
+    log_.warnings.push_back({"partial_batch",
+                             std::to_string(partial_batches_) + " gyro batch(es) incomplete: " +
+                                 std::to_string(missing_batch_samples_) +
+                                 " declared samples never logged",
+                             std::nullopt, missing_batch_samples_});
+  }
+  if (camera_events_without_time_ > 0) {
+    log_.warnings.push_back({"unused_source",
+                             std::to_string(camera_events_without_time_) +
+                                 " camera event(s) without a boot-time stamp (GPS time only) left "
+                                 "out",
+                             std::nullopt, camera_events_without_time_});
+  }
+  for (const std::string& unit : odd_gyro_units_)
+    log_.warnings.push_back({"unit", "gyro field " + unit + " read as rad/s"});
+  for (const auto& [kind, count] : warning_counts_) {
+    if (count > kMaxDetailedWarnings) {
+      log_.warnings.push_back({kind,
+                               std::to_string(count - kMaxDetailedWarnings) +
+                                   " more warnings of kind '" + kind + "' not listed",
+                               std::nullopt, count - kMaxDetailedWarnings});
+    }
+  }
+  if (skipped_bytes_ > 0)
+    log_.warnings.push_back(
+        {"corrupt", std::to_string(skipped_bytes_) + " corrupt bytes skipped in total"});
+
+  std::stable_sort(log_.camera_events.begin(), log_.camera_events.end(),
+                   [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
+  std::vector<double> airborne;
+  for (double h : cam_rel_alt_m_) {
+    if (h > kAirborneAltitudeM) airborne.push_back(h);
+  }
+  if (!airborne.empty()) {
+    log_.altitude_above_ground_m = Median(std::move(airborne));
+    log_.altitude_source = "median CAM.RelAlt above 1 m (height above home at each picture)";
   }
 }
 
@@ -459,27 +613,7 @@ FlightLog DataFlashParser::Run() {
     pos += len;
   }
 
-  for (const auto& [kind, count] : warning_counts_) {
-    if (count > kMaxDetailedWarnings) {
-      log_.warnings.push_back(std::to_string(count - kMaxDetailedWarnings) +
-                              " more warnings of kind '" + kind + "' not listed");
-    }
-  }
-  if (skipped_bytes_ > 0)
-    log_.warnings.push_back(std::to_string(skipped_bytes_) + " corrupt bytes skipped in total");
-
-  std::stable_sort(log_.camera_events.begin(), log_.camera_events.end(),
-                   [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
-  std::vector<double> airborne;
-  for (double h : cam_rel_alt_m_) {
-    if (h > kAirborneAltitudeM) airborne.push_back(h);
-  }
-  if (!airborne.empty()) {
-    log_.altitude_above_ground_m = Median(std::move(airborne));
-    log_.warnings.push_back(
-        "altitude above ground: median CAM.RelAlt above 1 m (height above home at each picture)");
-  }
-
+  Finish();
   std::vector<internal::GyroCandidate> candidates;
   for (auto& [name, c] : candidates_) candidates.push_back(std::move(c));
   if (!internal::ChooseGyroSource(std::move(candidates), &log_)) {

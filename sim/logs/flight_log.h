@@ -3,6 +3,7 @@
 // the best gyro trace in the log, camera events, and what was skipped on the way.
 
 #include "sim/gyro_trace.h"
+#include "sim/log_warning.h"
 
 #include <cstdint>
 #include <optional>
@@ -26,8 +27,12 @@ struct FlightLog {
   std::vector<std::string> gyro_sources_available;  // every candidate seen, best first
   std::vector<CameraEvent> camera_events;
   std::optional<double> altitude_above_ground_m;  // median over the flight when the log has it
-  size_t records_skipped = 0;         // corrupt / undecodable records or frames that were skipped
-  std::vector<std::string> warnings;  // one line each: what was skipped or odd, for the user
+  std::string altitude_source;  // how that altitude was formed, e.g. "median CAM.RelAlt ..."
+  size_t records_skipped = 0;   // corrupt / undecodable records or frames that were skipped
+  // One line each, with counts and times: what could not be read or trusted (truncation, corrupt
+  // records, partial batches, gaps, rate changes, saturation, assumptions about units). Every
+  // command prints them; every JSON output and report carries them.
+  std::vector<LogWarning> warnings;
 };
 
 }  // namespace shutterlab

@@ -3,9 +3,12 @@
 #include "sim/check.h"
 #include "sim/logs/blackbox.h"
 #include "sim/logs/dataflash.h"
+#include "sim/logs/gcsv.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/logs/ulog.h"
 #include "sim/text_file.h"
+#include "sim/trace_audit.h"
+#include "sim/units.h"
 
 #include <algorithm>
 #include <fstream>
@@ -62,10 +65,10 @@ LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string&
   }
 }
 
-FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& options) {
-  options.Check();
-  LogFormat format = options.format;
-  if (format == LogFormat::kAuto) format = DetectFlightLogFormat(ReadPrefix(path), path);
+namespace {
+
+FlightLog ReadDetected(const std::string& path, LogFormat format,
+                       const FlightLogReadOptions& options) {
   switch (format) {
     case LogFormat::kULog:
       return ReadULog(path);
@@ -81,7 +84,13 @@ FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& opt
   gyro_options.raw = options.raw;
   FlightLog log;
   try {
-    log.gyro = ReadGyro(path, gyro_options);
+    if (format == LogFormat::kGcsv) {
+      GcsvLog gcsv = ReadGcsv(path);  // its header's assumptions become warnings too
+      log.gyro = std::move(gcsv.trace);
+      log.warnings = std::move(gcsv.warnings);
+    } else {
+      log.gyro = ReadGyro(path, gyro_options);
+    }
   } catch (const IoError& e) {
     if (options.format != LogFormat::kAuto) throw;
     // Say what detection concluded, so that a file of an unknown kind is recognisable as such.
@@ -93,6 +102,20 @@ FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& opt
                     : format == LogFormat::kGcsv  ? "gcsv"
                                                   : "raw counts";
   log.gyro_sources_available = {log.gyro_source};
+  return log;
+}
+
+}  // namespace
+
+FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& options) {
+  options.Check();
+  LogFormat format = options.format;
+  if (format == LogFormat::kAuto) format = DetectFlightLogFormat(ReadPrefix(path), path);
+  FlightLog log = ReadDetected(path, format, options);
+  TraceAuditOptions audit;
+  if (format == LogFormat::kRaw) audit.full_scale_rad_s = options.raw.range_dps * kRadPerDeg;
+  for (LogWarning& warning : AuditTrace(log.gyro, audit))
+    log.warnings.push_back(std::move(warning));
   return log;
 }
 

@@ -27,7 +27,9 @@ LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string&
 
 // Reads any supported log. Plain gyro logs give format "gyro.csv" / "gcsv" / "raw", gyro_source
 // "t,gx,gy,gz" / "gcsv" / "raw counts", no camera events and no altitude. Throws IoError (path,
-// line or byte, problem) on unreadable or unknown input.
+// line or byte, problem) on unreadable or unknown input. FlightLog::warnings holds the reader's own
+// (truncation, corrupt records, ...) followed by sim/trace_audit.h's (gaps, rate changes,
+// saturation): everything a command must tell the user it could not read or trust.
 FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& options = {});
 
 }  // namespace shutterlab

@@ -212,7 +212,8 @@ Eigen::Matrix3d ApplyHeader(const std::string& path, GcsvHeader* header, GcsvLog
   log->gscale = *header->gscale;
   if (header->orientation_line == 0) {
     header->orientation = "xzY";
-    log->warnings.push_back("no orientation line: assumed 'xzY', as Gyroflow's parser does");
+    log->warnings.push_back(
+        {"assumption", "no orientation line: assumed 'xzY', as Gyroflow's parser does"});
   }
   Eigen::Matrix3d to_out;
   try {
@@ -229,9 +230,9 @@ Eigen::Matrix3d ApplyHeader(const std::string& path, GcsvHeader* header, GcsvLog
       log->frame_readout_direction = log->frame_readout_direction == ReadoutDirection::kBottomToTop
                                          ? ReadoutDirection::kTopToBottom
                                          : ReadoutDirection::kBottomToTop;
-      log->warnings.push_back("negative frame_readout_time on line " +
-                              std::to_string(header->readout_line) +
-                              ": read as the opposite readout direction");
+      log->warnings.push_back({"format", "negative frame_readout_time on line " +
+                                             std::to_string(header->readout_line) +
+                                             ": read as the opposite readout direction"});
     }
     log->frame_readout_s = std::abs(*header->readout_ms) * 1e-3;
   }

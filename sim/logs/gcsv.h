@@ -19,6 +19,7 @@
 // orientation line, and so do we.
 
 #include "sim/gyro_trace.h"
+#include "sim/log_warning.h"
 #include "sim/logs/raw_csv.h"
 #include "sim/readout_direction.h"
 
@@ -44,7 +45,7 @@ struct GcsvLog {
   double gscale = 1.0;
   // Every "key,value" line of the header block in file order, scales and orientation included.
   std::vector<std::pair<std::string, std::string>> header;
-  std::vector<std::string> warnings;  // one line each, e.g. a defaulted orientation
+  std::vector<LogWarning> warnings;  // e.g. a defaulted orientation
 };
 
 // Reads a .gcsv. Throws IoError "PATH:LINE: problem" for a missing first line, a header that ends

@@ -144,15 +144,18 @@ bool ChooseGyroSource(std::vector<GyroCandidate> candidates, FlightLog* log) {
   auto warn = [&](size_t count, const char* what) {
     if (count == 0) return;
     log->records_skipped += count;
-    log->warnings.push_back(name + ": " + std::to_string(count) + " " + what);
+    log->warnings.push_back(
+        {"corrupt", name + ": " + std::to_string(count) + " " + what, std::nullopt, count});
   };
   warn(best.dropped_time, "samples with a zero timestamp dropped");
   warn(best.dropped_value, "samples with a non-finite rate dropped");
   warn(best.dropped_spike, "samples with a timestamp out of line with their neighbours dropped");
   warn(best.dropped_outlier_end, "samples more than 60 s beyond the rest dropped");
   if (best.out_of_order > 0) {
-    log->warnings.push_back(name + ": " + std::to_string(best.out_of_order) +
-                            " samples were out of time order and were sorted");
+    log->warnings.push_back({"time_backwards",
+                             name + ": " + std::to_string(best.out_of_order) +
+                                 " samples were out of time order and were sorted",
+                             std::nullopt, best.out_of_order});
   }
   log->gyro_source = name;
   log->gyro = GyroTrace(std::move(best.candidate.samples));
@@ -163,6 +166,12 @@ bool ChooseGyroSource(std::vector<GyroCandidate> candidates, FlightLog* log) {
 
 // ---------------------------------------------------------------------------------------------
 namespace {
+
+// The contract's warning kind (docs/FORMATS.md "Warnings") for one of the parser's own.
+std::string WarningKind(const std::string& parser_kind) {
+  if (parser_kind == "truncated" || parser_kind == "corrupt") return parser_kind;
+  return "format";  // appended data, format definitions, subscriptions, flag bits
+}
 
 constexpr char kMagic[7] = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35};
 constexpr size_t kFileHeaderBytes = 16;
@@ -453,7 +462,7 @@ class ULogParser {
     size_t& count = warning_counts_[kind];
     ++count;
     if (count <= kMaxDetailedWarnings)
-      log_.warnings.push_back("byte " + std::to_string(offset) + ": " + text);
+      log_.warnings.push_back({WarningKind(kind), "byte " + std::to_string(offset) + ": " + text});
   }
 
   // A message header at q with a known type, a size that fits, and for 'D' a subscribed msg_id
@@ -830,16 +839,20 @@ bool ULogParser::ReadMessage(size_t* at, size_t end, bool last_segment) {
 void ULogParser::SummariseWarnings() {
   for (const auto& [kind, count] : warning_counts_) {
     if (count > kMaxDetailedWarnings) {
-      log_.warnings.push_back(std::to_string(count - kMaxDetailedWarnings) +
-                              " more warnings of kind '" + kind + "' not listed");
+      log_.warnings.push_back({WarningKind(kind),
+                               std::to_string(count - kMaxDetailedWarnings) +
+                                   " more warnings of kind '" + kind + "' not listed",
+                               std::nullopt, count - kMaxDetailedWarnings});
     }
   }
   for (const auto& [topic, count] : skipped_by_topic_) {
-    log_.warnings.push_back("topic '" + topic + "': " + std::to_string(count) +
-                            " data messages skipped");
+    log_.warnings.push_back(
+        {"corrupt", "topic '" + topic + "': " + std::to_string(count) + " data messages skipped",
+         std::nullopt, count});
   }
   if (skipped_bytes_ > 0)
-    log_.warnings.push_back(std::to_string(skipped_bytes_) + " corrupt bytes skipped in total");
+    log_.warnings.push_back(
+        {"corrupt", std::to_string(skipped_bytes_) + " corrupt bytes skipped in total"});
   if (dropouts_.empty()) return;
   uint64_t total_ms = 0;
   std::string where;
@@ -857,9 +870,13 @@ void ULogParser::SummariseWarnings() {
       where += buf;
     }
   }
-  log_.warnings.push_back(std::to_string(dropouts_.size()) + " logging dropouts totalling " +
-                          std::to_string(total_ms) + " ms (" + where +
-                          (dropouts_.size() > kMaxDetailedWarnings ? ", ..." : "") + ")");
+  std::optional<double> first_s;
+  if (dropouts_.front().first != 0) first_s = dropouts_.front().first * 1e-6;
+  log_.warnings.push_back({"gap",
+                           std::to_string(dropouts_.size()) + " logging dropouts totalling " +
+                               std::to_string(total_ms) + " ms (" + where +
+                               (dropouts_.size() > kMaxDetailedWarnings ? ", ..." : "") + ")",
+                           first_s, dropouts_.size()});
 }
 
 FlightLog ULogParser::Run() {
@@ -869,8 +886,8 @@ FlightLog ULogParser::Run() {
   if (!LooksLikeULog(bytes_)) Fail(0, "not a ULog file (bad magic)");
   const int version = static_cast<uint8_t>(bytes_[7]);
   if (version > 1)
-    log_.warnings.push_back("ULog file version " + std::to_string(version) +
-                            " is newer than 1; read as version 1");
+    log_.warnings.push_back({"format", "ULog file version " + std::to_string(version) +
+                                           " is newer than 1; read as version 1"});
 
   const size_t pos = ReadLeadingFlagBits(kFileHeaderBytes);
   const std::vector<std::pair<size_t, size_t>> segments = Segments(pos);
@@ -1031,18 +1048,16 @@ void SetAltitudeAboveGround(const DecodedTopics& topics, FlightLog* log) {
   };
   if (auto m = airborne_median(topics.dist_bottom_m)) {
     log->altitude_above_ground_m = m;
-    log->warnings.push_back(
-        "altitude above ground: median vehicle_local_position.dist_bottom (valid, above 1 m)");
+    log->altitude_source = "median vehicle_local_position.dist_bottom (valid, above 1 m)";
   } else if (!topics.local_z_m.empty()) {
     const double z_home = topics.home_z_m.value_or(topics.local_z_m.front());
     std::vector<double> heights;
     for (double z : topics.local_z_m) heights.push_back(-(z - z_home));
     if (auto h = airborne_median(heights)) {
       log->altitude_above_ground_m = h;
-      log->warnings.push_back(
-          std::string("altitude above ground: median -(vehicle_local_position.z - ") +
-          (topics.home_z_m ? "home_position.z" : "first local z") +
-          ") above 1 m (height above home, not a ground-distance measurement)");
+      log->altitude_source = std::string("median -(vehicle_local_position.z - ") +
+                             (topics.home_z_m ? "home_position.z" : "first local z") +
+                             ") above 1 m (height above home, not a ground-distance measurement)";
     }
   }
 }

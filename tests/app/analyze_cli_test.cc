@@ -31,7 +31,7 @@ TEST(AnalyzeCli, BlackboxEveryTwoSecondsJsonAndOutputs) {
       RunShutterlab("analyze " + Bbl() + " --every 2s --readout 20ms --altitude 40 --json --out " +
                     (dir / "out"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const nlohmann::json json = nlohmann::json::parse(r.output);
+  const nlohmann::json json = nlohmann::json::parse(r.out);
   EXPECT_EQ(json["source"]["format"], "betaflight");
   EXPECT_EQ(json["source"]["gyro"], "gyroADC");
   const double duration_s = json["source"]["duration_s"];
@@ -53,7 +53,7 @@ TEST(AnalyzeCli, ReportWithSceneIsSelfContainedAndMatchesTheTable) {
   const auto r = RunShutterlab("analyze " + Bbl() + " --every 4s --out " + (dir / "out") +
                                " --scene " + test::GroundScenePath(1) + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const nlohmann::json json = nlohmann::json::parse(r.output);
+  const nlohmann::json json = nlohmann::json::parse(r.out);
   const std::string html = ReadFileToString(dir / "out/report.html");
   EXPECT_TRUE(test::SelfContained(html));
   EXPECT_NE(html.find("var uPlot="), std::string::npos);
@@ -138,7 +138,7 @@ TEST(AnalyzeCli, SyntheticULogWithItsOwnTriggersAndAltitude) {
   ASSERT_EQ(synth.exit_code, 0) << synth.output;
   const auto r = RunShutterlab("analyze " + log + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const nlohmann::json json = nlohmann::json::parse(r.output);
+  const nlohmann::json json = nlohmann::json::parse(r.out);
   // Triggers at 3, 5, ..., 29 s on the log's clock (every 2 s from the first sample at 1 s, the
   // last a full interval before the log ends).
   ASSERT_EQ(json["images"].size(), 14u) << r.output;

@@ -2,27 +2,44 @@
 // Running the shutterlab executable from the command-line tests.
 
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <sys/wait.h>
+#include <unistd.h>
 
 namespace shutterlab::test {
 
 struct CommandResult {
   int exit_code;
-  std::string output;  // stdout and stderr together
+  std::string output;  // stdout, then stderr
+  std::string out;     // stdout alone (e.g. the --json document)
+  std::string err;     // stderr alone (warnings, progress, errors)
 };
 
 // Runs the shutterlab executable with the given argument string (shell syntax).
 inline CommandResult RunShutterlab(const std::string& args) {
-  const std::string command = std::string(SHUTTERLAB_BINARY) + " " + args + " 2>&1";
-  CommandResult result{-1, ""};
+  CommandResult result{-1, "", "", ""};
+  char err_path[] = "/tmp/shutterlab_stderr_XXXXXX";
+  const int fd = ::mkstemp(err_path);
+  if (fd < 0) return result;
+  ::close(fd);
+  const std::string command = std::string(SHUTTERLAB_BINARY) + " " + args + " 2>" + err_path;
   FILE* pipe = ::popen(command.c_str(), "r");
-  if (!pipe) return result;
-  char buffer[4096];
-  size_t n;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) result.output.append(buffer, n);
-  const int status = ::pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  if (pipe) {
+    char buffer[4096];
+    size_t n;
+    while ((n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) result.out.append(buffer, n);
+    const int status = ::pclose(pipe);
+    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  if (FILE* err = std::fopen(err_path, "rb")) {
+    char buffer[4096];
+    size_t n;
+    while ((n = std::fread(buffer, 1, sizeof(buffer), err)) > 0) result.err.append(buffer, n);
+    std::fclose(err);
+  }
+  std::remove(err_path);
+  result.output = result.out + result.err;
   return result;
 }
 

@@ -41,7 +41,7 @@ TEST(FlightCli, JsonFollowsFormats) {
   const auto r = RunShutterlab("flight " + trace +
                                " --altitude 50 --limit 5cm,0.10m --window 10ms,0.02 --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const auto j = nlohmann::json::parse(r.output);
+  const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j.at("altitude_m"), 50.0);
   EXPECT_EQ(j.at("noise_allowance_arcsec"), 20.0);
   EXPECT_EQ(j.at("windows_total"), 2000 - 10);
@@ -52,6 +52,57 @@ TEST(FlightCli, JsonFollowsFormats) {
   EXPECT_EQ(j["rows"][0]["flagged_percent_vector"], 100.0);
   EXPECT_EQ(j["rows"][2]["flagged_percent"], 0.0);    // 10 cm, 10 ms: 300" < 433"
   EXPECT_EQ(j["rows"][3]["flagged_percent"], 100.0);  // 10 cm, 20 ms: 633" > 433"
+}
+
+TEST(FlightCli, WarningsGoToStderrAndIntoTheJson) {
+  // A 1 kHz trace with a 0.5 s pause of the logger and one sample clipped at +-250 deg/s.
+  TempDir dir;
+  std::vector<GyroSample> samples;
+  for (int i = 0; i < 7000; ++i) {
+    const int64_t t_ns = static_cast<int64_t>(i) * 1'000'000 + (i >= 6000 ? 500'000'000 : 0);
+    samples.push_back({t_ns, Eigen::Vector3d(i == 6500 ? -250.0 * M_PI / 180.0 : 0.0, 0.0, 0.0)});
+  }
+  const std::string trace = dir / "gyro.csv";
+  WriteGyroCsv(trace, GyroTrace(std::move(samples)));
+  const auto r = RunShutterlab("flight " + trace + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // stderr names the file and each loss.
+  EXPECT_NE(r.err.find("warning: " + trace + ": gap: 1 interval(s)"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.err.find("warning: " + trace + ": saturated: axis x, 1 sample(s)"), std::string::npos)
+      << r.output;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j.at("warnings").size(), 2u) << j.dump(2);
+  EXPECT_EQ(j["warnings"][0]["kind"], "gap");
+  EXPECT_EQ(j["warnings"][0]["count"], 1);
+  EXPECT_NEAR(j["warnings"][0]["t_s"].get<double>(), 5.999, 1e-9);
+  EXPECT_EQ(j["warnings"][1]["kind"], "saturated");
+  EXPECT_NEAR(j["warnings"][1]["t_s"].get<double>(), 7.0, 1e-9);
+
+  // A clean trace carries an empty list.
+  const auto clean = RunShutterlab("flight " + WriteTrace(dir) + " --json");
+  ASSERT_EQ(clean.exit_code, 0) << clean.output;
+  EXPECT_TRUE(nlohmann::json::parse(clean.out).at("warnings").empty());
+}
+
+TEST(FlightCli, LowRateLogRowsSayTooFewSamples) {
+  TempDir dir;
+  std::vector<GyroSample> samples;
+  for (int i = 0; i < 1000; ++i)
+    samples.push_back({i * int64_t{20'000'000}, Eigen::Vector3d::Zero()});
+  const std::string trace = dir / "gyro50.csv";
+  WriteGyroCsv(trace, GyroTrace(std::move(samples)));
+  const auto r = RunShutterlab("flight " + trace + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.out);
+  for (const auto& row : j.at("rows")) {
+    EXPECT_TRUE(row.at("too_few_samples").get<bool>());
+    EXPECT_TRUE(row.at("flagged_percent").is_null());
+  }
+  EXPECT_EQ(j["warnings"][0]["kind"], "too_few_samples");
+  const auto table = RunShutterlab("flight " + trace);
+  EXPECT_NE(table.output.find("too few samples"), std::string::npos) << table.output;
+  EXPECT_EQ(table.output.find(" 0.00 "), std::string::npos) << "no 0 % for a row not measured";
 }
 
 TEST(FlightCli, TableAndSeries) {

@@ -70,7 +70,7 @@ TEST(MeasureCli, JsonOutputsAndTruthError) {
       "measure " + Quote(files.ref) + " " + Quote(files.rs) + " --camera " + Quote(files.camera) +
       " --truth " + Quote(files.truth) + " --out " + Quote(out) + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const nlohmann::json j = nlohmann::json::parse(r.output);
+  const nlohmann::json j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j.at("format"), "measure/1");
   EXPECT_EQ(j.at("width"), 480);
   EXPECT_EQ(j.at("height"), 360);

@@ -53,7 +53,7 @@ TEST(NoiseCli, PrintsJsonAndWritesTheAllanCsv) {
   WriteSession(trace, 8.0, 0);
   const auto result = RunShutterlab("noise " + trace + " --window 40 --json --allan " + allan);
   ASSERT_EQ(result.exit_code, 0) << result.output;
-  const nlohmann::json j = nlohmann::json::parse(result.output);
+  const nlohmann::json j = nlohmann::json::parse(result.out);
   EXPECT_EQ(j.at("window_samples").get<int>(), 40);
   EXPECT_EQ(j.at("samples").get<int>(), 3000);  // 8 s at 1 kHz after the default bias 0:5
   // Random walk of step s = sigma dt = 0.41" over 40 points: rms sigma = s sqrt((N^2-1)/(6N)) =
@@ -104,7 +104,7 @@ TEST(AccuracyCli, FindsEachTurnAndPrintsJson) {
   WriteSession(trace, 5.5, 3);
   const auto result = RunShutterlab("accuracy " + trace + " --reference-deg 1 --average 50 --json");
   ASSERT_EQ(result.exit_code, 0) << result.output;
-  const nlohmann::json j = nlohmann::json::parse(result.output);
+  const nlohmann::json j = nlohmann::json::parse(result.out);
   EXPECT_DOUBLE_EQ(j.at("reference_deg").get<double>(), 1.0);
   ASSERT_EQ(j.at("rotations").size(), 3u);
   for (const auto& rot : j["rotations"]) {

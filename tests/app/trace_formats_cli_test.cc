@@ -15,7 +15,7 @@ namespace {
 nlohmann::json RunJson(const std::string& args) {
   const test::CommandResult result = test::RunShutterlab(args + " 2>/dev/null");
   EXPECT_EQ(result.exit_code, 0) << args << "\n" << result.output;
-  return nlohmann::json::parse(result.output, nullptr, /*allow_exceptions=*/false);
+  return nlohmann::json::parse(result.out, nullptr, /*allow_exceptions=*/false);
 }
 
 TEST(TraceFormatsCli, NoiseReadsARealULog) {

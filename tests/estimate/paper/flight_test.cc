@@ -276,3 +276,70 @@ TEST(Flight, KnownBiasAnalysesEverySample) {
 
 }  // namespace
 }  // namespace shutterlab
+
+namespace shutterlab {
+namespace {
+
+// At 50 Hz a 10 ms or 20 ms window holds one sample: its range is 0 whatever the motion, so the
+// row is refused, not reported as 0 %; a 100 ms window in the same run is analysed.
+TEST(Flight, WindowsNotLongerThanTwoSampleIntervalsAreRefused) {
+  std::vector<GyroSample> samples;
+  for (int k = 0; k < 500; ++k) {  // 10 s at 50 Hz, turning fast about y
+    samples.push_back({static_cast<int64_t>(k) * 20'000'000, Eigen::Vector3d(0, 0.5, 0)});
+  }
+  FlightOptions options;
+  options.windows_s = {0.010, 0.040, 0.100};  // 40 ms = exactly two intervals: refused too
+  options.known_bias_rad_s = Eigen::Vector3d::Zero();
+  const FlightResult r = Flight(GyroTrace(samples), options);
+  EXPECT_DOUBLE_EQ(r.sample_interval_s, 0.020);
+  ASSERT_EQ(r.rows.size(), 6u);
+  for (const FlightRow& row : r.rows) {
+    const bool refused = row.window_s < 0.05;
+    EXPECT_EQ(row.too_few_samples, refused) << row.window_s;
+    if (refused) {
+      EXPECT_EQ(row.windows, 0u);
+      EXPECT_TRUE(std::isnan(row.flagged_percent));
+    } else {
+      EXPECT_GT(row.windows, 0u);
+      EXPECT_EQ(row.flagged_percent, 100.0);  // 0.5 rad/s over 80 ms is far over both limits
+    }
+  }
+  EXPECT_EQ(r.windows_total, 0u) << "the first window was refused";
+  const std::string table = FlightTable(r);
+  EXPECT_NE(table.find("too few samples: at 50 Hz a window must be longer than 40 ms"),
+            std::string::npos)
+      << table;
+  const std::vector<LogWarning> warnings = FlightWarnings(r);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0].kind, "too_few_samples");
+  EXPECT_EQ(warnings[0].count, 4u);
+  EXPECT_EQ(warnings[0].message.rfind("windows of 10 ms, 40 ms not analysed", 0), 0u)
+      << warnings[0].message;
+  EXPECT_TRUE(FlightWarnings(Flight(GyroTrace(samples),
+                                    [&] {
+                                      FlightOptions o = options;
+                                      o.windows_s = {0.1};
+                                      return o;
+                                    }()))
+                  .empty());
+}
+
+// A bias segment that leaves nothing to analyse says what to change, without an internal tag.
+TEST(Flight, TooShortTraceSaysWhatToDo) {
+  std::vector<GyroSample> samples;
+  for (int k = 0; k < 300; ++k)
+    samples.push_back({k * int64_t{1'000'000}, Eigen::Vector3d::Zero()});
+  FlightOptions options;  // bias 0:5 s, the trace lasts 0.3 s
+  try {
+    Flight(GyroTrace(samples), options);
+    FAIL() << "no samples after the bias segment";
+  } catch (const std::invalid_argument& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("--auto-bias"), std::string::npos) << message;
+    EXPECT_EQ(message.find("check failed"), std::string::npos) << message;
+    EXPECT_EQ(message.find(".cc:"), std::string::npos) << message;
+  }
+}
+
+}  // namespace
+}  // namespace shutterlab

@@ -647,8 +647,9 @@ TEST(Blackbox, ChoosesTheLongestLogOrTheOneAskedFor) {
   EXPECT_THROW(DecodeBlackbox(file, "multi.bbl", -2), IoError);
   const FlightLog log = DecodeBlackbox(file, "multi.bbl");
   const bool says_which =
-      std::any_of(log.warnings.begin(), log.warnings.end(), [](const std::string& w) {
-        return w.find("3 logs") != std::string::npos && w.find("log 1") != std::string::npos;
+      std::any_of(log.warnings.begin(), log.warnings.end(), [](const LogWarning& w) {
+        return w.message.find("3 logs") != std::string::npos &&
+               w.message.find("log 1") != std::string::npos;
       });
   EXPECT_TRUE(says_which);
 }
@@ -816,10 +817,8 @@ TEST(BlackboxCorruption, TruncatedCopiesDecodeToAPrefix) {
       const double kept_fraction = static_cast<double>(log.gyro.size()) / full.gyro.size();
       EXPECT_GT(kept_fraction, static_cast<double>(size) / bytes.size() - 0.05)
           << "cut at " << size;
-      const bool warns =
-          std::any_of(log.warnings.begin(), log.warnings.end(),
-                      [](const std::string& w) { return w.find("LOG_END") != std::string::npos; });
-      EXPECT_TRUE(warns);
+      EXPECT_TRUE(test::AnyWarningContains(log.warnings, "truncated: "));
+      EXPECT_TRUE(test::AnyWarningContains(log.warnings, "LOG_END"));
     } catch (const IoError& e) {
       EXPECT_LT(size, kHeaderBytes) << e.what();
     }

@@ -2,6 +2,7 @@
 
 #include "sim/check.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -12,8 +13,9 @@
 #include <string>
 #include <vector>
 
-// No real ArduPilot .bin with a usable licence is available to the project, so every file here is
-// written by the test from FMT definitions laid out as ArduPilot's AP_Logger writes them.
+// Most files here are written by the test from FMT definitions laid out as ArduPilot's AP_Logger
+// writes them, so that every value is known exactly; the real logs in the shared data folder
+// (../shared/data/incoming/ardupilot_*) check the same reader on what ArduPilot really wrote.
 
 namespace shutterlab {
 namespace {
@@ -113,6 +115,29 @@ class DataFlashBuilder {
     PutText(&bytes_, name, 16);
     test::PutLittleEndian(&bytes_, value);
   }
+  // An IMU message of the logs before ArduPilot 3.4: TimeMS (ms), no instance column; IMU2 and
+  // IMU3 are other message types with the same layout.
+  void ImuMs(uint8_t type, uint32_t t_ms, float x, float y, float z) {
+    Header(type);
+    test::PutLittleEndian(&bytes_, t_ms);
+    for (float v : {x, y, z, 0.0f, 0.0f, -9.81f}) test::PutLittleEndian(&bytes_, v);
+    test::PutLittleEndian<uint32_t>(&bytes_, 0);
+    test::PutLittleEndian<uint32_t>(&bytes_, 0);
+    test::PutLittleEndian(&bytes_, 25.0f);
+  }
+  void Unit(uint8_t type, char id, const std::string& label) {
+    Header(type);
+    test::PutLittleEndian<uint64_t>(&bytes_, 1);
+    test::PutLittleEndian<int8_t>(&bytes_, id);
+    PutText(&bytes_, label, 64);
+  }
+  void Fmtu(uint8_t type, uint8_t of_type, const std::string& unit_ids) {
+    Header(type);
+    test::PutLittleEndian<uint64_t>(&bytes_, 1);
+    test::PutLittleEndian(&bytes_, of_type);
+    PutText(&bytes_, unit_ids, 16);
+    PutText(&bytes_, "", 16);
+  }
   std::string& bytes() { return bytes_; }
 
  private:
@@ -125,8 +150,7 @@ class DataFlashBuilder {
 };
 
 bool AnyWarningContains(const FlightLog& log, const std::string& text) {
-  return std::any_of(log.warnings.begin(), log.warnings.end(),
-                     [&](const std::string& w) { return w.find(text) != std::string::npos; });
+  return test::AnyWarningContains(log.warnings, text);
 }
 
 // A 1 kHz GYR stream (instance 0 and a 500 Hz instance 1), a 400 Hz IMU stream, parameters and
@@ -163,7 +187,7 @@ TEST(DataFlash, ReadsGyrBackExactly) {
   EXPECT_EQ(log.gyro_sources_available[1], "GYR/1 (500.0 Hz, 500 samples)");
   EXPECT_EQ(log.gyro_sources_available[2], "IMU (200.0 Hz, 200 samples)");
   EXPECT_EQ(log.records_skipped, 0u);
-  EXPECT_TRUE(log.warnings.size() == 1u) << "only the altitude note: " << log.warnings.front();
+  EXPECT_TRUE(log.warnings.empty()) << test::JoinedWarnings(log.warnings);
 }
 
 TEST(DataFlash, ReadsCameraEventsAndAltitude) {
@@ -180,7 +204,7 @@ TEST(DataFlash, ReadsCameraEventsAndAltitude) {
   // CAM RelAlt 40..49 m ('e': centimetres); the TRIG copies say 0 m and are not used.
   constexpr double kCentimetre = 1e-9;  // 'e' is int32 * 0.01: exact to rounding only
   EXPECT_NEAR(*log.altitude_above_ground_m, 44.5, kCentimetre);
-  EXPECT_TRUE(AnyWarningContains(log, "CAM.RelAlt"));
+  EXPECT_NE(log.altitude_source.find("CAM.RelAlt"), std::string::npos) << log.altitude_source;
 }
 
 TEST(DataFlash, ReadsBatchSamplerGyroBatches) {
@@ -220,6 +244,67 @@ TEST(DataFlash, ReadsBatchSamplerGyroBatches) {
   }
   EXPECT_EQ(log.gyro.sampling().median_interval_ns, 500'000);
   EXPECT_EQ(log.gyro.sampling().gap_indices.size(), 2u) << "between the three batches";
+}
+
+TEST(DataFlash, ReadsOldTimeMsLogsWithEveryImuInstance) {
+  // ArduCopter 3.3: IMU, IMU2 and IMU3 share one layout with TimeMS first.
+  DataFlashBuilder b;
+  const char* kOldImu = "IffffffIIf";
+  const char* kOldLabels = "TimeMS,GyrX,GyrY,GyrZ,AccX,AccY,AccZ,ErrG,ErrA,Temp";
+  b.Fmt(131, 43, "IMU", kOldImu, kOldLabels);
+  b.Fmt(135, 43, "IMU2", kOldImu, kOldLabels);
+  b.Fmt(149, 43, "IMU3", kOldImu, kOldLabels);
+  for (uint32_t k = 0; k < 100; ++k) {
+    const uint32_t t_ms = 11'500 + 20 * k;  // 50 Hz
+    b.ImuMs(131, t_ms, 0.01f * k, 0, 0);
+    b.ImuMs(135, t_ms, 0, 0.02f * k, 0);
+    if (k % 2 == 0) b.ImuMs(149, t_ms, 0, 0, 1.0f);  // a slower third IMU
+  }
+  const FlightLog log = ParseDataFlash(b.bytes(), "old.bin");
+  EXPECT_EQ(log.gyro_source, "IMU");
+  ASSERT_EQ(log.gyro.size(), 100u);
+  EXPECT_EQ(log.gyro[0].t_ns, 11'500 * int64_t{1'000'000}) << "TimeMS is milliseconds";
+  EXPECT_EQ(log.gyro.sampling().median_interval_ns, 20'000'000);
+  EXPECT_EQ(log.gyro[99].omega_rad_s.x(), static_cast<double>(0.01f * 99));
+  ASSERT_EQ(log.gyro_sources_available.size(), 3u);
+  EXPECT_EQ(log.gyro_sources_available[1], "IMU/1 (50.0 Hz, 100 samples)");
+  EXPECT_EQ(log.gyro_sources_available[2], "IMU/2 (25.0 Hz, 50 samples)");
+}
+
+TEST(DataFlash, SaysWhenABatchEndsShortOfItsDeclaredSamples) {
+  DataFlashBuilder b;
+  b.Isbh(7, 1, 0, 938, 1024, 140'184'099, 2000.0f);
+  for (uint16_t seq = 0; seq < 18; ++seq) b.Isbd(7, seq, std::vector<int16_t>(32, 5), {}, {});
+  const FlightLog log = ParseDataFlash(b.bytes(), "short_batch.bin");
+  EXPECT_EQ(log.gyro.size(), 576u);
+  EXPECT_TRUE(AnyWarningContains(log, "gyro batch 7 (ISBH at 140.184 s): 576 of the 1024 samples"))
+      << test::JoinedWarnings(log.warnings);
+  EXPECT_TRUE(AnyWarningContains(log, "448 declared samples never logged"));
+}
+
+TEST(DataFlash, AppliesTheUnitsTableToGyroFields) {
+  // A log whose FMTU/UNIT tables say GyrX..GyrZ are in deg/s ('k'); TimeUS in 's' units is ignored.
+  DataFlashBuilder b;
+  b.Fmt(40, 3 + 8 + 1 + 64, "UNIT", "QbZ", "TimeUS,Id,Label");
+  b.Fmt(41, 3 + 8 + 1 + 16 + 16, "FMTU", "QBNN", "TimeUS,FmtType,UnitIds,MultIds");
+  b.Unit(40, 'k', "deg/s");
+  b.Unit(40, 's', "s");
+  b.Fmtu(41, kImu, "s#kkk");  // TimeUS, I, GyrX, GyrY, GyrZ
+  for (int k = 0; k < 20; ++k) b.Imu(1000 + k * 1000, 0, 90.0f, -180.0f, 0.0f);
+  const FlightLog log = ParseDataFlash(b.bytes(), "units.bin");
+  ASSERT_EQ(log.gyro.size(), 20u);
+  EXPECT_DOUBLE_EQ(log.gyro[3].omega_rad_s.x(), 90.0 * kRadPerDeg);
+  EXPECT_DOUBLE_EQ(log.gyro[3].omega_rad_s.y(), -180.0 * kRadPerDeg);
+}
+
+TEST(DataFlash, CameraEventsWithoutBootTimeAreCountedNotPlaced) {
+  DataFlashBuilder b;
+  b.Fmt(148, 31, "CAM", "IHLLeeccC", "GPSTime,GPSWeek,Lat,Lng,Alt,RelAlt,Roll,Pitch,Yaw");
+  b.bytes() += std::string("\xA3\x95\x94", 3) + std::string(28, '\0');
+  for (int k = 0; k < 10; ++k) b.Imu(1000 + k * 1000, 0, 0, 0, 0);
+  const FlightLog log = ParseDataFlash(b.bytes(), "oldcam.bin");
+  EXPECT_TRUE(log.camera_events.empty());
+  EXPECT_TRUE(AnyWarningContains(log, "1 camera event(s) without a boot-time stamp"));
 }
 
 TEST(DataFlash, TruncatedCopyKeepsWhatCameBefore) {

@@ -6,9 +6,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace shutterlab {
 namespace {
@@ -29,6 +31,40 @@ TEST(ReadFlightLog, DetectsAndReadsEveryRealLog) {
     EXPECT_GT(log.gyro.samples().size(), 1000u) << c.path;
     EXPECT_FALSE(log.gyro_source.empty()) << c.path;
   }
+}
+
+TEST(ReadFlightLog, RealArduPilotLogsSayWhatTheyLost) {
+  // ArduCopter 3.3 (2015): TimeMS, IMU/IMU2/IMU3 at 50 Hz, one sample clipped at +-2000 deg/s.
+  SHUTTERLAB_REAL_DATA(log171, "incoming/ardupilot_log171/log171.bin");
+  const FlightLog old = ReadFlightLog(log171);
+  EXPECT_EQ(old.gyro_source, "IMU");
+  EXPECT_EQ(old.gyro.size(), 11'916u);
+  EXPECT_NEAR(old.gyro.DurationS(), 242.6, 0.1);
+  EXPECT_NEAR(old.gyro.sampling().RateHz(), 50.0, 0.5);
+  EXPECT_EQ(old.gyro_sources_available.size(), 3u);
+  EXPECT_TRUE(test::AnyWarningContains(old.warnings,
+                                       "saturated: axis y, 1 sample(s) within 2 % of the "
+                                       "+-2000 deg/s full scale"))
+      << test::JoinedWarnings(old.warnings);
+  EXPECT_FALSE(test::AnyWarningContains(old.warnings, "axis x"))
+      << test::JoinedWarnings(old.warnings);
+  EXPECT_FALSE(test::AnyWarningContains(old.warnings, "axis z"))
+      << test::JoinedWarnings(old.warnings);
+
+  // ArduCopter 4.6, cut at 80 KiB: its one gyro batch holds 576 of 1024 samples.
+  SHUTTERLAB_REAL_DATA(isb, "incoming/ardupilot_isb_80k/backend_log_80k.bin");
+  const FlightLog batch = ReadFlightLog(isb);
+  EXPECT_EQ(batch.gyro_source, "ISBD");
+  EXPECT_EQ(batch.gyro.size(), 576u);
+  EXPECT_TRUE(test::AnyWarningContains(batch.warnings, "576 of the 1024 samples"))
+      << test::JoinedWarnings(batch.warnings);
+  EXPECT_TRUE(test::AnyWarningContains(batch.warnings, "truncated"))
+      << test::JoinedWarnings(batch.warnings);
+
+  SHUTTERLAB_REAL_DATA(pymavlink, "incoming/ardupilot_pymavlink_test/test.BIN");
+  const FlightLog cut = ReadFlightLog(pymavlink);
+  EXPECT_TRUE(test::AnyWarningContains(cut.warnings, "truncated"))
+      << test::JoinedWarnings(cut.warnings);
 }
 
 TEST(ReadFlightLog, WrapsGyroCsv) {
