@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <variant>
 
 namespace shutterlab::app {
 namespace {
@@ -39,14 +40,13 @@ const CommandRegistration kRegistration(55, [](CLI::App& app) {
     std::printf("gyro     %zu samples, %.2f Hz\n", summary.gyro_samples, summary.gyro_rate_hz);
     std::printf("frames   %zu, t_first_row %.6f .. %.6f s\n", summary.frames, summary.t_first_s,
                 summary.t_last_s);
-    const auto& record = summary.record;
-    if (record.contains("frames") && record["frames"].contains("failed_grabs") &&
-        record["frames"]["failed_grabs"].get<int>() > 0)
-      std::printf("note     the video reader failed %d grab(s) and went on\n",
-                  record["frames"]["failed_grabs"].get<int>());
-    for (const auto& claim : record["claims"])
-      std::printf("declared %-15s %-14s %s\n", claim["what"].get<std::string>().c_str(),
-                  claim["status"].get<std::string>().c_str(), claim["value"].dump().c_str());
+    const ImportRecord& record = summary.record;
+    const auto* gopro = std::get_if<GoproImportDetails>(&record.details);
+    if (gopro && gopro->failed_grabs > 0)
+      std::printf("note     the video reader failed %d grab(s) and went on\n", gopro->failed_grabs);
+    for (const ImportClaim& claim : record.claims)
+      std::printf("declared %-15s %-14s %s\n", claim.what.c_str(), ClaimStatusName(claim.status),
+                  ClaimValueJson(claim.value).c_str());
     std::printf("wrote %s (camera.json, gyro.csv, frames.csv, images/, import.json)\n",
                 options->out_dir.c_str());
   });

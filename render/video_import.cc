@@ -4,9 +4,9 @@
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "sim/check.h"
-#include "sim/logs/gpmf.h"
+#include "sim/logs/gopro_telemetry.h"
 #include "sim/logs/gyro_io.h"
-#include "sim/logs/mp4.h"
+#include "sim/logs/phone_clip.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
 
@@ -19,7 +19,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
-#include <regex>
 #include <unistd.h>
 
 namespace shutterlab {
@@ -44,11 +43,6 @@ constexpr size_t kWriteBatch =
 constexpr double kPhoneFx = 573.8534, kPhoneFy = 575.0448, kPhoneCx = 406.0101, kPhoneCy = 309.0112;
 constexpr double kPhoneSkew = -0.6974;
 constexpr double kPhoneFullFrameS = 0.033312;
-
-nlohmann::json Claim(const std::string& what, nlohmann::json value, const std::string& status,
-                     const std::string& source) {
-  return {{"what", what}, {"value", std::move(value)}, {"status", status}, {"source", source}};
-}
 
 // Frame ids [first, end) of the ids available, after --start-frame and --max-frames.
 std::vector<int64_t> SelectFrames(const std::vector<int64_t>& ids, const ImportOptions& options) {
@@ -115,42 +109,29 @@ RigModel BaseRig(int width, int height) {
 
 ImportSummary WriteDataset(const fs::path& dir, ImportSource kind, const RigModel& rig,
                            const GyroTrace& gyro, const std::vector<FrameEntry>& frames,
-                           nlohmann::json record) {
+                           ImportRecord record) {
   rig.Check();
   // Every frame is kept; those whose declared readout the gyro log does not cover are listed
   // (karma.mp4's gyro starts 8 ms after its first frame), so that a consumer can skip them.
-  nlohmann::json outside = nlohmann::json::array();
+  record.outside_gyro.clear();
   for (const FrameEntry& frame : frames) {
     const int64_t t0_ns = frame.t_first_row_ns + SecondsToNs(rig.time_offset_s);
     if (t0_ns < gyro.t_begin_ns() || t0_ns + SecondsToNs(rig.shutter.readout_s) > gyro.t_end_ns())
-      outside.push_back(frame.frame);
+      record.outside_gyro.push_back(frame.frame);
   }
-  record["frames"]["outside_gyro"] = outside;
   WriteRigModel((dir / "camera.json").string(), rig);
   WriteGyroCsv((dir / "gyro.csv").string(), gyro);
   WriteFramesCsv((dir / "frames.csv").string(), frames);
-  WriteFileAtomically((dir / "import.json").string(), record.dump(2) + "\n");
+  WriteImportJson((dir / "import.json").string(), record);
   ImportSummary summary;
   summary.kind = kind;
   summary.gyro_samples = gyro.size();
-  summary.gyro_rate_hz = record["gyro"]["rate_hz"];
+  summary.gyro_rate_hz = record.gyro_rate_hz;
   summary.frames = frames.size();
   summary.t_first_s = frames.front().t_first_row_ns * 1e-9;
   summary.t_last_s = frames.back().t_first_row_ns * 1e-9;
-  summary.record = record;
+  summary.record = std::move(record);
   return summary;
-}
-
-// The presentation times of the MP4's video track, ascending (OpenCV returns frames in
-// presentation order), s.
-std::vector<double> VideoFrameTimesS(const std::string& path) {
-  Mp4File mp4(path);
-  const Mp4Track* video = mp4.FindTrack("vide", "");
-  if (!video || video->size() == 0) throw IoError(IoMessage(path, -1, "no video track"));
-  std::vector<double> frame_times_s;
-  for (size_t i = 0; i < video->size(); ++i) frame_times_s.push_back(video->PresentationTimeS(i));
-  std::sort(frame_times_s.begin(), frame_times_s.end());
-  return frame_times_s;
 }
 
 // Writes (path, RGB image) pairs in parallel and empties *pending: encoding a PNG takes several
@@ -172,25 +153,11 @@ void WriteImagesInParallel(std::vector<std::pair<std::string, cv::Mat>>* pending
   if (!error.empty()) throw IoError(error);
 }
 
-// Exposure at t_s: the SHUT value nearest in time (SHUT is written once per video frame), null
-// when none lies within a frame period.
-nlohmann::json NearestExposureS(const GoproTelemetry& telemetry, double t_s, double period_s) {
-  nlohmann::json exposure = nullptr;
-  const auto& ts = telemetry.shutter_t_s;
-  if (!ts.empty()) {
-    const size_t k = std::lower_bound(ts.begin(), ts.end(), t_s) - ts.begin();
-    size_t best = std::min(k, ts.size() - 1);
-    if (k > 0 && std::abs(ts[k - 1] - t_s) < std::abs(ts[best] - t_s)) best = k - 1;
-    if (std::abs(ts[best] - t_s) <= period_s) exposure = telemetry.shutter_s[best];
-  }
-  return exposure;
-}
-
 // The selected frames as OpenCV decoded them, written under the dataset folder, with what the
 // decoding met.
 struct DecodedFrames {
   std::vector<FrameEntry> entries;
-  nlohmann::json exposures = nlohmann::json::array();
+  std::vector<FrameExposure> exposures;
   cv::Size size;
   int64_t decoded = 0;  // index of the next frame the reader returns
   int failures = 0, time_mismatches = 0;
@@ -242,9 +209,7 @@ DecodedFrames DecodeSelectedFrames(const std::string& path, const fs::path& dir,
     cv::cvtColor(frame, rgb, frame.channels() == 4 ? cv::COLOR_BGRA2RGB : cv::COLOR_BGR2RGB);
     pending.emplace_back((dir / entry.image).string(), rgb);
     out.entries.push_back(entry);
-    out.exposures.push_back(
-        {{"frame", index},
-         {"exposure_s", NearestExposureS(telemetry, frame_times_s[index], period_s)}});
+    out.exposures.push_back({index, NearestShutterS(telemetry, frame_times_s[index], period_s)});
     if (pending.size() >= kWriteBatch) flush();
   }
   flush();
@@ -275,53 +240,54 @@ RigModel Hero5Rig(const cv::Size& size) {
 
 // import.json for a GoPro clip: the source, the clock, the gyro stream and frames as read, and the
 // claims (all guesses or inferences: GoPro publishes none of them).
-nlohmann::json GoproRecord(const std::string& path, const GoproTelemetry& telemetry,
-                           const RigModel& rig, const DecodedFrames& frames, size_t video_samples) {
+ImportRecord GoproRecord(const std::string& path, const GoproTelemetry& telemetry,
+                         const RigModel& rig, const DecodedFrames& frames, size_t video_samples) {
   const double f_px = rig.camera.fx;
-  nlohmann::json record;
-  record["format"] = "import/1";
-  record["source"] = {{"kind", "gopro_mp4"}, {"path", path}, {"device", telemetry.device}};
-  record["time_origin_s"] = 0.0;
-  record["clock"] =
+  ImportRecord record;
+  record.path = path;
+  record.time_origin_s = 0.0;
+  record.clock =
       "movie timeline of the MP4 (s); gyro and frames share it, time_offset_s 0 declared";
-  record["gyro"] = {
-      {"samples", telemetry.gyro.size()},
-      {"rate_hz", telemetry.gyro_rate_hz},
-      {"stream_name", telemetry.gyro_name},
-      {"axis_order", telemetry.axis_order_source},
-      {"scal", telemetry.gyro_scale},
-      {"payload_samples", telemetry.gyro_payload_samples},
-      {"timing",
-       "one least-squares line of payload start time (gpmd sample table) against samples before "
-       "it"},
-      {"fit_max_residual_s", telemetry.gyro_fit_max_residual_s},
-      {"columns", "gyro.csv gx,gy,gz = the sensor's x, y, z (GPMF storage reordered)"}};
-  record["frames"] = {
-      {"count", frames.entries.size()},
-      {"video_samples", video_samples},
-      {"decoded", frames.decoded},
-      {"failed_grabs", frames.failures},
-      {"reader_time_mismatches", frames.time_mismatches},
-      {"times", "presentation times of the MP4 video track (stts/ctts/elst)"},
-      {"t_first_row", "frame presentation time; what it marks in the exposure is unknown"}};
-  record["exposure_s"] = frames.exposures;
-  record["claims"] = nlohmann::json::array(
-      {Claim("intrinsics",
-             {{"fx", f_px}, {"fy", f_px}, {"cx", rig.camera.cx}, {"cy", rig.camera.cy}}, "guess",
-             "equidistant focal length over GoPro's published 118.2 deg horizontal field of view "
-             "(HERO5 "
-             "Black, Wide); pinhole with no distortion declared although the lens is a fisheye"),
-       Claim("readout_s", kHero5ReadoutGuessS, "guess",
-             "not published for the HERO5; order of magnitude only"),
-       Claim("gyro_to_camera", MatrixJson(rig.cam_from_gyro), "inferred",
-             "camera y = -sensor z: the accelerometer's mean is +9.7 m/s^2 on z, and the "
-             "horizontal image shift "
-             "between frames follows the integrated z rate (correlation 0.99, checked when this "
-             "importer was written). "
-             "x forward, y left is a guess: the gimbal holds pitch and roll, so the clip cannot "
-             "tell x from y"),
-       Claim("direction", ReadoutDirectionName(rig.shutter.direction), "guess", "CMOS default"),
-       Claim("time_offset_s", 0.0, "guess", "telemetry and video share the MP4 timeline")});
+  record.gyro_samples = telemetry.gyro.size();
+  record.gyro_rate_hz = telemetry.gyro_rate_hz;
+  record.gyro_columns = "gyro.csv gx,gy,gz = the sensor's x, y, z (GPMF storage reordered)";
+  record.frame_count = frames.entries.size();
+  record.t_first_row = "frame presentation time; what it marks in the exposure is unknown";
+  record.exposures = frames.exposures;
+  GoproImportDetails gopro;
+  gopro.device = telemetry.device;
+  gopro.stream_name = telemetry.gyro_name;
+  gopro.axis_order = telemetry.axis_order_source;
+  gopro.scal = telemetry.gyro_scale;
+  gopro.payload_samples = telemetry.gyro_payload_samples;
+  gopro.timing =
+      "one least-squares line of payload start time (gpmd sample table) against samples before it";
+  gopro.fit_max_residual_s = telemetry.gyro_fit_max_residual_s;
+  gopro.video_samples = video_samples;
+  gopro.decoded = frames.decoded;
+  gopro.failed_grabs = frames.failures;
+  gopro.reader_time_mismatches = frames.time_mismatches;
+  gopro.times = "presentation times of the MP4 video track (stts/ctts/elst)";
+  record.details = std::move(gopro);
+  record.claims = {
+      ImportClaim{"intrinsics",
+                  std::map<std::string, double>{
+                      {"fx", f_px}, {"fy", f_px}, {"cx", rig.camera.cx}, {"cy", rig.camera.cy}},
+                  ClaimStatus::kGuess,
+                  "equidistant focal length over GoPro's published 118.2 deg horizontal field of "
+                  "view (HERO5 Black, Wide); pinhole with no distortion declared although the lens "
+                  "is a fisheye"},
+      ImportClaim{"readout_s", kHero5ReadoutGuessS, ClaimStatus::kGuess,
+                  "not published for the HERO5; order of magnitude only"},
+      ImportClaim{"gyro_to_camera", rig.cam_from_gyro, ClaimStatus::kInferred,
+                  "camera y = -sensor z: the accelerometer's mean is +9.7 m/s^2 on z, and the "
+                  "horizontal image shift between frames follows the integrated z rate "
+                  "(correlation 0.99, checked when this importer was written). x forward, y left "
+                  "is a guess: the gimbal holds pitch and roll, so the clip cannot tell x from y"},
+      ImportClaim{"direction", std::string(ReadoutDirectionName(rig.shutter.direction)),
+                  ClaimStatus::kGuess, "CMOS default"},
+      ImportClaim{"time_offset_s", 0.0, ClaimStatus::kGuess,
+                  "telemetry and video share the MP4 timeline"}};
   return record;
 }
 
@@ -329,7 +295,7 @@ ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
                           const std::function<void(size_t, size_t)>& progress) {
   const std::string& path = options.source;
   const GoproTelemetry telemetry = ReadGoproTelemetry(path);
-  const std::vector<double> frame_times_s = VideoFrameTimesS(path);
+  const std::vector<double> frame_times_s = ReadVideoFrameTimesS(path);
   std::vector<int64_t> ids(frame_times_s.size());
   for (size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<int64_t>(i);
   const std::vector<int64_t> selected = SelectFrames(ids, options);
@@ -343,8 +309,82 @@ ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
                  path.c_str(), frames.entries.size(), selected.size());
 
   const RigModel rig = Hero5Rig(frames.size);
-  const nlohmann::json record = GoproRecord(path, telemetry, rig, frames, frame_times_s.size());
-  return WriteDataset(dir, ImportSource::kGoproMp4, rig, telemetry.gyro, frames.entries, record);
+  return WriteDataset(dir, ImportSource::kGoproMp4, rig, telemetry.gyro, frames.entries,
+                      GoproRecord(path, telemetry, rig, frames, frame_times_s.size()));
+}
+
+// The phone clip's declared rig for frames of `size`: the source's calibration and full-frame
+// time, and the gyro-to-camera axes.
+RigModel PhoneRig(const cv::Size& size) {
+  RigModel rig = BaseRig(size.width, size.height);
+  rig.camera.fx = kPhoneFx;
+  rig.camera.fy = kPhoneFy;
+  rig.camera.cx = kPhoneCx;
+  rig.camera.cy = kPhoneCy;
+  rig.shutter.readout_s = kPhoneFullFrameS;
+  // The source says the gyro x axis is the camera y axis. Android's sensor axes (natural portrait:
+  // x right, y up, z out of the screen) and the usual rear-camera sensor orientation (90 degrees:
+  // the sensor's top row lies along device +x) give the signs: camera x = -gyro y, y = -gyro x, z =
+  // -gyro z.
+  Eigen::Matrix3d cam_from_gyro;
+  cam_from_gyro << 0, -1, 0,  //
+      -1, 0, 0,               //
+      0, 0, -1;
+  rig.cam_from_gyro = cam_from_gyro;
+  return rig;
+}
+
+// import.json for a phone clip: the source, the clock, the gyro and frames as read, and the
+// source's claims.
+ImportRecord PhoneRecord(const std::string& path, const PhoneClip& clip, const RigModel& rig,
+                         size_t frame_count, std::vector<FrameExposure> exposures) {
+  ImportRecord record;
+  record.path = path;
+  record.time_origin_s = clip.time_origin_ns * 1e-9;
+  record.clock = "device monotonic clock minus time_origin_s; gyro and frames share it";
+  record.gyro_samples = clip.gyro.size();
+  record.gyro_rate_hz = clip.gyro.sampling().RateHz();
+  record.gyro_columns = "gyro.txt gx,gy,gz (rad/s), the phone's sensor axes";
+  record.frame_count = frame_count;
+  record.t_first_row = "start-of-frame time from framestamp.txt (line N = frame N)";
+  record.exposures = std::move(exposures);
+  PhoneImportDetails phone;
+  phone.origin = "lhaippp/gyro-video-stabilization 20200109_145447 (MIT)";
+  phone.sof_times = clip.sof_ns.size();
+  phone.images_in_source = clip.frame_images.size();
+  phone.dump_sof_max_diff_s = clip.dump_sof_max_diff_s;
+  phone.exposure_min_s = INFINITY;
+  phone.exposure_max_s = -INFINITY;
+  for (const auto& [frame, value] : clip.exposure_s) {
+    phone.exposure_min_s = std::min(phone.exposure_min_s, value);
+    phone.exposure_max_s = std::max(phone.exposure_max_s, value);
+  }
+  record.details = std::move(phone);
+  record.claims = {
+      ImportClaim{"intrinsics",
+                  std::map<std::string, double>{{"fx", kPhoneFx},
+                                                {"fy", kPhoneFy},
+                                                {"cx", kPhoneCx},
+                                                {"cy", kPhoneCy},
+                                                {"skew", kPhoneSkew}},
+                  ClaimStatus::kSourceClaim,
+                  "the source repository's example K for the 800x600 frames; its skew is not in "
+                  "rig/1 and is dropped"},
+      ImportClaim{"readout_s", kPhoneFullFrameS, ClaimStatus::kSourceClaim,
+                  "the example's full-frame time"},
+      ImportClaim{"gyro_to_camera", rig.cam_from_gyro, ClaimStatus::kSourceClaimInferred,
+                  "the example's comment that the gyro x axis is the camera y axis; signs from "
+                  "Android's sensor axes and the usual 90 degree rear-camera sensor orientation. "
+                  "The image shift between the 20 frames against the integrated rates agreed when "
+                  "this importer was written (correlation 0.91 for u, 0.95 for v)"},
+      ImportClaim{"frame_images", std::string("RE_frame-N is frame N of framestamp.txt"),
+                  ClaimStatus::kSourceClaim, "inferred from the example, not verified"},
+      ImportClaim{"direction", std::string(ReadoutDirectionName(rig.shutter.direction)),
+                  ClaimStatus::kGuess, "CMOS default"},
+      ImportClaim{
+          "time_offset_s", 0.0, ClaimStatus::kGuess,
+          "gyro and SOF times are on the same device clock; SOF marks the start of the frame"}};
+  return record;
 }
 
 ImportSummary ImportPhone(const ImportOptions& options, const fs::path& dir,
@@ -354,7 +394,7 @@ ImportSummary ImportPhone(const ImportOptions& options, const fs::path& dir,
   for (const auto& [frame, image] : clip.frame_images) ids.push_back(frame);
   const std::vector<int64_t> selected = SelectFrames(ids, options);
   std::vector<FrameEntry> entries;
-  nlohmann::json exposures = nlohmann::json::array();
+  std::vector<FrameExposure> exposures;
   cv::Size size;
   for (int64_t frame : selected) {
     const std::string& source_image = clip.frame_images.at(frame);
@@ -373,87 +413,14 @@ ImportSummary ImportPhone(const ImportOptions& options, const fs::path& dir,
     fs::copy_file(source_image, dir / entry.image, fs::copy_options::overwrite_existing);
     entries.push_back(entry);
     const auto exposure = clip.exposure_s.find(frame);
-    exposures.push_back(
-        {{"frame", frame},
-         {"exposure_s", exposure == clip.exposure_s.end() ? nlohmann::json(nullptr)
-                                                          : nlohmann::json(exposure->second)}});
+    exposures.push_back({frame, exposure == clip.exposure_s.end()
+                                    ? std::nullopt
+                                    : std::optional<double>(exposure->second)});
     if (progress) progress(entries.size(), selected.size());
   }
-  RigModel rig = BaseRig(size.width, size.height);
-  rig.camera.fx = kPhoneFx;
-  rig.camera.fy = kPhoneFy;
-  rig.camera.cx = kPhoneCx;
-  rig.camera.cy = kPhoneCy;
-  rig.shutter.readout_s = kPhoneFullFrameS;
-  // The source says the gyro x axis is the camera y axis. Android's sensor axes (natural portrait:
-  // x right, y up, z out of the screen) and the usual rear-camera sensor orientation (90 degrees:
-  // the sensor's top row lies along device +x) give the signs: camera x = -gyro y, y = -gyro x, z =
-  // -gyro z.
-  Eigen::Matrix3d cam_from_gyro;
-  cam_from_gyro << 0, -1, 0,  //
-      -1, 0, 0,               //
-      0, 0, -1;
-  rig.cam_from_gyro = cam_from_gyro;
-
-  double exposure_min = INFINITY, exposure_max = -INFINITY;
-  for (const auto& [frame, value] : clip.exposure_s) {
-    exposure_min = std::min(exposure_min, value);
-    exposure_max = std::max(exposure_max, value);
-  }
-  nlohmann::json record;
-  record["format"] = "import/1";
-  record["source"] = {{"kind", "phone_folder"},
-                      {"path", options.source},
-                      {"origin", "lhaippp/gyro-video-stabilization 20200109_145447 (MIT)"}};
-  record["time_origin_s"] = clip.time_origin_ns * 1e-9;
-  record["clock"] = "device monotonic clock minus time_origin_s; gyro and frames share it";
-  record["gyro"] = {{"samples", clip.gyro.size()},
-                    {"rate_hz", clip.gyro.sampling().RateHz()},
-                    {"columns", "gyro.txt gx,gy,gz (rad/s), the phone's sensor axes"}};
-  record["frames"] = {{"count", entries.size()},
-                      {"sof_times", clip.sof_ns.size()},
-                      {"images_in_source", clip.frame_images.size()},
-                      {"t_first_row", "start-of-frame time from framestamp.txt (line N = frame N)"},
-                      {"dump_sof_max_diff_s", clip.dump_sof_max_diff_s}};
-  record["exposure_s"] = exposures;
-  record["exposure_range_s"] = {exposure_min, exposure_max};
-  record["claims"] = nlohmann::json::array(
-      {Claim("intrinsics",
-             {{"fx", kPhoneFx},
-              {"fy", kPhoneFy},
-              {"cx", kPhoneCx},
-              {"cy", kPhoneCy},
-              {"skew", kPhoneSkew}},
-             "source claim",
-             "the source repository's example K for the 800x600 frames; its skew is not in rig/1 "
-             "and is dropped"),
-       Claim("readout_s", kPhoneFullFrameS, "source claim", "the example's full-frame time"),
-       Claim("gyro_to_camera", MatrixJson(cam_from_gyro), "source claim + inferred",
-             "the example's comment that the gyro x axis is the camera y axis; signs from "
-             "Android's sensor axes and "
-             "the usual 90 degree rear-camera sensor orientation. The image shift between the 20 "
-             "frames against the "
-             "integrated rates agreed when this importer was written (correlation 0.91 for u, 0.95 "
-             "for v)"),
-       Claim("frame_images", "RE_frame-N is frame N of framestamp.txt", "source claim",
-             "inferred from the example, not verified"),
-       Claim("direction", ReadoutDirectionName(rig.shutter.direction), "guess", "CMOS default"),
-       Claim("time_offset_s", 0.0, "guess",
-             "gyro and SOF times are on the same device clock; SOF marks the start of the frame")});
-
-  return WriteDataset(dir, ImportSource::kPhoneFolder, rig, clip.gyro, entries, record);
-}
-
-// Parses "NAME :value" style fields of gyro_dump.txt: the text after `key` up to the next space or
-// comma. nullopt when the key is absent.
-std::optional<std::string_view> FieldAfter(std::string_view line, std::string_view key) {
-  const size_t at = line.find(key);
-  if (at == std::string_view::npos) return std::nullopt;
-  size_t begin = at + key.size();
-  while (begin < line.size() && (line[begin] == ' ' || line[begin] == ':')) ++begin;
-  size_t end = begin;
-  while (end < line.size() && line[end] != ' ' && line[end] != ',') ++end;
-  return line.substr(begin, end - begin);
+  const RigModel rig = PhoneRig(size);
+  return WriteDataset(dir, ImportSource::kPhoneFolder, rig, clip.gyro, entries,
+                      PhoneRecord(options.source, clip, rig, entries.size(), std::move(exposures)));
 }
 
 }  // namespace
@@ -467,150 +434,18 @@ void ImportOptions::Check() const {
 
 ImportSource DetectImportSource(const std::string& source) {
   if (fs::is_directory(source)) {
-    for (const char* name : {"gyro.txt", "framestamp.txt", "frames"})
-      if (!fs::exists(fs::path(source) / name))
-        throw IoError(
-            IoMessage(source, -1,
-                      std::string("a folder, but not a phone clip: no ") + name +
-                          " (expected gyro.txt, framestamp.txt, gyro_dump.txt, frames/)"));
+    const std::string missing = MissingPhoneClipPart(source);
+    if (!missing.empty())
+      throw IoError(IoMessage(source, -1,
+                              "a folder, but not a phone clip: no " + missing +
+                                  " (expected gyro.txt, framestamp.txt, gyro_dump.txt, frames/)"));
     return ImportSource::kPhoneFolder;
   }
   if (!fs::is_regular_file(source)) throw IoError(IoMessage(source, -1, "no such file or folder"));
-  Mp4File mp4(source);
-  if (!mp4.FindTrack("meta", "gpmd"))
+  if (!HasGoproTelemetry(source))
     throw IoError(
         IoMessage(source, -1, "an MP4 without a GoPro 'gpmd' metadata track (no GPMF telemetry)"));
   return ImportSource::kGoproMp4;
-}
-
-GoproTelemetry ReadGoproTelemetry(const std::string& mp4_path) {
-  Mp4File mp4(mp4_path);
-  const Mp4Track* track = mp4.FindTrack("meta", "gpmd");
-  if (!track) throw IoError(IoMessage(mp4_path, -1, "no GoPro 'gpmd' metadata track"));
-  const GpmfTrackStream gyro = ReadGpmfTrackStream(mp4, *track, "GYRO");
-  if (gyro.elements != 3)
-    throw IoError(IoMessage(mp4_path, -1,
-                            "GYRO has " + std::to_string(gyro.elements) + " elements, 3 expected"));
-  const AxisOrder order = GpmfAxisOrder(gyro.first, mp4_path);
-  GoproTelemetry out;
-  out.gyro_name = gyro.first.name;
-  out.device = gyro.first.device;
-  out.axis_order_source = order.source;
-  out.gyro_scale = gyro.first.scale;
-  out.gyro_payload_samples = gyro.payload_samples;
-  out.gyro_rate_hz = gyro.rate_hz;
-  out.gyro_fit_max_residual_s = gyro.fit_max_residual_s;
-  std::vector<GyroSample> samples(gyro.samples());
-  for (size_t i = 0; i < samples.size(); ++i) {
-    samples[i].t_ns = SecondsToNs(gyro.TimeS(i));
-    for (int a = 0; a < 3; ++a)
-      samples[i].omega_rad_s[a] = order.sign[a] * gyro.values[3 * i + order.column[a]];
-  }
-  out.gyro = GyroTrace(std::move(samples));
-  try {
-    const GpmfTrackStream shut = ReadGpmfTrackStream(mp4, *track, "SHUT");
-    for (size_t i = 0; i < shut.samples(); ++i) {
-      out.shutter_s.push_back(shut.values[i * shut.elements]);
-      out.shutter_t_s.push_back(shut.TimeS(i));
-    }
-  } catch (const IoError&) {
-    // Older firmware writes no SHUT: exposure is then unknown, which import.json says.
-  }
-  return out;
-}
-
-PhoneClip ReadPhoneClip(const std::string& folder) {
-  const fs::path root(folder);
-  PhoneClip clip;
-  std::vector<std::string_view> fields;
-  // gyro.txt: gx,gy,gz,t per line.
-  const std::string gyro_path = (root / "gyro.txt").string();
-  const std::string gyro_text = ReadFileToString(gyro_path);
-  std::vector<std::pair<double, Eigen::Vector3d>> rows;
-  LineCursor lines(gyro_text);
-  while (auto line = lines.Next()) {
-    if (line->empty()) continue;
-    SplitFields(*line, ',', &fields);
-    if (fields.size() < 4)
-      throw IoError(
-          IoMessage(gyro_path, lines.line_number(),
-                    "expected gx,gy,gz,t, got " + std::to_string(fields.size()) + " fields"));
-    double v[4];
-    for (int i = 0; i < 4; ++i) {
-      const auto value = ParseDouble(fields[i]);
-      if (!value)
-        throw IoError(IoMessage(gyro_path, lines.line_number(),
-                                "field " + std::to_string(i + 1) + " is not a number"));
-      v[i] = *value;
-    }
-    if (!rows.empty() && v[3] < rows.back().first)
-      throw IoError(IoMessage(gyro_path, lines.line_number(), "time goes backwards"));
-    rows.push_back({v[3], Eigen::Vector3d(v[0], v[1], v[2])});
-  }
-  if (rows.size() < 2) throw IoError(IoMessage(gyro_path, -1, "fewer than 2 samples"));
-  // Times are ~4.3e6 s on the device clock: subtract whole seconds so that files keep small
-  // numbers.
-  clip.time_origin_ns = static_cast<int64_t>(std::floor(rows.front().first)) * 1000000000LL;
-  std::vector<GyroSample> samples;
-  samples.reserve(rows.size());
-  for (const auto& [t_s, omega] : rows)
-    samples.push_back({SecondsToNs(t_s) - clip.time_origin_ns, omega});
-  clip.gyro = GyroTrace(std::move(samples));
-  // framestamp.txt: one SOF time per line, line N = frame N.
-  const std::string stamp_path = (root / "framestamp.txt").string();
-  const std::string stamp_text = ReadFileToString(stamp_path);
-  LineCursor stamps(stamp_text);
-  while (auto line = stamps.Next()) {
-    if (line->empty()) continue;
-    const auto value = ParseDouble(*line);
-    if (!value) throw IoError(IoMessage(stamp_path, stamps.line_number(), "not a time in seconds"));
-    if (static_cast<long>(clip.sof_ns.size()) + 1 != stamps.line_number())
-      throw IoError(
-          IoMessage(stamp_path, stamps.line_number(), "blank line: line N must be frame N"));
-    clip.sof_ns.push_back(SecondsToNs(*value) - clip.time_origin_ns);
-  }
-  if (clip.sof_ns.empty()) throw IoError(IoMessage(stamp_path, -1, "no start-of-frame times"));
-  // gyro_dump.txt (optional): "SOF <us>,  frameNum :N exp time <s>".
-  const fs::path dump_path = root / "gyro_dump.txt";
-  if (fs::exists(dump_path)) {
-    const std::string dump_text = ReadFileToString(dump_path.string());
-    LineCursor dump(dump_text);
-    while (auto line = dump.Next()) {
-      if (line->substr(0, 3) != "SOF") continue;
-      const auto sof = FieldAfter(*line, "SOF");
-      const auto frame = FieldAfter(*line, "frameNum");
-      const auto exposure = FieldAfter(*line, "exp time");
-      const auto sof_us = sof ? ParseInt(*sof) : std::nullopt;
-      const auto n = frame ? ParseInt(*frame) : std::nullopt;
-      const auto exposure_s = exposure ? ParseDouble(*exposure) : std::nullopt;
-      if (!sof_us || !n || !exposure_s)
-        throw IoError(IoMessage(dump_path.string(), dump.line_number(),
-                                "expected 'SOF <us>, frameNum :N exp time <s>'"));
-      const int64_t frame_n = n.value_or(0);
-      clip.exposure_s[frame_n] = exposure_s.value_or(0.0);
-      if (frame_n >= 1 && frame_n <= static_cast<int64_t>(clip.sof_ns.size())) {
-        const int64_t sof_ns = sof_us.value_or(0) * 1000 - clip.time_origin_ns;
-        const double diff_s = std::abs(sof_ns - clip.sof_ns[frame_n - 1]) * 1e-9;
-        clip.dump_sof_max_diff_s = std::max(clip.dump_sof_max_diff_s, diff_s);
-      }
-    }
-  }
-  // frames/RE_frame-N.jpg (any image extension).
-  const std::regex name_pattern(R"(RE_frame-(\d+)\.(jpg|jpeg|png))", std::regex::icase);
-  for (const auto& file : fs::directory_iterator(root / "frames")) {
-    std::smatch match;
-    const std::string name = file.path().filename().string();
-    if (!std::regex_match(name, match, name_pattern)) continue;
-    const int64_t n = std::stoll(match[1].str());
-    if (n < 1 || n > static_cast<int64_t>(clip.sof_ns.size()))
-      throw IoError(IoMessage(file.path().string(), -1,
-                              "frame " + std::to_string(n) + " has no time in framestamp.txt (" +
-                                  std::to_string(clip.sof_ns.size()) + " lines)"));
-    clip.frame_images[n] = file.path().string();
-  }
-  if (clip.frame_images.empty())
-    throw IoError(IoMessage((root / "frames").string(), -1, "no RE_frame-N.jpg images"));
-  return clip;
 }
 
 ImportSummary ImportVideo(const ImportOptions& options,

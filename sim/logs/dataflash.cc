@@ -1,7 +1,8 @@
 #include "sim/logs/dataflash.h"
 
 #include "sim/check.h"
-#include "sim/logs/ulog.h"
+#include "sim/logs/gyro_candidates.h"
+#include "sim/logs/ulog.h"  // kAirborneAltitudeM
 #include "sim/text_file.h"
 #include "sim/units.h"
 

@@ -26,7 +26,7 @@ bool LooksLikeDataFlash(std::string_view first_bytes);
 //    ISBH.SampleUS + (32 * seqno + k) / smp_rate, value raw / ISBH.mul rad/s, k < smp_cnt;
 //  - "IMU" (and IMU2/IMU3 of old logs): GyrX/GyrY/GyrZ at TimeUS.
 // The highest measured rate wins; within 10% of it, the order above decides
-// (internal::ChooseGyroSource, shared with the ULog reader).
+// (internal::ChooseGyroSource in sim/logs/gyro_candidates.h, shared with the ULog reader).
 // Camera events: CAM and TRIG at TimeUS, sequence from Img when logged.
 // Altitude above ground: median CAM.RelAlt (height above home at each picture) above
 // kAirborneAltitudeM, when CAM has RelAlt; a warning says so.

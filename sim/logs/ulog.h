@@ -24,7 +24,8 @@ bool LooksLikeULog(std::string_view first_bytes);
 // sensor_gyro (x,y,z at timestamp_sample), vehicle_angular_velocity (xyz at timestamp_sample),
 // sensor_combined (gyro_rad at timestamp). Each topic instance (multi_id) is one candidate, named
 // "topic.field" for instance 0 and "topic/N.field" for instance N. The one with the highest
-// measured rate wins; candidates within 10% of that rate are ranked by the order above.
+// measured rate wins; candidates within 10% of that rate are ranked by the order above
+// (internal::ChooseGyroSource in sim/logs/gyro_candidates.h, shared with the DataFlash reader).
 // gyro_sources_available lists every candidate as "NAME (RATE Hz, N samples)", chosen one first.
 // Camera events: camera_trigger and camera_capture (timestamp, seq).
 // Altitude above ground: median of vehicle_local_position.dist_bottom where dist_bottom_valid,
@@ -42,22 +43,4 @@ FlightLog ParseULog(std::string_view bytes, const std::string& path);
 // A vehicle below this height is taken to be on the ground when the altitude median is formed.
 inline constexpr double kAirborneAltitudeM = 1.0;
 
-namespace internal {
-
-// One gyro stream found in a log, before the best one is chosen. Shared by the ULog and DataFlash
-// readers so that both clean and rank their candidates in the same way.
-struct GyroCandidate {
-  std::string name;                 // e.g. "sensor_gyro_fifo.x,y,z" or "GYR/1"
-  int preference = 0;               // lower is better among candidates of similar rate
-  std::vector<GyroSample> samples;  // in log order; cleaned by ChooseGyroSource
-};
-
-// Cleans every candidate (drops t <= 0, non-finite rates and isolated timestamp spikes, i.e. a
-// sample outside the span of both its neighbours in log order; sorts what is left by time), then
-// picks the one with the highest median rate, preferring lower `preference` among those within
-// 10% of the best rate. Fills log->gyro, gyro_source, gyro_sources_available, and adds warnings
-// and records_skipped for what was dropped. Returns false when no candidate has 2 samples.
-bool ChooseGyroSource(std::vector<GyroCandidate> candidates, FlightLog* log);
-
-}  // namespace internal
 }  // namespace shutterlab
