@@ -1,0 +1,51 @@
+#pragma once
+// What every fuzz target shares: the one expected way for a reader to refuse bytes is IoError or
+// std::invalid_argument (a clear one-line error). Anything else (a crash, a sanitizer report, an
+// uncaught exception of another type, a hang) is a bug that libFuzzer reports.
+
+#include "sim/check.h"
+
+#include <cstdint>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <unistd.h>
+
+namespace shutterlab::fuzz {
+
+inline std::string_view Bytes(const uint8_t* data, size_t size) {
+  return {reinterpret_cast<const char*>(data), size};
+}
+
+// Runs read(); swallows the errors a reader is allowed to throw.
+template <typename Read>
+void Expect(const Read& read) {
+  try {
+    read();
+  } catch (const IoError&) {
+  } catch (const std::invalid_argument&) {
+  }
+}
+
+// For the readers that take a path: the bytes in a file of this process, rewritten per input.
+class InputFile {
+ public:
+  explicit InputFile(const std::string& leaf)
+      : path_((access("/dev/shm", W_OK) == 0 ? std::string("/dev/shm/") : std::string("/tmp/")) +
+              "shutterlab_fuzz_" + std::to_string(getpid()) + "_" + leaf) {}
+  ~InputFile() { std::remove(path_.c_str()); }
+  const std::string& Write(const uint8_t* data, size_t size) {
+    FILE* f = std::fopen(path_.c_str(), "wb");
+    if (f) {
+      if (size) std::fwrite(data, 1, size, f);
+      std::fclose(f);
+    }
+    return path_;
+  }
+
+ private:
+  std::string path_;
+};
+
+}  // namespace shutterlab::fuzz
