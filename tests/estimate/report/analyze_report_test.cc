@@ -9,7 +9,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace shutterlab {
@@ -44,6 +47,7 @@ AnalyzeOptions SmallCamera() {
   options.rig.shutter.readout_s = 0.030;
   options.rig.altitude_m = 50.0;
   options.flight_series = true;
+  options.allan = true;
   return options;
 }
 
@@ -60,7 +64,7 @@ TEST(AnalyzeReport, ChartsHoldTheAnalysedValues) {
   AnalyzeReportOptions report;
   report.log_name = "flight<1>.bbl";
   report.worst_images = 1;
-  const std::string html = AnalyzeReportPage(log, options, result, report).Html();
+  const std::string html = AnalyzeReportPage(options, result, report).Html();
   EXPECT_TRUE(test::SelfContained(html));
   EXPECT_NE(html.find("var uPlot="), std::string::npos);
   EXPECT_NE(html.find("flight&lt;1&gt;.bbl"), std::string::npos);
@@ -125,10 +129,10 @@ TEST(AnalyzeReport, SceneIsRenderedUnderTheHeatmap) {
   const AnalyzeResult result = Analyze(log, options);
   AnalyzeReportOptions report;
   report.worst_images = 1;
-  const std::string plain = AnalyzeReportPage(log, options, result, report).Html();
+  const std::string plain = AnalyzeReportPage(options, result, report).Html();
   report.scene = cv::Mat(240, 320, CV_8UC3, cv::Scalar(250, 250, 250));
   report.scene_name = "white.png";
-  const std::string blended = AnalyzeReportPage(log, options, result, report).Html();
+  const std::string blended = AnalyzeReportPage(options, result, report).Html();
   EXPECT_NE(blended.find("blended over white.png"), std::string::npos);
   EXPECT_NE(plain, blended);  // the picture differs
 }
@@ -141,11 +145,52 @@ TEST(AnalyzeReport, LongTracesAreEnveloped) {
   AnalyzeReportOptions report;
   report.chart_buckets = 100;
   report.worst_images = 0;
-  const auto charts = test::ChartBlocks(AnalyzeReportPage(log, options, result, report).Html());
+  const auto charts = test::ChartBlocks(AnalyzeReportPage(options, result, report).Html());
   ASSERT_GE(charts.size(), 2u);
   EXPECT_EQ(charts[0]["data"][0].size(), 200u);  // 100 buckets, min and max each
   EXPECT_EQ(charts[1]["data"][0].size(), 200u);
   EXPECT_EQ(charts[2]["data"][0].size(), 6u);  // images every 5 s of 30 s: 0, 5, ..., 25 s
+}
+
+TEST(AnalyzeReport, DrawsTheResultsTracesAndIntegratesNothingAgain) {
+  const FlightLog log = StepLog(10.0, RateFor(0.02), RateFor(0.07));
+  AnalyzeOptions options = SmallCamera();
+  options.triggers = {{"shaken", SecondsToNs(6.5)}};
+  AnalyzeResult result = Analyze(log, options);
+  AnalyzeReportOptions report;
+  report.worst_images = 0;
+  report.chart_buckets = 6000;  // 10001 samples: drawn one by one, no envelope
+  const AnalyzeTraces& kept = *result.traces;
+  const auto rate_and_angle = [&](const AnalyzeResult& r) {
+    const auto charts = test::ChartBlocks(AnalyzeReportPage(options, r, report).Html());
+    return std::make_pair(charts.at(0), charts.at(1));
+  };
+  const auto [rate, angle] = rate_and_angle(result);
+  ASSERT_EQ(rate["data"][0].size(), kept.camera_rates.size());
+  ASSERT_EQ(angle["data"][0].size(), kept.angles.size());
+  for (size_t k = 0; k < kept.camera_rates.size(); ++k) {
+    for (int a = 0; a < 3; ++a) {
+      ASSERT_EQ(rate["data"][a + 1][k].get<double>(),
+                kept.camera_rates[k].omega_rad_s[a] * kDegPerRad);
+      ASSERT_EQ(angle["data"][a + 1][k].get<double>(), kept.angles.angle_rad[a][k] * kDegPerRad);
+    }
+  }
+  // Traces put in the result by hand are what the page shows: it takes them, it does not
+  // compute them again.
+  AnalyzeTraces doubled = kept;
+  for (auto& axis : doubled.angles.angle_rad) {
+    for (double& v : axis) v *= 2.0;
+  }
+  AnalyzeResult altered = result;
+  altered.traces = std::make_shared<const AnalyzeTraces>(std::move(doubled));
+  const auto [same_rate, doubled_angle] = rate_and_angle(altered);
+  EXPECT_EQ(same_rate["data"], rate["data"]);
+  const size_t last = kept.angles.size() - 1;
+  EXPECT_EQ(doubled_angle["data"][1][last].get<double>(),
+            2.0 * kept.angles.angle_rad[0][last] * kDegPerRad);
+  EXPECT_NE(kept.angles.angle_rad[0][last], 0.0);
+  // A result that did not come from Analyze has nothing to draw.
+  EXPECT_THROW(AnalyzeReportPage(options, AnalyzeResult(), report), std::invalid_argument);
 }
 
 TEST(FlaggedIntervalsS, MergesOverlappingWindows) {
