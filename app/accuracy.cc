@@ -4,6 +4,7 @@
 
 #include "app/command.h"
 #include "app/trace_options.h"
+#include "estimate/report/analysis_json.h"
 
 #include <iostream>
 #include <memory>
@@ -21,7 +22,11 @@ struct AccuracyCommand {
 
 void Run(const AccuracyCommand& command) {
   const AccuracyResult result = AnalyzeTrace(command.trace, command.accuracy, AnalyzeAccuracy);
-  std::cout << (command.json ? AccuracyJson(result) : AccuracyTable(result));
+  if (command.json) {
+    std::cout << AccuracyToJson(result).dump(2) << "\n";
+  } else {
+    std::cout << AccuracyTable(result);
+  }
 }
 
 const CommandRegistration kRegistration(30, [](CLI::App& app) {

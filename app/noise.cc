@@ -5,6 +5,7 @@
 
 #include "app/command.h"
 #include "app/trace_options.h"
+#include "estimate/report/analysis_json.h"
 #include "sim/text_file.h"
 
 #include <iostream>
@@ -25,7 +26,11 @@ struct NoiseCommand {
 void Run(const NoiseCommand& command) {
   const NoiseResult result = AnalyzeTrace(command.trace, command.noise, AnalyzeNoise);
   if (!command.allan_path.empty()) WriteFileAtomically(command.allan_path, AllanCsv(result.allan));
-  std::cout << (command.json ? NoiseJson(result) : NoiseTable(result));
+  if (command.json) {
+    std::cout << NoiseToJson(result).dump(2) << "\n";
+  } else {
+    std::cout << NoiseTable(result);
+  }
 }
 
 const CommandRegistration kRegistration(20, [](CLI::App& app) {
