@@ -4,6 +4,8 @@
 #include "sim/logs/flight_log_io.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
+#include "tests/estimate/paper/paper_fixtures.h"
+#include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -18,42 +20,21 @@
 namespace shutterlab {
 namespace {
 
-constexpr int64_t kDtNs = 1'000'000;  // 1 kHz
-constexpr double kStillS = 4.0;       // still lead-in: the bias segment DetectStillSegment finds
-constexpr double kAltitudeM = 50.0;
-constexpr double kReadoutS = 0.030;
+using test::ConstantRateLog;
+using test::RateForGroundSmear;
+
+constexpr int64_t kDtNs = test::kLogDtNs;  // 1 kHz
+constexpr double kAltitudeM = 50.0;        // test::MappingRig's
+constexpr double kReadoutS = 0.030;        // test::MappingRig's
 // D_paper interpolates the window's ends, so a constant rate gives w * readout up to rounding.
 constexpr double kPaperTolM = 1e-9;
 
-// Still for kStillS, then a constant rate (gyro axes) until total_s.
-FlightLog ConstantRateLog(const Eigen::Vector3d& rate_rad_s, double total_s) {
-  std::vector<GyroSample> samples;
-  const int64_t n = static_cast<int64_t>(total_s * 1e9) / kDtNs + 1;
-  const int64_t still_n = static_cast<int64_t>(kStillS * 1e9) / kDtNs;
-  for (int64_t k = 0; k < n; ++k) {
-    samples.push_back({k * kDtNs, k <= still_n ? Eigen::Vector3d::Zero() : rate_rad_s});
-  }
-  FlightLog log;
-  log.gyro = GyroTrace(std::move(samples));
-  log.format = "test";
-  log.gyro_source = "constant";
-  return log;
-}
-
+// The mapping camera (1280x960, f 1100 px, 30 ms, 50 m), the default limits and triggers.
 AnalyzeOptions BaseOptions() {
   AnalyzeOptions options;
-  options.rig.camera.width = 1280;
-  options.rig.camera.height = 960;
-  options.rig.camera.fx = options.rig.camera.fy = 1100.0;
-  options.rig.camera.cx = 639.5;
-  options.rig.camera.cy = 479.5;
-  options.rig.shutter.readout_s = kReadoutS;
-  options.rig.altitude_m = kAltitudeM;
+  options.rig = test::MappingRig();
   return options;
 }
-
-// The rate about one axis for which the paper's model gives d_m on the ground.
-double RateForGroundSmear(double d_m) { return std::atan(d_m / kAltitudeM) / kReadoutS; }
 
 TEST(Analyze, ConstantRateGivesPaperDistortionAndFlagsAboveTheLimit) {
   const double omega = RateForGroundSmear(0.07);  // between the 5 cm and 10 cm limits

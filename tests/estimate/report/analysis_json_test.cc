@@ -2,7 +2,8 @@
 // the typed results hold.
 #include "estimate/report/analysis_json.h"
 
-#include "tests/estimate/loop/effect_fixtures.h"
+#include "tests/estimate/paper/paper_fixtures.h"
+#include "tests/render/render_fixtures.h"
 
 #include <gtest/gtest.h>
 
@@ -13,27 +14,15 @@
 namespace shutterlab {
 namespace {
 
-constexpr int64_t kDtNs = 1'000'000;  // 1 kHz
-constexpr double kStillS = 4.0;       // a still lead-in: the bias segment
-
-// Still for kStillS, then a constant rate about (1, 1, 1) until total_s.
-GyroTrace ConstantRateTrace(double rate_rad_s, double total_s) {
-  std::vector<GyroSample> samples;
-  const int64_t n = static_cast<int64_t>(total_s * 1e9) / kDtNs + 1;
-  const int64_t still_n = static_cast<int64_t>(kStillS * 1e9) / kDtNs;
-  const Eigen::Vector3d axis = Eigen::Vector3d::Ones().normalized();
-  for (int64_t k = 0; k < n; ++k) {
-    const Eigen::Vector3d rate =
-        k <= still_n ? Eigen::Vector3d::Zero() : Eigen::Vector3d(rate_rad_s * axis);
-    samples.push_back({k * kDtNs, rate});
-  }
-  return GyroTrace(std::move(samples));
+// Still for 4 s, then a constant rate about (1, 1, 1) until total_s.
+FlightLog DiagonalRateLog(double rate_rad_s, double total_s) {
+  return test::ConstantRateLog(rate_rad_s * Eigen::Vector3d::Ones().normalized(), total_s);
 }
 
 TEST(AnalysisJson, FlightHasTheContractsKeys) {
   FlightOptions options;
   options.bias = {0.0, 2.0};
-  const FlightResult r = Flight(ConstantRateTrace(0.1, 8.0), options);
+  const FlightResult r = Flight(DiagonalRateLog(0.1, 8.0).gyro, options);
   const nlohmann::json j = FlightToJson(r);
   EXPECT_EQ(j.at("altitude_m"), 50.0);
   EXPECT_EQ(j.at("noise_allowance_arcsec"), 20.0);
@@ -50,15 +39,12 @@ TEST(AnalysisJson, FlightHasTheContractsKeys) {
   }
   // Without the vector criterion its column is null, not a made-up number.
   options.vector_criterion = false;
-  const nlohmann::json no_vector = FlightToJson(Flight(ConstantRateTrace(0.1, 8.0), options));
+  const nlohmann::json no_vector = FlightToJson(Flight(DiagonalRateLog(0.1, 8.0).gyro, options));
   EXPECT_TRUE(no_vector["rows"][0]["flagged_percent_vector"].is_null());
 }
 
 TEST(AnalysisJson, AnalyzeHasTheContractsKeysAndOneEntryPerImage) {
-  FlightLog log;
-  log.gyro = ConstantRateTrace(0.05, 12.0);
-  log.format = "test";
-  log.gyro_source = "constant";
+  const FlightLog log = DiagonalRateLog(0.05, 12.0);
   AnalyzeOptions options;
   options.rig = test::MappingRig();  // 1280x960, f 1100 px, 30 ms, 50 m
   options.every_s = 2.0;
