@@ -4,6 +4,7 @@
 
 #include "app/command.h"
 #include "app/trace_options.h"
+#include "estimate/report/analysis_json.h"
 
 #include <iostream>
 #include <memory>
@@ -20,8 +21,16 @@ struct AccuracyCommand {
 };
 
 void Run(const AccuracyCommand& command) {
-  const AccuracyResult result = AnalyzeTrace(command.trace, command.accuracy, AnalyzeAccuracy);
-  std::cout << (command.json ? AccuracyJson(result) : AccuracyTable(result));
+  std::vector<LogWarning> warnings;
+  const AccuracyResult result =
+      AnalyzeTrace(command.trace, command.accuracy, AnalyzeAccuracy, &warnings);
+  if (command.json) {
+    auto json = AccuracyToJson(result);
+    json["warnings"] = WarningsToJson(warnings);
+    std::cout << json.dump(2) << "\n";
+  } else {
+    std::cout << AccuracyTable(result);
+  }
 }
 
 const CommandRegistration kRegistration(30, [](CLI::App& app) {

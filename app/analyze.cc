@@ -99,8 +99,10 @@ void Run(const AnalyzeCommand& command) {
     report.scene = ToRgb8(ReadImage(command.scene_path));
     report.scene_name = std::filesystem::path(command.scene_path).filename().string();
   }
-  // The report shades the flagged windows and draws their histograms from the flight series.
+  // The report shades the flagged windows and draws their histograms from the flight series, and
+  // plots the Allan deviation.
   options.flight_series = !command.out_dir.empty();
+  options.allan = !command.out_dir.empty();
   const FlightLog log = ReadFlightLog(command.log_path, read);
   PrintLogWarnings(command.log_path, log.warnings);
   Progress progress("analyze", 1000);
@@ -113,7 +115,7 @@ void Run(const AnalyzeCommand& command) {
   }
   if (!command.out_dir.empty()) {
     WriteAnalyzeOutputs(command.out_dir, result);
-    AnalyzeReportPage(log, options, result, report).Write(command.out_dir + "/report.html");
+    AnalyzeReportPage(options, result, report).Write(command.out_dir + "/report.html");
   }
   if (command.json) {
     std::cout << AnalyzeToJson(result).dump(2) << "\n";

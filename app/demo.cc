@@ -154,6 +154,7 @@ void StepAnalyze(DemoContext& context) {
   AnalyzeOptions options;
   options.rig = AnalyzeCamera();
   options.flight_series = true;  // the report's shading and histograms; triggers: the log's own
+  options.allan = true;          // the report's noise plot
   AnalyzeResult result;
   {
     Progress progress("analyze", 1000);
@@ -175,8 +176,7 @@ void StepAnalyze(DemoContext& context) {
   WriteAnalyzeOutputs(context.out.string(), result);
   {
     Progress progress("report", 1);
-    AnalyzeReportPage(context.log, options, result, report)
-        .Write((context.out / "report.html").string());
+    AnalyzeReportPage(options, result, report).Write((context.out / "report.html").string());
   }
   std::cout << "Report: " << (context.out / "report.html").string() << "; "
             << (context.out / "images.csv").string() << ", "

@@ -5,6 +5,7 @@
 
 #include "app/command.h"
 #include "app/trace_options.h"
+#include "estimate/report/analysis_json.h"
 #include "sim/text_file.h"
 
 #include <iostream>
@@ -23,9 +24,16 @@ struct NoiseCommand {
 };
 
 void Run(const NoiseCommand& command) {
-  const NoiseResult result = AnalyzeTrace(command.trace, command.noise, AnalyzeNoise);
+  std::vector<LogWarning> warnings;
+  const NoiseResult result = AnalyzeTrace(command.trace, command.noise, AnalyzeNoise, &warnings);
   if (!command.allan_path.empty()) WriteFileAtomically(command.allan_path, AllanCsv(result.allan));
-  std::cout << (command.json ? NoiseJson(result) : NoiseTable(result));
+  if (command.json) {
+    auto json = NoiseToJson(result);
+    json["warnings"] = WarningsToJson(warnings);
+    std::cout << json.dump(2) << "\n";
+  } else {
+    std::cout << NoiseTable(result);
+  }
 }
 
 const CommandRegistration kRegistration(20, [](CLI::App& app) {

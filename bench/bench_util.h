@@ -6,6 +6,7 @@
 #include <benchmark/benchmark.h>
 #include <opencv2/core.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -68,6 +69,42 @@ double Timed(benchmark::State& state, const std::string& name, Body body) {
   double& best = MeanSeconds()[name];
   if (best == 0.0 || mean_s < best) best = mean_s;
   return mean_s;
+}
+
+// Thread CPU seconds of one call of body: the paired runs, which alternate the contenders call by
+// call so that each sees the same load on the shared machine.
+template <typename Body>
+double CpuSecondsOf(Body&& body) {
+  const double start_s = ThreadCpuSeconds();
+  body();
+  return ThreadCpuSeconds() - start_s;
+}
+
+// Google Benchmark's usual main up to the end of the timed runs; false when an argument was not
+// understood (said on stderr), and nothing ran.
+inline bool RunBenchmarks(int* argc, char** argv) {
+  benchmark::Initialize(argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(*argc, argv)) return false;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return true;
+}
+
+// Prints every MeanSeconds entry against the one named `reference`, under `heading`, each ratio
+// followed by `against` (what the reference is, for a person); nothing when the reference did not
+// run (filtered out by --benchmark_filter).
+inline void PrintAgainstReference(const std::string& reference, const std::string& heading,
+                                  const std::string& against) {
+  const auto& seconds = MeanSeconds();
+  const auto found = seconds.find(reference);
+  if (found == seconds.end() || found->second <= 0) return;
+  int width = 0;
+  for (const auto& entry : seconds) width = std::max(width, static_cast<int>(entry.first.size()));
+  std::printf("\n%s (best mean per repetition):\n", heading.c_str());
+  for (const auto& [name, s] : seconds) {
+    std::printf("  %-*s %9.2f ms   %7.2fx %s\n", width, name.c_str(), s * 1e3, s / found->second,
+                against.c_str());
+  }
 }
 
 }  // namespace shutterlab::bench

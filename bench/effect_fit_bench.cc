@@ -25,16 +25,13 @@
 
 #include "bench/bench_util.h"
 #include <cstdio>
-#include <map>
 #include <random>
 #include <string>
-#include <time.h>
 #include <vector>
 
 namespace shutterlab {
 namespace {
 
-using bench::MeanSeconds;
 using bench::Timed;
 
 constexpr int kStepPx = 28;  // 46 x 34 = 1564 points a frame
@@ -185,20 +182,10 @@ void PrintFalseAlarmRate(int sets) {
 }  // namespace shutterlab
 
 int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  const auto& seconds = shutterlab::bench::MeanSeconds();
-  const auto reference = seconds.find("DisplacementField (1 frame)");
-  if (reference != seconds.end() && reference->second > 0) {
-    std::printf(
-        "\n12 frames x 1564 points, 1 thread, thread CPU time (best mean per repetition):\n");
-    for (const auto& [name, s] : seconds) {
-      std::printf("  %-32s %9.2f ms   %7.2fx DisplacementField of one frame\n", name.c_str(),
-                  s * 1e3, s / reference->second);
-    }
-  }
+  if (!shutterlab::bench::RunBenchmarks(&argc, argv)) return 1;
+  shutterlab::bench::PrintAgainstReference("DisplacementField (1 frame)",
+                                           "12 frames x 1564 points, 1 thread, thread CPU time",
+                                           "DisplacementField of one frame");
   shutterlab::PrintFalseAlarmRate(200);
   return 0;
 }

@@ -14,8 +14,8 @@
 #include "render/image_io.h"
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
-#include "sim/synth/synth.h"
 #include "sim/units.h"
+#include "tests/estimate/loop/effect_fixtures.h"
 
 #include <benchmark/benchmark.h>
 #include <opencv2/imgproc.hpp>
@@ -25,7 +25,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <string>
-#include <time.h>
 #include <vector>
 
 namespace shutterlab {
@@ -36,20 +35,9 @@ struct Fixture {
   double d_px = 0.0;
   Fixture() {
     const cv::Mat scene = ReadImage(bench::RealDataPath("images/siyi_zr10/IMG_0100.jpg"));
-    SynthOptions synth;
-    synth.profile = MotionProfile::kFlight;
-    synth.rate_hz = 1000.0;
-    synth.duration_s = 20.0;
-    synth.seed = 11;
-    synth.imu = ImuErrorModel::Ideal();
     TrueModel truth;
-    truth.rig.camera.width = 1280;
-    truth.rig.camera.height = 960;
-    truth.rig.camera.fx = truth.rig.camera.fy = 1100.0;
-    truth.rig.camera.cx = 639.5;
-    truth.rig.camera.cy = 479.5;
-    truth.rig.shutter.readout_s = 0.030;
-    const CameraMotion motion(SynthesizeTrace(synth), truth);
+    truth.rig = test::MappingRig();
+    const CameraMotion motion(test::FlightTrace(20.0, 11), truth);
     const FrameMotion fm = motion.Frame(SecondsToNs(10.1));
     const FrameGeometry geometry(truth.rig.camera, 50.0, fm, scene.size());
     RenderFrame(scene, geometry, Interpolation::kBilinear, &rs);
@@ -77,23 +65,19 @@ void RunDisMedium(Fixture& f) {
       ->calc(f.rs_grey, f.ref_grey, f.flow);
 }
 
-template <typename Body>
-void Timed(benchmark::State& state, Body body) {
-  cv::setNumThreads(1);
+// bench::Timed on the shared fixture, with the mean in ms as a counter.
+void Timed(benchmark::State& state, const std::string& name, void (*body)(Fixture&)) {
   Fixture& f = Shared();
-  body(f);  // warm-up
-  double total_s = 0.0;
-  for (auto _ : state) {
-    const double start_s = bench::ThreadCpuSeconds();
-    body(f);
-    total_s += bench::ThreadCpuSeconds() - start_s;
-  }
-  state.counters["cpu_ms"] = 1e3 * total_s / static_cast<double>(state.iterations());
+  state.counters["cpu_ms"] = 1e3 * bench::Timed(state, name, [&f, body] { body(f); });
 }
 
-void BM_Measure(benchmark::State& state) { Timed(state, RunMeasure); }
-void BM_DisUltrafastFull(benchmark::State& state) { Timed(state, RunDisUltrafast); }
-void BM_DisMediumDefault(benchmark::State& state) { Timed(state, RunDisMedium); }
+void BM_Measure(benchmark::State& state) { Timed(state, "measure", RunMeasure); }
+void BM_DisUltrafastFull(benchmark::State& state) {
+  Timed(state, "DIS ULTRAFAST finest 0", RunDisUltrafast);
+}
+void BM_DisMediumDefault(benchmark::State& state) {
+  Timed(state, "DIS MEDIUM default", RunDisMedium);
+}
 
 BENCHMARK(BM_Measure)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_DisUltrafastFull)->Unit(benchmark::kMillisecond)->MinTime(2.0);
@@ -104,15 +88,10 @@ void PrintPairedRatios(int runs) {
   cv::setNumThreads(1);
   Fixture& f = Shared();
   std::vector<double> measure_s, ultrafast_s, medium_s;
-  auto time = [&f](void (*body)(Fixture&)) {
-    const double start_s = bench::ThreadCpuSeconds();
-    body(f);
-    return bench::ThreadCpuSeconds() - start_s;
-  };
   for (int i = 0; i < runs; ++i) {
-    ultrafast_s.push_back(time(RunDisUltrafast));
-    measure_s.push_back(time(RunMeasure));
-    medium_s.push_back(time(RunDisMedium));
+    ultrafast_s.push_back(bench::CpuSecondsOf([&f] { RunDisUltrafast(f); }));
+    measure_s.push_back(bench::CpuSecondsOf([&f] { RunMeasure(f); }));
+    medium_s.push_back(bench::CpuSecondsOf([&f] { RunDisMedium(f); }));
   }
   const double ultrafast = UpperMedian(ultrafast_s), measure = UpperMedian(measure_s),
                medium = UpperMedian(medium_s);
@@ -131,10 +110,7 @@ void PrintPairedRatios(int runs) {
 }  // namespace shutterlab
 
 int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
+  if (!shutterlab::bench::RunBenchmarks(&argc, argv)) return 1;
   shutterlab::PrintPairedRatios(7);
   return 0;
 }

@@ -21,15 +21,11 @@
 #include "bench/bench_util.h"
 #include <algorithm>
 #include <cstdio>
-#include <map>
 #include <string>
-#include <time.h>
 #include <vector>
 
 namespace shutterlab {
 namespace {
-
-using bench::MeanSeconds;
 
 constexpr int kWidth = 5472, kHeight = 3648;
 
@@ -124,19 +120,14 @@ void PrintPairedRatios(int runs) {
   cv::setNumThreads(1);
   const FrameGeometry geometry(f.camera, 50.0, f.motion, f.scene.size());
   std::vector<double> render_s, warp_s, remap_s;
-  auto time = [](auto&& body) {
-    const double start_s = bench::ThreadCpuSeconds();
-    body();
-    return bench::ThreadCpuSeconds() - start_s;
-  };
   for (int i = 0; i < runs; ++i) {
-    warp_s.push_back(time([&] {
+    warp_s.push_back(bench::CpuSecondsOf([&] {
       cv::warpPerspective(f.scene, f.out, f.homography, f.out.size(),
                           cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT);
     }));
-    render_s.push_back(
-        time([&] { RenderFrame(f.scene, geometry, Interpolation::kBilinear, &f.out); }));
-    remap_s.push_back(time(
+    render_s.push_back(bench::CpuSecondsOf(
+        [&] { RenderFrame(f.scene, geometry, Interpolation::kBilinear, &f.out); }));
+    remap_s.push_back(bench::CpuSecondsOf(
         [&] { cv::remap(f.scene, f.out, f.map1, f.map2, cv::INTER_LINEAR, cv::BORDER_CONSTANT); }));
   }
   const double warp = UpperMedian(warp_s), render = UpperMedian(render_s),
@@ -153,19 +144,9 @@ void PrintPairedRatios(int runs) {
 }  // namespace shutterlab
 
 int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  const auto& seconds = shutterlab::bench::MeanSeconds();
-  const auto reference = seconds.find("warpPerspective");
-  if (reference != seconds.end() && reference->second > 0) {
-    std::printf("\n20 MP RGB, 1 thread, bilinear, thread CPU time (best mean per repetition):\n");
-    for (const auto& [name, s] : seconds) {
-      std::printf("  %-16s %8.1f ms   %.2fx warpPerspective\n", name.c_str(), s * 1e3,
-                  s / reference->second);
-    }
-  }
+  if (!shutterlab::bench::RunBenchmarks(&argc, argv)) return 1;
+  shutterlab::bench::PrintAgainstReference(
+      "warpPerspective", "20 MP RGB, 1 thread, bilinear, thread CPU time", "warpPerspective");
   shutterlab::PrintPairedRatios(9);
   return 0;
 }

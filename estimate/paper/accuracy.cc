@@ -7,7 +7,6 @@
 #include "sim/units.h"
 
 #include <Eigen/Geometry>
-#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -243,33 +242,6 @@ AccuracyResult AnalyzeAccuracy(const GyroTrace& trace, const AccuracyOptions& op
 
   SetDifferenceStats(&result);
   return result;
-}
-
-std::string AccuracyJson(const AccuracyResult& result) {
-  nlohmann::ordered_json j;
-  j["reference_deg"] = result.reference_deg;
-  nlohmann::ordered_json rotations = nlohmann::ordered_json::array();
-  for (const auto& r : result.rotations) {
-    nlohmann::ordered_json item;
-    item["before_arcsec"] = {r.before_arcsec.x(), r.before_arcsec.y(), r.before_arcsec.z()};
-    item["after_arcsec"] = {r.after_arcsec.x(), r.after_arcsec.y(), r.after_arcsec.z()};
-    item["theta_arcsec"] = r.theta_arcsec;
-    item["difference_arcsec"] = r.difference_arcsec;
-    item["theta_vector_arcsec"] = r.theta_vector_arcsec;
-    item["theta_so3_arcsec"] = r.theta_so3_arcsec;
-    item["t_start_s"] = r.t_start_s;
-    item["t_end_s"] = r.t_end_s;
-    rotations.push_back(item);
-  }
-  j["rotations"] = rotations;
-  j["average_samples"] = result.average_samples;
-  j["difference_mean_arcsec"] = result.difference_mean_arcsec;
-  j["difference_std_arcsec"] = result.difference_std_arcsec;
-  j["noise_level_rad_s"] = result.noise_level_rad_s;
-  j["enter_rad_s"] = result.enter_rad_s;
-  j["exit_rad_s"] = result.exit_rad_s;
-  j["skipped_t_s"] = result.skipped_t_s;
-  return j.dump(2) + "\n";
 }
 
 std::string AccuracyTable(const AccuracyResult& result) {

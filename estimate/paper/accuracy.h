@@ -70,13 +70,9 @@ struct AccuracyResult {
 
 // Detects the turns after the bias segment and measures each. Throws std::invalid_argument when
 // the options are bad, the bias segment is too short, or no measurable turn is found (the message
-// says why and gives the threshold).
+// says why and gives the threshold). Its JSON is written at the edge
+// (estimate/report/analysis_json.h AccuracyToJson).
 AccuracyResult AnalyzeAccuracy(const GyroTrace& trace, const AccuracyOptions& options);
-
-// JSON exactly as docs/FORMATS.md `accuracy`, plus extra keys per rotation (t_start_s, t_end_s,
-// theta_vector_arcsec, theta_so3_arcsec) and top level (average_samples, noise_level_rad_s,
-// enter_rad_s, exit_rad_s, skipped_t_s, difference_mean_arcsec, difference_std_arcsec).
-std::string AccuracyJson(const AccuracyResult& result);
 
 // Table for a person in the paper's Table 3 layout: one row per turn; before x y z, after x y z,
 // theta and difference (arcsec); then the SO(3) comparison and the mean and std of the differences.

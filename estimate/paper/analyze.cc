@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -200,6 +201,28 @@ void EstimateStillBias(const GyroTrace& camera_rates, bool estimate_bias, Analyz
   }
 }
 
+// The Allan deviation of the camera-axis rates, on the still segment when it holds enough samples
+// (AnalyzeResult::allan, allan_on_still).
+void AllanOfRates(const GyroTrace& rates, AnalyzeResult* result) {
+  result->allan_on_still = false;
+  if (result->bias_from_still) {
+    const int64_t t0 = rates.samples().front().t_ns;
+    std::vector<GyroSample> still;
+    for (const GyroSample& s : rates.samples()) {
+      const double t_s = (s.t_ns - t0) * 1e-9;
+      if (t_s >= result->still_segment.begin_s && t_s <= result->still_segment.end_s) {
+        still.push_back(s);
+      }
+    }
+    if (still.size() >= 20) {
+      result->allan = AllanAnalysis(GyroTrace(std::move(still)));
+      result->allan_on_still = true;
+      return;
+    }
+  }
+  result->allan = AllanAnalysis(rates);
+}
+
 // The flight table for this camera's readout (result->flight), or why there is none
 // (result->flight_problem). Progress 0 to 0.7.
 void FlightTableForReadout(const GyroTrace& camera_rates, const AnalyzeOptions& options,
@@ -384,16 +407,25 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
 
   AnalyzeResult result;
   DescribeSource(log, options, altitude_source, &result);
-  const GyroTrace camera_rates =
-      RotateTrace(gyro, options.rig.cam_from_gyro, Eigen::Vector3d::Zero());
-  EstimateStillBias(camera_rates, options.estimate_bias, &result);
-  FlightTableForReadout(camera_rates, options, &result);
+  {
+    // The bias is not known yet: the still search and the flight table take the rates as logged.
+    const GyroTrace camera_rates =
+        RotateTrace(gyro, options.rig.cam_from_gyro, Eigen::Vector3d::Zero());
+    EstimateStillBias(camera_rates, options.estimate_bias, &result);
+    FlightTableForReadout(camera_rates, options, &result);
+  }
 
-  // Per-image distortion.
-  const PerAxisAngles angles = IntegratePerAxis(camera_rates, result.bias_rad_s);
-  const CameraMotion motion(gyro, AnalyzeTrueModel(options.rig, result.bias_rad_s));
+  // Per-image distortion, from the traces the result keeps for the report. The angles are the
+  // same numbers as IntegratePerAxis(rates as logged, bias): each step is (w - b) * dt either way.
+  GyroTrace rates = RotateTrace(gyro, options.rig.cam_from_gyro, result.bias_rad_s);
+  PerAxisAngles angles = IntegratePerAxis(rates, Eigen::Vector3d::Zero());
+  result.traces = std::make_shared<const AnalyzeTraces>(
+      AnalyzeTraces{std::move(rates), std::move(angles),
+                    CameraMotion(gyro, AnalyzeTrueModel(options.rig, result.bias_rad_s))});
+  if (options.allan) AllanOfRates(result.traces->camera_rates, &result);
   const std::vector<ImageTrigger> triggers = ChooseTriggers(log, options, &result.trigger_source);
-  ImageContext context{&angles, &motion, options.rig, options.limits_m};
+  ImageContext context{&result.traces->angles, &result.traces->motion, options.rig,
+                       options.limits_m};
   const int64_t latency_ns = SecondsToNs(options.trigger_latency_s);
   result.images.reserve(triggers.size());
   for (size_t i = 0; i < triggers.size(); ++i) {

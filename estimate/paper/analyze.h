@@ -22,15 +22,21 @@
 // DetectStillSegment finds, else zero (AnalyzeResult::bias_from_still says which; with
 // AnalyzeOptions::estimate_bias false, zero without a search); it applies to
 // every sample, the flight table's included (FlightOptions::known_bias_rad_s).
+// The result keeps the traces the images came from (AnalyzeTraces: the camera-axis rates, their
+// per-axis angles, the full model's motion), each built once, for the report to draw.
 
+#include "estimate/paper/allan.h"
 #include "estimate/paper/flight.h"
 #include "render/camera.h"
 #include "render/truth_model.h"
+#include "sim/gyro_trace.h"
+#include "sim/integrate.h"
 #include "sim/logs/flight_log.h"
 
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -65,6 +71,8 @@ struct AnalyzeOptions {
   bool estimate_bias = true;
   // Keep the flight table's per-window ranges (FlightResult::series, readout window) for plots.
   bool flight_series = false;
+  // Compute the Allan deviation of the camera-axis rates (AnalyzeResult::allan) for the report.
+  bool allan = false;
   std::function<void(double)> progress;  // fraction done (0..1); may be empty
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
@@ -93,6 +101,20 @@ struct AnalyzeVerdict {
   std::string line;                                 // the one-line verdict for a person
 };
 
+// What the per-image analysis was computed from, kept so that a report draws it rather than
+// computing it again from the log.
+struct AnalyzeTraces {
+  // The log's rates in camera axes with the bias removed (rig.cam_from_gyro * w - bias), rad/s, on
+  // the log's gyro clock.
+  GyroTrace camera_rates;
+  // Their per-axis angles, the paper's sum (IntegratePerAxis with zero bias), rad, one per sample:
+  // the images' ranges and D_paper come from these.
+  PerAxisAngles angles;
+  // The full model's motion (AnalyzeTrueModel of the rig analysed, the log's altitude when used):
+  // D_full comes from its frames.
+  CameraMotion motion;
+};
+
 struct AnalyzeResult {
   // source
   std::string format, gyro_source;
@@ -114,6 +136,14 @@ struct AnalyzeResult {
   std::string altitude_method;  // how the log's altitude was formed (FlightLog::altitude_source)
   std::vector<ImageResult> images;
   AnalyzeVerdict verdict;
+  // With AnalyzeOptions::allan, the Allan deviation of the camera-axis rates (bias removed): on the
+  // still segment when one was found with 20 samples or more (allan_on_still), else on the whole
+  // log, where the flight's motion dominates and it bounds the gyro's noise from above. Empty
+  // (AllanResult::empty) when too few samples; nullopt when not asked for.
+  std::optional<AllanResult> allan;
+  bool allan_on_still = false;
+  // Set by Analyze, never null there; shared, so that copying a result does not copy the traces.
+  std::shared_ptr<const AnalyzeTraces> traces;
 };
 
 AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& options);

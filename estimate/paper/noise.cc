@@ -6,8 +6,6 @@
 #include "sim/text_file.h"
 #include "sim/units.h"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -73,36 +71,6 @@ NoiseResult AnalyzeNoise(const GyroTrace& trace, const NoiseOptions& options) {
   }
   result.allan = AllanAnalysis(trace, first, options.allan_points_per_decade);
   return result;
-}
-
-std::string NoiseJson(const NoiseResult& result) {
-  nlohmann::ordered_json j;
-  j["window_samples"] = result.window_samples;
-  j["windows"] = result.windows;
-  j["samples"] = result.samples_analysed;
-  j["rate_hz"] = result.rate_hz;
-  nlohmann::ordered_json axes;
-  for (int a = 0; a < 3; ++a) {
-    const AxisNoise& n = result.axes[a];
-    nlohmann::ordered_json axis;
-    axis["sigma_mean_arcsec"] = n.sigma_mean_arcsec;
-    axis["sigma_max_arcsec"] = n.sigma_max_arcsec;
-    axis["range_mean_arcsec"] = n.range_mean_arcsec;
-    axis["range_max_arcsec"] = n.range_max_arcsec;
-    axis["sigma_rms_arcsec"] = n.sigma_rms_arcsec;
-    axis["bias_rad_s"] = result.bias.bias_rad_s[a];
-    if (!result.allan.empty()) {
-      const AllanCoefficients& c = result.allan.axes[a];
-      axis["arw_deg_sqrt_h"] = c.arw_deg_sqrt_h;
-      axis["arw_rad_s_sqrt_hz"] = c.arw_rad_s_sqrt_hz;
-      axis["bias_instability_deg_h"] = c.bias_instability_deg_h;
-      axis["bias_instability_tau_s"] = c.bias_instability_tau_s;
-      axis["bias_instability_upper_bound"] = c.bias_instability_upper_bound;
-    }
-    axes[kAxisNames[a]] = axis;
-  }
-  j["axes"] = axes;
-  return j.dump(2) + "\n";
 }
 
 std::string NoiseTable(const NoiseResult& result) {

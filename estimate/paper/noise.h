@@ -44,13 +44,8 @@ struct NoiseResult {
 // per-axis angles (sim/integrate.h IntegratePerAxis) of the samples after the segment's end;
 // sliding windows of window_samples consecutive samples, step one sample. Throws
 // std::invalid_argument when the bias segment is too short or the window is longer than the samples
-// after it.
+// after it. Its JSON is written at the edge (estimate/report/analysis_json.h NoiseToJson).
 NoiseResult AnalyzeNoise(const GyroTrace& trace, const NoiseOptions& options);
-
-// JSON exactly as docs/FORMATS.md `noise`, plus extra keys: per axis sigma_rms_arcsec,
-// arw_deg_sqrt_h, arw_rad_s_sqrt_hz, bias_instability_deg_h, bias_instability_tau_s,
-// bias_instability_upper_bound, bias_rad_s; top level windows, samples, rate_hz.
-std::string NoiseJson(const NoiseResult& result);
 
 // A table for a person in the paper's layout: one row per axis; sigma mean/max, range mean/max
 // (arcsec); then ARW and bias instability from the Allan deviation.

@@ -7,6 +7,63 @@ constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 
 }  // namespace
 
+nlohmann::ordered_json NoiseToJson(const NoiseResult& result) {
+  nlohmann::ordered_json j;
+  j["window_samples"] = result.window_samples;
+  j["windows"] = result.windows;
+  j["samples"] = result.samples_analysed;
+  j["rate_hz"] = result.rate_hz;
+  nlohmann::ordered_json axes;
+  for (int a = 0; a < 3; ++a) {
+    const AxisNoise& n = result.axes[a];
+    nlohmann::ordered_json axis;
+    axis["sigma_mean_arcsec"] = n.sigma_mean_arcsec;
+    axis["sigma_max_arcsec"] = n.sigma_max_arcsec;
+    axis["range_mean_arcsec"] = n.range_mean_arcsec;
+    axis["range_max_arcsec"] = n.range_max_arcsec;
+    axis["sigma_rms_arcsec"] = n.sigma_rms_arcsec;
+    axis["bias_rad_s"] = result.bias.bias_rad_s[a];
+    if (!result.allan.empty()) {
+      const AllanCoefficients& c = result.allan.axes[a];
+      axis["arw_deg_sqrt_h"] = c.arw_deg_sqrt_h;
+      axis["arw_rad_s_sqrt_hz"] = c.arw_rad_s_sqrt_hz;
+      axis["bias_instability_deg_h"] = c.bias_instability_deg_h;
+      axis["bias_instability_tau_s"] = c.bias_instability_tau_s;
+      axis["bias_instability_upper_bound"] = c.bias_instability_upper_bound;
+    }
+    axes[kAxisNames[a]] = axis;
+  }
+  j["axes"] = axes;
+  return j;
+}
+
+nlohmann::ordered_json AccuracyToJson(const AccuracyResult& result) {
+  nlohmann::ordered_json j;
+  j["reference_deg"] = result.reference_deg;
+  nlohmann::ordered_json rotations = nlohmann::ordered_json::array();
+  for (const DetectedRotation& r : result.rotations) {
+    nlohmann::ordered_json item;
+    item["before_arcsec"] = {r.before_arcsec.x(), r.before_arcsec.y(), r.before_arcsec.z()};
+    item["after_arcsec"] = {r.after_arcsec.x(), r.after_arcsec.y(), r.after_arcsec.z()};
+    item["theta_arcsec"] = r.theta_arcsec;
+    item["difference_arcsec"] = r.difference_arcsec;
+    item["theta_vector_arcsec"] = r.theta_vector_arcsec;
+    item["theta_so3_arcsec"] = r.theta_so3_arcsec;
+    item["t_start_s"] = r.t_start_s;
+    item["t_end_s"] = r.t_end_s;
+    rotations.push_back(item);
+  }
+  j["rotations"] = rotations;
+  j["average_samples"] = result.average_samples;
+  j["difference_mean_arcsec"] = result.difference_mean_arcsec;
+  j["difference_std_arcsec"] = result.difference_std_arcsec;
+  j["noise_level_rad_s"] = result.noise_level_rad_s;
+  j["enter_rad_s"] = result.enter_rad_s;
+  j["exit_rad_s"] = result.exit_rad_s;
+  j["skipped_t_s"] = result.skipped_t_s;
+  return j;
+}
+
 nlohmann::json FlightToJson(const FlightResult& result) {
   nlohmann::json rows = nlohmann::json::array();
   for (const FlightRow& row : result.rows) {

@@ -1,9 +1,11 @@
 #pragma once
-// The paper's analyses as docs/FORMATS.md's JSON (`flight`, `analyze`): the results stay typed in
-// estimate/paper; their JSON is written here, at the edge.
+// The paper's analyses as docs/FORMATS.md's JSON (`noise`, `accuracy`, `flight`, `analyze`): the
+// results stay typed in estimate/paper; their JSON is written here, at the edge.
 
+#include "estimate/paper/accuracy.h"
 #include "estimate/paper/analyze.h"
 #include "estimate/paper/flight.h"
+#include "estimate/paper/noise.h"
 #include "sim/log_warning.h"
 
 #include <nlohmann/json.hpp>
@@ -11,6 +13,18 @@
 #include <vector>
 
 namespace shutterlab {
+
+// docs/FORMATS.md `noise` JSON, plus extra keys: per axis sigma_rms_arcsec, bias_rad_s and, when
+// the Allan deviation was computed, arw_deg_sqrt_h, arw_rad_s_sqrt_hz, bias_instability_deg_h,
+// bias_instability_tau_s, bias_instability_upper_bound; top level windows, samples, rate_hz. Keys
+// in the contract's order (ordered_json), as `noise --json` has always printed them.
+nlohmann::ordered_json NoiseToJson(const NoiseResult& result);
+
+// docs/FORMATS.md `accuracy` JSON, plus extra keys per rotation (theta_vector_arcsec,
+// theta_so3_arcsec, t_start_s, t_end_s) and top level (average_samples, difference_mean_arcsec,
+// difference_std_arcsec, noise_level_rad_s, enter_rad_s, exit_rad_s, skipped_t_s). Keys in the
+// contract's order (ordered_json), as `accuracy --json` has always printed them.
+nlohmann::ordered_json AccuracyToJson(const AccuracyResult& result);
 
 // docs/FORMATS.md `flight` JSON (plus per-axis percentages, window counts and the bias).
 nlohmann::json FlightToJson(const FlightResult& result);

@@ -6,7 +6,6 @@
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
 #include "sim/check.h"
-#include "sim/integrate.h"
 #include "sim/units.h"
 
 #include <opencv2/imgproc.hpp>
@@ -36,14 +35,6 @@ std::string Fmt(const char* format, double value) {
 
 std::string Cm(double m) { return Fmt("%.0f cm", m * 100.0); }
 
-// Camera-axis rates with the bias removed, as Analyze uses them.
-GyroTrace CameraRates(const GyroTrace& gyro, const Eigen::Matrix3d& cam_from_gyro,
-                      const Eigen::Vector3d& bias_rad_s) {
-  std::vector<GyroSample> samples = gyro.samples();
-  for (GyroSample& s : samples) s.omega_rad_s = cam_from_gyro * s.omega_rad_s - bias_rad_s;
-  return GyroTrace(std::move(samples));
-}
-
 std::vector<ChartShading> FlaggedShadings(const AnalyzeResult& result) {
   std::vector<ChartShading> shadings;
   if (!result.flight || result.flight->series.t_ns.empty()) return shadings;
@@ -65,9 +56,9 @@ std::vector<ChartShading> FlaggedShadings(const AnalyzeResult& result) {
   return shadings;
 }
 
-void AddRateAndAngleCharts(HtmlPage* page, const GyroTrace& rates, const AnalyzeResult& result,
+void AddRateAndAngleCharts(HtmlPage* page, const AnalyzeTraces& traces, const AnalyzeResult& result,
                            const AnalyzeReportOptions& report) {
-  const auto& samples = rates.samples();
+  const auto& samples = traces.camera_rates.samples();
   Chart rate;
   rate.title = "Rotation rate, camera axes (bias removed)";
   rate.x_label = "time on the log clock (s)";
@@ -89,7 +80,7 @@ void AddRateAndAngleCharts(HtmlPage* page, const GyroTrace& rates, const Analyze
   Chart angle = rate;  // the same x; the per-axis angles of the paper's model
   angle.title = "Integrated angle per camera axis (the paper's per-axis sum)";
   angle.y_label = "angle (deg)";
-  const PerAxisAngles angles = IntegratePerAxis(rates, Eigen::Vector3d::Zero());
+  const PerAxisAngles& angles = traces.angles;
   for (int a = 0; a < 3; ++a) {
     for (size_t i = 0; i < angle.x.size(); ++i) {
       angle.series[a].y[i] = angles.angle_rad[a][i] * kDegPerRad;
@@ -168,8 +159,11 @@ void AddWindowHistograms(HtmlPage* page, const FlightResult& flight,
   page->AddChart(chart);
 }
 
-void AddAllan(HtmlPage* page, const GyroTrace& rates, const AnalyzeResult& result) {
-  GyroTrace segment = rates;
+void AddAllan(HtmlPage* page, const AnalyzeResult& result) {
+  if (!result.allan) {
+    page->Paragraph("Allan deviation: not computed (AnalyzeOptions::allan).");
+    return;
+  }
   std::string on =
       "the whole log (no still segment found: the flight's motion dominates, so this "
       "bounds the gyro's noise from above)";
@@ -177,21 +171,11 @@ void AddAllan(HtmlPage* page, const GyroTrace& rates, const AnalyzeResult& resul
     on = "the whole log (bias not estimated, no still segment searched: the flight's motion "
          "dominates, so this bounds the gyro's noise from above)";
   }
-  if (result.bias_from_still) {
-    const int64_t t0 = rates.samples().front().t_ns;
-    std::vector<GyroSample> still;
-    for (const GyroSample& s : rates.samples()) {
-      const double t_s = (s.t_ns - t0) * 1e-9;
-      if (t_s >= result.still_segment.begin_s && t_s <= result.still_segment.end_s)
-        still.push_back(s);
-    }
-    if (still.size() >= 20) {
-      segment = GyroTrace(std::move(still));
-      on = "the still segment " + Fmt("%.2f", result.still_segment.begin_s) + "-" +
-           Fmt("%.2f", result.still_segment.end_s) + " s after the first sample";
-    }
+  if (result.allan_on_still) {
+    on = "the still segment " + Fmt("%.2f", result.still_segment.begin_s) + "-" +
+         Fmt("%.2f", result.still_segment.end_s) + " s after the first sample";
   }
-  const AllanResult allan = AllanAnalysis(segment);
+  const AllanResult& allan = *result.allan;
   if (allan.empty()) {
     page->Paragraph("Allan deviation: too few samples on " + on + ".");
     return;
@@ -302,8 +286,8 @@ cv::Mat WorstImagePicture(const CameraMotion& motion, const RigModel& rig, const
   return picture;
 }
 
-void AddWorstImages(HtmlPage* page, const FlightLog& log, const RigModel& rig,
-                    const AnalyzeResult& result, const AnalyzeReportOptions& report) {
+void AddWorstImages(HtmlPage* page, const RigModel& rig, const AnalyzeResult& result,
+                    const AnalyzeReportOptions& report) {
   std::vector<const ImageResult*> worst;
   for (const ImageResult& image : result.images) {
     if (image.in_trace) worst.push_back(&image);
@@ -323,9 +307,8 @@ void AddWorstImages(HtmlPage* page, const FlightLog& log, const RigModel& rig,
                                              (report.scene_name.empty() ? std::string("the scene")
                                                                         : report.scene_name) +
                                              " rendered through the same rolling-shutter frame."));
-  const CameraMotion motion(log.gyro, AnalyzeTrueModel(rig, result.bias_rad_s));
   for (const ImageResult* image : worst) {
-    page->Image(WorstImagePicture(motion, rig, *image, report),
+    page->Image(WorstImagePicture(result.traces->motion, rig, *image, report),
                 image->name + " at " + Fmt("%.2f", image->t_ns * 1e-9) + " s: D full " +
                     Fmt("%.1f", image->d_full_m * 100) + " cm (" + Fmt("%.1f", image->d_full_px) +
                     " px), D paper " + Fmt("%.1f", image->d_paper_m * 100) + " cm, axis " +
@@ -343,9 +326,11 @@ void AnalyzeReportOptions::Check() const {
   SHUTTERLAB_CHECK(picture_width_px >= 64) << "picture_width_px must be >= 64";
 }
 
-HtmlPage AnalyzeReportPage(const FlightLog& log, const AnalyzeOptions& options,
-                           const AnalyzeResult& result, const AnalyzeReportOptions& report) {
+HtmlPage AnalyzeReportPage(const AnalyzeOptions& options, const AnalyzeResult& result,
+                           const AnalyzeReportOptions& report) {
   report.Check();
+  SHUTTERLAB_CHECK(result.traces != nullptr)
+      << "the report draws the traces Analyze keeps: give it a result of Analyze";
   RigModel rig = options.rig;
   rig.altitude_m = result.altitude_m;
   HtmlPage page("Rolling-shutter flight report" +
@@ -396,13 +381,12 @@ HtmlPage AnalyzeReportPage(const FlightLog& log, const AnalyzeOptions& options,
   }
 
   page.Heading("Rotation during the flight");
-  const GyroTrace rates = CameraRates(log.gyro, options.rig.cam_from_gyro, result.bias_rad_s);
   if (!result.flight || result.flight->series.t_ns.empty()) {
     page.Paragraph(
         "Flagged windows are not shaded: the flight table's per-window series was not "
         "computed.");
   }
-  AddRateAndAngleCharts(&page, rates, result, report);
+  AddRateAndAngleCharts(&page, *result.traces, result, report);
 
   page.Heading("Distortion per image");
   page.Paragraph(
@@ -419,13 +403,13 @@ HtmlPage AnalyzeReportPage(const FlightLog& log, const AnalyzeOptions& options,
   }
 
   page.Heading("Gyro noise");
-  AddAllan(&page, rates, result);
+  AddAllan(&page, result);
 
   page.Heading("Images");
   AddImageTable(&page, result);
 
   page.Heading("Worst images");
-  AddWorstImages(&page, log, rig, result, report);
+  AddWorstImages(&page, rig, result, report);
   return page;
 }
 

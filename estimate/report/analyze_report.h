@@ -6,12 +6,13 @@
 // log), the flight and per-image tables, and for the worst images (by D_full) a heatmap of the
 // expected displacement |d| (render/rs_warp.h DisplacementField), blended over the nadir scene
 // rendered through the same frame when a scene is given. Built with estimate/html_report.h.
+// The page draws what Analyze computed (AnalyzeResult::traces: the rates, angles and camera
+// motion; AnalyzeResult::allan); it integrates and analyses nothing again.
 //
 // Long traces are cut to min/max envelopes (DownsampleMinMax) so the page stays a few MB.
 
 #include "estimate/paper/analyze.h"
 #include "estimate/report/html_report.h"
-#include "sim/logs/flight_log.h"
 
 #include <opencv2/core.hpp>
 
@@ -30,10 +31,11 @@ struct AnalyzeReportOptions {
   void Check() const;
 };
 
-// options: those given to Analyze (the rig; the altitude used is result.altitude_m). result should
-// come from Analyze with AnalyzeOptions::flight_series set, else the window histograms and the
-// shading are left out (said on the page).
-HtmlPage AnalyzeReportPage(const FlightLog& log, const AnalyzeOptions& options,
-                           const AnalyzeResult& result, const AnalyzeReportOptions& report);
+// options: those given to Analyze (the rig; the altitude used is result.altitude_m). result must
+// come from Analyze (it holds the traces drawn; throws std::invalid_argument otherwise), with
+// AnalyzeOptions::flight_series and allan set, else the window histograms and the shading, or the
+// Allan deviation, are left out (said on the page).
+HtmlPage AnalyzeReportPage(const AnalyzeOptions& options, const AnalyzeResult& result,
+                           const AnalyzeReportOptions& report);
 
 }  // namespace shutterlab

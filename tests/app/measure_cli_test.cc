@@ -35,13 +35,7 @@ PairFiles WritePair(const test::TempDir& dir) {
   cv::Mat scene = ReadImage(test::GroundScenePath(2));
   cv::resize(scene, scene, {}, 0.5, 0.5, cv::INTER_AREA);
   TrueModel truth;
-  truth.rig.camera.width = 480;
-  truth.rig.camera.height = 360;
-  truth.rig.camera.fx = truth.rig.camera.fy = 550.0;
-  truth.rig.camera.cx = 239.5;
-  truth.rig.camera.cy = 179.5;
-  truth.rig.shutter.readout_s = 0.030;
-  truth.rig.altitude_m = 50.0;
+  truth.rig = test::NadirRig(480, 360, 550.0);  // 30 ms, 50 m
   const CameraMotion motion(test::ConstantRateTrace({0.3, -0.2, 0.4}), truth);
   const FrameMotion fm = motion.Frame(SecondsToNs(0.5));
   const FrameGeometry geometry(truth.rig.camera, truth.rig.altitude_m, fm, scene.size());

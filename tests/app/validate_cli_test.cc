@@ -6,9 +6,9 @@
 #include "render/camera.h"
 #include "render/render_dataset.h"
 #include "sim/logs/gyro_io.h"
-#include "sim/synth/synth.h"
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
+#include "tests/estimate/loop/effect_fixtures.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
@@ -26,22 +26,8 @@ namespace fs = std::filesystem;
 
 // Renders dir/ds: 3 frames of 320x240 (f 275 px, 30 ms, 50 m), 3 ms undeclared time offset.
 std::string SmallDataset(const test::TempDir& dir) {
-  RigModel rig;
-  rig.camera.width = 320;
-  rig.camera.height = 240;
-  rig.camera.fx = rig.camera.fy = 275.0;
-  rig.camera.cx = 159.5;
-  rig.camera.cy = 119.5;
-  rig.shutter.readout_s = 0.030;
-  rig.altitude_m = 50.0;
-  WriteRigModel(dir / "camera.json", rig);
-  SynthOptions synth;
-  synth.profile = MotionProfile::kFlight;
-  synth.rate_hz = 1000.0;
-  synth.duration_s = 14.0;
-  synth.seed = 5;
-  synth.imu = ImuErrorModel::Ideal();
-  WriteGyroCsv(dir / "gyro.csv", SynthesizeTrace(synth));
+  WriteRigModel(dir / "camera.json", test::NadirRig(320, 240, 275.0));
+  WriteGyroCsv(dir / "gyro.csv", test::FlightTrace(14.0, 5));
   WriteFileAtomically(dir / "times.csv", "frame,t_first_row\n0,8.5\n1,10.0\n2,12.0\n");
   RenderOptions render;
   render.scene_path = test::GroundScenePath(2);

@@ -1,5 +1,6 @@
 #pragma once
-// Small fixtures shared by the render tests: rigs, constant-rate gyro traces, synthetic textures.
+// Small fixtures shared by the render tests and the tests above them: rigs, constant-rate gyro
+// traces, synthetic textures, the ground scene.
 
 #include "render/camera.h"
 #include "render/ground_texture.h"
@@ -49,17 +50,28 @@ inline std::string GroundScenePath(uint64_t seed = 1) {
   return written.paths[seed] = path;
 }
 
-// A small nadir rig: width x height, f = 300 px, principal point at the centre, 20 ms readout.
-inline RigModel SmallRig(int width = 96, int height = 72) {
+// A nadir rig over flat ground: width x height, fx = fy = f_px, the principal point at the centre,
+// no lens distortion, top-to-bottom readout, camera axes = gyro axes.
+inline RigModel NadirRig(int width, int height, double f_px, double readout_s = 0.030,
+                         double altitude_m = 50.0) {
   RigModel rig;
   rig.camera.width = width;
   rig.camera.height = height;
-  rig.camera.fx = 300.0;
-  rig.camera.fy = 310.0;
+  rig.camera.fx = rig.camera.fy = f_px;
   rig.camera.cx = (width - 1) / 2.0;
   rig.camera.cy = (height - 1) / 2.0;
-  rig.shutter.readout_s = 0.020;
-  rig.altitude_m = 40.0;
+  rig.shutter.readout_s = readout_s;
+  rig.altitude_m = altitude_m;
+  return rig;
+}
+
+// A mapping camera's rig: 1280x960, f = 1100 px, 30 ms readout, 50 m over flat ground.
+inline RigModel MappingRig() { return NadirRig(1280, 960, 1100.0); }
+
+// A small nadir rig: width x height, f = 300 px (fy 310: the axes kept apart), 20 ms, 40 m.
+inline RigModel SmallRig(int width = 96, int height = 72) {
+  RigModel rig = NadirRig(width, height, 300.0, 0.020, 40.0);
+  rig.camera.fy = 310.0;
   return rig;
 }
 

@@ -1,13 +1,14 @@
 #pragma once
-// Synthetic measurements for the effect-fitting tests and bench: a mapping camera's rig, a
+// Synthetic measurements for the effect-fitting tests and bench: the video tests' rig, a
 // multirotor-like gyro trace, grid points with the exact displacement of a TrueModel plus Gaussian
-// noise.
+// noise. The rigs they start from (MappingRig, NadirRig) are tests/render/render_fixtures.h's.
 
 #include "estimate/loop/effect_fit.h"
 #include "render/camera.h"
 #include "render/truth_model.h"
 #include "sim/gyro_trace.h"
 #include "sim/synth/synth.h"
+#include "tests/render/render_fixtures.h"
 
 #include <Eigen/Core>
 
@@ -18,30 +19,9 @@
 
 namespace shutterlab::test {
 
-// A mapping camera's rig: 1280x960, f = 1100 px, 30 ms readout, 50 m over flat ground.
-inline RigModel MappingRig() {
-  RigModel rig;
-  rig.camera.width = 1280;
-  rig.camera.height = 960;
-  rig.camera.fx = rig.camera.fy = 1100.0;
-  rig.camera.cx = 639.5;
-  rig.camera.cy = 479.5;
-  rig.shutter.readout_s = 0.030;
-  rig.altitude_m = 50.0;
-  return rig;
-}
-
-// The video tests' rig: the mapping rig's field of view at 640x480 (f = 550 px), 30 ms readout, 50
-// m.
-inline RigModel VideoRig() {
-  RigModel rig = MappingRig();
-  rig.camera.width = 640;
-  rig.camera.height = 480;
-  rig.camera.fx = rig.camera.fy = 550.0;
-  rig.camera.cx = 319.5;
-  rig.camera.cy = 239.5;
-  return rig;
-}
+// The video tests' rig: the mapping rig's (tests/render/render_fixtures.h MappingRig) field of
+// view at 640x480 (f = 550 px), 30 ms readout, 50 m.
+inline RigModel VideoRig() { return NadirRig(640, 480, 550.0); }
 
 // A multirotor-like logged trace (sim/motion.h flight profile, ideal sensor: the fit only sees the
 // logged rates, and the truth is defined on them), 1 kHz.

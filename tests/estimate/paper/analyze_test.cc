@@ -3,12 +3,16 @@
 #include "sim/check.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
+#include "tests/estimate/paper/paper_fixtures.h"
+#include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -16,42 +20,21 @@
 namespace shutterlab {
 namespace {
 
-constexpr int64_t kDtNs = 1'000'000;  // 1 kHz
-constexpr double kStillS = 4.0;       // still lead-in: the bias segment DetectStillSegment finds
-constexpr double kAltitudeM = 50.0;
-constexpr double kReadoutS = 0.030;
+using test::ConstantRateLog;
+using test::RateForGroundSmear;
+
+constexpr int64_t kDtNs = test::kLogDtNs;  // 1 kHz
+constexpr double kAltitudeM = 50.0;        // test::MappingRig's
+constexpr double kReadoutS = 0.030;        // test::MappingRig's
 // D_paper interpolates the window's ends, so a constant rate gives w * readout up to rounding.
 constexpr double kPaperTolM = 1e-9;
 
-// Still for kStillS, then a constant rate (gyro axes) until total_s.
-FlightLog ConstantRateLog(const Eigen::Vector3d& rate_rad_s, double total_s) {
-  std::vector<GyroSample> samples;
-  const int64_t n = static_cast<int64_t>(total_s * 1e9) / kDtNs + 1;
-  const int64_t still_n = static_cast<int64_t>(kStillS * 1e9) / kDtNs;
-  for (int64_t k = 0; k < n; ++k) {
-    samples.push_back({k * kDtNs, k <= still_n ? Eigen::Vector3d::Zero() : rate_rad_s});
-  }
-  FlightLog log;
-  log.gyro = GyroTrace(std::move(samples));
-  log.format = "test";
-  log.gyro_source = "constant";
-  return log;
-}
-
+// The mapping camera (1280x960, f 1100 px, 30 ms, 50 m), the default limits and triggers.
 AnalyzeOptions BaseOptions() {
   AnalyzeOptions options;
-  options.rig.camera.width = 1280;
-  options.rig.camera.height = 960;
-  options.rig.camera.fx = options.rig.camera.fy = 1100.0;
-  options.rig.camera.cx = 639.5;
-  options.rig.camera.cy = 479.5;
-  options.rig.shutter.readout_s = kReadoutS;
-  options.rig.altitude_m = kAltitudeM;
+  options.rig = test::MappingRig();
   return options;
 }
-
-// The rate about one axis for which the paper's model gives d_m on the ground.
-double RateForGroundSmear(double d_m) { return std::atan(d_m / kAltitudeM) / kReadoutS; }
 
 TEST(Analyze, ConstantRateGivesPaperDistortionAndFlagsAboveTheLimit) {
   const double omega = RateForGroundSmear(0.07);  // between the 5 cm and 10 cm limits
@@ -263,6 +246,82 @@ TEST(Analyze, CameraEventsAreTheDefaultTriggers) {
   const AnalyzeResult result = Analyze(log, BaseOptions());
   ASSERT_EQ(result.images.size(), 2u);  // the most frequent kind only
   EXPECT_EQ(result.images[1].name, "IMG_8");
+}
+
+TEST(Analyze, KeepsTheTracesItsImagesCameFrom) {
+  // A bias the still lead-in finds, a rate about gyro z that R_CG makes camera x, and the log's
+  // altitude: the kept traces are in camera axes, without the bias, at the altitude used.
+  const Eigen::Vector3d bias_gyro(0.002, -0.001, 0.003);
+  const FlightLog constant = ConstantRateLog(Eigen::Vector3d(0, 0, RateForGroundSmear(0.07)), 8.0);
+  // White noise on every sample: the lead-in and the rotation are equally quiet, and the still
+  // search takes the one with the smaller mean (noise-free, rounding would decide).
+  constexpr double kNoiseRadS = 1e-3;
+  // The bias is the mean over ~4000 still samples: 6 standard errors.
+  constexpr double kBiasTolRadS = 6 * kNoiseRadS / 63.0;
+  std::mt19937_64 rng(1);
+  std::normal_distribution<double> noise(0.0, kNoiseRadS);
+  std::vector<GyroSample> samples = constant.gyro.samples();
+  for (GyroSample& s : samples) {
+    s.omega_rad_s += bias_gyro + Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+  }
+  FlightLog log = constant;
+  log.gyro = GyroTrace(std::move(samples));
+  log.altitude_above_ground_m = 2.0 * kAltitudeM;
+  AnalyzeOptions options = BaseOptions();
+  options.rig.cam_from_gyro << 0, 0, 1, 1, 0, 0, 0, 1, 0;
+  options.use_log_altitude = true;
+  options.triggers = {{"a", SecondsToNs(6.0)}};
+  const AnalyzeResult result = Analyze(log, options);
+  ASSERT_TRUE(result.bias_from_still);
+  ASSERT_NE(result.traces, nullptr);
+  const AnalyzeTraces& traces = *result.traces;
+  const auto& logged = log.gyro.samples();
+  ASSERT_EQ(traces.camera_rates.size(), logged.size());
+  ASSERT_EQ(traces.angles.size(), logged.size());
+  for (size_t k = 0; k < logged.size(); ++k) {
+    ASSERT_EQ(traces.camera_rates[k].t_ns, logged[k].t_ns);
+    ASSERT_EQ(
+        traces.camera_rates[k].omega_rad_s,
+        Eigen::Vector3d(options.rig.cam_from_gyro * logged[k].omega_rad_s - result.bias_rad_s))
+        << k;
+  }
+  // The image's range is the kept angles' change over its readout (6.000 to 6.030 s: samples; the
+  // rate stays far above the noise, so the angle rises monotonically).
+  const ImageResult& image = result.images[0];
+  ASSERT_TRUE(image.in_trace);
+  const size_t begin = log.gyro.LowerBound(image.t_ns);
+  const size_t end = log.gyro.LowerBound(image.t_ns + SecondsToNs(kReadoutS));
+  EXPECT_DOUBLE_EQ(
+      image.range_arcsec[0],
+      (traces.angles.angle_rad[0][end] - traces.angles.angle_rad[0][begin]) * kArcsecPerRad);
+  // The full model's motion: the rig analysed, the bias back in gyro axes.
+  const TrueModel& model = traces.motion.model();
+  EXPECT_EQ(result.altitude_m, 2.0 * kAltitudeM);
+  EXPECT_EQ(model.rig.altitude_m, result.altitude_m);
+  EXPECT_EQ(model.rig.time_offset_s, 0.0);
+  EXPECT_LT((model.gyro_bias_rad_s - bias_gyro).norm(), kBiasTolRadS);
+  // A copy of the result shares the traces rather than copying them.
+  const AnalyzeResult copy = result;
+  EXPECT_EQ(copy.traces.get(), result.traces.get());
+}
+
+TEST(Analyze, AllanDeviationOnTheStillSegmentWhenAsked) {
+  const FlightLog log = ConstantRateLog(Eigen::Vector3d(RateForGroundSmear(0.07), 0, 0), 8.0);
+  AnalyzeOptions options = BaseOptions();
+  EXPECT_FALSE(Analyze(log, options).allan.has_value());
+  options.allan = true;
+  const AnalyzeResult still = Analyze(log, options);
+  ASSERT_TRUE(still.bias_from_still);
+  ASSERT_TRUE(still.allan.has_value());
+  ASSERT_FALSE(still.allan->empty());
+  EXPECT_TRUE(still.allan_on_still);
+  // The longest cluster time grows with the record: the still lead-in (4 s) is half the whole log
+  // (8 s, without a bias search), so its longest tau is shorter.
+  options.estimate_bias = false;
+  const AnalyzeResult whole = Analyze(log, options);
+  ASSERT_TRUE(whole.allan.has_value());
+  EXPECT_FALSE(whole.allan_on_still);
+  EXPECT_LT(still.allan->tau_s.back(), whole.allan->tau_s.back());
 }
 
 TEST(Analyze, RealBetaflightLogEveryTwoSeconds) {

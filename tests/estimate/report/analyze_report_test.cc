@@ -3,55 +3,47 @@
 #include "estimate/paper/flight.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
+#include "tests/estimate/paper/paper_fixtures.h"
 #include "tests/estimate/report/report_test_util.h"
+#include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace shutterlab {
 namespace {
 
-constexpr int64_t kDtNs = 1'000'000;  // 1 kHz
-
 // Still for 4 s, then about camera x a rate that is `fast` during [6, 7) s and slow elsewhere.
 FlightLog StepLog(double total_s, double slow_rad_s, double fast_rad_s) {
-  std::vector<GyroSample> samples;
-  const int64_t n = static_cast<int64_t>(total_s * 1e9) / kDtNs + 1;
-  for (int64_t k = 0; k < n; ++k) {
-    const double t_s = k * kDtNs * 1e-9;
-    const double w = t_s <= 4.0 ? 0.0 : (t_s >= 6.0 && t_s < 7.0 ? fast_rad_s : slow_rad_s);
-    samples.push_back({k * kDtNs, Eigen::Vector3d(w, 0, 0)});
-  }
-  FlightLog log;
-  log.gyro = GyroTrace(std::move(samples));
-  log.format = "test";
-  log.gyro_source = "step";
-  return log;
+  return test::StillThenRateLog(
+      total_s,
+      [=](double t_s) {
+        return Eigen::Vector3d(t_s >= 6.0 && t_s < 7.0 ? fast_rad_s : slow_rad_s, 0, 0);
+      },
+      "step");
 }
 
 AnalyzeOptions SmallCamera() {
   AnalyzeOptions options;
-  // A small frame keeps the heatmaps cheap (under sanitizers too).
-  options.rig.camera.width = 160;
-  options.rig.camera.height = 120;
-  options.rig.camera.fx = options.rig.camera.fy = 140.0;
-  options.rig.camera.cx = 79.5;
-  options.rig.camera.cy = 59.5;
-  options.rig.shutter.readout_s = 0.030;
-  options.rig.altitude_m = 50.0;
+  // A small frame keeps the heatmaps cheap (under sanitizers too): 160x120, f 140 px, 30 ms, 50 m.
+  options.rig = test::NadirRig(160, 120, 140.0);
   options.flight_series = true;
+  options.allan = true;
   return options;
 }
 
 // The rate whose 30 ms readout smears d_m on the ground at 50 m (paper model).
-double RateFor(double d_m) { return std::atan(d_m / 50.0) / 0.030; }
+using test::RateForGroundSmear;
 
 TEST(AnalyzeReport, ChartsHoldTheAnalysedValues) {
-  const FlightLog log = StepLog(10.0, RateFor(0.02), RateFor(0.07));
+  const FlightLog log = StepLog(10.0, RateForGroundSmear(0.02), RateForGroundSmear(0.07));
   AnalyzeOptions options = SmallCamera();
   options.triggers = {{"quiet", SecondsToNs(5.0)},
                       {"shaken", SecondsToNs(6.5)},
@@ -60,7 +52,7 @@ TEST(AnalyzeReport, ChartsHoldTheAnalysedValues) {
   AnalyzeReportOptions report;
   report.log_name = "flight<1>.bbl";
   report.worst_images = 1;
-  const std::string html = AnalyzeReportPage(log, options, result, report).Html();
+  const std::string html = AnalyzeReportPage(options, result, report).Html();
   EXPECT_TRUE(test::SelfContained(html));
   EXPECT_NE(html.find("var uPlot="), std::string::npos);
   EXPECT_NE(html.find("flight&lt;1&gt;.bbl"), std::string::npos);
@@ -75,7 +67,7 @@ TEST(AnalyzeReport, ChartsHoldTheAnalysedValues) {
   EXPECT_LE(rate["data"][0].size(), 8000u);
   double peak = 0;
   for (const auto& v : rate["data"][1]) peak = std::max(peak, v.get<double>());
-  EXPECT_NEAR(peak, RateFor(0.07) * kDegPerRad, 1e-9);
+  EXPECT_NEAR(peak, RateForGroundSmear(0.07) * kDegPerRad, 1e-9);
   // Shading per limit: at 5 cm, the windows that overlap the fast second by a share f whose range
   // f * fast + (1 - f) * slow passes the threshold (20" noise allowance included); none at 10 cm.
   ASSERT_EQ(rate["shadings"].size(), 2u);
@@ -83,7 +75,8 @@ TEST(AnalyzeReport, ChartsHoldTheAnalysedValues) {
   ASSERT_EQ(at5.size(), 1u);
   const double arcsec = 180.0 * 3600.0 / M_PI;
   const double threshold = std::atan(0.05 / 50.0) * arcsec + 20.0;
-  const double slow = RateFor(0.02) * 0.030 * arcsec, fast = RateFor(0.07) * 0.030 * arcsec;
+  const double slow = RateForGroundSmear(0.02) * 0.030 * arcsec,
+               fast = RateForGroundSmear(0.07) * 0.030 * arcsec;
   const double overlap_s = 0.030 * (threshold - slow) / (fast - slow);
   // Within 3 samples: the rectangle rule and the sample-bounded windows shift the edges by 1-2 ms.
   EXPECT_NEAR(at5[0][0].get<double>(), 6.0 - (0.030 - overlap_s), 0.003);
@@ -119,33 +112,74 @@ TEST(AnalyzeReport, ChartsHoldTheAnalysedValues) {
 }
 
 TEST(AnalyzeReport, SceneIsRenderedUnderTheHeatmap) {
-  const FlightLog log = StepLog(8.0, RateFor(0.02), RateFor(0.07));
+  const FlightLog log = StepLog(8.0, RateForGroundSmear(0.02), RateForGroundSmear(0.07));
   AnalyzeOptions options = SmallCamera();
   options.triggers = {{"shaken", SecondsToNs(6.5)}};
   const AnalyzeResult result = Analyze(log, options);
   AnalyzeReportOptions report;
   report.worst_images = 1;
-  const std::string plain = AnalyzeReportPage(log, options, result, report).Html();
+  const std::string plain = AnalyzeReportPage(options, result, report).Html();
   report.scene = cv::Mat(240, 320, CV_8UC3, cv::Scalar(250, 250, 250));
   report.scene_name = "white.png";
-  const std::string blended = AnalyzeReportPage(log, options, result, report).Html();
+  const std::string blended = AnalyzeReportPage(options, result, report).Html();
   EXPECT_NE(blended.find("blended over white.png"), std::string::npos);
   EXPECT_NE(plain, blended);  // the picture differs
 }
 
 TEST(AnalyzeReport, LongTracesAreEnveloped) {
-  const FlightLog log = StepLog(30.0, RateFor(0.02), RateFor(0.07));
+  const FlightLog log = StepLog(30.0, RateForGroundSmear(0.02), RateForGroundSmear(0.07));
   AnalyzeOptions options = SmallCamera();
   options.every_s = 5.0;
   const AnalyzeResult result = Analyze(log, options);
   AnalyzeReportOptions report;
   report.chart_buckets = 100;
   report.worst_images = 0;
-  const auto charts = test::ChartBlocks(AnalyzeReportPage(log, options, result, report).Html());
+  const auto charts = test::ChartBlocks(AnalyzeReportPage(options, result, report).Html());
   ASSERT_GE(charts.size(), 2u);
   EXPECT_EQ(charts[0]["data"][0].size(), 200u);  // 100 buckets, min and max each
   EXPECT_EQ(charts[1]["data"][0].size(), 200u);
   EXPECT_EQ(charts[2]["data"][0].size(), 6u);  // images every 5 s of 30 s: 0, 5, ..., 25 s
+}
+
+TEST(AnalyzeReport, DrawsTheResultsTracesAndIntegratesNothingAgain) {
+  const FlightLog log = StepLog(10.0, RateForGroundSmear(0.02), RateForGroundSmear(0.07));
+  AnalyzeOptions options = SmallCamera();
+  options.triggers = {{"shaken", SecondsToNs(6.5)}};
+  AnalyzeResult result = Analyze(log, options);
+  AnalyzeReportOptions report;
+  report.worst_images = 0;
+  report.chart_buckets = 6000;  // 10001 samples: drawn one by one, no envelope
+  const AnalyzeTraces& kept = *result.traces;
+  const auto rate_and_angle = [&](const AnalyzeResult& r) {
+    const auto charts = test::ChartBlocks(AnalyzeReportPage(options, r, report).Html());
+    return std::make_pair(charts.at(0), charts.at(1));
+  };
+  const auto [rate, angle] = rate_and_angle(result);
+  ASSERT_EQ(rate["data"][0].size(), kept.camera_rates.size());
+  ASSERT_EQ(angle["data"][0].size(), kept.angles.size());
+  for (size_t k = 0; k < kept.camera_rates.size(); ++k) {
+    for (int a = 0; a < 3; ++a) {
+      ASSERT_EQ(rate["data"][a + 1][k].get<double>(),
+                kept.camera_rates[k].omega_rad_s[a] * kDegPerRad);
+      ASSERT_EQ(angle["data"][a + 1][k].get<double>(), kept.angles.angle_rad[a][k] * kDegPerRad);
+    }
+  }
+  // Traces put in the result by hand are what the page shows: it takes them, it does not
+  // compute them again.
+  AnalyzeTraces doubled = kept;
+  for (auto& axis : doubled.angles.angle_rad) {
+    for (double& v : axis) v *= 2.0;
+  }
+  AnalyzeResult altered = result;
+  altered.traces = std::make_shared<const AnalyzeTraces>(std::move(doubled));
+  const auto [same_rate, doubled_angle] = rate_and_angle(altered);
+  EXPECT_EQ(same_rate["data"], rate["data"]);
+  const size_t last = kept.angles.size() - 1;
+  EXPECT_EQ(doubled_angle["data"][1][last].get<double>(),
+            2.0 * kept.angles.angle_rad[0][last] * kDegPerRad);
+  EXPECT_NE(kept.angles.angle_rad[0][last], 0.0);
+  // A result that did not come from Analyze has nothing to draw.
+  EXPECT_THROW(AnalyzeReportPage(options, AnalyzeResult(), report), std::invalid_argument);
 }
 
 TEST(FlaggedIntervalsS, MergesOverlappingWindows) {
