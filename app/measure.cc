@@ -5,6 +5,7 @@
 #include "estimate/loop/measure.h"
 
 #include "app/command.h"
+#include "estimate/report/loop_json.h"
 #include "render/camera.h"
 #include "render/image_io.h"
 #include "sim/check.h"

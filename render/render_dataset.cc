@@ -1,5 +1,6 @@
 #include "render/render_dataset.h"
 
+#include "render/effect_io.h"
 #include "render/effects.h"
 #include "render/frames_csv.h"
 #include "render/image_io.h"
@@ -9,6 +10,7 @@
 #include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
 
+#include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
@@ -58,11 +60,16 @@ TrueModel InjectedTruth(const RigModel& declared, const std::vector<std::string>
   TrueModel truth;
   truth.rig = declared;
   for (const std::string& injection : injections) {
-    const size_t eq = injection.find('=');
-    const nlohmann::json value = ApplyInjection(injection, &truth);
-    summary->injected[injection.substr(0, eq)] = value;
+    summary->injected.push_back(ApplyInjection(injection, &truth));
   }
   return truth;
+}
+
+// truth.json's "injected": {NAME: value}; an effect injected twice keeps its last value.
+nlohmann::json InjectedJson(const std::vector<Injection>& injected) {
+  nlohmann::json out = nlohmann::json::object();
+  for (const Injection& i : injected) out[Spec(i.effect).name] = EffectValueToJson(i.value);
+  return out;
 }
 
 // A video needs frames, and their times must increase.
@@ -243,7 +250,8 @@ RenderSummary RenderDataset(const RenderOptions& options,
   WriteRigModel((out / "camera.json").string(), declared);
   WriteGyroCsv((out / "gyro.csv").string(), logged);
   WriteFramesCsv((out / "frames.csv").string(), state.entries);
-  nlohmann::json truth_json = {{"injected", summary.injected}, {"frames", state.frames_json}};
+  nlohmann::json truth_json = {{"injected", InjectedJson(summary.injected)},
+                               {"frames", state.frames_json}};
   if (options.video) truth_json["video"] = true;
   WriteFileAtomically((out / "truth.json").string(), truth_json.dump(2) + "\n");
   return summary;

@@ -20,9 +20,8 @@
 // frame's "previous"; D_px / D_m stay each frame's own distortion against a global shutter at its
 // row 0.
 
+#include "render/effects.h"
 #include "render/rs_warp.h"
-
-#include <nlohmann/json.hpp>
 
 #include <cstdint>
 #include <functional>
@@ -54,7 +53,7 @@ struct RenderedFrame {
 };
 
 struct RenderSummary {
-  nlohmann::json injected = nlohmann::json::object();
+  std::vector<Injection> injected;  // each `--inject` as truth.json records it, in order
   std::vector<RenderedFrame> frames;
 };
 

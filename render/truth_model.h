@@ -19,7 +19,6 @@
 #include "sim/integrate.h"
 
 #include <Eigen/Core>
-#include <nlohmann/json.hpp>
 
 #include <optional>
 #include <string>

@@ -110,8 +110,6 @@ std::vector<Eigen::Vector2d> PredictDisplacements(const TrueModel& model, const 
 
 namespace {
 
-using nlohmann::json;
-
 // Upper-tail standard normal quantile z with P(Z > z) = alpha, by bisection on erfc.
 double NormalUpperQuantile(double alpha) {
   double lo = -10.0, hi = 10.0;
@@ -649,7 +647,7 @@ std::vector<Eigen::Vector2d> PointResiduals(const Fit& fit) {
 std::string Describe(const std::vector<Effect>& effects, const TrueModel& model) {
   std::string out;
   for (Effect e : effects) {
-    out += (out.empty() ? "" : "; ") + Spec(e).name + " = " + Spec(e).value(model).dump();
+    out += (out.empty() ? "" : "; ") + Spec(e).name + " = " + EffectValueText(Spec(e).value(model));
   }
   return out;
 }
@@ -729,7 +727,7 @@ struct Candidate {
   Effect effect = Effect::kTimeOffset;
   Fit fit;  // moved into the loop's current fit when chosen
   // The effect's fitted value and the fit's residual, for the log (the chosen fit moves away).
-  json value;
+  EffectValue value;
   double rms_px = 0.0;
   size_t kept = 0;       // the round's judged points
   size_t lost = 0;       // of them, those this candidate predicts nothing for
@@ -935,7 +933,7 @@ void LogRound(const Round& round, const LoopOptions& options, std::vector<std::s
   const std::string at = "round " + std::to_string(round.number) + ": ";
   for (const Candidate& c : round.candidates) {
     const std::string& name = Spec(c.effect).name;
-    const std::string fitted = name + " = " + c.value.dump();
+    const std::string fitted = name + " = " + EffectValueText(c.value);
     if (!c.predicts) {
       log->push_back(at + name + ": predicts " + std::to_string(c.kept - c.lost) + " of " +
                      std::to_string(c.kept) + " points; " + fitted + "; not a candidate");
@@ -1098,33 +1096,6 @@ LoopResult FitEffects(const TrueModel& declared, const GyroTrace& gyro,
   result.residuals_after = PointResiduals(current);
   result.unexplained = Material(ctx, options, level);
   return result;
-}
-
-nlohmann::json LoopToJson(const LoopResult& result, size_t frame_count) {
-  auto stats = [](const ResidualStats& s) {
-    return json{{"rms_px", s.rms_px}, {"max_px", s.max_px}};
-  };
-  json effects = json::array();
-  for (const IdentifiedEffect& e : result.effects) {
-    const EffectSpec& spec = Spec(e.effect);
-    json j = {
-        {"name", spec.name}, {"value", e.value}, {"stderr", e.stderr_value}, {"unit", spec.unit}};
-    if (!e.ambiguous_with.empty()) {
-      std::vector<std::string> names;
-      for (Effect a : e.ambiguous_with) names.push_back(Spec(a).name);
-      j["ambiguous_with"] = names;
-    }
-    j["after"] = stats(e.after);
-    effects.push_back(std::move(j));
-  }
-  json out{{"format", "validation/1"},          {"frames", frame_count},
-           {"before", stats(result.before)},    {"effects", std::move(effects)},
-           {"after", stats(result.after)},      {"noise_px", result.noise_px},
-           {"unexplained", result.unexplained}, {"log", result.log}};
-  // Beyond docs/FORMATS.md: with pair_translation the residual is one component (the distance
-  // across the epipolar line), to be read against noise_px / sqrt(2), not noise_px.
-  if (result.residual_components != 2) out["residual_components"] = result.residual_components;
-  return out;
 }
 
 std::vector<Effect> EffectsOf(const LoopResult& loop) {

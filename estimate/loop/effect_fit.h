@@ -14,7 +14,6 @@
 #include "sim/gyro_trace.h"
 
 #include <Eigen/Core>
-#include <nlohmann/json.hpp>
 
 #include <cstdint>
 #include <optional>
@@ -34,8 +33,8 @@ ResidualStats ResidualStatsOf(const std::vector<double>& squared_norms);
 // One identified effect, docs/FORMATS.md names, values and units.
 struct IdentifiedEffect {
   Effect effect = Effect::kTimeOffset;  // its name and unit: Spec(effect)
-  nlohmann::json value;         // docs/FORMATS.md value (number, [3], 3x3, {"k1","k2"}, string)
-  nlohmann::json stderr_value;  // same shape as value (null for readout_direction)
+  EffectValue value;         // docs/FORMATS.md value (number, [3], 3x3, {k1, k2}, direction)
+  EffectValue stderr_value;  // same shape as value (std::monostate for readout_direction)
   std::vector<Effect> ambiguous_with;  // effects that explain the data as well
   ResidualStats after;                 // residual once this effect is added
   // The fitted parameters (EffectSpec::parameter_count of them, deltas from the declared model as
@@ -123,9 +122,5 @@ LoopResult FitEffects(const TrueModel& start, const GyroTrace& gyro,
 
 // The loop's identified effects, in the order they were added.
 std::vector<Effect> EffectsOf(const LoopResult& loop);
-
-// docs/FORMATS.md "Validation report" keys (format, frames, before, effects, after, noise_px,
-// unexplained) for a loop result.
-nlohmann::json LoopToJson(const LoopResult& result, size_t frame_count);
 
 }  // namespace shutterlab

@@ -18,7 +18,6 @@
 #include "sim/gyro_trace.h"
 
 #include <Eigen/Core>
-#include <nlohmann/json.hpp>
 
 #include <memory>
 #include <string>

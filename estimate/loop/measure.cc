@@ -473,22 +473,6 @@ FieldComparison CompareFields(const cv::Mat& measured, const cv::Mat& truth) {
   return c;
 }
 
-nlohmann::json MeasureToJson(const MeasureReport& report) {
-  const DisplacementMeasurement& m = report.measurement;
-  nlohmann::json j = {
-      {"format", "measure/1"}, {"width", m.field.cols}, {"height", m.field.rows}, {"D_px", m.d_px}};
-  if (report.ground_m_per_px) j["D_m"] = m.d_px * *report.ground_m_per_px;
-  j["noise_px"] = m.noise_px;
-  j["measured_fraction"] = m.measured_fraction;
-  j["points"] = m.points.size();
-  if (report.truth) {
-    j["truth"] = {{"rms_px", report.truth->rms_px},
-                  {"max_px", report.truth->max_px},
-                  {"pixels", report.truth->pixels}};
-  }
-  return j;
-}
-
 std::string MeasureText(const MeasureReport& report) {
   const DisplacementMeasurement& m = report.measurement;
   char line[256];

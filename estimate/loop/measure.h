@@ -5,7 +5,6 @@
 // (Interface fixed first so that validate can be written against it; the method is documented in
 // measure.cc with the accuracy it was chosen by.)
 
-#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
 #include <optional>
@@ -61,9 +60,7 @@ struct MeasureReport {
   std::optional<double> ground_m_per_px;
   std::optional<FieldComparison> truth;  // with --truth
 };
-// JSON: {"format": "measure/1", "width", "height", "D_px", ["D_m"], "noise_px",
-// "measured_fraction", "points", ["truth": {"rms_px", "max_px", "pixels"}]}.
-nlohmann::json MeasureToJson(const MeasureReport& report);
+// Its JSON: estimate/report/loop_json.h MeasureToJson.
 // Table for a person.
 std::string MeasureText(const MeasureReport& report);
 

@@ -1,5 +1,6 @@
 #include "estimate/loop/validate_video.h"
 
+#include "estimate/loop/claims_io.h"
 #include "estimate/loop/effect_model.h"
 #include "estimate/loop/frame_residuals.h"
 #include "render/image_io.h"
@@ -29,7 +30,6 @@ namespace {
 constexpr double kMinPairMeasuredShare = 0.05;
 
 namespace fs = std::filesystem;
-using nlohmann::json;
 
 // 99 % quantiles of chi-square with 1, 2, 3 degrees of freedom: two fits of an effect on disjoint
 // halves agree when their difference, in the metric of the sum of their covariances, is below.
@@ -43,7 +43,7 @@ constexpr double kPreferTranslationShare = 0.5;
 // The two halves' fits of one effect against each other.
 HalfAgreement CompareHalves(const IdentifiedEffect& a, const IdentifiedEffect& b) {
   HalfAgreement out;
-  out.effect = Spec(a.effect).name;
+  out.effect = a.effect;
   out.first = a.value;
   out.first_stderr = a.stderr_value;
   out.second = b.value;
@@ -68,22 +68,6 @@ HalfAgreement CompareHalves(const IdentifiedEffect& a, const IdentifiedEffect& b
   if (lu.isInvertible()) d2 = d.dot(lu.solve(d));
   out.distance = std::sqrt(std::max(0.0, d2));
   out.agree = d2 < kChi2Quantile99[std::min<Eigen::Index>(n, 3)];
-  return out;
-}
-
-// The effect whose fit tests a claim of import.json (EffectSpec::claim); none for the others.
-std::optional<Effect> EffectForClaim(const std::string& claim) {
-  for (const EffectSpec& spec : AllEffects()) {
-    if (!spec.claim.empty() && spec.claim == claim) return spec.effect;
-  }
-  return std::nullopt;
-}
-
-Eigen::Matrix3d MatrixFromJson(const json& m) {
-  Eigen::Matrix3d out;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) out(r, c) = m.at(r).at(c).get<double>();
-  }
   return out;
 }
 
@@ -174,58 +158,6 @@ constexpr double kMaxMappingLostShare = 0.01;
 // claim down: it is reported as not determined rather than held or contradicted.
 constexpr double kMinClaimShare = 0.1;
 
-// The claims of import.json that validate can test, read and checked before any work is done (a
-// broken file is named at once, not after minutes of measuring); none without the file. Each
-// claim an object with a string "what"; "status" a string when present; a gyro_to_camera value a
-// 3x3 array of numbers, readout_s and time_offset_s numbers, direction a string.
-json ReadClaims(const fs::path& import_json) {
-  json claims = json::array();
-  if (!fs::is_regular_file(import_json)) return claims;
-  const std::string path = import_json.string();
-  json record;
-  try {
-    record = json::parse(ReadFileToString(path));
-  } catch (const json::exception& e) {
-    throw IoError(IoMessage(path, 0, std::string("not JSON: ") + e.what()));
-  }
-  if (!record.is_object() || !record.contains("claims")) return claims;
-  if (!record["claims"].is_array()) throw IoError(IoMessage(path, 0, "\"claims\" is not an array"));
-  for (size_t k = 0; k < record["claims"].size(); ++k) {
-    const json& claim = record["claims"][k];
-    const std::string where = "claim " + std::to_string(k + 1) + ": ";
-    if (!claim.is_object() || !claim.contains("what") || !claim["what"].is_string()) {
-      throw IoError(IoMessage(path, 0, where + "not an object with a string \"what\""));
-    }
-    if (claim.contains("status") && !claim["status"].is_string()) {
-      throw IoError(IoMessage(path, 0, where + "\"status\" is not a string"));
-    }
-    const std::optional<Effect> effect = EffectForClaim(claim["what"].get<std::string>());
-    if (!effect) continue;  // a claim validate cannot test (exposure, say)
-    const json value = claim.value("value", json());
-    bool ok = false;
-    if (*effect == Effect::kGyroToCamera) {
-      ok = value.is_array() && value.size() == 3;
-      for (size_t r = 0; ok && r < 3; ++r) {
-        ok = value[r].is_array() && value[r].size() == 3;
-        for (size_t c = 0; ok && c < 3; ++c) ok = value[r][c].is_number();
-      }
-    } else if (*effect == Effect::kReadoutDirection) {
-      const auto parsed = value.is_string() ? ParseReadoutDirection(value.get<std::string>())
-                                            : std::optional<ReadoutDirection>();
-      ok = parsed && IsRowReadout(*parsed);
-    } else {
-      ok = value.is_number() && std::isfinite(value.get<double>());
-    }
-    if (!ok) {
-      throw IoError(IoMessage(path, 0,
-                              where + "\"" + claim["what"].get<std::string>() +
-                                  "\" has an unusable value " + value.dump()));
-    }
-    claims.push_back(claim);
-  }
-  return claims;
-}
-
 // What the claims are tested against: the data, and both models with where their loops started.
 struct ClaimInputs {
   const GyroTrace& gyro;
@@ -313,10 +245,10 @@ AxesComparison CompareAxisMappings(const ClaimInputs& in, const Eigen::Matrix3d&
 // gyro_to_camera: the rotation-only residual of each of the 24 axis mappings against the claimed
 // one's.
 void CheckAxesClaim(const ClaimInputs& in, ClaimCheck* check) {
-  const Eigen::Matrix3d claimed = MatrixFromJson(check->claimed);
+  const Eigen::Matrix3d claimed = std::get<Eigen::Matrix3d>(check->claimed);
   const AxesComparison axes = CompareAxisMappings(in, claimed);
   const bool claimed_best = axes.claimed_mean_sq_px2 <= axes.other_mean_sq_px2;
-  check->found = MatrixJson(claimed_best ? NearestAxes(claimed) : axes.other);
+  check->found = claimed_best ? NearestAxes(claimed) : axes.other;
   check->difference = claimed_best ? 0.0 : AngleDeg(axes.other, claimed);
   // How much of the worse one's excess over the noise the better one removes.
   const double margin = ExplainedShare(
@@ -345,7 +277,7 @@ void CheckDirectionClaim(const TrimmedComparison& c, const RigModel& declared, d
   const std::string declared_word = ReadoutDirectionName(declared.shutter.direction);
   const std::string other_word = ReadoutDirectionName(other);
   const bool flip_better = c.b < c.a;
-  check->found = flip_better ? other_word : declared_word;
+  check->found = flip_better ? other : declared.shutter.direction;
   // How much of the worse reading's excess over the noise the better one removes.
   const double margin =
       ExplainedShare(flip_better ? c : TrimmedComparison{c.b, c.a, c.points}, noise_px);
@@ -368,14 +300,16 @@ bool CheckScalarClaim(const LoopResult& with, double share, const std::string& r
                       ClaimCheck* check) {
   const IdentifiedEffect* effect = nullptr;
   for (const IdentifiedEffect& e : with.effects) {
-    if (Spec(e.effect).name == check->effect) effect = &e;
+    if (e.effect == check->effect) effect = &e;
   }
-  if (effect == nullptr || !check->claimed.is_number() || !effect->value.is_number()) return false;
+  const double* claimed_value = std::get_if<double>(&check->claimed);
+  const double* found_value = effect ? std::get_if<double>(&effect->value) : nullptr;
+  if (claimed_value == nullptr || found_value == nullptr) return false;
   check->found = effect->value;
   check->found_stderr = effect->stderr_value;
-  const double claimed = check->claimed.get<double>(), found = effect->value.get<double>();
-  const double se = effect->stderr_value.is_number() ? effect->stderr_value.get<double>()
-                                                     : std::numeric_limits<double>::quiet_NaN();
+  const double claimed = *claimed_value, found = *found_value;
+  const double* se_value = std::get_if<double>(&effect->stderr_value);
+  const double se = se_value ? *se_value : std::numeric_limits<double>::quiet_NaN();
   check->difference = std::abs(found - claimed) / se;
   const std::string numbers =
       FormatNumber("%.3f", found * 1e3) + " +- " + FormatNumber("%.3f", se * 1e3) + " ms against " +
@@ -398,7 +332,7 @@ bool CheckScalarClaim(const LoopResult& with, double share, const std::string& r
 // (EffectSpec::identifiable_with_pair_translation), with the effect fitted beside the model's
 // identified ones and without it. False when the claim is not reported.
 bool CheckFittedClaim(const ClaimInputs& in, ClaimFits* fits, ClaimCheck* check) {
-  const Effect tested = *EffectForClaim(check->claim);  // ReadClaims kept only those
+  const Effect tested = check->effect;
   const bool by_rotation =
       in.preferred_options.pair_translation && !Spec(tested).identifiable_with_pair_translation;
   const LoopOptions& loop_options = by_rotation ? in.rotation_options : in.preferred_options;
@@ -440,17 +374,16 @@ bool CheckFittedClaim(const ClaimInputs& in, ClaimFits* fits, ClaimCheck* check)
 // standard errors, and how much of the residual fitting it removes. direction: both readings.
 // gyro_to_camera: the rotation- only residual of each of the 24 axis mappings against the claimed
 // one's. Each model's fits start where its loop started (preferred_start, rotation_start).
-std::vector<ClaimCheck> CheckClaims(const json& claims, const ClaimInputs& in) {
+std::vector<ClaimCheck> CheckClaims(const std::vector<SourceClaim>& claims, const ClaimInputs& in) {
   std::vector<ClaimCheck> checks;
   ClaimFits fits;
-  for (const json& claim : claims) {  // as ReadClaims checked them
+  for (const SourceClaim& claim : claims) {
     ClaimCheck check;
-    check.claim = claim["what"].get<std::string>();
-    const Effect tested = *EffectForClaim(check.claim);  // ReadClaims kept only those
-    check.effect = Spec(tested).name;
-    check.status = claim.value("status", "");
-    check.claimed = claim.value("value", json());
-    if (tested == Effect::kGyroToCamera) {
+    check.claim = claim.what;
+    check.effect = claim.effect;
+    check.status = claim.status;
+    check.claimed = claim.value;
+    if (claim.effect == Effect::kGyroToCamera) {
       CheckAxesClaim(in, &check);
     } else if (!CheckFittedClaim(in, &fits, &check)) {
       continue;
@@ -697,7 +630,7 @@ void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
   const VideoInputs in{dir, (dir / "frames.csv").string(), gyro, entries, options, progress};
   result->video = true;
   const std::vector<size_t> order = FramesInTimeOrder(in);
-  const json claims = ReadClaims(dir / "import.json");
+  const std::vector<SourceClaim> claims = ReadSourceClaims((dir / "import.json").string());
   result->read_s += SecondsSince(start);
 
   const std::vector<FramePoints> pairs = MeasurePairs(in, order, result);

@@ -4,9 +4,9 @@
 
 #include "estimate/loop/effect_fit.h"
 #include "estimate/loop/measure.h"
+#include "render/effects.h"
 
 #include <Eigen/Core>
-#include <nlohmann/json.hpp>
 
 #include <array>
 #include <cstdint>
@@ -66,8 +66,8 @@ struct FrameValidation {
 
 // Video: one effect of a model fitted on each half of the pairs.
 struct HalfAgreement {
-  std::string effect;
-  nlohmann::json first, first_stderr, second, second_stderr;  // docs/FORMATS.md values
+  Effect effect = Effect::kTimeOffset;
+  EffectValue first, first_stderr, second, second_stderr;  // docs/FORMATS.md values
   // Mahalanobis distance of the two fits' parameters under the sum of their covariances
   // (gyro_to_camera: its parameters are rotation vectors about the same declared mounting, so
   // they are compared directly), and whether it is below the 99 % quantile of chi-square with the
@@ -87,13 +87,15 @@ struct HalfCheck {
 
 // Video datasets from `shutterlab import`: one of the source's claims against the data.
 struct ClaimCheck {
-  std::string claim;       // import.json's name: readout_s, gyro_to_camera, time_offset_s, ...
-  std::string effect;      // the effect fitted to test it
-  std::string status;      // import.json's status ("source claim", "guess", ...)
-  nlohmann::json claimed;  // the value the source states
-  nlohmann::json found, found_stderr;  // fitted beside the identified effects
-  double difference = 0.0;             // |found - claimed| / stderr (gyro_to_camera: angle, deg)
-  std::string verdict;                 // for a person
+  std::string claim;                    // import.json's name: readout_s, gyro_to_camera, ...
+  Effect effect = Effect::kTimeOffset;  // the effect fitted to test it
+  std::string status;                   // import.json's status ("source claim", "guess", ...)
+  EffectValue claimed;                  // the value the source states (the effect's shape)
+  // Fitted beside the identified effects (gyro_to_camera: the best of the 24 axis mappings, with
+  // no standard error: std::monostate; readout_direction: the better reading, the same).
+  EffectValue found, found_stderr;
+  double difference = 0.0;  // |found - claimed| / stderr (gyro_to_camera: angle, deg)
+  std::string verdict;      // for a person
 };
 
 // Paper's flags against the measured truth at one limit (a frame is "positive" when over it).

@@ -2,6 +2,8 @@
 
 #include "estimate/paper/analyze.h"
 #include "estimate/report/html_report.h"
+#include "estimate/report/loop_json.h"
+#include "render/effect_io.h"
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "render/pictures.h"
@@ -39,9 +41,9 @@ void WriteLoopSummary(const LoopResult& loop, std::ostream& out) {
   out << "  before: rms " << FormatNumber("%.3f", loop.before.rms_px) << " px, max "
       << FormatNumber("%.3f", loop.before.max_px) << " px\n";
   for (const IdentifiedEffect& e : loop.effects) {
-    out << "  + " << Spec(e.effect).name << " = " << Rounded(e.value).dump() << " +- "
-        << Rounded(e.stderr_value).dump() << " " << Spec(e.effect).unit << " -> rms "
-        << FormatNumber("%.3f", e.after.rms_px) << " px, max "
+    out << "  + " << Spec(e.effect).name << " = " << Rounded(EffectValueToJson(e.value)).dump()
+        << " +- " << Rounded(EffectValueToJson(e.stderr_value)).dump() << " " << Spec(e.effect).unit
+        << " -> rms " << FormatNumber("%.3f", e.after.rms_px) << " px, max "
         << FormatNumber("%.3f", e.after.max_px) << " px";
     if (!e.ambiguous_with.empty()) {
       out << " (ambiguous with";

@@ -1,5 +1,7 @@
 #include "estimate/loop/validate_video.h"
+#include "estimate/report/loop_json.h"
 #include "estimate/report/validate_report.h"
+#include "render/effect_io.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
 
@@ -53,11 +55,11 @@ json VideoValidationToJson(const ValidationResult& result) {
   for (const HalfCheck& h : result.halves) {
     json effects = json::array();
     for (const HalfAgreement& a : h.effects) {
-      effects.push_back({{"name", a.effect},
-                         {"first", a.first},
-                         {"first_stderr", a.first_stderr},
-                         {"second", a.second},
-                         {"second_stderr", a.second_stderr},
+      effects.push_back({{"name", Spec(a.effect).name},
+                         {"first", EffectValueToJson(a.first)},
+                         {"first_stderr", EffectValueToJson(a.first_stderr)},
+                         {"second", EffectValueToJson(a.second)},
+                         {"second_stderr", EffectValueToJson(a.second_stderr)},
                          {"distance", std::isfinite(a.distance) ? json(a.distance) : json()},
                          {"agree", a.agree},
                          {"determined", a.determined}});
@@ -73,11 +75,11 @@ json VideoValidationToJson(const ValidationResult& result) {
   json claims = json::array();
   for (const ClaimCheck& c : result.claims) {
     claims.push_back({{"claim", c.claim},
-                      {"effect", c.effect},
+                      {"effect", Spec(c.effect).name},
                       {"status", c.status},
-                      {"claimed", c.claimed},
-                      {"found", c.found},
-                      {"found_stderr", c.found_stderr},
+                      {"claimed", EffectValueToJson(c.claimed)},
+                      {"found", EffectValueToJson(c.found)},
+                      {"found_stderr", EffectValueToJson(c.found_stderr)},
                       {"difference", std::isfinite(c.difference) ? json(c.difference) : json()},
                       {"verdict", c.verdict}});
   }
@@ -137,9 +139,10 @@ std::string VideoValidationReport(const ValidationResult& result) {
     out << "\nstability: " << h.model << " effects on pairs 1-" << h.first_pairs << " and "
         << h.first_pairs + 1 << "-" << h.first_pairs + h.second_pairs << ":\n";
     for (const HalfAgreement& a : h.effects) {
-      out << "  " << a.effect << ": " << Rounded(a.first).dump() << " +- "
-          << Rounded(a.first_stderr).dump() << " | " << Rounded(a.second).dump() << " +- "
-          << Rounded(a.second_stderr).dump() << " -> ";
+      out << "  " << Spec(a.effect).name << ": " << Rounded(EffectValueToJson(a.first)).dump()
+          << " +- " << Rounded(EffectValueToJson(a.first_stderr)).dump() << " | "
+          << Rounded(EffectValueToJson(a.second)).dump() << " +- "
+          << Rounded(EffectValueToJson(a.second_stderr)).dump() << " -> ";
       if (!a.determined) {
         out << "not determined (a half has no standard error)\n";
         continue;

@@ -1,3 +1,4 @@
+#include "render/effect_io.h"
 #include "render/effects.h"
 #include "render/frames_csv.h"
 #include "render/image_io.h"

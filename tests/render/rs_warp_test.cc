@@ -1,5 +1,6 @@
 #include "render/rs_warp.h"
 
+#include "render/effect_io.h"
 #include "render/effects.h"
 #include "render/image_io.h"
 #include "render/truth_model.h"

@@ -1,5 +1,6 @@
 #include "render/truth_model.h"
 
+#include "render/effect_io.h"
 #include "render/effects.h"
 #include "sim/so3.h"
 #include "tests/render/render_fixtures.h"
@@ -41,7 +42,7 @@ TEST(ApplyInjection, EveryEffectOfTheTableIsKnown) {
   std::set<std::string> names;
   for (const auto& [text, recorded] : cases) {
     TrueModel model = Base();
-    EXPECT_EQ(ApplyInjection(text, &model), recorded) << text;
+    EXPECT_EQ(EffectValueToJson(ApplyInjection(text, &model).value), recorded) << text;
     names.insert(text.substr(0, text.find('=')));
   }
   EXPECT_EQ(names.size(), AllEffects().size());

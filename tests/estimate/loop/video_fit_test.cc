@@ -4,6 +4,7 @@
 
 #include "estimate/loop/effect_fit.h"
 #include "estimate/loop/effect_model.h"
+#include "render/effect_io.h"
 #include "render/effects.h"
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
@@ -247,7 +248,7 @@ TEST(FitEffects, FitsTheGivenEffectsWithoutSelection) {
   EXPECT_NEAR(fit.model.rig.shutter.readout_s, 0.036, 0.2e-3);
   EXPECT_NEAR(fit.model.rig.time_offset_s, 0.0, 0.1e-3);
   // The time offset is in the fit although the data do not need it, with its standard error.
-  EXPECT_GT(fit.effects[1].stderr_value.get<double>(), 0.0);
+  EXPECT_GT(std::get<double>(fit.effects[1].stderr_value), 0.0);
   EXPECT_EQ(fit.effects[0].parameters.size(), 1);
   EXPECT_EQ(fit.effects[1].covariance.rows(), 1);
   EXPECT_LT(fit.after.rms_px, fit.before.rms_px);

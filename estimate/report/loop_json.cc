@@ -1,0 +1,58 @@
+#include "estimate/report/loop_json.h"
+
+#include "render/effect_io.h"
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace shutterlab {
+
+using nlohmann::json;
+
+json LoopToJson(const LoopResult& result, size_t frame_count) {
+  auto stats = [](const ResidualStats& s) {
+    return json{{"rms_px", s.rms_px}, {"max_px", s.max_px}};
+  };
+  json effects = json::array();
+  for (const IdentifiedEffect& e : result.effects) {
+    const EffectSpec& spec = Spec(e.effect);
+    json j = {{"name", spec.name},
+              {"value", EffectValueToJson(e.value)},
+              {"stderr", EffectValueToJson(e.stderr_value)},
+              {"unit", spec.unit}};
+    if (!e.ambiguous_with.empty()) {
+      std::vector<std::string> names;
+      for (Effect a : e.ambiguous_with) names.push_back(Spec(a).name);
+      j["ambiguous_with"] = names;
+    }
+    j["after"] = stats(e.after);
+    effects.push_back(std::move(j));
+  }
+  json out{{"format", "validation/1"},          {"frames", frame_count},
+           {"before", stats(result.before)},    {"effects", std::move(effects)},
+           {"after", stats(result.after)},      {"noise_px", result.noise_px},
+           {"unexplained", result.unexplained}, {"log", result.log}};
+  // Beyond docs/FORMATS.md: with pair_translation the residual is one component (the distance
+  // across the epipolar line), to be read against noise_px / sqrt(2), not noise_px.
+  if (result.residual_components != 2) out["residual_components"] = result.residual_components;
+  return out;
+}
+
+json MeasureToJson(const MeasureReport& report) {
+  const DisplacementMeasurement& m = report.measurement;
+  json j = {
+      {"format", "measure/1"}, {"width", m.field.cols}, {"height", m.field.rows}, {"D_px", m.d_px}};
+  if (report.ground_m_per_px) j["D_m"] = m.d_px * *report.ground_m_per_px;
+  j["noise_px"] = m.noise_px;
+  j["measured_fraction"] = m.measured_fraction;
+  j["points"] = m.points.size();
+  if (report.truth) {
+    j["truth"] = {{"rms_px", report.truth->rms_px},
+                  {"max_px", report.truth->max_px},
+                  {"pixels", report.truth->pixels}};
+  }
+  return j;
+}
+
+}  // namespace shutterlab

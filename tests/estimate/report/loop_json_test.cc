@@ -1,0 +1,91 @@
+// The loop's typed results as docs/FORMATS.md's JSON: every key the contract names, with the values
+// the typed results hold.
+#include "estimate/report/loop_json.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace shutterlab {
+namespace {
+
+TEST(LoopToJson, HasTheFormatsKeys) {
+  LoopResult r;
+  r.before = {1.8, 4.1, 100};
+  r.after = {0.05, 0.2, 100};
+  r.noise_px = 0.04;
+  r.log = {"round 1: added gyro_bias"};
+  IdentifiedEffect e;
+  e.effect = Effect::kGyroBias;
+  e.value = Eigen::Vector3d(0.01, 0.0, 0.0);
+  e.stderr_value = Eigen::Vector3d(0.001, 0.002, std::numeric_limits<double>::quiet_NaN());
+  e.ambiguous_with = {Effect::kVelocity};
+  r.effects.push_back(e);
+  const nlohmann::json j = LoopToJson(r, 12);
+  EXPECT_EQ(j["format"], "validation/1");
+  EXPECT_EQ(j["frames"], 12);
+  EXPECT_DOUBLE_EQ(j["before"]["rms_px"].get<double>(), 1.8);
+  EXPECT_DOUBLE_EQ(j["before"]["max_px"].get<double>(), 4.1);
+  EXPECT_DOUBLE_EQ(j["after"]["rms_px"].get<double>(), 0.05);
+  EXPECT_DOUBLE_EQ(j["noise_px"].get<double>(), 0.04);
+  EXPECT_EQ(j["unexplained"], false);
+  EXPECT_EQ(j["log"][0], "round 1: added gyro_bias");
+  EXPECT_FALSE(j.contains("residual_components"));
+  ASSERT_EQ(j["effects"].size(), 1u);
+  const nlohmann::json& je = j["effects"][0];
+  EXPECT_EQ(je["name"], "gyro_bias");
+  EXPECT_EQ(je["value"], nlohmann::json::parse("[0.01, 0.0, 0.0]"));
+  // An undetermined standard error is written as null.
+  EXPECT_EQ(je["stderr"].dump(), "[0.001,0.002,null]");
+  EXPECT_EQ(je["unit"], "rad/s");
+  EXPECT_EQ(je["ambiguous_with"][0], "velocity");
+  // No ambiguous_with key when there is no ambiguity.
+  r.effects[0].ambiguous_with.clear();
+  EXPECT_FALSE(LoopToJson(r, 12)["effects"][0].contains("ambiguous_with"));
+  // One residual component (video pairs with translation) is named.
+  r.residual_components = 1;
+  EXPECT_EQ(LoopToJson(r, 12)["residual_components"], 1);
+}
+
+TEST(LoopToJson, ReadoutDirectionIsAWordWithANullStandardError) {
+  LoopResult r;
+  IdentifiedEffect e;
+  e.effect = Effect::kReadoutDirection;
+  e.value = ReadoutDirection::kBottomToTop;
+  r.effects.push_back(e);
+  const nlohmann::json je = LoopToJson(r, 3)["effects"][0];
+  EXPECT_EQ(je["value"], "bottom_to_top");
+  EXPECT_TRUE(je["stderr"].is_null());
+  EXPECT_EQ(je["unit"], "");
+}
+
+TEST(MeasureToJson, HasTheFormatsKeys) {
+  MeasureReport report;
+  report.measurement.field = cv::Mat(6, 8, CV_32FC2, cv::Scalar(0.5f, 0.0f));
+  report.measurement.points.resize(4);
+  report.measurement.noise_px = 0.02;
+  report.measurement.d_px = 1.5;
+  report.measurement.measured_fraction = 0.9;
+  nlohmann::json j = MeasureToJson(report);
+  EXPECT_EQ(j["format"], "measure/1");
+  EXPECT_EQ(j["width"], 8);
+  EXPECT_EQ(j["height"], 6);
+  EXPECT_DOUBLE_EQ(j["D_px"].get<double>(), 1.5);
+  EXPECT_DOUBLE_EQ(j["noise_px"].get<double>(), 0.02);
+  EXPECT_DOUBLE_EQ(j["measured_fraction"].get<double>(), 0.9);
+  EXPECT_EQ(j["points"], 4);
+  EXPECT_FALSE(j.contains("D_m"));
+  EXPECT_FALSE(j.contains("truth"));
+  // D in metres with a camera, the error against a truth field with one.
+  report.ground_m_per_px = 0.04;
+  report.truth = FieldComparison{0.1, 0.3, 48};
+  j = MeasureToJson(report);
+  EXPECT_DOUBLE_EQ(j["D_m"].get<double>(), 1.5 * 0.04);
+  EXPECT_DOUBLE_EQ(j["truth"]["rms_px"].get<double>(), 0.1);
+  EXPECT_DOUBLE_EQ(j["truth"]["max_px"].get<double>(), 0.3);
+  EXPECT_EQ(j["truth"]["pixels"], 48);
+}
+
+}  // namespace
+}  // namespace shutterlab
