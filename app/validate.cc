@@ -4,6 +4,7 @@
 #include "estimate/loop/validate.h"
 
 #include "app/command.h"
+#include "app/trace_options.h"
 #include "estimate/report/validate_report.h"
 #include "render/effects.h"
 #include "sim/check.h"
@@ -52,6 +53,7 @@ void Run(const ValidateCommand& command) {
     StagedProgress progress;
     result = ValidateDataset(command.dataset, options, std::ref(progress));
   }
+  PrintLogWarnings((std::filesystem::path(command.dataset) / "gyro.csv").string(), result.warnings);
   const nlohmann::json json = ValidationToJson(result);
   if (!command.out_dir.empty()) WriteValidationPlots(command.out_dir, result);
   if (!command.report_path.empty()) WriteFileAtomically(command.report_path, json.dump(2) + "\n");

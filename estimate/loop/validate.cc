@@ -6,6 +6,7 @@
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "render/pictures.h"
+#include "render/rig_dataset.h"
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
 #include "sim/check.h"
@@ -117,51 +118,6 @@ Confusion Confuse(const std::vector<FrameValidation>& frames, size_t limit, doub
   return c;
 }
 
-// A dataset folder's three files, each checked to be there.
-struct DatasetFiles {
-  fs::path dir;
-  std::string camera_path, gyro_path, frames_path;
-};
-
-DatasetFiles FindDatasetFiles(const std::string& dataset_dir) {
-  DatasetFiles files;
-  files.dir = fs::path(dataset_dir);
-  if (!fs::is_directory(files.dir)) {
-    throw IoError(IoMessage(dataset_dir, 0, "not a dataset folder"));
-  }
-  files.camera_path = (files.dir / "camera.json").string();
-  files.gyro_path = (files.dir / "gyro.csv").string();
-  files.frames_path = (files.dir / "frames.csv").string();
-  for (const std::string& path : {files.camera_path, files.gyro_path, files.frames_path}) {
-    if (!fs::is_regular_file(path)) throw IoError(IoMessage(path, 0, "missing"));
-  }
-  return files;
-}
-
-// Whether the dataset is a video (docs/FORMATS.md: a video dataset leaves ref empty on every line),
-// after checking that every line agrees and every image it names is there.
-bool CheckFrameImages(const DatasetFiles& files, const std::vector<FrameEntry>& entries) {
-  const bool video = entries.front().ref.empty();
-  for (size_t i = 0; i < entries.size(); ++i) {
-    // frames.csv: a header line, then one frame a line.
-    const long line = static_cast<long>(i) + 2;
-    if (entries[i].ref.empty() != video) {
-      throw IoError(IoMessage(files.frames_path, line,
-                              video ? "a ref image in a video dataset (line 2 has none)"
-                                    : "no ref image (a video dataset leaves ref empty on every "
-                                      "line, line 2 has one)"));
-    }
-    std::vector<std::string> images = {entries[i].image};
-    if (!video) images.push_back(entries[i].ref);
-    for (const std::string& name : images) {
-      if (name.empty() || !fs::is_regular_file(files.dir / name)) {
-        throw IoError(IoMessage(files.frames_path, line, "image '" + name + "' not found"));
-      }
-    }
-  }
-  return video;
-}
-
 // Each frame's motion under the declared model; a frame outside the gyro log is an error.
 std::vector<FrameMotion> DeclaredMotions(const RigModel& rig, const GyroTrace& gyro,
                                          const std::vector<FrameEntry>& entries,
@@ -189,7 +145,7 @@ double GroundMetresPerPx(const RigModel& rig) {
 
 // Measures every still frame against its ref image: fills result->frames' measured columns and
 // returns each frame's points.
-std::vector<FramePoints> MeasureStillFrames(const DatasetFiles& files,
+std::vector<FramePoints> MeasureStillFrames(const RigDataset& files,
                                             const std::vector<FrameEntry>& entries,
                                             const ValidateOptions& options,
                                             const ValidateProgress& progress,
@@ -317,16 +273,16 @@ ValidationResult ValidateDataset(const std::string& dataset_dir, const ValidateO
   result.limits_m = options.limits_m;
 
   // --- read and check everything that is cheap to check before the long stages
-  const DatasetFiles files = FindDatasetFiles(dataset_dir);
-  result.declared = ReadRigModel(files.camera_path);
+  const RigDataset dataset = ReadRigDataset(dataset_dir);
+  result.declared = dataset.declared;
+  result.warnings = dataset.gyro_warnings;
+  const RigDataset& files = dataset;
   const RigModel& rig = result.declared;
-  const GyroTrace gyro = ReadGyroCsv(files.gyro_path);
-  if (gyro.size() < 2) throw IoError(IoMessage(files.gyro_path, 0, "fewer than two samples"));
-  const std::vector<FrameEntry> entries = ReadFramesCsv(files.frames_path);
-  if (entries.empty()) throw IoError(IoMessage(files.frames_path, 0, "no frames"));
-  if (CheckFrameImages(files, entries)) {
+  const GyroTrace& gyro = dataset.gyro;
+  const std::vector<FrameEntry>& entries = dataset.frames;
+  if (dataset.video) {
     result.read_s = SecondsSince(start);
-    ValidateVideoDataset(dataset_dir, gyro, entries, options, progress, &result);
+    ValidateVideoDataset(dataset, options, progress, &result);
     return result;
   }
   const std::vector<FrameMotion> motions = DeclaredMotions(rig, gyro, entries, files.frames_path);

@@ -622,12 +622,12 @@ std::vector<Effect> VideoCandidates() {
   return effects;
 }
 
-void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
-                          const std::vector<FrameEntry>& entries, const ValidateOptions& options,
+void ValidateVideoDataset(const RigDataset& dataset, const ValidateOptions& options,
                           const ValidateProgress& progress, ValidationResult* result) {
   auto start = std::chrono::steady_clock::now();
-  const fs::path dir(dataset_dir);
-  const VideoInputs in{dir, (dir / "frames.csv").string(), gyro, entries, options, progress};
+  const fs::path& dir = dataset.dir;
+  const GyroTrace& gyro = dataset.gyro;
+  const VideoInputs in{dir, dataset.frames_path, gyro, dataset.frames, options, progress};
   result->video = true;
   const std::vector<size_t> order = FramesInTimeOrder(in);
   const std::vector<SourceClaim> claims = ReadSourceClaims((dir / "import.json").string());

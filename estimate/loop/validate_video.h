@@ -4,6 +4,7 @@
 #include "estimate/loop/validation_result.h"
 #include "render/effects.h"
 #include "render/frames_csv.h"
+#include "render/rig_dataset.h"
 #include "sim/gyro_trace.h"
 
 #include <string>
@@ -15,10 +16,9 @@ namespace shutterlab {
 // model (moving objects, bad matches) are left out, this share of each.
 inline constexpr double kCompareTrimShare = 0.05;
 
-// Validates a video dataset whose camera.json (result->declared), gyro log and frames.csv entries
-// (all with an empty ref) have been read and checked; fills *result.
-void ValidateVideoDataset(const std::string& dataset_dir, const GyroTrace& gyro,
-                          const std::vector<FrameEntry>& entries, const ValidateOptions& options,
+// Validates a video dataset (ReadRigDataset, video true); result->declared is its camera.json.
+// Fills *result.
+void ValidateVideoDataset(const RigDataset& dataset, const ValidateOptions& options,
                           const ValidateProgress& progress, ValidationResult* result);
 
 // The effects docs/FORMATS.md lists that a video's rotation-only or pair-translation model can fit:

@@ -5,6 +5,7 @@
 #include "estimate/loop/effect_fit.h"
 #include "estimate/loop/measure.h"
 #include "render/effects.h"
+#include "sim/log_warning.h"
 
 #include <Eigen/Core>
 
@@ -117,6 +118,7 @@ struct RatioGroup {
 struct ValidationResult {
   std::string dataset;
   RigModel declared;
+  std::vector<LogWarning> warnings;  // what the audit of gyro.csv found (RigDataset)
   std::vector<double> limits_m;
   std::vector<FrameValidation> frames;
   std::vector<Confusion> confusion_paper;  // one per limit

@@ -1,6 +1,7 @@
 #include "estimate/report/validate_report.h"
 
 #include "estimate/paper/analyze.h"
+#include "estimate/report/analysis_json.h"
 #include "estimate/report/html_report.h"
 #include "estimate/report/loop_json.h"
 #include "render/effect_io.h"
@@ -63,8 +64,9 @@ void WriteLoopSummary(const LoopResult& loop, std::ostream& out) {
       << "x noise); " << (loop.unexplained ? "UNEXPLAINED residual remains" : "explained") << "\n";
 }
 
-nlohmann::json ValidationToJson(const ValidationResult& result) {
-  if (result.video) return VideoValidationToJson(result);
+namespace {
+
+nlohmann::json StillValidationToJson(const ValidationResult& result) {
   nlohmann::json json = LoopToJson(result.loop, result.frames.size());
   json["dataset"] = result.dataset;
   json["limits_m"] = result.limits_m;
@@ -126,6 +128,15 @@ nlohmann::json ValidationToJson(const ValidationResult& result) {
                       {"predict", result.predict_s},
                       {"loop", result.loop_s}};
   json["log"] = result.loop.log;
+  return json;
+}
+
+}  // namespace
+
+nlohmann::json ValidationToJson(const ValidationResult& result) {
+  nlohmann::json json =
+      result.video ? VideoValidationToJson(result) : StillValidationToJson(result);
+  json["warnings"] = WarningsToJson(result.warnings);
   return json;
 }
 
