@@ -57,7 +57,8 @@ TEST(ColumnCsvCli, FlightReadsASpreadsheetByFlagsAsItReadsTheSameGyroCsv) {
   const auto expected = nlohmann::json::parse(reference.out);
   const auto got = nlohmann::json::parse(r.out);
   EXPECT_EQ(got.at("rows"), expected.at("rows"));
-  EXPECT_EQ(got.at("samples"), 7000);
+  EXPECT_EQ(got.at("samples"), expected.at("samples"));
+  EXPECT_EQ(got.at("samples"), 2000);  // after the 5 s bias segment
 }
 
 TEST(ColumnCsvCli, AnalyzeSaysTheColumnsItRead) {
@@ -91,11 +92,12 @@ TEST(ColumnCsvCli, BadFlagsAndBadColumnsSayWhatIsWrong) {
 
 TEST(ColumnCsvCli, FlightReadsThePhoneGyroTxtByFlagsAlone) {
   SHUTTERLAB_REAL_DATA(gyro_txt, "rs/phone_gyro_video_20200109_145447/gyro.txt");
-  const auto r = RunShutterlab("flight " + gyro_txt +
-                               " --columns 4,1,2,3 --time-unit s --rate-unit rad/s --json");
+  const auto r =
+      RunShutterlab("flight " + gyro_txt +
+                    " --columns 4,1,2,3 --time-unit s --rate-unit rad/s --zero-bias --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = nlohmann::json::parse(r.out);
-  EXPECT_EQ(j.at("samples"), 29466);  // every line of gyro.txt (SOURCES.md)
+  EXPECT_EQ(j.at("samples"), 29466);  // every line of gyro.txt (SOURCES.md), no bias segment
   EXPECT_FALSE(j.at("rows").empty());
 }
 

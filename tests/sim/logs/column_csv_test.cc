@@ -11,6 +11,7 @@
 #include <fstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace shutterlab {
@@ -168,20 +169,27 @@ TEST(ColumnCsv, BomCrlfBlankLinesAndQuotedNamesFromAFile) {
 }
 
 TEST(ColumnCsv, ErrorsNameTheLineAndTheColumn) {
-  EXPECT_EQ(ErrorOf("time_ms;gyro_x;gyro_y;gyro_z\n1;2;3;4\n", Columns("time_ms,wx,wy,wz")),
-            "f.csv:1: column 'wx' (x) not in the header: time_ms;gyro_x;gyro_y;gyro_z");
-  EXPECT_EQ(ErrorOf("\n\nt,gx,gy,gz\n\n0,1,2,3\n1,1,2\n", Columns("t,gx,gy,gz")),
-            "f.csv:6: column 'gz' (z) missing: the line has 3 fields split on ','");
-  EXPECT_EQ(ErrorOf("t,gx,gy,gz\n0,1,2,3\n1,1,oops,3\n", Columns("t,gx,gy,gz")),
-            "f.csv:3: column 'gy' (y) is not a number: 'oops'");
-  EXPECT_EQ(ErrorOf("0,1,2,3\n1,1,2,nan\n", Columns("1,2,3,4")),
-            "f.csv:2: column 4 (z) is not a number: 'nan'");
-  EXPECT_EQ(ErrorOf("t,gx,gy,gz\n0.5,0,0,0\n0.75,0,0,0\n\n0.5,0,0,0\n", Columns("t,gx,gy,gz")),
-            "f.csv:5: time goes backwards: column 't' is 0.5 here and 0.75 on line 3");
-  EXPECT_EQ(ErrorOf("t,gx,gx,gz\n0,1,2,3\n", Columns("t,gx,gx,gz")),
-            "f.csv:1: column 'gx' appears twice in the header: t,gx,gx,gz");
-  EXPECT_EQ(ErrorOf("t,gx,gy,gz\n", Columns("t,gx,gy,gz")), "f.csv: no samples");
-  EXPECT_EQ(ErrorOf("\r\n\r\n", Columns("1,2,3,4")), "f.csv: no samples (the file is empty)");
+  struct Case {
+    const char* text;
+    const char* columns;
+    const char* message;
+  };
+  const Case cases[] = {
+      {"time_ms;gyro_x;gyro_y;gyro_z\n1;2;3;4\n", "time_ms,wx,wy,wz",
+       "f.csv:1: column 'wx' (x) not in the header: time_ms;gyro_x;gyro_y;gyro_z"},
+      {"\n\nt,gx,gy,gz\n\n0,1,2,3\n1,1,2\n", "t,gx,gy,gz",
+       "f.csv:6: column 'gz' (z) missing: the line has 3 fields split on ','"},
+      {"t,gx,gy,gz\n0,1,2,3\n1,1,oops,3\n", "t,gx,gy,gz",
+       "f.csv:3: column 'gy' (y) is not a number: 'oops'"},
+      {"0,1,2,3\n1,1,2,nan\n", "1,2,3,4", "f.csv:2: column 4 (z) is not a number: 'nan'"},
+      {"t,gx,gy,gz\n0.5,0,0,0\n0.75,0,0,0\n\n0.5,0,0,0\n", "t,gx,gy,gz",
+       "f.csv:5: time goes backwards: column 't' is 0.5 here and 0.75 on line 3"},
+      {"t,gx,gx,gz\n0,1,2,3\n", "t,gx,gx,gz",
+       "f.csv:1: column 'gx' appears twice in the header: t,gx,gx,gz"},
+      {"t,gx,gy,gz\n", "t,gx,gy,gz", "f.csv: no samples"},
+      {"\r\n\r\n", "1,2,3,4", "f.csv: no samples (the file is empty)"},
+  };
+  for (const Case& c : cases) EXPECT_EQ(ErrorOf(c.text, Columns(c.columns)), c.message) << c.text;
 }
 
 TEST(ColumnCsv, EqualTimesAreKeptForTheAudit) {
@@ -199,15 +207,13 @@ TEST(ColumnCsv, OptionsAndFlagsAreChecked) {
   named_without_header.header = HeaderMode::kNo;
   EXPECT_THROW(named_without_header.Check(), std::invalid_argument);
   EXPECT_THROW(ColumnCsvOptions().Check(), std::invalid_argument);  // no columns
-  EXPECT_EQ(ParseDelimiter("auto"), '\0');
-  EXPECT_EQ(ParseDelimiter("Semicolon"), ';');
-  EXPECT_EQ(ParseDelimiter("tab"), '\t');
-  EXPECT_EQ(ParseDelimiter("whitespace"), ' ');
-  EXPECT_EQ(ParseDelimiter(","), ',');
   EXPECT_THROW(ParseDelimiter("|"), std::invalid_argument);
+  EXPECT_THROW(ParseRateUnit("rpm"), std::invalid_argument);
+  const std::pair<const char*, char> delimiters[] = {
+      {"auto", '\0'}, {"Semicolon", ';'}, {"tab", '\t'}, {"whitespace", ' '}, {",", ','}};
+  for (const auto& [name, delimiter] : delimiters) EXPECT_EQ(ParseDelimiter(name), delimiter);
   EXPECT_EQ(ParseRateUnit("deg/s"), RateUnit::kDegPerSecond);
   EXPECT_EQ(ParseRateUnit("RAD/S"), RateUnit::kRadPerSecond);
-  EXPECT_THROW(ParseRateUnit("rpm"), std::invalid_argument);
 }
 
 TEST(ColumnCsv, ReadFlightLogTakesTheColumnReader) {
