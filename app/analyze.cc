@@ -30,7 +30,7 @@ struct AnalyzeCommand {
   std::string format = "auto";
   int log_index = -1;
   int range_dps = 250;
-  std::string time_unit = "s";
+  ColumnFlags column_flags;  // --time-unit, --columns, --delimiter, --rate-unit
   std::string camera_path;
   std::string readout = "30ms";
   double altitude_m = 50.0;
@@ -87,7 +87,7 @@ void Run(const AnalyzeCommand& command) {
   read.format = ParseLogFormat(command.format);
   read.log_index = command.log_index;
   read.raw.range_dps = command.range_dps;
-  read.raw.time_unit = ParseTimeUnit(command.time_unit);
+  command.column_flags.Apply(&read);
   read.Check();
   options.Check();  // before the (possibly long) read
   if (!command.triggers_path.empty()) options.triggers = ReadTriggersCsv(command.triggers_path);
@@ -127,21 +127,21 @@ void Run(const AnalyzeCommand& command) {
 const CommandRegistration kRegistration(80, [](CLI::App& app) {
   auto* cmd = app.add_subcommand("analyze",
                                  "per-image rolling-shutter distortion from a flight log (ULog, "
-                                 "DataFlash, blackbox, gyro.csv)");
+                                 "DataFlash, blackbox, gyro.csv, any CSV by --columns)");
   auto command = std::make_shared<AnalyzeCommand>();
   cmd->add_option("LOG", command->log_path, "flight or gyro log")
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--format", command->format,
-                  "auto, ulog, dataflash, blackbox, gyro.csv, gcsv, raw")
+                  "auto, ulog, dataflash, blackbox, gyro.csv, gcsv, raw (columns: set by "
+                  "--columns)")
       ->capture_default_str();
   cmd->add_option("--log-index", command->log_index,
                   "blackbox: which log of the file (-1 = longest)")
       ->capture_default_str();
   cmd->add_option("--range", command->range_dps, "raw counts: full-scale range, deg/s")
       ->capture_default_str();
-  cmd->add_option("--time-unit", command->time_unit, "raw counts: time column unit (s, ms, us, ns)")
-      ->capture_default_str();
+  command->column_flags.Add(cmd);
   cmd->add_option("--camera", command->camera_path, "camera.json (docs/FORMATS.md rig/1)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--readout", command->readout,

@@ -1,8 +1,43 @@
 #include "app/trace_options.h"
 
+#include "sim/check.h"
+
 #include <cstdio>
 
 namespace shutterlab::app {
+
+void ColumnFlags::Add(CLI::App* command) {
+  command
+      ->add_option("--time-unit", time_unit,
+                   "unit of the time column for raw counts and --columns (s, ms, us, ns)")
+      ->capture_default_str();
+  command->add_option("--columns", columns,
+                      "read any delimited file by its columns TIME,X,Y,Z: header names "
+                      "(t,gx,gy,gz) or 1-based numbers (4,1,2,3); content detection otherwise");
+  command->add_option("--delimiter", delimiter,
+                      "with --columns: comma, semicolon, tab, whitespace (default: from the first "
+                      "line)");
+  command->add_option("--rate-unit", rate_unit, "with --columns: rad/s (default) or deg/s");
+}
+
+void ColumnFlags::Apply(FlightLogReadOptions* options) const {
+  const TimeUnit unit = ParseTimeUnit(time_unit);
+  options->raw.time_unit = unit;
+  if (columns.empty()) {
+    SHUTTERLAB_CHECK(delimiter.empty() && rate_unit.empty())
+        << "--delimiter and --rate-unit are for --columns: give --columns TIME,X,Y,Z too";
+    return;
+  }
+  SHUTTERLAB_CHECK(options->format == LogFormat::kAuto || options->format == LogFormat::kColumns)
+      << "--columns reads the file by its columns; it cannot go with --format "
+      << LogFormatName(options->format);
+  options->format = LogFormat::kColumns;
+  options->columns.columns = ParseColumnList(columns);
+  options->columns.delimiter = delimiter.empty() ? '\0' : ParseDelimiter(delimiter);
+  options->columns.rate_unit =
+      rate_unit.empty() ? RateUnit::kRadPerSecond : ParseRateUnit(rate_unit);
+  options->columns.time_unit = unit;
+}
 
 void TraceOptions::Add(CLI::App* command, bool with_bias) {
   command
@@ -13,16 +48,15 @@ void TraceOptions::Add(CLI::App* command, bool with_bias) {
       ->check(CLI::ExistingFile);
   command
       ->add_option("--format", format,
-                   "log format: auto, csv, gcsv, raw, ulog, blackbox, dataflash")
+                   "log format: auto, csv, gcsv, raw, ulog, blackbox, dataflash (columns: set by "
+                   "--columns)")
       ->capture_default_str();
   command->add_flag("--raw", raw, "the log holds raw int16 counts (the source paper's logger)");
   command
       ->add_option("--range", range_dps,
                    "raw counts: gyro full-scale range, deg/s (250, 500, 1000, 2000)")
       ->capture_default_str();
-  command
-      ->add_option("--time-unit", time_unit, "raw counts: unit of the time column (s, ms, us, ns)")
-      ->capture_default_str();
+  column_flags.Add(command);
   if (with_bias) {
     command
         ->add_option("--bias", bias,
@@ -39,7 +73,9 @@ FlightLogReadOptions TraceOptions::ReadOptions() const {
   FlightLogReadOptions options;
   options.format = raw ? LogFormat::kRaw : ParseLogFormat(format);
   options.raw.range_dps = range_dps;
-  options.raw.time_unit = ParseTimeUnit(time_unit);
+  SHUTTERLAB_CHECK(!raw || column_flags.columns.empty())
+      << "--raw and --columns exclude each other";
+  column_flags.Apply(&options);
   options.Check();
   return options;
 }

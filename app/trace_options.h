@@ -14,12 +14,27 @@
 
 namespace shutterlab::app {
 
+// --time-unit, --columns, --delimiter and --rate-unit: how to read a file by its columns (and the
+// time unit of raw counts), shared by the trace commands and analyze.
+struct ColumnFlags {
+  std::string columns;          // "" = detect the format from the content
+  std::string delimiter;        // "" = auto
+  std::string rate_unit;        // "" = rad/s
+  std::string time_unit = "s";  // raw counts and --columns: unit of the time column
+
+  void Add(CLI::App* command);
+  // Sets the time units and, with --columns, the column reader (options->format = kColumns).
+  // Throws std::invalid_argument for a bad value, --delimiter or --rate-unit without --columns, or
+  // --columns with a --format other than auto / columns.
+  void Apply(FlightLogReadOptions* options) const;
+};
+
 struct TraceOptions {
   std::string path;
-  std::string format = "auto";  // auto | csv | gcsv | raw | ulog | blackbox | dataflash
+  std::string format = "auto";  // auto | csv | gcsv | raw | ulog | blackbox | dataflash | columns
   bool raw = false;             // shorthand for --format raw
   int range_dps = 250;          // raw counts: full-scale range
-  std::string time_unit = "s";  // raw counts: unit of the time column
+  ColumnFlags column_flags;     // --time-unit, --columns, --delimiter, --rate-unit
   std::string bias = "0:5";     // bias segment A:B, seconds after the first sample
   bool auto_bias = false;       // find the still segment automatically instead of --bias
 

@@ -35,6 +35,7 @@ void FlightLogReadOptions::Check() const {
   SHUTTERLAB_CHECK(log_index >= -1)
       << "log index must be -1 (longest) or >= 0 (got " << log_index << ")";
   raw.Check();
+  if (format == LogFormat::kColumns) columns.Check();
 }
 
 LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string& path) {
@@ -67,6 +68,16 @@ LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string&
 
 namespace {
 
+FlightLog ReadColumns(const std::string& path, const ColumnCsvOptions& options) {
+  ColumnCsvLog columns = ReadColumnCsv(path, options);
+  FlightLog log;
+  log.gyro = std::move(columns.trace);
+  log.format = LogFormatName(LogFormat::kColumns);
+  log.gyro_source = std::move(columns.source);
+  log.gyro_sources_available = {log.gyro_source};
+  return log;
+}
+
 FlightLog ReadDetected(const std::string& path, LogFormat format,
                        const FlightLogReadOptions& options) {
   switch (format) {
@@ -76,6 +87,8 @@ FlightLog ReadDetected(const std::string& path, LogFormat format,
       return ReadDataFlash(path);
     case LogFormat::kBlackbox:
       return ReadBlackbox(path, options.log_index);
+    case LogFormat::kColumns:
+      return ReadColumns(path, options.columns);
     default:
       break;
   }

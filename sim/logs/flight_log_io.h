@@ -4,6 +4,7 @@
 // .gcsv, the source paper's raw counts), detected by content. Plain gyro logs are wrapped into a
 // FlightLog with no camera events and no altitude, so that `analyze` treats every source alike.
 
+#include "sim/logs/column_csv.h"
 #include "sim/logs/flight_log.h"
 #include "sim/logs/log_format.h"
 
@@ -14,8 +15,9 @@ namespace shutterlab {
 
 struct FlightLogReadOptions {
   LogFormat format = LogFormat::kAuto;
-  int log_index = -1;   // blackbox files only: which log (ListBlackboxLogs); -1 = the longest
-  RawCountOptions raw;  // raw-count logs only
+  int log_index = -1;        // blackbox files only: which log (ListBlackboxLogs); -1 = the longest
+  RawCountOptions raw;       // raw-count logs only
+  ColumnCsvOptions columns;  // format kColumns only (its columns, delimiter, header and units)
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };
@@ -26,10 +28,11 @@ struct FlightLogReadOptions {
 LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string& path);
 
 // Reads any supported log. Plain gyro logs give format "gyro.csv" / "gcsv" / "raw", gyro_source
-// "t,gx,gy,gz" / "gcsv" / "raw counts", no camera events and no altitude. Throws IoError (path,
-// line or byte, problem) on unreadable or unknown input. FlightLog::warnings holds the reader's own
-// (truncation, corrupt records, ...) followed by sim/trace_audit.h's (gaps, rate changes,
-// saturation): everything a command must tell the user it could not read or trust.
+// "t,gx,gy,gz" / "gcsv" / "raw counts", no camera events and no altitude; kColumns gives format
+// "columns" and gyro_source the chosen columns ("time_ms,wx,wy,wz" or "4,1,2,3"). Throws IoError
+// (path, line or byte, problem) on unreadable or unknown input. FlightLog::warnings holds the
+// reader's own (truncation, corrupt records, ...) followed by sim/trace_audit.h's (gaps, rate
+// changes, saturation): everything a command must tell the user it could not read or trust.
 FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& options = {});
 
 }  // namespace shutterlab

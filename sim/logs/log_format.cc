@@ -19,6 +19,7 @@ constexpr FormatNames kFormatNames[] = {
     {LogFormat::kULog, {"ulog", "ulg", "px4"}},
     {LogFormat::kBlackbox, {"blackbox", "betaflight", "bbl"}},
     {LogFormat::kDataFlash, {"dataflash", "bin", "ardupilot"}},
+    {LogFormat::kColumns, {"columns"}},
 };
 
 // The format one of whose names is `lower`; kAuto with *found false when none is.
@@ -52,7 +53,7 @@ LogFormat ParseLogFormat(const std::string& name) {
   bool found = false;
   const LogFormat format = FindFormat(ToLower(name), &found);
   SHUTTERLAB_CHECK(found) << "unknown log format '" << name
-                          << "' (auto, ulog, dataflash, blackbox, gyro.csv, gcsv, raw)";
+                          << "' (auto, ulog, dataflash, blackbox, gyro.csv, gcsv, raw, columns)";
   return format;
 }
 

@@ -17,17 +17,19 @@ enum class LogFormat {
   kULog,       // PX4 .ulg
   kBlackbox,   // Betaflight / INAV blackbox, native or CSV export
   kDataFlash,  // ArduPilot .bin
+  kColumns,    // any delimited file read by the columns the user names (sim/logs/column_csv.h);
+               // never detected: chosen by --columns / --format columns
 };
 
 // kGyroCsv, kGcsv and kRaw: the plain gyro logs that ReadGyro reads.
 bool IsPlainGyroFormat(LogFormat format);
 
-// "auto", "gyro.csv", "gcsv", "raw", "ulog", "blackbox", "dataflash".
+// "auto", "gyro.csv", "gcsv", "raw", "ulog", "blackbox", "dataflash", "columns".
 const char* LogFormatName(LogFormat format);
 
 // Any name of the table, case-insensitive: "auto", "ulog" / "ulg" / "px4", "dataflash" / "bin" /
-// "ardupilot", "blackbox" / "betaflight" / "bbl", "gyro.csv" / "csv", "gcsv", "raw"; throws
-// std::invalid_argument naming the text otherwise.
+// "ardupilot", "blackbox" / "betaflight" / "bbl", "gyro.csv" / "csv", "gcsv", "raw", "columns";
+// throws std::invalid_argument naming the text otherwise.
 LogFormat ParseLogFormat(const std::string& name);
 
 // "auto" or a plain gyro format ("gyro.csv" / "csv", "gcsv", "raw"), case-insensitive; throws

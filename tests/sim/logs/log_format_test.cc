@@ -9,8 +9,9 @@ namespace shutterlab {
 namespace {
 
 TEST(LogFormat, NamesRoundTripThroughBothParsers) {
-  for (LogFormat f : {LogFormat::kAuto, LogFormat::kGyroCsv, LogFormat::kGcsv, LogFormat::kRaw,
-                      LogFormat::kULog, LogFormat::kBlackbox, LogFormat::kDataFlash}) {
+  for (LogFormat f :
+       {LogFormat::kAuto, LogFormat::kGyroCsv, LogFormat::kGcsv, LogFormat::kRaw, LogFormat::kULog,
+        LogFormat::kBlackbox, LogFormat::kDataFlash, LogFormat::kColumns}) {
     EXPECT_EQ(ParseLogFormat(LogFormatName(f)), f) << LogFormatName(f);
     if (f == LogFormat::kAuto || IsPlainGyroFormat(f)) {
       EXPECT_EQ(ParseGyroFormat(LogFormatName(f)), f) << LogFormatName(f);
@@ -30,7 +31,9 @@ TEST(LogFormat, UnknownNamesAreNamedWithTheChoices) {
   } catch (const std::invalid_argument& e) {
     EXPECT_EQ(
         std::string(e.what()).rfind(
-            "unknown log format 'jpeg' (auto, ulog, dataflash, blackbox, gyro.csv, gcsv, raw)", 0),
+            "unknown log format 'jpeg' (auto, ulog, dataflash, blackbox, gyro.csv, gcsv, raw, "
+            "columns)",
+            0),
         0u)
         << e.what();
   }
