@@ -70,6 +70,8 @@ cat >"$build/corpus/camera_json/camera.json" <<'JSON'
  "gyro_to_camera": [[1,0,0],[0,1,0],[0,0,1]], "time_offset_s": 0.0,
  "scene": {"altitude_m": 50.0}, "velocity_mps": [0.0, 0.0, 0.0]}
 JSON
+seed column_csv "$data"/rs/phone_gyro_video_20200109_145447/gyro.txt
+printf '\x01t;gx;gy;gz\n0;1;2;3\n0.001;1;2;3\n' >"$build/corpus/column_csv/semicolon.csv"
 seed frames_csv
 printf 'frame,t,image,ref\n0,0.0,images/frame_000000.png,\n1,0.04,images/frame_000001.png,0\n' >"$build/corpus/frames_csv/frames.csv"
 

@@ -96,7 +96,7 @@ TEST(EffectIo, ReadingRejectsAnotherShapeNamingWhere) {
       {Effect::kGyroBias, "0.1"},
       {Effect::kGyroToCamera, "[[1, 0], [0, 1]]"},
       {Effect::kGyroToCamera, "[1, 0, 0, 0, 1, 0, 0, 0, 1]"},  // `--inject` only
-      {Effect::kLensDistortion, "[-0.1, 0.02]"},                // `--inject` only
+      {Effect::kLensDistortion, "[-0.1, 0.02]"},               // `--inject` only
       {Effect::kLensDistortion, R"({"k9": 1})"},
       {Effect::kLensDistortion, "[1, 2, 3, 4, 5, 6]"},
       {Effect::kLensDistortion, "[]"},
