@@ -115,6 +115,10 @@ RigModel ReadRigModel(const std::string& path) {
     const size_t offset = std::min<size_t>(e.byte, text.size());
     const long line = 1 + static_cast<long>(std::count(text.begin(), text.begin() + offset, '\n'));
     throw IoError(IoMessage(path, line, "invalid JSON"));
+  } catch (const json::exception& e) {
+    // A number too large for a double ("10e900") is nlohmann's out_of_range, not a parse_error.
+    // Found by fuzz/camera_json_fuzz.
+    throw IoError(IoMessage(path, 0, std::string("invalid JSON: ") + e.what()));
   }
   RigModel rig;
   try {

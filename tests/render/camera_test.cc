@@ -121,6 +121,22 @@ TEST(RigModel, RejectsInvalidJsonWithItsLine) {
   }
 }
 
+// Regression (fuzz/camera_json_fuzz): a number too large for a double made nlohmann throw its
+// out_of_range, which escaped as an uncaught exception instead of a one-line error.
+TEST(RigModel, NumberOverflowIsAnIoError) {
+  test::TempDir dir;
+  WriteFileAtomically(dir / "camera.json",
+                      "{\"format\": \"rig/1\", \"intrinsics\": {\"fx\": 10e900}}");
+  try {
+    ReadRigModel(dir / "camera.json");
+    ADD_FAILURE() << "accepted 10e900";
+  } catch (const IoError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("camera.json: invalid JSON"), std::string::npos) << message;
+    EXPECT_NE(message.find("10e900"), std::string::npos) << message;
+  }
+}
+
 TEST(PinholeCamera, ImgFromCamInvertsCamFromImg) {
   PinholeCamera camera = FullRig().camera;
   std::mt19937_64 rng(3);
