@@ -274,14 +274,17 @@ class DataFlashParser {
   bool NextHeaderOk(size_t q) const { return q + kHeaderBytes > bytes_.size() || KnownAt(q) != 0; }
   // Decodes the known message of len bytes at pos (FMT or data).
   void Accept(size_t pos, size_t len);
-  void Handle(const Format& fmt, std::string_view payload);
-  void HandleGyro(const Format& fmt, std::string_view payload);
+  void Handle(uint8_t type, const Format& fmt, std::string_view payload);
+  void HandleGyro(uint8_t type, const Format& fmt, std::string_view payload);
   void HandleBatchHeader(const Format& fmt, std::string_view payload);
   void HandleBatchData(const Format& fmt, std::string_view payload);
   void CloseBatch(int64_t key);
   void HandleCamera(const Format& fmt, std::string_view payload);
   void HandleUnits(const Format& fmt, std::string_view payload);
   double GyroToRadPerS(const Format& fmt, uint8_t type, const std::string& label);
+  // GyroToRadPerS for GyrX, GyrY, GyrZ of a type, worked out once and kept until a UNIT, FMTU or
+  // FMT message could change it (a log holds thousands of gyro messages per second).
+  const Eigen::Vector3d& GyroScale(uint8_t type, const Format& fmt);
   void Finish();
   internal::GyroCandidate& Candidate(const std::string& base, int instance, int preference) {
     const std::string name = base + (instance ? "/" + std::to_string(instance) : "");
@@ -300,7 +303,7 @@ class DataFlashParser {
   std::map<int64_t, BatchHeader> batches_;  // by ISBH.N
   std::vector<double> cam_rel_alt_m_;
   size_t skipped_bytes_ = 0;
-  uint8_t current_type_ = 0;                       // message type being handled
+  std::array<std::optional<Eigen::Vector3d>, 256> gyro_scale_by_type_;  // GyroScale's cache
   std::map<char, std::string> unit_labels_;        // UNIT: id -> label ("rad/s")
   std::map<uint8_t, std::string> field_unit_ids_;  // FMTU: type -> one unit id per field
   std::set<std::string> odd_gyro_units_;
@@ -334,8 +337,7 @@ void DataFlashParser::Accept(size_t pos, size_t len) {
   const std::string_view payload = bytes_.substr(pos + kHeaderBytes, len - kHeaderBytes);
   const uint8_t type = static_cast<uint8_t>(bytes_[pos + 2]);
   if (type != kFmtType) {
-    current_type_ = type;
-    Handle(*formats_[type], payload);
+    Handle(type, *formats_[type], payload);
     return;
   }
   std::string error;
@@ -349,14 +351,15 @@ void DataFlashParser::Accept(size_t pos, size_t len) {
       Warn("fmt", pos, "FMT redefines itself with another length; ignored");
   } else {
     formats_[defined] = std::move(fmt);
+    gyro_scale_by_type_[defined].reset();
   }
 }
 
-void DataFlashParser::Handle(const Format& fmt, std::string_view p) {
+void DataFlashParser::Handle(uint8_t type, const Format& fmt, std::string_view p) {
   if (!fmt.relevant) return;
   const std::string& name = fmt.name;
   if (name == "GYR" || name == "IMU" || name == "IMU2" || name == "IMU3") {
-    HandleGyro(fmt, p);
+    HandleGyro(type, fmt, p);
   } else if (name == "ISBH") {
     HandleBatchHeader(fmt, p);
   } else if (name == "ISBD") {
@@ -365,6 +368,7 @@ void DataFlashParser::Handle(const Format& fmt, std::string_view p) {
     HandleCamera(fmt, p);
   } else if (name == "UNIT" || name == "FMTU") {
     HandleUnits(fmt, p);
+    for (auto& scale : gyro_scale_by_type_) scale.reset();  // a unit may have changed
   }
 }
 
@@ -398,7 +402,16 @@ double DataFlashParser::GyroToRadPerS(const Format& fmt, uint8_t type, const std
   return 1.0;
 }
 
-void DataFlashParser::HandleGyro(const Format& fmt, std::string_view p) {
+const Eigen::Vector3d& DataFlashParser::GyroScale(uint8_t type, const Format& fmt) {
+  std::optional<Eigen::Vector3d>& scale = gyro_scale_by_type_[type];
+  if (!scale) {
+    scale = Eigen::Vector3d(GyroToRadPerS(fmt, type, "GyrX"), GyroToRadPerS(fmt, type, "GyrY"),
+                            GyroToRadPerS(fmt, type, "GyrZ"));
+  }
+  return *scale;
+}
+
+void DataFlashParser::HandleGyro(uint8_t type, const Format& fmt, std::string_view p) {
   const std::string& name = fmt.name;
   const Field* x = fmt.Find("GyrX");
   const Field* y = fmt.Find("GyrY");
@@ -410,9 +423,7 @@ void DataFlashParser::HandleGyro(const Format& fmt, std::string_view p) {
   if (!sample_us && !fmt.time) return;
   int instance = name == "IMU2" ? 1 : name == "IMU3" ? 2 : 0;
   if (const Field* i = fmt.Find("I")) instance = static_cast<int>(ToInt(ReadNumber(p, *i)) & 0xff);
-  const uint8_t type = current_type_;
-  const Eigen::Vector3d scale(GyroToRadPerS(fmt, type, "GyrX"), GyroToRadPerS(fmt, type, "GyrY"),
-                              GyroToRadPerS(fmt, type, "GyrZ"));
+  const Eigen::Vector3d& scale = GyroScale(type, fmt);
   auto& c = Candidate(name == "GYR" ? "GYR" : "IMU", instance, name == "GYR" ? 0 : 2);
   last_t_ns_ = std::max(last_t_ns_, t_ns.value_or(0));
   c.samples.push_back(
