@@ -37,6 +37,14 @@ void SampleRowFixed(const cv::Mat& src, const int* xi, const int* yi, int n, uch
 void SampleRowFloat(const cv::Mat& src, const float* xs, const float* ys, int n,
                     Interpolation interpolation, uchar* out);
 
+// Fixed-point coordinates of n pixels along a line: out[k] = round(a + k b), a and b already in
+// fixed-point units (|a + k b| < 2^30).
+void LinearFixedRow(float a, float b, int n, int* out);
+
+// 255 where every bilinear tap of the fixed-point (xi[k], yi[k]) lies inside a width x height
+// source (0 <= x <= width - 1, 0 <= y <= height - 1), else 0.
+void InsideMaskRow(const int* xi, const int* yi, int n, int width, int height, uint8_t* mask);
+
 // The 8-bit RGB four-pixel path: true where this CPU runs it. SetWideSampler(false) turns it off
 // (tests compare both paths; benches time them), and returns the previous setting.
 bool WideSamplerAvailable();
