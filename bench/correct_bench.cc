@@ -51,14 +51,12 @@ struct Fixture {
     moving = motion;
     for (int v = 0; v < kHeight; ++v) {
       const double t_s = 0.030 * v / kHeight;
-      motion.world_from_cam[v] =
-          ExpSO3(Eigen::Vector3d(0.3, -0.4, 0.6) * t_s).toRotationMatrix();
+      motion.world_from_cam[v] = ExpSO3(Eigen::Vector3d(0.3, -0.4, 0.6) * t_s).toRotationMatrix();
       moving.world_from_cam[v] = motion.world_from_cam[v];
       moving.cam_center_m[v] = Eigen::Vector3d(8.0, 0.0, 0.0) * t_s;
     }
     const Eigen::Matrix3d k = camera.K();
-    const Eigen::Matrix3d h =
-        k * motion.world_from_cam[kHeight / 2].transpose() * k.inverse();
+    const Eigen::Matrix3d h = k * motion.world_from_cam[kHeight / 2].transpose() * k.inverse();
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) homography(r, c) = h(r, c);
     }
@@ -73,8 +71,8 @@ struct Fixture {
     CorrectFrame(image, map, Interpolation::kBilinear, &out, &mask);
   }
   void Warp() {
-    cv::warpPerspective(image, out, homography, out.size(),
-                        cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT);
+    cv::warpPerspective(image, out, homography, out.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
+                        cv::BORDER_CONSTANT);
   }
 };
 
@@ -95,8 +93,7 @@ void BM_Correct(benchmark::State& state) {
 
 void BM_CorrectTranslation(benchmark::State& state) {
   Fixture& f = Shared();
-  bench::Timed(state, "correct (plane, lens)",
-               [&] { f.Correct(f.lens_camera, f.moving, 50.0); });
+  bench::Timed(state, "correct (plane, lens)", [&] { f.Correct(f.lens_camera, f.moving, 50.0); });
 }
 
 void BM_CorrectWarpOnly(benchmark::State& state) {
@@ -120,8 +117,7 @@ void PrintPairedRatios(int runs) {
   std::vector<double> warp_s, correct_s, plane_s;
   for (int i = 0; i < runs; ++i) {
     warp_s.push_back(bench::CpuSecondsOf([&] { f.Warp(); }));
-    correct_s.push_back(
-        bench::CpuSecondsOf([&] { f.Correct(f.camera, f.motion, std::nullopt); }));
+    correct_s.push_back(bench::CpuSecondsOf([&] { f.Correct(f.camera, f.motion, std::nullopt); }));
     plane_s.push_back(bench::CpuSecondsOf([&] { f.Correct(f.lens_camera, f.moving, 50.0); }));
   }
   const double warp = UpperMedian(warp_s), correct = UpperMedian(correct_s),

@@ -8,7 +8,6 @@
 #include <cmath>
 #include <limits>
 
-
 namespace shutterlab {
 namespace {
 
@@ -94,8 +93,9 @@ std::optional<Eigen::Vector2d> CorrectionGeometry::SourcePixel(double u, double 
   Eigen::Vector3d center_m;
   for (int step = 0; step < kMaxSolveSteps; ++step) {
     PoseAtRow(w, &cam_from_world, &center_m);
-    const Eigen::Vector3d p_in_cam = plane_depth_m_ ? Eigen::Vector3d(cam_from_world * (point - center_m))
-                                                    : Eigen::Vector3d(cam_from_world * point);
+    const Eigen::Vector3d p_in_cam = plane_depth_m_
+                                         ? Eigen::Vector3d(cam_from_world * (point - center_m))
+                                         : Eigen::Vector3d(cam_from_world * point);
     const std::optional<Eigen::Vector2d> q = camera_.ImgFromCam(p_in_cam);
     if (!q || !q->allFinite() || std::abs(q->y()) > lost) return std::nullopt;
     if (std::abs(q->y() - w) <= solve_tol_px) return q;
@@ -108,7 +108,8 @@ std::optional<Eigen::Vector2d> CorrectionGeometry::OutputPixel(double u, double 
   Eigen::Matrix3d cam_from_world;
   Eigen::Vector3d center;
   PoseAtRow(v, &cam_from_world, &center);
-  const Eigen::Vector3d ray = cam_from_world.transpose() * camera_.CamFromImg(Eigen::Vector2d(u, v));
+  const Eigen::Vector3d ray =
+      cam_from_world.transpose() * camera_.CamFromImg(Eigen::Vector2d(u, v));
   if (!plane_depth_m_) return camera_.ImgFromCam(world_from_ref_.transpose() * ray);
   const double s = (*plane_depth_m_ - center.z()) / ray.z();
   if (!(s > 0) || !std::isfinite(s)) return std::nullopt;
@@ -212,10 +213,9 @@ void CorrectionMap::Build(int cell_px) {
   for (size_t j = 0; j + 1 < std::max<size_t>(2, node_v_.size()); ++j) {
     for (size_t i = 0; i < cells_u; ++i) {
       const size_t j1 = std::min(j + 1, node_v_.size() - 1), i1 = std::min(i + 1, columns - 1);
-      const bool missing = std::isnan(node_x_[j * columns + i]) ||
-                           std::isnan(node_x_[j * columns + i1]) ||
-                           std::isnan(node_x_[j1 * columns + i]) ||
-                           std::isnan(node_x_[j1 * columns + i1]);
+      const bool missing =
+          std::isnan(node_x_[j * columns + i]) || std::isnan(node_x_[j * columns + i1]) ||
+          std::isnan(node_x_[j1 * columns + i]) || std::isnan(node_x_[j1 * columns + i1]);
       exact_cell_[j * cells_u + i] = missing ? 1 : 0;
     }
   }
@@ -239,17 +239,16 @@ double CorrectionMap::CoarseError() const {
     for (size_t a = 0; a + 1 < std::max<size_t>(2, cu.size()); ++a) {
       const size_t i0 = cu[a], i1 = cu[std::min(a + 1, cu.size() - 1)];
       for (size_t j = j0; j <= j1; ++j) {
-        const double t = j1 == j0 ? 0.0
-                                  : static_cast<double>(node_v_[j] - node_v_[j0]) /
-                                        (node_v_[j1] - node_v_[j0]);
+        const double t =
+            j1 == j0 ? 0.0
+                     : static_cast<double>(node_v_[j] - node_v_[j0]) / (node_v_[j1] - node_v_[j0]);
         for (size_t i = i0; i <= i1; ++i) {
           const double s = i1 == i0 ? 0.0
                                     : static_cast<double>(node_u_[i] - node_u_[i0]) /
                                           (node_u_[i1] - node_u_[i0]);
           const auto at = [&](const std::vector<float>& nodes) {
             const double top = (1 - s) * nodes[j0 * columns + i0] + s * nodes[j0 * columns + i1];
-            const double bottom =
-                (1 - s) * nodes[j1 * columns + i0] + s * nodes[j1 * columns + i1];
+            const double bottom = (1 - s) * nodes[j1 * columns + i0] + s * nodes[j1 * columns + i1];
             return (1 - t) * top + t * bottom - nodes[j * columns + i];
           };
           const double dx = at(node_x_), dy = at(node_y_);
@@ -266,16 +265,16 @@ void CorrectionMap::SourceRow(int v, int u0, int n, float* xs, float* ys) const 
   const size_t columns = node_u_.size();
   const size_t cells_u = std::max<size_t>(1, columns - 1);
   double t = 0;
-  size_t j = static_cast<size_t>(std::upper_bound(node_v_.begin(), node_v_.end(), v) -
-                                 node_v_.begin());
+  size_t j =
+      static_cast<size_t>(std::upper_bound(node_v_.begin(), node_v_.end(), v) - node_v_.begin());
   j = std::clamp<size_t>(j, 1, std::max<size_t>(1, node_v_.size() - 1)) - 1;
   const size_t j1 = std::min(j + 1, node_v_.size() - 1);
   if (j1 != j) t = static_cast<double>(v - node_v_[j]) / (node_v_[j1] - node_v_[j]);
   const auto node_at = [&](const std::vector<float>& nodes, size_t i) {
     return (1 - t) * nodes[j * columns + i] + t * nodes[j1 * columns + i];
   };
-  size_t i = static_cast<size_t>(std::upper_bound(node_u_.begin(), node_u_.end(), u0) -
-                                 node_u_.begin());
+  size_t i =
+      static_cast<size_t>(std::upper_bound(node_u_.begin(), node_u_.end(), u0) - node_u_.begin());
   i = std::clamp<size_t>(i, 1, cells_u) - 1;
   for (int u = u0; u < u0 + n;) {
     const size_t i1 = std::min(i + 1, columns - 1);
@@ -343,8 +342,7 @@ void CorrectionMap::SourceRowFixed(int v, int u0, int n, int* xi, int* yi) const
 
 namespace {
 
-void MaskRowFloat(const float* xs, const float* ys, int n, int width, int height,
-                  uint8_t* mask) {
+void MaskRowFloat(const float* xs, const float* ys, int n, int width, int height, uint8_t* mask) {
   for (int k = 0; k < n; ++k) {
     mask[k] = xs[k] >= 0 && xs[k] <= width - 1 && ys[k] >= 0 && ys[k] <= height - 1 ? 255 : 0;
   }

@@ -116,7 +116,7 @@ class CorrectionMap {
   int cell_px_ = 0;
   double estimated_error_px_ = 0.0;
   double solve_tol_px_ = 0.0;
-  std::vector<int> node_u_, node_v_;  // node columns and rows (last column and row included)
+  std::vector<int> node_u_, node_v_;    // node columns and rows (last column and row included)
   std::vector<float> node_x_, node_y_;  // source at each node, row-major; NaN: no solution
   std::vector<char> exact_cell_;  // per cell: a node without solution, solved per pixel instead
   // For SourceRowFixed: the nodes in fixed-point units, each output row's cell row and weight of

@@ -244,8 +244,8 @@ void SampleRowFloatImpl(const cv::Mat& src, const float* xs, const float* ys, in
 // row's (left, right) weights and sums them; one shuffle at the end interleaves the channels. Where
 // a row boundary runs through the block (each pixel's rows are iy or iy + 1 from the block's
 // lowest) three rows are loaded, each pixel's weights on the two it reads and zero on the third.
-// Same integer weights, sums and rounding as BilinearPixel: bit-identical. A block whose taps do not
-// fit (a stretched map, the source's last columns or rows, no source) takes the one-pixel path.
+// Same integer weights, sums and rounding as BilinearPixel: bit-identical. A block whose taps do
+// not fit (a stretched map, the source's last columns or rows, no source) takes the one-pixel path.
 
 // The block fits when its loads stay inside the source: 3 ix0 + 16 <= 3 width, iy0 + 1 <= height-1.
 struct BlockLimits {
@@ -260,15 +260,15 @@ struct BlockLimits {
 
 // Control bytes of channel c for every 32-bit lane: (left, right) = bytes (c, c + 3), each
 // zero-extended (0x80 selects zero; adding a pixel's offset 3 dx < 16 keeps bit 7 set).
-#define SHUTTERLAB_CHANNEL_CTRL(c)                                                              \
+#define SHUTTERLAB_CHANNEL_CTRL(c) \
   c, -128, c + 3, -128, c, -128, c + 3, -128, c, -128, c + 3, -128, c, -128, c + 3, -128
 // Bytes R0 R1 R2 R3 G0 .. G3 B0 .. B3 (planar, as packed) to R0 G0 B0 R1 G1 B1 ...
 #define SHUTTERLAB_INTERLEAVE 0, 4, 8, 1, 5, 9, 2, 6, 10, 3, 7, 11, 12, 13, 14, 15
 
 __attribute__((target("sse4.1"))) inline __m128i ChannelSum4(bool three_rows, __m128i row0,
                                                              __m128i row1, __m128i row2,
-                                                             __m128i ctrl, __m128i w0,
-                                                             __m128i w1, __m128i w2) {
+                                                             __m128i ctrl, __m128i w0, __m128i w1,
+                                                             __m128i w2) {
   __m128i sum = _mm_add_epi32(_mm_madd_epi16(_mm_shuffle_epi8(row0, ctrl), w0),
                               _mm_madd_epi16(_mm_shuffle_epi8(row1, ctrl), w1));
   if (three_rows) sum = _mm_add_epi32(sum, _mm_madd_epi16(_mm_shuffle_epi8(row2, ctrl), w2));
@@ -323,15 +323,15 @@ __attribute__((target("sse4.1"))) inline bool Block4(const cv::Mat& src, const B
   const __m128i w0 = kThreeRows ? _mm_andnot_si128(lower, w_top) : w_top;
   const __m128i w1 = kThreeRows ? _mm_blendv_epi8(w_bottom, w_top, lower) : w_bottom;
   const __m128i w2 = kThreeRows ? _mm_and_si128(lower, w_bottom) : w_bottom;
-  const __m128i r = ChannelSum4(kThreeRows, row0, row1, row2,
-                                _mm_add_epi8(_mm_setr_epi8(SHUTTERLAB_CHANNEL_CTRL(0)), offsets),
-                                w0, w1, w2);
-  const __m128i g = ChannelSum4(kThreeRows, row0, row1, row2,
-                                _mm_add_epi8(_mm_setr_epi8(SHUTTERLAB_CHANNEL_CTRL(1)), offsets),
-                                w0, w1, w2);
-  const __m128i b = ChannelSum4(kThreeRows, row0, row1, row2,
-                                _mm_add_epi8(_mm_setr_epi8(SHUTTERLAB_CHANNEL_CTRL(2)), offsets),
-                                w0, w1, w2);
+  const __m128i r =
+      ChannelSum4(kThreeRows, row0, row1, row2,
+                  _mm_add_epi8(_mm_setr_epi8(SHUTTERLAB_CHANNEL_CTRL(0)), offsets), w0, w1, w2);
+  const __m128i g =
+      ChannelSum4(kThreeRows, row0, row1, row2,
+                  _mm_add_epi8(_mm_setr_epi8(SHUTTERLAB_CHANNEL_CTRL(1)), offsets), w0, w1, w2);
+  const __m128i b =
+      ChannelSum4(kThreeRows, row0, row1, row2,
+                  _mm_add_epi8(_mm_setr_epi8(SHUTTERLAB_CHANNEL_CTRL(2)), offsets), w0, w1, w2);
   const __m128i planar = _mm_packus_epi16(_mm_packs_epi32(r, g), _mm_packs_epi32(b, b));
   const __m128i rgb = _mm_shuffle_epi8(planar, _mm_setr_epi8(SHUTTERLAB_INTERLEAVE));
   _mm_storel_epi64(reinterpret_cast<__m128i*>(out), rgb);
@@ -374,9 +374,8 @@ __attribute__((target("sse4.1"))) void BilinearRow8uc3Sse41(const cv::Mat& src, 
 }
 
 __attribute__((target("avx2"))) inline __m256i ChannelSum8(bool three_rows, __m256i row0,
-                                                           __m256i row1, __m256i row2,
-                                                           __m256i ctrl, __m256i w0, __m256i w1,
-                                                           __m256i w2) {
+                                                           __m256i row1, __m256i row2, __m256i ctrl,
+                                                           __m256i w0, __m256i w1, __m256i w2) {
   __m256i sum = _mm256_add_epi32(_mm256_madd_epi16(_mm256_shuffle_epi8(row0, ctrl), w0),
                                  _mm256_madd_epi16(_mm256_shuffle_epi8(row1, ctrl), w1));
   if (three_rows) {
@@ -387,8 +386,8 @@ __attribute__((target("avx2"))) inline __m256i ChannelSum8(bool three_rows, __m2
 }
 
 // Two source rows' 16 bytes, from p_low (first block) and p_high (second block), k rows down.
-__attribute__((target("avx2"))) inline __m256i LoadRows(const uint8_t* p_low,
-                                                        const uint8_t* p_high, size_t offset) {
+__attribute__((target("avx2"))) inline __m256i LoadRows(const uint8_t* p_low, const uint8_t* p_high,
+                                                        size_t offset) {
   return _mm256_inserti128_si256(
       _mm256_castsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p_low + offset))),
       _mm_loadu_si128(reinterpret_cast<const __m128i*>(p_high + offset)), 1);
@@ -415,8 +414,7 @@ __attribute__((target("avx2"))) inline bool Block8(const cv::Mat& src, const Blo
                       _mm256_andnot_si256(_mm256_set1_epi32(kThreeRows ? 1 : 0), dy));
   const int ix0 = _mm256_extract_epi32(ix, 0), iy0 = _mm256_extract_epi32(low, 0);
   const int ix4 = _mm256_extract_epi32(ix, 4), iy4 = _mm256_extract_epi32(low, 4);
-  if (!_mm256_testz_si256(misfit, misfit) || !limits.Inside(ix0, iy0) ||
-      !limits.Inside(ix4, iy4) ||
+  if (!_mm256_testz_si256(misfit, misfit) || !limits.Inside(ix0, iy0) || !limits.Inside(ix4, iy4) ||
       (kThreeRows && (!limits.Inside(ix0, iy0 + 1) || !limits.Inside(ix4, iy4 + 1)))) {
     return false;
   }
@@ -455,10 +453,9 @@ __attribute__((target("avx2"))) inline bool Block8(const cv::Mat& src, const Blo
       _mm256_add_epi8(_mm256_setr_epi8(SHUTTERLAB_CHANNEL_CTRL(2), SHUTTERLAB_CHANNEL_CTRL(2)),
                       offsets),
       w0, w1, w2);
-  const __m256i planar =
-      _mm256_packus_epi16(_mm256_packs_epi32(r, g), _mm256_packs_epi32(b, b));
-  const __m256i rgb = _mm256_shuffle_epi8(
-      planar, _mm256_setr_epi8(SHUTTERLAB_INTERLEAVE, SHUTTERLAB_INTERLEAVE));
+  const __m256i planar = _mm256_packus_epi16(_mm256_packs_epi32(r, g), _mm256_packs_epi32(b, b));
+  const __m256i rgb =
+      _mm256_shuffle_epi8(planar, _mm256_setr_epi8(SHUTTERLAB_INTERLEAVE, SHUTTERLAB_INTERLEAVE));
   const __m128i lo = _mm256_castsi256_si128(rgb), hi = _mm256_extracti128_si256(rgb, 1);
   _mm_storel_epi64(reinterpret_cast<__m128i*>(out), lo);
   const uint32_t lo4 = static_cast<uint32_t>(_mm_cvtsi128_si32(_mm_srli_si128(lo, 8)));
@@ -517,8 +514,8 @@ __attribute__((target("avx2"))) void InsideMaskRowAvx2(const int* xi, const int*
     const __m256i inside = _mm256_and_si256(
         _mm256_and_si256(_mm256_cmpgt_epi32(x, low), _mm256_cmpgt_epi32(high_x, x)),
         _mm256_and_si256(_mm256_cmpgt_epi32(y, low), _mm256_cmpgt_epi32(high_y, y)));
-    const __m128i words = _mm_packs_epi32(_mm256_castsi256_si128(inside),
-                                          _mm256_extracti128_si256(inside, 1));
+    const __m128i words =
+        _mm_packs_epi32(_mm256_castsi256_si128(inside), _mm256_extracti128_si256(inside, 1));
     _mm_storel_epi64(reinterpret_cast<__m128i*>(mask + k), _mm_packs_epi16(words, words));
   }
   for (; k < n; ++k) {

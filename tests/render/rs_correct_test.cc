@@ -94,8 +94,8 @@ TEST(CorrectionGeometry, InvertsTheRenderersTruthForEveryEffect) {
 // The brute-force twin of the fixed point: scan every row w for a sign change of
 // project(X, pose(w)).y - w with the renderer's own pose interpolation (FrameMotion), then bisect.
 std::optional<Eigen::Vector2d> BruteForceSource(const PinholeCamera& camera,
-                                                const FrameMotion& motion, double depth_m,
-                                                double u, double v) {
+                                                const FrameMotion& motion, double depth_m, double u,
+                                                double v) {
   const Eigen::Vector3d ray = camera.CamFromImg(Eigen::Vector2d(u, v));  // reference pose: I, 0
   const Eigen::Vector3d point = ray * (depth_m / ray.z());
   const auto project = [&](double w) {
@@ -118,8 +118,7 @@ std::optional<Eigen::Vector2d> BruteForceSource(const PinholeCamera& camera,
 TEST(CorrectionGeometry, FixedPointMatchesABruteForceRowSearch) {
   const RigModel rig = SmallRig(120, 90);
   const TrueModel truth = Truth(rig, {"velocity=5,-3,0.5", "lens_distortion=-0.25,0.06"});
-  const FrameMotion motion =
-      Motion(truth, ConstantRateTrace(Eigen::Vector3d(1.5, -2.0, 2.5)), 0.5);
+  const FrameMotion motion = Motion(truth, ConstantRateTrace(Eigen::Vector3d(1.5, -2.0, 2.5)), 0.5);
   const CorrectionGeometry geometry(truth.rig.camera, motion, 0.0, rig.altitude_m);
   int compared = 0;
   for (int v = 3; v < rig.camera.height; v += 11) {
@@ -141,8 +140,7 @@ TEST(CorrectionMap, InterpolationStaysWithinItsToleranceEverywhere) {
   // against its exact solution.
   const RigModel rig = SmallRig(200, 150);
   const TrueModel truth = Truth(rig, kEveryEffect);
-  const FrameMotion motion =
-      Motion(truth, ConstantRateTrace(Eigen::Vector3d(2.5, -3.0, 4.0)), 0.5);
+  const FrameMotion motion = Motion(truth, ConstantRateTrace(Eigen::Vector3d(2.5, -3.0, 4.0)), 0.5);
   const CorrectionGeometry geometry(truth.rig.camera, motion, 0.0, rig.altitude_m);
   for (const double tolerance_px : {0.05, 0.002}) {
     CorrectionMapOptions options;
@@ -173,8 +171,7 @@ TEST(CorrectFrame, TrueModelGivesTheGlobalShutterReference) {
   // mask must mark exactly the pixels whose source lies outside the frame.
   const RigModel rig = SmallRig(160, 120);
   const TrueModel truth = Truth(rig, {"velocity=4,2,0"});
-  const FrameMotion motion =
-      Motion(truth, ConstantRateTrace(Eigen::Vector3d(0.8, -1.1, 1.4)), 0.5);
+  const FrameMotion motion = Motion(truth, ConstantRateTrace(Eigen::Vector3d(0.8, -1.1, 1.4)), 0.5);
   const cv::Size scene_size(500, 400);
   const cv::Mat scene = SmoothTexture(scene_size, CV_32FC1, 3, 4.0);
   const FrameGeometry render(rig.camera, rig.altitude_m, motion, scene_size);
@@ -220,8 +217,8 @@ TEST(CorrectFrame, MidReadoutIsRowZerosViewTurnedToTheMiddleRow) {
   const CorrectionGeometry at_row0(rig.camera, motion, 0.0, std::nullopt);
   const CorrectionGeometry at_mid(rig.camera, motion, mid, std::nullopt);
   const Eigen::Matrix3d k = rig.camera.K();
-  const Eigen::Matrix3d mid_from_row0 = k * motion.WorldFromCamAtRow(mid).transpose() *
-                                        motion.WorldFromCamAtRow(0) * k.inverse();
+  const Eigen::Matrix3d mid_from_row0 =
+      k * motion.WorldFromCamAtRow(mid).transpose() * motion.WorldFromCamAtRow(0) * k.inverse();
   for (int v = 0; v < rig.camera.height; v += 10) {
     for (int u = 0; u < rig.camera.width; u += 10) {
       const Eigen::Vector3d h = mid_from_row0 * at_row0.OutputPixel(u, v)->homogeneous();

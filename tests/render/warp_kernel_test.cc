@@ -51,8 +51,8 @@ TEST(WarpKernel, EveryRgbPathGivesTheScalarPathsBits) {
   const cv::Mat src = SmoothTexture(src_size, CV_8UC3, 3, 0.7) + cv::Scalar::all(1);
   std::vector<cv::Mat> channels;
   cv::split(src, channels);
-  // Rows above the source, at its top edge, inside, near and at its bottom edge (the last row has no
-  // row below it) and below it.
+  // Rows above the source, at its top edge, inside, near and at its bottom edge (the last row has
+  // no row below it) and below it.
   for (const float y0 : {-1.6f, -0.6f, 2.0f, 4.4f, 5.6f, 6.5f}) {
     std::vector<int> xi, yi;
     const int n = 4001;  // not a multiple of 4 or 8: the tail runs too
