@@ -32,6 +32,12 @@ EffectValue EffectValueFromJson(Effect effect, const nlohmann::json& json,
 // std::invalid_argument "--inject ..." for a missing '=', an unknown name or a bad value.
 Injection ParseInjection(const std::string& name_equals_value);
 
+// A whole true model: {"camera": camera.json's object, "gyro_scale": [3], "gyro_bias_rad_s": [3],
+// "clock_rate_ppm": x} (the validation report's "fitted_model"). FromJson throws
+// std::invalid_argument "<where>: problem".
+nlohmann::json TrueModelToJson(const TrueModel& model);
+TrueModel TrueModelFromJson(const nlohmann::json& json, const std::string& where);
+
 // ParseInjection, then the typed ApplyInjection (render/effects.h): the returned injection holds
 // the value as truth.json records it.
 Injection ApplyInjection(const std::string& name_equals_value, TrueModel* model);
