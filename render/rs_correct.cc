@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 
 namespace shutterlab {
 namespace {
@@ -131,55 +132,130 @@ CorrectionMap::CorrectionMap(const CorrectionGeometry& geometry,
                              const CorrectionMapOptions& options)
     : geometry_(geometry) {
   options.Check();
-  // Nodes are solved to 1 % of the tolerance: the map's own error is what is estimated.
+  // Nodes and checks are solved to 1 % of the tolerance: the map's own error is what is checked.
   solve_tol_px_ = 0.01 * options.tolerance_px;
-  int cell = options.max_cell_px;
-  while (true) {
-    Build(cell);
-    // Halving a cell quarters a smooth map's bilinear error (exactly so for a quadratic map).
-    estimated_error_px_ = 0.25 * CoarseError();
-    if (estimated_error_px_ <= options.tolerance_px || cell <= 2) break;
-    // Straight to the cell that should hold (with a margin), a power-of-two fraction of this one.
-    int next = cell / 2;
-    while (next > 2 && estimated_error_px_ * (next / static_cast<double>(cell)) *
-                               (next / static_cast<double>(cell)) >
-                           0.7 * options.tolerance_px) {
-      next /= 2;
-    }
-    cell = next;
+  for (int cell = options.max_cell_px;; cell /= 2) {
+    if (BuildRows(cell, options.tolerance_px) || cell <= 2) break;
   }
+  Finish();
 }
 
-void CorrectionMap::Build(int cell_px) {
+CorrectionMap::NodeRow CorrectionMap::SolveRow(int v, const std::vector<double>& us,
+                                               const std::vector<double>& start) const {
+  NodeRow row;
+  row.x.assign(us.size(), NAN);
+  row.y.assign(us.size(), NAN);
+  for (size_t i = 0; i < us.size(); ++i) {
+    std::optional<double> from;
+    if (std::isfinite(start[i])) from = start[i];
+    const std::optional<Eigen::Vector2d> q = geometry_.SourcePixel(us[i], v, from, solve_tol_px_);
+    if (!q) continue;
+    row.x[i] = std::clamp(q->x(), -kFarPx, kFarPx);
+    row.y[i] = std::clamp(q->y(), -kFarPx, kFarPx);
+  }
+  return row;
+}
+
+bool CorrectionMap::BuildRows(int cell_px, double tolerance_px) {
   cell_px_ = cell_px;
   const PinholeCamera& camera = geometry_.camera();
-  const auto nodes = [cell_px](int size) {
+  const auto uniform = [cell_px](int size) {
     std::vector<int> at;
     for (int x = 0; x < size - 1; x += cell_px) at.push_back(x);
     at.push_back(size - 1);
     return at;
   };
-  node_u_ = nodes(camera.width);
-  node_v_ = nodes(camera.height);
-  const size_t columns = node_u_.size();
-  node_x_.assign(columns * node_v_.size(), kNaN);
-  node_y_.assign(node_x_.size(), kNaN);
-  // Each node starts from its left neighbour's row (the first of a row from the one above, moved
-  // down with it): a few steps fewer than from its own row.
-  std::optional<double> start;
-  for (size_t j = 0; j < node_v_.size(); ++j) {
-    if (j > 0 && !std::isnan(node_y_[(j - 1) * columns])) {
-      start = node_y_[(j - 1) * columns] + (node_v_[j] - node_v_[j - 1]);
+  node_u_ = uniform(camera.width);
+  std::vector<double> us(node_u_.begin(), node_u_.end()), mids;
+  for (size_t i = 0; i + 1 < node_u_.size(); ++i) mids.push_back(0.5 * (us[i] + us[i + 1]));
+  rows_.clear();
+  estimated_error_px_ = 0.0;
+  // Uniform node rows first, each started from the row above moved down with it.
+  std::vector<double> start(us.size(), NAN);
+  int previous = 0;
+  for (int v : uniform(camera.height)) {
+    for (size_t i = 0; i < us.size() && !rows_.empty(); ++i) {
+      start[i] = rows_.rbegin()->second.y[i] + (v - previous);
     }
-    for (size_t i = 0; i < columns; ++i) {
-      const std::optional<Eigen::Vector2d> q =
-          geometry_.SourcePixel(node_u_[i], node_v_[j], start, solve_tol_px_);
-      if (!q) continue;
-      start = q->y();
-      node_x_[j * columns + i] = static_cast<float>(std::clamp(q->x(), -kFarPx, kFarPx));
-      node_y_[j * columns + i] = static_cast<float>(std::clamp(q->y(), -kFarPx, kFarPx));
+    rows_[v] = SolveRow(v, us, start);
+    previous = v;
+  }
+  // Along a row the map is smooth: its error at the cells' midpoints on the node rows decides the
+  // columns' spacing.
+  for (const auto& [v, row] : rows_) {
+    std::vector<double> guess(mids.size());
+    for (size_t i = 0; i < mids.size(); ++i) guess[i] = 0.5 * (row.y[i] + row.y[i + 1]);
+    const NodeRow exact = SolveRow(v, mids, guess);
+    for (size_t i = 0; i < mids.size(); ++i) {
+      const double dx = 0.5 * (row.x[i] + row.x[i + 1]) - exact.x[i];
+      const double dy = guess[i] - exact.y[i];
+      if (std::isfinite(dx) && std::isfinite(dy)) {
+        estimated_error_px_ = std::max(estimated_error_px_, std::hypot(dx, dy));
+      }
     }
   }
+  if (estimated_error_px_ > tolerance_px) return false;
+  // Down the columns the pose is only piecewise smooth (the gyro's rate bends at every sample):
+  // each band of rows is checked at its middle row, at the node columns and the cells' centres,
+  // and split there (the checked row becomes a node row) until its error is within tolerance.
+  std::vector<std::pair<int, int>> bands;
+  for (auto it = rows_.begin(); std::next(it) != rows_.end(); ++it) {
+    bands.emplace_back(it->first, std::next(it)->first);
+  }
+  std::vector<double> both = us;
+  both.insert(both.end(), mids.begin(), mids.end());
+  while (!bands.empty()) {
+    const auto [top, bottom] = bands.back();
+    bands.pop_back();
+    if (bottom - top <= 1) continue;
+    const int middle = (top + bottom) / 2;
+    const double t = static_cast<double>(middle - top) / (bottom - top);
+    const NodeRow& a = rows_.at(top);
+    const NodeRow& b = rows_.at(bottom);
+    // The band's interpolation at the middle row: node columns, then the cells' centres.
+    NodeRow interpolated;
+    for (size_t i = 0; i < us.size(); ++i) {
+      interpolated.x.push_back((1 - t) * a.x[i] + t * b.x[i]);
+      interpolated.y.push_back((1 - t) * a.y[i] + t * b.y[i]);
+    }
+    for (size_t i = 0; i < mids.size(); ++i) {
+      interpolated.x.push_back(0.5 * (interpolated.x[i] + interpolated.x[i + 1]));
+      interpolated.y.push_back(0.5 * (interpolated.y[i] + interpolated.y[i + 1]));
+    }
+    const NodeRow exact = SolveRow(middle, both, interpolated.y);
+    double band_error = 0.0;
+    for (size_t i = 0; i < both.size(); ++i) {
+      const double e = std::hypot(interpolated.x[i] - exact.x[i], interpolated.y[i] - exact.y[i]);
+      if (std::isfinite(e)) band_error = std::max(band_error, e);
+    }
+    if (band_error <= tolerance_px) {
+      estimated_error_px_ = std::max(estimated_error_px_, band_error);
+      continue;
+    }
+    NodeRow node_row;
+    node_row.x.assign(exact.x.begin(), exact.x.begin() + us.size());
+    node_row.y.assign(exact.y.begin(), exact.y.begin() + us.size());
+    rows_[middle] = std::move(node_row);
+    bands.emplace_back(top, middle);
+    bands.emplace_back(middle, bottom);
+  }
+  return true;
+}
+
+void CorrectionMap::Finish() {
+  const PinholeCamera& camera = geometry_.camera();
+  const size_t columns = node_u_.size();
+  node_v_.clear();
+  node_x_.clear();
+  node_y_.clear();
+  for (const auto& [v, row] : rows_) {
+    node_v_.push_back(v);
+    for (size_t i = 0; i < columns; ++i) {
+      node_x_.push_back(static_cast<float>(row.x[i]));
+      node_y_.push_back(static_cast<float>(row.y[i]));
+    }
+  }
+  rows_.clear();
   const double one = 1 << kSampleFracBits;
   node_x_fixed_.resize(node_x_.size());
   node_y_fixed_.resize(node_y_.size());
@@ -219,46 +295,6 @@ void CorrectionMap::Build(int cell_px) {
       exact_cell_[j * cells_u + i] = missing ? 1 : 0;
     }
   }
-}
-
-double CorrectionMap::CoarseError() const {
-  // The grid twice as coarse: every other node (and the last). Its cells' centres and edge
-  // midpoints are this grid's other nodes, where a smooth map's bilinear error peaks (a
-  // quadratic's exactly there): its error there, against this grid's exact nodes.
-  const auto coarse = [](size_t count) {
-    std::vector<size_t> at;
-    for (size_t k = 0; k < count; k += 2) at.push_back(k);
-    if (at.back() != count - 1) at.push_back(count - 1);
-    return at;
-  };
-  const std::vector<size_t> cu = coarse(node_u_.size()), cv = coarse(node_v_.size());
-  const size_t columns = node_u_.size();
-  double worst = 0.0;
-  for (size_t b = 0; b + 1 < std::max<size_t>(2, cv.size()); ++b) {
-    const size_t j0 = cv[b], j1 = cv[std::min(b + 1, cv.size() - 1)];
-    for (size_t a = 0; a + 1 < std::max<size_t>(2, cu.size()); ++a) {
-      const size_t i0 = cu[a], i1 = cu[std::min(a + 1, cu.size() - 1)];
-      for (size_t j = j0; j <= j1; ++j) {
-        const double t =
-            j1 == j0 ? 0.0
-                     : static_cast<double>(node_v_[j] - node_v_[j0]) / (node_v_[j1] - node_v_[j0]);
-        for (size_t i = i0; i <= i1; ++i) {
-          const double s = i1 == i0 ? 0.0
-                                    : static_cast<double>(node_u_[i] - node_u_[i0]) /
-                                          (node_u_[i1] - node_u_[i0]);
-          const auto at = [&](const std::vector<float>& nodes) {
-            const double top = (1 - s) * nodes[j0 * columns + i0] + s * nodes[j0 * columns + i1];
-            const double bottom = (1 - s) * nodes[j1 * columns + i0] + s * nodes[j1 * columns + i1];
-            return (1 - t) * top + t * bottom - nodes[j * columns + i];
-          };
-          const double dx = at(node_x_), dy = at(node_y_);
-          // NaN where a node has no solution: those cells are solved per pixel.
-          if (std::isfinite(dx) && std::isfinite(dy)) worst = std::max(worst, std::hypot(dx, dy));
-        }
-      }
-    }
-  }
-  return worst;
 }
 
 void CorrectionMap::SourceRow(int v, int u0, int n, float* xs, float* ys) const {

@@ -13,13 +13,15 @@
 // linearly, so the map stays smooth where its source leaves the frame (no source there: masked).
 //
 // A frame is not solved per pixel: the exact solution on a grid of nodes is interpolated
-// bilinearly, and the grid is refined until its interpolation error is within the tolerance. The
-// error is estimated from the nodes themselves: the grid twice as coarse, interpolated at this
-// grid's other nodes (its cells' centres and edge midpoints, where a smooth map's bilinear error
-// peaks), is compared with their exact solution, and a quarter of its largest error is this grid's
-// (halving a cell quarters the error; exactly so for a quadratic map). The tests check the
-// estimate against the exact solution at every pixel. The sampler is the renderer's
-// (render/warp_kernel.h).
+// bilinearly, and the grid is refined until its interpolation error, checked against the exact
+// solution at every cell's centre and edge midpoints, is within the tolerance. Along a row the map
+// is smooth (a bilinear error peaks at those midpoints; a quadratic's exactly there): the columns'
+// spacing is halved until the node rows' midpoints hold. Down a column the pose bends at every
+// gyro sample (the rate is linear between samples), a kink in the map's slope: each band of rows
+// is checked at its middle row and split there until it holds, so node rows crowd where the motion
+// changes fast. A kink between two checked rows leaves at most twice the error its band's middle
+// row shows. The tests check the map against the exact solution at every pixel. The sampler is
+// the renderer's (render/warp_kernel.h).
 
 #include "render/camera.h"
 #include "render/truth_model.h"
@@ -28,6 +30,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -97,8 +100,10 @@ class CorrectionMap {
   CorrectionMap(const CorrectionGeometry& geometry, const CorrectionMapOptions& options);
 
   int cell_px() const { return cell_px_; }
-  // The estimated largest |interpolated - exact| of the final grid, px (see the top).
+  // The largest |interpolated - exact| at the final grid's checked points, px (see the top).
   double estimated_error_px() const { return estimated_error_px_; }
+  // Node rows of the final grid (more where the motion bends).
+  size_t node_rows() const { return node_v_.size(); }
   // Source coordinates of output row v, columns [u0, u0 + n): fixed point (render/warp_kernel.h),
   // kInvalidFixed where there is no solution.
   void SourceRowFixed(int v, int u0, int n, int* xi, int* yi) const;
@@ -108,14 +113,21 @@ class CorrectionMap {
   const CorrectionGeometry& geometry() const { return geometry_; }
 
  private:
-  void Build(int cell_px);
-  // Largest error of the grid twice as coarse at this grid's other nodes, px.
-  double CoarseError() const;
+  struct NodeRow {
+    std::vector<double> x, y;  // source per node column; NaN: no solution
+  };
+  // The exact source at (us[i], v), each solve started at start[i] (NaN: at v).
+  NodeRow SolveRow(int v, const std::vector<double>& us, const std::vector<double>& start) const;
+  // Node rows for a column spacing of cell_px; false when the spacing is too wide.
+  bool BuildRows(int cell_px, double tolerance_px);
+  // The node arrays and look-up tables from rows_.
+  void Finish();
 
   const CorrectionGeometry& geometry_;
   int cell_px_ = 0;
   double estimated_error_px_ = 0.0;
   double solve_tol_px_ = 0.0;
+  std::map<int, NodeRow> rows_;         // while building: node rows by output row
   std::vector<int> node_u_, node_v_;    // node columns and rows (last column and row included)
   std::vector<float> node_x_, node_y_;  // source at each node, row-major; NaN: no solution
   std::vector<char> exact_cell_;  // per cell: a node without solution, solved per pixel instead

@@ -1,0 +1,110 @@
+#include "estimate/correct/correct_io.h"
+
+#include "estimate/report/analysis_json.h"
+#include "render/effect_io.h"
+#include "render/frames_csv.h"
+#include "sim/text_file.h"
+#include "sim/units.h"
+
+#include <algorithm>
+#include <sstream>
+
+namespace shutterlab {
+
+using nlohmann::json;
+
+namespace {
+
+json FrameJson(const CorrectedFrame& f, double m_per_px) {
+  const ResidualPrediction& r = f.residual;
+  json j = {{"frame", f.frame},
+            {"image", f.image},
+            {"mask", "masks/" + f.image + ".png"},
+            {"t_first_row_s", f.t_first_row_ns * 1e-9},
+            {"t_reference_s", f.t_reference_ns * 1e-9},
+            {"reference_row", f.reference_row},
+            {"kept", f.kept},
+            {"map", {{"cell_px", f.cell_px}, {"estimated_error_px", f.map_error_px}}},
+            {"no_source_fraction", f.no_source_fraction},
+            {"D_before_px", r.d_before_px},
+            {"D_before_m", r.d_before_px * m_per_px},
+            {"D_after_px", r.d_after_px},
+            {"D_after_m", r.d_after_px * m_per_px},
+            {"D_after_p90_px", r.d_after_p90_px},
+            {"rms_after_px", r.rms_after_px},
+            {"draws", r.draws}};
+  if (f.truth) {
+    j["truth"] = {{"rms_px", f.truth->rms_px},
+                  {"max_px", f.truth->max_px},
+                  {"D_px", f.truth->d_px},
+                  {"D_before_px", f.truth->d_before_px},
+                  {"pixels", f.truth->pixels}};
+  }
+  if (!f.notes.empty()) j["notes"] = f.notes;
+  return j;
+}
+
+}  // namespace
+
+json CorrectionToJson(const CorrectSummary& s) {
+  json effects = json::array();
+  for (Effect e : s.model.effects) effects.push_back(Spec(e).name);
+  json frames = json::array();
+  for (const CorrectedFrame& f : s.frames) frames.push_back(FrameJson(f, s.m_per_px));
+  json skipped = json::array();
+  for (const auto& [frame, why] : s.skipped) skipped.push_back({{"frame", frame}, {"why", why}});
+  std::vector<std::string> notes = s.model.notes;
+  notes.insert(notes.end(), s.notes.begin(), s.notes.end());
+  return {{"format", "correction/1"},
+          {"dataset", s.dataset},
+          {"out", s.out_dir},
+          {"kind", s.video ? "video" : "still"},
+          {"reference", CorrectionReferenceName(s.setting.reference)},
+          {"translation", s.translation},
+          {"report", s.report_path.empty() ? json() : json(s.report_path)},
+          {"effects", effects},
+          {"model", TrueModelToJson(s.model.model)},
+          {"gyro_noise",
+           {{"rad_s_sqrt_hz", s.model.gyro_noise_rad_s_sqrt_hz},
+            {"source", s.model.gyro_noise_source}}},
+          {"m_per_px", s.m_per_px},
+          {"frames", frames},
+          {"skipped", skipped},
+          {"notes", notes},
+          {"warnings", WarningsToJson(s.warnings)}};
+}
+
+std::string CorrectionTable(const CorrectSummary& s) {
+  std::ostringstream out;
+  const bool truth = std::any_of(s.frames.begin(), s.frames.end(),
+                                 [](const CorrectedFrame& f) { return f.truth.has_value(); });
+  out << "frame   D before px      m   D after px (p90)      m   no source"
+      << (truth ? "   truth after px (D, rms)" : "") << "\n";
+  std::vector<double> before, after;
+  for (const CorrectedFrame& f : s.frames) {
+    const ResidualPrediction& r = f.residual;
+    out << FormatNumber("%5.0f", static_cast<double>(f.frame))
+        << FormatNumber(" %12.3f", r.d_before_px)
+        << FormatNumber(" %6.3f", r.d_before_px * s.m_per_px)
+        << FormatNumber(" %12.3f", r.d_after_px) << FormatNumber(" (%.3f)", r.d_after_p90_px)
+        << FormatNumber(" %6.4f", r.d_after_px * s.m_per_px)
+        << FormatNumber(" %10.1f%%", 100.0 * f.no_source_fraction);
+    if (f.truth) {
+      out << FormatNumber(" %12.3f", f.truth->d_px) << FormatNumber(", %.3f", f.truth->rms_px);
+    }
+    out << (f.kept ? "  (kept)" : "") << "\n";
+    before.push_back(r.d_before_px);
+    after.push_back(r.d_after_px);
+  }
+  for (const auto& [frame, why] : s.skipped)
+    out << "frame " << frame << " skipped: " << why << "\n";
+  if (!s.frames.empty()) {
+    out << "corrected " << s.frames.size() << " frame(s) to " << s.out_dir << " ("
+        << CorrectionReferenceName(s.setting.reference) << ", " << s.translation << "): median D "
+        << FormatNumber("%.3f", UpperMedian(before)) << " px before, "
+        << FormatNumber("%.3f", UpperMedian(after)) << " px predicted after\n";
+  }
+  return out.str();
+}
+
+}  // namespace shutterlab
