@@ -73,6 +73,9 @@ const CommandRegistration kRegistration(75, [](CLI::App& app) {
   cmd->add_option("--report", o.report_path,
                   "a validation report (validate --report): correct with the effects it found")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--effect", o.effects,
+                  "NAME=VALUE: set an effect on top of camera.json and the report (as render "
+                  "--inject: readout_time=0.0235, gyro_to_camera=..., ...); repeatable");
   cmd->add_option("--reference", command->reference,
                   "the instant the corrected image shows: row0 (the first row, as render's "
                   "reference) or mid (mid-readout)")

@@ -1,6 +1,7 @@
 #include "estimate/correct/correct_dataset.h"
 
 #include "estimate/correct/correct_io.h"
+#include "render/effect_io.h"
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "render/pictures.h"
@@ -89,7 +90,7 @@ double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap
     xmp.emplace_back("Xmp.shutterlab.DistortionBeforePx",
                      FormatNumber("%.3f", residual.d_before_px));
     xmp.emplace_back("Xmp.shutterlab.PredictedDistortionAfterPx",
-                     FormatNumber("%.3f", residual.d_after_px));
+                     FormatNumber("%.3f", out->predicted_d_after_px));
     CreateParent(image_path);
     CreateParent(mask_path);
     out->notes = WriteImageLike(image_path.string(), corrected,
@@ -118,6 +119,8 @@ CorrectedFrame CorrectOne(const Context& c, const FrameEntry& e) {
                                  GyroAround(c.dataset.gyro, e.t_first_row_ns - kGyroMarginNs,
                                             e.t_first_row_ns + readout_ns + kGyroMarginNs),
                                  e.t_first_row_ns, c.setting, c.options.prediction);
+  out.predicted_d_after_px = out.residual.d_after_px + 2 * out.map_error_px;
+  out.predicted_d_after_p90_px = out.residual.d_after_p90_px + 2 * out.map_error_px;
   out.no_source_fraction = WriteCorrected(c, e, map, out.residual, &out);
   if (c.options.check_truth) {
     const fs::path truth = c.dataset.dir / "truth" / (FrameName(e.frame) + "_disp.exr");
@@ -267,7 +270,7 @@ void WriteOverview(const CorrectSummary& summary) {
                        FormatNumber("%.2f px", f.residual.d_before_px));
     captions.push_back("corrected (" +
                        std::string(CorrectionReferenceName(summary.setting.reference)) +
-                       "), predicted D " + FormatNumber("%.2f px", f.residual.d_after_px));
+                       "), predicted D " + FormatNumber("%.2f px", f.predicted_d_after_px));
   }
   WriteImage((fs::path(summary.out_dir) / "overview.png").string(),
              TiledOverview(tiles, captions, 480, 2));
@@ -369,6 +372,11 @@ CorrectSummary CorrectDataset(const CorrectOptions& options, const CorrectProgre
   std::optional<ReportedModel> report;
   if (!options.report_path.empty()) report = ReadValidationReport(options.report_path);
   summary.model = BuildCorrectionModel(dataset.declared, report, options.report_path);
+  for (const std::string& effect : options.effects) {
+    const Injection set = ApplyInjection(effect, &summary.model.model);
+    summary.model.notes.push_back("--effect " + Spec(set.effect).name + " = " +
+                                  EffectValueText(set.value) + " (no uncertainty)");
+  }
   if (options.gyro_noise_rad_s_sqrt_hz) {
     summary.model.gyro_noise_rad_s_sqrt_hz = *options.gyro_noise_rad_s_sqrt_hz;
     summary.model.gyro_noise_source = "--gyro-noise";
@@ -379,7 +387,10 @@ CorrectSummary CorrectDataset(const CorrectOptions& options, const CorrectProgre
   }
   const TrueModel& model = summary.model.model;
   ChooseSetting(options, dataset, model, &summary);
-  summary.m_per_px = model.rig.altitude_m / (0.5 * (model.rig.camera.fx + model.rig.camera.fy));
+  if (summary.setting.plane_depth_m) {
+    summary.m_per_px =
+        *summary.setting.plane_depth_m / (0.5 * (model.rig.camera.fx + model.rig.camera.fy));
+  }
   const CameraMotion motion(dataset.gyro, model);
   Context context{options, dataset, summary.model, summary.setting, motion, {}};
   context.xmp = {{"Xmp.shutterlab.RollingShutterCorrected", "True"},

@@ -42,6 +42,9 @@ struct CorrectOptions {
   std::string dataset_dir;
   std::string out_dir;
   std::string report_path;  // a validation report (validate --report); "" for the declared model
+  // Effects set on top of camera.json and the report, "NAME=VALUE" as `render --inject` takes them
+  // (a readout from a datasheet, a mounting measured on the bench).
+  std::vector<std::string> effects;
   CorrectionReference reference = CorrectionReference::kFirstRow;
   // Video: the scene plane's depth, m, for translation (the camera.json velocity); stills use the
   // altitude. Without it video is rotation only.
@@ -79,7 +82,10 @@ struct CorrectedFrame {
   int cell_px = 0;             // correction map grid
   double map_error_px = 0.0;   // its estimated interpolation error
   double no_source_fraction = 0.0;
-  ResidualPrediction residual;
+  ResidualPrediction residual;  // the model's share (its uncertainty and the gyro's noise)
+  // Predicted D after, median and 90th percentile: the model's share plus the map's (its
+  // interpolation may add twice its checked error to a column's diameter).
+  double predicted_d_after_px = 0.0, predicted_d_after_p90_px = 0.0;
   std::optional<TruthResidual> truth;
   std::vector<std::string> notes;  // what the image's metadata could not carry
 };

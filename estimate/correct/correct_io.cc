@@ -27,10 +27,11 @@ json FrameJson(const CorrectedFrame& f, double m_per_px) {
             {"map", {{"cell_px", f.cell_px}, {"estimated_error_px", f.map_error_px}}},
             {"no_source_fraction", f.no_source_fraction},
             {"D_before_px", r.d_before_px},
-            {"D_before_m", r.d_before_px * m_per_px},
-            {"D_after_px", r.d_after_px},
-            {"D_after_m", r.d_after_px * m_per_px},
-            {"D_after_p90_px", r.d_after_p90_px},
+            {"D_before_m", m_per_px > 0 ? json(r.d_before_px * m_per_px) : json()},
+            {"D_after_px", f.predicted_d_after_px},
+            {"D_after_m", m_per_px > 0 ? json(f.predicted_d_after_px * m_per_px) : json()},
+            {"D_after_p90_px", f.predicted_d_after_p90_px},
+            {"D_after_model_px", r.d_after_px},
             {"rms_after_px", r.rms_after_px},
             {"draws", r.draws}};
   if (f.truth) {
@@ -67,7 +68,7 @@ json CorrectionToJson(const CorrectSummary& s) {
           {"gyro_noise",
            {{"rad_s_sqrt_hz", s.model.gyro_noise_rad_s_sqrt_hz},
             {"source", s.model.gyro_noise_source}}},
-          {"m_per_px", s.m_per_px},
+          {"m_per_px", s.m_per_px > 0 ? json(s.m_per_px) : json()},
           {"frames", frames},
           {"skipped", skipped},
           {"notes", notes},
@@ -81,20 +82,24 @@ std::string CorrectionTable(const CorrectSummary& s) {
   out << "frame   D before px      m   D after px (p90)      m   no source"
       << (truth ? "   truth after px (D, rms)" : "") << "\n";
   std::vector<double> before, after;
+  // On the ground only where a plane gives the scale (not for rotation-only video).
+  const auto metres = [&](const char* format, double px) {
+    return s.m_per_px > 0 ? FormatNumber(format, px * s.m_per_px) : std::string("      -");
+  };
   for (const CorrectedFrame& f : s.frames) {
     const ResidualPrediction& r = f.residual;
     out << FormatNumber("%5.0f", static_cast<double>(f.frame))
-        << FormatNumber(" %12.3f", r.d_before_px)
-        << FormatNumber(" %6.3f", r.d_before_px * s.m_per_px)
-        << FormatNumber(" %12.3f", r.d_after_px) << FormatNumber(" (%.3f)", r.d_after_p90_px)
-        << FormatNumber(" %6.4f", r.d_after_px * s.m_per_px)
+        << FormatNumber(" %12.3f", r.d_before_px) << metres(" %6.3f", r.d_before_px)
+        << FormatNumber(" %12.3f", f.predicted_d_after_px)
+        << FormatNumber(" (%.3f)", f.predicted_d_after_p90_px)
+        << metres(" %6.4f", f.predicted_d_after_px)
         << FormatNumber(" %10.1f%%", 100.0 * f.no_source_fraction);
     if (f.truth) {
       out << FormatNumber(" %12.3f", f.truth->d_px) << FormatNumber(", %.3f", f.truth->rms_px);
     }
     out << (f.kept ? "  (kept)" : "") << "\n";
     before.push_back(r.d_before_px);
-    after.push_back(r.d_after_px);
+    after.push_back(f.predicted_d_after_px);
   }
   for (const auto& [frame, why] : s.skipped)
     out << "frame " << frame << " skipped: " << why << "\n";
