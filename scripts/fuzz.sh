@@ -74,6 +74,17 @@ seed column_csv "$data"/rs/phone_gyro_video_20200109_145447/gyro.txt
 printf '\x01t;gx;gy;gz\n0;1;2;3\n0.001;1;2;3\n' >"$build/corpus/column_csv/semicolon.csv"
 seed frames_csv
 printf 'frame,t,image,ref\n0,0.0,images/frame_000000.png,\n1,0.04,images/frame_000001.png,0\n' >"$build/corpus/frames_csv/frames.csv"
+seed validation_report
+cat >"$build/corpus/validation_report/report.json" <<'JSON'
+{"format": "validation/1", "frames": 2, "before": {"rms_px": 1.0, "max_px": 2.0},
+ "effects": [{"name": "clock_rate", "value": 30.0, "stderr": 1.0, "unit": "ppm",
+              "parameters": [30.0, 0.001], "covariance": [[1.0, null], [null, 1e-8]]}],
+ "after": {"rms_px": 0.1, "max_px": 0.2}, "noise_px": 0.1, "unexplained": false,
+ "fitted_model": {"camera": {"format": "rig/1", "image": {"width": 64, "height": 48},
+   "intrinsics": {"fx": 50, "fy": 50, "cx": 31.5, "cy": 23.5},
+   "rolling_shutter": {"readout_s": 0.03}}, "gyro_scale": [1, 1, 1],
+   "gyro_bias_rad_s": [0, 0, 0], "clock_rate_ppm": 30.0}}
+JSON
 
 mkdir -p "$build/artifacts"
 failed=0

@@ -358,6 +358,9 @@ TruthResidual MeasureAgainstTruth(const CorrectionMap& map, const cv::Mat& truth
 CorrectSummary CorrectDataset(const CorrectOptions& options, const CorrectProgress& progress) {
   options.Check();
   const RigDataset dataset = ReadRigDataset(options.dataset_dir);
+  SHUTTERLAB_CHECK(!options.check_truth || !dataset.video)
+      << "--truth: a video dataset's truth is each frame's match in the one before, not a "
+         "global-shutter reference";
   std::error_code ec;
   if (fs::weakly_canonical(options.out_dir, ec) == fs::weakly_canonical(options.dataset_dir, ec)) {
     throw IoError(

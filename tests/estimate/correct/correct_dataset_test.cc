@@ -319,6 +319,16 @@ TEST(CorrectEndToEnd, JpegInputKeepsItsQualityAndVideoIsRotationOnly) {
     EXPECT_TRUE(f.ref.empty()) << "a video dataset again";
   }
   EXPECT_TRUE(fs::is_regular_file(fs::path(options.out_dir) / "overview.png"));
+  // With a depth, video corrects translation too; its truth is frame-to-frame, which --truth
+  // refuses.
+  options.depth_m = 40.0;
+  options.out_dir = dir / "out_depth";
+  options.pictures = false;
+  const CorrectSummary with_depth = CorrectDataset(options);
+  EXPECT_EQ(with_depth.setting.plane_depth_m, 40.0);
+  EXPECT_NE(with_depth.translation.find("--depth"), std::string::npos) << with_depth.translation;
+  options.check_truth = true;
+  EXPECT_THROW(CorrectDataset(options), std::invalid_argument);
 }
 
 }  // namespace
