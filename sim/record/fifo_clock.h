@@ -32,6 +32,9 @@ class FifoClock {
   int64_t ProducedBy(int64_t t_ns) const;
 
   bool has_reads() const { return reads_ > 0; }
+  int64_t reads() const { return reads_; }
+  // Samples between the oldest reads that still weigh and the newest: how far the fit reaches.
+  double SpanSamples() const { return span_x_; }
   double PeriodNs() const;  // the fitted period (the nominal one until the reads span 50 periods)
   // The part's clock error, parts per million (positive: the part runs fast).
   double DriftPpm() const { return (nominal_period_ns_ / PeriodNs() - 1.0) * 1e6; }

@@ -3,16 +3,8 @@
 #include "sim/check.h"
 #include "sim/text_file.h"
 
-#include <cstdio>
-
 namespace shutterlab {
 namespace {
-
-std::string Hex(uint8_t value) {
-  char text[8];
-  std::snprintf(text, sizeof(text), "0x%02X", value);
-  return text;
-}
 
 // What a WHO_AM_I answer suggests, for the error message.
 std::string WhoAmIHint(uint8_t value) {
@@ -57,8 +49,8 @@ PartSetting GyroDriver::FinishConfigure(const SensorConfig& config, Clock& clock
   const uint32_t hz = info_.spi_config_hz;
   const uint8_t who = ReadRegister(*bus_, info_.who_am_i_reg, hz);
   if (who != info_.who_am_i) {
-    throw IoError(bus_->Name() + ": WHO_AM_I is " + Hex(who) + ", expected " + Hex(info_.who_am_i) +
-                  " (" + info_.name + ")" + WhoAmIHint(who));
+    throw IoError(bus_->Name() + ": WHO_AM_I is " + HexByte(who) + ", expected " +
+                  HexByte(info_.who_am_i) + " (" + info_.name + ")" + WhoAmIHint(who));
   }
   if (Icm()) {
     WriteRegister(*bus_, icm::kIntfConfig0, icm::kIntfConfig0Default, hz);

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace shutterlab {
 namespace {
@@ -134,6 +135,12 @@ double IcmRateHz(uint8_t odr_code) {
     default:
       return 0.0;
   }
+}
+
+std::string HexByte(uint8_t value) {
+  char text[8];
+  std::snprintf(text, sizeof(text), "0x%02X", value);
+  return text;
 }
 
 double IcmRangeDps(uint8_t fs_code) { return 2000.0 / (1 << (fs_code & 7)); }

@@ -108,6 +108,9 @@ struct PartSetting {
 // the part's highest or a range it lacks.
 PartSetting ResolvePartSetting(GyroPart part, const SensorConfig& config);
 
+// "0x71": a register value as the datasheets write it.
+std::string HexByte(uint8_t value);
+
 // The MPU's rate and bandwidth from its registers, as the part computes them: FCHOICE_B != 0:
 // 32 kHz; DLPF_CFG 0 or 7: 8 kHz; otherwise 1 kHz / (1 + SMPLRT_DIV).
 double MpuRateHz(uint8_t smplrt_div, uint8_t dlpf_cfg, uint8_t fchoice_b);

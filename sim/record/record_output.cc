@@ -143,7 +143,7 @@ std::string RecordedGcsvHeader(const RecordSummary& summary, int index,
   h.emplace_back("fwversion", "shutterlab record 0.1");
   h.emplace_back("timestamp", std::to_string(static_cast<long long>(std::time(nullptr))));
   h.emplace_back("part", part.name);
-  h.emplace_back("who_am_i", FormatNumber("0x%02X", part.who_am_i));
+  h.emplace_back("who_am_i", HexByte(part.who_am_i));
   h.emplace_back("device", s.device);
   h.emplace_back("sensor",
                  std::to_string(index + 1) + " of " + std::to_string(summary.sensors.size()));

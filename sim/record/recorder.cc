@@ -13,10 +13,13 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <cstring>
 #include <exception>
 #include <memory>
 #include <mutex>
+#include <pthread.h>
 #include <random>
+#include <sched.h>
 #include <thread>
 
 namespace shutterlab {
@@ -42,6 +45,8 @@ void RecorderOptions::Check() const {
         << "reader pause times must be >= 0";
   }
   SHUTTERLAB_CHECK(non_negative(debounce_s)) << "debounce must be >= 0 s";
+  SHUTTERLAB_CHECK(reader_priority >= 0 && reader_priority <= 99)
+      << "reader priority must be 0 (normal) or 1..99 (SCHED_FIFO), got " << reader_priority;
   SHUTTERLAB_CHECK(!trigger || !triggers_path.empty()) << "a trigger source needs a triggers file";
   SHUTTERLAB_CHECK(duration_s > 0 || stop != nullptr) << "give a duration or a stop flag";
   GcsvOrientationMatrix(orientation);
@@ -64,6 +69,10 @@ struct SensorState {
   std::unique_ptr<RowFile> rows;
   // reader
   FifoRead read;
+  // Samples read but not stamped yet, t_ns holding their index: at the start, until the fit has
+  // seen a quarter second of reads (one read knows the phase only to a period).
+  std::vector<RecordedSample> held;
+  bool settled = false;
   std::vector<RecordedSample> batch;
   int64_t next_index = 0;        // index of the next sample on the current sample train
   const char* resync = nullptr;  // the next read's index comes from the clock (why: a gap kind)
@@ -132,7 +141,7 @@ class Session {
   void ReaderLoop();
   void ReadSensor(int index);
   void Resync(int index, SensorState& s);
-  void PushBatch(int index, SensorState& s);
+  void Stamp(int index, SensorState& s, bool force);
   void CheckHealth(int index);
   void Recover(int index);
   void WriterLoop();
@@ -154,6 +163,7 @@ class Session {
   std::exception_ptr error_;
   std::vector<RecordGap> gaps_;
   std::vector<double> trigger_t_s_;
+  std::vector<std::string> notes_;
   size_t trigger_edges_ = 0, trigger_bounces_ = 0, trigger_other_ = 0;
   std::atomic<int64_t> max_stall_ns_{0};
   std::chrono::steady_clock::time_point started_;
@@ -190,15 +200,22 @@ void Session::Resync(int index, SensorState& s) {
   s.resync = nullptr;
 }
 
-void Session::PushBatch(int index, SensorState& s) {
-  const size_t n = s.read.samples.size();
+// Stamps the held samples on the current fit and hands them to the writer; held back while the fit
+// is young unless `force` (a gap: the fit will be asked about later samples only).
+void Session::Stamp(int index, SensorState& s, bool force) {
+  if (!s.settled) {
+    s.settled = s.fifo_clock->reads() >= 50 && s.fifo_clock->SpanSamples() >= s.setting.odr_hz / 4;
+    if (!s.settled && !force) return;
+  }
+  const size_t n = s.held.size();
   s.batch.resize(n);
   for (size_t i = 0; i < n; ++i) {
-    int64_t t_ns = s.fifo_clock->SampleTimeNs(s.next_index + static_cast<int64_t>(i));
+    int64_t t_ns = s.fifo_clock->SampleTimeNs(s.held[i].t_ns);
     t_ns = std::max(t_ns, s.last_t_ns + 1);  // a refit never moves time backwards
-    s.batch[i] = {t_ns, s.read.samples[i]};
+    s.batch[i] = {t_ns, s.held[i].counts};
     s.last_t_ns = t_ns;
   }
+  s.held.clear();
   const size_t pushed = s.ring->Push(s.batch.data(), n);
   if (pushed < n) {
     const int64_t dropped = static_cast<int64_t>(n - pushed);
@@ -209,10 +226,9 @@ void Session::PushBatch(int index, SensorState& s) {
     } else {
       s.open_buffer_gap = AddGap(index, s.batch[pushed].t_ns, dropped, "buffer_full");
     }
-  } else {
+  } else if (n > 0) {
     s.open_buffer_gap = -1;
   }
-  s.next_index += static_cast<int64_t>(n);
   s.samples.fetch_add(pushed);
 }
 
@@ -250,12 +266,14 @@ void Session::ReadSensor(int index) {
     AddGap(index, s.last_t_ns + static_cast<int64_t>(period_ns), lost, "part_reset");
     s.restarted = false;
   }
-  PushBatch(index, s);
+  for (int64_t i = 0; i < n; ++i) s.held.push_back({s.next_index + i, s.read.samples[i]});
+  s.next_index += n;
   if (s.read.overflow) s.resync = "fifo_overflow";
   if (s.read.bad_data) {
     s.resync = "bad_data";
     s.check_now = true;
   }
+  Stamp(index, s, s.resync != nullptr);
 }
 
 void Session::CheckHealth(int index) {
@@ -294,6 +312,8 @@ void Session::Recover(int index) {
     return;
   }
   s.down = false;
+  Stamp(index, s, /*force=*/true);  // on the old train's fit
+  s.settled = false;
   s.restarted = s.last_t_ns != INT64_MIN;
   s.resync = nullptr;
   s.next_index = 0;
@@ -302,6 +322,17 @@ void Session::Recover(int index) {
 
 void Session::ReaderLoop() {
   JoinClock();
+  if (options_.reader_priority > 0) {
+    sched_param param{};
+    param.sched_priority = options_.reader_priority;
+    const int error = ::pthread_setschedparam(::pthread_self(), SCHED_FIFO, &param);
+    if (error != 0) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      notes_.push_back("the reader runs at normal priority: SCHED_FIFO " +
+                       std::to_string(options_.reader_priority) + " refused (" +
+                       std::strerror(error) + "; run as root or with CAP_SYS_NICE)");
+    }
+  }
   try {
     const int64_t interval_ns = ReadIntervalNs();
     std::mt19937_64 rng(options_.seed);
@@ -336,6 +367,9 @@ void Session::ReaderLoop() {
       next_read_ns =
           std::max(next_read_ns + static_cast<int64_t>(interval_ns * dither(rng)), now_ns);
       clock_.SleepUntilNs(next_read_ns);
+    }
+    for (size_t i = 0; i < sensors_.size(); ++i) {
+      if (sensors_[i]->fifo_clock->has_reads()) Stamp(static_cast<int>(i), *sensors_[i], true);
     }
   } catch (...) {
     Fail();
@@ -455,6 +489,7 @@ RecordSummary Session::Summarise() {
   summary.max_writer_stall_s = max_stall_ns_.load() * 1e-9;
   summary.stopped = options_.stop && options_.stop->load();
   summary.gaps = gaps_;
+  summary.notes = notes_;
   summary.trigger_t_s = trigger_t_s_;
   summary.triggers = trigger_t_s_.size();
   summary.trigger_edges = trigger_edges_;
@@ -587,6 +622,7 @@ std::string RecordSummaryText(const RecordSummary& summary) {
     text += "  gap: sensor " + std::to_string(gap.sensor + 1) + " " + gap.kind +
             FormatNumber(" at %.6f s, ", gap.t_s) + std::to_string(gap.lost) + " sample(s) lost\n";
   }
+  for (const std::string& note : summary.notes) text += "note: " + note + "\n";
   text += FormatNumber("writer: longest away from the rings %.1f ms",
                        summary.max_writer_stall_s * 1e3) +
           "\n";

@@ -105,6 +105,9 @@ struct RecorderOptions {
   std::function<void(const RecordStatus&)> on_status;  // called from Record's own thread
   double status_interval_s = 1.0;                      // real time between on_status calls
   uint64_t seed = 1;                                   // the read dither
+  // Real-time priority (SCHED_FIFO 1..99) for the reader thread; 0 keeps normal scheduling. Needs
+  // root or CAP_SYS_NICE; when refused the recording goes on and the summary says so.
+  int reader_priority = 0;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };
@@ -135,6 +138,7 @@ struct RecordSummary {
   double duration_s = 0.0;          // from start to stop, on the clock
   double max_writer_stall_s = 0.0;  // longest time the writer took to come back to the rings
   bool stopped = false;             // by *stop rather than the duration
+  std::vector<std::string> notes;   // what a person should know (a refused real-time priority)
   // Triggers
   size_t triggers = 0, trigger_edges = 0, trigger_bounces = 0, trigger_other_polarity = 0;
   std::vector<double> trigger_t_s;
