@@ -37,6 +37,39 @@ nlohmann::ordered_json NoiseToJson(const NoiseResult& result) {
   return j;
 }
 
+nlohmann::ordered_json SensorPairToJson(const SensorPair& pair, const std::string& second_path) {
+  nlohmann::ordered_json j;
+  j["second_log"] = second_path;
+  j["paired"] = pair.paired;
+  j["unpaired"] = pair.unpaired;
+  j["mounting_fitted"] = pair.mounting_fitted;
+  j["mounting_angle_deg"] = pair.mounting_angle_deg;
+  j["mounting_signal_ratio"] = pair.mounting_signal_ratio;
+  nlohmann::ordered_json rows = nlohmann::ordered_json::array();
+  for (int r = 0; r < 3; ++r)
+    rows.push_back({pair.a_from_b(r, 0), pair.a_from_b(r, 1), pair.a_from_b(r, 2)});
+  j["a_from_b"] = rows;
+  j["weights_first"] = {pair.weight_a.x(), pair.weight_a.y(), pair.weight_a.z()};
+  j["weights_from_still"] = pair.weights_from_still;
+  j["difference_rms_rad_s"] = pair.residual_rms_rad_s;
+  return j;
+}
+
+nlohmann::ordered_json NoisePairToJson(const SensorPair& pair, const std::string& second_path,
+                                       const NoiseResult& first, const NoiseResult& second,
+                                       const NoiseResult& fused) {
+  nlohmann::ordered_json j = SensorPairToJson(pair, second_path);
+  j["first"] = NoiseToJson(first);
+  j["second"] = NoiseToJson(second);
+  const NoisePairGain g = FusedNoiseGain(first, second, fused);
+  auto xyz = [](const double(&v)[3]) { return nlohmann::ordered_json::array({v[0], v[1], v[2]}); };
+  j["gain"] = {{"sigma_vs_first", xyz(g.sigma_vs_first)},
+               {"sigma_vs_second", xyz(g.sigma_vs_second)},
+               {"arw_vs_first", xyz(g.arw_vs_first)},
+               {"arw_vs_second", xyz(g.arw_vs_second)}};
+  return j;
+}
+
 nlohmann::ordered_json AccuracyToJson(const AccuracyResult& result) {
   nlohmann::ordered_json j;
   j["reference_deg"] = result.reference_deg;
