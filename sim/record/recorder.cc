@@ -564,6 +564,13 @@ RecordSummary Session::Run() {
   for (std::thread& thread : threads) thread.join();
   if (error_) std::rethrow_exception(error_);
   RecordSummary summary = Summarise();
+  for (const SensorSummary& s : summary.sensors) {
+    if (s.samples == 0) {
+      throw IoError(IoMessage(
+          s.out_path, 0,
+          FormatNumber("no samples recorded in %.3f s: no file written", summary.duration_s)));
+    }
+  }
   for (size_t i = 0; i < sensors_.size(); ++i) {
     sensors_[i]->rows->Finish(RecordedGcsvHeader(summary, static_cast<int>(i), options_));
   }

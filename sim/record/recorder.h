@@ -145,8 +145,8 @@ struct RecordSummary {
 };
 
 // Configures every sensor (throws IoError for a wrong WHO_AM_I before anything is written), records
-// until the duration or *stop, and writes the files. Throws IoError when a file cannot be written
-// (no output is left then).
+// until the duration or *stop, and writes the files. Throws IoError when a file cannot be written,
+// or when a sensor recorded no sample (stopped before its first); no output is left then.
 RecordSummary Record(const std::vector<RecordSensor>& sensors, const RecorderOptions& options,
                      Clock& clock);
 

@@ -1,0 +1,104 @@
+// CLI tests of `shutterlab record`: an emulated 8 kHz MPU-9250 recorded through writer stalls and
+// read back by flight and analyze with its triggers, two sensors fused by noise --second, a clean
+// stop on SIGINT, and bad devices refused with one line and exit code 2.
+
+#include "sim/logs/gcsv.h"
+#include "sim/text_file.h"
+#include "tests/app/cli_test_util.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+
+namespace shutterlab {
+namespace {
+
+using test::RunShutterlab;
+
+TEST(RecordCli, EmulatedRecordingGoesThroughFlightAndAnalyzeWithItsTriggers) {
+  test::TempDir dir;
+  const std::string trace = dir / "flight.csv", rec = dir / "rec.gcsv";
+  ASSERT_EQ(
+      RunShutterlab("synth flight --rate 8000 --duration 4 --seed 2 --out " + trace).exit_code, 0);
+  const auto record = RunShutterlab(
+      "record --device emulate:" + trace + ",ppm=40 --duration 3.5s --clock virtual " +
+      "--stall-writer 300ms@1s --trigger emulate:every=1s,bounce=2 --out " + rec);
+  ASSERT_EQ(record.exit_code, 0) << record.output;
+  EXPECT_NE(record.out.find("gaps        0, 0 sample(s) lost"), std::string::npos) << record.out;
+  EXPECT_NE(record.out.find("triggers: 3"), std::string::npos) << record.out;
+  const GcsvLog log = ReadGcsv(rec);
+  EXPECT_NEAR(log.trace.size(), 28000.0, 100.0);
+  const auto flight = RunShutterlab("flight " + rec + " --bias 0:1 --json");
+  ASSERT_EQ(flight.exit_code, 0) << flight.output;
+  EXPECT_GT(nlohmann::json::parse(flight.out)["windows_total"].get<int>(), 10000);
+  const auto analyze =
+      RunShutterlab("analyze " + rec + " --triggers " + (dir / "rec.triggers.csv") + " --json");
+  ASSERT_EQ(analyze.exit_code, 0) << analyze.output;
+  const auto images = nlohmann::json::parse(analyze.out)["images"];
+  ASSERT_EQ(images.size(), 3u);
+  for (const auto& image : images) EXPECT_TRUE(image["in_trace"].get<bool>()) << image.dump();
+}
+
+TEST(RecordCli, TwoSensorsAreFusedByNoiseWithTheGainShown) {
+  test::TempDir dir;
+  const std::string a = dir / "a.csv", b = dir / "b.csv", rec = dir / "pair.gcsv";
+  ASSERT_EQ(
+      RunShutterlab("synth still --rate 8000 --duration 7 --seed 3 --out " + a + " --out2 " + b)
+          .exit_code,
+      0);
+  const auto record = RunShutterlab("record --device emulate:" + a + " --device emulate:" + b +
+                                    ",ppm=-30 --duration 6.5s --clock virtual --out " + rec);
+  ASSERT_EQ(record.exit_code, 0) << record.output;
+  const auto noise =
+      RunShutterlab("noise " + rec + " --second " + (dir / "pair.2.gcsv") + " --json");
+  ASSERT_EQ(noise.exit_code, 0) << noise.output;
+  const auto pair = nlohmann::json::parse(noise.out)["pair"];
+  EXPECT_FALSE(pair["mounting_fitted"].get<bool>());
+  for (int axis = 0; axis < 3; ++axis) {
+    // Two equal independent sensors: the white noise falls by sqrt(2); ARW read off 1.5 s of
+    // Allan deviation scatters by a few percent.
+    EXPECT_NEAR(pair["gain"]["arw_vs_first"][axis].get<double>(), std::sqrt(2.0), 0.1)
+        << pair.dump();
+  }
+  const auto text = RunShutterlab("noise " + rec + " --second " + (dir / "pair.2.gcsv"));
+  EXPECT_NE(text.out.find("Fused gain"), std::string::npos) << text.out;
+}
+
+TEST(RecordCli, SigintStopsTheRecordingWithTheFileWhole) {
+  test::TempDir dir;
+  const std::string trace = dir / "still.csv", rec = dir / "rec.gcsv";
+  ASSERT_EQ(RunShutterlab("synth still --rate 1000 --duration 2 --out " + trace).exit_code, 0);
+  // No duration: `timeout` sends SIGINT after 1 s, and its status is record's own. The virtual
+  // clock runs as fast as the machine, so that a slow start still leaves samples to write.
+  const std::string command = "timeout --preserve-status -s INT 1 " +
+                              std::string(SHUTTERLAB_BINARY) + " record --device emulate:" + trace +
+                              ",rate=1000 --clock virtual --out " + rec + " >/dev/null 2>&1";
+  EXPECT_EQ(std::system(command.c_str()), 0);
+  const GcsvLog log = ReadGcsv(rec);  // whole: header, column line, rows
+  EXPECT_GT(log.trace.size(), 100u);
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    EXPECT_EQ(entry.path().filename().string().find(".rec.gcsv."), std::string::npos)
+        << "a temporary file was left: " << entry.path();
+  }
+}
+
+TEST(RecordCli, BadDevicesAreOneLineWithExitCodeTwo) {
+  test::TempDir dir;
+  const std::string trace = dir / "still.csv";
+  ASSERT_EQ(RunShutterlab("synth still --rate 1000 --duration 1 --out " + trace).exit_code, 0);
+  for (const std::string& device :
+       {"emulate:" + dir / "missing.csv", "emulate:" + trace + ",part=icm42688p,rate=40000",
+        "emulate:" + trace + ",colour=red", "emulate:" + trace + ",range=300"}) {
+    const auto result = RunShutterlab("record --device " + device +
+                                      " --duration 1s --clock virtual --out " + (dir / "x.gcsv"));
+    EXPECT_EQ(result.exit_code, 2) << device << "\n" << result.output;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.gcsv"));
+  }
+}
+
+}  // namespace
+}  // namespace shutterlab
