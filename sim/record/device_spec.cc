@@ -39,13 +39,16 @@ DeviceSpec ParseDeviceSpec(const std::string& text) {
     } else if (key == "range") {
       need(number && *number == static_cast<int>(*number));
       spec.range_dps = static_cast<int>(*number);
+    } else if (key == "mode" && !spec.emulate) {
+      need(number && (*number == 0 || *number == 3));
+      spec.spi_mode = static_cast<int>(*number);
     } else if (key == "ppm" && spec.emulate) {
       need(number.has_value());
       spec.ppm = *number;
     } else {
       throw std::invalid_argument("device '" + text + "': unknown key '" + key +
                                   "' (part, rate, range" +
-                                  (spec.emulate ? ", ppm)" : "; ppm is for emulate:)"));
+                                  (spec.emulate ? ", ppm)" : ", mode; ppm is for emulate:)"));
     }
   }
   return spec;
@@ -55,7 +58,7 @@ OpenedDevice OpenDevice(const DeviceSpec& spec, GyroPart default_part, const Clo
   OpenedDevice device;
   device.part = spec.part.value_or(default_part);
   if (!spec.emulate) {
-    device.bus = std::make_unique<SpidevTransport>(spec.path);
+    device.bus = std::make_unique<SpidevTransport>(spec.path, spec.spi_mode);
     return device;
   }
   FlightLog log = ReadFlightLog(spec.path);

@@ -2,7 +2,7 @@
 // What `record --device` names: a real sensor on a Linux spidev device, or an emulated one
 // playing a gyro trace.
 //
-//   /dev/spidev0.0[,part=icm42688p][,rate=8000][,range=250]      (also spi:/dev/spidev0.0,...)
+//   /dev/spidev0.0[,part=icm42688p][,rate=8000][,range=250][,mode=0]  (also spi:/dev/spidev0.0,...)
 //   emulate:TRACE[,part=mpu9250][,rate=8000][,range=250][,ppm=40]
 //
 // TRACE is any gyro log the readers take (sim/logs/flight_log_io.h: gyro.csv, .gcsv, raw counts,
@@ -26,6 +26,7 @@ struct DeviceSpec {
   std::optional<double> rate_hz;
   std::optional<int> range_dps;
   double ppm = 0.0;  // emulate only
+  int spi_mode = 0;  // spidev only: 0 or 3
   std::string text;  // as given
 };
 

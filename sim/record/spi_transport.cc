@@ -39,18 +39,20 @@ std::string Errno(const std::string& path, const std::string& what) {
 }
 }  // namespace
 
-SpidevTransport::SpidevTransport(const std::string& path) : path_(path) {
+SpidevTransport::SpidevTransport(const std::string& path, int mode) : path_(path) {
+  SHUTTERLAB_CHECK(mode == 0 || mode == 3) << path << ": SPI mode must be 0 or 3, got " << mode;
   fd_ = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
   if (fd_ < 0) {
     throw IoError(Errno(path,
                         "cannot open the SPI device (is SPI enabled in config.txt, and "
                         "is the user in the spi group?)"));
   }
-  uint8_t mode = SPI_MODE_3;
+  uint8_t mode_bits = mode == 3 ? SPI_MODE_3 : SPI_MODE_0;
   uint8_t bits = 8;
-  if (::ioctl(fd_, SPI_IOC_WR_MODE, &mode) < 0 ||
+  if (::ioctl(fd_, SPI_IOC_WR_MODE, &mode_bits) < 0 ||
       ::ioctl(fd_, SPI_IOC_WR_BITS_PER_WORD, &bits) < 0) {
-    const std::string message = Errno(path, "cannot set SPI mode 3, 8 bits per word");
+    const std::string message =
+        Errno(path, "cannot set SPI mode " + std::to_string(mode) + ", 8 bits per word");
     ::close(fd_);
     throw IoError(message);
   }

@@ -28,11 +28,13 @@ void ReadRegisters(SpiTransport& bus, uint8_t address, uint8_t* out, size_t n, u
 uint8_t ReadRegister(SpiTransport& bus, uint8_t address, uint32_t speed_hz);
 void WriteRegister(SpiTransport& bus, uint8_t address, uint8_t value, uint32_t speed_hz);
 
-// Linux spidev (/dev/spidevB.C): SPI mode 3 (both parts accept it), 8 bits per word.
+// Linux spidev (/dev/spidevB.C), 8 bits per word, SPI mode 0 by default: both parts take modes 0
+// and 3, and the Raspberry Pi's second bus (SPI1, the auxiliary "mini SPI") has no mode 3.
 class SpidevTransport : public SpiTransport {
  public:
-  // Opens the device; throws IoError naming it (missing, no permission: the spi group).
-  explicit SpidevTransport(const std::string& path);
+  // Opens the device; throws IoError naming it (missing, no permission: the spi group; a mode the
+  // controller lacks).
+  explicit SpidevTransport(const std::string& path, int mode = 0);
   ~SpidevTransport() override;
   SpidevTransport(const SpidevTransport&) = delete;
   SpidevTransport& operator=(const SpidevTransport&) = delete;
