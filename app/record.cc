@@ -4,6 +4,7 @@
 
 #include "app/command.h"
 #include "estimate/paper/analyze.h"
+#include "estimate/report/analysis_json.h"
 #include "sim/check.h"
 #include "sim/record/device_spec.h"
 #include "sim/record/gpio_trigger.h"
@@ -51,6 +52,7 @@ struct RecordCommand {
   std::string pause_while_writing;
   std::string clock = "monotonic";
   int priority = 0;
+  bool json = false;
 };
 
 // "A@B": two durations (or a count and a duration), e.g. "300ms@2s".
@@ -196,6 +198,11 @@ void Run(const RecordCommand& command) {
   ::sigaction(SIGTERM, &action, nullptr);
   const RecordSummary summary = Record(sensors, options, *clock);
   if (tty) std::fprintf(stderr, "\r\033[K");
+  if (command.json) {
+    std::cout << RecordSummaryToJson(summary, options.trigger ? options.triggers_path : "").dump(2)
+              << "\n";
+    return;
+  }
   std::cout << RecordSummaryText(summary);
   for (const SensorSummary& s : summary.sensors) std::cout << "wrote " << s.out_path << "\n";
   if (options.trigger) std::cout << "wrote " << options.triggers_path << "\n";
@@ -254,6 +261,7 @@ const CommandRegistration kRegistration(15, [](CLI::App& app) {
   cmd->add_option("--pause-while-writing", command->pause_while_writing,
                   "the source paper's logger, for comparison: stop reading for T after every N "
                   "samples (e.g. 500000@300ms)");
+  cmd->add_flag("--json", command->json, "print the summary as JSON (docs/FORMATS.md record/1)");
   cmd->add_option(
          "--clock", command->clock,
          "monotonic (default), or virtual: emulated devices only, as fast as the machine runs")

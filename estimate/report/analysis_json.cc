@@ -70,6 +70,58 @@ nlohmann::ordered_json NoisePairToJson(const SensorPair& pair, const std::string
   return j;
 }
 
+nlohmann::ordered_json RecordSummaryToJson(const RecordSummary& summary,
+                                           const std::string& triggers_path) {
+  auto xyz = [](const Eigen::Vector3d& v) {
+    return nlohmann::ordered_json::array({v.x(), v.y(), v.z()});
+  };
+  nlohmann::ordered_json j;
+  j["format"] = "record/1";
+  j["duration_s"] = summary.duration_s;
+  j["t0_clock_ns"] = summary.t0_clock_ns;
+  j["stopped_by_signal"] = summary.stopped;
+  j["max_writer_stall_s"] = summary.max_writer_stall_s;
+  nlohmann::ordered_json sensors = nlohmann::ordered_json::array();
+  for (const SensorSummary& s : summary.sensors) {
+    nlohmann::ordered_json sensor;
+    sensor["part"] = GetPartInfo(s.setting.part).name;
+    sensor["device"] = s.device;
+    sensor["out"] = s.out_path;
+    sensor["odr_hz"] = s.setting.odr_hz;
+    sensor["range_dps"] = s.setting.range_dps;
+    sensor["samples"] = s.samples;
+    sensor["rate_hz"] = s.rate_hz;
+    sensor["drift_ppm"] = s.drift_ppm;
+    sensor["timestamp_rms_us"] = s.timestamp_rms_us;
+    sensor["gaps"] = s.gaps;
+    sensor["samples_lost"] = s.lost;
+    sensor["ring_high_water"] = s.ring_high_water;
+    sensor["ring_capacity"] = s.ring_capacity;
+    sensor["max_read_interval_s"] = s.max_read_interval_s;
+    sensor["still_s"] = s.still_span_s;
+    sensor["still_bias_rad_s"] = xyz(s.still_bias_rad_s);
+    sensor["still_std_rad_s"] = xyz(s.still_std_rad_s);
+    sensors.push_back(sensor);
+  }
+  j["sensors"] = sensors;
+  nlohmann::ordered_json gaps = nlohmann::ordered_json::array();
+  for (const RecordGap& gap : summary.gaps) {
+    gaps.push_back(
+        {{"sensor", gap.sensor + 1}, {"t_s", gap.t_s}, {"lost", gap.lost}, {"kind", gap.kind}});
+  }
+  j["gaps"] = gaps;
+  if (!triggers_path.empty()) {
+    j["triggers"] = {{"file", triggers_path},
+                     {"count", summary.triggers},
+                     {"edges", summary.trigger_edges},
+                     {"bounces", summary.trigger_bounces},
+                     {"other_polarity", summary.trigger_other_polarity},
+                     {"t_s", summary.trigger_t_s}};
+  }
+  j["notes"] = summary.notes;
+  return j;
+}
+
 nlohmann::ordered_json AccuracyToJson(const AccuracyResult& result) {
   nlohmann::ordered_json j;
   j["reference_deg"] = result.reference_deg;

@@ -7,6 +7,7 @@
 #include "estimate/paper/flight.h"
 #include "estimate/paper/noise.h"
 #include "sim/log_warning.h"
+#include "sim/record/recorder.h"
 #include "sim/sensor_pair.h"
 
 #include <nlohmann/json.hpp>
@@ -41,6 +42,10 @@ nlohmann::ordered_json SensorPairToJson(const SensorPair& pair, const std::strin
 nlohmann::ordered_json NoisePairToJson(const SensorPair& pair, const std::string& second_path,
                                        const NoiseResult& first, const NoiseResult& second,
                                        const NoiseResult& fused);
+
+// `record --json` (docs/FORMATS.md "Recorder output"): the summary of a recording.
+nlohmann::ordered_json RecordSummaryToJson(const RecordSummary& summary,
+                                           const std::string& triggers_path);
 
 nlohmann::json WarningsToJson(const std::vector<LogWarning>& warnings);
 

@@ -86,6 +86,8 @@ struct SensorState {
   double max_read_interval_s = 0;
   int open_buffer_gap = -1;  // gaps_ index of a buffer_full gap still growing
   // writer
+  double gscale =
+      0.0;  // rad/s per count, set before the threads start (a reconfiguration keeps it)
   std::string text;
   std::vector<RecordedSample> drained;
   size_t written = 0;
@@ -380,7 +382,7 @@ void Session::ReaderLoop() {
 }
 
 void Session::Drain(SensorState& s) {
-  const double gscale = kPi / 180.0 / s.setting.lsb_per_dps;
+  const double gscale = s.gscale;
   s.drained.resize(8192);
   while (const size_t n = s.ring->Pop(s.drained.data(), s.drained.size())) {
     for (size_t i = 0; i < n; ++i) {
@@ -531,6 +533,7 @@ RecordSummary Session::Run() {
   for (auto& s : sensors_) {  // before any thread or file: a wrong part is refused here
     s->setting = s->driver->Configure(s->spec.config, clock_);
     s->fifo_clock = std::make_unique<FifoClock>(1e9 / s->setting.odr_hz);
+    s->gscale = kPi / 180.0 / s->setting.lsb_per_dps;
     s->ring = std::make_unique<SampleRing>(
         static_cast<size_t>(std::ceil(options_.ring_s * s->setting.odr_hz)));
     s->rows = std::make_unique<RowFile>(s->spec.out_path);

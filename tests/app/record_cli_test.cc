@@ -50,8 +50,12 @@ TEST(RecordCli, TwoSensorsAreFusedByNoiseWithTheGainShown) {
           .exit_code,
       0);
   const auto record = RunShutterlab("record --device emulate:" + a + " --device emulate:" + b +
-                                    ",ppm=-30 --duration 6.5s --clock virtual --out " + rec);
+                                    ",ppm=-30 --duration 6.5s --clock virtual --json --out " + rec);
   ASSERT_EQ(record.exit_code, 0) << record.output;
+  const auto summary = nlohmann::json::parse(record.out);
+  ASSERT_EQ(summary["sensors"].size(), 2u);
+  EXPECT_NEAR(summary["sensors"][1]["drift_ppm"].get<double>(), -30.0, 2.0);
+  EXPECT_EQ(summary["gaps"].size(), 0u);
   const auto noise =
       RunShutterlab("noise " + rec + " --second " + (dir / "pair.2.gcsv") + " --json");
   ASSERT_EQ(noise.exit_code, 0) << noise.output;
@@ -71,11 +75,17 @@ TEST(RecordCli, SigintStopsTheRecordingWithTheFileWhole) {
   test::TempDir dir;
   const std::string trace = dir / "still.csv", rec = dir / "rec.gcsv";
   ASSERT_EQ(RunShutterlab("synth still --rate 1000 --duration 2 --out " + trace).exit_code, 0);
-  // No duration: `timeout` sends SIGINT after 1 s, and its status is record's own. The virtual
-  // clock runs as fast as the machine, so that a slow start still leaves samples to write.
-  const std::string command = "timeout --preserve-status -s INT 1 " +
-                              std::string(SHUTTERLAB_BINARY) + " record --device emulate:" + trace +
-                              ",rate=1000 --clock virtual --out " + rec + " >/dev/null 2>&1";
+  // No duration: SIGINT once the recording runs (its hidden rows file exists), however slowly the
+  // process started; the shell's status is record's own. The virtual clock runs as fast as the
+  // machine, so there are samples to write.
+  const std::string command = "bash -c '" + std::string(SHUTTERLAB_BINARY) +
+                              " record --device emulate:" + trace +
+                              ",rate=1000 --clock virtual --out " + rec +
+                              " >/dev/null 2>&1 & pid=$!; for i in $(seq 200); do "
+                              "ls -a " +
+                              dir.path().string() +
+                              " | grep -q rows && break; sleep 0.05; done; "
+                              "sleep 0.2; kill -INT $pid; wait $pid'";
   EXPECT_EQ(std::system(command.c_str()), 0);
   const GcsvLog log = ReadGcsv(rec);  // whole: header, column line, rows
   EXPECT_GT(log.trace.size(), 100u);
