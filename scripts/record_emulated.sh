@@ -36,6 +36,10 @@ diff "$out/flight_src.txt" "$out/flight_rec.txt" && echo "flight tables: identic
 echo "the paper's 10 ms / 20 ms windows (whole numbers of periods), source then recording:"
 s flight "$out/flight_src.csv" | sed -n 3p
 s flight "$out/flight_rec.gcsv" | sed -n 3p
+echo "the real-time recording of step 1 (ppm 40), source then recording, first row:"
+head_rows "$out/flight.csv" "$(rows "$out/rec.gcsv")" >"$out/rt_src.csv"
+s flight "$out/rt_src.csv" --window 10.0625ms,20.0625ms | sed -n 3p
+s flight "$out/rec.gcsv" --window 10.0625ms,20.0625ms 2>/dev/null | sed -n 3p
 s record --device "emulate:$out/still.csv" --duration 10s --stall-writer 300ms@2s --clock virtual \
   --out "$out/still_rec.gcsv" >/dev/null
 head_rows "$out/still.csv" "$(rows "$out/still_rec.gcsv")" >"$out/still_src.csv"
