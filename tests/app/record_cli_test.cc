@@ -3,6 +3,8 @@
 // stop on SIGINT, and bad devices refused with one line and exit code 2.
 
 #include "sim/logs/gcsv.h"
+#include "sim/logs/gyro_io.h"
+#include "sim/synth/synth.h"
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
 #include "tests/test_util.h"
@@ -18,6 +20,18 @@ namespace {
 
 using test::RunShutterlab;
 
+// A synthetic trace written as gyro.csv in the test itself (a process start less per test).
+void WriteTrace(const std::string& path, MotionProfile profile, double rate_hz, double duration_s,
+                uint64_t seed, const std::string& second_path = "") {
+  SynthOptions synth;
+  synth.profile = profile;
+  synth.rate_hz = rate_hz;
+  synth.duration_s = duration_s;
+  synth.seed = seed;
+  WriteGyroCsv(path, SynthesizeTrace(synth, 0));
+  if (!second_path.empty()) WriteGyroCsv(second_path, SynthesizeTrace(synth, 1));
+}
+
 TEST(RecordCli, EmulatedRecordingGoesThroughFlightAndAnalyzeWithItsTriggers) {
   test::TempDir dir;
   const std::string trace = dir / "flight.csv", rec = dir / "rec.gcsv";
@@ -31,13 +45,12 @@ TEST(RecordCli, EmulatedRecordingGoesThroughFlightAndAnalyzeWithItsTriggers) {
   EXPECT_NE(record.out.find("triggers: 3"), std::string::npos) << record.out;
   const GcsvLog log = ReadGcsv(rec);
   EXPECT_NEAR(log.trace.size(), 28000.0, 100.0);
-  const auto flight = RunShutterlab("flight " + rec + " --bias 0:1 --json");
-  ASSERT_EQ(flight.exit_code, 0) << flight.output;
-  EXPECT_GT(nlohmann::json::parse(flight.out)["windows_total"].get<int>(), 10000);
   const auto analyze =
       RunShutterlab("analyze " + rec + " --triggers " + (dir / "rec.triggers.csv") + " --json");
   ASSERT_EQ(analyze.exit_code, 0) << analyze.output;
-  const auto images = nlohmann::json::parse(analyze.out)["images"];
+  const auto analysis = nlohmann::json::parse(analyze.out);
+  EXPECT_GT(analysis["flight"]["windows_total"].get<int>(), 10000);  // the flight table read it all
+  const auto images = analysis["images"];
   ASSERT_EQ(images.size(), 3u);
   for (const auto& image : images) EXPECT_TRUE(image["in_trace"].get<bool>()) << image.dump();
 }
@@ -67,14 +80,12 @@ TEST(RecordCli, TwoSensorsAreFusedByNoiseWithTheGainShown) {
     EXPECT_NEAR(pair["gain"]["arw_vs_first"][axis].get<double>(), std::sqrt(2.0), 0.1)
         << pair.dump();
   }
-  const auto text = RunShutterlab("noise " + rec + " --second " + (dir / "pair.2.gcsv"));
-  EXPECT_NE(text.out.find("Fused gain"), std::string::npos) << text.out;
 }
 
 TEST(RecordCli, SigintStopsTheRecordingWithTheFileWhole) {
   test::TempDir dir;
   const std::string trace = dir / "still.csv", rec = dir / "rec.gcsv";
-  ASSERT_EQ(RunShutterlab("synth still --rate 1000 --duration 2 --out " + trace).exit_code, 0);
+  WriteTrace(trace, MotionProfile::kStill, 1000, 2.0, 4);
   // No duration: SIGINT once the recording runs (its hidden rows file exists), however slowly the
   // process started; the shell's status is record's own. The virtual clock runs as fast as the
   // machine, so there are samples to write.
@@ -98,10 +109,11 @@ TEST(RecordCli, SigintStopsTheRecordingWithTheFileWhole) {
 TEST(RecordCli, BadDevicesAreOneLineWithExitCodeTwo) {
   test::TempDir dir;
   const std::string trace = dir / "still.csv";
-  ASSERT_EQ(RunShutterlab("synth still --rate 1000 --duration 1 --out " + trace).exit_code, 0);
+  WriteTrace(trace, MotionProfile::kStill, 1000, 1.0, 5);
+  // A trace that is not there (IoError) and a part that has no such range (std::invalid_argument);
+  // the device spec's other refusals are tested in tests/sim/record.
   for (const std::string& device :
-       {"emulate:" + dir / "missing.csv", "emulate:" + trace + ",part=icm42688p,rate=40000",
-        "emulate:" + trace + ",colour=red", "emulate:" + trace + ",range=300"}) {
+       {"emulate:" + dir / "missing.csv", "emulate:" + trace + ",range=300"}) {
     const auto result = RunShutterlab("record --device " + device +
                                       " --duration 1s --clock virtual --out " + (dir / "x.gcsv"));
     EXPECT_EQ(result.exit_code, 2) << device << "\n" << result.output;
