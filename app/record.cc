@@ -162,11 +162,13 @@ void Run(const RecordCommand& command) {
   }
   std::vector<OpenedDevice> opened;
   std::vector<RecordSensor> sensors;
+  // Emulated sensors play their traces on one time line, as two parts on one camera would.
+  const auto origin = std::make_shared<std::atomic<int64_t>>(INT64_MIN);
   for (size_t i = 0; i < command.devices.size(); ++i) {
     const DeviceSpec spec = ParseDeviceSpec(command.devices[i]);
     SHUTTERLAB_CHECK(spec.emulate || command.clock == "monotonic")
         << "--clock virtual is for emulated devices only";
-    opened.push_back(OpenDevice(spec, default_part, clock.get()));
+    opened.push_back(OpenDevice(spec, default_part, clock.get(), origin));
     RecordSensor sensor;
     sensor.bus = opened.back().bus.get();
     sensor.part = opened.back().part;

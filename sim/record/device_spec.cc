@@ -54,7 +54,8 @@ DeviceSpec ParseDeviceSpec(const std::string& text) {
   return spec;
 }
 
-OpenedDevice OpenDevice(const DeviceSpec& spec, GyroPart default_part, const Clock* clock) {
+OpenedDevice OpenDevice(const DeviceSpec& spec, GyroPart default_part, const Clock* clock,
+                        std::shared_ptr<std::atomic<int64_t>> origin) {
   OpenedDevice device;
   device.part = spec.part.value_or(default_part);
   if (!spec.emulate) {
@@ -65,6 +66,7 @@ OpenedDevice OpenDevice(const DeviceSpec& spec, GyroPart default_part, const Clo
   EmulatorOptions options;
   options.part = device.part;
   options.ppm = spec.ppm;
+  options.shared_origin = std::move(origin);
   auto emulator = std::make_unique<SensorEmulator>(std::move(log.gyro), clock, options);
   device.emulator = emulator.get();
   device.bus = std::move(emulator);

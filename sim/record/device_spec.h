@@ -13,6 +13,8 @@
 #include "sim/record/sensor_emulator.h"
 #include "sim/record/spi_transport.h"
 
+#include <atomic>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -41,8 +43,10 @@ struct OpenedDevice {
 };
 
 // Opens the spidev device, or reads the trace (ReadFlightLog, any format) and builds the emulator
-// on clock. part is the spec's, else default_part. Throws IoError for an unreadable device or
-// trace.
-OpenedDevice OpenDevice(const DeviceSpec& spec, GyroPart default_part, const Clock* clock);
+// on clock, playing on the time line `origin` (EmulatorOptions::shared_origin: pass the same to
+// every device of a recording). part is the spec's, else default_part. Throws IoError for an
+// unreadable device or trace.
+OpenedDevice OpenDevice(const DeviceSpec& spec, GyroPart default_part, const Clock* clock,
+                        std::shared_ptr<std::atomic<int64_t>> origin = nullptr);
 
 }  // namespace shutterlab

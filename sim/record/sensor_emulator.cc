@@ -16,6 +16,8 @@ void EmulatorOptions::Check() const {
 SensorEmulator::SensorEmulator(GyroTrace trace, const Clock* clock, EmulatorOptions options)
     : trace_(std::move(trace)), clock_(clock), options_(options), info_(GetPartInfo(options.part)) {
   options_.Check();
+  play_origin_ns_ = options_.shared_origin ? options_.shared_origin
+                                           : std::make_shared<std::atomic<int64_t>>(INT64_MIN);
   SHUTTERLAB_CHECK(!trace_.empty()) << "the emulator needs a trace with samples";
   SHUTTERLAB_CHECK(clock_ != nullptr) << "the emulator needs a clock";
   Reset();
@@ -24,7 +26,7 @@ SensorEmulator::SensorEmulator(GyroTrace trace, const Clock* clock, EmulatorOpti
 std::string SensorEmulator::Name() const { return std::string("emulated ") + info_.name; }
 
 std::optional<int64_t> SensorEmulator::PlayOriginNs() const {
-  const int64_t origin = play_origin_ns_.load();
+  const int64_t origin = play_origin_ns_->load();
   if (origin == INT64_MIN) return std::nullopt;
   return origin;
 }
@@ -157,7 +159,10 @@ void SensorEmulator::PushPacket(const std::array<int16_t, 3>& counts) {
 
 void SensorEmulator::Produce(int64_t t_ns) {
   const bool collect = FifoCollects();
-  if (collect && !PlayOriginNs()) play_origin_ns_.store(t_ns);
+  if (collect && !PlayOriginNs()) {
+    int64_t unset = INT64_MIN;  // another part on the same time line may have set it meanwhile
+    play_origin_ns_->compare_exchange_strong(unset, t_ns);
+  }
   output_ = PlayedCounts(t_ns);
   if (!collect) return;
   if (options_.keep_truth) {

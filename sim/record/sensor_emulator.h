@@ -50,6 +50,10 @@ struct EmulatorOptions {
   // Brown-outs, for tests: from each start (clock ns) for its length the bus answers 0xFF to
   // everything (a loose wire, a dead part), and the part comes back from its reset values.
   std::vector<std::pair<int64_t, int64_t>> brownouts;
+  // Emulated parts that share this play origin play their traces on one time line: the first
+  // to start its FIFO sets it (two sensors on one camera feel the same motion at the same time,
+  // however far apart they were configured). Null: the part's own.
+  std::shared_ptr<std::atomic<int64_t>> shared_origin;
   // Keep every FIFO sample's time and counts (FifoSampleTimeNs): the truth tests compare with.
   bool keep_truth = false;
   // Throws std::invalid_argument naming the first bad field (|ppm| < 10000).
@@ -103,7 +107,7 @@ class SensorEmulator : public SpiTransport {
   int64_t anchor_ns_ = 0, anchor_k_ = 0, next_k_ = 0;
   double period_ns_ = 0.0;
   size_t trace_cursor_ = 0;
-  std::atomic<int64_t> play_origin_ns_{INT64_MIN};
+  std::shared_ptr<std::atomic<int64_t>> play_origin_ns_;  // INT64_MIN until the FIFO starts
   std::vector<int64_t> fifo_times_ns_;
   std::vector<std::array<int16_t, 3>> fifo_counts_;
   size_t samples_dropped_ = 0;
