@@ -60,3 +60,9 @@ echo "== 5. two emulated still sensors (the Pi's two buses) fused: noise --secon
 s record --device "emulate:$out/still.csv" --device "emulate:$out/still_b.csv,ppm=-25" --duration 10s \
   --clock virtual --out "$out/pair.gcsv" >/dev/null
 s noise "$out/pair.gcsv" --second "$out/pair.2.gcsv" | sed -n '/Fused gain/,$p'
+
+echo "== 6. two emulated sensors on a synthetic flight: the mounting fitted, the fused flight table"
+s synth flight --rate 8000 --duration 12 --seed 7 --out "$out/fa.csv" --out2 "$out/fb.csv" >/dev/null
+s record --device "emulate:$out/fa.csv" --device "emulate:$out/fb.csv,ppm=20" --duration 11s --clock virtual \
+  --out "$out/fp.gcsv" >/dev/null
+s flight "$out/fp.gcsv" --second "$out/fp.2.gcsv" | head -3
