@@ -8,7 +8,8 @@
 //  - BrownConrady, OpenCV's standard model (calib3d "Detailed description"): the undistorted
 //    normalised point (x, y) = (X/Z, Y/Z), r^2 = x^2 + y^2, radial 1 + k1 r^2 + k2 r^4 + k3 r^6,
 //    tangential p1, p2. Only rays in front of the camera (Z > 0) have a point.
-//  - Fisheye, OpenCV's fisheye model (Kannala-Brandt: equidistant with a polynomial; what Gyroflow's
+//  - Fisheye, OpenCV's fisheye model (Kannala-Brandt: equidistant with a polynomial; what
+//  Gyroflow's
 //    lens profiles hold): theta = the ray's angle from the optical axis, theta_d = theta (1 + k1
 //    theta^2 + k2 theta^4 + k3 theta^6 + k4 theta^8), x_d = theta_d (X, Y) / |(X, Y)|. OpenCV
 //    writes theta = atan(r) and so stops at 90 degrees; here theta = atan2(|(X, Y)|, Z), which is

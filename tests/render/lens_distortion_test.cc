@@ -31,8 +31,8 @@ PinholeCamera MaxCamera() {
   camera.fy = 834.242691007013;
   camera.cx = 961.0868688356376;
   camera.cy = 537.8612238194443;
-  camera.distortion =
-      Fisheye({0.0646075465207674, 0.039139647556618896, -0.041373671856156674, 0.014898789517094136});
+  camera.distortion = Fisheye(
+      {0.0646075465207674, 0.039139647556618896, -0.041373671856156674, 0.014898789517094136});
   return camera;
 }
 
@@ -68,7 +68,8 @@ TEST(Fisheye, DistortsAsOpenCvsFisheyeModule) {
     for (int i = 0; i < 500; ++i) {
       const double t = i == 0 ? 0.0 : theta(rng), p = phi(rng);
       rays.emplace_back(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
-      undistorted.emplace_back(rays.back().x() / rays.back().z(), rays.back().y() / rays.back().z());
+      undistorted.emplace_back(rays.back().x() / rays.back().z(),
+                               rays.back().y() / rays.back().z());
     }
     std::vector<cv::Point2d> expected;
     cv::fisheye::distortPoints(undistorted, expected, CvK(camera), CvD(camera));
@@ -86,8 +87,8 @@ TEST(Fisheye, UndistortsAsOpenCvsFisheyeModule) {
   const PinholeCamera camera = MaxCamera();
   std::mt19937_64 rng(8);
   std::uniform_real_distribution<double> u(0.0, camera.width - 1.0), v(0.0, camera.height - 1.0);
-  std::vector<cv::Point2d> distorted = {{0.0, 0.0}, {camera.width - 1.0, camera.height - 1.0},
-                                        {camera.cx, camera.cy}};
+  std::vector<cv::Point2d> distorted = {
+      {0.0, 0.0}, {camera.width - 1.0, camera.height - 1.0}, {camera.cx, camera.cy}};
   for (int i = 0; i < 500; ++i) distorted.emplace_back(u(rng), v(rng));
   std::vector<cv::Point2d> expected;
   cv::fisheye::undistortPoints(
