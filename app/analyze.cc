@@ -9,6 +9,7 @@
 #include "estimate/report/analysis_json.h"
 #include "estimate/report/analyze_report.h"
 #include "render/image_io.h"
+#include "render/lens_profile.h"
 #include "render/pictures.h"
 #include "sim/check.h"
 #include "sim/logs/flight_log_io.h"
@@ -18,6 +19,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -32,6 +34,7 @@ struct AnalyzeCommand {
   int range_dps = 250;
   ColumnFlags column_flags;  // --time-unit, --columns, --delimiter, --rate-unit
   std::string camera_path;
+  std::string lens_profile_path;
   std::string readout = "30ms";
   double altitude_m = 50.0;
   double focal_px = 1100.0;
@@ -45,6 +48,7 @@ struct AnalyzeCommand {
   std::string scene_path;
   bool json = false;
   bool altitude_given = false;
+  bool readout_given = false;
 };
 
 RigModel RigFromFlags(const AnalyzeCommand& command) {
@@ -75,6 +79,14 @@ void Run(const AnalyzeCommand& command) {
     if (command.altitude_given) options.rig.altitude_m = command.altitude_m;
   } else {
     options.rig = RigFromFlags(command);
+  }
+  // The profile's lens, and its readout unless --readout was typed.
+  std::optional<LensProfileUse> lens;
+  if (!command.lens_profile_path.empty()) {
+    lens = ScaleLensProfile(ReadLensProfile(command.lens_profile_path), options.rig.camera.width,
+                            options.rig.camera.height);
+    ApplyLensProfile(&*lens, &options.rig, command.readout_given);
+    for (const std::string& note : lens->notes) std::cerr << "note: " << note << "\n";
   }
   options.limits_m.clear();
   for (const std::string& text : command.limits) options.limits_m.push_back(ParseLengthM(text));
@@ -118,7 +130,9 @@ void Run(const AnalyzeCommand& command) {
     AnalyzeReportPage(options, result, report).Write(command.out_dir + "/report.html");
   }
   if (command.json) {
-    std::cout << AnalyzeToJson(result).dump(2) << "\n";
+    nlohmann::json out = AnalyzeToJson(result);
+    if (lens) out["lens_profile"] = LensProfileUseJson(*lens);
+    std::cout << out.dump(2) << "\n";
   } else {
     std::cout << AnalyzeReport(result);
   }
@@ -144,9 +158,13 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
   command->column_flags.Add(cmd);
   cmd->add_option("--camera", command->camera_path, "camera.json (docs/FORMATS.md rig/1)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--readout", command->readout,
-                  "rolling-shutter readout without --camera (s, ms, us)")
-      ->capture_default_str();
+  cmd->add_option("--lens-profile", command->lens_profile_path,
+                  "Gyroflow lens profile (JSON): its lens, scaled to the image size, and its "
+                  "readout where it states one (unless --readout is given)")
+      ->check(CLI::ExistingFile);
+  auto* readout = cmd->add_option("--readout", command->readout,
+                                  "rolling-shutter readout without --camera (s, ms, us)")
+                      ->capture_default_str();
   auto* altitude =
       cmd->add_option("--altitude", command->altitude_m,
                       "height above flat ground, m (overrides camera.json; default: the log's "
@@ -176,8 +194,9 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
                   "nadir image for the report's worst-image pictures (with --out)")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--json", command->json, "print JSON (docs/FORMATS.md `analyze`)");
-  return std::function<void()>([command, altitude] {
+  return std::function<void()>([command, altitude, readout] {
     command->altitude_given = altitude->count() > 0;
+    command->readout_given = readout->count() > 0;
     Run(*command);
   });
 });
