@@ -23,6 +23,11 @@ Eigen::Matrix3d PinholeCamera::K() const {
 }
 
 std::optional<Eigen::Vector2d> PinholeCamera::ImgFromCam(const Eigen::Vector3d& p_in_cam) const {
+  if (!HasDistortion()) {
+    if (!(p_in_cam.z() > 0)) return std::nullopt;
+    const double x = p_in_cam.x() / p_in_cam.z(), y = p_in_cam.y() / p_in_cam.z();
+    return Eigen::Vector2d(fx * x + cx, fy * y + cy);
+  }
   const std::optional<Eigen::Vector2d> x_d =
       std::visit([&](const auto& lens) { return lens.DistortedFromRay(p_in_cam); }, distortion);
   if (!x_d) return std::nullopt;
@@ -95,7 +100,8 @@ template <size_t N>
 std::array<double, N> Coefficients(const json& j, const char* const (&names)[N],
                                    const std::string& model) {
   std::array<double, N> c{};
-  for (const auto& [key, value] : j.items()) {
+  for (const auto& item : j.items()) {
+    const std::string& key = item.key();  // (a structured binding: clang 14 cannot capture it)
     if (key == "model") continue;
     const auto* at = std::find_if(std::begin(names), std::end(names),
                                   [&](const char* name) { return key == name; });

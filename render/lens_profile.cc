@@ -29,6 +29,14 @@ double NumberOr(const json& j, const char* key, double fallback, const std::stri
   return j[key].get<double>();
 }
 
+// An image dimension: a whole number of pixels, 0 when absent (the callers check it is positive).
+int PixelsOr(const json& j, const char* key, const std::string& path) {
+  const double px = NumberOr(j, key, 0.0, path);
+  if (!(px >= 0 && px <= 1e6) || px != std::floor(px))
+    Fail(path, std::string(key) + " " + j[key].dump() + " is not a size in pixels");
+  return static_cast<int>(px);
+}
+
 std::string TextOr(const json& j, const char* key) {
   return j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : "";
 }
@@ -87,12 +95,14 @@ void ReadLens(const json& j, LensProfile* p) {
       !j["distortion_model"].is_string())
     Fail(path, "distortion_model is not a name");
   if (model.empty()) {
-    const bool standard = j.value("use_opencv_standard", false) && !j.value("use_opencv_fisheye", false);
+    const bool standard =
+        j.value("use_opencv_standard", false) && !j.value("use_opencv_fisheye", false);
     model = standard ? "opencv_standard" : "opencv_fisheye";
   }
   if (j.contains("digital_lens") && !j["digital_lens"].is_null())
-    Fail(path, "digital_lens " + j["digital_lens"].dump() +
-                   ": an in-camera remapping after the lens (GoPro SuperView, ...) is not modelled");
+    Fail(path,
+         "digital_lens " + j["digital_lens"].dump() +
+             ": an in-camera remapping after the lens (GoPro SuperView, ...) is not modelled");
   for (const char* key : {"input_horizontal_stretch", "input_vertical_stretch"}) {
     const double stretch = NumberOr(j, key, 1.0, path);
     if (stretch != 0 && std::abs(stretch - 1.0) > 1e-9)
@@ -130,8 +140,8 @@ void ReadLens(const json& j, LensProfile* p) {
 ProfileReadout ReadCompatible(const json& c, const std::string& path) {
   if (!c.is_object()) Fail(path, "compatible_settings holds " + c.dump());
   ProfileReadout mode;
-  mode.width = static_cast<int>(NumberOr(c, "width", 0, path));
-  mode.height = static_cast<int>(NumberOr(c, "height", 0, path));
+  mode.width = PixelsOr(c, "width", path);
+  mode.height = PixelsOr(c, "height", path);
   mode.fps = NumberOr(c, "fps", 0, path);
   ReadReadout(c, "frame_readout_time", &mode, path);
   return mode;
@@ -166,8 +176,8 @@ LensProfile ReadLensProfile(const std::string& path) {
     p.calibrated_by = TextOr(j, "calibrated_by");
     p.official = j.value("official", false);
     const json& size = j.contains("calib_dimension") ? j["calib_dimension"] : json::object();
-    p.mode.width = static_cast<int>(NumberOr(size, "w", 0, path));
-    p.mode.height = static_cast<int>(NumberOr(size, "h", 0, path));
+    p.mode.width = PixelsOr(size, "w", path);
+    p.mode.height = PixelsOr(size, "h", path);
     if (p.mode.width <= 0 || p.mode.height <= 0)
       Fail(path, "calib_dimension " + size.dump() + " is not a positive size");
     p.mode.fps = NumberOr(j, "fps", 0, path);
@@ -176,7 +186,8 @@ LensProfile ReadLensProfile(const std::string& path) {
     p.camera.width = p.mode.width;
     p.camera.height = p.mode.height;
     if (j.contains("compatible_settings") && j["compatible_settings"].is_array()) {
-      for (const json& c : j["compatible_settings"]) p.compatible.push_back(ReadCompatible(c, path));
+      for (const json& c : j["compatible_settings"])
+        p.compatible.push_back(ReadCompatible(c, path));
     }
   } catch (const json::exception& e) {
     Fail(path, std::string("malformed lens profile: ") + e.what());
@@ -263,8 +274,8 @@ void ApplyLensProfile(LensProfileUse* use, RigModel* rig, bool keep_readout) {
     use->readout.reset();
     return;
   }
-  use->notes.push_back("readout " + FormatNumber("%.3f", *use->readout->readout_s * 1e3) +
-                       " ms " + ReadoutDirectionName(use->readout->direction) +
+  use->notes.push_back("readout " + FormatNumber("%.3f", *use->readout->readout_s * 1e3) + " ms " +
+                       ReadoutDirectionName(use->readout->direction) +
                        " from the profile replaces " +
                        FormatNumber("%.3f", rig->shutter.readout_s * 1e3) + " ms " +
                        ReadoutDirectionName(rig->shutter.direction));
@@ -281,10 +292,8 @@ nlohmann::json LensProfileUseJson(const LensProfileUse& use) {
   j["image_size"] = {use.width, use.height};
   j["scale"] = {use.scale_x, use.scale_y};
   j["aspect_differs"] = use.aspect_differs;
-  j["intrinsics"] = {{"fx", use.camera.fx},
-                     {"fy", use.camera.fy},
-                     {"cx", use.camera.cx},
-                     {"cy", use.camera.cy}};
+  j["intrinsics"] = {
+      {"fx", use.camera.fx}, {"fy", use.camera.fy}, {"cx", use.camera.cx}, {"cy", use.camera.cy}};
   j["distortion"] = DistortionJson(use.camera.distortion);
   j["readout_s"] = use.readout ? json(*use.readout->readout_s) : json(nullptr);
   j["readout_source"] = use.readout ? "frame_readout_time for " + ModeText(*use.readout) : "";

@@ -1,9 +1,9 @@
 #pragma once
-// Gyroflow lens profiles (github.com/gyroflow/lens_profiles, CC0: about 9,800 community and official
-// calibrations, the JSON that Gyroflow's lens calibrator writes): one camera mode's intrinsics,
-// OpenCV fisheye distortion (or, rarely, OpenCV's standard model), calibration size, frame rate
-// and often the frame readout time. `--lens-profile FILE` of render, analyze, import and validate
-// reads one and scales it to the images at hand (docs/FORMATS.md "Lens profile").
+// Gyroflow lens profiles (github.com/gyroflow/lens_profiles, CC0: about 9,800 community and
+// official calibrations, the JSON that Gyroflow's lens calibrator writes): one camera mode's
+// intrinsics, OpenCV fisheye distortion (or, rarely, OpenCV's standard model), calibration size,
+// frame rate and often the frame readout time. `--lens-profile FILE` of render, analyze, import and
+// validate reads one and scales it to the images at hand (docs/FORMATS.md "Lens profile").
 //
 // Fields read (Gyroflow src/core/lens_profile.rs names them; missing ones take Gyroflow's
 // defaults): name, camera_brand, camera_model, lens_model, calibrated_by, official, fps,
@@ -28,8 +28,8 @@ namespace shutterlab {
 
 // A frame readout a profile states: for its own mode, or for one of its compatible settings.
 struct ProfileReadout {
-  int width = 0, height = 0;  // the mode's image size, px
-  double fps = 0.0;           // its frame rate (0: not stated)
+  int width = 0, height = 0;        // the mode's image size, px
+  double fps = 0.0;                 // its frame rate (0: not stated)
   std::optional<double> readout_s;  // |frame_readout_time| / 1000; nullopt when null, absent or 0
   ReadoutDirection direction = ReadoutDirection::kTopToBottom;  // bottom_to_top where negative
 };
@@ -39,9 +39,9 @@ struct LensProfile {
   std::string name;  // "name", or brand, model and lens when it has none
   std::string calibrated_by;
   bool official = false;
-  double rms_error_px = 0.0;   // the calibration's reprojection error at calib_dimension
-  PinholeCamera camera;        // at the calibration size (camera.width, camera.height)
-  ProfileReadout mode;         // the calibrated mode's size, fps and readout
+  double rms_error_px = 0.0;  // the calibration's reprojection error at calib_dimension
+  PinholeCamera camera;       // at the calibration size (camera.width, camera.height)
+  ProfileReadout mode;        // the calibrated mode's size, fps and readout
   std::vector<ProfileReadout> compatible;  // compatible_settings, in file order
 };
 
@@ -62,7 +62,7 @@ struct LensProfileUse {
   // The profile's readout for this image, when it states one; ApplyLensProfile clears it when the
   // caller keeps its own: afterwards, the readout the rig took from the profile.
   std::optional<ProfileReadout> readout;
-  std::vector<std::string> notes;         // one line each, for a person
+  std::vector<std::string> notes;  // one line each, for a person
 };
 
 // Scales the profile's camera to width x height: fx, fy by the size ratios, the principal point

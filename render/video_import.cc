@@ -380,18 +380,21 @@ GoproDeclaration GoproDeclared(const GoproTelemetry& t, const cv::Size& size,
     }
     d.claims.push_back({"gyro_to_camera", rig.cam_from_gyro, ClaimStatus::kSourceClaimInferred,
                         "the camera's " + t.axis_order_source +
-                            " put GYRO on its own axes X, Y, Z (gyro.csv gx, gy, gz); X forward, "
-                            "Y left, Z up, as GoPro labels them (the HERO5's karma.mp4 showed Z "
-                            "up, X and Y are GoPro's figure)" +
+                            " put GYRO on its own axes X, Y, Z (gyro.csv gx, gy, gz); Z up (as "
+                            "on the HERO5's karma.mp4), X forward and Y left as assumed for the "
+                            "HERO5, whose gimbal could not tell them apart" +
                             up});
   } else {
-    d.claims.push_back(Hero5Declaration(size).claims[2]);
+    for (const ImportClaim& claim : Hero5Declaration(size).claims) {
+      if (claim.what == "gyro_to_camera") d.claims.push_back(claim);  // the HERO5's inference
+    }
   }
   d.claims.push_back({"direction", std::string(ReadoutDirectionName(rig.shutter.direction)),
                       ClaimStatus::kGuess,
-                      s.camera_mode ? "CMOS default; a MAX's HERO mode is reprojected from one of "
-                                      "its two fisheyes, so its rows need not be sensor rows"
-                                    : "CMOS default"});
+                      s.model.find("Max") != std::string::npos
+                          ? "CMOS default; a MAX's HERO mode is reprojected from one of its two "
+                            "fisheyes, so its rows need not be sensor rows"
+                          : "CMOS default"});
   d.claims.push_back(
       {"time_offset_s", 0.0, ClaimStatus::kGuess, "telemetry and video share the MP4 timeline"});
   if (!s.stabilizer.empty()) {

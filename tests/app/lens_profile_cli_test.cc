@@ -68,7 +68,8 @@ TEST(LensProfileCli, RenderTakesTheProfilesLensAndReadoutAndInjectsInItsModel) {
   EXPECT_EQ(truth["injected"]["lens_distortion"],
             json::parse(R"({"model": "fisheye", "k1": 0.09, "k2": 0.02, "k3": 0.0, "k4": 0.0})"));
   // A Brown-Conrady value for the fisheye is refused, one line, exit 2.
-  const auto bad = RunShutterlab(in.Render(in.dir / "bad", "--inject 'lens_distortion={\"k1\":0.1}'"));
+  const auto bad =
+      RunShutterlab(in.Render(in.dir / "bad", "--inject 'lens_distortion={\"k1\":0.1}'"));
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.err.find("a brown lens for a camera declared fisheye"), std::string::npos)
       << bad.err;

@@ -147,11 +147,17 @@ TEST(LensProfile, RefusesWhatItDoesNotModelWithAClearError) {
        "distortion_model 'poly5' is not one shutterlab models"},
       {[](json* j) { (*j)["digital_lens"] = "gopro_superview"; }, "digital_lens"},
       {[](json* j) { (*j)["input_horizontal_stretch"] = 1.33; }, "input_horizontal_stretch 1.33"},
-      {[](json* j) { (*j)["fisheye_params"]["distortion_coeffs"] = {0.1, 0.2}; },
+      {[](json* j) {
+         (*j)["fisheye_params"]["distortion_coeffs"] = {0.1, 0.2};
+       },
        "has 2 coefficients"},
       {[](json* j) { (*j)["fisheye_params"]["camera_matrix"] = json::array(); }, "3x3"},
-      {[](json* j) { (*j)["calib_dimension"] = {{"w", 0}, {"h", 1080}}; }, "calib_dimension"},
+      {[](json* j) {
+         (*j)["calib_dimension"] = {{"w", 0}, {"h", 1080}};
+       },
+       "calib_dimension"},
       {[](json* j) { (*j)["frame_readout_time"] = "fast"; }, "frame_readout_time is not a number"},
+      {[](json* j) { (*j)["calib_dimension"]["w"] = 1e20; }, "w 1e+20 is not a size in pixels"},
   };
   for (const auto& [change, message] : cases) {
     test::TempDir dir;
@@ -175,8 +181,9 @@ TEST(LensProfile, RefusesWhatItDoesNotModelWithAClearError) {
 // The shared folder's real profiles: the GoPro MAX's (HS EIS, 1920x1080, no readout) and the
 // HERO5's (official, with readouts and compatible settings).
 TEST(LensProfile, ReadsTheRealGyroflowProfiles) {
-  SHUTTERLAB_REAL_DATA(max, "incoming_rs/gopro_max_heromode/reference/"
-                            "gyroflow_GoPro_Max_Wide_HS-EIS_1080p_16by9_1920x1080-50fps.json");
+  SHUTTERLAB_REAL_DATA(max,
+                       "incoming_rs/gopro_max_heromode/reference/"
+                       "gyroflow_GoPro_Max_Wide_HS-EIS_1080p_16by9_1920x1080-50fps.json");
   const LensProfile p = ReadLensProfile(max);
   EXPECT_EQ(p.camera.width, 1920);
   EXPECT_NEAR(p.camera.fx, 834.714, 1e-3);
@@ -190,8 +197,9 @@ TEST(LensProfile, ReadsTheRealGyroflowProfiles) {
                         b = p.camera.CamFromImg({1919, 1079}).normalized();
   EXPECT_NEAR(std::acos(a.dot(b)) * 180 / M_PI, 136.0, 0.1);
   EXPECT_FALSE(use.readout.has_value());
-  SHUTTERLAB_REAL_DATA(hero5, "incoming_rs/gopro_karma_refs/reference/"
-                              "gyroflow_GoPro_HERO5_Black_Wide_EIS-Y_16by9.json");
+  SHUTTERLAB_REAL_DATA(hero5,
+                       "incoming_rs/gopro_karma_refs/reference/"
+                       "gyroflow_GoPro_HERO5_Black_Wide_EIS-Y_16by9.json");
   const LensProfile h = ReadLensProfile(hero5);
   EXPECT_DOUBLE_EQ(*h.mode.readout_s, 0.02669333);
   EXPECT_EQ(h.compatible.size(), 22u);
