@@ -14,6 +14,8 @@
 #include "sim/check.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/logs/gyro_io.h"
+#include "sim/sensor_pair.h"
+#include "sim/still_detect.h"
 #include "sim/units.h"
 
 #include <filesystem>
@@ -40,6 +42,7 @@ struct AnalyzeCommand {
   double focal_px = 1100.0;
   std::string size = "1280x960";
   std::string triggers_path;
+  std::string second_path;
   std::string every;
   std::string latency = "0";
   std::vector<std::string> limits{"5cm", "10cm"};
@@ -115,8 +118,27 @@ void Run(const AnalyzeCommand& command) {
   // plots the Allan deviation.
   options.flight_series = !command.out_dir.empty();
   options.allan = !command.out_dir.empty();
-  const FlightLog log = ReadFlightLog(command.log_path, read);
+  FlightLog log = ReadFlightLog(command.log_path, read);
   PrintLogWarnings(command.log_path, log.warnings);
+  // --second: the pair fused into one trace on the first log's clock, weighed over a still
+  // segment when the first sensor has one; the camera events stay the first log's.
+  std::optional<SensorPair> pair;
+  if (!command.second_path.empty()) {
+    const FlightLog second = ReadFlightLog(command.second_path, read);
+    PrintLogWarnings(command.second_path, second.warnings);
+    SensorPairOptions pair_options;
+    try {
+      pair_options.still = DetectStillSegment(log.gyro).segment;
+    } catch (const std::invalid_argument&) {
+    }
+    try {
+      pair = FuseSensorPair(log.gyro, second.gyro, pair_options);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(command.log_path + " + " + command.second_path + ": " + e.what());
+    }
+    log.gyro = pair->fused;
+    log.warnings.insert(log.warnings.end(), second.warnings.begin(), second.warnings.end());
+  }
   Progress progress("analyze", 1000);
   options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
   AnalyzeResult result;
@@ -130,10 +152,12 @@ void Run(const AnalyzeCommand& command) {
     AnalyzeReportPage(options, result, report).Write(command.out_dir + "/report.html");
   }
   if (command.json) {
-    nlohmann::json out = AnalyzeToJson(result);
-    if (lens) out["lens_profile"] = LensProfileUseJson(*lens);
-    std::cout << out.dump(2) << "\n";
+    auto json = AnalyzeToJson(result);
+    if (pair) json["pair"] = SensorPairToJson(*pair, command.second_path);
+    if (lens) json["lens_profile"] = LensProfileUseJson(*lens);
+    std::cout << json.dump(2) << "\n";
   } else {
+    if (pair) std::cout << SensorPairText(*pair, command.log_path, command.second_path) << "\n";
     std::cout << AnalyzeReport(result);
   }
 }
@@ -176,6 +200,10 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--triggers", command->triggers_path,
                   "CSV 'image,t' or 't': trigger times in seconds on the log clock")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--second", command->second_path,
+                  "a second sensor's log on the same clock (record --device twice): fused with the "
+                  "first, the mounting fitted from the motion")
       ->check(CLI::ExistingFile);
   cmd->add_option("--every", command->every,
                   "simulated triggers at this cadence (e.g. 2s); with --triggers or --every the "
