@@ -9,6 +9,7 @@
 #include "estimate/report/analysis_json.h"
 #include "estimate/report/analyze_report.h"
 #include "render/image_io.h"
+#include "render/lens_profile.h"
 #include "render/pictures.h"
 #include "sim/check.h"
 #include "sim/logs/flight_log_io.h"
@@ -35,6 +36,7 @@ struct AnalyzeCommand {
   int range_dps = 250;
   ColumnFlags column_flags;  // --time-unit, --columns, --delimiter, --rate-unit
   std::string camera_path;
+  std::string lens_profile_path;
   std::string readout = "30ms";
   double altitude_m = 50.0;
   double focal_px = 1100.0;
@@ -49,6 +51,7 @@ struct AnalyzeCommand {
   std::string scene_path;
   bool json = false;
   bool altitude_given = false;
+  bool readout_given = false;
 };
 
 RigModel RigFromFlags(const AnalyzeCommand& command) {
@@ -79,6 +82,14 @@ void Run(const AnalyzeCommand& command) {
     if (command.altitude_given) options.rig.altitude_m = command.altitude_m;
   } else {
     options.rig = RigFromFlags(command);
+  }
+  // The profile's lens, and its readout unless --readout was typed.
+  std::optional<LensProfileUse> lens;
+  if (!command.lens_profile_path.empty()) {
+    lens = ScaleLensProfile(ReadLensProfile(command.lens_profile_path), options.rig.camera.width,
+                            options.rig.camera.height);
+    ApplyLensProfile(&*lens, &options.rig, command.readout_given);
+    for (const std::string& note : lens->notes) std::cerr << "note: " << note << "\n";
   }
   options.limits_m.clear();
   for (const std::string& text : command.limits) options.limits_m.push_back(ParseLengthM(text));
@@ -143,6 +154,7 @@ void Run(const AnalyzeCommand& command) {
   if (command.json) {
     auto json = AnalyzeToJson(result);
     if (pair) json["pair"] = SensorPairToJson(*pair, command.second_path);
+    if (lens) json["lens_profile"] = LensProfileUseJson(*lens);
     std::cout << json.dump(2) << "\n";
   } else {
     if (pair) std::cout << SensorPairText(*pair, command.log_path, command.second_path) << "\n";
@@ -170,9 +182,13 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
   command->column_flags.Add(cmd);
   cmd->add_option("--camera", command->camera_path, "camera.json (docs/FORMATS.md rig/1)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--readout", command->readout,
-                  "rolling-shutter readout without --camera (s, ms, us)")
-      ->capture_default_str();
+  cmd->add_option("--lens-profile", command->lens_profile_path,
+                  "Gyroflow lens profile (JSON): its lens, scaled to the image size, and its "
+                  "readout where it states one (unless --readout is given)")
+      ->check(CLI::ExistingFile);
+  auto* readout = cmd->add_option("--readout", command->readout,
+                                  "rolling-shutter readout without --camera (s, ms, us)")
+                      ->capture_default_str();
   auto* altitude =
       cmd->add_option("--altitude", command->altitude_m,
                       "height above flat ground, m (overrides camera.json; default: the log's "
@@ -206,8 +222,9 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
                   "nadir image for the report's worst-image pictures (with --out)")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--json", command->json, "print JSON (docs/FORMATS.md `analyze`)");
-  return std::function<void()>([command, altitude] {
+  return std::function<void()>([command, altitude, readout] {
     command->altitude_given = altitude->count() > 0;
+    command->readout_given = readout->count() > 0;
     Run(*command);
   });
 });

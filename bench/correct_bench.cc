@@ -45,7 +45,7 @@ struct Fixture {
     camera.cx = (kWidth - 1) / 2.0;
     camera.cy = (kHeight - 1) / 2.0;
     lens_camera = camera;
-    lens_camera.dist[0] = -0.05;
+    lens_camera.distortion = BrownConrady{{-0.05, 0, 0, 0, 0}};
     motion.world_from_cam.resize(kHeight);
     motion.cam_center_m.assign(kHeight, Eigen::Vector3d::Zero());
     moving = motion;

@@ -59,16 +59,10 @@ TEST(CorrectionGeometry, NoMotionMapsEveryPixelToItself) {
   EXPECT_EQ(cv::countNonZero(mask), 96 * 72);
 }
 
-TEST(CorrectionGeometry, InvertsTheRenderersTruthForEveryEffect) {
-  // The renderer's exact truth sends a rolling-shutter pixel q to p_ref (FrameGeometry::RefPixel);
-  // the correction's source of p_ref must be q again, whatever the effects.
-  const RigModel rig = SmallRig(120, 90);
-  const GyroTrace trace = ConstantRateTrace(Eigen::Vector3d(0.9, -1.2, 1.6));
-  std::vector<std::vector<std::string>> cases = {{}, kEveryEffect};
-  for (const char* one : {"velocity=6,-4,1", "lens_distortion=-0.3,0.1", "clock_rate=300",
-                          "readout_direction=bottom_to_top"}) {
-    cases.push_back({one});
-  }
+// The renderer's exact truth sends a rolling-shutter pixel q to p_ref (FrameGeometry::RefPixel);
+// the correction's source of p_ref must be q again, whatever the effects and the lens.
+void ExpectInvertsTheRenderersTruth(const RigModel& rig, const GyroTrace& trace,
+                                    const std::vector<std::vector<std::string>>& cases) {
   for (const auto& injections : cases) {
     const TrueModel truth = Truth(rig, injections);
     const FrameMotion motion = Motion(truth, trace, 0.5);
@@ -89,6 +83,54 @@ TEST(CorrectionGeometry, InvertsTheRenderersTruthForEveryEffect) {
     }
     EXPECT_GT(largest_px, 0.5) << "the case must move pixels to test anything";
   }
+}
+
+TEST(CorrectionGeometry, InvertsTheRenderersTruthForEveryEffect) {
+  std::vector<std::vector<std::string>> cases = {{}, kEveryEffect};
+  for (const char* one : {"velocity=6,-4,1", "lens_distortion=-0.3,0.1", "clock_rate=300",
+                          "readout_direction=bottom_to_top"}) {
+    cases.push_back({one});
+  }
+  ExpectInvertsTheRenderersTruth(SmallRig(120, 90),
+                                 ConstantRateTrace(Eigen::Vector3d(0.9, -1.2, 1.6)), cases);
+}
+
+TEST(CorrectionGeometry, InvertsTheRenderersTruthThroughAFisheye) {
+  // A 120-degree fisheye (the GoPro MAX's coefficients); the lens effect adds to its k1, k2.
+  ExpectInvertsTheRenderersTruth(
+      test::FisheyeRig(120, 90, 60.0), ConstantRateTrace(Eigen::Vector3d(0.9, -1.2, 1.6)),
+      {{}, {"lens_distortion=-0.02,0.01", "velocity=6,-4,1", "time_offset=-0.003"}});
+}
+
+TEST(CorrectionGeometry, RotationOnlyThroughALensWiderThan180Degrees) {
+  // A 220-degree fisheye (rotation only, as for video): rays beyond 90 degrees off the axis point
+  // behind the image plane and must still be corrected, each rolling-shutter pixel's output
+  // mapping back to it; outside the lens's image circle nothing has a source.
+  const RigModel rig = test::FisheyeRig(160, 120, 110.0);
+  const TrueModel truth = Truth(rig);
+  const FrameMotion motion = Motion(truth, ConstantRateTrace(Eigen::Vector3d(1.2, -1.6, 2.0)), 0.5);
+  const CorrectionGeometry geometry(rig.camera, motion, 0.0, std::nullopt);
+  int behind = 0, compared = 0;
+  for (int v = 0; v < rig.camera.height; v += 5) {
+    for (int u = 0; u < rig.camera.width; u += 5) {
+      const Eigen::Vector3d ray = rig.camera.CamFromImg(Eigen::Vector2d(u, v));
+      const std::optional<Eigen::Vector2d> p = geometry.OutputPixel(u, v);
+      if (!ray.allFinite()) {
+        EXPECT_FALSE(p && p->allFinite())
+            << "outside the image circle at (" << u << ", " << v << ")";
+        continue;
+      }
+      ASSERT_TRUE(p) << "(" << u << ", " << v << ")";
+      const std::optional<Eigen::Vector2d> q = geometry.SourcePixel(p->x(), p->y());
+      ASSERT_TRUE(q) << "(" << u << ", " << v << ")";
+      EXPECT_NEAR((*q - Eigen::Vector2d(u, v)).norm(), 0.0, kSolvedTolPx)
+          << "(" << u << ", " << v << ")";
+      behind += ray.z() <= 0 ? 1 : 0;
+      ++compared;
+    }
+  }
+  EXPECT_GT(behind, 20) << "the test must reach beyond 90 degrees";
+  EXPECT_GT(compared, 500);
 }
 
 // The brute-force twin of the fixed point: scan every row w for a sign change of
@@ -193,11 +235,10 @@ TEST(CorrectionMap, RowsCrowdWhereTheRateJumps) {
   EXPECT_LE(WorstMapError(map, geometry), 2 * CorrectionMapOptions{}.tolerance_px + kFloatNodesPx);
 }
 
-TEST(CorrectFrame, TrueModelGivesTheGlobalShutterReference) {
-  // Render the rolling-shutter frame and its reference from one smooth float scene; the corrected
-  // frame must equal the reference to bilinear interpolation error where it has a source, and the
-  // mask must mark exactly the pixels whose source lies outside the frame.
-  const RigModel rig = SmallRig(160, 120);
+// Renders the rolling-shutter frame and its reference from one smooth float scene; the corrected
+// frame must equal the reference to bilinear interpolation error where it has a source, and the
+// mask must mark exactly the pixels whose source lies outside the frame.
+void ExpectCorrectionGivesTheReference(const RigModel& rig) {
   const TrueModel truth = Truth(rig, {"velocity=4,2,0"});
   const FrameMotion motion = Motion(truth, ConstantRateTrace(Eigen::Vector3d(0.8, -1.1, 1.4)), 0.5);
   const cv::Size scene_size(500, 400);
@@ -232,6 +273,14 @@ TEST(CorrectFrame, TrueModelGivesTheGlobalShutterReference) {
   }
   EXPECT_EQ(disagree, 0);
   EXPECT_GT(masked, 0) << "the motion must leave part of the view without a source";
+}
+
+TEST(CorrectFrame, TrueModelGivesTheGlobalShutterReference) {
+  ExpectCorrectionGivesTheReference(SmallRig(160, 120));
+}
+
+TEST(CorrectFrame, TrueModelGivesTheGlobalShutterReferenceThroughAFisheye) {
+  ExpectCorrectionGivesTheReference(test::FisheyeRig(160, 120, 50.0));
 }
 
 TEST(CorrectFrame, MidReadoutIsRowZerosViewTurnedToTheMiddleRow) {

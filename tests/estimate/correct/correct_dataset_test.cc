@@ -28,6 +28,7 @@
 #include <filesystem>
 #include <random>
 #include <string>
+#include <variant>
 #include <vector>
 
 namespace shutterlab {
@@ -82,8 +83,8 @@ struct Rendered {
 
 Rendered Render(const test::TempDir& dir, const std::string& name,
                 const std::vector<std::string>& injections, const std::vector<double>& times_s,
-                bool video = false) {
-  WriteRigModel(dir / "camera.json", DeclaredRig());
+                bool video = false, const RigModel& declared = DeclaredRig()) {
+  WriteRigModel(dir / "camera.json", declared);
   WriteGyroCsv(dir / "gyro.csv", FlightGyro());
   std::string times = "frame,t_first_row\n";
   for (size_t i = 0; i < times_s.size(); ++i) {
@@ -101,7 +102,7 @@ Rendered Render(const test::TempDir& dir, const std::string& name,
   render.video = video;
   RenderDataset(render);
   Rendered out{dir / name, {}};
-  out.truth.rig = DeclaredRig();
+  out.truth.rig = declared;
   for (const std::string& injection : injections) ApplyInjection(injection, &out.truth);
   return out;
 }
@@ -166,6 +167,37 @@ TEST(CorrectEndToEnd, TrueModelLeavesOnlyInterpolationForEveryEffect) {
           name.c_str(), i, after.d_before_px, after.d_px, after.rms_px, wrong.rms_px);
     }
   }
+}
+
+TEST(CorrectEndToEnd, FisheyeTrueModelLeavesOnlyInterpolation) {
+  // A 90-degree fisheye (the GoPro MAX's coefficients, f 254 px) over the ground, the truth with
+  // a lens error (added to the fisheye's k1, k2), a translation and a clock offset: corrected with
+  // the true model, the frames match the renderer's references to interpolation error.
+  test::TempDir dir;
+  RigModel fisheye = test::FisheyeRig(kWidth, kHeight, 45.0);
+  fisheye.altitude_m = kAltitudeM;
+  const Rendered rendered =
+      Render(dir, "fisheye", {"lens_distortion=-0.03,0.01", "velocity=6,-3,0", "time_offset=0.004"},
+             {12.0, 20.0}, /*video=*/false, fisheye);
+  ASSERT_TRUE(std::holds_alternative<Fisheye>(rendered.truth.rig.camera.distortion));
+  const CorrectSummary fixed =
+      Correct(rendered.dataset, dir / "fixed", Report(dir, "fisheye.json", rendered.truth));
+  const CorrectSummary declared = Correct(rendered.dataset, dir / "declared");
+  ASSERT_EQ(fixed.frames.size(), 2u);
+  for (size_t i = 0; i < fixed.frames.size(); ++i) {
+    const TruthResidual& after = *fixed.frames[i].truth;
+    EXPECT_LE(after.rms_px, kInterpolationRmsPx) << "frame " << i;
+    EXPECT_LE(after.d_px, 2 * CorrectionMapOptions{}.tolerance_px + 0.02) << "frame " << i;
+    EXPECT_GT(after.d_before_px, 0.5) << "the frame must be distorted to test anything";
+    EXPECT_GT(declared.frames[i].truth->rms_px, 2 * after.rms_px);
+    std::printf(
+        "  fisheye frame %zu: D before %.3f px, after %.4f px (rms %.4f); declared model leaves "
+        "rms %.3f px\n",
+        i, after.d_before_px, after.d_px, after.rms_px, declared.frames[i].truth->rms_px);
+  }
+  const RigModel written = ReadRigModel((dir.path() / "fixed" / "camera.json").string());
+  EXPECT_EQ(written.camera.distortion, rendered.truth.rig.camera.distortion)
+      << "the output declares the lens it was corrected through";
 }
 
 TEST(CorrectEndToEnd, OutputIsARigDatasetThatValidateFindsGlobal) {
