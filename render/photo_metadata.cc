@@ -67,7 +67,8 @@ std::optional<double> ExifNumber(const Exiv2::ExifData& exif, const char* key) {
 }
 
 // EXIF GPS degrees, minutes, seconds and a reference letter (S and W negative).
-std::optional<double> GpsDegrees(const Exiv2::ExifData& exif, const char* key, const char* ref_key) {
+std::optional<double> GpsDegrees(const Exiv2::ExifData& exif, const char* key,
+                                 const char* ref_key) {
   const Exiv2::Exifdatum* d = FindExif(exif, key);
   const auto deg = ExifNumber(d, 0), min = ExifNumber(d, 1), sec = ExifNumber(d, 2);
   if (!deg || !min || !sec) return std::nullopt;
@@ -81,10 +82,10 @@ void ReadCaptureTime(const Exiv2::ExifData& exif, PhotoMetadata* out) {
   struct Tags {
     const char *date, *sub, *offset;
   };
-  for (const Tags& tags : {Tags{"Exif.Photo.DateTimeOriginal", "Exif.Photo.SubSecTimeOriginal",
-                                "Exif.Photo.OffsetTimeOriginal"},
-                           Tags{"Exif.Image.DateTime", "Exif.Photo.SubSecTime",
-                                "Exif.Photo.OffsetTime"}}) {
+  for (const Tags& tags :
+       {Tags{"Exif.Photo.DateTimeOriginal", "Exif.Photo.SubSecTimeOriginal",
+             "Exif.Photo.OffsetTimeOriginal"},
+        Tags{"Exif.Image.DateTime", "Exif.Photo.SubSecTime", "Exif.Photo.OffsetTime"}}) {
     const std::string date = ExifText(exif, tags.date);
     if (date.empty()) continue;
     out->capture_time_text = date;
@@ -107,7 +108,8 @@ void ReadExif(const Exiv2::ExifData& exif, PhotoMetadata* out) {
   const int unit =
       static_cast<int>(ExifNumber(exif, "Exif.Photo.FocalPlaneResolutionUnit").value_or(2));
   const double mm_per_unit = unit == 3 ? 10.0 : unit == 4 ? 1.0 : unit == 5 ? 1e-3 : 25.4;
-  if (plane_res && *plane_res > 0 && unit >= 2) out->focal_plane_px_per_mm = *plane_res / mm_per_unit;
+  if (plane_res && *plane_res > 0 && unit >= 2)
+    out->focal_plane_px_per_mm = *plane_res / mm_per_unit;
   out->exposure_s = ExifNumber(exif, "Exif.Photo.ExposureTime");
   if (out->exposure_s && *out->exposure_s <= 0) out->exposure_s.reset();
   ReadCaptureTime(exif, out);
@@ -153,7 +155,8 @@ bool DecodeDjiMakerNote(const std::vector<uint8_t>& note, PhotoMetadata* out) {
       value[tag] = f;
       have[tag] = true;
     }
-    if (have[3] && have[4] && have[5]) out->speed_m_s = Eigen::Vector3d(value[3], value[4], value[5]);
+    if (have[3] && have[4] && have[5])
+      out->speed_m_s = Eigen::Vector3d(value[3], value[4], value[5]);
     if (have[6] && have[7] && have[8]) out->flight = AttitudeDeg{value[8], value[6], value[7]};
     if (have[9] && have[10] && have[11]) out->gimbal = AttitudeDeg{value[11], value[9], value[10]};
     return out->speed_m_s || out->flight || out->gimbal;
@@ -172,11 +175,11 @@ void ReadDjiMakerNote(const Exiv2::ExifData& exif, PhotoMetadata* out) {
 // drone-dji values, by tag name, whatever prefix the file bound the namespace to.
 void ReadDjiXmp(const Exiv2::XmpData& xmp, PhotoMetadata* out) {
   std::optional<double> v[14];
-  static const char* kNames[14] = {
-      "RelativeAltitude", "AbsoluteAltitude", "GimbalRollDegree", "GimbalPitchDegree",
-      "GimbalYawDegree",  "FlightRollDegree", "FlightPitchDegree", "FlightYawDegree",
-      "FlightXSpeed",     "FlightYSpeed",     "FlightZSpeed",      "CalibratedFocalLength",
-      "GpsLatitude",      "GpsLongitude"};
+  static const char* kNames[14] = {"RelativeAltitude",  "AbsoluteAltitude", "GimbalRollDegree",
+                                   "GimbalPitchDegree", "GimbalYawDegree",  "FlightRollDegree",
+                                   "FlightPitchDegree", "FlightYawDegree",  "FlightXSpeed",
+                                   "FlightYSpeed",      "FlightZSpeed",     "CalibratedFocalLength",
+                                   "GpsLatitude",       "GpsLongitude"};
   bool any = false;
   for (const Exiv2::Xmpdatum& d : xmp) {
     std::string ns;

@@ -56,7 +56,7 @@ struct PhotoMetadata {
   // Aircraft velocity, m/s: x north, y east, z vertical as written (DJI documents the sign of
   // neither; shutterlab uses only the horizontal part).
   std::optional<Eigen::Vector3d> speed_m_s;
-  std::string flight_state_source;  // "XMP drone-dji", "DJI maker note", or empty
+  std::string flight_state_source;                    // "XMP drone-dji", "DJI maker note", or empty
   std::optional<double> latitude_deg, longitude_deg;  // EXIF GPS, when written and not 0,0
 };
 

@@ -51,11 +51,24 @@ std::optional<int> ParseOffset(std::string_view text) {
 struct LeapStep {
   int year, month;
 };
-constexpr std::array<LeapStep, 18> kLeapSteps{{{1981, 7}, {1982, 7}, {1983, 7}, {1985, 7},
-                                               {1988, 1}, {1990, 1}, {1991, 1}, {1992, 7},
-                                               {1993, 7}, {1994, 7}, {1996, 1}, {1997, 7},
-                                               {1999, 1}, {2006, 1}, {2009, 1}, {2012, 7},
-                                               {2015, 7}, {2017, 1}}};
+constexpr std::array<LeapStep, 18> kLeapSteps{{{1981, 7},
+                                               {1982, 7},
+                                               {1983, 7},
+                                               {1985, 7},
+                                               {1988, 1},
+                                               {1990, 1},
+                                               {1991, 1},
+                                               {1992, 7},
+                                               {1993, 7},
+                                               {1994, 7},
+                                               {1996, 1},
+                                               {1997, 7},
+                                               {1999, 1},
+                                               {2006, 1},
+                                               {2009, 1},
+                                               {2012, 7},
+                                               {2015, 7},
+                                               {2017, 1}}};
 
 int64_t LeapStepUnixS(const LeapStep& step) {
   return DaysFromCivil(step.year, static_cast<unsigned>(step.month), 1) * kSecondsPerDay;
@@ -112,8 +125,7 @@ std::optional<ClockFace> ParseExifDateTime(std::string_view date_time, std::stri
                  kNsPerSecond;
   const std::string_view fraction = TrimSpaces(sub_second);
   if (!fraction.empty()) {
-    if (fraction.size() > 9 ||
-        fraction.find_first_not_of("0123456789") != std::string_view::npos) {
+    if (fraction.size() > 9 || fraction.find_first_not_of("0123456789") != std::string_view::npos) {
       return fail("sub-second time '" + std::string(sub_second) + "' is not digits");
     }
     int64_t ns = 0;
@@ -157,8 +169,7 @@ std::string UtcText(int64_t t_ns) {
 std::string UtcOffsetText(int offset_s) {
   char text[16];
   const int a = std::abs(offset_s);
-  std::snprintf(text, sizeof text, "%c%02d:%02d", offset_s < 0 ? '-' : '+', a / 3600,
-                a / 60 % 60);
+  std::snprintf(text, sizeof text, "%c%02d:%02d", offset_s < 0 ? '-' : '+', a / 3600, a / 60 % 60);
   return text;
 }
 

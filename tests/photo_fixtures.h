@@ -126,8 +126,12 @@ inline std::string JpegWithMetadata(const FixturePhoto& p) {
   jpeg += Segment(0xE1, std::string("Exif\0\0", 6) + tiff);
   if (!p.xmp.empty())
     jpeg += Segment(0xE1, std::string("http://ns.adobe.com/xap/1.0/\0", 29) + p.xmp);
-  std::string sof = {8, static_cast<char>(p.height >> 8), static_cast<char>(p.height & 0xff),
-                     static_cast<char>(p.width >> 8), static_cast<char>(p.width & 0xff), 3};
+  std::string sof = {8,
+                     static_cast<char>(p.height >> 8),
+                     static_cast<char>(p.height & 0xff),
+                     static_cast<char>(p.width >> 8),
+                     static_cast<char>(p.width & 0xff),
+                     3};
   for (char id = 1; id <= 3; ++id) sof += std::string{id, 0x11, 0};
   jpeg += Segment(0xC0, sof);
   jpeg += "\xff\xd9";
@@ -148,7 +152,8 @@ inline std::string DjiXmp(const std::map<std::string, std::string>& values, bool
       prefix + "=\"http://www.dji.com/drone-dji/1.0/\"\n    tiff:Make=\"XMP-Make\"";
   if (as_elements) {
     x += ">\n";
-    for (const auto& [k, v] : values) x += "   <" + prefix + ":" + k + ">" + v + "</" + prefix + ":" + k + ">\n";
+    for (const auto& [k, v] : values)
+      x += "   <" + prefix + ":" + k + ">" + v + "</" + prefix + ":" + k + ">\n";
     x += "  </rdf:Description>\n";
   } else {
     for (const auto& [k, v] : values) x += "\n    " + prefix + ":" + k + "=\"" + v + "\"";

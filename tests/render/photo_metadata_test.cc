@@ -138,8 +138,7 @@ TEST(PhotoMetadata, BlankDateIsAProblemNotAnError) {
   p.date_time_original = "    :  :     :  :  ";
   const PhotoMetadata m = ReadPhotoMetadata(WritePhoto(dir, "blank.jpg", p));
   EXPECT_FALSE(m.capture_time);
-  EXPECT_NE(m.capture_time_problem.find("YYYY:MM:DD"), std::string::npos)
-      << m.capture_time_problem;
+  EXPECT_NE(m.capture_time_problem.find("YYYY:MM:DD"), std::string::npos) << m.capture_time_problem;
 }
 
 TEST(PhotoMetadata, NotAnImageIsAnIoErrorNamingThePath) {
