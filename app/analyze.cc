@@ -1,14 +1,19 @@
 // `shutterlab analyze LOG`: per-image rolling-shutter distortion from a real flight log, with the
 // flight table for the camera's readout and a verdict (estimate/analyze.h).
+// `shutterlab analyze --photos DIR [LOG]`: the same for a folder of photos, read with their
+// metadata (render/photo_set.h, estimate/paper/photo_analysis.h).
 
 #include "estimate/paper/analyze.h"
 
 #include "app/command.h"
 #include "app/trace_options.h"
 #include "estimate/paper/flight.h"
+#include "estimate/paper/photo_analysis.h"
 #include "estimate/report/analysis_json.h"
 #include "estimate/report/analyze_report.h"
+#include "estimate/report/photo_json.h"
 #include "render/image_io.h"
+#include "render/photo_set.h"
 #include "render/pictures.h"
 #include "sim/check.h"
 #include "sim/logs/flight_log_io.h"
@@ -43,8 +48,11 @@ struct AnalyzeCommand {
   double noise_allowance_arcsec = 20.0;
   std::string out_dir;
   std::string scene_path;
+  std::string photos_dir;
   bool json = false;
   bool altitude_given = false;
+  bool readout_given = false;
+  bool focal_given = false;
 };
 
 RigModel RigFromFlags(const AnalyzeCommand& command) {
@@ -68,7 +76,55 @@ RigModel RigFromFlags(const AnalyzeCommand& command) {
   return rig;
 }
 
+// What the user gave that wins over the photos' own values: --camera's focal length and readout,
+// --readout, --focal-px and --altitude (the flags over the camera file).
+PhotoSetOptions PhotoOptionsFromFlags(const AnalyzeCommand& command) {
+  PhotoSetOptions options;
+  if (!command.camera_path.empty()) {
+    const RigModel rig = ReadRigModel(command.camera_path);
+    options.readout_s = rig.shutter.readout_s;
+    options.readout_origin = ReadoutOrigin::kCameraFile;
+    options.readout_text = "camera.json " + command.camera_path;
+    options.focal_px = 0.5 * (rig.camera.fx + rig.camera.fy);
+    options.focal_text = "camera.json " + command.camera_path;
+  }
+  if (command.readout_given) {
+    options.readout_s = ParseDurationS(command.readout);
+    options.readout_origin = ReadoutOrigin::kUser;
+    options.readout_text = "--readout " + command.readout;
+  }
+  if (command.focal_given) {
+    options.focal_px = command.focal_px;
+    options.focal_text = "--focal-px";
+  }
+  if (command.altitude_given) options.altitude_m = command.altitude_m;
+  return options;
+}
+
+void RunPhotos(const AnalyzeCommand& command) {
+  SHUTTERLAB_CHECK(command.log_path.empty())
+      << "analyze --photos with a LOG is not available yet: give the photos alone";
+  PhotoSetOptions read = PhotoOptionsFromFlags(command);
+  read.Check();
+  PhotoAnalysisOptions options;
+  options.limits_m.clear();
+  for (const std::string& text : command.limits) options.limits_m.push_back(ParseLengthM(text));
+  options.Check();
+  Progress progress("photos", 1000);
+  read.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
+  const PhotoSet set = ReadPhotoSet(command.photos_dir, read);
+  const PhotoAnalysis analysis = AnalyzePhotos(set, options);
+  if (!command.out_dir.empty()) WritePhotoOutputs(command.out_dir, set, analysis);
+  if (command.json) {
+    std::cout << PhotoAnalysisToJson(set, analysis).dump(2) << "\n";
+  } else {
+    std::cout << PhotoAnalysisReport(set, analysis);
+  }
+}
+
 void Run(const AnalyzeCommand& command) {
+  if (!command.photos_dir.empty()) return RunPhotos(command);
+  SHUTTERLAB_CHECK(!command.log_path.empty()) << "give a LOG, or --photos DIR";
   AnalyzeOptions options;
   if (!command.camera_path.empty()) {
     options.rig = ReadRigModel(command.camera_path);
@@ -129,9 +185,11 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
                                  "per-image rolling-shutter distortion from a flight log (ULog, "
                                  "DataFlash, blackbox, gyro.csv, any CSV by --columns)");
   auto command = std::make_shared<AnalyzeCommand>();
-  cmd->add_option("LOG", command->log_path, "flight or gyro log")
-      ->required()
+  cmd->add_option("LOG", command->log_path, "flight or gyro log (optional with --photos)")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--photos", command->photos_dir,
+                  "a folder of photos (or one photo): per-photo distortion from their metadata; "
+                  "without LOG the translation part from the recorded flight speed");
   cmd->add_option("--format", command->format,
                   "auto, ulog, dataflash, blackbox, gyro.csv, gcsv, raw (columns: set by "
                   "--columns)")
@@ -144,16 +202,19 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
   command->column_flags.Add(cmd);
   cmd->add_option("--camera", command->camera_path, "camera.json (docs/FORMATS.md rig/1)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--readout", command->readout,
-                  "rolling-shutter readout without --camera (s, ms, us)")
-      ->capture_default_str();
+  auto* readout = cmd->add_option("--readout", command->readout,
+                                  "rolling-shutter readout without --camera (s, ms, us); with "
+                                  "--photos it overrides the readout table")
+                      ->capture_default_str();
   auto* altitude =
       cmd->add_option("--altitude", command->altitude_m,
                       "height above flat ground, m (overrides camera.json; default: the log's "
                       "altitude above ground when it has one, else 50)")
           ->capture_default_str();
-  cmd->add_option("--focal-px", command->focal_px, "focal length without --camera, pixels")
-      ->capture_default_str();
+  auto* focal = cmd->add_option("--focal-px", command->focal_px,
+                                "focal length without --camera, pixels (with --photos: overrides "
+                                "the photos' own)")
+                    ->capture_default_str();
   cmd->add_option("--size", command->size, "image size WxH without --camera")
       ->capture_default_str();
   cmd->add_option("--triggers", command->triggers_path,
@@ -171,13 +232,16 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
                   "flight table: added to each threshold for the gyro's own noise, arcsec")
       ->capture_default_str();
   cmd->add_option("--out", command->out_dir,
-                  "write DIR/images.csv, DIR/exclude.txt and DIR/report.html");
+                  "write DIR/images.csv, DIR/exclude.txt and DIR/report.html (with --photos: "
+                  "DIR/photos.csv, exclude.txt, image_list.txt, colmap_image_list.txt)");
   cmd->add_option("--scene", command->scene_path,
                   "nadir image for the report's worst-image pictures (with --out)")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--json", command->json, "print JSON (docs/FORMATS.md `analyze`)");
-  return std::function<void()>([command, altitude] {
+  return std::function<void()>([command, altitude, readout, focal] {
     command->altitude_given = altitude->count() > 0;
+    command->readout_given = readout->count() > 0;
+    command->focal_given = focal->count() > 0;
     Run(*command);
   });
 });

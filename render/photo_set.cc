@@ -43,8 +43,8 @@ void ChooseFocal(const PhotoSetOptions& options, PhotoRecord* r) {
     r->focal_source = "XMP drone-dji:CalibratedFocalLength";
   } else if (m.focal_length_35mm && m.width > 0 && m.height > 0) {
     r->focal_px = FocalPxFrom35mm(*m.focal_length_35mm, m.width, m.height);
-    r->focal_source = FormatNumber("EXIF FocalLengthIn35mmFilm %g mm on the diagonal",
-                                   *m.focal_length_35mm);
+    r->focal_source =
+        FormatNumber("EXIF FocalLengthIn35mmFilm %g mm on the diagonal", *m.focal_length_35mm);
   } else if (m.focal_length_mm && m.focal_plane_px_per_mm) {
     r->focal_px = *m.focal_length_mm * *m.focal_plane_px_per_mm * FileScale(m);
     r->focal_source = "EXIF FocalLength x FocalPlaneXResolution";

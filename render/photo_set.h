@@ -78,7 +78,7 @@ struct PhotoRecord {
 };
 
 struct PhotoSet {
-  std::string source;  // the folder (or the one file) read
+  std::string source;               // the folder (or the one file) read
   std::vector<PhotoRecord> photos;  // by file name
 };
 

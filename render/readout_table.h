@@ -3,10 +3,10 @@
 // user (--readout), not camera.json, not a lens profile, not the file.
 //
 // Source: OpenDroneMap's readout database, `RS_DATABASE` in opendm/rollingshutter.py of
-// github.com/OpenDroneMap/ODM at commit 32cfaacfe15ae0a037da25c8e544b92ddf875342 (last change to the
-// table 5f05b988, 2026-03-25). ODM is AGPL-3.0; only the numbers (facts: camera -> readout in ms,
-// and the megapixel ranges of the cameras whose readout depends on the photo mode) are taken over,
-// typed in again; no code was copied. The values were measured by ODM's community with
+// github.com/OpenDroneMap/ODM at commit 32cfaacfe15ae0a037da25c8e544b92ddf875342 (last change to
+// the table 5f05b988, 2026-03-25). ODM is AGPL-3.0; only the numbers (facts: camera -> readout in
+// ms, and the megapixel ranges of the cameras whose readout depends on the photo mode) are taken
+// over, typed in again; no code was copied. The values were measured by ODM's community with
 // OpenDroneMap/RSCalibration (a filmed blinking LED) and are unverified: priors, not ground truth.
 // Every output that used one says so (ReadoutLookup::Citation).
 

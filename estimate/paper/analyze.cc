@@ -137,10 +137,6 @@ std::vector<double> SharesPercent(const std::vector<ImageResult>& images, size_t
   return shares;
 }
 
-std::string LengthText(double m) {
-  return m < 1.0 ? FormatNumber("%.3g cm", m * 100.0) : FormatNumber("%.3g m", m);
-}
-
 std::string SharesText(const std::vector<double>& shares, const std::vector<double>& limits_m) {
   std::string text;
   for (size_t l = 0; l < shares.size(); ++l) {
@@ -496,6 +492,10 @@ std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path) {
   }
   if (triggers.empty()) throw IoError(IoMessage(path, 0, "no trigger times in the file"));
   return triggers;
+}
+
+std::string LengthText(double m) {
+  return m < 1.0 ? FormatNumber("%.3g cm", m * 100.0) : FormatNumber("%.3g m", m);
 }
 
 std::string LimitKey(double limit_m) { return FormatNumber("%.12g", limit_m); }

@@ -168,5 +168,7 @@ void WriteAnalyzeOutputs(const std::string& dir, const AnalyzeResult& result);
 
 // The key used for a limit in JSON and CSV: shortest round-trip decimal ("0.05", "0.1").
 std::string LimitKey(double limit_m);
+// A length for a person, three digits: "5 cm", "12.5 cm", "1.5 m".
+std::string LengthText(double length_m);
 
 }  // namespace shutterlab
