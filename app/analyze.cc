@@ -18,11 +18,13 @@
 #include "sim/check.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/logs/gyro_io.h"
+#include "sim/logs/trigger_file.h"
 #include "sim/units.h"
 
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -146,7 +148,11 @@ void Run(const AnalyzeCommand& command) {
   command.column_flags.Apply(&read);
   read.Check();
   options.Check();  // before the (possibly long) read
-  if (!command.triggers_path.empty()) options.triggers = ReadTriggersCsv(command.triggers_path);
+  const std::optional<TriggerFile> triggers =
+      command.triggers_path.empty()
+          ? std::nullopt
+          : std::optional<TriggerFile>(ReadTriggerFile(command.triggers_path));
+  if (triggers) PrintLogWarnings(command.triggers_path, triggers->warnings);
   SHUTTERLAB_CHECK(command.scene_path.empty() || !command.out_dir.empty())
       << "--scene is for the report: give --out DIR too";
   AnalyzeReportOptions report;
@@ -161,6 +167,12 @@ void Run(const AnalyzeCommand& command) {
   options.allan = !command.out_dir.empty();
   const FlightLog log = ReadFlightLog(command.log_path, read);
   PrintLogWarnings(command.log_path, log.warnings);
+  if (triggers) {
+    options.triggers = TriggersOnLogClock(*triggers, log, command.triggers_path);
+    options.triggers_source = "trigger file " +
+                              std::filesystem::path(command.triggers_path).filename().string() +
+                              ": " + triggers->source;
+  }
   Progress progress("analyze", 1000);
   options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
   AnalyzeResult result;
@@ -218,7 +230,10 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
   cmd->add_option("--size", command->size, "image size WxH without --camera")
       ->capture_default_str();
   cmd->add_option("--triggers", command->triggers_path,
-                  "CSV 'image,t' or 't': trigger times in seconds on the log clock")
+                  "when the photos were taken, by content: DJI/Autel .MRK (GPS time, placed "
+                  "through the log's GPS fixes), a log's camera events (ULog, DataFlash CAM/TRIG), "
+                  "or CSV 'image,t' / 't' (s on the log clock; a header may name t_ms, t_us, "
+                  "timestamp, utc_usec or utc instead)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--every", command->every,
                   "simulated triggers at this cadence (e.g. 2s); with --triggers or --every the "

@@ -74,6 +74,9 @@ seed column_csv "$data"/rs/phone_gyro_video_20200109_145447/gyro.txt
 printf '\x01t;gx;gy;gz\n0;1;2;3\n0.001;1;2;3\n' >"$build/corpus/column_csv/semicolon.csv"
 seed frames_csv
 printf 'frame,t,image,ref\n0,0.0,images/frame_000000.png,\n1,0.04,images/frame_000001.png,0\n' >"$build/corpus/frames_csv/frames.csv"
+seed trigger_file "$data"/incoming/autel_mrk_helenenschacht/*.mrk "$data"/images/siyi_zr10/image_metadata.csv
+printf 'image,t\nDJI_0001.JPG,12.5\nDJI_0002.JPG,14.25\n' >"$build/corpus/trigger_file/named.csv"
+printf '1\t396015.412566\t[2110]\t-17,N\t11,E\t196,V\t22.5685,Lat\t113.9428,Lon\t-1.473,Ellh\t0.01, 0.01, 0.02\t50,Q\n' >"$build/corpus/trigger_file/dji.MRK"
 
 mkdir -p "$build/artifacts"
 failed=0

@@ -115,7 +115,7 @@ std::optional<ClockFace> ParseExifDateTime(std::string_view date_time, std::stri
                 "' is not 'YYYY:MM:DD HH:MM:SS' (blank or unknown)");
   }
   if (*month < 1 || *month > 12 || *day < 1 || *day > 31 || *hour > 23 || *minute > 59 ||
-      *second > 60 || *year < 1900) {
+      *second > 60 || *year < 1900 || *year > 2200) {  // int64 ns spans 1677..2262
     return fail("date and time '" + std::string(date_time) + "' is out of range");
   }
   ClockFace face;

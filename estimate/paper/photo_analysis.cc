@@ -123,22 +123,23 @@ std::string CameraLines(const PhotoSet& set) {
   for (const PhotoRecord& r : set.photos) {
     if (!r.ok()) continue;
     const PhotoMetadata& m = r.metadata;
-    std::string line = "camera: " + (m.make.empty() ? std::string("(no make)") : m.make) + " " +
-                       (m.model.empty() ? std::string("(no model)") : m.model) + ", " +
-                       std::to_string(m.width) + "x" + std::to_string(m.height) + ", f " +
-                       (r.focal_px ? FormatNumber("%.0f px", *r.focal_px) + " (" + r.focal_source + ")"
-                                   : std::string("unknown")) +
-                       "\n  readout " +
-                       (r.readout_s ? FormatNumber("%g ms", *r.readout_s * 1e3) : "unknown") +
-                       " (" + r.readout_source + ")";
+    std::string line =
+        "camera: " + (m.make.empty() ? std::string("(no make)") : m.make) + " " +
+        (m.model.empty() ? std::string("(no model)") : m.model) + ", " + std::to_string(m.width) +
+        "x" + std::to_string(m.height) + ", f " +
+        (r.focal_px ? FormatNumber("%.0f px", *r.focal_px) + " (" + r.focal_source + ")"
+                    : std::string("unknown")) +
+        "\n  readout " + (r.readout_s ? FormatNumber("%g ms", *r.readout_s * 1e3) : "unknown") +
+        " (" + r.readout_source + ")";
     if (lines[line]++ == 0) order.push_back(line);
   }
   std::string text;
   for (const std::string& line : order) {
     const size_t n = lines[line];
-    text += line +
-            (lines.size() > 1 ? "  [" + std::to_string(n) + (n == 1 ? " photo]" : " photos]") : "") +
-            "\n";
+    text +=
+        line +
+        (lines.size() > 1 ? "  [" + std::to_string(n) + (n == 1 ? " photo]" : " photos]") : "") +
+        "\n";
   }
   return text;
 }
@@ -146,7 +147,8 @@ std::string CameraLines(const PhotoSet& set) {
 std::string FlagText(const PhotoAnalysis& a, const PhotoResult& p) {
   std::string text;
   for (size_t l = 0; l < p.flagged.size(); ++l) {
-    if (p.flagged[l].value_or(false)) text += (text.empty() ? ">" : ",>") + LengthText(a.limits_m[l]);
+    if (p.flagged[l].value_or(false))
+      text += (text.empty() ? ">" : ",>") + LengthText(a.limits_m[l]);
   }
   return text;
 }
@@ -221,7 +223,8 @@ std::string PhotoAnalysisReport(const PhotoSet& set, const PhotoAnalysis& a) {
   if (a.with_log) {
     out << "placement: " << a.placement_method << "; " << a.placed << " of " << a.photos.size()
         << " placed";
-    if (a.clock_offset_s) out << FormatNumber(", camera clock - log time base %.3f s", *a.clock_offset_s);
+    if (a.clock_offset_s)
+      out << FormatNumber(", camera clock - log time base %.3f s", *a.clock_offset_s);
     if (a.residual_rms_s) {
       out << FormatNumber(", residual rms %.3f s", *a.residual_rms_s)
           << FormatNumber(" (max %.3f s)", *a.residual_max_s);
@@ -236,8 +239,8 @@ std::string PhotoAnalysisReport(const PhotoSet& set, const PhotoAnalysis& a) {
                   "flagged");
   } else {
     std::snprintf(line, sizeof line, "%-22s %-19s %7s %7s %9s %8s %8s %13s %7s  %s\n", "photo",
-                  "capture (camera)", "v m/s", "alt m", "readout", "D px", "D cm",
-                  "along/across", "blur px", "flagged");
+                  "capture (camera)", "v m/s", "alt m", "readout", "D px", "D cm", "along/across",
+                  "blur px", "flagged");
   }
   out << line;
   for (size_t i = 0; i < a.photos.size(); ++i) {
@@ -248,10 +251,10 @@ std::string PhotoAnalysisReport(const PhotoSet& set, const PhotoAnalysis& a) {
       out << line;
       continue;
     }
-    const std::string readout =
-        r.readout_s ? FormatNumber("%g ms", *r.readout_s * 1e3) +
-                          (r.readout_origin == ReadoutOrigin::kTable ? "*" : "")
-                    : "-";
+    const std::string readout = r.readout_s
+                                    ? FormatNumber("%g ms", *r.readout_s * 1e3) +
+                                          (r.readout_origin == ReadoutOrigin::kTable ? "*" : "")
+                                    : "-";
     const std::string parts = p.along_readout_px ? FormatNumber("%+.2f", *p.along_readout_px) +
                                                        FormatNumber("/%+.2f", *p.across_readout_px)
                                                  : "-";

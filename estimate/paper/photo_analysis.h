@@ -41,8 +41,8 @@ struct PhotoAnalysisOptions {
 
 // Where a photo sits on a log's clock (filled by estimate/paper/photo_clock.h).
 struct PhotoPlacement {
-  std::optional<int64_t> t_ns;  // exposure of row 0 on the log's clock; empty: not placed
-  std::string method;           // e.g. "trigger file (MRK) #123", "log camera event #4"
+  std::optional<int64_t> t_ns;       // exposure of row 0 on the log's clock; empty: not placed
+  std::string method;                // e.g. "trigger file (MRK) #123", "log camera event #4"
   std::optional<double> residual_s;  // capture time against the event, after the clock offset
   std::string problem;               // why it was not placed
 };

@@ -19,8 +19,9 @@ nlohmann::ordered_json Attitude(const std::optional<AttitudeDeg>& a) {
 
 nlohmann::ordered_json CaptureTime(const PhotoMetadata& m) {
   if (!m.capture_time) {
-    return m.capture_time_problem.empty() ? nlohmann::ordered_json(nullptr)
-                                          : nlohmann::ordered_json{{"problem", m.capture_time_problem}};
+    return m.capture_time_problem.empty()
+               ? nlohmann::ordered_json(nullptr)
+               : nlohmann::ordered_json{{"problem", m.capture_time_problem}};
   }
   const ClockFace& c = *m.capture_time;
   nlohmann::ordered_json j;
@@ -28,7 +29,8 @@ nlohmann::ordered_json CaptureTime(const PhotoMetadata& m) {
   j["camera_clock"] = UtcText(c.face_ns);
   j["utc_offset"] = c.utc_offset_s ? nlohmann::ordered_json(UtcOffsetText(*c.utc_offset_s))
                                    : nlohmann::ordered_json(nullptr);
-  j["utc"] = c.UtcNs() ? nlohmann::ordered_json(UtcText(*c.UtcNs())) : nlohmann::ordered_json(nullptr);
+  j["utc"] =
+      c.UtcNs() ? nlohmann::ordered_json(UtcText(*c.UtcNs())) : nlohmann::ordered_json(nullptr);
   j["resolution_s"] = c.resolution_s;
   return j;
 }
@@ -58,9 +60,9 @@ nlohmann::ordered_json PhotoJson(const PhotoRecord& r, const PhotoResult& p,
   j["altitude_source"] = r.altitude_source;
   j["speed_m_s"] = Optional(r.ground_speed_m_s);
   j["course_deg"] = Optional(r.course_deg);
-  j["velocity_m_s"] = m.speed_m_s ? nlohmann::ordered_json{m.speed_m_s->x(), m.speed_m_s->y(),
-                                                                 m.speed_m_s->z()}
-                                        : nlohmann::ordered_json(nullptr);
+  j["velocity_m_s"] =
+      m.speed_m_s ? nlohmann::ordered_json{m.speed_m_s->x(), m.speed_m_s->y(), m.speed_m_s->z()}
+                  : nlohmann::ordered_json(nullptr);
   j["speed_source"] = r.speed_source;
   j["exposure_s"] = Optional(m.exposure_s);
   j["gimbal_deg"] = Attitude(m.gimbal);
@@ -83,9 +85,9 @@ nlohmann::ordered_json PhotoJson(const PhotoRecord& r, const PhotoResult& p,
   }
   nlohmann::ordered_json flagged = nlohmann::ordered_json::object();
   for (size_t l = 0; l < a.limits_m.size(); ++l) {
-    flagged[LimitKey(a.limits_m[l])] =
-        l < p.flagged.size() && p.flagged[l] ? nlohmann::ordered_json(*p.flagged[l])
-                                             : nlohmann::ordered_json(nullptr);
+    flagged[LimitKey(a.limits_m[l])] = l < p.flagged.size() && p.flagged[l]
+                                           ? nlohmann::ordered_json(*p.flagged[l])
+                                           : nlohmann::ordered_json(nullptr);
   }
   j["flagged"] = flagged;
   j["missing"] = r.missing;
@@ -109,14 +111,12 @@ nlohmann::ordered_json PhotoAnalysisToJson(const PhotoSet& set, const PhotoAnaly
                       {"residual_max_s", Optional(a.residual_max_s)}};
   }
   nlohmann::ordered_json photos = nlohmann::ordered_json::array();
-  for (size_t i = 0; i < a.photos.size(); ++i) photos.push_back(PhotoJson(set.photos[i], a.photos[i], a));
+  for (size_t i = 0; i < a.photos.size(); ++i)
+    photos.push_back(PhotoJson(set.photos[i], a.photos[i], a));
   j["photos"] = std::move(photos);
-  j["summary"] = {{"files", a.photos.size()},
-                  {"read", a.read},
-                  {"predicted", a.predicted},
-                  {"readout_from_table", a.readout_from_table},
-                  {"flagged", a.flagged_count},
-                  {"line", a.verdict}};
+  j["summary"] = {{"files", a.photos.size()},   {"read", a.read},
+                  {"predicted", a.predicted},   {"readout_from_table", a.readout_from_table},
+                  {"flagged", a.flagged_count}, {"line", a.verdict}};
   return j;
 }
 

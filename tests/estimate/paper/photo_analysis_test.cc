@@ -58,14 +58,14 @@ TEST(AnalyzePhotos, TranslationOnlyMatchesTheClosedForm) {
 TEST(AnalyzePhotos, SplitsTheMotionAlongAndAcrossTheReadout) {
   // Top of the photo facing east, flying north: the photo's right faces south, so the ground
   // moves right across the readout. Facing south, flying north: against the readout.
-  const PhotoAnalysis a = AnalyzePhotos(
-      Set({Photo("east.jpg", 10.0, 0.0, 90.0), Photo("south.jpg", 10.0, 0.0, 180.0),
-           Photo("diag.jpg", 3.0, 4.0, 0.0)}),
-      {});
+  const PhotoAnalysis a =
+      AnalyzePhotos(Set({Photo("east.jpg", 10.0, 0.0, 90.0), Photo("south.jpg", 10.0, 0.0, 180.0),
+                         Photo("diag.jpg", 3.0, 4.0, 0.0)}),
+                    {});
   EXPECT_NEAR(*a.photos[0].along_readout_px, 0.0, kTol);
   EXPECT_NEAR(*a.photos[0].across_readout_px, 4.0, kTol);
   EXPECT_NEAR(*a.photos[1].along_readout_px, -4.0, kTol);
-  EXPECT_NEAR(*a.photos[2].along_readout_px, 3.0 * 0.4, kTol);   // v . north * T f / h
+  EXPECT_NEAR(*a.photos[2].along_readout_px, 3.0 * 0.4, kTol);    // v . north * T f / h
   EXPECT_NEAR(*a.photos[2].across_readout_px, -4.0 * 0.4, kTol);  // east is the photo's right
   EXPECT_NEAR(*a.photos[2].d_translation_px, 2.0, kTol);          // |(3, 4)| * 0.4
 }
@@ -130,8 +130,8 @@ TEST(WritePhotoOutputs, ExcludesFlaggedAndUnreadableAndListsTheRest) {
   broken.path = "/photos/broken.jpg";
   broken.name = "broken.jpg";
   broken.error = "unreadable";
-  const PhotoSet set = Set({Photo("fast.jpg", 10.0, 0.0, 0.0), Photo("slow.jpg", 1.0, 0.0, 0.0),
-                            broken});
+  const PhotoSet set =
+      Set({Photo("fast.jpg", 10.0, 0.0, 0.0), Photo("slow.jpg", 1.0, 0.0, 0.0), broken});
   const PhotoAnalysis a = AnalyzePhotos(set, {});
   WritePhotoOutputs(dir / "out", set, a);
   EXPECT_EQ(ReadFileToString(dir / "out/exclude.txt"), "fast.jpg\nbroken.jpg\n");
