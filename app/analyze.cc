@@ -9,6 +9,7 @@
 #include "app/trace_options.h"
 #include "estimate/paper/flight.h"
 #include "estimate/paper/photo_analysis.h"
+#include "estimate/paper/photo_flight.h"
 #include "estimate/report/analysis_json.h"
 #include "estimate/report/analyze_report.h"
 #include "estimate/report/photo_json.h"
@@ -16,10 +17,13 @@
 #include "render/photo_set.h"
 #include "render/pictures.h"
 #include "sim/check.h"
+#include "sim/civil_time.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/logs/trigger_file.h"
 #include "sim/units.h"
+
+#include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <iostream>
@@ -51,6 +55,7 @@ struct AnalyzeCommand {
   std::string out_dir;
   std::string scene_path;
   std::string photos_dir;
+  std::string photo_utc_offset;
   bool json = false;
   bool altitude_given = false;
   bool readout_given = false;
@@ -103,30 +108,8 @@ PhotoSetOptions PhotoOptionsFromFlags(const AnalyzeCommand& command) {
   return options;
 }
 
-void RunPhotos(const AnalyzeCommand& command) {
-  SHUTTERLAB_CHECK(command.log_path.empty())
-      << "analyze --photos with a LOG is not available yet: give the photos alone";
-  PhotoSetOptions read = PhotoOptionsFromFlags(command);
-  read.Check();
-  PhotoAnalysisOptions options;
-  options.limits_m.clear();
-  for (const std::string& text : command.limits) options.limits_m.push_back(ParseLengthM(text));
-  options.Check();
-  Progress progress("photos", 1000);
-  read.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
-  const PhotoSet set = ReadPhotoSet(command.photos_dir, read);
-  const PhotoAnalysis analysis = AnalyzePhotos(set, options);
-  if (!command.out_dir.empty()) WritePhotoOutputs(command.out_dir, set, analysis);
-  if (command.json) {
-    std::cout << PhotoAnalysisToJson(set, analysis).dump(2) << "\n";
-  } else {
-    std::cout << PhotoAnalysisReport(set, analysis);
-  }
-}
-
-void Run(const AnalyzeCommand& command) {
-  if (!command.photos_dir.empty()) return RunPhotos(command);
-  SHUTTERLAB_CHECK(!command.log_path.empty()) << "give a LOG, or --photos DIR";
+// analyze's options from the flags; the triggers come later (they need the log).
+AnalyzeOptions AnalyzeOptionsFromFlags(const AnalyzeCommand& command) {
   AnalyzeOptions options;
   if (!command.camera_path.empty()) {
     options.rig = ReadRigModel(command.camera_path);
@@ -141,18 +124,31 @@ void Run(const AnalyzeCommand& command) {
   options.use_log_altitude = !command.altitude_given && command.camera_path.empty();
   if (!command.every.empty()) options.every_s = ParseDurationS(command.every);
   options.trigger_latency_s = ParseDurationS(command.latency);
+  // The report shades the flagged windows and draws their histograms from the flight series, and
+  // plots the Allan deviation.
+  options.flight_series = !command.out_dir.empty();
+  options.allan = !command.out_dir.empty();
+  return options;
+}
+
+FlightLogReadOptions ReadOptionsFromFlags(const AnalyzeCommand& command) {
   FlightLogReadOptions read;
   read.format = ParseLogFormat(command.format);
   read.log_index = command.log_index;
   read.raw.range_dps = command.range_dps;
   command.column_flags.Apply(&read);
   read.Check();
-  options.Check();  // before the (possibly long) read
-  const std::optional<TriggerFile> triggers =
-      command.triggers_path.empty()
-          ? std::nullopt
-          : std::optional<TriggerFile>(ReadTriggerFile(command.triggers_path));
-  if (triggers) PrintLogWarnings(command.triggers_path, triggers->warnings);
+  return read;
+}
+
+std::optional<TriggerFile> TriggersFromFlags(const AnalyzeCommand& command) {
+  if (command.triggers_path.empty()) return std::nullopt;
+  TriggerFile triggers = ReadTriggerFile(command.triggers_path);
+  PrintLogWarnings(command.triggers_path, triggers.warnings);
+  return triggers;
+}
+
+AnalyzeReportOptions ReportFromFlags(const AnalyzeCommand& command) {
   SHUTTERLAB_CHECK(command.scene_path.empty() || !command.out_dir.empty())
       << "--scene is for the report: give --out DIR too";
   AnalyzeReportOptions report;
@@ -161,12 +157,92 @@ void Run(const AnalyzeCommand& command) {
     report.scene = ToRgb8(ReadImage(command.scene_path));
     report.scene_name = std::filesystem::path(command.scene_path).filename().string();
   }
-  // The report shades the flagged windows and draws their histograms from the flight series, and
-  // plots the Allan deviation.
-  options.flight_series = !command.out_dir.empty();
-  options.allan = !command.out_dir.empty();
-  const FlightLog log = ReadFlightLog(command.log_path, read);
+  return report;
+}
+
+FlightLog ReadLog(const AnalyzeCommand& command, const FlightLogReadOptions& read) {
+  FlightLog log = ReadFlightLog(command.log_path, read);
   PrintLogWarnings(command.log_path, log.warnings);
+  return log;
+}
+
+// --photos DIR [LOG]: the photos alone (translation from their speed), or placed on the log.
+void RunPhotos(const AnalyzeCommand& command) {
+  PhotoSetOptions read = PhotoOptionsFromFlags(command);
+  read.Check();
+  PhotoFlightOptions options;
+  options.analyze = AnalyzeOptionsFromFlags(command);
+  options.photos.limits_m = options.analyze.limits_m;
+  options.rig_given = !command.camera_path.empty();
+  options.altitude_given = command.altitude_given;
+  options.readout_given = command.readout_given;
+  if (!command.photo_utc_offset.empty()) {
+    options.clock.camera_utc_offset_s = ParseUtcOffset(command.photo_utc_offset);
+    SHUTTERLAB_CHECK(options.clock.camera_utc_offset_s)
+        << "--photo-utc-offset must be +HH:MM or -HH:MM (got '" << command.photo_utc_offset << "')";
+  }
+  SHUTTERLAB_CHECK(command.every.empty())
+      << "--every is for a log alone: the photos are the triggers";
+  options.Check();
+  const std::optional<FlightLogReadOptions> log_read =
+      command.log_path.empty() ? std::nullopt
+                               : std::optional<FlightLogReadOptions>(ReadOptionsFromFlags(command));
+  const std::optional<TriggerFile> triggers = TriggersFromFlags(command);
+  SHUTTERLAB_CHECK(!triggers || log_read) << "--triggers places photos on a LOG: give the LOG too";
+  const AnalyzeReportOptions report = ReportFromFlags(command);
+  PhotoSet set;
+  {
+    Progress progress("photos", 1000);
+    read.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
+    set = ReadPhotoSet(command.photos_dir, read);
+  }
+  if (!log_read) {
+    const PhotoAnalysis analysis = AnalyzePhotos(set, options.photos);
+    if (!command.out_dir.empty()) WritePhotoOutputs(command.out_dir, set, analysis);
+    if (command.json) {
+      std::cout << PhotoAnalysisToJson(set, analysis).dump(2) << "\n";
+    } else {
+      std::cout << PhotoAnalysisReport(set, analysis);
+    }
+    return;
+  }
+  const FlightLog log = ReadLog(command, *log_read);
+  Progress progress("analyze", 1000);
+  options.analyze.progress = [&progress](double f) {
+    progress.Update(static_cast<size_t>(f * 1000));
+  };
+  PhotoFlightResult result;
+  try {
+    result = AnalyzePhotoFlight(set, log, triggers ? &*triggers : nullptr, options);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(command.log_path + ": " + e.what());
+  }
+  if (!command.out_dir.empty()) {
+    WriteAnalyzeOutputs(command.out_dir, result.log);
+    AnalyzeReportPage(options.analyze, result.log, report).Write(command.out_dir + "/report.html");
+    WritePhotoOutputs(command.out_dir, set, result.photos);  // its exclude.txt replaces analyze's
+  }
+  if (command.json) {
+    nlohmann::json json = AnalyzeToJson(result.log);
+    json["photos"] = PhotoAnalysisToJson(set, result.photos);
+    json["photos"]["camera_source"] = result.camera_source;
+    std::cout << json.dump(2) << "\n";
+  } else {
+    std::cout << AnalyzeReport(result.log) << "\ncamera analysed: " << result.camera_source
+              << "\n\n"
+              << PhotoAnalysisReport(set, result.photos);
+  }
+}
+
+void Run(const AnalyzeCommand& command) {
+  if (!command.photos_dir.empty()) return RunPhotos(command);
+  SHUTTERLAB_CHECK(!command.log_path.empty()) << "give a LOG, or --photos DIR";
+  AnalyzeOptions options = AnalyzeOptionsFromFlags(command);
+  const FlightLogReadOptions read = ReadOptionsFromFlags(command);
+  options.Check();  // before the (possibly long) read
+  const std::optional<TriggerFile> triggers = TriggersFromFlags(command);
+  const AnalyzeReportOptions report = ReportFromFlags(command);
+  const FlightLog log = ReadLog(command, read);
   if (triggers) {
     options.triggers = TriggersOnLogClock(*triggers, log, command.triggers_path);
     options.triggers_source = "trigger file " +
@@ -201,7 +277,12 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--photos", command->photos_dir,
                   "a folder of photos (or one photo): per-photo distortion from their metadata; "
-                  "without LOG the translation part from the recorded flight speed");
+                  "without LOG the translation part from the recorded flight speed, with LOG "
+                  "each photo placed on the log's clock (--triggers, the log's camera events, or "
+                  "the capture times through the log's GPS time)");
+  cmd->add_option("--photo-utc-offset", command->photo_utc_offset,
+                  "the photos' camera clock zone, e.g. +08:00 (else EXIF OffsetTimeOriginal, the "
+                  "offset fitted to the log's events, or the one zone that fits the log)");
   cmd->add_option("--format", command->format,
                   "auto, ulog, dataflash, blackbox, gyro.csv, gcsv, raw (columns: set by "
                   "--columns)")

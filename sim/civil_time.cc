@@ -34,7 +34,9 @@ std::string_view TrimSpaces(std::string_view s) {
   return s;
 }
 
-std::optional<int> ParseOffset(std::string_view text) {
+}  // namespace
+
+std::optional<int> ParseUtcOffset(std::string_view text) {
   if (text == "Z") return 0;
   size_t pos = 0;
   if (!Expect(text, &pos, "+-")) return std::nullopt;
@@ -45,6 +47,8 @@ std::optional<int> ParseOffset(std::string_view text) {
   if (!minutes || pos != text.size() || *hours > 14 || *minutes > 59) return std::nullopt;
   return sign * (*hours * 3600 + *minutes * 60);
 }
+
+namespace {
 
 // UTC instants (s since 1970) from which GPS - UTC took the next value: 1 from 1981-07-01, ...,
 // 18 from 2017-01-01 (IERS Bulletin C; the GPS epoch started at 0).
@@ -135,7 +139,7 @@ std::optional<ClockFace> ParseExifDateTime(std::string_view date_time, std::stri
   }
   const std::string_view zone = TrimSpaces(offset);
   if (!zone.empty()) {
-    face.utc_offset_s = ParseOffset(zone);
+    face.utc_offset_s = ParseUtcOffset(zone);
     if (!face.utc_offset_s)
       return fail("time offset '" + std::string(offset) + "' is not '+HH:MM'");
   }

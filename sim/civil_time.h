@@ -44,6 +44,9 @@ struct ClockFace {
 std::optional<ClockFace> ParseExifDateTime(std::string_view date_time, std::string_view sub_second,
                                            std::string_view offset, std::string* problem);
 
+// "+08:00", "-05:30", "Z" -> seconds east of UTC; nullopt when the text is not one.
+std::optional<int> ParseUtcOffset(std::string_view text);
+
 // "2024-07-16 09:41:37.250" (UTC, ms) for t_ns since 1970-01-01; "+08:00" style for an offset.
 std::string UtcText(int64_t t_ns);
 std::string UtcOffsetText(int offset_s);

@@ -261,7 +261,7 @@ std::vector<ImageTrigger> ChooseTriggers(const FlightLog& log, const AnalyzeOpti
     for (int64_t k = 0; k < count; ++k) {
       triggers.push_back({ImageName(static_cast<size_t>(k)), t0_ns + k * every_ns});
     }
-  } else if (triggers.empty() && !log.camera_events.empty()) {
+  } else if (triggers.empty() && options.log_events && !log.camera_events.empty()) {
     // A log may record each image twice (PX4 camera_trigger and camera_capture): use the most
     // frequent kind only.
     std::map<std::string, size_t> kinds;

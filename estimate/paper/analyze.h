@@ -63,6 +63,7 @@ struct AnalyzeOptions {
   std::vector<ImageTrigger> triggers;
   std::string triggers_source = "triggers";  // what `triggers` are, for trigger_source
   double every_s = 0.0;
+  bool log_events = true;  // false: never the log's camera events (`triggers` are all there is)
   double trigger_latency_s = 0.0;  // trigger to exposure of row 0, s (may be negative)
   // Use the log's altitude above ground (FlightLog::altitude_above_ground_m) instead of
   // rig.altitude_m when the log has one.

@@ -8,36 +8,33 @@
 namespace shutterlab {
 namespace {
 
-nlohmann::ordered_json Optional(const std::optional<double>& v) {
-  return v ? nlohmann::ordered_json(*v) : nlohmann::ordered_json(nullptr);
+nlohmann::json Optional(const std::optional<double>& v) {
+  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
 }
 
-nlohmann::ordered_json Attitude(const std::optional<AttitudeDeg>& a) {
+nlohmann::json Attitude(const std::optional<AttitudeDeg>& a) {
   if (!a) return nullptr;
   return {{"roll", a->roll_deg}, {"pitch", a->pitch_deg}, {"yaw", a->yaw_deg}};
 }
 
-nlohmann::ordered_json CaptureTime(const PhotoMetadata& m) {
+nlohmann::json CaptureTime(const PhotoMetadata& m) {
   if (!m.capture_time) {
-    return m.capture_time_problem.empty()
-               ? nlohmann::ordered_json(nullptr)
-               : nlohmann::ordered_json{{"problem", m.capture_time_problem}};
+    return m.capture_time_problem.empty() ? nlohmann::json(nullptr)
+                                          : nlohmann::json{{"problem", m.capture_time_problem}};
   }
   const ClockFace& c = *m.capture_time;
-  nlohmann::ordered_json j;
+  nlohmann::json j;
   j["written"] = m.capture_time_text;
   j["camera_clock"] = UtcText(c.face_ns);
-  j["utc_offset"] = c.utc_offset_s ? nlohmann::ordered_json(UtcOffsetText(*c.utc_offset_s))
-                                   : nlohmann::ordered_json(nullptr);
-  j["utc"] =
-      c.UtcNs() ? nlohmann::ordered_json(UtcText(*c.UtcNs())) : nlohmann::ordered_json(nullptr);
+  j["utc_offset"] =
+      c.utc_offset_s ? nlohmann::json(UtcOffsetText(*c.utc_offset_s)) : nlohmann::json(nullptr);
+  j["utc"] = c.UtcNs() ? nlohmann::json(UtcText(*c.UtcNs())) : nlohmann::json(nullptr);
   j["resolution_s"] = c.resolution_s;
   return j;
 }
 
-nlohmann::ordered_json PhotoJson(const PhotoRecord& r, const PhotoResult& p,
-                                 const PhotoAnalysis& a) {
-  nlohmann::ordered_json j;
+nlohmann::json PhotoJson(const PhotoRecord& r, const PhotoResult& p, const PhotoAnalysis& a) {
+  nlohmann::json j;
   j["name"] = r.name;
   j["path"] = r.path;
   if (!r.ok()) {
@@ -60,9 +57,9 @@ nlohmann::ordered_json PhotoJson(const PhotoRecord& r, const PhotoResult& p,
   j["altitude_source"] = r.altitude_source;
   j["speed_m_s"] = Optional(r.ground_speed_m_s);
   j["course_deg"] = Optional(r.course_deg);
-  j["velocity_m_s"] =
-      m.speed_m_s ? nlohmann::ordered_json{m.speed_m_s->x(), m.speed_m_s->y(), m.speed_m_s->z()}
-                  : nlohmann::ordered_json(nullptr);
+  j["velocity_m_s"] = m.speed_m_s
+                          ? nlohmann::json{m.speed_m_s->x(), m.speed_m_s->y(), m.speed_m_s->z()}
+                          : nlohmann::json(nullptr);
   j["speed_source"] = r.speed_source;
   j["exposure_s"] = Optional(m.exposure_s);
   j["gimbal_deg"] = Attitude(m.gimbal);
@@ -73,21 +70,20 @@ nlohmann::ordered_json PhotoJson(const PhotoRecord& r, const PhotoResult& p,
   j["across_readout_px"] = Optional(p.across_readout_px);
   j["blur_px"] = Optional(p.blur_px);
   if (a.with_log) {
-    j["t"] = p.placement.t_ns ? nlohmann::ordered_json(*p.placement.t_ns * 1e-9)
-                              : nlohmann::ordered_json(nullptr);
-    j["placement"] = p.placement.t_ns ? nlohmann::ordered_json(p.placement.method)
-                                      : nlohmann::ordered_json(nullptr);
+    j["t"] = p.placement.t_ns ? nlohmann::json(*p.placement.t_ns * 1e-9) : nlohmann::json(nullptr);
+    j["placement"] =
+        p.placement.t_ns ? nlohmann::json(p.placement.method) : nlohmann::json(nullptr);
     j["placement_problem"] = p.placement.problem;
     j["residual_s"] = Optional(p.placement.residual_s);
     j["D_rotation_m"] = Optional(p.d_rotation_m);
     j["D_rotation_px"] = Optional(p.d_rotation_px);
     j["D_paper_m"] = Optional(p.d_paper_m);
   }
-  nlohmann::ordered_json flagged = nlohmann::ordered_json::object();
+  nlohmann::json flagged = nlohmann::json::object();
   for (size_t l = 0; l < a.limits_m.size(); ++l) {
     flagged[LimitKey(a.limits_m[l])] = l < p.flagged.size() && p.flagged[l]
-                                           ? nlohmann::ordered_json(*p.flagged[l])
-                                           : nlohmann::ordered_json(nullptr);
+                                           ? nlohmann::json(*p.flagged[l])
+                                           : nlohmann::json(nullptr);
   }
   j["flagged"] = flagged;
   j["missing"] = r.missing;
@@ -97,8 +93,8 @@ nlohmann::ordered_json PhotoJson(const PhotoRecord& r, const PhotoResult& p,
 
 }  // namespace
 
-nlohmann::ordered_json PhotoAnalysisToJson(const PhotoSet& set, const PhotoAnalysis& a) {
-  nlohmann::ordered_json j;
+nlohmann::json PhotoAnalysisToJson(const PhotoSet& set, const PhotoAnalysis& a) {
+  nlohmann::json j;
   j["source"] = a.source;
   j["model"] = a.with_log ? "rotation (log) + translation (recorded speed)"
                           : "translation only (recorded speed)";
@@ -110,7 +106,7 @@ nlohmann::ordered_json PhotoAnalysisToJson(const PhotoSet& set, const PhotoAnaly
                       {"residual_rms_s", Optional(a.residual_rms_s)},
                       {"residual_max_s", Optional(a.residual_max_s)}};
   }
-  nlohmann::ordered_json photos = nlohmann::ordered_json::array();
+  nlohmann::json photos = nlohmann::json::array();
   for (size_t i = 0; i < a.photos.size(); ++i)
     photos.push_back(PhotoJson(set.photos[i], a.photos[i], a));
   j["photos"] = std::move(photos);

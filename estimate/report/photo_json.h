@@ -13,6 +13,6 @@ namespace shutterlab {
 // a photo with what was read (make, model, size, capture time, attitude, speed), what was chosen
 // and where from (focal_px/focal_source, readout_s/readout_origin/readout_source,
 // altitude_m/altitude_source), the predictions and flags, and what is missing.
-nlohmann::ordered_json PhotoAnalysisToJson(const PhotoSet& set, const PhotoAnalysis& analysis);
+nlohmann::json PhotoAnalysisToJson(const PhotoSet& set, const PhotoAnalysis& analysis);
 
 }  // namespace shutterlab

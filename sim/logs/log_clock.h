@@ -21,7 +21,7 @@ struct LogUtcClock {
   size_t fixes = 0;        // fixes used
   size_t rejected = 0;     // fixes over 1 s from the median offset
   double rms_residual_s = 0.0, max_residual_s = 0.0;  // the used fixes about the line
-  int64_t first_t_ns = 0, last_t_ns = 0;               // the span the used fixes cover
+  int64_t first_t_ns = 0, last_t_ns = 0;              // the span the used fixes cover
 
   int64_t UtcNsFromLog(int64_t t_ns) const;
   int64_t LogNsFromUtc(int64_t utc_ns) const;

@@ -96,8 +96,8 @@ std::optional<int64_t> ParseUtcText(std::string_view text, std::string* problem)
     rest = rest.substr(end);
   }
   zone = rest;
-  const auto face =
-      ParseExifDateTime(text.substr(0, 19), fraction.substr(0, 9), zone.empty() ? "Z" : zone, problem);
+  const auto face = ParseExifDateTime(text.substr(0, 19), fraction.substr(0, 9),
+                                      zone.empty() ? "Z" : zone, problem);
   if (!face) return std::nullopt;
   return face->UtcNs();
 }
@@ -202,16 +202,20 @@ TriggerFile ParseMrk(std::string_view text, const std::string& path) {
     SplitMrk(*line, &fields);
     const long n = cursor.line_number();
     if (fields.size() < 3) {
-      throw IoError(IoMessage(path, n, "expected 'number<TAB>seconds of week<TAB>[week] ...', got '" +
-                                           std::string(*line) + "'"));
+      throw IoError(IoMessage(path, n,
+                              "expected 'number<TAB>seconds of week<TAB>[week] ...', got '" +
+                                  std::string(*line) + "'"));
     }
     const auto number = ParseInt(fields[0]);
     const auto tow_ns = SecondsOfWeekNs(fields[1]);
     const auto week = MrkWeek(fields[2]);
-    if (!number || *number < 0) throw IoError(IoMessage(path, n, "bad photo number '" + std::string(fields[0]) + "'"));
-    if (!tow_ns) throw IoError(IoMessage(path, n, "bad GPS seconds of week '" + std::string(fields[1]) + "'"));
+    if (!number || *number < 0)
+      throw IoError(IoMessage(path, n, "bad photo number '" + std::string(fields[0]) + "'"));
+    if (!tow_ns)
+      throw IoError(IoMessage(path, n, "bad GPS seconds of week '" + std::string(fields[1]) + "'"));
     if (!week || *week < 0 || *week > kMaxGpsWeek)
-      throw IoError(IoMessage(path, n, "bad GPS week '" + std::string(fields[2]) + "' (expected [week])"));
+      throw IoError(
+          IoMessage(path, n, "bad GPS week '" + std::string(fields[2]) + "' (expected [week])"));
     TriggerEvent event;
     event.sequence = *number;
     event.t_ns = *week * kSecondsPerWeek * kNsPerSecond + *tow_ns;
@@ -248,18 +252,20 @@ TriggerFile ParseTriggerCsv(std::string_view text, const std::string& path) {
         if (columns->time < 0) {
           throw IoError(IoMessage(path, n,
                                   "the header names no time column (t, time, t_s, t_ms, t_us, "
-                                  "t_ns, timestamp, utc_usec or utc): '" + std::string(content) +
-                                      "'"));
+                                  "t_ns, timestamp, utc_usec or utc): '" +
+                                      std::string(content) + "'"));
         }
         width = fields.size();
         file.clock = columns->clock;
-        file.source = "CSV column " + columns->time_name + " (" + TriggerClockName(file.clock) + ")";
+        file.source =
+            "CSV column " + columns->time_name + " (" + TriggerClockName(file.clock) + ")";
         continue;
       }
       if (fields.size() > 2) {
-        throw IoError(IoMessage(path, n, "expected 't' or 'image,t' (seconds on the log clock) or "
-                                         "a header naming the columns, got '" +
-                                             std::string(content) + "'"));
+        throw IoError(IoMessage(path, n,
+                                "expected 't' or 'image,t' (seconds on the log clock) or "
+                                "a header naming the columns, got '" +
+                                    std::string(content) + "'"));
       }
       columns = CsvColumns{fields.size() == 2 ? 0 : -1, static_cast<int>(fields.size()) - 1};
       columns->time_name = "t";
@@ -267,8 +273,9 @@ TriggerFile ParseTriggerCsv(std::string_view text, const std::string& path) {
       file.source = "CSV t (log clock)";
     }
     if (fields.size() != width) {
-      throw IoError(IoMessage(path, n, "expected " + std::to_string(width) + " fields, got " +
-                                           std::to_string(fields.size())));
+      throw IoError(IoMessage(
+          path, n,
+          "expected " + std::to_string(width) + " fields, got " + std::to_string(fields.size())));
     }
     const std::string_view cell = fields[columns->time];
     TriggerEvent event;
@@ -284,8 +291,8 @@ TriggerFile ParseTriggerCsv(std::string_view text, const std::string& path) {
     } else {
       const auto value = ParseDouble(cell);
       if (!value || std::abs(*value * columns->ns_per_unit) > 9e18) {
-        throw IoError(IoMessage(path, n, "bad time '" + std::string(cell) + "' in column " +
-                                             columns->time_name));
+        throw IoError(IoMessage(
+            path, n, "bad time '" + std::string(cell) + "' in column " + columns->time_name));
       }
       event.t_ns = std::llround(*value * columns->ns_per_unit);
     }

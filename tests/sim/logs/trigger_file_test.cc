@@ -98,8 +98,8 @@ TEST(TriggerFile, ReadsPlainAndNamedCsvOnTheLogClockOrUtc) {
   EXPECT_EQ(px4.events[0].t_ns, 182'092'193'000);
   EXPECT_EQ(px4.events[0].name, "IMG_0001.jpg");
 
-  const TriggerFile utc = ReadTriggerFile(
-      Write(dir, "utc.csv", "name,utc\nB.jpg,2026-01-13T03:04:17.875381+01:00\n"));
+  const TriggerFile utc =
+      ReadTriggerFile(Write(dir, "utc.csv", "name,utc\nB.jpg,2026-01-13T03:04:17.875381+01:00\n"));
   EXPECT_EQ(utc.clock, TriggerClock::kUtc);
   EXPECT_EQ(UtcText(utc.events[0].t_ns), "2026-01-13 02:04:17.875");
 }

@@ -1,0 +1,395 @@
+#include "estimate/paper/photo_clock.h"
+
+#include "sim/check.h"
+#include "sim/civil_time.h"
+#include "sim/logs/log_clock.h"
+#include "sim/text_file.h"
+#include "sim/units.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <numeric>
+#include <unordered_map>
+
+namespace shutterlab {
+namespace {
+
+constexpr int64_t kVoteBinNs = 500'000'000;          // offset votes, 0.5 s bins
+constexpr int64_t kQuarterHourNs = 900'000'000'000;  // time zones are whole quarter hours
+constexpr size_t kMaxVotePairs = 4'000'000;          // photo x event pairs that vote
+
+struct Event {
+  std::optional<int64_t> log_ns, utc_ns;
+  int64_t sequence = -1;
+  std::string name;
+};
+
+struct Events {
+  std::vector<Event> list;
+  std::string text;        // where they came from
+  bool numbered = false;   // the sequence is the photo's number (an .MRK)
+};
+
+int64_t FloorDiv(int64_t a, int64_t b) { return a / b - ((a % b != 0) && ((a < 0) != (b < 0))); }
+
+std::string Stem(const std::string& name) {
+  return ToLower(std::filesystem::path(name).stem().string());
+}
+
+Events CollectEvents(const FlightLog& log, const TriggerFile* triggers,
+                     const std::optional<LogUtcClock>& clock) {
+  Events events;
+  if (triggers) {
+    events.text = "trigger file (" + triggers->format + ", " + TriggerClockName(triggers->clock) + ")";
+    events.numbered = triggers->format == "mrk";
+    for (const TriggerEvent& t : triggers->events) {
+      Event e;
+      e.sequence = t.sequence;
+      e.name = t.name;
+      if (triggers->clock == TriggerClock::kLog) e.log_ns = t.t_ns;
+      if (triggers->clock == TriggerClock::kUtc) e.utc_ns = t.t_ns;
+      if (triggers->clock == TriggerClock::kGps) e.utc_ns = UtcFromGpsNs(t.t_ns);
+      events.list.push_back(std::move(e));
+    }
+  } else if (!log.camera_events.empty()) {
+    // As analyze does: the most frequent kind (PX4 may log camera_trigger and camera_capture).
+    std::map<std::string, size_t> kinds;
+    for (const CameraEvent& c : log.camera_events) ++kinds[c.kind];
+    const std::string kind = std::max_element(kinds.begin(), kinds.end(), [](auto& a, auto& b) {
+                               return a.second < b.second;
+                             })->first;
+    events.text = "the log's camera events (" + kind + ")";
+    for (const CameraEvent& c : log.camera_events) {
+      if (c.kind != kind) continue;
+      Event e;
+      e.log_ns = c.t_ns;
+      e.sequence = c.sequence;
+      events.list.push_back(std::move(e));
+    }
+  }
+  for (Event& e : events.list) {
+    if (!clock) continue;
+    if (e.log_ns && !e.utc_ns) e.utc_ns = clock->UtcNsFromLog(*e.log_ns);
+    if (e.utc_ns && !e.log_ns) e.log_ns = clock->LogNsFromUtc(*e.utc_ns);
+  }
+  return events;
+}
+
+std::optional<int64_t> FaceNs(const PhotoRecord& r) {
+  if (!r.ok() || !r.metadata.capture_time) return std::nullopt;
+  return r.metadata.capture_time->face_ns;
+}
+
+double ToleranceS(const PhotoRecord& r) {
+  return 0.5 * r.metadata.capture_time->resolution_s + 0.5;
+}
+
+using Pairs = std::vector<int>;  // event index per photo, -1: none
+
+Pairs PairByName(const PhotoSet& set, const Events& events) {
+  Pairs pairs(set.photos.size(), -1);
+  std::map<std::string, int> by_stem;
+  for (size_t j = 0; j < events.list.size(); ++j) {
+    if (!events.list[j].name.empty()) by_stem.emplace(Stem(events.list[j].name), static_cast<int>(j));
+  }
+  if (by_stem.empty()) return {};
+  for (size_t i = 0; i < set.photos.size(); ++i) {
+    const auto it = by_stem.find(Stem(set.photos[i].name));
+    if (it != by_stem.end()) pairs[i] = it->second;
+  }
+  return pairs;
+}
+
+Pairs PairByNumber(const PhotoSet& set, const Events& events) {
+  if (!events.numbered) return {};
+  Pairs pairs(set.photos.size(), -1);
+  std::map<int64_t, int> by_number;
+  for (size_t j = 0; j < events.list.size(); ++j)
+    by_number.emplace(events.list[j].sequence, static_cast<int>(j));
+  for (size_t i = 0; i < set.photos.size(); ++i) {
+    if (!set.photos[i].number) continue;
+    const auto it = by_number.find(*set.photos[i].number);
+    if (it != by_number.end()) pairs[i] = it->second;
+  }
+  return pairs;
+}
+
+// Each timed photo to the nearest event (by UTC) within its tolerance at camera offset offset_ns;
+// one photo per event, the closer one kept.
+Pairs MatchAtOffset(const PhotoSet& set, const Events& events, const std::vector<int>& by_utc,
+                    int64_t offset_ns) {
+  Pairs pairs(set.photos.size(), -1);
+  std::vector<int64_t> best_residual(events.list.size(), INT64_MAX);
+  std::vector<int> owner(events.list.size(), -1);
+  for (size_t i = 0; i < set.photos.size(); ++i) {
+    const auto face = FaceNs(set.photos[i]);
+    if (!face) continue;
+    const int64_t target = *face - offset_ns;
+    auto it = std::lower_bound(by_utc.begin(), by_utc.end(), target,
+                               [&](int j, int64_t t) { return *events.list[j].utc_ns < t; });
+    int best = -1;
+    int64_t best_abs = INT64_MAX;
+    for (auto c = it == by_utc.begin() ? it : it - 1; c != by_utc.end() && c <= it; ++c) {
+      const int64_t r = std::llabs(target - *events.list[*c].utc_ns);
+      if (r < best_abs) best_abs = r, best = *c;
+    }
+    if (best < 0 || best_abs > static_cast<int64_t>(ToleranceS(set.photos[i]) * 1e9)) continue;
+    if (best_abs < best_residual[best]) {
+      if (owner[best] >= 0) pairs[owner[best]] = -1;
+      owner[best] = static_cast<int>(i);
+      best_residual[best] = best_abs;
+      pairs[i] = best;
+    }
+  }
+  return pairs;
+}
+
+int64_t MedianOffset(const PhotoSet& set, const Events& events, const Pairs& pairs) {
+  // In double ns: the offsets are a time zone and an error (under a day), exact to 1 ns.
+  std::vector<double> d;
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    if (pairs[i] < 0 || !FaceNs(set.photos[i]) || !events.list[pairs[i]].utc_ns) continue;
+    d.push_back(static_cast<double>(*FaceNs(set.photos[i]) - *events.list[pairs[i]].utc_ns));
+  }
+  return d.empty() ? 0 : std::llround(Median(std::move(d)));
+}
+
+// Distance of an offset from the nearest whole quarter hour (a time zone), ns.
+int64_t FromQuarterHour(int64_t offset_ns) {
+  const int64_t r = ((offset_ns % kQuarterHourNs) + kQuarterHourNs) % kQuarterHourNs;
+  return std::min(r, kQuarterHourNs - r);
+}
+
+Pairs PairByTime(const PhotoSet& set, const Events& events, int64_t* offset_ns) {
+  std::vector<int> by_utc;
+  for (size_t j = 0; j < events.list.size(); ++j) {
+    if (events.list[j].utc_ns) by_utc.push_back(static_cast<int>(j));
+  }
+  std::vector<size_t> timed;
+  for (size_t i = 0; i < set.photos.size(); ++i) {
+    if (FaceNs(set.photos[i])) timed.push_back(i);
+  }
+  if (by_utc.empty() || timed.empty()) return {};
+  std::sort(by_utc.begin(), by_utc.end(),
+            [&](int a, int b) { return *events.list[a].utc_ns < *events.list[b].utc_ns; });
+  // Votes: every photo x event difference, in bins (photos thinned for very large sets).
+  const size_t stride = std::max<size_t>(1, timed.size() * by_utc.size() / kMaxVotePairs);
+  std::unordered_map<int64_t, int> votes;
+  for (size_t k = 0; k < timed.size(); k += stride) {
+    const int64_t face = *FaceNs(set.photos[timed[k]]);
+    for (int j : by_utc) ++votes[FloorDiv(face - *events.list[j].utc_ns, kVoteBinNs)];
+  }
+  auto count_at = [&votes](int64_t bin) {
+    const auto it = votes.find(bin);
+    return it == votes.end() ? 0 : it->second;
+  };
+  int64_t best_bin = 0;
+  int best_score = -1;
+  for (const auto& vote : votes) {
+    const int64_t bin = vote.first;
+    const int score = count_at(bin - 1) + vote.second + count_at(bin + 1);
+    // Ties: nearer a whole quarter hour (a time zone), then the smaller offset (deterministic).
+    const int64_t zone_gap = FromQuarterHour(bin * kVoteBinNs);
+    const int64_t best_gap = FromQuarterHour(best_bin * kVoteBinNs);
+    const bool better = score > best_score ||
+                        (score == best_score &&
+                         (zone_gap < best_gap || (zone_gap == best_gap && bin < best_bin)));
+    if (better) best_score = score, best_bin = bin;
+  }
+  Pairs pairs = MatchAtOffset(set, events, by_utc, best_bin * kVoteBinNs + kVoteBinNs / 2);
+  *offset_ns = MedianOffset(set, events, pairs);
+  pairs = MatchAtOffset(set, events, by_utc, *offset_ns);
+  *offset_ns = MedianOffset(set, events, pairs);
+  return pairs;
+}
+
+size_t Count(const Pairs& pairs) {
+  return static_cast<size_t>(std::count_if(pairs.begin(), pairs.end(), [](int j) { return j >= 0; }));
+}
+
+// The camera zone when nothing else gives it: the one quarter hour that puts every timed photo
+// inside the log's GPS span (1 min of margin). nullopt with *problem when none or several do.
+std::optional<int64_t> SearchZone(const PhotoSet& set, const LogUtcClock& clock,
+                                  std::string* problem) {
+  const int64_t first_utc = clock.UtcNsFromLog(clock.first_t_ns) - 60 * kNsPerSecond;
+  const int64_t last_utc = clock.UtcNsFromLog(clock.last_t_ns) + 60 * kNsPerSecond;
+  std::vector<int64_t> fits;
+  for (int64_t k = -48; k <= 56; ++k) {  // UTC-12:00 .. UTC+14:00
+    bool all = true, any = false;
+    for (const PhotoRecord& r : set.photos) {
+      const auto face = FaceNs(r);
+      if (!face) continue;
+      any = true;
+      const int64_t utc = *face - k * kQuarterHourNs;
+      all = all && utc >= first_utc && utc <= last_utc;
+    }
+    if (any && all) fits.push_back(k * kQuarterHourNs);
+  }
+  if (fits.size() == 1) return fits[0];
+  *problem = fits.empty() ? "no time zone puts the capture times inside the log's GPS time"
+                          : std::to_string(fits.size()) +
+                                " time zones put the capture times inside the log: give "
+                                "--photo-utc-offset";
+  return std::nullopt;
+}
+
+std::string OffsetText(int64_t offset_ns) {
+  const int64_t zone = (offset_ns + (offset_ns >= 0 ? kQuarterHourNs / 2 : -kQuarterHourNs / 2)) /
+                       kQuarterHourNs * kQuarterHourNs;
+  return UtcOffsetText(static_cast<int>(zone / kNsPerSecond)) +
+         FormatNumber(" %+.3f s", (offset_ns - zone) * 1e-9);
+}
+
+}  // namespace
+
+void PhotoClockOptions::Check() const {
+  SHUTTERLAB_CHECK(!camera_utc_offset_s || std::abs(*camera_utc_offset_s) <= 14 * 3600)
+      << "camera UTC offset must be within -14:00..+14:00";
+}
+
+PhotoClock PlacePhotos(const PhotoSet& set, const FlightLog& log, const TriggerFile* triggers,
+                       const PhotoClockOptions& options) {
+  options.Check();
+  const std::optional<LogUtcClock> clock = FitLogUtcClock(log.utc_fixes);
+  const Events events = CollectEvents(log, triggers, clock);
+  PhotoClock out;
+  out.placements.resize(set.photos.size());
+
+  // Pair photos with events: the first rule that pairs any.
+  Pairs pairs;
+  std::string rule;
+  std::optional<int64_t> offset_ns;
+  if (!events.list.empty()) {
+    if (Count(pairs = PairByName(set, events)) > 0) {
+      rule = "by name";
+    } else if (Count(pairs = PairByNumber(set, events)) > 0) {
+      rule = "by photo number";
+    } else if (int64_t o = 0; Count(pairs = PairByTime(set, events, &o)) > 0) {
+      rule = "by capture time";
+      offset_ns = o;
+    } else if (events.list.size() == set.photos.size()) {
+      pairs.resize(set.photos.size());
+      std::iota(pairs.begin(), pairs.end(), 0);
+      rule = "in order (as many photos as events)";
+    } else {
+      pairs.assign(set.photos.size(), -1);
+    }
+  }
+  pairs.resize(set.photos.size(), -1);
+  if (!offset_ns && Count(pairs) > 0) {
+    bool any_timed = false;
+    for (size_t i = 0; i < pairs.size(); ++i)
+      any_timed = any_timed || (pairs[i] >= 0 && FaceNs(set.photos[i]) && events.list[pairs[i]].utc_ns);
+    if (any_timed) offset_ns = MedianOffset(set, events, pairs);
+  }
+
+  // Paired photos: the event's time, and the residual of the capture time.
+  std::vector<double> residuals;
+  for (size_t i = 0; i < set.photos.size(); ++i) {
+    PhotoPlacement& p = out.placements[i];
+    if (pairs[i] < 0) continue;
+    const Event& e = events.list[pairs[i]];
+    const std::string id = e.name.empty() ? (e.sequence >= 0 ? " #" + std::to_string(e.sequence) : "")
+                                          : " " + e.name;
+    if (!e.log_ns) {
+      p.problem = "its event (" + events.text + id + ") is not on the log's clock: the log has no GPS time";
+      continue;
+    }
+    p.t_ns = e.log_ns;
+    p.method = events.text + id + ", " + rule;
+    ++out.paired;
+    if (offset_ns && FaceNs(set.photos[i]) && e.utc_ns) {
+      p.residual_s = (*FaceNs(set.photos[i]) - *offset_ns - *e.utc_ns) * 1e-9;
+      residuals.push_back(*p.residual_s);
+    }
+  }
+
+  // The rest by capture time, where the log has GPS time.
+  std::string zone_problem, zone_text;
+  std::optional<int64_t> zone_ns;
+  if (offset_ns) {
+    zone_ns = offset_ns;
+    zone_text = "the fitted camera clock offset";
+  } else if (options.camera_utc_offset_s) {
+    zone_ns = *options.camera_utc_offset_s * kNsPerSecond;
+    zone_text = "--photo-utc-offset";
+  }
+  bool searched = false;
+  for (size_t i = 0; i < set.photos.size(); ++i) {
+    PhotoPlacement& p = out.placements[i];
+    if (p.t_ns || !p.problem.empty()) continue;
+    const PhotoRecord& r = set.photos[i];
+    if (!r.ok()) {
+      p.problem = "unreadable";
+      continue;
+    }
+    if (!FaceNs(r)) {
+      p.problem = "no event and no capture time";
+      continue;
+    }
+    if (!clock) {
+      p.problem = events.list.empty() ? "no event, and the log has no GPS time for the capture time"
+                                      : "no matching event, and the log has no GPS time for the "
+                                        "capture time";
+      continue;
+    }
+    std::optional<int64_t> utc;
+    std::string how;
+    if (zone_ns) {
+      utc = *FaceNs(r) - *zone_ns;
+      how = zone_text;
+    } else if (const auto own = r.metadata.capture_time->UtcNs()) {
+      utc = own;
+      how = "EXIF OffsetTimeOriginal";
+    } else {
+      if (!searched) {
+        searched = true;
+        if (const auto z = SearchZone(set, *clock, &zone_problem)) {
+          zone_ns = *z;
+          zone_text = "camera zone UTC" + UtcOffsetText(static_cast<int>(*z / kNsPerSecond)) +
+                      " (the only one that puts every photo inside the log)";
+          utc = *FaceNs(r) - *zone_ns;
+          how = zone_text;
+        }
+      }
+      if (!utc) {
+        p.problem = zone_problem;
+        continue;
+      }
+    }
+    p.t_ns = clock->LogNsFromUtc(*utc);
+    p.method = FormatNumber("capture time (+-%g s) through the log's GPS time, ",
+                            0.5 * r.metadata.capture_time->resolution_s) +
+               how;
+  }
+
+  for (const PhotoPlacement& p : out.placements) out.placed += p.t_ns.has_value();
+  if (offset_ns) out.clock_offset_s = *offset_ns * 1e-9;
+  if (!residuals.empty()) {
+    double sum_sq = 0, max_abs = 0;
+    for (double r : residuals) sum_sq += r * r, max_abs = std::max(max_abs, std::abs(r));
+    out.residual_rms_s = std::sqrt(sum_sq / residuals.size());
+    out.residual_max_s = max_abs;
+  }
+  std::string method;
+  if (out.paired > 0) method = std::to_string(out.paired) + " paired with " + events.text + " " + rule;
+  if (out.placed > out.paired) {
+    method += (method.empty() ? "" : "; ") + std::to_string(out.placed - out.paired) +
+              " by capture time through the log's GPS time";
+  }
+  if (method.empty()) {
+    method = events.list.empty() ? "no camera events" : "no photo matched " + events.text;
+    if (!clock) method += ", and the log has no GPS time";
+  }
+  if (offset_ns) method += "; camera clock UTC" + OffsetText(*offset_ns);
+  if (clock) {
+    method += FormatNumber("; log clock to UTC from %.0f GPS fixes", static_cast<double>(clock->fixes)) +
+              FormatNumber(" (rms %.1f ms)", clock->rms_residual_s * 1e3);
+  }
+  out.method = method;
+  return out;
+}
+
+}  // namespace shutterlab
