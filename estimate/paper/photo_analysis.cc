@@ -4,6 +4,8 @@
 #include "sim/text_file.h"
 #include "sim/units.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -14,30 +16,42 @@
 namespace shutterlab {
 namespace {
 
+// The gimbal's attitude as a rotation, NED from the camera's frame (x optical axis, y image right,
+// z image down: DJI's gimbal frame at pitch 0), Z-Y-X: yaw, then pitch, then roll.
+Eigen::Matrix3d NedFromGimbal(const AttitudeDeg& a) {
+  return (Eigen::AngleAxisd(a.yaw_deg * kRadPerDeg, Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(a.pitch_deg * kRadPerDeg, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(a.roll_deg * kRadPerDeg, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
 // Translation only, from the recorded speed (the header's equations).
 void PredictTranslation(const PhotoRecord& r, const PhotoAnalysisOptions& options,
                         PhotoResult* out) {
   const PhotoMetadata& m = r.metadata;
-  const bool nadir_known = m.gimbal.has_value();
-  const bool nadir =
-      nadir_known && std::abs(m.gimbal->pitch_deg + 90.0) <= options.nadir_tolerance_deg;
-  if (nadir_known && !nadir) {
-    out->notes.push_back(FormatNumber("oblique (gimbal pitch %.1f deg): the model assumes nadir",
-                                      m.gimbal->pitch_deg));
+  std::optional<Eigen::Matrix3d> ned_from_gimbal;
+  if (m.gimbal) {
+    ned_from_gimbal = NedFromGimbal(*m.gimbal);
+    const double off_nadir_deg =
+        std::acos(std::clamp(ned_from_gimbal->col(0).z(), -1.0, 1.0)) * kDegPerRad;
+    if (off_nadir_deg > options.nadir_tolerance_deg) {
+      out->notes.push_back(
+          FormatNumber("oblique (%.1f deg from nadir", off_nadir_deg) +
+          FormatNumber(", gimbal pitch %.1f deg): the model assumes nadir", m.gimbal->pitch_deg));
+      ned_from_gimbal.reset();
+    }
   }
   if (!r.ground_speed_m_s || !r.readout_s || !r.focal_px || !r.altitude_m) return;
   const double px_per_m = *r.focal_px / *r.altitude_m;
   out->d_translation_m = *r.ground_speed_m_s * *r.readout_s;
   out->d_translation_px = *out->d_translation_m * px_per_m;
   if (m.exposure_s) out->blur_px = *r.ground_speed_m_s * *m.exposure_s * px_per_m;
-  if (nadir && m.speed_m_s) {
-    const double yaw_rad = m.gimbal->yaw_deg * kRadPerDeg;
-    const Eigen::Vector2d v(m.speed_m_s->x(), m.speed_m_s->y());  // north, east
-    const Eigen::Vector2d forward(std::cos(yaw_rad), std::sin(yaw_rad));
-    const Eigen::Vector2d right(-std::sin(yaw_rad), std::cos(yaw_rad));
+  if (ned_from_gimbal && m.speed_m_s) {
+    // The ground moves against the camera: -v along each image axis (horizontal motion only).
+    const Eigen::Vector3d v(m.speed_m_s->x(), m.speed_m_s->y(), 0.0);
     const double scale = *r.readout_s * px_per_m;
-    out->along_readout_px = v.dot(forward) * scale;
-    out->across_readout_px = -v.dot(right) * scale;
+    out->along_readout_px = -v.dot(ned_from_gimbal->col(2)) * scale;
+    out->across_readout_px = -v.dot(ned_from_gimbal->col(1)) * scale;
   }
 }
 
@@ -49,7 +63,7 @@ void Flag(const std::vector<double>& limits_m, std::optional<double> d_m, PhotoR
 
 void Summarise(const PhotoSet& set, PhotoAnalysis* a) {
   a->flagged_count.assign(a->limits_m.size(), 0);
-  size_t judged = 0;
+  size_t predicted_count = 0;
   for (size_t i = 0; i < a->photos.size(); ++i) {
     const PhotoRecord& r = set.photos[i];
     const PhotoResult& p = a->photos[i];
@@ -57,15 +71,16 @@ void Summarise(const PhotoSet& set, PhotoAnalysis* a) {
     a->predicted += p.d_translation_m.has_value();
     a->readout_from_table += r.ok() && r.readout_origin == ReadoutOrigin::kTable;
     a->placed += p.placement.t_ns.has_value();
-    judged += !p.flagged.empty() && p.flagged[0].has_value();
+    predicted_count += !p.flagged.empty() && p.flagged[0].has_value();
     for (size_t l = 0; l < a->limits_m.size(); ++l)
       a->flagged_count[l] += l < p.flagged.size() && p.flagged[l].value_or(false);
   }
   std::string line;
-  if (judged == 0) {
-    line = "no photo could be judged: see what is missing above";
+  if (predicted_count == 0) {
+    line = "no photo could be predicted: see what is missing above";
   } else {
-    line = std::to_string(judged) + " of " + std::to_string(a->photos.size()) + " photos judged: ";
+    line = std::to_string(predicted_count) + " of " + std::to_string(a->photos.size()) +
+           " photos predicted: ";
     for (size_t l = 0; l < a->limits_m.size(); ++l) {
       line += (l ? ", " : "") + std::to_string(a->flagged_count[l]) + " over " +
               LengthText(a->limits_m[l]);
@@ -74,7 +89,7 @@ void Summarise(const PhotoSet& set, PhotoAnalysis* a) {
                         : " (translation only, from the recorded speed; the rotation needs a "
                           "flight log)";
   }
-  // What would let the unjudged photos be judged, once each.
+  // What would let the other photos be predicted, once each.
   std::vector<std::string> hints;
   for (size_t i = 0; i < a->photos.size(); ++i) {
     if (!set.photos[i].ok() || a->photos[i].d_translation_m) continue;
@@ -87,7 +102,7 @@ void Summarise(const PhotoSet& set, PhotoAnalysis* a) {
     }
   }
   if (!hints.empty()) {
-    line += "; to judge the others give";
+    line += predicted_count == 0 ? "; to predict them give" : "; to predict the others give";
     for (size_t h = 0; h < hints.size(); ++h) line += (h ? ", " : " ") + hints[h];
   }
   if (a->readout_from_table > 0) {

@@ -10,10 +10,13 @@
 //     D_translation_m = v * T            (on the ground)
 //     D_translation_px = v * T * f / h   (in the image; f in pixels)
 // Along the readout (rows top to bottom, image y down) that motion stretches or compresses the
-// photo; across it, it shears it. With a nadir gimbal (pitch within nadir_tolerance_deg of -90)
-// and its yaw, the motion is split into those two parts: the image's top edge faces the gimbal's
-// yaw, so the ground moves down the image at v . forward and right at -v . right. The camera's
-// rotation during the readout (usually the larger part) needs a gyro log.
+// photo; across it, it shears it. With the gimbal's attitude (DJI: NED, Z-Y-X yaw, pitch, roll;
+// the camera's frame x along the optical axis, y image right, z image down) and its optical axis
+// within nadir_tolerance_deg of straight down, the motion is split into those two parts: the ground
+// moves by -v along each image axis, R * (0,1,0) (right) and R * (0,0,1) (down). At pitch -90 yaw
+// and roll turn about the same axis, so the image's top faces yaw + roll (an Inspire 1 photo at
+// yaw 103, roll 168.8 faces 271.8, its airframe's heading). The camera's rotation during the
+// readout (usually the larger part) needs a gyro log.
 //
 // With a log, each photo placed on the log's clock (estimate/paper/photo_clock.h) is analysed by
 // `analyze` (estimate/paper/analyze.h) for the rotation; the photo keeps both parts and is
@@ -34,7 +37,8 @@ namespace shutterlab {
 
 struct PhotoAnalysisOptions {
   std::vector<double> limits_m{0.05, 0.10};  // acceptable displacement on the ground
-  double nadir_tolerance_deg = 10.0;  // a gimbal pitch further than this from -90 is "oblique"
+  // An optical axis further than this from straight down is "oblique" (no along/across split).
+  double nadir_tolerance_deg = 10.0;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };

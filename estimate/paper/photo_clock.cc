@@ -28,8 +28,8 @@ struct Event {
 
 struct Events {
   std::vector<Event> list;
-  std::string text;        // where they came from
-  bool numbered = false;   // the sequence is the photo's number (an .MRK)
+  std::string text;       // where they came from
+  bool numbered = false;  // the sequence is the photo's number (an .MRK)
 };
 
 int64_t FloorDiv(int64_t a, int64_t b) { return a / b - ((a % b != 0) && ((a < 0) != (b < 0))); }
@@ -42,7 +42,8 @@ Events CollectEvents(const FlightLog& log, const TriggerFile* triggers,
                      const std::optional<LogUtcClock>& clock) {
   Events events;
   if (triggers) {
-    events.text = "trigger file (" + triggers->format + ", " + TriggerClockName(triggers->clock) + ")";
+    events.text =
+        "trigger file (" + triggers->format + ", " + TriggerClockName(triggers->clock) + ")";
     events.numbered = triggers->format == "mrk";
     for (const TriggerEvent& t : triggers->events) {
       Event e;
@@ -92,7 +93,8 @@ Pairs PairByName(const PhotoSet& set, const Events& events) {
   Pairs pairs(set.photos.size(), -1);
   std::map<std::string, int> by_stem;
   for (size_t j = 0; j < events.list.size(); ++j) {
-    if (!events.list[j].name.empty()) by_stem.emplace(Stem(events.list[j].name), static_cast<int>(j));
+    if (!events.list[j].name.empty())
+      by_stem.emplace(Stem(events.list[j].name), static_cast<int>(j));
   }
   if (by_stem.empty()) return {};
   for (size_t i = 0; i < set.photos.size(); ++i) {
@@ -193,9 +195,9 @@ Pairs PairByTime(const PhotoSet& set, const Events& events, int64_t* offset_ns) 
     // Ties: nearer a whole quarter hour (a time zone), then the smaller offset (deterministic).
     const int64_t zone_gap = FromQuarterHour(bin * kVoteBinNs);
     const int64_t best_gap = FromQuarterHour(best_bin * kVoteBinNs);
-    const bool better = score > best_score ||
-                        (score == best_score &&
-                         (zone_gap < best_gap || (zone_gap == best_gap && bin < best_bin)));
+    const bool better =
+        score > best_score ||
+        (score == best_score && (zone_gap < best_gap || (zone_gap == best_gap && bin < best_bin)));
     if (better) best_score = score, best_bin = bin;
   }
   Pairs pairs = MatchAtOffset(set, events, by_utc, best_bin * kVoteBinNs + kVoteBinNs / 2);
@@ -206,7 +208,8 @@ Pairs PairByTime(const PhotoSet& set, const Events& events, int64_t* offset_ns) 
 }
 
 size_t Count(const Pairs& pairs) {
-  return static_cast<size_t>(std::count_if(pairs.begin(), pairs.end(), [](int j) { return j >= 0; }));
+  return static_cast<size_t>(
+      std::count_if(pairs.begin(), pairs.end(), [](int j) { return j >= 0; }));
 }
 
 // The camera zone when nothing else gives it: the one quarter hour that puts every timed photo
@@ -281,7 +284,8 @@ PhotoClock PlacePhotos(const PhotoSet& set, const FlightLog& log, const TriggerF
   if (!offset_ns && Count(pairs) > 0) {
     bool any_timed = false;
     for (size_t i = 0; i < pairs.size(); ++i)
-      any_timed = any_timed || (pairs[i] >= 0 && FaceNs(set.photos[i]) && events.list[pairs[i]].utc_ns);
+      any_timed =
+          any_timed || (pairs[i] >= 0 && FaceNs(set.photos[i]) && events.list[pairs[i]].utc_ns);
     if (any_timed) offset_ns = MedianOffset(set, events, pairs);
   }
 
@@ -291,10 +295,11 @@ PhotoClock PlacePhotos(const PhotoSet& set, const FlightLog& log, const TriggerF
     PhotoPlacement& p = out.placements[i];
     if (pairs[i] < 0) continue;
     const Event& e = events.list[pairs[i]];
-    const std::string id = e.name.empty() ? (e.sequence >= 0 ? " #" + std::to_string(e.sequence) : "")
-                                          : " " + e.name;
+    const std::string id =
+        e.name.empty() ? (e.sequence >= 0 ? " #" + std::to_string(e.sequence) : "") : " " + e.name;
     if (!e.log_ns) {
-      p.problem = "its event (" + events.text + id + ") is not on the log's clock: the log has no GPS time";
+      p.problem =
+          "its event (" + events.text + id + ") is not on the log's clock: the log has no GPS time";
       continue;
     }
     p.t_ns = e.log_ns;
@@ -374,7 +379,8 @@ PhotoClock PlacePhotos(const PhotoSet& set, const FlightLog& log, const TriggerF
     out.residual_max_s = max_abs;
   }
   std::string method;
-  if (out.paired > 0) method = std::to_string(out.paired) + " paired with " + events.text + " " + rule;
+  if (out.paired > 0)
+    method = std::to_string(out.paired) + " paired with " + events.text + " " + rule;
   if (out.placed > out.paired) {
     method += (method.empty() ? "" : "; ") + std::to_string(out.placed - out.paired) +
               " by capture time through the log's GPS time";
@@ -385,8 +391,9 @@ PhotoClock PlacePhotos(const PhotoSet& set, const FlightLog& log, const TriggerF
   }
   if (offset_ns) method += "; camera clock UTC" + OffsetText(*offset_ns);
   if (clock) {
-    method += FormatNumber("; log clock to UTC from %.0f GPS fixes", static_cast<double>(clock->fixes)) +
-              FormatNumber(" (rms %.1f ms)", clock->rms_residual_s * 1e3);
+    method +=
+        FormatNumber("; log clock to UTC from %.0f GPS fixes", static_cast<double>(clock->fixes)) +
+        FormatNumber(" (rms %.1f ms)", clock->rms_residual_s * 1e3);
   }
   out.method = method;
   return out;

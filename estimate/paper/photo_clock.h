@@ -44,9 +44,9 @@ struct PhotoClockOptions {
 };
 
 struct PhotoClock {
-  std::vector<PhotoPlacement> placements;  // one per photo, same order
-  std::string method;                      // for a person: how the photos were placed
-  std::optional<double> clock_offset_s;    // camera clock - UTC, s (fitted or given)
+  std::vector<PhotoPlacement> placements;                // one per photo, same order
+  std::string method;                                    // for a person: how the photos were placed
+  std::optional<double> clock_offset_s;                  // camera clock - UTC, s (fitted or given)
   std::optional<double> residual_rms_s, residual_max_s;  // over the pairs with both times
   size_t paired = 0, placed = 0;
 };

@@ -26,8 +26,9 @@ void CameraFromPhotos(const PhotoSet& set, const PhotoFlightOptions& options, Ri
     example.emplace(key, &r);
   }
   if (counts.empty()) {
-    *source = "no photo gives its image size and focal length: the camera of the flags (--size, "
-              "--focal-px, --readout)";
+    *source =
+        "no photo gives its image size and focal length: the camera of the flags (--size, "
+        "--focal-px, --readout)";
     return;
   }
   const auto best = std::max_element(counts.begin(), counts.end(),
@@ -63,7 +64,8 @@ void PhotoFlightOptions::Check() const {
 }
 
 PhotoFlightResult AnalyzePhotoFlight(const PhotoSet& set, const FlightLog& log,
-                                     const TriggerFile* triggers, const PhotoFlightOptions& options) {
+                                     const TriggerFile* triggers,
+                                     const PhotoFlightOptions& options) {
   options.Check();
   PhotoFlightResult out;
   out.clock = PlacePhotos(set, log, triggers, options.clock);

@@ -34,13 +34,14 @@ struct PhotoFlightOptions {
 
 struct PhotoFlightResult {
   PhotoClock clock;
-  AnalyzeResult log;     // analyze on the placed photos (images named by the photos)
-  PhotoAnalysis photos;  // per photo: placement, rotation (from log) and translation
+  AnalyzeResult log;          // analyze on the placed photos (images named by the photos)
+  PhotoAnalysis photos;       // per photo: placement, rotation (from log) and translation
   std::string camera_source;  // where the analysed camera came from, for a person
 };
 
 // triggers: a trigger file, or null for the log's camera events.
 PhotoFlightResult AnalyzePhotoFlight(const PhotoSet& set, const FlightLog& log,
-                                     const TriggerFile* triggers, const PhotoFlightOptions& options);
+                                     const TriggerFile* triggers,
+                                     const PhotoFlightOptions& options);
 
 }  // namespace shutterlab

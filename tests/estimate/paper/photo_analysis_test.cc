@@ -70,6 +70,17 @@ TEST(AnalyzePhotos, SplitsTheMotionAlongAndAcrossTheReadout) {
   EXPECT_NEAR(*a.photos[2].d_translation_px, 2.0, kTol);          // |(3, 4)| * 0.4
 }
 
+// Looking straight down, yaw and roll turn about the same axis: yaw 90 with roll 180 faces 270
+// (west), so flying north moves the ground to the photo's left.
+TEST(AnalyzePhotos, GimbalRollAtNadirTurnsThePhotoLikeYaw) {
+  PhotoRecord r = Photo("rolled.jpg", 10.0, 0.0, 90.0);
+  r.metadata.gimbal->roll_deg = 180.0;
+  const PhotoAnalysis a = AnalyzePhotos(Set({r}), {});
+  EXPECT_NEAR(*a.photos[0].along_readout_px, 0.0, kTol);
+  EXPECT_NEAR(*a.photos[0].across_readout_px, -4.0, kTol);
+  EXPECT_TRUE(a.photos[0].notes.empty());
+}
+
 TEST(AnalyzePhotos, ObliqueMissingAndUnreadablePhotosAreSaidNotGuessed) {
   PhotoRecord oblique = Photo("oblique.jpg", 2.0, 0.0, 0.0, -45.0);
   PhotoMetadata bare;

@@ -30,7 +30,8 @@ FlightLog LogWithGps() {
 // Ten exposures 2 s apart (one 0.3 s late) from 20 s on the log clock.
 std::vector<int64_t> EventTimes() {
   std::vector<int64_t> t;
-  for (int k = 0; k < 10; ++k) t.push_back(20 * kNsPerSecond + k * 2 * kNsPerSecond + (k == 4 ? 300 * kMs : 0));
+  for (int k = 0; k < 10; ++k)
+    t.push_back(20 * kNsPerSecond + k * 2 * kNsPerSecond + (k == 4 ? 300 * kMs : 0));
   return t;
 }
 
@@ -92,7 +93,8 @@ TEST(PlacePhotos, WholeSecondCaptureTimesStillPickTheRightEvents) {
     log.camera_events.push_back({t[k], static_cast<int64_t>(k), "camera_capture"});
   PhotoSet set;
   for (size_t k = 0; k < t.size(); ++k) {
-    PhotoRecord r = Photo("P" + std::to_string(k) + ".jpg", kUtcAtLogZeroNs + t[k], -5 * kHourNs, 0);
+    PhotoRecord r =
+        Photo("P" + std::to_string(k) + ".jpg", kUtcAtLogZeroNs + t[k], -5 * kHourNs, 0);
     ClockFace& face = *r.metadata.capture_time;
     face.face_ns -= face.face_ns % kNsPerSecond;  // EXIF without SubSecTimeOriginal
     face.resolution_s = 1.0;
@@ -139,7 +141,8 @@ TEST(PlacePhotos, MrkPairsByPhotoNumberAndGpsTime) {
 TEST(PlacePhotos, WithoutEventsByCaptureTimeAndTheZone) {
   const FlightLog log = LogWithGps();
   PhotoSet written;  // OffsetTimeOriginal +02:00 in the file
-  written.photos.push_back(Photo("a.jpg", kUtcAtLogZeroNs + 30 * kNsPerSecond, 2 * kHourNs, 0, true));
+  written.photos.push_back(
+      Photo("a.jpg", kUtcAtLogZeroNs + 30 * kNsPerSecond, 2 * kHourNs, 0, true));
   PhotoClock clock = PlacePhotos(written, log, nullptr, {});
   ASSERT_TRUE(clock.placements[0].t_ns) << clock.placements[0].problem;
   EXPECT_NEAR(static_cast<double>(*clock.placements[0].t_ns - 30 * kNsPerSecond), 0.0, 2.0);
