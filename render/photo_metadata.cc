@@ -20,13 +20,24 @@ namespace {
 
 constexpr char kDjiXmpNamespace[] = "http://www.dji.com/drone-dji/1.0/";
 
-// exiv2 prints its warnings on stderr by default, and XMP parsing must be initialised once before
-// threads use it (exiv2's xmp_exiv2.hpp).
+// The XMP toolkit's lock, as exiv2's xmp_exiv2.hpp shows, so that photos may be read from several
+// threads.
+void LockXmp(void* mutex, bool lock) {
+  if (lock) {
+    static_cast<std::mutex*>(mutex)->lock();
+  } else {
+    static_cast<std::mutex*>(mutex)->unlock();
+  }
+}
+
+// exiv2 prints its warnings on stderr by default, and XMP parsing must be initialised once, with
+// its lock, before threads use it.
 void InitialiseExiv2() {
   static std::once_flag once;
+  static std::mutex xmp_mutex;
   std::call_once(once, [] {
     Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute);
-    Exiv2::XmpParser::initialize();
+    Exiv2::XmpParser::initialize(LockXmp, &xmp_mutex);
   });
 }
 

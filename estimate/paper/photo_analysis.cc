@@ -85,9 +85,14 @@ void Summarise(const PhotoSet& set, PhotoAnalysis* a) {
       line += (l ? ", " : "") + std::to_string(a->flagged_count[l]) + " over " +
               LengthText(a->limits_m[l]);
     }
-    line += a->with_log ? " (rotation from the log + translation from the recorded speed)"
-                        : " (translation only, from the recorded speed; the rotation needs a "
-                          "flight log)";
+    if (!a->with_log) {
+      line += " (translation only, from the recorded speed; the rotation needs a flight log)";
+    } else if (a->placed == 0) {
+      line += " (translation only: no photo could be placed on the log)";
+    } else {
+      line += " (rotation from the log for the " + std::to_string(a->placed) +
+              " placed photo(s) + translation from the recorded speed)";
+    }
   }
   // What would let the other photos be predicted, once each.
   std::vector<std::string> hints;

@@ -245,54 +245,43 @@ std::string OffsetText(int64_t offset_ns) {
          FormatNumber(" %+.3f s", (offset_ns - zone) * 1e-9);
 }
 
-}  // namespace
-
-void PhotoClockOptions::Check() const {
-  SHUTTERLAB_CHECK(!camera_utc_offset_s || std::abs(*camera_utc_offset_s) <= 14 * 3600)
-      << "camera UTC offset must be within -14:00..+14:00";
-}
-
-PhotoClock PlacePhotos(const PhotoSet& set, const FlightLog& log, const TriggerFile* triggers,
-                       const PhotoClockOptions& options) {
-  options.Check();
-  const std::optional<LogUtcClock> clock = FitLogUtcClock(log.utc_fixes);
-  const Events events = CollectEvents(log, triggers, clock);
-  PhotoClock out;
-  out.placements.resize(set.photos.size());
-
-  // Pair photos with events: the first rule that pairs any.
+// The pairing: the first rule that pairs any photo; *offset_ns is the camera clock's offset when
+// any pair has both times.
+Pairs PairPhotos(const PhotoSet& set, const Events& events, std::string* rule,
+                 std::optional<int64_t>* offset_ns) {
   Pairs pairs;
-  std::string rule;
-  std::optional<int64_t> offset_ns;
   if (!events.list.empty()) {
     if (Count(pairs = PairByName(set, events)) > 0) {
-      rule = "by name";
+      *rule = "by name";
     } else if (Count(pairs = PairByNumber(set, events)) > 0) {
-      rule = "by photo number";
+      *rule = "by photo number";
     } else if (int64_t o = 0; Count(pairs = PairByTime(set, events, &o)) > 0) {
-      rule = "by capture time";
-      offset_ns = o;
+      *rule = "by capture time";
+      *offset_ns = o;
     } else if (events.list.size() == set.photos.size()) {
       pairs.resize(set.photos.size());
       std::iota(pairs.begin(), pairs.end(), 0);
-      rule = "in order (as many photos as events)";
-    } else {
-      pairs.assign(set.photos.size(), -1);
+      *rule = "in order (as many photos as events)";
     }
   }
   pairs.resize(set.photos.size(), -1);
-  if (!offset_ns && Count(pairs) > 0) {
-    bool any_timed = false;
-    for (size_t i = 0; i < pairs.size(); ++i)
-      any_timed =
-          any_timed || (pairs[i] >= 0 && FaceNs(set.photos[i]) && events.list[pairs[i]].utc_ns);
-    if (any_timed) offset_ns = MedianOffset(set, events, pairs);
+  if (!*offset_ns) {
+    for (size_t i = 0; i < pairs.size(); ++i) {
+      if (pairs[i] >= 0 && FaceNs(set.photos[i]) && events.list[pairs[i]].utc_ns) {
+        *offset_ns = MedianOffset(set, events, pairs);
+        break;
+      }
+    }
   }
+  return pairs;
+}
 
-  // Paired photos: the event's time, and the residual of the capture time.
-  std::vector<double> residuals;
+// Paired photos take their event's time; the residual of their capture time where both are known.
+void PlacePaired(const PhotoSet& set, const Events& events, const Pairs& pairs,
+                 const std::string& rule, const std::optional<int64_t>& offset_ns, PhotoClock* out,
+                 std::vector<double>* residuals) {
   for (size_t i = 0; i < set.photos.size(); ++i) {
-    PhotoPlacement& p = out.placements[i];
+    PhotoPlacement& p = out->placements[i];
     if (pairs[i] < 0) continue;
     const Event& e = events.list[pairs[i]];
     const std::string id =
@@ -304,26 +293,28 @@ PhotoClock PlacePhotos(const PhotoSet& set, const FlightLog& log, const TriggerF
     }
     p.t_ns = e.log_ns;
     p.method = events.text + id + ", " + rule;
-    ++out.paired;
+    ++out->paired;
     if (offset_ns && FaceNs(set.photos[i]) && e.utc_ns) {
       p.residual_s = (*FaceNs(set.photos[i]) - *offset_ns - *e.utc_ns) * 1e-9;
-      residuals.push_back(*p.residual_s);
+      residuals->push_back(*p.residual_s);
     }
   }
+}
 
-  // The rest by capture time, where the log has GPS time.
-  std::string zone_problem, zone_text;
-  std::optional<int64_t> zone_ns;
-  if (offset_ns) {
-    zone_ns = offset_ns;
-    zone_text = "the fitted camera clock offset";
-  } else if (options.camera_utc_offset_s) {
-    zone_ns = *options.camera_utc_offset_s * kNsPerSecond;
-    zone_text = "--photo-utc-offset";
-  }
+// The camera clock's zone for photos placed by capture time alone, decided once.
+struct Zone {
+  std::optional<int64_t> ns;  // given: the fitted offset or --photo-utc-offset
+  std::string text;
+  std::optional<int64_t> found;  // searched, for photos without OffsetTimeOriginal
+  std::string found_text, problem;
   bool searched = false;
+};
+
+// The photos left: capture time -> UTC (by the zone) -> the log's clock.
+void PlaceByCaptureTime(const PhotoSet& set, const Events& events,
+                        const std::optional<LogUtcClock>& clock, Zone zone, PhotoClock* out) {
   for (size_t i = 0; i < set.photos.size(); ++i) {
-    PhotoPlacement& p = out.placements[i];
+    PhotoPlacement& p = out->placements[i];
     if (p.t_ns || !p.problem.empty()) continue;
     const PhotoRecord& r = set.photos[i];
     if (!r.ok()) {
@@ -335,49 +326,46 @@ PhotoClock PlacePhotos(const PhotoSet& set, const FlightLog& log, const TriggerF
       continue;
     }
     if (!clock) {
-      p.problem = events.list.empty() ? "no event, and the log has no GPS time for the capture time"
-                                      : "no matching event, and the log has no GPS time for the "
-                                        "capture time";
+      p.problem = std::string(events.list.empty() ? "no event" : "no matching event") +
+                  ", and the log has no GPS time for the capture time";
       continue;
     }
     std::optional<int64_t> utc;
     std::string how;
-    if (zone_ns) {
-      utc = *FaceNs(r) - *zone_ns;
-      how = zone_text;
+    if (zone.ns) {
+      utc = *FaceNs(r) - *zone.ns;
+      how = zone.text;
     } else if (const auto own = r.metadata.capture_time->UtcNs()) {
       utc = own;
       how = "EXIF OffsetTimeOriginal";
     } else {
-      if (!searched) {
-        searched = true;
-        if (const auto z = SearchZone(set, *clock, &zone_problem)) {
-          zone_ns = *z;
-          zone_text = "camera zone UTC" + UtcOffsetText(static_cast<int>(*z / kNsPerSecond)) +
-                      " (the only one that puts every photo inside the log)";
-          utc = *FaceNs(r) - *zone_ns;
-          how = zone_text;
+      if (!zone.searched) {
+        zone.searched = true;
+        if ((zone.found = SearchZone(set, *clock, &zone.problem))) {
+          zone.found_text = "camera zone UTC" +
+                            UtcOffsetText(static_cast<int>(*zone.found / kNsPerSecond)) +
+                            " (the only one that puts every photo inside the log)";
         }
       }
-      if (!utc) {
-        p.problem = zone_problem;
-        continue;
+      if (zone.found) {
+        utc = *FaceNs(r) - *zone.found;
+        how = zone.found_text;
       }
+    }
+    if (!utc) {
+      p.problem = zone.problem;
+      continue;
     }
     p.t_ns = clock->LogNsFromUtc(*utc);
     p.method = FormatNumber("capture time (+-%g s) through the log's GPS time, ",
                             0.5 * r.metadata.capture_time->resolution_s) +
                how;
   }
+}
 
-  for (const PhotoPlacement& p : out.placements) out.placed += p.t_ns.has_value();
-  if (offset_ns) out.clock_offset_s = *offset_ns * 1e-9;
-  if (!residuals.empty()) {
-    double sum_sq = 0, max_abs = 0;
-    for (double r : residuals) sum_sq += r * r, max_abs = std::max(max_abs, std::abs(r));
-    out.residual_rms_s = std::sqrt(sum_sq / residuals.size());
-    out.residual_max_s = max_abs;
-  }
+std::string MethodText(const PhotoClock& out, const Events& events, const std::string& rule,
+                       const std::optional<int64_t>& offset_ns,
+                       const std::optional<LogUtcClock>& clock) {
   std::string method;
   if (out.paired > 0)
     method = std::to_string(out.paired) + " paired with " + events.text + " " + rule;
@@ -395,7 +383,50 @@ PhotoClock PlacePhotos(const PhotoSet& set, const FlightLog& log, const TriggerF
         FormatNumber("; log clock to UTC from %.0f GPS fixes", static_cast<double>(clock->fixes)) +
         FormatNumber(" (rms %.1f ms)", clock->rms_residual_s * 1e3);
   }
-  out.method = method;
+  return method;
+}
+
+}  // namespace
+
+void PhotoClockOptions::Check() const {
+  SHUTTERLAB_CHECK(!camera_utc_offset_s || std::abs(*camera_utc_offset_s) <= 14 * 3600)
+      << "camera UTC offset must be within -14:00..+14:00";
+}
+
+PhotoClock PlacePhotos(const PhotoSet& set, const FlightLog& log, const TriggerFile* triggers,
+                       const PhotoClockOptions& options) {
+  options.Check();
+  const std::optional<LogUtcClock> clock = FitLogUtcClock(log.utc_fixes);
+  const Events events = CollectEvents(log, triggers, clock);
+  PhotoClock out;
+  out.placements.resize(set.photos.size());
+  std::string rule;
+  std::optional<int64_t> offset_ns;
+  const Pairs pairs = PairPhotos(set, events, &rule, &offset_ns);
+  std::vector<double> residuals;
+  PlacePaired(set, events, pairs, rule, offset_ns, &out, &residuals);
+
+  // The zone for the rest: the fitted offset, else --photo-utc-offset, else each photo's own
+  // OffsetTimeOriginal, else the search.
+  Zone zone;
+  if (offset_ns) {
+    zone.ns = offset_ns;
+    zone.text = "the fitted camera clock offset";
+  } else if (options.camera_utc_offset_s) {
+    zone.ns = *options.camera_utc_offset_s * kNsPerSecond;
+    zone.text = "--photo-utc-offset";
+  }
+  PlaceByCaptureTime(set, events, clock, zone, &out);
+
+  for (const PhotoPlacement& p : out.placements) out.placed += p.t_ns.has_value();
+  if (offset_ns) out.clock_offset_s = *offset_ns * 1e-9;
+  if (!residuals.empty()) {
+    double sum_sq = 0, max_abs = 0;
+    for (double r : residuals) sum_sq += r * r, max_abs = std::max(max_abs, std::abs(r));
+    out.residual_rms_s = std::sqrt(sum_sq / residuals.size());
+    out.residual_max_s = max_abs;
+  }
+  out.method = MethodText(out, events, rule, offset_ns, clock);
   return out;
 }
 
