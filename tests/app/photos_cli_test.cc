@@ -24,35 +24,36 @@ using test::RunShutterlab;
 // from the 24 mm equivalent on the 4032 x 2268 diagonal (2566.1 px).
 TEST(PhotosCli, DjiMini4ProTranslationOnly) {
   SHUTTERLAB_REAL_DATA(dir, "incoming/dji_fc8482_clusterodm");
-  const auto text = RunShutterlab("analyze --photos " + dir);
+  test::TempDir out;
+  const auto text = RunShutterlab("analyze --photos " + dir + " --out " + (out / "o"));
   ASSERT_EQ(text.exit_code, 0) << text.output;
   EXPECT_NE(text.out.find("16 ms (table: dji fc8482 (Mini 4 Pro)"), std::string::npos) << text.out;
   EXPECT_NE(text.out.find("translation only"), std::string::npos);
-  EXPECT_NE(text.out.find("test-photo-1.jpg"), std::string::npos);
+  EXPECT_NE(text.out.find("3 over 5 cm, 2 over 10 cm"), std::string::npos) << text.out;
+  // photos.csv: readout_s, readout_origin, altitude_m, speed_m_s ... D_translation_m.
+  const std::string csv = ReadFileToString(out / "o/photos.csv");
+  EXPECT_NE(csv.find("test-photo-1.jpg,DJI,FC8482,4032,2268,2566.101382972291,0.016,table,117.9,"
+                     "6.9,,,,0.11040000000000001,"),
+            std::string::npos)
+      << csv;
+  EXPECT_EQ(ReadFileToString(out / "o/exclude.txt"),
+            "test-photo-1.jpg\ntest-photo-2.jpg\ntest-photo-3.jpg\n");
 
-  const auto r = RunShutterlab("analyze --photos " + dir + " --json");
+  // --readout overrides the table, and says so.
+  const auto r = RunShutterlab("analyze --photos " + dir + " --readout 10ms --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   ASSERT_EQ(j["photos"].size(), 3u);
   const double speeds[3] = {6.9, 7.0, std::hypot(0.3, 4.6)};
   for (size_t i = 0; i < 3; ++i) {
     const nlohmann::json& p = j["photos"][i];
-    EXPECT_EQ(p["readout_origin"], "table");
-    EXPECT_DOUBLE_EQ(p["readout_s"].get<double>(), 0.016);
+    EXPECT_EQ(p["readout_origin"], "user");
     EXPECT_DOUBLE_EQ(p["altitude_m"].get<double>(), 117.9);
     EXPECT_DOUBLE_EQ(p["speed_m_s"].get<double>(), speeds[i]);
-    EXPECT_NEAR(p["D_translation_px"].get<double>(), speeds[i] * 0.016 * 2566.1014 / 117.9, 1e-4);
-    EXPECT_NEAR(p["D_translation_m"].get<double>(), speeds[i] * 0.016, 1e-12);
+    EXPECT_NEAR(p["D_translation_px"].get<double>(), speeds[i] * 0.010 * 2566.1014 / 117.9, 1e-4);
+    EXPECT_NEAR(p["D_translation_m"].get<double>(), speeds[i] * 0.010, 1e-12);
   }
-  EXPECT_EQ(j["summary"]["readout_from_table"], 3);
-
-  // --readout overrides the table, and says so.
-  const auto own = RunShutterlab("analyze --photos " + dir + " --readout 10ms --json");
-  ASSERT_EQ(own.exit_code, 0) << own.output;
-  const nlohmann::json o = nlohmann::json::parse(own.out);
-  EXPECT_EQ(o["photos"][0]["readout_origin"], "user");
-  EXPECT_NEAR(o["photos"][0]["D_translation_m"].get<double>(), 0.069, 1e-12);
-  EXPECT_EQ(o["summary"]["readout_from_table"], 0);
+  EXPECT_EQ(j["summary"]["readout_from_table"], 0);
 }
 
 TEST(PhotosCli, BadPhotosAreReportedAndAFolderWithoutPhotosIsAnError) {
