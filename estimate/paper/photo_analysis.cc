@@ -29,16 +29,18 @@ Eigen::Matrix3d NedFromGimbal(const AttitudeDeg& a) {
 void PredictTranslation(const PhotoRecord& r, const PhotoAnalysisOptions& options,
                         PhotoResult* out) {
   const PhotoMetadata& m = r.metadata;
-  std::optional<Eigen::Matrix3d> ned_from_gimbal;
+  // With a nadir gimbal, its attitude splits the motion along and across the readout.
+  Eigen::Matrix3d ned_from_gimbal = Eigen::Matrix3d::Identity();
+  bool nadir = false;
   if (m.gimbal) {
     ned_from_gimbal = NedFromGimbal(*m.gimbal);
     const double off_nadir_deg =
-        std::acos(std::clamp(ned_from_gimbal->col(0).z(), -1.0, 1.0)) * kDegPerRad;
-    if (off_nadir_deg > options.nadir_tolerance_deg) {
+        std::acos(std::clamp(ned_from_gimbal.col(0).z(), -1.0, 1.0)) * kDegPerRad;
+    nadir = off_nadir_deg <= options.nadir_tolerance_deg;
+    if (!nadir) {
       out->notes.push_back(
           FormatNumber("oblique (%.1f deg from nadir", off_nadir_deg) +
           FormatNumber(", gimbal pitch %.1f deg): the model assumes nadir", m.gimbal->pitch_deg));
-      ned_from_gimbal.reset();
     }
   }
   if (!r.ground_speed_m_s || !r.readout_s || !r.focal_px || !r.altitude_m) return;
@@ -46,12 +48,12 @@ void PredictTranslation(const PhotoRecord& r, const PhotoAnalysisOptions& option
   out->d_translation_m = *r.ground_speed_m_s * *r.readout_s;
   out->d_translation_px = *out->d_translation_m * px_per_m;
   if (m.exposure_s) out->blur_px = *r.ground_speed_m_s * *m.exposure_s * px_per_m;
-  if (ned_from_gimbal && m.speed_m_s) {
+  if (nadir && m.speed_m_s) {
     // The ground moves against the camera: -v along each image axis (horizontal motion only).
     const Eigen::Vector3d v(m.speed_m_s->x(), m.speed_m_s->y(), 0.0);
     const double scale = *r.readout_s * px_per_m;
-    out->along_readout_px = -v.dot(ned_from_gimbal->col(2)) * scale;
-    out->across_readout_px = -v.dot(ned_from_gimbal->col(1)) * scale;
+    out->along_readout_px = -v.dot(ned_from_gimbal.col(2)) * scale;
+    out->across_readout_px = -v.dot(ned_from_gimbal.col(1)) * scale;
   }
 }
 

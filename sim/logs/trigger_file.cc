@@ -267,7 +267,9 @@ TriggerFile ParseTriggerCsv(std::string_view text, const std::string& path) {
                                 "a header naming the columns, got '" +
                                     std::string(content) + "'"));
       }
-      columns = CsvColumns{fields.size() == 2 ? 0 : -1, static_cast<int>(fields.size()) - 1};
+      columns = CsvColumns{};
+      columns->image = fields.size() == 2 ? 0 : -1;
+      columns->time = static_cast<int>(fields.size()) - 1;
       columns->time_name = "t";
       width = fields.size();
       file.source = "CSV t (log clock)";
