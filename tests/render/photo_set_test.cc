@@ -51,7 +51,8 @@ TEST(ReadoutTable, KeysOnMakeModelAndPhotoMode) {
 // repository: the shared data folder) gives its value at a megapixel count inside its condition.
 TEST(ReadoutTableReal, MatchesTheCitedFacts) {
   SHUTTERLAB_REAL_DATA(path, "incoming/odm_rs_readout/readout_db.csv");
-  LineCursor cursor(ReadFileToString(path));
+  const std::string text = ReadFileToString(path);  // the cursor views it
+  LineCursor cursor(text);
   std::vector<std::string_view> fields;
   size_t rows = 0;
   cursor.Next();  // header
