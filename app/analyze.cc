@@ -14,6 +14,7 @@
 #include "estimate/report/analyze_report.h"
 #include "estimate/report/photo_json.h"
 #include "render/image_io.h"
+#include "render/lens_profile.h"
 #include "render/photo_set.h"
 #include "render/pictures.h"
 #include "sim/check.h"
@@ -21,6 +22,8 @@
 #include "sim/logs/flight_log_io.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/logs/trigger_file.h"
+#include "sim/sensor_pair.h"
+#include "sim/still_detect.h"
 #include "sim/units.h"
 
 #include <nlohmann/json.hpp>
@@ -43,11 +46,13 @@ struct AnalyzeCommand {
   int range_dps = 250;
   ColumnFlags column_flags;  // --time-unit, --columns, --delimiter, --rate-unit
   std::string camera_path;
+  std::string lens_profile_path;
   std::string readout = "30ms";
   double altitude_m = 50.0;
   double focal_px = 1100.0;
   std::string size = "1280x960";
   std::string triggers_path;
+  std::string second_path;
   std::string every;
   std::string latency = "0";
   std::vector<std::string> limits{"5cm", "10cm"};
@@ -105,17 +110,28 @@ PhotoSetOptions PhotoOptionsFromFlags(const AnalyzeCommand& command) {
     options.focal_text = "--focal-px";
   }
   if (command.altitude_given) options.altitude_m = command.altitude_m;
+  if (!command.lens_profile_path.empty())
+    options.lens_profile = ReadLensProfile(command.lens_profile_path);
   return options;
 }
 
-// analyze's options from the flags; the triggers come later (they need the log).
-AnalyzeOptions AnalyzeOptionsFromFlags(const AnalyzeCommand& command) {
+// analyze's options from the flags; the triggers come later (they need the log). *lens: the lens
+// profile's use, when --lens-profile is given (its lens, and its readout unless --readout was
+// typed).
+AnalyzeOptions AnalyzeOptionsFromFlags(const AnalyzeCommand& command,
+                                       std::optional<LensProfileUse>* lens) {
   AnalyzeOptions options;
   if (!command.camera_path.empty()) {
     options.rig = ReadRigModel(command.camera_path);
     if (command.altitude_given) options.rig.altitude_m = command.altitude_m;
   } else {
     options.rig = RigFromFlags(command);
+  }
+  if (lens && !command.lens_profile_path.empty()) {
+    *lens = ScaleLensProfile(ReadLensProfile(command.lens_profile_path), options.rig.camera.width,
+                             options.rig.camera.height);
+    ApplyLensProfile(&**lens, &options.rig, command.readout_given);
+    for (const std::string& note : (*lens)->notes) std::cerr << "note: " << note << "\n";
   }
   options.limits_m.clear();
   for (const std::string& text : command.limits) options.limits_m.push_back(ParseLengthM(text));
@@ -160,9 +176,27 @@ AnalyzeReportOptions ReportFromFlags(const AnalyzeCommand& command) {
   return report;
 }
 
-FlightLog ReadLog(const AnalyzeCommand& command, const FlightLogReadOptions& read) {
+// The log, and with --second the pair fused into one trace on the first log's clock, weighed over
+// a still segment when the first sensor has one; the camera events stay the first log's.
+FlightLog ReadLog(const AnalyzeCommand& command, const FlightLogReadOptions& read,
+                  std::optional<SensorPair>* pair) {
   FlightLog log = ReadFlightLog(command.log_path, read);
   PrintLogWarnings(command.log_path, log.warnings);
+  if (command.second_path.empty()) return log;
+  const FlightLog second = ReadFlightLog(command.second_path, read);
+  PrintLogWarnings(command.second_path, second.warnings);
+  SensorPairOptions pair_options;
+  try {
+    pair_options.still = DetectStillSegment(log.gyro).segment;
+  } catch (const std::invalid_argument&) {
+  }
+  try {
+    *pair = FuseSensorPair(log.gyro, second.gyro, pair_options);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(command.log_path + " + " + command.second_path + ": " + e.what());
+  }
+  log.gyro = (*pair)->fused;
+  log.warnings.insert(log.warnings.end(), second.warnings.begin(), second.warnings.end());
   return log;
 }
 
@@ -171,7 +205,8 @@ void RunPhotos(const AnalyzeCommand& command) {
   PhotoSetOptions read = PhotoOptionsFromFlags(command);
   read.Check();
   PhotoFlightOptions options;
-  options.analyze = AnalyzeOptionsFromFlags(command);
+  options.analyze = AnalyzeOptionsFromFlags(command, nullptr);
+  options.lens_profile = read.lens_profile;
   options.photos.limits_m = options.analyze.limits_m;
   options.rig_given = !command.camera_path.empty();
   options.altitude_given = command.altitude_given;
@@ -206,7 +241,8 @@ void RunPhotos(const AnalyzeCommand& command) {
     }
     return;
   }
-  const FlightLog log = ReadLog(command, *log_read);
+  std::optional<SensorPair> pair;
+  const FlightLog log = ReadLog(command, *log_read, &pair);
   Progress progress("analyze", 1000);
   options.analyze.progress = [&progress](double f) {
     progress.Update(static_cast<size_t>(f * 1000));
@@ -224,10 +260,13 @@ void RunPhotos(const AnalyzeCommand& command) {
   }
   if (command.json) {
     nlohmann::json json = AnalyzeToJson(result.log);
+    if (pair) json["pair"] = SensorPairToJson(*pair, command.second_path);
+    if (result.lens) json["lens_profile"] = LensProfileUseJson(*result.lens);
     json["photos"] = PhotoAnalysisToJson(set, result.photos);
     json["photos"]["camera_source"] = result.camera_source;
     std::cout << json.dump(2) << "\n";
   } else {
+    if (pair) std::cout << SensorPairText(*pair, command.log_path, command.second_path) << "\n";
     std::cout << AnalyzeReport(result.log) << "\ncamera analysed: " << result.camera_source
               << "\n\n"
               << PhotoAnalysisReport(set, result.photos);
@@ -237,12 +276,14 @@ void RunPhotos(const AnalyzeCommand& command) {
 void Run(const AnalyzeCommand& command) {
   if (!command.photos_dir.empty()) return RunPhotos(command);
   SHUTTERLAB_CHECK(!command.log_path.empty()) << "give a LOG, or --photos DIR";
-  AnalyzeOptions options = AnalyzeOptionsFromFlags(command);
+  std::optional<LensProfileUse> lens;
+  AnalyzeOptions options = AnalyzeOptionsFromFlags(command, &lens);
   const FlightLogReadOptions read = ReadOptionsFromFlags(command);
   options.Check();  // before the (possibly long) read
   const std::optional<TriggerFile> triggers = TriggersFromFlags(command);
   const AnalyzeReportOptions report = ReportFromFlags(command);
-  const FlightLog log = ReadLog(command, read);
+  std::optional<SensorPair> pair;
+  const FlightLog log = ReadLog(command, read, &pair);
   if (triggers) {
     options.triggers = TriggersOnLogClock(*triggers, log, command.triggers_path);
     options.triggers_source = "trigger file " +
@@ -262,8 +303,12 @@ void Run(const AnalyzeCommand& command) {
     AnalyzeReportPage(options, result, report).Write(command.out_dir + "/report.html");
   }
   if (command.json) {
-    std::cout << AnalyzeToJson(result).dump(2) << "\n";
+    auto json = AnalyzeToJson(result);
+    if (pair) json["pair"] = SensorPairToJson(*pair, command.second_path);
+    if (lens) json["lens_profile"] = LensProfileUseJson(*lens);
+    std::cout << json.dump(2) << "\n";
   } else {
+    if (pair) std::cout << SensorPairText(*pair, command.log_path, command.second_path) << "\n";
     std::cout << AnalyzeReport(result);
   }
 }
@@ -295,6 +340,11 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
   command->column_flags.Add(cmd);
   cmd->add_option("--camera", command->camera_path, "camera.json (docs/FORMATS.md rig/1)")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--lens-profile", command->lens_profile_path,
+                  "Gyroflow lens profile (JSON): its lens, scaled to the image size, and its "
+                  "readout where it states one (unless --readout is given); with --photos also "
+                  "each photo's focal length and readout")
+      ->check(CLI::ExistingFile);
   auto* readout = cmd->add_option("--readout", command->readout,
                                   "rolling-shutter readout without --camera (s, ms, us); with "
                                   "--photos it overrides the readout table")
@@ -315,6 +365,10 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
                   "through the log's GPS fixes), a log's camera events (ULog, DataFlash CAM/TRIG), "
                   "or CSV 'image,t' / 't' (s on the log clock; a header may name t_ms, t_us, "
                   "timestamp, utc_usec or utc instead)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--second", command->second_path,
+                  "a second sensor's log on the same clock (record --device twice): fused with the "
+                  "first, the mounting fitted from the motion")
       ->check(CLI::ExistingFile);
   cmd->add_option("--every", command->every,
                   "simulated triggers at this cadence (e.g. 2s); with --triggers or --every the "

@@ -33,11 +33,20 @@ double FileScale(const PhotoMetadata& m) {
                                            : 1.0;
 }
 
+// The lens profile scaled to the photo, when one is given and the photo has a size.
+std::optional<LensProfileUse> ProfileFor(const PhotoSetOptions& options, const PhotoMetadata& m) {
+  if (!options.lens_profile || m.width <= 0 || m.height <= 0) return std::nullopt;
+  return ScaleLensProfile(*options.lens_profile, m.width, m.height);
+}
+
 void ChooseFocal(const PhotoSetOptions& options, PhotoRecord* r) {
   const PhotoMetadata& m = r->metadata;
   if (options.focal_px) {
     r->focal_px = options.focal_px;
     r->focal_source = options.focal_text.empty() ? "--focal-px" : options.focal_text;
+  } else if (const auto use = ProfileFor(options, m)) {
+    r->focal_px = 0.5 * (use->camera.fx + use->camera.fy);
+    r->focal_source = "lens profile " + use->name;
   } else if (m.calibrated_focal_px) {
     r->focal_px = *m.calibrated_focal_px * FileScale(m);
     r->focal_source = "XMP drone-dji:CalibratedFocalLength";
@@ -59,7 +68,11 @@ void ChooseReadout(const PhotoSetOptions& options, PhotoRecord* r) {
     return;
   }
   const PhotoMetadata& m = r->metadata;
-  if (const auto hit = LookUpReadout(m.make, m.model, r->CaptureMegapixels())) {
+  if (const auto use = ProfileFor(options, m); use && use->readout && use->readout->readout_s) {
+    r->readout_s = use->readout->readout_s;
+    r->readout_origin = ReadoutOrigin::kLensProfile;
+    r->readout_source = "lens profile " + use->name;
+  } else if (const auto hit = LookUpReadout(m.make, m.model, r->CaptureMegapixels())) {
     r->readout_s = hit->readout_s;
     r->readout_origin = ReadoutOrigin::kTable;
     r->readout_source = hit->Citation();

@@ -5,6 +5,7 @@
 // cannot be read is a record with an error, never an exception: one bad file does not stop a
 // survey. Shared by `analyze --photos` and any command that takes the same folder.
 
+#include "render/lens_profile.h"
 #include "render/photo_metadata.h"
 
 #include <cstdint>
@@ -45,6 +46,9 @@ struct PhotoSetOptions {
   std::string readout_text;                             // e.g. "--readout 20ms", "camera.json"
   std::optional<double> focal_px;
   std::string focal_text;  // e.g. "--focal-px", "camera.json"
+  // A Gyroflow lens profile (--lens-profile), scaled to each photo: its focal length after the
+  // given one, its readout (ReadoutOrigin::kLensProfile) after the given one.
+  std::optional<LensProfile> lens_profile;
   std::optional<double> altitude_m;
   std::function<void(double)> progress;  // fraction read (0..1); may be empty
   // Throws std::invalid_argument naming the first bad field.

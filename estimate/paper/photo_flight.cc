@@ -76,6 +76,10 @@ PhotoFlightResult AnalyzePhotoFlight(const PhotoSet& set, const FlightLog& log,
   } else {
     CameraFromPhotos(set, options, &a.rig, &out.camera_source);
   }
+  if (options.lens_profile) {
+    out.lens = ScaleLensProfile(*options.lens_profile, a.rig.camera.width, a.rig.camera.height);
+    ApplyLensProfile(&*out.lens, &a.rig, options.readout_given);
+  }
   if (!options.altitude_given && !options.rig_given) {
     a.use_log_altitude = true;
     std::vector<double> heights;

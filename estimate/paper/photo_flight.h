@@ -13,10 +13,12 @@
 #include "estimate/paper/analyze.h"
 #include "estimate/paper/photo_analysis.h"
 #include "estimate/paper/photo_clock.h"
+#include "render/lens_profile.h"
 #include "render/photo_set.h"
 #include "sim/logs/flight_log.h"
 #include "sim/logs/trigger_file.h"
 
+#include <optional>
 #include <string>
 
 namespace shutterlab {
@@ -28,15 +30,19 @@ struct PhotoFlightOptions {
   bool rig_given = false, altitude_given = false, readout_given = false;
   PhotoAnalysisOptions photos;  // its limits are analyze's
   PhotoClockOptions clock;
+  // --lens-profile: scaled to the analysed camera and put into its rig (ApplyLensProfile; its
+  // readout unless readout_given).
+  std::optional<LensProfile> lens_profile;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };
 
 struct PhotoFlightResult {
   PhotoClock clock;
-  AnalyzeResult log;          // analyze on the placed photos (images named by the photos)
-  PhotoAnalysis photos;       // per photo: placement, rotation (from log) and translation
-  std::string camera_source;  // where the analysed camera came from, for a person
+  AnalyzeResult log;                   // analyze on the placed photos (images named by the photos)
+  PhotoAnalysis photos;                // per photo: placement, rotation (from log) and translation
+  std::string camera_source;           // where the analysed camera came from, for a person
+  std::optional<LensProfileUse> lens;  // the lens profile as the rig took it
 };
 
 // triggers: a trigger file, or null for the log's camera events.
