@@ -224,7 +224,7 @@ void RunPhotos(const AnalyzeCommand& command) {
                                : std::optional<FlightLogReadOptions>(ReadOptionsFromFlags(command));
   const std::optional<TriggerFile> triggers = TriggersFromFlags(command);
   SHUTTERLAB_CHECK(!triggers || log_read) << "--triggers places photos on a LOG: give the LOG too";
-  const AnalyzeReportOptions report = ReportFromFlags(command);
+  AnalyzeReportOptions report = ReportFromFlags(command);
   PhotoSet set;
   {
     Progress progress("photos", 1000);
@@ -253,9 +253,13 @@ void RunPhotos(const AnalyzeCommand& command) {
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(command.log_path + ": " + e.what());
   }
+  if (result.lens) {
+    for (const std::string& note : result.lens->notes) std::cerr << "note: " << note << "\n";
+  }
   if (!command.out_dir.empty()) {
     WriteAnalyzeOutputs(command.out_dir, result.log);
-    AnalyzeReportPage(options.analyze, result.log, report).Write(command.out_dir + "/report.html");
+    report.camera_source = result.camera_source;
+    AnalyzeReportPage(result.analyzed, result.log, report).Write(command.out_dir + "/report.html");
     WritePhotoOutputs(command.out_dir, set, result.photos);  // its exclude.txt replaces analyze's
   }
   if (command.json) {

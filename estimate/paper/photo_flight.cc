@@ -79,6 +79,7 @@ PhotoFlightResult AnalyzePhotoFlight(const PhotoSet& set, const FlightLog& log,
   if (options.lens_profile) {
     out.lens = ScaleLensProfile(*options.lens_profile, a.rig.camera.width, a.rig.camera.height);
     ApplyLensProfile(&*out.lens, &a.rig, options.readout_given);
+    out.camera_source += "; its lens from the lens profile " + out.lens->name;
   }
   if (!options.altitude_given && !options.rig_given) {
     a.use_log_altitude = true;
@@ -97,9 +98,10 @@ PhotoFlightResult AnalyzePhotoFlight(const PhotoSet& set, const FlightLog& log,
   a.every_s = 0.0;
   a.log_events = false;
   out.log = Analyze(log, a);
+  out.analyzed = std::move(a);
 
   PhotoAnalysisOptions photo_options = options.photos;
-  photo_options.limits_m = a.limits_m;
+  photo_options.limits_m = out.analyzed.limits_m;
   out.photos = AnalyzePhotosWithLog(set, photo_options, out.clock.placements, out.log);
   out.photos.placement_method = out.clock.method;
   out.photos.clock_offset_s = out.clock.clock_offset_s;

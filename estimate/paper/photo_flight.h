@@ -39,6 +39,7 @@ struct PhotoFlightOptions {
 
 struct PhotoFlightResult {
   PhotoClock clock;
+  AnalyzeOptions analyzed;             // what Analyze was given: the photos' camera, their times
   AnalyzeResult log;                   // analyze on the placed photos (images named by the photos)
   PhotoAnalysis photos;                // per photo: placement, rotation (from log) and translation
   std::string camera_source;           // where the analysed camera came from, for a person

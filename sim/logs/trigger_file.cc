@@ -63,6 +63,48 @@ std::optional<int64_t> SecondsOfWeekNs(std::string_view text) {
   return *whole * kNsPerSecond + ns;
 }
 
+// One MRK line's fields into *event; the problem in words, empty when the line reads.
+std::string MrkLineProblem(const std::vector<std::string_view>& fields, TriggerEvent* event) {
+  if (fields.size() < 3) return "expected 'number<TAB>seconds of week<TAB>[week] ...'";
+  const auto number = ParseInt(fields[0]);
+  const auto tow_ns = SecondsOfWeekNs(fields[1]);
+  const auto week = MrkWeek(fields[2]);
+  if (!number || *number < 0) return "bad photo number '" + std::string(fields[0]) + "'";
+  if (!tow_ns) return "bad GPS seconds of week '" + std::string(fields[1]) + "'";
+  if (!week || *week < 0 || *week > kMaxGpsWeek)
+    return "bad GPS week '" + std::string(fields[2]) + "' (expected [week])";
+  event->sequence = *number;
+  event->t_ns = *week * kSecondsPerWeek * kNsPerSecond + *tow_ns;
+  for (size_t i = 3; i < fields.size(); ++i) {
+    const auto value = Labelled(fields[i]);
+    if (!value) continue;
+    if (value->second == "Lat") event->latitude_deg = value->first;
+    if (value->second == "Lon") event->longitude_deg = value->first;
+    if (value->second == "Ellh") event->height_m = value->first;
+  }
+  return "";
+}
+
+// The file's last line, when the file does not end with a line break: a file cut while it was
+// written or copied (a full card, a pulled cable) ends so.
+bool IsCutLastLine(std::string_view text, std::string_view line) {
+  return !text.empty() && text.back() != '\n' &&
+         line.data() + line.size() == text.data() + text.size();
+}
+
+// A cut last line is said, not an error: kept: what it gave is read (its fields are labelled or
+// whole); dropped: it did not read.
+void WarnCutLastLine(const std::string& path, long line_number, bool kept,
+                     std::vector<LogWarning>* warnings) {
+  warnings->push_back(
+      {"truncated",
+       IoMessage(path, line_number,
+                 kept ? "the file ends inside this line (no line break, fewer fields than the "
+                        "first line): read as far as it goes"
+                      : "the file ends inside this line (no line break): the line is left out"),
+       std::nullopt, kept ? std::nullopt : std::optional<size_t>(1)});
+}
+
 void WarnOrder(const std::vector<TriggerEvent>& events, std::vector<LogWarning>* warnings) {
   size_t backwards = 0, repeated = 0;
   std::set<int64_t> seen;
@@ -145,6 +187,40 @@ std::optional<CsvColumns> HeaderColumns(const std::vector<std::string_view>& fie
   return c;
 }
 
+// One data row of a trigger CSV; throws IoError("PATH:LINE: problem").
+TriggerEvent CsvRow(const std::vector<std::string_view>& fields, const CsvColumns& columns,
+                    size_t width, const std::string& path, long n) {
+  if (fields.size() != width) {
+    throw IoError(IoMessage(
+        path, n,
+        "expected " + std::to_string(width) + " fields, got " + std::to_string(fields.size())));
+  }
+  const std::string_view cell = fields[columns.time];
+  TriggerEvent event;
+  if (columns.utc_text) {
+    std::string problem;
+    const auto t = ParseUtcText(cell, &problem);
+    if (!t) throw IoError(IoMessage(path, n, "bad UTC time: " + problem));
+    event.t_ns = *t;
+  } else if (const auto whole = ParseInt(cell);
+             whole && *whole > -static_cast<int64_t>(9e18 / columns.ns_per_unit) &&
+             *whole < static_cast<int64_t>(9e18 / columns.ns_per_unit)) {
+    event.t_ns = *whole * static_cast<int64_t>(columns.ns_per_unit);
+  } else {
+    const auto value = ParseDouble(cell);
+    if (!value || std::abs(*value * columns.ns_per_unit) > 9e18) {
+      throw IoError(IoMessage(
+          path, n, "bad time '" + std::string(cell) + "' in column " + columns.time_name));
+    }
+    event.t_ns = std::llround(*value * columns.ns_per_unit);
+  }
+  if (columns.image >= 0) {
+    event.name = std::string(fields[columns.image]);
+    if (event.name.empty()) throw IoError(IoMessage(path, n, "empty image name"));
+  }
+  return event;
+}
+
 TriggerFile FromLog(const std::string& path) {
   FlightLog log = ReadFlightLog(path);
   TriggerFile file;
@@ -197,35 +273,22 @@ TriggerFile ParseMrk(std::string_view text, const std::string& path) {
   file.source = "MRK exposure times (GPS time)";
   LineCursor cursor(text);
   std::vector<std::string_view> fields;
+  size_t first_fields = 0;  // a whole line's field count, from the first
   while (const auto line = cursor.Next()) {
     if (line->find_first_not_of(" \t") == std::string_view::npos) continue;
     SplitMrk(*line, &fields);
     const long n = cursor.line_number();
-    if (fields.size() < 3) {
-      throw IoError(IoMessage(path, n,
-                              "expected 'number<TAB>seconds of week<TAB>[week] ...', got '" +
-                                  std::string(*line) + "'"));
-    }
-    const auto number = ParseInt(fields[0]);
-    const auto tow_ns = SecondsOfWeekNs(fields[1]);
-    const auto week = MrkWeek(fields[2]);
-    if (!number || *number < 0)
-      throw IoError(IoMessage(path, n, "bad photo number '" + std::string(fields[0]) + "'"));
-    if (!tow_ns)
-      throw IoError(IoMessage(path, n, "bad GPS seconds of week '" + std::string(fields[1]) + "'"));
-    if (!week || *week < 0 || *week > kMaxGpsWeek)
-      throw IoError(
-          IoMessage(path, n, "bad GPS week '" + std::string(fields[2]) + "' (expected [week])"));
     TriggerEvent event;
-    event.sequence = *number;
-    event.t_ns = *week * kSecondsPerWeek * kNsPerSecond + *tow_ns;
-    for (size_t i = 3; i < fields.size(); ++i) {
-      const auto value = Labelled(fields[i]);
-      if (!value) continue;
-      if (value->second == "Lat") event.latitude_deg = value->first;
-      if (value->second == "Lon") event.longitude_deg = value->first;
-      if (value->second == "Ellh") event.height_m = value->first;
+    std::string problem = MrkLineProblem(fields, &event);
+    if (IsCutLastLine(text, *line)) {
+      if (!problem.empty() || fields.size() < first_fields) {
+        WarnCutLastLine(path, n, problem.empty(), &file.warnings);
+        if (!problem.empty()) break;
+      }
     }
+    if (!problem.empty())
+      throw IoError(IoMessage(path, n, problem + ", got '" + std::string(*line) + "'"));
+    if (first_fields == 0) first_fields = fields.size();
     file.events.push_back(std::move(event));
   }
   if (file.events.empty()) throw IoError(IoMessage(path, 0, "no photo lines in the MRK file"));
@@ -274,35 +337,15 @@ TriggerFile ParseTriggerCsv(std::string_view text, const std::string& path) {
       width = fields.size();
       file.source = "CSV t (log clock)";
     }
-    if (fields.size() != width) {
-      throw IoError(IoMessage(
-          path, n,
-          "expected " + std::to_string(width) + " fields, got " + std::to_string(fields.size())));
-    }
-    const std::string_view cell = fields[columns->time];
-    TriggerEvent event;
-    if (columns->utc_text) {
-      std::string problem;
-      const auto t = ParseUtcText(cell, &problem);
-      if (!t) throw IoError(IoMessage(path, n, "bad UTC time: " + problem));
-      event.t_ns = *t;
-    } else if (const auto whole = ParseInt(cell);
-               whole && *whole > -static_cast<int64_t>(9e18 / columns->ns_per_unit) &&
-               *whole < static_cast<int64_t>(9e18 / columns->ns_per_unit)) {
-      event.t_ns = *whole * static_cast<int64_t>(columns->ns_per_unit);
-    } else {
-      const auto value = ParseDouble(cell);
-      if (!value || std::abs(*value * columns->ns_per_unit) > 9e18) {
-        throw IoError(IoMessage(
-            path, n, "bad time '" + std::string(cell) + "' in column " + columns->time_name));
+    if (IsCutLastLine(text, content)) {
+      try {
+        file.events.push_back(CsvRow(fields, *columns, width, path, n));
+      } catch (const IoError&) {
+        WarnCutLastLine(path, n, false, &file.warnings);
       }
-      event.t_ns = std::llround(*value * columns->ns_per_unit);
+      continue;
     }
-    if (columns->image >= 0) {
-      event.name = std::string(fields[columns->image]);
-      if (event.name.empty()) throw IoError(IoMessage(path, n, "empty image name"));
-    }
-    file.events.push_back(std::move(event));
+    file.events.push_back(CsvRow(fields, *columns, width, path, n));
   }
   if (file.events.empty()) throw IoError(IoMessage(path, 0, "no trigger times in the file"));
   WarnOrder(file.events, &file.warnings);

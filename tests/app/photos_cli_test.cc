@@ -133,7 +133,7 @@ TEST(PhotosCli, PlacesPhotosOnASyntheticLogAndReportsTheResidual) {
                         test::JpegWithMetadata(p));
   }
   const auto r = RunShutterlab("analyze --photos " + (dir / "photos") + " " + (dir / "flight.ulg") +
-                               " --json");
+                               " --json --out " + (dir / "out"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   const nlohmann::json& photos = j["photos"];
@@ -155,6 +155,11 @@ TEST(PhotosCli, PlacesPhotosOnASyntheticLogAndReportsTheResidual) {
   EXPECT_NEAR(photos["placement"]["residual_rms_s"].get<double>(), std::sqrt(sum_sq / 5), 1e-9);
   EXPECT_NE(j["triggers"].get<std::string>().find("by capture time"), std::string::npos)
       << j["triggers"];
+  // The page shows the camera analysed, the photos' own, and says the readout is the table's.
+  const std::string page = ReadFileToString(dir / "out/report.html");
+  EXPECT_NE(page.find("the photos&#39; DJI FC8482 (5 of 5 photos), 400x300, f 277 px"),
+            std::string::npos);
+  EXPECT_NE(page.find("readout 16 ms (table: dji fc8482"), std::string::npos);
 }
 
 }  // namespace

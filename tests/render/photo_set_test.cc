@@ -134,6 +134,46 @@ TEST(PhotoRecord, GivenValuesWinAndMissingOnesAreListed) {
                                                     "flight speed", "capture time"}));
 }
 
+// A lens profile calibrated at half the photo's size, its mode's readout 12 ms: scaled to the
+// photo it gives the focal length and the readout, each said, after what the user typed.
+TEST(PhotoRecord, ALensProfileGivesFocalAndReadoutAfterTheUsers) {
+  LensProfile profile;
+  profile.name = "Mini 4 Pro 16:9";
+  profile.camera.width = 2016;
+  profile.camera.height = 1134;
+  profile.camera.fx = profile.camera.fy = 1300.0;
+  profile.camera.cx = 1007.5;
+  profile.camera.cy = 566.5;
+  profile.mode = {2016, 1134, 30.0, 0.012, ReadoutDirection::kTopToBottom};
+  PhotoSetOptions options;
+  options.lens_profile = profile;
+  PhotoMetadata m = DjiMetadata();
+  m.width = 4032;
+  m.height = 2268;
+  const PhotoRecord r = MakePhotoRecord("/x/a.jpg", m, options);
+  EXPECT_DOUBLE_EQ(*r.focal_px, 2600.0);
+  EXPECT_EQ(r.focal_source, "lens profile Mini 4 Pro 16:9");
+  EXPECT_DOUBLE_EQ(*r.readout_s, 0.012);
+  EXPECT_EQ(r.readout_origin, ReadoutOrigin::kLensProfile);
+  EXPECT_EQ(r.readout_source, "lens profile Mini 4 Pro 16:9");
+
+  options.readout_s = 0.020;
+  options.readout_text = "--readout 20ms";
+  options.focal_px = 3000.0;
+  const PhotoRecord given = MakePhotoRecord("/x/a.jpg", m, options);
+  EXPECT_EQ(given.readout_origin, ReadoutOrigin::kUser);
+  EXPECT_DOUBLE_EQ(*given.readout_s, 0.020);
+  EXPECT_DOUBLE_EQ(*given.focal_px, 3000.0);
+
+  // A profile without a readout leaves the table's.
+  options = {};
+  profile.mode.readout_s.reset();
+  options.lens_profile = profile;
+  const PhotoRecord table = MakePhotoRecord("/x/a.jpg", m, options);
+  EXPECT_EQ(table.readout_origin, ReadoutOrigin::kTable);
+  EXPECT_DOUBLE_EQ(*table.focal_px, 2600.0);
+}
+
 TEST(PhotoSet, ReadsPhotoFilesByNameAndReportsBadOnes) {
   test::TempDir dir;
   FixturePhoto good;

@@ -2,6 +2,7 @@
 
 #include "sim/check.h"
 #include "sim/civil_time.h"
+#include "sim/logs/trigger_file.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
 #include "tests/test_util.h"
@@ -189,6 +190,23 @@ TEST(DataFlash, ReadsGyrBackExactly) {
   EXPECT_EQ(log.gyro_sources_available[2], "IMU (200.0 Hz, 200 samples)");
   EXPECT_EQ(log.records_skipped, 0u);
   EXPECT_TRUE(log.warnings.empty()) << test::JoinedWarnings(log.warnings);
+}
+
+// The one trigger reader takes a DataFlash file by its content and keeps the log's clock.
+TEST(DataFlash, IsATriggerFile) {
+  test::TempDir dir;
+  WriteFileAtomically(dir / "00000042.BIN", FlightFile(300).bytes());
+  const TriggerFile f = ReadTriggerFile(dir / "00000042.BIN");
+  EXPECT_EQ(f.format, "dataflash");
+  EXPECT_EQ(f.clock, TriggerClock::kLog);
+  ASSERT_GE(f.events.size(), 3u);
+  const FlightLog log = ParseDataFlash(FlightFile(300).bytes(), "f.bin");
+  ASSERT_EQ(f.events.size(), log.camera_events.size());
+  for (size_t i = 0; i < f.events.size(); ++i) {
+    EXPECT_EQ(f.events[i].t_ns, log.camera_events[i].t_ns);
+    EXPECT_EQ(f.events[i].sequence, log.camera_events[i].sequence);
+  }
+  EXPECT_NE(f.source.find("CAM"), std::string::npos) << f.source;
 }
 
 TEST(DataFlash, ReadsCameraEventsAndAltitude) {

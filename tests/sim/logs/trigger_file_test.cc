@@ -58,6 +58,39 @@ TEST(TriggerFile, MrkErrorsNameTheLine) {
   EXPECT_TRUE(test::AnyWarningContains(f.warnings, "photo number(s) given twice"));
 }
 
+// A file cut while it was written: a last line that does not read is left out, one cut among its
+// labelled fields keeps its number and time; each said as truncated with its line. A whole file
+// that only lacks its last line break reads without a word.
+TEST(TriggerFile, ACutLastLineIsSaidNotAnError) {
+  const std::string two(kMrk, sizeof(kMrk) - 1);
+  const TriggerFile in_time = ParseMrk(two + "3\t3960", "f.MRK");
+  ASSERT_EQ(in_time.events.size(), 2u);
+  ASSERT_EQ(in_time.warnings.size(), 1u) << test::JoinedWarnings(in_time.warnings);
+  EXPECT_EQ(in_time.warnings[0].kind, "truncated");
+  EXPECT_NE(in_time.warnings[0].message.find("f.MRK:3: the file ends inside this line"),
+            std::string::npos)
+      << in_time.warnings[0].message;
+  EXPECT_EQ(in_time.warnings[0].count.value_or(0), 1u);
+
+  const TriggerFile in_position =
+      ParseMrk(two + "3\t396019.5\t[2110]\t-17,N\t11,E\t196,V\t22.56", "f.MRK");
+  ASSERT_EQ(in_position.events.size(), 3u);
+  EXPECT_EQ(in_position.events[2].sequence, 3);
+  EXPECT_FALSE(in_position.events[2].latitude_deg);
+  EXPECT_TRUE(test::AnyWarningContains(in_position.warnings, "read as far as it goes"))
+      << test::JoinedWarnings(in_position.warnings);
+
+  const std::string whole = two.substr(0, two.size() - 1);
+  EXPECT_TRUE(ParseMrk(whole, "f.MRK").warnings.empty());
+  EXPECT_THROW(ParseMrk("1\t39x0\t[2110]\n" + two, "f.MRK"), IoError);  // not the last line
+
+  const TriggerFile csv = ParseTriggerCsv("image,t\nA,1\nB,", "f.csv");
+  ASSERT_EQ(csv.events.size(), 1u);
+  EXPECT_TRUE(test::AnyWarningContains(csv.warnings, "f.csv:3: the file ends inside this line"))
+      << test::JoinedWarnings(csv.warnings);
+  EXPECT_EQ(ParseTriggerCsv("image,t\nA,1\nB,2", "f.csv").events.size(), 2u);
+}
+
 TEST(TriggerFileReal, AutelEvoIIMrk) {
   SHUTTERLAB_REAL_DATA(path, "incoming/autel_mrk_helenenschacht/101FTASK_Timestamp.mrk");
   const TriggerFile f = ReadTriggerFile(path);
