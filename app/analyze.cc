@@ -164,6 +164,18 @@ std::optional<TriggerFile> TriggersFromFlags(const AnalyzeCommand& command) {
   return triggers;
 }
 
+// What reading the trigger file lost goes with the log's warnings into the outputs (printed on
+// stderr already, when it was read), named by the file.
+void AddTriggerWarnings(const std::optional<TriggerFile>& triggers, const std::string& path,
+                        FlightLog* log) {
+  if (!triggers) return;
+  const std::string name = std::filesystem::path(path).filename().string();
+  for (LogWarning w : triggers->warnings) {
+    w.message = "trigger file " + name + ": " + w.message;
+    log->warnings.push_back(std::move(w));
+  }
+}
+
 AnalyzeReportOptions ReportFromFlags(const AnalyzeCommand& command) {
   SHUTTERLAB_CHECK(command.scene_path.empty() || !command.out_dir.empty())
       << "--scene is for the report: give --out DIR too";
@@ -242,7 +254,8 @@ void RunPhotos(const AnalyzeCommand& command) {
     return;
   }
   std::optional<SensorPair> pair;
-  const FlightLog log = ReadLog(command, *log_read, &pair);
+  FlightLog log = ReadLog(command, *log_read, &pair);
+  AddTriggerWarnings(triggers, command.triggers_path, &log);
   Progress progress("analyze", 1000);
   options.analyze.progress = [&progress](double f) {
     progress.Update(static_cast<size_t>(f * 1000));
@@ -287,7 +300,8 @@ void Run(const AnalyzeCommand& command) {
   const std::optional<TriggerFile> triggers = TriggersFromFlags(command);
   const AnalyzeReportOptions report = ReportFromFlags(command);
   std::optional<SensorPair> pair;
-  const FlightLog log = ReadLog(command, read, &pair);
+  FlightLog log = ReadLog(command, read, &pair);
+  AddTriggerWarnings(triggers, command.triggers_path, &log);
   if (triggers) {
     options.triggers = TriggersOnLogClock(*triggers, log, command.triggers_path);
     options.triggers_source = "trigger file " +

@@ -234,7 +234,8 @@ PhotoAnalysis AnalyzePhotosWithLog(const PhotoSet& set, const PhotoAnalysisOptio
 
 std::string PhotoAnalysisReport(const PhotoSet& set, const PhotoAnalysis& a) {
   std::ostringstream out;
-  out << "photos: " << a.source << " (" << a.photos.size() << " files, " << a.read << " read)\n"
+  out << "photos: " << a.source << " (" << a.photos.size()
+      << (a.photos.size() == 1 ? " file, " : " files, ") << a.read << " read)\n"
       << CameraLines(set);
   out << "model: "
       << (a.with_log ? "rotation from the log's gyro (analyze's full model) + translation from "

@@ -94,14 +94,13 @@ bool IsCutLastLine(std::string_view text, std::string_view line) {
 
 // A cut last line is said, not an error: kept: what it gave is read (its fields are labelled or
 // whole); dropped: it did not read.
-void WarnCutLastLine(const std::string& path, long line_number, bool kept,
-                     std::vector<LogWarning>* warnings) {
+void WarnCutLastLine(long line_number, bool kept, std::vector<LogWarning>* warnings) {
   warnings->push_back(
       {"truncated",
-       IoMessage(path, line_number,
-                 kept ? "the file ends inside this line (no line break, fewer fields than the "
-                        "first line): read as far as it goes"
-                      : "the file ends inside this line (no line break): the line is left out"),
+       "line " + std::to_string(line_number) +
+           (kept ? ": the file ends inside it (no line break, fewer fields than the first line): "
+                   "read as far as it goes"
+                 : ": the file ends inside it (no line break): left out"),
        std::nullopt, kept ? std::nullopt : std::optional<size_t>(1)});
 }
 
@@ -282,7 +281,7 @@ TriggerFile ParseMrk(std::string_view text, const std::string& path) {
     std::string problem = MrkLineProblem(fields, &event);
     if (IsCutLastLine(text, *line)) {
       if (!problem.empty() || fields.size() < first_fields) {
-        WarnCutLastLine(path, n, problem.empty(), &file.warnings);
+        WarnCutLastLine(n, problem.empty(), &file.warnings);
         if (!problem.empty()) break;
       }
     }
@@ -341,7 +340,7 @@ TriggerFile ParseTriggerCsv(std::string_view text, const std::string& path) {
       try {
         file.events.push_back(CsvRow(fields, *columns, width, path, n));
       } catch (const IoError&) {
-        WarnCutLastLine(path, n, false, &file.warnings);
+        WarnCutLastLine(n, false, &file.warnings);
       }
       continue;
     }
