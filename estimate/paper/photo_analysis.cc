@@ -247,7 +247,7 @@ std::string PhotoAnalysisReport(const PhotoSet& set, const PhotoAnalysis& a) {
     out << "placement: " << a.placement_method << "; " << a.placed << " of " << a.photos.size()
         << " placed";
     if (a.clock_offset_s)
-      out << FormatNumber(", camera clock - log time base %.3f s", *a.clock_offset_s);
+      out << ", camera clock - " << a.clock_offset_to << FormatNumber(" %.3f s", *a.clock_offset_s);
     if (a.residual_rms_s) {
       out << FormatNumber(", residual rms %.3f s", *a.residual_rms_s)
           << FormatNumber(" (max %.3f s)", *a.residual_max_s);

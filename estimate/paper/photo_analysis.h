@@ -80,7 +80,8 @@ struct PhotoAnalysis {
   std::vector<PhotoResult> photos;  // one per PhotoSet photo, same order
   // Placement summary with a log: how the photos were placed and how well.
   std::string placement_method;
-  std::optional<double> clock_offset_s;  // camera clock - log's time base, where fitted
+  std::optional<double> clock_offset_s;  // camera clock - clock_offset_to, where fitted
+  std::string clock_offset_to;           // "UTC", or "log clock" for a log without GPS time
   std::optional<double> residual_rms_s, residual_max_s;
   size_t placed = 0;
   // Counts: photos read, with a translation D, flagged per limit, readouts from the table.

@@ -32,6 +32,21 @@ struct Events {
   bool numbered = false;  // the sequence is the photo's number (an .MRK)
 };
 
+// The time line capture times are matched on: UTC where the events have it (the offset is then the
+// camera clock's zone and error), else the log's own clock (the offset is then the camera clock
+// against the log's boot time: any number, one per flight).
+enum class Base { kUtc, kLog };
+
+std::optional<int64_t> EventNs(const Event& e, Base base) {
+  return base == Base::kUtc ? e.utc_ns : e.log_ns;
+}
+
+// The camera clock's offset to a time base: capture time - offset = the exposure on that base.
+struct Offset {
+  int64_t ns = 0;
+  Base base = Base::kUtc;
+};
+
 int64_t FloorDiv(int64_t a, int64_t b) { return a / b - ((a % b != 0) && ((a < 0) != (b < 0))); }
 
 std::string Stem(const std::string& name) {
@@ -120,21 +135,22 @@ Pairs PairByNumber(const PhotoSet& set, const Events& events) {
 
 // Each timed photo to the nearest event (by UTC) within its tolerance at camera offset offset_ns;
 // one photo per event, the closer one kept.
-Pairs MatchAtOffset(const PhotoSet& set, const Events& events, const std::vector<int>& by_utc,
-                    int64_t offset_ns) {
+Pairs MatchAtOffset(const PhotoSet& set, const Events& events, const std::vector<int>& by_time,
+                    Offset offset) {
   Pairs pairs(set.photos.size(), -1);
   std::vector<int64_t> best_residual(events.list.size(), INT64_MAX);
   std::vector<int> owner(events.list.size(), -1);
   for (size_t i = 0; i < set.photos.size(); ++i) {
     const auto face = FaceNs(set.photos[i]);
     if (!face) continue;
-    const int64_t target = *face - offset_ns;
-    auto it = std::lower_bound(by_utc.begin(), by_utc.end(), target,
-                               [&](int j, int64_t t) { return *events.list[j].utc_ns < t; });
+    const int64_t target = *face - offset.ns;
+    auto it = std::lower_bound(by_time.begin(), by_time.end(), target, [&](int j, int64_t t) {
+      return *EventNs(events.list[j], offset.base) < t;
+    });
     int best = -1;
     int64_t best_abs = INT64_MAX;
-    for (auto c = it == by_utc.begin() ? it : it - 1; c != by_utc.end() && c <= it; ++c) {
-      const int64_t r = std::llabs(target - *events.list[*c].utc_ns);
+    for (auto c = it == by_time.begin() ? it : it - 1; c != by_time.end() && c <= it; ++c) {
+      const int64_t r = std::llabs(target - *EventNs(events.list[*c], offset.base));
       if (r < best_abs) best_abs = r, best = *c;
     }
     if (best < 0 || best_abs > static_cast<int64_t>(ToleranceS(set.photos[i]) * 1e9)) continue;
@@ -148,14 +164,22 @@ Pairs MatchAtOffset(const PhotoSet& set, const Events& events, const std::vector
   return pairs;
 }
 
-int64_t MedianOffset(const PhotoSet& set, const Events& events, const Pairs& pairs) {
-  // In double ns: the offsets are a time zone and an error (under a day), exact to 1 ns.
+// The median of capture time - event time over the pairs with both; nullopt when none has.
+std::optional<int64_t> MedianOffset(const PhotoSet& set, const Events& events, const Pairs& pairs,
+                                    Base base) {
+  // Relative to the first pair's, so that the doubles hold small numbers: exact to 1 ns.
   std::vector<double> d;
+  std::optional<int64_t> first;
   for (size_t i = 0; i < pairs.size(); ++i) {
-    if (pairs[i] < 0 || !FaceNs(set.photos[i]) || !events.list[pairs[i]].utc_ns) continue;
-    d.push_back(static_cast<double>(*FaceNs(set.photos[i]) - *events.list[pairs[i]].utc_ns));
+    if (pairs[i] < 0 || !FaceNs(set.photos[i])) continue;
+    const auto event_ns = EventNs(events.list[pairs[i]], base);
+    if (!event_ns) continue;
+    const int64_t offset = *FaceNs(set.photos[i]) - *event_ns;
+    if (!first) first = offset;
+    d.push_back(static_cast<double>(offset - *first));
   }
-  return d.empty() ? 0 : std::llround(Median(std::move(d)));
+  if (!first) return std::nullopt;
+  return *first + std::llround(Median(std::move(d)));
 }
 
 // Distance of an offset from the nearest whole quarter hour (a time zone), ns.
@@ -164,24 +188,25 @@ int64_t FromQuarterHour(int64_t offset_ns) {
   return std::min(r, kQuarterHourNs - r);
 }
 
-Pairs PairByTime(const PhotoSet& set, const Events& events, int64_t* offset_ns) {
-  std::vector<int> by_utc;
+Pairs PairByTime(const PhotoSet& set, const Events& events, Base base, int64_t* offset_ns) {
+  std::vector<int> by_time;
   for (size_t j = 0; j < events.list.size(); ++j) {
-    if (events.list[j].utc_ns) by_utc.push_back(static_cast<int>(j));
+    if (EventNs(events.list[j], base)) by_time.push_back(static_cast<int>(j));
   }
   std::vector<size_t> timed;
   for (size_t i = 0; i < set.photos.size(); ++i) {
     if (FaceNs(set.photos[i])) timed.push_back(i);
   }
-  if (by_utc.empty() || timed.empty()) return {};
-  std::sort(by_utc.begin(), by_utc.end(),
-            [&](int a, int b) { return *events.list[a].utc_ns < *events.list[b].utc_ns; });
+  if (by_time.empty() || timed.empty()) return {};
+  std::sort(by_time.begin(), by_time.end(), [&](int a, int b) {
+    return *EventNs(events.list[a], base) < *EventNs(events.list[b], base);
+  });
   // Votes: every photo x event difference, in bins (photos thinned for very large sets).
-  const size_t stride = std::max<size_t>(1, timed.size() * by_utc.size() / kMaxVotePairs);
+  const size_t stride = std::max<size_t>(1, timed.size() * by_time.size() / kMaxVotePairs);
   std::unordered_map<int64_t, int> votes;
   for (size_t k = 0; k < timed.size(); k += stride) {
     const int64_t face = *FaceNs(set.photos[timed[k]]);
-    for (int j : by_utc) ++votes[FloorDiv(face - *events.list[j].utc_ns, kVoteBinNs)];
+    for (int j : by_time) ++votes[FloorDiv(face - *EventNs(events.list[j], base), kVoteBinNs)];
   }
   auto count_at = [&votes](int64_t bin) {
     const auto it = votes.find(bin);
@@ -192,18 +217,18 @@ Pairs PairByTime(const PhotoSet& set, const Events& events, int64_t* offset_ns) 
   for (const auto& vote : votes) {
     const int64_t bin = vote.first;
     const int score = count_at(bin - 1) + vote.second + count_at(bin + 1);
-    // Ties: nearer a whole quarter hour (a time zone), then the smaller offset (deterministic).
-    const int64_t zone_gap = FromQuarterHour(bin * kVoteBinNs);
-    const int64_t best_gap = FromQuarterHour(best_bin * kVoteBinNs);
+    // Ties: nearer a whole quarter hour (a time zone, against UTC), then the smaller offset.
+    const int64_t zone_gap = base == Base::kUtc ? FromQuarterHour(bin * kVoteBinNs) : 0;
+    const int64_t best_gap = base == Base::kUtc ? FromQuarterHour(best_bin * kVoteBinNs) : 0;
     const bool better =
         score > best_score ||
         (score == best_score && (zone_gap < best_gap || (zone_gap == best_gap && bin < best_bin)));
     if (better) best_score = score, best_bin = bin;
   }
-  Pairs pairs = MatchAtOffset(set, events, by_utc, best_bin * kVoteBinNs + kVoteBinNs / 2);
-  *offset_ns = MedianOffset(set, events, pairs);
-  pairs = MatchAtOffset(set, events, by_utc, *offset_ns);
-  *offset_ns = MedianOffset(set, events, pairs);
+  Pairs pairs = MatchAtOffset(set, events, by_time, {best_bin * kVoteBinNs + kVoteBinNs / 2, base});
+  *offset_ns = MedianOffset(set, events, pairs, base).value_or(0);
+  pairs = MatchAtOffset(set, events, by_time, {*offset_ns, base});
+  *offset_ns = MedianOffset(set, events, pairs, base).value_or(0);
   return pairs;
 }
 
@@ -245,40 +270,43 @@ std::string OffsetText(int64_t offset_ns) {
          FormatNumber(" %+.3f s", (offset_ns - zone) * 1e-9);
 }
 
-// The pairing: the first rule that pairs any photo; *offset_ns is the camera clock's offset when
-// any pair has both times.
+// The pairing: the first rule that pairs any photo; *offset is the camera clock's offset where any
+// pair has both times: to UTC when the events have it, else to the log's clock (an offset free
+// to be anything, found by the same vote: the pattern of the capture times against the events').
 Pairs PairPhotos(const PhotoSet& set, const Events& events, std::string* rule,
-                 std::optional<int64_t>* offset_ns) {
+                 std::optional<Offset>* offset) {
+  const Base base =
+      std::any_of(events.list.begin(), events.list.end(), [](const Event& e) { return e.utc_ns; })
+          ? Base::kUtc
+          : Base::kLog;
   Pairs pairs;
   if (!events.list.empty()) {
+    int64_t o = 0;
     if (Count(pairs = PairByName(set, events)) > 0) {
       *rule = "by name";
     } else if (Count(pairs = PairByNumber(set, events)) > 0) {
       *rule = "by photo number";
-    } else if (int64_t o = 0; Count(pairs = PairByTime(set, events, &o)) > 0) {
-      *rule = "by capture time";
-      *offset_ns = o;
+    } else if (Count(pairs = PairByTime(set, events, base, &o)) > 0) {
+      *rule = base == Base::kUtc ? "by capture time" : "by capture time on the log's clock";
+      *offset = Offset{o, base};
     } else if (events.list.size() == set.photos.size()) {
       pairs.resize(set.photos.size());
       std::iota(pairs.begin(), pairs.end(), 0);
       *rule = "in order (as many photos as events)";
+    } else {
+      pairs.clear();
     }
   }
   pairs.resize(set.photos.size(), -1);
-  if (!*offset_ns) {
-    for (size_t i = 0; i < pairs.size(); ++i) {
-      if (pairs[i] >= 0 && FaceNs(set.photos[i]) && events.list[pairs[i]].utc_ns) {
-        *offset_ns = MedianOffset(set, events, pairs);
-        break;
-      }
-    }
+  if (!*offset) {
+    if (const auto o = MedianOffset(set, events, pairs, base)) *offset = Offset{*o, base};
   }
   return pairs;
 }
 
 // Paired photos take their event's time; the residual of their capture time where both are known.
 void PlacePaired(const PhotoSet& set, const Events& events, const Pairs& pairs,
-                 const std::string& rule, const std::optional<int64_t>& offset_ns, PhotoClock* out,
+                 const std::string& rule, const std::optional<Offset>& offset, PhotoClock* out,
                  std::vector<double>* residuals) {
   for (size_t i = 0; i < set.photos.size(); ++i) {
     PhotoPlacement& p = out->placements[i];
@@ -294,8 +322,8 @@ void PlacePaired(const PhotoSet& set, const Events& events, const Pairs& pairs,
     p.t_ns = e.log_ns;
     p.method = events.text + id + ", " + rule;
     ++out->paired;
-    if (offset_ns && FaceNs(set.photos[i]) && e.utc_ns) {
-      p.residual_s = (*FaceNs(set.photos[i]) - *offset_ns - *e.utc_ns) * 1e-9;
+    if (offset && FaceNs(set.photos[i]) && EventNs(e, offset->base)) {
+      p.residual_s = (*FaceNs(set.photos[i]) - offset->ns - *EventNs(e, offset->base)) * 1e-9;
       residuals->push_back(*p.residual_s);
     }
   }
@@ -303,7 +331,8 @@ void PlacePaired(const PhotoSet& set, const Events& events, const Pairs& pairs,
 
 // The camera clock's zone for photos placed by capture time alone, decided once.
 struct Zone {
-  std::optional<int64_t> ns;  // given: the fitted offset or --photo-utc-offset
+  std::optional<int64_t> log_offset_ns;  // camera clock - log clock, fitted: no GPS time needed
+  std::optional<int64_t> ns;             // given: the fitted offset or --photo-utc-offset
   std::string text;
   std::optional<int64_t> found;  // searched, for photos without OffsetTimeOriginal
   std::string found_text, problem;
@@ -323,6 +352,13 @@ void PlaceByCaptureTime(const PhotoSet& set, const Events& events,
     }
     if (!FaceNs(r)) {
       p.problem = "no event and no capture time";
+      continue;
+    }
+    if (zone.log_offset_ns) {
+      p.t_ns = *FaceNs(r) - *zone.log_offset_ns;
+      p.method =
+          FormatNumber("capture time (+-%g s)", 0.5 * r.metadata.capture_time->resolution_s) +
+          " through the camera clock's fitted offset to the log's clock";
       continue;
     }
     if (!clock) {
@@ -357,27 +393,30 @@ void PlaceByCaptureTime(const PhotoSet& set, const Events& events,
       continue;
     }
     p.t_ns = clock->LogNsFromUtc(*utc);
-    p.method = FormatNumber("capture time (+-%g s) through the log's GPS time, ",
-                            0.5 * r.metadata.capture_time->resolution_s) +
-               how;
+    p.method = FormatNumber("capture time (+-%g s)", 0.5 * r.metadata.capture_time->resolution_s) +
+               " through the log's GPS time, " + how;
   }
 }
 
 std::string MethodText(const PhotoClock& out, const Events& events, const std::string& rule,
-                       const std::optional<int64_t>& offset_ns,
+                       const std::optional<Offset>& offset,
                        const std::optional<LogUtcClock>& clock) {
   std::string method;
   if (out.paired > 0)
     method = std::to_string(out.paired) + " paired with " + events.text + " " + rule;
   if (out.placed > out.paired) {
     method += (method.empty() ? "" : "; ") + std::to_string(out.placed - out.paired) +
-              " by capture time through the log's GPS time";
+              (offset && offset->base == Base::kLog
+                   ? " by capture time through the camera clock's offset to the log's clock"
+                   : " by capture time through the log's GPS time");
   }
   if (method.empty()) {
     method = events.list.empty() ? "no camera events" : "no photo matched " + events.text;
     if (!clock) method += ", and the log has no GPS time";
   }
-  if (offset_ns) method += "; camera clock UTC" + OffsetText(*offset_ns);
+  if (offset && offset->base == Base::kUtc) method += "; camera clock UTC" + OffsetText(offset->ns);
+  if (offset && offset->base == Base::kLog)
+    method += FormatNumber("; camera clock - log clock %.3f s", offset->ns * 1e-9);
   if (clock) {
     method +=
         FormatNumber("; log clock to UTC from %.0f GPS fixes", static_cast<double>(clock->fixes)) +
@@ -401,16 +440,18 @@ PhotoClock PlacePhotos(const PhotoSet& set, const FlightLog& log, const TriggerF
   PhotoClock out;
   out.placements.resize(set.photos.size());
   std::string rule;
-  std::optional<int64_t> offset_ns;
-  const Pairs pairs = PairPhotos(set, events, &rule, &offset_ns);
+  std::optional<Offset> offset;
+  const Pairs pairs = PairPhotos(set, events, &rule, &offset);
   std::vector<double> residuals;
-  PlacePaired(set, events, pairs, rule, offset_ns, &out, &residuals);
+  PlacePaired(set, events, pairs, rule, offset, &out, &residuals);
 
   // The zone for the rest: the fitted offset, else --photo-utc-offset, else each photo's own
   // OffsetTimeOriginal, else the search.
   Zone zone;
-  if (offset_ns) {
-    zone.ns = offset_ns;
+  if (offset && offset->base == Base::kLog) {
+    zone.log_offset_ns = offset->ns;
+  } else if (offset) {
+    zone.ns = offset->ns;
     zone.text = "the fitted camera clock offset";
   } else if (options.camera_utc_offset_s) {
     zone.ns = *options.camera_utc_offset_s * kNsPerSecond;
@@ -419,14 +460,17 @@ PhotoClock PlacePhotos(const PhotoSet& set, const FlightLog& log, const TriggerF
   PlaceByCaptureTime(set, events, clock, zone, &out);
 
   for (const PhotoPlacement& p : out.placements) out.placed += p.t_ns.has_value();
-  if (offset_ns) out.clock_offset_s = *offset_ns * 1e-9;
+  if (offset) {
+    out.clock_offset_s = offset->ns * 1e-9;
+    out.clock_offset_to = offset->base == Base::kUtc ? "UTC" : "log clock";
+  }
   if (!residuals.empty()) {
     double sum_sq = 0, max_abs = 0;
     for (double r : residuals) sum_sq += r * r, max_abs = std::max(max_abs, std::abs(r));
     out.residual_rms_s = std::sqrt(sum_sq / residuals.size());
     out.residual_max_s = max_abs;
   }
-  out.method = MethodText(out, events, rule, offset_ns, clock);
+  out.method = MethodText(out, events, rule, offset, clock);
   return out;
 }
 

@@ -7,18 +7,21 @@
 // events, first rule that applies:
 //  1. by name, when the events name their images;
 //  2. by number, for an .MRK: its first column is the photo's number (DJI_0123.JPG <-> 123);
-//  3. by capture time, when the events have a UTC time (UTC or GPS times, or log times through
-//     the log's GPS fixes, sim/logs/log_clock.h) and the photos a capture time: the camera clock's
-//     offset (its time zone and error) is the difference that most photo-event pairs share
-//     (votes in 0.5 s bins, each photo matched to the nearest event within its capture time's
-//     resolution / 2 + 0.5 s), refined to the median of the matched pairs;
+//  3. by capture time, when the photos have one: the camera clock's offset is the difference that
+//     most photo-event pairs share (votes in 0.5 s bins, each photo matched to the nearest event
+//     within its capture time's resolution / 2 + 0.5 s), refined to the median of the matched
+//     pairs. Against UTC when the events have a UTC time (UTC or GPS times, or log times through
+//     the log's GPS fixes, sim/logs/log_clock.h): the offset is then the camera's time zone and
+//     error. Else against the log's own clock (a log without GPS time): the offset is then
+//     anything, and the pattern of the capture times against the events' decides;
 //  4. in order, when there are as many photos as events.
 // A paired photo's time is its event's (exposure of row 0, as analyze takes a trigger). Its
-// residual is the capture time less the camera clock's offset less the event's UTC time: what the
-// pairing could not explain (EXIF's whole seconds alone give up to +-0.5 s).
+// residual is the capture time less the camera clock's offset less the event's time on the same
+// base: what the pairing could not explain (EXIF's whole seconds alone give up to +-0.5 s).
 //
-// A photo without an event is placed by its capture time when the log has GPS time: capture time
-// - camera clock offset -> UTC -> log clock. The offset is the one fitted above, else
+// A photo without an event is placed by its capture time: with an offset to the log's clock
+// fitted above, capture time - offset; else when the log has GPS time, capture time - camera
+// clock offset -> UTC -> log clock. The offset is the one fitted above, else
 // PhotoClockOptions::camera_utc_offset_s, else EXIF OffsetTimeOriginal, else the one whole
 // quarter hour (a time zone) that puts every photo inside the log's GPS span; with several, the
 // photos are not placed and the problem says to give --photo-utc-offset. Such a placement has no
@@ -46,7 +49,8 @@ struct PhotoClockOptions {
 struct PhotoClock {
   std::vector<PhotoPlacement> placements;                // one per photo, same order
   std::string method;                                    // for a person: how the photos were placed
-  std::optional<double> clock_offset_s;                  // camera clock - UTC, s (fitted or given)
+  std::optional<double> clock_offset_s;                  // camera clock - clock_offset_to, s
+  std::string clock_offset_to;                           // "UTC" or "log clock" (no GPS time)
   std::optional<double> residual_rms_s, residual_max_s;  // over the pairs with both times
   size_t paired = 0, placed = 0;
 };

@@ -105,6 +105,7 @@ PhotoFlightResult AnalyzePhotoFlight(const PhotoSet& set, const FlightLog& log,
   out.photos = AnalyzePhotosWithLog(set, photo_options, out.clock.placements, out.log);
   out.photos.placement_method = out.clock.method;
   out.photos.clock_offset_s = out.clock.clock_offset_s;
+  out.photos.clock_offset_to = out.clock.clock_offset_to;
   out.photos.residual_rms_s = out.clock.residual_rms_s;
   out.photos.residual_max_s = out.clock.residual_max_s;
   return out;

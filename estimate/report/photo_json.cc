@@ -103,6 +103,8 @@ nlohmann::json PhotoAnalysisToJson(const PhotoSet& set, const PhotoAnalysis& a) 
     j["placement"] = {{"method", a.placement_method},
                       {"placed", a.placed},
                       {"clock_offset_s", Optional(a.clock_offset_s)},
+                      {"clock_offset_to", a.clock_offset_s ? nlohmann::json(a.clock_offset_to)
+                                                           : nlohmann::json(nullptr)},
                       {"residual_rms_s", Optional(a.residual_rms_s)},
                       {"residual_max_s", Optional(a.residual_max_s)}};
   }

@@ -108,6 +108,53 @@ TEST(PlacePhotos, WholeSecondCaptureTimesStillPickTheRightEvents) {
   }
 }
 
+// A log without GPS time (a gyro recorder's, an indoor flight): the capture times are matched on
+// the log's own clock. The camera clock runs an arbitrary 1.2e9 s + 17.25 s ahead of the log's
+// boot clock and off by kErrorsMs. The first exposure has no photo and the 7th photo's event was
+// not logged: eight pairs, residuals the errors less their median, and the 7th photo placed by
+// its capture time through the fitted offset.
+TEST(PlacePhotos, WithoutGpsTimeCaptureTimesAreMatchedOnTheLogsClock) {
+  FlightLog log;  // no utc_fixes
+  const std::vector<int64_t> t = EventTimes();
+  for (size_t k = 0; k < t.size(); ++k) {
+    if (k != 6) log.camera_events.push_back({t[k], static_cast<int64_t>(k), "camera_capture"});
+  }
+  constexpr int64_t kCameraAheadNs = 1'200'000'017'250'000'000;
+  PhotoSet set;
+  for (size_t k = 1; k < t.size(); ++k)
+    set.photos.push_back(
+        Photo("P" + std::to_string(k) + ".jpg", t[k], kCameraAheadNs, kErrorsMs[k] * kMs));
+  const PhotoClock clock = PlacePhotos(set, log, nullptr, {});
+  ASSERT_EQ(clock.paired, 8u) << clock.method;
+  ASSERT_EQ(clock.placed, 9u) << clock.method;
+  std::vector<int64_t> errors;
+  for (size_t k = 1; k < t.size(); ++k) {
+    if (k != 6) errors.push_back(kErrorsMs[k]);
+  }
+  std::sort(errors.begin(), errors.end());
+  const double median_ms = 0.5 * (errors[3] + errors[4]);
+  ASSERT_TRUE(clock.clock_offset_s);
+  EXPECT_EQ(clock.clock_offset_to, "log clock");
+  EXPECT_NEAR(*clock.clock_offset_s, kCameraAheadNs * 1e-9 + median_ms * 1e-3, 1e-6);
+  for (size_t i = 0; i < set.photos.size(); ++i) {
+    const size_t k = i + 1;
+    const PhotoPlacement& p = clock.placements[i];
+    ASSERT_TRUE(p.t_ns) << p.problem;
+    if (k == 6) {
+      EXPECT_FALSE(p.residual_s);
+      EXPECT_NEAR((*p.t_ns - t[k]) * 1e-9, (kErrorsMs[k] - median_ms) * 1e-3, 1e-9);
+      EXPECT_NE(p.method.find("offset to the log's clock"), std::string::npos)
+          << "[" << p.method << "]";
+      continue;
+    }
+    EXPECT_EQ(*p.t_ns, t[k]) << set.photos[i].name;
+    ASSERT_TRUE(p.residual_s);
+    EXPECT_NEAR(*p.residual_s, (kErrorsMs[k] - median_ms) * 1e-3, 1e-9);
+  }
+  EXPECT_NE(clock.method.find("by capture time on the log's clock"), std::string::npos)
+      << clock.method;
+}
+
 TEST(PlacePhotos, MrkPairsByPhotoNumberAndGpsTime) {
   FlightLog log = LogWithGps();
   const std::vector<int64_t> t = EventTimes();
