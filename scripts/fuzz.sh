@@ -92,6 +92,9 @@ cat >"$build/corpus/validation_report/report.json" <<'JSON'
    "rolling_shutter": {"readout_s": 0.03}}, "gyro_scale": [1, 1, 1],
    "gyro_bias_rad_s": [0, 0, 0], "clock_rate_ppm": 30.0}}
 JSON
+seed trigger_file "$data"/incoming/autel_mrk_helenenschacht/*.mrk "$data"/images/siyi_zr10/image_metadata.csv
+printf 'image,t\nDJI_0001.JPG,12.5\nDJI_0002.JPG,14.25\n' >"$build/corpus/trigger_file/named.csv"
+printf '1\t396015.412566\t[2110]\t-17,N\t11,E\t196,V\t22.5685,Lat\t113.9428,Lon\t-1.473,Ellh\t0.01, 0.01, 0.02\t50,Q\n' >"$build/corpus/trigger_file/dji.MRK"
 
 mkdir -p "$build/artifacts"
 failed=0
