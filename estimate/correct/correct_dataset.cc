@@ -123,7 +123,9 @@ CorrectedFrame CorrectOne(const Context& c, const FrameEntry& e) {
   out.predicted_d_after_p90_px = out.residual.d_after_p90_px + 2 * out.map_error_px;
   out.no_source_fraction = WriteCorrected(c, e, map, out.residual, &out);
   if (c.options.check_truth) {
-    const fs::path truth = c.dataset.dir / "truth" / (FrameName(e.frame) + "_disp.exr");
+    const fs::path truth_dir =
+        c.options.truth_dir.empty() ? c.dataset.dir / "truth" : fs::path(c.options.truth_dir);
+    const fs::path truth = truth_dir / (FrameName(e.frame) + "_disp.exr");
     if (!fs::is_regular_file(truth)) throw IoError(IoMessage(truth.string(), 0, "missing"));
     out.truth = MeasureAgainstTruth(map, ReadFloatImage(truth.string()));
   }
@@ -145,7 +147,7 @@ void RunFrames(const Context& c, const CorrectProgress& progress, CorrectSummary
       try {
         done[i] = CorrectOne(c, entries[i]);
       } catch (const std::out_of_range&) {
-        skipped[i] = "its readout is outside gyro.csv";
+        skipped[i] = "its readout is outside " + fs::path(c.dataset.gyro_path).filename().string();
       } catch (...) {
         const std::lock_guard<std::mutex> guard(lock);
         if (!failed.exchange(true)) error = std::current_exception();
@@ -199,10 +201,10 @@ void WriteDatasetFiles(const Context& c, const CorrectSummary& summary) {
     e.frame = f.frame;
     e.t_first_row_ns = f.t_reference_ns;
     e.image = f.image;
-    if (keep_refs) {
-      for (const FrameEntry& in : c.dataset.frames) {
-        if (in.frame == f.frame) e.ref = in.ref;
-      }
+    for (const FrameEntry& in : c.dataset.frames) {
+      if (keep_refs && in.frame == f.frame) e.ref = in.ref;
+    }
+    if (!e.ref.empty()) {
       const fs::path ref = out / e.ref;
       CreateParent(ref);
       std::error_code ec;
@@ -289,7 +291,7 @@ void ChooseSetting(const CorrectOptions& options, const RigDataset& dataset, con
   } else {
     summary->translation = "rotation only (video: no depth known; give --depth for translation)";
   }
-  if (options.reference == CorrectionReference::kMidReadout && !dataset.video) {
+  if (options.reference == CorrectionReference::kMidReadout && !dataset.video && !options.photos) {
     summary->notes.push_back(
         "--reference mid: the references show row 0's instant, not the corrected frames': "
         "frames.csv leaves ref empty");
@@ -355,9 +357,33 @@ TruthResidual MeasureAgainstTruth(const CorrectionMap& map, const cv::Mat& truth
   return out;
 }
 
-CorrectSummary CorrectDataset(const CorrectOptions& options, const CorrectProgress& progress) {
-  options.Check();
-  const RigDataset dataset = ReadRigDataset(options.dataset_dir);
+namespace {
+
+// A folder of photos: its triggers are on the log's clock (the model's time offset is not
+// applied), and the log's still segment gives the bias unless the report or --effect sets one.
+void AdaptModelToPhotos(const PhotoInput& input, bool bias_given, CorrectionModel* model) {
+  TrueModel& m = model->model;
+  if (m.rig.time_offset_s != 0.0) {
+    model->notes.push_back(
+        FormatNumber("time_offset_s %g s not applied: the photos' triggers are "
+                     "on the log's clock (give --latency)",
+                     m.rig.time_offset_s));
+    m.rig.time_offset_s = 0.0;
+  }
+  if (bias_given) return;
+  if (input.still_bias_rad_s) {
+    m.gyro_bias_rad_s = *input.still_bias_rad_s;
+    const Eigen::Vector3d deg_s = kDegPerRad * m.gyro_bias_rad_s;
+    model->notes.push_back(
+        "gyro bias " + FormatNumber("%.4f", deg_s.x()) + ", " + FormatNumber("%.4f", deg_s.y()) +
+        ", " + FormatNumber("%.4f", deg_s.z()) + " deg/s from " + input.still_bias_source);
+  } else {
+    model->notes.push_back("gyro bias 0: no still segment (" + input.still_bias_source + ")");
+  }
+}
+
+CorrectSummary CorrectInput(const CorrectOptions& options, const RigDataset& dataset,
+                            const PhotoInput* photos, const CorrectProgress& progress) {
   SHUTTERLAB_CHECK(!options.check_truth || !dataset.video)
       << "--truth: a video dataset's truth is each frame's match in the one before, not a "
          "global-shutter reference";
@@ -371,7 +397,12 @@ CorrectSummary CorrectDataset(const CorrectOptions& options, const CorrectProgre
   summary.out_dir = options.out_dir;
   summary.report_path = options.report_path;
   summary.video = dataset.video;
+  summary.photos = photos != nullptr;
   summary.warnings = dataset.gyro_warnings;
+  if (photos) {
+    summary.notes = photos->notes;
+    summary.skipped = photos->skipped;
+  }
   std::optional<ReportedModel> report;
   if (!options.report_path.empty()) report = ReadValidationReport(options.report_path);
   summary.model = BuildCorrectionModel(dataset.declared, report, options.report_path);
@@ -379,6 +410,14 @@ CorrectSummary CorrectDataset(const CorrectOptions& options, const CorrectProgre
     const Injection set = ApplyInjection(effect, &summary.model.model);
     summary.model.notes.push_back("--effect " + Spec(set.effect).name + " = " +
                                   EffectValueText(set.value) + " (no uncertainty)");
+  }
+  if (photos) {
+    const bool bias_given =
+        std::count(summary.model.effects.begin(), summary.model.effects.end(), Effect::kGyroBias) >
+            0 ||
+        std::any_of(options.effects.begin(), options.effects.end(),
+                    [](const std::string& e) { return e.rfind("gyro_bias=", 0) == 0; });
+    AdaptModelToPhotos(*photos, bias_given, &summary.model);
   }
   if (options.gyro_noise_rad_s_sqrt_hz) {
     summary.model.gyro_noise_rad_s_sqrt_hz = *options.gyro_noise_rad_s_sqrt_hz;
@@ -403,7 +442,8 @@ CorrectSummary CorrectDataset(const CorrectOptions& options, const CorrectProgre
   if (ec) throw IoError(IoMessage(options.out_dir, 0, "cannot create: " + ec.message()));
   RunFrames(context, progress, &summary);
   if (summary.frames.empty()) {
-    throw IoError(IoMessage(dataset.frames_path, 0, "no frame's readout lies inside gyro.csv"));
+    throw IoError(
+        IoMessage(dataset.frames_path, 0, "no frame's readout lies inside " + dataset.gyro_path));
   }
   WriteDatasetFiles(context, summary);
   WritePipelineLists(summary);
@@ -411,6 +451,16 @@ CorrectSummary CorrectDataset(const CorrectOptions& options, const CorrectProgre
   WriteFileAtomically((fs::path(options.out_dir) / "correct.json").string(),
                       CorrectionToJson(summary).dump(2) + "\n");
   return summary;
+}
+
+}  // namespace
+
+CorrectSummary CorrectDataset(const CorrectOptions& options, const CorrectProgress& progress) {
+  options.Check();
+  if (!options.photos)
+    return CorrectInput(options, ReadRigDataset(options.dataset_dir), nullptr, progress);
+  const PhotoInput input = ReadPhotoInput(options.dataset_dir, *options.photos);
+  return CorrectInput(options, input.dataset, &input, progress);
 }
 
 }  // namespace shutterlab

@@ -20,11 +20,15 @@
 //                                 NAME_mask.png
 //   overview.png                  a few frames, rolling shutter beside corrected
 //   correct.json                  what was done, per frame D before and predicted after
+// A folder of photos with its flight log (estimate/correct/photo_input.h) is corrected the same
+// way, as stills: DIR holds the corrected photos under their names, camera.json, gyro.csv (the
+// log's trace) and frames.csv (no references), masks and lists.
 // Stills use the ground plane at the altitude for translation; video is rotation only unless a
 // depth is given. Frames run in parallel; an image already in DIR is kept (resumed) unless force;
 // every file is written whole or not at all; the input is never modified.
 
 #include "estimate/correct/correction_model.h"
+#include "estimate/correct/photo_input.h"
 #include "estimate/correct/residual_prediction.h"
 #include "render/rs_correct.h"
 #include "sim/log_warning.h"
@@ -39,7 +43,11 @@
 namespace shutterlab {
 
 struct CorrectOptions {
-  std::string dataset_dir;
+  std::string dataset_dir;  // a rig dataset, or with `photos` the folder of photos
+  // correct --photos DIR LOG: the log, the triggers and the camera of the photos in dataset_dir.
+  // Their triggers are on the log's clock: the model's time_offset_s is not applied (said), and
+  // without a gyro bias in the model the log's still segment gives it (said).
+  std::optional<PhotoInputOptions> photos;
   std::string out_dir;
   std::string report_path;  // a validation report (validate --report); "" for the declared model
   // Effects set on top of camera.json and the report, "NAME=VALUE" as `render --inject` takes them
@@ -56,8 +64,11 @@ struct CorrectOptions {
   std::optional<double> gyro_noise_rad_s_sqrt_hz;
   bool force = false;        // rewrite corrected images that DIR already holds
   bool check_truth = false;  // rendered datasets: measure the result against truth/ (row 0)
-  int jobs = 0;              // frames at once; 0: the hardware's threads, at most 4
-  bool pictures = true;      // overview.png
+  // Where check_truth reads each frame's NNNN_disp.exr (photos: NNNN is the photo's index in the
+  // folder); "": DATASET/truth.
+  std::string truth_dir;
+  int jobs = 0;          // frames at once; 0: the hardware's threads, at most 4
+  bool pictures = true;  // overview.png
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };
@@ -93,6 +104,7 @@ struct CorrectedFrame {
 struct CorrectSummary {
   std::string dataset, out_dir, report_path;
   bool video = false;
+  bool photos = false;  // a folder of photos with its log
   CorrectionModel model;
   CorrectionSetting setting;
   std::string translation;             // for a person: "ground plane at 50 m", "rotation only: ..."

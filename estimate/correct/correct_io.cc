@@ -59,7 +59,9 @@ json CorrectionToJson(const CorrectSummary& s) {
   return {{"format", "correction/1"},
           {"dataset", s.dataset},
           {"out", s.out_dir},
-          {"kind", s.video ? "video" : "still"},
+          {"kind", s.photos  ? "photos"
+                   : s.video ? "video"
+                             : "still"},
           {"reference", CorrectionReferenceName(s.setting.reference)},
           {"translation", s.translation},
           {"report", s.report_path.empty() ? json() : json(s.report_path)},
@@ -79,7 +81,16 @@ std::string CorrectionTable(const CorrectSummary& s) {
   std::ostringstream out;
   const bool truth = std::any_of(s.frames.begin(), s.frames.end(),
                                  [](const CorrectedFrame& f) { return f.truth.has_value(); });
-  out << "frame   D before px      m   D after px (p90)      m   no source"
+  // Frames by number; photos by name.
+  size_t label_width = 5;
+  for (const CorrectedFrame& f : s.frames) {
+    label_width = std::max(label_width, s.photos ? f.image.size() : 0);
+  }
+  const auto label = [&](const std::string& text) {
+    return std::string(label_width - std::min(label_width, text.size()), ' ') + text;
+  };
+  out << label(s.photos ? "photo" : "frame")
+      << "   D before px      m   D after px (p90)      m   no source"
       << (truth ? "   truth after px (D, rms)" : "") << "\n";
   std::vector<double> before, after;
   // On the ground only where a plane gives the scale (not for rotation-only video).
@@ -88,8 +99,8 @@ std::string CorrectionTable(const CorrectSummary& s) {
   };
   for (const CorrectedFrame& f : s.frames) {
     const ResidualPrediction& r = f.residual;
-    out << FormatNumber("%5.0f", static_cast<double>(f.frame))
-        << FormatNumber(" %12.3f", r.d_before_px) << metres(" %6.3f", r.d_before_px)
+    out << label(s.photos ? f.image : std::to_string(f.frame))
+        << FormatNumber(" %13.3f", r.d_before_px) << metres(" %6.3f", r.d_before_px)
         << FormatNumber(" %12.3f", f.predicted_d_after_px)
         << FormatNumber(" (%.3f)", f.predicted_d_after_p90_px)
         << metres(" %6.4f", f.predicted_d_after_px)
@@ -101,13 +112,15 @@ std::string CorrectionTable(const CorrectSummary& s) {
     before.push_back(r.d_before_px);
     after.push_back(f.predicted_d_after_px);
   }
-  for (const auto& [frame, why] : s.skipped)
-    out << "frame " << frame << " skipped: " << why << "\n";
+  for (const auto& [frame, why] : s.skipped) {
+    out << (s.photos ? std::string() : "frame " + std::to_string(frame) + " ") << "skipped: " << why
+        << "\n";
+  }
   if (!s.frames.empty()) {
-    out << "corrected " << s.frames.size() << " frame(s) to " << s.out_dir << " ("
-        << CorrectionReferenceName(s.setting.reference) << ", " << s.translation << "): median D "
-        << FormatNumber("%.3f", UpperMedian(before)) << " px before, "
-        << FormatNumber("%.3f", UpperMedian(after)) << " px predicted after\n";
+    out << "corrected " << s.frames.size() << (s.photos ? " photo(s) to " : " frame(s) to ")
+        << s.out_dir << " (" << CorrectionReferenceName(s.setting.reference) << ", "
+        << s.translation << "): median D " << FormatNumber("%.3f", UpperMedian(before))
+        << " px before, " << FormatNumber("%.3f", UpperMedian(after)) << " px predicted after\n";
   }
   return out.str();
 }

@@ -62,6 +62,39 @@ TEST(CorrectCommand, WritesADatasetAndItsRecord) {
   EXPECT_EQ(nlohmann::json::parse(again.out)["frames"][0]["kept"], true);
 }
 
+TEST(CorrectCommand, PhotosWithTheirLogAndTriggers) {
+  // The dataset's two frames as JPEG photos, its gyro.csv as the flight log, a trigger file naming
+  // them: the photos are corrected under their names, the table says so.
+  test::TempDir dir;
+  const std::string dataset = SmallDataset(dir), out = dir / "out";
+  fs::create_directories(dir / "photos");
+  WriteImage(dir / "photos/A.jpg", ReadImage(dataset + "/images/0003_rs.png"));
+  WriteImage(dir / "photos/B.jpg", ReadImage(dataset + "/images/0012_rs.png"));
+  WriteFileAtomically(dir / "triggers.csv", "image,t\nA.jpg,0.5\nB.jpg,1.25\n");
+  const std::string photos = "correct --photos " + (dir / "photos") + " " + dataset +
+                             "/gyro.csv --camera " + dataset + "/camera.json --triggers " +
+                             (dir / "triggers.csv");
+  const test::CommandResult result = test::RunShutterlab(photos + " --out " + out);
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.out.find("corrected 2 photo(s)"), std::string::npos) << result.out;
+  EXPECT_NE(result.err.find("photos placed on gyro.csv: "), std::string::npos) << result.err;
+  for (const char* file : {"A.jpg", "B.jpg", "masks/A.jpg.png", "frames.csv", "correct.json"}) {
+    EXPECT_TRUE(fs::is_regular_file(fs::path(out) / file)) << file;
+  }
+  // Photo flags without --photos, and a trigger file that names no photo: one line, exit 2.
+  WriteFileAtomically(dir / "other.csv", "image,t\nC.jpg,0.5\n");
+  for (const std::string& args :
+       {"correct " + dataset + " --out " + (dir / "o4") + " --latency 5ms",
+        "correct --photos " + (dir / "photos") + " " + dataset + "/gyro.csv --camera " + dataset +
+            "/camera.json --triggers " + (dir / "other.csv") + " --out " + (dir / "o5")}) {
+    const test::CommandResult bad = test::RunShutterlab(args);
+    EXPECT_EQ(bad.exit_code, 2) << args << "\n" << bad.output;
+    EXPECT_EQ(bad.err.find('\n'), bad.err.size() - 1) << "one line: " << bad.err;
+  }
+  EXPECT_FALSE(fs::exists(dir / "o4"));
+  EXPECT_FALSE(fs::exists(dir / "o5"));
+}
+
 TEST(CorrectCommand, BadInputIsOneLineAndExitCodeTwo) {
   test::TempDir dir;
   const std::string dataset = SmallDataset(dir);

@@ -291,6 +291,63 @@ TEST(CorrectEndToEnd, PredictsTheResidualOfGyroNoise) {
   EXPECT_LT(median, 2.0);
 }
 
+TEST(CorrectPhotos, RenderedStillsPlacedByTheirTriggersMatchTheTruth) {
+  // Three stills rendered from one flight, written as JPEG photos, with the flight's gyro log and
+  // a trigger file naming them 5 ms before row 0 (--latency 5 ms) and a fourth photo that no
+  // trigger names: corrected with the true model, the three match the renderer's exact truth to
+  // interpolation error, the fourth is skipped with its reason, and a second run keeps them.
+  test::TempDir dir;
+  const std::vector<double> times_s = {12.0, 16.0, 20.0};
+  const Rendered rendered = Render(dir, "ds", {"velocity=6,-3,0"}, times_s);
+  const fs::path photos = dir.path() / "photos";
+  fs::create_directories(photos);
+  std::string triggers = "image,t\n";
+  const std::vector<FrameEntry> frames = ReadFramesCsv(rendered.dataset + "/frames.csv");
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const std::string name = "DJI_000" + std::to_string(i + 1) + ".JPG";
+    WriteImage((photos / name).string(), ReadImage(rendered.dataset + "/" + frames[i].image));
+    triggers += name + "," + FormatNumber("%.6f", times_s[i] - 0.005) + "\n";
+  }
+  fs::copy_file(photos / "DJI_0001.JPG", photos / "DJI_0099.JPG");
+  WriteFileAtomically(dir / "triggers.csv", triggers);
+  CorrectOptions options;
+  options.dataset_dir = photos.string();
+  options.out_dir = dir / "out";
+  options.report_path = Report(dir, "truth.json", rendered.truth);
+  options.check_truth = true;
+  options.truth_dir = rendered.dataset + "/truth";
+  options.pictures = false;
+  PhotoInputOptions input;
+  input.log_path = rendered.dataset + "/gyro.csv";
+  input.triggers_path = dir / "triggers.csv";
+  input.trigger_latency_s = 0.005;
+  input.camera = ReadRigModel(rendered.dataset + "/camera.json");
+  input.camera_path = "camera.json";
+  options.photos = input;
+  const CorrectSummary summary = CorrectDataset(options);
+  EXPECT_TRUE(summary.photos);
+  ASSERT_EQ(summary.frames.size(), 3u);
+  for (size_t i = 0; i < summary.frames.size(); ++i) {
+    const CorrectedFrame& f = summary.frames[i];
+    EXPECT_EQ(f.image, "DJI_000" + std::to_string(i + 1) + ".JPG");
+    EXPECT_EQ(f.t_first_row_ns, SecondsToNs(times_s[i])) << "trigger + latency";
+    EXPECT_LE(f.truth->rms_px, kInterpolationRmsPx) << f.image;
+    EXPECT_LE(f.truth->d_px, 2 * CorrectionMapOptions{}.tolerance_px + 0.02) << f.image;
+    EXPECT_GT(f.truth->d_before_px, 0.5) << "the photo must be distorted to test anything";
+    EXPECT_TRUE(fs::is_regular_file(fs::path(options.out_dir) / f.image));
+    EXPECT_TRUE(fs::is_regular_file(fs::path(options.out_dir) / "masks" / (f.image + ".png")));
+    std::printf("  %s: D before %.3f px, after %.4f px (rms %.4f) against the truth\n",
+                f.image.c_str(), f.truth->d_before_px, f.truth->d_px, f.truth->rms_px);
+  }
+  ASSERT_EQ(summary.skipped.size(), 1u);
+  EXPECT_NE(summary.skipped[0].second.find("DJI_0099.JPG"), std::string::npos)
+      << summary.skipped[0].second;
+  EXPECT_EQ(ReadFramesCsv((fs::path(options.out_dir) / "frames.csv").string()).size(), 3u);
+  EXPECT_TRUE(fs::is_regular_file(fs::path(options.out_dir) / "correct.json"));
+  options.check_truth = false;
+  for (const CorrectedFrame& f : CorrectDataset(options).frames) EXPECT_TRUE(f.kept) << f.image;
+}
+
 TEST(CorrectEndToEnd, ResumesKeepsInputsAndRefusesToOverwriteThem) {
   test::TempDir dir;
   const Rendered rendered = Render(dir, "ds", {}, {12.0});
