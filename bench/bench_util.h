@@ -10,10 +10,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <stdexcept>
 #include <string>
 #include <time.h>
+#include <utility>
+#include <vector>
 
 namespace shutterlab::bench {
 
@@ -104,6 +107,35 @@ inline void PrintAgainstReference(const std::string& reference, const std::strin
   for (const auto& [name, s] : seconds) {
     std::printf("  %-*s %9.2f ms   %7.2fx %s\n", width, name.c_str(), s * 1e3, s / found->second,
                 against.c_str());
+  }
+}
+
+// The paired runs: each contender called once per run, in turn (so that each sees the same load on
+// the shared machine), on one OpenCV thread; prints the median thread CPU time of each and its
+// ratio to the first, under "Paired, RUNS alternating runs, median thread CPU time (WHAT), against
+// FIRST:".
+inline void PrintPaired(
+    const std::string& what, int runs,
+    const std::vector<std::pair<std::string, std::function<void()>>>& contenders) {
+  cv::setNumThreads(1);
+  std::vector<std::vector<double>> seconds(contenders.size());
+  for (int i = 0; i < runs; ++i) {
+    for (size_t k = 0; k < contenders.size(); ++k) {
+      seconds[k].push_back(CpuSecondsOf(contenders[k].second));
+    }
+  }
+  size_t width = 0;
+  for (const auto& contender : contenders) width = std::max(width, contender.first.size());
+  std::printf("\nPaired, %d alternating runs, median thread CPU time (%s), against %s:\n", runs,
+              what.c_str(), contenders[0].first.c_str());
+  std::vector<double> medians;
+  for (std::vector<double>& s : seconds) {
+    std::sort(s.begin(), s.end());
+    medians.push_back(s[s.size() / 2]);  // the upper median
+  }
+  for (size_t k = 0; k < contenders.size(); ++k) {
+    std::printf("  %-*s %8.1f ms   %.2fx\n", static_cast<int>(width), contenders[k].first.c_str(),
+                medians[k] * 1e3, medians[k] / medians[0]);
   }
 }
 

@@ -113,23 +113,11 @@ BENCHMARK(BM_CorrectWarpOnly)->Unit(benchmark::kMillisecond)->MinTime(1.0);
 // medians, so that both see the same conditions.
 void PrintPairedRatios(int runs) {
   Fixture& f = Shared();
-  cv::setNumThreads(1);
-  std::vector<double> warp_s, correct_s, plane_s;
-  for (int i = 0; i < runs; ++i) {
-    warp_s.push_back(bench::CpuSecondsOf([&] { f.Warp(); }));
-    correct_s.push_back(bench::CpuSecondsOf([&] { f.Correct(f.camera, f.motion, std::nullopt); }));
-    plane_s.push_back(bench::CpuSecondsOf([&] { f.Correct(f.lens_camera, f.moving, 50.0); }));
-  }
-  const double warp = UpperMedian(warp_s), correct = UpperMedian(correct_s),
-               plane = UpperMedian(plane_s);
-  std::printf(
-      "\nPaired, %d alternating runs, median thread CPU time (20 MP RGB, 1 thread, bilinear):\n",
-      runs);
-  std::printf("  warpPerspective        %8.1f ms   1.00x\n", warp * 1e3);
-  std::printf("  correct (rotation)     %8.1f ms   %.2fx warpPerspective\n", correct * 1e3,
-              correct / warp);
-  std::printf("  correct (plane, lens)  %8.1f ms   %.2fx warpPerspective\n", plane * 1e3,
-              plane / warp);
+  bench::PrintPaired(
+      "20 MP RGB, 1 thread, bilinear", runs,
+      {{"warpPerspective", [&] { f.Warp(); }},
+       {"correct (rotation)", [&] { f.Correct(f.camera, f.motion, std::nullopt); }},
+       {"correct (plane, lens)", [&] { f.Correct(f.lens_camera, f.moving, 50.0); }}});
 }
 
 }  // namespace

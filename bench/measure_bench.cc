@@ -14,6 +14,7 @@
 #include "render/image_io.h"
 #include "render/rs_warp.h"
 #include "render/truth_model.h"
+#include "sim/text_file.h"
 #include "sim/units.h"
 #include "tests/estimate/loop/effect_fixtures.h"
 
@@ -85,25 +86,11 @@ BENCHMARK(BM_DisMediumDefault)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 // The shared machine's load drifts: alternate the contenders run by run, compare medians.
 void PrintPairedRatios(int runs) {
-  cv::setNumThreads(1);
   Fixture& f = Shared();
-  std::vector<double> measure_s, ultrafast_s, medium_s;
-  for (int i = 0; i < runs; ++i) {
-    ultrafast_s.push_back(bench::CpuSecondsOf([&f] { RunDisUltrafast(f); }));
-    measure_s.push_back(bench::CpuSecondsOf([&f] { RunMeasure(f); }));
-    medium_s.push_back(bench::CpuSecondsOf([&f] { RunDisMedium(f); }));
-  }
-  const double ultrafast = UpperMedian(ultrafast_s), measure = UpperMedian(measure_s),
-               medium = UpperMedian(medium_s);
-  std::printf(
-      "\nPaired, %d alternating runs, median thread CPU time (1280x960 RGB, D %.1f px, "
-      "1 thread):\n",
-      runs, f.d_px);
-  std::printf("  DIS ULTRAFAST finest 0, one way  %7.1f ms   1.00x\n", ultrafast * 1e3);
-  std::printf("  measure (all)                    %7.1f ms   %.2fx\n", measure * 1e3,
-              measure / ultrafast);
-  std::printf("  DIS MEDIUM default, one way      %7.1f ms   %.2fx\n", medium * 1e3,
-              medium / ultrafast);
+  bench::PrintPaired(FormatNumber("1280x960 RGB, D %.1f px, 1 thread", f.d_px), runs,
+                     {{"DIS ULTRAFAST finest 0, one way", [&f] { RunDisUltrafast(f); }},
+                      {"measure (all)", [&f] { RunMeasure(f); }},
+                      {"DIS MEDIUM default, one way", [&f] { RunDisMedium(f); }}});
 }
 
 }  // namespace

@@ -117,27 +117,18 @@ namespace {
 // compare medians, so that both see the same conditions.
 void PrintPairedRatios(int runs) {
   Fixture& f = Shared();
-  cv::setNumThreads(1);
   const FrameGeometry geometry(f.camera, 50.0, f.motion, f.scene.size());
-  std::vector<double> render_s, warp_s, remap_s;
-  for (int i = 0; i < runs; ++i) {
-    warp_s.push_back(bench::CpuSecondsOf([&] {
-      cv::warpPerspective(f.scene, f.out, f.homography, f.out.size(),
-                          cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT);
-    }));
-    render_s.push_back(bench::CpuSecondsOf(
-        [&] { RenderFrame(f.scene, geometry, Interpolation::kBilinear, &f.out); }));
-    remap_s.push_back(bench::CpuSecondsOf(
-        [&] { cv::remap(f.scene, f.out, f.map1, f.map2, cv::INTER_LINEAR, cv::BORDER_CONSTANT); }));
-  }
-  const double warp = UpperMedian(warp_s), render = UpperMedian(render_s),
-               remap = UpperMedian(remap_s);
-  std::printf(
-      "\nPaired, %d alternating runs, median thread CPU time (20 MP RGB, 1 thread, bilinear):\n",
-      runs);
-  std::printf("  warpPerspective  %8.1f ms   1.00x\n", warp * 1e3);
-  std::printf("  render (RS)      %8.1f ms   %.2fx warpPerspective\n", render * 1e3, render / warp);
-  std::printf("  remap (map)      %8.1f ms   %.2fx warpPerspective\n", remap * 1e3, remap / warp);
+  bench::PrintPaired(
+      "20 MP RGB, 1 thread, bilinear", runs,
+      {{"warpPerspective",
+        [&] {
+          cv::warpPerspective(f.scene, f.out, f.homography, f.out.size(),
+                              cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT);
+        }},
+       {"render (RS)", [&] { RenderFrame(f.scene, geometry, Interpolation::kBilinear, &f.out); }},
+       {"remap (map)", [&] {
+          cv::remap(f.scene, f.out, f.map1, f.map2, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+        }}});
 }
 
 }  // namespace
