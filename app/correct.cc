@@ -87,6 +87,15 @@ void Run(CorrectCommand& command) {
     options.dataset_dir = command.photos_dir;
     options.photos = PhotoOptionsFromFlags(command);
   }
+  // Reading the photos' metadata, then correcting them: one bar each.
+  std::unique_ptr<Progress> reading;
+  if (options.photos) {
+    options.photos->progress = [&reading](double f) {
+      if (!reading) reading = std::make_unique<Progress>("photos", 1000);
+      reading->Update(static_cast<size_t>(f * 1000));
+      if (f >= 1.0) reading.reset();
+    };
+  }
   const std::optional<CorrectionReference> reference = ParseCorrectionReference(command.reference);
   SHUTTERLAB_CHECK(reference) << "--reference must be row0 or mid (got " << command.reference
                               << ")";

@@ -17,8 +17,7 @@ namespace {
 namespace fs = std::filesystem;
 
 // What the user gave wins over the photos' own focal length, readout and altitude.
-PhotoSetOptions PhotoSetOptionsFrom(const PhotoInputOptions& options,
-                                    const std::function<void(double)>& progress) {
+PhotoSetOptions PhotoSetOptionsFrom(const PhotoInputOptions& options) {
   PhotoSetOptions set;
   if (options.camera) {
     set.readout_s = options.camera->shutter.readout_s;
@@ -38,7 +37,7 @@ PhotoSetOptions PhotoSetOptionsFrom(const PhotoInputOptions& options,
   }
   set.altitude_m = options.altitude_m;
   set.lens_profile = options.lens_profile;
-  set.progress = progress;
+  set.progress = options.progress;
   return set;
 }
 
@@ -122,10 +121,9 @@ void PhotoInputOptions::Check() const {
   clock.Check();
 }
 
-PhotoInput ReadPhotoInput(const std::string& photos_dir, const PhotoInputOptions& options,
-                          const std::function<void(double)>& progress) {
+PhotoInput ReadPhotoInput(const std::string& photos_dir, const PhotoInputOptions& options) {
   options.Check();
-  const PhotoSetOptions set_options = PhotoSetOptionsFrom(options, progress);
+  const PhotoSetOptions set_options = PhotoSetOptionsFrom(options);
   set_options.Check();
   const PhotoSet set = ReadPhotoSet(photos_dir, set_options);
   PhotoInput input;

@@ -41,6 +41,7 @@ struct PhotoInputOptions {
   std::optional<double> readout_s, focal_px, altitude_m;
   std::optional<LensProfile> lens_profile;  // --lens-profile, scaled to the photos
   PhotoClockOptions clock;
+  std::function<void(double)> progress;  // fraction of the photos read (0..1); may be empty
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };
@@ -62,8 +63,7 @@ struct PhotoInput {
 };
 
 // Reads the folder, the log and the triggers; throws IoError naming the file for what cannot be
-// read, and when no photo is placed on the log. progress: the fraction of photos read.
-PhotoInput ReadPhotoInput(const std::string& photos_dir, const PhotoInputOptions& options,
-                          const std::function<void(double)>& progress = {});
+// read, and when no photo is placed on the log.
+PhotoInput ReadPhotoInput(const std::string& photos_dir, const PhotoInputOptions& options);
 
 }  // namespace shutterlab
