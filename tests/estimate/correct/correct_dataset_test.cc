@@ -15,6 +15,7 @@
 #include "render/render_dataset.h"
 #include "sim/check.h"
 #include "sim/logs/gyro_io.h"
+#include "sim/logs/ulog_write.h"
 #include "sim/synth/synth.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
@@ -291,25 +292,22 @@ TEST(CorrectEndToEnd, PredictsTheResidualOfGyroNoise) {
   EXPECT_LT(median, 2.0);
 }
 
-TEST(CorrectPhotos, RenderedStillsPlacedByTheirTriggersMatchTheTruth) {
-  // Three stills rendered from one flight, written as JPEG photos, with the flight's gyro log and
-  // a trigger file naming them 5 ms before row 0 (--latency 5 ms) and a fourth photo that no
-  // trigger names: corrected with the true model, the three match the renderer's exact truth to
-  // interpolation error, the fourth is skipped with its reason, and a second run keeps them.
-  test::TempDir dir;
-  const std::vector<double> times_s = {12.0, 16.0, 20.0};
-  const Rendered rendered = Render(dir, "ds", {"velocity=6,-3,0"}, times_s);
+// The rendered frames as JPEG photos in DIR/photos under `names` (frames.csv order).
+fs::path PhotoFolder(const test::TempDir& dir, const Rendered& rendered,
+                     const std::vector<std::string>& names) {
   const fs::path photos = dir.path() / "photos";
   fs::create_directories(photos);
-  std::string triggers = "image,t\n";
   const std::vector<FrameEntry> frames = ReadFramesCsv(rendered.dataset + "/frames.csv");
-  for (size_t i = 0; i < frames.size(); ++i) {
-    const std::string name = "DJI_000" + std::to_string(i + 1) + ".JPG";
-    WriteImage((photos / name).string(), ReadImage(rendered.dataset + "/" + frames[i].image));
-    triggers += name + "," + FormatNumber("%.6f", times_s[i] - 0.005) + "\n";
+  for (size_t i = 0; i < names.size(); ++i) {
+    WriteImage((photos / names[i]).string(), ReadImage(rendered.dataset + "/" + frames[i].image));
   }
-  fs::copy_file(photos / "DJI_0001.JPG", photos / "DJI_0099.JPG");
-  WriteFileAtomically(dir / "triggers.csv", triggers);
+  return photos;
+}
+
+// correct --photos PHOTOS LOG with the rendered dataset's camera.json and a report holding the
+// true model, measured against the render's truth.
+CorrectOptions PhotoOptions(const test::TempDir& dir, const Rendered& rendered,
+                            const fs::path& photos, const std::string& log) {
   CorrectOptions options;
   options.dataset_dir = photos.string();
   options.out_dir = dir / "out";
@@ -317,28 +315,52 @@ TEST(CorrectPhotos, RenderedStillsPlacedByTheirTriggersMatchTheTruth) {
   options.check_truth = true;
   options.truth_dir = rendered.dataset + "/truth";
   options.pictures = false;
-  PhotoInputOptions input;
-  input.log_path = rendered.dataset + "/gyro.csv";
-  input.triggers_path = dir / "triggers.csv";
-  input.trigger_latency_s = 0.005;
-  input.camera = ReadRigModel(rendered.dataset + "/camera.json");
-  input.camera_path = "camera.json";
-  options.photos = input;
-  const CorrectSummary summary = CorrectDataset(options);
+  options.photos.emplace();
+  options.photos->log_path = log;
+  options.photos->camera = ReadRigModel(rendered.dataset + "/camera.json");
+  options.photos->camera_path = "camera.json";
+  return options;
+}
+
+void ExpectTheTruth(const CorrectSummary& summary, const std::vector<std::string>& names,
+                    const std::vector<double>& times_s) {
   EXPECT_TRUE(summary.photos);
-  ASSERT_EQ(summary.frames.size(), 3u);
+  ASSERT_EQ(summary.frames.size(), names.size());
   for (size_t i = 0; i < summary.frames.size(); ++i) {
     const CorrectedFrame& f = summary.frames[i];
-    EXPECT_EQ(f.image, "DJI_000" + std::to_string(i + 1) + ".JPG");
-    EXPECT_EQ(f.t_first_row_ns, SecondsToNs(times_s[i])) << "trigger + latency";
+    EXPECT_EQ(f.image, names[i]);
+    EXPECT_EQ(f.t_first_row_ns, SecondsToNs(times_s[i])) << f.image;
     EXPECT_LE(f.truth->rms_px, kInterpolationRmsPx) << f.image;
     EXPECT_LE(f.truth->d_px, 2 * CorrectionMapOptions{}.tolerance_px + 0.02) << f.image;
     EXPECT_GT(f.truth->d_before_px, 0.5) << "the photo must be distorted to test anything";
-    EXPECT_TRUE(fs::is_regular_file(fs::path(options.out_dir) / f.image));
-    EXPECT_TRUE(fs::is_regular_file(fs::path(options.out_dir) / "masks" / (f.image + ".png")));
+    EXPECT_TRUE(fs::is_regular_file(fs::path(summary.out_dir) / f.image));
+    EXPECT_TRUE(fs::is_regular_file(fs::path(summary.out_dir) / "masks" / (f.image + ".png")));
     std::printf("  %s: D before %.3f px, after %.4f px (rms %.4f) against the truth\n",
                 f.image.c_str(), f.truth->d_before_px, f.truth->d_px, f.truth->rms_px);
   }
+}
+
+TEST(CorrectPhotos, RenderedStillsPlacedByTheirTriggersMatchTheTruth) {
+  // Three stills rendered from one flight, written as JPEG photos, with the flight's gyro log and
+  // a trigger file naming them 5 ms before row 0 (--latency 5 ms) and a fourth photo that no
+  // trigger names: corrected with the true model, the three match the renderer's exact truth to
+  // interpolation error, the fourth is skipped with its reason, and a second run keeps them.
+  test::TempDir dir;
+  const std::vector<double> times_s = {12.0, 16.0, 20.0};
+  const std::vector<std::string> names = {"DJI_0001.JPG", "DJI_0002.JPG", "DJI_0003.JPG"};
+  const Rendered rendered = Render(dir, "ds", {"velocity=6,-3,0"}, times_s);
+  const fs::path photos = PhotoFolder(dir, rendered, names);
+  fs::copy_file(photos / "DJI_0001.JPG", photos / "DJI_0099.JPG");
+  std::string triggers = "image,t\n";
+  for (size_t i = 0; i < names.size(); ++i) {
+    triggers += names[i] + "," + FormatNumber("%.6f", times_s[i] - 0.005) + "\n";
+  }
+  WriteFileAtomically(dir / "triggers.csv", triggers);
+  CorrectOptions options = PhotoOptions(dir, rendered, photos, rendered.dataset + "/gyro.csv");
+  options.photos->triggers_path = dir / "triggers.csv";
+  options.photos->trigger_latency_s = 0.005;
+  const CorrectSummary summary = CorrectDataset(options);
+  ExpectTheTruth(summary, names, times_s);
   ASSERT_EQ(summary.skipped.size(), 1u);
   EXPECT_NE(summary.skipped[0].second.find("DJI_0099.JPG"), std::string::npos)
       << summary.skipped[0].second;
@@ -346,6 +368,28 @@ TEST(CorrectPhotos, RenderedStillsPlacedByTheirTriggersMatchTheTruth) {
   EXPECT_TRUE(fs::is_regular_file(fs::path(options.out_dir) / "correct.json"));
   options.check_truth = false;
   for (const CorrectedFrame& f : CorrectDataset(options).frames) EXPECT_TRUE(f.kept) << f.image;
+}
+
+TEST(CorrectPhotos, PlacedInOrderOnAPx4LogsOwnCameraEvents) {
+  // The same flight as a PX4 ULog whose camera_capture events are the photos' exposures, and no
+  // trigger file: the photos are paired with the log's events in order.
+  test::TempDir dir;
+  const std::vector<double> times_s = {14.0, 18.0};
+  const std::vector<std::string> names = {"a.jpg", "b.jpg"};
+  const Rendered rendered = Render(dir, "ds", {"time_offset=0.004"}, times_s);
+  const fs::path photos = PhotoFolder(dir, rendered, names);
+  std::vector<GyroSample> samples = FlightGyro().samples();
+  samples.erase(samples.begin());  // PX4 times are unsigned and 0 means unset: start at 1 ms
+  std::vector<CameraEvent> events;
+  // Row 0 on the log's clock: the camera's time plus the truth's clock offset.
+  for (size_t i = 0; i < times_s.size(); ++i) {
+    events.push_back({SecondsToNs(times_s[i] + 0.004), static_cast<int64_t>(i), ""});
+  }
+  WriteULog(dir / "flight.ulg", GyroTrace(std::move(samples)), events);
+  const CorrectSummary summary =
+      CorrectDataset(PhotoOptions(dir, rendered, photos, dir / "flight.ulg"));
+  ExpectTheTruth(summary, names, {times_s[0] + 0.004, times_s[1] + 0.004});
+  EXPECT_TRUE(summary.skipped.empty());
 }
 
 TEST(CorrectEndToEnd, ResumesKeepsInputsAndRefusesToOverwriteThem) {
