@@ -104,6 +104,26 @@ void StillBias(const GyroTrace& gyro, PhotoInput* input) {
   }
 }
 
+// What the gyro's axes are to the camera, said: a flight controller's gyro turns with the
+// airframe, a gimbal's camera does not.
+void AddMountingNotes(const PhotoSet& set, const PhotoInputOptions& options, PhotoInput* input) {
+  if (!options.camera) {
+    input->notes.push_back(
+        "mounting unknown: the log's gyro axes are taken as the camera's (x right, y down, z "
+        "along the view); give --camera camera.json with gyro_to_camera, or --effect "
+        "gyro_to_camera=...");
+  }
+  size_t on_gimbal = 0;
+  for (const PhotoRecord& r : set.photos) on_gimbal += r.ok() && r.metadata.gimbal ? 1 : 0;
+  if (on_gimbal > 0) {
+    input->notes.push_back(
+        std::to_string(on_gimbal) + " of " + std::to_string(set.photos.size()) +
+        " photos were taken from a gimbal: a stabilised camera does not turn with the airframe, "
+        "so a flight controller's gyro does not describe its motion (the correction is right only "
+        "with a gyro on the camera)");
+  }
+}
+
 }  // namespace
 
 void PhotoInputOptions::Check() const {
@@ -188,6 +208,7 @@ PhotoInput ReadPhotoInput(const std::string& photos_dir, const PhotoInputOptions
       (latency_ns != 0 ? FormatNumber(", latency %g ms", options.trigger_latency_s * 1e3)
                        : std::string()));
   input.notes.push_back("ground plane height: " + input.altitude_source);
+  AddMountingNotes(set, options, &input);
   return input;
 }
 

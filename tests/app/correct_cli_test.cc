@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 
@@ -93,6 +94,51 @@ TEST(CorrectCommand, PhotosWithTheirLogAndTriggers) {
   }
   EXPECT_FALSE(fs::exists(dir / "o4"));
   EXPECT_FALSE(fs::exists(dir / "o5"));
+}
+
+TEST(CorrectCommand, RealPhotosWithTheirOwnCameraAndTriggerFile) {
+  // Two real SIYI ZR10 photos (2560x1440, EXIF focal length) and the flight's own image list
+  // (PX4 boot time per image) as the trigger file, over a synthetic log that pans at a constant
+  // 0.01 rad/s about the camera's y axis: the photos' own camera is read, each photo is placed by
+  // name, and D before is the pan's shear during the readout, f w T.
+  SHUTTERLAB_REAL_DATA(siyi, "images/siyi_zr10");
+  test::TempDir dir;
+  fs::create_directories(dir / "photos");
+  for (const char* name : {"IMG_0050.jpg", "IMG_0100.jpg"}) {
+    fs::copy_file(fs::path(siyi) / name, dir.path() / "photos" / name);
+  }
+  WriteGyroCsv(dir / "log.csv",
+               test::ConstantRateTrace(Eigen::Vector3d(0, 0.01, 0), 320.0, 170.0, 200.0));
+  const std::string out = dir / "out";
+  const test::CommandResult result = test::RunShutterlab(
+      "correct --photos " + (dir / "photos") + " " + (dir / "log.csv") + " --triggers " + siyi +
+      "/image_metadata.csv --readout 20ms --effect gyro_bias=0,0,0 --json --out " + out);
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.err.find("the photos' SIYIKEJI ZR10 (2 of 2 photos), 2560x1440"),
+            std::string::npos)
+      << result.err;
+  EXPECT_NE(result.err.find("2 paired with trigger file (csv, log clock) by name"),
+            std::string::npos)
+      << result.err;
+  const nlohmann::json record = nlohmann::json::parse(result.out);
+  EXPECT_EQ(record["kind"], "photos");
+  ASSERT_EQ(record["frames"].size(), 2u);
+  const double fx = record["model"]["camera"]["intrinsics"]["fx"].get<double>();
+  EXPECT_EQ(record["model"]["camera"]["rolling_shutter"]["readout_s"], 0.020) << "--readout";
+  const double shear_px = fx * 0.01 * 0.020;
+  for (const auto& frame : record["frames"]) {
+    EXPECT_GT(frame["D_before_px"].get<double>(), 0.95 * shear_px) << frame["image"];
+    EXPECT_LT(frame["D_before_px"].get<double>(), 1.10 * shear_px) << frame["image"];
+    const std::string image = (fs::path(out) / frame["image"].get<std::string>()).string();
+    const auto metadata = ReadImageMetadata(image);
+    const auto has = [&](const std::string& key, const std::string& value) {
+      return std::find(metadata.begin(), metadata.end(), std::make_pair(key, value)) !=
+             metadata.end();
+    };
+    EXPECT_TRUE(has("Exif.Image.Model", "ZR10")) << image << ": the photo's EXIF is carried";
+    EXPECT_TRUE(has("Xmp.shutterlab.Reference", "row0")) << image;
+  }
+  EXPECT_NEAR(record["frames"][0]["t_first_row_s"].get<double>(), 329.091247, 1e-9);
 }
 
 TEST(CorrectCommand, BadInputIsOneLineAndExitCodeTwo) {
