@@ -7,10 +7,10 @@
 // in order); each placed photo's row 0 is exposed at its event + the trigger latency, on the log's
 // gyro clock. The camera is camera.json's when given, else the photos' own (the most common size,
 // focal length and readout among them, estimate/paper/photo_flight.h CameraFromPhotos), with a
-// lens profile's lens when given. A photo that cannot be read, is not placed or has another image
-// size than the camera is skipped, with the reason. The ground plane's height: --altitude, else
-// camera.json's, else the log's height above ground, else the photos' median height above
-// take-off, else camera.json's default (50 m), each said.
+// lens profile's lens when given. A photo that cannot be read, is not placed, or has another image
+// size or focal length (a zoom) than the camera is skipped, with the reason. The ground plane's
+// height: --altitude, else camera.json's, else the log's height above ground, else the photos'
+// median height above take-off, else camera.json's default (50 m), each said.
 
 #include "estimate/paper/photo_clock.h"
 #include "render/camera.h"

@@ -1,0 +1,98 @@
+// ReadPhotoInput on hand-written photos (metadata only: nothing here decodes pixels): the photos'
+// own camera, the photos a correction would get wrong skipped with the reason, and what cannot be
+// known said.
+
+#include "estimate/correct/photo_input.h"
+
+#include "render/photo_set.h"
+#include "sim/check.h"
+#include "sim/logs/gyro_io.h"
+#include "sim/text_file.h"
+#include "sim/units.h"
+#include "tests/photo_fixtures.h"
+#include "tests/render/render_fixtures.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+
+namespace shutterlab {
+namespace {
+
+bool AnyContains(const std::vector<std::string>& lines, const std::string& text) {
+  return std::any_of(lines.begin(), lines.end(),
+                     [&](const std::string& line) { return line.find(text) != std::string::npos; });
+}
+
+TEST(ReadPhotoInput, TheirOwnCameraAndWhatCannotBeCorrected) {
+  // Four 640x480 photos at 24 mm (35 mm equivalent), one of them zoomed to 48 mm, one 320x240,
+  // and one that no trigger names; the first from a gimbal (DJI XMP).
+  test::TempDir dir;
+  const std::string photos = dir / "photos";
+  std::filesystem::create_directories(photos);
+  const auto write = [&](const std::string& name, int width, uint16_t focal_35mm,
+                         const std::string& xmp = "") {
+    test::FixturePhoto p;
+    p.width = width;
+    p.height = width * 3 / 4;
+    p.focal_length_35mm = focal_35mm;
+    p.xmp = xmp;
+    WriteFileAtomically(photos + "/" + name, test::JpegWithMetadata(p));
+  };
+  write("A.JPG", 640, 24,
+        test::DjiXmp({{"GimbalPitchDegree", "-90.0"},
+                      {"GimbalYawDegree", "10.0"},
+                      {"GimbalRollDegree", "0.0"}},
+                     false));
+  write("B.JPG", 640, 24);
+  write("C.JPG", 640, 48);
+  write("D.JPG", 320, 24);
+  write("E.JPG", 640, 24);
+  // A still gyro with a bias of 1e-3 rad/s about x.
+  WriteGyroCsv(dir / "log.csv", test::ConstantRateTrace(Eigen::Vector3d(1e-3, 0, 0), 0.0, 10.0));
+  WriteFileAtomically(dir / "triggers.csv", "image,t\nA.JPG,2\nB.JPG,3\nC.JPG,4\nD.JPG,5\n");
+  PhotoInputOptions options;
+  options.log_path = dir / "log.csv";
+  options.triggers_path = dir / "triggers.csv";
+  options.readout_s = 0.02;
+  options.trigger_latency_s = -0.001;
+  const PhotoInput input = ReadPhotoInput(photos, options);
+
+  const RigModel& rig = input.dataset.declared;
+  EXPECT_EQ(rig.camera.width, 640);
+  EXPECT_NEAR(rig.camera.fx, FocalPxFrom35mm(24, 640, 480), 1e-9);
+  EXPECT_EQ(rig.shutter.readout_s, 0.02);
+  EXPECT_FALSE(input.dataset.video);
+  ASSERT_EQ(input.dataset.frames.size(), 2u);
+  EXPECT_EQ(input.dataset.frames[0].image, "A.JPG");
+  EXPECT_EQ(input.dataset.frames[0].frame, 0);
+  EXPECT_EQ(input.dataset.frames[0].t_first_row_ns, SecondsToNs(1.999)) << "event + latency";
+  EXPECT_EQ(input.dataset.frames[1].image, "B.JPG");
+  ASSERT_EQ(input.skipped.size(), 3u);
+  EXPECT_EQ(input.skipped[0].first, 2);
+  EXPECT_NE(input.skipped[0].second.find("C.JPG: focal length"), std::string::npos)
+      << input.skipped[0].second;
+  EXPECT_NE(input.skipped[1].second.find("D.JPG: is 320x240, the camera 640x480"),
+            std::string::npos)
+      << input.skipped[1].second;
+  EXPECT_NE(input.skipped[2].second.find("E.JPG: not placed on the log"), std::string::npos)
+      << input.skipped[2].second;
+  EXPECT_TRUE(AnyContains(input.notes, "mounting unknown")) << "no --camera";
+  EXPECT_TRUE(AnyContains(input.notes, "1 of 5 photos were taken from a gimbal"));
+  ASSERT_TRUE(input.still_bias_rad_s) << input.still_bias_source;
+  EXPECT_NEAR((*input.still_bias_rad_s - Eigen::Vector3d(1e-3, 0, 0)).norm(), 0.0, 1e-12);
+
+  // A given focal length is every photo's: the zoomed one is corrected with it too.
+  options.focal_px = 500.0;
+  const PhotoInput given = ReadPhotoInput(photos, options);
+  EXPECT_EQ(given.dataset.declared.camera.fx, 500.0);
+  EXPECT_EQ(given.dataset.frames.size(), 3u);
+  // No photo placed: one line naming the folder.
+  options.triggers_path.clear();
+  EXPECT_THROW(ReadPhotoInput(photos, options), IoError) << "the log has no camera events";
+}
+
+}  // namespace
+}  // namespace shutterlab
