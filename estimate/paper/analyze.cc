@@ -264,18 +264,14 @@ std::vector<ImageTrigger> ChooseTriggers(const FlightLog& log, const AnalyzeOpti
       triggers.push_back({ImageName(static_cast<size_t>(k)), t0_ns + k * every_ns});
     }
   } else if (triggers.empty() && !log.camera_events.empty()) {
-    // A log may record each image twice (PX4 camera_trigger and camera_capture): use the most
-    // frequent kind only.
-    std::map<std::string, size_t> kinds;
-    for (const CameraEvent& event : log.camera_events) ++kinds[event.kind];
-    const std::string kind =
-        std::max_element(kinds.begin(), kinds.end(), [](const auto& a, const auto& b) {
-          return a.second < b.second;
-        })->first;
-    *trigger_source = "camera events (" + kind + ")";
-    for (size_t i = 0; i < log.camera_events.size(); ++i) {
-      const CameraEvent& event = log.camera_events[i];
-      if (event.kind != kind) continue;
+    // The readers keep one kind already; a log built elsewhere gets the same choice.
+    FlightLog events_only;
+    events_only.camera_events = log.camera_events;
+    KeepOneCameraEventKind(&events_only);
+    const std::vector<CameraEvent>& events = events_only.camera_events;
+    *trigger_source = "camera events (" + events.front().kind + ")";
+    for (size_t i = 0; i < events.size(); ++i) {
+      const CameraEvent& event = events[i];
       triggers.push_back(
           {event.sequence >= 0 ? "IMG_" + std::to_string(event.sequence) : ImageName(i),
            event.t_ns});

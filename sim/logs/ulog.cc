@@ -849,9 +849,11 @@ void DecodeGyroRates(const std::string& topic, int multi_id, const Fields& f,
   cand->samples.reserve(cand->samples.size() + sub.payloads.size());
   for (std::string_view data : sub.payloads) {
     const auto t_ns = ReadTimeNs(data, *t_field);
-    cand->samples.push_back(
-        {t_ns.value_or(0), Eigen::Vector3d(ReadNumber(data, *axes[0]), ReadNumber(data, *axes[1]),
-                                           ReadNumber(data, *axes[2]))});
+    internal::AddCandidateSample(
+        t_ns,
+        Eigen::Vector3d(ReadNumber(data, *axes[0]), ReadNumber(data, *axes[1]),
+                        ReadNumber(data, *axes[2])),
+        cand);
   }
 }
 
@@ -962,6 +964,7 @@ void ULogParser::Decode() {
   std::stable_sort(topics.events.begin(), topics.events.end(),
                    [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
   log_.camera_events = std::move(topics.events);
+  KeepOneCameraEventKind(&log_);
   SetAltitudeAboveGround(topics, &log_);
   if (!internal::ChooseGyroSource(std::move(topics.candidates), &log_)) {
     throw IoError(IoMessage(path_, 0,
