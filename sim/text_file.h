@@ -2,6 +2,7 @@
 // Whole-file text input and all-or-nothing file output, shared by every reader and writer.
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -38,6 +39,54 @@ void AdviseHugePages(const void* data, size_t bytes);
 // Writes content to path via a temporary file in the same folder and a rename, so that a reader
 // never sees a partial file and a failed write leaves no output. Throws IoError.
 void WriteFileAtomically(const std::string& path, std::string_view content);
+
+// A text file read in blocks of whole lines, so that a file of any length is parsed in bounded
+// memory (a block, plus the longest line). Also over a text in memory (tests, fuzzing: small blocks
+// put every line end at a block edge somewhere).
+class TextBlocks {
+ public:
+  static constexpr size_t kBlockBytes = 4 << 20;
+  // Throws IoError naming the path when the file cannot be opened.
+  explicit TextBlocks(const std::string& path, size_t block_bytes = kBlockBytes);
+  TextBlocks(std::string_view text, size_t block_bytes);
+  ~TextBlocks();
+  TextBlocks(TextBlocks&& other) noexcept;
+  TextBlocks(const TextBlocks&) = delete;
+  TextBlocks& operator=(const TextBlocks&) = delete;
+  // The next run of whole lines: up to and including a '\n', or the input's last line when it has
+  // none. Empty at the end. Valid until the next call. Throws IoError when a read fails.
+  std::string_view Next();
+  // The share of the input handed out so far, 0..1.
+  double Fraction() const;
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+  uint64_t size_ = 0;                       // of the file (0 when unknown)
+  uint64_t handed_out_ = 0;                 // bytes returned by Next
+  std::string_view memory_;                 // the text in memory, or empty for a file
+  std::unique_ptr<char[]> buffer_;          // a file's block
+  size_t capacity_ = 0;                     // of buffer_
+  size_t carry_begin_ = 0, carry_end_ = 0;  // a started last line, kept for the next block
+  bool end_of_file_ = false;
+};
+
+// The lines of a TextBlocks, one at a time, with 1-based line numbers and a trailing '\r'
+// stripped, as LineCursor gives them from a whole text.
+class LineReader {
+ public:
+  explicit LineReader(TextBlocks blocks) : blocks_(std::move(blocks)) {}
+  // The next line, or nullopt at the end. Valid until the next call.
+  std::optional<std::string_view> Next();
+  long line_number() const { return line_number_; }
+  double Fraction() const { return blocks_.Fraction(); }
+
+ private:
+  TextBlocks blocks_;
+  std::string_view block_;
+  size_t pos_ = 0;
+  long line_number_ = 0;
+};
 
 // Iterates the lines of a text buffer, tracking 1-based line numbers; strips a trailing '\r'.
 class LineCursor {

@@ -18,6 +18,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -94,6 +95,27 @@ struct FlightResult {
 // when the bias segment leaves fewer than 2 samples, or a window is longer than the trace after the
 // bias segment (none fits).
 FlightResult Flight(const GyroTrace& trace, const FlightOptions& options);
+
+// The same analysis on a trace that arrives in chunks (a log read a block at a time), in memory
+// O(bias segment + chunk + longest window) whatever the trace's length; the results are
+// bit-identical to Flight's on the whole trace. The windows are swept as soon as they are complete;
+// which ones the rate is too low for is known, and said, at Finish.
+class FlightStream {
+ public:
+  // Throws std::invalid_argument for bad options (FlightOptions::Check); progress is not called.
+  explicit FlightStream(const FlightOptions& options);
+  ~FlightStream();
+  FlightStream(const FlightStream&) = delete;
+  FlightStream& operator=(const FlightStream&) = delete;
+  // The next samples (time order, finite: as a GyroTrace holds them).
+  void Add(const GyroSample* samples, size_t count);
+  // After the last Add; throws as Flight does.
+  FlightResult Finish();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // A too_few_samples warning (docs/FORMATS.md "Warnings") naming the rows the sampling rate could
 // not answer and the shortest window it allows; empty when every row was analysed.

@@ -90,51 +90,83 @@ GyroSample ParseRowGeneral(const std::string& path, long n, std::string_view lin
   return s;
 }
 
-// Reads the rows of a gyro.csv from `begin` (just past the header, which is line 1): t in seconds,
-// then gx, gy, gz in rad/s.
-GyroTrace ReadRows(const std::string& path, std::string_view text, size_t begin) {
-  const char* p = text.data() + begin;
-  const char* const end = text.data() + text.size();
-  std::vector<GyroSample> samples;
-  // Reserve from the length of the first lines so that a long log is never re-copied while it
-  // grows; untouched capacity costs address space only.
-  {
-    const size_t probe = std::min<size_t>(end - p, 4096);
-    const size_t probe_lines = std::max<size_t>(1, std::count(p, p + probe, '\n'));
-    const size_t estimate = (end - p) / std::max<size_t>(1, probe / probe_lines) * 5 / 4 + 16;
-    samples.reserve(estimate);
-    AdviseHugePages(samples.data(), estimate * sizeof(GyroSample));
+// Rows handed on per chunk: 2 MiB of samples, which stay in cache while the analysis takes them.
+constexpr size_t kChunkSamples = 1 << 16;
+
+// gyro.csv read block by block: the header at once, then chunks of rows (t in seconds, then gx,
+// gy, gz in rad/s).
+class GyroCsvSource : public GyroSource {
+ public:
+  GyroCsvSource(TextBlocks blocks, const std::string& path)
+      : blocks_(std::move(blocks)), path_(path) {
+    rest_ = blocks_.Next();
+    const size_t header_end = std::min(rest_.find('\n'), rest_.size());
+    std::string_view header = rest_.substr(0, header_end);
+    if (!header.empty() && header.back() == '\r') header.remove_suffix(1);
+    std::vector<std::string_view> fields;
+    SplitFields(StripBom(header), ',', &fields);
+    if (rest_.empty() || !IsGyroCsvHeader(fields)) {
+      throw IoError(IoMessage(path, 1, "missing header 't,gx,gy,gz'"));
+    }
+    rest_.remove_prefix(std::min(rest_.size(), header_end + 1));
+    chunk_.reserve(kChunkSamples);
   }
-  std::vector<std::string_view> fields;
-  long line_number = 1;
-  while (p < end) {
-    ++line_number;
-    GyroSample s;
-    const char* next = ParseRowFast(p, end, &s);
-    if (!next) {
-      const char* eol = static_cast<const char*>(std::memchr(p, '\n', end - p));
-      if (!eol) eol = end;
-      std::string_view line(p, eol - p);
-      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-      next = eol < end ? eol + 1 : end;
-      if (line.empty()) {
-        p = next;
-        continue;
+
+  GyroChunk Next() override {
+    chunk_.clear();
+    while (chunk_.size() < kChunkSamples) {
+      if (rest_.empty() && (rest_ = blocks_.Next()).empty()) break;
+      ParseRows();
+    }
+    if (chunk_.empty() && !any_) throw IoError(IoMessage(path_, 0, "no samples"));
+    return {chunk_.data(), chunk_.size()};
+  }
+  double Fraction() const override { return blocks_.Fraction(); }
+
+ private:
+  // Rows from rest_ (whole lines) into chunk_ until it is full or rest_ is used up.
+  void ParseRows() {
+    const char* p = rest_.data();
+    const char* const end = p + rest_.size();
+    while (p < end && chunk_.size() < kChunkSamples) {
+      ++line_number_;
+      GyroSample s;
+      const char* next = ParseRowFast(p, end, &s);
+      if (!next) {
+        const char* eol = static_cast<const char*>(std::memchr(p, '\n', end - p));
+        if (!eol) eol = end;
+        std::string_view line(p, eol - p);
+        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+        next = eol < end ? eol + 1 : end;
+        if (line.empty()) {
+          p = next;
+          continue;
+        }
+        s = ParseRowGeneral(path_, line_number_, line, &fields_);
       }
-      s = ParseRowGeneral(path, line_number, line, &fields);
+      if (any_ && s.t_ns < last_t_ns_) {
+        const char* comma = static_cast<const char*>(std::memchr(p, ',', end - p));
+        throw IoError(IoMessage(path_, line_number_,
+                                "timestamp decreases (" + std::string(p, comma ? comma - p : 0) +
+                                    " after an earlier, larger one)"));
+      }
+      any_ = true;
+      last_t_ns_ = s.t_ns;
+      chunk_.push_back(s);
+      p = next;
     }
-    if (!samples.empty() && s.t_ns < samples.back().t_ns) {
-      const char* eol = static_cast<const char*>(std::memchr(p, ',', end - p));
-      throw IoError(IoMessage(path, line_number,
-                              "timestamp decreases (" + std::string(p, eol ? eol - p : 0) +
-                                  " after an earlier, larger one)"));
-    }
-    samples.push_back(s);
-    p = next;
+    rest_ = std::string_view(p, end - p);
   }
-  if (samples.empty()) throw IoError(IoMessage(path, 0, "no samples"));
-  return GyroTrace(std::move(samples));
-}
+
+  TextBlocks blocks_;
+  std::string path_;
+  std::string_view rest_;  // whole lines of the current block not parsed yet
+  long line_number_ = 1;   // the header is line 1
+  bool any_ = false;
+  int64_t last_t_ns_ = 0;
+  std::vector<GyroSample> chunk_;
+  std::vector<std::string_view> fields_;
+};
 
 }  // namespace
 
@@ -144,18 +176,12 @@ void GyroReadOptions::Check() const {
   raw.Check();
 }
 
+std::unique_ptr<GyroSource> OpenGyroCsv(TextBlocks blocks, const std::string& path) {
+  return std::make_unique<GyroCsvSource>(std::move(blocks), path);
+}
+
 GyroTrace ReadGyroCsv(const std::string& path) {
-  const MappedFile file(path);
-  const std::string_view text = file.text();
-  LineCursor cursor(text);
-  const auto header = cursor.Next();
-  std::vector<std::string_view> fields;
-  if (header) SplitFields(StripBom(*header), ',', &fields);
-  if (!header || !IsGyroCsvHeader(fields)) {
-    throw IoError(IoMessage(path, 1, "missing header 't,gx,gy,gz'"));
-  }
-  const size_t header_end = text.find('\n');
-  return ReadRows(path, text, header_end == std::string_view::npos ? text.size() : header_end + 1);
+  return ReadAllSamples(OpenGyroCsv(TextBlocks(path), path).get());
 }
 
 void WriteGyroCsv(const std::string& path, const GyroTrace& trace) {

@@ -1,0 +1,58 @@
+#pragma once
+// A gyro trace handed on in chunks, in time order, so that a log of any length is analysed in
+// bounded memory: the readers of text logs parse a block at a time (sim/logs/gyro_io.h
+// OpenGyroCsv, ...), and a trace already in memory is handed on in slices (TraceSource).
+
+#include "sim/gyro_trace.h"
+
+#include <algorithm>
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+namespace shutterlab {
+
+// Samples [data, data + size), valid until the source's next call.
+struct GyroChunk {
+  const GyroSample* data = nullptr;
+  size_t size = 0;
+  bool empty() const { return size == 0; }
+  const GyroSample* begin() const { return data; }
+  const GyroSample* end() const { return data + size; }
+};
+
+class GyroSource {
+ public:
+  virtual ~GyroSource() = default;
+  // The next samples, in non-decreasing time with finite rates (a reader refuses anything else
+  // with an IoError naming the file and line); an empty chunk at the end.
+  virtual GyroChunk Next() = 0;
+  // The share of the input read so far, 0..1 (for progress).
+  virtual double Fraction() const = 0;
+};
+
+// A trace held in memory, in slices of chunk_samples.
+class TraceSource : public GyroSource {
+ public:
+  explicit TraceSource(GyroTrace trace, size_t chunk_samples = 1 << 16)
+      : trace_(std::move(trace)), chunk_(std::max<size_t>(chunk_samples, 1)) {}
+  GyroChunk Next() override {
+    const size_t n = std::min(chunk_, trace_.size() - next_);
+    GyroChunk chunk{trace_.samples().data() + next_, n};
+    next_ += n;
+    return chunk;
+  }
+  double Fraction() const override {
+    return trace_.empty() ? 1.0 : static_cast<double>(next_) / trace_.size();
+  }
+
+ private:
+  GyroTrace trace_;
+  size_t chunk_;
+  size_t next_ = 0;
+};
+
+// Every sample of a source, as a trace (validated as GyroTrace validates).
+GyroTrace ReadAllSamples(GyroSource* source);
+
+}  // namespace shutterlab
