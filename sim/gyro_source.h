@@ -29,6 +29,37 @@ class GyroSource {
   virtual GyroChunk Next() = 0;
   // The share of the input read so far, 0..1 (for progress).
   virtual double Fraction() const = 0;
+  // The next chunk into *out (its content replaced); false at the end. A source that fills a
+  // buffer of its own hands it over instead of copying (FillingSource).
+  virtual bool NextInto(std::vector<GyroSample>* out) {
+    const GyroChunk chunk = Next();
+    out->assign(chunk.begin(), chunk.end());
+    return !chunk.empty();
+  }
+};
+
+// A source that fills chunks of its own (the text readers): Fill is all it writes.
+class FillingSource : public GyroSource {
+ public:
+  GyroChunk Next() final {
+    chunk_.clear();
+    Fill(&chunk_);
+    return {chunk_.data(), chunk_.size()};
+  }
+  bool NextInto(std::vector<GyroSample>* out) final {
+    out->clear();
+    Fill(out);
+    return !out->empty();
+  }
+
+ protected:
+  // Samples per chunk: 2 MiB, which stay in cache while the analysis takes them.
+  static constexpr size_t kChunkSamples = 1 << 16;
+  // Appends the next samples, at most kChunkSamples, to *chunk (empty on entry); none at the end.
+  virtual void Fill(std::vector<GyroSample>* chunk) = 0;
+
+ private:
+  std::vector<GyroSample> chunk_;
 };
 
 // A trace held in memory, in slices of chunk_samples.
@@ -54,5 +85,10 @@ class TraceSource : public GyroSource {
 
 // Every sample of a source, as a trace (validated as GyroTrace validates).
 GyroTrace ReadAllSamples(GyroSource* source);
+
+// The source read one chunk ahead on a thread of its own, so that reading (parsing text) and the
+// analysis of the chunk before run on two cores. Chunks are copied into a few buffers of its own;
+// an exception of the source is thrown from Next in the caller's thread, in order.
+std::unique_ptr<GyroSource> ReadAhead(std::unique_ptr<GyroSource> source);
 
 }  // namespace shutterlab

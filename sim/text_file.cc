@@ -85,19 +85,27 @@ void WriteFileAtomically(const std::string& path, std::string_view content) {
   }
 }
 
-TextBlocks::TextBlocks(const std::string& path, size_t block_bytes)
-    : path_(path), capacity_(std::max<size_t>(block_bytes, 1)) {
-  fd_ = ::open(path.c_str(), O_RDONLY);
-  if (fd_ < 0)
+TextBlocks TextBlocks::OfFile(const std::string& path, size_t block_bytes) {
+  TextBlocks blocks;
+  blocks.path_ = path;
+  blocks.capacity_ = std::max<size_t>(block_bytes, 1);
+  blocks.fd_ = ::open(path.c_str(), O_RDONLY);
+  if (blocks.fd_ < 0)
     throw IoError(IoMessage(path, 0, std::string("cannot open: ") + std::strerror(errno)));
   struct stat info {};
-  if (::fstat(fd_, &info) == 0 && S_ISREG(info.st_mode))
-    size_ = static_cast<uint64_t>(info.st_size);
-  buffer_.reset(new char[capacity_]);
+  if (::fstat(blocks.fd_, &info) == 0 && S_ISREG(info.st_mode))
+    blocks.size_ = static_cast<uint64_t>(info.st_size);
+  blocks.buffer_.reset(new char[blocks.capacity_]);
+  return blocks;
 }
 
-TextBlocks::TextBlocks(std::string_view text, size_t block_bytes)
-    : size_(text.size()), memory_(text), capacity_(std::max<size_t>(block_bytes, 1)) {}
+TextBlocks TextBlocks::InMemory(std::string_view text, size_t block_bytes) {
+  TextBlocks blocks;
+  blocks.size_ = text.size();
+  blocks.memory_ = text;
+  blocks.capacity_ = std::max<size_t>(block_bytes, 1);
+  return blocks;
+}
 
 TextBlocks::TextBlocks(TextBlocks&& other) noexcept
     : path_(std::move(other.path_)),
@@ -215,8 +223,8 @@ std::optional<double> ParseDouble(std::string_view field) {
   if (!field.empty() && field.front() == '+') field.remove_prefix(1);
   if (field.empty()) return std::nullopt;
   double value = 0.0;
-  const auto [ptr, ec] = std::from_chars(field.data(), field.data() + field.size(), value);
-  if (ec != std::errc() || ptr != field.data() + field.size() || !std::isfinite(value)) {
+  const char* end = field.data() + field.size();
+  if (FromCharsDouble(field.data(), end, &value) != end || !std::isfinite(value)) {
     return std::nullopt;
   }
   return value;

@@ -1,6 +1,7 @@
 #pragma once
 // Whole-file text input and all-or-nothing file output, shared by every reader and writer.
 
+#include <charconv>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -46,9 +47,10 @@ void WriteFileAtomically(const std::string& path, std::string_view content);
 class TextBlocks {
  public:
   static constexpr size_t kBlockBytes = 4 << 20;
-  // Throws IoError naming the path when the file cannot be opened.
-  explicit TextBlocks(const std::string& path, size_t block_bytes = kBlockBytes);
-  TextBlocks(std::string_view text, size_t block_bytes);
+  // A file; throws IoError naming the path when it cannot be opened.
+  static TextBlocks OfFile(const std::string& path, size_t block_bytes = kBlockBytes);
+  // A text in memory, which must outlive the blocks.
+  static TextBlocks InMemory(std::string_view text, size_t block_bytes = kBlockBytes);
   ~TextBlocks();
   TextBlocks(TextBlocks&& other) noexcept;
   TextBlocks(const TextBlocks&) = delete;
@@ -60,6 +62,7 @@ class TextBlocks {
   double Fraction() const;
 
  private:
+  TextBlocks() = default;
   std::string path_;
   int fd_ = -1;
   uint64_t size_ = 0;                       // of the file (0 when unknown)
@@ -105,6 +108,40 @@ class LineCursor {
 // Splits a line on a delimiter, trimming spaces and tabs around each field. Appends to fields
 // (cleared first) to let callers reuse the vector across lines.
 void SplitFields(std::string_view line, char delimiter, std::vector<std::string_view>* fields);
+
+// std::from_chars for a double at p, exactly (the same value and end), faster on the plain
+// decimals that logs write ("-0.012345"): those of at most 19 digits whose digits fit 2^53 and with
+// at most 22 after the point are one correctly rounded division of two exact doubles (Clinger's
+// fast path, as std::from_chars itself takes it, without its general machinery). Anything else
+// (exponents, more digits, inf, nan) goes to std::from_chars. nullptr when there is no number.
+inline const char* FromCharsDouble(const char* p, const char* end, double* value) {
+  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                      1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+                                      1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+  const char* q = p;
+  const bool negative = q < end && *q == '-';
+  q += negative;
+  uint64_t mantissa = 0;
+  const char* digits = q;
+  while (q < end && static_cast<unsigned>(*q - '0') < 10) mantissa = mantissa * 10 + (*q++ - '0');
+  size_t count = static_cast<size_t>(q - digits);
+  size_t after_point = 0;
+  if (q < end && *q == '.') {
+    const char* fraction = ++q;
+    while (q < end && static_cast<unsigned>(*q - '0') < 10) mantissa = mantissa * 10 + (*q++ - '0');
+    after_point = static_cast<size_t>(q - fraction);
+    count += after_point;
+  }
+  const bool exponent = q < end && (*q == 'e' || *q == 'E');
+  if (count > 0 && count <= 19 && !exponent && mantissa <= (uint64_t{1} << 53) &&
+      after_point <= 22) {
+    const double v = static_cast<double>(mantissa) / kPow10[after_point];
+    *value = negative ? -v : v;
+    return q;
+  }
+  const auto [next, ec] = std::from_chars(p, end, *value);
+  return ec == std::errc() ? next : nullptr;
+}
 
 // Parses a whole field as a finite double (leading '+' allowed). nullopt when the field is not a
 // number, has trailing text, or is inf/nan.

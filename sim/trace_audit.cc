@@ -46,24 +46,23 @@ void TraceAuditor::Step(const GyroSample& s) {
   SHUTTERLAB_CHECK(s.omega_rad_s.allFinite())
       << "gyro sample " << index << " has a non-finite rate";
   if (index == 0) {
-    t_begin_ns_ = t_last_ns_ = block_begin_ns_ = s.t_ns;
+    t_begin_ns_ = t_last_ns_ = s.t_ns;
+    block_t_ns_.push_back(s.t_ns);
   } else {
     const int64_t dt = s.t_ns - t_last_ns_;
     SHUTTERLAB_CHECK(dt >= 0) << "gyro sample " << index << " goes back in time by " << -dt * 1e-9
                               << " s";
     if (dt == 0 && duplicates_++ == 0) first_duplicate_ns_ = s.t_ns;
     intervals_.Add(dt);
-    block_.push_back({dt, t_last_ns_});
+    block_t_ns_.push_back(s.t_ns);
     t_last_ns_ = s.t_ns;
-    if (s.t_ns - block_begin_ns_ >= kRateBlockNs) {
-      CloseBlock(/*at_end=*/false);
-      block_begin_ns_ = s.t_ns;
-    }
+    if (s.t_ns - block_t_ns_.front() >= kRateBlockNs) CloseBlock(/*at_end=*/false);
   }
+  const Eigen::Vector3d v = s.omega_rad_s.cwiseAbs();
+  for (int a = 0; a < 3; ++a) peak_[a] = std::max(peak_[a], v[a]);
+  if (v.maxCoeff() < limits_rad_s_[0]) return;  // below every full scale: the usual case
   for (int a = 0; a < 3; ++a) {
-    const double v = std::abs(s.omega_rad_s[a]);
-    peak_[a] = std::max(peak_[a], v);
-    for (size_t c = 0; c < limits_rad_s_.size() && v >= limits_rad_s_[c]; ++c) {
+    for (size_t c = 0; c < limits_rad_s_.size() && v[a] >= limits_rad_s_[c]; ++c) {
       Saturation& at = saturation_[c];
       if (at.count[a]++ == 0) at.first_ns[a] = s.t_ns;
       at.last_ns[a] = s.t_ns;
@@ -75,30 +74,28 @@ void TraceAuditor::Step(const GyroSample& s) {
 // that led into it (from the block before) and those inside; the last one pushed leads out of it
 // (into the sample that opens the next block) unless the trace ends here.
 void TraceAuditor::CloseBlock(bool at_end) {
-  std::optional<Interval> out_of_block;
-  const size_t pushed = block_.size();
-  if (!at_end) {
-    out_of_block = block_.back();
-    block_.pop_back();
-  }
+  const std::vector<int64_t>& t = block_t_ns_;
+  const size_t pushed = t.size() - 1;                  // intervals between the block's times
+  const size_t inside = at_end ? pushed : pushed - 1;  // the last one leads out of the block
+  const auto interval = [&t](size_t i) { return Interval{t[i + 1] - t[i], t[i]}; };
   if (pushed < kMinBlockIntervals && previous_median_ns_) {
     // Joins the block before: judged at its rate, which it does not change.
     if (into_block_) Judge(*into_block_, *previous_median_ns_);
-    for (const Interval& interval : block_) Judge(interval, *previous_median_ns_);
+    for (size_t i = 0; i < inside; ++i) Judge(interval(i), *previous_median_ns_);
   } else if (pushed > 0) {
-    std::vector<int64_t> dts;
-    dts.reserve(pushed);
-    for (const Interval& interval : block_) dts.push_back(interval.dt_ns);
-    if (out_of_block) dts.push_back(out_of_block->dt_ns);
+    std::vector<int64_t> dts(pushed);
+    for (size_t i = 0; i < pushed; ++i) dts[i] = t[i + 1] - t[i];
     const int64_t median_ns = UpperMedian(std::move(dts));
     // The interval into the block joins two blocks: the slower rate judges it.
     if (into_block_) Judge(*into_block_, std::max(median_ns, previous_median_ns_.value_or(0)));
-    for (const Interval& interval : block_) Judge(interval, median_ns);
-    NoteBlockRate(median_ns, block_begin_ns_);
+    for (size_t i = 0; i < inside; ++i) Judge(interval(i), median_ns);
+    NoteBlockRate(median_ns, t.front());
     previous_median_ns_ = median_ns;
   }
-  into_block_ = out_of_block;
-  block_.clear();
+  if (!at_end) into_block_ = interval(pushed - 1);
+  const int64_t next_begin_ns = t.back();
+  block_t_ns_.clear();
+  block_t_ns_.push_back(next_begin_ns);
 }
 
 void TraceAuditor::Judge(const Interval& interval, int64_t local_ns) {

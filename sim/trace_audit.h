@@ -91,10 +91,9 @@ class TraceAuditor {
   IntervalHistogram intervals_;
   size_t duplicates_ = 0;
   int64_t first_duplicate_ns_ = 0;
-  // The current 1 s block: its first sample's time and the intervals pushed since (the last one
-  // leads into the sample that opens the next block), and the interval that led into it.
-  int64_t block_begin_ns_ = 0;
-  std::vector<Interval> block_;
+  // The current 1 s block: the times of its samples (the intervals between them, the last of
+  // which leads into the sample that opens the next block), and the interval that led into it.
+  std::vector<int64_t> block_t_ns_;
   std::optional<Interval> into_block_;
   std::optional<int64_t> previous_median_ns_;  // of the last block that kept its own rate
   // Gaps found so far.

@@ -45,6 +45,34 @@ struct Quaternions {
   }
 };
 
+// A growable array that is not zero-filled (a sliding buffer writes every element it grows by).
+template <typename T>
+class Column {
+ public:
+  // Room for n more elements at the end; returns where they start.
+  T* Grow(size_t n) {
+    if (size_ + n > capacity_) {
+      capacity_ = std::max(2 * capacity_, size_ + n);
+      std::unique_ptr<T[]> larger(new T[capacity_]);
+      std::copy(data_.get(), data_.get() + size_, larger.get());
+      data_ = std::move(larger);
+    }
+    size_ += n;
+    return data_.get() + size_ - n;
+  }
+  void DropFront(size_t n) {
+    std::copy(data_.get() + n, data_.get() + size_, data_.get());
+    size_ -= n;
+  }
+  const T* data() const { return data_.get(); }
+  const T* end() const { return data_.get() + size_; }
+  size_t size() const { return size_; }
+
+ private:
+  std::unique_ptr<T[]> data_;
+  size_t size_ = 0, capacity_ = 0;
+};
+
 // The analysed samples (those after the bias segment) with their per-axis angles and orientations,
 // integrated as they arrive, in a sliding buffer that holds the global indices [base, end) only, so
 // that memory stays O(chunk + window) for any trace length (a 10^8-sample log needs no 3 GB of
@@ -56,44 +84,53 @@ class AngleBuffer {
   AngleBuffer(const Eigen::Vector3d& bias_rad_s, bool with_q)
       : bias_(bias_rad_s), with_q_(with_q) {}
 
-  void Push(const GyroSample& s) {
-    if (end_ > 0) {
-      const double dt_s = (s.t_ns - previous_.t_ns) * 1e-9;
-      for (int a = 0; a < 3; ++a) angle_[a] += (s.omega_rad_s[a] - bias_[a]) * dt_s;
+  // Appends samples [s, s + n), integrating them.
+  void Push(const GyroSample* s, size_t n) {
+    int64_t* t = t_.Grow(n);
+    double* angle[3] = {angles_[0].Grow(n), angles_[1].Grow(n), angles_[2].Grow(n)};
+    double* q[4] = {nullptr, nullptr, nullptr, nullptr};
+    if (with_q_) {
+      for (int k = 0; k < 4; ++k) q[k] = q_[k].Grow(n);
+    }
+    for (size_t i = 0; i < n; ++i) {
+      if (end_ + i > 0) {
+        const double dt_s = (s[i].t_ns - previous_.t_ns) * 1e-9;
+        for (int a = 0; a < 3; ++a) angle_[a] += (s[i].omega_rad_s[a] - bias_[a]) * dt_s;
+        if (with_q_) {
+          const Eigen::Vector3d wa = previous_.omega_rad_s - bias_;
+          const Eigen::Vector3d wb = s[i].omega_rad_s - bias_;
+          current_ = (current_ * ExpSO3(0.5 * (wa + wb) * dt_s)).normalized();
+        }
+      }
+      previous_ = s[i];
+      t[i] = s[i].t_ns;
+      for (int a = 0; a < 3; ++a) angle[a][i] = angle_[a];
       if (with_q_) {
-        const Eigen::Vector3d wa = previous_.omega_rad_s - bias_;
-        const Eigen::Vector3d wb = s.omega_rad_s - bias_;
-        current_ = (current_ * ExpSO3(0.5 * (wa + wb) * dt_s)).normalized();
+        q[0][i] = current_.w();
+        q[1][i] = current_.x();
+        q[2][i] = current_.y();
+        q[3][i] = current_.z();
       }
     }
-    previous_ = s;
-    ++end_;
-    t_.push_back(s.t_ns);
-    for (int a = 0; a < 3; ++a) angles_[a].push_back(angle_[a]);
-    if (with_q_) {
-      q_[0].push_back(current_.w());
-      q_[1].push_back(current_.x());
-      q_[2].push_back(current_.y());
-      q_[3].push_back(current_.z());
-    }
+    end_ += n;
   }
   // Samples before global index g are no longer needed. Their room is given back once they are
   // half of the buffer, so that each sample moves at most once or twice in all.
   void DropBefore(size_t g) {
     const size_t drop = g - base_;
     if (drop == 0 || 2 * drop < t_.size()) return;
-    t_.erase(t_.begin(), t_.begin() + drop);
-    for (auto& v : angles_) v.erase(v.begin(), v.begin() + drop);
+    t_.DropFront(drop);
+    for (auto& v : angles_) v.DropFront(drop);
     if (with_q_) {
-      for (auto& v : q_) v.erase(v.begin(), v.begin() + drop);
+      for (auto& v : q_) v.DropFront(drop);
     }
     base_ = g;
   }
   size_t end() const { return end_; }  // samples pushed in all
-  int64_t t(size_t g) const { return t_[g - base_]; }
+  int64_t t(size_t g) const { return t_.data()[g - base_]; }
   // Index of the first sample from g on with time >= t_ns (end() when none).
   size_t LowerBound(size_t g, int64_t t_ns) const {
-    return base_ + (std::lower_bound(t_.begin() + (g - base_), t_.end(), t_ns) - t_.begin());
+    return base_ + (std::lower_bound(t_.data() + (g - base_), t_.end(), t_ns) - t_.data());
   }
   const double* angle(int a, size_t g) const { return angles_[a].data() + (g - base_); }
   Quaternions q(size_t g) const {
@@ -108,9 +145,9 @@ class AngleBuffer {
   GyroSample previous_{};
   double angle_[3] = {0.0, 0.0, 0.0};
   Eigen::Quaterniond current_ = Eigen::Quaterniond::Identity();
-  std::vector<int64_t> t_;
-  std::vector<double> angles_[3];
-  std::vector<double> q_[4];
+  Column<int64_t> t_;
+  Column<double> angles_[3];
+  Column<double> q_[4];
 };
 
 // The vector criterion for one window [begin, end) against several thresholds (cos_half[l] =
@@ -271,7 +308,11 @@ void FlightOptions::Check() const {
 }
 
 struct FlightStream::Impl {
-  explicit Impl(const FlightOptions& given) : options(given), thresholds(Thresholds(given)) {
+  explicit Impl(const FlightOptions& given)
+      : options(given),
+        thresholds(Thresholds(given)),
+        segment_begin_ns(SecondsToNs(given.bias.begin_s)),
+        segment_end_ns(SecondsToNs(given.bias.end_s)) {
     for (double w : options.windows_s) {
       window_ns.push_back(SecondsToNs(w));
       window_max_ns = std::max(window_max_ns, window_ns.back());
@@ -285,35 +326,39 @@ struct FlightStream::Impl {
   }
 
   void Add(const GyroSample* samples, size_t count) {
-    for (size_t i = 0; i < count; ++i) {
-      const GyroSample& s = samples[i];
-      if (total++ == 0) {
-        t0_ns = s.t_ns;
-        if (options.known_bias_rad_s) {
-          bias.bias_rad_s = *options.known_bias_rad_s;
-          bias.first_after = 0;
-          StartAnalysis();
-        }
+    if (count == 0) return;
+    if (total == 0) {
+      t0_ns = samples[0].t_ns;
+      if (options.known_bias_rad_s) {
+        bias.bias_rad_s = *options.known_bias_rad_s;
+        bias.first_after = 0;
+        StartAnalysis();
       }
-      t_last_ns = s.t_ns;
-      if (!buffer && !TakeForBias(s)) continue;
-      if (buffer->end() > 0) {
-        intervals.Add(s.t_ns - t_last_analysed_ns);
-      } else {
-        t_first_analysed_ns = s.t_ns;
-      }
-      t_last_analysed_ns = s.t_ns;
-      buffer->Push(s);
     }
-    if (buffer) SweepCompleteChunks();
+    total += count;
+    t_last_ns = samples[count - 1].t_ns;
+    size_t i = 0;
+    while (!buffer && i < count) {
+      if (TakeForBias(samples[i])) break;  // the segment is over: this sample is analysed
+      ++i;
+    }
+    if (!buffer || i == count) return;
+    const GyroSample* s = samples + i;
+    const size_t n = count - i;
+    if (buffer->end() == 0) t_first_analysed_ns = s[0].t_ns;
+    for (size_t k = buffer->end() == 0 ? 1 : 0; k < n; ++k)
+      intervals.Add(s[k].t_ns - (k > 0 ? s[k - 1].t_ns : t_last_analysed_ns));
+    t_last_analysed_ns = s[n - 1].t_ns;
+    buffer->Push(s, n);
+    SweepCompleteChunks();
   }
 
   // Before the analysis: a sample of the bias segment (or before it) is kept or counted; true when
   // the segment is over with this sample, which then starts the analysis.
   bool TakeForBias(const GyroSample& s) {
     if (bias_failed) return false;
-    if (s.t_ns < t0_ns + SecondsToNs(options.bias.end_s)) {
-      if (s.t_ns >= t0_ns + SecondsToNs(options.bias.begin_s)) {
+    if (s.t_ns < t0_ns + segment_end_ns) {
+      if (s.t_ns >= t0_ns + segment_begin_ns) {
         segment.push_back(s);
       } else {
         ++before_segment;
@@ -396,7 +441,9 @@ struct FlightStream::Impl {
   // Every sample.
   size_t total = 0;
   int64_t t0_ns = 0, t_last_ns = 0;
-  // The bias segment's samples until it is over, and the samples before it.
+  // The bias segment (after the first sample) and its samples until it is over, and the samples
+  // before it.
+  const int64_t segment_begin_ns, segment_end_ns;
   std::vector<GyroSample> segment;
   size_t before_segment = 0;
   bool bias_failed = false;

@@ -136,7 +136,7 @@ bool LooksLikeHeader(const ColumnCsvOptions& options, const std::vector<std::str
 }
 
 // The data lines, a block at a time; the first one may have been read already (no header).
-class ColumnCsvSource : public GyroSource {
+class ColumnCsvSource : public FillingSource {
  public:
   ColumnCsvSource(LineReader lines, std::optional<std::string> first_row, long first_row_number,
                   ChosenColumns chosen, const ColumnCsvOptions& options, char delimiter,
@@ -148,30 +148,26 @@ class ColumnCsvSource : public GyroSource {
         time_unit_(options.time_unit),
         rad_s_per_unit_(options.rate_unit == RateUnit::kDegPerSecond ? kRadPerDeg : 1.0),
         delimiter_(delimiter),
-        path_(path) {
-    chunk_.reserve(kChunkSamples);
-  }
+        path_(path) {}
 
-  GyroChunk Next() override {
-    chunk_.clear();
-    if (first_row_) {
-      ParseRow(*first_row_, first_row_number_);
-      first_row_.reset();
-    }
-    while (chunk_.size() < kChunkSamples) {
-      const auto line = lines_.Next();
-      if (!line) break;
-      if (!Trim(*line).empty()) ParseRow(*line, lines_.line_number());
-    }
-    if (chunk_.empty() && !any_) throw IoError(IoMessage(path_, 0, "no samples"));
-    return {chunk_.data(), chunk_.size()};
-  }
   double Fraction() const override { return lines_.Fraction(); }
 
  private:
-  static constexpr size_t kChunkSamples = 1 << 16;
+  void Fill(std::vector<GyroSample>* chunk) override {
+    chunk->reserve(kChunkSamples);
+    if (first_row_) {
+      chunk->push_back(ParseRow(*first_row_, first_row_number_));
+      first_row_.reset();
+    }
+    while (chunk->size() < kChunkSamples) {
+      const auto line = lines_.Next();
+      if (!line) break;
+      if (!Trim(*line).empty()) chunk->push_back(ParseRow(*line, lines_.line_number()));
+    }
+    if (chunk->empty() && !any_) throw IoError(IoMessage(path_, 0, "no samples"));
+  }
 
-  void ParseRow(std::string_view line, long line_number) {
+  GyroSample ParseRow(std::string_view line, long line_number) {
     static const char* kUnitNames[] = {"s", "ms", "us", "ns"};
     Split(line, delimiter_, &fields_);
     if (fields_.size() < chosen_.needed_fields) {
@@ -205,11 +201,11 @@ class ColumnCsvSource : public GyroSource {
                                     std::string(field) + "'"));
       sample.omega_rad_s[k - 1] = *rate * rad_s_per_unit_;
     }
-    chunk_.push_back(sample);
     any_ = true;
     last_t_ns_ = *t_ns;
     previous_time_.assign(time_field.data(), time_field.size());
     previous_line_ = line_number;
+    return sample;
   }
 
   LineReader lines_;
@@ -225,7 +221,6 @@ class ColumnCsvSource : public GyroSource {
   std::string previous_time_;  // the time field of the row before, for messages
   long previous_line_ = 0;
   std::vector<std::string_view> fields_;
-  std::vector<GyroSample> chunk_;
 };
 
 }  // namespace
@@ -319,14 +314,14 @@ ColumnCsvStream OpenColumnCsv(TextBlocks blocks, const std::string& path,
 
 ColumnCsvLog ParseColumnCsv(std::string_view text, const std::string& path,
                             const ColumnCsvOptions& options) {
-  ColumnCsvStream stream = OpenColumnCsv(TextBlocks(text, TextBlocks::kBlockBytes), path, options);
+  ColumnCsvStream stream = OpenColumnCsv(TextBlocks::InMemory(text), path, options);
   stream.log.trace = ReadAllSamples(stream.samples.get());
   return std::move(stream.log);
 }
 
 ColumnCsvLog ReadColumnCsv(const std::string& path, const ColumnCsvOptions& options) {
   options.Check();
-  ColumnCsvStream stream = OpenColumnCsv(TextBlocks(path), path, options);
+  ColumnCsvStream stream = OpenColumnCsv(TextBlocks::OfFile(path), path, options);
   stream.log.trace = ReadAllSamples(stream.samples.get());
   return std::move(stream.log);
 }

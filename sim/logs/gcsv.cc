@@ -278,7 +278,7 @@ GyroSample ParseSample(const std::string& path, long n, const std::vector<std::s
 
 // The sample lines after the column line, in non-decreasing time (at least one), a block at a
 // time.
-class GcsvSource : public GyroSource {
+class GcsvSource : public FillingSource {
  public:
   GcsvSource(LineReader lines, const std::string& path, GcsvHeader header,
              const Eigen::Matrix3d& to_out)
@@ -286,13 +286,14 @@ class GcsvSource : public GyroSource {
         path_(path),
         header_(std::move(header)),
         to_out_(to_out),
-        exact_unit_(ExactUnit(*header_.tscale)) {
-    chunk_.reserve(kChunkSamples);
-  }
+        exact_unit_(ExactUnit(*header_.tscale)) {}
 
-  GyroChunk Next() override {
-    chunk_.clear();
-    while (chunk_.size() < kChunkSamples) {
+  double Fraction() const override { return lines_.Fraction(); }
+
+ private:
+  void Fill(std::vector<GyroSample>* chunk) override {
+    chunk->reserve(kChunkSamples);
+    while (chunk->size() < kChunkSamples) {
       const auto line = lines_.Next();
       if (!line) break;
       const long n = lines_.line_number();
@@ -312,16 +313,11 @@ class GcsvSource : public GyroSource {
       }
       any_ = true;
       last_t_ns_ = s.t_ns;
-      chunk_.push_back(s);
+      chunk->push_back(s);
     }
-    if (chunk_.empty() && !any_)
+    if (chunk->empty() && !any_)
       throw IoError(IoMessage(path_, 0, "no samples after the column line"));
-    return {chunk_.data(), chunk_.size()};
   }
-  double Fraction() const override { return lines_.Fraction(); }
-
- private:
-  static constexpr size_t kChunkSamples = 1 << 16;
   LineReader lines_;
   std::string path_;
   GcsvHeader header_;
@@ -330,7 +326,6 @@ class GcsvSource : public GyroSource {
   bool any_ = false;
   int64_t last_t_ns_ = 0;
   std::vector<std::string_view> fields_;
-  std::vector<GyroSample> chunk_;
 };
 
 }  // namespace
@@ -346,7 +341,7 @@ GcsvStream OpenGcsv(TextBlocks blocks, const std::string& path) {
 }
 
 GcsvLog ReadGcsv(const std::string& path) {
-  GcsvStream stream = OpenGcsv(TextBlocks(path), path);
+  GcsvStream stream = OpenGcsv(TextBlocks::OfFile(path), path);
   stream.log.trace = ReadAllSamples(stream.samples.get());
   return std::move(stream.log);
 }

@@ -46,8 +46,8 @@ const char* ParseRowFast(const char* p, const char* end, GyroSample* s) {
   for (int axis = 0; axis < 3; ++axis) {
     ++p;  // the ',' before this field
     double value;
-    const auto [next, ec] = std::from_chars(p, end, value);
-    if (ec != std::errc() || !std::isfinite(value)) return nullptr;
+    const char* next = FromCharsDouble(p, end, &value);
+    if (!next || !std::isfinite(value)) return nullptr;
     s->omega_rad_s[axis] = value;
     p = next;
     if (axis < 2 && (p >= end || *p != ',')) return nullptr;
@@ -90,12 +90,9 @@ GyroSample ParseRowGeneral(const std::string& path, long n, std::string_view lin
   return s;
 }
 
-// Rows handed on per chunk: 2 MiB of samples, which stay in cache while the analysis takes them.
-constexpr size_t kChunkSamples = 1 << 16;
-
 // gyro.csv read block by block: the header at once, then chunks of rows (t in seconds, then gx,
 // gy, gz in rad/s).
-class GyroCsvSource : public GyroSource {
+class GyroCsvSource : public FillingSource {
  public:
   GyroCsvSource(TextBlocks blocks, const std::string& path)
       : blocks_(std::move(blocks)), path_(path) {
@@ -109,26 +106,25 @@ class GyroCsvSource : public GyroSource {
       throw IoError(IoMessage(path, 1, "missing header 't,gx,gy,gz'"));
     }
     rest_.remove_prefix(std::min(rest_.size(), header_end + 1));
-    chunk_.reserve(kChunkSamples);
   }
 
-  GyroChunk Next() override {
-    chunk_.clear();
-    while (chunk_.size() < kChunkSamples) {
-      if (rest_.empty() && (rest_ = blocks_.Next()).empty()) break;
-      ParseRows();
-    }
-    if (chunk_.empty() && !any_) throw IoError(IoMessage(path_, 0, "no samples"));
-    return {chunk_.data(), chunk_.size()};
-  }
   double Fraction() const override { return blocks_.Fraction(); }
 
  private:
-  // Rows from rest_ (whole lines) into chunk_ until it is full or rest_ is used up.
-  void ParseRows() {
+  void Fill(std::vector<GyroSample>* chunk) override {
+    chunk->reserve(kChunkSamples);
+    while (chunk->size() < kChunkSamples) {
+      if (rest_.empty() && (rest_ = blocks_.Next()).empty()) break;
+      ParseRows(chunk);
+    }
+    if (chunk->empty() && !any_) throw IoError(IoMessage(path_, 0, "no samples"));
+  }
+
+  // Rows from rest_ (whole lines) into chunk until it is full or rest_ is used up.
+  void ParseRows(std::vector<GyroSample>* chunk) {
     const char* p = rest_.data();
     const char* const end = p + rest_.size();
-    while (p < end && chunk_.size() < kChunkSamples) {
+    while (p < end && chunk->size() < kChunkSamples) {
       ++line_number_;
       GyroSample s;
       const char* next = ParseRowFast(p, end, &s);
@@ -152,7 +148,7 @@ class GyroCsvSource : public GyroSource {
       }
       any_ = true;
       last_t_ns_ = s.t_ns;
-      chunk_.push_back(s);
+      chunk->push_back(s);
       p = next;
     }
     rest_ = std::string_view(p, end - p);
@@ -164,7 +160,6 @@ class GyroCsvSource : public GyroSource {
   long line_number_ = 1;   // the header is line 1
   bool any_ = false;
   int64_t last_t_ns_ = 0;
-  std::vector<GyroSample> chunk_;
   std::vector<std::string_view> fields_;
 };
 
@@ -181,7 +176,7 @@ std::unique_ptr<GyroSource> OpenGyroCsv(TextBlocks blocks, const std::string& pa
 }
 
 GyroTrace ReadGyroCsv(const std::string& path) {
-  return ReadAllSamples(OpenGyroCsv(TextBlocks(path), path).get());
+  return ReadAllSamples(OpenGyroCsv(TextBlocks::OfFile(path), path).get());
 }
 
 void WriteGyroCsv(const std::string& path, const GyroTrace& trace) {

@@ -136,19 +136,20 @@ int16_t RateToCount(double omega_rad_s, double lsb_per_dps, bool* saturated) {
 namespace {
 
 // A raw-count log read a block at a time.
-class RawCsvSource : public GyroSource {
+class RawCsvSource : public FillingSource {
  public:
   RawCsvSource(TextBlocks blocks, const std::string& path, int range_dps, TimeUnit time_unit)
       : lines_(std::move(blocks)),
         path_(path),
         rad_s_per_count_(kRadPerDeg / RawSensitivityLsbPerDps(range_dps)),
-        time_unit_(time_unit) {
-    chunk_.reserve(kChunkSamples);
-  }
+        time_unit_(time_unit) {}
 
-  GyroChunk Next() override {
-    chunk_.clear();
-    while (chunk_.size() < kChunkSamples) {
+  double Fraction() const override { return lines_.Fraction(); }
+
+ private:
+  void Fill(std::vector<GyroSample>* chunk) override {
+    chunk->reserve(kChunkSamples);
+    while (chunk->size() < kChunkSamples) {
       const auto line = lines_.Next();
       if (!line) break;
       if (line->empty()) continue;
@@ -165,15 +166,10 @@ class RawCsvSource : public GyroSource {
       }
       any_ = true;
       last_t_ns_ = s.t_ns;
-      chunk_.push_back(s);
+      chunk->push_back(s);
     }
-    if (chunk_.empty() && !any_) throw IoError(IoMessage(path_, 0, "no samples"));
-    return {chunk_.data(), chunk_.size()};
+    if (chunk->empty() && !any_) throw IoError(IoMessage(path_, 0, "no samples"));
   }
-  double Fraction() const override { return lines_.Fraction(); }
-
- private:
-  static constexpr size_t kChunkSamples = 1 << 16;
 
   // The sample of line n, split into fields_.
   GyroSample ParseRow(long n) const {
@@ -213,7 +209,6 @@ class RawCsvSource : public GyroSource {
   bool first_ = true, any_ = false;
   int64_t last_t_ns_ = 0;
   std::vector<std::string_view> fields_;
-  std::vector<GyroSample> chunk_;
 };
 
 }  // namespace
@@ -225,7 +220,7 @@ std::unique_ptr<GyroSource> OpenRawCsv(TextBlocks blocks, const std::string& pat
 
 GyroTrace ReadRawCsv(const std::string& path, int range_dps, TimeUnit time_unit) {
   RawSensitivityLsbPerDps(range_dps);  // an unknown range before the file is opened
-  return ReadAllSamples(OpenRawCsv(TextBlocks(path), path, range_dps, time_unit).get());
+  return ReadAllSamples(OpenRawCsv(TextBlocks::OfFile(path), path, range_dps, time_unit).get());
 }
 
 size_t WriteRawCsv(const std::string& path, const GyroTrace& trace, int range_dps,
