@@ -86,6 +86,13 @@ class DetectedSource : public GyroSource {
       throw IoError(std::string(e.what()) + DetectedAs(format_));
     }
   }
+  bool NextInto(std::vector<GyroSample>* out) override {
+    try {
+      return source_->NextInto(out);
+    } catch (const IoError& e) {
+      throw IoError(std::string(e.what()) + DetectedAs(format_));
+    }
+  }
   double Fraction() const override { return source_->Fraction(); }
 
  private:

@@ -1,7 +1,6 @@
 #include "sim/text_file.h"
 
 #include "sim/check.h"
-
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -20,11 +19,31 @@ namespace {
 // every kind of number a log may hold, and for text that is no number.
 TEST(FromCharsDouble, IsStdFromCharsOnEveryKindOfNumber) {
   std::mt19937_64 rng(15);
-  std::vector<std::string> texts = {"0",    "-0",   "-0.0", ".5",        "-.5",     "5.",   ".",
-                                    "-",    "",     "1e5",  "1.5e-3",    "1.5e",    "inf",  "nan",
-                                    "+1",   "abc",  "0.1",  "0.3",       "1,2",     "-1.5 ",
-                                    "9007199254740993",     "9007199254740992.5", "1234567890123456789",
-                                    "12345678901234567890", "0.00000000000000000000001",
+  std::vector<std::string> texts = {"0",
+                                    "-0",
+                                    "-0.0",
+                                    ".5",
+                                    "-.5",
+                                    "5.",
+                                    ".",
+                                    "-",
+                                    "",
+                                    "1e5",
+                                    "1.5e-3",
+                                    "1.5e",
+                                    "inf",
+                                    "nan",
+                                    "+1",
+                                    "abc",
+                                    "0.1",
+                                    "0.3",
+                                    "1,2",
+                                    "-1.5 ",
+                                    "9007199254740993",
+                                    "9007199254740992.5",
+                                    "1234567890123456789",
+                                    "12345678901234567890",
+                                    "0.00000000000000000000001",
                                     "0.0000000000000000000000001"};
   char buffer[64];
   for (int i = 0; i < 20000; ++i) {
@@ -74,7 +93,8 @@ TEST(LineReader, BlocksOfAnySizeGiveTheLinesOfTheWholeText) {
     const size_t block = 1 + rng() % 64;
     WriteFileAtomically(path, text);
     for (bool from_file : {false, true}) {
-      LineReader reader(from_file ? TextBlocks::OfFile(path, block) : TextBlocks::InMemory(text, block));
+      LineReader reader(from_file ? TextBlocks::OfFile(path, block)
+                                  : TextBlocks::InMemory(text, block));
       std::vector<std::pair<long, std::string>> got;
       while (auto line = reader.Next()) got.emplace_back(reader.line_number(), *line);
       EXPECT_EQ(got, expected) << "trial " << trial << ", block " << block
