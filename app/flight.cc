@@ -63,7 +63,7 @@ void Run(const FlightCommand& command) {
       throw std::invalid_argument(command.trace.path + ": " + e.what());
     }
   }
-  for (LogWarning& w : FlightWarnings(result)) warnings.push_back(std::move(w));
+  warnings.insert(warnings.end(), result.warnings.begin(), result.warnings.end());
   if (options.series) WriteFlightSeriesCsv(command.series_path, result.series);
   if (command.json) {
     nlohmann::json json = FlightToJson(result);

@@ -50,15 +50,16 @@ seed() {  # seed TARGET MODE FILE...: scripts/fuzz_seeds.py MODE of each file th
   done
   return 0
 }
-text_seeds() {  # small files of every text format the log reader detects
-  local dir="$build/corpus/$1"
+text_seeds() {  # text_seeds TARGET [PREFIX]: small files of every text format, after PREFIX
+  # (the option bytes that some targets read first; printf escapes)
+  local dir="$build/corpus/$1" p="${2:-}"
   mkdir -p "$dir"
-  printf 't,gx,gy,gz\n0,0.1,0.2,0.3\n0.001,0.1,0.2,0.3\n0.004,-1e-3,+2,3.5\n' >"$dir/gyro.csv"
-  printf '\xef\xbb\xbft,gx,gy,gz,extra\r\n1.5, 0.1 ,0.2,0.3,x\r\n\r\n1.5,0.1,0.2,0.3,y\r\n' >"$dir/gyro_crlf.csv"
-  printf '0,12,-5,3\n1000,13,-4,3\n2000,32767,-32768,0\n' >"$dir/raw.csv"
-  printf 'time,x,y,z\n0,12,-5,3\n1,13,-4,3\n' >"$dir/raw_header.csv"
-  printf 'GYROFLOW IMU LOG\nversion,1.3\nid,x\norientation,XYZ\ntscale,0.001\ngscale,1\nt,gx,gy,gz\n0,0.1,0.2,0.3\n1,0.1,0.2,0.3\n' >"$dir/log.gcsv"
-  printf 'CAMERA IMU LOG\nversion,1.1\norientation,yXZ\ntscale,1e-6\ngscale,0.0174533\nascale,1\nt,gx,gy,gz,ax,ay,az\n0,1,2,3,0,0,1\n1000,1,2,3,0,0,1\n' >"$dir/camera.gcsv"
+  printf "${p}"'t,gx,gy,gz\n0,0.1,0.2,0.3\n0.001,0.1,0.2,0.3\n0.004,-1e-3,+2,3.5\n' >"$dir/gyro.csv"
+  printf "${p}"'\xef\xbb\xbft,gx,gy,gz,extra\r\n1.5, 0.1 ,0.2,0.3,x\r\n\r\n1.5,0.1,0.2,0.3,y\r\n' >"$dir/gyro_crlf.csv"
+  printf "${p}"'0,12,-5,3\n1000,13,-4,3\n2000,32767,-32768,0\n' >"$dir/raw.csv"
+  printf "${p}"'time,x,y,z\n0,12,-5,3\n1,13,-4,3\n' >"$dir/raw_header.csv"
+  printf "${p}"'GYROFLOW IMU LOG\nversion,1.3\nid,x\norientation,XYZ\ntscale,0.001\ngscale,1\nt,gx,gy,gz\n0,0.1,0.2,0.3\n1,0.1,0.2,0.3\n' >"$dir/log.gcsv"
+  printf "${p}"'CAMERA IMU LOG\nversion,1.1\norientation,yXZ\ntscale,1e-6\ngscale,0.0174533\nascale,1\nt,gx,gy,gz,ax,ay,az\n0,1,2,3,0,0,1\n1000,1,2,3,0,0,1\n' >"$dir/camera.gcsv"
 }
 ulogs=("$data"/gyro/px4_ulog/*.ulg)
 dataflash=("$data"/incoming/ardupilot_*/*.bin "$data"/incoming/ardupilot_*/*.BIN)
@@ -75,7 +76,8 @@ for t in "${targets[@]}"; do
       seed flight_log prefix "${blackbox[@]}"
       seed flight_log mp4 "${mp4s[@]}"
       text_seeds flight_log ;;
-    gyro_csv | raw_csv | gcsv) text_seeds "$t" ;;
+    gyro_csv | gcsv) text_seeds "$t" '\x05' ;;  # blocks of 6 bytes
+    raw_csv) text_seeds "$t" '\x10' ;;          # 250 deg/s, seconds, blocks of 5 bytes
     mp4) seed mp4 mp4 "${mp4s[@]}" ;;
     gpmf)
       seed gpmf gpmf "${mp4s[@]}"
@@ -93,8 +95,11 @@ JSON
       ;;
     column_csv)
       seed column_csv prefix "$data"/rs/phone_gyro_video_20200109_145447/gyro.txt
-      printf '\x01t;gx;gy;gz\n0;1;2;3\n0.001;1;2;3\n' >"$build/corpus/column_csv/semicolon.csv"
-      printf '\x00"time_us","wx","wy","wz"\n1000,0.1,0.2,0.3\n2000,0.1,0.2,0.3\n' >"$build/corpus/column_csv/quoted.csv" ;;
+      for f in "$build/corpus/column_csv"/gyro.txt; do  # columns 4,1,2,3, auto delimiter
+        [ -f "$f" ] && { printf '\x01\xff'; head -c 4000 "$f"; } >"$f.tmp" && mv "$f.tmp" "$f"
+      done
+      printf '\x01\x07t;gx;gy;gz\n0;1;2;3\n0.001;1;2;3\n' >"$build/corpus/column_csv/semicolon.csv"
+      printf '\x00\x20"time_us","wx","wy","wz"\n1000,0.1,0.2,0.3\n2000,0.1,0.2,0.3\n' >"$build/corpus/column_csv/quoted.csv" ;;
     frames_csv)
       mkdir -p "$build/corpus/frames_csv"
       printf 'frame,t,image,ref\n0,0.0,images/frame_000000.png,\n1,0.04,images/frame_000001.png,0\n' >"$build/corpus/frames_csv/frames.csv" ;;

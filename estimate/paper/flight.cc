@@ -307,6 +307,30 @@ void FlightOptions::Check() const {
       << "bias segment " << bias.begin_s << ":" << bias.end_s << " must satisfy 0 <= A < B";
 }
 
+namespace {
+
+std::vector<LogWarning> TooFewSamplesWarnings(const FlightResult& result) {
+  std::string windows;
+  size_t count = 0;
+  for (const FlightRow& row : result.rows) {
+    if (!row.too_few_samples) continue;
+    const std::string window = FormatNumber("%g", row.window_s * 1e3) + " ms";
+    if (windows.find(window) == std::string::npos)
+      windows += (windows.empty() ? "" : ", ") + window;
+    ++count;
+  }
+  if (count == 0) return {};
+  const double dt_s = result.sample_interval_s;
+  return {{"too_few_samples",
+           "windows of " + windows + " not analysed: at " + FormatNumber("%.4g", 1.0 / dt_s) +
+               " Hz a window must be longer than " +
+               FormatNumber("%.4g", kMinWindowSampleIntervals * dt_s * 1e3) +
+               " ms (2 sample intervals) to measure a range",
+           std::nullopt, count}};
+}
+
+}  // namespace
+
 struct FlightStream::Impl {
   explicit Impl(const FlightOptions& given)
       : options(given),
@@ -529,6 +553,7 @@ FlightResult FlightStream::Impl::Finish() {
       row.flagged_percent_vector = row.flagged_vector * to_percent;
     }
   }
+  result.warnings = TooFewSamplesWarnings(result);
   return result;
 }
 
@@ -552,26 +577,6 @@ FlightResult Flight(const GyroTrace& trace, const FlightOptions& options) {
     if (options.progress) options.progress(static_cast<double>(i) / trace.size());
   }
   return stream.Finish();
-}
-
-std::vector<LogWarning> FlightWarnings(const FlightResult& result) {
-  std::string windows;
-  size_t count = 0;
-  for (const FlightRow& row : result.rows) {
-    if (!row.too_few_samples) continue;
-    const std::string window = FormatNumber("%g", row.window_s * 1e3) + " ms";
-    if (windows.find(window) == std::string::npos)
-      windows += (windows.empty() ? "" : ", ") + window;
-    ++count;
-  }
-  if (count == 0) return {};
-  const double dt_s = result.sample_interval_s;
-  return {{"too_few_samples",
-           "windows of " + windows + " not analysed: at " + FormatNumber("%.4g", 1.0 / dt_s) +
-               " Hz a window must be longer than " +
-               FormatNumber("%.4g", kMinWindowSampleIntervals * dt_s * 1e3) +
-               " ms (2 sample intervals) to measure a range",
-           std::nullopt, count}};
 }
 
 std::string FlightTable(const FlightResult& result) {
@@ -610,6 +615,7 @@ std::string FlightTable(const FlightResult& result) {
         << " ms (2 sample intervals) to measure a range; those rows were not analysed\n";
   }
   if (result.vector_criterion && too_few < result.rows.size()) {
+    const size_t analysed = result.rows.size() - too_few;  // refused rows are no comparison
     size_t vector_more = 0, axis_more = 0, vector_only = 0, axis_only = 0;
     for (const FlightRow& row : result.rows) {
       vector_more += row.flagged_vector > row.flagged;
@@ -619,10 +625,10 @@ std::string FlightTable(const FlightResult& result) {
     }
     out << "criteria: ";
     if (vector_more > 0 && axis_more == 0) {
-      out << "the vector angle flags more in " << vector_more << " of " << result.rows.size()
+      out << "the vector angle flags more in " << vector_more << " of " << analysed
           << " rows: per-axis ranges are NOT on the safe side on this data";
     } else if (axis_more > 0 && vector_more == 0) {
-      out << "per-axis flags more in " << axis_more << " of " << result.rows.size()
+      out << "per-axis flags more in " << axis_more << " of " << analysed
           << " rows: per-axis ranges are on the safe side on this data";
     } else if (axis_more == 0 && vector_more == 0) {
       out << "both criteria flag the same share in every row";

@@ -88,6 +88,10 @@ struct FlightResult {
   bool vector_criterion = false;
   std::vector<FlightRow> rows;  // limit-major: for each limit, each window (Table 4 order)
   FlightSeries series;
+  // A too_few_samples warning (docs/FORMATS.md "Warnings") naming the rows the sampling rate could
+  // not answer and the shortest window it allows; empty when every row was analysed. Commands add
+  // it to the log's warnings.
+  std::vector<LogWarning> warnings;
 };
 
 // Runs the analysis. Windows too short for the sampling rate are marked
@@ -116,10 +120,6 @@ class FlightStream {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
-
-// A too_few_samples warning (docs/FORMATS.md "Warnings") naming the rows the sampling rate could
-// not answer and the shortest window it allows; empty when every row was analysed.
-std::vector<LogWarning> FlightWarnings(const FlightResult& result);
 
 // The person-readable table in the paper's Table 4 layout, with a closing line saying which
 // criterion flags more on this data.

@@ -134,7 +134,8 @@ nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
     entry["trigger_t"] = image.trigger_t_ns * 1e-9;
     entry["in_trace"] = image.in_trace;
     nlohmann::json flagged = nlohmann::json::object();
-    if (image.in_trace) {
+    if (image.too_few_samples) entry["too_few_samples"] = true;  // absent: false
+    if (image.judged()) {
       entry["D_paper_m"] = image.d_paper_m;
       entry["D_full_m"] = image.d_full_m;
       entry["D_full_px"] = image.d_full_px;
@@ -162,6 +163,8 @@ nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
                      {"flagged_percent_fast_readout", v.share_fast_readout_percent},
                      {"flagged_percent_half_altitude", v.share_half_altitude_percent},
                      {"line", v.line}};
+  if (v.images_too_few_samples > 0)
+    json["verdict"]["images_too_few_samples"] = v.images_too_few_samples;
   return json;
 }
 
