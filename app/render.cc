@@ -2,6 +2,7 @@
 // (render/render_dataset.h).
 
 #include "app/command.h"
+#include "app/trace_options.h"  // PrintLogWarnings
 #include "render/render_dataset.h"
 
 #include <cstdio>
@@ -50,6 +51,7 @@ const CommandRegistration kRegistration(50, [](CLI::App& app) {
       bar->Update(done);
     });
     bar.reset();
+    PrintLogWarnings(options->gyro_path, summary.gyro_warnings);
     std::printf("frame      D_px       D_m\n");
     for (const RenderedFrame& f : summary.frames) {
       std::printf("%5lld %9.3f %9.4f\n", static_cast<long long>(f.frame), f.d_px, f.d_m);

@@ -1,6 +1,7 @@
 // libFuzzer target: gyro.csv (sim/logs/gyro_io.h OpenGyroCsv) read as flight reads it, a block at
 // a time: the first input byte picks the block size (1 to 256 bytes, so that every line end falls
-// on a block edge somewhere), the rest is the file's text. Every chunk goes through the trace audit.
+// on a block edge somewhere), the rest is the file's text. Every chunk goes through the trace
+// audit.
 #include "sim/logs/gyro_io.h"
 #include "sim/trace_audit.h"
 

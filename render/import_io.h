@@ -3,6 +3,8 @@
 // number of an imported dataset came from, as a typed record, and the one place that turns it into
 // JSON text.
 
+#include "sim/log_warning.h"
+
 #include <Eigen/Core>
 
 #include <cstddef>
@@ -80,6 +82,9 @@ struct ImportRecord {
   std::vector<int64_t> outside_gyro;  // frames whose declared readout the gyro does not cover
   std::vector<FrameExposure> exposures;
   std::vector<ImportClaim> claims;
+  // What the clip's gyro lost or doubted (sim/trace_audit.h: gaps, repeated times, rate changes,
+  // saturation), also printed on stderr.
+  std::vector<LogWarning> warnings;
   std::variant<GoproImportDetails, PhoneImportDetails> details;  // also gives source.kind
 };
 

@@ -96,17 +96,6 @@ nlohmann::json FlightToJson(const FlightResult& result) {
           {"rows", rows}};
 }
 
-nlohmann::json WarningsToJson(const std::vector<LogWarning>& warnings) {
-  nlohmann::json json = nlohmann::json::array();
-  for (const LogWarning& w : warnings) {
-    nlohmann::json item = {{"kind", w.kind}, {"message", w.message}};
-    if (w.t_s) item["t_s"] = *w.t_s;
-    if (w.count) item["count"] = *w.count;
-    json.push_back(std::move(item));
-  }
-  return json;
-}
-
 nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
   nlohmann::json json;
   json["source"] = {{"format", result.format},   {"gyro", result.gyro_source},

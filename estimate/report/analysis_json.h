@@ -6,6 +6,7 @@
 #include "estimate/paper/analyze.h"
 #include "estimate/paper/flight.h"
 #include "estimate/paper/noise.h"
+#include "render/warnings_io.h"  // WarningsToJson
 #include "sim/log_warning.h"
 
 #include <nlohmann/json.hpp>
@@ -28,10 +29,6 @@ nlohmann::ordered_json AccuracyToJson(const AccuracyResult& result);
 
 // docs/FORMATS.md `flight` JSON (plus per-axis percentages, window counts and the bias).
 nlohmann::json FlightToJson(const FlightResult& result);
-
-// docs/FORMATS.md "Warnings": [{"kind", "message", "t_s", "count"}], t_s and count only where
-// they apply.
-nlohmann::json WarningsToJson(const std::vector<LogWarning>& warnings);
 
 // docs/FORMATS.md `analyze` JSON (plus bias, verdict and per-image detail).
 nlohmann::json AnalyzeToJson(const AnalyzeResult& result);
