@@ -41,13 +41,15 @@ void Run(const FlightCommand& command) {
   if (command.zero_bias) options.known_bias_rad_s = Eigen::Vector3d::Zero();
   std::vector<LogWarning> warnings;
   FlightResult result;
-  if (command.trace.auto_bias) {
-    // The still segment may lie anywhere in the log: it is found on the whole trace first.
+  TracePair pair;
+  if (command.trace.auto_bias || !command.trace.second_path.empty()) {
+    // The still segment may lie anywhere in the log, and a pair is fused on the whole traces:
+    // both need the whole trace first.
     Progress progress("flight", 1000);
     options.progress = [&progress](double fraction) {
       progress.Update(static_cast<size_t>(fraction * 1000));
     };
-    result = AnalyzeTrace(command.trace, options, Flight, &warnings);
+    result = AnalyzeTrace(command.trace, options, Flight, &warnings, &pair);
   } else {
     // Streamed: memory stays bounded whatever the log's length.
     options.bias = ParseBiasSegment(command.trace.bias);
@@ -67,9 +69,14 @@ void Run(const FlightCommand& command) {
   if (options.series) WriteFlightSeriesCsv(command.series_path, result.series);
   if (command.json) {
     nlohmann::json json = FlightToJson(result);
+    if (!command.trace.second_path.empty())
+      json["pair"] = SensorPairToJson(pair.pair, command.trace.second_path);
     json["warnings"] = WarningsToJson(warnings);
     std::cout << json.dump(2) << "\n";
   } else {
+    if (!command.trace.second_path.empty()) {
+      std::cout << SensorPairText(pair.pair, command.trace.path, command.trace.second_path) << "\n";
+    }
     std::cout << FlightTable(result);  // its own line says which rows had too few samples
   }
 }
@@ -80,6 +87,7 @@ const CommandRegistration kRegistration(40, [](CLI::App& app) {
       "share of time windows whose rotation smears the image beyond a ground limit (Table 4)");
   auto command = std::make_shared<FlightCommand>();
   command->trace.Add(cmd, /*with_bias=*/true);
+  command->trace.AddSecond(cmd);
   cmd->add_option("--altitude", command->flight.altitude_m, "height above flat ground, m")
       ->capture_default_str();
   cmd->add_option("--limit", command->limits, "ground limits, e.g. 5cm,10cm (m, cm, mm; bare = m)")

@@ -92,7 +92,14 @@ for t in "${targets[@]}"; do
  "gyro_to_camera": [[1,0,0],[0,1,0],[0,0,1]], "time_offset_s": 0.0,
  "scene": {"altitude_m": 50.0}, "velocity_mps": [0.0, 0.0, 0.0]}
 JSON
+      cat >"$build/corpus/camera_json/fisheye.json" <<'JSON'
+{"format": "rig/1", "image": {"width": 848, "height": 480},
+ "intrinsics": {"fx": 368.7, "fy": 370.8, "cx": 424.2, "cy": 238.8},
+ "distortion": {"model": "fisheye", "k1": 0.0646, "k2": 0.0391, "k3": -0.0414, "k4": 0.0149},
+ "rolling_shutter": {"readout_s": 0.0206, "direction": "top_to_bottom"}}
+JSON
       ;;
+    lens_profile) seed lens_profile prefix "$data"/incoming_rs/*/reference/*.json ;;
     column_csv)
       seed column_csv prefix "$data"/rs/phone_gyro_video_20200109_145447/gyro.txt
       for f in "$build/corpus/column_csv"/gyro.txt; do  # columns 4,1,2,3, auto delimiter

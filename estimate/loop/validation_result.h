@@ -5,6 +5,7 @@
 #include "estimate/loop/effect_fit.h"
 #include "estimate/loop/measure.h"
 #include "render/effects.h"
+#include "render/lens_profile.h"
 #include "sim/log_warning.h"
 
 #include <Eigen/Core>
@@ -24,6 +25,9 @@ inline constexpr double kMinRatioDPx = 1.0;
 
 struct ValidateOptions {
   std::vector<double> limits_m{0.05, 0.10};  // acceptable smear on the ground, m
+  // A Gyroflow lens profile (render/lens_profile.h) whose lens, scaled to the dataset's image size,
+  // and readout (where it states one) replace camera.json's before anything is predicted.
+  std::string lens_profile_path;
   MeasureOptions measure;
   LoopOptions loop;
   // Keep the per-point residuals before and after the loop (for plots).
@@ -117,8 +121,9 @@ struct RatioGroup {
 
 struct ValidationResult {
   std::string dataset;
-  RigModel declared;
-  std::vector<LogWarning> warnings;  // what the audit of gyro.csv found (RigDataset)
+  RigModel declared;                           // camera.json, with the lens profile's when given
+  std::optional<LensProfileUse> lens_profile;  // what ValidateOptions::lens_profile_path gave
+  std::vector<LogWarning> warnings;            // what the audit of gyro.csv found (RigDataset)
   std::vector<double> limits_m;
   std::vector<FrameValidation> frames;
   std::vector<Confusion> confusion_paper;  // one per limit

@@ -217,7 +217,9 @@ TEST(TraceAuditor, StreamedInAnyChunksEqualsTheWholeTraceAudit) {
     }
     const LogWarning* rate = find("rate_change");
     ASSERT_EQ(rate != nullptr, expected.run_medians.size() > 1) << trial << "\n" << Joined(lines);
-    if (rate) EXPECT_EQ(*rate->count, expected.run_medians.size() - 1) << trial;
+    if (rate) {
+      EXPECT_EQ(*rate->count, expected.run_medians.size() - 1) << trial;
+    }
     // The streamed sampling is what the whole trace says of itself.
     const GyroTrace whole(samples);
     const TraceSampling sampling = auditor.Sampling();
