@@ -29,8 +29,10 @@ std::string_view StripBom(std::string_view line) {
 const char* ParseRowFast(const char* p, const char* end, GyroSample* s) {
   int64_t whole = 0;
   const char* digits = p;
-  while (p < end && *p >= '0' && *p <= '9' && p - digits < 12) whole = whole * 10 + (*p++ - '0');
-  if (p == digits || p >= end) return nullptr;
+  // At most 10 digits and 9e9 s, so that t_ns fits int64 (9.2e18 ns); the general path takes and
+  // judges the rest.
+  while (p < end && *p >= '0' && *p <= '9' && p - digits < 10) whole = whole * 10 + (*p++ - '0');
+  if (p == digits || p >= end || whole > 9'000'000'000) return nullptr;
   int64_t fraction_ns = 0;
   if (*p == '.') {
     ++p;
