@@ -221,6 +221,9 @@ void PredictStillFrames(const GyroTrace& gyro, const std::vector<FrameEntry>& en
     const ImageResult& image = paper.images[i];
     SHUTTERLAB_CHECK(image.in_trace) << frames_path << ":" << i + 2 << ": frame " << f.frame
                                      << ": the readout is outside the gyro log";
+    SHUTTERLAB_CHECK(!image.too_few_samples)
+        << frames_path << ":" << i + 2 << ": frame " << f.frame
+        << ": the readout holds too few gyro samples (2 or fewer) for the paper's model";
     f.d_paper_m = image.d_paper_m;
     f.range_arcsec = image.range_arcsec;
     f.dominant_axis = image.dominant_axis;
