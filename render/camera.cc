@@ -175,6 +175,12 @@ RigModel ReadRigModel(const std::string& path) {
         rig.velocity_mps[i] = v[i].get<double>();
       }
     }
+    if (j.contains("mask")) {
+      if (!j["mask"].is_string() || j["mask"].get<std::string>().empty()) {
+        throw std::invalid_argument("mask is not a file name");
+      }
+      rig.mask = j["mask"].get<std::string>();
+    }
     rig.Check();
   } catch (const json::exception& e) {
     throw IoError(IoMessage(path, 0, std::string("malformed camera: ") + e.what()));
@@ -202,6 +208,7 @@ void WriteRigModel(const std::string& path, const RigModel& rig) {
   j["time_offset_s"] = rig.time_offset_s;
   j["scene"] = {{"altitude_m", rig.altitude_m}};
   j["velocity_mps"] = {rig.velocity_mps.x(), rig.velocity_mps.y(), rig.velocity_mps.z()};
+  if (!rig.mask.empty()) j["mask"] = rig.mask;
   WriteFileAtomically(path, j.dump(2) + "\n");
 }
 

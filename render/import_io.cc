@@ -97,6 +97,9 @@ std::string ImportJson(const ImportRecord& record) {
   r["frames"]["outside_gyro"] = record.outside_gyro;
   r["exposure_s"] = ExposuresJson(record.exposures);
   r["claims"] = ClaimsJson(record.claims);
+  if (!record.mask_file.empty()) {
+    r["mask"] = {{"file", record.mask_file}, {"source", record.mask_source}};
+  }
   if (const auto* gopro = std::get_if<GoproImportDetails>(&record.details)) AddGopro(*gopro, &r);
   if (const auto* phone = std::get_if<PhoneImportDetails>(&record.details)) AddPhone(*phone, &r);
   return r.dump(2) + "\n";
