@@ -9,15 +9,19 @@
 #include "estimate/report/analysis_json.h"
 #include "estimate/report/analyze_report.h"
 #include "render/image_io.h"
+#include "render/lens_profile.h"
 #include "render/pictures.h"
 #include "sim/check.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/logs/gyro_io.h"
+#include "sim/sensor_pair.h"
+#include "sim/still_detect.h"
 #include "sim/units.h"
 
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -32,11 +36,13 @@ struct AnalyzeCommand {
   int range_dps = 250;
   ColumnFlags column_flags;  // --time-unit, --columns, --delimiter, --rate-unit
   std::string camera_path;
+  std::string lens_profile_path;
   std::string readout = "30ms";
   double altitude_m = 50.0;
   double focal_px = 1100.0;
   std::string size = "1280x960";
   std::string triggers_path;
+  std::string second_path;
   std::string every;
   std::string latency = "0";
   std::vector<std::string> limits{"5cm", "10cm"};
@@ -45,6 +51,7 @@ struct AnalyzeCommand {
   std::string scene_path;
   bool json = false;
   bool altitude_given = false;
+  bool readout_given = false;
 };
 
 RigModel RigFromFlags(const AnalyzeCommand& command) {
@@ -76,6 +83,14 @@ void Run(const AnalyzeCommand& command) {
   } else {
     options.rig = RigFromFlags(command);
   }
+  // The profile's lens, and its readout unless --readout was typed.
+  std::optional<LensProfileUse> lens;
+  if (!command.lens_profile_path.empty()) {
+    lens = ScaleLensProfile(ReadLensProfile(command.lens_profile_path), options.rig.camera.width,
+                            options.rig.camera.height);
+    ApplyLensProfile(&*lens, &options.rig, command.readout_given);
+    for (const std::string& note : lens->notes) std::cerr << "note: " << note << "\n";
+  }
   options.limits_m.clear();
   for (const std::string& text : command.limits) options.limits_m.push_back(ParseLengthM(text));
   options.noise_allowance_arcsec = command.noise_allowance_arcsec;
@@ -103,8 +118,27 @@ void Run(const AnalyzeCommand& command) {
   // plots the Allan deviation.
   options.flight_series = !command.out_dir.empty();
   options.allan = !command.out_dir.empty();
-  const FlightLog log = ReadFlightLog(command.log_path, read);
+  FlightLog log = ReadFlightLog(command.log_path, read);
   PrintLogWarnings(command.log_path, log.warnings);
+  // --second: the pair fused into one trace on the first log's clock, weighed over a still
+  // segment when the first sensor has one; the camera events stay the first log's.
+  std::optional<SensorPair> pair;
+  if (!command.second_path.empty()) {
+    const FlightLog second = ReadFlightLog(command.second_path, read);
+    PrintLogWarnings(command.second_path, second.warnings);
+    SensorPairOptions pair_options;
+    try {
+      pair_options.still = DetectStillSegment(log.gyro).segment;
+    } catch (const std::invalid_argument&) {
+    }
+    try {
+      pair = FuseSensorPair(log.gyro, second.gyro, pair_options);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(command.log_path + " + " + command.second_path + ": " + e.what());
+    }
+    log.gyro = pair->fused;
+    log.warnings.insert(log.warnings.end(), second.warnings.begin(), second.warnings.end());
+  }
   Progress progress("analyze", 1000);
   options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
   AnalyzeResult result;
@@ -118,8 +152,12 @@ void Run(const AnalyzeCommand& command) {
     AnalyzeReportPage(options, result, report).Write(command.out_dir + "/report.html");
   }
   if (command.json) {
-    std::cout << AnalyzeToJson(result).dump(2) << "\n";
+    auto json = AnalyzeToJson(result);
+    if (pair) json["pair"] = SensorPairToJson(*pair, command.second_path);
+    if (lens) json["lens_profile"] = LensProfileUseJson(*lens);
+    std::cout << json.dump(2) << "\n";
   } else {
+    if (pair) std::cout << SensorPairText(*pair, command.log_path, command.second_path) << "\n";
     std::cout << AnalyzeReport(result);
   }
 }
@@ -144,9 +182,13 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
   command->column_flags.Add(cmd);
   cmd->add_option("--camera", command->camera_path, "camera.json (docs/FORMATS.md rig/1)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--readout", command->readout,
-                  "rolling-shutter readout without --camera (s, ms, us)")
-      ->capture_default_str();
+  cmd->add_option("--lens-profile", command->lens_profile_path,
+                  "Gyroflow lens profile (JSON): its lens, scaled to the image size, and its "
+                  "readout where it states one (unless --readout is given)")
+      ->check(CLI::ExistingFile);
+  auto* readout = cmd->add_option("--readout", command->readout,
+                                  "rolling-shutter readout without --camera (s, ms, us)")
+                      ->capture_default_str();
   auto* altitude =
       cmd->add_option("--altitude", command->altitude_m,
                       "height above flat ground, m (overrides camera.json; default: the log's "
@@ -158,6 +200,10 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--triggers", command->triggers_path,
                   "CSV 'image,t' or 't': trigger times in seconds on the log clock")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--second", command->second_path,
+                  "a second sensor's log on the same clock (record --device twice): fused with the "
+                  "first, the mounting fitted from the motion")
       ->check(CLI::ExistingFile);
   cmd->add_option("--every", command->every,
                   "simulated triggers at this cadence (e.g. 2s); with --triggers or --every the "
@@ -176,8 +222,9 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
                   "nadir image for the report's worst-image pictures (with --out)")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--json", command->json, "print JSON (docs/FORMATS.md `analyze`)");
-  return std::function<void()>([command, altitude] {
+  return std::function<void()>([command, altitude, readout] {
     command->altitude_given = altitude->count() > 0;
+    command->readout_given = readout->count() > 0;
     Run(*command);
   });
 });

@@ -44,14 +44,20 @@ void Run(const FlightCommand& command) {
     progress.Update(static_cast<size_t>(fraction * 1000));
   };
   std::vector<LogWarning> warnings;
-  const FlightResult result = AnalyzeTrace(command.trace, options, Flight, &warnings);
+  TracePair pair;
+  const FlightResult result = AnalyzeTrace(command.trace, options, Flight, &warnings, &pair);
   for (LogWarning& w : FlightWarnings(result)) warnings.push_back(std::move(w));
   if (options.series) WriteFlightSeriesCsv(command.series_path, result.series);
   if (command.json) {
     nlohmann::json json = FlightToJson(result);
+    if (!command.trace.second_path.empty())
+      json["pair"] = SensorPairToJson(pair.pair, command.trace.second_path);
     json["warnings"] = WarningsToJson(warnings);
     std::cout << json.dump(2) << "\n";
   } else {
+    if (!command.trace.second_path.empty()) {
+      std::cout << SensorPairText(pair.pair, command.trace.path, command.trace.second_path) << "\n";
+    }
     std::cout << FlightTable(result);  // its own line says which rows had too few samples
   }
 }
@@ -62,6 +68,7 @@ const CommandRegistration kRegistration(40, [](CLI::App& app) {
       "share of time windows whose rotation smears the image beyond a ground limit (Table 4)");
   auto command = std::make_shared<FlightCommand>();
   command->trace.Add(cmd, /*with_bias=*/true);
+  command->trace.AddSecond(cmd);
   cmd->add_option("--altitude", command->flight.altitude_m, "height above flat ground, m")
       ->capture_default_str();
   cmd->add_option("--limit", command->limits, "ground limits, e.g. 5cm,10cm (m, cm, mm; bare = m)")

@@ -23,6 +23,10 @@ const CommandRegistration kRegistration(55, [](CLI::App& app) {
   cmd->add_option("--out", options->out_dir,
                   "output dataset folder (replaced only if it is an earlier import)")
       ->required();
+  cmd->add_option("--lens-profile", options->lens_profile_path,
+                  "Gyroflow lens profile (JSON): the declared lens, scaled to the frames, and its "
+                  "readout where the clip states none")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--max-frames", options->max_frames, "import at most N frames");
   cmd->add_option(
       "--start-frame", options->start_frame,
@@ -48,6 +52,21 @@ const CommandRegistration kRegistration(55, [](CLI::App& app) {
     const auto* gopro = std::get_if<GoproImportDetails>(&record.details);
     if (gopro && gopro->failed_grabs > 0)
       std::printf("note     the video reader failed %d grab(s) and went on\n", gopro->failed_grabs);
+    if (gopro && gopro->settings.present) {
+      const GoproSettings& s = gopro->settings;
+      std::printf("camera   %s, firmware %s, stabiliser %s%s\n", s.model.c_str(),
+                  s.firmware.c_str(), s.StabilizerOn() ? "ON: " : "off",
+                  s.StabilizerOn() ? s.stabilizer_mode.c_str() : "");
+    }
+    if (gopro && gopro->iori_samples > 0)
+      std::printf(
+          "note     image_orientation.csv: the stabiliser's IORI for %zu frames, up to "
+          "%.1f deg\n",
+          gopro->orientation_frames, gopro->iori_max_deg);
+    if (record.lens_profile) {
+      for (const std::string& line : record.lens_profile->notes)
+        std::printf("lens     %s\n", line.c_str());
+    }
     for (const ImportClaim& claim : record.claims)
       std::printf("declared %-15s %-14s %s\n", claim.what.c_str(), ClaimStatusName(claim.status),
                   ClaimValueJson(claim.value).c_str());

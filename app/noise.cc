@@ -10,6 +10,7 @@
 
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -25,14 +26,29 @@ struct NoiseCommand {
 
 void Run(const NoiseCommand& command) {
   std::vector<LogWarning> warnings;
-  const NoiseResult result = AnalyzeTrace(command.trace, command.noise, AnalyzeNoise, &warnings);
+  TracePair pair;
+  const NoiseResult result =
+      AnalyzeTrace(command.trace, command.noise, AnalyzeNoise, &warnings, &pair);
   if (!command.allan_path.empty()) WriteFileAtomically(command.allan_path, AllanCsv(result.allan));
+  // With --second, the table is the fused trace's; each sensor alone is analysed for the gain.
+  std::optional<NoiseResult> first, second;
+  if (!command.trace.second_path.empty()) {
+    NoiseOptions options = command.noise;
+    options.bias = pair.segment;
+    first = AnalyzeNoise(pair.first, options);
+    second = AnalyzeNoise(pair.second, options);
+  }
   if (command.json) {
     auto json = NoiseToJson(result);
+    if (first)
+      json["pair"] = NoisePairToJson(pair.pair, command.trace.second_path, *first, *second, result);
     json["warnings"] = WarningsToJson(warnings);
     std::cout << json.dump(2) << "\n";
   } else {
+    if (first)
+      std::cout << SensorPairText(pair.pair, command.trace.path, command.trace.second_path) << "\n";
     std::cout << NoiseTable(result);
+    if (first) std::cout << NoisePairTable(*first, *second, result);
   }
 }
 
@@ -42,6 +58,7 @@ const CommandRegistration kRegistration(20, [](CLI::App& app) {
       "static noise of a still gyro: sliding-window sigma and range of the angle, Allan deviation");
   auto command = std::make_shared<NoiseCommand>();
   command->trace.Add(cmd, /*with_bias=*/true);
+  command->trace.AddSecond(cmd);
   cmd->add_option("--window", command->noise.window_samples, "window length, samples")
       ->capture_default_str();
   cmd->add_flag("--json", command->json, "print JSON (docs/FORMATS.md `noise`) instead of a table");

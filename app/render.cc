@@ -27,6 +27,10 @@ const CommandRegistration kRegistration(50, [](CLI::App& app) {
   cmd->add_option("--frames", options->frames_path, "capture times: frame,t_first_row")
       ->required()
       ->check(CLI::ExistingFile);
+  cmd->add_option("--lens-profile", options->lens_profile_path,
+                  "Gyroflow lens profile (JSON): its lens, scaled to camera.json's image size, and "
+                  "its readout where it states one, replace camera.json's")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--out", options->out_dir, "output dataset folder")->required();
   cmd->add_option(
       "--inject", options->injections,
@@ -58,6 +62,9 @@ const CommandRegistration kRegistration(50, [](CLI::App& app) {
       bar->Update(done);
     });
     bar.reset();
+    if (summary.lens_profile) {
+      for (const std::string& note : summary.lens_profile->notes) std::printf("%s\n", note.c_str());
+    }
     std::printf("frame      D_px       D_m\n");
     for (const RenderedFrame& f : summary.frames) {
       std::printf("%5lld %9.3f %9.4f\n", static_cast<long long>(f.frame), f.d_px, f.d_m);

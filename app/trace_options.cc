@@ -69,6 +69,28 @@ void TraceOptions::Add(CLI::App* command, bool with_bias) {
   }
 }
 
+void TraceOptions::AddSecond(CLI::App* command) {
+  command
+      ->add_option("--second", second_path,
+                   "a second sensor's log on the same clock (record --device twice): paired, the "
+                   "mounting fitted from the motion, and fused")
+      ->check(CLI::ExistingFile);
+}
+
+SensorPair TraceOptions::LoadSecondAndFuse(const GyroTrace& first, const BiasSegment& still,
+                                           FlightLog* second_out) const {
+  FlightLog second = ReadFlightLog(second_path, ReadOptions());
+  PrintLogWarnings(second_path, second.warnings);
+  if (second_out) *second_out = second;
+  SensorPairOptions options;
+  options.still = still;
+  try {
+    return FuseSensorPair(first, second.gyro, options);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(path + " + " + second_path + ": " + e.what());
+  }
+}
+
 FlightLogReadOptions TraceOptions::ReadOptions() const {
   FlightLogReadOptions options;
   options.format = raw ? LogFormat::kRaw : ParseLogFormat(format);

@@ -4,6 +4,7 @@
 #include "sim/bias.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/logs/gyro_io.h"
+#include "sim/sensor_pair.h"
 #include "sim/still_detect.h"
 
 #include <CLI/CLI.hpp>
@@ -37,10 +38,18 @@ struct TraceOptions {
   ColumnFlags column_flags;     // --time-unit, --columns, --delimiter, --rate-unit
   std::string bias = "0:5";     // bias segment A:B, seconds after the first sample
   bool auto_bias = false;       // find the still segment automatically instead of --bias
+  std::string second_path;      // --second: a second sensor's log on the same clock
 
   // Adds TRACE (positional) and the options above to a subcommand. with_bias: add --bias too.
   void Add(CLI::App* command, bool with_bias);
+  // Adds --second (noise, flight): the second sensor of a pair.
+  void AddSecond(CLI::App* command);
   FlightLogReadOptions ReadOptions() const;
+  // With --second: reads it (the same read options), fuses it with `first` (sim/sensor_pair.h,
+  // weights from `still`) and prints its warnings on stderr.
+  // *second (optional) receives the second sensor's trace.
+  SensorPair LoadSecondAndFuse(const GyroTrace& first, const BiasSegment& still,
+                               FlightLog* second = nullptr) const;
   // Reads the log and prints its warnings on stderr (PrintLogWarnings).
   FlightLog Load() const;
   // The bias segment for this trace: with --auto-bias the detected still segment
@@ -57,17 +66,33 @@ void PrintLogWarnings(const std::string& path, const std::vector<LogWarning>& wa
 // checked before the (possibly long) read, the log's warnings are printed (and handed back in
 // *warnings for --json), the segment is resolved after the read (--auto-bias detects the still
 // segment), and the analysis's own errors are prefixed with the trace's path.
+// With --second: each sensor's trace and their fusion.
+struct TracePair {
+  GyroTrace first, second;
+  SensorPair pair;
+  BiasSegment segment;  // the bias segment the analysis used
+};
+
+// With --second the analysis runs on the fused trace of the pair (*pair, when given, receives
+// both traces and the fusion).
 template <typename Options, typename Analysis>
 auto AnalyzeTrace(const TraceOptions& trace_options, Options options, const Analysis& analysis,
-                  std::vector<LogWarning>* warnings = nullptr) {
+                  std::vector<LogWarning>* warnings = nullptr, TracePair* pair = nullptr) {
   if (!trace_options.auto_bias) options.bias = ParseBiasSegment(trace_options.bias);
   options.Check();
   FlightLog log = trace_options.Load();
   if (warnings) *warnings = log.warnings;
-  const GyroTrace& trace = log.gyro;
-  options.bias = trace_options.Segment(trace);
+  options.bias = trace_options.Segment(log.gyro);
+  if (!trace_options.second_path.empty()) {
+    FlightLog second;
+    SensorPair fused = trace_options.LoadSecondAndFuse(log.gyro, options.bias, &second);
+    if (warnings) warnings->insert(warnings->end(), second.warnings.begin(), second.warnings.end());
+    GyroTrace first = std::move(log.gyro);
+    log.gyro = fused.fused;
+    if (pair) *pair = {std::move(first), std::move(second.gyro), std::move(fused), options.bias};
+  }
   try {
-    return analysis(trace, options);
+    return analysis(log.gyro, options);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(trace_options.path + ": " + e.what());
   }

@@ -22,6 +22,7 @@ namespace {
 
 struct ValidateCommand {
   std::string dataset;
+  std::string lens_profile_path;
   std::string report_path;
   std::vector<std::string> limits{"5cm", "10cm"};
   std::string out_dir;
@@ -43,6 +44,7 @@ void Run(const ValidateCommand& command) {
   options.mask_path = command.mask_path;
   options.screen.camera_fixed = !command.no_camera_fixed;
   options.screen.consensus = !command.no_consensus;
+  options.lens_profile_path = command.lens_profile_path;
   options.keep_residuals = !command.out_dir.empty();
   options.Check();
   // Where the report goes must exist before the long stages: outputs are whole or absent.
@@ -79,6 +81,10 @@ const CommandRegistration kRegistration(70, [](CLI::App& app) {
                   "rig dataset folder (camera.json, gyro.csv, frames.csv, images)")
       ->required()
       ->check(CLI::ExistingDirectory);
+  cmd->add_option("--lens-profile", command->lens_profile_path,
+                  "Gyroflow lens profile (JSON): its lens, scaled to the images, and its readout "
+                  "where it states one replace camera.json's")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--report", command->report_path,
                   "write the validation report JSON (docs/FORMATS.md validation/1) here");
   cmd->add_option("--limit", command->limits, "ground limits, e.g. 5cm,10cm")

@@ -3,20 +3,18 @@
 #include "sim/check.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iterator>
 
 namespace shutterlab {
 
-bool PinholeCamera::HasDistortion() const {
-  for (double d : dist) {
-    if (d != 0.0) return true;
-  }
-  return false;
-}
+bool PinholeCamera::HasDistortion() const { return shutterlab::HasDistortion(distortion); }
 
 Eigen::Matrix3d PinholeCamera::K() const {
   Eigen::Matrix3d k;
@@ -25,45 +23,36 @@ Eigen::Matrix3d PinholeCamera::K() const {
 }
 
 std::optional<Eigen::Vector2d> PinholeCamera::ImgFromCam(const Eigen::Vector3d& p_in_cam) const {
-  if (!(p_in_cam.z() > 0)) return std::nullopt;
-  double x = p_in_cam.x() / p_in_cam.z(), y = p_in_cam.y() / p_in_cam.z();
-  if (HasDistortion()) {
-    // OpenCV's model (calib3d docs, "Detailed description"): radial k1 k2 k3, tangential p1 p2.
-    const double r2 = x * x + y * y;
-    const double radial = 1 + r2 * (dist[0] + r2 * (dist[1] + r2 * dist[4]));
-    const double xd = x * radial + 2 * dist[2] * x * y + dist[3] * (r2 + 2 * x * x);
-    const double yd = y * radial + dist[2] * (r2 + 2 * y * y) + 2 * dist[3] * x * y;
-    x = xd;
-    y = yd;
+  if (!HasDistortion()) {
+    if (!(p_in_cam.z() > 0)) return std::nullopt;
+    const double x = p_in_cam.x() / p_in_cam.z(), y = p_in_cam.y() / p_in_cam.z();
+    return Eigen::Vector2d(fx * x + cx, fy * y + cy);
   }
-  return Eigen::Vector2d(fx * x + cx, fy * y + cy);
+  const std::optional<Eigen::Vector2d> x_d =
+      std::visit([&](const auto& lens) { return lens.DistortedFromRay(p_in_cam); }, distortion);
+  if (!x_d) return std::nullopt;
+  return Eigen::Vector2d(fx * x_d->x() + cx, fy * x_d->y() + cy);
 }
 
 Eigen::Vector3d PinholeCamera::CamFromImg(const Eigen::Vector2d& px) const {
-  const double xd = (px.x() - cx) / fx, yd = (px.y() - cy) / fy;
-  if (!HasDistortion()) return Eigen::Vector3d(xd, yd, 1.0);
-  // Newton iteration on the distortion map (converges where the map is invertible; the plain
-  // fixed-point iteration OpenCV uses stalls for strong distortion at the corners).
-  double x = xd, y = yd;
-  for (int it = 0; it < 50; ++it) {
-    const double r2 = x * x + y * y;
-    const double k1 = dist[0], k2 = dist[1], p1 = dist[2], p2 = dist[3], k3 = dist[4];
-    const double radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3));
-    const double d_radial_d_r2 = k1 + r2 * (2 * k2 + 3 * r2 * k3);
-    const double fx_ = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x) - xd;
-    const double fy_ = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y - yd;
-    const double j00 = radial + 2 * x * x * d_radial_d_r2 + 2 * p1 * y + 6 * p2 * x;
-    const double j01 = 2 * x * y * d_radial_d_r2 + 2 * p1 * x + 2 * p2 * y;
-    const double j10 = 2 * x * y * d_radial_d_r2 + 2 * p1 * x + 2 * p2 * y;
-    const double j11 = radial + 2 * y * y * d_radial_d_r2 + 6 * p1 * y + 2 * p2 * x;
-    const double det = j00 * j11 - j01 * j10;
-    if (det == 0) break;
-    const double dx = (j11 * fx_ - j01 * fy_) / det, dy = (j00 * fy_ - j10 * fx_) / det;
-    x -= dx;
-    y -= dy;
-    if (std::abs(dx) + std::abs(dy) < 1e-15) break;
+  const Eigen::Vector2d x_d((px.x() - cx) / fx, (px.y() - cy) / fy);
+  if (!HasDistortion()) return Eigen::Vector3d(x_d.x(), x_d.y(), 1.0);
+  return std::visit([&](const auto& lens) { return lens.RayFromDistorted(x_d); }, distortion);
+}
+
+bool PinholeCamera::DistortionMonotonicOverImage() const {
+  const double dx = std::max(cx, width - 1 - cx) / fx;
+  const double dy = std::max(cy, height - 1 - cy) / fy;
+  const double corner = std::hypot(dx, dy);  // distorted normalised radius of the farthest corner
+  if (const auto* brown = std::get_if<BrownConrady>(&distortion)) {
+    // The undistorted corner radius can be larger than the distorted one: check well beyond it.
+    return brown->MonotonicTo(1.5 * corner);
   }
-  return Eigen::Vector3d(x, y, 1.0);
+  const Fisheye& fisheye = std::get<Fisheye>(distortion);
+  if (fisheye.max_theta_rad() >= kPi) return true;
+  const Eigen::Vector3d ray = fisheye.RayFromDistorted(Eigen::Vector2d(corner, 0.0));
+  if (!ray.allFinite()) return false;
+  return 1.2 * std::atan2(ray.x(), ray.z()) < fisheye.max_theta_rad();
 }
 
 double RollingShutter::RowTimeOffsetS(double row, int height) const {
@@ -79,7 +68,7 @@ void RigModel::Check() const {
       << "focal length fx=" << camera.fx << " fy=" << camera.fy << " must be positive";
   SHUTTERLAB_CHECK(std::isfinite(camera.cx) && std::isfinite(camera.cy))
       << "principal point is not finite";
-  for (double d : camera.dist) SHUTTERLAB_CHECK(std::isfinite(d)) << "distortion is not finite";
+  SHUTTERLAB_CHECK(DistortionFinite(camera.distortion)) << "distortion is not finite";
   SHUTTERLAB_CHECK(shutter.readout_s > 0 && shutter.readout_s < 10)
       << "readout_s=" << shutter.readout_s << " must be positive (and below 10 s)";
   SHUTTERLAB_CHECK(IsRowReadout(shutter.direction))
@@ -103,7 +92,53 @@ double Number(const json& j, const char* key, const std::string& where) {
   return j.at(key).get<double>();
 }
 
+// camera.json's coefficient names of each model, in the order the model holds them.
+constexpr const char* kBrownNames[5] = {"k1", "k2", "p1", "p2", "k3"};
+constexpr const char* kFisheyeNames[4] = {"k1", "k2", "k3", "k4"};
+
+template <size_t N>
+std::array<double, N> Coefficients(const json& j, const char* const (&names)[N],
+                                   const std::string& model) {
+  std::array<double, N> c{};
+  for (const auto& item : j.items()) {
+    const std::string& key = item.key();  // (a structured binding: clang 14 cannot capture it)
+    if (key == "model") continue;
+    const auto* at = std::find_if(std::begin(names), std::end(names),
+                                  [&](const char* name) { return key == name; });
+    if (at == std::end(names)) {
+      std::string known;
+      for (const char* name : names) known += std::string(known.empty() ? "" : " ") + name;
+      throw std::invalid_argument("distortion." + key + " is not a coefficient of the " + model +
+                                  " model (" + known + ")");
+    }
+    c[at - std::begin(names)] = Number(j, key.c_str(), "distortion");
+  }
+  return c;
+}
+
 }  // namespace
+
+LensDistortion DistortionFromJson(const json& j) {
+  if (!j.is_object()) throw std::invalid_argument("distortion is not an object");
+  const std::string model = j.contains("model") && j["model"].is_string()
+                                ? j["model"].get<std::string>()
+                                : (j.contains("model") ? j["model"].dump() : "brown");
+  if (model == "brown") return BrownConrady{Coefficients(j, kBrownNames, model)};
+  if (model == "fisheye") return Fisheye(Coefficients(j, kFisheyeNames, model));
+  throw std::invalid_argument("distortion.model '" + model + "' is not brown or fisheye");
+}
+
+json DistortionJson(const LensDistortion& lens) {
+  json out = json::object();
+  if (const auto* fisheye = std::get_if<Fisheye>(&lens)) {
+    out["model"] = "fisheye";
+    for (size_t i = 0; i < 4; ++i) out[kFisheyeNames[i]] = fisheye->coeffs()[i];
+    return out;
+  }
+  // Brown-Conrady, the default: written without "model", as rig/1 files always were.
+  for (size_t i = 0; i < 5; ++i) out[kBrownNames[i]] = std::get<BrownConrady>(lens).coeffs[i];
+  return out;
+}
 
 RigModel ReadRigModel(const std::string& path) {
   const std::string text = ReadFileToString(path);
@@ -134,13 +169,7 @@ RigModel ReadRigModel(const std::string& path) {
     rig.camera.fy = Number(k, "fy", "intrinsics");
     rig.camera.cx = Number(k, "cx", "intrinsics");
     rig.camera.cy = Number(k, "cy", "intrinsics");
-    if (j.contains("distortion")) {
-      const char* names[5] = {"k1", "k2", "p1", "p2", "k3"};
-      for (int i = 0; i < 5; ++i) {
-        if (j["distortion"].contains(names[i]))
-          rig.camera.dist[i] = Number(j["distortion"], names[i], "distortion");
-      }
-    }
+    if (j.contains("distortion")) rig.camera.distortion = DistortionFromJson(j["distortion"]);
     const json& rs = j.at("rolling_shutter");
     rig.shutter.readout_s = Number(rs, "readout_s", "rolling_shutter");
     const std::string direction =
@@ -197,11 +226,7 @@ void WriteRigModel(const std::string& path, const RigModel& rig) {
   j["image"] = {{"width", rig.camera.width}, {"height", rig.camera.height}};
   j["intrinsics"] = {
       {"fx", rig.camera.fx}, {"fy", rig.camera.fy}, {"cx", rig.camera.cx}, {"cy", rig.camera.cy}};
-  j["distortion"] = {{"k1", rig.camera.dist[0]},
-                     {"k2", rig.camera.dist[1]},
-                     {"p1", rig.camera.dist[2]},
-                     {"p2", rig.camera.dist[3]},
-                     {"k3", rig.camera.dist[4]}};
+  j["distortion"] = DistortionJson(rig.camera.distortion);
   j["rolling_shutter"] = {{"readout_s", rig.shutter.readout_s},
                           {"direction", ReadoutDirectionName(rig.shutter.direction)}};
   j["gyro_to_camera"] = MatrixJson(rig.cam_from_gyro);

@@ -4,29 +4,38 @@
 // Pixel convention (OpenCV): pixel (u, v) = (column, row); the centre of the top-left pixel is
 // (0, 0). Camera frame: x right, y down, z along the optical axis into the scene.
 
+#include "render/lens_distortion.h"
 #include "sim/readout_direction.h"
 
 #include <Eigen/Core>
 #include <nlohmann/json_fwd.hpp>
 
-#include <array>
 #include <optional>
 #include <string>
 
 namespace shutterlab {
 
-// Pinhole intrinsics with OpenCV's Brown-Conrady distortion (k1, k2, p1, p2, k3).
+// Intrinsics: focal lengths and principal point, with one of the two lens distortion models of
+// docs/FORMATS.md (render/lens_distortion.h: OpenCV's Brown-Conrady or fisheye).
 struct PinholeCamera {
   int width = 0, height = 0;              // pixels
   double fx = 0, fy = 0, cx = 0, cy = 0;  // pixels
-  std::array<double, 5> dist{};           // k1, k2, p1, p2, k3 (dimensionless)
+  LensDistortion distortion;              // Brown-Conrady with every coefficient 0 by default
 
   bool HasDistortion() const;
   Eigen::Matrix3d K() const;
-  // Distorted pixel of a point in the camera frame; nullopt when z <= 0 (behind the camera).
+  // Distorted pixel of a point in the camera frame; nullopt when the lens model gives it none
+  // (Brown-Conrady: z <= 0, behind the camera; fisheye: at or beyond the angle where its
+  // polynomial turns).
   std::optional<Eigen::Vector2d> ImgFromCam(const Eigen::Vector3d& p_in_cam) const;
-  // Ray (z = 1) of a distorted pixel; undistortion by fixed-point iteration to 1e-12.
+  // Ray of a distorted pixel: (x, y, 1) whenever it points forward; a fisheye pixel 90 degrees or
+  // more off the axis gives a unit vector with z <= 0, one outside the fisheye's image circle NaN
+  // (render/lens_distortion.h). Undistortion by Newton's method to 1e-15.
   Eigen::Vector3d CamFromImg(const Eigen::Vector2d& px) const;
+  // True when the distortion keeps the image in one piece well beyond its farthest corner (a fit
+  // may not fold the image to explain data): Brown-Conrady's radial map increases out to 1.5 times
+  // the corner's normalised radius; a fisheye's polynomial holds 20 % beyond the corner's angle.
+  bool DistortionMonotonicOverImage() const;
 };
 
 // Rolling-shutter timing. The only place that knows how a row maps to a time.
@@ -59,6 +68,12 @@ struct RigModel {
 RigModel ReadRigModel(const std::string& path);
 // Writes camera.json whole or not at all.
 void WriteRigModel(const std::string& path, const RigModel& rig);
+// camera.json's "distortion" object (docs/FORMATS.md): "model" "brown" (the default) with k1 k2 p1
+// p2 k3, or "fisheye" with k1 k2 k3 k4, each coefficient 0 when absent. Throws
+// std::invalid_argument naming the first problem (an unknown model or coefficient, a non-number).
+LensDistortion DistortionFromJson(const nlohmann::json& j);
+// The same object as camera.json writes it (Brown-Conrady without "model", as rig/1 always was).
+nlohmann::json DistortionJson(const LensDistortion& lens);
 // A 3x3 matrix as camera.json writes gyro_to_camera: an array of its rows.
 nlohmann::json MatrixJson(const Eigen::Matrix3d& m);
 

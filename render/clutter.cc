@@ -70,8 +70,8 @@ MovingPatch MakeMovingPatch(const PinholeCamera& camera, double altitude_m, doub
   MovingPatch patch;
   patch.side_px = std::max(8, static_cast<int>(std::lround(0.2 * camera.height)));
   patch.velocity_px_s = Eigen::Vector2d(speed_mps * camera.fx / altitude_m, 0.0);
-  patch.start_px = centre_px - Eigen::Vector2d::Constant(0.5 * patch.side_px) -
-                   patch.velocity_px_s * t_mid_s;
+  patch.start_px =
+      centre_px - Eigen::Vector2d::Constant(0.5 * patch.side_px) - patch.velocity_px_s * t_mid_s;
   GroundTextureOptions options;
   options.width_px = options.height_px = std::max(64, patch.side_px);
   options.seed = 29;

@@ -58,26 +58,34 @@ std::vector<double> Numbers(const json& j, size_t n, const std::string& where) {
   return out;
 }
 
-// OpenCV's order, as PinholeCamera::dist holds them.
-constexpr const char* kLensNames[5] = {"k1", "k2", "p1", "p2", "k3"};
-
-LensCoefficients LensFromJson(const json& j, const std::string& where) {
-  std::array<double, 5> c{};
+// A lens value: a JSON object as camera.json's "distortion" (its "model" says which, brown when
+// absent), or a list of numbers in the declared model's order (`--inject` only; Brown-Conrady when
+// no camera is known): k1[,k2[,p1,p2[,k3]]] or, for a fisheye, k1[,k2[,k3[,k4]]].
+LensDistortion LensFromJson(const json& j, const std::string& where,
+                            const LensDistortion* declared) {
   if (j.is_object()) {
     for (const auto& [key, x] : j.items()) {
-      int i = 0;
-      while (i < 5 && key != kLensNames[i]) ++i;
-      if (i == 5) throw std::invalid_argument(where + ": unknown coefficient '" + key + "'");
-      c[i] = Scalar(x, where);
+      if (key != "model") Scalar(x, where);  // finite numbers only
     }
-  } else {
-    const json list = j.is_array() ? j : json::array({j});
-    if (list.empty() || list.size() > 5) {
-      throw std::invalid_argument(where + ": expected k1[,k2[,p1,p2[,k3]]], got " + j.dump());
+    try {
+      return DistortionFromJson(j);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(where + ": " + e.what());
     }
-    for (size_t i = 0; i < list.size(); ++i) c[i] = Scalar(list[i], where);
   }
-  return LensCoefficients{c[0], c[1], c[2], c[3], c[4]};
+  const bool fisheye = declared && std::holds_alternative<Fisheye>(*declared);
+  const size_t most = fisheye ? 4 : 5;
+  const json list = j.is_array() ? j : json::array({j});
+  if (list.empty() || list.size() > most) {
+    throw std::invalid_argument(where +
+                                (fisheye ? ": expected k1[,k2[,k3[,k4]]] (fisheye), got "
+                                         : ": expected k1[,k2[,p1,p2[,k3]]], got ") +
+                                j.dump());
+  }
+  std::array<double, 5> c{};
+  for (size_t i = 0; i < list.size(); ++i) c[i] = Scalar(list[i], where);
+  if (fisheye) return Fisheye({c[0], c[1], c[2], c[3]});
+  return BrownConrady{c};
 }
 
 ReadoutDirection DirectionFromJson(const json& j, const std::string& where) {
@@ -115,8 +123,10 @@ bool HasFormatsShape(EffectShape shape, const json& j) {
   return false;
 }
 
-// The value as `--inject` reads it (effect_io.h ParseInjection).
-EffectValue InjectionValue(Effect effect, const json& j, const std::string& where) {
+// The value as `--inject` reads it (effect_io.h ParseInjection); declared: the camera's lens, which
+// sets the order of a list of lens coefficients (nullptr: Brown-Conrady).
+EffectValue InjectionValue(Effect effect, const json& j, const std::string& where,
+                           const LensDistortion* declared = nullptr) {
   switch (Spec(effect).shape) {
     case EffectShape::kNumber:
       return Scalar(j, where);
@@ -133,7 +143,7 @@ EffectValue InjectionValue(Effect effect, const json& j, const std::string& wher
       return m;
     }
     case EffectShape::kLens:
-      return LensFromJson(j, where);
+      return LensFromJson(j, where, declared);
     case EffectShape::kDirection:
       return DirectionFromJson(j, where);
   }
@@ -145,11 +155,13 @@ struct ToJson {
   json operator()(double x) const { return x; }
   json operator()(const Eigen::Vector3d& v) const { return json::array({v.x(), v.y(), v.z()}); }
   json operator()(const Eigen::Matrix3d& m) const { return MatrixJson(m); }
-  json operator()(const LensCoefficients& c) const {
-    const double values[5] = {c.k1, c.k2, c.p1, c.p2, c.k3};
-    json out = json::object();
-    for (int i = 0; i < 5; ++i) {
-      if (i < 2 || values[i] != 0.0) out[kLensNames[i]] = values[i];
+  json operator()(const LensDistortion& lens) const {
+    json out = DistortionJson(lens);
+    // Brown-Conrady: k1 and k2 always, p1, p2 and k3 only where set (the fit holds k1 and k2).
+    if (std::holds_alternative<BrownConrady>(lens)) {
+      for (const char* key : {"p1", "p2", "k3"}) {
+        if (out[key].get<double>() == 0.0) out.erase(key);
+      }
     }
     return out;
   }
@@ -184,6 +196,13 @@ Injection ParseInjection(const std::string& name_equals_value) {
 
 Injection ApplyInjection(const std::string& name_equals_value, TrueModel* model) {
   Injection injection = ParseInjection(name_equals_value);
+  if (injection.effect == Effect::kLensDistortion) {
+    // A list of coefficients is in the declared camera's model.
+    const size_t eq = name_equals_value.find('=');
+    injection.value =
+        InjectionValue(Effect::kLensDistortion, ParseValueText(name_equals_value.substr(eq + 1)),
+                       "--inject lens_distortion", &model->rig.camera.distortion);
+  }
   injection.value = ApplyInjection(injection, model);
   return injection;
 }

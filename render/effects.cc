@@ -183,20 +183,36 @@ EffectSpec LensDistortionSpec() {
   s.parameter_count = 2;
   s.step = Step1e4;
   s.apply_delta = [](const double* x, TrueModel* m) {
-    m->rig.camera.dist[0] += x[0];
-    m->rig.camera.dist[1] += x[1];
+    AddToK1K2(x[0], x[1], &m->rig.camera.distortion);
   };
   s.inject = [](const EffectValue& v, TrueModel* m) -> EffectValue {
-    const LensCoefficients& c = std::get<LensCoefficients>(v);
-    m->rig.camera.dist = {c.k1, c.k2, c.p1, c.p2, c.k3};
-    return c;
+    const LensDistortion& lens = std::get<LensDistortion>(v);
+    const LensDistortion& declared = m->rig.camera.distortion;
+    if (lens.index() != declared.index()) {
+      // docs/FORMATS.md: the true distortion in the declared camera's model. Another model is not
+      // an effect that a fit of the declared one could find.
+      throw std::invalid_argument(std::string("--inject lens_distortion: a ") +
+                                  LensModelName(lens) + " lens for a camera declared " +
+                                  LensModelName(declared) + " (give the declared model's " +
+                                  "coefficients, or declare the other model in camera.json)");
+    }
+    m->rig.camera.distortion = lens;
+    return lens;
   };
   s.value = [](const TrueModel& m) -> EffectValue {
-    return LensCoefficients{m.rig.camera.dist[0], m.rig.camera.dist[1]};
+    const LensDistortion& lens = m.rig.camera.distortion;
+    if (const auto* brown = std::get_if<BrownConrady>(&lens)) {
+      return LensDistortion(BrownConrady{{brown->coeffs[0], brown->coeffs[1], 0, 0, 0}});
+    }
+    return lens;
   };
-  s.stderr_value = [](const TrueModel&, const Eigen::MatrixXd&,
+  s.stderr_value = [](const TrueModel& m, const Eigen::MatrixXd&,
                       const Eigen::VectorXd& sd) -> EffectValue {
-    return LensCoefficients{sd[0], sd[1]};
+    if (std::holds_alternative<BrownConrady>(m.rig.camera.distortion)) {
+      return LensDistortion(BrownConrady{{sd[0], sd[1], 0, 0, 0}});
+    }
+    constexpr double kHeld = std::numeric_limits<double>::quiet_NaN();  // k3, k4: not fitted
+    return LensDistortion(Fisheye({sd[0], sd[1], kHeld, kHeld}));
   };
   return s;
 }
@@ -270,10 +286,6 @@ std::vector<EffectSpec> MakeTable() {
 
 }  // namespace
 
-bool LensCoefficients::operator==(const LensCoefficients& o) const {
-  return k1 == o.k1 && k2 == o.k2 && p1 == o.p1 && p2 == o.p2 && k3 == o.k3;
-}
-
 const char* EffectShapeWords(EffectShape shape) {
   switch (shape) {
     case EffectShape::kNumber:
@@ -299,7 +311,7 @@ bool HasShape(const EffectValue& value, EffectShape shape) {
     case EffectShape::kMatrix3:
       return std::holds_alternative<Eigen::Matrix3d>(value);
     case EffectShape::kLens:
-      return std::holds_alternative<LensCoefficients>(value);
+      return std::holds_alternative<LensDistortion>(value);
     case EffectShape::kDirection:
       return std::holds_alternative<ReadoutDirection>(value);
   }

@@ -6,6 +6,7 @@
 // new effect is one new row, and a misspelt one is a compile error, not a run-time throw. Names and
 // values are text only at the edges: the command line, JSON and reports (render/effect_io.h).
 
+#include "render/lens_distortion.h"
 #include "render/truth_model.h"
 #include "sim/readout_direction.h"
 
@@ -32,24 +33,18 @@ enum class Effect {
   kClockRate,
 };
 
-// lens_distortion's value: Brown-Conrady coefficients in OpenCV's order (PinholeCamera::dist). The
-// effect's value and fit hold k1 and k2; p1, p2 and k3 are non-zero only where `--inject` set them.
-struct LensCoefficients {
-  double k1 = 0.0, k2 = 0.0, p1 = 0.0, p2 = 0.0, k3 = 0.0;
-  bool operator==(const LensCoefficients& other) const;
-  bool operator!=(const LensCoefficients& other) const { return !(*this == other); }
-};
-
 // One effect's value (or standard error) in docs/FORMATS.md's shape and units (EffectSpec::unit):
 //  double: time_offset, readout_time (s), clock_rate (ppm);
 //  Eigen::Vector3d: gyro_scale, gyro_bias (rad/s), velocity (m/s);
 //  Eigen::Matrix3d: gyro_to_camera, R_CG (its standard error: per entry);
-//  LensCoefficients: lens_distortion;
+//  LensDistortion: lens_distortion, in the declared camera's model (render/lens_distortion.h);
+//    the fit holds k1 and k2 of either model; Brown-Conrady's p1, p2 and k3 are non-zero only
+//    where `--inject` set them, a fisheye's k3 and k4 are the declared ones (standard error NaN);
 //  ReadoutDirection: readout_direction (a row order, IsRowReadout);
 //  std::monostate: none (readout_direction's standard error).
 // A standard error that the data do not determine is NaN. JSON and text: render/effect_io.h.
 using EffectValue = std::variant<std::monostate, double, Eigen::Vector3d, Eigen::Matrix3d,
-                                 LensCoefficients, ReadoutDirection>;
+                                 LensDistortion, ReadoutDirection>;
 
 // Which of EffectValue's alternatives an effect's value holds.
 enum class EffectShape { kNumber, kVector3, kMatrix3, kLens, kDirection };
@@ -85,7 +80,7 @@ struct EffectSpec {
   // records it. Throws std::invalid_argument for a value out of range.
   EffectValue (*inject)(const EffectValue& value, TrueModel* model) = nullptr;
   // The docs/FORMATS.md value read from a model (time_offset: the true time_offset_s, ...;
-  // lens_distortion: k1 and k2 only).
+  // lens_distortion: Brown-Conrady's k1 and k2 only, a fisheye's k1..k4).
   EffectValue (*value)(const TrueModel& model) = nullptr;
   // Standard errors in the value's shape from the parameters' covariance and standard deviations
   // sd (its diagonal's roots, NaN where negative). See EffectStderr.

@@ -14,6 +14,7 @@ json ValueJson(const ClaimValue& value) {
   if (const auto* number = std::get_if<double>(&value)) return *number;
   if (const auto* text = std::get_if<std::string>(&value)) return *text;
   if (const auto* matrix = std::get_if<Eigen::Matrix3d>(&value)) return MatrixJson(*matrix);
+  if (const auto* lens = std::get_if<LensDistortion>(&value)) return DistortionJson(*lens);
   return std::get<std::map<std::string, double>>(value);
 }
 
@@ -50,6 +51,39 @@ void AddGopro(const GoproImportDetails& gopro, json* record) {
   r["frames"]["failed_grabs"] = gopro.failed_grabs;
   r["frames"]["reader_time_mismatches"] = gopro.reader_time_mismatches;
   r["frames"]["times"] = gopro.times;
+  // Fields that only newer cameras write: absent, not null, for a clip without them.
+  if (!gopro.gyro_orin.empty()) r["gyro"]["orin"] = gopro.gyro_orin;
+  if (!gopro.gyro_orio.empty()) r["gyro"]["orio"] = gopro.gyro_orio;
+  if (!gopro.gyro_mtrx.empty()) r["gyro"]["mtrx"] = gopro.gyro_mtrx;
+  const GoproSettings& s = gopro.settings;
+  if (s.present) {
+    json& j = r["settings"];
+    j["model"] = s.model;
+    j["firmware"] = s.firmware;
+    j["fov"] = s.fov;
+    j["projection"] = s.projection;
+    j["stabilizer"] = s.stabilizer;
+    j["stabilizer_mode"] = s.stabilizer_mode;
+    j["readout_s"] = s.readout_s ? json(*s.readout_s) : json(nullptr);
+    j["diagonal_fov_deg"] = s.diagonal_fov_deg ? json(*s.diagonal_fov_deg) : json(nullptr);
+    j["camera_mode"] = s.camera_mode ? json(*s.camera_mode) : json(nullptr);
+    j["source"] =
+        "moov/udta/GPMF, DEVC \"Global Settings\" (MINF FMWR VFOV PRJT EISE EISA SROT "
+        "ZFOV CMOD)";
+  }
+  if (!s.unreadable.empty()) r["settings_unreadable"] = s.unreadable;
+  if (gopro.iori_samples > 0 || gopro.cori_samples > 0) {
+    json& j = r["image_orientation"];
+    j["file"] = "image_orientation.csv";
+    j["iori_samples"] = gopro.iori_samples;
+    j["cori_samples"] = gopro.cori_samples;
+    j["frames_matched"] = gopro.orientation_frames;
+    j["iori_max_deg"] = gopro.iori_max_deg;
+    j["source"] =
+        "GPMF IORI (image orientation relative to the body: the stabiliser's) and CORI "
+        "(camera orientation), (w, x, y, z) / SCAL as written; each frame's nearest "
+        "sample within half a frame period";
+  }
 }
 
 void AddPhone(const PhoneImportDetails& phone, json* record) {
@@ -97,6 +131,7 @@ std::string ImportJson(const ImportRecord& record) {
   r["frames"]["outside_gyro"] = record.outside_gyro;
   r["exposure_s"] = ExposuresJson(record.exposures);
   r["claims"] = ClaimsJson(record.claims);
+  if (record.lens_profile) r["lens_profile"] = LensProfileUseJson(*record.lens_profile);
   if (!record.mask_file.empty()) {
     r["mask"] = {{"file", record.mask_file}, {"source", record.mask_source}};
   }

@@ -3,6 +3,10 @@
 // number of an imported dataset came from, as a typed record, and the one place that turns it into
 // JSON text.
 
+#include "render/lens_distortion.h"
+#include "render/lens_profile.h"
+#include "sim/logs/gopro_telemetry.h"
+
 #include <Eigen/Core>
 
 #include <cstddef>
@@ -25,10 +29,11 @@ enum class ClaimStatus {
 const char* ClaimStatusName(ClaimStatus status);
 
 // A claimed value: a number (readout_s, time_offset_s), a word or sentence (direction,
-// frame_images), a 3x3 matrix (gyro_to_camera, written as its rows) or named numbers (intrinsics:
-// fx, fy, cx, cy and what else the source states).
-using ClaimValue =
-    std::variant<double, std::string, Eigen::Matrix3d, std::map<std::string, double>>;
+// frame_images, stabilizer), a 3x3 matrix (gyro_to_camera, written as its rows), named numbers
+// (intrinsics: fx, fy, cx, cy and what else the source states) or a lens (lens_distortion, written
+// as camera.json's "distortion").
+using ClaimValue = std::variant<double, std::string, Eigen::Matrix3d, std::map<std::string, double>,
+                                LensDistortion>;
 
 // What the source states or what the importer had to assume; validate tests some of them.
 struct ImportClaim {
@@ -56,6 +61,14 @@ struct GoproImportDetails {
   int failed_grabs = 0;
   int reader_time_mismatches = 0;
   std::string times;  // where the frame times come from, for a person
+  // The GYRO stream's orientation keys as written ("gyro": "orin", "orio", "mtrx" when present).
+  std::string gyro_orin, gyro_orio;
+  std::vector<double> gyro_mtrx;
+  GoproSettings settings;  // "settings" when the clip has global settings
+  // image_orientation.csv ("image_orientation" when the clip has IORI): samples read, frames
+  // matched, and the largest IORI angle over the imported frames, deg.
+  size_t iori_samples = 0, cori_samples = 0, orientation_frames = 0;
+  double iori_max_deg = 0.0;
 };
 
 // What only a phone clip folder records.
@@ -80,6 +93,7 @@ struct ImportRecord {
   std::vector<int64_t> outside_gyro;  // frames whose declared readout the gyro does not cover
   std::vector<FrameExposure> exposures;
   std::vector<ImportClaim> claims;
+  std::optional<LensProfileUse> lens_profile;  // `--lens-profile` ("lens_profile" when given)
   std::variant<GoproImportDetails, PhoneImportDetails> details;  // also gives source.kind
   // import --mask: the mask file the dataset's camera.json names (docs/FORMATS.md `mask`) and the
   // user's file it was made from; empty when none was given.

@@ -246,8 +246,13 @@ RenderSummary RenderDataset(const RenderOptions& options,
                             const std::function<void(size_t, size_t)>& progress) {
   options.Check();
   // --- read and check everything first: bad input must leave no output
-  const RigModel declared = ReadRigModel(options.camera_path);
+  RigModel declared = ReadRigModel(options.camera_path);
   RenderSummary summary;
+  if (!options.lens_profile_path.empty()) {
+    summary.lens_profile = ScaleLensProfile(ReadLensProfile(options.lens_profile_path),
+                                            declared.camera.width, declared.camera.height);
+    ApplyLensProfile(&*summary.lens_profile, &declared);
+  }
   const TrueModel truth = InjectedTruth(declared, options.injections, &summary);
   const GyroTrace logged = ReadGyroCsv(options.gyro_path);
   SHUTTERLAB_CHECK(logged.size() >= 2)

@@ -26,18 +26,24 @@
 
 #include "render/clutter.h"
 #include "render/effects.h"
+#include "render/lens_profile.h"
 #include "render/rs_warp.h"
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace shutterlab {
 
 struct RenderOptions {
-  std::string scene_path;               // scene image (docs/FORMATS.md "The scene image")
-  std::string camera_path;              // declared camera.json
+  std::string scene_path;   // scene image (docs/FORMATS.md "The scene image")
+  std::string camera_path;  // declared camera.json
+  // A Gyroflow lens profile (render/lens_profile.h): its lens, scaled to camera.json's image size,
+  // and its readout where it states one, replace camera.json's (the written camera.json holds
+  // them).
+  std::string lens_profile_path;
   std::string gyro_path;                // gyro.csv (gyro clock, gyro axes)
   std::string frames_path;              // frame,t_first_row (camera clock, first row read)
   std::string out_dir;                  // created if missing
@@ -62,7 +68,8 @@ struct RenderedFrame {
 };
 
 struct RenderSummary {
-  std::vector<Injection> injected;  // each `--inject` as truth.json records it, in order
+  std::optional<LensProfileUse> lens_profile;  // what --lens-profile gave, with its notes
+  std::vector<Injection> injected;             // each `--inject` as truth.json records it, in order
   std::vector<RenderedFrame> frames;
 };
 

@@ -3,6 +3,7 @@
 #include "render/camera.h"
 #include "render/frames_csv.h"
 #include "render/image_io.h"
+#include "render/lens_profile.h"
 #include "render/rig_dataset.h"
 #include "sim/check.h"
 #include "sim/logs/gopro_telemetry.h"
@@ -97,6 +98,17 @@ class StagingDir {
   fs::path out_, staging_;
   bool committed_ = false;
 };
+
+// GoPro's own axis labels (gpmf-parser's README, "IMU Orientation Uses These Axis Labels") in the
+// camera frame of docs/FORMATS.md: X forward along the optical axis, Y to the left, Z up; so camera
+// x = -Y, y = -Z, z = X.
+Eigen::Matrix3d GoproCamFromImu() {
+  Eigen::Matrix3d cam_from_imu;
+  cam_from_imu << 0, -1, 0,  //
+      0, 0, -1,              //
+      1, 0, 0;
+  return cam_from_imu;
+}
 
 RigModel BaseRig(int width, int height) {
   RigModel rig;
@@ -231,19 +243,183 @@ RigModel Hero5Rig(const cv::Size& size) {
   // rate (correlation 0.99): z points up, camera y = -z. The gimbal holds pitch and roll, so the
   // clip cannot tell x from y: x along the optical axis and y to the left complete a right-handed
   // frame.
-  Eigen::Matrix3d cam_from_gyro;
-  cam_from_gyro << 0, -1, 0,  //
-      0, 0, -1,               //
-      1, 0, 0;
-  rig.cam_from_gyro = cam_from_gyro;
+  rig.cam_from_gyro = GoproCamFromImu();
   return rig;
 }
 
+// What a GoPro import declares: the rig and, for each number of it, where it came from.
+struct GoproDeclaration {
+  RigModel rig;
+  std::vector<ImportClaim> claims;
+  std::optional<LensProfileUse> lens;
+};
+
+// The HERO5's declaration as it has always been (karma.mp4): every number a guess or an inference.
+GoproDeclaration Hero5Declaration(const cv::Size& size) {
+  GoproDeclaration d;
+  d.rig = Hero5Rig(size);
+  const RigModel& rig = d.rig;
+  d.claims = {
+      ImportClaim{"intrinsics",
+                  std::map<std::string, double>{{"fx", rig.camera.fx},
+                                                {"fy", rig.camera.fy},
+                                                {"cx", rig.camera.cx},
+                                                {"cy", rig.camera.cy}},
+                  ClaimStatus::kGuess,
+                  "equidistant focal length over GoPro's published 118.2 deg horizontal field of "
+                  "view (HERO5 Black, Wide); pinhole with no distortion declared although the lens "
+                  "is a fisheye"},
+      ImportClaim{"readout_s", kHero5ReadoutGuessS, ClaimStatus::kGuess,
+                  "not published for the HERO5; order of magnitude only"},
+      ImportClaim{"gyro_to_camera", rig.cam_from_gyro, ClaimStatus::kInferred,
+                  "camera y = -sensor z: the accelerometer's mean is +9.7 m/s^2 on z, and the "
+                  "horizontal image shift between frames follows the integrated z rate "
+                  "(correlation 0.99, checked when this importer was written). x forward, y left "
+                  "is a guess: the gimbal holds pitch and roll, so the clip cannot tell x from y"},
+      ImportClaim{"direction", std::string(ReadoutDirectionName(rig.shutter.direction)),
+                  ClaimStatus::kGuess, "CMOS default"},
+      ImportClaim{"time_offset_s", 0.0, ClaimStatus::kGuess,
+                  "telemetry and video share the MP4 timeline"}};
+  return d;
+}
+
+std::map<std::string, double> IntrinsicsClaim(const PinholeCamera& camera) {
+  return {{"fx", camera.fx}, {"fy", camera.fy}, {"cx", camera.cx}, {"cy", camera.cy}};
+}
+
+std::string Joined(const std::vector<std::string>& lines) {
+  std::string out;
+  for (const std::string& line : lines) out += (out.empty() ? "" : "; ") + line;
+  return out;
+}
+
+// The lens: a lens profile's, else an equidistant fisheye over the camera's diagonal field of view
+// (ZFOV), else the HERO5's pinhole guess.
+void DeclareGoproLens(const GoproTelemetry& t, const cv::Size& size, std::optional<double> fps,
+                      const std::optional<LensProfile>& profile, GoproDeclaration* d) {
+  RigModel& rig = d->rig;
+  if (profile) {
+    d->lens = ScaleLensProfile(*profile, size.width, size.height, fps);
+    rig.camera = d->lens->camera;
+    const std::string source =
+        "Gyroflow " +
+        Joined({d->lens->notes.begin(), d->lens->notes.begin() + 1 + d->lens->aspect_differs});
+    d->claims.push_back(
+        {"intrinsics", IntrinsicsClaim(rig.camera), ClaimStatus::kSourceClaim, source});
+    d->claims.push_back(
+        {"lens_distortion", rig.camera.distortion, ClaimStatus::kSourceClaim, source});
+    return;
+  }
+  rig.camera.cx = 0.5 * (size.width - 1);
+  rig.camera.cy = 0.5 * (size.height - 1);
+  if (t.settings.diagonal_fov_deg && *t.settings.diagonal_fov_deg > 0 &&
+      *t.settings.diagonal_fov_deg < 360) {
+    // Equidistant: the corner's distance from the centre is f times its angle off the axis.
+    const double half_diagonal_px = 0.5 * std::hypot(size.width, size.height);
+    rig.camera.fx = rig.camera.fy =
+        half_diagonal_px / (0.5 * *t.settings.diagonal_fov_deg * kRadPerDeg);
+    rig.camera.distortion = Fisheye();
+    const std::string source =
+        "an equidistant fisheye whose image diagonal spans the camera's ZFOV " +
+        FormatNumber("%.2f", *t.settings.diagonal_fov_deg) +
+        " deg (GPMF global settings), principal point at the image centre; no lens profile given";
+    d->claims.push_back(
+        {"intrinsics", IntrinsicsClaim(rig.camera), ClaimStatus::kInferred, source});
+    d->claims.push_back({"lens_distortion", rig.camera.distortion, ClaimStatus::kInferred, source});
+    return;
+  }
+  const RigModel hero5 = Hero5Rig(size);
+  rig.camera = hero5.camera;
+  d->claims.push_back({"intrinsics", IntrinsicsClaim(rig.camera), ClaimStatus::kGuess,
+                       "equidistant focal length over the HERO5 Black's published 118.2 deg "
+                       "horizontal field of view, pinhole; the clip states no field of view"});
+}
+
+// A GoPro that states its own facts (global settings: HERO8, MAX and later), or any GoPro with a
+// lens profile: the lens (DeclareGoproLens), the readout (SROT, else the profile's, else a guess),
+// the axes (the camera's own X, Y, Z: ORIN / ORIO / MTRX, then GoPro's labels), the stabiliser.
+GoproDeclaration GoproDeclared(const GoproTelemetry& t, const cv::Size& size,
+                               std::optional<double> fps,
+                               const std::optional<LensProfile>& profile) {
+  GoproDeclaration d;
+  d.rig = BaseRig(size.width, size.height);
+  RigModel& rig = d.rig;
+  DeclareGoproLens(t, size, fps, profile, &d);
+  const GoproSettings& s = t.settings;
+  if (s.readout_s) {
+    rig.shutter.readout_s = *s.readout_s;
+    d.claims.push_back(
+        {"readout_s", *s.readout_s, ClaimStatus::kSourceClaim,
+         "GPMF SROT (global settings): the sensor readout time as the camera wrote "
+         "it" +
+             std::string(d.lens && d.lens->readout
+                             ? "; it wins over the lens profile's " +
+                                   FormatNumber("%.3f", *d.lens->readout->readout_s * 1e3) + " ms"
+                             : "")});
+  } else if (d.lens && d.lens->readout) {
+    ApplyLensProfile(&*d.lens, &rig);
+    d.claims.push_back({"readout_s", rig.shutter.readout_s, ClaimStatus::kSourceClaim,
+                        "Gyroflow lens profile " + d.lens->name + ": " +
+                            d.lens->notes[1 + d.lens->aspect_differs]});
+  } else {
+    rig.shutter.readout_s = kHero5ReadoutGuessS;
+    d.claims.push_back({"readout_s", kHero5ReadoutGuessS, ClaimStatus::kGuess,
+                        "neither the clip (no SROT) nor a lens profile states it; order of "
+                        "magnitude only"});
+  }
+  if (d.lens && s.readout_s && d.lens->readout) {
+    ApplyLensProfile(&*d.lens, &rig, /*keep_readout=*/true);
+  }
+  rig.cam_from_gyro = GoproCamFromImu();
+  if (!t.gyro_orin.empty()) {
+    std::string up;
+    if (t.accel_mean_mps2) {
+      up = "; the accelerometer's mean on these axes is (" +
+           FormatNumber("%.2f", t.accel_mean_mps2->x()) + ", " +
+           FormatNumber("%.2f", t.accel_mean_mps2->y()) + ", " +
+           FormatNumber("%.2f", t.accel_mean_mps2->z()) + ") m/s^2";
+    }
+    d.claims.push_back({"gyro_to_camera", rig.cam_from_gyro, ClaimStatus::kSourceClaimInferred,
+                        "the camera's " + t.axis_order_source +
+                            " put GYRO on its own axes X, Y, Z (gyro.csv gx, gy, gz); Z up (as "
+                            "on the HERO5's karma.mp4), X forward and Y left as assumed for the "
+                            "HERO5, whose gimbal could not tell them apart" +
+                            up});
+  } else {
+    for (const ImportClaim& claim : Hero5Declaration(size).claims) {
+      if (claim.what == "gyro_to_camera") d.claims.push_back(claim);  // the HERO5's inference
+    }
+  }
+  d.claims.push_back({"direction", std::string(ReadoutDirectionName(rig.shutter.direction)),
+                      ClaimStatus::kGuess,
+                      s.model.find("Max") != std::string::npos
+                          ? "CMOS default; a MAX's HERO mode is reprojected from one of its two "
+                            "fisheyes, so its rows need not be sensor rows"
+                          : "CMOS default"});
+  d.claims.push_back(
+      {"time_offset_s", 0.0, ClaimStatus::kGuess, "telemetry and video share the MP4 timeline"});
+  if (!s.stabilizer.empty()) {
+    const std::string value =
+        s.StabilizerOn()
+            ? "on (" + (s.stabilizer_mode.empty() ? std::string("EISE Y") : s.stabilizer_mode) + ")"
+            : "off";
+    d.claims.push_back(
+        {"stabilizer", value, ClaimStatus::kSourceClaim,
+         "GPMF global settings EISE '" + s.stabilizer + "', EISA '" + s.stabilizer_mode + "'" +
+             (s.StabilizerOn()
+                  ? ": the camera re-rendered each image from its own orientation estimate, so "
+                    "the image does not follow the body gyro (its per-frame correction, IORI, is "
+                    "in image_orientation.csv); a claim to test before trusting any fit"
+                  : "")});
+  }
+  return d;
+}
+
 // import.json for a GoPro clip: the source, the clock, the gyro stream and frames as read, and the
-// claims (all guesses or inferences: GoPro publishes none of them).
+// declaration's claims.
 ImportRecord GoproRecord(const std::string& path, const GoproTelemetry& telemetry,
-                         const RigModel& rig, const DecodedFrames& frames, size_t video_samples) {
-  const double f_px = rig.camera.fx;
+                         const GoproDeclaration& declared, const DecodedFrames& frames,
+                         size_t video_samples) {
   ImportRecord record;
   record.path = path;
   record.time_origin_s = 0.0;
@@ -251,7 +427,10 @@ ImportRecord GoproRecord(const std::string& path, const GoproTelemetry& telemetr
       "movie timeline of the MP4 (s); gyro and frames share it, time_offset_s 0 declared";
   record.gyro_samples = telemetry.gyro.size();
   record.gyro_rate_hz = telemetry.gyro_rate_hz;
-  record.gyro_columns = "gyro.csv gx,gy,gz = the sensor's x, y, z (GPMF storage reordered)";
+  record.gyro_columns = telemetry.gyro_orin.empty()
+                            ? "gyro.csv gx,gy,gz = the sensor's x, y, z (GPMF storage reordered)"
+                            : "gyro.csv gx,gy,gz = the camera's own axes X, Y, Z (" +
+                                  telemetry.axis_order_source + ")";
   record.frame_count = frames.entries.size();
   record.t_first_row = "frame presentation time; what it marks in the exposure is unknown";
   record.exposures = frames.exposures;
@@ -269,30 +448,65 @@ ImportRecord GoproRecord(const std::string& path, const GoproTelemetry& telemetr
   gopro.failed_grabs = frames.failures;
   gopro.reader_time_mismatches = frames.time_mismatches;
   gopro.times = "presentation times of the MP4 video track (stts/ctts/elst)";
+  gopro.gyro_orin = telemetry.gyro_orin;
+  gopro.gyro_orio = telemetry.gyro_orio;
+  gopro.gyro_mtrx = telemetry.gyro_mtrx;
+  gopro.settings = telemetry.settings;
   record.details = std::move(gopro);
-  record.claims = {
-      ImportClaim{"intrinsics",
-                  std::map<std::string, double>{
-                      {"fx", f_px}, {"fy", f_px}, {"cx", rig.camera.cx}, {"cy", rig.camera.cy}},
-                  ClaimStatus::kGuess,
-                  "equidistant focal length over GoPro's published 118.2 deg horizontal field of "
-                  "view (HERO5 Black, Wide); pinhole with no distortion declared although the lens "
-                  "is a fisheye"},
-      ImportClaim{"readout_s", kHero5ReadoutGuessS, ClaimStatus::kGuess,
-                  "not published for the HERO5; order of magnitude only"},
-      ImportClaim{"gyro_to_camera", rig.cam_from_gyro, ClaimStatus::kInferred,
-                  "camera y = -sensor z: the accelerometer's mean is +9.7 m/s^2 on z, and the "
-                  "horizontal image shift between frames follows the integrated z rate "
-                  "(correlation 0.99, checked when this importer was written). x forward, y left "
-                  "is a guess: the gimbal holds pitch and roll, so the clip cannot tell x from y"},
-      ImportClaim{"direction", std::string(ReadoutDirectionName(rig.shutter.direction)),
-                  ClaimStatus::kGuess, "CMOS default"},
-      ImportClaim{"time_offset_s", 0.0, ClaimStatus::kGuess,
-                  "telemetry and video share the MP4 timeline"}};
+  record.claims = declared.claims;
+  record.lens_profile = declared.lens;
   return record;
 }
 
-ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
+// Angle of a rotation quaternion (w, x, y, z), deg.
+double QuaternionAngleDeg(const std::array<double, 4>& q) {
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  return norm > 0 ? 2.0 * std::acos(std::min(1.0, std::abs(q[0]) / norm)) * kDegPerRad : 0.0;
+}
+
+// The sample of a per-frame stream nearest in time to t_s, within half a frame period.
+std::optional<size_t> NearestSample(const GoproQuaternions& q, double t_s, double period_s) {
+  if (q.empty()) return std::nullopt;
+  const size_t k = std::lower_bound(q.t_s.begin(), q.t_s.end(), t_s) - q.t_s.begin();
+  size_t best = std::min(k, q.t_s.size() - 1);
+  if (k > 0 && std::abs(q.t_s[k - 1] - t_s) < std::abs(q.t_s[best] - t_s)) best = k - 1;
+  if (std::abs(q.t_s[best] - t_s) <= 0.5 * period_s) return best;
+  return std::nullopt;
+}
+
+// image_orientation.csv: for each imported frame its IORI and CORI samples (docs/FORMATS.md
+// "Import output"); the counts go into import.json. Nothing is written without IORI and CORI.
+void WriteImageOrientation(const fs::path& dir, const GoproTelemetry& t,
+                           const std::vector<FrameEntry>& frames, double period_s,
+                           GoproImportDetails* gopro) {
+  gopro->iori_samples = t.image_orientation.t_s.size();
+  gopro->cori_samples = t.camera_orientation.t_s.size();
+  if (t.image_orientation.empty() && t.camera_orientation.empty()) return;
+  std::string text =
+      "frame,t,iori_t,iori_w,iori_x,iori_y,iori_z,cori_t,cori_w,cori_x,cori_y,cori_z\n";
+  const auto sample = [&](const GoproQuaternions& q, std::optional<size_t> i) {
+    if (!i) return std::string(",,,,");
+    std::string out = FormatNumber("%.6f", q.t_s[*i]);
+    for (double c : q.wxyz[*i]) out += "," + FormatNumber("%.6f", c);
+    return out;
+  };
+  for (const FrameEntry& frame : frames) {
+    const double t_s = frame.t_first_row_ns * 1e-9;
+    const std::optional<size_t> iori = NearestSample(t.image_orientation, t_s, period_s);
+    const std::optional<size_t> cori = NearestSample(t.camera_orientation, t_s, period_s);
+    if (iori || cori) ++gopro->orientation_frames;
+    if (iori) {
+      gopro->iori_max_deg =
+          std::max(gopro->iori_max_deg, QuaternionAngleDeg(t.image_orientation.wxyz[*iori]));
+    }
+    text += std::to_string(frame.frame) + "," + FormatNumber("%.6f", t_s) + "," +
+            sample(t.image_orientation, iori) + "," + sample(t.camera_orientation, cori) + "\n";
+  }
+  WriteFileAtomically((dir / "image_orientation.csv").string(), text);
+}
+
+ImportSummary ImportGopro(const ImportOptions& options, const std::optional<LensProfile>& profile,
+                          const fs::path& dir,
                           const std::function<void(size_t, size_t)>& progress) {
   const std::string& path = options.source;
   const GoproTelemetry telemetry = ReadGoproTelemetry(path);
@@ -308,10 +522,21 @@ ImportSummary ImportGopro(const ImportOptions& options, const fs::path& dir,
   if (static_cast<int64_t>(frames.entries.size()) < static_cast<int64_t>(selected.size()))
     std::fprintf(stderr, "warning: %s: OpenCV decoded %zu of the %zu frames selected\n",
                  path.c_str(), frames.entries.size(), selected.size());
-
-  const RigModel rig = Hero5Rig(frames.size);
-  return WriteDataset(dir, ImportSource::kGoproMp4, rig, telemetry.gyro, frames.entries,
-                      GoproRecord(path, telemetry, rig, frames, frame_times_s.size()));
+  const double period_s =
+      frame_times_s.size() > 1
+          ? (frame_times_s.back() - frame_times_s.front()) / (frame_times_s.size() - 1)
+          : 0.0;
+  const std::optional<double> fps =
+      period_s > 0 ? std::optional<double>(1.0 / period_s) : std::nullopt;
+  // A clip that states nothing about itself (the HERO5's karma.mp4) and no profile: as always.
+  const GoproDeclaration declared = telemetry.settings.present || profile
+                                        ? GoproDeclared(telemetry, frames.size, fps, profile)
+                                        : Hero5Declaration(frames.size);
+  ImportRecord record = GoproRecord(path, telemetry, declared, frames, frame_times_s.size());
+  WriteImageOrientation(dir, telemetry, frames.entries, period_s,
+                        &std::get<GoproImportDetails>(record.details));
+  return WriteDataset(dir, ImportSource::kGoproMp4, declared.rig, telemetry.gyro, frames.entries,
+                      std::move(record));
 }
 
 // The phone clip's declared rig for frames of `size`: the source's calibration and full-frame
@@ -388,7 +613,8 @@ ImportRecord PhoneRecord(const std::string& path, const PhoneClip& clip, const R
   return record;
 }
 
-ImportSummary ImportPhone(const ImportOptions& options, const fs::path& dir,
+ImportSummary ImportPhone(const ImportOptions& options, const std::optional<LensProfile>& profile,
+                          const fs::path& dir,
                           const std::function<void(size_t, size_t)>& progress) {
   const PhoneClip clip = ReadPhoneClip(options.source);
   std::vector<int64_t> ids;
@@ -419,9 +645,26 @@ ImportSummary ImportPhone(const ImportOptions& options, const fs::path& dir,
                                     : std::optional<double>(exposure->second)});
     if (progress) progress(entries.size(), selected.size());
   }
-  const RigModel rig = PhoneRig(size);
-  return WriteDataset(dir, ImportSource::kPhoneFolder, rig, clip.gyro, entries,
-                      PhoneRecord(options.source, clip, rig, entries.size(), std::move(exposures)));
+  RigModel rig = PhoneRig(size);
+  ImportRecord record =
+      PhoneRecord(options.source, clip, rig, entries.size(), std::move(exposures));
+  if (profile) {
+    // The profile's lens and readout replace the example's calibration, and say so.
+    LensProfileUse use = ScaleLensProfile(*profile, size.width, size.height);
+    ApplyLensProfile(&use, &rig);
+    for (ImportClaim& claim : record.claims) {
+      const std::string source = "Gyroflow " + use.notes.front();
+      if (claim.what == "intrinsics")
+        claim = {"intrinsics", IntrinsicsClaim(rig.camera), ClaimStatus::kSourceClaim, source};
+      if (claim.what == "readout_s" && use.readout)
+        claim = {"readout_s", rig.shutter.readout_s, ClaimStatus::kSourceClaim,
+                 "Gyroflow lens profile " + use.name + ": frame_readout_time"};
+    }
+    record.claims.push_back({"lens_distortion", rig.camera.distortion, ClaimStatus::kSourceClaim,
+                             "Gyroflow " + use.notes.front()});
+    record.lens_profile = use;
+  }
+  return WriteDataset(dir, ImportSource::kPhoneFolder, rig, clip.gyro, entries, std::move(record));
 }
 
 }  // namespace
@@ -467,10 +710,13 @@ ImportSummary ImportVideo(const ImportOptions& options,
                           const std::function<void(size_t, size_t)>& progress) {
   options.Check();
   const ImportSource kind = DetectImportSource(options.source);
+  // Read before the long decoding: a bad profile fails at once.
+  std::optional<LensProfile> profile;
+  if (!options.lens_profile_path.empty()) profile = ReadLensProfile(options.lens_profile_path);
   StagingDir staging(options.out_dir);
   ImportSummary summary = kind == ImportSource::kGoproMp4
-                              ? ImportGopro(options, staging.path(), progress)
-                              : ImportPhone(options, staging.path(), progress);
+                              ? ImportGopro(options, profile, staging.path(), progress)
+                              : ImportPhone(options, profile, staging.path(), progress);
   if (!options.mask_path.empty()) AddMask(options.mask_path, staging.path(), &summary.record);
   staging.Commit();
   return summary;

@@ -5,8 +5,10 @@
 //
 // Sources, their bytes read in sim/logs:
 //  - a GoPro MP4 with a GPMF 'gpmd' track (HERO5 and later; sim/logs/gopro_telemetry.h): GYRO
-//    (SCAL, axis order), SHUT; frames through OpenCV's video reader, times from the MP4 video
-//    track's sample table;
+//    (SCAL, and ORIN/ORIO/MTRX: the camera's own axes), SHUT, CORI/IORI (passed on in
+//    image_orientation.csv), the global settings (SROT: the readout; ZFOV: the field of view;
+//    EISE/EISA: the stabiliser, stated as a claim to test); frames through OpenCV's video reader,
+//    times from the MP4 video track's sample table;
 //  - a phone clip folder (lhaippp/gyro-video-stabilization layout; sim/logs/phone_clip.h):
 //    gyro.txt, framestamp.txt, gyro_dump.txt (exposure per frame), frames/RE_frame-N.jpg (frame
 //    N), the images copied as they are.
@@ -25,8 +27,12 @@ namespace shutterlab {
 enum class ImportSource { kGoproMp4, kPhoneFolder };
 
 struct ImportOptions {
-  std::string source;        // an .mp4 with a gpmd track, or a phone clip folder
-  std::string out_dir;       // written whole or not at all
+  std::string source;   // an .mp4 with a gpmd track, or a phone clip folder
+  std::string out_dir;  // written whole or not at all
+  // A Gyroflow lens profile (render/lens_profile.h): the declared lens, scaled to the frames, and
+  // its readout where the source states none (a GoPro's SROT wins); import.json names it as the
+  // claims' source.
+  std::string lens_profile_path;
   int64_t max_frames = -1;   // at most this many frames (-1: all)
   int64_t start_frame = -1;  // first frame id to import (-1: the first one); ids as in frames.csv
                              // (GoPro: video frame index from 0; phone: frame number N)

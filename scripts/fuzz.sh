@@ -58,7 +58,7 @@ seed dataflash "$data"/incoming/ardupilot_*/*.bin "$data"/incoming/ardupilot_*/*
 seed blackbox "$data"/gyro/betaflight_blackbox/*
 seed flight_log "$data"/gyro/px4_ulog/*.ulg "$data"/incoming/ardupilot_*/*.bin "$data"/gyro/betaflight_blackbox/*
 text_seeds flight_log
-seed mp4 "$data"/rs/gopro_karma/*.mp4
+seed mp4 "$data"/rs/gopro_karma/*.mp4 "$data"/incoming_rs/gopro_max_heromode/*.mp4
 seed gpmf
 printf 'DEVC\x00\x00\x00\x00' >"$build/corpus/gpmf/empty"
 seed camera_json
@@ -70,6 +70,13 @@ cat >"$build/corpus/camera_json/camera.json" <<'JSON'
  "gyro_to_camera": [[1,0,0],[0,1,0],[0,0,1]], "time_offset_s": 0.0,
  "scene": {"altitude_m": 50.0}, "velocity_mps": [0.0, 0.0, 0.0]}
 JSON
+cat >"$build/corpus/camera_json/fisheye.json" <<'JSON'
+{"format": "rig/1", "image": {"width": 848, "height": 480},
+ "intrinsics": {"fx": 368.7, "fy": 370.8, "cx": 424.2, "cy": 238.8},
+ "distortion": {"model": "fisheye", "k1": 0.0646, "k2": 0.0391, "k3": -0.0414, "k4": 0.0149},
+ "rolling_shutter": {"readout_s": 0.0206, "direction": "top_to_bottom"}}
+JSON
+seed lens_profile "$data"/incoming_rs/*/reference/*.json
 seed column_csv "$data"/rs/phone_gyro_video_20200109_145447/gyro.txt
 printf '\x01t;gx;gy;gz\n0;1;2;3\n0.001;1;2;3\n' >"$build/corpus/column_csv/semicolon.csv"
 seed frames_csv

@@ -217,32 +217,14 @@ TrueModel ModelOf(const Context& ctx, const std::vector<Effect>& effects,
   return model;
 }
 
-// Radial distortion keeps the image in one piece: r (1 + k1 r^2 + k2 r^4) increases with r out to
-// the farthest image corner (normalised radius). A fit may not fold the image to explain data.
-bool MonotonicDistortion(const PinholeCamera& camera) {
-  const double k1 = camera.dist[0], k2 = camera.dist[1], k3 = camera.dist[4];
-  if (k1 == 0 && k2 == 0 && k3 == 0) return true;
-  const double dx = std::max(camera.cx, camera.width - 1 - camera.cx) / camera.fx;
-  const double dy = std::max(camera.cy, camera.height - 1 - camera.cy) / camera.fy;
-  // The undistorted corner radius can be larger than the distorted one: check well beyond it.
-  const double r_max = 1.5 * std::hypot(dx, dy);
-  constexpr int kSteps = 64;
-  for (int i = 1; i <= kSteps; ++i) {
-    const double r2 = std::pow(r_max * i / kSteps, 2);
-    // d/dr [r (1 + k1 r^2 + k2 r^4 + k3 r^6)]
-    if (!(1 + 3 * k1 * r2 + 5 * k2 * r2 * r2 + 7 * k3 * r2 * r2 * r2 > 0)) return false;
-  }
-  return true;
-}
-
 // The declared lens is the user's calibration and is taken as it is (a wide lens may fold just
 // beyond the corners); only a fitted change must keep the image in one piece.
 bool Plausible(const Context& ctx, const TrueModel& model) {
   return model.rig.shutter.readout_s > 0 && (model.gyro_scale.array() > 0).all() &&
          std::abs(model.clock_rate_ppm) < 1e5 && model.gyro_bias_rad_s.allFinite() &&
          model.rig.velocity_mps.allFinite() &&
-         (model.rig.camera.dist == ctx.declared.rig.camera.dist ||
-          MonotonicDistortion(model.rig.camera));
+         (model.rig.camera.distortion == ctx.declared.rig.camera.distortion ||
+          model.rig.camera.DistortionMonotonicOverImage());
 }
 
 void Residuals(const Context& ctx, const TrueModel& model, Eigen::VectorXd* r,

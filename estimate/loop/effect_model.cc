@@ -22,7 +22,8 @@ namespace {
 
 // The rays K^-1 p depend on these alone: a cache of them stays valid while they do not change.
 bool SameIntrinsics(const PinholeCamera& a, const PinholeCamera& b) {
-  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.dist == b.dist;
+  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy &&
+         a.distortion == b.distortion;
 }
 
 }  // namespace
@@ -515,6 +516,7 @@ void PredictDistances(const PinholeCamera& camera, const PairView& pair, const C
     const double distance_px = v_dir.dot(c.a[i]) / g;
     const Eigen::Vector2d normal(n_cam.x() / camera.fx / g, n_cam.y() / camera.fy / g);
     const Eigen::Vector3d& xq = pair.match_rays[i];
+    if (!(xq.z() > 0)) continue;  // a fisheye's ray 90 degrees or more off the axis: no such pixel
     const Eigen::Vector2d q_undistorted = (k_mat * xq).hnormalized();
     const Eigen::Vector2d foot = q_undistorted - distance_px * normal;
     double across_px = distance_px;

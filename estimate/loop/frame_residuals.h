@@ -9,9 +9,8 @@
 
 namespace shutterlab {
 
-// The noise of all frames' points pooled (RMS over points), px, never below kMinNoisePx: identical
-// images measure exactly 0, against which every residual would be infinitely significant.
-inline constexpr double kMinNoisePx = 1e-3;
+// The noise of all frames' points pooled (RMS over points), px, never below kMinNoisePx
+// (measure.h).
 double PooledNoisePx(const std::vector<FrameValidation>& frames);
 
 // Each frame's residual statistics over the points each loop used (and, with keep_residuals, every

@@ -77,8 +77,7 @@ ImageOrientationCheck TestImageOrientation(const TrueModel& declared, const Gyro
   ImageOrientationCheck check;
   check.present = !iori.empty();
   if (!check.present) return check;
-  const std::vector<PairRotation> rotations =
-      PairRotations(declared, gyro, pairs, consensus, iori);
+  const std::vector<PairRotation> rotations = PairRotations(declared, gyro, pairs, consensus, iori);
   check.pairs_tested = static_cast<int>(rotations.size());
   if (rotations.size() < 3) {
     check.verdict = "not determined: " + std::to_string(rotations.size()) +

@@ -33,6 +33,10 @@ struct MeasureOptions {
   void Check() const;
 };
 
+// The least measurement noise any fit or test assumes, px: identical images measure exactly 0,
+// against which every residual would be infinitely significant.
+inline constexpr double kMinNoisePx = 1e-3;
+
 struct DisplacementMeasurement {
   cv::Mat field;       // CV_32FC2 (dx, dy) per rolling-shutter pixel; NaN where unmeasured
   cv::Mat confidence;  // CV_32F, 0..1, 0 where unmeasured (textureless, saturated, inconsistent)

@@ -339,10 +339,10 @@ GyroFollowCheck CheckImageFollowsGyro(const TrueModel& declared, const GyroTrace
     Eigen::Vector3d w_gyro;
     try {
       // The model's rotation between the two images (with each frame's cam_from_image).
-      const Eigen::Quaterniond rel =
-          Eigen::Quaterniond(pair.earlier->cam_from_image).conjugate() *
-          orientation.WorldFromBodyAt(t_e, off_e).conjugate() *
-          orientation.WorldFromBodyAt(t_l, off_l) * Eigen::Quaterniond(pair.cam_from_image);
+      const Eigen::Quaterniond rel = Eigen::Quaterniond(pair.earlier->cam_from_image).conjugate() *
+                                     orientation.WorldFromBodyAt(t_e, off_e).conjugate() *
+                                     orientation.WorldFromBodyAt(t_l, off_l) *
+                                     Eigen::Quaterniond(pair.cam_from_image);
       w_gyro = LogSO3(rel.normalized()) / ((t_l - t_e) * 1e-9 + off_l - off_e);
     } catch (const std::out_of_range&) {
       continue;
@@ -365,11 +365,12 @@ GyroFollowCheck CheckImageFollowsGyro(const TrueModel& declared, const GyroTrace
   check.follows = check.gain >= kMinGain;
   char text[256];
   std::snprintf(text, sizeof(text),
-                "the image turns %.2fx as fast as the gyro says (median over %d pairs)",
-                check.gain, check.pairs_tested);
+                "the image turns %.2fx as fast as the gyro says (median over %d pairs)", check.gain,
+                check.pairs_tested);
   check.verdict = check.follows ? std::string("the image follows the gyro: ") + text
-                                : std::string("the image does not follow the gyro (a stabiliser "
-                                              "re-rendered it, in the camera or afterwards): ") +
+                                : std::string(
+                                      "the image does not follow the gyro (a stabiliser "
+                                      "re-rendered it, in the camera or afterwards): ") +
                                       text;
   return check;
 }
@@ -427,7 +428,8 @@ void LeaveOut(const TrueModel& declared, const GyroTrace& gyro,
     size_t k = 0;
     for (const FramePoints& f : frames) {
       for (const MeasuredPoint& p : f.points) {
-        if (screen->region.Contains(p.u, p.v)) screen->rotation_status[k] = PointStatus::kCameraFixed;
+        if (screen->region.Contains(p.u, p.v))
+          screen->rotation_status[k] = PointStatus::kCameraFixed;
         ++k;
       }
     }
@@ -448,9 +450,11 @@ void LeaveOut(const TrueModel& declared, const GyroTrace& gyro,
 
 PointScreen ScreenPoints(const TrueModel& declared, const GyroTrace& gyro,
                          const std::vector<FramePoints>& frames,
-                         const std::vector<double>& frame_noise_px, int step_px,
+                         const std::vector<double>& measured_noise_px, int step_px,
                          const ScreenOptions& options) {
   options.Check();
+  std::vector<double> frame_noise_px;  // identical frames measure 0: never judge against that
+  for (double noise : measured_noise_px) frame_noise_px.push_back(std::max(kMinNoisePx, noise));
   PointScreen screen;
   const std::unique_ptr<PointPredictor> predictor =
       MakePredictor(gyro, frames, /*pair_translation=*/false, /*robust_delta_px=*/1.0);
@@ -464,8 +468,8 @@ PointScreen ScreenPoints(const TrueModel& declared, const GyroTrace& gyro,
   LeaveOut(declared, gyro, frames, predicted, frame_noise_px, use_region, options, &screen);
   const bool video = !frames.empty() && frames.front().earlier.has_value();
   if (video && options.consensus) {
-    screen.gyro_follow = CheckImageFollowsGyro(declared, gyro, frames, predicted, frame_noise_px,
-                                               screen.rotation);
+    screen.gyro_follow =
+        CheckImageFollowsGyro(declared, gyro, frames, predicted, frame_noise_px, screen.rotation);
     // An image that does not follow the gyro stays behind it everywhere: the cells that stayed
     // are the stabiliser's doing, not a part of the frame that moves with the camera.
     if (use_region && screen.gyro_follow.determined && !screen.gyro_follow.follows) {

@@ -11,12 +11,13 @@
 //     declared model predicts there, and the prediction is "testable" when it is at least
 //     max(kMinTestablePx, kMinTestableNoise (5) x the frame's noise) long (the scene must be
 //     predicted to move for a pixel to be caught standing still; a camera-fixed point then stays
-//     with probability 1 - e^-3 or more, its noise being at most a fifth of the prediction). A cell moves with the camera when it was
-//     testable in at least kMinTestableFrames frames and stayed in at least kFixedShare of them;
-//     isolated cells (no fixed neighbour among the 8) are dropped. A scene point stays only where
-//     the camera's own motion cancels its parallax, which wanders from frame to frame; a dashboard
-//     stays in every frame. When more than kMaxRegionShare of the testable cells stay, it is no
-//     region but the whole image not following the gyro (check 3): nothing is left out for it.
+//     with probability 1 - e^-3 or more, its noise being at most a fifth of the prediction). A cell
+//     moves with the camera when it was testable in at least kMinTestableFrames frames and stayed
+//     in at least kFixedShare of them; isolated cells (no fixed neighbour among the 8) are dropped.
+//     A scene point stays only where the camera's own motion cancels its parallax, which wanders
+//     from frame to frame; a dashboard stays in every frame. When more than kMaxRegionShare of the
+//     testable cells stay, it is no region but the whole image not following the gyro (check 3):
+//     nothing is left out for it.
 //  2. Consensus (RotationConsensus; for video pairs also the epipolar consensus of
 //     VideoPairPredictor::ConsensusDistances). Per frame (or pair), one camera motion must explain
 //     a point: the declared model plus a constant angular-rate correction dw over the frame, under
@@ -63,9 +64,9 @@ namespace shutterlab {
 // Why a measured point is left out of the fits (kKept: it is not).
 enum class PointStatus : uint8_t {
   kKept = 0,
-  kCameraFixed,     // in a region that moves with the camera (check 1)
-  kMoving,          // no single camera motion of its frame explains it (rotation consensus)
-  kOffEpipolar,     // off its pair's epipolar geometry (video, translation consensus only)
+  kCameraFixed,  // in a region that moves with the camera (check 1)
+  kMoving,       // no single camera motion of its frame explains it (rotation consensus)
+  kOffEpipolar,  // off its pair's epipolar geometry (video, translation consensus only)
 };
 const char* PointStatusName(PointStatus status);
 
@@ -151,7 +152,7 @@ GyroFollowCheck CheckImageFollowsGyro(const TrueModel& declared, const GyroTrace
                                       const std::vector<FrameConsensus>& consensus);
 
 // All three checks (3 and the epipolar consensus for video pairs only). step_px: the measured
-// points' grid spacing.
+// points' grid spacing; each frame's noise is taken as at least kMinNoisePx (measure.h).
 PointScreen ScreenPoints(const TrueModel& declared, const GyroTrace& gyro,
                          const std::vector<FramePoints>& frames,
                          const std::vector<double>& frame_noise_px, int step_px,

@@ -296,6 +296,21 @@ void ScreenStillFrames(const GyroTrace& gyro, const std::vector<FramePoints>& fr
   }
 }
 
+// The frames' rate: the median interval between consecutive frame times (a video's; a still
+// dataset's frames seconds apart give a rate no lens profile states). nullopt with fewer than two.
+std::optional<double> FrameRateHz(const std::vector<FrameEntry>& frames) {
+  std::vector<int64_t> t;
+  for (const FrameEntry& f : frames) t.push_back(f.t_first_row_ns);
+  std::sort(t.begin(), t.end());
+  std::vector<int64_t> dt;
+  for (size_t i = 1; i < t.size(); ++i) {
+    if (t[i] > t[i - 1]) dt.push_back(t[i] - t[i - 1]);
+  }
+  if (dt.empty()) return std::nullopt;
+  std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
+  return 1e9 / static_cast<double>(dt[dt.size() / 2]);
+}
+
 }  // namespace
 
 void ValidateOptions::Check() const {
@@ -327,6 +342,12 @@ ValidationResult ValidateDataset(const std::string& dataset_dir,
   options.measure.mask = CombinedMask(dataset, given_options.mask_path, &result.mask_description);
   result.mask = options.measure.mask;
   result.declared = dataset.declared;
+  if (!options.lens_profile_path.empty()) {
+    result.lens_profile =
+        ScaleLensProfile(ReadLensProfile(options.lens_profile_path), result.declared.camera.width,
+                         result.declared.camera.height, FrameRateHz(dataset.frames));
+    ApplyLensProfile(&*result.lens_profile, &result.declared);
+  }
   result.warnings = dataset.gyro_warnings;
   const RigDataset& files = dataset;
   const RigModel& rig = result.declared;

@@ -7,6 +7,7 @@
 #include "estimate/loop/measure.h"
 #include "estimate/loop/point_screen.h"
 #include "render/effects.h"
+#include "render/lens_profile.h"
 #include "sim/log_warning.h"
 
 #include <Eigen/Core>
@@ -26,6 +27,9 @@ inline constexpr double kMinRatioDPx = 1.0;
 
 struct ValidateOptions {
   std::vector<double> limits_m{0.05, 0.10};  // acceptable smear on the ground, m
+  // A Gyroflow lens profile (render/lens_profile.h) whose lens, scaled to the dataset's image size,
+  // and readout (where it states one) replace camera.json's before anything is predicted.
+  std::string lens_profile_path;
   MeasureOptions measure;  // its mask is the dataset's (camera.json) and mask_path's together
   LoopOptions loop;
   ScreenOptions screen;  // points left out before the loop (estimate/loop/point_screen.h)
@@ -136,8 +140,9 @@ struct RatioGroup {
 
 struct ValidationResult {
   std::string dataset;
-  RigModel declared;
-  std::vector<LogWarning> warnings;  // what the audit of gyro.csv found (RigDataset)
+  RigModel declared;                           // camera.json, with the lens profile's when given
+  std::optional<LensProfileUse> lens_profile;  // what ValidateOptions::lens_profile_path gave
+  std::vector<LogWarning> warnings;            // what the audit of gyro.csv found (RigDataset)
   std::vector<double> limits_m;
   std::vector<FrameValidation> frames;
   std::vector<Confusion> confusion_paper;  // one per limit

@@ -117,4 +117,49 @@ std::string NoiseTable(const NoiseResult& result) {
   return out;
 }
 
+NoisePairGain FusedNoiseGain(const NoiseResult& first, const NoiseResult& second,
+                             const NoiseResult& fused) {
+  NoisePairGain gain;
+  auto ratio = [](double a, double b) { return b > 0 ? a / b : 0.0; };
+  const bool allan = !first.allan.empty() && !second.allan.empty() && !fused.allan.empty();
+  for (int a = 0; a < 3; ++a) {
+    gain.sigma_vs_first[a] =
+        ratio(first.axes[a].sigma_mean_arcsec, fused.axes[a].sigma_mean_arcsec);
+    gain.sigma_vs_second[a] =
+        ratio(second.axes[a].sigma_mean_arcsec, fused.axes[a].sigma_mean_arcsec);
+    if (!allan) continue;
+    const double f = fused.allan.axes[a].arw_rad_s_sqrt_hz;
+    gain.arw_vs_first[a] = ratio(first.allan.axes[a].arw_rad_s_sqrt_hz, f);
+    gain.arw_vs_second[a] = ratio(second.allan.axes[a].arw_rad_s_sqrt_hz, f);
+  }
+  return gain;
+}
+
+std::string NoisePairTable(const NoiseResult& first, const NoiseResult& second,
+                           const NoiseResult& fused) {
+  const NoisePairGain gain = FusedNoiseGain(first, second, fused);
+  std::string text =
+      "\nFused gain: the sensors' noise over the fused trace's (about 1.41 for two equal "
+      "independent sensors)\n"
+      "axis   sigma mean (arcsec): first  second  fused   gain vs first  vs second"
+      "   ARW (rad/s/sqrt(Hz)): first     second      fused   gain vs first  vs second\n";
+  for (int a = 0; a < 3; ++a) {
+    text += "  " + std::string(1, "xyz"[a]) + "    ";
+    text += FormatNumber("%26.3f", first.axes[a].sigma_mean_arcsec) +
+            FormatNumber("%8.3f", second.axes[a].sigma_mean_arcsec) +
+            FormatNumber("%7.3f", fused.axes[a].sigma_mean_arcsec) +
+            FormatNumber("%16.3f", gain.sigma_vs_first[a]) +
+            FormatNumber("%11.3f", gain.sigma_vs_second[a]);
+    if (!first.allan.empty() && !second.allan.empty() && !fused.allan.empty()) {
+      text += FormatNumber("%29.3e", first.allan.axes[a].arw_rad_s_sqrt_hz) +
+              FormatNumber("%11.3e", second.allan.axes[a].arw_rad_s_sqrt_hz) +
+              FormatNumber("%11.3e", fused.allan.axes[a].arw_rad_s_sqrt_hz) +
+              FormatNumber("%16.3f", gain.arw_vs_first[a]) +
+              FormatNumber("%11.3f", gain.arw_vs_second[a]);
+    }
+    text += "\n";
+  }
+  return text;
+}
+
 }  // namespace shutterlab

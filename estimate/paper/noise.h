@@ -51,4 +51,16 @@ NoiseResult AnalyzeNoise(const GyroTrace& trace, const NoiseOptions& options);
 // (arcsec); then ARW and bias instability from the Allan deviation.
 std::string NoiseTable(const NoiseResult& result);
 
+// Two sensors and their fusion (sim/sensor_pair.h): per axis the window sigma mean and the white
+// noise (ARW) of each and of the fused trace, and the fused gain over each: sigma of the sensor /
+// sigma of the fused trace (about sqrt(2) for two equal independent sensors).
+struct NoisePairGain {
+  double sigma_vs_first[3] = {0, 0, 0}, sigma_vs_second[3] = {0, 0, 0};
+  double arw_vs_first[3] = {0, 0, 0}, arw_vs_second[3] = {0, 0, 0};  // 0 without Allan deviations
+};
+NoisePairGain FusedNoiseGain(const NoiseResult& first, const NoiseResult& second,
+                             const NoiseResult& fused);
+std::string NoisePairTable(const NoiseResult& first, const NoiseResult& second,
+                           const NoiseResult& fused);
+
 }  // namespace shutterlab

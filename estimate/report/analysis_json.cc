@@ -37,6 +37,91 @@ nlohmann::ordered_json NoiseToJson(const NoiseResult& result) {
   return j;
 }
 
+nlohmann::ordered_json SensorPairToJson(const SensorPair& pair, const std::string& second_path) {
+  nlohmann::ordered_json j;
+  j["second_log"] = second_path;
+  j["paired"] = pair.paired;
+  j["unpaired"] = pair.unpaired;
+  j["mounting_fitted"] = pair.mounting_fitted;
+  j["mounting_angle_deg"] = pair.mounting_angle_deg;
+  j["mounting_signal_ratio"] = pair.mounting_signal_ratio;
+  nlohmann::ordered_json rows = nlohmann::ordered_json::array();
+  for (int r = 0; r < 3; ++r)
+    rows.push_back({pair.a_from_b(r, 0), pair.a_from_b(r, 1), pair.a_from_b(r, 2)});
+  j["a_from_b"] = rows;
+  j["weights_first"] = {pair.weight_a.x(), pair.weight_a.y(), pair.weight_a.z()};
+  j["weights_from_still"] = pair.weights_from_still;
+  j["difference_rms_rad_s"] = pair.residual_rms_rad_s;
+  return j;
+}
+
+nlohmann::ordered_json NoisePairToJson(const SensorPair& pair, const std::string& second_path,
+                                       const NoiseResult& first, const NoiseResult& second,
+                                       const NoiseResult& fused) {
+  nlohmann::ordered_json j = SensorPairToJson(pair, second_path);
+  j["first"] = NoiseToJson(first);
+  j["second"] = NoiseToJson(second);
+  const NoisePairGain g = FusedNoiseGain(first, second, fused);
+  auto xyz = [](const double(&v)[3]) { return nlohmann::ordered_json::array({v[0], v[1], v[2]}); };
+  j["gain"] = {{"sigma_vs_first", xyz(g.sigma_vs_first)},
+               {"sigma_vs_second", xyz(g.sigma_vs_second)},
+               {"arw_vs_first", xyz(g.arw_vs_first)},
+               {"arw_vs_second", xyz(g.arw_vs_second)}};
+  return j;
+}
+
+nlohmann::ordered_json RecordSummaryToJson(const RecordSummary& summary,
+                                           const std::string& triggers_path) {
+  auto xyz = [](const Eigen::Vector3d& v) {
+    return nlohmann::ordered_json::array({v.x(), v.y(), v.z()});
+  };
+  nlohmann::ordered_json j;
+  j["format"] = "record/1";
+  j["duration_s"] = summary.duration_s;
+  j["t0_clock_ns"] = summary.t0_clock_ns;
+  j["stopped_by_signal"] = summary.stopped;
+  j["max_writer_stall_s"] = summary.max_writer_stall_s;
+  nlohmann::ordered_json sensors = nlohmann::ordered_json::array();
+  for (const SensorSummary& s : summary.sensors) {
+    nlohmann::ordered_json sensor;
+    sensor["part"] = GetPartInfo(s.setting.part).name;
+    sensor["device"] = s.device;
+    sensor["out"] = s.out_path;
+    sensor["odr_hz"] = s.setting.odr_hz;
+    sensor["range_dps"] = s.setting.range_dps;
+    sensor["samples"] = s.samples;
+    sensor["rate_hz"] = s.rate_hz;
+    sensor["drift_ppm"] = s.drift_ppm;
+    sensor["timestamp_rms_us"] = s.timestamp_rms_us;
+    sensor["gaps"] = s.gaps;
+    sensor["samples_lost"] = s.lost;
+    sensor["ring_high_water"] = s.ring_high_water;
+    sensor["ring_capacity"] = s.ring_capacity;
+    sensor["max_read_interval_s"] = s.max_read_interval_s;
+    sensor["still_s"] = s.still_span_s;
+    sensor["still_bias_rad_s"] = xyz(s.still_bias_rad_s);
+    sensor["still_std_rad_s"] = xyz(s.still_std_rad_s);
+    sensors.push_back(sensor);
+  }
+  j["sensors"] = sensors;
+  nlohmann::ordered_json gaps = nlohmann::ordered_json::array();
+  for (const RecordGap& gap : summary.gaps) {
+    gaps.push_back(
+        {{"sensor", gap.sensor + 1}, {"t_s", gap.t_s}, {"lost", gap.lost}, {"kind", gap.kind}});
+  }
+  j["gaps"] = gaps;
+  if (!triggers_path.empty()) {
+    j["triggers"] = {{"file", triggers_path},
+                     {"count", summary.triggers},
+                     {"edges", summary.trigger_edges},
+                     {"bounces", summary.trigger_bounces},
+                     {"other_polarity", summary.trigger_other_polarity},
+                     {"t_s", summary.trigger_t_s}};
+  }
+  j["notes"] = summary.notes;
+  return j;
+}
+
 nlohmann::ordered_json AccuracyToJson(const AccuracyResult& result) {
   nlohmann::ordered_json j;
   j["reference_deg"] = result.reference_deg;

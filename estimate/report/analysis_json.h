@@ -7,6 +7,8 @@
 #include "estimate/paper/flight.h"
 #include "estimate/paper/noise.h"
 #include "sim/log_warning.h"
+#include "sim/record/recorder.h"
+#include "sim/sensor_pair.h"
 
 #include <nlohmann/json.hpp>
 
@@ -31,6 +33,20 @@ nlohmann::json FlightToJson(const FlightResult& result);
 
 // docs/FORMATS.md "Warnings": [{"kind", "message", "t_s", "count"}], t_s and count only where
 // they apply.
+// The two-sensor fusion (sim/sensor_pair.h): {"second_log": PATH, "paired", "unpaired",
+// "mounting_fitted", "mounting_angle_deg", "mounting_signal_ratio", "a_from_b" (3x3 row-major),
+// "weights_first" [x, y, z], "weights_from_still", "difference_rms_rad_s"}.
+nlohmann::ordered_json SensorPairToJson(const SensorPair& pair, const std::string& second_path);
+// Noise of a pair: SensorPairToJson plus "first", "second" (NoiseToJson) and "gain"
+// ({"sigma_vs_first": [x, y, z], "sigma_vs_second", "arw_vs_first", "arw_vs_second"}).
+nlohmann::ordered_json NoisePairToJson(const SensorPair& pair, const std::string& second_path,
+                                       const NoiseResult& first, const NoiseResult& second,
+                                       const NoiseResult& fused);
+
+// `record --json` (docs/FORMATS.md "Recorder output"): the summary of a recording.
+nlohmann::ordered_json RecordSummaryToJson(const RecordSummary& summary,
+                                           const std::string& triggers_path);
+
 nlohmann::json WarningsToJson(const std::vector<LogWarning>& warnings);
 
 // docs/FORMATS.md `analyze` JSON (plus bias, verdict and per-image detail).

@@ -375,10 +375,9 @@ cv::Mat ScreeningPicture(const ValidationResult& result) {
     cv::Vec3b* row = rgb.ptr<cv::Vec3b>(v);
     const uchar* mask = result.mask.empty() ? nullptr : result.mask.ptr<uchar>(v);
     for (int u = 0; u < rgb.cols; ++u) {
-      const cv::Vec3b tint = mask != nullptr && mask[u] == 0 ? cv::Vec3b(40, 90, 230)
-                             : !region.whole_image && region.Contains(u, v)
-                                 ? cv::Vec3b(230, 40, 30)
-                                 : row[u];
+      const cv::Vec3b tint = mask != nullptr && mask[u] == 0                ? cv::Vec3b(40, 90, 230)
+                             : !region.whole_image && region.Contains(u, v) ? cv::Vec3b(230, 40, 30)
+                                                                            : row[u];
       row[u] = 0.45 * cv::Vec3f(tint) + 0.55 * cv::Vec3f(row[u]);
     }
   }
@@ -419,16 +418,15 @@ void AddScreening(const ValidationResult& result, HtmlPage* page) {
   std::vector<std::vector<std::string>> rows = {
       {"mask (camera.json, --mask)", result.mask.empty() ? "none" : result.mask_description},
       {"region that moves with the camera",
-       s.region.whole_image
-           ? "none: the whole image stays (see the image against the gyro)"
-           : percent(s.camera_fixed_share) + " of the points, " +
-                 std::to_string(s.region.cells_fixed) + " of " +
-                 std::to_string(s.region.cells_testable) + " cells of " +
-                 std::to_string(s.region.step_px) + " px"},
+       s.region.whole_image ? "none: the whole image stays (see the image against the gyro)"
+                            : percent(s.camera_fixed_share) + " of the points, " +
+                                  std::to_string(s.region.cells_fixed) + " of " +
+                                  std::to_string(s.region.cells_testable) + " cells of " +
+                                  std::to_string(s.region.step_px) + " px"},
       {"moving on their own (no single camera motion explains them)", percent(s.moving_share)}};
   if (result.video) {
-    rows.push_back({"off their pair's epipolar geometry (translation model)",
-                    percent(s.off_epipolar_share)});
+    rows.push_back(
+        {"off their pair's epipolar geometry (translation model)", percent(s.off_epipolar_share)});
     rows.push_back({"the image against the gyro", s.gyro_follow.verdict});
   }
   page->Table({"what", "left out"}, rows, /*text=*/true);
@@ -449,11 +447,11 @@ void AddEffectsTable(const ValidationResult& result, HtmlPage* page) {
   for (const auto& [name, loop] : loops) {
     for (const IdentifiedEffect& e : loop->effects) {
       const EffectSpec& spec = Spec(e.effect);
-      rows.push_back({name, spec.name, Rounded(EffectValueToJson(e.value)).dump(),
-                      Rounded(EffectValueToJson(e.stderr_value)).dump(), spec.unit,
-                      std::string(CovarianceKindName(e.stderr_from)) + " over " +
-                          std::to_string(e.clusters),
-                      FormatNumber("%.3f", e.after.rms_px)});
+      rows.push_back(
+          {name, spec.name, Rounded(EffectValueToJson(e.value)).dump(),
+           Rounded(EffectValueToJson(e.stderr_value)).dump(), spec.unit,
+           std::string(CovarianceKindName(e.stderr_from)) + " over " + std::to_string(e.clusters),
+           FormatNumber("%.3f", e.after.rms_px)});
     }
     rows.push_back({name, loop->effects.empty() ? "(no effect)" : "after", "", "", "", "",
                     FormatNumber("%.3f", loop->after.rms_px) +

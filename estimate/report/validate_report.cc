@@ -186,7 +186,16 @@ nlohmann::json ValidationToJson(const ValidationResult& result) {
       result.video ? VideoValidationToJson(result) : StillValidationToJson(result);
   json["warnings"] = WarningsToJson(result.warnings);
   json["verdict"] = VerdictToJson(MakeVerdict(result));
+  if (result.lens_profile) json["lens_profile"] = LensProfileUseJson(*result.lens_profile);
   return json;
+}
+
+std::string LensProfileLines(const ValidationResult& result) {
+  std::string out;
+  if (result.lens_profile) {
+    for (const std::string& note : result.lens_profile->notes) out += "  " + note + "\n";
+  }
+  return out;
 }
 
 std::string ValidationReport(const ValidationResult& result) {
@@ -197,7 +206,8 @@ std::string ValidationReport(const ValidationResult& result) {
       << result.declared.camera.width << "x" << result.declared.camera.height << ", f "
       << FormatNumber("%.1f", 0.5 * (result.declared.camera.fx + result.declared.camera.fy))
       << " px, readout " << FormatNumber("%.2f", result.declared.shutter.readout_s * 1e3) << " ms, "
-      << FormatNumber("%g", result.declared.altitude_m) << " m\n\n";
+      << FormatNumber("%g", result.declared.altitude_m) << " m\n"
+      << LensProfileLines(result) << "\n";
   out << "frame  points  noise |  D_meas        |  D_full        | D_paper | D_vector | axis |"
          " flags M F P at";
   for (double l : limits) out << " " << FormatNumber("%g", l * 100) << "cm";

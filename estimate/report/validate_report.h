@@ -30,6 +30,9 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
 // "skipped", "timing_s". ValidationToJson calls it for video datasets.
 nlohmann::json VideoValidationToJson(const ValidationResult& result);
 
+// The lens profile's notes (ValidationResult::lens_profile), one indented line each; "" without.
+std::string LensProfileLines(const ValidationResult& result);
+
 // The tables and summary of a video validation; ValidationReport calls it for video datasets.
 std::string VideoValidationReport(const ValidationResult& result);
 

@@ -22,7 +22,8 @@ std::string ValueText(const EffectSpec& spec, const EffectValue& value, const Ef
   const double* v = std::get_if<double>(&value);
   const double* s = std::get_if<double>(&se);
   if (v != nullptr && spec.unit == "s") {
-    return FormatNumber("%.3f", *v * 1e3) + (s && std::isfinite(*s) ? " ± " + FormatNumber("%.3f", *s * 1e3) : "") + " ms";
+    return FormatNumber("%.3f", *v * 1e3) +
+           (s && std::isfinite(*s) ? " ± " + FormatNumber("%.3f", *s * 1e3) : "") + " ms";
   }
   std::string text = EffectValueText(value);
   if (!std::holds_alternative<std::monostate>(se)) text += " ± " + EffectValueText(se);
@@ -31,8 +32,7 @@ std::string ValueText(const EffectSpec& spec, const EffectValue& value, const Ef
 
 // The loop whose effects the report gives (video: the preferred model's).
 const LoopResult& PreferredLoop(const ValidationResult& result) {
-  return result.video && result.preferred == "translation" ? result.translation_loop
-                                                           : result.loop;
+  return result.video && result.preferred == "translation" ? result.translation_loop : result.loop;
 }
 
 double NoiseRatio(const LoopResult& loop) {
@@ -89,9 +89,10 @@ std::string Certainty(const ValidationResult& result, const LoopResult& loop) {
   }
   const PointScreen& s = result.screen;
   out << "Residual after the fit: " << FormatNumber("%.2f", NoiseRatio(loop))
-      << "x the measurement noise over " << loop.after.points << " points; left out before the fit: "
-      << Percent(s.camera_fixed_share) << " in a region that moves with the camera, "
-      << Percent(s.moving_share) << " moving on their own"
+      << "x the measurement noise over " << loop.after.points
+      << " points; left out before the fit: " << Percent(s.camera_fixed_share)
+      << " in a region that moves with the camera, " << Percent(s.moving_share)
+      << " moving on their own"
       << (result.video ? ", " + Percent(s.off_epipolar_share) + " off their epipolar lines" : "")
       << (result.mask.empty() ? "" : ", and the masked pixels") << ".";
   return out.str();
@@ -148,7 +149,8 @@ ValidationVerdict MakeVerdict(const ValidationResult& result) {
         "motion the model does not hold.");
   } else if (!effects.empty()) {
     v.level = ValidationVerdict::Level::kAttention;
-    v.headline = "The declared camera model is off: the data show " + Joined(effects, " and ") + ".";
+    v.headline =
+        "The declared camera model is off: the data show " + Joined(effects, " and ") + ".";
     v.actions.push_back("Put " + ConfigLine(loop) +
                         " into camera.json (docs/FORMATS.md names and units) and validate again.");
   } else {
@@ -156,8 +158,8 @@ ValidationVerdict MakeVerdict(const ValidationResult& result) {
                  noise + "): there is nothing to correct.";
   }
   if (result.image_orientation.present) {
-    v.findings.push_back("The stabiliser's own rotation (IORI): " + result.image_orientation.verdict +
-                         ".");
+    v.findings.push_back(
+        "The stabiliser's own rotation (IORI): " + result.image_orientation.verdict + ".");
   }
   if (result.video && result.preferred == "translation") {
     v.findings.push_back("The camera moved between frames: each pair's translation explains " +
@@ -208,8 +210,8 @@ nlohmann::json VerdictToJson(const ValidationVerdict& verdict) {
 }
 
 std::string VerdictText(const ValidationVerdict& verdict) {
-  std::string text = "VERDICT (" + std::string(VerdictLevelName(verdict.level)) + "): " +
-                     verdict.headline + "\n";
+  std::string text =
+      "VERDICT (" + std::string(VerdictLevelName(verdict.level)) + "): " + verdict.headline + "\n";
   for (const std::string& f : verdict.findings) text += "  - " + f + "\n";
   text += "  how sure: " + verdict.certainty + "\n";
   for (const std::string& a : verdict.actions) text += "  to do: " + a + "\n";

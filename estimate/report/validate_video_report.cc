@@ -118,7 +118,8 @@ std::string VideoValidationReport(const ValidationResult& result) {
   out << "video dataset " << result.dataset << ": " << result.frames.size() << " pairs, "
       << rig.camera.width << "x" << rig.camera.height << ", f "
       << FormatNumber("%.1f", 0.5 * (rig.camera.fx + rig.camera.fy)) << " px, readout "
-      << FormatNumber("%.2f", rig.shutter.readout_s * 1e3) << " ms declared\n";
+      << FormatNumber("%.2f", rig.shutter.readout_s * 1e3) << " ms declared\n"
+      << LensProfileLines(result);
   for (const std::string& s : result.skipped) out << "  left out: " << s << "\n";
   out << "\n  pair          points  noise |  rms before | rotation only | with translation\n";
   out << "                          px  |  px (declared) |   after, px   |  after, px (across)\n";

@@ -131,6 +131,25 @@ void CheckFirstLine(const std::string& path, LineCursor* cursor) {
   }
 }
 
+// A logger's own dropout, "gap,T_S,LOST,KIND" (shutterlab record writes one per gap): a `gap`
+// warning with its time and count; a line that does not parse is a `format` warning (a header key
+// the reader does not need never makes a file unreadable).
+LogWarning GapLineWarning(long n, const std::vector<std::string_view>& fields) {
+  const auto t_s = fields.size() >= 3 ? ParseDouble(fields[1]) : std::nullopt;
+  const auto lost = fields.size() >= 3 ? ParseInt(fields[2]) : std::nullopt;
+  if (!t_s || !lost || *lost < 0) {
+    return {"format", "line " + std::to_string(n) + ": gap line is not 'gap,T_S,LOST[,KIND]'",
+            std::nullopt, std::nullopt};
+  }
+  const std::string kind = fields.size() >= 4 ? std::string(fields[3]) : "gap";
+  LogWarning w{"gap",
+               "the logger recorded a " + kind + " at " + FormatNumber("%.6f", *t_s) +
+                   " s: " + std::to_string(*lost) + " sample(s) lost (header line " +
+                   std::to_string(n) + ")",
+               *t_s, static_cast<size_t>(*lost)};
+  return w;
+}
+
 // One 'key,value' header line (line n): kept in log->header, and the keys the reader uses checked
 // into *header (frame_readout_direction straight into the log).
 void ReadHeaderLine(const std::string& path, long n, std::string_view line,
@@ -164,6 +183,8 @@ void ReadHeaderLine(const std::string& path, long n, std::string_view line,
           IoMessage(path, n, "frame_readout_time is not a finite number: '" + value + "'"));
     }
     header->readout_line = n;
+  } else if (key == "gap") {
+    log->warnings.push_back(GapLineWarning(n, fields));
   } else if (key == "frame_readout_direction") {
     const auto direction = GyroflowReadoutDirection(value);
     if (!direction) {
@@ -334,10 +355,8 @@ void GcsvWriteOptions::Check() const {
   }
 }
 
-void WriteGcsv(const std::string& path, const GyroTrace& trace, const GcsvWriteOptions& options) {
+std::string GcsvHeaderText(const GcsvWriteOptions& options) {
   options.Check();
-  // The reader applies M (out = M * in); M is a signed permutation, so its inverse is M^T.
-  const Eigen::Matrix3d in_from_out = GcsvOrientationMatrix(options.orientation).transpose();
   std::string out = "GYROFLOW IMU LOG\nversion,1.3\nid," + options.id + "\norientation," +
                     options.orientation + "\n";
   for (const auto& [key, value] : options.extra_header) out += key + "," + value + "\n";
@@ -350,6 +369,13 @@ void WriteGcsv(const std::string& path, const GyroTrace& trace, const GcsvWriteO
   out += std::string("tscale,") + TscaleText(options.time_unit) + "\ngscale,";
   AppendDouble(options.gscale > 0 ? options.gscale : 1.0, &out);
   out += "\nt,gx,gy,gz\n";
+  return out;
+}
+
+void WriteGcsv(const std::string& path, const GyroTrace& trace, const GcsvWriteOptions& options) {
+  std::string out = GcsvHeaderText(options);
+  // The reader applies M (out = M * in); M is a signed permutation, so its inverse is M^T.
+  const Eigen::Matrix3d in_from_out = GcsvOrientationMatrix(options.orientation).transpose();
   out.reserve(out.size() + trace.size() * 72);
   for (const GyroSample& s : trace.samples()) {
     AppendTimeInUnit(s.t_ns, options.time_unit, &out);

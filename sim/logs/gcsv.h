@@ -45,7 +45,9 @@ struct GcsvLog {
   double gscale = 1.0;
   // Every "key,value" line of the header block in file order, scales and orientation included.
   std::vector<std::pair<std::string, std::string>> header;
-  std::vector<LogWarning> warnings;  // e.g. a defaulted orientation
+  // e.g. a defaulted orientation; and a `gap` warning for each "gap,T_S,LOST,KIND" header line,
+  // the dropouts a logger wrote into its own header (shutterlab record does).
+  std::vector<LogWarning> warnings;
 };
 
 // Reads a .gcsv. Throws IoError "PATH:LINE: problem" for a missing first line, a header that ends
@@ -70,6 +72,10 @@ struct GcsvWriteOptions {
   std::vector<std::pair<std::string, std::string>> extra_header;
   void Check() const;  // throws std::invalid_argument naming the first bad field
 };
+
+// The header of a .gcsv up to and including its column line "t,gx,gy,gz", as WriteGcsv writes it:
+// for writers that stream the rows themselves (sim/record). Checks the options.
+std::string GcsvHeaderText(const GcsvWriteOptions& options);
 
 // Writes a .gcsv whole or not at all (IoError on failure).
 void WriteGcsv(const std::string& path, const GyroTrace& trace,

@@ -174,6 +174,10 @@ std::vector<GpmfStreamData> FindGpmfStreams(const std::vector<GpmfKlv>& payload,
           stream.units = GpmfString(item);
         else if (item.key == "ORIN" && item.type == 'c')
           stream.orientation = GpmfString(item);
+        else if (item.key == "ORIO" && item.type == 'c')
+          stream.orientation_out = GpmfString(item);
+        else if (item.key == "MTRX")
+          stream.matrix = GpmfValues(item, path);
         else if (item.key == "SCAL")
           stream.scale = GpmfValues(item, path);
         else if (item.key == key) {
@@ -197,6 +201,52 @@ std::vector<GpmfStreamData> FindGpmfStreams(const std::vector<GpmfKlv>& payload,
   }
   return found;
 }
+
+namespace {
+
+// ORIO and MTRX (see AxisOrder): the output row of each axis, the matrix checked or taken.
+void ReadOutputOrientation(const GpmfStreamData& stream, const std::string& path,
+                           AxisOrder* order) {
+  std::array<int, 3> row_of_axis{0, 1, 2};  // output row of axis a
+  if (!stream.orientation_out.empty()) {
+    const std::string& out = stream.orientation_out;
+    std::array<bool, 3> seen{false, false, false};
+    for (size_t y = 0; y < out.size() && y < 3; ++y) {
+      const int axis = out[y] - 'X';
+      if (axis < 0 || axis > 2 || seen[axis]) break;
+      seen[axis] = true;
+      row_of_axis[axis] = static_cast<int>(y);
+    }
+    if (out.size() != 3 || !(seen[0] && seen[1] && seen[2]))
+      throw IoError(IoMessage(path, -1, "ORIO '" + out + "' is not a permutation of X, Y, Z"));
+    order->source += ", ORIO '" + out + "'";
+  }
+  if (stream.matrix.empty()) return;
+  if (stream.matrix.size() != 9)
+    throw IoError(IoMessage(
+        path, -1,
+        "MTRX has " + std::to_string(stream.matrix.size()) + " values, not a 3x3 matrix"));
+  Eigen::Matrix3d m;  // rows: output channels (ORIO's order); columns: stored channels
+  bool signed_permutation = true;
+  for (int i = 0; i < 9; ++i) {
+    const double v = stream.matrix[i];
+    m(i / 3, i % 3) = v;
+    signed_permutation = signed_permutation && (v == 0 || v == 1 || v == -1);
+  }
+  Eigen::Matrix3d xyz_from_stored;
+  for (int a = 0; a < 3; ++a) xyz_from_stored.row(a) = m.row(row_of_axis[a]);
+  if (!signed_permutation) {
+    order->calibration = xyz_from_stored;
+    order->source += ", MTRX (a calibration, applied)";
+    return;
+  }
+  Eigen::Matrix3d expected = Eigen::Matrix3d::Zero();
+  for (int a = 0; a < 3; ++a) expected(a, order->column[a]) = order->sign[a];
+  // As gpmf-parser: a matrix of 0 and +-1 is the channels' orientation, which ORIN and ORIO give.
+  order->source += xyz_from_stored == expected ? ", MTRX agrees" : ", MTRX disagrees (not used)";
+}
+
+}  // namespace
 
 AxisOrder GpmfAxisOrder(const GpmfStreamData& stream, const std::string& path) {
   AxisOrder order;
@@ -226,6 +276,7 @@ AxisOrder GpmfAxisOrder(const GpmfStreamData& stream, const std::string& path) {
   }
   if (letters.empty()) {
     order.source = "default x,y,z";
+    ReadOutputOrientation(stream, path, &order);
     return order;
   }
   std::array<bool, 3> seen{false, false, false};
@@ -240,6 +291,7 @@ AxisOrder GpmfAxisOrder(const GpmfStreamData& stream, const std::string& path) {
     order.column[axis] = j;
     order.sign[axis] = sign[j];
   }
+  ReadOutputOrientation(stream, path, &order);
   return order;
 }
 

@@ -11,8 +11,11 @@
 
 #include "sim/logs/mp4.h"
 
+#include <Eigen/Core>
+
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -46,13 +49,15 @@ std::string GpmfString(const GpmfKlv& klv);
 
 // One stream's data in one payload, with its sticky properties, already divided by SCAL.
 struct GpmfStreamData {
-  std::string device;          // DVNM of the enclosing DEVC
-  std::string name;            // STNM
-  std::string units;           // SIUN (or UNIT)
-  std::string orientation;     // ORIN ("" when absent)
-  std::vector<double> scale;   // SCAL as found (empty: 1)
-  size_t elements = 0;         // values per sample
-  std::vector<double> values;  // samples * elements
+  std::string device;           // DVNM of the enclosing DEVC
+  std::string name;             // STNM
+  std::string units;            // SIUN (or UNIT)
+  std::string orientation;      // ORIN ("" when absent)
+  std::vector<double> scale;    // SCAL as found (empty: 1)
+  size_t elements = 0;          // values per sample
+  std::vector<double> values;   // samples * elements
+  std::string orientation_out;  // ORIO ("" when absent): the output channels' axis letters
+  std::vector<double> matrix;   // MTRX, row-major (empty when absent)
   size_t samples() const { return elements ? values.size() / elements : 0; }
 };
 
@@ -60,13 +65,22 @@ struct GpmfStreamData {
 std::vector<GpmfStreamData> FindGpmfStreams(const std::vector<GpmfKlv>& payload,
                                             const std::string& key, const std::string& path);
 
-// Which stored column holds the sensor's x, y and z, and with which sign. From ORIN when present
-// ("ZXY"; lowercase = negated, as GoPro documents it), else from a "(z,x,y)" list in the stream
-// name (HERO5: "Gyroscope (z,x,y)"), else x,y,z. Throws IoError when neither names a permutation.
+// Which stored column holds the camera's x, y and z (GoPro's own axis labels), and with which sign.
+// From ORIN when present ("XzY": the stored channels are the camera's X, -Z and Y; lowercase =
+// negated, GPMF_common.h), else from a "(z,x,y)" list in the stream name (HERO5: "Gyroscope
+// (z,x,y)"), else x,y,z. ORIO (the output order, "ZXY") and MTRX (the stored-to-output matrix,
+// rows in ORIO's order) are read as gpmf-parser's GPMF_ScaledData reads them: a matrix of 0 and
+// +-1 only is the same mapping as ORIN and ORIO and is checked against them; any other MTRX is a
+// calibration and is applied as it is (`calibration`). Throws IoError when ORIN or ORIO names no
+// permutation or MTRX is not 3x3.
 struct AxisOrder {
-  std::array<int, 3> column{0, 1, 2};  // column[a]: stored column of sensor axis a (0 = x)
+  std::array<int, 3> column{0, 1, 2};  // column[a]: stored column of axis a (0 = x)
   std::array<int, 3> sign{1, 1, 1};
-  std::string source;  // "ORIN 'ZXY'", "STNM 'Gyroscope (z,x,y)'" or "default x,y,z"
+  // A calibration MTRX: axis a = sum over columns j of calibration(a, j) * stored j; nullopt when
+  // the mapping is the signed permutation above.
+  std::optional<Eigen::Matrix3d> calibration;
+  // "ORIN 'XzY', ORIO 'ZXY', MTRX agrees", "STNM 'Gyroscope (z,x,y)'" or "default x,y,z"
+  std::string source;
 };
 AxisOrder GpmfAxisOrder(const GpmfStreamData& stream, const std::string& path);
 

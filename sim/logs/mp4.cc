@@ -309,6 +309,32 @@ std::vector<Mp4Track> ParseMoov(const std::string& moov_body, uint64_t file_offs
   return tracks;
 }
 
+std::vector<Mp4UserBox> ParseUserData(const std::string& moov_body, uint64_t file_offset,
+                                      const std::string& path) {
+  const Bytes bytes(moov_body, file_offset, path);
+  std::vector<Mp4UserBox> boxes;
+  ForEachBox(bytes, 0, moov_body.size(), [&](const Box& udta) {
+    if (udta.type != "udta") return;
+    try {
+      ForEachBox(bytes, udta.begin, udta.end, [&](const Box& box) {
+        boxes.push_back(
+            {box.type, moov_body.substr(box.begin, box.end - box.begin), file_offset + box.begin});
+      });
+    } catch (const IoError&) {
+      // User data is optional metadata, and QuickTime ends its list with a 4-byte 0 that is no
+      // box: keep the boxes before whatever does not parse.
+    }
+  });
+  return boxes;
+}
+
+const Mp4UserBox* Mp4File::FindUserBox(const std::string& type) const {
+  for (const Mp4UserBox& box : user_boxes_) {
+    if (box.type == type) return &box;
+  }
+  return nullptr;
+}
+
 Mp4File::Mp4File(const std::string& path) : path_(path), file_(path, std::ios::binary) {
   if (!file_) throw IoError(IoMessage(path, -1, "cannot open"));
   file_.seekg(0, std::ios::end);
@@ -347,6 +373,7 @@ Mp4File::Mp4File(const std::string& path) : path_(path), file_(path, std::ios::b
       if (!file_)
         throw IoError(IoMessage(path, -1, "offset " + std::to_string(at) + ": cannot read 'moov'"));
       tracks_ = ParseMoov(body, at + header_size, file_size_, path_);
+      user_boxes_ = ParseUserData(body, at + header_size, path_);
       found = true;
     }
     at += size;

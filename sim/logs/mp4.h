@@ -35,6 +35,13 @@ struct Mp4Track {
   double DecodeTimeS(size_t i) const;
 };
 
+// A box of the movie's user data ('moov/udta'), e.g. GoPro's 'GPMF' global settings.
+struct Mp4UserBox {
+  std::string type;          // FourCC
+  std::string body;          // the bytes after its header
+  uint64_t file_offset = 0;  // of body[0], for messages
+};
+
 // An open MP4 file: its track tables, read once from 'moov', and random access to sample bytes.
 class Mp4File {
  public:
@@ -45,6 +52,8 @@ class Mp4File {
   const std::string& path() const { return path_; }
   uint64_t file_size() const { return file_size_; }
   const std::vector<Mp4Track>& tracks() const { return tracks_; }
+  // The first 'moov/udta' box of this type; nullptr when the file has none.
+  const Mp4UserBox* FindUserBox(const std::string& type) const;
   // The first track with this handler and (when non-empty) sample format; nullptr if none.
   const Mp4Track* FindTrack(const std::string& handler, const std::string& sample_format) const;
   // Bytes of one sample; throws IoError when they lie outside the file.
@@ -55,7 +64,12 @@ class Mp4File {
   std::ifstream file_;
   uint64_t file_size_ = 0;
   std::vector<Mp4Track> tracks_;
+  std::vector<Mp4UserBox> user_boxes_;
 };
+
+// The boxes of a 'moov' body's 'udta' (every udta, in order); file_offset as for ParseMoov.
+std::vector<Mp4UserBox> ParseUserData(const std::string& moov_body, uint64_t file_offset,
+                                      const std::string& path);
 
 // Parses a 'moov' box body (the bytes after its header) into tracks. file_offset is the file
 // offset of moov_body[0], for error messages; file_size bounds the sample offsets. Exposed for

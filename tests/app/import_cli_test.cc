@@ -12,6 +12,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 
 namespace shutterlab {
@@ -115,6 +116,86 @@ TEST(ImportCli, GoproSelectionAndReimport) {
   EXPECT_FALSE(fs::exists(out + "/images/0100.png"));
   for (const auto& entry : fs::directory_iterator(dir.path()))  // no staging folder left behind
     EXPECT_EQ(entry.path().filename(), "karma");
+}
+
+// The GoPro MAX clip states its readout (SROT), its axes (ORIN / ORIO / MTRX) and that HyperSmooth
+// was on (EISE / EISA); its IORI goes into image_orientation.csv. With its Gyroflow lens profile
+// the lens is the profile's, scaled from 1920x1080 to 848x480 (the aspect differs), and the SROT
+// readout still wins (the profile states none). A dozen frames from the middle.
+TEST(ImportCli, GoproMaxStatesItsOwnFacts) {
+  SHUTTERLAB_REAL_DATA(max, "incoming_rs/gopro_max_heromode/max-heromode.mp4");
+  SHUTTERLAB_REAL_DATA(profile,
+                       "incoming_rs/gopro_max_heromode/reference/"
+                       "gyroflow_GoPro_Max_Wide_HS-EIS_1080p_16by9_1920x1080-50fps.json");
+  test::TempDir dir;
+  const std::string out = dir / "max";
+  const auto r = RunShutterlab("import " + max + " --out " + out +
+                               " --start-frame 150 --max-frames 12 --lens-profile " + profile);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("GoPro Max, firmware H19.03.01.30.00, stabiliser ON: HS HLevel"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("differs from the profile's"), std::string::npos) << r.output;
+
+  const RigModel rig = ReadRigModel(out + "/camera.json");
+  EXPECT_NEAR(rig.shutter.readout_s, 0.0206008, 1e-6);  // SROT
+  EXPECT_NEAR(rig.camera.fx, 834.7142 * 848 / 1920, 1e-3);
+  EXPECT_NEAR(rig.camera.fy, 834.2427 * 480 / 1080, 1e-3);
+  ASSERT_TRUE(std::holds_alternative<Fisheye>(rig.camera.distortion));
+  EXPECT_NEAR(std::get<Fisheye>(rig.camera.distortion).coeffs()[0], 0.0646075, 1e-6);
+  EXPECT_EQ(rig.cam_from_gyro.row(1), Eigen::RowVector3d(0, 0, -1));  // camera y = -Z (up)
+
+  const nlohmann::json record = ReadJson(out + "/import.json");
+  EXPECT_EQ(record["settings"]["model"], "GoPro Max");
+  EXPECT_EQ(record["settings"]["stabilizer"], "Y");
+  EXPECT_EQ(record["settings"]["stabilizer_mode"], "HS HLevel");
+  EXPECT_EQ(record["gyro"]["orin"], "XzY");
+  EXPECT_EQ(record["gyro"]["orio"], "ZXY");
+  EXPECT_EQ(record["lens_profile"]["aspect_differs"], true);
+  std::map<std::string, nlohmann::json> claims;
+  for (const auto& claim : record["claims"]) claims[claim["what"]] = claim;
+  EXPECT_EQ(claims["readout_s"]["status"], "source claim");
+  EXPECT_NE(claims["readout_s"]["source"].get<std::string>().find("SROT"), std::string::npos);
+  EXPECT_EQ(claims["stabilizer"]["value"], "on (HS HLevel)");
+  EXPECT_EQ(claims["stabilizer"]["status"], "source claim");
+  EXPECT_EQ(claims["gyro_to_camera"]["status"], "source claim + inferred");
+  EXPECT_NE(claims["intrinsics"]["source"].get<std::string>().find("Gyroflow lens profile"),
+            std::string::npos);
+  EXPECT_EQ(claims["lens_distortion"]["value"]["model"], "fisheye");
+
+  // One line per imported frame: its IORI and CORI samples.
+  const std::string orientation = ReadFileToString(out + "/image_orientation.csv");
+  EXPECT_EQ(orientation.rfind("frame,t,iori_t,iori_w,iori_x,iori_y,iori_z,cori_t,", 0), 0u);
+  EXPECT_EQ(LineCount(orientation), 13u);
+  EXPECT_EQ(record["image_orientation"]["frames_matched"], 12);
+  EXPECT_EQ(record["image_orientation"]["iori_samples"], 316);
+}
+
+// karma.mp4 with the official HERO5 profile: the lens and the readout (26.693 ms, the profile's
+// own mode: 854x480 is no compatible setting) are the profile's, and say so.
+TEST(ImportCli, GoproKarmaWithALensProfile) {
+  SHUTTERLAB_REAL_DATA(profile,
+                       "incoming_rs/gopro_karma_refs/reference/"
+                       "gyroflow_GoPro_HERO5_Black_Wide_EIS-Y_16by9.json");
+  SHUTTERLAB_NEED_REAL_DATA();
+  test::TempDir dir;
+  const std::string out = dir / "karma";
+  const auto r = RunShutterlab("import " + kKarma + " --out " + out +
+                               " --max-frames 3 --lens-profile " + profile);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const RigModel rig = ReadRigModel(out + "/camera.json");
+  EXPECT_NEAR(rig.shutter.readout_s, 0.02669333, 1e-9);
+  EXPECT_TRUE(std::holds_alternative<Fisheye>(rig.camera.distortion));
+  const nlohmann::json record = ReadJson(out + "/import.json");
+  for (const auto& claim : record["claims"]) {
+    if (claim["what"] == "readout_s") {
+      EXPECT_EQ(claim["status"], "source claim");
+      EXPECT_NE(claim["source"].get<std::string>().find("26.693 ms"), std::string::npos)
+          << claim.dump();
+    }
+  }
+  EXPECT_FALSE(record.contains("settings")) << "the HERO5 writes no global settings";
+  EXPECT_FALSE(fs::exists(out + "/image_orientation.csv"));
 }
 
 TEST(ImportCli, PhoneClip) {

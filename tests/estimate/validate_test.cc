@@ -53,7 +53,7 @@ struct DatasetSpec {
   double first_frame_s = 8.0, last_frame_s = 28.0;  // frame times spread evenly between these
   uint64_t seed = 3;                                // the flight motion's seed
   uint64_t scene_seed = 1;                          // the procedural ground texture's
-  ClutterOptions clutter;                           // render --camera-fixed-patch, --moving-patch
+  ClutterOptions clutter = {};                      // render --camera-fixed-patch, --moving-patch
 };
 
 RigModel DeclaredRig() {

@@ -41,6 +41,7 @@ constexpr double kAfterOverNoise = 1.5;
 
 struct ClipSpec {
   std::vector<std::string> injections;
+  RigModel declared = test::VideoRig();
   int frames = 16;
   double first_s = 12.6, fps = 30.0;
   double log_s = 20.0;
@@ -57,7 +58,7 @@ ClutterOptions Clutter() {
 }
 
 std::string MakeClip(const test::TempDir& dir, const ClipSpec& spec) {
-  WriteRigModel(dir / "camera.json", test::VideoRig());
+  WriteRigModel(dir / "camera.json", spec.declared);
   WriteGyroCsv(dir / "gyro.csv", test::FlightTrace(spec.log_s, 3));
   std::string times = "frame,t_first_row\n";
   for (int i = 0; i < spec.frames; ++i) {
@@ -162,7 +163,30 @@ TEST(ValidateVideo, RecoversLensDistortion) {
   test::TempDir dir;
   const ValidationResult result = Validate(MakeClip(dir, {{"lens_distortion=-0.05,0.01"}}));
   ExpectIdentified(result, "lens_distortion", [](const TrueModel& m) {
-    return std::abs(m.rig.camera.dist[0] + 0.05) <= 0.005;
+    return std::abs(std::get<BrownConrady>(m.rig.camera.distortion).coeffs[0] + 0.05) <= 0.005;
+  });
+}
+
+// The same for a 100 degree fisheye (the GoPro MAX's coefficients) with k1, k2 off by +0.1, -0.06:
+// the fit holds the fisheye's k1 and k2, each within 0.01 of the truth.
+TEST(ValidateVideo, RecoversAFisheyesLensDistortion) {
+  if (kAsan) GTEST_SKIP() << "reduced set under ASan";
+  test::TempDir dir;
+  ClipSpec spec;
+  spec.declared = test::FisheyeRig(480, 360, 50.0);  // smaller than the others: a fisheye
+  spec.frames = 10;                                  // renders and predicts per pixel
+  const std::array<double, 4> declared =
+      std::get<Fisheye>(spec.declared.camera.distortion).coeffs();
+  const std::array<double, 4> truth = {declared[0] + 0.1, declared[1] - 0.06, declared[2],
+                                       declared[3]};
+  spec.injections = {"lens_distortion=" + FormatNumber("%.17g", truth[0]) + "," +
+                     FormatNumber("%.17g", truth[1]) + "," + FormatNumber("%.17g", truth[2]) + "," +
+                     FormatNumber("%.17g", truth[3])};
+  const ValidationResult result = Validate(MakeClip(dir, spec));
+  ExpectIdentified(result, "lens_distortion", [&](const TrueModel& m) {
+    const Fisheye* lens = std::get_if<Fisheye>(&m.rig.camera.distortion);
+    return lens && std::abs(lens->coeffs()[0] - truth[0]) <= 0.01 &&
+           std::abs(lens->coeffs()[1] - truth[1]) <= 0.01;
   });
 }
 

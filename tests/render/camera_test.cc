@@ -25,7 +25,7 @@ RigModel FullRig() {
   rig.camera.fy = 1098.25;
   rig.camera.cx = 639.5;
   rig.camera.cy = 479.25;
-  rig.camera.dist = {-0.12, 0.034, 0.001, -0.0007, 0.002};
+  rig.camera.distortion = BrownConrady{{-0.12, 0.034, 0.001, -0.0007, 0.002}};
   rig.shutter.readout_s = 0.0312;
   rig.shutter.direction = ReadoutDirection::kBottomToTop;
   rig.cam_from_gyro = RotationZYX(0.3, -0.2, 0.1);
@@ -52,7 +52,7 @@ TEST(RigModel, RoundTripsThroughCameraJson) {
   EXPECT_EQ(back.camera.fy, rig.camera.fy);
   EXPECT_EQ(back.camera.cx, rig.camera.cx);
   EXPECT_EQ(back.camera.cy, rig.camera.cy);
-  EXPECT_EQ(back.camera.dist, rig.camera.dist);
+  EXPECT_TRUE(back.camera.distortion == rig.camera.distortion);
   EXPECT_EQ(back.shutter.readout_s, rig.shutter.readout_s);
   EXPECT_EQ(back.shutter.direction, rig.shutter.direction);
   EXPECT_EQ(back.cam_from_gyro, rig.cam_from_gyro);
@@ -110,6 +110,39 @@ TEST(RigModel, RejectsNonsenseWithAClearError) {
   ExpectRejected("\"intrinsics\"", "\"intrinsic\"", "camera.json");
 }
 
+TEST(RigModel, AFisheyeRoundTripsThroughCameraJson) {
+  test::TempDir dir;
+  RigModel rig = FullRig();
+  rig.camera.distortion = Fisheye({0.0646, 0.0391, -0.0414, 0.0149});
+  WriteRigModel(dir / "camera.json", rig);
+  const std::string text = ReadFileToString(dir / "camera.json");
+  EXPECT_NE(text.find("\"model\": \"fisheye\""), std::string::npos) << text;
+  EXPECT_TRUE(ReadRigModel(dir / "camera.json").camera.distortion == rig.camera.distortion);
+  // docs/FORMATS.md's example, and "brown" spelled out.
+  WriteFileAtomically(dir / "camera.json",
+                      ValidJson().substr(0, ValidJson().size() - 1) +
+                          R"(, "distortion": {"model": "fisheye", "k1": 0.05, "k2": 0.01,
+                          "k3": -0.002, "k4": 0.0}})");
+  EXPECT_TRUE(ReadRigModel(dir / "camera.json").camera.distortion ==
+              LensDistortion(Fisheye({0.05, 0.01, -0.002, 0.0})));
+  WriteFileAtomically(dir / "camera.json", ValidJson().substr(0, ValidJson().size() - 1) +
+                                               R"(, "distortion": {"model": "brown", "k1": 0.1}})");
+  EXPECT_TRUE(ReadRigModel(dir / "camera.json").camera.distortion ==
+              LensDistortion(BrownConrady{{0.1, 0, 0, 0, 0}}));
+}
+
+TEST(RigModel, RejectsADistortionOfNoModel) {
+  const std::string open = "\"rolling_shutter\"";
+  ExpectRejected(open, R"("distortion": {"model": "kb8", "k1": 0.1}, "rolling_shutter")",
+                 "distortion.model 'kb8' is not brown or fisheye");
+  ExpectRejected(open, R"("distortion": {"model": "fisheye", "p1": 0.1}, "rolling_shutter")",
+                 "distortion.p1 is not a coefficient of the fisheye model (k1 k2 k3 k4)");
+  ExpectRejected(open, R"("distortion": {"k4": 0.1}, "rolling_shutter")",
+                 "distortion.k4 is not a coefficient of the brown model");
+  ExpectRejected(open, R"("distortion": {"model": "fisheye", "k1": "big"}, "rolling_shutter")",
+                 "distortion.k1 is not a number");
+}
+
 TEST(RigModel, RejectsInvalidJsonWithItsLine) {
   test::TempDir dir;
   WriteFileAtomically(dir / "camera.json", "{\n\"image\": {\"width\": 10,\n oops\n}");
@@ -142,9 +175,9 @@ TEST(PinholeCamera, ImgFromCamInvertsCamFromImg) {
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-100.0, camera.width + 100.0),
       v(-100.0, camera.height + 100.0);
-  for (const auto& dist :
-       {std::array<double, 5>{}, camera.dist, std::array<double, 5>{0.25, -0.1, 0, 0, 0.02}}) {
-    camera.dist = dist;
+  for (const LensDistortion& lens : {LensDistortion(BrownConrady{}), camera.distortion,
+                                     LensDistortion(BrownConrady{{0.25, -0.1, 0, 0, 0.02}})}) {
+    camera.distortion = lens;
     for (int i = 0; i < 500; ++i) {
       const Eigen::Vector2d px(u(rng), v(rng));
       const std::optional<Eigen::Vector2d> back = camera.ImgFromCam(camera.CamFromImg(px));

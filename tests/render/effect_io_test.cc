@@ -32,6 +32,7 @@ const std::vector<std::string>& InjectionTexts() {
       "lens_distortion=-0.1,0.02,0.001,-0.0005,0.03",
       "lens_distortion={\"k1\":-0.1,\"p2\":0.001}",
       "lens_distortion=-0.05",
+      "lens_distortion={\"model\":\"fisheye\",\"k1\":0.06,\"k2\":0.04,\"k3\":-0.04}",
       "readout_direction=bottom_to_top",
       "readout_direction=\"top_to_bottom\"",
       "clock_rate=-35",
@@ -82,10 +83,46 @@ TEST(EffectIo, WritesTheFormatsShapes) {
   m << 0, -1, 0, 1, 0, 0, 0, 0, 1;
   EXPECT_EQ(EffectValueToJson(m).dump(), "[[0.0,-1.0,0.0],[1.0,0.0,0.0],[0.0,0.0,1.0]]");
   // k1 and k2 always; p1, p2, k3 only where set.
-  EXPECT_EQ(EffectValueToJson(LensCoefficients{-0.1, 0.0}).dump(), R"({"k1":-0.1,"k2":0.0})");
-  EXPECT_EQ(EffectValueToJson(LensCoefficients{-0.1, 0.02, 0.0, 0.001}).dump(),
+  EXPECT_EQ(EffectValueToJson(LensDistortion(BrownConrady{{-0.1, 0.0}})).dump(),
+            R"({"k1":-0.1,"k2":0.0})");
+  EXPECT_EQ(EffectValueToJson(LensDistortion(BrownConrady{{-0.1, 0.02, 0.0, 0.001}})).dump(),
             R"({"k1":-0.1,"k2":0.02,"p2":0.001})");
+  // A fisheye: its model and all four coefficients; an undetermined standard error is null.
+  EXPECT_EQ(EffectValueToJson(LensDistortion(Fisheye({0.5, 0.25, 0.0, 0.0}))).dump(),
+            R"({"k1":0.5,"k2":0.25,"k3":0.0,"k4":0.0,"model":"fisheye"})");
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(EffectValueToJson(LensDistortion(Fisheye({0.5, 0.25, nan, nan}))).dump(),
+            R"({"k1":0.5,"k2":0.25,"k3":null,"k4":null,"model":"fisheye"})");
   EXPECT_EQ(EffectValueToJson(ReadoutDirection::kBottomToTop).dump(), "\"bottom_to_top\"");
+}
+
+// docs/FORMATS.md: the lens value is in the declared camera's model. A list of numbers is read in
+// it; a value of the other model is refused, and the model stays as it was.
+TEST(EffectIo, LensInjectionFollowsTheDeclaredModel) {
+  TrueModel fisheye;
+  fisheye.rig = test::SmallRig(64, 48);
+  fisheye.rig.camera.distortion = Fisheye({0.01, 0.0, 0.0, 0.0});
+  const Injection list = ApplyInjection("lens_distortion=0.05,0.01,-0.002,0.0005", &fisheye);
+  EXPECT_TRUE(fisheye.rig.camera.distortion ==
+              LensDistortion(Fisheye({0.05, 0.01, -0.002, 0.0005})));
+  EXPECT_EQ(EffectValueToJson(list.value).dump(),
+            R"({"k1":0.05,"k2":0.01,"k3":-0.002,"k4":0.0005,"model":"fisheye"})");
+  const TrueModel before = fisheye;
+  for (const std::string& text :
+       {std::string("lens_distortion={\"k1\":-0.1}"), std::string("lens_distortion=1,2,3,4,5")}) {
+    EXPECT_THROW(ApplyInjection(text, &fisheye), std::invalid_argument) << text;
+    EXPECT_TRUE(fisheye.rig.camera.distortion == before.rig.camera.distortion);
+  }
+  TrueModel brown;
+  brown.rig = test::SmallRig(64, 48);
+  try {
+    ApplyInjection("lens_distortion={\"model\":\"fisheye\",\"k1\":0.05}", &brown);
+    ADD_FAILURE() << "a fisheye lens for a Brown-Conrady camera";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("a fisheye lens for a camera declared brown"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(EffectIo, ReadingRejectsAnotherShapeNamingWhere) {
@@ -100,6 +137,8 @@ TEST(EffectIo, ReadingRejectsAnotherShapeNamingWhere) {
       {Effect::kLensDistortion, R"({"k9": 1})"},
       {Effect::kLensDistortion, "[1, 2, 3, 4, 5, 6]"},
       {Effect::kLensDistortion, "[]"},
+      {Effect::kLensDistortion, R"({"model": "fisheye", "p1": 0.1})"},
+      {Effect::kLensDistortion, R"({"model": "kb8"})"},
       {Effect::kReadoutDirection, "\"left_to_right\""},
       {Effect::kReadoutDirection, "1"},
       {Effect::kClockRate, "null"},
@@ -152,12 +191,13 @@ TEST(EffectIo, TypedInjectionChecksShapeAndRange) {
   EXPECT_EQ(model.rig.cam_from_gyro, before.rig.cam_from_gyro);
   EXPECT_EQ(model.rig.shutter.direction, before.rig.shutter.direction);
   const EffectValue recorded = ApplyInjection(
-      Injection{Effect::kLensDistortion, LensCoefficients{-0.1, 0.02, 0, 0, 0.5}}, &model);
-  EXPECT_EQ(model.rig.camera.dist, (std::array<double, 5>{-0.1, 0.02, 0, 0, 0.5}));
-  EXPECT_TRUE(recorded == EffectValue(LensCoefficients{-0.1, 0.02, 0, 0, 0.5}));
+      Injection{Effect::kLensDistortion, LensDistortion(BrownConrady{{-0.1, 0.02, 0, 0, 0.5}})},
+      &model);
+  EXPECT_TRUE(model.rig.camera.distortion == LensDistortion(BrownConrady{{-0.1, 0.02, 0, 0, 0.5}}));
+  EXPECT_TRUE(recorded == EffectValue(LensDistortion(BrownConrady{{-0.1, 0.02, 0, 0, 0.5}})));
   // The effect's value holds what the loop fits: k1 and k2.
   EXPECT_TRUE(Spec(Effect::kLensDistortion).value(model) ==
-              EffectValue(LensCoefficients{-0.1, 0.02}));
+              EffectValue(LensDistortion(BrownConrady{{-0.1, 0.02, 0, 0, 0}})));
 }
 
 }  // namespace

@@ -48,10 +48,19 @@ double Difference(const EffectValue& a, const EffectValue& b) {
   if (const auto* m = std::get_if<Eigen::Matrix3d>(&a)) {
     return (*m - std::get<Eigen::Matrix3d>(b)).cwiseAbs().maxCoeff();
   }
-  if (const auto* c = std::get_if<LensCoefficients>(&a)) {
-    const LensCoefficients& d = std::get<LensCoefficients>(b);
-    return std::max({std::abs(c->k1 - d.k1), std::abs(c->k2 - d.k2), std::abs(c->p1 - d.p1),
-                     std::abs(c->p2 - d.p2), std::abs(c->k3 - d.k3)});
+  if (const auto* c = std::get_if<LensDistortion>(&a)) {
+    const LensDistortion& d = std::get<LensDistortion>(b);
+    if (c->index() != d.index()) return inf;
+    const auto coeffs = [](const LensDistortion& lens) -> std::vector<double> {
+      if (const auto* b = std::get_if<BrownConrady>(&lens))
+        return {b->coeffs.begin(), b->coeffs.end()};
+      const Fisheye& f = std::get<Fisheye>(lens);
+      return {f.coeffs().begin(), f.coeffs().end()};
+    };
+    const std::vector<double> x = coeffs(*c), y = coeffs(d);
+    double worst = 0.0;
+    for (size_t i = 0; i < x.size(); ++i) worst = std::max(worst, std::abs(x[i] - y[i]));
+    return worst;
   }
   return a == b ? 0.0 : inf;  // directions, std::monostate
 }

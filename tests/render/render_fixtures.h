@@ -75,6 +75,18 @@ inline RigModel SmallRig(int width = 96, int height = 72) {
   return rig;
 }
 
+// A nadir action camera with a fisheye lens: width x height, the GoPro MAX's Gyroflow coefficients
+// (../shared/data/incoming_rs/gopro_max_heromode/reference), f such that the left and right edges
+// are half_fov_deg off the axis, 30 ms readout, 50 m.
+inline RigModel FisheyeRig(int width, int height, double half_fov_deg = 60.0) {
+  const Fisheye lens(
+      {0.0646075465207674, 0.039139647556618896, -0.041373671856156674, 0.014898789517094136});
+  RigModel rig = NadirRig(width, height, 1.0);
+  rig.camera.fx = rig.camera.fy = rig.camera.cx / lens.ThetaD(half_fov_deg * M_PI / 180.0);
+  rig.camera.distortion = lens;
+  return rig;
+}
+
 // Constant logged rate (gyro axes) from t0_s for duration_s at rate_hz; times are exact integers.
 inline GyroTrace ConstantRateTrace(const Eigen::Vector3d& omega_rad_s, double t0_s = 0.0,
                                    double duration_s = 2.0, double rate_hz = 1000.0) {

@@ -4,6 +4,7 @@
 #include "render/effects.h"
 #include "render/image_io.h"
 #include "render/truth_model.h"
+#include "sim/units.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
@@ -103,6 +104,7 @@ struct OracleParams {
   bool bottom_to_top = false;
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
   std::array<double, 5> dist{};
+  bool fisheye = false;  // dist[0..3] are cv::fisheye's k1..k4
 };
 
 Eigen::Vector2d OracleRefPixel(const RigModel& declared, const OracleParams& o,
@@ -123,33 +125,85 @@ Eigen::Vector2d OracleRefPixel(const RigModel& declared, const OracleParams& o,
   const Eigen::Vector3d c_v = o.velocity * (gyro_time(v) - gyro_time(0));
   const cv::Matx33d k(cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);
   const std::vector<double> dist(o.dist.begin(), o.dist.end());
+  const cv::Vec4d fisheye_d(o.dist[0], o.dist[1], o.dist[2], o.dist[3]);
   std::vector<cv::Point2d> in = {{u, static_cast<double>(v)}}, undistorted;
-  cv::undistortPoints(
-      in, undistorted, k, dist, cv::noArray(), cv::noArray(),
-      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-16));
+  if (o.fisheye) {
+    cv::fisheye::undistortPoints(
+        in, undistorted, k, fisheye_d, cv::noArray(), cv::noArray(),
+        cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-14));
+  } else {
+    cv::undistortPoints(
+        in, undistorted, k, dist, cv::noArray(), cv::noArray(),
+        cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-16));
+  }
   const Eigen::Vector3d ray = r_v * Eigen::Vector3d(undistorted[0].x, undistorted[0].y, 1.0);
   const double s = (declared.altitude_m - c_v.z()) / ray.z();
   const Eigen::Vector3d x = c_v + s * ray;  // ground point; the reference pose is identity at c = 0
   std::vector<cv::Point3d> points = {{x.x(), x.y(), x.z()}};
   std::vector<cv::Point2d> projected;
-  cv::projectPoints(points, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), k, dist, projected);
+  if (o.fisheye) {
+    cv::fisheye::projectPoints(points, projected, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), k,
+                               fisheye_d);
+  } else {
+    cv::projectPoints(points, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), k, dist, projected);
+  }
   return Eigen::Vector2d(projected[0].x, projected[0].y);
+}
+
+// One injected truth per case, compared with the oracle at 200 points (half of them whole pixels,
+// where the float field is checked too): RefPixel to kTruthTolPx.
+struct OracleCase {
+  std::vector<std::string> injections;
+  std::function<void(OracleParams*)> apply;
+};
+
+void ExpectTruthMatchesOracle(const RigModel& declared, const OracleParams& base,
+                              const Eigen::Vector3d& logged_w, const std::vector<OracleCase>& cases,
+                              uint64_t seed) {
+  const GyroTrace trace = ConstantRateTrace(logged_w);
+  const double t_first_row_s = 0.5;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> random_u(0.0, declared.camera.width - 1.0);
+  std::uniform_int_distribution<int> random_v(0, declared.camera.height - 1);
+  for (const OracleCase& c : cases) {
+    TrueModel truth = Truth(declared);
+    std::string name;
+    for (const std::string& injection : c.injections) {
+      ApplyInjection(injection, &truth);
+      name += injection + " ";
+    }
+    OracleParams oracle = base;
+    c.apply(&oracle);
+    const FrameGeometry geometry = Geometry(truth, trace, t_first_row_s, cv::Size(400, 400));
+    const cv::Mat field = DisplacementField(geometry);
+    double largest_px = 0.0;
+    for (int i = 0; i < 200; ++i) {
+      const double u = i < 100 ? random_u(rng) : std::floor(random_u(rng));
+      const int v = random_v(rng);
+      const Eigen::Vector2d expected =
+          OracleRefPixel(declared, oracle, logged_w, t_first_row_s, u, v);
+      const Eigen::Vector2d got = *geometry.RefPixel(u, v);
+      ASSERT_NEAR(got.x(), expected.x(), kTruthTolPx) << name << " at (" << u << ", " << v << ")";
+      ASSERT_NEAR(got.y(), expected.y(), kTruthTolPx) << name << " at (" << u << ", " << v << ")";
+      largest_px = std::max(largest_px, (expected - Eigen::Vector2d(u, v)).norm());
+      if (u == std::floor(u)) {
+        const cv::Vec2f d = field.at<cv::Vec2f>(v, static_cast<int>(u));
+        EXPECT_NEAR(d[0], expected.x() - u, kFloatFieldTolPx) << name;
+        EXPECT_NEAR(d[1], expected.y() - v, kFloatFieldTolPx) << name;
+      }
+    }
+    EXPECT_GT(largest_px, 0.05) << name << ": the case must move pixels to test anything";
+  }
 }
 
 TEST(RsWarp, TruthMatchesIndependentModelForEveryEffect) {
   RigModel declared = SmallRig(96, 72);
   declared.time_offset_s = 0.001;
   const Eigen::Vector3d logged_w(0.3, -0.5, 0.7);
-  const GyroTrace trace = ConstantRateTrace(logged_w);
-  const double t_first_row_s = 0.5;
   OracleParams base;
   base.time_offset_s = declared.time_offset_s;
   base.readout_s = declared.shutter.readout_s;
-  struct Case {
-    std::vector<std::string> injections;
-    std::function<void(OracleParams*)> apply;
-  };
-  const std::vector<Case> cases = {
+  const std::vector<OracleCase> cases = {
       {{}, [](OracleParams*) {}},
       {{"time_offset=0.0042"}, [](OracleParams* o) { o->time_offset_s = 0.0042; }},
       {{"readout_time=0.033"}, [](OracleParams* o) { o->readout_s = 0.033; }},
@@ -179,38 +233,68 @@ TEST(RsWarp, TruthMatchesIndependentModelForEveryEffect) {
          o->time_offset_s = -0.003;
        }},
   };
-  std::mt19937_64 rng(42);
-  std::uniform_real_distribution<double> random_u(0.0, declared.camera.width - 1.0);
-  std::uniform_int_distribution<int> random_v(0, declared.camera.height - 1);
-  for (const Case& c : cases) {
-    TrueModel truth = Truth(declared);
-    std::string name;
-    for (const std::string& injection : c.injections) {
-      ApplyInjection(injection, &truth);
-      name += injection + " ";
-    }
-    OracleParams oracle = base;
-    c.apply(&oracle);
-    const FrameGeometry geometry = Geometry(truth, trace, t_first_row_s, cv::Size(400, 400));
-    const cv::Mat field = DisplacementField(geometry);
-    double largest_px = 0.0;
-    for (int i = 0; i < 200; ++i) {
-      const double u = i < 100 ? random_u(rng) : std::floor(random_u(rng));
-      const int v = random_v(rng);
-      const Eigen::Vector2d expected =
-          OracleRefPixel(declared, oracle, logged_w, t_first_row_s, u, v);
-      const Eigen::Vector2d got = *geometry.RefPixel(u, v);
-      ASSERT_NEAR(got.x(), expected.x(), kTruthTolPx) << name << " at (" << u << ", " << v << ")";
-      ASSERT_NEAR(got.y(), expected.y(), kTruthTolPx) << name << " at (" << u << ", " << v << ")";
-      largest_px = std::max(largest_px, (expected - Eigen::Vector2d(u, v)).norm());
-      if (u == std::floor(u)) {
-        const cv::Vec2f d = field.at<cv::Vec2f>(v, static_cast<int>(u));
-        EXPECT_NEAR(d[0], expected.x() - u, kFloatFieldTolPx) << name;
-        EXPECT_NEAR(d[1], expected.y() - v, kFloatFieldTolPx) << name;
-      }
-    }
-    EXPECT_GT(largest_px, 0.05) << name << ": the case must move pixels to test anything";
+  ExpectTruthMatchesOracle(declared, base, logged_w, cases, 42);
+}
+
+// The same independent evaluation for a fisheye camera (cv::fisheye's undistortPoints and
+// projectPoints): 120 degrees across the frame's width, its lens effect injected in its own model.
+TEST(RsWarp, FisheyeTruthMatchesIndependentModel) {
+  RigModel declared = SmallRig(96, 72);
+  declared.camera.fx = declared.camera.fy = 47.5 / (60.0 * kRadPerDeg);  // 60 degrees to the edge
+  declared.camera.distortion = Fisheye({0.02, -0.01, 0.002, 0.0});
+  const Eigen::Vector3d logged_w(0.3, -0.5, 0.7);
+  OracleParams base;
+  base.readout_s = declared.shutter.readout_s;
+  base.fisheye = true;
+  base.dist = {0.02, -0.01, 0.002, 0.0, 0.0};
+  const std::vector<OracleCase> cases = {
+      {{}, [](OracleParams*) {}},
+      {{"lens_distortion=0.06,0.04,-0.04,0.015"},
+       [](OracleParams* o) {
+         o->dist = {0.06, 0.04, -0.04, 0.015, 0.0};
+       }},
+      {{"velocity=3,-2,0.5", "readout_time=0.03", "gyro_scale=1.02,0.97,1.01"},
+       [](OracleParams* o) {
+         o->velocity = Eigen::Vector3d(3, -2, 0.5);
+         o->readout_s = 0.03;
+         o->scale = Eigen::Vector3d(1.02, 0.97, 1.01);
+       }},
+  };
+  // A fisheye is never a homography: the per-pixel path.
+  ASSERT_FALSE(Geometry(Truth(declared), ConstantRateTrace(logged_w), 0.5, cv::Size(400, 400))
+                   .RotationOnly());
+  ExpectTruthMatchesOracle(declared, base, logged_w, cases, 43);
+}
+
+// A 150 degree fisheye (4:3, its corners 94 degrees off the axis) looking straight down: the
+// corners look above the horizon and see nothing (black, no truth); they must not wrap round to
+// the ground on the other side of the image.
+TEST(RsWarp, AWideFisheyeDoesNotWrapRaysBehindTheCamera) {
+  RigModel rig = SmallRig(80, 61);  // odd height: the centre (39.5, 30) lies on a row
+  const Fisheye lens;               // equidistant
+  rig.camera.fx = rig.camera.fy = rig.camera.cx / (75.0 * kRadPerDeg);
+  rig.camera.distortion = lens;
+  const cv::Size scene_size(400, 400);
+  const FrameGeometry geometry =
+      Geometry(Truth(rig), ConstantRateTrace(Eigen::Vector3d::Zero()), 0.5, scene_size);
+  for (const Eigen::Vector2d& corner : {Eigen::Vector2d(0, 0), Eigen::Vector2d(79, 0),
+                                        Eigen::Vector2d(0, 60), Eigen::Vector2d(79, 60)}) {
+    EXPECT_FALSE(geometry.ScenePixel(corner.x(), static_cast<int>(corner.y())).has_value())
+        << corner.transpose();
+    EXPECT_FALSE(geometry.RefPixel(corner.x(), static_cast<int>(corner.y())).has_value());
   }
+  // The edge at mid-height, 75 degrees off nadir, sees the ground on its own side, tan(75) * f
+  // from the centre of the scene.
+  const std::optional<Eigen::Vector2d> edge = geometry.ScenePixel(0, 30);
+  ASSERT_TRUE(edge.has_value());
+  const double centre_x = (scene_size.width - 1) / 2.0;
+  EXPECT_NEAR(edge->x() - centre_x, -rig.camera.fx * std::tan(75.0 * kRadPerDeg), 1e-6);
+  cv::Mat rendered;
+  RenderFrame(SmoothTexture(scene_size, CV_8UC1) + 1, geometry, Interpolation::kBilinear,
+              &rendered);
+  EXPECT_EQ(rendered.at<uint8_t>(0, 0), 0);
+  EXPECT_EQ(rendered.at<uint8_t>(60, 79), 0);
+  EXPECT_GT(rendered.at<uint8_t>(30, 40), 0);
 }
 
 TEST(RsWarp, BottomToTopMirrorsTheTiming) {

@@ -57,7 +57,7 @@ TEST(ApplyInjection, ChangesOnlyItsOwnField) {
   ApplyInjection("gyro_bias=0.001,-0.002,0.003", &model);
   EXPECT_EQ(model.gyro_bias_rad_s, Eigen::Vector3d(0.001, -0.002, 0.003));
   ApplyInjection("lens_distortion=-0.1,0.02", &model);
-  EXPECT_EQ(model.rig.camera.dist, (std::array<double, 5>{-0.1, 0.02, 0, 0, 0}));
+  EXPECT_TRUE(model.rig.camera.distortion == LensDistortion(BrownConrady{{-0.1, 0.02, 0, 0, 0}}));
   EXPECT_EQ(model.rig.time_offset_s, 0.005);
   EXPECT_EQ(model.rig.shutter.readout_s, Base().rig.shutter.readout_s);
   EXPECT_EQ(model.gyro_scale, Eigen::Vector3d::Ones());

@@ -156,7 +156,7 @@ TEST(VideoMatch, TiltSolvesTheMatchesOwnRowTime) {
 
 TEST(VideoDisplacementField, EqualsVideoMatchAtEveryPixel) {
   TrueModel model = Model();
-  model.rig.camera.dist = {-0.1, 0.02, 0, 0, 0};
+  model.rig.camera.distortion = BrownConrady{{-0.1, 0.02, 0, 0, 0}};
   model.rig.velocity_mps = {3.0, -1.0, 0.5};
   const Pair pair = MakePair(model, test::ConstantRateTrace({0.4, -0.7, 0.9}), 0.5, 1.0 / 25);
   const cv::Mat field = VideoDisplacementField(pair.later, pair.earlier);

@@ -142,7 +142,8 @@ TEST(Coverage, DISABLED_JackknifeCoversTheTruthOnRenderedClips) {
   Coverage coverage;
   for (int c = 0; c < kClips; ++c) {
     const Clip clip = MakeClip(100 + c, kWidth, kFrames);
-    const cv::Mat scene = test::SmoothTexture(cv::Size(4 * kWidth, 3 * kWidth), CV_8UC1, 7 + c, 1.2);
+    const cv::Mat scene =
+        test::SmoothTexture(cv::Size(4 * kWidth, 3 * kWidth), CV_8UC1, 7 + c, 1.2);
     const CameraMotion motion(clip.gyro, clip.truth);
     std::vector<cv::Mat> images(kFrames);
     for (int k = 0; k < kFrames; ++k) {

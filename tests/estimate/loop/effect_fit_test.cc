@@ -88,6 +88,41 @@ const IdentifiedEffect& ExpectIdentified(const LoopResult& r, const std::string&
 // |fitted - true| <= 4 stderr: the standard error is plausible (not a vanishing number).
 constexpr double kStderrFactor = 4.0;
 
+// The prediction of every point of two frames against the renderer's truth (RefPixel): the same
+// arithmetic, only the integration's start sample differs (rounding, ~1e-13 px). Returns the
+// largest displacement, which must show the frames move.
+double ExpectPredictionEqualsRendererTruth(const TrueModel& truth,
+                                           const std::vector<FramePoints>& frames,
+                                           const GyroTrace& gyro) {
+  const CameraMotion motion(gyro, truth);
+  double largest_px = 0.0;
+  for (const FramePoints& f : frames) {
+    const std::vector<Eigen::Vector2d> predicted = PredictDisplacements(truth, gyro, f);
+    const FrameGeometry geometry(truth.rig.camera, truth.rig.altitude_m,
+                                 motion.Frame(f.t_first_row_ns), cv::Size(4000, 3000));
+    for (size_t i = 0; i < f.points.size(); ++i) {
+      const MeasuredPoint& p = f.points[i];
+      const std::optional<Eigen::Vector2d> ref = geometry.RefPixel(p.u, static_cast<int>(p.v));
+      EXPECT_TRUE(ref.has_value());
+      if (!ref) continue;
+      const Eigen::Vector2d truth_d = *ref - Eigen::Vector2d(p.u, p.v);
+      EXPECT_NEAR(predicted[i].x(), truth_d.x(), 1e-9);
+      EXPECT_NEAR(predicted[i].y(), truth_d.y(), 1e-9);
+      largest_px = std::max(largest_px, truth_d.norm());
+    }
+    // And against the float32 field the renderer writes as truth (DisplacementField), on every
+    // 7th point: the field is float, hence 1e-3 px.
+    const cv::Mat field = DisplacementField(geometry);
+    for (size_t i = 0; i < f.points.size(); i += 7) {
+      const MeasuredPoint& p = f.points[i];
+      const cv::Vec2f d = field.at<cv::Vec2f>(static_cast<int>(p.v), static_cast<int>(p.u));
+      EXPECT_NEAR(predicted[i].x(), d[0], 1e-3);
+      EXPECT_NEAR(predicted[i].y(), d[1], 1e-3);
+    }
+  }
+  return largest_px;
+}
+
 TEST(EffectModel, PredictionEqualsRendererTruth) {
   // Every effect at once, so every code path of the prediction is compared with the renderer's.
   const RigModel declared = MappingRig();
@@ -98,39 +133,33 @@ TEST(EffectModel, PredictionEqualsRendererTruth) {
   truth.rig.shutter.direction = ReadoutDirection::kBottomToTop;
   truth.rig.cam_from_gyro = ExpSO3(Eigen::Vector3d(0.03, -0.05, 0.02)).toRotationMatrix();
   truth.rig.velocity_mps = Eigen::Vector3d(3.0, -2.0, 0.5);
-  truth.rig.camera.dist = {-0.08, 0.02, 0.0, 0.0, 0.0};
+  truth.rig.camera.distortion = BrownConrady{{-0.08, 0.02, 0.0, 0.0, 0.0}};
   truth.gyro_scale = Eigen::Vector3d(1.03, 0.98, 1.01);
   truth.gyro_bias_rad_s = Eigen::Vector3d(0.01, -0.02, 0.005);
   truth.clock_rate_ppm = 250.0;
   const GyroTrace gyro = FlightTrace(14.0, 5);
-  const std::vector<FramePoints> frames = GridFrames(declared, {8.3, 11.7});
-  const CameraMotion motion(gyro, truth);
-  for (const FramePoints& f : frames) {
-    const std::vector<Eigen::Vector2d> predicted = PredictDisplacements(truth, gyro, f);
-    const FrameGeometry geometry(truth.rig.camera, truth.rig.altitude_m,
-                                 motion.Frame(f.t_first_row_ns), cv::Size(4000, 3000));
-    double largest_px = 0.0;
-    for (size_t i = 0; i < f.points.size(); ++i) {
-      const MeasuredPoint& p = f.points[i];
-      const std::optional<Eigen::Vector2d> ref = geometry.RefPixel(p.u, static_cast<int>(p.v));
-      ASSERT_TRUE(ref.has_value());
-      const Eigen::Vector2d truth_d = *ref - Eigen::Vector2d(p.u, p.v);
-      // Same arithmetic; only the integration's start sample differs (rounding, ~1e-13 px).
-      EXPECT_NEAR(predicted[i].x(), truth_d.x(), 1e-9);
-      EXPECT_NEAR(predicted[i].y(), truth_d.y(), 1e-9);
-      largest_px = std::max(largest_px, truth_d.norm());
-    }
-    EXPECT_GT(largest_px, 1.0) << "the frame should move";
-    // And against the float32 field the renderer writes as truth (DisplacementField), on a crop
-    // of rows so the test stays fast: the field is float, hence 1e-3 px.
-    const cv::Mat field = DisplacementField(geometry);
-    for (size_t i = 0; i < f.points.size(); i += 7) {
-      const MeasuredPoint& p = f.points[i];
-      const cv::Vec2f d = field.at<cv::Vec2f>(static_cast<int>(p.v), static_cast<int>(p.u));
-      EXPECT_NEAR(predicted[i].x(), d[0], 1e-3);
-      EXPECT_NEAR(predicted[i].y(), d[1], 1e-3);
-    }
-  }
+  EXPECT_GT(ExpectPredictionEqualsRendererTruth(truth, GridFrames(declared, {8.3, 11.7}), gyro),
+            1.0)
+      << "the frames should move";
+}
+
+TEST(EffectModel, PredictionEqualsRendererTruthForAFisheye) {
+  // A 120 degree fisheye (its corners 76 degrees off the axis) with every effect it can show: the
+  // lens in its own model, timing, velocity, gyro scale. Its focal length is a quarter of the
+  // mapping rig's, and so are its displacements.
+  const RigModel declared = test::FisheyeRig(640, 480);
+  TrueModel truth;
+  truth.rig = declared;
+  ApplyInjection("lens_distortion=0.09,0.02,-0.04,0.015", &truth);
+  truth.rig.time_offset_s = 0.004;
+  truth.rig.shutter.readout_s = 0.025;
+  truth.rig.velocity_mps = Eigen::Vector3d(3.0, -2.0, 0.5);
+  truth.gyro_scale = Eigen::Vector3d(1.03, 0.98, 1.01);
+  const GyroTrace gyro = FlightTrace(14.0, 5);
+  EXPECT_GT(
+      ExpectPredictionEqualsRendererTruth(truth, test::GridFrames(declared, {8.3, 11.7}, 20), gyro),
+      0.3)
+      << "the frames should move";
 }
 
 TEST(EffectModel, OutsideTheTraceIsNaN) {
@@ -177,7 +206,7 @@ TEST(CloseTheLoop, TakesADeclaredWideLensThatFoldsBeyondTheCorners) {
   // k1 = -0.35 keeps r (1 + k1 r^2) increasing out to r = 0.98, beyond this image's corners
   // (0.73) but not beyond every radius a fit checks: the user's calibration is taken as it is.
   RigModel declared = MappingRig();
-  declared.camera.dist[0] = -0.35;
+  declared.camera.distortion = BrownConrady{{-0.35, 0, 0, 0, 0}};
   TrueModel truth;
   truth.rig = declared;
   const GyroTrace gyro = FlightTrace(22.0, 3);
@@ -219,6 +248,39 @@ TEST(CloseTheLoop, RecoversTimeOffset) {
   EXPECT_NEAR(std::get<double>(e.value), 0.004, 0.0003);
   EXPECT_NEAR(std::get<double>(e.value), 0.004, kStderrFactor * std::get<double>(e.stderr_value));
   EXPECT_EQ(Spec(e.effect).unit, "s");
+}
+
+TEST(CloseTheLoop, RecoversAFisheyesLensDistortion) {
+  // A 120 degree fisheye declared with the GoPro MAX's coefficients; the true k1, k2 differ by
+  // +0.05, -0.03. A still frame's displacement is the rolling shutter's alone (a few px at this
+  // focal length), so the lens shows in it as a few hundredths of a px: measured to 0.03 px per
+  // component. The fit holds k1 and k2 of the fisheye model (k3, k4 as declared) and must find
+  // them within 0.005 and 4 standard errors.
+  constexpr double kSigmaFinePx = 0.03;
+  Case c;
+  c.declared = test::FisheyeRig(1280, 960);
+  c.truth.rig = c.declared;
+  ApplyInjection(
+      "lens_distortion=0.1146075465207674,0.009139647556618896,-0.041373671856156674,"
+      "0.014898789517094136",
+      &c.truth);
+  c.gyro = FlightTrace(22.0, 3);
+  c.frames = GridFrames(c.declared, EverySecond(10));
+  Measure(c.truth, c.gyro, &c.frames, 103, kSigmaFinePx);
+  c.result = CloseTheLoop(c.declared, c.gyro, c.frames, kSigmaFinePx * std::sqrt(2.0));
+  const IdentifiedEffect& e = ExpectIdentified(c.result, "lens_distortion");
+  if (e.effect != Effect::kLensDistortion) return;
+  const auto* fitted = std::get_if<Fisheye>(&std::get<LensDistortion>(e.value));
+  const auto* sd = std::get_if<Fisheye>(&std::get<LensDistortion>(e.stderr_value));
+  ASSERT_TRUE(fitted && sd) << "the value is in the declared (fisheye) model";
+  const std::array<double, 4>& truth = std::get<Fisheye>(c.truth.rig.camera.distortion).coeffs();
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_NEAR(fitted->coeffs()[i], truth[i], 0.005) << "k" << i + 1;
+    EXPECT_NEAR(fitted->coeffs()[i], truth[i], kStderrFactor * sd->coeffs()[i]) << "k" << i + 1;
+  }
+  EXPECT_EQ(fitted->coeffs()[2], truth[2]) << "k3 is held";
+  EXPECT_TRUE(std::isnan(sd->coeffs()[3])) << "k4 is not fitted: no standard error";
+  EXPECT_EQ(EffectValueToJson(e.value)["model"], "fisheye");
 }
 
 TEST(CloseTheLoop, RecoversReadoutTime) {

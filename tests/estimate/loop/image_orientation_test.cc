@@ -23,7 +23,7 @@ constexpr double kNoisePx = 0.05;
 double FrameS(int k) { return 12.6 + k / 30.0; }
 
 struct Stabilised {
-  std::vector<FramePoints> pairs;            // measured, cam_from_image not known (identity)
+  std::vector<FramePoints> pairs;              // measured, cam_from_image not known (identity)
   std::map<int64_t, Eigen::Quaterniond> iori;  // as the camera wrote it
   ImageOrientationCheck truth_reading;
 };

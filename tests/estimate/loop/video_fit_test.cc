@@ -85,6 +85,12 @@ std::vector<std::pair<std::string, TrueModel>> TrueModels() {
     ApplyInjection(injection, &model);
     out.emplace_back(injection, model);
   }
+  // A 120 degree fisheye, as declared and with its lens effect.
+  TrueModel fisheye;
+  fisheye.rig = test::FisheyeRig(640, 480);
+  out.emplace_back("fisheye", fisheye);
+  ApplyInjection("lens_distortion=0.09,0.02,-0.04,0.015", &fisheye);
+  out.emplace_back("fisheye lens_distortion=0.09,0.02,-0.04,0.015", fisheye);
   return out;
 }
 

@@ -146,7 +146,7 @@ TEST(Analyze, FullDistortionCountsLensDistortion) {
   AnalyzeOptions options = BaseOptions();
   options.triggers = {{"a", SecondsToNs(6.0)}};
   const AnalyzeResult pinhole = Analyze(log, options);
-  options.rig.camera.dist = {-0.2, 0, 0, 0, 0};
+  options.rig.camera.distortion = BrownConrady{{-0.2, 0, 0, 0, 0}};
   const AnalyzeResult barrel = Analyze(log, options);
   EXPECT_EQ(pinhole.images[0].d_paper_m, barrel.images[0].d_paper_m);
   EXPECT_GT(std::abs(barrel.images[0].d_full_px / pinhole.images[0].d_full_px - 1.0), 0.03);

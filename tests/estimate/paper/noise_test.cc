@@ -181,5 +181,24 @@ TEST(NoiseTable, HasTheWindowStatisticsAndTheAllanCoefficients) {
       << table;
 }
 
+TEST(NoisePairTable, GainIsEachSensorsNoiseOverTheFusedOnes) {
+  NoiseResult first, second, fused;
+  for (int a = 0; a < 3; ++a) {
+    first.axes[a].sigma_mean_arcsec = 1.0 + a;
+    second.axes[a].sigma_mean_arcsec = 2.0 * (1.0 + a);
+    fused.axes[a].sigma_mean_arcsec = 0.5 * (1.0 + a);
+  }
+  const NoisePairGain gain = FusedNoiseGain(first, second, fused);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_DOUBLE_EQ(gain.sigma_vs_first[a], 2.0);
+    EXPECT_DOUBLE_EQ(gain.sigma_vs_second[a], 4.0);
+    EXPECT_EQ(gain.arw_vs_first[a], 0.0);  // no Allan deviations: no ARW gain
+  }
+  const std::string table = NoisePairTable(first, second, fused);
+  EXPECT_NE(table.find("Fused gain"), std::string::npos) << table;
+  EXPECT_NE(table.find("  y "), std::string::npos) << table;
+  EXPECT_NE(table.find("4.000"), std::string::npos) << table;
+}
+
 }  // namespace
 }  // namespace shutterlab

@@ -249,5 +249,25 @@ TEST(Gcsv, RejectsBadInputNamingTheLine) {
                 "not 'key,value'");
 }
 
+TEST(Gcsv, GapLinesOfTheHeaderAreGapWarnings) {
+  test::TempDir dir;
+  const std::string path = WriteText(dir, "rec.gcsv",
+                                     "GYROFLOW IMU LOG\nversion,1.3\norientation,XYZ\n"
+                                     "gap,1.010612500,315,fifo_overflow\n"
+                                     "gap,2.5,7\n"
+                                     "gap,soon,7,bad_data\n"
+                                     "tscale,0.001\ngscale,1\nt,gx,gy,gz\n0,1,2,3\n1,1,2,3\n");
+  const GcsvLog log = ReadGcsv(path);
+  ASSERT_EQ(log.warnings.size(), 3u) << test::JoinedWarnings(log.warnings);
+  EXPECT_EQ(log.warnings[0].kind, "gap");
+  EXPECT_EQ(log.warnings[0].t_s.value_or(-1), 1.0106125);
+  EXPECT_EQ(log.warnings[0].count.value_or(0), 315u);
+  EXPECT_NE(log.warnings[0].message.find("fifo_overflow"), std::string::npos);
+  EXPECT_EQ(log.warnings[1].kind, "gap");  // the kind is optional
+  EXPECT_EQ(log.warnings[1].count.value_or(0), 7u);
+  EXPECT_EQ(log.warnings[2].kind, "format");  // a gap line that does not parse never fails the file
+  EXPECT_EQ(log.trace.size(), 2u);
+}
+
 }  // namespace
 }  // namespace shutterlab

@@ -85,6 +85,65 @@ TEST(GoproTelemetry, KarmaGyroInSensorAxesAndShutter) {
     EXPECT_NEAR(t.shutter_t_s[i] - t.shutter_t_s[i - 1], 1 / 29.97, 1e-3) << i;
 }
 
+// karma.mp4's HERO5 writes no global settings, no orientation keys and no CORI / IORI.
+TEST(GoproTelemetry, KarmaStatesNoSettings) {
+  SHUTTERLAB_REAL_DATA(karma, "rs/gopro_karma/karma.mp4");
+  const GoproTelemetry t = ReadGoproTelemetry(karma);
+  EXPECT_FALSE(t.settings.present);
+  EXPECT_TRUE(t.settings.unreadable.empty());
+  EXPECT_TRUE(t.gyro_orin.empty());
+  EXPECT_TRUE(t.image_orientation.empty());
+  // The gimbal holds the camera level: z up (the importer's inference).
+  ASSERT_TRUE(t.accel_mean_mps2.has_value());
+  EXPECT_NEAR(t.accel_mean_mps2->z(), 9.7, 0.2);
+}
+
+// max-heromode.mp4 (GoPro MAX, HERO mode; PROVENANCE.md lists what it holds): the global settings,
+// the gyro on the camera's own axes by ORIN / ORIO / MTRX, CORI and IORI per frame.
+TEST(GoproTelemetry, MaxStatesItsReadoutAxesAndStabiliser) {
+  SHUTTERLAB_REAL_DATA(max, "incoming_rs/gopro_max_heromode/max-heromode.mp4");
+  const GoproTelemetry t = ReadGoproTelemetry(max);
+  const GoproSettings& s = t.settings;
+  ASSERT_TRUE(s.present);
+  EXPECT_EQ(s.model, "GoPro Max");
+  EXPECT_EQ(s.firmware, "H19.03.01.30.00");
+  ASSERT_TRUE(s.readout_s.has_value());
+  EXPECT_NEAR(*s.readout_s, 0.0206008, 1e-6);
+  EXPECT_NEAR(*s.diagonal_fov_deg, 137.388, 1e-3);
+  EXPECT_EQ(s.fov, "W");
+  EXPECT_TRUE(s.StabilizerOn());
+  EXPECT_EQ(s.stabilizer_mode, "HS HLevel");
+  EXPECT_EQ(s.projection, "GPRO");
+  EXPECT_EQ(t.gyro_orin, "XzY");
+  EXPECT_EQ(t.gyro_orio, "ZXY");
+  EXPECT_EQ(t.gyro_mtrx, (std::vector<double>{0, -1, 0, 1, 0, 0, 0, 0, 1}));
+  EXPECT_EQ(t.axis_order_source, "ORIN 'XzY', ORIO 'ZXY', MTRX agrees");
+  EXPECT_EQ(t.gyro.size(), 2082u);
+  // Hand-held upright: gravity's reaction on the camera's Z (GoPro's "up").
+  ASSERT_TRUE(t.accel_mean_mps2.has_value());
+  EXPECT_NEAR(t.accel_mean_mps2->z(), 9.7, 0.2);
+  EXPECT_LT(std::abs(t.accel_mean_mps2->x()), 1.0);
+  // Sample by sample: X = stored 0, Y = stored 2, Z = -stored 1.
+  Mp4File mp4(max);
+  const GpmfTrackStream stored = ReadGpmfTrackStream(mp4, *mp4.FindTrack("meta", "gpmd"), "GYRO");
+  for (size_t i = 0; i < t.gyro.size(); i += 101) {
+    const Eigen::Vector3d& w = t.gyro.samples()[i].omega_rad_s;
+    EXPECT_EQ(w.x(), stored.values[3 * i]);
+    EXPECT_EQ(w.y(), stored.values[3 * i + 2]);
+    EXPECT_EQ(w.z(), -stored.values[3 * i + 1]);
+  }
+  // One CORI and one IORI per frame; IORI's largest turn is 19.4 degrees (PROVENANCE.md).
+  ASSERT_EQ(t.image_orientation.t_s.size(), 316u);
+  ASSERT_EQ(t.camera_orientation.t_s.size(), 316u);
+  double largest_deg = 0.0;
+  for (const auto& q : t.image_orientation.wxyz) {
+    const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    EXPECT_NEAR(norm, 1.0, 1e-3);
+    largest_deg = std::max(largest_deg, 2 * std::acos(std::min(1.0, std::abs(q[0]) / norm)));
+  }
+  EXPECT_NEAR(largest_deg * 180 / M_PI, 19.4, 0.1);
+}
+
 TEST(GoproTelemetry, KarmaVideoFrameTimesAreTheSampleTable) {
   SHUTTERLAB_REAL_DATA(karma, "rs/gopro_karma/karma.mp4");
   const std::vector<double> times_s = ReadVideoFrameTimesS(karma);

@@ -32,6 +32,15 @@ std::string Nest(const std::string& key, const std::string& body) {
   return Klv(key, 0, 1, static_cast<uint16_t>(body.size()), body);
 }
 
+// A 3-element stream with only a name and an ORIN.
+GpmfStreamData Stream(const std::string& name, const std::string& orin) {
+  GpmfStreamData stream;
+  stream.name = name;
+  stream.orientation = orin;
+  stream.elements = 3;
+  return stream;
+}
+
 // A payload with known values: a gyro stream in z,x,y order with one SCAL, a stream with one SCAL
 // per element, and one value of each numeric type.
 std::string KnownPayload() {
@@ -88,7 +97,7 @@ TEST(Gpmf, KnownPayloadDecodes) {
   const auto pair = FindGpmfStreams(klvs, "PAIR", "known");
   ASSERT_EQ(pair.size(), 1u);
   EXPECT_EQ(pair[0].values, (std::vector<double>{2.5, -3.0}));  // SCAL per element
-  const AxisOrder orin = GpmfAxisOrder(GpmfStreamData{"", "", "", "yXz", {}, 3, {}}, "known");
+  const AxisOrder orin = GpmfAxisOrder(Stream("", "yXz"), "known");
   EXPECT_EQ(orin.column, (std::array<int, 3>{1, 0, 2}));
   EXPECT_EQ(orin.sign, (std::array<int, 3>{1, -1, -1}));  // lowercase = negated
 
@@ -111,6 +120,41 @@ TEST(Gpmf, KnownPayloadDecodes) {
   EXPECT_FLOAT_EQ(static_cast<float>(shut[0].values[2]), 0.006f);
 }
 
+// The GoPro MAX's gyro keys: ORIN "XzY" (stored channels X, -Z, Y), ORIO "ZXY" (output order) and
+// MTRX, the same mapping as a matrix with rows in ORIO's order; gpmf-parser takes a matrix of 0 and
+// +-1 as that orientation and any other as a calibration.
+TEST(Gpmf, OutputOrientationAndMatrixAsGpmfParserReadsThem) {
+  GpmfStreamData max;
+  max.orientation = "XzY";
+  max.orientation_out = "ZXY";
+  max.matrix = {0, -1, 0, 1, 0, 0, 0, 0, 1};
+  const AxisOrder order = GpmfAxisOrder(max, "max");
+  EXPECT_EQ(order.column, (std::array<int, 3>{0, 2, 1}));  // X stored first, Y third, Z second
+  EXPECT_EQ(order.sign, (std::array<int, 3>{1, 1, -1}));
+  EXPECT_FALSE(order.calibration.has_value());
+  EXPECT_EQ(order.source, "ORIN 'XzY', ORIO 'ZXY', MTRX agrees");
+  // A +-1 matrix that says otherwise is not used (the orientation keys are).
+  GpmfStreamData other = max;
+  other.matrix = {0, 1, 0, 1, 0, 0, 0, 0, 1};
+  EXPECT_EQ(GpmfAxisOrder(other, "max").source,
+            "ORIN 'XzY', ORIO 'ZXY', MTRX disagrees (not used)");
+  EXPECT_EQ(GpmfAxisOrder(other, "max").column, order.column);
+  // A calibration: each camera axis a row of it, in ORIO's order (Z is the first row).
+  GpmfStreamData calibrated = max;
+  calibrated.matrix = {0.01, -0.99, 0, 1.01, 0, 0.02, 0, 0, 1};
+  const AxisOrder cal = GpmfAxisOrder(calibrated, "max");
+  ASSERT_TRUE(cal.calibration.has_value());
+  EXPECT_EQ(cal.calibration->row(0), Eigen::RowVector3d(1.01, 0, 0.02));   // X
+  EXPECT_EQ(cal.calibration->row(1), Eigen::RowVector3d(0, 0, 1));         // Y
+  EXPECT_EQ(cal.calibration->row(2), Eigen::RowVector3d(0.01, -0.99, 0));  // Z
+  GpmfStreamData bad = max;
+  bad.orientation_out = "ZXX";
+  EXPECT_THROW(GpmfAxisOrder(bad, "p"), IoError);
+  bad = max;
+  bad.matrix = {1, 0, 0, 1};
+  EXPECT_THROW(GpmfAxisOrder(bad, "p"), IoError);
+}
+
 TEST(Gpmf, BadScaleAndAxisOrderAreErrors) {
   const std::string bad_scal =
       Nest("DEVC", Nest("STRM", Klv("SCAL", 's', 2, 2, std::string(4, '\1')) +
@@ -120,10 +164,8 @@ TEST(Gpmf, BadScaleAndAxisOrderAreErrors) {
   const std::string odd_size =
       Nest("DEVC", Nest("STRM", Klv("GYRO", 's', 5, 1, std::string(5, '\0'))));
   EXPECT_THROW(FindGpmfStreams(ParseGpmf(odd_size, 0, "p"), "GYRO", "p"), IoError);
-  EXPECT_THROW(GpmfAxisOrder(GpmfStreamData{"", "Gyroscope (z,x,x)", "", "", {}, 3, {}}, "p"),
-               IoError);
-  EXPECT_EQ(GpmfAxisOrder(GpmfStreamData{"", "Gyroscope", "", "", {}, 3, {}}, "p").source,
-            "default x,y,z");
+  EXPECT_THROW(GpmfAxisOrder(Stream("Gyroscope (z,x,x)", ""), "p"), IoError);
+  EXPECT_EQ(GpmfAxisOrder(Stream("Gyroscope", ""), "p").source, "default x,y,z");
 }
 
 TEST(Gpmf, EveryTruncationAndByteValueIsAnErrorOrAResult) {

@@ -70,6 +70,30 @@ TEST(Mp4, HandBuiltSampleTableKnownAnswer) {
   EXPECT_EQ(mp4.FindTrack("vide", ""), nullptr);
 }
 
+// User data: the boxes of moov/udta, in order; a QuickTime list's closing 4-byte 0 (no box) ends
+// it without an error.
+TEST(Mp4, HandBuiltUserDataBoxes) {
+  test::TempDir dir;
+  std::vector<uint32_t> offsets;
+  std::string bytes = TinyMp4(16, &offsets);
+  const std::string udta = BoxOf("udta", BoxOf("FIRM", "HD5.02") + BoxOf("GPMF", "abcd") + U32(0));
+  // Grow moov (the last box) by the udta.
+  const size_t moov_at = bytes.size() - (bytes.size() - bytes.rfind("moov") + 4);
+  const uint32_t moov_size = static_cast<uint32_t>(bytes.size() - moov_at + udta.size());
+  bytes.replace(moov_at, 4, U32(moov_size));
+  bytes += udta;
+  WriteBytes(dir / "udta.mp4", bytes);
+  Mp4File mp4(dir / "udta.mp4");
+  ASSERT_EQ(mp4.tracks().size(), 1u);
+  const Mp4UserBox* gpmf = mp4.FindUserBox("GPMF");
+  ASSERT_NE(gpmf, nullptr);
+  EXPECT_EQ(gpmf->body, "abcd");
+  EXPECT_EQ(bytes.substr(gpmf->file_offset, 4), "abcd");
+  ASSERT_NE(mp4.FindUserBox("FIRM"), nullptr);
+  EXPECT_EQ(mp4.FindUserBox("FIRM")->body, "HD5.02");
+  EXPECT_EQ(mp4.FindUserBox("MUID"), nullptr);
+}
+
 TEST(Mp4, HandBuiltEveryTruncationAndByteFlipIsAnErrorOrATable) {
   std::vector<uint32_t> offsets;
   const std::string bytes = TinyMp4(16, &offsets);

@@ -1,0 +1,126 @@
+// CLI tests of `shutterlab record`: an emulated 8 kHz MPU-9250 recorded through writer stalls and
+// read back by flight and analyze with its triggers, two sensors fused by noise --second, a clean
+// stop on SIGINT, and bad devices refused with one line and exit code 2.
+
+#include "sim/logs/gcsv.h"
+#include "sim/logs/gyro_io.h"
+#include "sim/synth/synth.h"
+#include "sim/text_file.h"
+#include "tests/app/cli_test_util.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+
+namespace shutterlab {
+namespace {
+
+using test::RunShutterlab;
+
+// A synthetic trace written as gyro.csv in the test itself (a process start less per test).
+void WriteTrace(const std::string& path, MotionProfile profile, double rate_hz, double duration_s,
+                uint64_t seed, const std::string& second_path = "") {
+  SynthOptions synth;
+  synth.profile = profile;
+  synth.rate_hz = rate_hz;
+  synth.duration_s = duration_s;
+  synth.seed = seed;
+  WriteGyroCsv(path, SynthesizeTrace(synth, 0));
+  if (!second_path.empty()) WriteGyroCsv(second_path, SynthesizeTrace(synth, 1));
+}
+
+TEST(RecordCli, EmulatedRecordingGoesThroughFlightAndAnalyzeWithItsTriggers) {
+  test::TempDir dir;
+  const std::string trace = dir / "flight.csv", rec = dir / "rec.gcsv";
+  ASSERT_EQ(
+      RunShutterlab("synth flight --rate 8000 --duration 4 --seed 2 --out " + trace).exit_code, 0);
+  const auto record = RunShutterlab(
+      "record --device emulate:" + trace + ",ppm=40 --duration 3.5s --clock virtual " +
+      "--stall-writer 300ms@1s --trigger emulate:every=1s,bounce=2 --out " + rec);
+  ASSERT_EQ(record.exit_code, 0) << record.output;
+  EXPECT_NE(record.out.find("gaps        0, 0 sample(s) lost"), std::string::npos) << record.out;
+  EXPECT_NE(record.out.find("triggers: 3"), std::string::npos) << record.out;
+  const GcsvLog log = ReadGcsv(rec);
+  EXPECT_NEAR(log.trace.size(), 28000.0, 100.0);
+  const auto analyze =
+      RunShutterlab("analyze " + rec + " --triggers " + (dir / "rec.triggers.csv") + " --json");
+  ASSERT_EQ(analyze.exit_code, 0) << analyze.output;
+  const auto analysis = nlohmann::json::parse(analyze.out);
+  EXPECT_GT(analysis["flight"]["windows_total"].get<int>(), 10000);  // the flight table read it all
+  const auto images = analysis["images"];
+  ASSERT_EQ(images.size(), 3u);
+  for (const auto& image : images) EXPECT_TRUE(image["in_trace"].get<bool>()) << image.dump();
+}
+
+TEST(RecordCli, TwoSensorsAreFusedByNoiseWithTheGainShown) {
+  test::TempDir dir;
+  const std::string a = dir / "a.csv", b = dir / "b.csv", rec = dir / "pair.gcsv";
+  ASSERT_EQ(
+      RunShutterlab("synth still --rate 8000 --duration 7 --seed 3 --out " + a + " --out2 " + b)
+          .exit_code,
+      0);
+  const auto record = RunShutterlab("record --device emulate:" + a + " --device emulate:" + b +
+                                    ",ppm=-30 --duration 6.5s --clock virtual --json --out " + rec);
+  ASSERT_EQ(record.exit_code, 0) << record.output;
+  const auto summary = nlohmann::json::parse(record.out);
+  ASSERT_EQ(summary["sensors"].size(), 2u);
+  EXPECT_NEAR(summary["sensors"][1]["drift_ppm"].get<double>(), -30.0, 2.0);
+  EXPECT_EQ(summary["gaps"].size(), 0u);
+  const auto noise =
+      RunShutterlab("noise " + rec + " --second " + (dir / "pair.2.gcsv") + " --json");
+  ASSERT_EQ(noise.exit_code, 0) << noise.output;
+  const auto pair = nlohmann::json::parse(noise.out)["pair"];
+  EXPECT_FALSE(pair["mounting_fitted"].get<bool>());
+  for (int axis = 0; axis < 3; ++axis) {
+    // Two equal independent sensors: the white noise falls by sqrt(2); ARW read off 1.5 s of
+    // Allan deviation scatters by a few percent.
+    EXPECT_NEAR(pair["gain"]["arw_vs_first"][axis].get<double>(), std::sqrt(2.0), 0.1)
+        << pair.dump();
+  }
+}
+
+TEST(RecordCli, SigintStopsTheRecordingWithTheFileWhole) {
+  test::TempDir dir;
+  const std::string trace = dir / "still.csv", rec = dir / "rec.gcsv";
+  WriteTrace(trace, MotionProfile::kStill, 1000, 2.0, 4);
+  // No duration: SIGINT once the recording runs (its hidden rows file exists), however slowly the
+  // process started; the shell's status is record's own. The virtual clock runs as fast as the
+  // machine, so there are samples to write.
+  const std::string command = "bash -c '" + std::string(SHUTTERLAB_BINARY) +
+                              " record --device emulate:" + trace +
+                              ",rate=1000 --clock virtual --out " + rec +
+                              " >/dev/null 2>&1 & pid=$!; for i in $(seq 200); do "
+                              "ls -a " +
+                              dir.path().string() +
+                              " | grep -q rows && break; sleep 0.05; done; "
+                              "sleep 0.2; kill -INT $pid; wait $pid'";
+  EXPECT_EQ(std::system(command.c_str()), 0);
+  const GcsvLog log = ReadGcsv(rec);  // whole: header, column line, rows
+  EXPECT_GT(log.trace.size(), 100u);
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    EXPECT_EQ(entry.path().filename().string().find(".rec.gcsv."), std::string::npos)
+        << "a temporary file was left: " << entry.path();
+  }
+}
+
+TEST(RecordCli, BadDevicesAreOneLineWithExitCodeTwo) {
+  test::TempDir dir;
+  const std::string trace = dir / "still.csv";
+  WriteTrace(trace, MotionProfile::kStill, 1000, 1.0, 5);
+  // A trace that is not there (IoError) and a part that has no such range (std::invalid_argument);
+  // the device spec's other refusals are tested in tests/sim/record.
+  for (const std::string& device :
+       {"emulate:" + dir / "missing.csv", "emulate:" + trace + ",range=300"}) {
+    const auto result = RunShutterlab("record --device " + device +
+                                      " --duration 1s --clock virtual --out " + (dir / "x.gcsv"));
+    EXPECT_EQ(result.exit_code, 2) << device << "\n" << result.output;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.gcsv"));
+  }
+}
+
+}  // namespace
+}  // namespace shutterlab
