@@ -209,14 +209,9 @@ void EstimateStillBias(const GyroTrace& camera_rates, bool estimate_bias, Analyz
 void AllanOfRates(const GyroTrace& rates, AnalyzeResult* result) {
   result->allan_on_still = false;
   if (result->bias_from_still) {
-    const int64_t t0 = rates.samples().front().t_ns;
-    std::vector<GyroSample> still;
-    for (const GyroSample& s : rates.samples()) {
-      const double t_s = (s.t_ns - t0) * 1e-9;
-      if (t_s >= result->still_segment.begin_s && t_s <= result->still_segment.end_s) {
-        still.push_back(s);
-      }
-    }
+    // [begin_s, end_s): the samples the bias was averaged over, not one more.
+    const auto [begin, end] = SamplesInSegment(rates, result->still_segment);
+    std::vector<GyroSample> still(rates.samples().begin() + begin, rates.samples().begin() + end);
     if (still.size() >= 20) {
       result->allan = AllanAnalysis(GyroTrace(std::move(still)));
       result->allan_on_still = true;
