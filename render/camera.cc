@@ -192,6 +192,12 @@ RigModel RigModelFromJson(const json& j) {
         rig.velocity_mps[i] = v[i].get<double>();
       }
     }
+    if (j.contains("mask")) {
+      if (!j["mask"].is_string() || j["mask"].get<std::string>().empty()) {
+        throw std::invalid_argument("mask is not a file name");
+      }
+      rig.mask = j["mask"].get<std::string>();
+    }
   } catch (const json::exception& e) {
     throw std::invalid_argument(std::string("malformed camera: ") + e.what());
   }
@@ -234,6 +240,7 @@ json RigModelToJson(const RigModel& rig) {
   j["time_offset_s"] = rig.time_offset_s;
   j["scene"] = {{"altitude_m", rig.altitude_m}};
   j["velocity_mps"] = {rig.velocity_mps.x(), rig.velocity_mps.y(), rig.velocity_mps.z()};
+  if (!rig.mask.empty()) j["mask"] = rig.mask;
   return j;
 }
 

@@ -55,6 +55,10 @@ struct RigModel {
   double time_offset_s = 0.0;  // gyro clock = camera clock + time_offset_s
   double altitude_m = 50.0;    // ground plane z_W = altitude_m
   Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();  // world frame, constant within a frame
+  // docs/FORMATS.md v1.1 `mask`: a single-channel image of the camera's size, relative to the
+  // dataset folder; non-zero = may be used. Empty: every pixel may be used. (Read by
+  // render/rig_dataset.h ReadRigDataset.)
+  std::string mask;
 
   // Throws std::invalid_argument naming the first nonsensical field.
   void Check() const;

@@ -41,12 +41,28 @@ json LoopToJson(const LoopResult& result, size_t frame_count) {
       covariance.push_back(row);
     }
     j["covariance"] = std::move(covariance);
+    // Every estimator's standard error of the effect's parameters (EffectSpec's parameter units),
+    // beside the one "stderr" holds (the loop's "covariance").
+    const auto numbers = [](const Eigen::VectorXd& v) {
+      std::vector<double> out(v.data(), v.data() + v.size());
+      return out;
+    };
+    j["parameter_stderr"] = {{"model", numbers(e.parameter_stderr_model)},
+                             {"cluster_sandwich", numbers(e.parameter_stderr_sandwich)},
+                             {"cluster_jackknife", numbers(e.parameter_stderr_jackknife)},
+                             {"clusters", e.clusters}};
+    j["stderr_from"] = CovarianceKindName(e.stderr_from);
     effects.push_back(std::move(j));
   }
-  json out{{"format", "validation/1"},          {"frames", frame_count},
-           {"before", stats(result.before)},    {"effects", std::move(effects)},
-           {"after", stats(result.after)},      {"noise_px", result.noise_px},
-           {"unexplained", result.unexplained}, {"log", result.log}};
+  json out{{"format", "validation/1"},
+           {"frames", frame_count},
+           {"before", stats(result.before)},
+           {"effects", std::move(effects)},
+           {"after", stats(result.after)},
+           {"noise_px", result.noise_px},
+           {"unexplained", result.unexplained},
+           {"log", result.log},
+           {"covariance", CovarianceKindName(result.covariance)}};
   // Beyond docs/FORMATS.md: with pair_translation the residual is one component (the distance
   // across the epipolar line), to be read against noise_px / sqrt(2), not noise_px.
   if (result.residual_components != 2) out["residual_components"] = result.residual_components;
