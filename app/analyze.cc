@@ -243,6 +243,17 @@ void RunPhotos(const AnalyzeCommand& command) {
     read.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
     set = ReadPhotoSet(command.photos_dir, read);
   }
+  if (read.lens_profile && !log_read) {
+    // What the profile gave the photos (scaled to the first photo with a size; with a LOG the
+    // analysed camera's notes are printed instead).
+    for (const PhotoRecord& r : set.photos) {
+      if (!r.ok() || r.metadata.width <= 0 || r.metadata.height <= 0) continue;
+      const LensProfileUse use =
+          ScaleLensProfile(*read.lens_profile, r.metadata.width, r.metadata.height);
+      for (const std::string& note : use.notes) std::cerr << "note: " << note << "\n";
+      break;
+    }
+  }
   if (!log_read) {
     const PhotoAnalysis analysis = AnalyzePhotos(set, options.photos);
     if (!command.out_dir.empty()) WritePhotoOutputs(command.out_dir, set, analysis);

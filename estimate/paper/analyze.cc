@@ -153,13 +153,6 @@ std::string SharesText(const std::vector<double>& shares, const std::vector<doub
   return text;
 }
 
-std::string Trim(std::string_view s) {
-  size_t b = 0, e = s.size();
-  while (b < e && (s[b] == ' ' || s[b] == '\t')) ++b;
-  while (e > b && (s[e - 1] == ' ' || s[e - 1] == '\t')) --e;
-  return std::string(s.substr(b, e - b));
-}
-
 std::string ImageName(size_t index) {
   char buffer[32];
   std::snprintf(buffer, sizeof(buffer), "IMG_%04zu", index + 1);

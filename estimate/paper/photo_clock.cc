@@ -19,6 +19,9 @@ namespace {
 constexpr int64_t kVoteBinNs = 500'000'000;          // offset votes, 0.5 s bins
 constexpr int64_t kQuarterHourNs = 900'000'000'000;  // time zones are whole quarter hours
 constexpr size_t kMaxVotePairs = 4'000'000;          // photo x event pairs that vote
+constexpr char kAmbiguousText[] =
+    "the capture times fit the events as well at several offsets (a regular cadence, no UTC "
+    "time): give a trigger file that names the photos, or a log with GPS time";
 
 struct Event {
   std::optional<int64_t> log_ns, utc_ns;
@@ -188,7 +191,63 @@ int64_t FromQuarterHour(int64_t offset_ns) {
   return std::min(r, kQuarterHourNs - r);
 }
 
-Pairs PairByTime(const PhotoSet& set, const Events& events, Base base, int64_t* offset_ns) {
+// Pairs at an offset, refined to their median offset, with how many and how tightly they pair.
+struct Alignment {
+  Pairs pairs;
+  int64_t offset_ns = 0;
+  size_t count = 0;
+  double spread_s = 0.0;  // rms of capture time - offset - event time over the pairs
+};
+
+Alignment AlignAt(const PhotoSet& set, const Events& events, const std::vector<int>& by_time,
+                  Offset start) {
+  Alignment a;
+  a.offset_ns = start.ns;
+  for (int pass = 0; pass < 2; ++pass) {
+    a.pairs = MatchAtOffset(set, events, by_time, {a.offset_ns, start.base});
+    a.offset_ns = MedianOffset(set, events, a.pairs, start.base).value_or(a.offset_ns);
+  }
+  double sum_sq = 0.0;
+  for (size_t i = 0; i < a.pairs.size(); ++i) {
+    if (a.pairs[i] < 0) continue;
+    const double r_s =
+        (*FaceNs(set.photos[i]) - a.offset_ns - *EventNs(events.list[a.pairs[i]], start.base)) *
+        1e-9;
+    sum_sq += r_s * r_s;
+    ++a.count;
+  }
+  a.spread_s = a.count > 0 ? std::sqrt(sum_sq / a.count) : 0.0;
+  return a;
+}
+
+// Against the log's clock the offset is free, and a regular cadence fits at every shift: every
+// offset that draws the most votes is tried, the one pairing the most photos, then the most
+// tightly, wins; *ambiguous when another (over 1 s away) pairs as many about as tightly (within
+// twice the spread + 50 ms: whole-second capture times cannot tell 3 s shifts apart).
+Pairs BestLogAlignment(const PhotoSet& set, const Events& events, const std::vector<int>& by_time,
+                       const std::vector<int64_t>& best_bins, int64_t* offset_ns, bool* ambiguous) {
+  std::vector<Alignment> tried;
+  for (int64_t bin : best_bins)
+    tried.push_back(AlignAt(set, events, by_time, {bin * kVoteBinNs + kVoteBinNs / 2, Base::kLog}));
+  const auto better = [](const Alignment& a, const Alignment& b) {
+    return a.count != b.count ? a.count > b.count : a.spread_s < b.spread_s;
+  };
+  const Alignment& best = *std::min_element(tried.begin(), tried.end(), better);
+  for (const Alignment& a : tried) {
+    if (std::llabs(a.offset_ns - best.offset_ns) > kNsPerSecond && a.count == best.count &&
+        a.spread_s <= 2.0 * best.spread_s + 0.05) {
+      *ambiguous = true;
+      return {};
+    }
+  }
+  *offset_ns = best.offset_ns;
+  return best.pairs;
+}
+
+// *ambiguous: against the log's clock, see BestLogAlignment. Against UTC the nearest time zone
+// breaks a tie.
+Pairs PairByTime(const PhotoSet& set, const Events& events, Base base, int64_t* offset_ns,
+                 bool* ambiguous) {
   std::vector<int> by_time;
   for (size_t j = 0; j < events.list.size(); ++j) {
     if (EventNs(events.list[j], base)) by_time.push_back(static_cast<int>(j));
@@ -224,6 +283,15 @@ Pairs PairByTime(const PhotoSet& set, const Events& events, Base base, int64_t* 
         score > best_score ||
         (score == best_score && (zone_gap < best_gap || (zone_gap == best_gap && bin < best_bin)));
     if (better) best_score = score, best_bin = bin;
+  }
+  if (base == Base::kLog) {
+    std::vector<int64_t> best_bins;
+    for (const auto& vote : votes) {
+      if (count_at(vote.first - 1) + vote.second + count_at(vote.first + 1) == best_score)
+        best_bins.push_back(vote.first);
+    }
+    std::sort(best_bins.begin(), best_bins.end());  // deterministic order
+    return BestLogAlignment(set, events, by_time, best_bins, offset_ns, ambiguous);
   }
   Pairs pairs = MatchAtOffset(set, events, by_time, {best_bin * kVoteBinNs + kVoteBinNs / 2, base});
   *offset_ns = MedianOffset(set, events, pairs, base).value_or(0);
@@ -274,7 +342,7 @@ std::string OffsetText(int64_t offset_ns) {
 // pair has both times: to UTC when the events have it, else to the log's clock (an offset free
 // to be anything, found by the same vote: the pattern of the capture times against the events').
 Pairs PairPhotos(const PhotoSet& set, const Events& events, std::string* rule,
-                 std::optional<Offset>* offset) {
+                 std::optional<Offset>* offset, bool* ambiguous) {
   const Base base =
       std::any_of(events.list.begin(), events.list.end(), [](const Event& e) { return e.utc_ns; })
           ? Base::kUtc
@@ -286,7 +354,7 @@ Pairs PairPhotos(const PhotoSet& set, const Events& events, std::string* rule,
       *rule = "by name";
     } else if (Count(pairs = PairByNumber(set, events)) > 0) {
       *rule = "by photo number";
-    } else if (Count(pairs = PairByTime(set, events, base, &o)) > 0) {
+    } else if (Count(pairs = PairByTime(set, events, base, &o, ambiguous)) > 0) {
       *rule = base == Base::kUtc ? "by capture time" : "by capture time on the log's clock";
       *offset = Offset{o, base};
     } else if (events.list.size() == set.photos.size()) {
@@ -331,6 +399,7 @@ void PlacePaired(const PhotoSet& set, const Events& events, const Pairs& pairs,
 
 // The camera clock's zone for photos placed by capture time alone, decided once.
 struct Zone {
+  bool ambiguous = false;                // PairByTime found no single offset to the log's clock
   std::optional<int64_t> log_offset_ns;  // camera clock - log clock, fitted: no GPS time needed
   std::optional<int64_t> ns;             // given: the fitted offset or --photo-utc-offset
   std::string text;
@@ -362,8 +431,10 @@ void PlaceByCaptureTime(const PhotoSet& set, const Events& events,
       continue;
     }
     if (!clock) {
-      p.problem = std::string(events.list.empty() ? "no event" : "no matching event") +
-                  ", and the log has no GPS time for the capture time";
+      p.problem = zone.ambiguous
+                      ? std::string("not placed: ") + kAmbiguousText
+                      : std::string(events.list.empty() ? "no event" : "no matching event") +
+                            ", and the log has no GPS time for the capture time";
       continue;
     }
     std::optional<int64_t> utc;
@@ -399,8 +470,8 @@ void PlaceByCaptureTime(const PhotoSet& set, const Events& events,
 }
 
 std::string MethodText(const PhotoClock& out, const Events& events, const std::string& rule,
-                       const std::optional<Offset>& offset,
-                       const std::optional<LogUtcClock>& clock) {
+                       const std::optional<Offset>& offset, const std::optional<LogUtcClock>& clock,
+                       bool ambiguous) {
   std::string method;
   if (out.paired > 0)
     method = std::to_string(out.paired) + " paired with " + events.text + " " + rule;
@@ -412,7 +483,11 @@ std::string MethodText(const PhotoClock& out, const Events& events, const std::s
   }
   if (method.empty()) {
     method = events.list.empty() ? "no camera events" : "no photo matched " + events.text;
-    if (!clock) method += ", and the log has no GPS time";
+    if (ambiguous) {
+      method += std::string(": ") + kAmbiguousText;
+    } else if (!clock) {
+      method += ", and the log has no GPS time";
+    }
   }
   if (offset && offset->base == Base::kUtc) method += "; camera clock UTC" + OffsetText(offset->ns);
   if (offset && offset->base == Base::kLog)
@@ -441,13 +516,15 @@ PhotoClock PlacePhotos(const PhotoSet& set, const FlightLog& log, const TriggerF
   out.placements.resize(set.photos.size());
   std::string rule;
   std::optional<Offset> offset;
-  const Pairs pairs = PairPhotos(set, events, &rule, &offset);
+  bool ambiguous = false;
+  const Pairs pairs = PairPhotos(set, events, &rule, &offset, &ambiguous);
   std::vector<double> residuals;
   PlacePaired(set, events, pairs, rule, offset, &out, &residuals);
 
   // The zone for the rest: the fitted offset, else --photo-utc-offset, else each photo's own
   // OffsetTimeOriginal, else the search.
   Zone zone;
+  zone.ambiguous = ambiguous;
   if (offset && offset->base == Base::kLog) {
     zone.log_offset_ns = offset->ns;
   } else if (offset) {
@@ -470,7 +547,7 @@ PhotoClock PlacePhotos(const PhotoSet& set, const FlightLog& log, const TriggerF
     out.residual_rms_s = std::sqrt(sum_sq / residuals.size());
     out.residual_max_s = max_abs;
   }
-  out.method = MethodText(out, events, rule, offset, clock);
+  out.method = MethodText(out, events, rule, offset, clock, ambiguous);
   return out;
 }
 
