@@ -32,6 +32,8 @@ namespace fs = std::filesystem;
 constexpr int64_t kGyroMarginNs = 1'000'000'000;
 // Frames drawn in overview.png.
 constexpr size_t kOverviewFrames = 4;
+// DIR's copy of camera.json's mask (docs/FORMATS.md v1.1 `mask`).
+constexpr const char* kCameraMaskName = "camera_mask.png";
 
 struct Context {
   const CorrectOptions& options;
@@ -83,6 +85,13 @@ double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap
     }
     cv::Mat corrected;
     CorrectFrame(rs, map, c.options.interpolation, &corrected, &mask);
+    if (!c.dataset.mask.empty()) {
+      // camera.json's mask moves with the pixels: a corrected pixel may be used where every tap
+      // of its source may (the bilinear sample of 0/255 is 255 exactly there).
+      cv::Mat moved;
+      CorrectFrame(c.dataset.mask, map, Interpolation::kBilinear, &moved);
+      mask &= (moved == 255);
+    }
     std::vector<std::pair<std::string, std::string>> xmp = c.xmp;
     xmp.emplace_back("Xmp.shutterlab.ReferenceTime",
                      FormatNumber("%.9f", out->t_reference_ns * 1e-9));
@@ -192,6 +201,9 @@ void WriteDatasetFiles(const Context& c, const CorrectSummary& summary) {
   const fs::path out(c.options.out_dir);
   RigModel rig = c.model.model.rig;
   rig.shutter.readout_s = 0.0;
+  // camera.json's mask as it was (each frame's masks/ image has it moved with the frame).
+  rig.mask = c.dataset.mask.empty() ? "" : kCameraMaskName;
+  if (!rig.mask.empty()) WriteImage((out / rig.mask).string(), c.dataset.mask);
   WriteRigModel((out / "camera.json").string(), rig);
   WriteGyroCsv((out / "gyro.csv").string(), CorrectedGyro(c.dataset.gyro, c.model.model));
   const bool keep_refs = !c.dataset.video && c.setting.reference == CorrectionReference::kFirstRow;

@@ -176,6 +176,11 @@ PhotoInput ReadPhotoInput(const std::string& photos_dir, const PhotoInputOptions
   dataset.gyro_path = options.log_path;
   dataset.frames_path = options.triggers_path.empty() ? options.log_path : options.triggers_path;
   dataset.declared = PhotosCamera(set, options, &input.camera_source);
+  if (!dataset.declared.mask.empty()) {  // camera.json's mask, beside camera.json
+    dataset.mask =
+        ReadMask((fs::path(options.camera_path).parent_path() / dataset.declared.mask).string(),
+                 dataset.declared.camera.width, dataset.declared.camera.height);
+  }
 
   FlightLog log = ReadFlightLog(options.log_path, options.read);
   std::optional<TriggerFile> triggers;

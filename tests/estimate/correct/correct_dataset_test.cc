@@ -13,6 +13,7 @@
 #include "render/ground_texture.h"
 #include "render/image_io.h"
 #include "render/render_dataset.h"
+#include "render/rig_dataset.h"
 #include "sim/check.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/logs/ulog_write.h"
@@ -390,6 +391,34 @@ TEST(CorrectPhotos, PlacedInOrderOnAPx4LogsOwnCameraEvents) {
       CorrectDataset(PhotoOptions(dir, rendered, photos, dir / "flight.ulg"));
   ExpectTheTruth(summary, names, {times_s[0] + 0.004, times_s[1] + 0.004});
   EXPECT_TRUE(summary.skipped.empty());
+}
+
+TEST(CorrectEndToEnd, CameraMaskMovesWithEachFrame) {
+  // camera.json's mask (the left quarter not to be used): each frame's mask in DIR is the
+  // has-a-source mask less the camera mask moved with the frame, and DIR's camera.json names a
+  // copy of it, so that DIR reads as a rig dataset again.
+  test::TempDir dir;
+  const Rendered rendered = Render(dir, "ds", {}, {12.0});
+  const std::string plain = dir / "plain";
+  Correct(rendered.dataset, plain);
+  cv::Mat camera_mask(kHeight, kWidth, CV_8U, cv::Scalar(255));
+  camera_mask.colRange(0, kWidth / 4).setTo(0);
+  WriteImage(rendered.dataset + "/mask.png", camera_mask);
+  RigModel rig = ReadRigModel(rendered.dataset + "/camera.json");
+  rig.mask = "mask.png";
+  WriteRigModel(rendered.dataset + "/camera.json", rig);
+  const std::string masked = dir / "masked";
+  Correct(rendered.dataset, masked);
+  const cv::Mat without = ReadImage(plain + "/masks/images/0000_rs.png.png");
+  const cv::Mat with = ReadImage(masked + "/masks/images/0000_rs.png.png");
+  constexpr int kMarginPx = 12;  // beyond the frame's displacement
+  EXPECT_EQ(cv::countNonZero(with.colRange(0, kWidth / 4 - kMarginPx)), 0);
+  EXPECT_EQ(cv::norm(with.colRange(kWidth / 4 + kMarginPx, kWidth),
+                     without.colRange(kWidth / 4 + kMarginPx, kWidth), cv::NORM_INF),
+            0.0);
+  const RigDataset out = ReadRigDataset(masked);
+  EXPECT_EQ(out.declared.mask, "camera_mask.png");
+  EXPECT_EQ(cv::norm(out.mask, camera_mask, cv::NORM_INF), 0.0);
 }
 
 TEST(CorrectEndToEnd, ResumesKeepsInputsAndRefusesToOverwriteThem) {
