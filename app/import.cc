@@ -2,6 +2,7 @@
 // into a video rig dataset (render/video_import.h).
 
 #include "app/command.h"
+#include "app/trace_options.h"  // PrintLogWarnings
 #include "render/video_import.h"
 
 #include <cstdio>
@@ -31,6 +32,10 @@ const CommandRegistration kRegistration(55, [](CLI::App& app) {
   cmd->add_option(
       "--start-frame", options->start_frame,
       "first frame id to import (GoPro: video frame index from 0; phone: frame number)");
+  cmd->add_option("--mask", options->mask_path,
+                  "MASK.png of the frames' size: white = may be measured, black = never (a "
+                  "dashboard, landing gear, burned-in text); becomes the dataset's mask.png")
+      ->check(CLI::ExistingFile);
   return std::function<void()>([options] {
     options->Check();
     std::unique_ptr<Progress> bar;
@@ -39,6 +44,7 @@ const CommandRegistration kRegistration(55, [](CLI::App& app) {
       bar->Update(done);
     });
     bar.reset();
+    PrintLogWarnings(options->source, summary.record.warnings);
     const char* kind = summary.kind == ImportSource::kGoproMp4 ? "GoPro MP4 (GPMF)" : "phone clip";
     std::printf("source   %s: %s\n", kind, options->source.c_str());
     std::printf("gyro     %zu samples, %.2f Hz\n", summary.gyro_samples, summary.gyro_rate_hz);

@@ -2,6 +2,7 @@
 // (render/render_dataset.h).
 
 #include "app/command.h"
+#include "app/trace_options.h"  // PrintLogWarnings
 #include "render/render_dataset.h"
 
 #include <cstdio>
@@ -41,6 +42,14 @@ const CommandRegistration kRegistration(50, [](CLI::App& app) {
       ->check(CLI::IsMember({"bilinear", "bicubic"}));
   cmd->add_flag("!--no-pictures", options->pictures,
                 "skip heatmaps, side-by-side panels and overview");
+  cmd->add_option("--camera-fixed-patch", options->clutter.camera_fixed_share,
+                  "SHARE: the bottom SHARE of every frame's rows show a textured patch that moves "
+                  "with the camera (a dashboard, landing gear); truth 0 there")
+      ->check(CLI::Range(0.0, 0.9));
+  cmd->add_option("--moving-patch", options->clutter.moving_patch_mps,
+                  "M/S: a textured square drives over the ground at this speed (along x), seen at "
+                  "each row's own time; truth NaN where it is seen")
+      ->check(CLI::Range(0.0, 1000.0));
   cmd->add_flag("--video", options->video,
                 "a video dataset: consecutive rolling-shutter frames of one flight, no reference "
                 "images; the truth of each frame is its match in the previous one");
@@ -54,6 +63,7 @@ const CommandRegistration kRegistration(50, [](CLI::App& app) {
       bar->Update(done);
     });
     bar.reset();
+    PrintLogWarnings(options->gyro_path, summary.gyro_warnings);
     if (summary.lens_profile) {
       for (const std::string& note : summary.lens_profile->notes) std::printf("%s\n", note.c_str());
     }

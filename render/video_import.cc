@@ -4,11 +4,13 @@
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "render/lens_profile.h"
+#include "render/rig_dataset.h"
 #include "sim/check.h"
 #include "sim/logs/gopro_telemetry.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/logs/phone_clip.h"
 #include "sim/text_file.h"
+#include "sim/trace_audit.h"
 #include "sim/units.h"
 
 #include <opencv2/core/utility.hpp>
@@ -430,6 +432,7 @@ ImportRecord GoproRecord(const std::string& path, const GoproTelemetry& telemetr
                             ? "gyro.csv gx,gy,gz = the sensor's x, y, z (GPMF storage reordered)"
                             : "gyro.csv gx,gy,gz = the camera's own axes X, Y, Z (" +
                                   telemetry.axis_order_source + ")";
+  record.warnings = AuditTrace(telemetry.gyro);
   record.frame_count = frames.entries.size();
   record.t_first_row = "frame presentation time; what it marks in the exposure is unknown";
   record.exposures = frames.exposures;
@@ -570,6 +573,7 @@ ImportRecord PhoneRecord(const std::string& path, const PhoneClip& clip, const R
   record.gyro_samples = clip.gyro.size();
   record.gyro_rate_hz = clip.gyro.sampling().RateHz();
   record.gyro_columns = "gyro.txt gx,gy,gz (rad/s), the phone's sensor axes";
+  record.warnings = AuditTrace(clip.gyro);
   record.frame_count = frame_count;
   record.t_first_row = "start-of-frame time from framestamp.txt (line N = frame N)";
   record.exposures = std::move(exposures);
@@ -691,6 +695,20 @@ ImportSource DetectImportSource(const std::string& source) {
   return ImportSource::kGoproMp4;
 }
 
+// import --mask: the mask checked against the frames' size, written as DIR/mask.png (0 / 255),
+// named in camera.json and recorded in import.json.
+void AddMask(const std::string& mask_path, const fs::path& dir, ImportRecord* record) {
+  const std::string camera_path = (dir / "camera.json").string();
+  RigModel rig = ReadRigModel(camera_path);
+  const cv::Mat mask = ReadMask(mask_path, rig.camera.width, rig.camera.height);
+  rig.mask = "mask.png";
+  WriteImage((dir / rig.mask).string(), mask);
+  WriteRigModel(camera_path, rig);
+  record->mask_file = rig.mask;
+  record->mask_source = mask_path;
+  WriteImportJson((dir / "import.json").string(), *record);
+}
+
 ImportSummary ImportVideo(const ImportOptions& options,
                           const std::function<void(size_t, size_t)>& progress) {
   options.Check();
@@ -702,6 +720,7 @@ ImportSummary ImportVideo(const ImportOptions& options,
   ImportSummary summary = kind == ImportSource::kGoproMp4
                               ? ImportGopro(options, profile, staging.path(), progress)
                               : ImportPhone(options, profile, staging.path(), progress);
+  if (!options.mask_path.empty()) AddMask(options.mask_path, staging.path(), &summary.record);
   staging.Commit();
   return summary;
 }

@@ -84,9 +84,14 @@ struct AnalyzeOptions {
 struct ImageResult {
   std::string name;
   int64_t trigger_t_ns = 0;
-  int64_t t_ns = 0;        // exposure of row 0 = trigger + latency
-  bool in_trace = false;   // false: [t, t + readout] is not covered by the gyro trace
-  double d_paper_m = 0.0;  // meaningful only when in_trace
+  int64_t t_ns = 0;       // exposure of row 0 = trigger + latency
+  bool in_trace = false;  // false: [t, t + readout] is not covered by the gyro trace
+  // The readout is not longer than kMinWindowSampleIntervals sample intervals (the log's median):
+  // it holds one or two samples, too few for a range, and the image is not judged (as flight's
+  // rows; "too few samples" in the table, null values in the JSON).
+  bool too_few_samples = false;
+  bool judged() const { return in_trace && !too_few_samples; }
+  double d_paper_m = 0.0;  // meaningful only when judged()
   double d_full_m = 0.0;
   double d_full_px = 0.0;
   std::array<double, 3> range_arcsec{};  // per camera axis within the readout
@@ -95,7 +100,8 @@ struct ImageResult {
 };
 
 struct AnalyzeVerdict {
-  size_t images_in_trace = 0;
+  size_t images_in_trace = 0;  // judged: inside the trace, with samples enough in the readout
+  size_t images_too_few_samples = 0;  // inside the trace, but not judged (ImageResult)
   std::vector<double> share_percent;  // per limit: images over the limit / images in the trace
   int axis_to_stabilise = -1;         // most frequent dominant axis of flagged images; -1 none
   double fast_readout_s = 0.010;

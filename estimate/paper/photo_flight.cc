@@ -9,12 +9,8 @@
 #include <tuple>
 
 namespace shutterlab {
-namespace {
 
-// The most common camera among the readable photos with a size and a focal length: image size,
-// focal length (0.1 px) and readout (ns; -1 unknown).
-void CameraFromPhotos(const PhotoSet& set, const PhotoFlightOptions& options, RigModel* rig,
-                      std::string* source) {
+void CameraFromPhotos(const PhotoSet& set, bool readout_given, RigModel* rig, std::string* source) {
   using Key = std::tuple<int, int, int64_t, int64_t>;
   std::map<Key, size_t> counts;
   std::map<Key, const PhotoRecord*> example;
@@ -43,7 +39,7 @@ void CameraFromPhotos(const PhotoSet& set, const PhotoFlightOptions& options, Ri
             std::to_string(best->second) + " of " + std::to_string(set.photos.size()) +
             " photos), " + std::to_string(r.metadata.width) + "x" +
             std::to_string(r.metadata.height) + FormatNumber(", f %.0f px", *r.focal_px);
-  if (options.readout_given) {
+  if (readout_given) {
     *source += FormatNumber(", readout %g ms (--readout)", rig->shutter.readout_s * 1e3);
   } else if (r.readout_s) {
     rig->shutter.readout_s = *r.readout_s;
@@ -54,8 +50,6 @@ void CameraFromPhotos(const PhotoSet& set, const PhotoFlightOptions& options, Ri
   }
   if (counts.size() > 1) *source += "; other cameras in the folder are analysed as this one";
 }
-
-}  // namespace
 
 void PhotoFlightOptions::Check() const {
   analyze.Check();
@@ -74,7 +68,7 @@ PhotoFlightResult AnalyzePhotoFlight(const PhotoSet& set, const FlightLog& log,
   if (options.rig_given) {
     out.camera_source = "camera.json";
   } else {
-    CameraFromPhotos(set, options, &a.rig, &out.camera_source);
+    CameraFromPhotos(set, options.readout_given, &a.rig, &out.camera_source);
   }
   if (options.lens_profile) {
     out.lens = ScaleLensProfile(*options.lens_profile, a.rig.camera.width, a.rig.camera.height);

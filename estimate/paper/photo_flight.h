@@ -46,6 +46,13 @@ struct PhotoFlightResult {
   std::optional<LensProfileUse> lens;  // the lens profile as the rig took it
 };
 
+// The most common camera among the readable photos with a size and a focal length (image size,
+// focal length to 0.1 px and readout) into *rig: its size, focal length, principal point at the
+// centre, and its readout unless readout_given (the rig's is kept then, and when no photo has
+// one). *source says which camera it was and where each value came from; rig is left as it is
+// when no photo gives its size and focal length.
+void CameraFromPhotos(const PhotoSet& set, bool readout_given, RigModel* rig, std::string* source);
+
 // triggers: a trigger file, or null for the log's camera events.
 PhotoFlightResult AnalyzePhotoFlight(const PhotoSet& set, const FlightLog& log,
                                      const TriggerFile* triggers,

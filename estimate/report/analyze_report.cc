@@ -101,8 +101,8 @@ void AddDistortionChart(HtmlPage* page, const AnalyzeResult& result) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (const ImageResult& image : result.images) {
     chart.x.push_back(image.t_ns * 1e-9);
-    paper.y.push_back(image.in_trace ? image.d_paper_m * 100.0 : nan);
-    full.y.push_back(image.in_trace ? image.d_full_m * 100.0 : nan);
+    paper.y.push_back(image.judged() ? image.d_paper_m * 100.0 : nan);
+    full.y.push_back(image.judged() ? image.d_full_m * 100.0 : nan);
   }
   chart.series = {paper, full};
   for (size_t l = 0; l < result.limits_m.size(); ++l) {
@@ -250,8 +250,8 @@ void AddImageTable(HtmlPage* page, const AnalyzeResult& result) {
   std::vector<std::vector<std::string>> rows;
   for (const ImageResult& image : result.images) {
     std::vector<std::string> cells = {image.name, Fmt("%.3f", image.t_ns * 1e-9)};
-    if (!image.in_trace) {
-      cells.push_back("outside the log");
+    if (!image.judged()) {
+      cells.push_back(image.in_trace ? "too few samples in the readout" : "outside the log");
     } else {
       cells.insert(cells.end(),
                    {Fmt("%.2f", image.d_paper_m * 100), Fmt("%.2f", image.d_full_m * 100),
@@ -290,7 +290,7 @@ void AddWorstImages(HtmlPage* page, const RigModel& rig, const AnalyzeResult& re
                     const AnalyzeReportOptions& report) {
   std::vector<const ImageResult*> worst;
   for (const ImageResult& image : result.images) {
-    if (image.in_trace) worst.push_back(&image);
+    if (image.judged()) worst.push_back(&image);
   }
   std::sort(worst.begin(), worst.end(),
             [](const ImageResult* a, const ImageResult* b) { return a->d_full_m > b->d_full_m; });
@@ -366,7 +366,12 @@ HtmlPage AnalyzeReportPage(const AnalyzeOptions& options, const AnalyzeResult& r
       {"ground sample", Fmt("%.2f cm/px", 100.0 * result.altitude_m / (0.5 * (cam.fx + cam.fy)))},
       {"triggers", result.trigger_source},
       {"images", std::to_string(result.images.size()) + " (" +
-                     std::to_string(result.verdict.images_in_trace) + " inside the log)"}};
+                     std::to_string(result.verdict.images_in_trace) + " inside the log" +
+                     (result.verdict.images_too_few_samples > 0
+                          ? ", " + std::to_string(result.verdict.images_too_few_samples) +
+                                " more with too few samples in their readout"
+                          : "") +
+                     ")"}};
   // Where the camera and its readout came from, beside them, when the caller says it.
   if (!report.camera_source.empty())
     rows.insert(rows.begin() + 11, {"camera from", report.camera_source});

@@ -430,9 +430,10 @@ void DataFlashParser::HandleGyro(uint8_t type, const Format& fmt, std::string_vi
   const Eigen::Vector3d& scale = GyroScale(type, fmt);
   auto& c = Candidate(name == "GYR" ? "GYR" : "IMU", instance, name == "GYR" ? 0 : 2);
   last_t_ns_ = std::max(last_t_ns_, t_ns.value_or(0));
-  c.samples.push_back(
-      {t_ns.value_or(0), Eigen::Vector3d(ReadNumber(p, *x), ReadNumber(p, *y), ReadNumber(p, *z))
-                             .cwiseProduct(scale)});
+  internal::AddCandidateSample(
+      t_ns,
+      Eigen::Vector3d(ReadNumber(p, *x), ReadNumber(p, *y), ReadNumber(p, *z)).cwiseProduct(scale),
+      &c);
 }
 
 void DataFlashParser::HandleBatchHeader(const Format& fmt, std::string_view p) {
@@ -580,6 +581,7 @@ void DataFlashParser::Finish() {
 
   std::stable_sort(log_.camera_events.begin(), log_.camera_events.end(),
                    [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
+  KeepOneCameraEventKind(&log_);
   std::vector<double> airborne;
   for (double h : cam_rel_alt_m_) {
     if (h > kAirborneAltitudeM) airborne.push_back(h);

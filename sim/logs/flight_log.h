@@ -45,4 +45,11 @@ struct FlightLog {
   std::vector<LogWarning> warnings;
 };
 
+// A log may record each image twice: PX4's camera_trigger (the command) and camera_capture (the
+// camera's feedback), ArduPilot's TRIG and CAM. Keeps the events of one kind, the camera's
+// feedback where the log has it (camera_capture, CAM; otherwise camera_trigger, TRIG; otherwise
+// the most frequent kind), and says in an unused_source warning how many of the others were left
+// out. Events stay in time order.
+void KeepOneCameraEventKind(FlightLog* log);
+
 }  // namespace shutterlab

@@ -851,9 +851,11 @@ void DecodeGyroRates(const std::string& topic, int multi_id, const Fields& f,
   cand->samples.reserve(cand->samples.size() + sub.payloads.size());
   for (std::string_view data : sub.payloads) {
     const auto t_ns = ReadTimeNs(data, *t_field);
-    cand->samples.push_back(
-        {t_ns.value_or(0), Eigen::Vector3d(ReadNumber(data, *axes[0]), ReadNumber(data, *axes[1]),
-                                           ReadNumber(data, *axes[2]))});
+    internal::AddCandidateSample(
+        t_ns,
+        Eigen::Vector3d(ReadNumber(data, *axes[0]), ReadNumber(data, *axes[1]),
+                        ReadNumber(data, *axes[2])),
+        cand);
   }
 }
 
@@ -984,6 +986,7 @@ void ULogParser::Decode() {
   std::stable_sort(topics.utc_fixes.begin(), topics.utc_fixes.end(),
                    [](const UtcFix& a, const UtcFix& b) { return a.t_ns < b.t_ns; });
   log_.utc_fixes = std::move(topics.utc_fixes);
+  KeepOneCameraEventKind(&log_);
   SetAltitudeAboveGround(topics, &log_);
   if (!internal::ChooseGyroSource(std::move(topics.candidates), &log_)) {
     throw IoError(IoMessage(path_, 0,

@@ -76,6 +76,40 @@ TEST(Analyze, ConstantRateGivesPaperDistortionAndFlagsAboveTheLimit) {
   EXPECT_EQ(result.flight->rows.size(), 2u);
 }
 
+// At 50 Hz a 30 ms readout holds one or two samples: the images are refused as flight's rows are,
+// not given a D of 0, and the verdict says what the rate allows; a 100 ms readout is judged.
+TEST(Analyze, ImagesWhoseReadoutHoldsTooFewSamplesAreNotJudged) {
+  FlightLog log;
+  std::vector<GyroSample> samples;
+  for (int k = 0; k < 1000; ++k)  // 20 s at 50 Hz, turning about x after 6 s
+    samples.push_back({static_cast<int64_t>(k) * 20'000'000,
+                       Eigen::Vector3d(k >= 300 ? RateForGroundSmear(0.07) : 0.0, 0, 0)});
+  log.gyro = GyroTrace(samples);
+  log.format = "gyro.csv";
+  AnalyzeOptions options = BaseOptions();
+  options.every_s = 2.0;
+  const AnalyzeResult refused = Analyze(log, options);
+  ASSERT_FALSE(refused.images.empty());
+  for (const ImageResult& image : refused.images) {
+    if (!image.in_trace) continue;
+    EXPECT_TRUE(image.too_few_samples) << image.name;
+    EXPECT_FALSE(image.judged());
+  }
+  EXPECT_EQ(refused.verdict.images_in_trace, 0u);
+  EXPECT_GT(refused.verdict.images_too_few_samples, 0u);
+  EXPECT_EQ(refused.verdict.line.rfind("verdict: no image can be judged: at 50 Hz the 30 ms "
+                                       "readout holds at most two samples; it must be longer "
+                                       "than 40 ms",
+                                       0),
+            0u)
+      << refused.verdict.line;
+  EXPECT_NE(AnalyzeReport(refused).find("too few samples in the readout"), std::string::npos);
+  options.rig.shutter.readout_s = 0.100;
+  const AnalyzeResult judged = Analyze(log, options);
+  EXPECT_EQ(judged.verdict.images_too_few_samples, 0u);
+  EXPECT_EQ(judged.verdict.images_in_trace, refused.verdict.images_too_few_samples);
+}
+
 TEST(Analyze, FlagIsStrictlyAboveTheLimit) {
   // Just under and just over 5 cm.
   for (const double d_m : {0.0499, 0.0501}) {

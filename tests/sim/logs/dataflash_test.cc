@@ -189,7 +189,9 @@ TEST(DataFlash, ReadsGyrBackExactly) {
   EXPECT_EQ(log.gyro_sources_available[1], "GYR/1 (500.0 Hz, 500 samples)");
   EXPECT_EQ(log.gyro_sources_available[2], "IMU (200.0 Hz, 200 samples)");
   EXPECT_EQ(log.records_skipped, 0u);
-  EXPECT_TRUE(log.warnings.empty()) << test::JoinedWarnings(log.warnings);
+  // Nothing lost; only the note that the TRIG copies of the pictures were not used.
+  ASSERT_EQ(log.warnings.size(), 1u) << test::JoinedWarnings(log.warnings);
+  EXPECT_EQ(log.warnings[0].kind, "unused_source");
 }
 
 // The one trigger reader takes a DataFlash file by its content and keeps the log's clock.
@@ -212,13 +214,15 @@ TEST(DataFlash, IsATriggerFile) {
 TEST(DataFlash, ReadsCameraEventsAndAltitude) {
   DataFlashBuilder b = FlightFile(1000);
   const FlightLog log = ParseDataFlash(b.bytes(), "flight.bin");
-  ASSERT_EQ(log.camera_events.size(), 20u);
-  EXPECT_EQ(log.camera_events[0].kind, "TRIG");
-  EXPECT_EQ(log.camera_events[0].t_ns, (2'049'000 + 600) * int64_t{1000});
-  EXPECT_EQ(log.camera_events[1].kind, "CAM");
-  EXPECT_EQ(log.camera_events[1].t_ns, (2'050'000 + 700) * int64_t{1000});
-  EXPECT_EQ(log.camera_events[1].sequence, 1);
-  EXPECT_EQ(log.camera_events[19].sequence, 10);
+  // Each picture as TRIG (the command) and CAM (the feedback): the 10 CAM are kept.
+  ASSERT_EQ(log.camera_events.size(), 10u);
+  EXPECT_EQ(log.camera_events[0].kind, "CAM");
+  EXPECT_EQ(log.camera_events[0].t_ns, (2'050'000 + 700) * int64_t{1000});
+  EXPECT_EQ(log.camera_events[0].sequence, 1);
+  EXPECT_EQ(log.camera_events[9].sequence, 10);
+  EXPECT_TRUE(test::AnyWarningContains(log.warnings,
+                                       "camera events: used the 10 CAM events; 10 TRIG not used"))
+      << test::JoinedWarnings(log.warnings);
   ASSERT_TRUE(log.altitude_above_ground_m.has_value());
   // CAM RelAlt 40..49 m ('e': centimetres); the TRIG copies say 0 m and are not used.
   constexpr double kCentimetre = 1e-9;  // 'e' is int32 * 0.01: exact to rounding only
@@ -381,7 +385,7 @@ TEST(DataFlash, CorruptedCopySkipsDamageAndReadsOn) {
   EXPECT_TRUE(AnyWarningContains(log, "corrupt bytes skipped in total"));
   // The two damaged GYR messages are lost (of instance 0 or 1), nothing else.
   EXPECT_GE(log.gyro.size(), 998u);
-  EXPECT_EQ(log.camera_events.size(), 20u);
+  EXPECT_EQ(log.camera_events.size(), 10u);  // the CAM ones (TRIG not used)
 }
 
 TEST(DataFlash, RandomDamageGivesErrorOrPartialResult) {
