@@ -73,15 +73,12 @@ Events CollectEvents(const FlightLog& log, const TriggerFile* triggers,
       events.list.push_back(std::move(e));
     }
   } else if (!log.camera_events.empty()) {
-    // As analyze does: the most frequent kind (PX4 may log camera_trigger and camera_capture).
-    std::map<std::string, size_t> kinds;
-    for (const CameraEvent& c : log.camera_events) ++kinds[c.kind];
-    const std::string kind = std::max_element(kinds.begin(), kinds.end(), [](auto& a, auto& b) {
-                               return a.second < b.second;
-                             })->first;
-    events.text = "the log's camera events (" + kind + ")";
-    for (const CameraEvent& c : log.camera_events) {
-      if (c.kind != kind) continue;
+    // The readers keep one kind already; a log built elsewhere gets the same choice (analyze's).
+    FlightLog events_only;
+    events_only.camera_events = log.camera_events;
+    KeepOneCameraEventKind(&events_only);
+    events.text = "the log's camera events (" + events_only.camera_events.front().kind + ")";
+    for (const CameraEvent& c : events_only.camera_events) {
       Event e;
       e.log_ns = c.t_ns;
       e.sequence = c.sequence;
