@@ -262,9 +262,16 @@ std::string ToLower(std::string_view s) {
 }
 
 std::string FormatNumber(const char* format, double value) {
+  // Most results fit the stack buffer; a longer format (a sentence around the number) is sized
+  // and written again rather than cut.
   char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), format, value);
-  return buffer;
+  const int length = std::snprintf(buffer, sizeof(buffer), format, value);
+  if (length < 0) return {};
+  if (static_cast<size_t>(length) < sizeof(buffer)) return std::string(buffer, length);
+  std::string out(static_cast<size_t>(length) + 1, '\0');
+  std::snprintf(out.data(), out.size(), format, value);
+  out.resize(static_cast<size_t>(length));
+  return out;
 }
 
 }  // namespace shutterlab

@@ -116,5 +116,12 @@ TEST(TextBlocks, EveryBlockEndsAtALineEndAndAMissingFileIsAnIoError) {
   EXPECT_THROW(TextBlocks::OfFile("/nonexistent/gyro.csv"), IoError);
 }
 
+TEST(FormatNumber, KeepsTextLongerThanItsStackBuffer) {
+  EXPECT_EQ(FormatNumber("%.2f", 3.14159), "3.14");
+  const std::string sentence(100, 'x');
+  const std::string formatted = FormatNumber((sentence + " %.1f s").c_str(), 2.5);
+  EXPECT_EQ(formatted, sentence + " 2.5 s");
+}
+
 }  // namespace
 }  // namespace shutterlab
