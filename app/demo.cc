@@ -164,7 +164,7 @@ void StepAnalyze(DemoContext& context) {
   std::cout << AnalyzeReport(result);
   std::string flagged;
   for (const ImageResult& image : result.images) {
-    if (image.in_trace && image.flagged.back())
+    if (image.judged() && image.flagged.back())
       flagged += (flagged.empty() ? "" : " ") + image.name;
   }
   std::cout << "flagged over " << LimitKey(options.limits_m.back() * 100)

@@ -39,14 +39,33 @@ void Run(const FlightCommand& command) {
   options.series = !command.series_path.empty();
   // A known (zero) bias takes precedence over the segment in Flight().
   if (command.zero_bias) options.known_bias_rad_s = Eigen::Vector3d::Zero();
-  Progress progress("flight", 1000);
-  options.progress = [&progress](double fraction) {
-    progress.Update(static_cast<size_t>(fraction * 1000));
-  };
   std::vector<LogWarning> warnings;
+  FlightResult result;
   TracePair pair;
-  const FlightResult result = AnalyzeTrace(command.trace, options, Flight, &warnings, &pair);
-  for (LogWarning& w : FlightWarnings(result)) warnings.push_back(std::move(w));
+  if (command.trace.auto_bias || !command.trace.second_path.empty()) {
+    // The still segment may lie anywhere in the log, and a pair is fused on the whole traces:
+    // both need the whole trace first.
+    Progress progress("flight", 1000);
+    options.progress = [&progress](double fraction) {
+      progress.Update(static_cast<size_t>(fraction * 1000));
+    };
+    result = AnalyzeTrace(command.trace, options, Flight, &warnings, &pair);
+  } else {
+    // Streamed: memory stays bounded whatever the log's length.
+    options.bias = ParseBiasSegment(command.trace.bias);
+    FlightStream flight(options);
+    warnings =
+        command.trace
+            .Stream("flight",
+                    [&flight](const GyroChunk& chunk) { flight.Add(chunk.data, chunk.size); })
+            .warnings;
+    try {
+      result = flight.Finish();
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(command.trace.path + ": " + e.what());
+    }
+  }
+  warnings.insert(warnings.end(), result.warnings.begin(), result.warnings.end());
   if (options.series) WriteFlightSeriesCsv(command.series_path, result.series);
   if (command.json) {
     nlohmann::json json = FlightToJson(result);

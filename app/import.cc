@@ -2,6 +2,7 @@
 // into a video rig dataset (render/video_import.h).
 
 #include "app/command.h"
+#include "app/trace_options.h"  // PrintLogWarnings
 #include "render/video_import.h"
 
 #include <cstdio>
@@ -43,6 +44,7 @@ const CommandRegistration kRegistration(55, [](CLI::App& app) {
       bar->Update(done);
     });
     bar.reset();
+    PrintLogWarnings(options->source, summary.record.warnings);
     const char* kind = summary.kind == ImportSource::kGoproMp4 ? "GoPro MP4 (GPMF)" : "phone clip";
     std::printf("source   %s: %s\n", kind, options->source.c_str());
     std::printf("gyro     %zu samples, %.2f Hz\n", summary.gyro_samples, summary.gyro_rate_hz);

@@ -2,6 +2,7 @@
 // (render/render_dataset.h).
 
 #include "app/command.h"
+#include "app/trace_options.h"  // PrintLogWarnings
 #include "render/render_dataset.h"
 
 #include <cstdio>
@@ -62,6 +63,7 @@ const CommandRegistration kRegistration(50, [](CLI::App& app) {
       bar->Update(done);
     });
     bar.reset();
+    PrintLogWarnings(options->gyro_path, summary.gyro_warnings);
     if (summary.lens_profile) {
       for (const std::string& note : summary.lens_profile->notes) std::printf("%s\n", note.c_str());
     }

@@ -1,5 +1,6 @@
 #include "app/trace_options.h"
 
+#include "app/command.h"
 #include "sim/check.h"
 
 #include <cstdio>
@@ -107,6 +108,21 @@ FlightLog TraceOptions::Load() const {
   FlightLog log = ReadFlightLog(path, ReadOptions());
   PrintLogWarnings(path, log.warnings);
   return log;
+}
+
+StreamedLog TraceOptions::Stream(const std::string& label,
+                                 const std::function<void(const GyroChunk&)>& consume) const {
+  FlightLogStream stream = OpenFlightLog(path, ReadOptions());
+  stream.gyro = ReadAhead(std::move(stream.gyro));
+  StreamedLog streamed;
+  {
+    Progress progress(label, 1000);
+    streamed = ConsumeFlightLog(&stream, consume, [&progress](double fraction) {
+      progress.Update(static_cast<size_t>(fraction * 1000));
+    });
+  }
+  PrintLogWarnings(path, streamed.warnings);
+  return streamed;
 }
 
 void PrintLogWarnings(const std::string& path, const std::vector<LogWarning>& warnings) {

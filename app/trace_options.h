@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -52,6 +53,11 @@ struct TraceOptions {
                                FlightLog* second = nullptr) const;
   // Reads the log and prints its warnings on stderr (PrintLogWarnings).
   FlightLog Load() const;
+  // Reads the log as a stream, a block at a time with the reader a chunk ahead on a second thread,
+  // handing each chunk to consume; shows progress on a terminal (label), prints the warnings on
+  // stderr once the log is read, and returns them with the sampling.
+  StreamedLog Stream(const std::string& label,
+                     const std::function<void(const GyroChunk&)>& consume) const;
   // The bias segment for this trace: with --auto-bias the detected still segment
   // (DetectStillSegment, default StillDetectOptions; one note "auto-bias: still segment A:B s" on
   // stderr), otherwise --bias A:B. Throws std::invalid_argument when neither gives a segment.

@@ -4,6 +4,8 @@
 // uncaught exception of another type, a hang) is a bug that libFuzzer reports.
 
 #include "sim/check.h"
+#include "sim/gyro_source.h"
+#include "sim/trace_audit.h"
 
 #include <cstdint>
 #include <cstdio>
@@ -26,6 +28,15 @@ void Expect(const Read& read) {
   } catch (const IoError&) {
   } catch (const std::invalid_argument&) {
   }
+}
+
+// Takes every chunk of a source through the trace audit, as the commands do.
+inline void AuditEveryChunk(GyroSource* source, const TraceAuditOptions& options = {}) {
+  TraceAuditor auditor(options);
+  for (GyroChunk chunk = source->Next(); !chunk.empty(); chunk = source->Next())
+    auditor.Add(chunk.data, chunk.size);
+  auditor.Finish();
+  auditor.Sampling();
 }
 
 // For the readers that take a path: the bytes in a file of this process, rewritten per input.

@@ -1,6 +1,7 @@
 #include "render/import_io.h"
 
 #include "render/camera.h"
+#include "render/warnings_io.h"
 #include "sim/text_file.h"
 
 #include <nlohmann/json.hpp>
@@ -131,6 +132,7 @@ std::string ImportJson(const ImportRecord& record) {
   r["frames"]["outside_gyro"] = record.outside_gyro;
   r["exposure_s"] = ExposuresJson(record.exposures);
   r["claims"] = ClaimsJson(record.claims);
+  r["warnings"] = WarningsToJson(record.warnings);
   if (record.lens_profile) r["lens_profile"] = LensProfileUseJson(*record.lens_profile);
   if (!record.mask_file.empty()) {
     r["mask"] = {{"file", record.mask_file}, {"source", record.mask_source}};

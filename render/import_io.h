@@ -5,6 +5,7 @@
 
 #include "render/lens_distortion.h"
 #include "render/lens_profile.h"
+#include "sim/log_warning.h"
 #include "sim/logs/gopro_telemetry.h"
 
 #include <Eigen/Core>
@@ -93,6 +94,9 @@ struct ImportRecord {
   std::vector<int64_t> outside_gyro;  // frames whose declared readout the gyro does not cover
   std::vector<FrameExposure> exposures;
   std::vector<ImportClaim> claims;
+  // What the clip's gyro lost or doubted (sim/trace_audit.h: gaps, repeated times, rate changes,
+  // saturation), also printed on stderr.
+  std::vector<LogWarning> warnings;
   std::optional<LensProfileUse> lens_profile;  // `--lens-profile` ("lens_profile" when given)
   std::variant<GoproImportDetails, PhoneImportDetails> details;  // also gives source.kind
   // import --mask: the mask file the dataset's camera.json names (docs/FORMATS.md `mask`) and the

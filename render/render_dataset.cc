@@ -9,6 +9,7 @@
 #include "sim/check.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
+#include "sim/trace_audit.h"
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
@@ -257,6 +258,7 @@ RenderSummary RenderDataset(const RenderOptions& options,
   const GyroTrace logged = ReadGyroCsv(options.gyro_path);
   SHUTTERLAB_CHECK(logged.size() >= 2)
       << options.gyro_path << ": a gyro log needs at least two samples";
+  summary.gyro_warnings = AuditTrace(logged);
   const std::vector<FrameEntry> times = ReadFrameTimes(options.frames_path);
   if (options.video) CheckVideoTimes(options, times);
   const cv::Mat scene = ReadImage(options.scene_path);

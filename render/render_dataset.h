@@ -28,6 +28,7 @@
 #include "render/effects.h"
 #include "render/lens_profile.h"
 #include "render/rs_warp.h"
+#include "sim/log_warning.h"
 
 #include <cstdint>
 #include <functional>
@@ -71,6 +72,9 @@ struct RenderSummary {
   std::optional<LensProfileUse> lens_profile;  // what --lens-profile gave, with its notes
   std::vector<Injection> injected;             // each `--inject` as truth.json records it, in order
   std::vector<RenderedFrame> frames;
+  // What gyro.csv lost or doubted (sim/trace_audit.h), for the command to say: the truth is
+  // rendered from the trace as it is.
+  std::vector<LogWarning> gyro_warnings;
 };
 
 // Reads and checks every input (and every frame's time against the gyro trace) before writing

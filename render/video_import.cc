@@ -10,6 +10,7 @@
 #include "sim/logs/gyro_io.h"
 #include "sim/logs/phone_clip.h"
 #include "sim/text_file.h"
+#include "sim/trace_audit.h"
 #include "sim/units.h"
 
 #include <opencv2/core/utility.hpp>
@@ -431,6 +432,7 @@ ImportRecord GoproRecord(const std::string& path, const GoproTelemetry& telemetr
                             ? "gyro.csv gx,gy,gz = the sensor's x, y, z (GPMF storage reordered)"
                             : "gyro.csv gx,gy,gz = the camera's own axes X, Y, Z (" +
                                   telemetry.axis_order_source + ")";
+  record.warnings = AuditTrace(telemetry.gyro);
   record.frame_count = frames.entries.size();
   record.t_first_row = "frame presentation time; what it marks in the exposure is unknown";
   record.exposures = frames.exposures;
@@ -571,6 +573,7 @@ ImportRecord PhoneRecord(const std::string& path, const PhoneClip& clip, const R
   record.gyro_samples = clip.gyro.size();
   record.gyro_rate_hz = clip.gyro.sampling().RateHz();
   record.gyro_columns = "gyro.txt gx,gy,gz (rad/s), the phone's sensor axes";
+  record.warnings = AuditTrace(clip.gyro);
   record.frame_count = frame_count;
   record.t_first_row = "start-of-frame time from framestamp.txt (line N = frame N)";
   record.exposures = std::move(exposures);

@@ -20,19 +20,27 @@ BiasEstimate EstimateBias(const GyroTrace& trace, const BiasSegment& segment) {
       << "bias segment " << segment.begin_s << ":" << segment.end_s << " is empty or negative";
   SHUTTERLAB_CHECK(!trace.empty()) << "empty gyro trace";
   const auto [begin, end] = SamplesInSegment(trace, segment);
+  return BiasOverSegment(trace.samples().data() + begin, trace.samples().data() + end, segment, end,
+                         trace.DurationS());
+}
+
+BiasEstimate BiasOverSegment(const GyroSample* begin, const GyroSample* end,
+                             const BiasSegment& segment, size_t first_after,
+                             double trace_duration_s) {
   BiasEstimate out;
-  out.samples = end - begin;
-  out.first_after = end;
+  out.samples = static_cast<size_t>(end - begin);
+  out.first_after = first_after;
   SHUTTERLAB_CHECK(out.samples >= kMinBiasSamples)
       << "bias segment " << segment.begin_s << ":" << segment.end_s << " s holds " << out.samples
-      << " samples (need at least " << kMinBiasSamples << "; the trace lasts " << trace.DurationS()
+      << " samples (need at least " << kMinBiasSamples << "; the trace lasts " << trace_duration_s
       << " s)";
   // Two passes: mean, then spread about it (no cancellation for large biases).
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (size_t i = begin; i < end; ++i) sum += trace[i].omega_rad_s;
+  for (const GyroSample* s = begin; s < end; ++s) sum += s->omega_rad_s;
   out.bias_rad_s = sum / static_cast<double>(out.samples);
   Eigen::Vector3d sq = Eigen::Vector3d::Zero();
-  for (size_t i = begin; i < end; ++i) sq += (trace[i].omega_rad_s - out.bias_rad_s).cwiseAbs2();
+  for (const GyroSample* s = begin; s < end; ++s)
+    sq += (s->omega_rad_s - out.bias_rad_s).cwiseAbs2();
   out.stderr_rad_s = (sq / static_cast<double>(out.samples - 1)).cwiseSqrt() /
                      std::sqrt(static_cast<double>(out.samples));
   return out;

@@ -35,6 +35,12 @@ inline constexpr size_t kMinBiasSamples = 10;
 // Mean rate over the segment. Throws std::invalid_argument when the segment is malformed or holds
 // fewer than kMinBiasSamples samples (the message says how many it holds).
 BiasEstimate EstimateBias(const GyroTrace& trace, const BiasSegment& segment);
+// The same over the segment's samples [begin, end) alone, for a trace that is streamed: the
+// analyses start at first_after, and trace_duration_s goes into the message when the segment
+// holds too few samples.
+BiasEstimate BiasOverSegment(const GyroSample* begin, const GyroSample* end,
+                             const BiasSegment& segment, size_t first_after,
+                             double trace_duration_s);
 
 // Parses "A:B" (seconds). Throws std::invalid_argument on anything else.
 BiasSegment ParseBiasSegment(const std::string& text);

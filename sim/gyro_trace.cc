@@ -1,6 +1,7 @@
 #include "sim/gyro_trace.h"
 
 #include "sim/check.h"
+#include "sim/interval_histogram.h"
 #include "sim/units.h"
 
 #include <algorithm>
@@ -8,42 +9,9 @@
 
 namespace shutterlab {
 
-namespace {
-
-// Exact median of the sampling intervals. Logs hold few distinct intervals (a clock tick or two),
-// so a small sorted histogram answers in one pass with no copy of the trace; irregular clocks fall
-// back to UpperMedian on a copy.
-int64_t MedianInterval(const std::vector<GyroSample>& samples) {
-  constexpr size_t kMaxDistinct = 64;
-  std::vector<std::pair<int64_t, size_t>> histogram;  // interval -> count, sorted by interval
-  const size_t n = samples.size() - 1;
-  for (size_t k = 0; k < n; ++k) {
-    const int64_t dt = samples[k + 1].t_ns - samples[k].t_ns;
-    auto it = std::lower_bound(histogram.begin(), histogram.end(), dt,
-                               [](const auto& entry, int64_t v) { return entry.first < v; });
-    if (it != histogram.end() && it->first == dt) {
-      ++it->second;
-    } else if (histogram.size() < kMaxDistinct) {
-      histogram.insert(it, {dt, 1});
-    } else {
-      std::vector<int64_t> intervals(n);
-      for (size_t i = 0; i < n; ++i) intervals[i] = samples[i + 1].t_ns - samples[i].t_ns;
-      return UpperMedian(std::move(intervals));
-    }
-  }
-  // The element at sorted position n / 2, as UpperMedian would give.
-  size_t seen = 0;
-  for (const auto& [interval, count] : histogram) {
-    seen += count;
-    if (seen > n / 2) return interval;
-  }
-  return histogram.back().first;
-}
-
-}  // namespace
-
 GyroTrace::GyroTrace(std::vector<GyroSample> samples) : samples_(std::move(samples)) {
   const size_t n = samples_.size();
+  IntervalHistogram intervals;
   for (size_t i = 0; i < n; ++i) {
     SHUTTERLAB_CHECK(samples_[i].omega_rad_s.allFinite())
         << "gyro sample " << i << " has a non-finite rate";
@@ -52,9 +20,10 @@ GyroTrace::GyroTrace(std::vector<GyroSample> samples) : samples_(std::move(sampl
     SHUTTERLAB_CHECK(dt >= 0) << "gyro sample " << i << " goes back in time by " << -dt * 1e-9
                               << " s";
     if (dt == 0) ++sampling_.duplicate_timestamps;
+    intervals.Add(dt);
   }
   if (n < 2) return;
-  sampling_.median_interval_ns = MedianInterval(samples_);
+  sampling_.median_interval_ns = intervals.Median();
   const double gap_ns =
       SamplingReport::kGapFactor * static_cast<double>(sampling_.median_interval_ns);
   for (size_t k = 0; k + 1 < n; ++k) {

@@ -16,7 +16,9 @@ struct GyroSample {
 
 // Irregularities in the sampling of a trace, found once at construction.
 struct SamplingReport {
-  int64_t median_interval_ns = 0;   // median of t[k+1]-t[k]; 0 for fewer than 2 samples
+  // Median of t[k+1]-t[k] (sim/interval_histogram.h: exact while the intervals take at most 65,536
+  // distinct values); 0 for fewer than 2 samples.
+  int64_t median_interval_ns = 0;
   std::vector<size_t> gap_indices;  // k such that t[k+1]-t[k] > kGapFactor * median interval
   size_t duplicate_timestamps = 0;  // count of k with t[k+1] == t[k]
   double RateHz() const { return median_interval_ns > 0 ? 1e9 / median_interval_ns : 0.0; }

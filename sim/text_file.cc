@@ -2,6 +2,7 @@
 
 #include "sim/check.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -10,9 +11,11 @@
 #include <fcntl.h>
 #include <fstream>
 #include <random>
+#include <string.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <utility>
 
 namespace shutterlab {
 
@@ -82,6 +85,113 @@ void WriteFileAtomically(const std::string& path, std::string_view content) {
   }
 }
 
+TextBlocks TextBlocks::OfFile(const std::string& path, size_t block_bytes) {
+  TextBlocks blocks;
+  blocks.path_ = path;
+  blocks.capacity_ = std::max<size_t>(block_bytes, 1);
+  blocks.fd_ = ::open(path.c_str(), O_RDONLY);
+  if (blocks.fd_ < 0)
+    throw IoError(IoMessage(path, 0, std::string("cannot open: ") + std::strerror(errno)));
+  struct stat info {};
+  if (::fstat(blocks.fd_, &info) == 0 && S_ISREG(info.st_mode))
+    blocks.size_ = static_cast<uint64_t>(info.st_size);
+  blocks.buffer_.reset(new char[blocks.capacity_]);
+  return blocks;
+}
+
+TextBlocks TextBlocks::InMemory(std::string_view text, size_t block_bytes) {
+  TextBlocks blocks;
+  blocks.size_ = text.size();
+  blocks.memory_ = text;
+  blocks.capacity_ = std::max<size_t>(block_bytes, 1);
+  return blocks;
+}
+
+TextBlocks::TextBlocks(TextBlocks&& other) noexcept
+    : path_(std::move(other.path_)),
+      fd_(std::exchange(other.fd_, -1)),
+      size_(other.size_),
+      handed_out_(other.handed_out_),
+      memory_(other.memory_),
+      buffer_(std::move(other.buffer_)),
+      capacity_(other.capacity_),
+      carry_begin_(other.carry_begin_),
+      carry_end_(other.carry_end_),
+      end_of_file_(other.end_of_file_) {}
+
+TextBlocks::~TextBlocks() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+std::string_view TextBlocks::Next() {
+  if (fd_ < 0) {  // in memory: cut at the last line end within a block (or the next one after)
+    const size_t begin = handed_out_;
+    if (begin >= memory_.size()) return {};
+    size_t end = std::min(memory_.size(), begin + capacity_);
+    if (end < memory_.size()) {
+      const size_t last = memory_.rfind('\n', end - 1);
+      if (last != std::string_view::npos && last >= begin) {
+        end = last + 1;
+      } else {
+        const size_t next = memory_.find('\n', end);
+        end = next == std::string_view::npos ? memory_.size() : next + 1;
+      }
+    }
+    handed_out_ = end;
+    return memory_.substr(begin, end - begin);
+  }
+  // The started line of the last block first, then as much of the file as fits.
+  size_t filled = carry_end_ - carry_begin_;
+  std::memmove(buffer_.get(), buffer_.get() + carry_begin_, filled);
+  carry_begin_ = carry_end_ = 0;
+  size_t searched = 0;
+  while (true) {
+    while (!end_of_file_ && filled < capacity_) {
+      const ssize_t n = ::read(fd_, buffer_.get() + filled, capacity_ - filled);
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        throw IoError(IoMessage(path_, 0, std::string("read failed: ") + std::strerror(errno)));
+      }
+      if (n == 0) end_of_file_ = true;
+      filled += static_cast<size_t>(n);
+    }
+    const void* last =
+        filled > searched ? ::memrchr(buffer_.get() + searched, '\n', filled - searched) : nullptr;
+    if (last != nullptr || end_of_file_) {
+      const size_t end = last ? static_cast<const char*>(last) - buffer_.get() + 1 : filled;
+      carry_begin_ = end;
+      carry_end_ = filled;
+      handed_out_ += end;
+      return {buffer_.get(), end};
+    }
+    // One line longer than the block: a larger block.
+    searched = filled;
+    std::unique_ptr<char[]> larger(new char[capacity_ * 2]);
+    std::memcpy(larger.get(), buffer_.get(), filled);
+    buffer_ = std::move(larger);
+    capacity_ *= 2;
+  }
+}
+
+double TextBlocks::Fraction() const {
+  return size_ > 0 ? std::min(1.0, static_cast<double>(handed_out_) / size_) : 1.0;
+}
+
+std::optional<std::string_view> LineReader::Next() {
+  if (pos_ >= block_.size()) {
+    block_ = blocks_.Next();
+    pos_ = 0;
+    if (block_.empty()) return std::nullopt;
+  }
+  size_t end = block_.find('\n', pos_);
+  if (end == std::string_view::npos) end = block_.size();
+  std::string_view line = block_.substr(pos_, end - pos_);
+  pos_ = end + 1;
+  ++line_number_;
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  return line;
+}
+
 std::optional<std::string_view> LineCursor::Next() {
   if (pos_ >= text_.size()) return std::nullopt;
   size_t end = text_.find('\n', pos_);
@@ -113,8 +223,8 @@ std::optional<double> ParseDouble(std::string_view field) {
   if (!field.empty() && field.front() == '+') field.remove_prefix(1);
   if (field.empty()) return std::nullopt;
   double value = 0.0;
-  const auto [ptr, ec] = std::from_chars(field.data(), field.data() + field.size(), value);
-  if (ec != std::errc() || ptr != field.data() + field.size() || !std::isfinite(value)) {
+  const char* end = field.data() + field.size();
+  if (FromCharsDouble(field.data(), end, &value) != end || !std::isfinite(value)) {
     return std::nullopt;
   }
   return value;

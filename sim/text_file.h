@@ -1,7 +1,9 @@
 #pragma once
 // Whole-file text input and all-or-nothing file output, shared by every reader and writer.
 
+#include <charconv>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -39,6 +41,56 @@ void AdviseHugePages(const void* data, size_t bytes);
 // never sees a partial file and a failed write leaves no output. Throws IoError.
 void WriteFileAtomically(const std::string& path, std::string_view content);
 
+// A text file read in blocks of whole lines, so that a file of any length is parsed in bounded
+// memory (a block, plus the longest line). Also over a text in memory (tests, fuzzing: small blocks
+// put every line end at a block edge somewhere).
+class TextBlocks {
+ public:
+  static constexpr size_t kBlockBytes = 4 << 20;
+  // A file; throws IoError naming the path when it cannot be opened.
+  static TextBlocks OfFile(const std::string& path, size_t block_bytes = kBlockBytes);
+  // A text in memory, which must outlive the blocks.
+  static TextBlocks InMemory(std::string_view text, size_t block_bytes = kBlockBytes);
+  ~TextBlocks();
+  TextBlocks(TextBlocks&& other) noexcept;
+  TextBlocks(const TextBlocks&) = delete;
+  TextBlocks& operator=(const TextBlocks&) = delete;
+  // The next run of whole lines: up to and including a '\n', or the input's last line when it has
+  // none. Empty at the end. Valid until the next call. Throws IoError when a read fails.
+  std::string_view Next();
+  // The share of the input handed out so far, 0..1.
+  double Fraction() const;
+
+ private:
+  TextBlocks() = default;
+  std::string path_;
+  int fd_ = -1;
+  uint64_t size_ = 0;                       // of the file (0 when unknown)
+  uint64_t handed_out_ = 0;                 // bytes returned by Next
+  std::string_view memory_;                 // the text in memory, or empty for a file
+  std::unique_ptr<char[]> buffer_;          // a file's block
+  size_t capacity_ = 0;                     // of buffer_
+  size_t carry_begin_ = 0, carry_end_ = 0;  // a started last line, kept for the next block
+  bool end_of_file_ = false;
+};
+
+// The lines of a TextBlocks, one at a time, with 1-based line numbers and a trailing '\r'
+// stripped, as LineCursor gives them from a whole text.
+class LineReader {
+ public:
+  explicit LineReader(TextBlocks blocks) : blocks_(std::move(blocks)) {}
+  // The next line, or nullopt at the end. Valid until the next call.
+  std::optional<std::string_view> Next();
+  long line_number() const { return line_number_; }
+  double Fraction() const { return blocks_.Fraction(); }
+
+ private:
+  TextBlocks blocks_;
+  std::string_view block_;
+  size_t pos_ = 0;
+  long line_number_ = 0;
+};
+
 // Iterates the lines of a text buffer, tracking 1-based line numbers; strips a trailing '\r'.
 class LineCursor {
  public:
@@ -56,6 +108,40 @@ class LineCursor {
 // Splits a line on a delimiter, trimming spaces and tabs around each field. Appends to fields
 // (cleared first) to let callers reuse the vector across lines.
 void SplitFields(std::string_view line, char delimiter, std::vector<std::string_view>* fields);
+
+// std::from_chars for a double at p, exactly (the same value and end), faster on the plain
+// decimals that logs write ("-0.012345"): those of at most 19 digits whose digits fit 2^53 and with
+// at most 22 after the point are one correctly rounded division of two exact doubles (Clinger's
+// fast path, as std::from_chars itself takes it, without its general machinery). Anything else
+// (exponents, more digits, inf, nan) goes to std::from_chars. nullptr when there is no number.
+inline const char* FromCharsDouble(const char* p, const char* end, double* value) {
+  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                      1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+                                      1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+  const char* q = p;
+  const bool negative = q < end && *q == '-';
+  q += negative;
+  uint64_t mantissa = 0;
+  const char* digits = q;
+  while (q < end && static_cast<unsigned>(*q - '0') < 10) mantissa = mantissa * 10 + (*q++ - '0');
+  size_t count = static_cast<size_t>(q - digits);
+  size_t after_point = 0;
+  if (q < end && *q == '.') {
+    const char* fraction = ++q;
+    while (q < end && static_cast<unsigned>(*q - '0') < 10) mantissa = mantissa * 10 + (*q++ - '0');
+    after_point = static_cast<size_t>(q - fraction);
+    count += after_point;
+  }
+  const bool exponent = q < end && (*q == 'e' || *q == 'E');
+  if (count > 0 && count <= 19 && !exponent && mantissa <= (uint64_t{1} << 53) &&
+      after_point <= 22) {
+    const double v = static_cast<double>(mantissa) / kPow10[after_point];
+    *value = negative ? -v : v;
+    return q;
+  }
+  const auto [next, ec] = std::from_chars(p, end, *value);
+  return ec == std::errc() ? next : nullptr;
+}
 
 // Parses a whole field as a finite double (leading '+' allowed). nullopt when the field is not a
 // number, has trailing text, or is inf/nan.

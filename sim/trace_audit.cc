@@ -1,166 +1,227 @@
 #include "sim/trace_audit.h"
 
+#include "sim/check.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 
 namespace shutterlab {
 namespace {
 
 constexpr const char* kAxisNames[3] = {"x", "y", "z"};
+// The trace is cut into blocks of this length, each with its median sample interval: the local
+// rate, against which a gap is judged (a log that changes rate is not full of gaps) and rate
+// changes are found. A block of fewer than kMinBlockIntervals intervals says little about the
+// rate: it joins the block before it.
 constexpr int64_t kRateBlockNs = 1'000'000'000;
+constexpr size_t kMinBlockIntervals = 8;
 constexpr size_t kMaxRateChangesListed = 4;
 
-// The trace cut into 1 s blocks, each with its median sample interval: the local rate, against
-// which a gap is judged (a log that changes rate is not full of gaps) and rate changes are found.
-struct RateBlock {
-  size_t begin = 0, end = 0;  // samples [begin, end); the block's intervals end at end
-  int64_t median_interval_ns = 0;
-};
-
-std::vector<RateBlock> RateBlocks(const GyroTrace& trace) {
-  std::vector<RateBlock> blocks;
-  std::vector<int64_t> intervals;
-  size_t begin = 0;
-  for (size_t k = 1; k <= trace.size(); ++k) {
-    const bool block_ends = k == trace.size() || trace[k].t_ns - trace[begin].t_ns >= kRateBlockNs;
-    if (k < trace.size()) intervals.push_back(trace[k].t_ns - trace[k - 1].t_ns);
-    if (!block_ends) continue;
-    // A short block says little about the rate: it joins the previous one.
-    if (intervals.size() < 8 && !blocks.empty()) {
-      blocks.back().end = k;
-    } else {
-      blocks.push_back({begin, k, UpperMedian(intervals)});
-    }
-    intervals.clear();
-    begin = k;
-  }
-  return blocks;
-}
-
-std::optional<LogWarning> GapWarning(const GyroTrace& trace, const std::vector<RateBlock>& blocks) {
-  size_t gaps = 0;
-  int64_t missing_ns = 0, longest_ns = 0;
-  size_t longest_at = 0, first_at = 0;
-  for (size_t b = 0; b < blocks.size(); ++b) {
-    const RateBlock& block = blocks[b];
-    for (size_t k = std::max<size_t>(block.begin, 1); k < block.end; ++k) {
-      // The interval into a block's first sample joins two blocks: the slower rate judges it.
-      const int64_t local_ns =
-          k == block.begin && b > 0
-              ? std::max(block.median_interval_ns, blocks[b - 1].median_interval_ns)
-              : block.median_interval_ns;
-      const int64_t gap_ns = trace[k].t_ns - trace[k - 1].t_ns;
-      if (local_ns == 0 || gap_ns <= SamplingReport::kGapFactor * local_ns) continue;
-      if (gaps++ == 0) first_at = k - 1;
-      missing_ns += gap_ns - local_ns;
-      if (gap_ns > longest_ns) {
-        longest_ns = gap_ns;
-        longest_at = k - 1;
-      }
-    }
-  }
-  if (gaps == 0) return std::nullopt;
-  return LogWarning{
-      "gap",
-      std::to_string(gaps) + " interval(s) over " + FormatNumber("%g", SamplingReport::kGapFactor) +
-          "x the median " + FormatNumber("%.3f", trace.sampling().median_interval_ns * 1e-6) +
-          " ms, " + FormatNumber("%.3f", missing_ns * 1e-9) + " s missing in all; longest " +
-          FormatNumber("%.3f", longest_ns * 1e-9) + " s at " + SecondsText(trace[longest_at].t_ns),
-      trace[first_at].t_ns * 1e-9, gaps};
-}
-
-// Consecutive blocks whose rates differ by more than the factor: the rates and where they change.
-std::optional<LogWarning> RateChangeWarning(const GyroTrace& trace,
-                                            const std::vector<RateBlock>& blocks, double factor) {
-  std::vector<RateBlock> runs;
-  for (const RateBlock& b : blocks) {
-    if (!runs.empty()) {
-      const double ratio = static_cast<double>(b.median_interval_ns) /
-                           std::max<int64_t>(1, runs.back().median_interval_ns);
-      if (ratio < factor && ratio > 1.0 / factor) continue;
-    }
-    runs.push_back(b);
-  }
-  if (runs.size() < 2) return std::nullopt;
-  std::string line = "sample rate changes " + std::to_string(runs.size() - 1) + " time(s):";
-  for (size_t r = 0; r < runs.size() && r <= kMaxRateChangesListed; ++r) {
-    const double rate_hz = runs[r].median_interval_ns > 0 ? 1e9 / runs[r].median_interval_ns : 0;
-    line += (r ? ", then " : " ") + FormatNumber("%.4g", rate_hz) + " Hz" +
-            (r ? " from " + SecondsText(trace[runs[r].begin].t_ns) : "");
-  }
-  if (runs.size() > kMaxRateChangesListed + 1) line += ", ...";
-  return LogWarning{"rate_change", line, trace[runs[1].begin].t_ns * 1e-9, runs.size() - 1};
-}
-
-std::vector<LogWarning> SaturationWarnings(const GyroTrace& trace,
-                                           const TraceAuditOptions& options) {
-  std::vector<LogWarning> lines;
-  const std::optional<double> full_scale = SaturationFullScale(trace, options);
-  if (!full_scale) return lines;
-  const double limit = (1.0 - options.saturation_margin) * *full_scale;
-  for (int a = 0; a < 3; ++a) {
-    size_t count = 0;
-    int64_t first_ns = 0, last_ns = 0;
-    double peak = 0.0;
-    for (const GyroSample& s : trace.samples()) {
-      const double v = std::abs(s.omega_rad_s[a]);
-      peak = std::max(peak, v);
-      if (v < limit) continue;
-      if (count++ == 0) first_ns = s.t_ns;
-      last_ns = s.t_ns;
-    }
-    if (count == 0) continue;
-    lines.push_back(LogWarning{
-        "saturated",
-        "axis " + std::string(kAxisNames[a]) + ", " + std::to_string(count) + " sample(s) within " +
-            FormatNumber("%g", options.saturation_margin * 100) + " % of the +-" +
-            FormatNumber("%.0f", *full_scale * kDegPerRad) + " deg/s full scale" +
-            (options.full_scale_rad_s ? "" : " (where the peak lands)") + ", peak " +
-            FormatNumber("%.0f", peak * kDegPerRad) + " deg/s, from " + SecondsText(first_ns) +
-            " to " + SecondsText(last_ns) + ": the rotation there is under-reported",
-        first_ns * 1e-9, count});
-  }
-  return lines;
+// The candidate full scales (rad/s, ascending): the stated one, or the common ones.
+std::vector<double> FullScaleCandidates(const TraceAuditOptions& options) {
+  if (options.full_scale_rad_s) return {*options.full_scale_rad_s};
+  std::vector<double> candidates;
+  for (double full_scale_dps : kCommonGyroFullScalesDps)
+    candidates.push_back(full_scale_dps * kRadPerDeg);
+  return candidates;
 }
 
 }  // namespace
 
-std::optional<double> SaturationFullScale(const GyroTrace& trace,
-                                          const TraceAuditOptions& options) {
+TraceAuditor::TraceAuditor(TraceAuditOptions options)
+    : options_(std::move(options)), full_scales_rad_s_(FullScaleCandidates(options_)) {
+  for (double full_scale : full_scales_rad_s_)
+    limits_rad_s_.push_back((1.0 - options_.saturation_margin) * full_scale);
+  saturation_.resize(full_scales_rad_s_.size());
+}
+
+void TraceAuditor::Add(const GyroSample* samples, size_t count) {
+  for (size_t i = 0; i < count; ++i) Step(samples[i]);
+}
+
+void TraceAuditor::Step(const GyroSample& s) {
+  const size_t index = samples_++;
+  SHUTTERLAB_CHECK(s.omega_rad_s.allFinite())
+      << "gyro sample " << index << " has a non-finite rate";
+  if (index == 0) {
+    t_begin_ns_ = t_last_ns_ = s.t_ns;
+    block_t_ns_.push_back(s.t_ns);
+  } else {
+    const int64_t dt = s.t_ns - t_last_ns_;
+    SHUTTERLAB_CHECK(dt >= 0) << "gyro sample " << index << " goes back in time by " << -dt * 1e-9
+                              << " s";
+    if (dt == 0 && duplicates_++ == 0) first_duplicate_ns_ = s.t_ns;
+    intervals_.Add(dt);
+    block_t_ns_.push_back(s.t_ns);
+    t_last_ns_ = s.t_ns;
+    if (s.t_ns - block_t_ns_.front() >= kRateBlockNs) CloseBlock(/*at_end=*/false);
+  }
+  const Eigen::Vector3d v = s.omega_rad_s.cwiseAbs();
+  for (int a = 0; a < 3; ++a) peak_[a] = std::max(peak_[a], v[a]);
+  if (v.maxCoeff() < limits_rad_s_[0]) return;  // below every full scale: the usual case
+  for (int a = 0; a < 3; ++a) {
+    for (size_t c = 0; c < limits_rad_s_.size() && v[a] >= limits_rad_s_[c]; ++c) {
+      Saturation& at = saturation_[c];
+      if (at.count[a]++ == 0) at.first_ns[a] = s.t_ns;
+      at.last_ns[a] = s.t_ns;
+    }
+  }
+}
+
+// Closes the block [block_begin, this sample) and judges the intervals into its samples: the one
+// that led into it (from the block before) and those inside; the last one pushed leads out of it
+// (into the sample that opens the next block) unless the trace ends here.
+void TraceAuditor::CloseBlock(bool at_end) {
+  const std::vector<int64_t>& t = block_t_ns_;
+  const size_t pushed = t.size() - 1;                  // intervals between the block's times
+  const size_t inside = at_end ? pushed : pushed - 1;  // the last one leads out of the block
+  const auto interval = [&t](size_t i) { return Interval{t[i + 1] - t[i], t[i]}; };
+  if (pushed < kMinBlockIntervals && previous_median_ns_) {
+    // Joins the block before: judged at its rate, which it does not change.
+    if (into_block_) Judge(*into_block_, *previous_median_ns_);
+    for (size_t i = 0; i < inside; ++i) Judge(interval(i), *previous_median_ns_);
+  } else if (pushed > 0) {
+    std::vector<int64_t> dts(pushed);
+    for (size_t i = 0; i < pushed; ++i) dts[i] = t[i + 1] - t[i];
+    const int64_t median_ns = UpperMedian(std::move(dts));
+    // The interval into the block joins two blocks: the slower rate judges it.
+    if (into_block_) Judge(*into_block_, std::max(median_ns, previous_median_ns_.value_or(0)));
+    for (size_t i = 0; i < inside; ++i) Judge(interval(i), median_ns);
+    NoteBlockRate(median_ns, t.front());
+    previous_median_ns_ = median_ns;
+  }
+  if (!at_end) into_block_ = interval(pushed - 1);
+  const int64_t next_begin_ns = t.back();
+  block_t_ns_.clear();
+  block_t_ns_.push_back(next_begin_ns);
+}
+
+void TraceAuditor::Judge(const Interval& interval, int64_t local_ns) {
+  if (local_ns == 0 || interval.dt_ns <= SamplingReport::kGapFactor * local_ns) return;
+  if (gaps_++ == 0) first_gap_at_ns_ = interval.t_before_ns;
+  missing_ns_ += interval.dt_ns - local_ns;
+  if (interval.dt_ns > longest_ns_) {
+    longest_ns_ = interval.dt_ns;
+    longest_at_ns_ = interval.t_before_ns;
+  }
+}
+
+// A block whose rate differs from the current run's by more than the factor starts a new run.
+void TraceAuditor::NoteBlockRate(int64_t median_ns, int64_t begin_ns) {
+  if (run_count_ > 0) {
+    const double ratio = static_cast<double>(median_ns) / std::max<int64_t>(1, last_run_median_ns_);
+    if (ratio < options_.rate_change_factor && ratio > 1.0 / options_.rate_change_factor) return;
+  }
+  ++run_count_;
+  last_run_median_ns_ = median_ns;
+  if (runs_.size() < kMaxRateChangesListed + 2) runs_.push_back({median_ns, begin_ns});
+}
+
+std::optional<LogWarning> TraceAuditor::GapWarning() const {
+  if (gaps_ == 0) return std::nullopt;
+  return LogWarning{"gap",
+                    std::to_string(gaps_) + " interval(s) over " +
+                        FormatNumber("%g", SamplingReport::kGapFactor) + "x the median " +
+                        FormatNumber("%.3f", intervals_.Median() * 1e-6) + " ms, " +
+                        FormatNumber("%.3f", missing_ns_ * 1e-9) + " s missing in all; longest " +
+                        FormatNumber("%.3f", longest_ns_ * 1e-9) + " s at " +
+                        SecondsText(longest_at_ns_),
+                    first_gap_at_ns_ * 1e-9, gaps_};
+}
+
+std::optional<LogWarning> TraceAuditor::RateChangeWarning() const {
+  if (run_count_ < 2) return std::nullopt;
+  std::string line = "sample rate changes " + std::to_string(run_count_ - 1) + " time(s):";
+  for (size_t r = 0; r < runs_.size() && r <= kMaxRateChangesListed; ++r) {
+    const double rate_hz = runs_[r].median_ns > 0 ? 1e9 / runs_[r].median_ns : 0;
+    line += (r ? ", then " : " ") + FormatNumber("%.4g", rate_hz) + " Hz" +
+            (r ? " from " + SecondsText(runs_[r].begin_ns) : "");
+  }
+  if (run_count_ > kMaxRateChangesListed + 1) line += ", ...";
+  return LogWarning{"rate_change", line, runs_[1].begin_ns * 1e-9, run_count_ - 1};
+}
+
+std::vector<LogWarning> TraceAuditor::SaturationWarnings() const {
+  std::vector<LogWarning> lines;
+  const double peak = std::max({peak_[0], peak_[1], peak_[2]});
+  const std::optional<double> full_scale = SaturationFullScale(peak, options_);
+  if (!full_scale) return lines;
+  const size_t c = static_cast<size_t>(
+      std::find(full_scales_rad_s_.begin(), full_scales_rad_s_.end(), *full_scale) -
+      full_scales_rad_s_.begin());
+  SHUTTERLAB_CHECK(c < saturation_.size()) << "full scale not among the candidates";
+  const Saturation& at = saturation_[c];
+  for (int a = 0; a < 3; ++a) {
+    if (at.count[a] == 0) continue;
+    lines.push_back(LogWarning{
+        "saturated",
+        "axis " + std::string(kAxisNames[a]) + ", " + std::to_string(at.count[a]) +
+            " sample(s) within " + FormatNumber("%g", options_.saturation_margin * 100) +
+            " % of the +-" + FormatNumber("%.0f", *full_scale * kDegPerRad) + " deg/s full scale" +
+            (options_.full_scale_rad_s ? "" : " (where the peak lands)") + ", peak " +
+            FormatNumber("%.0f", peak_[a] * kDegPerRad) + " deg/s, from " +
+            SecondsText(at.first_ns[a]) + " to " + SecondsText(at.last_ns[a]) +
+            ": the rotation there is under-reported",
+        at.first_ns[a] * 1e-9, at.count[a]});
+  }
+  return lines;
+}
+
+std::vector<LogWarning> TraceAuditor::Finish() {
+  std::vector<LogWarning> warnings;
+  if (samples_ < 2) return warnings;
+  CloseBlock(/*at_end=*/true);
+  if (auto gaps = GapWarning()) warnings.push_back(std::move(*gaps));
+  if (duplicates_ > 0) {
+    warnings.push_back({"duplicate_time",
+                        std::to_string(duplicates_) + " sample(s) share the time of the one before",
+                        first_duplicate_ns_ * 1e-9, duplicates_});
+  }
+  if (auto rate = RateChangeWarning()) warnings.push_back(std::move(*rate));
+  for (LogWarning& w : SaturationWarnings()) warnings.push_back(std::move(w));
+  return warnings;
+}
+
+TraceSampling TraceAuditor::Sampling() const {
+  TraceSampling sampling;
+  sampling.samples = samples_;
+  if (samples_ == 0) return sampling;
+  sampling.t_begin_ns = t_begin_ns_;
+  sampling.t_end_ns = t_last_ns_;
+  sampling.duplicate_timestamps = duplicates_;
+  if (samples_ < 2) return sampling;
+  sampling.median_interval_ns = intervals_.Median();
+  sampling.gaps = intervals_.CountAbove(SamplingReport::kGapFactor *
+                                        static_cast<double>(sampling.median_interval_ns));
+  return sampling;
+}
+
+std::optional<double> SaturationFullScale(double peak_rad_s, const TraceAuditOptions& options) {
   if (options.full_scale_rad_s) return options.full_scale_rad_s;
-  double peak = 0.0;
-  for (const GyroSample& s : trace.samples())
-    peak = std::max(peak, s.omega_rad_s.cwiseAbs().maxCoeff());
   for (double full_scale_dps : kCommonGyroFullScalesDps) {
     const double full_scale = full_scale_dps * kRadPerDeg;
     // A calibrated rate can exceed the raw range a little (scale factors above 1).
-    if (peak >= (1.0 - options.saturation_margin) * full_scale &&
-        peak <= (1.0 + 2.5 * options.saturation_margin) * full_scale)
+    if (peak_rad_s >= (1.0 - options.saturation_margin) * full_scale &&
+        peak_rad_s <= (1.0 + 2.5 * options.saturation_margin) * full_scale)
       return full_scale;
   }
   return std::nullopt;
 }
 
+std::optional<double> SaturationFullScale(const GyroTrace& trace,
+                                          const TraceAuditOptions& options) {
+  double peak = 0.0;
+  for (const GyroSample& s : trace.samples())
+    peak = std::max(peak, s.omega_rad_s.cwiseAbs().maxCoeff());
+  return SaturationFullScale(peak, options);
+}
+
 std::vector<LogWarning> AuditTrace(const GyroTrace& trace, const TraceAuditOptions& options) {
-  std::vector<LogWarning> warnings;
-  if (trace.size() < 2) return warnings;
-  const std::vector<RateBlock> blocks = RateBlocks(trace);
-  if (auto gaps = GapWarning(trace, blocks)) warnings.push_back(std::move(*gaps));
-  if (const size_t duplicates = trace.sampling().duplicate_timestamps; duplicates > 0) {
-    size_t first = 1;
-    while (trace[first].t_ns != trace[first - 1].t_ns) ++first;
-    warnings.push_back({"duplicate_time",
-                        std::to_string(duplicates) + " sample(s) share the time of the one before",
-                        trace[first].t_ns * 1e-9, duplicates});
-  }
-  if (auto rate = RateChangeWarning(trace, blocks, options.rate_change_factor))
-    warnings.push_back(std::move(*rate));
-  for (LogWarning& w : SaturationWarnings(trace, options)) warnings.push_back(std::move(w));
-  return warnings;
+  TraceAuditor auditor(options);
+  auditor.Add(trace.samples());
+  return auditor.Finish();
 }
 
 }  // namespace shutterlab

@@ -220,7 +220,7 @@ TrueModel ModelOf(const Context& ctx, const std::vector<Effect>& effects,
 // The declared lens is the user's calibration and is taken as it is (a wide lens may fold just
 // beyond the corners); only a fitted change must keep the image in one piece.
 bool Plausible(const Context& ctx, const TrueModel& model) {
-  return model.rig.shutter.readout_s > 0 && (model.gyro_scale.array() > 0).all() &&
+  return model.rig.shutter.readout_s >= 0 && (model.gyro_scale.array() > 0).all() &&
          std::abs(model.clock_rate_ppm) < 1e5 && model.gyro_bias_rad_s.allFinite() &&
          model.rig.velocity_mps.allFinite() &&
          (model.rig.camera.distortion == ctx.declared.rig.camera.distortion ||

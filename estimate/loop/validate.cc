@@ -215,15 +215,24 @@ void PredictStillFrames(const GyroTrace& gyro, const std::vector<FrameEntry>& en
                         ValidationResult* result) {
   const RigModel& rig = result->declared;
   const double m_per_px = GroundMetresPerPx(rig);
-  const AnalyzeResult paper = PaperModel(rig, gyro, entries, options);
+  // A global shutter (readout 0, as `correct` declares its output) has no readout window: the
+  // paper's model predicts no distortion.
+  const bool global_shutter = rig.shutter.readout_s == 0;
+  const AnalyzeResult paper =
+      global_shutter ? AnalyzeResult{} : PaperModel(rig, gyro, entries, options);
   for (size_t i = 0; i < entries.size(); ++i) {
     FrameValidation& f = result->frames[i];
-    const ImageResult& image = paper.images[i];
-    SHUTTERLAB_CHECK(image.in_trace) << frames_path << ":" << i + 2 << ": frame " << f.frame
-                                     << ": the readout is outside the gyro log";
-    f.d_paper_m = image.d_paper_m;
-    f.range_arcsec = image.range_arcsec;
-    f.dominant_axis = image.dominant_axis;
+    if (!global_shutter) {
+      const ImageResult& image = paper.images[i];
+      SHUTTERLAB_CHECK(image.in_trace) << frames_path << ":" << i + 2 << ": frame " << f.frame
+                                       << ": the readout is outside the gyro log";
+      SHUTTERLAB_CHECK(!image.too_few_samples)
+          << frames_path << ":" << i + 2 << ": frame " << f.frame
+          << ": the readout holds too few gyro samples (2 or fewer) for the paper's model";
+      f.d_paper_m = image.d_paper_m;
+      f.range_arcsec = image.range_arcsec;
+      f.dominant_axis = image.dominant_axis;
+    }
     const FullModelD full = FullModel(rig, motions[i]);
     f.d_full_px = full.d_px;
     f.d_full_m = full.d_px * m_per_px;

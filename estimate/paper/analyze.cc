@@ -4,7 +4,9 @@
 #include "render/truth_model.h"
 #include "sim/bias.h"
 #include "sim/check.h"
+#include "sim/civil_time.h"
 #include "sim/integrate.h"
+#include "sim/logs/log_clock.h"
 #include "sim/still_detect.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
@@ -75,6 +77,7 @@ struct ImageContext {
   const CameraMotion* motion;  // null: skip D_full
   RigModel rig;
   std::vector<double> limits_m;
+  int64_t sample_interval_ns = 0;  // the log's median: a readout must be longer than two
 };
 
 ImageResult AnalyzeImage(const ImageContext& context, const ImageTrigger& trigger,
@@ -91,6 +94,10 @@ ImageResult AnalyzeImage(const ImageContext& context, const ImageTrigger& trigge
     return image;
   }
   image.in_trace = true;
+  if (readout_ns <= kMinWindowSampleIntervals * context.sample_interval_ns) {
+    image.too_few_samples = true;
+    return image;
+  }
   const auto first = std::upper_bound(angles.t_ns.begin(), angles.t_ns.end(), image.t_ns);
   const auto last = std::lower_bound(angles.t_ns.begin(), angles.t_ns.end(), end_ns);
   const size_t i0 = static_cast<size_t>(first - angles.t_ns.begin());
@@ -129,16 +136,12 @@ std::vector<double> SharesPercent(const std::vector<ImageResult>& images, size_t
   std::vector<double> shares(limits, 0.0);
   size_t in_trace = 0;
   for (const ImageResult& image : images) {
-    if (!image.in_trace) continue;
+    if (!image.judged()) continue;
     ++in_trace;
     for (size_t l = 0; l < limits; ++l) shares[l] += image.flagged[l] ? 1.0 : 0.0;
   }
   for (double& s : shares) s = in_trace > 0 ? 100.0 * s / in_trace : 0.0;
   return shares;
-}
-
-std::string LengthText(double m) {
-  return m < 1.0 ? FormatNumber("%.3g cm", m * 100.0) : FormatNumber("%.3g m", m);
 }
 
 std::string SharesText(const std::vector<double>& shares, const std::vector<double>& limits_m) {
@@ -235,8 +238,8 @@ void FlightTableForReadout(const GyroTrace& camera_rates, const AnalyzeOptions& 
     // sample rather than starting the statistics after the segment as `flight --bias` does.
     flight_options.known_bias_rad_s = result->bias_rad_s;
     result->flight = Flight(camera_rates, flight_options);
-    for (LogWarning& w : FlightWarnings(*result->flight))
-      result->log_warnings.push_back(std::move(w));
+    result->log_warnings.insert(result->log_warnings.end(), result->flight->warnings.begin(),
+                                result->flight->warnings.end());
   } catch (const std::invalid_argument& e) {
     result->flight_problem = e.what();
   }
@@ -248,7 +251,7 @@ std::vector<ImageTrigger> ChooseTriggers(const FlightLog& log, const AnalyzeOpti
                                          std::string* trigger_source) {
   const GyroTrace& gyro = log.gyro;
   std::vector<ImageTrigger> triggers = options.triggers;
-  *trigger_source = "triggers";
+  *trigger_source = options.triggers_source;
   if (triggers.empty() && options.every_s > 0) {
     *trigger_source = FormatNumber("every %g s", options.every_s);
     const int64_t every_ns = SecondsToNs(options.every_s);
@@ -258,19 +261,15 @@ std::vector<ImageTrigger> ChooseTriggers(const FlightLog& log, const AnalyzeOpti
     for (int64_t k = 0; k < count; ++k) {
       triggers.push_back({ImageName(static_cast<size_t>(k)), t0_ns + k * every_ns});
     }
-  } else if (triggers.empty() && !log.camera_events.empty()) {
-    // A log may record each image twice (PX4 camera_trigger and camera_capture): use the most
-    // frequent kind only.
-    std::map<std::string, size_t> kinds;
-    for (const CameraEvent& event : log.camera_events) ++kinds[event.kind];
-    const std::string kind =
-        std::max_element(kinds.begin(), kinds.end(), [](const auto& a, const auto& b) {
-          return a.second < b.second;
-        })->first;
-    *trigger_source = "camera events (" + kind + ")";
-    for (size_t i = 0; i < log.camera_events.size(); ++i) {
-      const CameraEvent& event = log.camera_events[i];
-      if (event.kind != kind) continue;
+  } else if (triggers.empty() && options.log_events && !log.camera_events.empty()) {
+    // The readers keep one kind already; a log built elsewhere gets the same choice.
+    FlightLog events_only;
+    events_only.camera_events = log.camera_events;
+    KeepOneCameraEventKind(&events_only);
+    const std::vector<CameraEvent>& events = events_only.camera_events;
+    *trigger_source = "camera events (" + events.front().kind + ")";
+    for (size_t i = 0; i < events.size(); ++i) {
+      const CameraEvent& event = events[i];
       triggers.push_back(
           {event.sequence >= 0 ? "IMG_" + std::to_string(event.sequence) : ImageName(i),
            event.t_ns});
@@ -294,7 +293,7 @@ int AxisToStabilise(const std::vector<ImageResult>& images, size_t images_in_tra
   int axis_to_stabilise = -1;
   std::array<size_t, 3> dominant{};
   for (const ImageResult& image : images) {
-    if (image.in_trace && image.flagged[0]) ++dominant[image.dominant_axis];
+    if (image.judged() && image.flagged[0]) ++dominant[image.dominant_axis];
   }
   for (int axis = 0; axis < 3; ++axis) {
     if (dominant[axis] > 0 &&
@@ -305,7 +304,7 @@ int AxisToStabilise(const std::vector<ImageResult>& images, size_t images_in_tra
   if (axis_to_stabilise < 0) {
     std::array<size_t, 3> all{};
     for (const ImageResult& image : images) {
-      if (image.in_trace) ++all[image.dominant_axis];
+      if (image.judged()) ++all[image.dominant_axis];
     }
     if (images_in_trace > 0) {
       axis_to_stabilise = static_cast<int>(std::max_element(all.begin(), all.end()) - all.begin());
@@ -334,9 +333,16 @@ void WhatIfShares(const ImageContext& context, const std::vector<ImageTrigger>& 
 }
 
 // The one-line verdict for a person.
-std::string VerdictLine(const AnalyzeVerdict& verdict, bool no_images,
+std::string VerdictLine(const AnalyzeVerdict& verdict, bool no_images, double rate_hz,
                         const AnalyzeOptions& options) {
   if (verdict.images_in_trace == 0) {
+    if (verdict.images_too_few_samples > 0) {
+      return "verdict: no image can be judged: at " + FormatNumber("%.4g", rate_hz) + " Hz the " +
+             FormatNumber("%g", options.rig.shutter.readout_s * 1e3) +
+             " ms readout holds at most two samples; it must be longer than " +
+             FormatNumber("%.4g", kMinWindowSampleIntervals * 1e3 / rate_hz) +
+             " ms (2 sample intervals), or the log sampled faster";
+    }
     return no_images ? "verdict: no images to judge (the log has no camera events; give "
                        "--triggers or --every)"
                      : "verdict: no image lies inside the gyro trace";
@@ -345,6 +351,10 @@ std::string VerdictLine(const AnalyzeVerdict& verdict, bool no_images,
   line << "verdict: " << verdict.images_in_trace
        << (verdict.images_in_trace == 1 ? " image, " : " images, ")
        << SharesText(verdict.share_percent, options.limits_m);
+  if (verdict.images_too_few_samples > 0) {
+    line << " (" << verdict.images_too_few_samples
+         << " more not judged: too few samples in their readout)";
+  }
   const bool any_flagged = std::any_of(verdict.share_percent.begin(), verdict.share_percent.end(),
                                        [](double s) { return s > 0; });
   line << (any_flagged ? "; stabilise camera axis " : "; largest rotation about camera axis ")
@@ -420,7 +430,7 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
   if (options.allan) AllanOfRates(result.traces->camera_rates, &result);
   const std::vector<ImageTrigger> triggers = ChooseTriggers(log, options, &result.trigger_source);
   ImageContext context{&result.traces->angles, &result.traces->motion, options.rig,
-                       options.limits_m};
+                       options.limits_m, gyro.sampling().median_interval_ns};
   const int64_t latency_ns = SecondsToNs(options.trigger_latency_s);
   result.images.reserve(triggers.size());
   for (size_t i = 0; i < triggers.size(); ++i) {
@@ -430,67 +440,49 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
 
   // The verdict, with the what-if shares recomputed (not scaled) under the changed camera.
   AnalyzeVerdict& verdict = result.verdict;
-  for (const ImageResult& image : result.images) verdict.images_in_trace += image.in_trace;
+  for (const ImageResult& image : result.images) {
+    verdict.images_in_trace += image.judged();
+    verdict.images_too_few_samples += image.in_trace && image.too_few_samples;
+  }
   verdict.share_percent = SharesPercent(result.images, options.limits_m.size());
   verdict.axis_to_stabilise = AxisToStabilise(result.images, verdict.images_in_trace);
   if (options.what_if && verdict.images_in_trace > 0) {
     WhatIfShares(context, triggers, latency_ns, &verdict);
   }
-  verdict.line = VerdictLine(verdict, result.images.empty(), options);
+  verdict.line = VerdictLine(verdict, result.images.empty(), result.rate_hz, options);
   ReportProgress(options, 1.0);
   return result;
 }
 
-std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path) {
-  const std::string text = ReadFileToString(path);
-  LineCursor cursor(text);
-  std::vector<std::string_view> fields;
+std::vector<ImageTrigger> TriggersOnLogClock(const TriggerFile& file, const FlightLog& log,
+                                             const std::string& path) {
+  std::optional<LogUtcClock> clock;
+  if (file.clock != TriggerClock::kLog) {
+    clock = FitLogUtcClock(log.utc_fixes);
+    if (!clock) {
+      throw IoError(IoMessage(path, 0,
+                              std::string("the trigger times are ") + TriggerClockName(file.clock) +
+                                  " and the log has no GPS time to place them on its clock"));
+    }
+  }
   std::vector<ImageTrigger> triggers;
-  int columns = 0;  // 1: t; 2: image,t; 0: not known yet
-  bool first_line = true;
-  while (const auto line = cursor.Next()) {
-    const std::string trimmed = Trim(*line);
-    if (trimmed.empty() || trimmed[0] == '#') continue;
-    SplitFields(trimmed, ',', &fields);
-    const long line_number = cursor.line_number();
-    if (first_line) {
-      first_line = false;
-      const std::string last = ToLower(fields.back());
-      if (!ParseDouble(fields.back())) {
-        const bool time_name = last == "t" || last == "time" || last == "t_s";
-        const bool image_name =
-            fields.size() == 2 && (ToLower(fields[0]) == "image" || ToLower(fields[0]) == "name");
-        if (!time_name || (fields.size() == 2 && !image_name) || fields.size() > 2) {
-          throw IoError(IoMessage(
-              path, line_number,
-              "expected a header 'image,t' or 't', or a time in seconds (got '" + trimmed + "')"));
-        }
-        columns = static_cast<int>(fields.size());
-        continue;
-      }
-    }
-    if (columns == 0) columns = static_cast<int>(fields.size());
-    if (static_cast<int>(fields.size()) != columns || columns > 2) {
-      throw IoError(IoMessage(path, line_number,
-                              "expected " +
-                                  std::string(columns == 1 ? "1 field (t)" : "2 fields (image,t)") +
-                                  ", got " + std::to_string(fields.size())));
-    }
-    const std::optional<double> t_s = ParseDouble(fields.back());
-    if (!t_s || std::abs(*t_s) > 9e9) {
-      throw IoError(IoMessage(path, line_number,
-                              "bad time '" + std::string(fields.back()) + "' (seconds expected)"));
-    }
+  triggers.reserve(file.events.size());
+  for (size_t i = 0; i < file.events.size(); ++i) {
+    const TriggerEvent& e = file.events[i];
     ImageTrigger trigger;
-    trigger.t_ns = SecondsToNs(*t_s);
-    trigger.name = columns == 2 ? std::string(fields[0]) : ImageName(triggers.size());
-    if (trigger.name.empty()) {
-      throw IoError(IoMessage(path, line_number, "empty image name"));
-    }
+    trigger.name = !e.name.empty()   ? e.name
+                   : e.sequence >= 0 ? "IMG_" + std::to_string(e.sequence)
+                                     : ImageName(i);
+    trigger.t_ns = e.t_ns;
+    if (file.clock == TriggerClock::kGps) trigger.t_ns = clock->LogNsFromUtc(UtcFromGpsNs(e.t_ns));
+    if (file.clock == TriggerClock::kUtc) trigger.t_ns = clock->LogNsFromUtc(e.t_ns);
     triggers.push_back(std::move(trigger));
   }
-  if (triggers.empty()) throw IoError(IoMessage(path, 0, "no trigger times in the file"));
   return triggers;
+}
+
+std::string LengthText(double m) {
+  return m < 1.0 ? FormatNumber("%.3g cm", m * 100.0) : FormatNumber("%.3g m", m);
 }
 
 std::string LimitKey(double limit_m) { return FormatNumber("%.12g", limit_m); }
@@ -527,9 +519,10 @@ std::string AnalyzeReport(const AnalyzeResult& result) {
     out << "image          t (s)   D_paper (cm)  D_full (cm)  axis  flagged\n";
     for (const ImageResult& image : result.images) {
       char line[256];
-      if (!image.in_trace) {
-        std::snprintf(line, sizeof(line), "%-12s %9.3f  outside the log\n", image.name.c_str(),
-                      image.t_ns * 1e-9);
+      if (!image.judged()) {
+        std::snprintf(line, sizeof(line), "%-12s %9.3f  %s\n", image.name.c_str(),
+                      image.t_ns * 1e-9,
+                      image.in_trace ? "too few samples in the readout" : "outside the log");
       } else {
         std::string flags;
         for (size_t l = 0; l < result.limits_m.size(); ++l) {
@@ -559,10 +552,10 @@ void WriteAnalyzeOutputs(const std::string& dir, const AnalyzeResult& result) {
   for (const ImageResult& image : result.images) {
     csv += image.name + ",";
     AppendDouble(image.t_ns * 1e-9, &csv);
-    if (!image.in_trace) {
+    if (!image.judged()) {
       csv += ",,";
       for (size_t l = 0; l < result.limits_m.size(); ++l) csv += ",";
-      csv += ",outside\n";
+      csv += image.in_trace ? ",too_few_samples\n" : ",outside\n";
       continue;
     }
     csv += ",";

@@ -32,6 +32,7 @@
 #include "sim/gyro_trace.h"
 #include "sim/integrate.h"
 #include "sim/logs/flight_log.h"
+#include "sim/logs/trigger_file.h"
 
 #include <array>
 #include <cstdint>
@@ -60,7 +61,9 @@ struct AnalyzeOptions {
   // Image triggers, first match wins: these; else, when every_s > 0, simulated triggers every
   // every_s seconds from the first gyro sample (a mapping cadence); else the log's camera events.
   std::vector<ImageTrigger> triggers;
+  std::string triggers_source = "triggers";  // what `triggers` are, for trigger_source
   double every_s = 0.0;
+  bool log_events = true;  // false: never the log's camera events (`triggers` are all there is)
   double trigger_latency_s = 0.0;  // trigger to exposure of row 0, s (may be negative)
   // Use the log's altitude above ground (FlightLog::altitude_above_ground_m) instead of
   // rig.altitude_m when the log has one.
@@ -81,9 +84,14 @@ struct AnalyzeOptions {
 struct ImageResult {
   std::string name;
   int64_t trigger_t_ns = 0;
-  int64_t t_ns = 0;        // exposure of row 0 = trigger + latency
-  bool in_trace = false;   // false: [t, t + readout] is not covered by the gyro trace
-  double d_paper_m = 0.0;  // meaningful only when in_trace
+  int64_t t_ns = 0;       // exposure of row 0 = trigger + latency
+  bool in_trace = false;  // false: [t, t + readout] is not covered by the gyro trace
+  // The readout is not longer than kMinWindowSampleIntervals sample intervals (the log's median):
+  // it holds one or two samples, too few for a range, and the image is not judged (as flight's
+  // rows; "too few samples" in the table, null values in the JSON).
+  bool too_few_samples = false;
+  bool judged() const { return in_trace && !too_few_samples; }
+  double d_paper_m = 0.0;  // meaningful only when judged()
   double d_full_m = 0.0;
   double d_full_px = 0.0;
   std::array<double, 3> range_arcsec{};  // per camera axis within the readout
@@ -92,7 +100,8 @@ struct ImageResult {
 };
 
 struct AnalyzeVerdict {
-  size_t images_in_trace = 0;
+  size_t images_in_trace = 0;  // judged: inside the trace, with samples enough in the readout
+  size_t images_too_few_samples = 0;  // inside the trace, but not judged (ImageResult)
   std::vector<double> share_percent;  // per limit: images over the limit / images in the trace
   int axis_to_stabilise = -1;         // most frequent dominant axis of flagged images; -1 none
   double fast_readout_s = 0.010;
@@ -129,7 +138,8 @@ struct AnalyzeResult {
   bool bias_from_still = false;
   BiasSegment still_segment;
   Eigen::Vector3d bias_rad_s = Eigen::Vector3d::Zero();  // camera axes
-  std::string trigger_source;  // "none", "camera events (KIND)", "triggers", "every N s"
+  // "none", "camera events (KIND)", AnalyzeOptions::triggers_source ("triggers"), "every N s"
+  std::string trigger_source;
   std::vector<double> limits_m;
   double altitude_m = 0.0, readout_s = 0.0;
   std::string altitude_source;  // "camera" (the options) or "log"
@@ -152,9 +162,12 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& options);
 // on the log clock) and the bias (camera axes) removed as the gyro bias (gyro axes).
 TrueModel AnalyzeTrueModel(const RigModel& rig, const Eigen::Vector3d& bias_cam_rad_s);
 
-// Reads a trigger file: CSV "image,t" or "t" (seconds on the log clock), optional header line
-// naming those columns; unnamed images become IMG_0001, ... Throws IoError(path:line: problem).
-std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path);
+// A trigger file's events (sim/logs/trigger_file.h) as image triggers on the log's clock: log-clock
+// times as they are, GPS or UTC times through the log's GPS fixes (sim/logs/log_clock.h). Named
+// by the file's image names, else IMG_<photo number>, else IMG_0001, ... in file order. Throws
+// IoError(path: problem) when the times are GPS or UTC and the log has no GPS time.
+std::vector<ImageTrigger> TriggersOnLogClock(const TriggerFile& file, const FlightLog& log,
+                                             const std::string& path);
 
 // Where the altitude came from, for a person: "camera", or "log: median CAM.RelAlt ...".
 std::string AltitudeText(const AnalyzeResult& result);
@@ -168,5 +181,7 @@ void WriteAnalyzeOutputs(const std::string& dir, const AnalyzeResult& result);
 
 // The key used for a limit in JSON and CSV: shortest round-trip decimal ("0.05", "0.1").
 std::string LimitKey(double limit_m);
+// A length for a person, three digits: "5 cm", "12.5 cm", "1.5 m".
+std::string LengthText(double length_m);
 
 }  // namespace shutterlab

@@ -2,6 +2,7 @@
 
 #include "estimate/paper/window_stats.h"
 #include "sim/check.h"
+#include "sim/interval_histogram.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
@@ -10,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -23,9 +25,10 @@ constexpr size_t kChunkWindows = 8192;
 // sqrt(1 - c^2) terms ~1e-13 at the smallest angles we meet).
 constexpr double kCosBoundMargin = 1e-12;
 
-// Orientations as structure of arrays (Hamilton w, x, y, z) so the per-window dot products stream.
+// Orientations as structure of arrays (Hamilton w, x, y, z) so the per-window dot products stream;
+// a view of AngleBuffer's arrays from a window chunk's first sample.
 struct Quaternions {
-  std::vector<double> w, x, y, z;
+  const double *w, *x, *y, *z;
   // |q_i . q_j| = cos(theta_ij / 2), theta_ij the rotation angle between the two orientations.
   double AbsDot(size_t i, size_t j) const {
     return std::abs(w[i] * w[j] + x[i] * x[j] + y[i] * y[j] + z[i] * z[j]);
@@ -42,80 +45,109 @@ struct Quaternions {
   }
 };
 
-// The analysed samples' per-axis angles and orientations, integrated as a stream over a sliding
-// buffer that holds samples [base, end) only, so that memory stays O(chunk + window) for any trace
-// length (and a 10^8-sample log needs no 3 GB of angle arrays). Index g counts the samples after
-// the bias segment (trace index first + g). The recurrences are exactly those of
-// IntegratePerAxis (angle += (w_g - b) dt) and OrientationTrace (q_g = q_{g-1} Exp(0.5 (w_{g-1} +
-// w_g) dt), bias-corrected rates), evaluated in the same order, so the values are bit-identical
-// to theirs.
-class AngleStream {
+// A growable array that is not zero-filled (a sliding buffer writes every element it grows by).
+template <typename T>
+class Column {
  public:
-  AngleStream(const GyroTrace& trace, size_t first, const Eigen::Vector3d& bias_rad_s, bool with_q)
-      : trace_(trace), first_(first), bias_(bias_rad_s), with_q_(with_q) {}
-
-  // Makes samples [new_base, new_end) available; new_base and new_end never decrease.
-  void Advance(size_t new_base, size_t new_end) {
-    // Every sample must be stepped through once, in order, for the running sums.
-    SHUTTERLAB_CHECK(new_base <= end_ || (end_ == 0 && new_base == 0)) << "stream skipped samples";
-    const size_t keep_from = std::max(new_base, base_);
-    const size_t keep = end_ > keep_from ? end_ - keep_from : 0;
-    const size_t size = new_end - new_base;
-    for (auto* v : Buffers()) {
-      if (keep > 0 && keep_from > base_) {
-        std::copy(v->begin() + (keep_from - base_), v->begin() + (keep_from - base_) + keep,
-                  v->begin());
-      }
-      if (v->size() < size) v->resize(size);
+  // Room for n more elements at the end; returns where they start.
+  T* Grow(size_t n) {
+    if (size_ + n > capacity_) {
+      capacity_ = std::max(2 * capacity_, size_ + n);
+      std::unique_ptr<T[]> larger(new T[capacity_]);
+      std::copy(data_.get(), data_.get() + size_, larger.get());
+      data_ = std::move(larger);
     }
-    base_ = new_base;
-    for (size_t g = std::max(end_, new_base); g < new_end; ++g) Step(g);
-    end_ = std::max(end_, new_end);
+    size_ += n;
+    return data_.get() + size_ - n;
   }
-
-  const double* angle(int a) const { return angle_buffer_[a].data(); }
-  const Quaternions& q() const { return q_; }
-  size_t base() const { return base_; }
+  void DropFront(size_t n) {
+    std::copy(data_.get() + n, data_.get() + size_, data_.get());
+    size_ -= n;
+  }
+  const T* data() const { return data_.get(); }
+  const T* end() const { return data_.get() + size_; }
+  size_t size() const { return size_; }
 
  private:
-  std::vector<std::vector<double>*> Buffers() {
-    std::vector<std::vector<double>*> out = {&angle_buffer_[0], &angle_buffer_[1],
-                                             &angle_buffer_[2]};
-    if (with_q_) out.insert(out.end(), {&q_.w, &q_.x, &q_.y, &q_.z});
-    return out;
-  }
+  std::unique_ptr<T[]> data_;
+  size_t size_ = 0, capacity_ = 0;
+};
 
-  void Step(size_t g) {
-    const GyroSample& s = trace_[first_ + g];
-    if (g > 0) {
-      const GyroSample& previous = trace_[first_ + g - 1];
-      const double dt_s = (s.t_ns - previous.t_ns) * 1e-9;
-      for (int a = 0; a < 3; ++a) angle_[a] += (s.omega_rad_s[a] - bias_[a]) * dt_s;
+// The analysed samples (those after the bias segment) with their per-axis angles and orientations,
+// integrated as they arrive, in a sliding buffer that holds the global indices [base, end) only, so
+// that memory stays O(chunk + window) for any trace length (a 10^8-sample log needs no 3 GB of
+// angle arrays). The recurrences are exactly those of IntegratePerAxis (angle += (w_g - b) dt) and
+// OrientationTrace (q_g = q_{g-1} Exp(0.5 (w_{g-1} + w_g) dt), bias-corrected rates), evaluated in
+// the same order, so the values are bit-identical to theirs.
+class AngleBuffer {
+ public:
+  AngleBuffer(const Eigen::Vector3d& bias_rad_s, bool with_q)
+      : bias_(bias_rad_s), with_q_(with_q) {}
+
+  // Appends samples [s, s + n), integrating them.
+  void Push(const GyroSample* s, size_t n) {
+    int64_t* t = t_.Grow(n);
+    double* angle[3] = {angles_[0].Grow(n), angles_[1].Grow(n), angles_[2].Grow(n)};
+    double* q[4] = {nullptr, nullptr, nullptr, nullptr};
+    if (with_q_) {
+      for (int k = 0; k < 4; ++k) q[k] = q_[k].Grow(n);
+    }
+    for (size_t i = 0; i < n; ++i) {
+      if (end_ + i > 0) {
+        const double dt_s = (s[i].t_ns - previous_.t_ns) * 1e-9;
+        for (int a = 0; a < 3; ++a) angle_[a] += (s[i].omega_rad_s[a] - bias_[a]) * dt_s;
+        if (with_q_) {
+          const Eigen::Vector3d wa = previous_.omega_rad_s - bias_;
+          const Eigen::Vector3d wb = s[i].omega_rad_s - bias_;
+          current_ = (current_ * ExpSO3(0.5 * (wa + wb) * dt_s)).normalized();
+        }
+      }
+      previous_ = s[i];
+      t[i] = s[i].t_ns;
+      for (int a = 0; a < 3; ++a) angle[a][i] = angle_[a];
       if (with_q_) {
-        const Eigen::Vector3d wa = previous.omega_rad_s - bias_;
-        const Eigen::Vector3d wb = s.omega_rad_s - bias_;
-        current_ = (current_ * ExpSO3(0.5 * (wa + wb) * dt_s)).normalized();
+        q[0][i] = current_.w();
+        q[1][i] = current_.x();
+        q[2][i] = current_.y();
+        q[3][i] = current_.z();
       }
     }
-    const size_t i = g - base_;
-    for (int a = 0; a < 3; ++a) angle_buffer_[a][i] = angle_[a];
+    end_ += n;
+  }
+  // Samples before global index g are no longer needed. Their room is given back once they are
+  // half of the buffer, so that each sample moves at most once or twice in all.
+  void DropBefore(size_t g) {
+    const size_t drop = g - base_;
+    if (drop == 0 || 2 * drop < t_.size()) return;
+    t_.DropFront(drop);
+    for (auto& v : angles_) v.DropFront(drop);
     if (with_q_) {
-      q_.w[i] = current_.w();
-      q_.x[i] = current_.x();
-      q_.y[i] = current_.y();
-      q_.z[i] = current_.z();
+      for (auto& v : q_) v.DropFront(drop);
     }
+    base_ = g;
+  }
+  size_t end() const { return end_; }  // samples pushed in all
+  int64_t t(size_t g) const { return t_.data()[g - base_]; }
+  // Index of the first sample from g on with time >= t_ns (end() when none).
+  size_t LowerBound(size_t g, int64_t t_ns) const {
+    return base_ + (std::lower_bound(t_.data() + (g - base_), t_.end(), t_ns) - t_.data());
+  }
+  const double* angle(int a, size_t g) const { return angles_[a].data() + (g - base_); }
+  Quaternions q(size_t g) const {
+    const size_t i = g - base_;
+    return {q_[0].data() + i, q_[1].data() + i, q_[2].data() + i, q_[3].data() + i};
   }
 
-  const GyroTrace& trace_;
-  const size_t first_;
+ private:
   const Eigen::Vector3d bias_;
   const bool with_q_;
   size_t base_ = 0, end_ = 0;
+  GyroSample previous_{};
   double angle_[3] = {0.0, 0.0, 0.0};
   Eigen::Quaterniond current_ = Eigen::Quaterniond::Identity();
-  std::vector<double> angle_buffer_[3];
-  Quaternions q_;
+  Column<int64_t> t_;
+  Column<double> angles_[3];
+  Column<double> q_[4];
 };
 
 // The vector criterion for one window [begin, end) against several thresholds (cos_half[l] =
@@ -190,110 +222,21 @@ double MaxPairwiseAngle(const Quaternions& q, size_t begin, size_t end,
   return best;
 }
 
-// What the pass over the windows needs: where the samples after the bias segment start, the
-// windows per duration and the thresholds per limit.
-struct FlightPlan {
-  size_t first = 0;                // first sample after the bias segment
-  size_t n = 0;                    // samples from there to the end
-  std::vector<int64_t> window_ns;  // per duration
-  std::vector<size_t> windows;     // window starts per duration
-  size_t windows_max = 0;
-  std::vector<bool> too_few_samples;            // per duration: not longer than 2 sample intervals
-  int64_t sample_interval_ns = 0;               // median, of the analysed samples
-  std::vector<double> threshold_rad, cos_half;  // per limit; cos_half: cos(threshold / 2)
+// The thresholds per limit, with the noise allowance; cos_half: cos(threshold / 2).
+struct FlightThresholds {
+  std::vector<double> threshold_rad, cos_half;
 };
 
-// Median interval between the samples from `first` on (the trace's own median covers the bias
-// segment too, which may be sampled differently).
-int64_t MedianIntervalNs(const GyroTrace& trace, size_t first) {
-  std::vector<int64_t> intervals;
-  intervals.reserve(trace.size() - first);
-  for (size_t k = first + 1; k < trace.size(); ++k)
-    intervals.push_back(trace[k].t_ns - trace[k - 1].t_ns);
-  return intervals.empty() ? 0 : UpperMedian(std::move(intervals));
-}
-
-// The bias removed from every sample: the options' known one, or estimated on their segment.
-BiasEstimate FlightBias(const GyroTrace& trace, const FlightOptions& options) {
-  BiasEstimate bias;
-  if (options.known_bias_rad_s) {
-    bias.bias_rad_s = *options.known_bias_rad_s;
-    bias.first_after = 0;
-  } else {
-    bias = EstimateBias(trace, options.bias);
-  }
-  return bias;
-}
-
-// Windows per duration: starts k with t_k + W <= t_last (docs/FORMATS.md: the rest run past the
-// end); thresholds per limit, with the noise allowance.
-FlightPlan PlanFlight(const GyroTrace& trace, const FlightOptions& options, size_t first) {
-  FlightPlan plan;
-  plan.first = first;
-  plan.n = trace.size() - first;
-  if (plan.n < 2) {
-    throw std::invalid_argument("only " + std::to_string(plan.n) +
-                                " sample(s) after the bias segment (it ends at " +
-                                FormatNumber("%g", options.bias.end_s) + " s; the trace lasts " +
-                                FormatNumber("%.3f", trace.DurationS()) +
-                                " s): give an earlier --bias A:B, --auto-bias, or a longer log");
-  }
-  const int64_t t0 = trace[first].t_ns;
-  const int64_t t_last = trace.t_end_ns();
-  const double span_s = (t_last - t0) * 1e-9;
-  plan.sample_interval_ns = MedianIntervalNs(trace, first);
-  const size_t windows_count = options.windows_s.size();
-  plan.window_ns.resize(windows_count);
-  plan.windows.resize(windows_count);
-  plan.too_few_samples.resize(windows_count);
-  for (size_t wi = 0; wi < windows_count; ++wi) {
-    const double w = options.windows_s[wi];
-    plan.window_ns[wi] = SecondsToNs(w);
-    if (plan.window_ns[wi] <= kMinWindowSampleIntervals * plan.sample_interval_ns) {
-      plan.too_few_samples[wi] = true;  // plan.windows[wi] stays 0: nothing to sweep
-      continue;
-    }
-    if (t0 + plan.window_ns[wi] > t_last) {
-      throw std::invalid_argument("window " + FormatNumber("%g", w) + " s is longer than the " +
-                                  FormatNumber("%.3f", span_s) +
-                                  " s of trace after the bias segment: give shorter --windows or "
-                                  "an earlier --bias A:B");
-    }
-    plan.windows[wi] = trace.LowerBound(t_last - plan.window_ns[wi] + 1) - first;
-    plan.windows_max = std::max(plan.windows_max, plan.windows[wi]);
-  }
+FlightThresholds Thresholds(const FlightOptions& options) {
   const size_t limits = options.limits_m.size();
   SHUTTERLAB_CHECK(limits <= 64) << "at most 64 ground limits";
-  plan.threshold_rad.resize(limits);
-  plan.cos_half.resize(limits);
+  FlightThresholds out;
   for (size_t l = 0; l < limits; ++l) {
-    plan.threshold_rad[l] = std::atan(options.limits_m[l] / options.altitude_m) +
-                            options.noise_allowance_arcsec / kArcsecPerRad;
-    plan.cos_half[l] = std::cos(0.5 * plan.threshold_rad[l]);
+    out.threshold_rad.push_back(std::atan(options.limits_m[l] / options.altitude_m) +
+                                options.noise_allowance_arcsec / kArcsecPerRad);
+    out.cos_half.push_back(std::cos(0.5 * out.threshold_rad.back()));
   }
-  return plan;
-}
-
-// Each duration's windows starting in [k0, k1): their ends (local indices: the stream's buffer
-// starts at sample k0) into chunk_end, their number into count; e is the running window end per
-// duration (global index). Returns the end of the samples the chunk needs.
-size_t ChunkWindowEnds(const GyroTrace& trace, const FlightPlan& plan, size_t k0, size_t k1,
-                       std::vector<size_t>* e, std::vector<std::vector<uint32_t>>* chunk_end,
-                       std::vector<size_t>* count) {
-  const auto t = [&](size_t g) { return trace[plan.first + g].t_ns; };
-  size_t region_end = k0 + 1;
-  for (size_t wi = 0; wi < plan.windows.size(); ++wi) {
-    const size_t k_stop = std::min(k1, plan.windows[wi]);
-    size_t& end = (*e)[wi];
-    for (size_t k = k0; k < k_stop; ++k) {
-      const int64_t t_end = t(k) + plan.window_ns[wi];
-      while (end < plan.n && t(end) < t_end) ++end;
-      // Local index: the stream's buffer starts at sample k0.
-      (*chunk_end)[wi][(*count)[wi]++] = static_cast<uint32_t>(end - k0);
-    }
-    if ((*count)[wi] > 0) region_end = std::max(region_end, end);
-  }
-  return region_end;
+  return out;
 }
 
 // The m windows' per-axis ranges (rad) against each limit: flagged on any axis and per axis, added
@@ -326,7 +269,7 @@ void CountAxisFlags(const std::array<std::vector<double>, 3>& range, size_t m,
 // The m windows (window i: stream samples [i, ends[i])) by the vector criterion against each
 // limit, and where it and the per-axis one disagree, added to the duration's rows as above.
 void CountVectorFlags(const Quaternions& q, const uint32_t* ends, size_t m,
-                      const std::array<std::vector<double>, 3>& range, const FlightPlan& plan,
+                      const std::array<std::vector<double>, 3>& range, const FlightThresholds& plan,
                       FlightRow* rows, size_t stride) {
   bool vector_flag[64];
   for (size_t i = 0; i < m; ++i) {
@@ -338,82 +281,6 @@ void CountVectorFlags(const Quaternions& q, const uint32_t* ends, size_t m,
       row.flagged_vector += vector_flag[l];
       row.flagged_vector_only += vector_flag[l] && !flagged;
       row.flagged_axis_only += flagged && !vector_flag[l];
-    }
-  }
-}
-
-// The first duration's m windows starting at k0 appended to the --series output.
-void AppendSeries(const GyroTrace& trace, const FlightOptions& options, const FlightPlan& plan,
-                  size_t k0, const Quaternions& q, const uint32_t* ends, size_t m,
-                  const std::array<std::vector<double>, 3>& range, std::vector<double>* scratch,
-                  FlightSeries* series) {
-  for (size_t i = 0; i < m; ++i) {
-    series->t_ns.push_back(trace[plan.first + k0 + i].t_ns);
-    for (int a = 0; a < 3; ++a) series->range_arcsec[a].push_back(range[a][i] * kArcsecPerRad);
-    if (options.vector_criterion && options.series_vector) {
-      series->vector_arcsec.push_back(MaxPairwiseAngle(q, i, ends[i], scratch) * kArcsecPerRad);
-    }
-  }
-}
-
-// One pass over chunks of window starts; every duration's windows of the chunk are done together
-// so the angles are integrated once. Counts into result->rows (limit-major), the series.
-void SweepWindows(const GyroTrace& trace, const FlightOptions& options, const FlightPlan& plan,
-                  FlightResult* result) {
-  const size_t windows_count = plan.windows.size();
-  AngleStream stream(trace, plan.first, result->bias.bias_rad_s, options.vector_criterion);
-  SlidingRangeKernel kernel;
-  std::vector<std::vector<uint32_t>> chunk_end(windows_count, std::vector<uint32_t>(kChunkWindows));
-  std::vector<size_t> e(windows_count, 0);  // running window end per duration (global index)
-  std::array<std::vector<double>, 3> range;
-  for (auto& r : range) r.resize(kChunkWindows);
-  std::vector<double> scratch;
-  for (size_t k0 = 0; k0 < plan.windows_max; k0 += kChunkWindows) {
-    const size_t k1 = std::min(plan.windows_max, k0 + kChunkWindows);
-    std::vector<size_t> count(windows_count, 0);
-    const size_t region_end = ChunkWindowEnds(trace, plan, k0, k1, &e, &chunk_end, &count);
-    stream.Advance(k0, region_end);
-    const Quaternions& q = stream.q();
-    for (size_t wi = 0; wi < windows_count; ++wi) {
-      const size_t m = count[wi];
-      if (m == 0) continue;
-      const uint32_t* ends = chunk_end[wi].data();
-      kernel.Run3({stream.angle(0), stream.angle(1), stream.angle(2)}, ends, 0, m,
-                  {range[0].data(), range[1].data(), range[2].data()});
-      FlightRow* rows = &result->rows[wi];  // limit l's row: rows[l * windows_count]
-      CountAxisFlags(range, m, plan.threshold_rad, rows, windows_count);
-      if (options.vector_criterion) {
-        CountVectorFlags(q, ends, m, range, plan, rows, windows_count);
-      }
-      if (options.series && wi == 0) {
-        AppendSeries(trace, options, plan, k0, q, ends, m, range, &scratch, &result->series);
-      }
-    }
-    if (options.progress) options.progress(static_cast<double>(k1) / plan.windows_max);
-  }
-}
-
-// Each row's limit, window, threshold and shares of the windows.
-void FinishRows(const FlightOptions& options, const FlightPlan& plan, FlightResult* result) {
-  const size_t windows_count = plan.windows.size();
-  for (size_t wi = 0; wi < windows_count; ++wi) {
-    for (size_t l = 0; l < plan.threshold_rad.size(); ++l) {
-      FlightRow& row = result->rows[l * windows_count + wi];
-      row.limit_m = options.limits_m[l];
-      row.window_s = options.windows_s[wi];
-      row.threshold_arcsec = plan.threshold_rad[l] * kArcsecPerRad;
-      row.windows = plan.windows[wi];
-      if (plan.too_few_samples[wi]) {
-        row.too_few_samples = true;
-        const double nan = std::numeric_limits<double>::quiet_NaN();
-        row.flagged_percent = row.flagged_percent_vector = nan;
-        row.flagged_percent_axis = {nan, nan, nan};
-        continue;
-      }
-      const double to_percent = 100.0 / static_cast<double>(plan.windows[wi]);
-      row.flagged_percent = row.flagged * to_percent;
-      for (int a = 0; a < 3; ++a) row.flagged_percent_axis[a] = row.flagged_axis[a] * to_percent;
-      row.flagged_percent_vector = row.flagged_vector * to_percent;
     }
   }
 }
@@ -440,26 +307,9 @@ void FlightOptions::Check() const {
       << "bias segment " << bias.begin_s << ":" << bias.end_s << " must satisfy 0 <= A < B";
 }
 
-FlightResult Flight(const GyroTrace& trace, const FlightOptions& options) {
-  options.Check();
-  SHUTTERLAB_CHECK(!trace.empty()) << "empty gyro trace";
-  FlightResult result;
-  result.altitude_m = options.altitude_m;
-  result.noise_allowance_arcsec = options.noise_allowance_arcsec;
-  result.vector_criterion = options.vector_criterion;
-  result.bias = FlightBias(trace, options);
-  const FlightPlan plan = PlanFlight(trace, options, result.bias.first_after);
-  result.samples = plan.n;
-  result.sample_interval_s = plan.sample_interval_ns * 1e-9;
-  result.rows.resize(options.limits_m.size() * options.windows_s.size());
-  if (options.series) result.series.window_s = options.windows_s[0];
-  SweepWindows(trace, options, plan, &result);
-  result.windows_total = plan.windows[0];
-  FinishRows(options, plan, &result);
-  return result;
-}
+namespace {
 
-std::vector<LogWarning> FlightWarnings(const FlightResult& result) {
+std::vector<LogWarning> TooFewSamplesWarnings(const FlightResult& result) {
   std::string windows;
   size_t count = 0;
   for (const FlightRow& row : result.rows) {
@@ -477,6 +327,256 @@ std::vector<LogWarning> FlightWarnings(const FlightResult& result) {
                FormatNumber("%.4g", kMinWindowSampleIntervals * dt_s * 1e3) +
                " ms (2 sample intervals) to measure a range",
            std::nullopt, count}};
+}
+
+}  // namespace
+
+struct FlightStream::Impl {
+  explicit Impl(const FlightOptions& given)
+      : options(given),
+        thresholds(Thresholds(given)),
+        segment_begin_ns(SecondsToNs(given.bias.begin_s)),
+        segment_end_ns(SecondsToNs(given.bias.end_s)) {
+    for (double w : options.windows_s) {
+      window_ns.push_back(SecondsToNs(w));
+      window_max_ns = std::max(window_max_ns, window_ns.back());
+    }
+    const size_t durations = window_ns.size();
+    chunk_end.assign(durations, std::vector<uint32_t>(kChunkWindows));
+    e.assign(durations, 0);
+    for (auto& r : range) r.resize(kChunkWindows);
+    rows.resize(options.limits_m.size() * durations);
+    if (options.series) series.window_s = options.windows_s[0];
+  }
+
+  void Add(const GyroSample* samples, size_t count) {
+    if (count == 0) return;
+    if (total == 0) {
+      t0_ns = samples[0].t_ns;
+      if (options.known_bias_rad_s) {
+        bias.bias_rad_s = *options.known_bias_rad_s;
+        bias.first_after = 0;
+        StartAnalysis();
+      }
+    }
+    total += count;
+    t_last_ns = samples[count - 1].t_ns;
+    size_t i = 0;
+    while (!buffer && i < count) {
+      if (TakeForBias(samples[i])) break;  // the segment is over: this sample is analysed
+      ++i;
+    }
+    if (!buffer || i == count) return;
+    const GyroSample* s = samples + i;
+    const size_t n = count - i;
+    if (buffer->end() == 0) t_first_analysed_ns = s[0].t_ns;
+    for (size_t k = buffer->end() == 0 ? 1 : 0; k < n; ++k)
+      intervals.Add(s[k].t_ns - (k > 0 ? s[k - 1].t_ns : t_last_analysed_ns));
+    t_last_analysed_ns = s[n - 1].t_ns;
+    buffer->Push(s, n);
+    SweepCompleteChunks();
+  }
+
+  // Before the analysis: a sample of the bias segment (or before it) is kept or counted; true when
+  // the segment is over with this sample, which then starts the analysis.
+  bool TakeForBias(const GyroSample& s) {
+    if (bias_failed) return false;
+    if (s.t_ns < t0_ns + segment_end_ns) {
+      if (s.t_ns >= t0_ns + segment_begin_ns) {
+        segment.push_back(s);
+      } else {
+        ++before_segment;
+      }
+      return false;
+    }
+    if (segment.size() < kMinBiasSamples) {  // said at Finish, with the trace's length
+      bias_failed = true;
+      return false;
+    }
+    bias = SegmentBias();
+    segment = {};
+    StartAnalysis();
+    return true;
+  }
+
+  BiasEstimate SegmentBias() const {
+    return BiasOverSegment(segment.data(), segment.data() + segment.size(), options.bias,
+                           before_segment + segment.size(), (t_last_ns - t0_ns) * 1e-9);
+  }
+
+  void StartAnalysis() {
+    buffer = std::make_unique<AngleBuffer>(bias.bias_rad_s, options.vector_criterion);
+  }
+
+  // Every chunk of window starts whose windows, the longest included, lie inside the samples so
+  // far: the windows of every duration starting in it are then complete.
+  void SweepCompleteChunks() {
+    const std::vector<size_t> all(window_ns.size(), std::numeric_limits<size_t>::max());
+    while (next_k0 + kChunkWindows <= buffer->end() &&
+           buffer->t(next_k0 + kChunkWindows - 1) + window_max_ns <= t_last_analysed_ns) {
+      SweepChunk(next_k0, next_k0 + kChunkWindows, all);
+      next_k0 += kChunkWindows;
+      buffer->DropBefore(next_k0);
+    }
+  }
+
+  // The windows starting in [k0, k1) of every duration (at most windows[wi] of duration wi): their
+  // ends, per-axis ranges and flags, counted into rows (limit-major) and the series.
+  void SweepChunk(size_t k0, size_t k1, const std::vector<size_t>& windows) {
+    const size_t durations = window_ns.size();
+    const size_t n = buffer->end();
+    for (size_t wi = 0; wi < durations; ++wi) {
+      const size_t k_stop = std::min(k1, windows[wi]);
+      size_t m = 0;
+      for (size_t k = k0; k < k_stop; ++k) {
+        const int64_t t_end = buffer->t(k) + window_ns[wi];
+        while (e[wi] < n && buffer->t(e[wi]) < t_end) ++e[wi];
+        chunk_end[wi][m++] = static_cast<uint32_t>(e[wi] - k0);  // local: from sample k0
+      }
+      if (m == 0) continue;
+      const uint32_t* ends = chunk_end[wi].data();
+      kernel.Run3({buffer->angle(0, k0), buffer->angle(1, k0), buffer->angle(2, k0)}, ends, 0, m,
+                  {range[0].data(), range[1].data(), range[2].data()});
+      FlightRow* duration_rows = &rows[wi];  // limit l's row: duration_rows[l * durations]
+      CountAxisFlags(range, m, thresholds.threshold_rad, duration_rows, durations);
+      const Quaternions q = options.vector_criterion ? buffer->q(k0) : Quaternions{};
+      if (options.vector_criterion) {
+        CountVectorFlags(q, ends, m, range, thresholds, duration_rows, durations);
+      }
+      if (options.series && wi == 0) {
+        for (size_t i = 0; i < m; ++i) {
+          series.t_ns.push_back(buffer->t(k0 + i));
+          for (int a = 0; a < 3; ++a) series.range_arcsec[a].push_back(range[a][i] * kArcsecPerRad);
+          if (options.vector_criterion && options.series_vector) {
+            series.vector_arcsec.push_back(MaxPairwiseAngle(q, i, ends[i], &scratch) *
+                                           kArcsecPerRad);
+          }
+        }
+      }
+    }
+  }
+
+  FlightResult Finish();
+
+  const FlightOptions options;
+  const FlightThresholds thresholds;
+  std::vector<int64_t> window_ns;  // per duration
+  int64_t window_max_ns = 0;
+  // Every sample.
+  size_t total = 0;
+  int64_t t0_ns = 0, t_last_ns = 0;
+  // The bias segment (after the first sample) and its samples until it is over, and the samples
+  // before it.
+  const int64_t segment_begin_ns, segment_end_ns;
+  std::vector<GyroSample> segment;
+  size_t before_segment = 0;
+  bool bias_failed = false;
+  BiasEstimate bias;
+  // The analysed samples (null until the bias is known) and their intervals.
+  std::unique_ptr<AngleBuffer> buffer;
+  int64_t t_first_analysed_ns = 0, t_last_analysed_ns = 0;
+  IntervalHistogram intervals;
+  // The sweep over chunks of window starts.
+  size_t next_k0 = 0;
+  std::vector<size_t> e;  // running window end per duration (global index)
+  std::vector<std::vector<uint32_t>> chunk_end;
+  std::array<std::vector<double>, 3> range;
+  std::vector<double> scratch;
+  SlidingRangeKernel kernel;
+  std::vector<FlightRow> rows;
+  FlightSeries series;
+};
+
+FlightResult FlightStream::Impl::Finish() {
+  SHUTTERLAB_CHECK(total > 0) << "empty gyro trace";
+  const double trace_s = (t_last_ns - t0_ns) * 1e-9;
+  if (!buffer) SegmentBias();  // throws when the segment holds too few samples
+  const size_t n = buffer ? buffer->end() : 0;
+  if (n < 2) {
+    throw std::invalid_argument("only " + std::to_string(n) +
+                                " sample(s) after the bias segment (it ends at " +
+                                FormatNumber("%g", options.bias.end_s) + " s; the trace lasts " +
+                                FormatNumber("%.3f", trace_s) +
+                                " s): give an earlier --bias A:B, --auto-bias, or a longer log");
+  }
+  const int64_t interval_ns = intervals.Median();
+  const size_t durations = window_ns.size();
+  std::vector<size_t> windows(durations, 0);
+  std::vector<bool> too_few(durations, false);
+  size_t windows_max = 0;
+  for (size_t wi = 0; wi < durations; ++wi) {
+    if (window_ns[wi] <= kMinWindowSampleIntervals * interval_ns) {
+      too_few[wi] = true;  // windows[wi] stays 0: its rows are not analysed
+      continue;
+    }
+    if (t_first_analysed_ns + window_ns[wi] > t_last_analysed_ns) {
+      throw std::invalid_argument(
+          "window " + FormatNumber("%g", options.windows_s[wi]) + " s is longer than the " +
+          FormatNumber("%.3f", (t_last_analysed_ns - t_first_analysed_ns) * 1e-9) +
+          " s of trace after the bias segment: give shorter --windows or an earlier --bias A:B");
+    }
+    windows[wi] = buffer->LowerBound(next_k0, t_last_analysed_ns - window_ns[wi] + 1);
+    windows_max = std::max(windows_max, windows[wi]);
+  }
+  for (size_t k0 = next_k0; k0 < windows_max; k0 += kChunkWindows)
+    SweepChunk(k0, std::min(windows_max, k0 + kChunkWindows), windows);
+
+  FlightResult result;
+  result.altitude_m = options.altitude_m;
+  result.noise_allowance_arcsec = options.noise_allowance_arcsec;
+  result.vector_criterion = options.vector_criterion;
+  result.bias = bias;
+  result.samples = n;
+  result.sample_interval_s = interval_ns * 1e-9;
+  result.windows_total = windows[0];
+  result.rows = std::move(rows);
+  if (options.series && !too_few[0]) result.series = std::move(series);
+  result.series.window_s = options.series ? options.windows_s[0] : 0.0;
+  for (size_t wi = 0; wi < durations; ++wi) {
+    for (size_t l = 0; l < thresholds.threshold_rad.size(); ++l) {
+      FlightRow& row = result.rows[l * durations + wi];
+      if (too_few[wi]) row = FlightRow{};  // swept as it came, but not an answer
+      row.limit_m = options.limits_m[l];
+      row.window_s = options.windows_s[wi];
+      row.threshold_arcsec = thresholds.threshold_rad[l] * kArcsecPerRad;
+      row.windows = windows[wi];
+      if (too_few[wi]) {
+        row.too_few_samples = true;
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        row.flagged_percent = row.flagged_percent_vector = nan;
+        row.flagged_percent_axis = {nan, nan, nan};
+        continue;
+      }
+      const double to_percent = 100.0 / static_cast<double>(windows[wi]);
+      row.flagged_percent = row.flagged * to_percent;
+      for (int a = 0; a < 3; ++a) row.flagged_percent_axis[a] = row.flagged_axis[a] * to_percent;
+      row.flagged_percent_vector = row.flagged_vector * to_percent;
+    }
+  }
+  result.warnings = TooFewSamplesWarnings(result);
+  return result;
+}
+
+FlightStream::FlightStream(const FlightOptions& options) {
+  options.Check();
+  impl_ = std::make_unique<Impl>(options);
+}
+
+FlightStream::~FlightStream() = default;
+
+void FlightStream::Add(const GyroSample* samples, size_t count) { impl_->Add(samples, count); }
+
+FlightResult FlightStream::Finish() { return impl_->Finish(); }
+
+FlightResult Flight(const GyroTrace& trace, const FlightOptions& options) {
+  FlightStream stream(options);
+  // Slices, so that progress can be told on a long trace.
+  constexpr size_t kSlice = 1 << 20;
+  for (size_t i = 0; i < trace.size(); i += kSlice) {
+    stream.Add(trace.samples().data() + i, std::min(kSlice, trace.size() - i));
+    if (options.progress) options.progress(static_cast<double>(i) / trace.size());
+  }
+  return stream.Finish();
 }
 
 std::string FlightTable(const FlightResult& result) {
@@ -515,6 +615,7 @@ std::string FlightTable(const FlightResult& result) {
         << " ms (2 sample intervals) to measure a range; those rows were not analysed\n";
   }
   if (result.vector_criterion && too_few < result.rows.size()) {
+    const size_t analysed = result.rows.size() - too_few;  // refused rows are no comparison
     size_t vector_more = 0, axis_more = 0, vector_only = 0, axis_only = 0;
     for (const FlightRow& row : result.rows) {
       vector_more += row.flagged_vector > row.flagged;
@@ -524,10 +625,10 @@ std::string FlightTable(const FlightResult& result) {
     }
     out << "criteria: ";
     if (vector_more > 0 && axis_more == 0) {
-      out << "the vector angle flags more in " << vector_more << " of " << result.rows.size()
+      out << "the vector angle flags more in " << vector_more << " of " << analysed
           << " rows: per-axis ranges are NOT on the safe side on this data";
     } else if (axis_more > 0 && vector_more == 0) {
-      out << "per-axis flags more in " << axis_more << " of " << result.rows.size()
+      out << "per-axis flags more in " << axis_more << " of " << analysed
           << " rows: per-axis ranges are on the safe side on this data";
     } else if (axis_more == 0 && vector_more == 0) {
       out << "both criteria flag the same share in every row";

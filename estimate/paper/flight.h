@@ -18,6 +18,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -87,6 +88,10 @@ struct FlightResult {
   bool vector_criterion = false;
   std::vector<FlightRow> rows;  // limit-major: for each limit, each window (Table 4 order)
   FlightSeries series;
+  // A too_few_samples warning (docs/FORMATS.md "Warnings") naming the rows the sampling rate could
+  // not answer and the shortest window it allows; empty when every row was analysed. Commands add
+  // it to the log's warnings.
+  std::vector<LogWarning> warnings;
 };
 
 // Runs the analysis. Windows too short for the sampling rate are marked
@@ -95,9 +100,26 @@ struct FlightResult {
 // bias segment (none fits).
 FlightResult Flight(const GyroTrace& trace, const FlightOptions& options);
 
-// A too_few_samples warning (docs/FORMATS.md "Warnings") naming the rows the sampling rate could
-// not answer and the shortest window it allows; empty when every row was analysed.
-std::vector<LogWarning> FlightWarnings(const FlightResult& result);
+// The same analysis on a trace that arrives in chunks (a log read a block at a time), in memory
+// O(bias segment + chunk + longest window) whatever the trace's length; the results are
+// bit-identical to Flight's on the whole trace. The windows are swept as soon as they are complete;
+// which ones the rate is too low for is known, and said, at Finish.
+class FlightStream {
+ public:
+  // Throws std::invalid_argument for bad options (FlightOptions::Check); progress is not called.
+  explicit FlightStream(const FlightOptions& options);
+  ~FlightStream();
+  FlightStream(const FlightStream&) = delete;
+  FlightStream& operator=(const FlightStream&) = delete;
+  // The next samples (time order, finite: as a GyroTrace holds them).
+  void Add(const GyroSample* samples, size_t count);
+  // After the last Add; throws as Flight does.
+  FlightResult Finish();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // The person-readable table in the paper's Table 4 layout, with a closing line saying which
 // criterion flags more on this data.

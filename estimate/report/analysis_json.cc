@@ -181,17 +181,6 @@ nlohmann::json FlightToJson(const FlightResult& result) {
           {"rows", rows}};
 }
 
-nlohmann::json WarningsToJson(const std::vector<LogWarning>& warnings) {
-  nlohmann::json json = nlohmann::json::array();
-  for (const LogWarning& w : warnings) {
-    nlohmann::json item = {{"kind", w.kind}, {"message", w.message}};
-    if (w.t_s) item["t_s"] = *w.t_s;
-    if (w.count) item["count"] = *w.count;
-    json.push_back(std::move(item));
-  }
-  return json;
-}
-
 nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
   nlohmann::json json;
   json["source"] = {{"format", result.format},   {"gyro", result.gyro_source},
@@ -219,7 +208,8 @@ nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
     entry["trigger_t"] = image.trigger_t_ns * 1e-9;
     entry["in_trace"] = image.in_trace;
     nlohmann::json flagged = nlohmann::json::object();
-    if (image.in_trace) {
+    if (image.too_few_samples) entry["too_few_samples"] = true;  // absent: false
+    if (image.judged()) {
       entry["D_paper_m"] = image.d_paper_m;
       entry["D_full_m"] = image.d_full_m;
       entry["D_full_px"] = image.d_full_px;
@@ -247,6 +237,8 @@ nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
                      {"flagged_percent_fast_readout", v.share_fast_readout_percent},
                      {"flagged_percent_half_altitude", v.share_half_altitude_percent},
                      {"line", v.line}};
+  if (v.images_too_few_samples > 0)
+    json["verdict"]["images_too_few_samples"] = v.images_too_few_samples;
   return json;
 }
 

@@ -6,6 +6,7 @@
 #include "estimate/paper/analyze.h"
 #include "estimate/paper/flight.h"
 #include "estimate/paper/noise.h"
+#include "render/warnings_io.h"  // WarningsToJson
 #include "sim/log_warning.h"
 #include "sim/record/recorder.h"
 #include "sim/sensor_pair.h"
@@ -31,8 +32,6 @@ nlohmann::ordered_json AccuracyToJson(const AccuracyResult& result);
 // docs/FORMATS.md `flight` JSON (plus per-axis percentages, window counts and the bias).
 nlohmann::json FlightToJson(const FlightResult& result);
 
-// docs/FORMATS.md "Warnings": [{"kind", "message", "t_s", "count"}], t_s and count only where
-// they apply.
 // The two-sensor fusion (sim/sensor_pair.h): {"second_log": PATH, "paired", "unpaired",
 // "mounting_fitted", "mounting_angle_deg", "mounting_signal_ratio", "a_from_b" (3x3 row-major),
 // "weights_first" [x, y, z], "weights_from_still", "difference_rms_rad_s"}.
@@ -46,8 +45,6 @@ nlohmann::ordered_json NoisePairToJson(const SensorPair& pair, const std::string
 // `record --json` (docs/FORMATS.md "Recorder output"): the summary of a recording.
 nlohmann::ordered_json RecordSummaryToJson(const RecordSummary& summary,
                                            const std::string& triggers_path);
-
-nlohmann::json WarningsToJson(const std::vector<LogWarning>& warnings);
 
 // docs/FORMATS.md `analyze` JSON (plus bias, verdict and per-image detail).
 nlohmann::json AnalyzeToJson(const AnalyzeResult& result);

@@ -101,8 +101,8 @@ void AddDistortionChart(HtmlPage* page, const AnalyzeResult& result) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (const ImageResult& image : result.images) {
     chart.x.push_back(image.t_ns * 1e-9);
-    paper.y.push_back(image.in_trace ? image.d_paper_m * 100.0 : nan);
-    full.y.push_back(image.in_trace ? image.d_full_m * 100.0 : nan);
+    paper.y.push_back(image.judged() ? image.d_paper_m * 100.0 : nan);
+    full.y.push_back(image.judged() ? image.d_full_m * 100.0 : nan);
   }
   chart.series = {paper, full};
   for (size_t l = 0; l < result.limits_m.size(); ++l) {
@@ -250,8 +250,8 @@ void AddImageTable(HtmlPage* page, const AnalyzeResult& result) {
   std::vector<std::vector<std::string>> rows;
   for (const ImageResult& image : result.images) {
     std::vector<std::string> cells = {image.name, Fmt("%.3f", image.t_ns * 1e-9)};
-    if (!image.in_trace) {
-      cells.push_back("outside the log");
+    if (!image.judged()) {
+      cells.push_back(image.in_trace ? "too few samples in the readout" : "outside the log");
     } else {
       cells.insert(cells.end(),
                    {Fmt("%.2f", image.d_paper_m * 100), Fmt("%.2f", image.d_full_m * 100),
@@ -290,7 +290,7 @@ void AddWorstImages(HtmlPage* page, const RigModel& rig, const AnalyzeResult& re
                     const AnalyzeReportOptions& report) {
   std::vector<const ImageResult*> worst;
   for (const ImageResult& image : result.images) {
-    if (image.in_trace) worst.push_back(&image);
+    if (image.judged()) worst.push_back(&image);
   }
   std::sort(worst.begin(), worst.end(),
             [](const ImageResult* a, const ImageResult* b) { return a->d_full_m > b->d_full_m; });
@@ -347,27 +347,35 @@ HtmlPage AnalyzeReportPage(const AnalyzeOptions& options, const AnalyzeResult& r
     bias = result.bias_estimated ? "none found: zero bias assumed" : "zero (not estimated)";
   }
   const Eigen::Vector3d b = result.bias_rad_s * kDegPerRad;
-  page.Table(
-      {"", ""},
-      {{"log", report.log_name},
-       {"format", result.format},
-       {"gyro", result.gyro_source},
-       {"samples", std::to_string(result.samples)},
-       {"duration", Fmt("%.1f s", result.duration_s)},
-       {"rate", Fmt("%.1f Hz", result.rate_hz)},
-       {"gaps", std::to_string(result.gaps)},
-       {"bias", bias},
-       {"bias (deg/s, camera x y z)",
-        Fmt("%.4f", b.x()) + " " + Fmt("%.4f", b.y()) + " " + Fmt("%.4f", b.z())},
-       {"camera", std::to_string(cam.width) + "x" + std::to_string(cam.height) + ", f " +
-                      Fmt("%.0f px", 0.5 * (cam.fx + cam.fy)) +
-                      (cam.HasDistortion() ? ", lens distortion" : "")},
-       {"readout", Fmt("%g ms", result.readout_s * 1e3)},
-       {"altitude", Fmt("%g m", result.altitude_m) + " (" + AltitudeText(result) + ")"},
-       {"ground sample", Fmt("%.2f cm/px", 100.0 * result.altitude_m / (0.5 * (cam.fx + cam.fy)))},
-       {"triggers", result.trigger_source},
-       {"images", std::to_string(result.images.size()) + " (" +
-                      std::to_string(result.verdict.images_in_trace) + " inside the log)"}});
+  std::vector<std::vector<std::string>> rows = {
+      {"log", report.log_name},
+      {"format", result.format},
+      {"gyro", result.gyro_source},
+      {"samples", std::to_string(result.samples)},
+      {"duration", Fmt("%.1f s", result.duration_s)},
+      {"rate", Fmt("%.1f Hz", result.rate_hz)},
+      {"gaps", std::to_string(result.gaps)},
+      {"bias", bias},
+      {"bias (deg/s, camera x y z)",
+       Fmt("%.4f", b.x()) + " " + Fmt("%.4f", b.y()) + " " + Fmt("%.4f", b.z())},
+      {"camera", std::to_string(cam.width) + "x" + std::to_string(cam.height) + ", f " +
+                     Fmt("%.0f px", 0.5 * (cam.fx + cam.fy)) +
+                     (cam.HasDistortion() ? ", lens distortion" : "")},
+      {"readout", Fmt("%g ms", result.readout_s * 1e3)},
+      {"altitude", Fmt("%g m", result.altitude_m) + " (" + AltitudeText(result) + ")"},
+      {"ground sample", Fmt("%.2f cm/px", 100.0 * result.altitude_m / (0.5 * (cam.fx + cam.fy)))},
+      {"triggers", result.trigger_source},
+      {"images", std::to_string(result.images.size()) + " (" +
+                     std::to_string(result.verdict.images_in_trace) + " inside the log" +
+                     (result.verdict.images_too_few_samples > 0
+                          ? ", " + std::to_string(result.verdict.images_too_few_samples) +
+                                " more with too few samples in their readout"
+                          : "") +
+                     ")"}};
+  // Where the camera and its readout came from, beside them, when the caller says it.
+  if (!report.camera_source.empty())
+    rows.insert(rows.begin() + 11, {"camera from", report.camera_source});
+  page.Table({"", ""}, rows);
 
   if (!result.log_warnings.empty()) {
     page.Heading("What the log lost");

@@ -135,62 +135,93 @@ bool LooksLikeHeader(const ColumnCsvOptions& options, const std::vector<std::str
   return false;
 }
 
-// Parses the data lines from the cursor on.
-std::vector<GyroSample> ParseRows(LineCursor* cursor, std::optional<std::string_view> line,
-                                  const ChosenColumns& chosen, const ColumnCsvOptions& options,
-                                  char delimiter, const std::string& path, size_t expected_rows) {
-  const double rad_s_per_unit = options.rate_unit == RateUnit::kDegPerSecond ? kRadPerDeg : 1.0;
-  const char* unit_name[] = {"s", "ms", "us", "ns"};
-  std::vector<GyroSample> samples;
-  samples.reserve(expected_rows);
-  // Fewer page faults on a long log (sim/text_file.h): it costs more than parsing otherwise.
-  AdviseHugePages(samples.data(), expected_rows * sizeof(GyroSample));
-  std::vector<std::string_view> fields;
-  std::string_view previous_time;
-  long previous_line = 0;
-  for (; line; line = cursor->Next()) {
-    if (Trim(*line).empty()) continue;
-    const long line_number = cursor->line_number();
-    Split(*line, delimiter, &fields);
-    if (fields.size() < chosen.needed_fields) {
+// The data lines, a block at a time; the first one may have been read already (no header).
+class ColumnCsvSource : public FillingSource {
+ public:
+  ColumnCsvSource(LineReader lines, std::optional<std::string> first_row, long first_row_number,
+                  ChosenColumns chosen, const ColumnCsvOptions& options, char delimiter,
+                  const std::string& path)
+      : lines_(std::move(lines)),
+        first_row_(std::move(first_row)),
+        first_row_number_(first_row_number),
+        chosen_(std::move(chosen)),
+        time_unit_(options.time_unit),
+        rad_s_per_unit_(options.rate_unit == RateUnit::kDegPerSecond ? kRadPerDeg : 1.0),
+        delimiter_(delimiter),
+        path_(path) {}
+
+  double Fraction() const override { return lines_.Fraction(); }
+
+ private:
+  void Fill(std::vector<GyroSample>* chunk) override {
+    chunk->reserve(kChunkSamples);
+    if (first_row_) {
+      chunk->push_back(ParseRow(*first_row_, first_row_number_));
+      first_row_.reset();
+    }
+    while (chunk->size() < kChunkSamples) {
+      const auto line = lines_.Next();
+      if (!line) break;
+      if (!Trim(*line).empty()) chunk->push_back(ParseRow(*line, lines_.line_number()));
+    }
+    if (chunk->empty() && !any_) throw IoError(IoMessage(path_, 0, "no samples"));
+  }
+
+  GyroSample ParseRow(std::string_view line, long line_number) {
+    static const char* kUnitNames[] = {"s", "ms", "us", "ns"};
+    Split(line, delimiter_, &fields_);
+    if (fields_.size() < chosen_.needed_fields) {
       for (int k = 0; k < 4; ++k) {
-        if (chosen.index[k] < fields.size()) continue;
-        throw IoError(IoMessage(path, line_number,
-                                chosen.label[k] + " (" + kRoles[k] + ") missing: the line has " +
-                                    std::to_string(fields.size()) + " fields split on " +
-                                    DelimiterName(delimiter)));
+        if (chosen_.index[k] < fields_.size()) continue;
+        throw IoError(IoMessage(path_, line_number,
+                                chosen_.label[k] + " (" + kRoles[k] + ") missing: the line has " +
+                                    std::to_string(fields_.size()) + " fields split on " +
+                                    DelimiterName(delimiter_)));
       }
     }
-    const std::string_view time_field = fields[chosen.index[0]];
-    const std::optional<int64_t> t_ns = ParseTimeInUnitNs(time_field, options.time_unit);
+    const std::string_view time_field = fields_[chosen_.index[0]];
+    const std::optional<int64_t> t_ns = ParseTimeInUnitNs(time_field, time_unit_);
     if (!t_ns)
-      throw IoError(IoMessage(path, line_number,
-                              chosen.label[0] + " (time) is not a time in " +
-                                  unit_name[static_cast<int>(options.time_unit)] + ": '" +
+      throw IoError(IoMessage(path_, line_number,
+                              chosen_.label[0] + " (time) is not a time in " +
+                                  kUnitNames[static_cast<int>(time_unit_)] + ": '" +
                                   std::string(time_field) + "'"));
-    if (!samples.empty() && *t_ns < samples.back().t_ns)
-      throw IoError(IoMessage(path, line_number,
-                              "time goes backwards: " + chosen.label[0] + " is " +
-                                  std::string(time_field) + " here and " +
-                                  std::string(previous_time) + " on line " +
-                                  std::to_string(previous_line)));
+    if (any_ && *t_ns < last_t_ns_)
+      throw IoError(IoMessage(path_, line_number,
+                              "time goes backwards: " + chosen_.label[0] + " is " +
+                                  std::string(time_field) + " here and " + previous_time_ +
+                                  " on line " + std::to_string(previous_line_)));
     GyroSample sample{*t_ns, {}};
     for (int k = 1; k < 4; ++k) {
-      const std::string_view field = fields[chosen.index[k]];
+      const std::string_view field = fields_[chosen_.index[k]];
       const std::optional<double> rate = ParseDouble(field);
       if (!rate)
-        throw IoError(IoMessage(path, line_number,
-                                chosen.label[k] + " (" + kRoles[k] + ") is not a number: '" +
+        throw IoError(IoMessage(path_, line_number,
+                                chosen_.label[k] + " (" + kRoles[k] + ") is not a number: '" +
                                     std::string(field) + "'"));
-      sample.omega_rad_s[k - 1] = *rate * rad_s_per_unit;
+      sample.omega_rad_s[k - 1] = *rate * rad_s_per_unit_;
     }
-    samples.push_back(sample);
-    previous_time = time_field;
-    previous_line = line_number;
+    any_ = true;
+    last_t_ns_ = *t_ns;
+    previous_time_.assign(time_field.data(), time_field.size());
+    previous_line_ = line_number;
+    return sample;
   }
-  if (samples.empty()) throw IoError(IoMessage(path, 0, "no samples"));
-  return samples;
-}
+
+  LineReader lines_;
+  std::optional<std::string> first_row_;
+  long first_row_number_;
+  ChosenColumns chosen_;
+  TimeUnit time_unit_;
+  double rad_s_per_unit_;
+  char delimiter_;
+  std::string path_;
+  bool any_ = false;
+  int64_t last_t_ns_ = 0;
+  std::string previous_time_;  // the time field of the row before, for messages
+  long previous_line_ = 0;
+  std::vector<std::string_view> fields_;
+};
 
 }  // namespace
 
@@ -249,45 +280,50 @@ const char* RateUnitName(RateUnit unit) {
   return unit == RateUnit::kDegPerSecond ? "deg/s" : "rad/s";
 }
 
-ColumnCsvLog ParseColumnCsv(std::string_view text, const std::string& path,
-                            const ColumnCsvOptions& options) {
+ColumnCsvStream OpenColumnCsv(TextBlocks blocks, const std::string& path,
+                              const ColumnCsvOptions& options) {
   options.Check();
   constexpr std::string_view kBom = "\xEF\xBB\xBF";
-  if (text.substr(0, kBom.size()) == kBom) text.remove_prefix(kBom.size());
-  LineCursor cursor(text);
-  std::optional<std::string_view> line = cursor.Next();
-  while (line && Trim(*line).empty()) line = cursor.Next();
+  LineReader lines(std::move(blocks));
+  std::optional<std::string_view> line = lines.Next();
+  if (line && line->substr(0, kBom.size()) == kBom) line->remove_prefix(kBom.size());
+  while (line && Trim(*line).empty()) line = lines.Next();
   if (!line) throw IoError(IoMessage(path, 0, "no samples (the file is empty)"));
-  ColumnCsvLog log;
+  ColumnCsvStream stream;
+  ColumnCsvLog& log = stream.log;
   log.delimiter = options.delimiter != '\0' ? options.delimiter : DetectDelimiter(*line);
   std::vector<std::string_view> first;
   Split(*line, log.delimiter, &first);
   log.has_header = LooksLikeHeader(options, first);
-  const ChosenColumns chosen =
-      ResolveColumns(options, log.has_header ? &first : nullptr, *line, path, cursor.line_number());
+  ChosenColumns chosen =
+      ResolveColumns(options, log.has_header ? &first : nullptr, *line, path, lines.line_number());
   for (int k = 0; k < 4; ++k) {
     if (k > 0) log.source += ',';
     const size_t i = chosen.index[k];
     log.source +=
         log.has_header && i < first.size() ? std::string(Unquote(first[i])) : std::to_string(i + 1);
   }
-  if (log.has_header) line = cursor.Next();
-  // Rows from the length of the first lines, a quarter over, so that the vector never re-copies.
-  const std::string_view rest =
-      line ? text.substr(static_cast<size_t>(line->data() - text.data())) : std::string_view();
-  const size_t probe = std::min<size_t>(rest.size(), 4096);
-  const size_t probe_lines =
-      std::max<size_t>(1, std::count(rest.begin(), rest.begin() + probe, '\n'));
-  const size_t expected_rows = rest.size() / std::max<size_t>(1, probe / probe_lines) * 5 / 4 + 16;
-  log.trace =
-      GyroTrace(ParseRows(&cursor, line, chosen, options, log.delimiter, path, expected_rows));
-  return log;
+  std::optional<std::string> first_row;
+  if (!log.has_header) first_row = std::string(*line);
+  const long first_row_number = lines.line_number();
+  stream.samples =
+      std::make_unique<ColumnCsvSource>(std::move(lines), std::move(first_row), first_row_number,
+                                        std::move(chosen), options, log.delimiter, path);
+  return stream;
+}
+
+ColumnCsvLog ParseColumnCsv(std::string_view text, const std::string& path,
+                            const ColumnCsvOptions& options) {
+  ColumnCsvStream stream = OpenColumnCsv(TextBlocks::InMemory(text), path, options);
+  stream.log.trace = ReadAllSamples(stream.samples.get());
+  return std::move(stream.log);
 }
 
 ColumnCsvLog ReadColumnCsv(const std::string& path, const ColumnCsvOptions& options) {
   options.Check();
-  const MappedFile file(path);
-  return ParseColumnCsv(file.text(), path, options);
+  ColumnCsvStream stream = OpenColumnCsv(TextBlocks::OfFile(path), path, options);
+  stream.log.trace = ReadAllSamples(stream.samples.get());
+  return std::move(stream.log);
 }
 
 }  // namespace shutterlab

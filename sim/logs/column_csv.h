@@ -6,9 +6,12 @@
 // (`--columns timestamp,gyro_rad[0],gyro_rad[1],gyro_rad[2] --time-unit us`) or a spreadsheet
 // export (`time_ms;wx;wy;wz`).
 
+#include "sim/gyro_source.h"
 #include "sim/gyro_trace.h"
 #include "sim/logs/raw_csv.h"  // TimeUnit
+#include "sim/text_file.h"
 
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -66,5 +69,13 @@ ColumnCsvLog ReadColumnCsv(const std::string& path, const ColumnCsvOptions& opti
 // The same on text already in memory; path names it in messages.
 ColumnCsvLog ParseColumnCsv(std::string_view text, const std::string& path,
                             const ColumnCsvOptions& options);
+// The same as a stream: the first line and the columns are resolved at once (their errors thrown
+// here), the rows a block at a time as the chunks are taken. log.trace stays empty.
+struct ColumnCsvStream {
+  ColumnCsvLog log;
+  std::unique_ptr<GyroSource> samples;
+};
+ColumnCsvStream OpenColumnCsv(TextBlocks blocks, const std::string& path,
+                              const ColumnCsvOptions& options);
 
 }  // namespace shutterlab

@@ -68,68 +68,130 @@ LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string&
 
 namespace {
 
-FlightLog ReadColumns(const std::string& path, const ColumnCsvOptions& options) {
-  ColumnCsvLog columns = ReadColumnCsv(path, options);
-  FlightLog log;
-  log.gyro = std::move(columns.trace);
-  log.format = LogFormatName(LogFormat::kColumns);
-  log.gyro_source = std::move(columns.source);
-  log.gyro_sources_available = {log.gyro_source};
-  return log;
+// A detected plain gyro log's errors say what detection concluded, so that a file of an unknown
+// kind is recognisable as such; they may come while the rows are streamed.
+std::string DetectedAs(LogFormat format) {
+  return std::string(" (read as ") + LogFormatName(format) +
+         ": not ULog, DataFlash or blackbox; --format chooses)";
 }
 
-FlightLog ReadDetected(const std::string& path, LogFormat format,
-                       const FlightLogReadOptions& options) {
+class DetectedSource : public GyroSource {
+ public:
+  DetectedSource(std::unique_ptr<GyroSource> source, LogFormat format)
+      : source_(std::move(source)), format_(format) {}
+  GyroChunk Next() override {
+    try {
+      return source_->Next();
+    } catch (const IoError& e) {
+      throw IoError(std::string(e.what()) + DetectedAs(format_));
+    }
+  }
+  bool NextInto(std::vector<GyroSample>* out) override {
+    try {
+      return source_->NextInto(out);
+    } catch (const IoError& e) {
+      throw IoError(std::string(e.what()) + DetectedAs(format_));
+    }
+  }
+  double Fraction() const override { return source_->Fraction(); }
+
+ private:
+  std::unique_ptr<GyroSource> source_;
+  LogFormat format_;
+};
+
+// The plain gyro logs and the column reader, streamed a block at a time.
+FlightLogStream OpenText(const std::string& path, LogFormat format,
+                         const FlightLogReadOptions& options) {
+  FlightLogStream stream;
+  FlightLog& log = stream.log;
+  log.format = LogFormatName(format);
+  if (format == LogFormat::kColumns) {
+    ColumnCsvStream columns = OpenColumnCsv(TextBlocks::OfFile(path), path, options.columns);
+    log.gyro_source = std::move(columns.log.source);
+    stream.gyro = std::move(columns.samples);
+  } else if (format == LogFormat::kGcsv) {
+    GcsvStream gcsv =
+        OpenGcsv(TextBlocks::OfFile(path), path);  // its header's assumptions: warnings
+    log.warnings = std::move(gcsv.log.warnings);
+    log.gyro_source = "gcsv";
+    stream.gyro = std::move(gcsv.samples);
+  } else if (format == LogFormat::kRaw) {
+    options.raw.Check();
+    log.gyro_source = "raw counts";
+    stream.gyro =
+        OpenRawCsv(TextBlocks::OfFile(path), path, options.raw.range_dps, options.raw.time_unit);
+    stream.audit.full_scale_rad_s = options.raw.range_dps * kRadPerDeg;
+  } else {
+    log.gyro_source = "t,gx,gy,gz";
+    stream.gyro = OpenGyroCsv(TextBlocks::OfFile(path), path);
+  }
+  log.gyro_sources_available = {log.gyro_source};
+  return stream;
+}
+
+// The binary logs are decoded whole (the best gyro stream is chosen once every one is known),
+// then handed on in slices.
+FlightLog ReadBinary(const std::string& path, LogFormat format,
+                     const FlightLogReadOptions& options) {
   switch (format) {
     case LogFormat::kULog:
       return ReadULog(path);
     case LogFormat::kDataFlash:
       return ReadDataFlash(path);
-    case LogFormat::kBlackbox:
-      return ReadBlackbox(path, options.log_index);
-    case LogFormat::kColumns:
-      return ReadColumns(path, options.columns);
     default:
-      break;
+      return ReadBlackbox(path, options.log_index);
   }
-  GyroReadOptions gyro_options;
-  gyro_options.format = format;
-  gyro_options.raw = options.raw;
-  FlightLog log;
-  try {
-    if (format == LogFormat::kGcsv) {
-      GcsvLog gcsv = ReadGcsv(path);  // its header's assumptions become warnings too
-      log.gyro = std::move(gcsv.trace);
-      log.warnings = std::move(gcsv.warnings);
-    } else {
-      log.gyro = ReadGyro(path, gyro_options);
-    }
-  } catch (const IoError& e) {
-    if (options.format != LogFormat::kAuto) throw;
-    // Say what detection concluded, so that a file of an unknown kind is recognisable as such.
-    throw IoError(std::string(e.what()) + " (read as " + LogFormatName(gyro_options.format) +
-                  ": not ULog, DataFlash or blackbox; --format chooses)");
-  }
-  log.format = LogFormatName(gyro_options.format);
-  log.gyro_source = format == LogFormat::kGyroCsv ? "t,gx,gy,gz"
-                    : format == LogFormat::kGcsv  ? "gcsv"
-                                                  : "raw counts";
-  log.gyro_sources_available = {log.gyro_source};
-  return log;
 }
 
 }  // namespace
 
-FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& options) {
+FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOptions& options) {
   options.Check();
   LogFormat format = options.format;
   if (format == LogFormat::kAuto) format = DetectFlightLogFormat(ReadPrefix(path), path);
-  FlightLog log = ReadDetected(path, format, options);
-  TraceAuditOptions audit;
-  if (format == LogFormat::kRaw) audit.full_scale_rad_s = options.raw.range_dps * kRadPerDeg;
-  for (LogWarning& warning : AuditTrace(log.gyro, audit))
+  if (format == LogFormat::kULog || format == LogFormat::kDataFlash ||
+      format == LogFormat::kBlackbox) {
+    FlightLogStream stream;
+    stream.log = ReadBinary(path, format, options);
+    stream.gyro = std::make_unique<TraceSource>(std::move(stream.log.gyro));
+    stream.log.gyro = GyroTrace();
+    return stream;
+  }
+  try {
+    FlightLogStream stream = OpenText(path, format, options);
+    if (options.format == LogFormat::kAuto)
+      stream.gyro = std::make_unique<DetectedSource>(std::move(stream.gyro), format);
+    return stream;
+  } catch (const IoError& e) {
+    if (options.format != LogFormat::kAuto) throw;
+    throw IoError(std::string(e.what()) + DetectedAs(format));
+  }
+}
+
+FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& options) {
+  FlightLogStream stream = OpenFlightLog(path, options);
+  FlightLog log = std::move(stream.log);
+  log.gyro = ReadAllSamples(stream.gyro.get());
+  for (LogWarning& warning : AuditTrace(log.gyro, stream.audit))
     log.warnings.push_back(std::move(warning));
   return log;
+}
+
+StreamedLog ConsumeFlightLog(FlightLogStream* stream,
+                             const std::function<void(const GyroChunk&)>& consume,
+                             const std::function<void(double)>& progress) {
+  TraceAuditor auditor(stream->audit);
+  for (GyroChunk chunk = stream->gyro->Next(); !chunk.empty(); chunk = stream->gyro->Next()) {
+    auditor.Add(chunk.data, chunk.size);
+    consume(chunk);
+    if (progress) progress(stream->gyro->Fraction());
+  }
+  StreamedLog out;
+  out.warnings = stream->log.warnings;
+  for (LogWarning& warning : auditor.Finish()) out.warnings.push_back(std::move(warning));
+  out.sampling = auditor.Sampling();
+  return out;
 }
 
 }  // namespace shutterlab

@@ -7,7 +7,10 @@
 #include "sim/logs/column_csv.h"
 #include "sim/logs/flight_log.h"
 #include "sim/logs/log_format.h"
+#include "sim/trace_audit.h"
 
+#include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 
@@ -34,5 +37,29 @@ LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string&
 // reader's own (truncation, corrupt records, ...) followed by sim/trace_audit.h's (gaps, rate
 // changes, saturation): everything a command must tell the user it could not read or trust.
 FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& options = {});
+
+// A log opened to be read as a stream. The text logs (gyro.csv, .gcsv, raw counts, --columns) are
+// parsed a block at a time as the chunks are taken, in bounded memory whatever their length; the
+// binary logs (ULog, DataFlash, blackbox) are decoded whole when opened, then handed on in slices.
+struct FlightLogStream {
+  FlightLog log;                     // all but the samples (log.gyro stays empty)
+  std::unique_ptr<GyroSource> gyro;  // the samples; reading errors are thrown from Next
+  TraceAuditOptions audit;           // for the trace audit (raw counts: their stated range)
+};
+// Detects the format and reads what comes before the samples (a text log's header, a whole binary
+// log); throws IoError as ReadFlightLog does.
+FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOptions& options = {});
+
+// What a streamed log lost (the reader's warnings, then the trace audit's, as ReadFlightLog gives
+// them) and how it was sampled.
+struct StreamedLog {
+  std::vector<LogWarning> warnings;
+  TraceSampling sampling;
+};
+// Reads the stream to its end, handing every chunk to consume once the trace audit has taken it;
+// progress (may be empty) gets the share of the input read.
+StreamedLog ConsumeFlightLog(FlightLogStream* stream,
+                             const std::function<void(const GyroChunk&)>& consume,
+                             const std::function<void(double)>& progress = {});
 
 }  // namespace shutterlab

@@ -118,11 +118,11 @@ struct GcsvHeader {
   long orientation_line = 0, readout_line = 0;
   std::string orientation;
   long column_line = 0;
-  std::vector<std::string_view> columns;  // the column line's fields
+  std::vector<std::string> columns;  // the column line's fields
 };
 
 // The first line names the format.
-void CheckFirstLine(const std::string& path, LineCursor* cursor) {
+void CheckFirstLine(const std::string& path, LineReader* cursor) {
   const auto first = cursor->Next();
   std::vector<std::string_view> fields;
   if (first) SplitFields(StripBom(*first), '\x01', &fields);  // no split: just trim
@@ -197,7 +197,7 @@ void ReadHeaderLine(const std::string& path, long n, std::string_view line,
 }
 
 // The header lines up to and including the column line ('t,...' or 'time,...'), which must come.
-GcsvHeader ReadHeader(const std::string& path, LineCursor* cursor, GcsvLog* log) {
+GcsvHeader ReadHeader(const std::string& path, LineReader* cursor, GcsvLog* log) {
   GcsvHeader header;
   std::vector<std::string_view> fields;
   while (auto line = cursor->Next()) {
@@ -207,7 +207,7 @@ GcsvHeader ReadHeader(const std::string& path, LineCursor* cursor, GcsvLog* log)
     const std::string key = ToLower(fields[0]);
     if (key == "t" || key == "time") {
       header.column_line = n;
-      header.columns = fields;
+      header.columns.assign(fields.begin(), fields.end());
       break;
     }
     ReadHeaderLine(path, n, *line, fields, &header, log);
@@ -234,7 +234,7 @@ Eigen::Matrix3d ApplyHeader(const std::string& path, GcsvHeader* header, GcsvLog
   if (header->orientation_line == 0) {
     header->orientation = "xzY";
     log->warnings.push_back(
-        {"assumption", "no orientation line: assumed 'xzY', as Gyroflow's parser does"});
+        {"assumption", "no orientation line: assumed 'xzY', as Gyroflow's parser does", {}, {}});
   }
   Eigen::Matrix3d to_out;
   try {
@@ -251,13 +251,16 @@ Eigen::Matrix3d ApplyHeader(const std::string& path, GcsvHeader* header, GcsvLog
       log->frame_readout_direction = log->frame_readout_direction == ReadoutDirection::kBottomToTop
                                          ? ReadoutDirection::kTopToBottom
                                          : ReadoutDirection::kBottomToTop;
-      log->warnings.push_back({"format", "negative frame_readout_time on line " +
-                                             std::to_string(header->readout_line) +
-                                             ": read as the opposite readout direction"});
+      log->warnings.push_back({"format",
+                               "negative frame_readout_time on line " +
+                                   std::to_string(header->readout_line) +
+                                   ": read as the opposite readout direction",
+                               {},
+                               {}});
     }
     log->frame_readout_s = std::abs(*header->readout_ms) * 1e-3;
   }
-  const std::vector<std::string_view>& columns = header->columns;
+  const std::vector<std::string>& columns = header->columns;
   if (columns.size() < 4 || ToLower(columns[1]) != "gx" || ToLower(columns[2]) != "gy" ||
       ToLower(columns[3]) != "gz") {
     throw IoError(IoMessage(path, column_line, "column line must start with t,gx,gy,gz"));
@@ -297,45 +300,74 @@ GyroSample ParseSample(const std::string& path, long n, const std::vector<std::s
   return s;
 }
 
-// The sample lines after the column line, in non-decreasing time; at least one.
-std::vector<GyroSample> ReadSamples(const std::string& path, LineCursor* cursor,
-                                    const GcsvHeader& header, const Eigen::Matrix3d& to_out) {
-  const std::optional<TimeUnit> exact_unit = ExactUnit(*header.tscale);
-  std::vector<std::string_view> fields;
-  std::vector<GyroSample> samples;
-  while (auto line = cursor->Next()) {
-    const long n = cursor->line_number();
-    if (line->empty()) continue;
-    SplitFields(*line, ',', &fields);
-    if (fields.size() != header.columns.size()) {
-      throw IoError(IoMessage(path, n,
-                              "expected " + std::to_string(header.columns.size()) +
-                                  " columns as on line " + std::to_string(header.column_line) +
-                                  ", found " + std::to_string(fields.size())));
+// The sample lines after the column line, in non-decreasing time (at least one), a block at a
+// time.
+class GcsvSource : public FillingSource {
+ public:
+  GcsvSource(LineReader lines, const std::string& path, GcsvHeader header,
+             const Eigen::Matrix3d& to_out)
+      : lines_(std::move(lines)),
+        path_(path),
+        header_(std::move(header)),
+        to_out_(to_out),
+        exact_unit_(ExactUnit(*header_.tscale)) {}
+
+  double Fraction() const override { return lines_.Fraction(); }
+
+ private:
+  void Fill(std::vector<GyroSample>* chunk) override {
+    chunk->reserve(kChunkSamples);
+    while (chunk->size() < kChunkSamples) {
+      const auto line = lines_.Next();
+      if (!line) break;
+      const long n = lines_.line_number();
+      if (line->empty()) continue;
+      SplitFields(*line, ',', &fields_);
+      if (fields_.size() != header_.columns.size()) {
+        throw IoError(IoMessage(path_, n,
+                                "expected " + std::to_string(header_.columns.size()) +
+                                    " columns as on line " + std::to_string(header_.column_line) +
+                                    ", found " + std::to_string(fields_.size())));
+      }
+      const GyroSample s = ParseSample(path_, n, fields_, header_, exact_unit_, to_out_);
+      if (any_ && s.t_ns < last_t_ns_) {
+        throw IoError(IoMessage(
+            path_, n,
+            "timestamp decreases (" + std::string(fields_[0]) + " after an earlier, larger one)"));
+      }
+      any_ = true;
+      last_t_ns_ = s.t_ns;
+      chunk->push_back(s);
     }
-    const GyroSample s = ParseSample(path, n, fields, header, exact_unit, to_out);
-    if (!samples.empty() && s.t_ns < samples.back().t_ns) {
-      throw IoError(IoMessage(
-          path, n,
-          "timestamp decreases (" + std::string(fields[0]) + " after an earlier, larger one)"));
-    }
-    samples.push_back(s);
+    if (chunk->empty() && !any_)
+      throw IoError(IoMessage(path_, 0, "no samples after the column line"));
   }
-  if (samples.empty()) throw IoError(IoMessage(path, 0, "no samples after the column line"));
-  return samples;
-}
+  LineReader lines_;
+  std::string path_;
+  GcsvHeader header_;
+  Eigen::Matrix3d to_out_;
+  std::optional<TimeUnit> exact_unit_;
+  bool any_ = false;
+  int64_t last_t_ns_ = 0;
+  std::vector<std::string_view> fields_;
+};
 
 }  // namespace
 
+GcsvStream OpenGcsv(TextBlocks blocks, const std::string& path) {
+  LineReader lines(std::move(blocks));
+  CheckFirstLine(path, &lines);
+  GcsvStream stream;
+  GcsvHeader header = ReadHeader(path, &lines, &stream.log);
+  const Eigen::Matrix3d to_out = ApplyHeader(path, &header, &stream.log);
+  stream.samples = std::make_unique<GcsvSource>(std::move(lines), path, std::move(header), to_out);
+  return stream;
+}
+
 GcsvLog ReadGcsv(const std::string& path) {
-  const std::string text = ReadFileToString(path);
-  LineCursor cursor(text);
-  CheckFirstLine(path, &cursor);
-  GcsvLog log;
-  GcsvHeader header = ReadHeader(path, &cursor, &log);
-  const Eigen::Matrix3d to_out = ApplyHeader(path, &header, &log);
-  log.trace = GyroTrace(ReadSamples(path, &cursor, header, to_out));
-  return log;
+  GcsvStream stream = OpenGcsv(TextBlocks::OfFile(path), path);
+  stream.log.trace = ReadAllSamples(stream.samples.get());
+  return std::move(stream.log);
 }
 
 void GcsvWriteOptions::Check() const {

@@ -18,13 +18,16 @@
 // Gyroflow's own IMU frame; the same parser (src/gyroflow/gcsv.rs) assumes "xzY" when a file has no
 // orientation line, and so do we.
 
+#include "sim/gyro_source.h"
 #include "sim/gyro_trace.h"
 #include "sim/log_warning.h"
 #include "sim/logs/raw_csv.h"
 #include "sim/readout_direction.h"
+#include "sim/text_file.h"
 
 #include <Eigen/Core>
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -55,6 +58,13 @@ struct GcsvLog {
 // column line not starting t,gx,gy,gz, a row whose column count differs from the column line's, a
 // non-numeric or non-finite field, or a decreasing timestamp.
 GcsvLog ReadGcsv(const std::string& path);
+// The same as a stream: the header block is read at once (its errors thrown here), the samples a
+// block at a time as the chunks are taken. log.trace stays empty. path names the file in messages.
+struct GcsvStream {
+  GcsvLog log;
+  std::unique_ptr<GyroSource> samples;
+};
+GcsvStream OpenGcsv(TextBlocks blocks, const std::string& path);
 
 struct GcsvWriteOptions {
   std::string id = "shutterlab";

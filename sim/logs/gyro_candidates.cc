@@ -14,7 +14,7 @@ namespace {
 struct CleanedCandidate {
   GyroCandidate candidate;
   double rate_hz = 0.0;
-  size_t dropped_time = 0;   // t <= 0
+  size_t dropped_time = 0;   // t <= 0 (PX4 and ArduPilot write 0 for 'not set')
   size_t dropped_value = 0;  // non-finite rate
   size_t dropped_spike = 0;  // isolated timestamp spike
   size_t out_of_order = 0;   // samples that had to be moved by the sort
@@ -135,6 +135,8 @@ bool ChooseGyroSource(std::vector<GyroCandidate> candidates, FlightLog* log) {
         {"corrupt", name + ": " + std::to_string(count) + " " + what, std::nullopt, count});
   };
   warn(best.dropped_time, "samples with a zero timestamp dropped");
+  warn(best.candidate.unreadable_time,
+       "samples with an unreadable timestamp (beyond 292 years in nanoseconds) dropped");
   warn(best.dropped_value, "samples with a non-finite rate dropped");
   warn(best.dropped_spike, "samples with a timestamp out of line with their neighbours dropped");
   warn(best.dropped_outlier_end, "samples more than 60 s beyond the rest dropped");

@@ -6,6 +6,7 @@
 #include "sim/gyro_trace.h"
 #include "sim/logs/flight_log.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,7 +18,20 @@ struct GyroCandidate {
   std::string name;                 // e.g. "sensor_gyro_fifo.x,y,z" or "GYR/1"
   int preference = 0;               // lower is better among candidates of similar rate
   std::vector<GyroSample> samples;  // in log order; cleaned by ChooseGyroSource
+  // Messages whose time could not be read (beyond int64 nanoseconds, or not an integer field):
+  // left out of samples, counted here so that the warning says what they were.
+  size_t unreadable_time = 0;
 };
+
+// Adds a sample read from a message with time t_ns (nullopt: unreadable, counted).
+inline void AddCandidateSample(const std::optional<int64_t>& t_ns, const Eigen::Vector3d& rate,
+                               GyroCandidate* candidate) {
+  if (!t_ns) {
+    ++candidate->unreadable_time;
+    return;
+  }
+  candidate->samples.push_back({*t_ns, rate});
+}
 
 // Cleans every candidate (drops t <= 0, non-finite rates and isolated timestamp spikes, i.e. a
 // sample outside the span of both its neighbours in log order; sorts what is left by time; drops

@@ -29,8 +29,10 @@ std::string_view StripBom(std::string_view line) {
 const char* ParseRowFast(const char* p, const char* end, GyroSample* s) {
   int64_t whole = 0;
   const char* digits = p;
-  while (p < end && *p >= '0' && *p <= '9' && p - digits < 12) whole = whole * 10 + (*p++ - '0');
-  if (p == digits || p >= end) return nullptr;
+  // At most 10 digits and 9e9 s, so that t_ns fits int64 (9.2e18 ns); the general path takes and
+  // judges the rest.
+  while (p < end && *p >= '0' && *p <= '9' && p - digits < 10) whole = whole * 10 + (*p++ - '0');
+  if (p == digits || p >= end || whole > 9'000'000'000) return nullptr;
   int64_t fraction_ns = 0;
   if (*p == '.') {
     ++p;
@@ -46,8 +48,8 @@ const char* ParseRowFast(const char* p, const char* end, GyroSample* s) {
   for (int axis = 0; axis < 3; ++axis) {
     ++p;  // the ',' before this field
     double value;
-    const auto [next, ec] = std::from_chars(p, end, value);
-    if (ec != std::errc() || !std::isfinite(value)) return nullptr;
+    const char* next = FromCharsDouble(p, end, &value);
+    if (!next || !std::isfinite(value)) return nullptr;
     s->omega_rad_s[axis] = value;
     p = next;
     if (axis < 2 && (p >= end || *p != ',')) return nullptr;
@@ -90,51 +92,78 @@ GyroSample ParseRowGeneral(const std::string& path, long n, std::string_view lin
   return s;
 }
 
-// Reads the rows of a gyro.csv from `begin` (just past the header, which is line 1): t in seconds,
-// then gx, gy, gz in rad/s.
-GyroTrace ReadRows(const std::string& path, std::string_view text, size_t begin) {
-  const char* p = text.data() + begin;
-  const char* const end = text.data() + text.size();
-  std::vector<GyroSample> samples;
-  // Reserve from the length of the first lines so that a long log is never re-copied while it
-  // grows; untouched capacity costs address space only.
-  {
-    const size_t probe = std::min<size_t>(end - p, 4096);
-    const size_t probe_lines = std::max<size_t>(1, std::count(p, p + probe, '\n'));
-    const size_t estimate = (end - p) / std::max<size_t>(1, probe / probe_lines) * 5 / 4 + 16;
-    samples.reserve(estimate);
-    AdviseHugePages(samples.data(), estimate * sizeof(GyroSample));
+// gyro.csv read block by block: the header at once, then chunks of rows (t in seconds, then gx,
+// gy, gz in rad/s).
+class GyroCsvSource : public FillingSource {
+ public:
+  GyroCsvSource(TextBlocks blocks, const std::string& path)
+      : blocks_(std::move(blocks)), path_(path) {
+    rest_ = blocks_.Next();
+    const size_t header_end = std::min(rest_.find('\n'), rest_.size());
+    std::string_view header = rest_.substr(0, header_end);
+    if (!header.empty() && header.back() == '\r') header.remove_suffix(1);
+    std::vector<std::string_view> fields;
+    SplitFields(StripBom(header), ',', &fields);
+    if (rest_.empty() || !IsGyroCsvHeader(fields)) {
+      throw IoError(IoMessage(path, 1, "missing header 't,gx,gy,gz'"));
+    }
+    rest_.remove_prefix(std::min(rest_.size(), header_end + 1));
   }
-  std::vector<std::string_view> fields;
-  long line_number = 1;
-  while (p < end) {
-    ++line_number;
-    GyroSample s;
-    const char* next = ParseRowFast(p, end, &s);
-    if (!next) {
-      const char* eol = static_cast<const char*>(std::memchr(p, '\n', end - p));
-      if (!eol) eol = end;
-      std::string_view line(p, eol - p);
-      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-      next = eol < end ? eol + 1 : end;
-      if (line.empty()) {
-        p = next;
-        continue;
+
+  double Fraction() const override { return blocks_.Fraction(); }
+
+ private:
+  void Fill(std::vector<GyroSample>* chunk) override {
+    chunk->reserve(kChunkSamples);
+    while (chunk->size() < kChunkSamples) {
+      if (rest_.empty() && (rest_ = blocks_.Next()).empty()) break;
+      ParseRows(chunk);
+    }
+    if (chunk->empty() && !any_) throw IoError(IoMessage(path_, 0, "no samples"));
+  }
+
+  // Rows from rest_ (whole lines) into chunk until it is full or rest_ is used up.
+  void ParseRows(std::vector<GyroSample>* chunk) {
+    const char* p = rest_.data();
+    const char* const end = p + rest_.size();
+    while (p < end && chunk->size() < kChunkSamples) {
+      ++line_number_;
+      GyroSample s;
+      const char* next = ParseRowFast(p, end, &s);
+      if (!next) {
+        const char* eol = static_cast<const char*>(std::memchr(p, '\n', end - p));
+        if (!eol) eol = end;
+        std::string_view line(p, eol - p);
+        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+        next = eol < end ? eol + 1 : end;
+        if (line.empty()) {
+          p = next;
+          continue;
+        }
+        s = ParseRowGeneral(path_, line_number_, line, &fields_);
       }
-      s = ParseRowGeneral(path, line_number, line, &fields);
+      if (any_ && s.t_ns < last_t_ns_) {
+        const char* comma = static_cast<const char*>(std::memchr(p, ',', end - p));
+        throw IoError(IoMessage(path_, line_number_,
+                                "timestamp decreases (" + std::string(p, comma ? comma - p : 0) +
+                                    " after an earlier, larger one)"));
+      }
+      any_ = true;
+      last_t_ns_ = s.t_ns;
+      chunk->push_back(s);
+      p = next;
     }
-    if (!samples.empty() && s.t_ns < samples.back().t_ns) {
-      const char* eol = static_cast<const char*>(std::memchr(p, ',', end - p));
-      throw IoError(IoMessage(path, line_number,
-                              "timestamp decreases (" + std::string(p, eol ? eol - p : 0) +
-                                  " after an earlier, larger one)"));
-    }
-    samples.push_back(s);
-    p = next;
+    rest_ = std::string_view(p, end - p);
   }
-  if (samples.empty()) throw IoError(IoMessage(path, 0, "no samples"));
-  return GyroTrace(std::move(samples));
-}
+
+  TextBlocks blocks_;
+  std::string path_;
+  std::string_view rest_;  // whole lines of the current block not parsed yet
+  long line_number_ = 1;   // the header is line 1
+  bool any_ = false;
+  int64_t last_t_ns_ = 0;
+  std::vector<std::string_view> fields_;
+};
 
 }  // namespace
 
@@ -144,18 +173,12 @@ void GyroReadOptions::Check() const {
   raw.Check();
 }
 
+std::unique_ptr<GyroSource> OpenGyroCsv(TextBlocks blocks, const std::string& path) {
+  return std::make_unique<GyroCsvSource>(std::move(blocks), path);
+}
+
 GyroTrace ReadGyroCsv(const std::string& path) {
-  const MappedFile file(path);
-  const std::string_view text = file.text();
-  LineCursor cursor(text);
-  const auto header = cursor.Next();
-  std::vector<std::string_view> fields;
-  if (header) SplitFields(StripBom(*header), ',', &fields);
-  if (!header || !IsGyroCsvHeader(fields)) {
-    throw IoError(IoMessage(path, 1, "missing header 't,gx,gy,gz'"));
-  }
-  const size_t header_end = text.find('\n');
-  return ReadRows(path, text, header_end == std::string_view::npos ? text.size() : header_end + 1);
+  return ReadAllSamples(OpenGyroCsv(TextBlocks::OfFile(path), path).get());
 }
 
 void WriteGyroCsv(const std::string& path, const GyroTrace& trace) {

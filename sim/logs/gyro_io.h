@@ -2,11 +2,14 @@
 // Readers and writers of gyro logs. Every reader throws IoError("PATH:LINE: problem") on bad input
 // and never returns a partial trace.
 
+#include "sim/gyro_source.h"
 #include "sim/gyro_trace.h"
 #include "sim/logs/gcsv.h"        // GcsvLog, ReadGcsv, WriteGcsv
 #include "sim/logs/log_format.h"  // LogFormat, RawCountOptions, ParseGyroFormat
 #include "sim/logs/raw_csv.h"     // TimeUnit, ReadRawCsv, WriteRawCsv
+#include "sim/text_file.h"        // TextBlocks
 
+#include <memory>
 #include <string>
 #include <string_view>
 
@@ -42,6 +45,10 @@ LogFormat DetectGyroFormat(std::string_view text, const std::string& path);
 
 // docs/FORMATS.md gyro.csv. Extra columns after gz are ignored.
 GyroTrace ReadGyroCsv(const std::string& path);
+// The same as a stream: the header is checked at once, the rows are parsed a block at a time as
+// the chunks are taken (IoError naming the line on the first bad one). path names the file in
+// messages.
+std::unique_ptr<GyroSource> OpenGyroCsv(TextBlocks blocks, const std::string& path);
 // Writes gyro.csv whole or not at all; times exact to the nanosecond, rates round-trip exact.
 void WriteGyroCsv(const std::string& path, const GyroTrace& trace);
 

@@ -133,56 +133,94 @@ int16_t RateToCount(double omega_rad_s, double lsb_per_dps, bool* saturated) {
   return static_cast<int16_t>(counts);
 }
 
-GyroTrace ReadRawCsv(const std::string& path, int range_dps, TimeUnit time_unit) {
-  const double rad_s_per_count = kRadPerDeg / RawSensitivityLsbPerDps(range_dps);
-  const std::string text = ReadFileToString(path);
-  LineCursor cursor(text);
-  std::vector<GyroSample> samples;
-  std::vector<std::string_view> fields;
-  bool first = true;
-  while (auto line = cursor.Next()) {
-    if (line->empty()) continue;
-    SplitFields(*line, ',', &fields);
-    const long n = cursor.line_number();
-    if (first) {
-      first = false;
-      if (IsHeader(fields)) continue;
+namespace {
+
+// A raw-count log read a block at a time.
+class RawCsvSource : public FillingSource {
+ public:
+  RawCsvSource(TextBlocks blocks, const std::string& path, int range_dps, TimeUnit time_unit)
+      : lines_(std::move(blocks)),
+        path_(path),
+        rad_s_per_count_(kRadPerDeg / RawSensitivityLsbPerDps(range_dps)),
+        time_unit_(time_unit) {}
+
+  double Fraction() const override { return lines_.Fraction(); }
+
+ private:
+  void Fill(std::vector<GyroSample>* chunk) override {
+    chunk->reserve(kChunkSamples);
+    while (chunk->size() < kChunkSamples) {
+      const auto line = lines_.Next();
+      if (!line) break;
+      if (line->empty()) continue;
+      SplitFields(*line, ',', &fields_);
+      if (first_) {
+        first_ = false;
+        if (IsHeader(fields_)) continue;
+      }
+      const GyroSample s = ParseRow(lines_.line_number());
+      if (any_ && s.t_ns < last_t_ns_) {
+        throw IoError(IoMessage(
+            path_, lines_.line_number(),
+            "timestamp decreases (" + std::string(fields_[0]) + " after an earlier, larger one)"));
+      }
+      any_ = true;
+      last_t_ns_ = s.t_ns;
+      chunk->push_back(s);
     }
-    if (fields.size() < 4) {
+    if (chunk->empty() && !any_) throw IoError(IoMessage(path_, 0, "no samples"));
+  }
+
+  // The sample of line n, split into fields_.
+  GyroSample ParseRow(long n) const {
+    if (fields_.size() < 4) {
       throw IoError(IoMessage(
-          path, n, "expected 4 columns t,gx,gy,gz, found " + std::to_string(fields.size())));
+          path_, n, "expected 4 columns t,gx,gy,gz, found " + std::to_string(fields_.size())));
     }
     GyroSample s;
-    const auto t_ns = ParseTimeInUnitNs(fields[0], time_unit);
+    const auto t_ns = ParseTimeInUnitNs(fields_[0], time_unit_);
     if (!t_ns) {
       throw IoError(IoMessage(
-          path, n, "t is not a finite number in range: '" + std::string(fields[0]) + "'"));
+          path_, n, "t is not a finite number in range: '" + std::string(fields_[0]) + "'"));
     }
     s.t_ns = *t_ns;
     for (int axis = 0; axis < 3; ++axis) {
-      const std::string_view field = fields[axis + 1];
+      const std::string_view field = fields_[axis + 1];
       const std::string name = std::string("g") + "xyz"[axis];
       const auto count = ParseInt(field);
       if (!count) {
         throw IoError(
-            IoMessage(path, n, name + " is not an integer count: '" + std::string(field) + "'"));
+            IoMessage(path_, n, name + " is not an integer count: '" + std::string(field) + "'"));
       }
       if (*count < -32768 || *count > 32767) {
         throw IoError(IoMessage(
-            path, n,
+            path_, n,
             name + " = " + std::string(field) + " is outside the int16 range of a raw count"));
       }
-      s.omega_rad_s[axis] = static_cast<double>(*count) * rad_s_per_count;
+      s.omega_rad_s[axis] = static_cast<double>(*count) * rad_s_per_count_;
     }
-    if (!samples.empty() && s.t_ns < samples.back().t_ns) {
-      throw IoError(IoMessage(
-          path, n,
-          "timestamp decreases (" + std::string(fields[0]) + " after an earlier, larger one)"));
-    }
-    samples.push_back(s);
+    return s;
   }
-  if (samples.empty()) throw IoError(IoMessage(path, 0, "no samples"));
-  return GyroTrace(std::move(samples));
+
+  LineReader lines_;
+  std::string path_;
+  double rad_s_per_count_;
+  TimeUnit time_unit_;
+  bool first_ = true, any_ = false;
+  int64_t last_t_ns_ = 0;
+  std::vector<std::string_view> fields_;
+};
+
+}  // namespace
+
+std::unique_ptr<GyroSource> OpenRawCsv(TextBlocks blocks, const std::string& path, int range_dps,
+                                       TimeUnit time_unit) {
+  return std::make_unique<RawCsvSource>(std::move(blocks), path, range_dps, time_unit);
+}
+
+GyroTrace ReadRawCsv(const std::string& path, int range_dps, TimeUnit time_unit) {
+  RawSensitivityLsbPerDps(range_dps);  // an unknown range before the file is opened
+  return ReadAllSamples(OpenRawCsv(TextBlocks::OfFile(path), path, range_dps, time_unit).get());
 }
 
 size_t WriteRawCsv(const std::string& path, const GyroTrace& trace, int range_dps,

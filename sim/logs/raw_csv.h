@@ -3,10 +3,13 @@
 // Raspberry Pi): one sample per line `t,gx,gy,gz[,...]`, an optional header line, gx..gz the
 // sensor's int16 output registers, t in s, ms, us or ns.
 
+#include "sim/gyro_source.h"
 #include "sim/gyro_trace.h"
+#include "sim/text_file.h"
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -30,6 +33,10 @@ double RawSensitivityLsbPerDps(int range_dps);
 // int16 [-32768, 32767], a field is missing or not numeric, or the time goes backwards; throws
 // std::invalid_argument for an unknown range.
 GyroTrace ReadRawCsv(const std::string& path, int range_dps, TimeUnit time_unit);
+// The same as a stream, parsed a block at a time as the chunks are taken; path names the file in
+// messages.
+std::unique_ptr<GyroSource> OpenRawCsv(TextBlocks blocks, const std::string& path, int range_dps,
+                                       TimeUnit time_unit);
 
 // Header of the raw-count logs we write: not gyro.csv's "t,gx,gy,gz", so that detection can tell
 // counts from rad/s (a docs/FORMATS.md header always means gyro.csv).

@@ -246,6 +246,12 @@ TEST(ImportCli, PhoneClip) {
   EXPECT_EQ(std::abs(rig.cam_from_gyro(1, 0)), 1.0);  // "gyro x is camera y"
 
   const nlohmann::json record = ReadJson(out + "/import.json");
+  // The gyro's one pause, audited as every log is: in import.json and on stderr.
+  ASSERT_EQ(record["warnings"].size(), 1u) << record["warnings"].dump();
+  EXPECT_EQ(record["warnings"][0]["kind"], "gap");
+  EXPECT_EQ(record["warnings"][0]["count"], 1);
+  EXPECT_NE(r.output.find("warning: " + kPhone + ": gap: 1 interval(s)"), std::string::npos)
+      << r.output;
   EXPECT_EQ(record["frames"]["sof_times"], 2146);
   EXPECT_TRUE(record["frames"]["outside_gyro"].empty());
   EXPECT_DOUBLE_EQ(record["time_origin_s"].get<double>(), origin_s);

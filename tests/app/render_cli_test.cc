@@ -101,6 +101,22 @@ TEST(RenderCommand, WritesACompleteDatasetWithTruth) {
   EXPECT_TRUE(fs::exists(out + "/overview.png"));
 }
 
+// A gyro log with a pause is rendered as it is, and the command says what it lost, as every
+// command that reads a log does.
+TEST(RenderCommand, SaysWhatTheGyroLogLost) {
+  Inputs in;
+  std::vector<GyroSample> samples;
+  for (const GyroSample& s : in.gyro.samples()) {
+    if (s.t_ns < 800'000'000 || s.t_ns >= 1'000'000'000) samples.push_back(s);  // 0.2 s lost
+  }
+  WriteGyroCsv(in.dir / "gyro.csv", GyroTrace(samples));
+  const test::CommandResult result = test::RunShutterlab(in.Args(in.dir / "out", "--no-pictures"));
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("gyro.csv: gap: 1 interval(s) over 3x the median 1.000 ms"),
+            std::string::npos)
+      << result.output;
+}
+
 TEST(RenderCommand, BadInputExitsTwoAndWritesNothing) {
   Inputs in;
   WriteFileAtomically(in.dir / "late.csv", "frame,t_first_row\n0,0.5\n1,5.0\n");

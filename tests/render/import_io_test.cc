@@ -33,6 +33,7 @@ ImportRecord CommonRecord() {
               {"readout_s", 0.033, ClaimStatus::kGuess, "a guess"},
               {"gyro_to_camera", m, ClaimStatus::kSourceClaimInferred, "both"},
               {"direction", std::string("top_to_bottom"), ClaimStatus::kInferred, "the data"}};
+  r.warnings = {{"gap", "1 interval(s) over 3x the median", 12.5, 1}};
   return r;
 }
 
@@ -91,7 +92,10 @@ TEST(ImportIo, PhoneRecordHoldsTheCommonFieldsAndThePhoneExtras) {
   EXPECT_EQ(j["claims"][2]["value"], json::parse("[[0,-1,0],[-1,0,0],[0,0,-1]]"));
   EXPECT_EQ(j["claims"][2]["status"], "source claim + inferred");
   EXPECT_EQ(j["claims"][3]["value"], "top_to_bottom");
-  EXPECT_EQ(j.size(), 9u);  // nothing of the GoPro's
+  EXPECT_EQ(j["warnings"],
+            json::parse(R"([{"kind":"gap","message":"1 interval(s) over 3x the median",
+                                            "t_s":12.5,"count":1}])"));
+  EXPECT_EQ(j.size(), 10u);  // nothing of the GoPro's
 
   // No exposure known: the range is written as nulls.
   phone.exposure_min_s = INFINITY;
@@ -135,7 +139,7 @@ TEST(ImportIo, GoproRecordHoldsTheGoproExtrasAndIsWrittenWhole) {
   EXPECT_EQ(j["frames"]["times"], "sample table");
   EXPECT_EQ(j["frames"].size(), 8u);
   EXPECT_FALSE(j.contains("exposure_range_s"));
-  EXPECT_EQ(j.size(), 8u);
+  EXPECT_EQ(j.size(), 9u);
 }
 
 }  // namespace

@@ -1,9 +1,12 @@
 #include "sim/trace_audit.h"
 
+#include "sim/text_file.h"
 #include "sim/units.h"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -110,6 +113,140 @@ TEST(AuditTrace, SaturationWhereThePeakLandsOnACommonFullScale) {
   samples[300].omega_rad_s = Eigen::Vector3d(0, 1500, 0) * kRadPerDeg;
   EXPECT_FALSE(SaturationFullScale(GyroTrace(samples), {}).has_value());
   EXPECT_TRUE(AuditTrace(GyroTrace(samples)).empty());
+}
+
+// The gap and rate-change audit as first written, over a trace held whole (blocks of 1 s, a block
+// of fewer than 8 intervals joining the one before, the interval into a block judged at the slower
+// of the two rates): the reference for the streamed TraceAuditor. Returns (gap count, missing ns,
+// longest ns, its start, first gap start, rate-run medians).
+struct ReferenceAudit {
+  size_t gaps = 0;
+  int64_t missing_ns = 0, longest_ns = 0, longest_at_ns = 0, first_at_ns = 0;
+  std::vector<int64_t> run_medians;
+};
+ReferenceAudit WholeTraceAudit(const std::vector<GyroSample>& t, double factor) {
+  struct Block {
+    size_t begin, end;
+    int64_t median;
+  };
+  std::vector<Block> blocks;
+  std::vector<int64_t> intervals;
+  size_t begin = 0;
+  for (size_t k = 1; k <= t.size(); ++k) {
+    const bool ends = k == t.size() || t[k].t_ns - t[begin].t_ns >= 1'000'000'000;
+    if (k < t.size()) intervals.push_back(t[k].t_ns - t[k - 1].t_ns);
+    if (!ends) continue;
+    if (intervals.size() < 8 && !blocks.empty()) {
+      blocks.back().end = k;
+    } else {
+      blocks.push_back({begin, k, UpperMedian(intervals)});
+    }
+    intervals.clear();
+    begin = k;
+  }
+  ReferenceAudit out;
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    for (size_t k = std::max<size_t>(blocks[b].begin, 1); k < blocks[b].end; ++k) {
+      const int64_t local = k == blocks[b].begin && b > 0
+                                ? std::max(blocks[b].median, blocks[b - 1].median)
+                                : blocks[b].median;
+      const int64_t gap = t[k].t_ns - t[k - 1].t_ns;
+      if (local == 0 || gap <= SamplingReport::kGapFactor * local) continue;
+      if (out.gaps++ == 0) out.first_at_ns = t[k - 1].t_ns;
+      out.missing_ns += gap - local;
+      if (gap > out.longest_ns) {
+        out.longest_ns = gap;
+        out.longest_at_ns = t[k - 1].t_ns;
+      }
+    }
+  }
+  for (const Block& b : blocks) {
+    if (!out.run_medians.empty()) {
+      const double ratio = static_cast<double>(b.median) / out.run_medians.back();
+      if (ratio < factor && ratio > 1.0 / factor) continue;
+    }
+    out.run_medians.push_back(b.median);
+  }
+  return out;
+}
+
+TEST(TraceAuditor, StreamedInAnyChunksEqualsTheWholeTraceAudit) {
+  std::mt19937_64 rng(15);
+  for (int trial = 0; trial < 20; ++trial) {
+    // Stretches at changing rates, with jitter, pauses, repeated times and short tails.
+    std::vector<GyroSample> samples;
+    int64_t t = 1'000'000'000;
+    const int stretches = 1 + static_cast<int>(rng() % 5);
+    for (int s = 0; s < stretches; ++s) {
+      const int64_t period = 250'000 * (1 + static_cast<int64_t>(rng() % 16));
+      const size_t n = rng() % 4000;
+      for (size_t k = 0; k < n; ++k) {
+        samples.push_back({t, Eigen::Vector3d::Zero()});
+        const uint64_t r = rng() % 1000;
+        t += r < 3   ? period * (2 + static_cast<int64_t>(rng() % 40))  // a pause
+             : r < 6 ? 0                                                // a repeated time
+                     : period + static_cast<int64_t>(rng() % (period / 10 + 1));
+      }
+    }
+    if (samples.size() < 2) continue;
+    const ReferenceAudit expected = WholeTraceAudit(samples, 1.25);
+    TraceAuditor auditor;
+    for (size_t i = 0; i < samples.size();) {
+      const size_t n = std::min<size_t>(samples.size() - i, 1 + rng() % 3000);
+      auditor.Add(samples.data() + i, n);
+      i += n;
+    }
+    const std::vector<LogWarning> lines = auditor.Finish();
+    const auto find = [&](const std::string& kind) -> const LogWarning* {
+      for (const LogWarning& w : lines) {
+        if (w.kind == kind) return &w;
+      }
+      return nullptr;
+    };
+    const LogWarning* gap = find("gap");
+    ASSERT_EQ(gap != nullptr, expected.gaps > 0) << trial << "\n" << Joined(lines);
+    if (gap) {
+      EXPECT_EQ(*gap->count, expected.gaps) << trial;
+      EXPECT_DOUBLE_EQ(*gap->t_s, expected.first_at_ns * 1e-9) << trial;
+      EXPECT_NE(gap->message.find(FormatNumber("%.3f", expected.missing_ns * 1e-9) +
+                                  " s missing in all; longest " +
+                                  FormatNumber("%.3f", expected.longest_ns * 1e-9) + " s at " +
+                                  SecondsText(expected.longest_at_ns)),
+                std::string::npos)
+          << trial << ": " << gap->message;
+    }
+    const LogWarning* rate = find("rate_change");
+    ASSERT_EQ(rate != nullptr, expected.run_medians.size() > 1) << trial << "\n" << Joined(lines);
+    if (rate) {
+      EXPECT_EQ(*rate->count, expected.run_medians.size() - 1) << trial;
+    }
+    // The streamed sampling is what the whole trace says of itself.
+    const GyroTrace whole(samples);
+    const TraceSampling sampling = auditor.Sampling();
+    EXPECT_EQ(sampling.samples, whole.size());
+    EXPECT_EQ(sampling.median_interval_ns, whole.sampling().median_interval_ns) << trial;
+    EXPECT_EQ(sampling.gaps, whole.sampling().gap_indices.size()) << trial;
+    EXPECT_EQ(sampling.duplicate_timestamps, whole.sampling().duplicate_timestamps) << trial;
+  }
+}
+
+TEST(TraceAuditor, RefusesWhatGyroTraceRefuses) {
+  TraceAuditor auditor;
+  std::vector<GyroSample> samples = Regular(10, 1'000'000);
+  samples[7].t_ns -= 3'000'000;
+  auditor.Add(samples.data(), 5);
+  try {
+    auditor.Add(samples.data() + 5, 5);
+    FAIL() << "a time going back must be refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("gyro sample 7 goes back in time by 0.002 s"),
+              std::string::npos)
+        << e.what();
+  }
+  TraceAuditor nan;
+  samples = Regular(3, 1'000'000);
+  samples[2].omega_rad_s.y() = std::nan("");
+  EXPECT_THROW(nan.Add(samples), std::invalid_argument);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "estimate/paper/analyze.h"
 
 #include "sim/check.h"
+#include "sim/civil_time.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
@@ -73,6 +74,40 @@ TEST(Analyze, ConstantRateGivesPaperDistortionAndFlagsAboveTheLimit) {
   EXPECT_NE(result.verdict.line.find("50.0% over 5 cm"), std::string::npos) << result.verdict.line;
   ASSERT_TRUE(result.flight.has_value());
   EXPECT_EQ(result.flight->rows.size(), 2u);
+}
+
+// At 50 Hz a 30 ms readout holds one or two samples: the images are refused as flight's rows are,
+// not given a D of 0, and the verdict says what the rate allows; a 100 ms readout is judged.
+TEST(Analyze, ImagesWhoseReadoutHoldsTooFewSamplesAreNotJudged) {
+  FlightLog log;
+  std::vector<GyroSample> samples;
+  for (int k = 0; k < 1000; ++k)  // 20 s at 50 Hz, turning about x after 6 s
+    samples.push_back({static_cast<int64_t>(k) * 20'000'000,
+                       Eigen::Vector3d(k >= 300 ? RateForGroundSmear(0.07) : 0.0, 0, 0)});
+  log.gyro = GyroTrace(samples);
+  log.format = "gyro.csv";
+  AnalyzeOptions options = BaseOptions();
+  options.every_s = 2.0;
+  const AnalyzeResult refused = Analyze(log, options);
+  ASSERT_FALSE(refused.images.empty());
+  for (const ImageResult& image : refused.images) {
+    if (!image.in_trace) continue;
+    EXPECT_TRUE(image.too_few_samples) << image.name;
+    EXPECT_FALSE(image.judged());
+  }
+  EXPECT_EQ(refused.verdict.images_in_trace, 0u);
+  EXPECT_GT(refused.verdict.images_too_few_samples, 0u);
+  EXPECT_EQ(refused.verdict.line.rfind("verdict: no image can be judged: at 50 Hz the 30 ms "
+                                       "readout holds at most two samples; it must be longer "
+                                       "than 40 ms",
+                                       0),
+            0u)
+      << refused.verdict.line;
+  EXPECT_NE(AnalyzeReport(refused).find("too few samples in the readout"), std::string::npos);
+  options.rig.shutter.readout_s = 0.100;
+  const AnalyzeResult judged = Analyze(log, options);
+  EXPECT_EQ(judged.verdict.images_too_few_samples, 0u);
+  EXPECT_EQ(judged.verdict.images_in_trace, refused.verdict.images_too_few_samples);
 }
 
 TEST(Analyze, FlagIsStrictlyAboveTheLimit) {
@@ -358,24 +393,30 @@ TEST(Analyze, WritesImagesCsvAndExcludeList) {
             "name,t,D_paper_m,D_full_m,flag_0.05,flag_0.1,dominant_axis");
 }
 
-TEST(ReadTriggersCsv, ReadsNamedAndBareTimesAndRejectsBadLines) {
-  test::TempDir dir;
-  std::ofstream(dir / "named.csv") << "image,t\nDSC01,12.5\nDSC02,14.25\n";
-  std::ofstream(dir / "bare.csv") << "3.0\n4.0\n";
-  std::ofstream(dir / "bad.csv") << "t\n1.0\nnot-a-time\n";
-  const auto named = ReadTriggersCsv(dir / "named.csv");
+TEST(TriggersOnLogClock, NamesTriggersAndPlacesGpsTimesThroughTheLogsFixes) {
+  TriggerFile csv;
+  csv.clock = TriggerClock::kLog;
+  csv.events = {{3'000'000'000, -1, "DSC01", {}, {}, {}}, {4'000'000'000, -1, "", {}, {}, {}}};
+  const FlightLog no_gps;
+  const auto named = TriggersOnLogClock(csv, no_gps, "t.csv");
   ASSERT_EQ(named.size(), 2u);
-  EXPECT_EQ(named[1].name, "DSC02");
-  EXPECT_EQ(named[1].t_ns, 14'250'000'000);
-  const auto bare = ReadTriggersCsv(dir / "bare.csv");
-  ASSERT_EQ(bare.size(), 2u);
-  EXPECT_EQ(bare[0].name, "IMG_0001");
-  try {
-    ReadTriggersCsv(dir / "bad.csv");
-    FAIL() << "no IoError";
-  } catch (const IoError& e) {
-    EXPECT_NE(std::string(e.what()).find("bad.csv:3:"), std::string::npos) << e.what();
-  }
+  EXPECT_EQ(named[0].name, "DSC01");
+  EXPECT_EQ(named[1].name, "IMG_0002");
+  EXPECT_EQ(named[1].t_ns, 4'000'000'000);
+
+  // MRK: GPS time. The log's clock is UTC - 1e18 ns; GPS is 18 s ahead of UTC (2022).
+  TriggerFile mrk;
+  mrk.clock = TriggerClock::kGps;
+  const int64_t gps_ns = GpsNsFromWeek(2211, 296288.242869);
+  mrk.events = {{gps_ns, 12, "", {}, {}, {}}};
+  EXPECT_THROW(TriggersOnLogClock(mrk, no_gps, "f.MRK"), IoError);
+  FlightLog log;
+  const int64_t utc_ns = UtcFromGpsNs(gps_ns);
+  log.utc_fixes = {{utc_ns - 1'000'000'000'000'000'000 - 5'000'000'000, utc_ns - 5'000'000'000},
+                   {utc_ns - 1'000'000'000'000'000'000 + 5'000'000'000, utc_ns + 5'000'000'000}};
+  const auto placed = TriggersOnLogClock(mrk, log, "f.MRK");
+  EXPECT_EQ(placed[0].name, "IMG_12");
+  EXPECT_EQ(placed[0].t_ns, utc_ns - 1'000'000'000'000'000'000);
 }
 
 TEST(AnalyzeOptions, CheckRejectsNonsense) {

@@ -1,6 +1,8 @@
 #include "sim/logs/dataflash.h"
 
 #include "sim/check.h"
+#include "sim/civil_time.h"
+#include "sim/logs/trigger_file.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
 #include "tests/test_util.h"
@@ -187,19 +189,40 @@ TEST(DataFlash, ReadsGyrBackExactly) {
   EXPECT_EQ(log.gyro_sources_available[1], "GYR/1 (500.0 Hz, 500 samples)");
   EXPECT_EQ(log.gyro_sources_available[2], "IMU (200.0 Hz, 200 samples)");
   EXPECT_EQ(log.records_skipped, 0u);
-  EXPECT_TRUE(log.warnings.empty()) << test::JoinedWarnings(log.warnings);
+  // Nothing lost; only the note that the TRIG copies of the pictures were not used.
+  ASSERT_EQ(log.warnings.size(), 1u) << test::JoinedWarnings(log.warnings);
+  EXPECT_EQ(log.warnings[0].kind, "unused_source");
+}
+
+// The one trigger reader takes a DataFlash file by its content and keeps the log's clock.
+TEST(DataFlash, IsATriggerFile) {
+  test::TempDir dir;
+  WriteFileAtomically(dir / "00000042.BIN", FlightFile(300).bytes());
+  const TriggerFile f = ReadTriggerFile(dir / "00000042.BIN");
+  EXPECT_EQ(f.format, "dataflash");
+  EXPECT_EQ(f.clock, TriggerClock::kLog);
+  ASSERT_GE(f.events.size(), 3u);
+  const FlightLog log = ParseDataFlash(FlightFile(300).bytes(), "f.bin");
+  ASSERT_EQ(f.events.size(), log.camera_events.size());
+  for (size_t i = 0; i < f.events.size(); ++i) {
+    EXPECT_EQ(f.events[i].t_ns, log.camera_events[i].t_ns);
+    EXPECT_EQ(f.events[i].sequence, log.camera_events[i].sequence);
+  }
+  EXPECT_NE(f.source.find("CAM"), std::string::npos) << f.source;
 }
 
 TEST(DataFlash, ReadsCameraEventsAndAltitude) {
   DataFlashBuilder b = FlightFile(1000);
   const FlightLog log = ParseDataFlash(b.bytes(), "flight.bin");
-  ASSERT_EQ(log.camera_events.size(), 20u);
-  EXPECT_EQ(log.camera_events[0].kind, "TRIG");
-  EXPECT_EQ(log.camera_events[0].t_ns, (2'049'000 + 600) * int64_t{1000});
-  EXPECT_EQ(log.camera_events[1].kind, "CAM");
-  EXPECT_EQ(log.camera_events[1].t_ns, (2'050'000 + 700) * int64_t{1000});
-  EXPECT_EQ(log.camera_events[1].sequence, 1);
-  EXPECT_EQ(log.camera_events[19].sequence, 10);
+  // Each picture as TRIG (the command) and CAM (the feedback): the 10 CAM are kept.
+  ASSERT_EQ(log.camera_events.size(), 10u);
+  EXPECT_EQ(log.camera_events[0].kind, "CAM");
+  EXPECT_EQ(log.camera_events[0].t_ns, (2'050'000 + 700) * int64_t{1000});
+  EXPECT_EQ(log.camera_events[0].sequence, 1);
+  EXPECT_EQ(log.camera_events[9].sequence, 10);
+  EXPECT_TRUE(test::AnyWarningContains(log.warnings,
+                                       "camera events: used the 10 CAM events; 10 TRIG not used"))
+      << test::JoinedWarnings(log.warnings);
   ASSERT_TRUE(log.altitude_above_ground_m.has_value());
   // CAM RelAlt 40..49 m ('e': centimetres); the TRIG copies say 0 m and are not used.
   constexpr double kCentimetre = 1e-9;  // 'e' is int32 * 0.01: exact to rounding only
@@ -307,6 +330,31 @@ TEST(DataFlash, CameraEventsWithoutBootTimeAreCountedNotPlaced) {
   EXPECT_TRUE(AnyWarningContains(log, "1 camera event(s) without a boot-time stamp"));
 }
 
+// GPS (TimeUS, I, Status, GMS, GWk): the boot clock against UTC from 3-D fixes of instance 0.
+TEST(DataFlash, ReadsGpsTimeAgainstTheBootClock) {
+  DataFlashBuilder b;
+  b.Fmt(149, 3 + 8 + 1 + 1 + 4 + 2, "GPS", "QBBIH", "TimeUS,I,Status,GMS,GWk");
+  auto gps = [&b](uint64_t t_us, uint8_t instance, uint8_t status, uint32_t gms) {
+    b.bytes() += std::string("\xA3\x95\x95", 3);
+    test::PutLittleEndian(&b.bytes(), t_us);
+    test::PutLittleEndian(&b.bytes(), instance);
+    test::PutLittleEndian(&b.bytes(), status);
+    test::PutLittleEndian(&b.bytes(), gms);
+    test::PutLittleEndian<uint16_t>(&b.bytes(), 2211);
+  };
+  gps(5'000'000, 0, 3, 296'288'242);
+  gps(5'200'000, 1, 3, 296'288'442);  // a second receiver: not used
+  gps(5'400'000, 0, 1, 296'288'642);  // no fix: not used
+  gps(5'600'000, 0, 6, 296'288'842);  // RTK fixed
+  for (int k = 0; k < 10; ++k) b.Imu(1000 + k * 1000, 0, 0, 0, 0);
+  const FlightLog log = ParseDataFlash(b.bytes(), "gps.bin");
+  ASSERT_EQ(log.utc_fixes.size(), 2u);
+  EXPECT_EQ(log.utc_fixes[0].t_ns, 5'000'000'000);
+  // GPS week 2211, 296288.242 s of week, less 18 leap seconds: 2022-05-25 10:17:50.242 UTC.
+  EXPECT_EQ(UtcText(log.utc_fixes[0].utc_ns), "2022-05-25 10:17:50.242");
+  EXPECT_EQ(log.utc_fixes[1].utc_ns - log.utc_fixes[0].utc_ns, 600'000'000);
+}
+
 TEST(DataFlash, TruncatedCopyKeepsWhatCameBefore) {
   DataFlashBuilder b = FlightFile(1000);
   const std::string& bytes = b.bytes();
@@ -337,7 +385,7 @@ TEST(DataFlash, CorruptedCopySkipsDamageAndReadsOn) {
   EXPECT_TRUE(AnyWarningContains(log, "corrupt bytes skipped in total"));
   // The two damaged GYR messages are lost (of instance 0 or 1), nothing else.
   EXPECT_GE(log.gyro.size(), 998u);
-  EXPECT_EQ(log.camera_events.size(), 20u);
+  EXPECT_EQ(log.camera_events.size(), 10u);  // the CAM ones (TRIG not used)
 }
 
 TEST(DataFlash, RandomDamageGivesErrorOrPartialResult) {

@@ -42,13 +42,15 @@ TEST(GyroCandidates, BadTimesValuesAndSpikesAreDroppedAndCounted) {
   c.samples[20].omega_rad_s.x() = std::numeric_limits<double>::quiet_NaN();  // no value
   c.samples[50].t_ns += 3'000'000'000;  // a corrupted time, 3 s ahead of both neighbours
   c.samples[50].omega_rad_s.x() = 7.0;
-  c.samples[0].t_ns = c.samples[2].t_ns + 1;  // the first sample after its successors
+  c.samples[0].t_ns = c.samples[2].t_ns + 1;        // the first sample after its successors
+  AddCandidateSample(std::nullopt, {1, 2, 3}, &c);  // a time beyond int64 ns: counted, not kept
   FlightLog log;
   ASSERT_TRUE(ChooseGyroSource({c}, &log));
   EXPECT_EQ(log.gyro_source, "GYR");
   ASSERT_EQ(log.gyro.size(), 96u);
-  EXPECT_EQ(log.records_skipped, 4u);
+  EXPECT_EQ(log.records_skipped, 5u);
   EXPECT_TRUE(HasWarning(log, "GYR: 1 samples with a zero timestamp dropped"));
+  EXPECT_TRUE(HasWarning(log, "GYR: 1 samples with an unreadable timestamp"));
   EXPECT_TRUE(HasWarning(log, "GYR: 1 samples with a non-finite rate dropped"));
   EXPECT_TRUE(
       HasWarning(log, "GYR: 2 samples with a timestamp out of line with their neighbours dropped"));

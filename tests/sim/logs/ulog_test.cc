@@ -438,13 +438,15 @@ TEST(ULog, ReadsCameraEventsAndAltitude) {
   for (int i = 0; i < 6; ++i)
     b.Data(3, position(1'000'000 + i * 10'000, 2.0f - heights[i], heights[i], i >= 2));
   const FlightLog log = ParseULog(b.bytes(), "camera.ulg");
-  ASSERT_EQ(log.camera_events.size(), 4u);
-  EXPECT_EQ(log.camera_events[0].kind, "camera_trigger");
-  EXPECT_EQ(log.camera_events[0].t_ns, 1'200'000'000);
-  EXPECT_EQ(log.camera_events[0].sequence, 10);
-  EXPECT_EQ(log.camera_events[1].kind, "camera_capture");
-  EXPECT_EQ(log.camera_events[1].sequence, 7);
-  EXPECT_EQ(log.camera_events[3].t_ns, 1'400'000'000);
+  // Both kinds: the camera's feedback (camera_capture) is kept, the 3 commands are counted.
+  ASSERT_EQ(log.camera_events.size(), 1u);
+  EXPECT_EQ(log.camera_events[0].kind, "camera_capture");
+  EXPECT_EQ(log.camera_events[0].t_ns, 1'250'000'000);
+  EXPECT_EQ(log.camera_events[0].sequence, 7);
+  EXPECT_TRUE(test::AnyWarningContains(log.warnings,
+                                       "camera events: used the 1 camera_capture events; 3 "
+                                       "camera_trigger not used"))
+      << test::JoinedWarnings(log.warnings);
   ASSERT_TRUE(log.altitude_above_ground_m.has_value());
   EXPECT_DOUBLE_EQ(*log.altitude_above_ground_m, 31.5);
   EXPECT_NE(log.altitude_source.find("dist_bottom"), std::string::npos) << log.altitude_source;

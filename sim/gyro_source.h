@@ -1,0 +1,94 @@
+#pragma once
+// A gyro trace handed on in chunks, in time order, so that a log of any length is analysed in
+// bounded memory: the readers of text logs parse a block at a time (sim/logs/gyro_io.h
+// OpenGyroCsv, ...), and a trace already in memory is handed on in slices (TraceSource).
+
+#include "sim/gyro_trace.h"
+
+#include <algorithm>
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+namespace shutterlab {
+
+// Samples [data, data + size), valid until the source's next call.
+struct GyroChunk {
+  const GyroSample* data = nullptr;
+  size_t size = 0;
+  bool empty() const { return size == 0; }
+  const GyroSample* begin() const { return data; }
+  const GyroSample* end() const { return data + size; }
+};
+
+class GyroSource {
+ public:
+  virtual ~GyroSource() = default;
+  // The next samples, in non-decreasing time with finite rates (a reader refuses anything else
+  // with an IoError naming the file and line); an empty chunk at the end.
+  virtual GyroChunk Next() = 0;
+  // The share of the input read so far, 0..1 (for progress).
+  virtual double Fraction() const = 0;
+  // The next chunk into *out (its content replaced); false at the end. A source that fills a
+  // buffer of its own hands it over instead of copying (FillingSource).
+  virtual bool NextInto(std::vector<GyroSample>* out) {
+    const GyroChunk chunk = Next();
+    out->assign(chunk.begin(), chunk.end());
+    return !chunk.empty();
+  }
+};
+
+// A source that fills chunks of its own (the text readers): Fill is all it writes.
+class FillingSource : public GyroSource {
+ public:
+  GyroChunk Next() final {
+    chunk_.clear();
+    Fill(&chunk_);
+    return {chunk_.data(), chunk_.size()};
+  }
+  bool NextInto(std::vector<GyroSample>* out) final {
+    out->clear();
+    Fill(out);
+    return !out->empty();
+  }
+
+ protected:
+  // Samples per chunk: 2 MiB, which stay in cache while the analysis takes them.
+  static constexpr size_t kChunkSamples = 1 << 16;
+  // Appends the next samples, at most kChunkSamples, to *chunk (empty on entry); none at the end.
+  virtual void Fill(std::vector<GyroSample>* chunk) = 0;
+
+ private:
+  std::vector<GyroSample> chunk_;
+};
+
+// A trace held in memory, in slices of chunk_samples.
+class TraceSource : public GyroSource {
+ public:
+  explicit TraceSource(GyroTrace trace, size_t chunk_samples = 1 << 16)
+      : trace_(std::move(trace)), chunk_(std::max<size_t>(chunk_samples, 1)) {}
+  GyroChunk Next() override {
+    const size_t n = std::min(chunk_, trace_.size() - next_);
+    GyroChunk chunk{trace_.samples().data() + next_, n};
+    next_ += n;
+    return chunk;
+  }
+  double Fraction() const override {
+    return trace_.empty() ? 1.0 : static_cast<double>(next_) / trace_.size();
+  }
+
+ private:
+  GyroTrace trace_;
+  size_t chunk_;
+  size_t next_ = 0;
+};
+
+// Every sample of a source, as a trace (validated as GyroTrace validates).
+GyroTrace ReadAllSamples(GyroSource* source);
+
+// The source read one chunk ahead on a thread of its own, so that reading (parsing text) and the
+// analysis of the chunk before run on two cores. Chunks are copied into a few buffers of its own;
+// an exception of the source is thrown from Next in the caller's thread, in order.
+std::unique_ptr<GyroSource> ReadAhead(std::unique_ptr<GyroSource> source);
+
+}  // namespace shutterlab

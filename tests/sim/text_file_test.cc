@@ -1,0 +1,120 @@
+#include "sim/text_file.h"
+
+#include "sim/check.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <charconv>
+#include <cstdio>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+// FromCharsDouble is std::from_chars, faster on plain decimals: the same bits and the same end for
+// every kind of number a log may hold, and for text that is no number.
+TEST(FromCharsDouble, IsStdFromCharsOnEveryKindOfNumber) {
+  std::mt19937_64 rng(15);
+  std::vector<std::string> texts = {"0",
+                                    "-0",
+                                    "-0.0",
+                                    ".5",
+                                    "-.5",
+                                    "5.",
+                                    ".",
+                                    "-",
+                                    "",
+                                    "1e5",
+                                    "1.5e-3",
+                                    "1.5e",
+                                    "inf",
+                                    "nan",
+                                    "+1",
+                                    "abc",
+                                    "0.1",
+                                    "0.3",
+                                    "1,2",
+                                    "-1.5 ",
+                                    "9007199254740993",
+                                    "9007199254740992.5",
+                                    "1234567890123456789",
+                                    "12345678901234567890",
+                                    "0.00000000000000000000001",
+                                    "0.0000000000000000000000001"};
+  char buffer[64];
+  for (int i = 0; i < 20000; ++i) {
+    // Shortest round-trip decimals (up to 17 digits), fixed decimals as loggers write them, and
+    // integers of every length.
+    const double x = std::ldexp(static_cast<double>(rng() >> 11), -static_cast<int>(rng() % 80)) *
+                     ((rng() & 1) ? -1 : 1);
+    std::to_chars_result r = std::to_chars(buffer, buffer + sizeof(buffer), x);
+    texts.emplace_back(buffer, r.ptr);
+    r = std::to_chars(buffer, buffer + sizeof(buffer), x, std::chars_format::fixed,
+                      static_cast<int>(rng() % 12));
+    texts.emplace_back(buffer, r.ptr);
+    texts.push_back(std::to_string(rng() >> (rng() % 64)));
+  }
+  for (const std::string& text : texts) {
+    const char* end = text.data() + text.size();
+    double expected = -7.0, got = -7.0;
+    const auto [expected_end, ec] = std::from_chars(text.data(), end, expected);
+    const char* got_end = FromCharsDouble(text.data(), end, &got);
+    if (ec != std::errc()) {
+      EXPECT_EQ(got_end, nullptr) << "'" << text << "'";
+      continue;
+    }
+    ASSERT_EQ(got_end, expected_end) << "'" << text << "'";
+    EXPECT_EQ(std::memcmp(&got, &expected, sizeof(double)), 0)
+        << "'" << text << "': " << got << " vs " << expected;
+  }
+}
+
+// The lines of a text read in blocks of any size are the lines LineCursor gives of it whole, with
+// the same numbers: long lines, CR LF, empty lines, a last line without its end.
+TEST(LineReader, BlocksOfAnySizeGiveTheLinesOfTheWholeText) {
+  std::mt19937_64 rng(15);
+  test::TempDir dir;
+  const std::string path = dir / "text.txt";
+  for (int trial = 0; trial < 200; ++trial) {
+    std::string text;
+    const int lines = static_cast<int>(rng() % 40);
+    for (int l = 0; l < lines; ++l) {
+      text.append(rng() % 4 == 0 ? rng() % 300 : rng() % 12, static_cast<char>('a' + l % 26));
+      text += rng() % 5 == 0 ? "\r\n" : "\n";
+    }
+    if (rng() % 2) text += "last";
+    std::vector<std::pair<long, std::string>> expected;
+    LineCursor cursor(text);
+    while (auto line = cursor.Next()) expected.emplace_back(cursor.line_number(), *line);
+    const size_t block = 1 + rng() % 64;
+    WriteFileAtomically(path, text);
+    for (bool from_file : {false, true}) {
+      LineReader reader(from_file ? TextBlocks::OfFile(path, block)
+                                  : TextBlocks::InMemory(text, block));
+      std::vector<std::pair<long, std::string>> got;
+      while (auto line = reader.Next()) got.emplace_back(reader.line_number(), *line);
+      EXPECT_EQ(got, expected) << "trial " << trial << ", block " << block
+                               << (from_file ? ", file" : ", memory");
+      EXPECT_DOUBLE_EQ(reader.Fraction(), 1.0);
+    }
+  }
+}
+
+TEST(TextBlocks, EveryBlockEndsAtALineEndAndAMissingFileIsAnIoError) {
+  const std::string text = "a,b\nccc\n\ndddd";
+  TextBlocks blocks = TextBlocks::InMemory(text, 2);
+  std::string joined;
+  for (std::string_view block = blocks.Next(); !block.empty(); block = blocks.Next()) {
+    EXPECT_TRUE(block.back() == '\n' || joined.size() + block.size() == text.size()) << block;
+    joined += block;
+  }
+  EXPECT_EQ(joined, text);
+  EXPECT_THROW(TextBlocks::OfFile("/nonexistent/gyro.csv"), IoError);
+}
+
+}  // namespace
+}  // namespace shutterlab
