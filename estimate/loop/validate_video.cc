@@ -744,6 +744,11 @@ void ValidateVideoDataset(const RigDataset& dataset, const ValidateOptions& opti
   const double noise_px = PooledNoisePx(result->frames);
   VideoModels models = PrepareModels(options, result->declared);
   ScreenVideo(dataset, models.rotation_start, options, &pairs, result);
+  // An image that does not follow the gyro shows no effect of the sensor (the top-level effects
+  // stay empty whatever a loop fits): the loops fit the declared model alone, for its residual.
+  if (result->screen.gyro_follow.determined && !result->screen.gyro_follow.follows) {
+    models.rotation_options.max_effects = models.translation_options.max_effects = 0;
+  }
   const std::vector<FramePoints> rotation_pairs =
       WithoutScreened(pairs, result->screen.rotation_status);
   const std::vector<FramePoints> translation_pairs =
@@ -764,16 +769,25 @@ void ValidateVideoDataset(const RigDataset& dataset, const ValidateOptions& opti
                                  models.rotation_start,
                                  rot,
                                  models.rotation_options};
-  CheckHalves(claim_inputs, result);
-  // The source's claims, when the dataset came from `shutterlab import`.
-  result->claims = CheckClaims(claims, claim_inputs);
-  // An image that does not follow the gyro settles none of them, whatever a fit says.
+  // An image that does not follow the gyro settles none of the source's claims and shows no
+  // effect of the sensor on either half, whatever a fit says: no fit is tried for them.
   const GyroFollowCheck& follow = result->screen.gyro_follow;
   if (follow.determined && !follow.follows) {
-    for (ClaimCheck& c : result->claims) {
-      c.verdict = "not determined: the image does not follow the gyro (it turns " +
-                  FormatNumber("%.2f", follow.gain) + "x as fast): a stabiliser re-rendered it";
+    for (const SourceClaim& claim : claims) {
+      ClaimCheck check;
+      check.claim = claim.what;
+      check.effect = claim.effect;
+      check.status = claim.status;
+      check.claimed = claim.value;
+      check.difference = std::numeric_limits<double>::quiet_NaN();
+      check.verdict = "not determined: the image does not follow the gyro (it turns " +
+                      FormatNumber("%.2f", follow.gain) + "x as fast): a stabiliser re-rendered it";
+      result->claims.push_back(std::move(check));
     }
+  } else {
+    CheckHalves(claim_inputs, result);
+    // The source's claims, when the dataset came from `shutterlab import`.
+    result->claims = CheckClaims(claims, claim_inputs);
   }
   result->loop_s = SecondsSince(start);
 }

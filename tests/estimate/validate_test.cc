@@ -135,6 +135,7 @@ TEST(ValidateEndToEnd, RecoversTimeOffset) {
 // The same with the bottom quarter of every frame fixed to the camera (landing gear, a dashboard)
 // and a car driving across the ground at 15 m/s: the same tolerance, the region left out.
 TEST(ValidateEndToEnd, RecoversTimeOffsetWithClutter) {
+  if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   DatasetSpec spec;
   spec.injections = {"time_offset=0.004"};
