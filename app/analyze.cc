@@ -165,13 +165,13 @@ void Run(const AnalyzeCommand& command) {
 const CommandRegistration kRegistration(80, [](CLI::App& app) {
   auto* cmd = app.add_subcommand("analyze",
                                  "per-image rolling-shutter distortion from a flight log (ULog, "
-                                 "DataFlash, blackbox, gyro.csv, any CSV by --columns)");
+                                 "DataFlash, blackbox, GoPro MP4, gyro.csv, any CSV by --columns)");
   auto command = std::make_shared<AnalyzeCommand>();
   cmd->add_option("LOG", command->log_path, "flight or gyro log")
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--format", command->format,
-                  "auto, ulog, dataflash, blackbox, gyro.csv, gcsv, raw (columns: set by "
+                  "auto, ulog, dataflash, blackbox, gopro, gyro.csv, gcsv, raw (columns: set by "
                   "--columns)")
       ->capture_default_str();
   cmd->add_option("--log-index", command->log_index,
