@@ -1,22 +1,32 @@
 // `shutterlab analyze LOG`: per-image rolling-shutter distortion from a real flight log, with the
 // flight table for the camera's readout and a verdict (estimate/analyze.h).
+// `shutterlab analyze --photos DIR [LOG]`: the same for a folder of photos, read with their
+// metadata (render/photo_set.h, estimate/paper/photo_analysis.h).
 
 #include "estimate/paper/analyze.h"
 
 #include "app/command.h"
 #include "app/trace_options.h"
 #include "estimate/paper/flight.h"
+#include "estimate/paper/photo_analysis.h"
+#include "estimate/paper/photo_flight.h"
 #include "estimate/report/analysis_json.h"
 #include "estimate/report/analyze_report.h"
+#include "estimate/report/photo_json.h"
 #include "render/image_io.h"
 #include "render/lens_profile.h"
+#include "render/photo_set.h"
 #include "render/pictures.h"
 #include "sim/check.h"
+#include "sim/civil_time.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/logs/gyro_io.h"
+#include "sim/logs/trigger_file.h"
 #include "sim/sensor_pair.h"
 #include "sim/still_detect.h"
 #include "sim/units.h"
+
+#include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <iostream>
@@ -49,9 +59,12 @@ struct AnalyzeCommand {
   double noise_allowance_arcsec = 20.0;
   std::string out_dir;
   std::string scene_path;
+  std::string photos_dir;
+  std::string photo_utc_offset;
   bool json = false;
   bool altitude_given = false;
   bool readout_given = false;
+  bool focal_given = false;
 };
 
 RigModel RigFromFlags(const AnalyzeCommand& command) {
@@ -75,7 +88,38 @@ RigModel RigFromFlags(const AnalyzeCommand& command) {
   return rig;
 }
 
-void Run(const AnalyzeCommand& command) {
+// What the user gave that wins over the photos' own values: --camera's focal length and readout,
+// --readout, --focal-px and --altitude (the flags over the camera file).
+PhotoSetOptions PhotoOptionsFromFlags(const AnalyzeCommand& command) {
+  PhotoSetOptions options;
+  if (!command.camera_path.empty()) {
+    const RigModel rig = ReadRigModel(command.camera_path);
+    options.readout_s = rig.shutter.readout_s;
+    options.readout_origin = ReadoutOrigin::kCameraFile;
+    options.readout_text = "camera.json " + command.camera_path;
+    options.focal_px = 0.5 * (rig.camera.fx + rig.camera.fy);
+    options.focal_text = "camera.json " + command.camera_path;
+  }
+  if (command.readout_given) {
+    options.readout_s = ParseDurationS(command.readout);
+    options.readout_origin = ReadoutOrigin::kUser;
+    options.readout_text = "--readout " + command.readout;
+  }
+  if (command.focal_given) {
+    options.focal_px = command.focal_px;
+    options.focal_text = "--focal-px";
+  }
+  if (command.altitude_given) options.altitude_m = command.altitude_m;
+  if (!command.lens_profile_path.empty())
+    options.lens_profile = ReadLensProfile(command.lens_profile_path);
+  return options;
+}
+
+// analyze's options from the flags; the triggers come later (they need the log). *lens: the lens
+// profile's use, when --lens-profile is given (its lens, and its readout unless --readout was
+// typed).
+AnalyzeOptions AnalyzeOptionsFromFlags(const AnalyzeCommand& command,
+                                       std::optional<LensProfileUse>* lens) {
   AnalyzeOptions options;
   if (!command.camera_path.empty()) {
     options.rig = ReadRigModel(command.camera_path);
@@ -83,13 +127,11 @@ void Run(const AnalyzeCommand& command) {
   } else {
     options.rig = RigFromFlags(command);
   }
-  // The profile's lens, and its readout unless --readout was typed.
-  std::optional<LensProfileUse> lens;
-  if (!command.lens_profile_path.empty()) {
-    lens = ScaleLensProfile(ReadLensProfile(command.lens_profile_path), options.rig.camera.width,
-                            options.rig.camera.height);
-    ApplyLensProfile(&*lens, &options.rig, command.readout_given);
-    for (const std::string& note : lens->notes) std::cerr << "note: " << note << "\n";
+  if (lens && !command.lens_profile_path.empty()) {
+    *lens = ScaleLensProfile(ReadLensProfile(command.lens_profile_path), options.rig.camera.width,
+                             options.rig.camera.height);
+    ApplyLensProfile(&**lens, &options.rig, command.readout_given);
+    for (const std::string& note : (*lens)->notes) std::cerr << "note: " << note << "\n";
   }
   options.limits_m.clear();
   for (const std::string& text : command.limits) options.limits_m.push_back(ParseLengthM(text));
@@ -98,14 +140,43 @@ void Run(const AnalyzeCommand& command) {
   options.use_log_altitude = !command.altitude_given && command.camera_path.empty();
   if (!command.every.empty()) options.every_s = ParseDurationS(command.every);
   options.trigger_latency_s = ParseDurationS(command.latency);
+  // The report shades the flagged windows and draws their histograms from the flight series, and
+  // plots the Allan deviation.
+  options.flight_series = !command.out_dir.empty();
+  options.allan = !command.out_dir.empty();
+  return options;
+}
+
+FlightLogReadOptions ReadOptionsFromFlags(const AnalyzeCommand& command) {
   FlightLogReadOptions read;
   read.format = ParseLogFormat(command.format);
   read.log_index = command.log_index;
   read.raw.range_dps = command.range_dps;
   command.column_flags.Apply(&read);
   read.Check();
-  options.Check();  // before the (possibly long) read
-  if (!command.triggers_path.empty()) options.triggers = ReadTriggersCsv(command.triggers_path);
+  return read;
+}
+
+std::optional<TriggerFile> TriggersFromFlags(const AnalyzeCommand& command) {
+  if (command.triggers_path.empty()) return std::nullopt;
+  TriggerFile triggers = ReadTriggerFile(command.triggers_path);
+  PrintLogWarnings(command.triggers_path, triggers.warnings);
+  return triggers;
+}
+
+// What reading the trigger file lost goes with the log's warnings into the outputs (printed on
+// stderr already, when it was read), named by the file.
+void AddTriggerWarnings(const std::optional<TriggerFile>& triggers, const std::string& path,
+                        FlightLog* log) {
+  if (!triggers) return;
+  const std::string name = std::filesystem::path(path).filename().string();
+  for (LogWarning w : triggers->warnings) {
+    w.message = "trigger file " + name + ": " + w.message;
+    log->warnings.push_back(std::move(w));
+  }
+}
+
+AnalyzeReportOptions ReportFromFlags(const AnalyzeCommand& command) {
   SHUTTERLAB_CHECK(command.scene_path.empty() || !command.out_dir.empty())
       << "--scene is for the report: give --out DIR too";
   AnalyzeReportOptions report;
@@ -114,30 +185,128 @@ void Run(const AnalyzeCommand& command) {
     report.scene = ToRgb8(ReadImage(command.scene_path));
     report.scene_name = std::filesystem::path(command.scene_path).filename().string();
   }
-  // The report shades the flagged windows and draws their histograms from the flight series, and
-  // plots the Allan deviation.
-  options.flight_series = !command.out_dir.empty();
-  options.allan = !command.out_dir.empty();
+  return report;
+}
+
+// The log, and with --second the pair fused into one trace on the first log's clock, weighed over
+// a still segment when the first sensor has one; the camera events stay the first log's.
+FlightLog ReadLog(const AnalyzeCommand& command, const FlightLogReadOptions& read,
+                  std::optional<SensorPair>* pair) {
   FlightLog log = ReadFlightLog(command.log_path, read);
   PrintLogWarnings(command.log_path, log.warnings);
-  // --second: the pair fused into one trace on the first log's clock, weighed over a still
-  // segment when the first sensor has one; the camera events stay the first log's.
+  if (command.second_path.empty()) return log;
+  const FlightLog second = ReadFlightLog(command.second_path, read);
+  PrintLogWarnings(command.second_path, second.warnings);
+  SensorPairOptions pair_options;
+  try {
+    pair_options.still = DetectStillSegment(log.gyro).segment;
+  } catch (const std::invalid_argument&) {
+  }
+  try {
+    *pair = FuseSensorPair(log.gyro, second.gyro, pair_options);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(command.log_path + " + " + command.second_path + ": " + e.what());
+  }
+  log.gyro = (*pair)->fused;
+  log.warnings.insert(log.warnings.end(), second.warnings.begin(), second.warnings.end());
+  return log;
+}
+
+// --photos DIR [LOG]: the photos alone (translation from their speed), or placed on the log.
+void RunPhotos(const AnalyzeCommand& command) {
+  PhotoSetOptions read = PhotoOptionsFromFlags(command);
+  read.Check();
+  PhotoFlightOptions options;
+  options.analyze = AnalyzeOptionsFromFlags(command, nullptr);
+  options.lens_profile = read.lens_profile;
+  options.photos.limits_m = options.analyze.limits_m;
+  options.rig_given = !command.camera_path.empty();
+  options.altitude_given = command.altitude_given;
+  options.readout_given = command.readout_given;
+  if (!command.photo_utc_offset.empty()) {
+    options.clock.camera_utc_offset_s = ParseUtcOffset(command.photo_utc_offset);
+    SHUTTERLAB_CHECK(options.clock.camera_utc_offset_s)
+        << "--photo-utc-offset must be +HH:MM or -HH:MM (got '" << command.photo_utc_offset << "')";
+  }
+  SHUTTERLAB_CHECK(command.every.empty())
+      << "--every is for a log alone: the photos are the triggers";
+  options.Check();
+  const std::optional<FlightLogReadOptions> log_read =
+      command.log_path.empty() ? std::nullopt
+                               : std::optional<FlightLogReadOptions>(ReadOptionsFromFlags(command));
+  const std::optional<TriggerFile> triggers = TriggersFromFlags(command);
+  SHUTTERLAB_CHECK(!triggers || log_read) << "--triggers places photos on a LOG: give the LOG too";
+  AnalyzeReportOptions report = ReportFromFlags(command);
+  PhotoSet set;
+  {
+    Progress progress("photos", 1000);
+    read.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
+    set = ReadPhotoSet(command.photos_dir, read);
+  }
+  if (!log_read) {
+    const PhotoAnalysis analysis = AnalyzePhotos(set, options.photos);
+    if (!command.out_dir.empty()) WritePhotoOutputs(command.out_dir, set, analysis);
+    if (command.json) {
+      std::cout << PhotoAnalysisToJson(set, analysis).dump(2) << "\n";
+    } else {
+      std::cout << PhotoAnalysisReport(set, analysis);
+    }
+    return;
+  }
   std::optional<SensorPair> pair;
-  if (!command.second_path.empty()) {
-    const FlightLog second = ReadFlightLog(command.second_path, read);
-    PrintLogWarnings(command.second_path, second.warnings);
-    SensorPairOptions pair_options;
-    try {
-      pair_options.still = DetectStillSegment(log.gyro).segment;
-    } catch (const std::invalid_argument&) {
-    }
-    try {
-      pair = FuseSensorPair(log.gyro, second.gyro, pair_options);
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(command.log_path + " + " + command.second_path + ": " + e.what());
-    }
-    log.gyro = pair->fused;
-    log.warnings.insert(log.warnings.end(), second.warnings.begin(), second.warnings.end());
+  FlightLog log = ReadLog(command, *log_read, &pair);
+  AddTriggerWarnings(triggers, command.triggers_path, &log);
+  Progress progress("analyze", 1000);
+  options.analyze.progress = [&progress](double f) {
+    progress.Update(static_cast<size_t>(f * 1000));
+  };
+  PhotoFlightResult result;
+  try {
+    result = AnalyzePhotoFlight(set, log, triggers ? &*triggers : nullptr, options);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(command.log_path + ": " + e.what());
+  }
+  if (result.lens) {
+    for (const std::string& note : result.lens->notes) std::cerr << "note: " << note << "\n";
+  }
+  if (!command.out_dir.empty()) {
+    WriteAnalyzeOutputs(command.out_dir, result.log);
+    report.camera_source = result.camera_source;
+    AnalyzeReportPage(result.analyzed, result.log, report).Write(command.out_dir + "/report.html");
+    WritePhotoOutputs(command.out_dir, set, result.photos);  // its exclude.txt replaces analyze's
+  }
+  if (command.json) {
+    nlohmann::json json = AnalyzeToJson(result.log);
+    if (pair) json["pair"] = SensorPairToJson(*pair, command.second_path);
+    if (result.lens) json["lens_profile"] = LensProfileUseJson(*result.lens);
+    json["photos"] = PhotoAnalysisToJson(set, result.photos);
+    json["photos"]["camera_source"] = result.camera_source;
+    std::cout << json.dump(2) << "\n";
+  } else {
+    if (pair) std::cout << SensorPairText(*pair, command.log_path, command.second_path) << "\n";
+    std::cout << AnalyzeReport(result.log) << "\ncamera analysed: " << result.camera_source
+              << "\n\n"
+              << PhotoAnalysisReport(set, result.photos);
+  }
+}
+
+void Run(const AnalyzeCommand& command) {
+  if (!command.photos_dir.empty()) return RunPhotos(command);
+  SHUTTERLAB_CHECK(!command.log_path.empty()) << "give a LOG, or --photos DIR";
+  std::optional<LensProfileUse> lens;
+  AnalyzeOptions options = AnalyzeOptionsFromFlags(command, &lens);
+  const FlightLogReadOptions read = ReadOptionsFromFlags(command);
+  options.Check();  // before the (possibly long) read
+  const std::optional<TriggerFile> triggers = TriggersFromFlags(command);
+  const AnalyzeReportOptions report = ReportFromFlags(command);
+  std::optional<SensorPair> pair;
+  FlightLog log = ReadLog(command, read, &pair);
+  AddTriggerWarnings(triggers, command.triggers_path, &log);
+  if (triggers) {
+    options.triggers = TriggersOnLogClock(*triggers, log, command.triggers_path);
+    options.triggers_source = "trigger file " +
+                              std::filesystem::path(command.triggers_path).filename().string() +
+                              ": " + triggers->source;
   }
   Progress progress("analyze", 1000);
   options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
@@ -167,9 +336,16 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
                                  "per-image rolling-shutter distortion from a flight log (ULog, "
                                  "DataFlash, blackbox, GoPro MP4, gyro.csv, any CSV by --columns)");
   auto command = std::make_shared<AnalyzeCommand>();
-  cmd->add_option("LOG", command->log_path, "flight or gyro log")
-      ->required()
+  cmd->add_option("LOG", command->log_path, "flight or gyro log (optional with --photos)")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--photos", command->photos_dir,
+                  "a folder of photos (or one photo): per-photo distortion from their metadata; "
+                  "without LOG the translation part from the recorded flight speed, with LOG "
+                  "each photo placed on the log's clock (--triggers, the log's camera events, or "
+                  "the capture times through the log's GPS time)");
+  cmd->add_option("--photo-utc-offset", command->photo_utc_offset,
+                  "the photos' camera clock zone, e.g. +08:00 (else EXIF OffsetTimeOriginal, the "
+                  "offset fitted to the log's events, or the one zone that fits the log)");
   cmd->add_option("--format", command->format,
                   "auto, ulog, dataflash, blackbox, gopro, gyro.csv, gcsv, raw (columns: set by "
                   "--columns)")
@@ -184,22 +360,29 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--lens-profile", command->lens_profile_path,
                   "Gyroflow lens profile (JSON): its lens, scaled to the image size, and its "
-                  "readout where it states one (unless --readout is given)")
+                  "readout where it states one (unless --readout is given); with --photos also "
+                  "each photo's focal length and readout")
       ->check(CLI::ExistingFile);
   auto* readout = cmd->add_option("--readout", command->readout,
-                                  "rolling-shutter readout without --camera (s, ms, us)")
+                                  "rolling-shutter readout without --camera (s, ms, us); with "
+                                  "--photos it overrides the readout table")
                       ->capture_default_str();
   auto* altitude =
       cmd->add_option("--altitude", command->altitude_m,
                       "height above flat ground, m (overrides camera.json; default: the log's "
                       "altitude above ground when it has one, else 50)")
           ->capture_default_str();
-  cmd->add_option("--focal-px", command->focal_px, "focal length without --camera, pixels")
-      ->capture_default_str();
+  auto* focal = cmd->add_option("--focal-px", command->focal_px,
+                                "focal length without --camera, pixels (with --photos: overrides "
+                                "the photos' own)")
+                    ->capture_default_str();
   cmd->add_option("--size", command->size, "image size WxH without --camera")
       ->capture_default_str();
   cmd->add_option("--triggers", command->triggers_path,
-                  "CSV 'image,t' or 't': trigger times in seconds on the log clock")
+                  "when the photos were taken, by content: DJI/Autel .MRK (GPS time, placed "
+                  "through the log's GPS fixes), a log's camera events (ULog, DataFlash CAM/TRIG), "
+                  "or CSV 'image,t' / 't' (s on the log clock; a header may name t_ms, t_us, "
+                  "timestamp, utc_usec or utc instead)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--second", command->second_path,
                   "a second sensor's log on the same clock (record --device twice): fused with the "
@@ -217,14 +400,16 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
                   "flight table: added to each threshold for the gyro's own noise, arcsec")
       ->capture_default_str();
   cmd->add_option("--out", command->out_dir,
-                  "write DIR/images.csv, DIR/exclude.txt and DIR/report.html");
+                  "write DIR/images.csv, DIR/exclude.txt and DIR/report.html (with --photos: "
+                  "DIR/photos.csv, exclude.txt, image_list.txt, colmap_image_list.txt)");
   cmd->add_option("--scene", command->scene_path,
                   "nadir image for the report's worst-image pictures (with --out)")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--json", command->json, "print JSON (docs/FORMATS.md `analyze`)");
-  return std::function<void()>([command, altitude, readout] {
+  return std::function<void()>([command, altitude, readout, focal] {
     command->altitude_given = altitude->count() > 0;
     command->readout_given = readout->count() > 0;
+    command->focal_given = focal->count() > 0;
     Run(*command);
   });
 });

@@ -32,6 +32,10 @@ const CommandRegistration kRegistration(55, [](CLI::App& app) {
   cmd->add_option(
       "--start-frame", options->start_frame,
       "first frame id to import (GoPro: video frame index from 0; phone: frame number)");
+  cmd->add_option("--mask", options->mask_path,
+                  "MASK.png of the frames' size: white = may be measured, black = never (a "
+                  "dashboard, landing gear, burned-in text); becomes the dataset's mask.png")
+      ->check(CLI::ExistingFile);
   return std::function<void()>([options] {
     options->Check();
     std::unique_ptr<Progress> bar;

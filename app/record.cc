@@ -6,6 +6,7 @@
 #include "estimate/paper/analyze.h"
 #include "estimate/report/analysis_json.h"
 #include "sim/check.h"
+#include "sim/logs/trigger_file.h"
 #include "sim/record/device_spec.h"
 #include "sim/record/gpio_trigger.h"
 #include "sim/record/recorder.h"
@@ -100,7 +101,11 @@ std::unique_ptr<TriggerSource> OpenTrigger(const RecordCommand& command, Clock* 
     } else if (text.rfind("width=", 0) == 0) {
       width_ns = SecondsToNs(ParseDurationS(text.substr(6)));
     } else {
-      for (const ImageTrigger& trigger : ReadTriggersCsv(text)) pulses.push_back(trigger.t_ns);
+      const TriggerFile file = ReadTriggerFile(text);
+      SHUTTERLAB_CHECK(file.clock == TriggerClock::kLog)
+          << "--trigger emulate:" << text << ": the times must be on the trace's clock (they are "
+          << TriggerClockName(file.clock) << ")";
+      for (const TriggerEvent& event : file.events) pulses.push_back(event.t_ns);
     }
   }
   // Pulse times count from the emulated sensor's first sample (the trace's start), so that they

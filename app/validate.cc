@@ -28,6 +28,8 @@ struct ValidateCommand {
   std::string out_dir;
   std::vector<std::string> candidates;
   int grid_step_px = MeasureOptions{}.grid_step_px;
+  std::string mask_path;
+  bool no_camera_fixed = false, no_consensus = false;
   bool json = false;
 };
 
@@ -39,6 +41,9 @@ void Run(const ValidateCommand& command) {
     options.loop.candidates.push_back(RequireEffect(name, "candidates"));
   }
   options.measure.grid_step_px = command.grid_step_px;
+  options.mask_path = command.mask_path;
+  options.screen.camera_fixed = !command.no_camera_fixed;
+  options.screen.consensus = !command.no_consensus;
   options.lens_profile_path = command.lens_profile_path;
   options.keep_residuals = !command.out_dir.empty();
   options.Check();
@@ -93,6 +98,15 @@ const CommandRegistration kRegistration(70, [](CLI::App& app) {
       ->delimiter(',');
   cmd->add_option("--grid-step", command->grid_step_px, "spacing of the measured points, px")
       ->capture_default_str();
+  cmd->add_option("--mask", command->mask_path,
+                  "MASK.png: measure only where it is white (non-zero), beside camera.json's own "
+                  "mask; black: a dashboard, landing gear, burned-in text")
+      ->check(CLI::ExistingFile);
+  cmd->add_flag("--no-camera-fixed", command->no_camera_fixed,
+                "keep the points of regions that move with the camera (found by default)");
+  cmd->add_flag("--no-consensus", command->no_consensus,
+                "keep the points that no single camera motion of their frame explains (left out "
+                "by default)");
   cmd->add_flag("--json", command->json, "print the report JSON instead of the table");
   return std::function<void()>([command] { Run(*command); });
 });

@@ -69,8 +69,10 @@ void RigModel::Check() const {
   SHUTTERLAB_CHECK(std::isfinite(camera.cx) && std::isfinite(camera.cy))
       << "principal point is not finite";
   SHUTTERLAB_CHECK(DistortionFinite(camera.distortion)) << "distortion is not finite";
-  SHUTTERLAB_CHECK(shutter.readout_s > 0 && shutter.readout_s < 10)
-      << "readout_s=" << shutter.readout_s << " must be positive (and below 10 s)";
+  // 0 is a global shutter: every row at t_first_row (what `correct` declares for its output).
+  SHUTTERLAB_CHECK(shutter.readout_s >= 0 && shutter.readout_s < 10)
+      << "readout_s=" << shutter.readout_s
+      << " must be 0 (a global shutter) or positive (below 10 s)";
   SHUTTERLAB_CHECK(IsRowReadout(shutter.direction))
       << "readout direction " << ReadoutDirectionName(shutter.direction)
       << " is not top_to_bottom or bottom_to_top";
@@ -140,27 +142,13 @@ json DistortionJson(const LensDistortion& lens) {
   return out;
 }
 
-RigModel ReadRigModel(const std::string& path) {
-  const std::string text = ReadFileToString(path);
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    // nlohmann reports a byte offset; turn it into a line number for the message.
-    const size_t offset = std::min<size_t>(e.byte, text.size());
-    const long line = 1 + static_cast<long>(std::count(text.begin(), text.begin() + offset, '\n'));
-    throw IoError(IoMessage(path, line, "invalid JSON"));
-  } catch (const json::exception& e) {
-    // A number too large for a double ("10e900") is nlohmann's out_of_range, not a parse_error.
-    // Found by fuzz/camera_json_fuzz.
-    throw IoError(IoMessage(path, 0, std::string("invalid JSON: ") + e.what()));
-  }
+RigModel RigModelFromJson(const json& j) {
   RigModel rig;
+  if (!j.is_object()) throw std::invalid_argument("top level is not an object");
+  if (j.contains("format") && j["format"] != "rig/1") {
+    throw std::invalid_argument("format is " + j["format"].dump() + ", expected \"rig/1\"");
+  }
   try {
-    if (!j.is_object()) throw std::invalid_argument("top level is not an object");
-    if (j.contains("format") && j["format"] != "rig/1") {
-      throw std::invalid_argument("format is " + j["format"].dump() + ", expected \"rig/1\"");
-    }
     const json& image = j.at("image");
     rig.camera.width = static_cast<int>(Number(image, "width", "image"));
     rig.camera.height = static_cast<int>(Number(image, "height", "image"));
@@ -204,17 +192,42 @@ RigModel ReadRigModel(const std::string& path) {
         rig.velocity_mps[i] = v[i].get<double>();
       }
     }
-    rig.Check();
+    if (j.contains("mask")) {
+      if (!j["mask"].is_string() || j["mask"].get<std::string>().empty()) {
+        throw std::invalid_argument("mask is not a file name");
+      }
+      rig.mask = j["mask"].get<std::string>();
+    }
   } catch (const json::exception& e) {
-    throw IoError(IoMessage(path, 0, std::string("malformed camera: ") + e.what()));
-  } catch (const std::invalid_argument& e) {
-    throw IoError(IoMessage(path, 0, e.what()));
+    throw std::invalid_argument(std::string("malformed camera: ") + e.what());
   }
+  rig.Check();
   return rig;
 }
 
-void WriteRigModel(const std::string& path, const RigModel& rig) {
-  rig.Check();
+RigModel ReadRigModel(const std::string& path) {
+  const std::string text = ReadFileToString(path);
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    // nlohmann reports a byte offset; turn it into a line number for the message.
+    const size_t offset = std::min<size_t>(e.byte, text.size());
+    const long line = 1 + static_cast<long>(std::count(text.begin(), text.begin() + offset, '\n'));
+    throw IoError(IoMessage(path, line, "invalid JSON"));
+  } catch (const json::exception& e) {
+    // A number too large for a double ("10e900") is nlohmann's out_of_range, not a parse_error.
+    // Found by fuzz/camera_json_fuzz.
+    throw IoError(IoMessage(path, 0, std::string("invalid JSON: ") + e.what()));
+  }
+  try {
+    return RigModelFromJson(j);
+  } catch (const std::invalid_argument& e) {
+    throw IoError(IoMessage(path, 0, e.what()));
+  }
+}
+
+json RigModelToJson(const RigModel& rig) {
   json j;
   j["format"] = "rig/1";
   j["image"] = {{"width", rig.camera.width}, {"height", rig.camera.height}};
@@ -227,7 +240,13 @@ void WriteRigModel(const std::string& path, const RigModel& rig) {
   j["time_offset_s"] = rig.time_offset_s;
   j["scene"] = {{"altitude_m", rig.altitude_m}};
   j["velocity_mps"] = {rig.velocity_mps.x(), rig.velocity_mps.y(), rig.velocity_mps.z()};
-  WriteFileAtomically(path, j.dump(2) + "\n");
+  if (!rig.mask.empty()) j["mask"] = rig.mask;
+  return j;
+}
+
+void WriteRigModel(const std::string& path, const RigModel& rig) {
+  rig.Check();
+  WriteFileAtomically(path, RigModelToJson(rig).dump(2) + "\n");
 }
 
 json MatrixJson(const Eigen::Matrix3d& m) {

@@ -40,8 +40,8 @@ struct PinholeCamera {
 
 // Rolling-shutter timing. The only place that knows how a row maps to a time.
 struct RollingShutter {
-  double readout_s =
-      0.0;  // s; row v is read at v * readout_s / height after row 0 (docs/FORMATS.md)
+  // s; row v is read at v * readout_s / height after row 0 (docs/FORMATS.md); 0: a global shutter
+  double readout_s = 0.0;
   ReadoutDirection direction = ReadoutDirection::kTopToBottom;  // a row order (IsRowReadout)
   // Seconds after t_first_row at which image row `row` of an image `height` rows tall is captured.
   double RowTimeOffsetS(double row, int height) const;
@@ -55,6 +55,10 @@ struct RigModel {
   double time_offset_s = 0.0;  // gyro clock = camera clock + time_offset_s
   double altitude_m = 50.0;    // ground plane z_W = altitude_m
   Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();  // world frame, constant within a frame
+  // docs/FORMATS.md v1.1 `mask`: a single-channel image of the camera's size, relative to the
+  // dataset folder; non-zero = may be used. Empty: every pixel may be used. (Read by
+  // render/rig_dataset.h ReadRigDataset.)
+  std::string mask;
 
   // Throws std::invalid_argument naming the first nonsensical field.
   void Check() const;
@@ -64,6 +68,10 @@ struct RigModel {
 RigModel ReadRigModel(const std::string& path);
 // Writes camera.json whole or not at all.
 void WriteRigModel(const std::string& path, const RigModel& rig);
+// camera.json's object, as ReadRigModel reads it (throws std::invalid_argument "field: problem")
+// and WriteRigModel writes it (every key).
+RigModel RigModelFromJson(const nlohmann::json& camera);
+nlohmann::json RigModelToJson(const RigModel& rig);
 // camera.json's "distortion" object (docs/FORMATS.md): "model" "brown" (the default) with k1 k2 p1
 // p2 k3, or "fisheye" with k1 k2 k3 k4, each coefficient 0 when absent. Throws
 // std::invalid_argument naming the first problem (an unknown model or coefficient, a non-number).

@@ -194,6 +194,41 @@ Injection ParseInjection(const std::string& name_equals_value) {
   return Injection{effect, InjectionValue(effect, value, "--inject " + Spec(effect).name)};
 }
 
+json TrueModelToJson(const TrueModel& model) {
+  return {{"camera", RigModelToJson(model.rig)},
+          {"gyro_scale", EffectValueToJson(model.gyro_scale)},
+          {"gyro_bias_rad_s", EffectValueToJson(model.gyro_bias_rad_s)},
+          {"clock_rate_ppm", model.clock_rate_ppm}};
+}
+
+TrueModel TrueModelFromJson(const json& j, const std::string& where) {
+  if (!j.is_object() || !j.contains("camera")) {
+    throw std::invalid_argument(where + ": expected an object with \"camera\"");
+  }
+  TrueModel model;
+  try {
+    model.rig = RigModelFromJson(j.at("camera"));
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(where + ".camera: " + e.what());
+  }
+  const auto vector = [&](const char* key, Eigen::Vector3d fallback) {
+    if (!j.contains(key)) return fallback;
+    const std::vector<double> v = Numbers(j.at(key), 3, where + "." + key);
+    return Eigen::Vector3d(v[0], v[1], v[2]);
+  };
+  model.gyro_scale = vector("gyro_scale", Eigen::Vector3d::Ones());
+  model.gyro_bias_rad_s = vector("gyro_bias_rad_s", Eigen::Vector3d::Zero());
+  if (j.contains("clock_rate_ppm")) {
+    model.clock_rate_ppm = Scalar(j.at("clock_rate_ppm"), where + ".clock_rate_ppm");
+  }
+  try {
+    model.Check();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(where + ": " + e.what());
+  }
+  return model;
+}
+
 Injection ApplyInjection(const std::string& name_equals_value, TrueModel* model) {
   Injection injection = ParseInjection(name_equals_value);
   if (injection.effect == Effect::kLensDistortion) {

@@ -34,6 +34,12 @@ EffectValue EffectValueFromJson(Effect effect, const nlohmann::json& json,
 // std::invalid_argument "--inject ..." for a missing '=', an unknown name or a bad value.
 Injection ParseInjection(const std::string& name_equals_value);
 
+// A whole true model: {"camera": camera.json's object, "gyro_scale": [3], "gyro_bias_rad_s": [3],
+// "clock_rate_ppm": x} (the validation report's "fitted_model"). FromJson throws
+// std::invalid_argument "<where>: problem".
+nlohmann::json TrueModelToJson(const TrueModel& model);
+TrueModel TrueModelFromJson(const nlohmann::json& json, const std::string& where);
+
 // ParseInjection, then the typed ApplyInjection (render/effects.h): the returned injection holds
 // the value as truth.json records it. A list of lens coefficients is read in the model's own lens
 // model (a fisheye's: k1[,k2[,k3[,k4]]]); a lens object of the other model is refused.

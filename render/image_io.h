@@ -1,6 +1,7 @@
 #pragma once
-// Image files through OpenImageIO. This unit is the only one that includes OpenImageIO (it links
-// PRIVATE to shutterlab_render), so the rest of the project sees plain cv::Mat.
+// Image files through OpenImageIO, their metadata through exiv2. This unit is the only one that
+// includes either (both link PRIVATE to shutterlab_render), so the rest of the project sees plain
+// cv::Mat.
 //
 // Channel order is the file's (R, G, B), not OpenCV's BGR: images are read and written here only,
 // so the order never matters to the geometry, and a grey image stays one channel.
@@ -8,7 +9,9 @@
 
 #include <opencv2/core.hpp>
 
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace shutterlab {
@@ -26,5 +29,40 @@ void WriteImage(const std::string& path, const cv::Mat& image,
 
 // Reads a float image (e.g. an EXR displacement field) as CV_32FC(n) and returns its channel names.
 cv::Mat ReadFloatImage(const std::string& path, std::vector<std::string>* channel_names = nullptr);
+
+// How an image file stores its pixels, so that another image can be written alike.
+struct ImageFileInfo {
+  std::string format;  // OpenImageIO's format name: "jpeg", "png", "tiff", "openexr", ...
+  int width = 0, height = 0, channels = 0;
+  int bits_per_channel = 8;  // as stored: 8, 16 (integer or half float), 32 (float)
+  bool floating = false;     // float or half samples
+  std::string compression;   // OpenImageIO's "Compression" ("lzw", "zip", "piz", ...), "" if none
+  // JPEG: the quality of the IJG scale that gives the file's luminance quantisation table (the
+  // estimate ImageMagick makes; exact for files written by libjpeg at that quality), and the chroma
+  // subsampling ("4:2:0", ...).
+  std::optional<int> jpeg_quality;
+  std::string jpeg_subsampling;
+};
+// Throws IoError("PATH: problem") when the file cannot be opened as an image.
+ImageFileInfo ReadImageFileInfo(const std::string& path);
+
+// Writes `image` (its depth as ReadImage gives it for `like`) into `path` as `like` is stored: the
+// same bits per channel (half floats again as half), JPEG quality and subsampling, compression; the
+// format follows path's extension. Then copies the EXIF, IPTC and XMP metadata of the file at
+// like.path (exiv2; an EXIF thumbnail is carried as it is) and sets the XMP properties in `xmp`
+// (keys "Xmp.shutterlab.Name", namespace https://shutterlab.invalid/ns/1.0/). Whole or not at all.
+// Returns what could not be carried, one line each (a format without a metadata container: EXR).
+struct ImageLike {
+  std::string path;  // the file whose metadata is copied
+  ImageFileInfo info;
+};
+std::vector<std::string> WriteImageLike(
+    const std::string& path, const cv::Mat& image, const ImageLike& like,
+    const std::vector<std::pair<std::string, std::string>>& xmp = {});
+
+// The EXIF, IPTC and XMP metadata of an image file as (exiv2 key, value text) pairs, e.g.
+// ("Exif.Image.Make", "DJI"), ("Xmp.drone-dji.RelativeAltitude", "+117.90"); empty for a format
+// exiv2 does not read. Throws IoError for a file that is not there.
+std::vector<std::pair<std::string, std::string>> ReadImageMetadata(const std::string& path);
 
 }  // namespace shutterlab

@@ -134,6 +134,9 @@ std::string ImportJson(const ImportRecord& record) {
   r["claims"] = ClaimsJson(record.claims);
   r["warnings"] = WarningsToJson(record.warnings);
   if (record.lens_profile) r["lens_profile"] = LensProfileUseJson(*record.lens_profile);
+  if (!record.mask_file.empty()) {
+    r["mask"] = {{"file", record.mask_file}, {"source", record.mask_source}};
+  }
   if (const auto* gopro = std::get_if<GoproImportDetails>(&record.details)) AddGopro(*gopro, &r);
   if (const auto* phone = std::get_if<PhoneImportDetails>(&record.details)) AddPhone(*phone, &r);
   return r.dump(2) + "\n";

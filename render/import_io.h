@@ -99,6 +99,9 @@ struct ImportRecord {
   std::vector<LogWarning> warnings;
   std::optional<LensProfileUse> lens_profile;  // `--lens-profile` ("lens_profile" when given)
   std::variant<GoproImportDetails, PhoneImportDetails> details;  // also gives source.kind
+  // import --mask: the mask file the dataset's camera.json names (docs/FORMATS.md `mask`) and the
+  // user's file it was made from; empty when none was given.
+  std::string mask_file, mask_source;
 };
 
 // A claim's value as import.json holds it, compact ("0.015", "[[0.0,-1.0,0.0],...]").

@@ -27,6 +27,7 @@ void RenderOptions::Check() const {
   SHUTTERLAB_CHECK(!gyro_path.empty()) << "--gyro is required";
   SHUTTERLAB_CHECK(!frames_path.empty()) << "--frames is required";
   SHUTTERLAB_CHECK(!out_dir.empty()) << "--out is required";
+  clutter.Check();
 }
 
 double OutsideSceneFraction(const FrameGeometry& geometry, cv::Size scene_size) {
@@ -115,6 +116,9 @@ struct RenderContext {
   double f_px;  // the declared camera's
   const std::vector<FrameEntry>& times;
   const std::vector<FrameMotion>& motions;
+  const RollingShutter& shutter;  // the true one: the moving patch's row times
+  const std::optional<CameraFixedPatch>& camera_fixed;
+  const std::optional<MovingPatch>& moving;
 };
 
 // What the frames add to as they are written.
@@ -133,6 +137,30 @@ struct FrameTruth {
   std::vector<std::string> labels;
 };
 
+// Each row's time on the moving patch's clock (render_dataset.h): the rolling-shutter rows of frame
+// i, or with `reference` every row at the time of row 0.
+std::vector<double> PatchRowTimes(const RenderContext& ctx, size_t i, bool reference) {
+  const int height = ctx.camera.height;
+  const double row0_s = ctx.shutter.RowTimeOffsetS(0, height);
+  const double origin_s =
+      ctx.options.video ? (ctx.times[i].t_first_row_ns - ctx.times.front().t_first_row_ns) * 1e-9
+                        : -row0_s;
+  std::vector<double> t_s(height);
+  for (int v = 0; v < height; ++v) {
+    t_s[v] = origin_s + (reference ? row0_s : ctx.shutter.RowTimeOffsetS(v, height));
+  }
+  return t_s;
+}
+
+// The clutter over a rendered frame (and its truth field, when given).
+void PaintClutter(const RenderContext& ctx, size_t i, const FrameGeometry& geometry, bool reference,
+                  cv::Mat* image, cv::Mat* truth) {
+  if (ctx.moving) {
+    PaintMovingPatch(*ctx.moving, geometry, PatchRowTimes(ctx, i, reference), image, truth);
+  }
+  if (ctx.camera_fixed) PaintCameraFixed(*ctx.camera_fixed, image, truth);
+}
+
 // The truth field and the pictures beside it: against the reference, or (video) against the
 // previous frame, which the first frame of a video does not have.
 FrameTruth TruthField(const RenderContext& ctx, size_t i, const FrameGeometry& geometry,
@@ -144,9 +172,10 @@ FrameTruth TruthField(const RenderContext& ctx, size_t i, const FrameGeometry& g
     const FrameGeometry reference(ctx.camera, ctx.altitude_m, ctx.motions[i].Reference(),
                                   ctx.scene.size());
     RenderFrame(ctx.scene, reference, ctx.options.interpolation, &state->ref);
+    PaintClutter(ctx, i, reference, /*reference=*/true, &state->ref, nullptr);
     entry->ref = "images/" + name + "_ref.png";
     WriteImage((ctx.out / entry->ref).string(), state->ref);
-    truth.field = own_field;
+    truth.field = ctx.options.clutter.any() ? own_field.clone() : own_field;
     truth.panels = {state->ref, state->rs};
     truth.labels = {"reference", "rolling shutter"};
   } else if (i > 0) {
@@ -197,10 +226,12 @@ void WriteFrame(const RenderContext& ctx, size_t i, RenderSummary* summary, Rend
 
   FrameEntry entry = ctx.times[i];
   entry.image = "images/" + name + "_rs.png";
-  WriteImage((ctx.out / entry.image).string(), state->rs);
   nlohmann::json frame_json = {
       {"frame", rendered.frame}, {"D_px", rendered.d_px}, {"D_m", rendered.d_m}};
+  // The truth before the clutter: a video's previous frame is read clean from the scene.
   FrameTruth truth = TruthField(ctx, i, geometry, own_field, &entry, &frame_json, state);
+  PaintClutter(ctx, i, geometry, /*reference=*/false, &state->rs, &truth.field);
+  WriteImage((ctx.out / entry.image).string(), state->rs);
   state->entries.push_back(entry);
   state->frames_json.push_back(frame_json);
   if (!truth.field.empty()) {
@@ -237,6 +268,22 @@ RenderSummary RenderDataset(const RenderOptions& options,
   const std::filesystem::path out(options.out_dir);
   CreateFolder(out / "images");
   CreateFolder(out / "truth");
+  const ClutterOptions& clutter = options.clutter;
+  const cv::Size frame_size(truth.rig.camera.width, truth.rig.camera.height);
+  std::optional<CameraFixedPatch> camera_fixed;
+  if (clutter.camera_fixed_share > 0) {
+    camera_fixed = MakeCameraFixedPatch(frame_size, scene.type(), clutter.camera_fixed_share);
+  }
+  std::optional<MovingPatch> moving;
+  if (clutter.moving_patch_mps > 0) {
+    const Eigen::Vector2d centre((scene.cols - 1) / 2.0,
+                                 (scene.rows - 1) / 2.0 - 0.15 * frame_size.height);
+    const double t_mid_s =
+        options.video ? 0.5 * (times.back().t_first_row_ns - times.front().t_first_row_ns) * 1e-9
+                      : 0.0;
+    moving = MakeMovingPatch(truth.rig.camera, truth.rig.altitude_m, clutter.moving_patch_mps,
+                             centre, t_mid_s, scene.type());
+  }
   const RenderContext ctx{options,
                           out,
                           scene,
@@ -244,7 +291,10 @@ RenderSummary RenderDataset(const RenderOptions& options,
                           truth.rig.altitude_m,
                           (declared.camera.fx + declared.camera.fy) / 2,
                           times,
-                          motions};
+                          motions,
+                          truth.rig.shutter,
+                          camera_fixed,
+                          moving};
   RenderState state;
   for (size_t i = 0; i < times.size(); ++i) {
     WriteFrame(ctx, i, &summary, &state);
@@ -260,6 +310,13 @@ RenderSummary RenderDataset(const RenderOptions& options,
   nlohmann::json truth_json = {{"injected", InjectedJson(summary.injected)},
                                {"frames", state.frames_json}};
   if (options.video) truth_json["video"] = true;
+  if (camera_fixed) truth_json["camera_fixed_rows_from"] = camera_fixed->rows_from;
+  if (moving) {
+    truth_json["moving_patch"] = {{"speed_mps", clutter.moving_patch_mps},
+                                  {"side_px", moving->side_px},
+                                  {"start_px", {moving->start_px.x(), moving->start_px.y()}},
+                                  {"velocity_px_s", {moving->velocity_px_s.x(), 0.0}}};
+  }
   WriteFileAtomically((out / "truth.json").string(), truth_json.dump(2) + "\n");
   return summary;
 }

@@ -19,7 +19,12 @@
 // frame of frames.csv (VideoDisplacementField). truth.json marks "video": true and names each
 // frame's "previous"; D_px / D_m stay each frame's own distortion against a global shutter at its
 // row 0.
+// With clutter (render/clutter.h), the moving patch's clock is the camera clock from the first
+// frame's first row (video) or from each frame's row 0 (stills, so that the reference sees it where
+// row 0 does), and it crosses the scene point above the scene's centre (15 % of the frame height)
+// in the middle of the clip (video) or at each frame's row 0 (stills).
 
+#include "render/clutter.h"
 #include "render/effects.h"
 #include "render/lens_profile.h"
 #include "render/rs_warp.h"
@@ -47,6 +52,10 @@ struct RenderOptions {
   Interpolation interpolation = Interpolation::kBilinear;
   bool pictures = true;  // heatmaps, side-by-side panels and the overview
   bool video = false;    // a video dataset (above); frame times must increase
+  // Known-answer clutter (render/clutter.h): a camera-fixed patch over the bottom rows of every
+  // frame and reference (truth 0 there), a patch driving over the ground (truth NaN where seen).
+  // truth.json records both.
+  ClutterOptions clutter;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };

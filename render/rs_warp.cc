@@ -1,9 +1,9 @@
 #include "render/rs_warp.h"
 
+#include "render/warp_kernel.h"
+
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <cstring>
 #include <limits>
 
 #if defined(__SSE2__)
@@ -15,18 +15,6 @@
 #include <opencv2/imgproc.hpp>
 
 namespace shutterlab {
-namespace {
-
-// Fixed-point bilinear sampling for integer images: coordinates in 1/128 px (7 fractional bits per
-// axis), so a weight product is at most 2^14: it fits the signed 16-bit lanes of _mm_madd_epi16,
-// and a 16-bit sample times 2^14 fits in uint32. Quantisation error <= 1/256 px per axis.
-constexpr int kFracBits = 7;
-constexpr int kFracOne = 1 << kFracBits;
-constexpr int kFracMask = kFracOne - 1;
-// Marks a pixel whose ray misses the ground: far outside any scene, so it samples black.
-constexpr int kInvalidFixed = std::numeric_limits<int>::min();
-
-}  // namespace
 
 FrameGeometry::FrameGeometry(const PinholeCamera& camera, double altitude_m,
                              const FrameMotion& motion, cv::Size scene_size)
@@ -149,246 +137,6 @@ bool FrameGeometry::SceneRowFixed(int v, int frac_bits, int* xi, int* yi, int u_
   return true;
 }
 
-namespace {
-
-inline int ToFixed(float x) {
-  // NaN and anything beyond +-2^23 px is outside every scene.
-  return std::abs(x) < 8388608.0f ? cvRound(x * kFracOne) : kInvalidFixed;
-}
-
-template <typename T>
-inline T RoundFixed(uint32_t acc) {
-  return static_cast<T>((acc + (1u << (2 * kFracBits - 1))) >> (2 * kFracBits));
-}
-
-// Scalar bilinear sample of one pixel at fixed-point (xi, yi); taps outside the scene read as 0.
-template <typename T>
-inline void BilinearPixel(const T* base, size_t step, int sw, int sh, int cn, int xi, int yi,
-                          T* out) {
-  const int ix = xi >> kFracBits, iy = yi >> kFracBits;  // arithmetic shift: floor
-  if (xi == kInvalidFixed || yi == kInvalidFixed || ix < -1 || iy < -1 || ix >= sw || iy >= sh) {
-    for (int c = 0; c < cn; ++c) out[c] = 0;
-    return;
-  }
-  const uint32_t fx = xi & kFracMask, fy = yi & kFracMask;
-  const uint32_t w00 = (kFracOne - fx) * (kFracOne - fy), w01 = fx * (kFracOne - fy);
-  const uint32_t w10 = (kFracOne - fx) * fy, w11 = fx * fy;
-  if (ix >= 0 && iy >= 0 && ix < sw - 1 && iy < sh - 1) {
-    const T* p0 = base + iy * step + static_cast<size_t>(ix) * cn;
-    const T* p1 = p0 + step;
-    for (int c = 0; c < cn; ++c) {
-      out[c] = RoundFixed<T>(p0[c] * w00 + p0[c + cn] * w01 + p1[c] * w10 + p1[c + cn] * w11);
-    }
-    return;
-  }
-  const bool x0 = ix >= 0, x1 = ix + 1 < sw, y0 = iy >= 0, y1 = iy + 1 < sh;
-  for (int c = 0; c < cn; ++c) {
-    uint32_t acc = 0;
-    if (y0 && x0) acc += base[iy * step + static_cast<size_t>(ix) * cn + c] * w00;
-    if (y0 && x1) acc += base[iy * step + static_cast<size_t>(ix + 1) * cn + c] * w01;
-    if (y1 && x0) acc += base[(iy + 1) * step + static_cast<size_t>(ix) * cn + c] * w10;
-    if (y1 && x1) acc += base[(iy + 1) * step + static_cast<size_t>(ix + 1) * cn + c] * w11;
-    out[c] = RoundFixed<T>(acc);
-  }
-}
-
-template <typename T, int kCn>
-void BilinearRowInt(const cv::Mat& scene, const int* xi, const int* yi, int width, int cn_runtime,
-                    T* out) {
-  const int cn = kCn > 0 ? kCn : cn_runtime;
-  const T* base = scene.ptr<T>();
-  for (int u = 0; u < width; ++u)
-    BilinearPixel(base, scene.step1(), scene.cols, scene.rows, cn, xi[u], yi[u], out + u * cn);
-}
-
-#if defined(__SSE2__)
-// 8-bit RGB, the common case, one pixel per step in SSE2: the 2x2 neighbourhood is two 8-byte
-// loads; interleaving the top and bottom rows pairs each tap with its vertical partner, so
-// _mm_madd_epi16 applies the (top, bottom) weights of one column and sums them in one instruction.
-// Same weights and rounding as BilinearPixel: the result is bit-identical to the scalar path.
-// Weight pairs of pixels [0, n): weights[2u] = column ix's (top | bottom << 16), weights[2u+1] =
-// column ix+1's, four pixels per step. Products are < 2^15, so 16-bit multiplies are exact.
-void BilinearWeights(const int* xi, const int* yi, int n, int32_t* weights) {
-  const __m128i mask = _mm_set1_epi32(kFracMask), one = _mm_set1_epi32(kFracOne);
-  int u = 0;
-  for (; u + 4 <= n; u += 4) {
-    const __m128i fx =
-        _mm_and_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(xi + u)), mask);
-    const __m128i fy =
-        _mm_and_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(yi + u)), mask);
-    const __m128i gx = _mm_sub_epi32(one, fx), gy = _mm_sub_epi32(one, fy);
-    const __m128i w0 =
-        _mm_or_si128(_mm_mullo_epi16(gx, gy), _mm_slli_epi32(_mm_mullo_epi16(gx, fy), 16));
-    const __m128i w1 =
-        _mm_or_si128(_mm_mullo_epi16(fx, gy), _mm_slli_epi32(_mm_mullo_epi16(fx, fy), 16));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(weights + 2 * u), _mm_unpacklo_epi32(w0, w1));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(weights + 2 * u + 4), _mm_unpackhi_epi32(w0, w1));
-  }
-  for (; u < n; ++u) {
-    const int fx = xi[u] & kFracMask, fy = yi[u] & kFracMask;
-    const int gx = kFracOne - fx, gy = kFracOne - fy;
-    weights[2 * u] = (gx * gy) | ((gx * fy) << 16);
-    weights[2 * u + 1] = (fx * gy) | ((fx * fy) << 16);
-  }
-}
-
-void BilinearRow8uc3(const cv::Mat& scene, const int* xi, const int* yi, int width, uint8_t* out) {
-  const int sw = scene.cols, sh = scene.rows;
-  const size_t step = scene.step;
-  const uint8_t* base = scene.data;
-  const __m128i zero = _mm_setzero_si128();
-  const __m128i round = _mm_set1_epi32(1 << (2 * kFracBits - 1));
-  // The fast path reads 8 bytes from column ix: ix <= sw - 3 keeps the read inside the row.
-  const unsigned fast_x = static_cast<unsigned>(std::max(0, sw - 2)),
-                 fast_y = static_cast<unsigned>(std::max(0, sh - 1));
-  constexpr int kBlock = 256;  // weights of a block of pixels, computed four at a time
-  alignas(16) int32_t weights[2 * kBlock];
-  // The row's last pixel goes through the scalar path, after the loop: the 4-byte store below would
-  // spill past it.
-  const int last = width - 1;
-  for (int u0 = 0; u0 < last; u0 += kBlock) {
-    const int n = std::min(kBlock, last - u0);
-    BilinearWeights(xi + u0, yi + u0, n, weights);
-    for (int k = 0; k < n; ++k) {
-      const int u = u0 + k;
-      const int ix = xi[u] >> kFracBits, iy = yi[u] >> kFracBits;
-      if (static_cast<unsigned>(ix) >= fast_x || static_cast<unsigned>(iy) >= fast_y) {
-        BilinearPixel<uint8_t>(base, step, sw, sh, 3, xi[u], yi[u], out + 3 * u);
-        continue;
-      }
-      const uint8_t* p0 = base + iy * step + ix * 3;
-      const __m128i top = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p0));
-      const __m128i bottom = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p0 + step));
-      // r0t r0b g0t g0b b0t b0b r1t r1b g1t g1b b1t b1b ..
-      const __m128i pairs = _mm_unpacklo_epi8(top, bottom);
-      const __m128i lo = _mm_unpacklo_epi8(pairs, zero);  // int16: r0t r0b g0t g0b b0t b0b r1t r1b
-      const __m128i hi = _mm_unpackhi_epi8(pairs, zero);  // int16: g1t g1b b1t b1b ...
-      // (w0, w1, ., .): the (top, bottom) weights of columns ix and ix+1.
-      const __m128i w01 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(weights + 2 * k));
-      const __m128i sum_lo =
-          _mm_madd_epi16(lo, _mm_shuffle_epi32(w01, _MM_SHUFFLE(1, 0, 0, 0)));  // R0 G0 B0 R1
-      const __m128i sum_hi =
-          _mm_madd_epi16(_mm_unpacklo_epi64(hi, zero),
-                         _mm_shuffle_epi32(w01, _MM_SHUFFLE(1, 1, 1, 1)));  // G1 B1 0 0
-      __m128i sum = _mm_add_epi32(sum_lo, _mm_slli_si128(sum_hi, 4));       // R0 G G B R1
-      sum = _mm_add_epi32(sum, _mm_srli_si128(sum, 12));                    // R G B R1
-      sum = _mm_srli_epi32(_mm_add_epi32(sum, round), 2 * kFracBits);
-      sum = _mm_packs_epi32(sum, sum);
-      sum = _mm_packus_epi16(sum, sum);
-      const uint32_t rgbx = static_cast<uint32_t>(_mm_cvtsi128_si32(sum));
-      // 4-byte store: its 4th byte belongs to pixel u+1, which is written afterwards.
-      std::memcpy(out + 3 * u, &rgbx, 4);
-    }
-  }
-  if (width > 0) {
-    BilinearPixel<uint8_t>(base, step, sw, sh, 3, xi[last], yi[last], out + 3 * last);
-  }
-}
-#endif
-
-void BilinearRowFloat(const cv::Mat& scene, const float* xs, const float* ys, int width,
-                      float* out) {
-  const int cn = scene.channels();
-  const int sw = scene.cols, sh = scene.rows;
-  const size_t step = scene.step1();
-  const float* base = scene.ptr<float>();
-  for (int u = 0; u < width; ++u, out += cn) {
-    const float x = xs[u], y = ys[u];
-    for (int c = 0; c < cn; ++c) out[c] = 0.0f;
-    if (!(x > -1.0f && x < static_cast<float>(sw) && y > -1.0f && y < static_cast<float>(sh)))
-      continue;
-    const int ix = static_cast<int>(std::floor(x)), iy = static_cast<int>(std::floor(y));
-    const float fx = x - ix, fy = y - iy;
-    const float w[2][2] = {{(1 - fx) * (1 - fy), fx * (1 - fy)}, {(1 - fx) * fy, fx * fy}};
-    for (int dy = 0; dy < 2; ++dy) {
-      const int yy = iy + dy;
-      if (yy < 0 || yy >= sh) continue;
-      for (int dx = 0; dx < 2; ++dx) {
-        const int xx = ix + dx;
-        if (xx < 0 || xx >= sw) continue;
-        const float* p = base + yy * step + static_cast<size_t>(xx) * cn;
-        for (int c = 0; c < cn; ++c) out[c] += w[dy][dx] * p[c];
-      }
-    }
-  }
-}
-
-// OpenCV's cubic convolution kernel (A = -0.75), the one INTER_CUBIC uses.
-inline void CubicWeights(float t, float w[4]) {
-  constexpr float kA = -0.75f;
-  w[0] = ((kA * (t + 1) - 5 * kA) * (t + 1) + 8 * kA) * (t + 1) - 4 * kA;
-  w[1] = ((kA + 2) * t - (kA + 3)) * t * t + 1;
-  w[2] = ((kA + 2) * (1 - t) - (kA + 3)) * (1 - t) * (1 - t) + 1;
-  w[3] = 1.0f - w[0] - w[1] - w[2];
-}
-
-template <typename T>
-void BicubicRow(const cv::Mat& scene, const float* xs, const float* ys, int width, T* out) {
-  const int cn = scene.channels();
-  const int sw = scene.cols, sh = scene.rows;
-  const size_t step = scene.step1();
-  const T* base = scene.ptr<T>();
-  float acc[4];
-  for (int u = 0; u < width; ++u, out += cn) {
-    const float x = xs[u], y = ys[u];
-    if (!(x > -2.0f && x < static_cast<float>(sw + 1) && y > -2.0f &&
-          y < static_cast<float>(sh + 1))) {
-      for (int c = 0; c < cn; ++c) out[c] = 0;
-      continue;
-    }
-    const int ix = static_cast<int>(std::floor(x)), iy = static_cast<int>(std::floor(y));
-    float wx[4], wy[4];
-    CubicWeights(x - ix, wx);
-    CubicWeights(y - iy, wy);
-    for (int c = 0; c < cn; ++c) acc[c] = 0.0f;
-    for (int dy = 0; dy < 4; ++dy) {
-      const int yy = iy - 1 + dy;
-      if (yy < 0 || yy >= sh) continue;
-      for (int dx = 0; dx < 4; ++dx) {
-        const int xx = ix - 1 + dx;
-        if (xx < 0 || xx >= sw) continue;
-        const float w = wy[dy] * wx[dx];
-        const T* p = base + yy * step + static_cast<size_t>(xx) * cn;
-        for (int c = 0; c < cn; ++c) acc[c] += w * static_cast<float>(p[c]);
-      }
-    }
-    for (int c = 0; c < cn; ++c) out[c] = cv::saturate_cast<T>(acc[c]);
-  }
-}
-
-// Float-coordinate rows: bicubic for every type, bilinear for float images.
-void SampleRowFloat(const cv::Mat& scene, const float* xs, const float* ys, int width,
-                    Interpolation interpolation, uchar* out) {
-  const int depth = scene.depth();
-  if (interpolation == Interpolation::kBicubic) {
-    if (depth == CV_8U) return BicubicRow<uint8_t>(scene, xs, ys, width, out);
-    if (depth == CV_16U)
-      return BicubicRow<uint16_t>(scene, xs, ys, width, reinterpret_cast<uint16_t*>(out));
-    return BicubicRow<float>(scene, xs, ys, width, reinterpret_cast<float*>(out));
-  }
-  BilinearRowFloat(scene, xs, ys, width, reinterpret_cast<float*>(out));
-}
-
-// Fixed-point rows: bilinear for 8- and 16-bit images.
-void SampleRowFixed(const cv::Mat& scene, const int* xi, const int* yi, int width, uchar* out) {
-  const int cn = scene.channels();
-  if (scene.depth() == CV_8U) {
-#if defined(__SSE2__)
-    if (cn == 3) return BilinearRow8uc3(scene, xi, yi, width, out);
-#else
-    if (cn == 3) return BilinearRowInt<uint8_t, 3>(scene, xi, yi, width, cn, out);
-#endif
-    if (cn == 1) return BilinearRowInt<uint8_t, 1>(scene, xi, yi, width, cn, out);
-    return BilinearRowInt<uint8_t, 0>(scene, xi, yi, width, cn, out);
-  }
-  auto* out16 = reinterpret_cast<uint16_t*>(out);
-  if (cn == 3) return BilinearRowInt<uint16_t, 3>(scene, xi, yi, width, cn, out16);
-  if (cn == 1) return BilinearRowInt<uint16_t, 1>(scene, xi, yi, width, cn, out16);
-  return BilinearRowInt<uint16_t, 0>(scene, xi, yi, width, cn, out16);
-}
-
-}  // namespace
-
 void RenderFrame(const cv::Mat& scene, const FrameGeometry& geometry, Interpolation interpolation,
                  cv::Mat* out) {
   SHUTTERLAB_CHECK(!scene.empty()) << "empty scene";
@@ -414,7 +162,7 @@ void RenderFrame(const cv::Mat& scene, const FrameGeometry& geometry, Interpolat
       bool have_floats = false;
       for (int u0 = 0; u0 < width; u0 += kChunk) {
         const int n = std::min(kChunk, width - u0);
-        if (!geometry.SceneRowFixed(v, kFracBits, xi.data(), yi.data(), u0, n)) {
+        if (!geometry.SceneRowFixed(v, kSampleFracBits, xi.data(), yi.data(), u0, n)) {
           if (!have_floats) geometry.SceneRow(v, xs.data(), ys.data());
           have_floats = true;
           for (int u = 0; u < n; ++u) {

@@ -22,6 +22,7 @@
 
 #include "render/camera.h"
 #include "render/truth_model.h"
+#include "render/warp_kernel.h"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -30,8 +31,6 @@
 #include <vector>
 
 namespace shutterlab {
-
-enum class Interpolation { kBilinear, kBicubic };
 
 // The per-pixel geometry of one frame under the true model.
 class FrameGeometry {

@@ -4,6 +4,7 @@
 #include "render/frames_csv.h"
 #include "render/image_io.h"
 #include "render/lens_profile.h"
+#include "render/rig_dataset.h"
 #include "sim/check.h"
 #include "sim/logs/gopro_telemetry.h"
 #include "sim/logs/gyro_io.h"
@@ -694,6 +695,20 @@ ImportSource DetectImportSource(const std::string& source) {
   return ImportSource::kGoproMp4;
 }
 
+// import --mask: the mask checked against the frames' size, written as DIR/mask.png (0 / 255),
+// named in camera.json and recorded in import.json.
+void AddMask(const std::string& mask_path, const fs::path& dir, ImportRecord* record) {
+  const std::string camera_path = (dir / "camera.json").string();
+  RigModel rig = ReadRigModel(camera_path);
+  const cv::Mat mask = ReadMask(mask_path, rig.camera.width, rig.camera.height);
+  rig.mask = "mask.png";
+  WriteImage((dir / rig.mask).string(), mask);
+  WriteRigModel(camera_path, rig);
+  record->mask_file = rig.mask;
+  record->mask_source = mask_path;
+  WriteImportJson((dir / "import.json").string(), *record);
+}
+
 ImportSummary ImportVideo(const ImportOptions& options,
                           const std::function<void(size_t, size_t)>& progress) {
   options.Check();
@@ -705,6 +720,7 @@ ImportSummary ImportVideo(const ImportOptions& options,
   ImportSummary summary = kind == ImportSource::kGoproMp4
                               ? ImportGopro(options, profile, staging.path(), progress)
                               : ImportPhone(options, profile, staging.path(), progress);
+  if (!options.mask_path.empty()) AddMask(options.mask_path, staging.path(), &summary.record);
   staging.Commit();
   return summary;
 }

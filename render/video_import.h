@@ -36,6 +36,10 @@ struct ImportOptions {
   int64_t max_frames = -1;   // at most this many frames (-1: all)
   int64_t start_frame = -1;  // first frame id to import (-1: the first one); ids as in frames.csv
                              // (GoPro: video frame index from 0; phone: frame number N)
+  // A mask image of the frames' size (non-zero = may be measured: a dashboard, landing gear or
+  // burned-in text painted black); written as the dataset's mask.png, named by camera.json's
+  // `mask` and recorded in import.json. Empty: none.
+  std::string mask_path;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };

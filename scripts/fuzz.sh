@@ -111,6 +111,23 @@ JSON
     frames_csv)
       mkdir -p "$build/corpus/frames_csv"
       printf 'frame,t,image,ref\n0,0.0,images/frame_000000.png,\n1,0.04,images/frame_000001.png,0\n' >"$build/corpus/frames_csv/frames.csv" ;;
+    trigger_file)
+      seed trigger_file prefix "$data"/incoming/autel_mrk_helenenschacht/*.mrk "$data"/images/siyi_zr10/image_metadata.csv
+      printf 'image,t\nDJI_0001.JPG,12.5\nDJI_0002.JPG,14.25\n' >"$build/corpus/trigger_file/named.csv"
+      printf '1\t396015.412566\t[2110]\t-17,N\t11,E\t196,V\t22.5685,Lat\t113.9428,Lon\t-1.473,Ellh\t0.01, 0.01, 0.02\t50,Q\n' >"$build/corpus/trigger_file/dji.MRK" ;;
+    validation_report)
+      mkdir -p "$build/corpus/validation_report"
+      cat >"$build/corpus/validation_report/report.json" <<'JSON'
+{"format": "validation/1", "frames": 2, "before": {"rms_px": 1.0, "max_px": 2.0},
+ "effects": [{"name": "clock_rate", "value": 30.0, "stderr": 1.0, "unit": "ppm",
+              "parameters": [30.0, 0.001], "covariance": [[1.0, null], [null, 1e-8]]}],
+ "after": {"rms_px": 0.1, "max_px": 0.2}, "noise_px": 0.1, "unexplained": false,
+ "fitted_model": {"camera": {"format": "rig/1", "image": {"width": 64, "height": 48},
+   "intrinsics": {"fx": 50, "fy": 50, "cx": 31.5, "cy": 23.5},
+   "rolling_shutter": {"readout_s": 0.03}}, "gyro_scale": [1, 1, 1],
+   "gyro_bias_rad_s": [0, 0, 0], "clock_rate_ppm": 30.0}}
+JSON
+      ;;
   esac
 done
 

@@ -8,13 +8,18 @@
 
 namespace shutterlab {
 
+SampleRange SamplesInSegment(const GyroTrace& trace, const BiasSegment& segment) {
+  if (trace.empty()) return {};
+  const int64_t t0 = trace.t_begin_ns();
+  return {trace.LowerBound(t0 + SecondsToNs(segment.begin_s)),
+          trace.LowerBound(t0 + SecondsToNs(segment.end_s))};
+}
+
 BiasEstimate EstimateBias(const GyroTrace& trace, const BiasSegment& segment) {
   SHUTTERLAB_CHECK(segment.begin_s >= 0.0 && segment.end_s > segment.begin_s)
       << "bias segment " << segment.begin_s << ":" << segment.end_s << " is empty or negative";
   SHUTTERLAB_CHECK(!trace.empty()) << "empty gyro trace";
-  const int64_t t0 = trace.t_begin_ns();
-  const size_t begin = trace.LowerBound(t0 + SecondsToNs(segment.begin_s));
-  const size_t end = trace.LowerBound(t0 + SecondsToNs(segment.end_s));
+  const auto [begin, end] = SamplesInSegment(trace, segment);
   return BiasOverSegment(trace.samples().data() + begin, trace.samples().data() + end, segment, end,
                          trace.DurationS());
 }

@@ -21,6 +21,14 @@ struct BiasEstimate {
   size_t first_after = 0;       // index of the first sample at or after end_s: analyses start here
 };
 
+// The samples of a trace inside the segment, as an index range [begin, end): a sample at exactly
+// end_s is outside, as the segment's [begin_s, end_s) says. The one place that turns a segment's
+// seconds into samples (the bias, the Allan deviation on a still segment).
+struct SampleRange {
+  size_t begin = 0, end = 0;
+};
+SampleRange SamplesInSegment(const GyroTrace& trace, const BiasSegment& segment);
+
 // Minimum samples a bias segment must hold to give a meaningful mean.
 inline constexpr size_t kMinBiasSamples = 10;
 

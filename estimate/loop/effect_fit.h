@@ -30,6 +30,14 @@ struct ResidualStats {
 // The statistics of residuals given as squared lengths, px^2.
 ResidualStats ResidualStatsOf(const std::vector<double>& squared_norms);
 
+// How the standard errors of fitted effects are computed (effect_fit.cc, "Standard errors").
+enum class CovarianceKind {
+  kModel,             // (J^T W J)^-1 s^2 c: points independent but for their neighbours
+  kClusterSandwich,   // cluster-robust sandwich, frames (video: pairs) as clusters
+  kClusterJackknife,  // leave-one-frame-out jackknife (one Gauss-Newton step per refit)
+};
+const char* CovarianceKindName(CovarianceKind kind);
+
 // One identified effect, docs/FORMATS.md names, values and units.
 struct IdentifiedEffect {
   Effect effect = Effect::kTimeOffset;  // its name and unit: Spec(effect)
@@ -40,7 +48,15 @@ struct IdentifiedEffect {
   // The fitted parameters (EffectSpec::parameter_count of them, deltas from the declared model as
   // EffectSpec::apply_delta takes them) and their covariance, as the standard errors come from.
   Eigen::VectorXd parameters;
-  Eigen::MatrixXd covariance;
+  Eigen::MatrixXd covariance;  // LoopOptions::covariance's
+  // Each parameter's standard error by every CovarianceKind (NaN where none), and the clusters
+  // (frames or pairs with points) they were computed over: the report says which one it used, the
+  // coverage test measures them all.
+  Eigen::VectorXd parameter_stderr_model, parameter_stderr_sandwich, parameter_stderr_jackknife;
+  int clusters = 0;
+  // Where the standard error came from: LoopOptions::covariance, or the model's with fewer than 3
+  // clusters.
+  CovarianceKind stderr_from = CovarianceKind::kModel;
 };
 
 struct LoopOptions {
@@ -68,6 +84,8 @@ struct LoopOptions {
   // epipolar constraint with per-row poses). Only each match's distance from its epipolar line is
   // fitted then; the translation directions are solved inside every prediction (effect_model.h).
   bool pair_translation = false;
+  // The standard errors the effects get, and that claims, halves and every "contradicted" use.
+  CovarianceKind covariance = CovarianceKind::kClusterJackknife;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };
@@ -86,6 +104,7 @@ struct LoopResult {
   std::vector<Eigen::Vector2d> residuals_before, residuals_after;
   // Residual components per point that carry information (2; 1 with pair_translation).
   int residual_components = 2;
+  CovarianceKind covariance = CovarianceKind::kClusterJackknife;  // the effects' standard errors
   // With pair_translation: each frame's fitted translation direction (unit, in the earlier
   // frame's row-0 camera axes; sign arbitrary), input order.
   std::vector<Eigen::Vector3d> pair_translation_dirs;

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <random>
 
 namespace shutterlab {
 
@@ -195,6 +196,8 @@ VideoPairPredictor::VideoPairPredictor(const GyroTrace& gyro,
       pair.row_of_point.push_back(static_cast<int>(
           std::lower_bound(pair.rows.begin(), pair.rows.end(), p.v) - pair.rows.begin()));
     }
+    pair.later_cam_from_image = f.cam_from_image;
+    pair.earlier_cam_from_image = f.earlier->cam_from_image;
     points_ += f.points.size();
     frames_span_s_ = std::max({frames_span_s_, std::abs(f.t_first_row_ns * 1e-9),
                                std::abs(f.earlier->t_first_row_ns * 1e-9)});
@@ -249,10 +252,32 @@ struct PairView {
   const std::vector<Eigen::Vector2d>& measured;
   const std::vector<Eigen::Vector2d>& match;
   const std::vector<double>& weight;
-  const Eigen::Vector3d* rays;        // K^-1 p of the pair's points
-  const Eigen::Vector3d* match_rays;  // K^-1 q of the pair's points
-  Eigen::Vector2d* out;               // the pair's predictions
+  const Eigen::Vector3d* rays;                  // K^-1 p of the pair's points
+  const Eigen::Vector3d* match_rays;            // K^-1 q of the pair's points
+  Eigen::Vector2d* out;                         // the pair's predictions
+  const Eigen::Matrix3d& later_cam_from_image;  // VideoPairPredictor::Pair's
+  const Eigen::Matrix3d& earlier_cam_from_image;
 };
+
+// The view of a VideoPairPredictor::Pair (deduced: the type is the class's own) and its rays,
+// predictions into out.
+template <typename Pair>
+PairView ViewOf(const Pair& pair, const std::vector<Eigen::Vector3d>& rays,
+                const std::vector<Eigen::Vector3d>& match_rays, Eigen::Vector2d* out) {
+  return {pair.t_earlier_ns,
+          pair.t_later_ns,
+          pair.rows,
+          pair.row_of_point,
+          pair.px,
+          pair.measured,
+          pair.match,
+          pair.weight,
+          rays.data() + pair.first,
+          match_rays.data() + pair.first,
+          out,
+          pair.later_cam_from_image,
+          pair.earlier_cam_from_image};
+}
 
 // The orientation trace that covers the pair: everything relative to the earlier frame's
 // t_first_row (camera clock) on the gyro clock. *later_offset_s: each later row's gyro offset.
@@ -288,16 +313,21 @@ class PairRotations {
         earlier_rot_(height_),
         earlier_state_(height_, 0),
         later_rot_(pair.rows.size()),
-        later_ok_(pair.rows.size(), 0) {
+        later_ok_(pair.rows.size(), 0),
+        earlier_cam_from_image_(pair.earlier_cam_from_image),
+        earlier_reimaged_(!pair.earlier_cam_from_image.isIdentity(0.0)) {
     for (size_t r = 0; r < pair.rows.size(); ++r) {
       if (!InSpan(pair.t_later_ns, later_offset_s[r], front_ns_, back_ns_)) continue;
-      later_rot_[r] =
-          trace.WorldFromBodyAt(pair.t_later_ns, later_offset_s[r]).normalized().toRotationMatrix();
+      later_rot_[r] = trace.WorldFromBodyAt(pair.t_later_ns, later_offset_s[r])
+                          .normalized()
+                          .toRotationMatrix() *
+                      pair.later_cam_from_image;
       later_ok_[r] = 1;
     }
   }
 
-  // Whether later row r is inside the trace, and its rotation.
+  // Whether later row r is inside the trace, and its world_from_image rotation (the camera's
+  // times the frame's cam_from_image).
   bool later_ok(int r) const { return later_ok_[r] != 0; }
   const Eigen::Matrix3d& later_rot(int r) const { return later_rot_[r]; }
 
@@ -321,10 +351,19 @@ class PairRotations {
     return earlier_state_[row] == 1 ? &earlier_rot_[row] : nullptr;
   }
 
-  // R(w)^T y (inverse) or R(w) y at a fractional row w: linear between the neighbouring rows'
-  // products (rows ~30 us apart: ~1e-10 from the integrated trace). False when a row is outside
-  // the trace.
+  // (R(w) S)^T y (inverse) or R(w) S y at a fractional row w, S the earlier frame's
+  // cam_from_image: linear between the neighbouring rows' products (rows ~30 us apart: ~1e-10
+  // from the integrated trace). False when a row is outside the trace.
   bool RotateAt(double w, const Eigen::Vector3d& y, bool inverse, Eigen::Vector3d* z) {
+    if (!earlier_reimaged_) return RotateCameraAt(w, y, inverse, z);
+    if (!inverse) return RotateCameraAt(w, earlier_cam_from_image_ * y, false, z);
+    if (!RotateCameraAt(w, y, true, z)) return false;
+    *z = earlier_cam_from_image_.transpose() * *z;
+    return true;
+  }
+
+  // R(w)^T y or R(w) y, the physical camera's.
+  bool RotateCameraAt(double w, const Eigen::Vector3d& y, bool inverse, Eigen::Vector3d* z) {
     const int r0 = std::min(static_cast<int>(w), std::max(0, height_ - 2));
     const double a = w - r0;
     const auto apply = [&](int row, Eigen::Vector3d* out) {
@@ -351,10 +390,14 @@ class PairRotations {
   std::vector<uint8_t> earlier_state_;        // 0 not yet, 1 known, 2 outside the trace
   std::vector<Eigen::Matrix3d> later_rot_;
   std::vector<uint8_t> later_ok_;
+  Eigen::Matrix3d earlier_cam_from_image_;
+  bool earlier_reimaged_ = false;
 };
 
 // Rotation-only: each point's match in the earlier frame, the row it lies on found by fixed-point
-// iteration.
+// iteration. It starts at the measured match's row, which is the answer to within the measurement
+// and the model's error: one or two steps instead of the five or six from the point's own row
+// (the fixed point is the same from any start, the map being a contraction).
 void PredictRotationOnly(const PinholeCamera& camera, const PairView& pair, PairRotations* rot) {
   const double last_row = camera.height - 1;
   for (size_t i = 0; i < pair.px.size(); ++i) {
@@ -362,7 +405,8 @@ void PredictRotationOnly(const PinholeCamera& camera, const PairView& pair, Pair
     if (!rot->later_ok(r)) continue;
     const Eigen::Vector3d y = rot->later_rot(r) * pair.rays[i];  // world direction
     constexpr int kMaxIterations = 50;
-    double w = std::clamp(pair.px[i].y(), 0.0, last_row);
+    const double start = std::isfinite(pair.match[i].y()) ? pair.match[i].y() : pair.px[i].y();
+    double w = std::clamp(start, 0.0, last_row);
     for (int it = 0; it < kMaxIterations; ++it) {
       Eigen::Vector3d z;
       if (!rot->CamFromWorldAt(w, y, &z)) break;
@@ -414,7 +458,8 @@ CrossProducts MatchCrossProducts(const PinholeCamera& camera, const PairView& pa
 double NormalPx(const PinholeCamera& camera, const CrossProducts& c, size_t i,
                 const Eigen::Vector3d& v, PairRotations* rot, Eigen::Vector3d* n_cam) {
   if (!rot->CamFromWorldAt(c.w_row[i], c.y[i].cross(v), n_cam)) return 0.0;
-  return std::hypot(n_cam->x() / camera.fx, n_cam->y() / camera.fy);
+  const double nx = n_cam->x() / camera.fx, ny = n_cam->y() / camera.fy;
+  return std::sqrt(nx * nx + ny * ny);  // not std::hypot: far slower, and no overflow here
 }
 
 // The translation direction V (world axes, sign arbitrary): the least eigenvector of the cross
@@ -489,7 +534,7 @@ void PredictDistances(const PinholeCamera& camera, const PairView& pair, const C
     Eigen::Vector3d epipole;
     if (rot->CamFromWorldAt(c.w_row[i], v_dir, &epipole) && std::abs(epipole.z()) > 1e-12) {
       const double rho = (q_undistorted - (k_mat * (epipole / epipole.z())).head<2>()).norm();
-      across_px *= rho / std::hypot(rho, epipole_radius_px);
+      across_px *= rho / std::sqrt(rho * rho + epipole_radius_px * epipole_radius_px);
     }
     if (std::isfinite(across_px)) {
       pair.out[i] = pair.measured[i] - Eigen::Vector2d(across_px, 0.0);
@@ -503,17 +548,7 @@ void VideoPairPredictor::PredictPair(const TrueModel& model, size_t k,
                                      std::vector<Eigen::Vector2d>* out) const {
   const Pair& pair = pairs_[k];
   if (pair.px.empty()) return;
-  const PairView view{pair.t_earlier_ns,
-                      pair.t_later_ns,
-                      pair.rows,
-                      pair.row_of_point,
-                      pair.px,
-                      pair.measured,
-                      pair.match,
-                      pair.weight,
-                      rays_.data() + pair.first,
-                      match_rays_.data() + pair.first,
-                      out->data() + pair.first};
+  const PairView view = ViewOf(pair, rays_, match_rays_, out->data() + pair.first);
   std::vector<double> later_offset_s;
   const std::optional<OrientationTrace> trace = PairTrace(gyro_, model, view, &later_offset_s);
   if (!trace) return;
@@ -537,6 +572,77 @@ void VideoPairPredictor::PredictPair(const TrueModel& model, size_t k,
   Eigen::Vector3d v_cam;
   translation_dirs_[k] = rot.CamFromWorldAt(0.0, v_dir, &v_cam) ? v_cam.normalized() : v_dir;
   PredictDistances(camera, view, c, v_dir, &rot);
+}
+
+std::vector<double> VideoPairPredictor::ConsensusDistances(const TrueModel& model,
+                                                           const std::vector<double>& threshold_px,
+                                                           int hypotheses) const {
+  SHUTTERLAB_CHECK(pair_translation_) << "the epipolar consensus needs pair translation";
+  SHUTTERLAB_CHECK(threshold_px.size() == pairs_.size()) << "one threshold per pair is needed";
+  std::vector<double> out(points_, std::numeric_limits<double>::quiet_NaN());
+  RefreshRays(model.rig.camera);
+  const PinholeCamera& camera = model.rig.camera;
+  cv::parallel_for_(cv::Range(0, static_cast<int>(pairs_.size())), [&](const cv::Range& range) {
+    for (int k = range.start; k < range.end; ++k) {
+      const Pair& pair = pairs_[k];
+      std::vector<Eigen::Vector2d> unused(pair.px.size());
+      const PairView view = ViewOf(pair, rays_, match_rays_, unused.data());
+      std::vector<double> later_offset_s;
+      const std::optional<OrientationTrace> trace = PairTrace(gyro_, model, view, &later_offset_s);
+      if (!trace) continue;
+      PairRotations rot(model, *trace, view, later_offset_s);
+      const CrossProducts c = MatchCrossProducts(camera, view, &rot);
+      std::vector<size_t> usable;
+      for (size_t i = 0; i < c.a.size(); ++i) {
+        if (c.w_row[i] >= 0 && pair.weight[i] > 0) usable.push_back(i);
+      }
+      if (usable.size() < 2) continue;
+      const auto distance = [&](const Eigen::Vector3d& v, size_t i) {
+        Eigen::Vector3d n_cam;
+        const double g = NormalPx(camera, c, i, v, &rot, &n_cam);
+        return g > 0 ? v.dot(c.a[i]) / g : std::numeric_limits<double>::quiet_NaN();
+      };
+      const double t2 = threshold_px[k] * threshold_px[k];
+      std::mt19937_64 rng(static_cast<uint64_t>(k) + 1);
+      std::uniform_int_distribution<size_t> pick(0, usable.size() - 1);
+      Eigen::Vector3d best = Eigen::Vector3d::Zero();
+      double best_cost = std::numeric_limits<double>::infinity();
+      for (int h = 0; h < hypotheses; ++h) {
+        const size_t i = usable[pick(rng)], j = usable[pick(rng)];
+        const Eigen::Vector3d v = c.a[i].cross(c.a[j]);
+        if (i == j || !(v.norm() > 0) || !v.allFinite()) continue;
+        const Eigen::Vector3d v_dir = v.normalized();
+        double cost = 0.0;
+        for (size_t m : usable) {
+          const double d = distance(v_dir, m);
+          cost += std::isfinite(d) ? std::min(d * d, t2) : t2;
+          if (cost >= best_cost) break;
+        }
+        if (cost < best_cost) {
+          best_cost = cost;
+          best = v_dir;
+        }
+      }
+      if (best.isZero(0.0)) continue;
+      // Refined on its inliers: the least eigenvector of their outer products, each weighted to
+      // pixel distances (as TranslationDirection).
+      Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+      for (size_t i : usable) {
+        Eigen::Vector3d n_cam;
+        const double g = NormalPx(camera, c, i, best, &rot, &n_cam);
+        if (!(g > 0) || std::pow(best.dot(c.a[i]) / g, 2) > t2) continue;
+        m.noalias() += pair.weight[i] / (g * g) * c.a[i] * c.a[i].transpose();
+      }
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m);
+      if (eig.info() == Eigen::Success && m.allFinite() && !m.isZero(0.0)) {
+        best = eig.eigenvectors().col(0).normalized();
+      }
+      for (size_t i = 0; i < c.a.size(); ++i) {
+        if (c.w_row[i] >= 0) out[pair.first + i] = distance(best, i);
+      }
+    }
+  });
+  return out;
 }
 
 std::unique_ptr<PointPredictor> MakePredictor(const GyroTrace& gyro,

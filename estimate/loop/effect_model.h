@@ -85,6 +85,9 @@ class DisplacementPredictor : public PointPredictor {
 
 // Video pairs (every frame has FramePoints::earlier): the match q of each point p of the later
 // frame in the earlier one, both rolling shutter (docs/FORMATS.md "Video datasets"), as q - p.
+//  A frame re-rendered by a stabiliser (FramePoints::cam_from_image S, per frame) looks through
+//  R(t) S instead of R(t): q ~ K S_w^T R(t_w)^T R(t_v) S_v K^-1 p, and the same in the epipolar
+//  constraint.
 //  - Rotation only (the default): q ~ K R(t_w)^T R(t_v) K^-1 p with K^-1 / K undistorting /
 //    distorting, t_v the point's row time, t_w the time of q's own row w = q.y: a fixed point,
 //    iterated from w = v (the contraction is the image rate times the row time, far below 1).
@@ -116,6 +119,14 @@ class VideoPairPredictor : public PointPredictor {
   const std::vector<Eigen::Vector3d>& translation_dirs() const override {
     return translation_dirs_;
   }
+  // The screening's epipolar consensus (estimate/loop/point_screen.h), pair_translation only: for
+  // each pair, the translation direction that most matches agree with (MSAC over two-match samples:
+  // V = a_i x a_j, each match's distance truncated at threshold_px[k]; kHypotheses samples seeded
+  // by the pair's index), and every match's distance across its epipolar line under it, px (NaN
+  // where there is none), in input order. Matches of weight 0 are neither sampled nor scored.
+  std::vector<double> ConsensusDistances(const TrueModel& model,
+                                         const std::vector<double>& threshold_px,
+                                         int hypotheses) const;
 
  private:
   struct Pair {
@@ -127,6 +138,9 @@ class VideoPairPredictor : public PointPredictor {
     std::vector<Eigen::Vector2d> match;     // measured q = p + (dx, dy) (earlier frame)
     std::vector<double> weight;
     size_t first = 0;
+    // FramePoints::cam_from_image of the later and the earlier frame (identity: not re-rendered).
+    Eigen::Matrix3d later_cam_from_image = Eigen::Matrix3d::Identity();
+    Eigen::Matrix3d earlier_cam_from_image = Eigen::Matrix3d::Identity();
   };
   void RefreshRays(const PinholeCamera& camera) const;
   // Predict for pair k (its points in *out, its direction in translation_dirs_).

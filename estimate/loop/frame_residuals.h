@@ -9,16 +9,16 @@
 
 namespace shutterlab {
 
-// The noise of all frames' points pooled (RMS over points), px, never below kMinNoisePx: identical
-// images measure exactly 0, against which every residual would be infinitely significant.
-inline constexpr double kMinNoisePx = 1e-3;
+// The noise of all frames' points pooled (RMS over points), px, never below kMinNoisePx
+// (measure.h).
 double PooledNoisePx(const std::vector<FrameValidation>& frames);
 
-// Each frame's residual statistics (and, with keep_residuals, its points' residuals) from the
-// loop's per-point residuals; frames[k] holds out[k]'s points. translation: the video
-// pair-translation loop, or null.
+// Each frame's residual statistics over the points each loop used (and, with keep_residuals, every
+// point's residuals and why a loop left it out) from the loops' per-point residuals; frames[k]
+// holds out[k]'s points. translation: the video pair-translation loop, or null. screen: the
+// screening's statuses, one per point of the frames (PointScreen).
 void FillFrameResiduals(const std::vector<FramePoints>& frames, const LoopResult& loop,
-                        const LoopResult* translation, bool keep_residuals,
-                        std::vector<FrameValidation>* out);
+                        const LoopResult* translation, const PointScreen& screen,
+                        bool keep_residuals, std::vector<FrameValidation>* out);
 
 }  // namespace shutterlab

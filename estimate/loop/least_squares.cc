@@ -30,7 +30,8 @@ double RobustCost(const RobustProblem& problem, const Eigen::VectorXd& r,
       cost += w * problem.invalid_cost;
       continue;
     }
-    cost += w * HuberRho(std::hypot(r[2 * i], r[2 * i + 1]), problem.huber_delta);
+    cost += w * HuberRho(std::sqrt(r[2 * i] * r[2 * i] + r[2 * i + 1] * r[2 * i + 1]),
+                         problem.huber_delta);
   }
   return cost;
 }
@@ -84,7 +85,7 @@ void Linearise(const RobustProblem& problem, const Eigen::VectorXd& x, const Eva
       jac.middleRows(2 * i, 2).setZero();
       continue;
     }
-    const double s = std::hypot(at.r[2 * i], at.r[2 * i + 1]);
+    const double s = std::sqrt(at.r[2 * i] * at.r[2 * i] + at.r[2 * i + 1] * at.r[2 * i + 1]);
     const double wh = w * HuberWeight(s, problem.huber_delta);
     if (irls_weights) (*irls_weights)[i] = wh;
     const auto j = jac.middleRows(2 * i, 2);

@@ -23,9 +23,19 @@ struct MeasuredPoint {
 struct MeasureOptions {
   // Spacing of the sparse measured points handed to the model fit, px.
   int grid_step_px = 16;
+  // Pixels that may be measured (docs/FORMATS.md camera.json `mask`): CV_8U of the image's size,
+  // non-zero = may be used; empty: every pixel. A masked pixel is never measured, never a point
+  // and never bridged by the row model (its field is NaN).
+  cv::Mat mask;
+  // Compute the frame distortion D of the field (d_px); video pairs have no use for it.
+  bool frame_distortion = true;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };
+
+// The least measurement noise any fit or test assumes, px: identical images measure exactly 0,
+// against which every residual would be infinitely significant.
+inline constexpr double kMinNoisePx = 1e-3;
 
 struct DisplacementMeasurement {
   cv::Mat field;       // CV_32FC2 (dx, dy) per rolling-shutter pixel; NaN where unmeasured
@@ -40,7 +50,7 @@ struct DisplacementMeasurement {
 };
 
 // ref and image: same size, 8U/16U/32F, grey or RGB (any channel order). Throws
-// std::invalid_argument when the sizes differ or an image is empty.
+// std::invalid_argument when the sizes differ (images or mask) or an image is empty.
 DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& image,
                                             const MeasureOptions& options = {});
 

@@ -144,12 +144,11 @@ double GroundMetresPerPx(const RigModel& rig) {
 }
 
 // Measures every still frame against its ref image: fills result->frames' measured columns and
-// returns each frame's points.
-std::vector<FramePoints> MeasureStillFrames(const RigDataset& files,
-                                            const std::vector<FrameEntry>& entries,
-                                            const ValidateOptions& options,
-                                            const ValidateProgress& progress,
-                                            ValidationResult* result) {
+// returns each frame's points; *fields gets each frame's measured field (for D without the regions
+// the screening leaves out).
+std::vector<FramePoints> MeasureStillFrames(
+    const RigDataset& files, const std::vector<FrameEntry>& entries, const ValidateOptions& options,
+    const ValidateProgress& progress, ValidationResult* result, std::vector<cv::Mat>* fields) {
   const RigModel& rig = result->declared;
   const double m_per_px = GroundMetresPerPx(rig);
   std::vector<FramePoints> frame_points(entries.size());
@@ -184,6 +183,7 @@ std::vector<FramePoints> MeasureStillFrames(const RigDataset& files,
     f.d_meas_px = measured.d_px;
     f.d_meas_m = measured.d_px * m_per_px;
     frame_points[i] = {entries[i].frame, entries[i].t_first_row_ns, measured.points, std::nullopt};
+    fields->push_back(measured.field);
     if (progress) progress("measure", i + 1, entries.size());
   }
   return frame_points;
@@ -215,18 +215,24 @@ void PredictStillFrames(const GyroTrace& gyro, const std::vector<FrameEntry>& en
                         ValidationResult* result) {
   const RigModel& rig = result->declared;
   const double m_per_px = GroundMetresPerPx(rig);
-  const AnalyzeResult paper = PaperModel(rig, gyro, entries, options);
+  // A global shutter (readout 0, as `correct` declares its output) has no readout window: the
+  // paper's model predicts no distortion.
+  const bool global_shutter = rig.shutter.readout_s == 0;
+  const AnalyzeResult paper =
+      global_shutter ? AnalyzeResult{} : PaperModel(rig, gyro, entries, options);
   for (size_t i = 0; i < entries.size(); ++i) {
     FrameValidation& f = result->frames[i];
-    const ImageResult& image = paper.images[i];
-    SHUTTERLAB_CHECK(image.in_trace) << frames_path << ":" << i + 2 << ": frame " << f.frame
-                                     << ": the readout is outside the gyro log";
-    SHUTTERLAB_CHECK(!image.too_few_samples)
-        << frames_path << ":" << i + 2 << ": frame " << f.frame
-        << ": the readout holds too few gyro samples (2 or fewer) for the paper's model";
-    f.d_paper_m = image.d_paper_m;
-    f.range_arcsec = image.range_arcsec;
-    f.dominant_axis = image.dominant_axis;
+    if (!global_shutter) {
+      const ImageResult& image = paper.images[i];
+      SHUTTERLAB_CHECK(image.in_trace) << frames_path << ":" << i + 2 << ": frame " << f.frame
+                                       << ": the readout is outside the gyro log";
+      SHUTTERLAB_CHECK(!image.too_few_samples)
+          << frames_path << ":" << i + 2 << ": frame " << f.frame
+          << ": the readout holds too few gyro samples (2 or fewer) for the paper's model";
+      f.d_paper_m = image.d_paper_m;
+      f.range_arcsec = image.range_arcsec;
+      f.dominant_axis = image.dominant_axis;
+    }
     const FullModelD full = FullModel(rig, motions[i]);
     f.d_full_px = full.d_px;
     f.d_full_m = full.d_px * m_per_px;
@@ -255,6 +261,50 @@ void SummarisePredictions(const ValidateOptions& options, ValidationResult* resu
   result->ratios.push_back(Ratios(result->frames, 3));
 }
 
+// The mask the measurement uses: camera.json's and --mask's together (a pixel is measured where
+// both allow it); empty when there is neither. *description says where it came from.
+cv::Mat CombinedMask(const RigDataset& dataset, const std::string& mask_path,
+                     std::string* description) {
+  cv::Mat mask = dataset.mask.clone();
+  if (!dataset.mask.empty()) *description = "camera.json's mask (" + dataset.declared.mask + ")";
+  if (!mask_path.empty()) {
+    const cv::Mat user =
+        ReadMask(mask_path, dataset.declared.camera.width, dataset.declared.camera.height);
+    mask = mask.empty() ? user : (mask & user);
+    *description += (description->empty() ? "" : " and ") + std::string("--mask ") + mask_path;
+  }
+  return mask;
+}
+
+// The still frames' screening (estimate/loop/point_screen.h) under the declared model, and each
+// frame's measured D again without the camera-fixed region.
+void ScreenStillFrames(const GyroTrace& gyro, const std::vector<FramePoints>& frame_points,
+                       const std::vector<cv::Mat>& fields, const ValidateOptions& options,
+                       ValidationResult* result) {
+  TrueModel declared;
+  declared.rig = result->declared;
+  std::vector<double> noise;
+  for (const FrameValidation& f : result->frames) noise.push_back(f.noise_px);
+  result->screen = ScreenPoints(declared, gyro, frame_points, noise, options.measure.grid_step_px,
+                                options.screen);
+  const CameraFixedRegion& region = result->screen.region;
+  if (region.whole_image || region.cells_fixed == 0) return;
+  const double m_per_px = GroundMetresPerPx(result->declared);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (size_t i = 0; i < fields.size(); ++i) {
+    cv::Mat field = fields[i].clone();
+    for (int v = 0; v < field.rows; ++v) {
+      cv::Vec2f* row = field.ptr<cv::Vec2f>(v);
+      for (int u = 0; u < field.cols; ++u) {
+        if (region.Contains(u, v)) row[u] = cv::Vec2f(nan, nan);
+      }
+    }
+    FrameValidation& f = result->frames[i];
+    f.d_meas_px = FrameDistortionPx(field);
+    f.d_meas_m = f.d_meas_px * m_per_px;
+  }
+}
+
 // The frames' rate: the median interval between consecutive frame times (a video's; a still
 // dataset's frames seconds apart give a rate no lens profile states). nullopt with fewer than two.
 std::optional<double> FrameRateHz(const std::vector<FrameEntry>& frames) {
@@ -280,18 +330,26 @@ void ValidateOptions::Check() const {
   }
   measure.Check();
   loop.Check();
+  screen.Check();
+  SHUTTERLAB_CHECK(max_points_per_pair >= 20) << "max_points_per_pair must be at least 20";
+  SHUTTERLAB_CHECK(max_video_points >= max_points_per_pair)
+      << "max_video_points must be at least max_points_per_pair";
 }
 
-ValidationResult ValidateDataset(const std::string& dataset_dir, const ValidateOptions& options,
+ValidationResult ValidateDataset(const std::string& dataset_dir,
+                                 const ValidateOptions& given_options,
                                  const ValidateProgress& progress) {
-  options.Check();
+  given_options.Check();
   auto start = std::chrono::steady_clock::now();
   ValidationResult result;
   result.dataset = dataset_dir;
-  result.limits_m = options.limits_m;
+  result.limits_m = given_options.limits_m;
 
   // --- read and check everything that is cheap to check before the long stages
   const RigDataset dataset = ReadRigDataset(dataset_dir);
+  ValidateOptions options = given_options;
+  options.measure.mask = CombinedMask(dataset, given_options.mask_path, &result.mask_description);
+  result.mask = options.measure.mask;
   result.declared = dataset.declared;
   if (!options.lens_profile_path.empty()) {
     result.lens_profile =
@@ -312,18 +370,24 @@ ValidationResult ValidateDataset(const std::string& dataset_dir, const ValidateO
   const std::vector<FrameMotion> motions = DeclaredMotions(rig, gyro, entries, files.frames_path);
   result.read_s = SecondsSince(start);
 
+  std::vector<cv::Mat> fields;
   const std::vector<FramePoints> frame_points =
-      MeasureStillFrames(files, entries, options, progress, &result);
+      MeasureStillFrames(files, entries, options, progress, &result, &fields);
 
   start = std::chrono::steady_clock::now();
+  ScreenStillFrames(gyro, frame_points, fields, options, &result);
+  fields.clear();
   PredictStillFrames(gyro, entries, motions, files.frames_path, options, progress, &result);
   SummarisePredictions(options, &result);
   result.predict_s = SecondsSince(start);
 
   // --- close the loop over all frames' points
   start = std::chrono::steady_clock::now();
-  result.loop = CloseTheLoop(rig, gyro, frame_points, PooledNoisePx(result.frames), options.loop);
-  FillFrameResiduals(frame_points, result.loop, nullptr, options.keep_residuals, &result.frames);
+  result.loop =
+      CloseTheLoop(rig, gyro, WithoutScreened(frame_points, result.screen.rotation_status),
+                   PooledNoisePx(result.frames), options.loop);
+  FillFrameResiduals(frame_points, result.loop, nullptr, result.screen, options.keep_residuals,
+                     &result.frames);
   result.loop_s = SecondsSince(start);
   return result;
 }

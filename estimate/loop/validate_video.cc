@@ -11,10 +11,12 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
+#include <opencv2/core/utility.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -161,7 +163,9 @@ constexpr double kMinClaimShare = 0.1;
 // What the claims are tested against: the data, and both models with where their loops started.
 struct ClaimInputs {
   const GyroTrace& gyro;
-  const std::vector<FramePoints>& pairs;
+  // The pairs as each model's loop used them (the points the screening left out at weight 0).
+  const std::vector<FramePoints>& pairs;  // the preferred model's
+  const std::vector<FramePoints>& rotation_pairs;
   double noise_px;
   const TrueModel& preferred_start;
   const LoopResult& preferred;
@@ -193,7 +197,7 @@ std::vector<Eigen::Vector2d> MappingResiduals(const ClaimInputs& in, PointPredic
   predictor->Predict(model, &predicted);
   std::vector<Eigen::Vector2d> r(predicted.size());
   size_t at = 0;
-  for (const FramePoints& f : in.pairs) {
+  for (const FramePoints& f : in.rotation_pairs) {
     for (const MeasuredPoint& p : f.points) {
       r[at] = Eigen::Vector2d(p.dx, p.dy) - predicted[at];
       ++at;
@@ -208,10 +212,10 @@ std::vector<Eigen::Vector2d> MappingResiduals(const ClaimInputs& in, PointPredic
 // where the measurement found them inside, is out.
 AxesComparison CompareAxisMappings(const ClaimInputs& in, const Eigen::Matrix3d& claimed) {
   const std::unique_ptr<PointPredictor> predictor =
-      MakePredictor(in.gyro, in.pairs, /*pair_translation=*/false, 1.0);
+      MakePredictor(in.gyro, in.rotation_pairs, /*pair_translation=*/false, 1.0);
   const std::vector<Eigen::Vector2d> r_claimed = MappingResiduals(in, predictor.get(), claimed);
   std::vector<double> weights;
-  for (const FramePoints& f : in.pairs) {
+  for (const FramePoints& f : in.rotation_pairs) {
     for (const MeasuredPoint& p : f.points) weights.push_back(p.weight);
   }
   size_t claimed_points = 0;
@@ -219,7 +223,7 @@ AxesComparison CompareAxisMappings(const ClaimInputs& in, const Eigen::Matrix3d&
     claimed_points += weights[i] > 0 && r_claimed[i].allFinite();
   }
   AxesComparison out;
-  out.claimed_mean_sq_px2 = CompareTrimmed(in.pairs, r_claimed, 2, r_claimed, 2).a;
+  out.claimed_mean_sq_px2 = CompareTrimmed(in.rotation_pairs, r_claimed, 2, r_claimed, 2).a;
   out.other = claimed;
   const Eigen::Matrix3d claimed_axes = NearestAxes(claimed);
   for (const Eigen::Matrix3d& axes : AxisRotations()) {  // signed permutations already
@@ -230,7 +234,7 @@ AxesComparison CompareAxisMappings(const ClaimInputs& in, const Eigen::Matrix3d&
       lost += weights[i] > 0 && r_claimed[i].allFinite() && !r[i].allFinite();
     }
     if (lost > kMaxMappingLostShare * static_cast<double>(claimed_points)) continue;
-    const TrimmedComparison c = CompareTrimmed(in.pairs, r_claimed, 2, r, 2);
+    const TrimmedComparison c = CompareTrimmed(in.rotation_pairs, r_claimed, 2, r, 2);
     if (c.points == 0 || !(c.a > 0)) continue;
     if (!std::isfinite(out.other_mean_sq_px2) ||
         c.b / c.a < out.other_mean_sq_px2 / out.claimed_mean_sq_px2) {
@@ -343,12 +347,12 @@ bool CheckFittedClaim(const ClaimInputs& in, ClaimFits* fits, ClaimCheck* check)
   std::vector<Effect> with_effect = base;
   with_effect.push_back(tested);
   const TrueModel& start = by_rotation ? in.rotation_start : in.preferred_start;
+  const std::vector<FramePoints>& pairs = by_rotation ? in.rotation_pairs : in.pairs;
   const auto fit = [&](const std::vector<Effect>& effects) -> const LoopResult& {
     const auto key = std::make_pair(by_rotation, effects);
     auto it = fits->find(key);
     if (it == fits->end()) {
-      it = fits->emplace(key,
-                         FitEffects(start, in.gyro, in.pairs, in.noise_px, effects, loop_options))
+      it = fits->emplace(key, FitEffects(start, in.gyro, pairs, in.noise_px, effects, loop_options))
                .first;
     }
     return it->second;
@@ -356,7 +360,7 @@ bool CheckFittedClaim(const ClaimInputs& in, ClaimFits* fits, ClaimCheck* check)
   const LoopResult& without = fit(base);
   const LoopResult& with = fit(with_effect);
   const TrimmedComparison c =
-      CompareTrimmed(in.pairs, without.residuals_after, without.residual_components,
+      CompareTrimmed(pairs, without.residuals_after, without.residual_components,
                      with.residuals_after, with.residual_components);
   if (tested == Effect::kReadoutDirection) {
     CheckDirectionClaim(c, in.rotation_start.rig, in.noise_px, check);
@@ -446,67 +450,134 @@ cv::Mat ReadFrameImage(const VideoInputs& in, const RigModel& rig, const FrameEn
   return image;
 }
 
-// One pair, frame `entry` (image) against the earlier one (previous): its points appended to
-// *pairs and its row to result->frames, or the reason it is skipped to result->skipped.
-void MeasurePair(const VideoInputs& in, const FrameEntry& earlier, const cv::Mat& previous,
-                 const FrameEntry& entry, const cv::Mat& image, std::vector<FramePoints>* pairs,
-                 ValidationResult* result) {
-  const RigModel& rig = result->declared;
-  const std::string pair_name =
-      "pair " + std::to_string(earlier.frame) + " -> " + std::to_string(entry.frame);
+// At most `max` of the points, spread evenly over them (every k-th in grid order, k fractional).
+void ThinEvenly(size_t max, std::vector<MeasuredPoint>* points) {
+  if (points->size() <= max) return;
+  std::vector<MeasuredPoint> kept;
+  kept.reserve(max);
+  const double stride = static_cast<double>(points->size()) / max;
+  for (size_t i = 0; i < max; ++i) kept.push_back((*points)[static_cast<size_t>(i * stride)]);
+  *points = std::move(kept);
+}
+
+// One pair's measurement, or why it has none (skip non-empty).
+struct PairMeasurement {
+  DisplacementMeasurement measured;
+  std::string skip;
+};
+
+// Frame `entry` against the earlier one (previous): the flow from the later frame's pixel p to
+// the earlier frame is q - p (the earlier frame is the "reference").
+PairMeasurement MeasureOnePair(const VideoInputs& in, const RigModel& rig,
+                               const FrameEntry& earlier, const cv::Mat& previous,
+                               const FrameEntry& entry, const cv::Mat& image, size_t max_points) {
+  PairMeasurement out;
   if (!ReadoutInsideGyro(rig, in.gyro, earlier) || !ReadoutInsideGyro(rig, in.gyro, entry)) {
-    result->skipped.push_back(pair_name + ": a readout lies outside the gyro log");
-    return;
+    out.skip = "a readout lies outside the gyro log";
+    return out;
   }
-  const auto start = std::chrono::steady_clock::now();
-  // The earlier frame is the "reference": the flow from the later frame's pixel p to it is q - p.
-  const DisplacementMeasurement measured = MeasureDisplacement(previous, image, in.options.measure);
-  result->measure_s += SecondsSince(start);
-  if (measured.points.empty()) {
-    result->skipped.push_back(pair_name + ": no point could be measured");
-    return;
+  MeasureOptions measure = in.options.measure;
+  measure.frame_distortion = false;  // D of a flow between two frames means nothing
+  out.measured = MeasureDisplacement(previous, image, measure);
+  if (out.measured.points.empty()) {
+    out.skip = "no point could be measured";
+  } else if (out.measured.measured_fraction < kMinPairMeasuredShare) {
+    out.skip = "the flow matched only " +
+               FormatNumber("%.1f", 100 * out.measured.measured_fraction) +
+               " % of the pixels (too little overlap to measure)";
   }
-  if (measured.measured_fraction < kMinPairMeasuredShare) {
-    result->skipped.push_back(pair_name + ": the flow matched only " +
-                              FormatNumber("%.1f", 100 * measured.measured_fraction) +
-                              " % of the pixels (too little overlap to measure)");
+  ThinEvenly(max_points, &out.measured.points);
+  return out;
+}
+
+// A measured pair into the result (its row in result->frames, its points in *pairs), or its
+// reason into result->skipped.
+void AddPair(const FrameEntry& earlier, const FrameEntry& entry, PairMeasurement m,
+             std::vector<FramePoints>* pairs, ValidationResult* result) {
+  if (!m.skip.empty()) {
+    result->skipped.push_back("pair " + std::to_string(earlier.frame) + " -> " +
+                              std::to_string(entry.frame) + ": " + m.skip);
     return;
   }
   FrameValidation f;
   f.frame = entry.frame;
   f.previous = earlier.frame;
   f.image = entry.image;
-  f.t_gyro_s = entry.t_first_row_ns * 1e-9 + rig.time_offset_s;
-  f.points = measured.points.size();
-  f.measured_fraction = measured.measured_fraction;
-  f.noise_px = measured.noise_px;
-  f.d_meas_px = measured.d_px;
+  f.t_gyro_s = entry.t_first_row_ns * 1e-9 + result->declared.time_offset_s;
+  f.points = m.measured.points.size();
+  f.measured_fraction = m.measured.measured_fraction;
+  f.noise_px = m.measured.noise_px;
   result->frames.push_back(std::move(f));
   FramePoints points;
   points.frame = entry.frame;
   points.t_first_row_ns = entry.t_first_row_ns;
-  points.points = measured.points;
+  points.points = std::move(m.measured.points);
   points.earlier = EarlierFrame{earlier.frame, earlier.t_first_row_ns};
   pairs->push_back(std::move(points));
 }
 
 // Every pair of consecutive frames (in time order): frame k against frame k-1. None measured is
-// an error.
+// an error. Frames are read and pairs measured a chunk at a time, the chunk's pairs in parallel
+// (each measurement on one thread: a few pairs at once use the cores better than one flow split
+// over them), keeping only the chunk's images in memory; the result is the same whatever the
+// thread count.
 std::vector<FramePoints> MeasurePairs(const VideoInputs& in, const std::vector<size_t>& order,
                                       ValidationResult* result) {
   std::vector<FramePoints> pairs;
-  cv::Mat previous;
   const size_t pair_total = order.size() - 1;
-  for (size_t k = 0; k < order.size(); ++k) {
-    const auto start = std::chrono::steady_clock::now();
-    const FrameEntry& entry = in.entries[order[k]];
-    cv::Mat image = ReadFrameImage(in, result->declared, entry, static_cast<long>(order[k]) + 2);
+  const size_t chunk = std::max<size_t>(2, 2 * static_cast<size_t>(cv::getNumThreads()));
+  const RigModel& rig = result->declared;
+  // ValidateOptions::max_points_per_pair and max_video_points.
+  constexpr size_t kMinPointsPerPair = 100;
+  const size_t max_points = std::min(
+      in.options.max_points_per_pair,
+      std::max(kMinPointsPerPair, in.options.max_video_points / std::max<size_t>(1, pair_total)));
+  cv::Mat previous;  // the last image of the previous chunk
+  for (size_t first = 0; first < order.size(); first += chunk) {
+    const size_t last = std::min(order.size(), first + chunk);  // frames [first, last)
+    std::vector<cv::Mat> images(last - first);
+    std::vector<PairMeasurement> measured(last - first);
+    std::vector<std::exception_ptr> errors(last - first);
+    auto start = std::chrono::steady_clock::now();
+    cv::parallel_for_(cv::Range(0, static_cast<int>(images.size())), [&](const cv::Range& r) {
+      for (int i = r.start; i < r.end; ++i) {
+        try {
+          const size_t k = first + i;
+          images[i] =
+              ReadFrameImage(in, rig, in.entries[order[k]], static_cast<long>(order[k]) + 2);
+        } catch (...) {
+          errors[i] = std::current_exception();
+        }
+      }
+    });
+    for (const std::exception_ptr& e : errors) {
+      if (e) std::rethrow_exception(e);
+    }
     result->read_s += SecondsSince(start);
-    if (k > 0) {
-      MeasurePair(in, in.entries[order[k - 1]], previous, entry, image, &pairs, result);
+    start = std::chrono::steady_clock::now();
+    cv::parallel_for_(cv::Range(0, static_cast<int>(images.size())), [&](const cv::Range& r) {
+      for (int i = r.start; i < r.end; ++i) {
+        const size_t k = first + i;
+        if (k == 0) continue;
+        const cv::Mat& earlier_image = i > 0 ? images[i - 1] : previous;
+        try {
+          measured[i] = MeasureOnePair(in, rig, in.entries[order[k - 1]], earlier_image,
+                                       in.entries[order[k]], images[i], max_points);
+        } catch (...) {
+          errors[i] = std::current_exception();
+        }
+      }
+    });
+    result->measure_s += SecondsSince(start);
+    for (size_t i = 0; i < images.size(); ++i) {
+      if (errors[i]) std::rethrow_exception(errors[i]);
+      const size_t k = first + i;
+      if (k == 0) continue;
+      AddPair(in.entries[order[k - 1]], in.entries[order[k]], std::move(measured[i]), &pairs,
+              result);
       if (in.progress) in.progress("measure", k, pair_total);
     }
-    previous = std::move(image);
+    previous = images.back();
   }
   if (pairs.empty()) {
     throw IoError(IoMessage(in.frames_path, 0,
@@ -544,11 +615,12 @@ VideoModels PrepareModels(const ValidateOptions& options, const RigModel& rig) {
 
 // The loop twice: rotation only (the baseline, result->loop), then with each pair's translation
 // (result->translation_loop); models->translation_start is set between them.
-void RunBothLoops(const VideoInputs& in, const std::vector<FramePoints>& pairs, double noise_px,
+void RunBothLoops(const VideoInputs& in, const std::vector<FramePoints>& rotation_pairs,
+                  const std::vector<FramePoints>& translation_pairs, double noise_px,
                   VideoModels* models, ValidationResult* result) {
   if (in.progress) in.progress("loop", 0, 2);
-  result->loop =
-      CloseTheLoop(models->rotation_start, in.gyro, pairs, noise_px, models->rotation_options);
+  result->loop = CloseTheLoop(models->rotation_start, in.gyro, rotation_pairs, noise_px,
+                              models->rotation_options);
   if (in.progress) in.progress("loop", 1, 2);
   // The pair-translation model cannot tell the gyro's own calibration (mounting, scale, bias): it
   // takes the rotation-only loop's when that one left the noise (its fit is then trustworthy),
@@ -562,13 +634,13 @@ void RunBothLoops(const VideoInputs& in, const std::vector<FramePoints>& pairs, 
       spec.apply_delta(e.parameters.data(), &models->translation_start);
     }
   }
-  result->translation_loop = CloseTheLoop(models->translation_start, in.gyro, pairs, noise_px,
-                                          models->translation_options);
+  result->translation_loop = CloseTheLoop(models->translation_start, in.gyro, translation_pairs,
+                                          noise_px, models->translation_options);
   if (in.progress) in.progress("loop", 2, 2);
 }
 
-// The two models over the same trimmed points, per residual component, and which is preferred
-// (result->preferred).
+// The two models over the same trimmed points (those both loops used), per residual component, and
+// which is preferred (result->preferred).
 void PreferModel(const std::vector<FramePoints>& pairs, double noise_px, ValidationResult* result) {
   const LoopResult& rot = result->loop;
   const LoopResult& trans = result->translation_loop;
@@ -612,6 +684,39 @@ void CheckHalves(const ClaimInputs& in, ValidationResult* result) {
   result->halves.push_back(std::move(check));
 }
 
+// The screening (estimate/loop/point_screen.h) of the pairs into result->screen; with the
+// stabiliser's own rotation (image_orientation.csv), its claim tested first and, where it holds,
+// applied to the pairs (pairs without it are left out) before the screening that counts.
+void ScreenVideo(const RigDataset& dataset, const TrueModel& declared,
+                 const ValidateOptions& options, std::vector<FramePoints>* pairs,
+                 ValidationResult* result) {
+  const auto screen = [&] {
+    std::vector<double> noise_px;
+    for (const FrameValidation& f : result->frames) noise_px.push_back(f.noise_px);
+    result->screen = ScreenPoints(declared, dataset.gyro, *pairs, noise_px,
+                                  options.measure.grid_step_px, options.screen);
+  };
+  screen();
+  if (dataset.image_orientation.empty() || !options.screen.consensus) return;
+  result->image_orientation = TestImageOrientation(
+      declared, dataset.gyro, *pairs, result->screen.rotation, dataset.image_orientation);
+  if (!result->image_orientation.holds) return;
+  const std::vector<size_t> removed =
+      ApplyImageOrientation(result->image_orientation, dataset.image_orientation, pairs);
+  for (auto it = removed.rbegin(); it != removed.rend(); ++it) {
+    const FrameValidation& f = result->frames[*it];
+    result->skipped.push_back("pair " + std::to_string(f.previous.value_or(-1)) + " -> " +
+                              std::to_string(f.frame) +
+                              ": a frame without the stabiliser's rotation (IORI)");
+    result->frames.erase(result->frames.begin() + static_cast<long>(*it));
+  }
+  if (pairs->empty()) {
+    throw IoError(IoMessage((dataset.dir / "image_orientation.csv").string(), 0,
+                            "no pair whose two frames have the stabiliser's rotation"));
+  }
+  screen();
+}
+
 }  // namespace
 
 std::vector<Effect> VideoCandidates() {
@@ -633,19 +738,25 @@ void ValidateVideoDataset(const RigDataset& dataset, const ValidateOptions& opti
   const std::vector<SourceClaim> claims = ReadSourceClaims((dir / "import.json").string());
   result->read_s += SecondsSince(start);
 
-  const std::vector<FramePoints> pairs = MeasurePairs(in, order, result);
+  std::vector<FramePoints> pairs = MeasurePairs(in, order, result);
 
   start = std::chrono::steady_clock::now();
   const double noise_px = PooledNoisePx(result->frames);
   VideoModels models = PrepareModels(options, result->declared);
-  RunBothLoops(in, pairs, noise_px, &models, result);
+  ScreenVideo(dataset, models.rotation_start, options, &pairs, result);
+  const std::vector<FramePoints> rotation_pairs =
+      WithoutScreened(pairs, result->screen.rotation_status);
+  const std::vector<FramePoints> translation_pairs =
+      WithoutScreened(pairs, result->screen.translation_status);
+  RunBothLoops(in, rotation_pairs, translation_pairs, noise_px, &models, result);
   const LoopResult& rot = result->loop;
   const LoopResult& trans = result->translation_loop;
-  FillFrameResiduals(pairs, rot, &trans, options.keep_residuals, &result->frames);
-  PreferModel(pairs, noise_px, result);
+  FillFrameResiduals(pairs, rot, &trans, result->screen, options.keep_residuals, &result->frames);
+  PreferModel(WithoutScreened(translation_pairs, result->screen.rotation_status), noise_px, result);
   const bool translation = result->preferred == "translation";
   const ClaimInputs claim_inputs{gyro,
-                                 pairs,
+                                 translation ? translation_pairs : rotation_pairs,
+                                 rotation_pairs,
                                  noise_px,
                                  translation ? models.translation_start : models.rotation_start,
                                  translation ? trans : rot,
@@ -656,6 +767,14 @@ void ValidateVideoDataset(const RigDataset& dataset, const ValidateOptions& opti
   CheckHalves(claim_inputs, result);
   // The source's claims, when the dataset came from `shutterlab import`.
   result->claims = CheckClaims(claims, claim_inputs);
+  // An image that does not follow the gyro settles none of them, whatever a fit says.
+  const GyroFollowCheck& follow = result->screen.gyro_follow;
+  if (follow.determined && !follow.follows) {
+    for (ClaimCheck& c : result->claims) {
+      c.verdict = "not determined: the image does not follow the gyro (it turns " +
+                  FormatNumber("%.2f", follow.gain) + "x as fast): a stabiliser re-rendered it";
+    }
+  }
   result->loop_s = SecondsSince(start);
 }
 

@@ -3,7 +3,9 @@
 // effects, and for video datasets both models, the halves and the source's claims.
 
 #include "estimate/loop/effect_fit.h"
+#include "estimate/loop/image_orientation.h"
 #include "estimate/loop/measure.h"
+#include "estimate/loop/point_screen.h"
 #include "render/effects.h"
 #include "render/lens_profile.h"
 #include "sim/log_warning.h"
@@ -28,10 +30,21 @@ struct ValidateOptions {
   // A Gyroflow lens profile (render/lens_profile.h) whose lens, scaled to the dataset's image size,
   // and readout (where it states one) replace camera.json's before anything is predicted.
   std::string lens_profile_path;
-  MeasureOptions measure;
+  MeasureOptions measure;  // its mask is the dataset's (camera.json) and mask_path's together
   LoopOptions loop;
+  ScreenOptions screen;  // points left out before the loop (estimate/loop/point_screen.h)
+  // validate --mask: a mask image (render/rig_dataset.h ReadMask, non-zero = use) beside
+  // camera.json's own; a pixel is measured only where both allow it. Empty: none.
+  std::string mask_path;
   // Keep the per-point residuals before and after the loop (for plots).
   bool keep_residuals = true;
+  // Video: at most this many of a pair's measured points go to the loops, spread evenly over its
+  // grid, and at most max_video_points over all pairs (a long clip's pairs get fewer each, never
+  // fewer than 100). A pair's points share its errors (the standard errors see pairs, not points),
+  // so beyond a few hundred they add cost, not information: a 360-pair clip of 854x480 measures
+  // about 900 a pair, and keeps 111.
+  size_t max_points_per_pair = 400;
+  size_t max_video_points = 40000;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };
@@ -43,6 +56,8 @@ struct PointResidual {
   float after_dx = 0, after_dy = 0;    // against the declared model plus the identified effects
   // Video: against the model with pair translation (only the part across the epipolar line).
   float translation_dx = 0, translation_dy = 0;
+  // Why the rotation-only (still: the) loop and the pair-translation loop left it out, if they did.
+  PointStatus status = PointStatus::kKept, translation_status = PointStatus::kKept;
 };
 
 struct FrameValidation {
@@ -60,8 +75,12 @@ struct FrameValidation {
   std::array<double, 3> range_arcsec{};                // per camera axis within the readout
   int dominant_axis = 0;                               // 0 x, 1 y, 2 z (camera axes)
   std::vector<bool> flag_meas, flag_full, flag_paper;  // one per limit: D_m > limit
-  ResidualStats before, after;                         // this frame's points only
-  std::vector<PointResidual> residuals;                // when ValidateOptions::keep_residuals
+  ResidualStats before, after;                         // this frame's points that the loop used
+  // Points the screening left out (estimate/loop/point_screen.h): in a camera-fixed region, and
+  // rejected by the frame's consensus (video: the rotation-only one; off_epipolar: the
+  // pair-translation one).
+  size_t camera_fixed = 0, moving = 0, off_epipolar = 0;
+  std::vector<PointResidual> residuals;  // when ValidateOptions::keep_residuals
   // Video pairs: the earlier frame this one was measured against, the residual after the loop with
   // pair translation, and the pair's fitted translation direction (earlier frame's camera axes).
   std::optional<int64_t> previous;
@@ -146,6 +165,14 @@ struct ValidationResult {
   std::vector<HalfCheck> halves;
   std::vector<ClaimCheck> claims;
   std::vector<std::string> skipped;  // pairs left out, and why
+  // The points left out before the loop, the camera-fixed region, the consensus per frame, and
+  // (video) whether the image follows the gyro at all.
+  PointScreen screen;
+  // Video of a stabilised camera that wrote its per-frame rotation (image_orientation.csv): the
+  // claim tested, and applied where it holds (estimate/loop/image_orientation.h).
+  ImageOrientationCheck image_orientation;
+  cv::Mat mask;                  // CV_8U 0 / 255 the measurement used (empty: none)
+  std::string mask_description;  // where it came from, for a person
   // Wall time per stage, s.
   double read_s = 0, measure_s = 0, predict_s = 0, loop_s = 0;
 };

@@ -4,7 +4,9 @@
 #include "render/truth_model.h"
 #include "sim/bias.h"
 #include "sim/check.h"
+#include "sim/civil_time.h"
 #include "sim/integrate.h"
+#include "sim/logs/log_clock.h"
 #include "sim/still_detect.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
@@ -142,10 +144,6 @@ std::vector<double> SharesPercent(const std::vector<ImageResult>& images, size_t
   return shares;
 }
 
-std::string LengthText(double m) {
-  return m < 1.0 ? FormatNumber("%.3g cm", m * 100.0) : FormatNumber("%.3g m", m);
-}
-
 std::string SharesText(const std::vector<double>& shares, const std::vector<double>& limits_m) {
   std::string text;
   for (size_t l = 0; l < shares.size(); ++l) {
@@ -211,14 +209,9 @@ void EstimateStillBias(const GyroTrace& camera_rates, bool estimate_bias, Analyz
 void AllanOfRates(const GyroTrace& rates, AnalyzeResult* result) {
   result->allan_on_still = false;
   if (result->bias_from_still) {
-    const int64_t t0 = rates.samples().front().t_ns;
-    std::vector<GyroSample> still;
-    for (const GyroSample& s : rates.samples()) {
-      const double t_s = (s.t_ns - t0) * 1e-9;
-      if (t_s >= result->still_segment.begin_s && t_s <= result->still_segment.end_s) {
-        still.push_back(s);
-      }
-    }
+    // [begin_s, end_s): the samples the bias was averaged over, not one more.
+    const auto [begin, end] = SamplesInSegment(rates, result->still_segment);
+    std::vector<GyroSample> still(rates.samples().begin() + begin, rates.samples().begin() + end);
     if (still.size() >= 20) {
       result->allan = AllanAnalysis(GyroTrace(std::move(still)));
       result->allan_on_still = true;
@@ -258,7 +251,7 @@ std::vector<ImageTrigger> ChooseTriggers(const FlightLog& log, const AnalyzeOpti
                                          std::string* trigger_source) {
   const GyroTrace& gyro = log.gyro;
   std::vector<ImageTrigger> triggers = options.triggers;
-  *trigger_source = "triggers";
+  *trigger_source = options.triggers_source;
   if (triggers.empty() && options.every_s > 0) {
     *trigger_source = FormatNumber("every %g s", options.every_s);
     const int64_t every_ns = SecondsToNs(options.every_s);
@@ -268,7 +261,7 @@ std::vector<ImageTrigger> ChooseTriggers(const FlightLog& log, const AnalyzeOpti
     for (int64_t k = 0; k < count; ++k) {
       triggers.push_back({ImageName(static_cast<size_t>(k)), t0_ns + k * every_ns});
     }
-  } else if (triggers.empty() && !log.camera_events.empty()) {
+  } else if (triggers.empty() && options.log_events && !log.camera_events.empty()) {
     // The readers keep one kind already; a log built elsewhere gets the same choice.
     FlightLog events_only;
     events_only.camera_events = log.camera_events;
@@ -468,56 +461,35 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
   return result;
 }
 
-std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path) {
-  const std::string text = ReadFileToString(path);
-  LineCursor cursor(text);
-  std::vector<std::string_view> fields;
+std::vector<ImageTrigger> TriggersOnLogClock(const TriggerFile& file, const FlightLog& log,
+                                             const std::string& path) {
+  std::optional<LogUtcClock> clock;
+  if (file.clock != TriggerClock::kLog) {
+    clock = FitLogUtcClock(log.utc_fixes);
+    if (!clock) {
+      throw IoError(IoMessage(path, 0,
+                              std::string("the trigger times are ") + TriggerClockName(file.clock) +
+                                  " and the log has no GPS time to place them on its clock"));
+    }
+  }
   std::vector<ImageTrigger> triggers;
-  int columns = 0;  // 1: t; 2: image,t; 0: not known yet
-  bool first_line = true;
-  while (const auto line = cursor.Next()) {
-    const std::string trimmed = Trim(*line);
-    if (trimmed.empty() || trimmed[0] == '#') continue;
-    SplitFields(trimmed, ',', &fields);
-    const long line_number = cursor.line_number();
-    if (first_line) {
-      first_line = false;
-      const std::string last = ToLower(fields.back());
-      if (!ParseDouble(fields.back())) {
-        const bool time_name = last == "t" || last == "time" || last == "t_s";
-        const bool image_name =
-            fields.size() == 2 && (ToLower(fields[0]) == "image" || ToLower(fields[0]) == "name");
-        if (!time_name || (fields.size() == 2 && !image_name) || fields.size() > 2) {
-          throw IoError(IoMessage(
-              path, line_number,
-              "expected a header 'image,t' or 't', or a time in seconds (got '" + trimmed + "')"));
-        }
-        columns = static_cast<int>(fields.size());
-        continue;
-      }
-    }
-    if (columns == 0) columns = static_cast<int>(fields.size());
-    if (static_cast<int>(fields.size()) != columns || columns > 2) {
-      throw IoError(IoMessage(path, line_number,
-                              "expected " +
-                                  std::string(columns == 1 ? "1 field (t)" : "2 fields (image,t)") +
-                                  ", got " + std::to_string(fields.size())));
-    }
-    const std::optional<double> t_s = ParseDouble(fields.back());
-    if (!t_s || std::abs(*t_s) > 9e9) {
-      throw IoError(IoMessage(path, line_number,
-                              "bad time '" + std::string(fields.back()) + "' (seconds expected)"));
-    }
+  triggers.reserve(file.events.size());
+  for (size_t i = 0; i < file.events.size(); ++i) {
+    const TriggerEvent& e = file.events[i];
     ImageTrigger trigger;
-    trigger.t_ns = SecondsToNs(*t_s);
-    trigger.name = columns == 2 ? std::string(fields[0]) : ImageName(triggers.size());
-    if (trigger.name.empty()) {
-      throw IoError(IoMessage(path, line_number, "empty image name"));
-    }
+    trigger.name = !e.name.empty()   ? e.name
+                   : e.sequence >= 0 ? "IMG_" + std::to_string(e.sequence)
+                                     : ImageName(i);
+    trigger.t_ns = e.t_ns;
+    if (file.clock == TriggerClock::kGps) trigger.t_ns = clock->LogNsFromUtc(UtcFromGpsNs(e.t_ns));
+    if (file.clock == TriggerClock::kUtc) trigger.t_ns = clock->LogNsFromUtc(e.t_ns);
     triggers.push_back(std::move(trigger));
   }
-  if (triggers.empty()) throw IoError(IoMessage(path, 0, "no trigger times in the file"));
   return triggers;
+}
+
+std::string LengthText(double m) {
+  return m < 1.0 ? FormatNumber("%.3g cm", m * 100.0) : FormatNumber("%.3g m", m);
 }
 
 std::string LimitKey(double limit_m) { return FormatNumber("%.12g", limit_m); }

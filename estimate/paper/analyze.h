@@ -32,6 +32,7 @@
 #include "sim/gyro_trace.h"
 #include "sim/integrate.h"
 #include "sim/logs/flight_log.h"
+#include "sim/logs/trigger_file.h"
 
 #include <array>
 #include <cstdint>
@@ -60,7 +61,9 @@ struct AnalyzeOptions {
   // Image triggers, first match wins: these; else, when every_s > 0, simulated triggers every
   // every_s seconds from the first gyro sample (a mapping cadence); else the log's camera events.
   std::vector<ImageTrigger> triggers;
+  std::string triggers_source = "triggers";  // what `triggers` are, for trigger_source
   double every_s = 0.0;
+  bool log_events = true;  // false: never the log's camera events (`triggers` are all there is)
   double trigger_latency_s = 0.0;  // trigger to exposure of row 0, s (may be negative)
   // Use the log's altitude above ground (FlightLog::altitude_above_ground_m) instead of
   // rig.altitude_m when the log has one.
@@ -137,7 +140,8 @@ struct AnalyzeResult {
   bool bias_from_still = false;
   BiasSegment still_segment;
   Eigen::Vector3d bias_rad_s = Eigen::Vector3d::Zero();  // camera axes
-  std::string trigger_source;  // "none", "camera events (KIND)", "triggers", "every N s"
+  // "none", "camera events (KIND)", AnalyzeOptions::triggers_source ("triggers"), "every N s"
+  std::string trigger_source;
   std::vector<double> limits_m;
   double altitude_m = 0.0, readout_s = 0.0;
   std::string altitude_source;  // "camera" (the options) or "log"
@@ -160,9 +164,12 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& options);
 // on the log clock) and the bias (camera axes) removed as the gyro bias (gyro axes).
 TrueModel AnalyzeTrueModel(const RigModel& rig, const Eigen::Vector3d& bias_cam_rad_s);
 
-// Reads a trigger file: CSV "image,t" or "t" (seconds on the log clock), optional header line
-// naming those columns; unnamed images become IMG_0001, ... Throws IoError(path:line: problem).
-std::vector<ImageTrigger> ReadTriggersCsv(const std::string& path);
+// A trigger file's events (sim/logs/trigger_file.h) as image triggers on the log's clock: log-clock
+// times as they are, GPS or UTC times through the log's GPS fixes (sim/logs/log_clock.h). Named
+// by the file's image names, else IMG_<photo number>, else IMG_0001, ... in file order. Throws
+// IoError(path: problem) when the times are GPS or UTC and the log has no GPS time.
+std::vector<ImageTrigger> TriggersOnLogClock(const TriggerFile& file, const FlightLog& log,
+                                             const std::string& path);
 
 // Where the altitude came from, for a person: "camera", or "log: median CAM.RelAlt ...".
 std::string AltitudeText(const AnalyzeResult& result);
@@ -176,5 +183,7 @@ void WriteAnalyzeOutputs(const std::string& dir, const AnalyzeResult& result);
 
 // The key used for a limit in JSON and CSV: shortest round-trip decimal ("0.05", "0.1").
 std::string LimitKey(double limit_m);
+// A length for a person, three digits: "5 cm", "12.5 cm", "1.5 m".
+std::string LengthText(double length_m);
 
 }  // namespace shutterlab

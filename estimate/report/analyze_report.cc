@@ -347,32 +347,35 @@ HtmlPage AnalyzeReportPage(const AnalyzeOptions& options, const AnalyzeResult& r
     bias = result.bias_estimated ? "none found: zero bias assumed" : "zero (not estimated)";
   }
   const Eigen::Vector3d b = result.bias_rad_s * kDegPerRad;
-  page.Table(
-      {"", ""},
-      {{"log", report.log_name},
-       {"format", result.format},
-       {"gyro", result.gyro_source},
-       {"samples", std::to_string(result.samples)},
-       {"duration", Fmt("%.1f s", result.duration_s)},
-       {"rate", Fmt("%.1f Hz", result.rate_hz)},
-       {"gaps", std::to_string(result.gaps)},
-       {"bias", bias},
-       {"bias (deg/s, camera x y z)",
-        Fmt("%.4f", b.x()) + " " + Fmt("%.4f", b.y()) + " " + Fmt("%.4f", b.z())},
-       {"camera", std::to_string(cam.width) + "x" + std::to_string(cam.height) + ", f " +
-                      Fmt("%.0f px", 0.5 * (cam.fx + cam.fy)) +
-                      (cam.HasDistortion() ? ", lens distortion" : "")},
-       {"readout", Fmt("%g ms", result.readout_s * 1e3)},
-       {"altitude", Fmt("%g m", result.altitude_m) + " (" + AltitudeText(result) + ")"},
-       {"ground sample", Fmt("%.2f cm/px", 100.0 * result.altitude_m / (0.5 * (cam.fx + cam.fy)))},
-       {"triggers", result.trigger_source},
-       {"images", std::to_string(result.images.size()) + " (" +
-                      std::to_string(result.verdict.images_in_trace) + " inside the log" +
-                      (result.verdict.images_too_few_samples > 0
-                           ? ", " + std::to_string(result.verdict.images_too_few_samples) +
-                                 " more with too few samples in their readout"
-                           : "") +
-                      ")"}});
+  std::vector<std::vector<std::string>> rows = {
+      {"log", report.log_name},
+      {"format", result.format},
+      {"gyro", result.gyro_source},
+      {"samples", std::to_string(result.samples)},
+      {"duration", Fmt("%.1f s", result.duration_s)},
+      {"rate", Fmt("%.1f Hz", result.rate_hz)},
+      {"gaps", std::to_string(result.gaps)},
+      {"bias", bias},
+      {"bias (deg/s, camera x y z)",
+       Fmt("%.4f", b.x()) + " " + Fmt("%.4f", b.y()) + " " + Fmt("%.4f", b.z())},
+      {"camera", std::to_string(cam.width) + "x" + std::to_string(cam.height) + ", f " +
+                     Fmt("%.0f px", 0.5 * (cam.fx + cam.fy)) +
+                     (cam.HasDistortion() ? ", lens distortion" : "")},
+      {"readout", Fmt("%g ms", result.readout_s * 1e3)},
+      {"altitude", Fmt("%g m", result.altitude_m) + " (" + AltitudeText(result) + ")"},
+      {"ground sample", Fmt("%.2f cm/px", 100.0 * result.altitude_m / (0.5 * (cam.fx + cam.fy)))},
+      {"triggers", result.trigger_source},
+      {"images", std::to_string(result.images.size()) + " (" +
+                     std::to_string(result.verdict.images_in_trace) + " inside the log" +
+                     (result.verdict.images_too_few_samples > 0
+                          ? ", " + std::to_string(result.verdict.images_too_few_samples) +
+                                " more with too few samples in their readout"
+                          : "") +
+                     ")"}};
+  // Where the camera and its readout came from, beside them, when the caller says it.
+  if (!report.camera_source.empty())
+    rows.insert(rows.begin() + 11, {"camera from", report.camera_source});
+  page.Table({"", ""}, rows);
 
   if (!result.log_warnings.empty()) {
     page.Heading("What the log lost");

@@ -24,6 +24,9 @@ struct AnalyzeReportOptions {
   std::string log_name;    // shown in the title (e.g. the log's file name)
   cv::Mat scene;           // 8-bit RGB nadir image for the pictures; empty: heatmaps alone
   std::string scene_name;  // said in the captions
+  // Where the camera and its readout came from, when the caller knows more than the rig (e.g.
+  // analyze --photos: "the photos' DJI FC8482 ..., readout 16 ms (table: ...)"); shown beside it.
+  std::string camera_source;
   size_t worst_images = 3;
   size_t chart_buckets = 4000;  // DownsampleMinMax buckets of the time charts
   int histogram_bins = 60;

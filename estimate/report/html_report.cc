@@ -115,6 +115,13 @@ figure { display: inline-block; margin: 6px 12px 12px 0; vertical-align: top; }
 figure img { max-width: 100%; height: auto; border: 1px solid #d5dbe3; }
 figcaption { font-size: 13px; color: #4a5462; margin-top: 3px; }
 pre { background: #f5f7fa; padding: 8px; font-size: 12px; overflow: auto; }
+table.text td { white-space: normal; text-align: left; max-width: 760px; }
+ul { margin: 4px 0 10px; padding-left: 22px; line-height: 1.45; }
+.box { border: 1px solid #d5dbe3; border-left: 6px solid #8a94a3; padding: 6px 16px;
+       margin: 10px 0 16px; background: #fbfcfd; }
+.box.ok { border-left-color: #2e9d4a; } .box.attention { border-left-color: #e0a400; }
+.box.problem { border-left-color: #d2372c; }
+details summary { cursor: pointer; color: #4a5462; margin: 8px 0; }
 )css";
 
 const char* KindName(ChartKind kind) {
@@ -302,8 +309,9 @@ void HtmlPage::Preformatted(const std::string& text) {
 }
 
 void HtmlPage::Table(const std::vector<std::string>& header,
-                     const std::vector<std::vector<std::string>>& rows) {
-  std::string html = "<div class=\"table-wrap\"><table>\n<thead><tr>";
+                     const std::vector<std::vector<std::string>>& rows, bool text) {
+  std::string html = std::string("<div class=\"table-wrap\"><table") +
+                     (text ? " class=\"text\"" : "") + ">\n<thead><tr>";
   for (const std::string& cell : header) html += "<th>" + EscapeHtml(cell) + "</th>";
   html += "</tr></thead>\n<tbody>\n";
   for (const auto& row : rows) {
@@ -314,6 +322,23 @@ void HtmlPage::Table(const std::vector<std::string>& header,
     html += "</tr>\n";
   }
   body_ += html + "</tbody></table></div>\n";
+}
+
+void HtmlPage::List(const std::vector<std::string>& items) {
+  body_ += "<ul>\n";
+  for (const std::string& item : items) body_ += "<li>" + EscapeHtml(item) + "</li>\n";
+  body_ += "</ul>\n";
+}
+
+void HtmlPage::BeginBox(const std::string& level) {
+  body_ += "<div class=\"box " + EscapeHtml(level) + "\">\n";
+}
+
+void HtmlPage::EndBox() { body_ += "</div>\n"; }
+
+void HtmlPage::Details(const std::string& summary, const std::string& preformatted) {
+  body_ += "<details><summary>" + EscapeHtml(summary) + "</summary><pre>" +
+           EscapeHtml(preformatted) + "</pre></details>\n";
 }
 
 void HtmlPage::AddChart(const Chart& chart) {

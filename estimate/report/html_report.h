@@ -78,13 +78,22 @@ class HtmlPage {
   void Heading(const std::string& text, int level = 2);  // level 1..4
   void Paragraph(const std::string& text);
   void Preformatted(const std::string& text);
-  // rows may be shorter than header (missing cells are empty). Cells are plain text.
+  // rows may be shorter than header (missing cells are empty). Cells are plain text; `text`: cells
+  // are sentences (left-aligned, wrapped) rather than numbers.
   void Table(const std::vector<std::string>& header,
-             const std::vector<std::vector<std::string>>& rows);
+             const std::vector<std::vector<std::string>>& rows, bool text = false);
   // Throws std::invalid_argument when a series' length differs from x's.
   void AddChart(const Chart& chart);
   // An 8-bit grey, RGB (channel order R, G, B as render/pictures.h gives) or RGBA image as PNG.
   void Image(const cv::Mat& rgb8, const std::string& caption);
+  // A bulleted list of plain-text items.
+  void List(const std::vector<std::string>& items);
+  // A framed box around what follows until EndBox: "ok" (green), "attention" (amber) or "problem"
+  // (red) edge, e.g. a verdict.
+  void BeginBox(const std::string& level);
+  void EndBox();
+  // Text a reader may open: a summary line over preformatted text, closed at first.
+  void Details(const std::string& summary, const std::string& preformatted);
   // Raw HTML, for callers that need a construct the builder lacks (not escaped).
   void RawHtml(const std::string& html);
 

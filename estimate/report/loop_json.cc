@@ -1,6 +1,8 @@
 #include "estimate/report/loop_json.h"
 
 #include "render/effect_io.h"
+#include "sim/check.h"
+#include "sim/text_file.h"
 
 #include <string>
 #include <utility>
@@ -27,16 +29,119 @@ json LoopToJson(const LoopResult& result, size_t frame_count) {
       j["ambiguous_with"] = names;
     }
     j["after"] = stats(e.after);
+    // Beyond docs/FORMATS.md: the fitted parameters and their covariance, which the value's
+    // standard errors leave out (clock_rate's companion offset, correlations): `correct` draws
+    // the model's uncertainty from them.
+    j["parameters"] =
+        std::vector<double>(e.parameters.data(), e.parameters.data() + e.parameters.size());
+    json covariance = json::array();
+    for (int r = 0; r < e.covariance.rows(); ++r) {
+      std::vector<double> row(static_cast<size_t>(e.covariance.cols()));
+      for (int c = 0; c < e.covariance.cols(); ++c) row[c] = e.covariance(r, c);
+      covariance.push_back(row);
+    }
+    j["covariance"] = std::move(covariance);
+    // Every estimator's standard error of the effect's parameters (EffectSpec's parameter units),
+    // beside the one "stderr" holds (the loop's "covariance").
+    const auto numbers = [](const Eigen::VectorXd& v) {
+      std::vector<double> out(v.data(), v.data() + v.size());
+      return out;
+    };
+    j["parameter_stderr"] = {{"model", numbers(e.parameter_stderr_model)},
+                             {"cluster_sandwich", numbers(e.parameter_stderr_sandwich)},
+                             {"cluster_jackknife", numbers(e.parameter_stderr_jackknife)},
+                             {"clusters", e.clusters}};
+    j["stderr_from"] = CovarianceKindName(e.stderr_from);
     effects.push_back(std::move(j));
   }
-  json out{{"format", "validation/1"},          {"frames", frame_count},
-           {"before", stats(result.before)},    {"effects", std::move(effects)},
-           {"after", stats(result.after)},      {"noise_px", result.noise_px},
-           {"unexplained", result.unexplained}, {"log", result.log}};
+  json out{{"format", "validation/1"},
+           {"frames", frame_count},
+           {"before", stats(result.before)},
+           {"effects", std::move(effects)},
+           {"after", stats(result.after)},
+           {"noise_px", result.noise_px},
+           {"unexplained", result.unexplained},
+           {"log", result.log},
+           {"covariance", CovarianceKindName(result.covariance)}};
   // Beyond docs/FORMATS.md: with pair_translation the residual is one component (the distance
   // across the epipolar line), to be read against noise_px / sqrt(2), not noise_px.
   if (result.residual_components != 2) out["residual_components"] = result.residual_components;
+  out["fitted_model"] = TrueModelToJson(result.model);
   return out;
+}
+
+namespace {
+
+// A JSON array of arrays of numbers (null: NaN) as a matrix; an empty one when absent.
+Eigen::MatrixXd MatrixFromJson(const json& j, const std::string& where) {
+  if (j.is_null()) return {};
+  if (!j.is_array()) throw std::invalid_argument(where + ": expected an array of rows");
+  Eigen::MatrixXd m(static_cast<int>(j.size()), j.empty() ? 0 : static_cast<int>(j[0].size()));
+  for (size_t r = 0; r < j.size(); ++r) {
+    if (!j[r].is_array() || static_cast<int>(j[r].size()) != m.cols()) {
+      throw std::invalid_argument(where + ": rows of different lengths");
+    }
+    for (size_t c = 0; c < j[r].size(); ++c) {
+      const json& x = j[r][c];
+      if (!x.is_number() && !x.is_null()) throw std::invalid_argument(where + ": not a number");
+      m(static_cast<int>(r), static_cast<int>(c)) = x.is_null() ? NAN : x.get<double>();
+    }
+  }
+  return m;
+}
+
+ReportedModel ReportedModelFromJson(const json& j) {
+  if (!j.is_object() || j.value("format", "") != "validation/1") {
+    throw std::invalid_argument("not a validation report (format validation/1)");
+  }
+  ReportedModel out;
+  out.noise_px = j.value("noise_px", 0.0);
+  out.unexplained = j.value("unexplained", false);
+  if (j.contains("after") && j["after"].is_object()) {
+    out.after.rms_px = j["after"].value("rms_px", 0.0);
+    out.after.max_px = j["after"].value("max_px", 0.0);
+  }
+  if (!j.contains("effects") || !j["effects"].is_array()) {
+    throw std::invalid_argument("effects: expected an array");
+  }
+  for (size_t i = 0; i < j["effects"].size(); ++i) {
+    const json& e = j["effects"][i];
+    const std::string where = "effects[" + std::to_string(i) + "]";
+    if (!e.is_object() || !e.contains("name") || !e["name"].is_string()) {
+      throw std::invalid_argument(where + ": expected an object with a name");
+    }
+    ReportedEffect effect;
+    effect.effect = RequireEffect(e["name"].get<std::string>(), where);
+    effect.value = EffectValueFromJson(effect.effect, e.at("value"), where + ".value");
+    if (e.contains("parameters") && e.contains("covariance")) {
+      const Eigen::MatrixXd p =
+          MatrixFromJson(json::array({e["parameters"]}), where + ".parameters");
+      effect.parameters = p.rows() == 1 ? Eigen::VectorXd(p.row(0).transpose()) : Eigen::VectorXd();
+      effect.covariance = MatrixFromJson(e["covariance"], where + ".covariance");
+      const int n = Spec(effect.effect).parameter_count;
+      if (effect.parameters.size() != n || effect.covariance.rows() != n ||
+          effect.covariance.cols() != n) {
+        throw std::invalid_argument(where + ": " + std::to_string(n) +
+                                    " parameters and an n x n covariance expected");
+      }
+    }
+    out.effects.push_back(std::move(effect));
+  }
+  if (j.contains("fitted_model")) out.fitted = TrueModelFromJson(j["fitted_model"], "fitted_model");
+  return out;
+}
+
+}  // namespace
+
+ReportedModel ReadValidationReport(const std::string& path) {
+  const std::string text = ReadFileToString(path);
+  try {
+    return ReportedModelFromJson(json::parse(text));
+  } catch (const json::exception& e) {
+    throw IoError(IoMessage(path, 0, std::string("invalid JSON: ") + e.what()));
+  } catch (const std::invalid_argument& e) {
+    throw IoError(IoMessage(path, 0, e.what()));
+  }
 }
 
 json MeasureToJson(const MeasureReport& report) {

@@ -39,6 +39,11 @@ std::string VideoValidationReport(const ValidationResult& result);
 // The value with every number at 4 significant digits, for tables (the JSON keeps them all).
 nlohmann::json Rounded(const nlohmann::json& value);
 
+// What the screening left out before the loop (estimate/loop/point_screen.h), the mask, and (video)
+// whether the image follows the gyro: the report's "screening" JSON and its lines for a person.
+nlohmann::json ScreeningToJson(const ValidationResult& result);
+void WriteScreeningSummary(const ValidationResult& result, std::ostream& out);
+
 // A loop's lines for a person: before, each effect with its value +- standard error and the
 // residual after it, after (against the noise), explained or not.
 void WriteLoopSummary(const LoopResult& loop, std::ostream& out);

@@ -23,6 +23,13 @@ json VideoValidationToJson(const ValidationResult& result) {
   const bool translation = result.preferred == "translation";
   const LoopResult& preferred = translation ? result.translation_loop : result.loop;
   json out = LoopToJson(preferred, result.frames.size());
+  // An image that does not follow the gyro (a stabiliser) holds no rolling-shutter effect of the
+  // sensor's: the report names none, whatever the loops fitted (kept under their own keys).
+  const GyroFollowCheck& follow = result.screen.gyro_follow;
+  if (follow.determined && !follow.follows) {
+    out["effects"] = json::array();
+    out["unexplained"] = true;
+  }
   out["model"] = result.preferred;
   out["video"] = true;
   out["dataset"] = result.dataset;
@@ -47,6 +54,10 @@ json VideoValidationToJson(const ValidationResult& result) {
                      {"before", StatsJson(f.before)},
                      {"after", StatsJson(f.after)},
                      {"translation_after", StatsJson(f.translation_after)},
+                     {"left_out",
+                      {{"camera_fixed", f.camera_fixed},
+                       {"moving", f.moving},
+                       {"off_epipolar", f.off_epipolar}}},
                      {"translation_dir",
                       {f.translation_dir.x(), f.translation_dir.y(), f.translation_dir.z()}}});
   }
@@ -85,6 +96,17 @@ json VideoValidationToJson(const ValidationResult& result) {
   }
   out["claims"] = claims;
   out["skipped"] = result.skipped;
+  out["screening"] = ScreeningToJson(result);
+  if (result.image_orientation.present) {
+    const ImageOrientationCheck& o = result.image_orientation;
+    out["image_orientation"] = {{"pairs_tested", o.pairs_tested},
+                                {"share", o.share},
+                                {"gain", o.gain},
+                                {"holds", o.holds},
+                                {"axes", MatrixJson(o.axes)},
+                                {"inverse", o.inverse},
+                                {"verdict", o.verdict}};
+  }
   out["timing_s"] = {
       {"read", result.read_s}, {"measure", result.measure_s}, {"loop", result.loop_s}};
   return out;
@@ -110,6 +132,13 @@ std::string VideoValidationReport(const ValidationResult& result) {
     out << line;
   }
   const double noise = result.loop.noise_px;
+  out << "\n";
+  WriteScreeningSummary(result, out);
+  if (result.image_orientation.present) {
+    out << "the stabiliser's rotation (image_orientation.csv): " << result.image_orientation.verdict
+        << "\n";
+  }
+  out << "standard errors: " << CovarianceKindName(result.loop.covariance) << " over the pairs\n";
   out << "\nrotation only (docs/FORMATS.md's video model), " << result.loop.before.points
       << " points, noise " << FormatNumber("%.3f", noise) << " px:\n";
   WriteLoopSummary(result.loop, out);

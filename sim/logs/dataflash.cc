@@ -1,6 +1,7 @@
 #include "sim/logs/dataflash.h"
 
 #include "sim/check.h"
+#include "sim/civil_time.h"
 #include "sim/logs/gyro_candidates.h"
 #include "sim/logs/ulog.h"  // kAirborneAltitudeM
 #include "sim/text_file.h"
@@ -231,7 +232,7 @@ std::optional<Format> ParseFmt(std::string_view p, std::string* error) {
   if ((fmt.time = fmt.Find("TimeUS")) == nullptr && (fmt.time = fmt.Find("TimeMS")) != nullptr)
     fmt.time_ns_per_tick = 1'000'000;
   static const char* kRelevant[] = {"GYR", "IMU",  "IMU2", "IMU3", "ISBH", "ISBD",
-                                    "CAM", "TRIG", "FMTU", "UNIT", "MULT"};
+                                    "CAM", "TRIG", "FMTU", "UNIT", "MULT", "GPS"};
   fmt.relevant = std::any_of(std::begin(kRelevant), std::end(kRelevant),
                              [&](const char* n) { return fmt.name == n; });
   if (offset + kHeaderBytes != fmt.length) {
@@ -280,6 +281,7 @@ class DataFlashParser {
   void HandleBatchData(const Format& fmt, std::string_view payload);
   void CloseBatch(int64_t key);
   void HandleCamera(const Format& fmt, std::string_view payload);
+  void HandleGpsTime(const Format& fmt, std::string_view payload);
   void HandleUnits(const Format& fmt, std::string_view payload);
   double GyroToRadPerS(const Format& fmt, uint8_t type, const std::string& label);
   // GyroToRadPerS for GyrX, GyrY, GyrZ of a type, worked out once and kept until a UNIT, FMTU or
@@ -366,6 +368,8 @@ void DataFlashParser::Handle(uint8_t type, const Format& fmt, std::string_view p
     HandleBatchData(fmt, p);
   } else if (name == "CAM" || name == "TRIG") {
     HandleCamera(fmt, p);
+  } else if (name == "GPS") {
+    HandleGpsTime(fmt, p);
   } else if (name == "UNIT" || name == "FMTU") {
     HandleUnits(fmt, p);
     for (auto& scale : gyro_scale_by_type_) scale.reset();  // a unit may have changed
@@ -524,6 +528,24 @@ void DataFlashParser::HandleCamera(const Format& fmt, std::string_view p) {
       if (std::isfinite(h)) cam_rel_alt_m_.push_back(h);
     }
   }
+}
+
+// GPS (ArduPilot 3.4 and later: TimeUS boot time, GWk GPS week, GMS ms of week, Status 3 and above
+// a 3-D fix): the boot clock against UTC, from the first GPS instance only. Older logs stamp GPS
+// with GPS time alone (TimeMS is then the ms of week) and give no relation.
+void DataFlashParser::HandleGpsTime(const Format& fmt, std::string_view p) {
+  const Field* week = fmt.Find("GWk");
+  const Field* ms = fmt.Find("GMS");
+  const Field* status = fmt.Find("Status");
+  if (!week || !ms || !fmt.Find("TimeUS")) return;
+  if (const Field* i = fmt.Find("I"); i && ReadNumber(p, *i) != 0.0) return;
+  if (status && ReadNumber(p, *status) < 3.0) return;
+  const auto t = fmt.TimeNs(p);
+  const double w = ReadNumber(p, *week), gms = ReadNumber(p, *ms);
+  if (!t || *t <= 0 || !(w > 0 && w < 10000) || !(gms >= 0 && gms < 604800e3)) return;
+  const int64_t gps_ns =
+      (static_cast<int64_t>(w) * kSecondsPerWeek * 1000 + static_cast<int64_t>(gms)) * 1'000'000;
+  log_.utc_fixes.push_back({*t, UtcFromGpsNs(gps_ns)});
 }
 
 // Everything said once the whole file has been read: what was lost, the altitude, the gyro.

@@ -19,6 +19,12 @@ struct CameraEvent {
   std::string kind;       // e.g. "camera_trigger", "camera_capture", "CAM", "TRIG"
 };
 
+// One GPS fix's time: the log's clock against UTC, from the log's own GPS messages.
+struct UtcFix {
+  int64_t t_ns = 0;    // on the gyro trace's clock (when the log stamped the message)
+  int64_t utc_ns = 0;  // UTC, ns since 1970-01-01 (GPS time less the leap seconds)
+};
+
 struct FlightLog {
   GyroTrace gyro;      // rad/s, sensor axes of the flight controller (FRD body for PX4 / ArduPilot)
   std::string format;  // "ulog", "betaflight", "dataflash", "gyro.csv", ...
@@ -26,6 +32,10 @@ struct FlightLog {
                             // "sensor_combined.gyro_rad"
   std::vector<std::string> gyro_sources_available;  // every candidate seen, best first
   std::vector<CameraEvent> camera_events;
+  // GPS time against the log's clock, one per GPS message with a valid time, in log order (PX4
+  // vehicle_gps_position / sensor_gps time_utc_usec; ArduPilot GPS GWk + GMS). Empty when the log
+  // has none. sim/logs/log_clock.h fits the relation.
+  std::vector<UtcFix> utc_fixes;
   std::optional<double> altitude_above_ground_m;  // median over the flight when the log has it
   std::string altitude_source;  // how that altitude was formed, e.g. "median CAM.RelAlt ..."
   size_t records_skipped = 0;   // corrupt / undecodable records or frames that were skipped

@@ -257,8 +257,9 @@ bool IsGyroTopic(const std::string& topic) {
 // Topics whose data the reader keeps.
 bool WantedTopic(const std::string& topic) {
   static const char* kTopics[] = {
-      "sensor_gyro_fifo", "sensor_gyro",    "vehicle_angular_velocity", "sensor_combined",
-      "camera_trigger",   "camera_capture", "vehicle_local_position",   "home_position"};
+      "sensor_gyro_fifo",     "sensor_gyro",    "vehicle_angular_velocity", "sensor_combined",
+      "camera_trigger",       "camera_capture", "vehicle_local_position",   "home_position",
+      "vehicle_gps_position", "sensor_gps"};
   for (const char* t : kTopics) {
     if (topic == t) return true;
   }
@@ -784,6 +785,7 @@ std::string CandidateName(const std::string& topic, int multi_id, const std::str
 struct DecodedTopics {
   std::vector<internal::GyroCandidate> candidates;
   std::vector<CameraEvent> events;
+  std::vector<UtcFix> utc_fixes;
   std::vector<double> dist_bottom_m;
   std::vector<double> local_z_m;
   std::optional<double> home_z_m;
@@ -875,6 +877,21 @@ void DecodeCameraEvents(const std::string& topic, const Fields& f, const FlatFie
   }
 }
 
+// vehicle_gps_position / sensor_gps: the log time of each message with a UTC time (time_utc_usec,
+// 0 until the receiver knows it).
+void DecodeGpsTime(const Fields& f, const FlatField& t_field, const Subscription& sub,
+                   std::vector<UtcFix>* fixes) {
+  const FlatField* utc = f.Find("time_utc_usec");
+  if (!utc) return;
+  for (std::string_view data : sub.payloads) {
+    const auto t_ns = ReadTimeNs(data, t_field);
+    const double utc_us = ReadNumber(data, *utc);
+    // After 2000-01-01 and before 2200: a set clock, not a count from zero.
+    if (!t_ns || *t_ns <= 0 || !(utc_us > 946684800e6 && utc_us < 7258118400e6)) continue;
+    fixes->push_back({*t_ns, static_cast<int64_t>(utc_us) * 1000});
+  }
+}
+
 // vehicle_local_position: the valid distances to the ground and local z values, m.
 void DecodeLocalPosition(const Fields& f, const Subscription& sub, DecodedTopics* out) {
   const FlatField* dist = f.Find("dist_bottom");
@@ -941,6 +958,8 @@ void ULogParser::DecodeStream(const std::string& topic, int multi_id,
       DecodeCameraEvents(topic, f, t_plain ? *t_plain : *t_field, *sub, &out->events);
     } else if (topic == "vehicle_local_position") {
       DecodeLocalPosition(f, *sub, out);
+    } else if (topic == "vehicle_gps_position" || topic == "sensor_gps") {
+      DecodeGpsTime(f, t_plain ? *t_plain : *t_field, *sub, &out->utc_fixes);
     } else if (topic == "home_position") {
       if (const FlatField* z = f.Find("z")) {
         const double v = ReadNumber(sub->payloads.back(), *z);
@@ -964,6 +983,9 @@ void ULogParser::Decode() {
   std::stable_sort(topics.events.begin(), topics.events.end(),
                    [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
   log_.camera_events = std::move(topics.events);
+  std::stable_sort(topics.utc_fixes.begin(), topics.utc_fixes.end(),
+                   [](const UtcFix& a, const UtcFix& b) { return a.t_ns < b.t_ns; });
+  log_.utc_fixes = std::move(topics.utc_fixes);
   KeepOneCameraEventKind(&log_);
   SetAltitudeAboveGround(topics, &log_);
   if (!internal::ChooseGyroSource(std::move(topics.candidates), &log_)) {

@@ -35,6 +35,9 @@ constexpr char kPositionTopic[] = "vehicle_local_position";
 constexpr char kPositionFormat[] =
     "vehicle_local_position:uint64_t timestamp;float dist_bottom;bool dist_bottom_valid;"
     "uint8_t[3] _padding0;";
+constexpr uint16_t kGpsMsgId = 3;
+constexpr char kGpsTopic[] = "vehicle_gps_position";
+constexpr char kGpsFormat[] = "vehicle_gps_position:uint64_t timestamp;uint64_t time_utc_usec;";
 
 // Little-endian stores, independent of the host's byte order.
 void PutLittleEndian(uint64_t value, size_t bytes, std::string* out) {
@@ -109,7 +112,7 @@ std::string SerializeULog(const GyroTrace& gyro, const std::vector<CameraEvent>&
   }
 
   std::vector<Record> records;
-  records.reserve(gyro.size() + camera_events.size());
+  records.reserve(gyro.size() + camera_events.size() + options.utc_fixes.size());
   for (size_t i = 0; i < gyro.size(); ++i) {
     records.push_back({ToULogMicros(gyro[i].t_ns, "gyro sample", i), kGyroMsgId, i});
   }
@@ -129,6 +132,13 @@ std::string SerializeULog(const GyroTrace& gyro, const std::vector<CameraEvent>&
       records.push_back({t_us, kPositionMsgId, tick++});
     }
   }
+  for (size_t i = 0; i < options.utc_fixes.size(); ++i) {
+    const int64_t utc_ns = options.utc_fixes[i].utc_ns;
+    SHUTTERLAB_CHECK(utc_ns > 0) << "GPS fix " << i << " has UTC " << utc_ns
+                                 << " ns: time_utc_usec is unsigned and 0 means 'not set'";
+    records.push_back({ToULogMicros(options.utc_fixes[i].t_ns, "GPS fix", i), kGpsMsgId, i});
+  }
+  const bool gps = !options.utc_fixes.empty();
   // Data in time order, as a logger writes it; stable, so equal times keep gyro, camera, altitude.
   std::stable_sort(records.begin(), records.end(),
                    [](const Record& a, const Record& b) { return a.t_us < b.t_us; });
@@ -145,9 +155,11 @@ std::string SerializeULog(const GyroTrace& gyro, const std::vector<CameraEvent>&
   AppendMessage('F', kGyroFormat, &out);
   AppendMessage('F', kCameraFormat, &out);
   if (altitude_m) AppendMessage('F', kPositionFormat, &out);
+  if (gps) AppendMessage('F', kGpsFormat, &out);
   AppendSubscription(kGyroMsgId, kGyroTopic, &out);
   AppendSubscription(kCameraMsgId, kCameraTopic, &out);
   if (altitude_m) AppendSubscription(kPositionMsgId, kPositionTopic, &out);
+  if (gps) AppendSubscription(kGpsMsgId, kGpsTopic, &out);
 
   std::string payload;  // reused: 'D' payload = uint16 msg_id, then the topic's fields
   for (const Record& r : records) {
@@ -169,6 +181,9 @@ std::string SerializeULog(const GyroTrace& gyro, const std::vector<CameraEvent>&
     } else if (r.msg_id == kCameraMsgId) {
       PutU32(static_cast<uint32_t>(camera_events[r.index].sequence), &payload);
       PutLittleEndian(0, 4, &payload);  // _padding0
+    } else if (r.msg_id == kGpsMsgId) {
+      const int64_t utc_ns = options.utc_fixes[r.index].utc_ns;
+      PutU64(static_cast<uint64_t>(utc_ns / 1000), &payload);  // time_utc_usec
     } else {
       PutFloat(*altitude_m, &payload);  // dist_bottom
       PutU8(1, &payload);               // dist_bottom_valid

@@ -14,7 +14,9 @@
 //   camera_capture         one message per camera event: timestamp, seq (uint32);
 //   vehicle_local_position only with ULogWriteOptions::altitude_above_ground_m: dist_bottom and
 //                          dist_bottom_valid = true at 10 Hz from the first to the last gyro
-//                          sample.
+//                          sample;
+//   vehicle_gps_position   only with ULogWriteOptions::utc_fixes: timestamp and time_utc_usec
+//                          (UTC, us, truncated), one message a fix.
 // Times: the trace's int64 ns rounded to the nearest PX4 microsecond (uint64 since boot).
 
 #include "sim/gyro_trace.h"
@@ -31,6 +33,8 @@ struct ULogWriteOptions {
   // over the trace. Must be finite and above kAirborneAltitudeM (sim/ulog.h): readers take lower
   // heights for the vehicle on the ground and would not report it.
   std::optional<double> altitude_above_ground_m;
+  // GPS time messages (log time, UTC), for readers that place photos on the log's clock.
+  std::vector<UtcFix> utc_fixes;
 };
 
 // Serialises a flight as ULog bytes. Preconditions (std::invalid_argument naming the offending

@@ -118,6 +118,26 @@ TEST(AnalyzeCli, BadTriggersCsvIsOneLineExitTwoAndNoOutput) {
   EXPECT_FALSE(std::filesystem::exists(dir / "out/images.csv"));
 }
 
+// A trigger file cut inside its last line: the rest is analysed, and what was lost is said on
+// stderr and in the JSON's warnings, named by the file.
+TEST(AnalyzeCli, ACutTriggerFileIsAWarningInTheJson) {
+  SHUTTERLAB_NEED_REAL_DATA();
+  test::TempDir dir;
+  std::ofstream(dir / "times.csv") << "image,t\nIMG_1,1.0\nIMG_2,";
+  const auto r =
+      RunShutterlab("analyze " + Bbl() + " --triggers " + (dir / "times.csv") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json json = nlohmann::json::parse(r.out);
+  EXPECT_EQ(json["images"].size(), 1u);
+  bool said = false;
+  for (const auto& w : json["warnings"]) {
+    said |= w["kind"] == "truncated" &&
+            w["message"].get<std::string>().rfind("trigger file times.csv: line 3:", 0) == 0;
+  }
+  EXPECT_TRUE(said) << json["warnings"];
+  EXPECT_NE(r.err.find("times.csv: truncated: line 3"), std::string::npos) << r.err;
+}
+
 TEST(AnalyzeCli, UnknownLogIsOneLineExitTwo) {
   test::TempDir dir;
   std::ofstream(dir / "notes.txt") << "hello\n";

@@ -3,6 +3,7 @@
 #include "sim/check.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
+#include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -92,10 +93,19 @@ void ExpectRejected(const std::string& from, const std::string& to,
   }
 }
 
+TEST(RigModel, ReadoutZeroIsAGlobalShutter) {
+  test::TempDir dir;
+  RigModel rig = test::MappingRig();
+  rig.shutter.readout_s = 0.0;
+  WriteRigModel(dir / "camera.json", rig);
+  const RigModel back = ReadRigModel(dir / "camera.json");
+  EXPECT_EQ(back.shutter.readout_s, 0.0);
+  EXPECT_EQ(back.shutter.RowTimeOffsetS(959, 960), 0.0) << "every row at t_first_row";
+}
+
 TEST(RigModel, RejectsNonsenseWithAClearError) {
   ExpectRejected("\"fx\": 1100.0", "\"fx\": -5", "focal length");
   ExpectRejected("\"fy\": 1100.0", "\"fy\": 0", "focal length");
-  ExpectRejected("\"readout_s\": 0.030", "\"readout_s\": 0", "readout_s");
   ExpectRejected("\"readout_s\": 0.030", "\"readout_s\": -0.01", "readout_s");
   ExpectRejected("\"top_to_bottom\"", "\"left_to_right\"", "direction");
   ExpectRejected("\"width\": 1280", "\"width\": 0", "image size");

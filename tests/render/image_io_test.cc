@@ -71,6 +71,107 @@ TEST(ImageIo, ExrKeepsFloatsAndChannelNames) {
   }
 }
 
+// The value of key in metadata, "" when absent.
+std::string MetadataValue(const std::vector<std::pair<std::string, std::string>>& metadata,
+                          const std::string& key) {
+  for (const auto& [k, v] : metadata) {
+    if (k == key) return v;
+  }
+  return "";
+}
+
+TEST(ImageIo, JpegQualityIsReadFromTheQuantisationTables) {
+  test::TempDir dir;
+  const cv::Mat image = test::SmoothTexture(cv::Size(64, 48), CV_8UC3, 9, 3.0);
+  WriteImage(dir / "default.jpg", image);
+  EXPECT_EQ(ReadImageFileInfo(dir / "default.jpg").jpeg_quality, 95);
+  for (const int quality : {30, 75, 92}) {
+    ImageLike like;
+    like.info.format = "jpeg";
+    like.info.jpeg_quality = quality;
+    like.info.jpeg_subsampling = "4:4:4";
+    const std::string path = dir / ("q" + std::to_string(quality) + ".jpg");
+    WriteImageLike(path, image, like);
+    const ImageFileInfo info = ReadImageFileInfo(path);
+    EXPECT_EQ(info.format, "jpeg");
+    EXPECT_EQ(info.jpeg_quality, quality);
+    EXPECT_EQ(info.jpeg_subsampling, "4:4:4");
+  }
+  WriteImage(dir / "lossless.png", image);
+  EXPECT_FALSE(ReadImageFileInfo(dir / "lossless.png").jpeg_quality) << "a PNG has none";
+}
+
+TEST(ImageIo, WritingLikeKeepsTheBitDepth) {
+  test::TempDir dir;
+  struct Case {
+    const char* name;
+    int type;
+    bool half;
+  };
+  for (const Case& c : {Case{"a.png", CV_8UC3, false}, Case{"b.png", CV_16UC1, false},
+                        Case{"c.tif", CV_16UC3, false}, Case{"d.tif", CV_8UC1, false},
+                        Case{"e.exr", CV_32FC3, true}, Case{"f.exr", CV_32FC3, false}}) {
+    const cv::Mat image = test::SmoothTexture(cv::Size(33, 21), c.type, 4, 1.0);
+    ImageLike like;
+    like.info.floating = CV_MAT_DEPTH(c.type) == CV_32F;
+    like.info.bits_per_channel = c.half ? 16 : static_cast<int>(CV_ELEM_SIZE1(c.type)) * 8;
+    const std::string path = dir / c.name;
+    WriteImageLike(path, image, like);
+    const ImageFileInfo info = ReadImageFileInfo(path);
+    EXPECT_EQ(info.bits_per_channel, like.info.bits_per_channel) << c.name;
+    EXPECT_EQ(info.floating, like.info.floating) << c.name;
+    const cv::Mat back = ReadImage(path);
+    EXPECT_EQ(back.type(), c.type) << c.name;
+    // Lossless, but half floats keep 11 significant bits.
+    EXPECT_LE(cv::norm(back, image, cv::NORM_INF), c.half ? 1e-3 : 0.0) << c.name;
+  }
+}
+
+TEST(ImageIo, MetadataIsCopiedWhereTheFormatHoldsIt) {
+  test::TempDir dir;
+  const cv::Mat image = test::SmoothTexture(cv::Size(40, 30), CV_8UC3, 2, 1.0);
+  ImageLike plain;
+  plain.info.format = "jpeg";
+  EXPECT_TRUE(WriteImageLike(dir / "source.jpg", image, plain,
+                             {{"Xmp.shutterlab.Test", "abc"}, {"Xmp.dc.source", "unit test"}})
+                  .empty());
+  ImageLike like{dir / "source.jpg", ReadImageFileInfo(dir / "source.jpg")};
+  for (const char* name : {"copy.jpg", "copy.png", "copy.tif"}) {
+    EXPECT_TRUE(
+        WriteImageLike(dir / name, image, like, {{"Xmp.shutterlab.Reference", "row0"}}).empty())
+        << name;
+    const auto metadata = ReadImageMetadata(dir / name);
+    EXPECT_EQ(MetadataValue(metadata, "Xmp.shutterlab.Test"), "abc") << name;
+    EXPECT_EQ(MetadataValue(metadata, "Xmp.dc.source"), "unit test") << name;
+    EXPECT_EQ(MetadataValue(metadata, "Xmp.shutterlab.Reference"), "row0") << name;
+  }
+  cv::Mat floats;
+  image.convertTo(floats, CV_32FC3, 1.0 / 255);
+  const std::vector<std::string> notes = WriteImageLike(dir / "copy.exr", floats, like);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("holds no EXIF or XMP"), std::string::npos) << notes[0];
+  EXPECT_EQ(ReadImage(dir / "copy.exr").type(), CV_32FC3) << "the pixels are written all the same";
+}
+
+TEST(ImageIo, RealDronePhotoKeepsItsExifAndDjiXmp) {
+  SHUTTERLAB_REAL_DATA(photo, "incoming/dji_fc8482_clusterodm/test-photo-1.jpg");
+  test::TempDir dir;
+  const ImageLike like{photo, ReadImageFileInfo(photo)};
+  // Re-compressed to 118 KB for 9 MP (its PROVENANCE.md): every luminance entry is 255, what IJG
+  // quality 1 gives.
+  EXPECT_EQ(like.info.jpeg_quality, 1);
+  const cv::Mat image = ReadImage(photo);
+  EXPECT_TRUE(WriteImageLike(dir / "corrected.jpg", image, like).empty());
+  const auto original = ReadImageMetadata(photo), copied = ReadImageMetadata(dir / "corrected.jpg");
+  for (const char* key : {"Exif.Image.Make", "Exif.Image.Model", "Exif.Photo.DateTimeOriginal",
+                          "Exif.GPSInfo.GPSLatitude", "Xmp.drone-dji.RelativeAltitude",
+                          "Xmp.drone-dji.GimbalPitchDegree", "Xmp.drone-dji.FlightYSpeed"}) {
+    ASSERT_NE(MetadataValue(original, key), "") << key;
+    EXPECT_EQ(MetadataValue(copied, key), MetadataValue(original, key)) << key;
+  }
+  EXPECT_EQ(ReadImageFileInfo(dir / "corrected.jpg").jpeg_quality, like.info.jpeg_quality);
+}
+
 TEST(ImageIo, ReadsRealJpegWithoutReorienting) {
   const cv::Mat scene = ReadImage(test::GroundScenePath(2));
   EXPECT_EQ(scene.cols, 2560);

@@ -233,6 +233,46 @@ TEST_F(RenderVideo, WritesAVideoDatasetWithPairTruth) {
   }
 }
 
+// render --camera-fixed-patch and --moving-patch (render/clutter.h): the bottom rows are the same
+// bytes in every frame and their truth is 0; the moving patch is where truth.json says, its truth
+// NaN, and it moves across the ground between frames.
+TEST_F(RenderVideo, CameraFixedAndMovingPatchesAreWhereTheTruthSays) {
+  WriteFileAtomically(dir_ / "times.csv", "frame,t_first_row\n0,0.5\n1,0.54\n2,0.58\n");
+  options_.clutter.camera_fixed_share = 0.25;
+  options_.clutter.moving_patch_mps = 20.0;
+  RenderDataset(options_);
+  const nlohmann::json json = nlohmann::json::parse(ReadFileToString(dir_ / "out/truth.json"));
+  const int rows_from = json["camera_fixed_rows_from"].get<int>();
+  EXPECT_EQ(rows_from, 36);  // 48 - 0.25 * 48
+  EXPECT_EQ(json["moving_patch"]["speed_mps"], 20.0);
+  const std::vector<FrameEntry> frames = ReadFramesCsv(dir_ / "out/frames.csv");
+  std::vector<cv::Mat> images;
+  for (const FrameEntry& f : frames) images.push_back(ReadImage(dir_.path() / "out" / f.image));
+  const cv::Rect fixed(0, rows_from, 64, 48 - rows_from), scene(0, 0, 64, rows_from);
+  for (size_t k = 1; k < images.size(); ++k) {
+    EXPECT_EQ(cv::norm(images[k](fixed), images[0](fixed), cv::NORM_INF), 0.0) << k;
+    EXPECT_GT(cv::norm(images[k](scene), images[0](scene), cv::NORM_INF), 0.0) << k;
+  }
+  // The truth: 0 in the fixed rows, NaN where the patch is seen, finite elsewhere.
+  const cv::Mat truth = ReadFloatImage(dir_ / "out/truth/0002_disp.exr");
+  int patch = 0, scene_pixels = 0;
+  for (int v = 0; v < truth.rows; ++v) {
+    for (int u = 0; u < truth.cols; ++u) {
+      const cv::Vec2f d = truth.at<cv::Vec2f>(v, u);
+      if (v >= rows_from) {
+        EXPECT_EQ(d, cv::Vec2f(0, 0)) << u << "," << v;
+      } else if (std::isnan(d[0])) {
+        ++patch;
+      } else {
+        ++scene_pixels;
+      }
+    }
+  }
+  // The patch's side is 20 % of the height (about 10 px) and lies above the fixed rows.
+  EXPECT_GT(patch, 40);
+  EXPECT_GT(scene_pixels, 1000);
+}
+
 TEST_F(RenderVideo, FrameTimesMustIncreaseAndNothingIsWritten) {
   WriteFileAtomically(dir_ / "times.csv", "frame,t_first_row\n0,0.5\n1,0.5\n");
   try {

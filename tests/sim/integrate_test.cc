@@ -86,6 +86,17 @@ TEST(EstimateBias, RecoversConstantBiasAndFirstIndexAfter) {
   EXPECT_EQ(estimate.first_after, 5000u);
 }
 
+// [begin_s, end_s): a sample at exactly end_s is outside (the still segment's Allan deviation used
+// to take it in), one at exactly begin_s inside.
+TEST(EstimateBias, SegmentIsHalfOpen) {
+  const GyroTrace trace = ConstantRate(Eigen::Vector3d::Zero(), 1000.0, 10.0);  // t = k ms
+  const SampleRange range = SamplesInSegment(trace, {1.0, 2.0});
+  EXPECT_EQ(trace[range.begin].t_ns - trace.t_begin_ns(), 1'000'000'000);
+  EXPECT_EQ(range.end - range.begin, 1000u);
+  EXPECT_EQ(trace[range.end].t_ns - trace.t_begin_ns(), 2'000'000'000);
+  EXPECT_EQ(SamplesInSegment(trace, {0.0, 5.0}).end, EstimateBias(trace, {0.0, 5.0}).first_after);
+}
+
 TEST(EstimateBias, RejectsSegmentWithTooFewSamples) {
   const GyroTrace trace = ConstantRate(Eigen::Vector3d::Zero(), 100.0, 1.0);
   EXPECT_THROW(EstimateBias(trace, {2.0, 5.0}), std::invalid_argument);

@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include <cmath>
 #include <cstdint>
 #include <random>
 #include <stdexcept>
@@ -76,6 +77,47 @@ inline void MeasureExactly(const TrueModel& truth, const GyroTrace& gyro,
       f.points[i].dy = d[i].y() + noise(rng);
     }
   }
+}
+
+// Video pairs k-1 -> k (k = 1..pairs, frames at first_s + k / 30 s) with points on a grid of
+// step_px, measured as `truth` moves them plus Gaussian noise of noise_px rms length (points whose
+// match leaves the frame dropped). cam_from_image (optional, one per frame 0..pairs): how a
+// stabiliser re-rendered each frame in the truth; the points are not told (identity).
+inline std::vector<FramePoints> MeasuredVideoPairs(
+    const TrueModel& truth, const GyroTrace& gyro, int pairs, int step_px, double noise_px,
+    uint64_t seed, double first_s = 12.6, const std::vector<Eigen::Matrix3d>& cam_from_image = {}) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, noise_px / std::sqrt(2.0));
+  std::vector<FramePoints> out;
+  for (int k = 1; k <= pairs; ++k) {
+    FramePoints f;
+    f.frame = k;
+    f.t_first_row_ns = SecondsToNs(first_s + k / 30.0);
+    f.earlier = EarlierFrame{k - 1, SecondsToNs(first_s + (k - 1) / 30.0)};
+    if (!cam_from_image.empty()) {
+      f.cam_from_image = cam_from_image[k];
+      f.earlier->cam_from_image = cam_from_image[k - 1];
+    }
+    for (int v = step_px / 2; v < truth.rig.camera.height; v += step_px) {
+      for (int u = step_px / 2; u < truth.rig.camera.width; u += step_px) {
+        f.points.push_back({1.0 * u, 1.0 * v});
+      }
+    }
+    const std::vector<Eigen::Vector2d> d = PredictDisplacements(truth, gyro, f);
+    std::vector<MeasuredPoint> kept;
+    for (size_t i = 0; i < d.size(); ++i) {
+      if (!d[i].allFinite()) continue;
+      MeasuredPoint p = f.points[i];
+      p.dx = d[i].x() + noise(rng);
+      p.dy = d[i].y() + noise(rng);
+      kept.push_back(p);
+    }
+    f.points = kept;
+    f.cam_from_image.setIdentity();
+    f.earlier->cam_from_image.setIdentity();
+    out.push_back(std::move(f));
+  }
+  return out;
 }
 
 }  // namespace shutterlab::test

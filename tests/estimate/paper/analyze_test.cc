@@ -1,6 +1,7 @@
 #include "estimate/paper/analyze.h"
 
 #include "sim/check.h"
+#include "sim/civil_time.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
@@ -397,24 +398,30 @@ TEST(Analyze, WritesImagesCsvAndExcludeList) {
             "name,t,D_paper_m,D_full_m,flag_0.05,flag_0.1,dominant_axis");
 }
 
-TEST(ReadTriggersCsv, ReadsNamedAndBareTimesAndRejectsBadLines) {
-  test::TempDir dir;
-  std::ofstream(dir / "named.csv") << "image,t\nDSC01,12.5\nDSC02,14.25\n";
-  std::ofstream(dir / "bare.csv") << "3.0\n4.0\n";
-  std::ofstream(dir / "bad.csv") << "t\n1.0\nnot-a-time\n";
-  const auto named = ReadTriggersCsv(dir / "named.csv");
+TEST(TriggersOnLogClock, NamesTriggersAndPlacesGpsTimesThroughTheLogsFixes) {
+  TriggerFile csv;
+  csv.clock = TriggerClock::kLog;
+  csv.events = {{3'000'000'000, -1, "DSC01", {}, {}, {}}, {4'000'000'000, -1, "", {}, {}, {}}};
+  const FlightLog no_gps;
+  const auto named = TriggersOnLogClock(csv, no_gps, "t.csv");
   ASSERT_EQ(named.size(), 2u);
-  EXPECT_EQ(named[1].name, "DSC02");
-  EXPECT_EQ(named[1].t_ns, 14'250'000'000);
-  const auto bare = ReadTriggersCsv(dir / "bare.csv");
-  ASSERT_EQ(bare.size(), 2u);
-  EXPECT_EQ(bare[0].name, "IMG_0001");
-  try {
-    ReadTriggersCsv(dir / "bad.csv");
-    FAIL() << "no IoError";
-  } catch (const IoError& e) {
-    EXPECT_NE(std::string(e.what()).find("bad.csv:3:"), std::string::npos) << e.what();
-  }
+  EXPECT_EQ(named[0].name, "DSC01");
+  EXPECT_EQ(named[1].name, "IMG_0002");
+  EXPECT_EQ(named[1].t_ns, 4'000'000'000);
+
+  // MRK: GPS time. The log's clock is UTC - 1e18 ns; GPS is 18 s ahead of UTC (2022).
+  TriggerFile mrk;
+  mrk.clock = TriggerClock::kGps;
+  const int64_t gps_ns = GpsNsFromWeek(2211, 296288.242869);
+  mrk.events = {{gps_ns, 12, "", {}, {}, {}}};
+  EXPECT_THROW(TriggersOnLogClock(mrk, no_gps, "f.MRK"), IoError);
+  FlightLog log;
+  const int64_t utc_ns = UtcFromGpsNs(gps_ns);
+  log.utc_fixes = {{utc_ns - 1'000'000'000'000'000'000 - 5'000'000'000, utc_ns - 5'000'000'000},
+                   {utc_ns - 1'000'000'000'000'000'000 + 5'000'000'000, utc_ns + 5'000'000'000}};
+  const auto placed = TriggersOnLogClock(mrk, log, "f.MRK");
+  EXPECT_EQ(placed[0].name, "IMG_12");
+  EXPECT_EQ(placed[0].t_ns, utc_ns - 1'000'000'000'000'000'000);
 }
 
 TEST(AnalyzeOptions, CheckRejectsNonsense) {

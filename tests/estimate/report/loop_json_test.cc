@@ -2,6 +2,11 @@
 // the typed results hold.
 #include "estimate/report/loop_json.h"
 
+#include "sim/check.h"
+#include "sim/text_file.h"
+#include "tests/render/render_fixtures.h"
+#include "tests/test_util.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -58,6 +63,46 @@ TEST(LoopToJson, ReadoutDirectionIsAWordWithANullStandardError) {
   EXPECT_EQ(je["value"], "bottom_to_top");
   EXPECT_TRUE(je["stderr"].is_null());
   EXPECT_EQ(je["unit"], "");
+}
+
+TEST(ReadValidationReport, ReadsBackTheFittedModelAndTheCovariances) {
+  LoopResult r;
+  r.model.rig = test::MappingRig();
+  r.model.rig.time_offset_s = 0.0042;
+  r.model.clock_rate_ppm = 35.0;
+  r.model.gyro_scale = Eigen::Vector3d(1.01, 0.99, 1.0);
+  r.after = {0.03, 0.1, 50};
+  r.noise_px = 0.025;
+  IdentifiedEffect e;
+  e.effect = Effect::kClockRate;
+  e.value = 35.0;
+  e.stderr_value = 2.0;
+  e.parameters = Eigen::Vector2d(35.0, 0.0042);
+  e.covariance = (Eigen::Matrix2d() << 4.0, -1e-5, -1e-5, 1e-10).finished();
+  r.effects.push_back(e);
+  test::TempDir dir;
+  WriteFileAtomically(dir / "report.json", LoopToJson(r, 6).dump(2));
+  const ReportedModel back = ReadValidationReport(dir / "report.json");
+  ASSERT_TRUE(back.fitted);
+  EXPECT_EQ(back.fitted->rig.time_offset_s, 0.0042);
+  EXPECT_EQ(back.fitted->clock_rate_ppm, 35.0);
+  EXPECT_EQ(back.fitted->gyro_scale, r.model.gyro_scale);
+  EXPECT_EQ(back.fitted->rig.camera.width, 1280);
+  ASSERT_EQ(back.effects.size(), 1u);
+  EXPECT_EQ(back.effects[0].effect, Effect::kClockRate);
+  EXPECT_EQ(std::get<double>(back.effects[0].value), 35.0);
+  EXPECT_EQ(back.effects[0].parameters, e.parameters);
+  EXPECT_EQ(back.effects[0].covariance, e.covariance);
+  EXPECT_DOUBLE_EQ(back.noise_px, 0.025);
+  EXPECT_DOUBLE_EQ(back.after.rms_px, 0.03);
+  // What is not a report is refused, naming the file.
+  WriteFileAtomically(dir / "other.json", R"({"format": "measure/1"})");
+  try {
+    ReadValidationReport(dir / "other.json");
+    ADD_FAILURE() << "read a measure report as a validation report";
+  } catch (const IoError& error) {
+    EXPECT_NE(std::string(error.what()).find("other.json"), std::string::npos) << error.what();
+  }
 }
 
 TEST(MeasureToJson, HasTheFormatsKeys) {

@@ -1,6 +1,8 @@
 #include "sim/logs/dataflash.h"
 
 #include "sim/check.h"
+#include "sim/civil_time.h"
+#include "sim/logs/trigger_file.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
 #include "tests/test_util.h"
@@ -192,6 +194,23 @@ TEST(DataFlash, ReadsGyrBackExactly) {
   EXPECT_EQ(log.warnings[0].kind, "unused_source");
 }
 
+// The one trigger reader takes a DataFlash file by its content and keeps the log's clock.
+TEST(DataFlash, IsATriggerFile) {
+  test::TempDir dir;
+  WriteFileAtomically(dir / "00000042.BIN", FlightFile(300).bytes());
+  const TriggerFile f = ReadTriggerFile(dir / "00000042.BIN");
+  EXPECT_EQ(f.format, "dataflash");
+  EXPECT_EQ(f.clock, TriggerClock::kLog);
+  ASSERT_GE(f.events.size(), 3u);
+  const FlightLog log = ParseDataFlash(FlightFile(300).bytes(), "f.bin");
+  ASSERT_EQ(f.events.size(), log.camera_events.size());
+  for (size_t i = 0; i < f.events.size(); ++i) {
+    EXPECT_EQ(f.events[i].t_ns, log.camera_events[i].t_ns);
+    EXPECT_EQ(f.events[i].sequence, log.camera_events[i].sequence);
+  }
+  EXPECT_NE(f.source.find("CAM"), std::string::npos) << f.source;
+}
+
 TEST(DataFlash, ReadsCameraEventsAndAltitude) {
   DataFlashBuilder b = FlightFile(1000);
   const FlightLog log = ParseDataFlash(b.bytes(), "flight.bin");
@@ -309,6 +328,31 @@ TEST(DataFlash, CameraEventsWithoutBootTimeAreCountedNotPlaced) {
   const FlightLog log = ParseDataFlash(b.bytes(), "oldcam.bin");
   EXPECT_TRUE(log.camera_events.empty());
   EXPECT_TRUE(AnyWarningContains(log, "1 camera event(s) without a boot-time stamp"));
+}
+
+// GPS (TimeUS, I, Status, GMS, GWk): the boot clock against UTC from 3-D fixes of instance 0.
+TEST(DataFlash, ReadsGpsTimeAgainstTheBootClock) {
+  DataFlashBuilder b;
+  b.Fmt(149, 3 + 8 + 1 + 1 + 4 + 2, "GPS", "QBBIH", "TimeUS,I,Status,GMS,GWk");
+  auto gps = [&b](uint64_t t_us, uint8_t instance, uint8_t status, uint32_t gms) {
+    b.bytes() += std::string("\xA3\x95\x95", 3);
+    test::PutLittleEndian(&b.bytes(), t_us);
+    test::PutLittleEndian(&b.bytes(), instance);
+    test::PutLittleEndian(&b.bytes(), status);
+    test::PutLittleEndian(&b.bytes(), gms);
+    test::PutLittleEndian<uint16_t>(&b.bytes(), 2211);
+  };
+  gps(5'000'000, 0, 3, 296'288'242);
+  gps(5'200'000, 1, 3, 296'288'442);  // a second receiver: not used
+  gps(5'400'000, 0, 1, 296'288'642);  // no fix: not used
+  gps(5'600'000, 0, 6, 296'288'842);  // RTK fixed
+  for (int k = 0; k < 10; ++k) b.Imu(1000 + k * 1000, 0, 0, 0, 0);
+  const FlightLog log = ParseDataFlash(b.bytes(), "gps.bin");
+  ASSERT_EQ(log.utc_fixes.size(), 2u);
+  EXPECT_EQ(log.utc_fixes[0].t_ns, 5'000'000'000);
+  // GPS week 2211, 296288.242 s of week, less 18 leap seconds: 2022-05-25 10:17:50.242 UTC.
+  EXPECT_EQ(UtcText(log.utc_fixes[0].utc_ns), "2022-05-25 10:17:50.242");
+  EXPECT_EQ(log.utc_fixes[1].utc_ns - log.utc_fixes[0].utc_ns, 600'000'000);
 }
 
 TEST(DataFlash, TruncatedCopyKeepsWhatCameBefore) {

@@ -1,0 +1,200 @@
+// `shutterlab correct DATASET --out DIR`: rolling-shutter images to their global-shutter view, a
+// rig dataset again (estimate/correct/correct_dataset.h); `correct --photos DIR LOG --out OUT`: a
+// folder of photos with the flight log that recorded them (estimate/correct/photo_input.h).
+
+#include "app/command.h"
+#include "app/trace_options.h"
+#include "estimate/correct/correct_dataset.h"
+#include "estimate/correct/correct_io.h"
+#include "render/lens_profile.h"
+#include "sim/check.h"
+#include "sim/civil_time.h"
+#include "sim/logs/log_format.h"
+#include "sim/units.h"
+
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <mutex>
+#include <string>
+
+namespace shutterlab::app {
+namespace {
+
+struct CorrectCommand {
+  CorrectOptions options;
+  std::string input;  // the dataset folder, or with --photos the LOG
+  // --photos DIR LOG, with analyze's flags for the log, the triggers and the camera.
+  std::string photos_dir;
+  std::string format = "auto";
+  ColumnFlags column_flags;
+  std::string triggers_path;
+  std::string latency = "0";
+  std::string camera_path;
+  std::string lens_profile_path;
+  std::string readout;
+  double focal_px = 0.0;
+  double altitude_m = 0.0;
+  std::string photo_utc_offset;
+  std::string reference = "row0";
+  std::string interpolation = "bilinear";
+  double depth_m = 0.0;
+  double gyro_noise = -1.0;
+  bool json = false;
+};
+
+// --photos DIR LOG: the photo input's options from the flags.
+PhotoInputOptions PhotoOptionsFromFlags(const CorrectCommand& command) {
+  PhotoInputOptions photos;
+  photos.log_path = command.input;
+  photos.read.format = ParseLogFormat(command.format);
+  command.column_flags.Apply(&photos.read);
+  photos.triggers_path = command.triggers_path;
+  photos.trigger_latency_s = ParseDurationS(command.latency);
+  if (!command.camera_path.empty()) {
+    photos.camera = ReadRigModel(command.camera_path);
+    photos.camera_path = command.camera_path;
+  }
+  if (!command.lens_profile_path.empty())
+    photos.lens_profile = ReadLensProfile(command.lens_profile_path);
+  if (!command.readout.empty()) photos.readout_s = ParseDurationS(command.readout);
+  if (command.focal_px != 0.0) photos.focal_px = command.focal_px;
+  if (command.altitude_m != 0.0) photos.altitude_m = command.altitude_m;
+  if (!command.photo_utc_offset.empty()) {
+    photos.clock.camera_utc_offset_s = ParseUtcOffset(command.photo_utc_offset);
+    SHUTTERLAB_CHECK(photos.clock.camera_utc_offset_s)
+        << "--photo-utc-offset must be +HH:MM or -HH:MM (got '" << command.photo_utc_offset << "')";
+  }
+  photos.Check();
+  return photos;
+}
+
+void Run(CorrectCommand& command) {
+  CorrectOptions& options = command.options;
+  const bool photo_flags =
+      !command.triggers_path.empty() || command.latency != "0" || !command.camera_path.empty() ||
+      !command.lens_profile_path.empty() || !command.readout.empty() || command.focal_px != 0.0 ||
+      command.altitude_m != 0.0 || !command.photo_utc_offset.empty() || command.format != "auto";
+  if (command.photos_dir.empty()) {
+    SHUTTERLAB_CHECK(!photo_flags) << "--triggers, --latency, --camera, --lens-profile, --readout, "
+                                      "--focal-px, --altitude, --photo-utc-offset and --format "
+                                      "are for --photos DIR LOG (a rig dataset has camera.json)";
+    SHUTTERLAB_CHECK(std::filesystem::is_directory(command.input))
+        << command.input << ": not a folder (a rig dataset; for photos: --photos DIR LOG)";
+    options.dataset_dir = command.input;
+  } else {
+    SHUTTERLAB_CHECK(!options.check_truth) << "--truth is for a rendered rig dataset";
+    options.dataset_dir = command.photos_dir;
+    options.photos = PhotoOptionsFromFlags(command);
+  }
+  const std::optional<CorrectionReference> reference = ParseCorrectionReference(command.reference);
+  SHUTTERLAB_CHECK(reference) << "--reference must be row0 or mid (got " << command.reference
+                              << ")";
+  options.reference = *reference;
+  options.interpolation =
+      command.interpolation == "bicubic" ? Interpolation::kBicubic : Interpolation::kBilinear;
+  if (command.depth_m != 0.0) options.depth_m = command.depth_m;
+  if (command.gyro_noise >= 0.0) options.gyro_noise_rad_s_sqrt_hz = command.gyro_noise;
+  options.Check();
+  std::unique_ptr<Progress> bar;
+  const CorrectSummary summary = CorrectDataset(options, [&](size_t done, size_t total) {
+    if (!bar) bar = std::make_unique<Progress>("correct", total);
+    bar->Update(done);
+  });
+  bar.reset();
+  PrintLogWarnings(options.photos
+                       ? options.photos->log_path
+                       : (std::filesystem::path(options.dataset_dir) / "gyro.csv").string(),
+                   summary.warnings);
+  for (const std::string& note : summary.model.notes) std::cerr << "note: " << note << "\n";
+  for (const std::string& note : summary.notes) std::cerr << "note: " << note << "\n";
+  for (const CorrectedFrame& f : summary.frames) {
+    for (const std::string& note : f.notes) std::cerr << "note: " << note << "\n";
+  }
+  if (command.json) {
+    std::cout << CorrectionToJson(summary).dump(2) << "\n";
+  } else {
+    std::cout << CorrectionTable(summary);
+  }
+}
+
+const CommandRegistration kRegistration(75, [](CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "correct",
+      "correct the rolling shutter of a rig dataset's images (still or video) or of a folder of "
+      "photos with its flight log: the global-shutter view from the pose at a reference instant");
+  auto command = std::make_shared<CorrectCommand>();
+  CorrectOptions& o = command->options;
+  cmd->add_option("DATASET", command->input,
+                  "rig dataset folder (camera.json, gyro.csv, frames.csv, images): render's or "
+                  "import's; with --photos DIR, the flight log (ULog, DataFlash, blackbox, "
+                  "gyro.csv, any CSV by --columns)")
+      ->required()
+      ->check(CLI::ExistingPath);
+  cmd->add_option("--photos", command->photos_dir,
+                  "a folder of photos (JPEG, TIFF, DNG) taken during the flight DATASET logged")
+      ->check(CLI::ExistingPath);
+  cmd->add_option("--format", command->format,
+                  "--photos: the log's format (auto, ulog, dataflash, blackbox, gyro.csv, gcsv, "
+                  "raw)")
+      ->capture_default_str();
+  command->column_flags.Add(cmd);
+  cmd->add_option("--triggers", command->triggers_path,
+                  "--photos: trigger file (.MRK, CSV image,t or t, a log's camera events); "
+                  "default: the log's camera events")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--latency", command->latency,
+                  "--photos: trigger to the exposure of row 0 (s, ms, us; may be negative)")
+      ->capture_default_str();
+  cmd->add_option("--camera", command->camera_path,
+                  "--photos: camera.json (default: the photos' own size, focal length and readout)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--lens-profile", command->lens_profile_path,
+                  "--photos: Gyroflow lens profile (JSON), scaled to the photos")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--readout", command->readout,
+                  "--photos: the readout (s, ms, us), over camera.json and the readout table");
+  cmd->add_option("--focal-px", command->focal_px, "--photos: focal length, pixels");
+  cmd->add_option("--altitude", command->altitude_m,
+                  "--photos: height of the ground plane below the camera, m (default: camera.json, "
+                  "the log's height above ground, the photos' height above take-off)");
+  cmd->add_option("--photo-utc-offset", command->photo_utc_offset,
+                  "--photos: the camera clock's zone, +HH:MM (placing photos by capture time)");
+  cmd->add_option("--out", o.out_dir, "output dataset folder (images already there are kept)")
+      ->required();
+  cmd->add_option("--report", o.report_path,
+                  "a validation report (validate --report): correct with the effects it found")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--effect", o.effects,
+                  "NAME=VALUE: set an effect on top of camera.json and the report (as render "
+                  "--inject: readout_time=0.0235, gyro_to_camera=..., ...); repeatable");
+  cmd->add_option("--reference", command->reference,
+                  "the instant the corrected image shows: row0 (the first row, as render's "
+                  "reference) or mid (mid-readout)")
+      ->capture_default_str();
+  cmd->add_option("--depth", command->depth_m,
+                  "video: the scene's depth, m, to correct translation too (camera.json velocity); "
+                  "without it video is rotation only");
+  cmd->add_option("--interpolation", command->interpolation, "bilinear or bicubic")
+      ->check(CLI::IsMember({"bilinear", "bicubic"}))
+      ->capture_default_str();
+  cmd->add_option("--tolerance", o.map.tolerance_px,
+                  "largest interpolation error of the correction map, px")
+      ->capture_default_str();
+  cmd->add_option("--gyro-noise", command->gyro_noise,
+                  "the gyro's white noise, rad/s/sqrt(Hz), for the predicted residual (default: "
+                  "estimated from gyro.csv)");
+  cmd->add_option("--draws", o.prediction.draws, "draws of the truth for the predicted residual")
+      ->capture_default_str();
+  cmd->add_option("--jobs", o.jobs, "frames corrected at once (0: the cores, at most 4)")
+      ->capture_default_str();
+  cmd->add_flag("--force", o.force, "rewrite corrected images that the output already holds");
+  cmd->add_flag("--truth", o.check_truth,
+                "a rendered dataset: measure the corrected frames against truth/ (exact)");
+  cmd->add_flag("!--no-pictures", o.pictures, "skip overview.png");
+  cmd->add_flag("--json", command->json, "print correct.json instead of the table");
+  return std::function<void()>([command] { Run(*command); });
+});
+
+}  // namespace
+}  // namespace shutterlab::app

@@ -1,0 +1,466 @@
+#include "estimate/correct/correct_dataset.h"
+
+#include "estimate/correct/correct_io.h"
+#include "render/effect_io.h"
+#include "render/frames_csv.h"
+#include "render/image_io.h"
+#include "render/pictures.h"
+#include "render/rig_dataset.h"
+#include "render/rs_warp.h"
+#include "sim/check.h"
+#include "sim/logs/gyro_io.h"
+#include "sim/text_file.h"
+#include "sim/units.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <exception>
+#include <filesystem>
+#include <mutex>
+#include <thread>
+
+namespace shutterlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Gyro samples either side of a frame's readout that a residual draw may need (a clock-rate draw
+// moves a frame at 1000 s by 1 ms per ppm).
+constexpr int64_t kGyroMarginNs = 1'000'000'000;
+// Frames drawn in overview.png.
+constexpr size_t kOverviewFrames = 4;
+
+struct Context {
+  const CorrectOptions& options;
+  const RigDataset& dataset;
+  const CorrectionModel& model;
+  const CorrectionSetting& setting;
+  const CameraMotion& motion;
+  std::vector<std::pair<std::string, std::string>> xmp;  // the same for every frame
+};
+
+fs::path OutPath(const Context& c, const std::string& relative) {
+  return fs::path(c.options.out_dir) / relative;
+}
+fs::path MaskPath(const std::string& out_dir, const std::string& image) {
+  return fs::path(out_dir) / "masks" / (image + ".png");
+}
+
+void CreateParent(const fs::path& path) {
+  std::error_code ec;
+  fs::create_directories(path.parent_path(), ec);
+  if (ec)
+    throw IoError(IoMessage(path.parent_path().string(), 0, "cannot create: " + ec.message()));
+}
+
+// The instant the corrected frame shows, camera clock: the reference row's capture time.
+int64_t ReferenceTimeNs(const TrueModel& model, int64_t t_first_row_ns, double reference_row) {
+  return t_first_row_ns +
+         SecondsToNs(model.rig.shutter.RowTimeOffsetS(reference_row, model.rig.camera.height));
+}
+
+// Writes the corrected image and its mask (unless DIR holds both and force is off); the share of
+// pixels with no source.
+double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap& map,
+                      const ResidualPrediction& residual, CorrectedFrame* out) {
+  const fs::path image_path = OutPath(c, e.image), mask_path = MaskPath(c.options.out_dir, e.image);
+  cv::Mat mask;
+  if (!c.options.force && fs::is_regular_file(image_path) && fs::is_regular_file(mask_path)) {
+    out->kept = true;
+    mask = ReadImage(mask_path.string());
+  } else {
+    const std::string input = (c.dataset.dir / e.image).string();
+    const cv::Mat rs = ReadImage(input);
+    if (rs.cols != map.geometry().camera().width || rs.rows != map.geometry().camera().height) {
+      throw IoError(IoMessage(input, 0,
+                              "is " + std::to_string(rs.cols) + "x" + std::to_string(rs.rows) +
+                                  ", camera.json declares " +
+                                  std::to_string(map.geometry().camera().width) + "x" +
+                                  std::to_string(map.geometry().camera().height)));
+    }
+    cv::Mat corrected;
+    CorrectFrame(rs, map, c.options.interpolation, &corrected, &mask);
+    std::vector<std::pair<std::string, std::string>> xmp = c.xmp;
+    xmp.emplace_back("Xmp.shutterlab.ReferenceTime",
+                     FormatNumber("%.9f", out->t_reference_ns * 1e-9));
+    xmp.emplace_back("Xmp.shutterlab.ReferenceRow", FormatNumber("%g", out->reference_row));
+    xmp.emplace_back("Xmp.shutterlab.DistortionBeforePx",
+                     FormatNumber("%.3f", residual.d_before_px));
+    xmp.emplace_back("Xmp.shutterlab.PredictedDistortionAfterPx",
+                     FormatNumber("%.3f", out->predicted_d_after_px));
+    CreateParent(image_path);
+    CreateParent(mask_path);
+    out->notes = WriteImageLike(image_path.string(), corrected,
+                                ImageLike{input, ReadImageFileInfo(input)}, xmp);
+    WriteImage(mask_path.string(), mask);
+  }
+  return 1.0 - cv::countNonZero(mask) / static_cast<double>(mask.total());
+}
+
+CorrectedFrame CorrectOne(const Context& c, const FrameEntry& e) {
+  const TrueModel& model = c.model.model;
+  CorrectedFrame out;
+  out.frame = e.frame;
+  out.image = e.image;
+  out.t_first_row_ns = e.t_first_row_ns;
+  out.reference_row = ReferenceRow(c.setting.reference, model.rig.shutter, model.rig.camera.height);
+  out.t_reference_ns = ReferenceTimeNs(model, e.t_first_row_ns, out.reference_row);
+  const FrameMotion motion = c.motion.Frame(e.t_first_row_ns);  // std::out_of_range: skipped
+  const CorrectionGeometry geometry(model.rig.camera, motion, out.reference_row,
+                                    c.setting.plane_depth_m);
+  const CorrectionMap map(geometry, c.options.map);
+  out.cell_px = map.cell_px();
+  out.map_error_px = map.estimated_error_px();
+  const int64_t readout_ns = SecondsToNs(model.rig.shutter.readout_s);
+  out.residual = PredictResidual(c.model,
+                                 GyroAround(c.dataset.gyro, e.t_first_row_ns - kGyroMarginNs,
+                                            e.t_first_row_ns + readout_ns + kGyroMarginNs),
+                                 e.t_first_row_ns, c.setting, c.options.prediction);
+  out.predicted_d_after_px = out.residual.d_after_px + 2 * out.map_error_px;
+  out.predicted_d_after_p90_px = out.residual.d_after_p90_px + 2 * out.map_error_px;
+  out.no_source_fraction = WriteCorrected(c, e, map, out.residual, &out);
+  if (c.options.check_truth) {
+    const fs::path truth_dir =
+        c.options.truth_dir.empty() ? c.dataset.dir / "truth" : fs::path(c.options.truth_dir);
+    const fs::path truth = truth_dir / (FrameName(e.frame) + "_disp.exr");
+    if (!fs::is_regular_file(truth)) throw IoError(IoMessage(truth.string(), 0, "missing"));
+    out.truth = MeasureAgainstTruth(map, ReadFloatImage(truth.string()));
+  }
+  return out;
+}
+
+// Every frame on `jobs` threads, frames.csv order kept; frames whose readout the gyro does not
+// cover go to skipped. The first error stops the others and is thrown.
+void RunFrames(const Context& c, const CorrectProgress& progress, CorrectSummary* summary) {
+  const std::vector<FrameEntry>& entries = c.dataset.frames;
+  std::vector<std::optional<CorrectedFrame>> done(entries.size());
+  std::vector<std::string> skipped(entries.size());
+  std::atomic<size_t> next{0}, finished{0};
+  std::atomic<bool> failed{false};
+  std::exception_ptr error;
+  std::mutex lock;
+  const auto work = [&] {
+    for (size_t i = next++; i < entries.size() && !failed; i = next++) {
+      try {
+        done[i] = CorrectOne(c, entries[i]);
+      } catch (const std::out_of_range&) {
+        skipped[i] = "its readout is outside " + fs::path(c.dataset.gyro_path).filename().string();
+      } catch (...) {
+        const std::lock_guard<std::mutex> guard(lock);
+        if (!failed.exchange(true)) error = std::current_exception();
+      }
+      const std::lock_guard<std::mutex> guard(lock);
+      if (progress) progress(++finished, entries.size());
+    }
+  };
+  const int hardware = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int jobs = c.options.jobs > 0 ? c.options.jobs : std::min(hardware, 4);
+  std::vector<std::thread> workers;
+  for (int k = 1; k < std::min<int>(jobs, static_cast<int>(entries.size())); ++k) {
+    workers.emplace_back(work);
+  }
+  work();
+  for (std::thread& t : workers) t.join();
+  if (error) std::rethrow_exception(error);
+  for (size_t i = 0; i < entries.size(); ++i) {
+    if (done[i]) summary->frames.push_back(std::move(*done[i]));
+    if (!skipped[i].empty()) summary->skipped.emplace_back(entries[i].frame, skipped[i]);
+  }
+}
+
+// The logged trace with the model's gyro scale, bias and clock rate applied (rates in gyro axes;
+// times moved so that gyro time = camera time + time_offset_s), so that camera.json with identity
+// scale, zero bias and no clock rate declares the whole model.
+GyroTrace CorrectedGyro(const GyroTrace& logged, const TrueModel& model) {
+  std::vector<GyroSample> samples = logged.samples();
+  const int64_t offset_ns = SecondsToNs(model.rig.time_offset_s);
+  const double rate = 1.0 + model.clock_rate_ppm * 1e-6;
+  for (GyroSample& s : samples) {
+    s.omega_rad_s = model.gyro_scale.cwiseProduct(s.omega_rad_s - model.gyro_bias_rad_s);
+    if (model.clock_rate_ppm != 0.0) {
+      s.t_ns = offset_ns + static_cast<int64_t>(std::llround((s.t_ns - offset_ns) / rate));
+    }
+  }
+  return GyroTrace(std::move(samples));
+}
+
+// camera.json, gyro.csv, frames.csv and the copied references of DIR.
+void WriteDatasetFiles(const Context& c, const CorrectSummary& summary) {
+  const fs::path out(c.options.out_dir);
+  RigModel rig = c.model.model.rig;
+  rig.shutter.readout_s = 0.0;
+  WriteRigModel((out / "camera.json").string(), rig);
+  WriteGyroCsv((out / "gyro.csv").string(), CorrectedGyro(c.dataset.gyro, c.model.model));
+  const bool keep_refs = !c.dataset.video && c.setting.reference == CorrectionReference::kFirstRow;
+  std::vector<FrameEntry> frames;
+  for (const CorrectedFrame& f : summary.frames) {
+    FrameEntry e;
+    e.frame = f.frame;
+    e.t_first_row_ns = f.t_reference_ns;
+    e.image = f.image;
+    for (const FrameEntry& in : c.dataset.frames) {
+      if (keep_refs && in.frame == f.frame) e.ref = in.ref;
+    }
+    if (!e.ref.empty()) {
+      const fs::path ref = out / e.ref;
+      CreateParent(ref);
+      std::error_code ec;
+      fs::copy_file(c.dataset.dir / e.ref, ref, fs::copy_options::overwrite_existing, ec);
+      if (ec)
+        throw IoError(IoMessage(ref.string(), 0, "cannot copy the reference: " + ec.message()));
+    }
+    frames.push_back(e);
+  }
+  WriteFramesCsv((out / "frames.csv").string(), frames);
+}
+
+// A hard link to target at link (a copy where links are refused), replacing what is there.
+void LinkOrCopy(const fs::path& target, const fs::path& link) {
+  std::error_code ec;
+  fs::remove(link, ec);
+  fs::create_hard_link(target, link, ec);
+  if (!ec) return;
+  fs::copy_file(target, link, fs::copy_options::overwrite_existing, ec);
+  if (ec) throw IoError(IoMessage(link.string(), 0, "cannot link or copy: " + ec.message()));
+}
+
+// colmap/image_list.txt and odm/images/ (one folder: names flattened where folders would clash).
+void WritePipelineLists(const CorrectSummary& summary) {
+  const fs::path out(summary.out_dir);
+  std::string list;
+  for (const CorrectedFrame& f : summary.frames) list += f.image + "\n";
+  CreateParent(out / "colmap" / "image_list.txt");
+  WriteFileAtomically((out / "colmap" / "image_list.txt").string(), list);
+  std::vector<std::string> names;
+  for (const CorrectedFrame& f : summary.frames)
+    names.push_back(fs::path(f.image).filename().string());
+  std::vector<std::string> sorted = names;
+  std::sort(sorted.begin(), sorted.end());
+  const bool clash = std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end();
+  const fs::path odm = out / "odm" / "images";
+  std::error_code ec;
+  fs::create_directories(odm, ec);
+  if (ec) throw IoError(IoMessage(odm.string(), 0, "cannot create: " + ec.message()));
+  for (size_t i = 0; i < summary.frames.size(); ++i) {
+    std::string name = names[i];
+    if (clash) {
+      name = summary.frames[i].image;
+      std::replace(name.begin(), name.end(), '/', '_');
+    }
+    const fs::path image = odm / name;
+    LinkOrCopy(out / summary.frames[i].image, image);
+    LinkOrCopy(MaskPath(summary.out_dir, summary.frames[i].image),
+               odm / (image.stem().string() + "_mask.png"));
+  }
+}
+
+// overview.png: a few frames, evenly spread, rolling shutter beside corrected.
+void WriteOverview(const CorrectSummary& summary) {
+  if (summary.frames.empty()) return;
+  std::vector<cv::Mat> tiles;
+  std::vector<std::string> captions;
+  const size_t count = std::min(kOverviewFrames, summary.frames.size());
+  for (size_t k = 0; k < count; ++k) {
+    const CorrectedFrame& f =
+        summary.frames[k * (summary.frames.size() - 1) / std::max<size_t>(1, count - 1)];
+    tiles.push_back(ToRgb8(ReadImage((fs::path(summary.dataset) / f.image).string())));
+    tiles.push_back(ToRgb8(ReadImage((fs::path(summary.out_dir) / f.image).string())));
+    captions.push_back("frame " + std::to_string(f.frame) + ": rolling shutter, D " +
+                       FormatNumber("%.2f px", f.residual.d_before_px));
+    captions.push_back("corrected (" +
+                       std::string(CorrectionReferenceName(summary.setting.reference)) +
+                       "), predicted D " + FormatNumber("%.2f px", f.predicted_d_after_px));
+  }
+  WriteImage((fs::path(summary.out_dir) / "overview.png").string(),
+             TiledOverview(tiles, captions, 480, 2));
+}
+
+// The setting and its words: the ground plane for stills, rotation only for video unless a depth.
+void ChooseSetting(const CorrectOptions& options, const RigDataset& dataset, const TrueModel& model,
+                   CorrectSummary* summary) {
+  summary->setting.reference = options.reference;
+  if (!dataset.video) {
+    summary->setting.plane_depth_m = model.rig.altitude_m;
+    summary->translation = FormatNumber("ground plane at %g m", model.rig.altitude_m);
+  } else if (options.depth_m) {
+    summary->setting.plane_depth_m = *options.depth_m;
+    summary->translation = FormatNumber("scene plane at %g m (--depth)", *options.depth_m);
+  } else {
+    summary->translation = "rotation only (video: no depth known; give --depth for translation)";
+  }
+  if (options.reference == CorrectionReference::kMidReadout && !dataset.video && !options.photos) {
+    summary->notes.push_back(
+        "--reference mid: the references show row 0's instant, not the corrected frames': "
+        "frames.csv leaves ref empty");
+  }
+}
+
+// The field (CV_32FC2) at (x, y) inside it, bilinear (NaN where a tap is NaN).
+cv::Vec2f BilinearAt(const cv::Mat& field, double x, double y) {
+  const int x0 = std::min(static_cast<int>(x), field.cols - 2);
+  const int y0 = std::min(static_cast<int>(y), field.rows - 2);
+  const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
+  const cv::Vec2f* top = field.ptr<cv::Vec2f>(y0) + x0;
+  const cv::Vec2f* bottom = field.ptr<cv::Vec2f>(y0 + 1) + x0;
+  return (1 - fy) * ((1 - fx) * top[0] + fx * top[1]) +
+         fy * ((1 - fx) * bottom[0] + fx * bottom[1]);
+}
+
+}  // namespace
+
+void CorrectOptions::Check() const {
+  SHUTTERLAB_CHECK(!dataset_dir.empty()) << "the dataset folder is required";
+  SHUTTERLAB_CHECK(!out_dir.empty()) << "--out is required";
+  SHUTTERLAB_CHECK(!depth_m || (*depth_m > 0 && std::isfinite(*depth_m)))
+      << "--depth must be positive (got " << *depth_m << " m)";
+  SHUTTERLAB_CHECK(!gyro_noise_rad_s_sqrt_hz ||
+                   (*gyro_noise_rad_s_sqrt_hz >= 0 && std::isfinite(*gyro_noise_rad_s_sqrt_hz)))
+      << "--gyro-noise must be 0 or positive";
+  SHUTTERLAB_CHECK(jobs >= 0 && jobs <= 256) << "--jobs must be 0 to 256 (got " << jobs << ")";
+  SHUTTERLAB_CHECK(!check_truth || reference == CorrectionReference::kFirstRow)
+      << "--truth compares with the renderer's references, which show row 0: use --reference row0";
+  map.Check();
+  prediction.Check();
+}
+
+TruthResidual MeasureAgainstTruth(const CorrectionMap& map, const cv::Mat& truth_field) {
+  const PinholeCamera& camera = map.geometry().camera();
+  SHUTTERLAB_CHECK(truth_field.type() == CV_32FC2 && truth_field.cols == camera.width &&
+                   truth_field.rows == camera.height)
+      << "the truth field must be the camera's size with two float channels";
+  TruthResidual out;
+  out.d_before_px = FrameDistortionPx(truth_field);
+  cv::Mat residual(truth_field.size(), CV_32FC2, cv::Scalar::all(NAN));
+  std::vector<float> xs(camera.width), ys(camera.width);
+  double sum_sq = 0.0;
+  for (int v = 0; v < camera.height; ++v) {
+    map.SourceRow(v, 0, camera.width, xs.data(), ys.data());
+    for (int u = 0; u < camera.width; ++u) {
+      const Eigen::Vector2d q(xs[u], ys[u]);
+      if (!map.geometry().HasSource(q)) continue;
+      const cv::Vec2f dq = BilinearAt(truth_field, q.x(), q.y());
+      if (!std::isfinite(dq[0]) || !std::isfinite(dq[1])) continue;
+      const cv::Vec2f r(static_cast<float>(q.x() + dq[0] - u),
+                        static_cast<float>(q.y() + dq[1] - v));
+      residual.at<cv::Vec2f>(v, u) = r;
+      const double r2 = double{r[0]} * r[0] + double{r[1]} * r[1];
+      sum_sq += r2;
+      out.max_px = std::max(out.max_px, std::sqrt(r2));
+      ++out.pixels;
+    }
+  }
+  out.rms_px = out.pixels > 0 ? std::sqrt(sum_sq / out.pixels) : 0.0;
+  out.d_px = FrameDistortionPx(residual);
+  return out;
+}
+
+namespace {
+
+// A folder of photos: its triggers are on the log's clock (the model's time offset is not
+// applied), and the log's still segment gives the bias unless the report or --effect sets one.
+void AdaptModelToPhotos(const PhotoInput& input, bool bias_given, CorrectionModel* model) {
+  TrueModel& m = model->model;
+  if (m.rig.time_offset_s != 0.0) {
+    model->notes.push_back(
+        FormatNumber("time_offset_s %g s not applied: the photos' triggers are "
+                     "on the log's clock (give --latency)",
+                     m.rig.time_offset_s));
+    m.rig.time_offset_s = 0.0;
+  }
+  if (bias_given) return;
+  if (input.still_bias_rad_s) {
+    m.gyro_bias_rad_s = *input.still_bias_rad_s;
+    const Eigen::Vector3d deg_s = kDegPerRad * m.gyro_bias_rad_s;
+    model->notes.push_back(
+        "gyro bias " + FormatNumber("%.4f", deg_s.x()) + ", " + FormatNumber("%.4f", deg_s.y()) +
+        ", " + FormatNumber("%.4f", deg_s.z()) + " deg/s from " + input.still_bias_source);
+  } else {
+    model->notes.push_back("gyro bias 0: no still segment (" + input.still_bias_source + ")");
+  }
+}
+
+CorrectSummary CorrectInput(const CorrectOptions& options, const RigDataset& dataset,
+                            const PhotoInput* photos, const CorrectProgress& progress) {
+  SHUTTERLAB_CHECK(!options.check_truth || !dataset.video)
+      << "--truth: a video dataset's truth is each frame's match in the one before, not a "
+         "global-shutter reference";
+  std::error_code ec;
+  if (fs::weakly_canonical(options.out_dir, ec) == fs::weakly_canonical(options.dataset_dir, ec)) {
+    throw IoError(
+        IoMessage(options.out_dir, 0, "--out is the dataset itself: the input is never modified"));
+  }
+  CorrectSummary summary;
+  summary.dataset = options.dataset_dir;
+  summary.out_dir = options.out_dir;
+  summary.report_path = options.report_path;
+  summary.video = dataset.video;
+  summary.photos = photos != nullptr;
+  summary.warnings = dataset.gyro_warnings;
+  if (photos) {
+    summary.notes = photos->notes;
+    summary.skipped = photos->skipped;
+  }
+  std::optional<ReportedModel> report;
+  if (!options.report_path.empty()) report = ReadValidationReport(options.report_path);
+  summary.model = BuildCorrectionModel(dataset.declared, report, options.report_path);
+  for (const std::string& effect : options.effects) {
+    const Injection set = ApplyInjection(effect, &summary.model.model);
+    summary.model.notes.push_back("--effect " + Spec(set.effect).name + " = " +
+                                  EffectValueText(set.value) + " (no uncertainty)");
+  }
+  if (photos) {
+    const bool bias_given =
+        std::count(summary.model.effects.begin(), summary.model.effects.end(), Effect::kGyroBias) >
+            0 ||
+        std::any_of(options.effects.begin(), options.effects.end(),
+                    [](const std::string& e) { return e.rfind("gyro_bias=", 0) == 0; });
+    AdaptModelToPhotos(*photos, bias_given, &summary.model);
+  }
+  if (options.gyro_noise_rad_s_sqrt_hz) {
+    summary.model.gyro_noise_rad_s_sqrt_hz = *options.gyro_noise_rad_s_sqrt_hz;
+    summary.model.gyro_noise_source = "--gyro-noise";
+  } else {
+    const GyroNoiseEstimate noise = EstimateGyroNoise(dataset.gyro);
+    summary.model.gyro_noise_rad_s_sqrt_hz = noise.rad_s_sqrt_hz;
+    summary.model.gyro_noise_source = "estimated from " + noise.source;
+  }
+  const TrueModel& model = summary.model.model;
+  ChooseSetting(options, dataset, model, &summary);
+  if (summary.setting.plane_depth_m) {
+    summary.m_per_px =
+        *summary.setting.plane_depth_m / (0.5 * (model.rig.camera.fx + model.rig.camera.fy));
+  }
+  const CameraMotion motion(dataset.gyro, model);
+  Context context{options, dataset, summary.model, summary.setting, motion, {}};
+  context.xmp = {{"Xmp.shutterlab.RollingShutterCorrected", "True"},
+                 {"Xmp.shutterlab.Reference", CorrectionReferenceName(options.reference)},
+                 {"Xmp.shutterlab.Translation", summary.translation}};
+  fs::create_directories(options.out_dir, ec);
+  if (ec) throw IoError(IoMessage(options.out_dir, 0, "cannot create: " + ec.message()));
+  RunFrames(context, progress, &summary);
+  if (summary.frames.empty()) {
+    throw IoError(
+        IoMessage(dataset.frames_path, 0, "no frame's readout lies inside " + dataset.gyro_path));
+  }
+  WriteDatasetFiles(context, summary);
+  WritePipelineLists(summary);
+  if (options.pictures) WriteOverview(summary);
+  WriteFileAtomically((fs::path(options.out_dir) / "correct.json").string(),
+                      CorrectionToJson(summary).dump(2) + "\n");
+  return summary;
+}
+
+}  // namespace
+
+CorrectSummary CorrectDataset(const CorrectOptions& options, const CorrectProgress& progress) {
+  options.Check();
+  if (!options.photos)
+    return CorrectInput(options, ReadRigDataset(options.dataset_dir), nullptr, progress);
+  const PhotoInput input = ReadPhotoInput(options.dataset_dir, *options.photos);
+  return CorrectInput(options, input.dataset, &input, progress);
+}
+
+}  // namespace shutterlab

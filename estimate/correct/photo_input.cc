@@ -1,0 +1,196 @@
+#include "estimate/correct/photo_input.h"
+
+#include "estimate/paper/photo_flight.h"
+#include "sim/bias.h"
+#include "sim/check.h"
+#include "sim/logs/trigger_file.h"
+#include "sim/still_detect.h"
+#include "sim/text_file.h"
+#include "sim/units.h"
+
+#include <cmath>
+#include <filesystem>
+
+namespace shutterlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+// What the user gave wins over the photos' own focal length, readout and altitude.
+PhotoSetOptions PhotoSetOptionsFrom(const PhotoInputOptions& options,
+                                    const std::function<void(double)>& progress) {
+  PhotoSetOptions set;
+  if (options.camera) {
+    set.readout_s = options.camera->shutter.readout_s;
+    set.readout_origin = ReadoutOrigin::kCameraFile;
+    set.readout_text = "--camera " + options.camera_path;
+    set.focal_px = 0.5 * (options.camera->camera.fx + options.camera->camera.fy);
+    set.focal_text = "--camera " + options.camera_path;
+  }
+  if (options.readout_s) {
+    set.readout_s = options.readout_s;
+    set.readout_origin = ReadoutOrigin::kUser;
+    set.readout_text = "--readout";
+  }
+  if (options.focal_px) {
+    set.focal_px = options.focal_px;
+    set.focal_text = "--focal-px";
+  }
+  set.altitude_m = options.altitude_m;
+  set.lens_profile = options.lens_profile;
+  set.progress = progress;
+  return set;
+}
+
+// The camera: camera.json's (with the flags over it), else the photos' own; a lens profile's lens.
+RigModel PhotosCamera(const PhotoSet& set, const PhotoInputOptions& options, std::string* source) {
+  RigModel rig;
+  rig.shutter.readout_s = 0.030;
+  if (options.camera) {
+    rig = *options.camera;
+    *source = "--camera " + options.camera_path;
+  } else {
+    if (options.readout_s) rig.shutter.readout_s = *options.readout_s;
+    CameraFromPhotos(set, options.readout_s.has_value(), &rig, source);
+    if (rig.camera.width <= 0) {
+      throw IoError(IoMessage(set.source, 0,
+                              "no photo gives its image size and focal length: give --camera "
+                              "camera.json or --focal-px"));
+    }
+  }
+  if (options.readout_s) rig.shutter.readout_s = *options.readout_s;
+  if (options.focal_px) rig.camera.fx = rig.camera.fy = *options.focal_px;
+  if (options.lens_profile) {
+    LensProfileUse use =
+        ScaleLensProfile(*options.lens_profile, rig.camera.width, rig.camera.height);
+    ApplyLensProfile(&use, &rig, options.readout_s.has_value() || options.camera.has_value());
+    *source += "; its lens from the lens profile " + use.name;
+  }
+  return rig;
+}
+
+// The ground plane's height, first that applies: --altitude, camera.json, the log, the photos.
+std::string ChooseAltitude(const PhotoInputOptions& options, const FlightLog& log,
+                           const PhotoSet& set, RigModel* rig) {
+  if (options.altitude_m) {
+    rig->altitude_m = *options.altitude_m;
+    return "--altitude";
+  }
+  if (options.camera) return "--camera " + options.camera_path;
+  if (log.altitude_above_ground_m && *log.altitude_above_ground_m > 0) {
+    rig->altitude_m = *log.altitude_above_ground_m;
+    return "the log: " + log.altitude_source + FormatNumber(" (%.1f m)", rig->altitude_m);
+  }
+  std::vector<double> heights;
+  for (const PhotoRecord& r : set.photos) {
+    if (r.ok() && r.altitude_m) heights.push_back(*r.altitude_m);
+  }
+  if (!heights.empty()) {
+    rig->altitude_m = Median(std::move(heights));
+    return "the photos' median height above take-off (" + FormatNumber("%.1f m)", rig->altitude_m);
+  }
+  return FormatNumber("assumed %g m (give --altitude)", rig->altitude_m);
+}
+
+// The log's bias over its still segment, gyro axes.
+void StillBias(const GyroTrace& gyro, PhotoInput* input) {
+  try {
+    const StillSegment still = DetectStillSegment(gyro);
+    input->still_bias_rad_s = EstimateBias(gyro, still.segment).bias_rad_s;
+    input->still_bias_source = "the log's still segment " +
+                               FormatNumber("%.1f", still.segment.begin_s) + "-" +
+                               FormatNumber("%.1f s", still.segment.end_s);
+  } catch (const std::invalid_argument& e) {
+    input->still_bias_source = e.what();
+  }
+}
+
+}  // namespace
+
+void PhotoInputOptions::Check() const {
+  SHUTTERLAB_CHECK(!log_path.empty()) << "--photos needs the LOG that recorded the flight";
+  SHUTTERLAB_CHECK(std::isfinite(trigger_latency_s) && std::abs(trigger_latency_s) < 10)
+      << "--latency must be below 10 s (got " << trigger_latency_s << " s)";
+  SHUTTERLAB_CHECK(!readout_s || (*readout_s > 0 && *readout_s < 10))
+      << "--readout must be positive (below 10 s)";
+  SHUTTERLAB_CHECK(!focal_px || (*focal_px > 0 && std::isfinite(*focal_px)))
+      << "--focal-px must be positive";
+  SHUTTERLAB_CHECK(!altitude_m || (*altitude_m > 0 && std::isfinite(*altitude_m)))
+      << "--altitude must be positive";
+  if (camera) camera->Check();
+  read.Check();
+  clock.Check();
+}
+
+PhotoInput ReadPhotoInput(const std::string& photos_dir, const PhotoInputOptions& options,
+                          const std::function<void(double)>& progress) {
+  options.Check();
+  const PhotoSetOptions set_options = PhotoSetOptionsFrom(options, progress);
+  set_options.Check();
+  const PhotoSet set = ReadPhotoSet(photos_dir, set_options);
+  PhotoInput input;
+  RigDataset& dataset = input.dataset;
+  dataset.dir =
+      fs::is_directory(photos_dir) ? fs::path(photos_dir) : fs::path(photos_dir).parent_path();
+  dataset.camera_path = options.camera_path;
+  dataset.gyro_path = options.log_path;
+  dataset.frames_path = options.triggers_path.empty() ? options.log_path : options.triggers_path;
+  dataset.declared = PhotosCamera(set, options, &input.camera_source);
+
+  FlightLog log = ReadFlightLog(options.log_path, options.read);
+  std::optional<TriggerFile> triggers;
+  if (!options.triggers_path.empty()) triggers = ReadTriggerFile(options.triggers_path);
+  input.altitude_source = ChooseAltitude(options, log, set, &dataset.declared);
+  dataset.declared.Check();
+  const PhotoClock clock = PlacePhotos(set, log, triggers ? &*triggers : nullptr, options.clock);
+  input.placement = clock.method;
+  dataset.gyro_warnings = log.warnings;
+  if (triggers) {
+    const std::string name = fs::path(options.triggers_path).filename().string();
+    for (LogWarning w : triggers->warnings) {
+      w.message = "trigger file " + name + ": " + w.message;
+      dataset.gyro_warnings.push_back(std::move(w));
+    }
+  }
+  StillBias(log.gyro, &input);
+  dataset.gyro = std::move(log.gyro);
+
+  const PinholeCamera& camera = dataset.declared.camera;
+  const int64_t latency_ns = SecondsToNs(options.trigger_latency_s);
+  for (size_t i = 0; i < set.photos.size(); ++i) {
+    const PhotoRecord& r = set.photos[i];
+    const PhotoPlacement& p = clock.placements[i];
+    const int64_t index = static_cast<int64_t>(i);
+    if (!r.ok()) {
+      input.skipped.emplace_back(index, r.name + ": " + r.error);
+    } else if (!p.t_ns) {
+      input.skipped.emplace_back(index, r.name + ": not placed on the log: " + p.problem);
+    } else if (r.metadata.width != camera.width || r.metadata.height != camera.height) {
+      input.skipped.emplace_back(index, r.name + ": is " + std::to_string(r.metadata.width) + "x" +
+                                            std::to_string(r.metadata.height) + ", the camera " +
+                                            std::to_string(camera.width) + "x" +
+                                            std::to_string(camera.height));
+    } else {
+      FrameEntry e;
+      e.frame = index;
+      e.image = r.name;
+      e.t_first_row_ns = *p.t_ns + latency_ns;
+      dataset.frames.push_back(std::move(e));
+    }
+  }
+  if (dataset.frames.empty()) {
+    throw IoError(IoMessage(
+        set.source, 0,
+        "no photo could be corrected" +
+            (input.skipped.empty() ? std::string() : " (" + input.skipped[0].second + ")")));
+  }
+  input.notes.push_back("camera: " + input.camera_source);
+  input.notes.push_back(
+      "photos placed on " + fs::path(options.log_path).filename().string() + ": " + clock.method +
+      (latency_ns != 0 ? FormatNumber(", latency %g ms", options.trigger_latency_s * 1e3)
+                       : std::string()));
+  input.notes.push_back("ground plane height: " + input.altitude_source);
+  return input;
+}
+
+}  // namespace shutterlab

@@ -1,0 +1,177 @@
+#include "estimate/correct/residual_prediction.h"
+
+#include "sim/check.h"
+#include "sim/so3.h"
+#include "sim/units.h"
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+// A point on the output grid with its source under the model.
+struct GridPoint {
+  int column = 0;        // grid column, for D
+  Eigen::Vector2d p, q;  // output pixel, its source
+};
+
+std::vector<double> GridAt(int size, int count) {
+  std::vector<double> at;
+  for (int k = 0; k < count; ++k) at.push_back((size - 1) * static_cast<double>(k) / (count - 1));
+  return at;
+}
+
+// docs/FORMATS.md's D of displacements grouped by column: the largest diameter within a column.
+double ColumnDiameter(const std::vector<int>& column, const std::vector<Eigen::Vector2d>& d) {
+  double best = 0.0;
+  for (size_t a = 0; a < d.size(); ++a) {
+    for (size_t b = a + 1; b < d.size(); ++b) {
+      if (column[a] == column[b]) best = std::max(best, (d[a] - d[b]).norm());
+    }
+  }
+  return best;
+}
+
+// Adds the gyro's white noise to a frame's rows: per camera axis a random walk in the rows'
+// times, zero at the reference row.
+void AddGyroNoise(const TrueModel& model, int64_t t_first_row_ns, double reference_row,
+                  double density_rad_s_sqrt_hz, std::mt19937_64* rng, FrameMotion* motion) {
+  const int height = static_cast<int>(motion->world_from_cam.size());
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const int start = std::clamp(static_cast<int>(std::lround(reference_row)), 0, height - 1);
+  const auto walk = [&](int from, int to, int step) {
+    Eigen::Vector3d angle = Eigen::Vector3d::Zero();
+    for (int v = from; v != to; v += step) {
+      const double dt_s = std::abs(model.RowGyroOffsetS(t_first_row_ns, v) -
+                                   model.RowGyroOffsetS(t_first_row_ns, v - step));
+      const double sd = density_rad_s_sqrt_hz * std::sqrt(dt_s);
+      angle += sd * Eigen::Vector3d(normal(*rng), normal(*rng), normal(*rng));
+      motion->world_from_cam[v] = motion->world_from_cam[v] * ExpSO3(angle).toRotationMatrix();
+    }
+  };
+  walk(start + 1, height, 1);
+  walk(start - 1, -1, -1);
+}
+
+// The model with each effect's parameters drawn from its covariance.
+TrueModel DrawModel(const CorrectionModel& model, std::mt19937_64* rng) {
+  TrueModel drawn = model.model;
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (const EffectUncertainty& u : model.uncertainty) {
+    // covariance = V diag(l) V^T: delta = V sqrt(l) z (negative eigenvalues of a nearly singular
+    // covariance read as 0).
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(u.covariance);
+    Eigen::VectorXd z(u.covariance.rows());
+    for (int i = 0; i < z.size(); ++i) {
+      z[i] = std::sqrt(std::max(0.0, eigen.eigenvalues()[i])) * normal(*rng);
+    }
+    const Eigen::VectorXd delta = eigen.eigenvectors() * z;
+    Spec(u.effect).apply_delta(delta.data(), &drawn);
+  }
+  return drawn;
+}
+
+}  // namespace
+
+void ResidualPredictionOptions::Check() const {
+  SHUTTERLAB_CHECK(draws >= 1 && draws <= 10000)
+      << "draws must be 1 to 10000 (got " << draws << ")";
+  SHUTTERLAB_CHECK(grid_columns >= 2 && grid_rows >= 2) << "the grid needs two rows and columns";
+}
+
+GyroTrace GyroAround(const GyroTrace& gyro, int64_t begin_ns, int64_t end_ns) {
+  const std::vector<GyroSample>& s = gyro.samples();
+  const auto first = std::upper_bound(s.begin(), s.end(), begin_ns,
+                                      [](int64_t t, const GyroSample& x) { return t < x.t_ns; });
+  const auto last = std::lower_bound(s.begin(), s.end(), end_ns,
+                                     [](const GyroSample& x, int64_t t) { return x.t_ns < t; });
+  const auto from = first == s.begin() ? first : first - 1;
+  const auto to = last == s.end() ? last : last + 1;
+  return GyroTrace(std::vector<GyroSample>(from, std::max(from, to)));
+}
+
+ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace& gyro,
+                                   int64_t t_first_row_ns, const CorrectionSetting& setting,
+                                   const ResidualPredictionOptions& options) {
+  options.Check();
+  const TrueModel& hat = model.model;
+  const PinholeCamera& camera = hat.rig.camera;
+  const FrameMotion motion = CameraMotion(gyro, hat).Frame(t_first_row_ns);
+  const CorrectionGeometry geometry(camera, motion,
+                                    ReferenceRow(setting.reference, hat.rig.shutter, camera.height),
+                                    setting.plane_depth_m);
+  const std::vector<double> us = GridAt(camera.width, options.grid_columns);
+  const std::vector<double> vs = GridAt(camera.height, options.grid_rows);
+  ResidualPrediction out;
+  // Before: the model's displacement of each rolling-shutter grid pixel into the corrected view.
+  {
+    std::vector<int> column;
+    std::vector<Eigen::Vector2d> d;
+    for (size_t i = 0; i < us.size(); ++i) {
+      for (double v : vs) {
+        const std::optional<Eigen::Vector2d> p = geometry.OutputPixel(us[i], v);
+        if (!p) continue;
+        column.push_back(static_cast<int>(i));
+        d.push_back(*p - Eigen::Vector2d(us[i], v));
+      }
+    }
+    out.d_before_px = ColumnDiameter(column, d);
+  }
+  std::vector<GridPoint> grid;
+  for (size_t i = 0; i < us.size(); ++i) {
+    for (double v : vs) {
+      const std::optional<Eigen::Vector2d> q = geometry.SourcePixel(us[i], v);
+      if (q && geometry.HasSource(*q)) grid.push_back({static_cast<int>(i), {us[i], v}, *q});
+    }
+  }
+  std::mt19937_64 rng(options.seed ^ static_cast<uint64_t>(t_first_row_ns));
+  std::vector<double> d_after, rms_after;
+  std::vector<int> column(grid.size());
+  for (size_t k = 0; k < grid.size(); ++k) column[k] = grid[k].column;
+  std::vector<Eigen::Vector2d> r(grid.size());
+  for (int draw = 0; draw < options.draws; ++draw) {
+    const TrueModel truth = DrawModel(model, &rng);
+    FrameMotion truth_motion;
+    try {
+      truth_motion = CameraMotion(gyro, truth).Frame(t_first_row_ns);
+    } catch (const std::out_of_range&) {
+      continue;  // this draw's readout leaves the trace around the frame
+    }
+    const double reference_row = ReferenceRow(setting.reference, truth.rig.shutter, camera.height);
+    if (model.gyro_noise_rad_s_sqrt_hz > 0) {
+      AddGyroNoise(truth, t_first_row_ns, reference_row, model.gyro_noise_rad_s_sqrt_hz, &rng,
+                   &truth_motion);
+    }
+    const CorrectionGeometry truth_geometry(truth.rig.camera, truth_motion, reference_row,
+                                            setting.plane_depth_m);
+    double sum_sq = 0.0;
+    size_t n = 0;
+    for (size_t k = 0; k < grid.size(); ++k) {
+      const std::optional<Eigen::Vector2d> seen =
+          truth_geometry.OutputPixel(grid[k].q.x(), grid[k].q.y());
+      r[k] = seen ? Eigen::Vector2d(*seen - grid[k].p) : Eigen::Vector2d::Zero();
+      if (seen) {
+        sum_sq += r[k].squaredNorm();
+        ++n;
+      }
+    }
+    d_after.push_back(ColumnDiameter(column, r));
+    rms_after.push_back(n > 0 ? std::sqrt(sum_sq / n) : 0.0);
+  }
+  out.draws = static_cast<int>(d_after.size());
+  if (out.draws > 0) {
+    std::sort(d_after.begin(), d_after.end());
+    out.d_after_px = UpperMedian(d_after);
+    out.d_after_p90_px =
+        d_after[std::min(d_after.size() - 1, static_cast<size_t>(0.9 * d_after.size()))];
+    out.rms_after_px = UpperMedian(rms_after);
+  }
+  return out;
+}
+
+}  // namespace shutterlab

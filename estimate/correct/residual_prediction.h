@@ -1,0 +1,60 @@
+#pragma once
+// How much distortion a correction leaves, predicted from the model's uncertainty: the
+// displacement D of docs/FORMATS.md "Frame distortion D" of the frame before correction (under the
+// model), and of the corrected frame against the true global-shutter view, over draws of the truth
+// around the model.
+//
+// For an output pixel p the correction reads the rolling-shutter image at q = S(p), the source
+// under the model (render/rs_correct.h). Were the truth T, q would show what the true reference
+// view shows at F_T(q), T's forward map; the corrected frame is displaced by r(p) = F_T(S(p)) - p
+// against that view. Each draw takes T = the model plus, per effect, a normal draw of its fitted
+// parameters (the report's covariance), and the gyro's white noise integrated along the readout
+// (an independent random walk per camera axis, zero at the reference row, of variance density
+// squared per second). D after is r's D; with the model itself as the truth r is 0 (the map's own
+// interpolation error is not in it: CorrectionMap::estimated_error_px).
+
+#include "estimate/correct/correction_model.h"
+#include "render/rs_correct.h"
+#include "sim/gyro_trace.h"
+
+#include <cstdint>
+#include <optional>
+
+namespace shutterlab {
+
+// How a frame is corrected.
+struct CorrectionSetting {
+  CorrectionReference reference = CorrectionReference::kFirstRow;
+  // The scene plane's depth in the frame's world (stills: the ground at the altitude); nullopt:
+  // rotation only.
+  std::optional<double> plane_depth_m;
+};
+
+struct ResidualPredictionOptions {
+  int draws = 32;         // draws of the truth
+  int grid_columns = 33;  // output pixels on a grid, borders included
+  int grid_rows = 25;
+  uint64_t seed = 1;  // with the frame's time: the same draws on every run
+  // Throws std::invalid_argument naming the first bad field.
+  void Check() const;
+};
+
+struct ResidualPrediction {
+  double d_before_px = 0.0;     // the uncorrected frame's D under the model
+  double d_after_px = 0.0;      // median over draws of the corrected frame's D
+  double d_after_p90_px = 0.0;  // its 90th percentile
+  double rms_after_px = 0.0;    // median over draws of r's root mean square
+  int draws = 0;                // draws whose truth covered the frame (and so counted)
+};
+
+// gyro: the logged trace around the frame (a second either side is plenty: each draw integrates
+// it again). Throws std::out_of_range when the model's readout of the frame lies outside it.
+ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace& gyro,
+                                   int64_t t_first_row_ns, const CorrectionSetting& setting,
+                                   const ResidualPredictionOptions& options = {});
+
+// The samples of gyro within [begin_ns, end_ns] and the ones just outside them (so that the span
+// stays covered), as a trace of its own.
+GyroTrace GyroAround(const GyroTrace& gyro, int64_t begin_ns, int64_t end_ns);
+
+}  // namespace shutterlab

@@ -1,0 +1,108 @@
+#include "estimate/paper/photo_flight.h"
+
+#include "sim/check.h"
+#include "sim/text_file.h"
+#include "sim/units.h"
+
+#include <cmath>
+#include <map>
+#include <tuple>
+
+namespace shutterlab {
+
+void CameraFromPhotos(const PhotoSet& set, bool readout_given, RigModel* rig, std::string* source) {
+  using Key = std::tuple<int, int, int64_t, int64_t>;
+  std::map<Key, size_t> counts;
+  std::map<Key, const PhotoRecord*> example;
+  for (const PhotoRecord& r : set.photos) {
+    if (!r.ok() || !r.focal_px || r.metadata.width <= 0) continue;
+    const Key key{r.metadata.width, r.metadata.height, std::llround(*r.focal_px * 10.0),
+                  r.readout_s ? std::llround(*r.readout_s * 1e9) : -1};
+    ++counts[key];
+    example.emplace(key, &r);
+  }
+  if (counts.empty()) {
+    *source =
+        "no photo gives its image size and focal length: the camera of the flags (--size, "
+        "--focal-px, --readout)";
+    return;
+  }
+  const auto best = std::max_element(counts.begin(), counts.end(),
+                                     [](auto& a, auto& b) { return a.second < b.second; });
+  const PhotoRecord& r = *example[best->first];
+  rig->camera.width = r.metadata.width;
+  rig->camera.height = r.metadata.height;
+  rig->camera.fx = rig->camera.fy = *r.focal_px;
+  rig->camera.cx = 0.5 * (r.metadata.width - 1);
+  rig->camera.cy = 0.5 * (r.metadata.height - 1);
+  *source = "the photos' " + r.metadata.make + " " + r.metadata.model + " (" +
+            std::to_string(best->second) + " of " + std::to_string(set.photos.size()) +
+            " photos), " + std::to_string(r.metadata.width) + "x" +
+            std::to_string(r.metadata.height) + FormatNumber(", f %.0f px", *r.focal_px);
+  if (readout_given) {
+    *source += FormatNumber(", readout %g ms (--readout)", rig->shutter.readout_s * 1e3);
+  } else if (r.readout_s) {
+    rig->shutter.readout_s = *r.readout_s;
+    *source += FormatNumber(", readout %g ms (", *r.readout_s * 1e3) + r.readout_source + ")";
+  } else {
+    *source += FormatNumber(", readout unknown: %g ms assumed (give --readout)",
+                            rig->shutter.readout_s * 1e3);
+  }
+  if (counts.size() > 1) *source += "; other cameras in the folder are analysed as this one";
+}
+
+void PhotoFlightOptions::Check() const {
+  analyze.Check();
+  photos.Check();
+  clock.Check();
+}
+
+PhotoFlightResult AnalyzePhotoFlight(const PhotoSet& set, const FlightLog& log,
+                                     const TriggerFile* triggers,
+                                     const PhotoFlightOptions& options) {
+  options.Check();
+  PhotoFlightResult out;
+  out.clock = PlacePhotos(set, log, triggers, options.clock);
+
+  AnalyzeOptions a = options.analyze;
+  if (options.rig_given) {
+    out.camera_source = "camera.json";
+  } else {
+    CameraFromPhotos(set, options.readout_given, &a.rig, &out.camera_source);
+  }
+  if (options.lens_profile) {
+    out.lens = ScaleLensProfile(*options.lens_profile, a.rig.camera.width, a.rig.camera.height);
+    ApplyLensProfile(&*out.lens, &a.rig, options.readout_given);
+    out.camera_source += "; its lens from the lens profile " + out.lens->name;
+  }
+  if (!options.altitude_given && !options.rig_given) {
+    a.use_log_altitude = true;
+    std::vector<double> heights;
+    for (const PhotoRecord& r : set.photos) {
+      if (r.ok() && r.altitude_m) heights.push_back(*r.altitude_m);
+    }
+    if (!heights.empty()) a.rig.altitude_m = Median(std::move(heights));
+  }
+  a.triggers.clear();
+  for (size_t i = 0; i < set.photos.size(); ++i) {
+    const PhotoPlacement& p = out.clock.placements[i];
+    if (p.t_ns) a.triggers.push_back({set.photos[i].name, *p.t_ns});
+  }
+  a.triggers_source = "photos: " + out.clock.method;
+  a.every_s = 0.0;
+  a.log_events = false;
+  out.log = Analyze(log, a);
+  out.analyzed = std::move(a);
+
+  PhotoAnalysisOptions photo_options = options.photos;
+  photo_options.limits_m = out.analyzed.limits_m;
+  out.photos = AnalyzePhotosWithLog(set, photo_options, out.clock.placements, out.log);
+  out.photos.placement_method = out.clock.method;
+  out.photos.clock_offset_s = out.clock.clock_offset_s;
+  out.photos.clock_offset_to = out.clock.clock_offset_to;
+  out.photos.residual_rms_s = out.clock.residual_rms_s;
+  out.photos.residual_max_s = out.clock.residual_max_s;
+  return out;
+}
+
+}  // namespace shutterlab

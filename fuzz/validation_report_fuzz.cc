@@ -1,0 +1,12 @@
+// libFuzzer target: a validation report as `correct --report` reads it
+// (estimate/report/loop_json.h ReadValidationReport).
+#include "estimate/report/loop_json.h"
+
+#include "fuzz/fuzz_util.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  static shutterlab::fuzz::InputFile file("report.json");
+  const std::string& path = file.Write(data, size);
+  shutterlab::fuzz::Expect([&] { shutterlab::ReadValidationReport(path); });
+  return 0;
+}

@@ -1,0 +1,53 @@
+#pragma once
+// The sampler that the renderer (render/rs_warp.h) and the corrector (render/rs_correct.h) share:
+// one row of output pixels read from a source image at given source coordinates.
+//
+// Coordinates are source pixels, OpenCV's convention (the centre of the top-left pixel is (0, 0)).
+// Bilinear sampling of integer images takes fixed-point coordinates (kSampleFracBits fractional
+// bits: 1/128 px, quantisation <= 1/256 px per axis) and fixed-point weights; float images and
+// bicubic sampling take float coordinates. Taps outside the source read as 0 (OpenCV's
+// BORDER_CONSTANT with value 0), each tap separately.
+// 8-bit RGB has SIMD paths: one pixel per step in SSE2, and where the CPU has SSE4.1 (checked at
+// run time) four pixels per step when their taps lie in one 16-byte span of two source rows, as
+// they do for maps close to a shift (rolling-shutter frames). Every path gives the same bits.
+
+#include <opencv2/core.hpp>
+
+#include <limits>
+
+namespace shutterlab {
+
+enum class Interpolation { kBilinear, kBicubic };
+
+inline constexpr int kSampleFracBits = 7;
+// A coordinate with no source (a ray that misses the ground, NaN): far outside any image, so it
+// samples black.
+inline constexpr int kInvalidFixed = std::numeric_limits<int>::min();
+
+// x in fixed point (round(x * 2^kSampleFracBits)); kInvalidFixed for NaN and beyond +-2^23 px.
+int ToFixed(float x);
+
+// Bilinear samples of n pixels at fixed-point (xi[k], yi[k]) from src (CV_8U or CV_16U, 1 to 4
+// channels) into out: n * channels values of src's depth, interleaved.
+void SampleRowFixed(const cv::Mat& src, const int* xi, const int* yi, int n, uchar* out);
+
+// Samples of n pixels at float (xs[k], ys[k]) (NaN: no source, black): bicubic (OpenCV's A = -0.75
+// kernel, float weights) for CV_8U, CV_16U and CV_32F, bilinear for CV_32F only (integer images
+// take SampleRowFixed).
+void SampleRowFloat(const cv::Mat& src, const float* xs, const float* ys, int n,
+                    Interpolation interpolation, uchar* out);
+
+// Fixed-point coordinates of n pixels along a line: out[k] = round(a + k b), a and b already in
+// fixed-point units (|a + k b| < 2^30).
+void LinearFixedRow(float a, float b, int n, int* out);
+
+// 255 where every bilinear tap of the fixed-point (xi[k], yi[k]) lies inside a width x height
+// source (0 <= x <= width - 1, 0 <= y <= height - 1), else 0.
+void InsideMaskRow(const int* xi, const int* yi, int n, int width, int height, uint8_t* mask);
+
+// The 8-bit RGB four-pixel path: true where this CPU runs it. SetWideSampler(false) turns it off
+// (tests compare both paths; benches time them), and returns the previous setting.
+bool WideSamplerAvailable();
+bool SetWideSampler(bool enabled);
+
+}  // namespace shutterlab

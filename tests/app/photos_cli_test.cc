@@ -1,0 +1,166 @@
+// `analyze --photos`: a folder of photos, without and with a log.
+
+#include "sim/civil_time.h"
+#include "sim/logs/ulog_write.h"
+#include "sim/text_file.h"
+#include "tests/app/cli_test_util.h"
+#include "tests/photo_fixtures.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+namespace shutterlab {
+namespace {
+
+using test::RunShutterlab;
+
+// The case: three nadir DJI Mini 4 Pro photos at 117.9 m flying about 7 m/s. Their readout
+// comes from the table (16 ms for the 9.1 MP 16:9 mode) and says so; D = v * 16 ms * f / h with f
+// from the 24 mm equivalent on the 4032 x 2268 diagonal (2566.1 px).
+TEST(PhotosCli, DjiMini4ProTranslationOnly) {
+  SHUTTERLAB_REAL_DATA(dir, "incoming/dji_fc8482_clusterodm");
+  test::TempDir out;
+  const auto text = RunShutterlab("analyze --photos " + dir + " --out " + (out / "o"));
+  ASSERT_EQ(text.exit_code, 0) << text.output;
+  EXPECT_NE(text.out.find("16 ms (table: dji fc8482 (Mini 4 Pro)"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("translation only"), std::string::npos);
+  EXPECT_NE(text.out.find("3 over 5 cm, 2 over 10 cm"), std::string::npos) << text.out;
+  // photos.csv: readout_s, readout_origin, altitude_m, speed_m_s ... D_translation_m.
+  const std::string csv = ReadFileToString(out / "o/photos.csv");
+  EXPECT_NE(csv.find("test-photo-1.jpg,DJI,FC8482,4032,2268,2566.101382972291,0.016,table,117.9,"
+                     "6.9,,,,0.11040000000000001,"),
+            std::string::npos)
+      << csv;
+  EXPECT_EQ(ReadFileToString(out / "o/exclude.txt"),
+            "test-photo-1.jpg\ntest-photo-2.jpg\ntest-photo-3.jpg\n");
+
+  // --readout overrides the table, and says so.
+  const auto r = RunShutterlab("analyze --photos " + dir + " --readout 10ms --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["photos"].size(), 3u);
+  const double speeds[3] = {6.9, 7.0, std::hypot(0.3, 4.6)};
+  for (size_t i = 0; i < 3; ++i) {
+    const nlohmann::json& p = j["photos"][i];
+    EXPECT_EQ(p["readout_origin"], "user");
+    EXPECT_DOUBLE_EQ(p["altitude_m"].get<double>(), 117.9);
+    EXPECT_DOUBLE_EQ(p["speed_m_s"].get<double>(), speeds[i]);
+    EXPECT_NEAR(p["D_translation_px"].get<double>(), speeds[i] * 0.010 * 2566.1014 / 117.9, 1e-4);
+    EXPECT_NEAR(p["D_translation_m"].get<double>(), speeds[i] * 0.010, 1e-12);
+  }
+  EXPECT_EQ(j["summary"]["readout_from_table"], 0);
+}
+
+TEST(PhotosCli, BadPhotosAreReportedAndAFolderWithoutPhotosIsAnError) {
+  test::TempDir dir;
+  test::FixturePhoto p;
+  p.focal_length_35mm = 24;
+  p.xmp = test::DjiXmp({{"RelativeAltitude", "+60"},
+                        {"FlightXSpeed", "5"},
+                        {"FlightYSpeed", "0"},
+                        {"FlightZSpeed", "0"}},
+                       false);
+  std::filesystem::create_directories(dir / "photos");
+  std::filesystem::create_directories(dir / "empty");
+  WriteFileAtomically(dir / "photos/DJI_0001.JPG", test::JpegWithMetadata(p));
+  WriteFileAtomically(dir / "photos/DJI_0002.JPG", "cut off");
+  const auto r = RunShutterlab("analyze --photos " + (dir / "photos") + " --readout 20ms --out " +
+                               (dir / "out"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.out.find("DJI_0002.JPG: unreadable"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("DJI_0001.JPG: no capture time"), std::string::npos) << r.out;
+  EXPECT_EQ(ReadFileToString(dir / "out/exclude.txt"), "DJI_0001.JPG\nDJI_0002.JPG\n")
+      << "5 m/s x 20 ms = 10 cm is over 5 cm; the unreadable photo is excluded too";
+
+  WriteFileAtomically(dir / "empty/notes.txt", "x");
+  const auto none = RunShutterlab("analyze --photos " + (dir / "empty"));
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_NE(none.err.find("no photo files"), std::string::npos) << none.err;
+  const auto neither = RunShutterlab("analyze");
+  EXPECT_EQ(neither.exit_code, 2);
+  EXPECT_NE(neither.err.find("--photos"), std::string::npos) << neither.err;
+}
+
+// A synthetic flight whose events and capture times we control: a PX4 ULog (200 Hz gyro, still for
+// 5 s then swaying about x, five camera_capture events 2 s apart, GPS time every second) and five
+// DJI photos whose camera clock is UTC+08:00 off by a few ms. Each photo must land on its event,
+// with the camera clock's offset and the residuals reported, and carry analyze's rotation beside
+// its own translation.
+TEST(PhotosCli, PlacesPhotosOnASyntheticLogAndReportsTheResidual) {
+  test::TempDir dir;
+  constexpr int64_t kUtcAtLogZeroNs = 1'721'091'600'000'000'000;  // 2024-07-16 01:00:00 UTC
+  std::vector<GyroSample> samples;
+  for (int i = 0; i < 40 * 200; ++i) {
+    const double t_s = i / 200.0;
+    const double wx = t_s < 5.0 ? 0.0 : 0.2 * std::sin(2.0 * M_PI * 0.7 * t_s);
+    samples.push_back({5'000'000 + i * 5'000'000LL, Eigen::Vector3d(wx, 0.0, 0.0)});
+  }
+  std::vector<CameraEvent> events;
+  for (int k = 0; k < 5; ++k) events.push_back({10'000'000'000 + k * 2'000'000'000LL, k, ""});
+  ULogWriteOptions options;
+  for (int k = 1; k < 40; ++k)
+    options.utc_fixes.push_back({k * 1'000'000'000LL, kUtcAtLogZeroNs + k * 1'000'000'000LL});
+  WriteULog(dir / "flight.ulg", GyroTrace(samples), events, options);
+
+  std::filesystem::create_directories(dir / "photos");
+  const int error_ms[5] = {4, -3, 0, 2, -1};  // median 0
+  for (int k = 0; k < 5; ++k) {
+    const int64_t face_ns =
+        kUtcAtLogZeroNs + events[k].t_ns + 8 * 3'600'000'000'000LL + error_ms[k] * 1'000'000LL;
+    test::FixturePhoto p;
+    p.width = 400;
+    p.height = 300;
+    p.focal_length_35mm = 24;
+    const int64_t s = face_ns / 1'000'000'000;
+    const int ms = static_cast<int>(face_ns / 1'000'000 % 1000);
+    p.date_time_original = UtcText(s * 1'000'000'000).substr(0, 19);  // "2024-07-16 09:00:10"
+    p.date_time_original[4] = p.date_time_original[7] = ':';          // EXIF's "2024:07:16"
+    p.sub_sec_time_original = FormatNumber("%03.0f", ms);
+    p.xmp = test::DjiXmp({{"RelativeAltitude", "+100.0"},
+                          {"GimbalPitchDegree", "-90.0"},
+                          {"GimbalRollDegree", "0.0"},
+                          {"GimbalYawDegree", "0.0"},
+                          {"FlightXSpeed", "5.0"},
+                          {"FlightYSpeed", "0.0"},
+                          {"FlightZSpeed", "0.0"}},
+                         false);
+    WriteFileAtomically(dir / ("photos/DJI_000" + std::to_string(k + 1) + ".JPG"),
+                        test::JpegWithMetadata(p));
+  }
+  const auto r = RunShutterlab("analyze --photos " + (dir / "photos") + " " + (dir / "flight.ulg") +
+                               " --json --out " + (dir / "out"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  const nlohmann::json& photos = j["photos"];
+  EXPECT_NEAR(photos["placement"]["clock_offset_s"].get<double>(), 8 * 3600.0, 1e-6);
+  double sum_sq = 0;
+  for (int k = 0; k < 5; ++k) {
+    const nlohmann::json& p = photos["photos"][k];
+    SCOPED_TRACE(p["name"].get<std::string>());
+    EXPECT_NEAR(p["t"].get<double>(), events[k].t_ns * 1e-9, 1e-9);
+    EXPECT_NEAR(p["residual_s"].get<double>(), error_ms[k] * 1e-3, 1e-9);
+    sum_sq += error_ms[k] * error_ms[k] * 1e-6;
+    // The rotation is analyze's D_full for the image of that name; the translation the speed's.
+    const nlohmann::json& image = j["images"][k];
+    EXPECT_EQ(image["name"], p["name"]);
+    EXPECT_DOUBLE_EQ(p["D_rotation_m"].get<double>(), image["D_full_m"].get<double>());
+    EXPECT_GT(p["D_rotation_m"].get<double>(), 0.0);
+    EXPECT_NEAR(p["D_translation_m"].get<double>(), 5.0 * 0.016, 1e-12);  // table: 16 ms
+  }
+  EXPECT_NEAR(photos["placement"]["residual_rms_s"].get<double>(), std::sqrt(sum_sq / 5), 1e-9);
+  EXPECT_NE(j["triggers"].get<std::string>().find("by capture time"), std::string::npos)
+      << j["triggers"];
+  // The page shows the camera analysed, the photos' own, and says the readout is the table's.
+  const std::string page = ReadFileToString(dir / "out/report.html");
+  EXPECT_NE(page.find("the photos&#39; DJI FC8482 (5 of 5 photos), 400x300, f 277 px"),
+            std::string::npos);
+  EXPECT_NE(page.find("readout 16 ms (table: dji fc8482"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace shutterlab

@@ -1,0 +1,424 @@
+// End-to-end tests of `correct` on rendered datasets (render/render_dataset.h), whose truth is
+// exact: with the true model the corrected frames match the renderer's global-shutter references
+// to interpolation error for every effect of docs/FORMATS.md's table; with a model error of known
+// size, or a noisy gyro, the residual is what the prediction said. Small frames (320x240, f = 400
+// px: the field of view of a 1280x960 mapping camera with f = 1600 px), a few frames each.
+
+#include "estimate/correct/correct_dataset.h"
+
+#include "estimate/loop/validate.h"
+#include "estimate/report/loop_json.h"
+#include "render/effect_io.h"
+#include "render/frames_csv.h"
+#include "render/ground_texture.h"
+#include "render/image_io.h"
+#include "render/render_dataset.h"
+#include "sim/check.h"
+#include "sim/logs/gyro_io.h"
+#include "sim/synth/synth.h"
+#include "sim/text_file.h"
+#include "sim/units.h"
+#include "tests/render/render_fixtures.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kAsan = true;  // 3-10x slower: every other effect of the table
+#else
+constexpr bool kAsan = false;
+#endif
+constexpr int kWidth = 320, kHeight = 240;
+constexpr double kFocalPx = 400.0, kAltitudeM = 50.0;
+// The bar for "interpolation only": the corrected frame against the exact truth.
+constexpr double kInterpolationRmsPx = 0.05;
+
+RigModel DeclaredRig() {
+  RigModel rig = test::NadirRig(kWidth, kHeight, kFocalPx, 0.030, kAltitudeM);
+  return rig;
+}
+
+// The scene at the rig's ground sample distance, 900x700 (margin for the motion), written once per
+// test folder.
+std::string Scene(const test::TempDir& dir) {
+  const std::string path = dir / "scene.png";
+  if (!fs::exists(path)) {
+    GroundTextureOptions options;
+    options.width_px = 900;
+    options.height_px = 700;
+    options.ground_sample_distance_m = kAltitudeM / kFocalPx;
+    WriteImage(path, MakeGroundTexture(options));
+  }
+  return path;
+}
+
+// A multirotor-like flight (6 s still, then motion), perfect sensor, 1 kHz.
+GyroTrace FlightGyro(double duration_s = 30.0) {
+  SynthOptions synth;
+  synth.profile = MotionProfile::kFlight;
+  synth.rate_hz = 1000.0;
+  synth.duration_s = duration_s;
+  synth.seed = 3;
+  synth.imu = ImuErrorModel::Ideal();
+  return SynthesizeTrace(synth);
+}
+
+struct Rendered {
+  std::string dataset;
+  TrueModel truth;  // the declared model plus the injections
+};
+
+Rendered Render(const test::TempDir& dir, const std::string& name,
+                const std::vector<std::string>& injections, const std::vector<double>& times_s,
+                bool video = false, const RigModel& declared = DeclaredRig()) {
+  WriteRigModel(dir / "camera.json", declared);
+  WriteGyroCsv(dir / "gyro.csv", FlightGyro());
+  std::string times = "frame,t_first_row\n";
+  for (size_t i = 0; i < times_s.size(); ++i) {
+    times += std::to_string(i) + "," + FormatNumber("%.6f", times_s[i]) + "\n";
+  }
+  WriteFileAtomically(dir / "times.csv", times);
+  RenderOptions render;
+  render.scene_path = Scene(dir);
+  render.camera_path = dir / "camera.json";
+  render.gyro_path = dir / "gyro.csv";
+  render.frames_path = dir / "times.csv";
+  render.out_dir = dir / name;
+  render.injections = injections;
+  render.pictures = false;
+  render.video = video;
+  RenderDataset(render);
+  Rendered out{dir / name, {}};
+  out.truth.rig = declared;
+  for (const std::string& injection : injections) ApplyInjection(injection, &out.truth);
+  return out;
+}
+
+// A validation report whose fitted model is `model`, with the given effects' covariances.
+std::string Report(const test::TempDir& dir, const std::string& name, const TrueModel& model,
+                   const std::vector<IdentifiedEffect>& effects = {}) {
+  LoopResult loop;
+  loop.model = model;
+  loop.effects = effects;
+  const std::string path = dir / name;
+  WriteFileAtomically(path, LoopToJson(loop, 1).dump());
+  return path;
+}
+
+CorrectSummary Correct(const std::string& dataset, const std::string& out,
+                       const std::string& report = "") {
+  CorrectOptions options;
+  options.dataset_dir = dataset;
+  options.out_dir = out;
+  options.report_path = report;
+  options.check_truth = true;
+  options.pictures = false;
+  return CorrectDataset(options);
+}
+
+TEST(CorrectEndToEnd, TrueModelLeavesOnlyInterpolationForEveryEffect) {
+  // Each effect of docs/FORMATS.md's table in the truth and not in camera.json: corrected with the
+  // true model (a report holding it), the frames match the renderer's references to interpolation
+  // error; corrected with camera.json alone, they do not.
+  const std::vector<std::string> effects = {
+      "time_offset=0.004",
+      "readout_time=0.036",
+      "gyro_scale=1.05,0.95,1.04",
+      "gyro_bias=0.02,-0.015,0.01",
+      "velocity=6,-3,0",
+      "lens_distortion=-0.12,0.02",
+      "readout_direction=bottom_to_top",
+      "clock_rate=300",
+      "gyro_to_camera=0.99756405,-0.06975647,0,0.06975647,0.99756405,0,0,0,1"};
+  test::TempDir dir;
+  for (size_t k = 0; k < effects.size(); k += kAsan ? 2 : 1) {
+    const std::string& effect = effects[k];
+    const std::string name = effect.substr(0, effect.find('='));
+    const Rendered rendered = Render(dir, name, {effect}, {12.0, 20.0});
+    const CorrectSummary fixed = Correct(rendered.dataset, dir / (name + "_fixed"),
+                                         Report(dir, name + ".json", rendered.truth));
+    const CorrectSummary declared = Correct(rendered.dataset, dir / (name + "_declared"));
+    ASSERT_EQ(fixed.frames.size(), 2u) << name;
+    for (size_t i = 0; i < fixed.frames.size(); ++i) {
+      const TruthResidual& after = *fixed.frames[i].truth;
+      const TruthResidual& wrong = *declared.frames[i].truth;
+      EXPECT_LE(after.rms_px, kInterpolationRmsPx) << name << " frame " << i;
+      // D of the residual: twice the map's checked tolerance at most (a kink between checks).
+      EXPECT_LE(after.d_px, 2 * CorrectionMapOptions{}.tolerance_px + 0.02)
+          << name << " frame " << i;
+      EXPECT_GT(after.d_before_px, 0.5) << name << ": the frame must be distorted to test anything";
+      EXPECT_GT(wrong.rms_px, 2 * after.rms_px) << name << ": the declared model leaves more";
+      std::printf(
+          "  %-18s frame %zu: D before %.3f px, after %.4f px (rms %.4f); declared model "
+          "leaves rms %.3f px\n",
+          name.c_str(), i, after.d_before_px, after.d_px, after.rms_px, wrong.rms_px);
+    }
+  }
+}
+
+TEST(CorrectEndToEnd, FisheyeTrueModelLeavesOnlyInterpolation) {
+  // A 90-degree fisheye (the GoPro MAX's coefficients, f 254 px) over the ground, the truth with
+  // a lens error (added to the fisheye's k1, k2), a translation and a clock offset: corrected with
+  // the true model, the frames match the renderer's references to interpolation error.
+  test::TempDir dir;
+  RigModel fisheye = test::FisheyeRig(kWidth, kHeight, 45.0);
+  fisheye.altitude_m = kAltitudeM;
+  const Rendered rendered =
+      Render(dir, "fisheye", {"lens_distortion=-0.03,0.01", "velocity=6,-3,0", "time_offset=0.004"},
+             {12.0, 20.0}, /*video=*/false, fisheye);
+  ASSERT_TRUE(std::holds_alternative<Fisheye>(rendered.truth.rig.camera.distortion));
+  const CorrectSummary fixed =
+      Correct(rendered.dataset, dir / "fixed", Report(dir, "fisheye.json", rendered.truth));
+  const CorrectSummary declared = Correct(rendered.dataset, dir / "declared");
+  ASSERT_EQ(fixed.frames.size(), 2u);
+  for (size_t i = 0; i < fixed.frames.size(); ++i) {
+    const TruthResidual& after = *fixed.frames[i].truth;
+    EXPECT_LE(after.rms_px, kInterpolationRmsPx) << "frame " << i;
+    EXPECT_LE(after.d_px, 2 * CorrectionMapOptions{}.tolerance_px + 0.02) << "frame " << i;
+    EXPECT_GT(after.d_before_px, 0.5) << "the frame must be distorted to test anything";
+    EXPECT_GT(declared.frames[i].truth->rms_px, 2 * after.rms_px);
+    std::printf(
+        "  fisheye frame %zu: D before %.3f px, after %.4f px (rms %.4f); declared model leaves "
+        "rms %.3f px\n",
+        i, after.d_before_px, after.d_px, after.rms_px, declared.frames[i].truth->rms_px);
+  }
+  const RigModel written = ReadRigModel((dir.path() / "fixed" / "camera.json").string());
+  EXPECT_EQ(written.camera.distortion, rendered.truth.rig.camera.distortion)
+      << "the output declares the lens it was corrected through";
+}
+
+TEST(CorrectEndToEnd, OutputIsARigDatasetThatValidateFindsGlobal) {
+  test::TempDir dir;
+  const Rendered rendered =
+      Render(dir, "ds", {"velocity=6,-3,0", "time_offset=0.004"}, {12.0, 16.0, 20.0});
+  const std::string out = dir / "out";
+  Correct(rendered.dataset, out, Report(dir, "report.json", rendered.truth));
+  const RigModel written = ReadRigModel((fs::path(out) / "camera.json").string());
+  EXPECT_EQ(written.shutter.readout_s, 0.0);
+  EXPECT_NEAR(written.time_offset_s, 0.004, 1e-12);
+  EXPECT_EQ(written.velocity_mps, Eigen::Vector3d(6, -3, 0));
+  const std::vector<FrameEntry> frames = ReadFramesCsv((fs::path(out) / "frames.csv").string());
+  const std::vector<FrameEntry> input =
+      ReadFramesCsv((fs::path(rendered.dataset) / "frames.csv").string());
+  ASSERT_EQ(frames.size(), input.size());
+  for (size_t i = 0; i < frames.size(); ++i) {
+    EXPECT_EQ(frames[i].image, input[i].image) << "the same relative paths";
+    EXPECT_EQ(frames[i].ref, input[i].ref);
+    EXPECT_EQ(frames[i].t_first_row_ns, input[i].t_first_row_ns) << "row 0 is the first row read";
+    EXPECT_TRUE(fs::is_regular_file(fs::path(out) / ("masks/" + frames[i].image + ".png")));
+  }
+  EXPECT_TRUE(fs::is_regular_file(fs::path(out) / "colmap/image_list.txt"));
+  EXPECT_TRUE(fs::is_regular_file(fs::path(out) / "odm/images/0000_rs_mask.png"));
+  // validate, measuring each corrected frame against its reference: the declared global shutter
+  // already explains it (the residual at the noise, nothing to add); the input's is far above.
+  ValidateOptions validate;
+  validate.keep_residuals = false;
+  const ValidationResult corrected = ValidateDataset(out, validate);
+  const ValidationResult original = ValidateDataset(rendered.dataset, validate);
+  EXPECT_FALSE(corrected.loop.above_noise_before) << corrected.loop.before.rms_px;
+  EXPECT_TRUE(corrected.loop.effects.empty());
+  EXPECT_LE(corrected.loop.before.rms_px, 1.5 * corrected.loop.noise_px);
+  EXPECT_GT(original.loop.before.rms_px, 3 * corrected.loop.before.rms_px);
+  std::printf("  validate before: rms %.4f px on the input, %.4f px corrected (noise %.4f px)\n",
+              original.loop.before.rms_px, corrected.loop.before.rms_px, corrected.loop.noise_px);
+}
+
+TEST(CorrectEndToEnd, PredictsTheResidualOfAReportedModelError) {
+  // The truth's clock offset is 6 ms; the report says 3.5 ms +- 2.5 ms: the model is off by one
+  // standard error. The draws spread |error| as a half-normal (median 0.67, 90 % 1.64 standard
+  // errors), so one standard error lies between the prediction's median and 90th percentile.
+  test::TempDir dir;
+  const Rendered rendered = Render(dir, "ds", {"time_offset=0.006"}, {14.0, 18.0, 22.0, 26.0});
+  TrueModel reported = rendered.truth;
+  reported.rig.time_offset_s = 0.0035;
+  IdentifiedEffect effect;
+  effect.effect = Effect::kTimeOffset;
+  effect.value = 0.0035;
+  effect.parameters = Eigen::VectorXd::Constant(1, 0.0035);
+  effect.covariance = Eigen::MatrixXd::Constant(1, 1, 0.0025 * 0.0025);
+  const CorrectSummary summary =
+      Correct(rendered.dataset, dir / "out", Report(dir, "report.json", reported, {effect}));
+  for (const CorrectedFrame& f : summary.frames) {
+    const double measured = f.truth->d_px;
+    EXPECT_GE(measured, 0.8 * f.predicted_d_after_px) << "frame " << f.frame;
+    EXPECT_LE(measured, 1.25 * f.predicted_d_after_p90_px) << "frame " << f.frame;
+    EXPECT_GT(f.residual.d_after_px, 0.05) << "the error must be visible to test anything";
+    std::printf("  frame %lld: predicted D after %.3f px (90 %%: %.3f), measured %.3f px\n",
+                static_cast<long long>(f.frame), f.predicted_d_after_px, f.predicted_d_after_p90_px,
+                measured);
+  }
+}
+
+TEST(CorrectEndToEnd, PredictsTheResidualOfGyroNoise) {
+  // Rendered with a perfect gyro, corrected with the same trace plus white noise (its still lead
+  // shows the noise to the estimate): each frame's residual is one draw of what the prediction
+  // spreads; over the frames the measured D follows the predicted median.
+  test::TempDir dir;
+  const Rendered rendered = Render(dir, "ds", {}, {9.0, 11.0, 13.0, 15.0, 17.0, 19.0, 21.0, 23.0});
+  constexpr double kDensity = 2e-3;  // rad/s/sqrt(Hz): a poor MEMS gyro, to see it at 320x240
+  std::vector<GyroSample> samples = FlightGyro().samples();
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> normal(0.0, kDensity / std::sqrt(1e-3));
+  for (GyroSample& s : samples)
+    s.omega_rad_s += Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+  WriteGyroCsv((fs::path(rendered.dataset) / "gyro.csv").string(), GyroTrace(std::move(samples)));
+  const CorrectSummary summary = Correct(rendered.dataset, dir / "out");
+  EXPECT_NEAR(summary.model.gyro_noise_rad_s_sqrt_hz, kDensity, 0.1 * kDensity)
+      << summary.model.gyro_noise_source;
+  std::vector<double> ratios;
+  for (const CorrectedFrame& f : summary.frames) {
+    ratios.push_back(f.truth->d_px / f.predicted_d_after_px);
+    EXPECT_LE(f.truth->d_px, 2.0 * f.predicted_d_after_p90_px) << "frame " << f.frame;
+    std::printf("  frame %lld: predicted D after %.3f px (90 %%: %.3f), measured %.3f px\n",
+                static_cast<long long>(f.frame), f.predicted_d_after_px, f.predicted_d_after_p90_px,
+                f.truth->d_px);
+  }
+  const double median = UpperMedian(ratios);
+  EXPECT_GT(median, 0.5);
+  EXPECT_LT(median, 2.0);
+}
+
+TEST(CorrectPhotos, RenderedStillsPlacedByTheirTriggersMatchTheTruth) {
+  // Three stills rendered from one flight, written as JPEG photos, with the flight's gyro log and
+  // a trigger file naming them 5 ms before row 0 (--latency 5 ms) and a fourth photo that no
+  // trigger names: corrected with the true model, the three match the renderer's exact truth to
+  // interpolation error, the fourth is skipped with its reason, and a second run keeps them.
+  test::TempDir dir;
+  const std::vector<double> times_s = {12.0, 16.0, 20.0};
+  const Rendered rendered = Render(dir, "ds", {"velocity=6,-3,0"}, times_s);
+  const fs::path photos = dir.path() / "photos";
+  fs::create_directories(photos);
+  std::string triggers = "image,t\n";
+  const std::vector<FrameEntry> frames = ReadFramesCsv(rendered.dataset + "/frames.csv");
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const std::string name = "DJI_000" + std::to_string(i + 1) + ".JPG";
+    WriteImage((photos / name).string(), ReadImage(rendered.dataset + "/" + frames[i].image));
+    triggers += name + "," + FormatNumber("%.6f", times_s[i] - 0.005) + "\n";
+  }
+  fs::copy_file(photos / "DJI_0001.JPG", photos / "DJI_0099.JPG");
+  WriteFileAtomically(dir / "triggers.csv", triggers);
+  CorrectOptions options;
+  options.dataset_dir = photos.string();
+  options.out_dir = dir / "out";
+  options.report_path = Report(dir, "truth.json", rendered.truth);
+  options.check_truth = true;
+  options.truth_dir = rendered.dataset + "/truth";
+  options.pictures = false;
+  PhotoInputOptions input;
+  input.log_path = rendered.dataset + "/gyro.csv";
+  input.triggers_path = dir / "triggers.csv";
+  input.trigger_latency_s = 0.005;
+  input.camera = ReadRigModel(rendered.dataset + "/camera.json");
+  input.camera_path = "camera.json";
+  options.photos = input;
+  const CorrectSummary summary = CorrectDataset(options);
+  EXPECT_TRUE(summary.photos);
+  ASSERT_EQ(summary.frames.size(), 3u);
+  for (size_t i = 0; i < summary.frames.size(); ++i) {
+    const CorrectedFrame& f = summary.frames[i];
+    EXPECT_EQ(f.image, "DJI_000" + std::to_string(i + 1) + ".JPG");
+    EXPECT_EQ(f.t_first_row_ns, SecondsToNs(times_s[i])) << "trigger + latency";
+    EXPECT_LE(f.truth->rms_px, kInterpolationRmsPx) << f.image;
+    EXPECT_LE(f.truth->d_px, 2 * CorrectionMapOptions{}.tolerance_px + 0.02) << f.image;
+    EXPECT_GT(f.truth->d_before_px, 0.5) << "the photo must be distorted to test anything";
+    EXPECT_TRUE(fs::is_regular_file(fs::path(options.out_dir) / f.image));
+    EXPECT_TRUE(fs::is_regular_file(fs::path(options.out_dir) / "masks" / (f.image + ".png")));
+    std::printf("  %s: D before %.3f px, after %.4f px (rms %.4f) against the truth\n",
+                f.image.c_str(), f.truth->d_before_px, f.truth->d_px, f.truth->rms_px);
+  }
+  ASSERT_EQ(summary.skipped.size(), 1u);
+  EXPECT_NE(summary.skipped[0].second.find("DJI_0099.JPG"), std::string::npos)
+      << summary.skipped[0].second;
+  EXPECT_EQ(ReadFramesCsv((fs::path(options.out_dir) / "frames.csv").string()).size(), 3u);
+  EXPECT_TRUE(fs::is_regular_file(fs::path(options.out_dir) / "correct.json"));
+  options.check_truth = false;
+  for (const CorrectedFrame& f : CorrectDataset(options).frames) EXPECT_TRUE(f.kept) << f.image;
+}
+
+TEST(CorrectEndToEnd, ResumesKeepsInputsAndRefusesToOverwriteThem) {
+  test::TempDir dir;
+  const Rendered rendered = Render(dir, "ds", {}, {12.0});
+  const std::string out = dir / "out";
+  Correct(rendered.dataset, out);
+  const fs::path image = fs::path(out) / "images/0000_rs.png";
+  const auto written = fs::last_write_time(image);
+  const CorrectSummary again = Correct(rendered.dataset, out);
+  ASSERT_EQ(again.frames.size(), 1u);
+  EXPECT_TRUE(again.frames[0].kept);
+  EXPECT_EQ(fs::last_write_time(image), written) << "an image already written is skipped";
+  CorrectOptions force;
+  force.dataset_dir = rendered.dataset;
+  force.out_dir = out;
+  force.force = true;
+  force.pictures = false;
+  EXPECT_FALSE(CorrectDataset(force).frames[0].kept);
+  force.out_dir = rendered.dataset;
+  EXPECT_THROW(CorrectDataset(force), IoError) << "never into the input";
+}
+
+TEST(CorrectEndToEnd, JpegInputKeepsItsQualityAndVideoIsRotationOnly) {
+  test::TempDir dir;
+  const Rendered rendered = Render(dir, "video", {}, {12.0, 12.033, 12.066}, /*video=*/true);
+  // The same dataset with its frames as JPEG at quality 80.
+  const fs::path jpeg = dir.path() / "jpeg";
+  fs::create_directories(jpeg / "images");
+  for (const char* file : {"camera.json", "gyro.csv"}) {
+    fs::copy_file(fs::path(rendered.dataset) / file, jpeg / file);
+  }
+  std::vector<FrameEntry> frames = ReadFramesCsv(rendered.dataset + "/frames.csv");
+  for (FrameEntry& f : frames) {
+    const cv::Mat image = ReadImage(rendered.dataset + "/" + f.image);
+    f.image = fs::path(f.image).replace_extension(".jpg").string();
+    ImageLike like;
+    like.info.jpeg_quality = 80;
+    WriteImageLike((jpeg / f.image).string(), image, like, {{"Xmp.dc.source", "a test"}});
+  }
+  WriteFramesCsv((jpeg / "frames.csv").string(), frames);
+  CorrectOptions options;
+  options.dataset_dir = jpeg.string();
+  options.out_dir = dir / "out";
+  const CorrectSummary summary = CorrectDataset(options);
+  EXPECT_TRUE(summary.video);
+  EXPECT_FALSE(summary.setting.plane_depth_m);
+  EXPECT_NE(summary.translation.find("rotation only"), std::string::npos) << summary.translation;
+  ASSERT_EQ(summary.frames.size(), 3u);
+  const std::string first = (fs::path(options.out_dir) / frames[0].image).string();
+  EXPECT_EQ(ReadImageFileInfo(first).jpeg_quality, 80);
+  const auto metadata = ReadImageMetadata(first);
+  const auto has = [&](const std::string& key, const std::string& value) {
+    return std::find(metadata.begin(), metadata.end(), std::make_pair(key, value)) !=
+           metadata.end();
+  };
+  EXPECT_TRUE(has("Xmp.dc.source", "a test")) << "the input's metadata is carried";
+  EXPECT_TRUE(has("Xmp.shutterlab.Reference", "row0"));
+  for (const FrameEntry& f : ReadFramesCsv((fs::path(options.out_dir) / "frames.csv").string())) {
+    EXPECT_TRUE(f.ref.empty()) << "a video dataset again";
+  }
+  EXPECT_TRUE(fs::is_regular_file(fs::path(options.out_dir) / "overview.png"));
+  // With a depth, video corrects translation too; its truth is frame-to-frame, which --truth
+  // refuses.
+  options.depth_m = 40.0;
+  options.out_dir = dir / "out_depth";
+  options.pictures = false;
+  const CorrectSummary with_depth = CorrectDataset(options);
+  EXPECT_EQ(with_depth.setting.plane_depth_m, 40.0);
+  EXPECT_NE(with_depth.translation.find("--depth"), std::string::npos) << with_depth.translation;
+  options.check_truth = true;
+  EXPECT_THROW(CorrectDataset(options), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace shutterlab

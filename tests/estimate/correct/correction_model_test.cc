@@ -1,0 +1,92 @@
+#include "estimate/correct/correction_model.h"
+
+#include "estimate/correct/residual_prediction.h"
+#include "render/rs_warp.h"
+#include "sim/units.h"
+#include "tests/render/render_fixtures.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+// White noise of density `density` at 1 kHz on a still stretch of `still_s`, then a slow swing.
+GyroTrace NoisyTrace(double density, double still_s, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, density / std::sqrt(1e-3));
+  std::vector<GyroSample> samples;
+  for (int k = 0; k < 20000; ++k) {
+    const double t = k * 1e-3;
+    const double swing = t < still_s ? 0.0 : 0.5 * std::sin(2 * M_PI * 0.7 * (t - still_s));
+    samples.push_back({k * 1'000'000LL, Eigen::Vector3d(swing + normal(rng),
+                                                        0.3 * swing + normal(rng), normal(rng))});
+  }
+  return GyroTrace(std::move(samples));
+}
+
+TEST(EstimateGyroNoise, ReadsTheDensityOnTheStillSegmentOrFromSecondDifferences) {
+  constexpr double kDensity = 7e-5;  // rad/s/sqrt(Hz), an MPU-9250's
+  const GyroNoiseEstimate still = EstimateGyroNoise(NoisyTrace(kDensity, 6.0, 1));
+  EXPECT_NEAR(still.rad_s_sqrt_hz, kDensity, 0.05 * kDensity) << still.source;
+  EXPECT_NE(still.source.find("still segment"), std::string::npos) << still.source;
+  // Moving from the start: the second differences, which a slow motion barely touches.
+  const GyroNoiseEstimate moving = EstimateGyroNoise(NoisyTrace(kDensity, 0.0, 2));
+  EXPECT_NEAR(moving.rad_s_sqrt_hz, kDensity, 0.1 * kDensity) << moving.source;
+  EXPECT_NE(moving.source.find("second differences"), std::string::npos) << moving.source;
+}
+
+TEST(BuildCorrectionModel, TakesTheFittedModelAndRefusesAnotherCamera) {
+  const RigModel declared = test::SmallRig(96, 72);
+  ReportedModel report;
+  report.fitted = TrueModel{};
+  report.fitted->rig = declared;
+  report.fitted->rig.time_offset_s = 0.003;
+  report.fitted->gyro_scale = Eigen::Vector3d(1.02, 1.0, 0.98);
+  ReportedEffect effect;
+  effect.effect = Effect::kTimeOffset;
+  effect.value = 0.003;
+  effect.covariance = Eigen::MatrixXd::Constant(1, 1, 1e-8);
+  report.effects.push_back(effect);
+  const CorrectionModel model = BuildCorrectionModel(declared, report, "r.json");
+  EXPECT_EQ(model.model.rig.time_offset_s, 0.003);
+  EXPECT_EQ(model.model.gyro_scale, report.fitted->gyro_scale);
+  ASSERT_EQ(model.uncertainty.size(), 1u);
+  EXPECT_EQ(model.uncertainty[0].covariance(0, 0), 1e-8);
+  report.fitted->rig.camera.width = 128;
+  EXPECT_THROW(BuildCorrectionModel(declared, report, "r.json"), std::invalid_argument);
+  // Without fitted_model the effects' values are applied to camera.json, and it is said.
+  report.fitted.reset();
+  const CorrectionModel applied = BuildCorrectionModel(declared, report, "r.json");
+  EXPECT_EQ(applied.model.rig.time_offset_s, 0.003);
+  EXPECT_FALSE(applied.notes.empty());
+}
+
+TEST(PredictResidual, ACertainModelLeavesNothingAndDBeforeIsTheFramesDistortion) {
+  const RigModel rig = test::SmallRig(160, 120);
+  const GyroTrace gyro = test::ConstantRateTrace(Eigen::Vector3d(0.4, -0.6, 0.9));
+  CorrectionModel model;
+  model.model.rig = rig;
+  CorrectionSetting setting;
+  setting.plane_depth_m = rig.altitude_m;
+  const ResidualPrediction certain = PredictResidual(model, gyro, SecondsToNs(0.5), setting);
+  EXPECT_LT(certain.d_after_px, 1e-5) << "the fixed point is solved to 1e-6 px";
+  EXPECT_EQ(certain.draws, 32);
+  // D before against the renderer's truth field's D (every pixel; the prediction's grid is 33x25).
+  const FrameGeometry geometry(rig.camera, rig.altitude_m,
+                               CameraMotion(gyro, model.model).Frame(SecondsToNs(0.5)),
+                               cv::Size(400, 300));
+  EXPECT_NEAR(certain.d_before_px, FrameDistortionPx(DisplacementField(geometry)), 0.02);
+  // A readout uncertain by 10 %: something is left, more at the 90th percentile than the median.
+  model.uncertainty.push_back({Effect::kReadoutTime, Eigen::MatrixXd::Constant(1, 1, 4e-6)});
+  const ResidualPrediction uncertain = PredictResidual(model, gyro, SecondsToNs(0.5), setting);
+  EXPECT_GT(uncertain.d_after_px, 0.02 * certain.d_before_px);
+  EXPECT_GT(uncertain.d_after_p90_px, uncertain.d_after_px);
+  EXPECT_LT(uncertain.d_after_p90_px, 0.3 * certain.d_before_px);
+}
+
+}  // namespace
+}  // namespace shutterlab

@@ -1,0 +1,90 @@
+#include "render/warp_kernel.h"
+
+#include "tests/render/render_fixtures.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+#include <random>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+using test::SmoothTexture;
+
+// Coordinates of a map close to a shift (the wide blocks' case), with what makes a block fall back
+// mixed in: a row boundary inside a block, a stretch, a mirrored run, the source's borders and
+// beyond, and pixels with no source.
+void NearShiftCoordinates(int n, cv::Size src, uint64_t seed, std::vector<int>* xi,
+                          std::vector<int>* yi) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<float> jitter(-0.3f, 0.3f);
+  std::uniform_int_distribution<int> kind(0, 19);
+  xi->resize(n);
+  yi->resize(n);
+  float x = -3.0f, y = static_cast<float>(src.height) * 0.5f;
+  for (int u = 0; u < n; ++u) {
+    switch (kind(rng)) {
+      case 0:  // stretch
+        x += 2.7f;
+        break;
+      case 1:  // mirrored step
+        x -= 1.0f;
+        break;
+      case 2:  // next source row
+        y += 1.0f;
+        break;
+      default:
+        x += 1.0f + 0.01f * jitter(rng);
+        y += 0.002f;
+    }
+    if (x > src.width + 3) x = -3.0f;
+    const bool no_source = u % 97 == 5;
+    (*xi)[u] = no_source ? kInvalidFixed : ToFixed(x + 0.1f * jitter(rng));
+    (*yi)[u] = ToFixed(y + 0.1f * jitter(rng));
+  }
+}
+
+TEST(WarpKernel, EveryRgbPathGivesTheScalarPathsBits) {
+  const cv::Size src_size(157, 6);
+  const cv::Mat src = SmoothTexture(src_size, CV_8UC3, 3, 0.7) + cv::Scalar::all(1);
+  std::vector<cv::Mat> channels;
+  cv::split(src, channels);
+  // Rows above the source, at its top edge, inside, near and at its bottom edge (the last row has
+  // no row below it) and below it.
+  for (const float y0 : {-1.6f, -0.6f, 2.0f, 4.4f, 5.6f, 6.5f}) {
+    std::vector<int> xi, yi;
+    const int n = 4001;  // not a multiple of 4 or 8: the tail runs too
+    NearShiftCoordinates(n, src_size, 11 + static_cast<int>(y0 * 10), &xi, &yi);
+    for (int& y : yi) y = y == kInvalidFixed ? y : y - ToFixed(src_size.height * 0.5f - y0);
+    std::vector<uint8_t> wide(3 * n), narrow(3 * n), grey(n);
+    const bool previous = SetWideSampler(true);
+    SampleRowFixed(src, xi.data(), yi.data(), n, wide.data());
+    SetWideSampler(false);
+    SampleRowFixed(src, xi.data(), yi.data(), n, narrow.data());
+    SetWideSampler(previous);
+    EXPECT_EQ(wide, narrow) << "y0 = " << y0;
+    for (int c = 0; c < 3; ++c) {
+      SampleRowFixed(channels[c], xi.data(), yi.data(), n, grey.data());
+      for (int u = 0; u < n; ++u) {
+        ASSERT_EQ(wide[3 * u + c], grey[u]) << "pixel " << u << " channel " << c << " y0 " << y0;
+      }
+    }
+  }
+}
+
+TEST(WarpKernel, SamplesAtPixelCentresAreThePixels) {
+  const cv::Mat src = SmoothTexture(cv::Size(40, 8), CV_8UC3, 5, 1.0);
+  std::vector<int> xi(40), yi(40);
+  for (int u = 0; u < 40; ++u) {
+    xi[u] = ToFixed(static_cast<float>(u));
+    yi[u] = ToFixed(3.0f);
+  }
+  cv::Mat out(1, 40, CV_8UC3);
+  SampleRowFixed(src, xi.data(), yi.data(), 40, out.ptr());
+  EXPECT_EQ(cv::norm(out, src.row(3), cv::NORM_INF), 0.0);
+}
+
+}  // namespace
+}  // namespace shutterlab
