@@ -20,7 +20,8 @@ TEST(Check, TheLocationIsForDevelopersAndComesOffForAPerson) {
     EXPECT_EQ(what.rfind("bias segment holds 3 samples [sic] [check_test.cc:", 0), 0u) << what;
     EXPECT_NE(what.find(" check failed (samples >= 10)]"), std::string::npos) << what;
     EXPECT_EQ(WithoutCheckLocation(what), "bias segment holds 3 samples [sic]");
-    EXPECT_EQ(WithoutCheckLocation("log.csv: " + what), "log.csv: bias segment holds 3 samples [sic]");
+    EXPECT_EQ(WithoutCheckLocation("log.csv: " + what),
+              "log.csv: bias segment holds 3 samples [sic]");
   }
   EXPECT_EQ(WithoutCheckLocation("a plain message [with brackets]"),
             "a plain message [with brackets]");
