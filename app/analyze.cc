@@ -345,7 +345,7 @@ void Run(const AnalyzeCommand& command) {
 const CommandRegistration kRegistration(80, [](CLI::App& app) {
   auto* cmd = app.add_subcommand("analyze",
                                  "per-image rolling-shutter distortion from a flight log (ULog, "
-                                 "DataFlash, blackbox, gyro.csv, any CSV by --columns)");
+                                 "DataFlash, blackbox, GoPro MP4, gyro.csv, any CSV by --columns)");
   auto command = std::make_shared<AnalyzeCommand>();
   cmd->add_option("LOG", command->log_path, "flight or gyro log (optional with --photos)")
       ->check(CLI::ExistingFile);
@@ -358,7 +358,7 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
                   "the photos' camera clock zone, e.g. +08:00 (else EXIF OffsetTimeOriginal, the "
                   "offset fitted to the log's events, or the one zone that fits the log)");
   cmd->add_option("--format", command->format,
-                  "auto, ulog, dataflash, blackbox, gyro.csv, gcsv, raw (columns: set by "
+                  "auto, ulog, dataflash, blackbox, gopro, gyro.csv, gcsv, raw (columns: set by "
                   "--columns)")
       ->capture_default_str();
   cmd->add_option("--log-index", command->log_index,

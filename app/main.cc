@@ -67,7 +67,9 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << e.what() << "\n";
     return 2;
   } catch (const std::invalid_argument& e) {
-    std::cerr << "error: " << e.what() << "\n";
+    // The option or the data the user gave cannot be used: the message says why and what to do;
+    // the source location is for developers.
+    std::cerr << "error: " << shutterlab::WithoutCheckLocation(e.what()) << "\n";
     return 2;
   } catch (const std::out_of_range& e) {
     std::cerr << "error: " << e.what() << "\n";

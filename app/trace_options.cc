@@ -44,13 +44,14 @@ void TraceOptions::Add(CLI::App* command, bool with_bias) {
   command
       ->add_option("TRACE", path,
                    "gyro log: gyro.csv, Gyroflow .gcsv, raw-count CSV, PX4 ULog, Betaflight "
-                   "blackbox, ArduPilot DataFlash")
+                   "blackbox, ArduPilot DataFlash, GoPro MP4")
       ->required()
       ->check(CLI::ExistingFile);
   command
-      ->add_option("--format", format,
-                   "log format: auto, csv, gcsv, raw, ulog, blackbox, dataflash (columns: set by "
-                   "--columns)")
+      ->add_option(
+          "--format", format,
+          "log format: auto, csv, gcsv, raw, ulog, blackbox, dataflash, gopro (columns: set by "
+          "--columns)")
       ->capture_default_str();
   command->add_flag("--raw", raw, "the log holds raw int16 counts (the source paper's logger)");
   command

@@ -8,8 +8,7 @@
 #   scripts/fuzz.sh --seconds 600 ulog   one target for 10 minutes
 #   scripts/fuzz.sh --runs 10000000      every target until 10 million executions
 #   scripts/fuzz.sh --smoke              every target for 5 s (what CI runs)
-#   scripts/fuzz.sh --build DIR ...      use (or make) the fuzz build in DIR (default build-fuzz;
-#                                        CI's sanitizer build is configured with SHUTTERLAB_FUZZ=ON)
+#   scripts/fuzz.sh --build DIR ...      use (or make) the fuzz build in DIR (default build-fuzz)
 #
 # A crash, leak, hang (> 10 s on one input), an input needing over 2 GB, or a sanitizer report stops
 # that target, leaves the input in DIR/artifacts/, and makes the script exit 1. Each such input
@@ -33,6 +32,8 @@ done
 if [ ! -f "$build/CMakeCache.txt" ]; then
   CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DSHUTTERLAB_FUZZ=ON -DSHUTTERLAB_BUILD_TESTS=OFF -DSHUTTERLAB_BUILD_BENCH=OFF >/dev/null
+else
+  cmake -S . -B "$build" >/dev/null  # picks up fuzz targets added since it was configured
 fi
 if [ ${#targets[@]} -eq 0 ]; then
   for src in fuzz/*_fuzz.cc; do targets+=("$(basename "$src" _fuzz.cc)"); done

@@ -33,7 +33,7 @@ BiasEstimate BiasOverSegment(const GyroSample* begin, const GyroSample* end,
   SHUTTERLAB_CHECK(out.samples >= kMinBiasSamples)
       << "bias segment " << segment.begin_s << ":" << segment.end_s << " s holds " << out.samples
       << " samples (need at least " << kMinBiasSamples << "; the trace lasts " << trace_duration_s
-      << " s)";
+      << " s): give a --bias A:B over a still part of the log, --auto-bias, or a longer log";
   // Two passes: mean, then spread about it (no cancellation for large biases).
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   for (const GyroSample* s = begin; s < end; ++s) sum += s->omega_rad_s;

@@ -8,6 +8,15 @@ std::string IoMessage(const std::string& path, long line, const std::string& pro
   return message + ": " + problem;
 }
 
+std::string WithoutCheckLocation(const std::string& message) {
+  const size_t open = message.rfind(" [");
+  if (open == std::string::npos || message.back() != ']' ||
+      message.find(" check failed (", open) == std::string::npos) {
+    return message;
+  }
+  return message.substr(0, open);
+}
+
 namespace internal {
 
 CheckFailure::CheckFailure(const char* file, int line, const char* condition) {

@@ -22,6 +22,10 @@ class IoError : public std::runtime_error {
 // Builds "path:line: problem" for IoError. line <= 0 leaves the line out.
 std::string IoMessage(const std::string& path, long line, const std::string& problem);
 
+// A message without the source location that SHUTTERLAB_CHECK appends for developers
+// (" [file.cc:N check failed (condition)]"), for a person: what the CLI prints.
+std::string WithoutCheckLocation(const std::string& message);
+
 namespace internal {
 // Collects a streamed message and throws std::invalid_argument when destroyed, so that
 // SHUTTERLAB_CHECK(x) << "detail" reads like a log statement (colmap's THROW_CHECK).

@@ -197,7 +197,7 @@ AccuracyResult AnalyzeAccuracy(const GyroTrace& trace, const AccuracyOptions& op
   const size_t first = bias.first_after;
   SHUTTERLAB_CHECK(first < n) << "no samples after the bias segment " << options.bias.begin_s << ":"
                               << options.bias.end_s << " s (the trace lasts " << trace.DurationS()
-                              << " s)";
+                              << " s): give an earlier --bias A:B or a longer log";
   const int64_t t0_ns = trace.t_begin_ns();
 
   const double rate_hz = trace.sampling().RateHz();
@@ -210,7 +210,9 @@ AccuracyResult AnalyzeAccuracy(const GyroTrace& trace, const AccuracyOptions& op
   SHUTTERLAB_CHECK(!segments.empty())
       << "no rotation found after the bias segment: the smoothed rate never exceeded "
       << result.enter_rad_s << " rad/s (" << options.enter_factor << " x the still noise level "
-      << result.noise_level_rad_s << " rad/s)";
+      << result.noise_level_rad_s
+      << " rad/s): accuracy needs a log of turns between still stretches (a total-station test) "
+         "whose --bias A:B segment is still";
 
   // Per-axis angles and SO(3) orientations of the bias-corrected samples after the bias segment.
   const PerAxisAngles angles = IntegratePerAxis(trace, bias.bias_rad_s, first);
@@ -238,7 +240,9 @@ AccuracyResult AnalyzeAccuracy(const GyroTrace& trace, const AccuracyOptions& op
       << "found " << segments.size() << " motion(s) after the bias segment but none has "
       << options.guard_s << " s + " << average
       << " samples of still time on both sides to average (first motion at "
-      << (trace[segments[0].begin].t_ns - t0_ns) * 1e-9 << " s)";
+      << (trace[segments[0].begin].t_ns - t0_ns) * 1e-9
+      << " s): hold the gyro still before and after each turn, or give a shorter --guard or "
+         "--average";
 
   SetDifferenceStats(&result);
   return result;

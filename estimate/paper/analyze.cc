@@ -321,7 +321,12 @@ void WhatIfShares(const ImageContext& context, const std::vector<ImageTrigger>& 
     fast_images.push_back(AnalyzeImage(fast, trigger, latency_ns));
     low_images.push_back(AnalyzeImage(low, trigger, latency_ns));
   }
-  verdict->share_fast_readout_percent = SharesPercent(fast_images, context.limits_m.size());
+  // A fast readout may hold too few samples to judge any image: then no share, not 0 %.
+  const bool fast_judged = std::any_of(fast_images.begin(), fast_images.end(),
+                                       [](const ImageResult& image) { return image.judged(); });
+  verdict->share_fast_readout_percent.clear();
+  if (fast_judged)
+    verdict->share_fast_readout_percent = SharesPercent(fast_images, context.limits_m.size());
   verdict->share_half_altitude_percent = SharesPercent(low_images, context.limits_m.size());
 }
 
@@ -353,8 +358,10 @@ std::string VerdictLine(const AnalyzeVerdict& verdict, bool no_images, double ra
   line << (any_flagged ? "; stabilise camera axis " : "; largest rotation about camera axis ")
        << kAxisNames[verdict.axis_to_stabilise];
   if (options.what_if) {
-    line << "; with a " << FormatNumber("%g", verdict.fast_readout_s * 1e3)
-         << " ms readout: " << SharesText(verdict.share_fast_readout_percent, options.limits_m)
+    line << "; with a " << FormatNumber("%g", verdict.fast_readout_s * 1e3) << " ms readout: "
+         << (verdict.share_fast_readout_percent.empty()
+                 ? "too few samples at " + FormatNumber("%.4g", rate_hz) + " Hz to judge"
+                 : SharesText(verdict.share_fast_readout_percent, options.limits_m))
          << "; at " << FormatNumber("%g", 0.5 * options.rig.altitude_m)
          << " m altitude: " << SharesText(verdict.share_half_altitude_percent, options.limits_m);
   }

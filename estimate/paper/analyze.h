@@ -105,7 +105,9 @@ struct AnalyzeVerdict {
   std::vector<double> share_percent;  // per limit: images over the limit / images in the trace
   int axis_to_stabilise = -1;         // most frequent dominant axis of flagged images; -1 none
   double fast_readout_s = 0.010;
-  std::vector<double> share_fast_readout_percent;   // recomputed with readout fast_readout_s
+  // Recomputed with readout fast_readout_s; empty when that readout holds too few samples to
+  // judge any image.
+  std::vector<double> share_fast_readout_percent;
   std::vector<double> share_half_altitude_percent;  // recomputed with half the altitude
   std::string line;                                 // the one-line verdict for a person
 };

@@ -39,7 +39,8 @@ NoiseResult AnalyzeNoise(const GyroTrace& trace, const NoiseOptions& options) {
   SHUTTERLAB_CHECK(result.samples_analysed >= n_window)
       << "window of " << n_window << " samples is longer than the " << result.samples_analysed
       << " samples after the bias segment (" << options.bias.begin_s << ":" << options.bias.end_s
-      << " s)";
+      << " s; the trace lasts " << trace.DurationS()
+      << " s): give an earlier --bias A:B, a shorter --window, or a longer log";
   SHUTTERLAB_CHECK(result.samples_analysed < (1ull << 32)) << "trace too long for 32-bit windows";
 
   const PerAxisAngles angles = IntegratePerAxis(trace, result.bias.bias_rad_s, first);

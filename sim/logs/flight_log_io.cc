@@ -4,6 +4,7 @@
 #include "sim/logs/blackbox.h"
 #include "sim/logs/dataflash.h"
 #include "sim/logs/gcsv.h"
+#include "sim/logs/gopro_telemetry.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/logs/ulog.h"
 #include "sim/text_file.h"
@@ -42,13 +43,14 @@ LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string&
   if (LooksLikeULog(first_bytes)) return LogFormat::kULog;
   if (LooksLikeDataFlash(first_bytes)) return LogFormat::kDataFlash;
   if (LooksLikeBlackbox(first_bytes)) return LogFormat::kBlackbox;
+  if (LooksLikeMp4(first_bytes)) return LogFormat::kGoproMp4;
   // A binary file is none of the text formats; say so instead of quoting line 1 of garbage.
   const size_t probe = std::min<size_t>(first_bytes.size(), 512);
   for (size_t i = 0; i < probe; ++i) {
     if (first_bytes[i] == '\0') {
       throw IoError(IoMessage(path, 0,
-                              "unknown log format: not ULog, DataFlash, blackbox, gyro.csv, .gcsv "
-                              "or raw counts (binary content)"));
+                              "unknown log format: not ULog, DataFlash, blackbox, GoPro MP4, "
+                              "gyro.csv, .gcsv or raw counts (binary content)"));
     }
   }
   // The prefix may end mid-line; drop the partial last line so that it cannot mislead detection.
@@ -61,8 +63,8 @@ LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string&
     return DetectGyroFormat(text, path);  // kGyroCsv, kGcsv or kRaw
   } catch (const IoError& e) {
     throw IoError(std::string(e.what()) +
-                  " (unknown log format: not ULog, DataFlash, blackbox, gyro.csv, .gcsv or raw "
-                  "counts)");
+                  " (unknown log format: not ULog, DataFlash, blackbox, GoPro MP4, gyro.csv, .gcsv "
+                  "or raw counts)");
   }
 }
 
@@ -72,7 +74,7 @@ namespace {
 // kind is recognisable as such; they may come while the rows are streamed.
 std::string DetectedAs(LogFormat format) {
   return std::string(" (read as ") + LogFormatName(format) +
-         ": not ULog, DataFlash or blackbox; --format chooses)";
+         ": not ULog, DataFlash, blackbox or GoPro MP4; --format chooses)";
 }
 
 class DetectedSource : public GyroSource {
@@ -139,6 +141,8 @@ FlightLog ReadBinary(const std::string& path, LogFormat format,
       return ReadULog(path);
     case LogFormat::kDataFlash:
       return ReadDataFlash(path);
+    case LogFormat::kGoproMp4:
+      return ReadGoproFlightLog(path);
     default:
       return ReadBlackbox(path, options.log_index);
   }
@@ -151,7 +155,7 @@ FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOption
   LogFormat format = options.format;
   if (format == LogFormat::kAuto) format = DetectFlightLogFormat(ReadPrefix(path), path);
   if (format == LogFormat::kULog || format == LogFormat::kDataFlash ||
-      format == LogFormat::kBlackbox) {
+      format == LogFormat::kBlackbox || format == LogFormat::kGoproMp4) {
     FlightLogStream stream;
     stream.log = ReadBinary(path, format, options);
     stream.gyro = std::make_unique<TraceSource>(std::move(stream.log.gyro));

@@ -1,8 +1,9 @@
 #pragma once
 // One entry point for every log the project reads: flight-controller logs (PX4 ULog, ArduPilot
-// DataFlash, Betaflight blackbox native or CSV export) and plain gyro logs (gyro.csv, Gyroflow
-// .gcsv, the source paper's raw counts), detected by content. Plain gyro logs are wrapped into a
-// FlightLog with no camera events and no altitude, so that `analyze` treats every source alike.
+// DataFlash, Betaflight blackbox native or CSV export), a GoPro MP4's GPMF gyro, and plain gyro
+// logs (gyro.csv, Gyroflow .gcsv, the source paper's raw counts), detected by content. Plain gyro
+// logs are wrapped into a FlightLog with no camera events and no altitude, so that `analyze` treats
+// every source alike.
 
 #include "sim/logs/column_csv.h"
 #include "sim/logs/flight_log.h"
@@ -26,8 +27,8 @@ struct FlightLogReadOptions {
 };
 
 // Detects the format from the first bytes of a file (a few KiB): ULog magic, DataFlash FMT
-// header, blackbox marker or CSV header, in that order; otherwise the plain gyro formats by
-// sim/gyro_io.h DetectGyroFormat. Throws IoError naming path when none matches.
+// header, blackbox marker, an MP4's first box or CSV header, in that order; otherwise the plain
+// gyro formats by sim/gyro_io.h DetectGyroFormat. Throws IoError naming path when none matches.
 LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string& path);
 
 // Reads any supported log. Plain gyro logs give format "gyro.csv" / "gcsv" / "raw", gyro_source
@@ -40,7 +41,8 @@ FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& opt
 
 // A log opened to be read as a stream. The text logs (gyro.csv, .gcsv, raw counts, --columns) are
 // parsed a block at a time as the chunks are taken, in bounded memory whatever their length; the
-// binary logs (ULog, DataFlash, blackbox) are decoded whole when opened, then handed on in slices.
+// binary logs (ULog, DataFlash, blackbox, GoPro MP4) are decoded whole when opened, then handed on
+// in slices.
 struct FlightLogStream {
   FlightLog log;                     // all but the samples (log.gyro stays empty)
   std::unique_ptr<GyroSource> gyro;  // the samples; reading errors are thrown from Next

@@ -154,6 +154,20 @@ GoproTelemetry ReadGoproTelemetry(const std::string& mp4_path) {
   return out;
 }
 
+FlightLog ReadGoproFlightLog(const std::string& mp4_path) {
+  GoproTelemetry telemetry = ReadGoproTelemetry(mp4_path);
+  FlightLog log;
+  log.format = "gopro";
+  log.gyro_source = "GPMF GYRO '" + telemetry.gyro_name + "' (" + telemetry.axis_order_source + ")";
+  log.gyro_sources_available = {log.gyro_source};
+  log.gyro = std::move(telemetry.gyro);
+  if (!telemetry.settings.unreadable.empty()) {
+    log.warnings.push_back(
+        {"corrupt", "global settings unreadable: " + telemetry.settings.unreadable, {}, {}});
+  }
+  return log;
+}
+
 std::vector<double> ReadVideoFrameTimesS(const std::string& mp4_path) {
   const Mp4File mp4(mp4_path);
   const Mp4Track* video = mp4.FindTrack("vide", "");

@@ -4,6 +4,7 @@
 // through sim/logs/mp4.h and sim/logs/gpmf.h. Decoding the frames themselves is render's business.
 
 #include "sim/gyro_trace.h"
+#include "sim/logs/flight_log.h"
 #include "sim/logs/mp4.h"
 
 #include <array>
@@ -78,6 +79,11 @@ bool HasGoproTelemetry(const std::string& mp4_path);
 // writes them, SHUT, CORI, IORI and the global settings. Throws IoError when there is no gpmd track
 // or GYRO is unreadable (a missing optional stream is only missing).
 GoproTelemetry ReadGoproTelemetry(const std::string& mp4_path);
+
+// A GoPro MP4 as every command reads a log (format "gopro"): the GYRO trace on the camera's axes,
+// gyro_source naming the stream, no camera events and no altitude; a settings box that does not
+// parse is a warning. Throws IoError as ReadGoproTelemetry does.
+FlightLog ReadGoproFlightLog(const std::string& mp4_path);
 
 // The presentation times of the MP4's video track, ascending (a video reader returns frames in
 // presentation order), s. Throws IoError when there is no video track.

@@ -252,6 +252,7 @@ GyroTrace ReadGyro(const std::string& path, const GyroReadOptions& options) {
     case LogFormat::kULog:
     case LogFormat::kBlackbox:
     case LogFormat::kDataFlash:
+    case LogFormat::kGoproMp4:
     case LogFormat::kColumns:
       break;  // refused by options.Check()
   }

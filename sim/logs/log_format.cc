@@ -19,6 +19,7 @@ constexpr FormatNames kFormatNames[] = {
     {LogFormat::kULog, {"ulog", "ulg", "px4"}},
     {LogFormat::kBlackbox, {"blackbox", "betaflight", "bbl"}},
     {LogFormat::kDataFlash, {"dataflash", "bin", "ardupilot"}},
+    {LogFormat::kGoproMp4, {"gopro", "mp4"}},
     {LogFormat::kColumns, {"columns"}},
 };
 
@@ -52,8 +53,9 @@ const char* LogFormatName(LogFormat format) {
 LogFormat ParseLogFormat(const std::string& name) {
   bool found = false;
   const LogFormat format = FindFormat(ToLower(name), &found);
-  SHUTTERLAB_CHECK(found) << "unknown log format '" << name
-                          << "' (auto, ulog, dataflash, blackbox, gyro.csv, gcsv, raw, columns)";
+  SHUTTERLAB_CHECK(found)
+      << "unknown log format '" << name
+      << "' (auto, ulog, dataflash, blackbox, gopro, gyro.csv, gcsv, raw, columns)";
   return format;
 }
 

@@ -17,6 +17,7 @@ enum class LogFormat {
   kULog,       // PX4 .ulg
   kBlackbox,   // Betaflight / INAV blackbox, native or CSV export
   kDataFlash,  // ArduPilot .bin
+  kGoproMp4,   // a GoPro MP4 with GPMF telemetry (its GYRO stream; sim/logs/gopro_telemetry.h)
   kColumns,    // any delimited file read by the columns the user names (sim/logs/column_csv.h);
                // never detected: chosen by --columns / --format columns
 };
@@ -24,11 +25,12 @@ enum class LogFormat {
 // kGyroCsv, kGcsv and kRaw: the plain gyro logs that ReadGyro reads.
 bool IsPlainGyroFormat(LogFormat format);
 
-// "auto", "gyro.csv", "gcsv", "raw", "ulog", "blackbox", "dataflash", "columns".
+// "auto", "gyro.csv", "gcsv", "raw", "ulog", "blackbox", "dataflash", "gopro", "columns".
 const char* LogFormatName(LogFormat format);
 
 // Any name of the table, case-insensitive: "auto", "ulog" / "ulg" / "px4", "dataflash" / "bin" /
-// "ardupilot", "blackbox" / "betaflight" / "bbl", "gyro.csv" / "csv", "gcsv", "raw", "columns";
+// "ardupilot", "blackbox" / "betaflight" / "bbl", "gopro" / "mp4", "gyro.csv" / "csv", "gcsv",
+// "raw", "columns";
 // throws std::invalid_argument naming the text otherwise.
 LogFormat ParseLogFormat(const std::string& name);
 

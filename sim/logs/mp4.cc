@@ -391,6 +391,12 @@ const Mp4Track* Mp4File::FindTrack(const std::string& handler,
   return nullptr;
 }
 
+bool LooksLikeMp4(std::string_view first_bytes) {
+  if (first_bytes.size() < 8) return false;
+  const std::string_view type = first_bytes.substr(4, 4);
+  return type == "ftyp" || type == "moov" || type == "mdat" || type == "wide" || type == "free";
+}
+
 std::string Mp4File::ReadSample(const Mp4Track& track, size_t index) {
   const uint64_t offset = track.offsets.at(index);
   const uint32_t size = track.sizes.at(index);

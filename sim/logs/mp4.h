@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <fstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace shutterlab {
@@ -66,6 +67,10 @@ class Mp4File {
   std::vector<Mp4Track> tracks_;
   std::vector<Mp4UserBox> user_boxes_;
 };
+
+// An MP4 / QuickTime file by its first box: 'ftyp' (or a bare 'moov', 'mdat', 'wide', 'free') in
+// bytes 4..8 of the file.
+bool LooksLikeMp4(std::string_view first_bytes);
 
 // The boxes of a 'moov' body's 'udta' (every udta, in order); file_offset as for ParseMoov.
 std::vector<Mp4UserBox> ParseUserData(const std::string& moov_body, uint64_t file_offset,

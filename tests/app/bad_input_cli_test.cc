@@ -54,6 +54,7 @@ TEST_P(BadInputCli, OneLineExitTwoNoOutput) {
     EXPECT_NE(r.output.find(where), std::string::npos) << r.output;
   }
   EXPECT_NE(r.output.find(c.problem), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("check failed"), std::string::npos) << "an internal tag: " << r.output;
   EXPECT_FALSE(std::filesystem::exists(out)) << "output left behind: " << out;
 }
 
@@ -102,9 +103,13 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"detect_other_header", "time,x,y,z\n0,1,2,3.5\n", "", 2, "unrecognised header"},
         BadCase{"detect_empty", "", "", 0, "empty file"},
         // options that fail once the trace is read
-        BadCase{"bias_too_few_samples", StillTrace(), "--bias 0:0.005", 0, "holds 5 samples"},
+        BadCase{"bias_too_few_samples", StillTrace(), "--bias 0:0.005", 0,
+                "holds 5 samples (need at least 10; the trace lasts 2.999 s): give a --bias A:B "
+                "over a still part of the log, --auto-bias, or a longer log"},
         BadCase{"window_longer_than_trace", StillTrace(), "--bias 0:1 --window 100000", 0,
-                "100000"},
+                "100000 samples is longer than the 2000 samples after the bias segment (0:1 s; the "
+                "trace lasts 2.999 s): give an earlier --bias A:B, a shorter --window, or a longer "
+                "log"},
         BadCase{"bias_reversed", StillTrace(), "--bias 5:2", -1, "bias segment"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });
 

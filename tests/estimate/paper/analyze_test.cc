@@ -108,6 +108,11 @@ TEST(Analyze, ImagesWhoseReadoutHoldsTooFewSamplesAreNotJudged) {
   const AnalyzeResult judged = Analyze(log, options);
   EXPECT_EQ(judged.verdict.images_too_few_samples, 0u);
   EXPECT_EQ(judged.verdict.images_in_trace, refused.verdict.images_too_few_samples);
+  // Its what-if of a 10 ms readout cannot be judged at 50 Hz either: said, not given as 0 %.
+  EXPECT_TRUE(judged.verdict.share_fast_readout_percent.empty());
+  EXPECT_NE(judged.verdict.line.find("with a 10 ms readout: too few samples at 50 Hz to judge"),
+            std::string::npos)
+      << judged.verdict.line;
 }
 
 TEST(Analyze, FlagIsStrictlyAboveTheLimit) {

@@ -1,6 +1,7 @@
 #include "sim/logs/flight_log_io.h"
 
 #include "sim/check.h"
+#include "sim/logs/gopro_telemetry.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
 #include "tests/test_util.h"
@@ -32,6 +33,30 @@ TEST(ReadFlightLog, DetectsAndReadsEveryRealLog) {
     EXPECT_EQ(log.format, c.format) << c.path;
     EXPECT_GT(log.gyro.samples().size(), 1000u) << c.path;
     EXPECT_FALSE(log.gyro_source.empty()) << c.path;
+  }
+}
+
+// A GoPro clip's GPMF gyro is a log like any other: detected by its first box, read on the
+// camera's axes as import reads it.
+TEST(ReadFlightLog, ReadsAGoproClipsGyro) {
+  SHUTTERLAB_REAL_DATA(karma, "rs/gopro_karma/karma.mp4");
+  const FlightLog log = ReadFlightLog(karma);
+  EXPECT_EQ(log.format, "gopro");
+  EXPECT_NE(log.gyro_source.find("GPMF GYRO"), std::string::npos) << log.gyro_source;
+  const GoproTelemetry telemetry = ReadGoproTelemetry(karma);
+  ASSERT_EQ(log.gyro.size(), telemetry.gyro.size());
+  EXPECT_EQ(log.gyro[100].t_ns, telemetry.gyro[100].t_ns);
+  EXPECT_EQ(log.gyro[100].omega_rad_s, telemetry.gyro[100].omega_rad_s);
+  EXPECT_TRUE(log.camera_events.empty());
+  // An MP4 without GoPro telemetry is refused with what it lacks.
+  test::TempDir dir;
+  const std::string bytes = ReadFileToString(karma);
+  WriteFileAtomically(dir / "cut.mp4", bytes.substr(0, 4096));
+  try {
+    ReadFlightLog(dir / "cut.mp4");
+    ADD_FAILURE() << "a cut MP4 was read";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find(dir / "cut.mp4"), std::string::npos) << e.what();
   }
 }
 

@@ -11,7 +11,7 @@ namespace {
 TEST(LogFormat, NamesRoundTripThroughBothParsers) {
   for (LogFormat f :
        {LogFormat::kAuto, LogFormat::kGyroCsv, LogFormat::kGcsv, LogFormat::kRaw, LogFormat::kULog,
-        LogFormat::kBlackbox, LogFormat::kDataFlash, LogFormat::kColumns}) {
+        LogFormat::kBlackbox, LogFormat::kDataFlash, LogFormat::kGoproMp4, LogFormat::kColumns}) {
     EXPECT_EQ(ParseLogFormat(LogFormatName(f)), f) << LogFormatName(f);
     if (f == LogFormat::kAuto || IsPlainGyroFormat(f)) {
       EXPECT_EQ(ParseGyroFormat(LogFormatName(f)), f) << LogFormatName(f);
@@ -22,6 +22,7 @@ TEST(LogFormat, NamesRoundTripThroughBothParsers) {
   EXPECT_EQ(ParseLogFormat("CSV"), LogFormat::kGyroCsv);
   EXPECT_EQ(ParseLogFormat("px4"), LogFormat::kULog);
   EXPECT_EQ(ParseLogFormat("bin"), LogFormat::kDataFlash);
+  EXPECT_EQ(ParseLogFormat("MP4"), LogFormat::kGoproMp4);
 }
 
 TEST(LogFormat, UnknownNamesAreNamedWithTheChoices) {
@@ -29,12 +30,11 @@ TEST(LogFormat, UnknownNamesAreNamedWithTheChoices) {
     ParseLogFormat("jpeg");
     FAIL();
   } catch (const std::invalid_argument& e) {
-    EXPECT_EQ(
-        std::string(e.what()).rfind(
-            "unknown log format 'jpeg' (auto, ulog, dataflash, blackbox, gyro.csv, gcsv, raw, "
-            "columns)",
-            0),
-        0u)
+    EXPECT_EQ(std::string(e.what()).rfind("unknown log format 'jpeg' (auto, ulog, dataflash, "
+                                          "blackbox, gopro, gyro.csv, gcsv, raw, "
+                                          "columns)",
+                                          0),
+              0u)
         << e.what();
   }
   try {
