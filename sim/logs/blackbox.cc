@@ -426,7 +426,8 @@ class LogDecoder {
 
   void Run(DecodedLog* out) {
     // Main frames take at least a few bytes each; reserving avoids regrowing a large trace.
-    out->samples.reserve((end_ - h_.data_begin) / 8 + 16);
+    // A header that claims to run past the data (found by fuzz/flight_log_fuzz) reserves nothing.
+    out->samples.reserve((end_ > h_.data_begin ? (end_ - h_.data_begin) / 8 : 0) + 16);
     size_t pos = h_.data_begin;
     size_t end = end_;  // a LOG_END event moves it to just after itself
     bool have_last = false;
