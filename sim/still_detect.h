@@ -24,7 +24,11 @@
 // rotation with the same noise is indistinguishable by the gyro alone and may win).
 
 #include "sim/bias.h"
+#include "sim/gyro_source.h"
 #include "sim/gyro_trace.h"
+
+#include <functional>
+#include <memory>
 
 namespace shutterlab {
 
@@ -49,6 +53,13 @@ struct StillSegment {
 // Finds the still segment. Throws std::invalid_argument when the window or min_duration_s is longer
 // than the trace, or when no still run lasts min_duration_s (the message names the longest found).
 StillSegment DetectStillSegment(const GyroTrace& trace, const StillDetectOptions& options = {});
+// The same on a trace too long to hold: open() gives a fresh source of it each time, read five
+// times (length, mean and rate; the least stretch variance; the reference; its windows' spread,
+// up to its end; the still runs), in memory bounded by the stretch (min_duration_s of samples)
+// whatever the trace's length. The result and the refusals are the same, to the bit, as for the
+// trace held whole: the same sums are formed in the same order.
+StillSegment DetectStillSegment(const std::function<std::unique_ptr<GyroSource>()>& open,
+                                const StillDetectOptions& options = {});
 
 // Largest accepted ratio of the variance of the window means over the reference stretch to the mean
 // in-window variance (both summed over axes). White noise gives 1/N; noise low-passed to a

@@ -6,7 +6,9 @@
 
 #include <cmath>
 #include <functional>
+#include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace shutterlab {
@@ -170,6 +172,58 @@ TEST(StillDetect, SegmentFeedsEstimateBias) {
   EXPECT_EQ(bias.samples, s.end_sample - s.first_sample);
   // Four seconds of 0.002 rad/s noise: the mean is within 5 standard errors (~1.6e-4) of the bias.
   EXPECT_LE((bias.bias_rad_s - o.bias_rad_s).cwiseAbs().maxCoeff(), 1.6e-4);
+}
+
+// A trace held whole and the same trace streamed in chunks of any size give the same segment, to
+// the bit, and the same refusals.
+TEST(StillDetectStreamed, EqualsTheWholeTraceAtAwkwardChunkSizes) {
+  Synth o;
+  o.duration_s = 16.0;
+  o.lowpass_alpha = 0.3;
+  const GyroTrace longest = Make(o, [](double t) -> Eigen::Vector3d {
+    const bool still = (t >= 1.0 && t < 3.5) || (t >= 6.0 && t < 11.0);
+    return still ? Eigen::Vector3d::Zero() : Eigen::Vector3d(0.2 * std::sin(3 * t) + 0.3, 0.1, 0);
+  });
+  Synth at_end;
+  at_end.duration_s = 9.0;
+  at_end.count_rad_s = 0.001;
+  const GyroTrace still_at_end = Make(at_end, MotionOutside(5.0, 100.0));
+  StillDetectOptions first;
+  first.first = true;
+  struct Case {
+    const GyroTrace* trace;
+    StillDetectOptions options;
+  };
+  for (const Case& c : {Case{&longest, {}}, Case{&longest, first}, Case{&still_at_end, {}}}) {
+    const StillSegment whole = DetectStillSegment(*c.trace, c.options);
+    for (const size_t chunk : {size_t{1}, size_t{7}, size_t{999}, size_t{1} << 16}) {
+      const StillSegment streamed = DetectStillSegment(
+          [&] { return std::make_unique<TraceSource>(*c.trace, chunk); }, c.options);
+      EXPECT_EQ(streamed.first_sample, whole.first_sample) << chunk;
+      EXPECT_EQ(streamed.end_sample, whole.end_sample) << chunk;
+      EXPECT_EQ(streamed.window_samples, whole.window_samples) << chunk;
+      EXPECT_EQ(streamed.segment.begin_s, whole.segment.begin_s) << chunk;
+      EXPECT_EQ(streamed.segment.end_s, whole.segment.end_s) << chunk;
+      EXPECT_EQ(streamed.quiet_mean_rad_s, whole.quiet_mean_rad_s) << chunk;
+    }
+  }
+  // Refusals say the same.
+  const GyroTrace moving = Make(at_end, [](double t) -> Eigen::Vector3d {
+    return Eigen::Vector3d(0.3 * std::sin(2 * kPi * 0.9 * t), 0.2, 0.1 * t);
+  });
+  std::string whole_error, streamed_error;
+  try {
+    DetectStillSegment(moving);
+  } catch (const std::invalid_argument& e) {
+    whole_error = e.what();
+  }
+  try {
+    DetectStillSegment([&] { return std::make_unique<TraceSource>(moving, 13); });
+  } catch (const std::invalid_argument& e) {
+    streamed_error = e.what();
+  }
+  EXPECT_FALSE(whole_error.empty());
+  EXPECT_EQ(streamed_error, whole_error);
 }
 
 }  // namespace
