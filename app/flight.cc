@@ -42,17 +42,18 @@ void Run(const FlightCommand& command) {
   std::vector<LogWarning> warnings;
   FlightResult result;
   TracePair pair;
-  if (command.trace.auto_bias || !command.trace.second_path.empty()) {
-    // The still segment may lie anywhere in the log, and a pair is fused on the whole traces:
-    // both need the whole trace first.
+  if (!command.trace.second_path.empty()) {
+    // A pair is fused on the whole traces.
     Progress progress("flight", 1000);
     options.progress = [&progress](double fraction) {
       progress.Update(static_cast<size_t>(fraction * 1000));
     };
     result = AnalyzeTrace(command.trace, options, Flight, &warnings, &pair);
   } else {
-    // Streamed: memory stays bounded whatever the log's length.
-    options.bias = ParseBiasSegment(command.trace.bias);
+    // Streamed: memory stays bounded whatever the log's length. The still segment may lie anywhere
+    // in the log: --auto-bias finds it in passes of its own before this one.
+    options.Check();
+    options.bias = command.trace.StreamedSegment();
     FlightStream flight(options);
     warnings =
         command.trace

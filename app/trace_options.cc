@@ -3,7 +3,11 @@
 #include "app/command.h"
 #include "sim/check.h"
 
+#include <algorithm>
 #include <cstdio>
+#include <functional>
+#include <memory>
+#include <utility>
 
 namespace shutterlab::app {
 
@@ -131,12 +135,52 @@ void PrintLogWarnings(const std::string& path, const std::vector<LogWarning>& wa
     std::fprintf(stderr, "warning: %s: %s\n", path.c_str(), WarningLine(w).c_str());
 }
 
-BiasSegment TraceOptions::Segment(const GyroTrace& trace) const {
-  if (!auto_bias) return ParseBiasSegment(bias);
-  const StillSegment still = DetectStillSegment(trace);
+namespace {
+
+// The detected still segment, with its note on stderr.
+BiasSegment NoteStillSegment(const StillSegment& still) {
   std::fprintf(stderr, "auto-bias: still segment %.3f:%.3f s\n", still.segment.begin_s,
                still.segment.end_s);
   return still.segment;
+}
+
+// A source that reports the share it has read after each chunk.
+class ReportingSource : public GyroSource {
+ public:
+  ReportingSource(std::unique_ptr<GyroSource> source, std::function<void(double)> report)
+      : source_(std::move(source)), report_(std::move(report)) {}
+  GyroChunk Next() override {
+    const GyroChunk chunk = source_->Next();
+    report_(source_->Fraction());
+    return chunk;
+  }
+  double Fraction() const override { return source_->Fraction(); }
+  std::vector<LogWarning> Warnings() const override { return source_->Warnings(); }
+
+ private:
+  std::unique_ptr<GyroSource> source_;
+  std::function<void(double)> report_;
+};
+
+}  // namespace
+
+BiasSegment TraceOptions::Segment(const GyroTrace& trace) const {
+  if (!auto_bias) return ParseBiasSegment(bias);
+  return NoteStillSegment(DetectStillSegment(trace));
+}
+
+BiasSegment TraceOptions::StreamedSegment() const {
+  if (!auto_bias) return ParseBiasSegment(bias);
+  constexpr size_t kPasses = 5;  // DetectStillSegment on a source reads it at most five times
+  Progress progress("auto-bias", kPasses * 1000);
+  size_t pass = 0;
+  const auto open = [&]() -> std::unique_ptr<GyroSource> {
+    const size_t done = std::min(pass++, kPasses - 1) * 1000;
+    return std::make_unique<ReportingSource>(
+        OpenFlightLog(path, ReadOptions()).gyro,
+        [&progress, done](double f) { progress.Update(done + static_cast<size_t>(f * 1000)); });
+  };
+  return NoteStillSegment(DetectStillSegment(open));
 }
 
 }  // namespace shutterlab::app

@@ -62,6 +62,10 @@ struct TraceOptions {
   // (DetectStillSegment, default StillDetectOptions; one note "auto-bias: still segment A:B s" on
   // stderr), otherwise --bias A:B. Throws std::invalid_argument when neither gives a segment.
   BiasSegment Segment(const GyroTrace& trace) const;
+  // The same for a log too long to hold, read as a stream: the still search reads the log five
+  // times (DetectStillSegment on a source) in memory bounded by its 2 s stretch, with the same
+  // segment and note; shows progress on a terminal.
+  BiasSegment StreamedSegment() const;
 };
 
 // What the reader could not read or trust, one "warning: PATH: LINE" on stderr each, so that no

@@ -1,4 +1,7 @@
+#include "estimate/paper/flight.h"
+#include "estimate/report/analysis_json.h"
 #include "sim/logs/gyro_io.h"
+#include "sim/still_detect.h"
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
 #include "tests/test_util.h"
@@ -9,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -116,6 +120,35 @@ TEST(FlightCli, TableAndSeries) {
   const std::string csv = ReadFileToString(series);
   EXPECT_EQ(csv.rfind("t,range_x,range_y,range_z,vector\n", 0), 0u);
   EXPECT_EQ(CountLines(csv), 1u + 2000u - 10u);
+}
+
+// --auto-bias streams the log (the still search reads it in passes of its own, in bounded memory)
+// and must give what the analysis of the whole trace gives: the same segment, bias and counts.
+TEST(FlightCli, AutoBiasStreamedEqualsTheWholeTrace) {
+  TempDir dir;
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  std::vector<GyroSample> samples;
+  for (int i = 0; i < 9000; ++i) {  // 1 kHz: moving, still from 3 s to 6 s, moving again
+    const double t = i * 1e-3;
+    const bool still = t >= 3.0 && t < 6.0;
+    const Eigen::Vector3d motion =
+        still ? Eigen::Vector3d::Zero() : Eigen::Vector3d(0.3 * std::sin(4 * t), 0.2, 0.05);
+    samples.push_back({static_cast<int64_t>(i) * 1000000,
+                       motion + Eigen::Vector3d(0.01 + noise(rng), noise(rng), noise(rng))});
+  }
+  const GyroTrace trace(std::move(samples));
+  const std::string path = dir / "gyro.csv";
+  WriteGyroCsv(path, trace);
+  const auto r = RunShutterlab("flight " + path + " --auto-bias --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.err.find("auto-bias: still segment 3.0"), std::string::npos) << r.err;
+  FlightOptions options;
+  options.bias = DetectStillSegment(ReadGyroCsv(path)).segment;
+  const nlohmann::json whole = FlightToJson(Flight(ReadGyroCsv(path), options));
+  nlohmann::json streamed = nlohmann::json::parse(r.out);
+  streamed.erase("warnings");
+  EXPECT_EQ(streamed, whole) << streamed.dump(1) << "\n" << whole.dump(1);
 }
 
 TEST(FlightCli, BadInputExitsTwoWithOneLine) {
