@@ -50,7 +50,8 @@ std::vector<cv::Point2f> FindCorners(const cv::Mat& grey, const cv::Mat& mask) {
   std::vector<cv::Point2f> corners;
   for (std::vector<Corner>& tile : tiles) {
     std::sort(tile.begin(), tile.end(), [](const Corner& a, const Corner& b) {
-      return a.eig > b.eig || (a.eig == b.eig && (a.p.y < b.p.y || (a.p.y == b.p.y && a.p.x < b.p.x)));
+      return a.eig > b.eig ||
+             (a.eig == b.eig && (a.p.y < b.p.y || (a.p.y == b.p.y && a.p.x < b.p.x)));
     });
     for (size_t i = 0; i < tile.size() && i < static_cast<size_t>(kCornersPerTile); ++i) {
       if (tile[i].eig < kMinCornerFraction * tile.front().eig) break;
@@ -99,7 +100,8 @@ std::vector<MeasuredPoint> TrackCorners(const cv::Mat& grey_ref, const cv::Mat& 
     const cv::Vec2f d = dense_flow.at<cv::Vec2f>(cvRound(corners[i].y), cvRound(corners[i].x));
     const bool apart = std::isfinite(d[0]) && std::isfinite(d[1]) && cv::norm(d) >= kMinStartGapPx;
     const float diagonal = static_cast<float>(kMinStartGapPx / std::sqrt(2.0));
-    from_dense[i] = corners[i] + (apart ? cv::Point2f(d[0], d[1]) : cv::Point2f(diagonal, diagonal));
+    from_dense[i] =
+        corners[i] + (apart ? cv::Point2f(d[0], d[1]) : cv::Point2f(diagonal, diagonal));
   }
   cv::calcOpticalFlowPyrLK(img, ref, corners, from_dense, ok_dense, err, window, kLkLevels, stop,
                            cv::OPTFLOW_USE_INITIAL_FLOW);
