@@ -108,7 +108,7 @@ TEST(RigModel, RejectsNonsenseWithAClearError) {
   ExpectRejected("\"fy\": 1100.0", "\"fy\": 0", "focal length");
   ExpectRejected("\"readout_s\": 0.030", "\"readout_s\": -0.01", "readout_s");
   ExpectRejected("\"top_to_bottom\"", "\"left_to_right\"", "direction");
-  ExpectRejected("\"width\": 1280", "\"width\": 0", "image size");
+  ExpectRejected("\"width\": 1280", "\"width\": 0", "image.width 0 is not a whole number");
   ExpectRejected("\"fx\": 1100.0", "\"fx\": \"big\"", "fx");
   ExpectRejected("\"rig/1\"", "\"rig/9\"", "format");
   ExpectRejected("\"format\": \"rig/1\",",
@@ -151,6 +151,16 @@ TEST(RigModel, RejectsADistortionOfNoModel) {
                  "distortion.k4 is not a coefficient of the brown model");
   ExpectRejected(open, R"("distortion": {"model": "fisheye", "k1": "big"}, "rolling_shutter")",
                  "distortion.k1 is not a number");
+}
+
+// Regression (fuzz/camera_json_fuzz): a width too large for an int was cast anyway (undefined
+// behaviour); a fractional or non-positive side was truncated or left to a later check.
+TEST(RigModel, RejectsAnImageSideThatIsNotAWholePixelCount) {
+  const std::string width = "\"width\": 1280";
+  ExpectRejected(width, "\"width\": 8.49e52",
+                 "image.width 8.49e+52 is not a whole number of pixels from 1 to 1048576");
+  ExpectRejected(width, "\"width\": 1280.5", "image.width 1280.5 is not a whole number");
+  ExpectRejected("\"height\": 960", "\"height\": -960", "image.height -960 is not a whole");
 }
 
 TEST(RigModel, RejectsInvalidJsonWithItsLine) {

@@ -720,6 +720,27 @@ TEST(Blackbox, FloodsOfFrameMarkersAreBoundedPerFrame) {
   EXPECT_GT(log.records_skipped, 0u);
 }
 
+TEST(Blackbox, AHeaderThatRunsIntoTheNextLogsMarkerReadsAsAnEmptyLog) {
+  // Regression (found by fuzzing): log 0's last header line is a bare "H " directly followed by
+  // log 1's "H Product:" marker, so log 0 ends where that line's text would begin and its header
+  // scan stops one byte past its end. Its data then began after its end: the decoder reserved a
+  // wrapped-around size and threw std::length_error instead of reading log 0 as empty.
+  SyntheticOptions o;
+  o.frames = 60;
+  o.frames_after_resume = 0;
+  const Synthetic next = MakeSyntheticLog(o);
+  const std::string file = SyntheticHeader(o) + "H " + next.bytes;
+  std::vector<BlackboxLogInfo> infos;
+  ASSERT_NO_THROW(infos = ListBlackboxLogsInBuffer(file, "cut.bbl"));
+  ASSERT_EQ(infos.size(), 2u);
+  EXPECT_EQ(infos[0].size_bytes, SyntheticHeader(o).size() + 2);
+  EXPECT_EQ(infos[0].main_frames, 0u);
+  EXPECT_EQ(infos[1].main_frames, 60u);
+  // The longest log is read whole; log 0 itself is a clear error, not a crash.
+  ExpectMatchesSynthetic(DecodeBlackbox(file, "cut.bbl"), next, kRadPerDeg);
+  EXPECT_THROW(DecodeBlackbox(file, "cut.bbl", 0), IoError);
+}
+
 // ---- The real logs ----
 
 std::string DataPath(const std::string& leaf) {
