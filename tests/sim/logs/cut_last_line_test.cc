@@ -27,11 +27,11 @@ constexpr int kRows = 6;
 // One text format: its lines before the rows, its rows, and how it is read.
 struct TextFormat {
   std::string name;
-  std::string header;                 // whole lines before the rows ("" for none)
+  std::string header;                   // whole lines before the rows ("" for none)
   std::function<std::string(int)> row;  // row k, without its line break
-  size_t fields = 4;                  // fields a whole row has
-  bool time_last = false;             // a cut inside the time makes it go backwards
-  FlightLogReadOptions read;          // how ReadFlightLog reads the file
+  size_t fields = 4;                    // fields a whole row has
+  bool time_last = false;               // a cut inside the time makes it go backwards
+  FlightLogReadOptions read;            // how ReadFlightLog reads the file
   // The rows as a stream over text in memory, in blocks of block_bytes; null: files only.
   std::function<std::unique_ptr<GyroSource>(TextBlocks)> open;
 };
@@ -57,8 +57,9 @@ std::vector<TextFormat> Formats() {
 
   TextFormat gcsv;
   gcsv.name = "gcsv";
-  gcsv.header = "GYROFLOW IMU LOG\nversion,1.3\nid,x\norientation,XYZ\ntscale,0.001\n"
-                "gscale,0.5\nt,gx,gy,gz\n";
+  gcsv.header =
+      "GYROFLOW IMU LOG\nversion,1.3\nid,x\norientation,XYZ\ntscale,0.001\n"
+      "gscale,0.5\nt,gx,gy,gz\n";
   gcsv.row = [](int k) { return std::to_string(1000 + k) + ",12,-345,-6789"; };
   gcsv.open = [](TextBlocks blocks) {
     return std::move(OpenGcsv(std::move(blocks), "mem.gcsv").samples);
@@ -129,8 +130,8 @@ void ExpectCutRead(const TextFormat& format, const CutRead& got, const GyroTrace
                    std::string_view cut, long last_line, const std::string& where,
                    size_t* left_out) {
   ExpectSamePrefix(got.trace, whole, kRows - 1, where);
-  const bool said = test::AnyWarningContains(got.warnings, "truncated: line " +
-                                                               std::to_string(last_line) + ":");
+  const bool said =
+      test::AnyWarningContains(got.warnings, "truncated: line " + std::to_string(last_line) + ":");
   if (got.trace.size() == kRows - 1) {
     ++*left_out;
     EXPECT_TRUE(said) << where << "\n" << test::JoinedWarnings(got.warnings);
@@ -180,8 +181,8 @@ TEST(CutLastLine, EveryLineReaderReadsUpToTheLastWholeLineAndSaysSo) {
               format.open(TextBlocks::InMemory(cut_text, block));
           GyroTrace trace = ReadAllSamples(source.get());
           size_t ignored = 0;
-          ExpectCutRead(format, {std::move(trace), source->Warnings()}, whole.gyro, cut,
-                        last_line, where + " in blocks of " + std::to_string(block), &ignored);
+          ExpectCutRead(format, {std::move(trace), source->Warnings()}, whole.gyro, cut, last_line,
+                        where + " in blocks of " + std::to_string(block), &ignored);
         } catch (const std::exception& e) {
           ADD_FAILURE() << where << " in blocks of " << block << ": " << e.what();
         }
@@ -197,9 +198,8 @@ TEST(CutLastLine, ABadLineBeforeTheLastIsStillAnErrorNamingFileAndLine) {
   for (const TextFormat& format : Formats()) {
     std::string text = format.header;
     for (int k = 0; k < kRows; ++k) text += (k == 2 ? std::string("x,y") : format.row(k)) + "\n";
-    const long bad_line = static_cast<long>(std::count(format.header.begin(),
-                                                       format.header.end(), '\n')) +
-                          3;
+    const long bad_line =
+        static_cast<long>(std::count(format.header.begin(), format.header.end(), '\n')) + 3;
     // With the last line cut as well: the cut is forgiven, the bad line is not.
     text.resize(text.size() - 4);
     const std::string path = dir / "bad";
