@@ -1,6 +1,7 @@
 // libFuzzer target: a delimited gyro log read by its columns (sim/logs/column_csv.h), a block at a
 // time. The first input byte picks the column choice, delimiter and units, the second the block
-// size (1 to 256 bytes); the rest is the file's text. Every chunk goes through the trace audit.
+// size (1 to 256 bytes) and the samples per chunk (fuzz::ChunkSamples); the rest is the file's
+// text. Every chunk goes through the trace audit.
 #include "sim/logs/column_csv.h"
 
 #include "fuzz/fuzz_util.h"
@@ -17,8 +18,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   options.time_unit = (pick & 0x10) ? TimeUnit::kMicroseconds : TimeUnit::kSeconds;
   options.rate_unit = (pick & 0x20) ? RateUnit::kDegPerSecond : RateUnit::kRadPerSecond;
   fuzz::Expect([&] {
-    ColumnCsvStream stream = OpenColumnCsv(
-        TextBlocks::InMemory(fuzz::Bytes(data + 2, size - 2), 1 + data[1]), "fuzz.csv", options);
+    ColumnCsvStream stream =
+        OpenColumnCsv(TextBlocks::InMemory(fuzz::Bytes(data + 2, size - 2), 1 + data[1]),
+                      "fuzz.csv", options, fuzz::ChunkSamples(data[1]));
     fuzz::AuditEveryChunk(stream.samples.get());
   });
   return 0;

@@ -30,6 +30,10 @@ void Expect(const Read& read) {
   }
 }
 
+// Samples per chunk for a streaming reader, from an input byte: 1 to 17, so that chunk edges fall
+// everywhere in a small input (and no run allocates a full-size chunk).
+inline size_t ChunkSamples(uint8_t byte) { return 1 + byte % 17; }
+
 // Takes every chunk of a source through the trace audit, as the commands do.
 inline void AuditEveryChunk(GyroSource* source, const TraceAuditOptions& options = {}) {
   TraceAuditor auditor(options);

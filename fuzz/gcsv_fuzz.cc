@@ -1,6 +1,7 @@
 // libFuzzer target: Gyroflow .gcsv (sim/logs/gcsv.h OpenGcsv): its header block, then the samples a
-// block at a time. The first input byte picks the block size (1 to 256 bytes); the rest is the
-// file's text. Every chunk goes through the trace audit.
+// block at a time. The first input byte picks the block size (1 to 256 bytes) and the samples per
+// chunk (fuzz::ChunkSamples); the rest is the file's text. Every chunk goes through the trace
+// audit.
 #include "sim/logs/gcsv.h"
 #include "sim/trace_audit.h"
 
@@ -11,7 +12,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size == 0) return 0;
   const std::string_view text = fuzz::Bytes(data + 1, size - 1);
   fuzz::Expect([&] {
-    GcsvStream stream = OpenGcsv(TextBlocks::InMemory(text, 1 + data[0]), "fuzz.gcsv");
+    GcsvStream stream =
+        OpenGcsv(TextBlocks::InMemory(text, 1 + data[0]), "fuzz.gcsv", fuzz::ChunkSamples(data[0]));
     fuzz::AuditEveryChunk(stream.samples.get());
   });
   return 0;

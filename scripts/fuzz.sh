@@ -2,11 +2,14 @@
 # Builds the libFuzzer targets (fuzz/*_fuzz.cc, clang, ASan + UBSan) and runs each one, seeded with
 # small seeds made from the real logs and clips in the shared data folder (scripts/fuzz_seeds.py:
 # a few KiB that hold each format's header and definitions) and with small files of every text
-# format. Prints, per target, the executions, the time and whether anything was found.
+# format. Prints, per target, the executions, the wall and CPU time, the executions per CPU second
+# and whether anything was found; the same table goes to DIR/fuzz.txt (DIR/campaign.txt).
 #
 #   scripts/fuzz.sh                      every target for 60 s
 #   scripts/fuzz.sh --seconds 600 ulog   one target for 10 minutes
 #   scripts/fuzz.sh --runs 10000000      every target until 10 million executions
+#   nice scripts/fuzz.sh --campaign      the same, the table also in DIR/campaign.txt (hours: the
+#                                        rate of each target is in the table of a short run)
 #   scripts/fuzz.sh --smoke              every target for 3000 executions from seed 1 (what CI runs:
 #                                        the same inputs on every machine, so it passes or fails alike)
 #   scripts/fuzz.sh --build DIR ...      use (or make) the fuzz build in DIR (default build-fuzz)
@@ -20,10 +23,12 @@ cd "$(dirname "$0")/.."
 limit=(-max_total_time=60)
 targets=()
 build=build-fuzz
+table=
 while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) limit=(-max_total_time="$2"); shift 2 ;;
     --runs) limit=(-runs="$2"); shift 2 ;;
+    --campaign) limit=(-runs=10000000); table=campaign.txt; shift ;;
     --smoke) limit=(-runs=3000 -seed=1); shift ;;
     --build) build="$2"; shift 2 ;;
     -*) echo "fuzz.sh: unknown option $1" >&2; exit 2 ;;
@@ -36,6 +41,7 @@ if [ ! -f "$build/CMakeCache.txt" ]; then
 else
   cmake -S . -B "$build" >/dev/null  # picks up fuzz targets added since it was configured
 fi
+table="$build/${table:-fuzz.txt}"
 if [ ${#targets[@]} -eq 0 ]; then
   for src in fuzz/*_fuzz.cc; do targets+=("$(basename "$src" _fuzz.cc)"); done
 fi
@@ -134,10 +140,22 @@ done
 
 mkdir -p "$build/artifacts"
 failed=0
-printf '%-12s %14s %9s %10s  %s\n' target executions seconds "exec/s" result
+# The table goes to the terminal and to $table (a campaign's record). CPU time is the fuzzer's own
+# (user + system): on a shared machine it, not wall time, says what a target costs.
+: >"$table"
+row() { printf '%-18s %12s %9s %9s %10s  %s\n' "$@" | tee -a "$table"; }
+row target executions "wall s" "CPU s" "exec/CPU s" result
+children_cpu() {  # cpu_now: user + system seconds of this shell's finished children (`times`,
+  # run in this shell, not in a subshell, which would have children of its own)
+  times >"$build/artifacts/times.txt"
+  cpu_now=$(awk 'NR == 2 { split($0, f, /[ ms]+/); print f[1] * 60 + f[2] + f[3] * 60 + f[4] }' \
+    "$build/artifacts/times.txt")
+}
 for t in "${targets[@]}"; do
   log="$build/artifacts/$t.log"
   start=$(date +%s.%N)
+  children_cpu
+  cpu_start=$cpu_now
   if "$build/bin/${t}_fuzz" "${limit[@]}" -max_len=$max_len -timeout=10 -rss_limit_mb=2048 \
       -print_final_stats=1 -artifact_prefix="$build/artifacts/$t-" "$build/corpus/$t" \
       >"$log" 2>&1; then
@@ -146,9 +164,12 @@ for t in "${targets[@]}"; do
     result="FOUND (see $log)"
     failed=1
   fi
-  seconds=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { print b - a }')
+  seconds=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { printf "%.0f", b - a }')
+  children_cpu
+  cpu=$(awk -v a="$cpu_start" -v b="$cpu_now" 'BEGIN { printf "%.2f", b - a }')
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
-  rate=$(awk -v n="${execs:-0}" -v s="$seconds" 'BEGIN { printf "%.0f", n / s }')
-  printf '%-12s %14s %9.0f %10s  %s\n' "$t" "${execs:-?}" "$seconds" "$rate" "$result"
+  rate=$(awk -v n="${execs:-0}" -v s="$cpu" 'BEGIN { printf "%.0f", (s > 0 ? n / s : 0) }')
+  row "$t" "${execs:-?}" "$seconds" "$cpu" "$rate" "$result"
 done
+echo "table written to $table"
 exit $failed

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -47,6 +48,11 @@ class GyroSource {
 // A source that fills chunks of its own (the text readers): Fill is all it writes.
 class FillingSource : public GyroSource {
  public:
+  // Samples per chunk by default: 2 MiB, which stay in cache while the analysis takes them. Tests
+  // and fuzz targets choose a few, which puts chunk edges everywhere in a small input.
+  static constexpr size_t kDefaultChunkSamples = 1 << 16;
+  explicit FillingSource(size_t chunk_samples = kDefaultChunkSamples)
+      : chunk_samples_(std::max<size_t>(chunk_samples, 1)) {}
   GyroChunk Next() final {
     chunk_.clear();
     Fill(&chunk_);
@@ -60,10 +66,15 @@ class FillingSource : public GyroSource {
   std::vector<LogWarning> Warnings() const final { return warnings_; }
 
  protected:
-  // Samples per chunk: 2 MiB, which stay in cache while the analysis takes them.
-  static constexpr size_t kChunkSamples = 1 << 16;
-  // Appends the next samples, at most kChunkSamples, to *chunk (empty on entry); none at the end.
+  // Appends the next samples, at most chunk_samples(), to *chunk (empty on entry); none at the end.
   virtual void Fill(std::vector<GyroSample>* chunk) = 0;
+  size_t chunk_samples() const { return chunk_samples_; }
+  // Room in *chunk for a chunk, but no more than an input of input_bytes can fill (a row of four
+  // numbers takes at least 8 bytes; 0: unknown): a small file does not allocate a 2 MiB chunk.
+  void ReserveChunk(std::vector<GyroSample>* chunk, uint64_t input_bytes) const {
+    const uint64_t rows = input_bytes > 0 ? input_bytes / 8 + 1 : chunk_samples_;
+    chunk->reserve(static_cast<size_t>(std::min<uint64_t>(chunk_samples_, rows)));
+  }
   // The input's last line (line_number) has no line break and does not read: left out, and said
   // (Warnings). last_t_ns: the time of the sample before it, when there is one.
   void LeaveOutCutLastLine(long line_number, std::optional<int64_t> last_t_ns) {
@@ -72,6 +83,7 @@ class FillingSource : public GyroSource {
   }
 
  private:
+  size_t chunk_samples_;
   std::vector<GyroSample> chunk_;
   std::vector<LogWarning> warnings_;
 };

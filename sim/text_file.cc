@@ -93,8 +93,15 @@ TextBlocks TextBlocks::OfFile(const std::string& path, size_t block_bytes) {
   if (blocks.fd_ < 0)
     throw IoError(IoMessage(path, 0, std::string("cannot open: ") + std::strerror(errno)));
   struct stat info {};
-  if (::fstat(blocks.fd_, &info) == 0 && S_ISREG(info.st_mode))
+  if (::fstat(blocks.fd_, &info) == 0 && S_ISREG(info.st_mode)) {
     blocks.size_ = static_cast<uint64_t>(info.st_size);
+    // A block no larger than the file needs (with room to see its end in the same read), so that
+    // a small log does not allocate and fault in 4 MiB; a file that grows meanwhile is still read
+    // whole, in more reads.
+    constexpr uint64_t kSmallestBlock = 4 << 10;
+    blocks.capacity_ = static_cast<size_t>(
+        std::min<uint64_t>(blocks.capacity_, std::max(blocks.size_ + 1, kSmallestBlock)));
+  }
   blocks.buffer_.reset(new char[blocks.capacity_]);
   return blocks;
 }

@@ -60,6 +60,8 @@ class TextBlocks {
   std::string_view Next();
   // The share of the input handed out so far, 0..1.
   double Fraction() const;
+  // The input's length in bytes; 0 when unknown (a pipe).
+  uint64_t size_bytes() const { return size_; }
 
  private:
   TextBlocks() = default;
@@ -83,6 +85,7 @@ class LineReader {
   std::optional<std::string_view> Next();
   long line_number() const { return line_number_; }
   double Fraction() const { return blocks_.Fraction(); }
+  uint64_t size_bytes() const { return blocks_.size_bytes(); }
   // The line Next returned last is the input's last and has no line break: a file that does not
   // read there was cut inside it (copied or recorded while still being written).
   bool unterminated() const { return unterminated_; }

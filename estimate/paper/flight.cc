@@ -344,7 +344,14 @@ struct FlightStream::Impl {
     const size_t durations = window_ns.size();
     chunk_end.assign(durations, std::vector<uint32_t>(kChunkWindows));
     e.assign(durations, 0);
-    for (auto& r : range) r.resize(kChunkWindows);
+    ranges.resize(durations);
+    sets.resize(durations);
+    for (size_t wi = 0; wi < durations; ++wi) {
+      for (int a = 0; a < 3; ++a) {
+        ranges[wi][a].resize(kChunkWindows);
+        sets[wi].out[a] = ranges[wi][a].data();
+      }
+    }
     rows.resize(options.limits_m.size() * durations);
     if (options.series) series.window_s = options.windows_s[0];
   }
@@ -425,6 +432,8 @@ struct FlightStream::Impl {
   void SweepChunk(size_t k0, size_t k1, const std::vector<size_t>& windows) {
     const size_t durations = window_ns.size();
     const size_t n = buffer->end();
+    // Every duration's window ends, then their ranges in one kernel pass (the block extrema of
+    // the samples are shared), then the counts.
     for (size_t wi = 0; wi < durations; ++wi) {
       const size_t k_stop = std::min(k1, windows[wi]);
       size_t m = 0;
@@ -433,10 +442,15 @@ struct FlightStream::Impl {
         while (e[wi] < n && buffer->t(e[wi]) < t_end) ++e[wi];
         chunk_end[wi][m++] = static_cast<uint32_t>(e[wi] - k0);  // local: from sample k0
       }
+      sets[wi].ends = chunk_end[wi].data();
+      sets[wi].count = m;
+    }
+    kernel.Run3Sets({buffer->angle(0, k0), buffer->angle(1, k0), buffer->angle(2, k0)}, 0, sets);
+    for (size_t wi = 0; wi < durations; ++wi) {
+      const size_t m = sets[wi].count;
       if (m == 0) continue;
       const uint32_t* ends = chunk_end[wi].data();
-      kernel.Run3({buffer->angle(0, k0), buffer->angle(1, k0), buffer->angle(2, k0)}, ends, 0, m,
-                  {range[0].data(), range[1].data(), range[2].data()});
+      const std::array<std::vector<double>, 3>& range = ranges[wi];
       FlightRow* duration_rows = &rows[wi];  // limit l's row: duration_rows[l * durations]
       CountAxisFlags(range, m, thresholds.threshold_rad, duration_rows, durations);
       const Quaternions q = options.vector_criterion ? buffer->q(k0) : Quaternions{};
@@ -480,7 +494,8 @@ struct FlightStream::Impl {
   size_t next_k0 = 0;
   std::vector<size_t> e;  // running window end per duration (global index)
   std::vector<std::vector<uint32_t>> chunk_end;
-  std::array<std::vector<double>, 3> range;
+  std::vector<std::array<std::vector<double>, 3>> ranges;  // per duration, per axis
+  std::vector<SlidingRangeKernel::WindowSet> sets;         // per duration: its ends and ranges
   std::vector<double> scratch;
   SlidingRangeKernel kernel;
   std::vector<FlightRow> rows;

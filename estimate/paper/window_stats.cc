@@ -114,13 +114,10 @@ std::vector<double> SlidingStdDevBruteForce(const std::vector<double>& x,
 // so the same formula holds. This is streaming code with predictable branches, against the
 // data-dependent branches of the monotonic-deque algorithm. kAxes signals share one pass (the
 // window bookkeeping is the same for all), with their buffers interleaved per sample.
+// The block extrema of kAxes signals over their samples [base, base + n), blocks of `block`.
 template <int kAxes>
-void RangeKernel(const double* const* x, const uint32_t* chunk_end, size_t k_begin, size_t k_end,
-                 double* const* out, std::vector<double>* buffers) {
-  if (k_end <= k_begin) return;
-  const size_t base = k_begin;
-  const size_t n = chunk_end[k_end - 1 - base] - base;  // samples the chunk's windows touch
-  const size_t block = ChooseBlock(chunk_end, k_begin, k_end);
+void BuildBlocks(const double* const* x, size_t base, size_t n, size_t block,
+                 std::vector<double>* buffers) {
   const size_t blocks = (n + block - 1) / block;
   for (int i = 0; i < 4; ++i) buffers[i].resize(n * kAxes);
   buffers[4].resize(blocks * kAxes);
@@ -155,6 +152,20 @@ void RangeKernel(const double* const* x, const uint32_t* chunk_end, size_t k_beg
       }
     }
   }
+}
+
+// The ranges of the windows k in [k_begin, k_end) (ends chunk_end[k - k_begin]) from the block
+// extrema BuildBlocks made from sample base = k_begin on, with the same block.
+template <int kAxes>
+void QueryWindows(const double* const* x, const uint32_t* chunk_end, size_t k_begin, size_t k_end,
+                  size_t block, const std::vector<double>* buffers, double* const* out) {
+  const size_t base = k_begin;
+  const double* pmax = buffers[0].data();
+  const double* pmin = buffers[1].data();
+  const double* smax = buffers[2].data();
+  const double* smin = buffers[3].data();
+  const double* bmax = buffers[4].data();
+  const double* bmin = buffers[5].data();
   // Block index of the window's first sample, advanced incrementally (s grows by one per window).
   size_t first_block = 0, first_block_end = block;
   for (size_t k = k_begin; k < k_end; ++k) {
@@ -193,6 +204,16 @@ void RangeKernel(const double* const* x, const uint32_t* chunk_end, size_t k_beg
   }
 }
 
+template <int kAxes>
+void RangeKernel(const double* const* x, const uint32_t* chunk_end, size_t k_begin, size_t k_end,
+                 double* const* out, std::vector<double>* buffers) {
+  if (k_end <= k_begin) return;
+  const size_t n = chunk_end[k_end - 1 - k_begin] - k_begin;  // samples the chunk's windows touch
+  const size_t block = ChooseBlock(chunk_end, k_begin, k_end);
+  BuildBlocks<kAxes>(x, k_begin, n, block, buffers);
+  QueryWindows<kAxes>(x, chunk_end, k_begin, k_end, block, buffers, out);
+}
+
 void SlidingRangeKernel::Run(const double* x, const uint32_t* chunk_end, size_t k_begin,
                              size_t k_end, double* out) {
   RangeKernel<1>(&x, chunk_end, k_begin, k_end, &out, buffers_);
@@ -201,6 +222,25 @@ void SlidingRangeKernel::Run(const double* x, const uint32_t* chunk_end, size_t 
 void SlidingRangeKernel::Run3(const std::array<const double*, 3>& x, const uint32_t* chunk_end,
                               size_t k_begin, size_t k_end, const std::array<double*, 3>& out) {
   RangeKernel<3>(x.data(), chunk_end, k_begin, k_end, out.data(), buffers_);
+}
+
+void SlidingRangeKernel::Run3Sets(const std::array<const double*, 3>& x, size_t k_begin,
+                                  const std::vector<WindowSet>& sets) {
+  // One block for every set: the shortest windows' (a longer window spans more whole blocks,
+  // which costs one max and min each); the samples: as far as the farthest window reaches.
+  size_t n = 0, block = std::numeric_limits<size_t>::max();
+  for (const WindowSet& set : sets) {
+    if (set.count == 0) continue;
+    n = std::max<size_t>(n, set.ends[set.count - 1] - k_begin);
+    block = std::min(block, ChooseBlock(set.ends, k_begin, k_begin + set.count));
+  }
+  if (n == 0) return;
+  BuildBlocks<3>(x.data(), k_begin, n, block, buffers_);
+  for (const WindowSet& set : sets) {
+    if (set.count == 0) continue;
+    QueryWindows<3>(x.data(), set.ends, k_begin, k_begin + set.count, block, buffers_,
+                    set.out.data());
+  }
 }
 
 std::vector<double> SlidingRange(const std::vector<double>& x,

@@ -64,6 +64,17 @@ class SlidingRangeKernel {
   // bookkeeping is shared, ~1.5x faster than three Run calls.
   void Run3(const std::array<const double*, 3>& x, const uint32_t* chunk_end, size_t k_begin,
             size_t k_end, const std::array<double*, 3>& out);
+  // Windows of several durations starting at the same samples k_begin, k_begin + 1, ...: their
+  // block extrema are built once for all (the flight analysis' 10 and 20 ms windows), with
+  // results bit-identical to one Run3 per set. Set i's windows k in [k_begin, k_begin + count) end
+  // at ends[k - k_begin]; out[axis][k - k_begin] receives their ranges.
+  struct WindowSet {
+    const uint32_t* ends = nullptr;
+    size_t count = 0;
+    std::array<double*, 3> out{};
+  };
+  void Run3Sets(const std::array<const double*, 3>& x, size_t k_begin,
+                const std::vector<WindowSet>& sets);
 
  private:
   // prefix max/min, suffix max/min (per sample), block max/min (per block).

@@ -140,8 +140,9 @@ class ColumnCsvSource : public FillingSource {
  public:
   ColumnCsvSource(LineReader lines, std::optional<std::string> first_row, long first_row_number,
                   ChosenColumns chosen, const ColumnCsvOptions& options, char delimiter,
-                  const std::string& path)
-      : lines_(std::move(lines)),
+                  const std::string& path, size_t chunk_samples)
+      : FillingSource(chunk_samples),
+        lines_(std::move(lines)),
         first_row_(std::move(first_row)),
         first_row_number_(first_row_number),
         chosen_(std::move(chosen)),
@@ -154,12 +155,12 @@ class ColumnCsvSource : public FillingSource {
 
  private:
   void Fill(std::vector<GyroSample>* chunk) override {
-    chunk->reserve(kChunkSamples);
+    ReserveChunk(chunk, lines_.size_bytes());
     if (first_row_) {
       chunk->push_back(ParseRow(*first_row_, first_row_number_));
       first_row_.reset();
     }
-    while (chunk->size() < kChunkSamples) {
+    while (chunk->size() < chunk_samples()) {
       const auto line = lines_.Next();
       if (!line) break;
       if (Trim(*line).empty()) continue;
@@ -288,7 +289,7 @@ const char* RateUnitName(RateUnit unit) {
 }
 
 ColumnCsvStream OpenColumnCsv(TextBlocks blocks, const std::string& path,
-                              const ColumnCsvOptions& options) {
+                              const ColumnCsvOptions& options, size_t chunk_samples) {
   options.Check();
   constexpr std::string_view kBom = "\xEF\xBB\xBF";
   LineReader lines(std::move(blocks));
@@ -313,9 +314,9 @@ ColumnCsvStream OpenColumnCsv(TextBlocks blocks, const std::string& path,
   std::optional<std::string> first_row;
   if (!log.has_header) first_row = std::string(*line);
   const long first_row_number = lines.line_number();
-  stream.samples =
-      std::make_unique<ColumnCsvSource>(std::move(lines), std::move(first_row), first_row_number,
-                                        std::move(chosen), options, log.delimiter, path);
+  stream.samples = std::make_unique<ColumnCsvSource>(std::move(lines), std::move(first_row),
+                                                     first_row_number, std::move(chosen), options,
+                                                     log.delimiter, path, chunk_samples);
   return stream;
 }
 

@@ -79,7 +79,9 @@ struct ColumnCsvStream {
   ColumnCsvLog log;
   std::unique_ptr<GyroSource> samples;
 };
+// chunk_samples bounds each chunk.
 ColumnCsvStream OpenColumnCsv(TextBlocks blocks, const std::string& path,
-                              const ColumnCsvOptions& options);
+                              const ColumnCsvOptions& options,
+                              size_t chunk_samples = FillingSource::kDefaultChunkSamples);
 
 }  // namespace shutterlab

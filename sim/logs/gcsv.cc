@@ -305,8 +305,9 @@ GyroSample ParseSample(const std::string& path, long n, const std::vector<std::s
 class GcsvSource : public FillingSource {
  public:
   GcsvSource(LineReader lines, const std::string& path, GcsvHeader header,
-             const Eigen::Matrix3d& to_out)
-      : lines_(std::move(lines)),
+             const Eigen::Matrix3d& to_out, size_t chunk_samples)
+      : FillingSource(chunk_samples),
+        lines_(std::move(lines)),
         path_(path),
         header_(std::move(header)),
         to_out_(to_out),
@@ -316,8 +317,8 @@ class GcsvSource : public FillingSource {
 
  private:
   void Fill(std::vector<GyroSample>* chunk) override {
-    chunk->reserve(kChunkSamples);
-    while (chunk->size() < kChunkSamples) {
+    ReserveChunk(chunk, lines_.size_bytes());
+    while (chunk->size() < chunk_samples()) {
       const auto line = lines_.Next();
       if (!line) break;
       const long n = lines_.line_number();
@@ -364,13 +365,14 @@ class GcsvSource : public FillingSource {
 
 }  // namespace
 
-GcsvStream OpenGcsv(TextBlocks blocks, const std::string& path) {
+GcsvStream OpenGcsv(TextBlocks blocks, const std::string& path, size_t chunk_samples) {
   LineReader lines(std::move(blocks));
   CheckFirstLine(path, &lines);
   GcsvStream stream;
   GcsvHeader header = ReadHeader(path, &lines, &stream.log);
   const Eigen::Matrix3d to_out = ApplyHeader(path, &header, &stream.log);
-  stream.samples = std::make_unique<GcsvSource>(std::move(lines), path, std::move(header), to_out);
+  stream.samples = std::make_unique<GcsvSource>(std::move(lines), path, std::move(header), to_out,
+                                                chunk_samples);
   return stream;
 }
 

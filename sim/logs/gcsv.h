@@ -65,7 +65,9 @@ struct GcsvStream {
   GcsvLog log;
   std::unique_ptr<GyroSource> samples;
 };
-GcsvStream OpenGcsv(TextBlocks blocks, const std::string& path);
+// chunk_samples bounds each chunk.
+GcsvStream OpenGcsv(TextBlocks blocks, const std::string& path,
+                    size_t chunk_samples = FillingSource::kDefaultChunkSamples);
 
 struct GcsvWriteOptions {
   std::string id = "shutterlab";

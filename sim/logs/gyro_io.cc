@@ -96,8 +96,8 @@ GyroSample ParseRowGeneral(const std::string& path, long n, std::string_view lin
 // gy, gz in rad/s).
 class GyroCsvSource : public FillingSource {
  public:
-  GyroCsvSource(TextBlocks blocks, const std::string& path)
-      : blocks_(std::move(blocks)), path_(path) {
+  GyroCsvSource(TextBlocks blocks, const std::string& path, size_t chunk_samples)
+      : FillingSource(chunk_samples), blocks_(std::move(blocks)), path_(path) {
     rest_ = blocks_.Next();
     const size_t header_end = std::min(rest_.find('\n'), rest_.size());
     std::string_view header = rest_.substr(0, header_end);
@@ -114,8 +114,8 @@ class GyroCsvSource : public FillingSource {
 
  private:
   void Fill(std::vector<GyroSample>* chunk) override {
-    chunk->reserve(kChunkSamples);
-    while (chunk->size() < kChunkSamples) {
+    ReserveChunk(chunk, blocks_.size_bytes());
+    while (chunk->size() < chunk_samples()) {
       if (rest_.empty() && (rest_ = blocks_.Next()).empty()) break;
       ParseRows(chunk);
     }
@@ -126,7 +126,7 @@ class GyroCsvSource : public FillingSource {
   void ParseRows(std::vector<GyroSample>* chunk) {
     const char* p = rest_.data();
     const char* const end = p + rest_.size();
-    while (p < end && chunk->size() < kChunkSamples) {
+    while (p < end && chunk->size() < chunk_samples()) {
       ++line_number_;
       GyroSample s;
       const char* next = ParseRowFast(p, end, &s);
@@ -190,8 +190,9 @@ void GyroReadOptions::Check() const {
   raw.Check();
 }
 
-std::unique_ptr<GyroSource> OpenGyroCsv(TextBlocks blocks, const std::string& path) {
-  return std::make_unique<GyroCsvSource>(std::move(blocks), path);
+std::unique_ptr<GyroSource> OpenGyroCsv(TextBlocks blocks, const std::string& path,
+                                        size_t chunk_samples) {
+  return std::make_unique<GyroCsvSource>(std::move(blocks), path, chunk_samples);
 }
 
 GyroTrace ReadGyroCsv(const std::string& path) {

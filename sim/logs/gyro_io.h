@@ -51,8 +51,9 @@ LogFormat DetectGyroFormat(std::string_view text, const std::string& path);
 GyroTrace ReadGyroCsv(const std::string& path);
 // The same as a stream: the header is checked at once, the rows are parsed a block at a time as
 // the chunks are taken (IoError naming the line on the first bad one). path names the file in
-// messages.
-std::unique_ptr<GyroSource> OpenGyroCsv(TextBlocks blocks, const std::string& path);
+// messages; chunk_samples bounds each chunk.
+std::unique_ptr<GyroSource> OpenGyroCsv(TextBlocks blocks, const std::string& path,
+                                        size_t chunk_samples = FillingSource::kDefaultChunkSamples);
 // Writes gyro.csv whole or not at all; times exact to the nanosecond, rates round-trip exact.
 void WriteGyroCsv(const std::string& path, const GyroTrace& trace);
 

@@ -138,8 +138,10 @@ namespace {
 // A raw-count log read a block at a time.
 class RawCsvSource : public FillingSource {
  public:
-  RawCsvSource(TextBlocks blocks, const std::string& path, int range_dps, TimeUnit time_unit)
-      : lines_(std::move(blocks)),
+  RawCsvSource(TextBlocks blocks, const std::string& path, int range_dps, TimeUnit time_unit,
+               size_t chunk_samples)
+      : FillingSource(chunk_samples),
+        lines_(std::move(blocks)),
         path_(path),
         rad_s_per_count_(kRadPerDeg / RawSensitivityLsbPerDps(range_dps)),
         time_unit_(time_unit) {}
@@ -148,8 +150,8 @@ class RawCsvSource : public FillingSource {
 
  private:
   void Fill(std::vector<GyroSample>* chunk) override {
-    chunk->reserve(kChunkSamples);
-    while (chunk->size() < kChunkSamples) {
+    ReserveChunk(chunk, lines_.size_bytes());
+    while (chunk->size() < chunk_samples()) {
       const auto line = lines_.Next();
       if (!line) break;
       if (line->empty()) continue;
@@ -225,8 +227,9 @@ class RawCsvSource : public FillingSource {
 }  // namespace
 
 std::unique_ptr<GyroSource> OpenRawCsv(TextBlocks blocks, const std::string& path, int range_dps,
-                                       TimeUnit time_unit) {
-  return std::make_unique<RawCsvSource>(std::move(blocks), path, range_dps, time_unit);
+                                       TimeUnit time_unit, size_t chunk_samples) {
+  return std::make_unique<RawCsvSource>(std::move(blocks), path, range_dps, time_unit,
+                                        chunk_samples);
 }
 
 GyroTrace ReadRawCsv(const std::string& path, int range_dps, TimeUnit time_unit) {

@@ -34,9 +34,10 @@ double RawSensitivityLsbPerDps(int range_dps);
 // std::invalid_argument for an unknown range.
 GyroTrace ReadRawCsv(const std::string& path, int range_dps, TimeUnit time_unit);
 // The same as a stream, parsed a block at a time as the chunks are taken; path names the file in
-// messages.
+// messages; chunk_samples bounds each chunk.
 std::unique_ptr<GyroSource> OpenRawCsv(TextBlocks blocks, const std::string& path, int range_dps,
-                                       TimeUnit time_unit);
+                                       TimeUnit time_unit,
+                                       size_t chunk_samples = FillingSource::kDefaultChunkSamples);
 
 // Header of the raw-count logs we write: not gyro.csv's "t,gx,gy,gz", so that detection can tell
 // counts from rad/s (a docs/FORMATS.md header always means gyro.csv).

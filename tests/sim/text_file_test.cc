@@ -116,6 +116,28 @@ TEST(TextBlocks, EveryBlockEndsAtALineEndAndAMissingFileIsAnIoError) {
   EXPECT_THROW(TextBlocks::OfFile("/nonexistent/gyro.csv"), IoError);
 }
 
+TEST(TextBlocks, AFileOfAnySizeIsReadWholeWithTheDefaultBlock) {
+  // The default block is sized to the file (at least 4 KiB): files just under, at and over that,
+  // and one line longer than the block, come back whole.
+  test::TempDir dir;
+  const std::string path = dir / "text.txt";
+  for (size_t size :
+       {size_t{0}, size_t{1}, size_t{4095}, size_t{4096}, size_t{4097}, size_t{100000}}) {
+    std::string text;
+    for (size_t i = 0; text.size() < size; ++i) text += i % 50 == 49 ? '\n' : 'a';
+    text.resize(size);
+    for (const std::string& content : {text, std::string(9000, 'b') + "\n" + text}) {
+      WriteFileAtomically(path, content);
+      TextBlocks blocks = TextBlocks::OfFile(path);
+      EXPECT_EQ(blocks.size_bytes(), content.size());
+      std::string joined;
+      for (std::string_view block = blocks.Next(); !block.empty(); block = blocks.Next())
+        joined += block;
+      EXPECT_EQ(joined, content) << "size " << content.size();
+    }
+  }
+}
+
 TEST(FormatNumber, KeepsTextLongerThanItsStackBuffer) {
   EXPECT_EQ(FormatNumber("%.2f", 3.14159), "3.14");
   const std::string sentence(100, 'x');

@@ -1,7 +1,9 @@
 #include "estimate/paper/flight.h"
 
 #include "estimate/paper/window_stats.h"
+#include "sim/gyro_source.h"
 #include "sim/integrate.h"
+#include "sim/logs/gyro_io.h"
 #include "sim/so3.h"
 #include "sim/units.h"
 #include "tests/test_util.h"
@@ -164,20 +166,25 @@ TEST(Flight, SingleAxisMotionCriteriaAgree) {
   }
 }
 
-// Brute-force twin of everything on a random three-axis motion: per-axis counts against
-// SlidingRangeBruteForce of IntegratePerAxis; vector counts and series against all-pairs
-// AngularDistance of OrientationTrace.
-TEST(Flight, MatchesBruteForceOnRandomMotion) {
-  std::mt19937_64 rng(42);
+// The still second, then motion_samples of smooth random rates: a random walk, large enough to
+// straddle both thresholds.
+GyroTrace RandomMotionTrace(size_t motion_samples, uint64_t seed) {
+  std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
-  // Smooth random rates: a random walk, large enough to straddle both thresholds.
   Eigen::Vector3d w = Eigen::Vector3d::Zero();
-  std::vector<Eigen::Vector3d> rates(2500);
+  std::vector<Eigen::Vector3d> rates(motion_samples);
   for (auto& r : rates) {
     w = 0.98 * w + 0.02 * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
     r = w + 0.005 * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
   }
-  const auto trace = MakeTrace(2.5, [&](size_t i) { return rates[i]; });
+  return MakeTrace(motion_samples * kDtS, [&](size_t i) { return rates[i]; });
+}
+
+// Brute-force twin of everything on a random three-axis motion: per-axis counts against
+// SlidingRangeBruteForce of IntegratePerAxis; vector counts and series against all-pairs
+// AngularDistance of OrientationTrace.
+TEST(Flight, MatchesBruteForceOnRandomMotion) {
+  const auto trace = RandomMotionTrace(2500, 42);
   FlightOptions options = Options();
   options.series = true;
   const FlightResult r = Flight(trace, options);
@@ -350,6 +357,39 @@ TEST(Flight, TooShortTraceSaysWhatToDo) {
     EXPECT_NE(message.find("--auto-bias"), std::string::npos) << message;
     EXPECT_EQ(message.find("check failed"), std::string::npos) << message;
     EXPECT_EQ(message.find(".cc:"), std::string::npos) << message;
+  }
+}
+
+TEST(Flight, StreamedOnOneThreadOrTwoGivesTheWholeTracesResult) {
+  // A gyro.csv read as `flight` reads it (a block at a time, chunks of a few samples so that the
+  // analysis' chunk edges fall anywhere) on one thread, and with the reader a chunk ahead on a
+  // second thread (ReadAhead), gives exactly Flight's result on the whole trace.
+  const GyroTrace trace = RandomMotionTrace(3000, 7);
+  test::TempDir dir;
+  const std::string path = dir / "gyro.csv";
+  WriteGyroCsv(path, trace);
+  FlightOptions options = Options();
+  options.series = true;
+  const FlightResult whole = Flight(ReadGyroCsv(path), options);
+  for (bool two_threads : {false, true}) {
+    for (size_t chunk : {size_t{7}, size_t{4096}}) {
+      std::unique_ptr<GyroSource> source = OpenGyroCsv(TextBlocks::OfFile(path, 1000), path, chunk);
+      if (two_threads) source = ReadAhead(std::move(source));
+      FlightStream stream(options);
+      for (GyroChunk c = source->Next(); !c.empty(); c = source->Next()) stream.Add(c.data, c.size);
+      const FlightResult got = stream.Finish();
+      ASSERT_EQ(got.rows.size(), whole.rows.size());
+      for (size_t i = 0; i < got.rows.size(); ++i) {
+        EXPECT_EQ(got.rows[i].windows, whole.rows[i].windows) << i;
+        EXPECT_EQ(got.rows[i].flagged, whole.rows[i].flagged) << i;
+        EXPECT_EQ(got.rows[i].flagged_axis, whole.rows[i].flagged_axis) << i;
+        EXPECT_EQ(got.rows[i].flagged_vector, whole.rows[i].flagged_vector) << i;
+      }
+      EXPECT_GT(whole.rows[0].flagged, 0u);
+      for (int a = 0; a < 3; ++a)
+        EXPECT_EQ(got.series.range_arcsec[a], whole.series.range_arcsec[a]);
+      EXPECT_EQ(got.series.vector_arcsec, whole.series.vector_arcsec);
+    }
   }
 }
 

@@ -205,5 +205,36 @@ TEST(WindowStats, KernelChunkedMatchesWholeRun) {
   EXPECT_EQ(three[2], SlidingRangeBruteForce(z, ends));
 }
 
+TEST(WindowStats, KernelSetsOfSeveralDurationsMatchBruteForce) {
+  // Windows of 3, 15 and 40 ms over the same irregular samples (gaps make some windows shorter
+  // than the shared block), swept a chunk of starts at a time as estimate/flight does: each set's
+  // ranges equal its brute-force twin's, bit for bit, including the chunks where a longer set has
+  // no window left.
+  const auto x = RandomSignal(20000, 21), y = RandomSignal(20000, 22), z = RandomSignal(20000, 23);
+  const auto t = IrregularTimes(x.size(), 24);
+  std::vector<std::vector<uint32_t>> ends;
+  for (int64_t window_ns : {3000000, 15000000, 40000000})
+    ends.push_back(WindowEndsByDuration(t, window_ns));
+  std::vector<std::array<std::vector<double>, 3>> got(ends.size());
+  for (size_t d = 0; d < ends.size(); ++d) {
+    for (auto& axis : got[d]) axis.assign(ends[d].size(), -1.0);
+  }
+  SlidingRangeKernel kernel;
+  for (size_t k0 = 0; k0 < ends[0].size(); k0 += 777) {
+    std::vector<SlidingRangeKernel::WindowSet> sets(ends.size());
+    for (size_t d = 0; d < ends.size(); ++d) {
+      sets[d].count = k0 < ends[d].size() ? std::min<size_t>(777, ends[d].size() - k0) : 0;
+      sets[d].ends = sets[d].count > 0 ? ends[d].data() + k0 : nullptr;
+      for (int a = 0; a < 3; ++a) sets[d].out[a] = got[d][a].data() + k0;
+    }
+    kernel.Run3Sets({x.data(), y.data(), z.data()}, k0, sets);
+  }
+  for (size_t d = 0; d < ends.size(); ++d) {
+    EXPECT_EQ(got[d][0], SlidingRangeBruteForce(x, ends[d])) << "set " << d;
+    EXPECT_EQ(got[d][1], SlidingRangeBruteForce(y, ends[d])) << "set " << d;
+    EXPECT_EQ(got[d][2], SlidingRangeBruteForce(z, ends[d])) << "set " << d;
+  }
+}
+
 }  // namespace
 }  // namespace shutterlab

@@ -1,6 +1,7 @@
 #include "sim/logs/gyro_io.h"
 
 #include "sim/check.h"
+#include "sim/logs/column_csv.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
 #include "tests/test_util.h"
@@ -11,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 namespace shutterlab {
 namespace {
@@ -219,6 +221,64 @@ TEST(GyroCsv, BadInputNamesFileLineAndProblem) {
       const std::string what = e.what();
       EXPECT_NE(what.find(path), std::string::npos) << what;
       EXPECT_NE(what.find(c.expected_fragment), std::string::npos) << c.name << ": " << what;
+    }
+  }
+}
+
+// Every sample of a streaming source, checking that no chunk holds more than chunk_samples.
+std::vector<GyroSample> Drain(GyroSource* source, size_t chunk_samples) {
+  std::vector<GyroSample> all;
+  for (GyroChunk chunk = source->Next(); !chunk.empty(); chunk = source->Next()) {
+    EXPECT_LE(chunk.size, chunk_samples);
+    all.insert(all.end(), chunk.begin(), chunk.end());
+  }
+  return all;
+}
+
+TEST(StreamingReaders, AnyChunkSizeGivesTheSameSamples) {
+  // 40 rows in each text format; every reader, at chunk sizes that split the rows anywhere and
+  // at the default, hands on the same samples in the same order.
+  std::string gyro = "t,gx,gy,gz\n", raw = "",
+              gcsv =
+                  "GYROFLOW IMU "
+                  "LOG\nversion,1.3\nid,x\norientation,XYZ\ntscale,0.001\ngscale,1\nt,gx,gy,gz\n";
+  std::string columns = "time_ms;wx;wy;wz\n";
+  for (int i = 0; i < 40; ++i) {
+    const std::string t = std::to_string(i), r = std::to_string(i % 7 - 3) + ".25";
+    gyro += "0." + std::string(i < 10 ? "00" : "0") + t + "," + r + ",0.5," + r + "\n";
+    raw += t + "," + std::to_string(i * 3 - 50) + ",7,-9\n";
+    gcsv += t + "," + r + ",1," + r + "\n";
+    columns += t + ";" + r + ";2;" + r + "\n";
+  }
+  ColumnCsvOptions column_options;
+  column_options.columns = {"time_ms", "wx", "wy", "wz"};
+  column_options.time_unit = TimeUnit::kMilliseconds;
+  const auto open = [&](int format, size_t chunk) -> std::unique_ptr<GyroSource> {
+    switch (format) {
+      case 0:
+        return OpenGyroCsv(TextBlocks::InMemory(gyro, 16), "g.csv", chunk);
+      case 1:
+        return OpenRawCsv(TextBlocks::InMemory(raw, 16), "r.csv", 250, TimeUnit::kMilliseconds,
+                          chunk);
+      case 2:
+        return OpenGcsv(TextBlocks::InMemory(gcsv, 16), "l.gcsv", chunk).samples;
+      default:
+        return OpenColumnCsv(TextBlocks::InMemory(columns, 16), "c.csv", column_options, chunk)
+            .samples;
+    }
+  };
+  for (int format = 0; format < 4; ++format) {
+    const std::vector<GyroSample> expected =
+        Drain(open(format, FillingSource::kDefaultChunkSamples).get(),
+              FillingSource::kDefaultChunkSamples);
+    ASSERT_EQ(expected.size(), 40u) << "format " << format;
+    for (size_t chunk : {size_t{1}, size_t{3}, size_t{39}, size_t{40}, size_t{41}}) {
+      const std::vector<GyroSample> got = Drain(open(format, chunk).get(), chunk);
+      ASSERT_EQ(got.size(), expected.size()) << "format " << format << ", chunk " << chunk;
+      for (size_t i = 0; i < got.size(); ++i) {
+        EXPECT_EQ(got[i].t_ns, expected[i].t_ns) << "format " << format << ", chunk " << chunk;
+        EXPECT_EQ(got[i].omega_rad_s, expected[i].omega_rad_s);
+      }
     }
   }
 }
