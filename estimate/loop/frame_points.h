@@ -31,6 +31,9 @@ struct FramePoints {
   // IORI): the rotation from the image's virtual camera frame to the physical one, x_cam =
   // cam_from_image x_image, constant over the frame. Identity for footage nobody re-rendered.
   Eigen::Matrix3d cam_from_image = Eigen::Matrix3d::Identity();
+  // Sparse corner tracks of the same frame or pair, (dx, dy) as `points` (MeasureOptions::
+  // corner_tracks): evidence for the camera-fixed check only, never fitted. Empty: not tracked.
+  std::vector<MeasuredPoint> tracks;
 };
 
 }  // namespace shutterlab

@@ -41,6 +41,7 @@
 
 #include "estimate/loop/measure.h"
 
+#include "estimate/loop/corner_tracks.h"
 #include "render/image_io.h"
 #include "render/pictures.h"
 #include "render/rs_warp.h"
@@ -492,6 +493,8 @@ DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& i
   if (options.dense_field && options.frame_distortion) {
     result.d_px = FrameDistortionPx(result.field);
   }
+  if (options.corner_tracks)
+    result.tracks = TrackCorners(grey_ref, grey_img, forward, options.mask);
   return result;
 }
 

@@ -32,6 +32,9 @@ struct MeasureOptions {
   // Fill `field` and `confidence` (and so D); off, they stay empty and only the points, noise_px
   // and measured_fraction are computed (the same numbers): video pairs use nothing else.
   bool dense_field = true;
+  // Also track sparse corners (estimate/loop/corner_tracks.h) into `tracks`: what the camera-fixed
+  // check trusts where the dense flow may be dragged along (dark, nearly textureless regions).
+  bool corner_tracks = false;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };
@@ -46,6 +49,7 @@ struct DisplacementMeasurement {
   cv::Mat confidence;  // CV_32F, 0..1, 0 where unmeasured (textureless, saturated, inconsistent)
                        // (0.1 in short gaps that the per-row model bridges, see measure.cc)
   std::vector<MeasuredPoint> points;  // independent measurements on the grid, unmeasured left out
+  std::vector<MeasuredPoint> tracks;  // with MeasureOptions::corner_tracks: the corner tracks
   // The measurement's own noise: the RMS length of (measured - true) over `points` as estimated
   // from the data, i.e. the rms_px that a perfect model would leave on these points, px.
   double noise_px = 0.0;

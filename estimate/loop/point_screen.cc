@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <random>
 
 namespace shutterlab {
@@ -97,6 +98,49 @@ void DropIsolated(CameraFixedRegion* region) {
     }
   }
   region->fixed = std::move(kept);
+}
+
+// The cells with no testable measurement that touch the region (4-neighbours, repeatedly) join
+// it, from each connected part of at least kMinRegionSeedCells fixed cells: a dark, flat part of
+// a dashboard measures nothing that can be trusted, and the scene's cells bound the region.
+void JoinUnmeasured(CameraFixedRegion* region) {
+  const int cols = region->cols, rows = region->rows;
+  std::vector<int> part(region->fixed.size(), -1);
+  std::vector<size_t> part_size;
+  std::vector<size_t> stack;
+  const auto neighbours = [&](size_t k, auto&& visit) {
+    const int r = static_cast<int>(k) / cols, c = static_cast<int>(k) % cols;
+    if (r > 0) visit(k - cols);
+    if (r + 1 < rows) visit(k + cols);
+    if (c > 0) visit(k - 1);
+    if (c + 1 < cols) visit(k + 1);
+  };
+  for (size_t k = 0; k < part.size(); ++k) {  // the connected parts of the fixed cells
+    if (!region->fixed[k] || part[k] >= 0) continue;
+    const int id = static_cast<int>(part_size.size());
+    part_size.push_back(0);
+    part[k] = id;
+    stack.assign(1, k);
+    while (!stack.empty()) {
+      const size_t at = stack.back();
+      stack.pop_back();
+      ++part_size[id];
+      neighbours(at, [&](size_t n) {
+        if (region->fixed[n] && part[n] < 0) part[n] = id, stack.push_back(n);
+      });
+    }
+  }
+  stack.clear();
+  for (size_t k = 0; k < part.size(); ++k) {
+    if (part[k] >= 0 && part_size[part[k]] >= kMinRegionSeedCells) stack.push_back(k);
+  }
+  while (!stack.empty()) {
+    const size_t at = stack.back();
+    stack.pop_back();
+    neighbours(at, [&](size_t n) {
+      if (!region->fixed[n] && region->testable[n] == 0) region->fixed[n] = 1, stack.push_back(n);
+    });
+  }
 }
 
 // The rotational flow of a small rotation theta applied to the ray through undistorted normalised
@@ -284,11 +328,14 @@ CameraFixedRegion DetectCameraFixed(const std::vector<FramePoints>& frames,
                       region.still[k] >= kFixedShare * region.testable[k];
   }
   DropIsolated(&region);
-  region.cells_fixed = static_cast<size_t>(std::count(region.fixed.begin(), region.fixed.end(), 1));
+  const size_t seeds = static_cast<size_t>(std::count(region.fixed.begin(), region.fixed.end(), 1));
   if (region.cells_testable > 0 &&
-      region.cells_fixed > kMaxRegionShare * static_cast<double>(region.cells_testable)) {
+      seeds > kMaxRegionShare * static_cast<double>(region.cells_testable)) {
     region.whole_image = true;
   }
+  if (!region.whole_image) JoinUnmeasured(&region);
+  region.cells_fixed = static_cast<size_t>(std::count(region.fixed.begin(), region.fixed.end(), 1));
+  region.cells_joined = region.cells_fixed - seeds;
   return region;
 }
 
@@ -446,6 +493,31 @@ void LeaveOut(const TrueModel& declared, const GyroTrace& gyro,
   }
 }
 
+// Check 1 on the frames' corner tracks (FramePoints::tracks); nothing when no frame has any.
+std::optional<CameraFixedRegion> CameraFixedFromTracks(const TrueModel& declared,
+                                                       const GyroTrace& gyro,
+                                                       const std::vector<FramePoints>& frames,
+                                                       const std::vector<double>& frame_noise_px,
+                                                       int width, int height, int step_px) {
+  std::vector<FramePoints> tracked;
+  bool any = false;
+  for (const FramePoints& f : frames) {
+    FramePoints t;
+    t.frame = f.frame;
+    t.t_first_row_ns = f.t_first_row_ns;
+    t.earlier = f.earlier;
+    t.cam_from_image = f.cam_from_image;
+    t.points = f.tracks;
+    any = any || !t.points.empty();
+    tracked.push_back(std::move(t));
+  }
+  if (!any) return std::nullopt;
+  std::vector<Eigen::Vector2d> predicted;
+  MakePredictor(gyro, tracked, /*pair_translation=*/false, /*robust_delta_px=*/1.0)
+      ->Predict(declared, &predicted);
+  return DetectCameraFixed(tracked, predicted, frame_noise_px, width, height, step_px);
+}
+
 }  // namespace
 
 PointScreen ScreenPoints(const TrueModel& declared, const GyroTrace& gyro,
@@ -462,7 +534,11 @@ PointScreen ScreenPoints(const TrueModel& declared, const GyroTrace& gyro,
   predictor->Predict(declared, &predicted);
   const int width = declared.rig.camera.width, height = declared.rig.camera.height;
   if (options.camera_fixed) {
-    screen.region = DetectCameraFixed(frames, predicted, frame_noise_px, width, height, step_px);
+    std::optional<CameraFixedRegion> tracked =
+        CameraFixedFromTracks(declared, gyro, frames, frame_noise_px, width, height, step_px);
+    screen.region =
+        tracked ? std::move(*tracked)
+                : DetectCameraFixed(frames, predicted, frame_noise_px, width, height, step_px);
   }
   bool use_region = options.camera_fixed && !screen.region.whole_image;
   LeaveOut(declared, gyro, frames, predicted, frame_noise_px, use_region, options, &screen);

@@ -83,6 +83,7 @@ inline constexpr double kMinTestableNoise = 5.0;
 inline constexpr int kMinTestableFrames = 2;
 inline constexpr double kFixedShare = 0.6;
 inline constexpr double kMaxRegionShare = 0.5;
+inline constexpr size_t kMinRegionSeedCells = 4;
 inline constexpr int kHypotheses = 200;
 inline constexpr double kInlierSigmas = 4.5;
 inline constexpr double kMinGain = 0.7;
@@ -93,6 +94,7 @@ struct CameraFixedRegion {
   std::vector<uint8_t> fixed;        // per cell, row-major: 1 = moves with the camera
   std::vector<int> testable, still;  // per cell: testable frames, and of them those it stayed in
   size_t cells_fixed = 0, cells_testable = 0;
+  size_t cells_joined = 0;   // of cells_fixed, those with no testable measurement (joined)
   bool whole_image = false;  // too much stayed: the image does not follow the gyro (no region)
   bool Contains(double u, double v) const;
 };

@@ -170,7 +170,9 @@ std::vector<FramePoints> MeasureStillFrames(
     }
     result->read_s += SecondsSince(start);
     start = std::chrono::steady_clock::now();
-    const DisplacementMeasurement measured = MeasureDisplacement(ref, image, options.measure);
+    MeasureOptions measure = options.measure;
+    measure.corner_tracks = options.screen.camera_fixed;
+    DisplacementMeasurement measured = MeasureDisplacement(ref, image, measure);
     result->measure_s += SecondsSince(start);
 
     FrameValidation& f = result->frames[i];
@@ -182,7 +184,10 @@ std::vector<FramePoints> MeasureStillFrames(
     f.noise_px = measured.noise_px;
     f.d_meas_px = measured.d_px;
     f.d_meas_m = measured.d_px * m_per_px;
-    frame_points[i] = {entries[i].frame, entries[i].t_first_row_ns, measured.points, std::nullopt};
+    frame_points[i].frame = entries[i].frame;
+    frame_points[i].t_first_row_ns = entries[i].t_first_row_ns;
+    frame_points[i].points = std::move(measured.points);
+    frame_points[i].tracks = std::move(measured.tracks);
     fields->push_back(measured.field);
     if (progress) progress("measure", i + 1, entries.size());
   }

@@ -479,6 +479,7 @@ PairMeasurement MeasureOnePair(const VideoInputs& in, const RigModel& rig,
   MeasureOptions measure = in.options.measure;
   measure.frame_distortion = false;  // D of a flow between two frames means nothing
   measure.dense_field = false;       // only the points are used
+  measure.corner_tracks = in.options.screen.camera_fixed;
   out.measured = MeasureDisplacement(previous, image, measure);
   if (out.measured.points.empty()) {
     out.skip = "no point could be measured";
@@ -513,6 +514,7 @@ void AddPair(const FrameEntry& earlier, const FrameEntry& entry, PairMeasurement
   points.frame = entry.frame;
   points.t_first_row_ns = entry.t_first_row_ns;
   points.points = std::move(m.measured.points);
+  points.tracks = std::move(m.measured.tracks);
   points.earlier = EarlierFrame{earlier.frame, earlier.t_first_row_ns};
   pairs->push_back(std::move(points));
 }

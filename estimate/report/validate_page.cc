@@ -411,6 +411,60 @@ cv::Mat ScreeningPicture(const ValidationResult& result) {
   return rgb;
 }
 
+// The camera-fixed region as a mask of the camera's size (white = use, black = the region), as
+// --mask and camera.json's `mask` take it; all white when there is no region.
+cv::Mat CameraFixedMask(const ValidationResult& result) {
+  const CameraFixedRegion& region = result.screen.region;
+  cv::Mat mask(result.declared.camera.height, result.declared.camera.width, CV_8U, cv::Scalar(255));
+  if (region.whole_image) return mask;
+  for (int v = 0; v < mask.rows; ++v) {
+    uchar* row = mask.ptr<uchar>(v);
+    for (int u = 0; u < mask.cols; ++u) row[u] = region.Contains(u, v) ? 0 : 255;
+  }
+  return mask;
+}
+
+// The camera-fixed check's evidence over the first frame's image: each cell with a testable
+// measurement tinted from green (it moved with the scene in every testable pair or frame) to red
+// (it stayed in every one), cells with none left untinted (unmeasured), the region's cells
+// crossed. Empty when the image cannot be read.
+cv::Mat CameraFixedEvidence(const ValidationResult& result) {
+  if (result.frames.empty()) return cv::Mat();
+  cv::Mat rgb;
+  try {
+    rgb = ToRgb8(ReadImage((fs::path(result.dataset) / result.frames.front().image).string()));
+  } catch (const std::exception&) {
+    return cv::Mat();
+  }
+  const CameraFixedRegion& region = result.screen.region;
+  if (rgb.cols != result.declared.camera.width || rgb.rows != result.declared.camera.height ||
+      region.fixed.empty()) {
+    return cv::Mat();
+  }
+  const int step = region.step_px;
+  for (int r = 0; r < region.rows; ++r) {
+    for (int c = 0; c < region.cols; ++c) {
+      const size_t k = static_cast<size_t>(r) * region.cols + c;
+      const cv::Rect cell =
+          cv::Rect(c * step, r * step, step, step) & cv::Rect(0, 0, rgb.cols, rgb.rows);
+      cv::Mat view = rgb(cell);
+      if (region.testable[k] > 0) {
+        const double stayed = static_cast<double>(region.still[k]) / region.testable[k];
+        const cv::Vec3f tint(static_cast<float>(255 * stayed),
+                             static_cast<float>(200 * (1 - stayed)), 40.0f);
+        view.forEach<cv::Vec3b>(
+            [&](cv::Vec3b& p, const int*) { p = cv::Vec3b(0.55 * tint + 0.45 * cv::Vec3f(p)); });
+      }
+      if (region.fixed[k] && !region.whole_image) {
+        cv::line(rgb, cell.tl(), cell.br() - cv::Point(1, 1), cv::Scalar(255, 255, 255));
+        cv::line(rgb, {cell.x, cell.br().y - 1}, {cell.br().x - 1, cell.y},
+                 cv::Scalar(255, 255, 255));
+      }
+    }
+  }
+  return rgb;
+}
+
 // The verdict in a box (validate_verdict.h): what the data show, how sure, what to do.
 void AddVerdict(const ValidationResult& result, HtmlPage* page) {
   const ValidationVerdict verdict = MakeVerdict(result);
@@ -455,6 +509,17 @@ void AddScreening(const ValidationResult& result, HtmlPage* page) {
     page->Image(picture, "frame " + FrameName(result.frames.front().frame) +
                              ": red, a region that moves with the camera; blue, masked; magenta, "
                              "points moving on their own");
+  }
+  const cv::Mat evidence = CameraFixedEvidence(result);
+  if (!evidence.empty()) {
+    page->Image(evidence,
+                "the camera-fixed check's evidence (corner tracks, cells of " +
+                    std::to_string(s.region.step_px) +
+                    " px): green, measured moving with the scene in every testable pair; red, "
+                    "staying with the camera in every one; untinted, nothing trustworthy measured "
+                    "there; crossed, the region left out (camera_fixed_evidence.png; "
+                    "camera_fixed_mask.png beside this page, white = use, is the region as a "
+                    "--mask)");
   }
 }
 
@@ -594,6 +659,14 @@ std::vector<std::string> WriteValidationPlots(const std::string& dir,
       WriteResidualPictures(dir, result, step_px, &written);
   const RowProfile profile = ProfileRows(result, step_px);
   WriteRowProfile(dir, result.video, profile, &written);
+  const std::string mask_path = (fs::path(dir) / "camera_fixed_mask.png").string();
+  WriteImage(mask_path, CameraFixedMask(result));
+  written.push_back(mask_path);
+  const cv::Mat evidence = CameraFixedEvidence(result);
+  if (!evidence.empty()) {
+    written.push_back((fs::path(dir) / "camera_fixed_evidence.png").string());
+    WriteImage(written.back(), evidence);
+  }
   written.push_back(WriteValidationPage(dir, result, profile, panels));
   return written;
 }

@@ -175,7 +175,12 @@ TEST(Coverage, JackknifeCoversTheTruthOnRenderedClips) {
     size_t points = 0;
     for (int k = 1; k < kFrames; ++k) {
       const DisplacementMeasurement m = MeasureDisplacement(images[k - 1], images[k], measure);
-      pairs.push_back({k, clip.t_ns[k], m.points, EarlierFrame{k - 1, clip.t_ns[k - 1]}});
+      FramePoints pair;
+      pair.frame = k;
+      pair.t_first_row_ns = clip.t_ns[k];
+      pair.points = m.points;
+      pair.earlier = EarlierFrame{k - 1, clip.t_ns[k - 1]};
+      pairs.push_back(std::move(pair));
       noise_sq += m.noise_px * m.noise_px * m.points.size();
       points += m.points.size();
     }

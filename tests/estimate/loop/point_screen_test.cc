@@ -76,6 +76,46 @@ TEST(DetectCameraFixed, FindsTheRowsThatStayAndNothingElse) {
   EXPECT_FALSE(region.Contains(100, 20));
 }
 
+// A dashboard whose top rows have texture (they measure 0) and whose lower rows measure nothing
+// (dark and flat): the lower rows join the region through the cells that measure nothing, up to
+// the scene. A hole that measures nothing in the scene stays out, even beside 3 cells that stay
+// (too few to grow).
+TEST(DetectCameraFixed, CellsThatMeasureNothingJoinTheRegionBelowIt) {
+  const GyroTrace gyro = test::FlightTrace(14.0, 3);
+  const TrueModel model = Declared();
+  std::vector<FramePoints> pairs = Pairs(model, gyro, 6);
+  const int height = model.rig.camera.height, width = model.rig.camera.width;
+  const int fixed_from = height * 3 / 4, flat_from = fixed_from + 3 * kStepPx;
+  const auto in_hole = [&](const MeasuredPoint& p) {  // a flat patch in the scene
+    return p.u >= 4 * kStepPx && p.u < 8 * kStepPx && p.v >= 4 * kStepPx && p.v < 8 * kStepPx;
+  };
+  const auto in_small = [&](const MeasuredPoint& p) {  // three cells beside the hole that stay
+    return p.u >= 8 * kStepPx && p.u < 11 * kStepPx && p.v >= 4 * kStepPx && p.v < 5 * kStepPx;
+  };
+  for (FramePoints& f : pairs) {
+    std::vector<MeasuredPoint> kept;
+    for (MeasuredPoint p : f.points) {
+      if (p.v >= flat_from || in_hole(p)) continue;  // nothing measured
+      if (p.v >= fixed_from || in_small(p)) p.dx = p.dy = 0.0;
+      kept.push_back(p);
+    }
+    f.points = std::move(kept);
+  }
+  const CameraFixedRegion region =
+      DetectCameraFixed(pairs, Predicted(model, gyro, pairs),
+                        std::vector<double>(pairs.size(), kNoisePx), width, height, kStepPx);
+  ASSERT_FALSE(region.whole_image);
+  for (int v = flat_from + kStepPx / 2; v < height; v += kStepPx) {
+    for (int u = kStepPx / 2; u < width; u += kStepPx) {
+      EXPECT_TRUE(region.Contains(u, v)) << u << ", " << v;
+    }
+  }
+  EXPECT_GT(region.cells_joined, 0u);
+  EXPECT_FALSE(region.Contains(6 * kStepPx, 6 * kStepPx));         // the hole
+  EXPECT_TRUE(region.Contains(9 * kStepPx + 8, 4 * kStepPx + 8));  // the 3 cells themselves
+  EXPECT_FALSE(region.Contains(width / 2, fixed_from - kStepPx));  // the scene above
+}
+
 TEST(DetectCameraFixed, AWholeImageThatStaysIsNoRegion) {
   const GyroTrace gyro = test::FlightTrace(14.0, 3);
   const TrueModel model = Declared();
