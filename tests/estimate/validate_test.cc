@@ -3,10 +3,9 @@
 // gyro trace with ONE effect in the truth that camera.json does not declare, runs ValidateDataset
 // on it (which sees only what docs/FORMATS.md's dataset holds) and checks what the loop recovers.
 //
-// Sizes: 8 frames of 1280x960, fx = 1100 px, 30 ms readout, 50 m (a typical mapping camera); the
-// clutter case 640x480 (the same field of view: its tolerance holds there, at a third of the
-// time). Under AddressSanitizer (3-5x slower) the frames are 640x480 and only the cases marked
-// kAlsoUnderAsan run, so that the CI stage stays short.
+// Sizes: 8 frames of 1280x960, fx = 1100 px, 30 ms readout, 50 m (a typical mapping camera). Under
+// AddressSanitizer (3-5x slower) the frames are 640x480 (same field of view) and only the
+// cases marked kAlsoUnderAsan run, so that the CI stage stays short.
 
 #include "estimate/loop/validate.h"
 
@@ -37,11 +36,12 @@ namespace {
 
 #if defined(__SANITIZE_ADDRESS__)
 constexpr bool kAsan = true;
-constexpr int kWidth = 640, kFrames = 6;
+constexpr int kWidth = 640, kHeight = 480, kFrames = 6;
 #else
 constexpr bool kAsan = false;
-constexpr int kWidth = 1280, kFrames = 8;
+constexpr int kWidth = 1280, kHeight = 960, kFrames = 8;
 #endif
+constexpr double kFocalPx = 1100.0 * kWidth / 1280.0;  // same field of view at either size
 constexpr double kReadoutS = 0.030;
 constexpr double kAltitudeM = 50.0;
 // Acceptance: in identified cases the residual after the loop is at the noise level.
@@ -54,17 +54,15 @@ struct DatasetSpec {
   uint64_t seed = 3;                                // the flight motion's seed
   uint64_t scene_seed = 1;                          // the procedural ground texture's
   ClutterOptions clutter = {};                      // render --camera-fixed-patch, --moving-patch
-  int width = kWidth;                               // px, the same field of view at any width
 };
 
-RigModel DeclaredRig(int width = kWidth) {
-  const int height = width * 3 / 4;
+RigModel DeclaredRig() {
   RigModel rig;
-  rig.camera.width = width;
-  rig.camera.height = height;
-  rig.camera.fx = rig.camera.fy = 1100.0 * width / 1280.0;
-  rig.camera.cx = 0.5 * (width - 1);
-  rig.camera.cy = 0.5 * (height - 1);
+  rig.camera.width = kWidth;
+  rig.camera.height = kHeight;
+  rig.camera.fx = rig.camera.fy = kFocalPx;
+  rig.camera.cx = 0.5 * (kWidth - 1);
+  rig.camera.cy = 0.5 * (kHeight - 1);
   rig.shutter.readout_s = kReadoutS;
   rig.altitude_m = kAltitudeM;
   return rig;
@@ -84,7 +82,7 @@ GyroTrace FlightGyro(const DatasetSpec& spec) {
 
 // Renders the dataset into dir/ds and returns that folder.
 std::string MakeDataset(const test::TempDir& dir, const DatasetSpec& spec) {
-  WriteRigModel(dir / "camera.json", DeclaredRig(spec.width));
+  WriteRigModel(dir / "camera.json", DeclaredRig());
   WriteGyroCsv(dir / "gyro.csv", FlightGyro(spec));
   std::string times = "frame,t_first_row\n";
   for (int i = 0; i < kFrames; ++i) {
@@ -143,7 +141,6 @@ TEST(ValidateEndToEnd, RecoversTimeOffsetWithClutter) {
   spec.injections = {"time_offset=0.004"};
   spec.clutter.camera_fixed_share = 0.25;
   spec.clutter.moving_patch_mps = 15.0;
-  spec.width = 640;  // a quarter of the pixels: the same tolerance holds
   const ValidationResult result = Validate(MakeDataset(dir, spec));
   ExpectIdentified(result, "time_offset");
   EXPECT_NEAR(result.loop.model.rig.time_offset_s, 0.004, 0.3e-3) << Summary(result);
