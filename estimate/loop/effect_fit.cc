@@ -64,9 +64,9 @@
 //  Calibration (tests/estimate/loop/coverage_test.cc), the truth within 2 reported standard errors:
 //  60 seeded clips with an injected offset and readout whose pairs carry pair-coherent errors: the
 //  jackknife 95 % and 95 % (median |error| / SE 0.66 and 0.62; a calibrated SE gives 95 % and
-//  0.67), the model's 97-100 % at 0.52-0.56; 50 rendered and measured 320x240 clips (the disabled
-//  test there, the flow's own errors): the jackknife 94 % and 94 % (0.56, 0.62), the model's
-//  96-100 % at 0.38-0.40, 1.7 times too wide.
+//  0.67), the model's 97-100 % at 0.52-0.56; 50 rendered and measured 240x180 clips (the flow's
+//  own errors): the jackknife 92 % and 92 % (0.86, 0.90), the model's 100 % and 90 % at
+//  0.43-0.49.
 
 #include "estimate/loop/effect_model.h"
 #include "estimate/loop/least_squares.h"

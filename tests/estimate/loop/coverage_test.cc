@@ -2,20 +2,27 @@
 // fitted, and the truth compared with the reported standard errors (estimate/loop/effect_fit.cc,
 // "Standard errors").
 //
-// The suite's test is the fit only: video pairs of a 320x240 rig (f = 275 px, the video tests'
-// field of view) over a multirotor-like flight, each pair's points (32 px grid, about 80) at the
-// TRUE model's exact displacement plus errors as dense flow has them: independent noise of
-// 0.03 px per component and, per pair, an error coherent over the whole pair (an affine field,
-// 0.01 px per coefficient: a flow bias along the frame, a pair's own timing). Points of one pair
-// share that error, which a covariance taking points as independent beyond their neighbours does
-// not model (here the model's correlation factor happens to widen it enough: it covers 97-100 %).
-// The jackknife over pairs must cover the truth within 2 standard errors in at least 90 % of the
-// clips for each effect (measured: 95 % and 95 %), and not be far wider than it needs (the
-// truth's median distance at least 0.3 standard errors; measured 0.66 and 0.62, a calibrated SE
-// gives 0.67). 60 clips of 7 pairs: about 1.5 s in Release.
+// JackknifeCoversTheTruthWithPairCoherentErrors, the fit only: video pairs of a 320x240 rig (f =
+// 275 px, the video tests' field of view) over a multirotor-like flight, each pair's points (32 px
+// grid, about 80) at the TRUE model's exact displacement plus errors as dense flow has them:
+// independent noise of 0.03 px per component and, per pair, an error coherent over the whole pair
+// (an affine field, 0.01 px per coefficient: a flow bias along the frame, a pair's own timing).
+// Points of one pair share that error, which a covariance taking points as independent beyond
+// their neighbours does not model (here the model's correlation factor happens to widen it enough:
+// it covers 97-100 %). The jackknife over pairs must cover the truth within 2 standard errors in at
+// least 90 % of the clips for each effect (measured: 95 % and 95 %), and not be far wider than it
+// needs (the truth's median distance at least 0.3 standard errors; measured 0.66 and 0.62, a
+// calibrated SE gives 0.67). 60 clips of 7 pairs: about 1.5 s in Release.
 //
-// The disabled test renders and measures each clip instead (320x240, 8 frames: the flow's own
-// errors, about 1 s a clip on one core): run it with --gtest_also_run_disabled_tests.
+// JackknifeCoversTheTruthOnRenderedClips renders and measures each clip instead, as validate
+// measures a video pair (the flow's own errors): 50 clips of 8 frames of 240x180 (f = 206 px) over
+// a smooth random texture; measured 92 % and 92 % (median 0.86 and 0.90), the model's 100 % and
+// 90 %; about 5 s of one core, not under ASan. Smaller clips cover less, and not for want of a
+// wider standard error: at 160x120 (82 % and 86 %) the misses are a few clips whose flow is biased
+// by a few hundredths of a pixel the same way in every pair, enough for the offset's cost to
+// prefer a wrong minimum (one clip: 12 ms off, where the truth leaves 0.011 px rms and the wrong
+// fit 0.008 px against a noise of 0.005 px). No estimator over pairs can see an error that every
+// pair shares, and the leave-one-pair-out refits all stay in that minimum.
 
 #include "estimate/loop/effect_fit.h"
 #include "estimate/loop/measure.h"
@@ -35,6 +42,12 @@
 
 namespace shutterlab {
 namespace {
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kAsan = true;
+#else
+constexpr bool kAsan = false;
+#endif
 
 struct Clip {
   GyroTrace gyro;
@@ -139,8 +152,12 @@ TEST(Coverage, JackknifeCoversTheTruthWithPairCoherentErrors) {
 }
 
 // Rendered and measured: the flow's own errors (see the top).
-TEST(Coverage, DISABLED_JackknifeCoversTheTruthOnRenderedClips) {
-  constexpr int kClips = 50, kFrames = 8, kWidth = 320;
+TEST(Coverage, JackknifeCoversTheTruthOnRenderedClips) {
+  if (kAsan) GTEST_SKIP() << "50 rendered clips: not under ASan (the fit-only test runs)";
+  constexpr int kClips = 50, kFrames = 8, kWidth = 240;
+  MeasureOptions measure;  // as validate measures a video pair (MeasureOnePair)
+  measure.frame_distortion = false;
+  measure.dense_field = false;
   Coverage coverage;
   for (int c = 0; c < kClips; ++c) {
     const Clip clip = MakeClip(100 + c, kWidth, kFrames);
@@ -157,7 +174,7 @@ TEST(Coverage, DISABLED_JackknifeCoversTheTruthOnRenderedClips) {
     double noise_sq = 0.0;
     size_t points = 0;
     for (int k = 1; k < kFrames; ++k) {
-      const DisplacementMeasurement m = MeasureDisplacement(images[k - 1], images[k]);
+      const DisplacementMeasurement m = MeasureDisplacement(images[k - 1], images[k], measure);
       FramePoints pair;
       pair.frame = k;
       pair.t_first_row_ns = clip.t_ns[k];
