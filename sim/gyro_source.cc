@@ -1,5 +1,7 @@
 #include "sim/gyro_source.h"
 
+#include "sim/check.h"
+
 #include <condition_variable>
 #include <deque>
 #include <exception>
@@ -14,6 +16,14 @@ GyroTrace ReadAllSamples(GyroSource* source) {
   for (GyroChunk chunk = source->Next(); !chunk.empty(); chunk = source->Next())
     samples.insert(samples.end(), chunk.begin(), chunk.end());
   return GyroTrace(std::move(samples));
+}
+
+GyroTrace ReadAllSamples(GyroSource* source, const std::string& path) {
+  GyroTrace trace = ReadAllSamples(source);
+  const std::vector<LogWarning> lost = source->Warnings();
+  if (!lost.empty())
+    throw IoError(path + ": " + lost.front().message + " (this reader keeps no warnings)");
+  return trace;
 }
 
 namespace {
@@ -54,6 +64,12 @@ class ReadAheadSource : public GyroSource {
   double Fraction() const override {
     std::lock_guard<std::mutex> lock(mutex_);
     return fraction_;
+  }
+
+  // The source's, once its thread has read to the end (before that, nothing is complete).
+  std::vector<LogWarning> Warnings() const override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return finished_ ? source_->Warnings() : std::vector<LogWarning>{};
   }
 
  private:

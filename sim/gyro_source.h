@@ -4,10 +4,13 @@
 // OpenGyroCsv, ...), and a trace already in memory is handed on in slices (TraceSource).
 
 #include "sim/gyro_trace.h"
+#include "sim/log_warning.h"
 
 #include <algorithm>
 #include <cstddef>
 #include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace shutterlab {
@@ -29,6 +32,9 @@ class GyroSource {
   virtual GyroChunk Next() = 0;
   // The share of the input read so far, 0..1 (for progress).
   virtual double Fraction() const = 0;
+  // What reading lost (a text log cut inside its last line: sim/log_warning.h
+  // CutLastLineWarning), complete once Next has returned the empty chunk.
+  virtual std::vector<LogWarning> Warnings() const { return {}; }
   // The next chunk into *out (its content replaced); false at the end. A source that fills a
   // buffer of its own hands it over instead of copying (FillingSource).
   virtual bool NextInto(std::vector<GyroSample>* out) {
@@ -51,15 +57,23 @@ class FillingSource : public GyroSource {
     Fill(out);
     return !out->empty();
   }
+  std::vector<LogWarning> Warnings() const final { return warnings_; }
 
  protected:
   // Samples per chunk: 2 MiB, which stay in cache while the analysis takes them.
   static constexpr size_t kChunkSamples = 1 << 16;
   // Appends the next samples, at most kChunkSamples, to *chunk (empty on entry); none at the end.
   virtual void Fill(std::vector<GyroSample>* chunk) = 0;
+  // The input's last line (line_number) has no line break and does not read: left out, and said
+  // (Warnings). last_t_ns: the time of the sample before it, when there is one.
+  void LeaveOutCutLastLine(long line_number, std::optional<int64_t> last_t_ns) {
+    warnings_.push_back(CutLastLineWarning(
+        line_number, last_t_ns ? std::optional<double>(*last_t_ns * 1e-9) : std::nullopt));
+  }
 
  private:
   std::vector<GyroSample> chunk_;
+  std::vector<LogWarning> warnings_;
 };
 
 // A trace held in memory, in slices of chunk_samples.
@@ -85,6 +99,9 @@ class TraceSource : public GyroSource {
 
 // Every sample of a source, as a trace (validated as GyroTrace validates).
 GyroTrace ReadAllSamples(GyroSource* source);
+// The same for a caller that keeps no warnings (the readers that return a bare trace): what the
+// source lost (a cut last line) is an IoError naming path there, never dropped silently.
+GyroTrace ReadAllSamples(GyroSource* source, const std::string& path);
 
 // The source read one chunk ahead on a thread of its own, so that reading (parsing text) and the
 // analysis of the chunk before run on two cores. Chunks are copied into a few buffers of its own;

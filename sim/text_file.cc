@@ -184,7 +184,9 @@ std::optional<std::string_view> LineReader::Next() {
     if (block_.empty()) return std::nullopt;
   }
   size_t end = block_.find('\n', pos_);
-  if (end == std::string_view::npos) end = block_.size();
+  // A block holds whole lines, but for the input's last when it has no line break.
+  unterminated_ = end == std::string_view::npos;
+  if (unterminated_) end = block_.size();
   std::string_view line = block_.substr(pos_, end - pos_);
   pos_ = end + 1;
   ++line_number_;
@@ -195,7 +197,8 @@ std::optional<std::string_view> LineReader::Next() {
 std::optional<std::string_view> LineCursor::Next() {
   if (pos_ >= text_.size()) return std::nullopt;
   size_t end = text_.find('\n', pos_);
-  if (end == std::string_view::npos) end = text_.size();
+  unterminated_ = end == std::string_view::npos;
+  if (unterminated_) end = text_.size();
   std::string_view line = text_.substr(pos_, end - pos_);
   pos_ = end + 1;
   ++line_number_;

@@ -83,12 +83,16 @@ class LineReader {
   std::optional<std::string_view> Next();
   long line_number() const { return line_number_; }
   double Fraction() const { return blocks_.Fraction(); }
+  // The line Next returned last is the input's last and has no line break: a file that does not
+  // read there was cut inside it (copied or recorded while still being written).
+  bool unterminated() const { return unterminated_; }
 
  private:
   TextBlocks blocks_;
   std::string_view block_;
   size_t pos_ = 0;
   long line_number_ = 0;
+  bool unterminated_ = false;
 };
 
 // Iterates the lines of a text buffer, tracking 1-based line numbers; strips a trailing '\r'.
@@ -98,11 +102,14 @@ class LineCursor {
   // Next line, or nullopt at the end of the buffer.
   std::optional<std::string_view> Next();
   long line_number() const { return line_number_; }
+  // As LineReader::unterminated: the line Next returned last ends the text without a line break.
+  bool unterminated() const { return unterminated_; }
 
  private:
   std::string_view text_;
   size_t pos_ = 0;
   long line_number_ = 0;
+  bool unterminated_ = false;
 };
 
 // Splits a line on a delimiter, trimming spaces and tabs around each field. Appends to fields

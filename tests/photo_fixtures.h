@@ -5,6 +5,10 @@
 // here, not by the library under test, so that the reader is checked against the EXIF 2.32 and
 // XMP layouts themselves.
 
+#include "render/photo_metadata.h"
+
+#include <Eigen/Core>
+
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
@@ -183,6 +187,22 @@ inline std::string DjiMakerNote(const std::vector<std::pair<uint16_t, float>>& f
   }
   Put32(&note, 0);
   return note;
+}
+
+// What the metadata reader gives for a DJI Mini 3 photo (FC8482, 4032x2268, 24 mm equivalent):
+// the camera the readout table knows, with the flight state DJI writes in its XMP.
+inline PhotoMetadata DjiMini3Metadata(double relative_altitude_m,
+                                      const Eigen::Vector3d& speed_m_s) {
+  PhotoMetadata m;
+  m.make = "DJI";
+  m.model = "FC8482";
+  m.width = 4032;
+  m.height = 2268;
+  m.focal_length_35mm = 24.0;
+  m.relative_altitude_m = relative_altitude_m;
+  m.speed_m_s = speed_m_s;
+  m.flight_state_source = "XMP drone-dji";
+  return m;
 }
 
 }  // namespace shutterlab::test

@@ -161,38 +161,42 @@ class RowBandModel {
   // Fits to the flow at the pixels with weight > 0 (weights: CV_32F). Robust by IRLS.
   void Fit(const cv::Mat& flow, const cv::Mat& weight) {
     cv::Mat w = weight.clone();
+    // Each measured pixel's residual length against its own row model, px (one evaluation of the
+    // model per pixel and iteration serves both the scale and the weights).
+    std::vector<double> length(static_cast<size_t>(width_) * height_);
+    std::vector<float> residuals;
+    residuals.reserve(static_cast<size_t>(width_) * height_ / 4);
     for (int it = 0; it <= kIrlsIterations; ++it) {
       FitWeighted(flow, w);
       if (it == kIrlsIterations) break;
       // Residuals against each pixel's own row model; a global robust scale.
-      std::vector<float> residuals;
-      residuals.reserve(static_cast<size_t>(width_) * height_ / 4);
+      residuals.clear();
       for (int v = 0; v < height_; ++v) {
         if (!valid_[v]) continue;
         const float* wr = weight.ptr<float>(v);
         const cv::Vec2f* fr = flow.ptr<cv::Vec2f>(v);
+        double* lr = length.data() + static_cast<size_t>(v) * width_;
         for (int u = 0; u < width_; ++u) {
           if (wr[u] <= 0) continue;
-          const cv::Vec2f m = Eval(u, v);
-          residuals.push_back(static_cast<float>(cv::norm(fr[u] - m)));
+          lr[u] = cv::norm(fr[u] - Eval(u, v));
+          residuals.push_back(static_cast<float>(lr[u]));
         }
       }
       if (residuals.empty()) return;
       // |r| of a 2D Gaussian is Rayleigh: median = sigma * sqrt(2 ln 2).
-      const double sigma =
-          std::max(1e-3, UpperMedian(std::move(residuals)) / std::sqrt(2.0 * std::log(2.0)));
+      const double sigma = std::max(1e-3, UpperMedian(residuals) / std::sqrt(2.0 * std::log(2.0)));
       scale_px_ = sigma;
       const double c = kTukeyC * sigma;
       for (int v = 0; v < height_; ++v) {
         const float* wr = weight.ptr<float>(v);
         float* out = w.ptr<float>(v);
-        const cv::Vec2f* fr = flow.ptr<cv::Vec2f>(v);
+        const double* lr = length.data() + static_cast<size_t>(v) * width_;
         for (int u = 0; u < width_; ++u) {
           if (wr[u] <= 0 || !valid_[v]) {
             out[u] = 0;
             continue;
           }
-          const double r = cv::norm(fr[u] - Eval(u, v)) / c;
+          const double r = lr[u] / c;
           out[u] = r >= 1 ? 0.0f : static_cast<float>(wr[u] * (1 - r * r) * (1 - r * r));
         }
       }
@@ -379,22 +383,24 @@ void FirstWeights(const cv::Mat& grey_ref, const cv::Mat& grey_img, const cv::Ma
   }
 }
 
-// The model's field and confidence wherever measured (and across short gaps);
-// result->measured_fraction.
+// The model's field and confidence wherever measured (and across short gaps), when `write`;
+// result->measured_fraction always.
 void FillField(const RowBandModel& model, const cv::Mat& weight, const cv::Mat& robust,
-               const cv::Mat& never_fill, DisplacementMeasurement* result) {
+               const cv::Mat& never_fill, bool write, DisplacementMeasurement* result) {
   const int width = weight.cols, height = weight.rows;
-  result->field.create(height, width, CV_32FC2);
-  result->field.setTo(cv::Scalar(kNaN, kNaN));
-  result->confidence = cv::Mat(height, width, CV_32F, cv::Scalar(0));
+  if (write) {
+    result->field.create(height, width, CV_32FC2);
+    result->field.setTo(cv::Scalar(kNaN, kNaN));
+    result->confidence = cv::Mat(height, width, CV_32F, cv::Scalar(0));
+  }
   size_t measured = 0;
   for (int v = 0; v < height; ++v) {
     if (!model.RowValid(v)) continue;
     const float* wr = weight.ptr<float>(v);
     const float* rw = robust.ptr<float>(v);
     const uchar* sat = never_fill.ptr<uchar>(v);
-    cv::Vec2f* out = result->field.ptr<cv::Vec2f>(v);
-    float* conf = result->confidence.ptr<float>(v);
+    cv::Vec2f* out = write ? result->field.ptr<cv::Vec2f>(v) : nullptr;
+    float* conf = write ? result->confidence.ptr<float>(v) : nullptr;
     int last = -1;  // last measured column
     for (int u = 0; u < width; ++u) {
       if (wr[u] <= 0) continue;
@@ -403,13 +409,17 @@ void FillField(const RowBandModel& model, const cv::Mat& weight, const cv::Mat& 
       if (last >= 0 && u - last > 1 && u - last <= kMaxGapPx) {
         for (int g = last + 1; g < u; ++g) {
           if (sat[g]) continue;
-          out[g] = model.Eval(g, v);
-          conf[g] = 0.1f;
+          if (write) {
+            out[g] = model.Eval(g, v);
+            conf[g] = 0.1f;
+          }
           ++measured;
         }
       }
-      out[u] = model.Eval(u, v);
-      conf[u] = std::max(0.1f, rw[u]);
+      if (write) {
+        out[u] = model.Eval(u, v);
+        conf[u] = std::max(0.1f, rw[u]);
+      }
       ++measured;
       last = u;
     }
@@ -478,9 +488,11 @@ DisplacementMeasurement MeasureDisplacement(const cv::Mat& ref, const cv::Mat& i
   const cv::Mat& robust = model.robust_weight().empty() ? weight : model.robust_weight();
 
   DisplacementMeasurement result;
-  FillField(model, weight, robust, never_fill, &result);
+  FillField(model, weight, robust, never_fill, options.dense_field, &result);
   GridPoints(model, forward, weight, robust, options.grid_step_px, &result);
-  if (options.frame_distortion) result.d_px = FrameDistortionPx(result.field);
+  if (options.dense_field && options.frame_distortion) {
+    result.d_px = FrameDistortionPx(result.field);
+  }
   if (options.corner_tracks)
     result.tracks = TrackCorners(grey_ref, grey_img, forward, options.mask);
   return result;

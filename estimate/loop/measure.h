@@ -29,6 +29,9 @@ struct MeasureOptions {
   cv::Mat mask;
   // Compute the frame distortion D of the field (d_px); video pairs have no use for it.
   bool frame_distortion = true;
+  // Fill `field` and `confidence` (and so D); off, they stay empty and only the points, noise_px
+  // and measured_fraction are computed (the same numbers): video pairs use nothing else.
+  bool dense_field = true;
   // Also track sparse corners (estimate/loop/corner_tracks.h) into `tracks`: what the camera-fixed
   // check trusts where the dense flow may be dragged along (dark, nearly textureless regions).
   bool corner_tracks = false;
@@ -41,6 +44,7 @@ struct MeasureOptions {
 inline constexpr double kMinNoisePx = 1e-3;
 
 struct DisplacementMeasurement {
+  // Both empty without MeasureOptions::dense_field.
   cv::Mat field;       // CV_32FC2 (dx, dy) per rolling-shutter pixel; NaN where unmeasured
   cv::Mat confidence;  // CV_32F, 0..1, 0 where unmeasured (textureless, saturated, inconsistent)
                        // (0.1 in short gaps that the per-row model bridges, see measure.cc)

@@ -478,6 +478,7 @@ PairMeasurement MeasureOnePair(const VideoInputs& in, const RigModel& rig,
   }
   MeasureOptions measure = in.options.measure;
   measure.frame_distortion = false;  // D of a flow between two frames means nothing
+  measure.dense_field = false;       // only the points are used
   measure.corner_tracks = in.options.screen.camera_fixed;
   out.measured = MeasureDisplacement(previous, image, measure);
   if (out.measured.points.empty()) {

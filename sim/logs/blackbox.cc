@@ -991,6 +991,39 @@ std::string_view FirstLine(std::string_view bytes) {
                       newline == std::string_view::npos ? std::string_view::npos : newline - start);
 }
 
+// The sample of one data row of blackbox_decode's CSV (line n), split into *fields.
+GyroSample BlackboxCsvRow(std::string_view line, const CsvColumns& columns, const std::string& path,
+                          long n, std::vector<std::string_view>* fields) {
+  SplitFields(line, ',', fields);
+  const int needed =
+      std::max({columns.time, columns.gyro[0], columns.gyro[1], columns.gyro[2]}) + 1;
+  if (static_cast<int>(fields->size()) < needed) {
+    throw IoError(IoMessage(path, n,
+                            "expected at least " + std::to_string(needed) + " fields, found " +
+                                std::to_string(fields->size())));
+  }
+  const std::optional<double> t = ParseDouble((*fields)[columns.time]);
+  if (!t) {
+    throw IoError(
+        IoMessage(path, n, "time '" + std::string((*fields)[columns.time]) + "' is not a number"));
+  }
+  GyroSample sample;
+  const double t_ns = *t * columns.time_to_ns;
+  if (!(std::abs(t_ns) < 9.2e18)) throw IoError(IoMessage(path, n, "time out of range"));
+  sample.t_ns = std::llround(t_ns);
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::optional<double> v = ParseDouble((*fields)[columns.gyro[axis]]);
+    if (!v) {
+      throw IoError(IoMessage(path, n,
+                              "gyroADC[" + std::to_string(axis) + "] '" +
+                                  std::string((*fields)[columns.gyro[axis]]) +
+                                  "' is not a number"));
+    }
+    sample.omega_rad_s[axis] = *v * columns.gyro_to_rad_s;
+  }
+  return sample;
+}
+
 FlightLog ReadBlackboxCsv(std::string_view text, const std::string& path) {
   LineCursor cursor(text);
   std::optional<std::string_view> line = cursor.Next();
@@ -999,42 +1032,24 @@ FlightLog ReadBlackboxCsv(std::string_view text, const std::string& path) {
   std::string problem;
   const std::optional<CsvColumns> columns = ParseCsvHeader(*line, &problem);
   if (!columns) throw IoError(IoMessage(path, 1, problem));
-  const int needed =
-      std::max({columns->time, columns->gyro[0], columns->gyro[1], columns->gyro[2]}) + 1;
 
   std::vector<GyroSample> samples;
   std::vector<std::string_view> fields;
+  std::vector<LogWarning> cut;
   while ((line = cursor.Next())) {
     if (line->find_first_not_of(" \t") == std::string_view::npos) continue;
-    SplitFields(*line, ',', &fields);
-    if (static_cast<int>(fields.size()) < needed) {
-      throw IoError(IoMessage(path, cursor.line_number(),
-                              "expected at least " + std::to_string(needed) + " fields, found " +
-                                  std::to_string(fields.size())));
+    try {
+      const GyroSample sample =
+          BlackboxCsvRow(*line, *columns, path, cursor.line_number(), &fields);
+      if (!samples.empty() && sample.t_ns < samples.back().t_ns)
+        throw IoError(IoMessage(path, cursor.line_number(), "time goes backwards"));
+      samples.push_back(sample);
+    } catch (const IoError&) {
+      if (!cursor.unterminated()) throw;  // only the last line may be cut
+      cut.push_back(CutLastLineWarning(
+          cursor.line_number(),
+          samples.empty() ? std::nullopt : std::optional<double>(samples.back().t_ns * 1e-9)));
     }
-    const std::optional<double> t = ParseDouble(fields[columns->time]);
-    if (!t)
-      throw IoError(IoMessage(path, cursor.line_number(),
-                              "time '" + std::string(fields[columns->time]) + "' is not a number"));
-    GyroSample sample;
-    const double t_ns = *t * columns->time_to_ns;
-    if (!(std::abs(t_ns) < 9.2e18))
-      throw IoError(IoMessage(path, cursor.line_number(), "time out of range"));
-    sample.t_ns = std::llround(t_ns);
-    for (int axis = 0; axis < 3; ++axis) {
-      const std::optional<double> v = ParseDouble(fields[columns->gyro[axis]]);
-      if (!v) {
-        throw IoError(IoMessage(path, cursor.line_number(),
-                                "gyroADC[" + std::to_string(axis) + "] '" +
-                                    std::string(fields[columns->gyro[axis]]) +
-                                    "' is not a number"));
-      }
-      sample.omega_rad_s[axis] = *v * columns->gyro_to_rad_s;
-    }
-    if (!samples.empty() && sample.t_ns < samples.back().t_ns) {
-      throw IoError(IoMessage(path, cursor.line_number(), "time goes backwards"));
-    }
-    samples.push_back(sample);
   }
   if (samples.empty()) throw IoError(IoMessage(path, cursor.line_number(), "no data rows"));
 
@@ -1048,6 +1063,7 @@ FlightLog ReadBlackboxCsv(std::string_view text, const std::string& path) {
                             "gyroADC has no unit in the CSV header; taken as deg/s (Betaflight >= "
                             "3 logs gyro_scale 1.0)"});
   }
+  log.warnings.insert(log.warnings.end(), cut.begin(), cut.end());
   return log;
 }
 

@@ -162,7 +162,14 @@ class ColumnCsvSource : public FillingSource {
     while (chunk->size() < kChunkSamples) {
       const auto line = lines_.Next();
       if (!line) break;
-      if (!Trim(*line).empty()) chunk->push_back(ParseRow(*line, lines_.line_number()));
+      if (Trim(*line).empty()) continue;
+      try {
+        chunk->push_back(ParseRow(*line, lines_.line_number()));
+      } catch (const IoError&) {
+        if (!lines_.unterminated()) throw;
+        LeaveOutCutLastLine(lines_.line_number(),
+                            any_ ? std::optional<int64_t>(last_t_ns_) : std::nullopt);
+      }
     }
     if (chunk->empty() && !any_) throw IoError(IoMessage(path_, 0, "no samples"));
   }
@@ -316,6 +323,7 @@ ColumnCsvLog ParseColumnCsv(std::string_view text, const std::string& path,
                             const ColumnCsvOptions& options) {
   ColumnCsvStream stream = OpenColumnCsv(TextBlocks::InMemory(text), path, options);
   stream.log.trace = ReadAllSamples(stream.samples.get());
+  stream.log.warnings = stream.samples->Warnings();
   return std::move(stream.log);
 }
 
@@ -323,6 +331,7 @@ ColumnCsvLog ReadColumnCsv(const std::string& path, const ColumnCsvOptions& opti
   options.Check();
   ColumnCsvStream stream = OpenColumnCsv(TextBlocks::OfFile(path), path, options);
   stream.log.trace = ReadAllSamples(stream.samples.get());
+  stream.log.warnings = stream.samples->Warnings();
   return std::move(stream.log);
 }
 

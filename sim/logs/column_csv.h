@@ -57,6 +57,9 @@ struct ColumnCsvLog {
   std::string source;  // the chosen columns, "time_ms,wx,wy,wz" from a header or "4,1,2,3"
   char delimiter = ',';
   bool has_header = false;
+  // A last line cut inside (no line break, does not read): left out and said here
+  // (CutLastLineWarning).
+  std::vector<LogWarning> warnings;
 };
 
 // Reads the file (a UTF-8 byte-order mark and CRLF line ends are accepted; blank lines skipped;
@@ -64,7 +67,8 @@ struct ColumnCsvLog {
 // "PATH:LINE: problem" naming the column when a name is not in the header (quoting the header), a
 // line lacks a chosen column, a field is not a number, or a time is smaller than the one before
 // (naming both lines); and when the file has no sample. Throws std::invalid_argument for bad
-// options (ColumnCsvOptions::Check).
+// options (ColumnCsvOptions::Check). A last line without its line break that does not read is
+// the file cut inside it: left out, with a `truncated` warning.
 ColumnCsvLog ReadColumnCsv(const std::string& path, const ColumnCsvOptions& options);
 // The same on text already in memory; path names it in messages.
 ColumnCsvLog ParseColumnCsv(std::string_view text, const std::string& path,

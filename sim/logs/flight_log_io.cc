@@ -96,6 +96,7 @@ class DetectedSource : public GyroSource {
     }
   }
   double Fraction() const override { return source_->Fraction(); }
+  std::vector<LogWarning> Warnings() const override { return source_->Warnings(); }
 
  private:
   std::unique_ptr<GyroSource> source_;
@@ -177,6 +178,7 @@ FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& opt
   FlightLogStream stream = OpenFlightLog(path, options);
   FlightLog log = std::move(stream.log);
   log.gyro = ReadAllSamples(stream.gyro.get());
+  for (LogWarning& warning : stream.gyro->Warnings()) log.warnings.push_back(std::move(warning));
   for (LogWarning& warning : AuditTrace(log.gyro, stream.audit))
     log.warnings.push_back(std::move(warning));
   return log;
@@ -193,6 +195,7 @@ StreamedLog ConsumeFlightLog(FlightLogStream* stream,
   }
   StreamedLog out;
   out.warnings = stream->log.warnings;
+  for (LogWarning& warning : stream->gyro->Warnings()) out.warnings.push_back(std::move(warning));
   for (LogWarning& warning : auditor.Finish()) out.warnings.push_back(std::move(warning));
   out.sampling = auditor.Sampling();
   return out;

@@ -322,25 +322,35 @@ class GcsvSource : public FillingSource {
       if (!line) break;
       const long n = lines_.line_number();
       if (line->empty()) continue;
-      SplitFields(*line, ',', &fields_);
-      if (fields_.size() != header_.columns.size()) {
-        throw IoError(IoMessage(path_, n,
-                                "expected " + std::to_string(header_.columns.size()) +
-                                    " columns as on line " + std::to_string(header_.column_line) +
-                                    ", found " + std::to_string(fields_.size())));
+      try {
+        chunk->push_back(ReadRow(*line, n));
+      } catch (const IoError&) {
+        if (!lines_.unterminated()) throw;
+        LeaveOutCutLastLine(n, any_ ? std::optional<int64_t>(last_t_ns_) : std::nullopt);
       }
-      const GyroSample s = ParseSample(path_, n, fields_, header_, exact_unit_, to_out_);
-      if (any_ && s.t_ns < last_t_ns_) {
-        throw IoError(IoMessage(
-            path_, n,
-            "timestamp decreases (" + std::string(fields_[0]) + " after an earlier, larger one)"));
-      }
-      any_ = true;
-      last_t_ns_ = s.t_ns;
-      chunk->push_back(s);
     }
     if (chunk->empty() && !any_)
       throw IoError(IoMessage(path_, 0, "no samples after the column line"));
+  }
+
+  // The sample of line n, after the one before.
+  GyroSample ReadRow(std::string_view line, long n) {
+    SplitFields(line, ',', &fields_);
+    if (fields_.size() != header_.columns.size()) {
+      throw IoError(IoMessage(path_, n,
+                              "expected " + std::to_string(header_.columns.size()) +
+                                  " columns as on line " + std::to_string(header_.column_line) +
+                                  ", found " + std::to_string(fields_.size())));
+    }
+    const GyroSample s = ParseSample(path_, n, fields_, header_, exact_unit_, to_out_);
+    if (any_ && s.t_ns < last_t_ns_) {
+      throw IoError(IoMessage(
+          path_, n,
+          "timestamp decreases (" + std::string(fields_[0]) + " after an earlier, larger one)"));
+    }
+    any_ = true;
+    last_t_ns_ = s.t_ns;
+    return s;
   }
   LineReader lines_;
   std::string path_;
@@ -367,6 +377,7 @@ GcsvStream OpenGcsv(TextBlocks blocks, const std::string& path) {
 GcsvLog ReadGcsv(const std::string& path) {
   GcsvStream stream = OpenGcsv(TextBlocks::OfFile(path), path);
   stream.log.trace = ReadAllSamples(stream.samples.get());
+  for (LogWarning& w : stream.samples->Warnings()) stream.log.warnings.push_back(std::move(w));
   return std::move(stream.log);
 }
 

@@ -56,7 +56,8 @@ struct GcsvLog {
 // Reads a .gcsv. Throws IoError "PATH:LINE: problem" for a missing first line, a header that ends
 // before the column line, a missing or non-positive tscale / gscale, a bad orientation string, a
 // column line not starting t,gx,gy,gz, a row whose column count differs from the column line's, a
-// non-numeric or non-finite field, or a decreasing timestamp.
+// non-numeric or non-finite field, or a decreasing timestamp; but a last line without its line
+// break that does not read is the file cut inside it: left out, with a `truncated` warning.
 GcsvLog ReadGcsv(const std::string& path);
 // The same as a stream: the header block is read at once (its errors thrown here), the samples a
 // block at a time as the chunks are taken. log.trace stays empty. path names the file in messages.

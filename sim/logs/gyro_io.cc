@@ -140,7 +140,12 @@ class GyroCsvSource : public FillingSource {
           p = next;
           continue;
         }
-        s = ParseRowGeneral(path_, line_number_, line, &fields_);
+        if (eol < end) {
+          s = ParseRowGeneral(path_, line_number_, line, &fields_);
+        } else if (!ParseCutLastLine(line, &s)) {
+          p = end;
+          break;
+        }
       }
       if (any_ && s.t_ns < last_t_ns_) {
         const char* comma = static_cast<const char*>(std::memchr(p, ',', end - p));
@@ -154,6 +159,18 @@ class GyroCsvSource : public FillingSource {
       p = next;
     }
     rest_ = std::string_view(p, end - p);
+  }
+
+  // The input's last line, which has no line break (a block holds whole lines but for that one):
+  // false when it does not read, the file cut inside it, which is left out and said.
+  bool ParseCutLastLine(std::string_view line, GyroSample* s) {
+    try {
+      *s = ParseRowGeneral(path_, line_number_, line, &fields_);
+      return true;
+    } catch (const IoError&) {
+      LeaveOutCutLastLine(line_number_, any_ ? std::optional<int64_t>(last_t_ns_) : std::nullopt);
+      return false;
+    }
   }
 
   TextBlocks blocks_;
@@ -178,7 +195,7 @@ std::unique_ptr<GyroSource> OpenGyroCsv(TextBlocks blocks, const std::string& pa
 }
 
 GyroTrace ReadGyroCsv(const std::string& path) {
-  return ReadAllSamples(OpenGyroCsv(TextBlocks::OfFile(path), path).get());
+  return ReadAllSamples(OpenGyroCsv(TextBlocks::OfFile(path), path).get(), path);
 }
 
 void WriteGyroCsv(const std::string& path, const GyroTrace& trace) {
@@ -245,8 +262,14 @@ GyroTrace ReadGyro(const std::string& path, const GyroReadOptions& options) {
     case LogFormat::kAuto:
     case LogFormat::kGyroCsv:
       return ReadGyroCsv(path);
-    case LogFormat::kGcsv:
-      return ReadGcsv(path).trace;
+    case LogFormat::kGcsv: {
+      GcsvLog log = ReadGcsv(path);
+      for (const LogWarning& w : log.warnings) {
+        if (w.kind == "truncated")  // as ReadGyroCsv: no warnings kept here, so refused
+          throw IoError(path + ": " + w.message + " (this reader keeps no warnings)");
+      }
+      return std::move(log.trace);
+    }
     case LogFormat::kRaw:
       return ReadRawCsv(path, options.raw.range_dps, options.raw.time_unit);
     case LogFormat::kULog:

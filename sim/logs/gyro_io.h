@@ -1,6 +1,10 @@
 #pragma once
 // Readers and writers of gyro logs. Every reader throws IoError("PATH:LINE: problem") on bad input
-// and never returns a partial trace.
+// and never returns a partial trace, with one exception: a last line without its line break that
+// does not read is the file cut inside it, left out and said by the source's Warnings
+// (CutLastLineWarning), which the commands report (sim/logs/flight_log_io.h). The readers that
+// return a bare GyroTrace (ReadGyroCsv, ReadRawCsv, ReadGyro) keep no warnings: they refuse such
+// a file with an IoError instead.
 
 #include "sim/gyro_source.h"
 #include "sim/gyro_trace.h"

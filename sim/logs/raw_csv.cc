@@ -158,17 +158,28 @@ class RawCsvSource : public FillingSource {
         first_ = false;
         if (IsHeader(fields_)) continue;
       }
-      const GyroSample s = ParseRow(lines_.line_number());
-      if (any_ && s.t_ns < last_t_ns_) {
-        throw IoError(IoMessage(
-            path_, lines_.line_number(),
-            "timestamp decreases (" + std::string(fields_[0]) + " after an earlier, larger one)"));
+      try {
+        chunk->push_back(ReadRow(lines_.line_number()));
+      } catch (const IoError&) {
+        if (!lines_.unterminated()) throw;
+        LeaveOutCutLastLine(lines_.line_number(),
+                            any_ ? std::optional<int64_t>(last_t_ns_) : std::nullopt);
       }
-      any_ = true;
-      last_t_ns_ = s.t_ns;
-      chunk->push_back(s);
     }
     if (chunk->empty() && !any_) throw IoError(IoMessage(path_, 0, "no samples"));
+  }
+
+  // The sample of line n, split into fields_, after the one before.
+  GyroSample ReadRow(long n) {
+    const GyroSample s = ParseRow(n);
+    if (any_ && s.t_ns < last_t_ns_) {
+      throw IoError(IoMessage(
+          path_, n,
+          "timestamp decreases (" + std::string(fields_[0]) + " after an earlier, larger one)"));
+    }
+    any_ = true;
+    last_t_ns_ = s.t_ns;
+    return s;
   }
 
   // The sample of line n, split into fields_.
@@ -220,7 +231,8 @@ std::unique_ptr<GyroSource> OpenRawCsv(TextBlocks blocks, const std::string& pat
 
 GyroTrace ReadRawCsv(const std::string& path, int range_dps, TimeUnit time_unit) {
   RawSensitivityLsbPerDps(range_dps);  // an unknown range before the file is opened
-  return ReadAllSamples(OpenRawCsv(TextBlocks::OfFile(path), path, range_dps, time_unit).get());
+  return ReadAllSamples(OpenRawCsv(TextBlocks::OfFile(path), path, range_dps, time_unit).get(),
+                        path);
 }
 
 size_t WriteRawCsv(const std::string& path, const GyroTrace& trace, int range_dps,

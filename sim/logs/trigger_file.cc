@@ -95,13 +95,14 @@ bool IsCutLastLine(std::string_view text, std::string_view line) {
 // A cut last line is said, not an error: kept: what it gave is read (its fields are labelled or
 // whole); dropped: it did not read.
 void WarnCutLastLine(long line_number, bool kept, std::vector<LogWarning>* warnings) {
+  if (!kept) {
+    warnings->push_back(CutLastLineWarning(line_number));
+    return;
+  }
   warnings->push_back(
-      {"truncated",
-       "line " + std::to_string(line_number) +
-           (kept ? ": the file ends inside it (no line break, fewer fields than the first line): "
-                   "read as far as it goes"
-                 : ": the file ends inside it (no line break): left out"),
-       std::nullopt, kept ? std::nullopt : std::optional<size_t>(1)});
+      {"truncated", "line " + std::to_string(line_number) +
+                        ": the file ends inside it (no line break, fewer fields than the first "
+                        "line): read as far as it goes"});
 }
 
 void WarnOrder(const std::vector<TriggerEvent>& events, std::vector<LogWarning>* warnings) {

@@ -82,16 +82,7 @@ TEST(ReadoutTableReal, MatchesTheCitedFacts) {
 }
 
 PhotoMetadata DjiMetadata() {
-  PhotoMetadata m;
-  m.make = "DJI";
-  m.model = "FC8482";
-  m.width = 4032;
-  m.height = 2268;
-  m.focal_length_35mm = 24.0;
-  m.relative_altitude_m = 117.9;
-  m.speed_m_s = Eigen::Vector3d(3.0, -4.0, 0.0);
-  m.flight_state_source = "XMP drone-dji";
-  return m;
+  return test::DjiMini3Metadata(117.9, Eigen::Vector3d(3.0, -4.0, 0.0));
 }
 
 TEST(PhotoRecord, DerivesCameraAndFlightStateWithSources) {

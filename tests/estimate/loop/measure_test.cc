@@ -304,6 +304,27 @@ TEST(Measure, GreyRgbSixteenBitAndFloatAgree) {
 }
 
 // With sensor noise added to both images the raw points get much noisier; noise_px must follow.
+// Without the dense field (video pairs) the points, their noise and the measured share are the
+// same numbers, bit for bit; only the field and its confidence are left empty.
+TEST(Measure, WithoutTheDenseFieldThePointsAreTheSame) {
+  const RenderedPair pair = CroppedPair();
+  const DisplacementMeasurement full = MeasureDisplacement(pair.ref, pair.rs);
+  MeasureOptions options;
+  options.dense_field = false;
+  const DisplacementMeasurement points = MeasureDisplacement(pair.ref, pair.rs, options);
+  EXPECT_TRUE(points.field.empty());
+  EXPECT_TRUE(points.confidence.empty());
+  EXPECT_EQ(points.noise_px, full.noise_px);
+  EXPECT_EQ(points.measured_fraction, full.measured_fraction);
+  ASSERT_EQ(points.points.size(), full.points.size());
+  ASSERT_GT(full.points.size(), 100u);
+  for (size_t i = 0; i < full.points.size(); ++i) {
+    const MeasuredPoint &a = full.points[i], &b = points.points[i];
+    EXPECT_TRUE(a.u == b.u && a.v == b.v && a.dx == b.dx && a.dy == b.dy && a.weight == b.weight)
+        << "point " << i;
+  }
+}
+
 TEST(Measure, NoiseEstimateFollowsImageNoise) {
   RenderedPair pair = CroppedPair();
   cv::RNG rng(5);

@@ -3,6 +3,8 @@
 
 #include "estimate/report/photo_json.h"
 
+#include "tests/photo_fixtures.h"
+
 #include <gtest/gtest.h>
 
 #include <string>
@@ -11,15 +13,7 @@ namespace shutterlab {
 namespace {
 
 PhotoSet TwoPhotos() {
-  PhotoMetadata m;
-  m.make = "DJI";
-  m.model = "FC8482";
-  m.width = 4032;
-  m.height = 2268;
-  m.focal_length_35mm = 24.0;
-  m.relative_altitude_m = 100.0;
-  m.speed_m_s = Eigen::Vector3d(5.0, 0.0, 0.0);
-  m.flight_state_source = "XMP drone-dji";
+  PhotoMetadata m = test::DjiMini3Metadata(100.0, Eigen::Vector3d(5.0, 0.0, 0.0));
   std::string problem;
   m.capture_time = ParseExifDateTime("2024:07:16 09:41:37", "5", "+02:00", &problem);
   PhotoSet set;
