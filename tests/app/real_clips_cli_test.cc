@@ -177,7 +177,10 @@ TEST(RealClips, GoproKarmaIsMostlyTranslation) {
   for (size_t at = page.find("<img "); at != std::string::npos; at = page.find("<img ", at + 1)) {
     ++images;
   }
-  EXPECT_EQ(images, 24u + 1u);  // the residual pictures, and the screening's
+  // The residual pictures, the screening's and the camera-fixed check's evidence (also a file).
+  EXPECT_EQ(images, 24u + 2u);
+  EXPECT_TRUE(fs::exists(dir / "plots/camera_fixed_evidence.png"));
+  EXPECT_TRUE(fs::exists(dir / "plots/camera_fixed_mask.png"));
   EXPECT_NE(page.find("The 24 of 30 pairs with the largest residual before"), std::string::npos);
   // Whatever it says, nothing confident and wrong: no effect stands beside an unexplained residual.
   EXPECT_TRUE(report["effects"].empty() || report["unexplained"] == false) << report.dump(2);
