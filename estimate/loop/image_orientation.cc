@@ -112,18 +112,42 @@ ImageOrientationCheck TestImageOrientation(const TrueModel& declared, const Gyro
     if (model > 0) gains.push_back(r.theta_image.norm() / model);
   }
   check.gain = gains.empty() ? 0.0 : Median(gains);
-  check.holds = check.share >= kMinImageOrientationShare && check.gain >= kMinGain &&
-                check.gain <= 1.0 / kMinGain;
-  const std::string numbers =
-      "the best of the 48 readings (its axes and sense) explains " +
-      FormatNumber("%.0f", 100 * check.share) +
-      " % of how the image turns against the gyro, and the image then turns " +
-      FormatNumber("%.2f", check.gain) + "x as the model says (median over " +
-      std::to_string(check.pairs_tested) + " pairs)";
-  check.verdict = (check.holds ? "the stabiliser's rotation (IORI) holds, and is applied: "
-                               : "the stabiliser's rotation (IORI) does not explain the images: ") +
-                  numbers;
+  check.verdict = "not judged: the images have not been screened under the best reading";
   return check;
+}
+
+void JudgeImageOrientation(const GyroFollowCheck& raw, const GyroFollowCheck& applied,
+                           ImageOrientationCheck* check) {
+  check->raw_gain = raw.determined ? raw.gain : std::numeric_limits<double>::quiet_NaN();
+  check->applied_gain =
+      applied.determined ? applied.gain : std::numeric_limits<double>::quiet_NaN();
+  check->applied_pairs = applied.pairs_tested;
+  if (applied.determined) {
+    // Closer to 1 on a log scale: a gain of 0.5 and one of 2 are as far off.
+    const bool closer =
+        !raw.determined || std::abs(std::log(applied.gain)) < std::abs(std::log(raw.gain));
+    check->holds = applied.follows && closer;
+  } else {  // the camera so turned moves too little to test: the rotations' own test
+    check->holds = check->share >= kMinImageOrientationShare && check->gain >= kMinGain &&
+                   check->gain <= 1.0 / kMinGain;
+  }
+  const std::string numbers =
+      "with the best of its 48 readings (axes and sense) applied, the image turns " +
+      (applied.determined
+           ? FormatNumber("%.2f", applied.gain) +
+                 "x as fast as the gyro turned by it says (median over " +
+                 std::to_string(applied.pairs_tested) + " pairs)"
+           : FormatNumber("%.2f", check->gain) +
+                 "x as the reading's rotation says (too little motion left for the screening's "
+                 "test)") +
+      (raw.determined ? ", against " + FormatNumber("%.2f", raw.gain) + "x for the gyro alone"
+                      : std::string()) +
+      "; the reading explains " + FormatNumber("%.0f", 100 * check->share) +
+      " % of how the image's rotation departs from the gyro's";
+  check->verdict =
+      (check->holds ? "the stabiliser's rotation (IORI) holds, and is applied: "
+                    : "the stabiliser's rotation (IORI) does not explain the images: ") +
+      numbers;
 }
 
 std::vector<size_t> ApplyImageOrientation(const ImageOrientationCheck& reading,

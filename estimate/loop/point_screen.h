@@ -14,6 +14,12 @@
 //     with probability 1 - e^-3 or more, its noise being at most a fifth of the prediction). A cell
 //     moves with the camera when it was testable in at least kMinTestableFrames frames and stayed
 //     in at least kFixedShare of them; isolated cells (no fixed neighbour among the 8) are dropped.
+//     The points are the frames' corner tracks (FramePoints::tracks, estimate/loop/corner_tracks.h)
+//     where the frames have any, else the measured points: dense flow drags a dark, flat region
+//     along with the scene beside it, a track is kept only where texture pins it. A cell with no
+//     testable point is unmeasured, not scene: unmeasured cells 4-connected to a connected part
+//     of at least kMinRegionSeedCells fixed cells join the region (cells_joined), so the flat
+//     lower part of a dashboard goes with its textured edge; the scene's cells bound it.
 //     A scene point stays only where the camera's own motion cancels its parallax, which wanders
 //     from frame to frame; a dashboard stays in every frame. When more than kMaxRegionShare of the
 //     testable cells stay, it is no region but the whole image not following the gyro (check 3):

@@ -688,24 +688,37 @@ void CheckHalves(const ClaimInputs& in, ValidationResult* result) {
 }
 
 // The screening (estimate/loop/point_screen.h) of the pairs into result->screen; with the
-// stabiliser's own rotation (image_orientation.csv), its claim tested first and, where it holds,
-// applied to the pairs (pairs without it are left out) before the screening that counts.
+// stabiliser's own rotation (image_orientation.csv), its best reading found, the pairs screened
+// again with it applied and the claim judged on the two (JudgeImageOrientation); where it holds,
+// the applied pairs and their screening replace the raw ones (pairs without IORI left out).
 void ScreenVideo(const RigDataset& dataset, const TrueModel& declared,
                  const ValidateOptions& options, std::vector<FramePoints>* pairs,
                  ValidationResult* result) {
-  const auto screen = [&] {
+  // The screening of `on`: the pairs less those at the indices in `removed` (ascending).
+  const auto screen = [&](const std::vector<FramePoints>& on, const std::vector<size_t>& removed) {
     std::vector<double> noise_px;
-    for (const FrameValidation& f : result->frames) noise_px.push_back(f.noise_px);
-    result->screen = ScreenPoints(declared, dataset.gyro, *pairs, noise_px,
-                                  options.measure.grid_step_px, options.screen);
+    for (size_t i = 0; i < result->frames.size(); ++i) {
+      if (!std::binary_search(removed.begin(), removed.end(), i)) {
+        noise_px.push_back(result->frames[i].noise_px);
+      }
+    }
+    return ScreenPoints(declared, dataset.gyro, on, noise_px, options.measure.grid_step_px,
+                        options.screen);
   };
-  screen();
+  result->screen = screen(*pairs, {});
   if (dataset.image_orientation.empty() || !options.screen.consensus) return;
-  result->image_orientation = TestImageOrientation(
-      declared, dataset.gyro, *pairs, result->screen.rotation, dataset.image_orientation);
-  if (!result->image_orientation.holds) return;
+  ImageOrientationCheck& check = result->image_orientation;
+  check = TestImageOrientation(declared, dataset.gyro, *pairs, result->screen.rotation,
+                               dataset.image_orientation);
+  if (check.pairs_tested < 3) return;  // its verdict says why
+  std::vector<FramePoints> applied = *pairs;
   const std::vector<size_t> removed =
-      ApplyImageOrientation(result->image_orientation, dataset.image_orientation, pairs);
+      ApplyImageOrientation(check, dataset.image_orientation, &applied);
+  PointScreen applied_screen = screen(applied, removed);
+  JudgeImageOrientation(result->screen.gyro_follow, applied_screen.gyro_follow, &check);
+  if (!check.holds) return;
+  *pairs = std::move(applied);
+  result->screen = std::move(applied_screen);
   for (auto it = removed.rbegin(); it != removed.rend(); ++it) {
     const FrameValidation& f = result->frames[*it];
     result->skipped.push_back("pair " + std::to_string(f.previous.value_or(-1)) + " -> " +
@@ -713,11 +726,6 @@ void ScreenVideo(const RigDataset& dataset, const TrueModel& declared,
                               ": a frame without the stabiliser's rotation (IORI)");
     result->frames.erase(result->frames.begin() + static_cast<long>(*it));
   }
-  if (pairs->empty()) {
-    throw IoError(IoMessage((dataset.dir / "image_orientation.csv").string(), 0,
-                            "no pair whose two frames have the stabiliser's rotation"));
-  }
-  screen();
 }
 
 }  // namespace
@@ -747,9 +755,9 @@ void ValidateVideoDataset(const RigDataset& dataset, const ValidateOptions& opti
   const double noise_px = PooledNoisePx(result->frames);
   VideoModels models = PrepareModels(options, result->declared);
   ScreenVideo(dataset, models.rotation_start, options, &pairs, result);
-  // An image that does not follow the gyro shows no effect of the sensor (the top-level effects
-  // stay empty whatever a loop fits): the loops fit the declared model alone, for its residual.
-  if (result->screen.gyro_follow.determined && !result->screen.gyro_follow.follows) {
+  // A stabiliser's rendering shows no effect of the sensor (the top-level effects stay empty
+  // whatever a loop fits): the loops fit the declared model alone, for its residual.
+  if (ReRenderedByStabiliser(*result)) {
     models.rotation_options.max_effects = models.translation_options.max_effects = 0;
   }
   const std::vector<FramePoints> rotation_pairs =
@@ -772,10 +780,10 @@ void ValidateVideoDataset(const RigDataset& dataset, const ValidateOptions& opti
                                  models.rotation_start,
                                  rot,
                                  models.rotation_options};
-  // An image that does not follow the gyro settles none of the source's claims and shows no
-  // effect of the sensor on either half, whatever a fit says: no fit is tried for them.
+  // A stabiliser's rendering settles none of the source's claims and shows no effect of the
+  // sensor on either half, whatever a fit says: no fit is tried for them.
   const GyroFollowCheck& follow = result->screen.gyro_follow;
-  if (follow.determined && !follow.follows) {
+  if (ReRenderedByStabiliser(*result)) {
     for (const SourceClaim& claim : claims) {
       ClaimCheck check;
       check.claim = claim.what;
@@ -783,8 +791,13 @@ void ValidateVideoDataset(const RigDataset& dataset, const ValidateOptions& opti
       check.status = claim.status;
       check.claimed = claim.value;
       check.difference = std::numeric_limits<double>::quiet_NaN();
-      check.verdict = "not determined: the image does not follow the gyro (it turns " +
-                      FormatNumber("%.2f", follow.gain) + "x as fast): a stabiliser re-rendered it";
+      check.verdict =
+          result->image_orientation.holds
+              ? "not determined: a stabiliser re-rendered the image (it follows the gyro only "
+                "turned by the stabiliser's own rotation, IORI): a fit on it describes the "
+                "stabiliser's output, not the sensor"
+              : "not determined: the image does not follow the gyro (it turns " +
+                    FormatNumber("%.2f", follow.gain) + "x as fast): a stabiliser re-rendered it";
       result->claims.push_back(std::move(check));
     }
   } else {

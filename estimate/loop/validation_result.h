@@ -177,6 +177,14 @@ struct ValidationResult {
   double read_s = 0, measure_s = 0, predict_s = 0, loop_s = 0;
 };
 
+// Whether the images are a stabiliser's rendering rather than the sensor's rows (video): they do
+// not follow the gyro, or follow it only turned by the stabiliser's own rotation (IORI). No
+// effect of the sensor is named on them, and no claim about it settled.
+inline bool ReRenderedByStabiliser(const ValidationResult& result) {
+  const GyroFollowCheck& follow = result.screen.gyro_follow;
+  return (follow.determined && !follow.follows) || result.image_orientation.holds;
+}
+
 // progress(stage, done, total): stage is "measure" or "predict"; may be empty.
 using ValidateProgress = std::function<void(const std::string& stage, size_t done, size_t total)>;
 

@@ -126,7 +126,20 @@ ValidationVerdict MakeVerdict(const ValidationResult& result) {
   const std::vector<std::string> effects = EffectLines(result, loop);
   const GyroFollowCheck& follow = result.screen.gyro_follow;
   const std::string noise = FormatNumber("%.2f", NoiseRatio(loop)) + "x the measurement noise";
-  if (result.video && follow.determined && !follow.follows) {
+  if (result.video && result.image_orientation.holds) {
+    const ImageOrientationCheck& o = result.image_orientation;
+    v.level = ValidationVerdict::Level::kProblem;
+    v.headline =
+        "A stabiliser re-rendered the image: it follows the gyro only turned by the stabiliser's "
+        "own per-frame rotation (IORI; " +
+        FormatNumber("%.2f", o.applied_gain) + "x as fast, where the gyro alone gives " +
+        FormatNumber("%.2f", o.raw_gain) +
+        "x). The images are its output, not the sensor's rows, so no rolling-shutter effect of "
+        "the sensor can be read from them.";
+    v.actions.push_back(
+        "Record with the stabiliser off (GoPro: HyperSmooth / EIS off), or validate the camera's "
+        "unstabilised footage.");
+  } else if (result.video && follow.determined && !follow.follows) {
     v.level = ValidationVerdict::Level::kProblem;
     v.headline = "The image does not follow the gyro: it turns " +
                  FormatNumber("%.2f", follow.gain) + "x as fast as the gyro says (median over " +

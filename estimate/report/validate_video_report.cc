@@ -23,10 +23,9 @@ json VideoValidationToJson(const ValidationResult& result) {
   const bool translation = result.preferred == "translation";
   const LoopResult& preferred = translation ? result.translation_loop : result.loop;
   json out = LoopToJson(preferred, result.frames.size());
-  // An image that does not follow the gyro (a stabiliser) holds no rolling-shutter effect of the
-  // sensor's: the report names none, whatever the loops fitted (kept under their own keys).
-  const GyroFollowCheck& follow = result.screen.gyro_follow;
-  if (follow.determined && !follow.follows) {
+  // A stabiliser's rendering holds no rolling-shutter effect of the sensor's: the report names
+  // none, whatever the loops fitted (kept under their own keys).
+  if (ReRenderedByStabiliser(result)) {
     out["effects"] = json::array();
     out["unexplained"] = true;
   }
@@ -99,13 +98,17 @@ json VideoValidationToJson(const ValidationResult& result) {
   out["screening"] = ScreeningToJson(result);
   if (result.image_orientation.present) {
     const ImageOrientationCheck& o = result.image_orientation;
-    out["image_orientation"] = {{"pairs_tested", o.pairs_tested},
-                                {"share", o.share},
-                                {"gain", o.gain},
-                                {"holds", o.holds},
-                                {"axes", MatrixJson(o.axes)},
-                                {"inverse", o.inverse},
-                                {"verdict", o.verdict}};
+    out["image_orientation"] = {
+        {"pairs_tested", o.pairs_tested},
+        {"share", o.share},
+        {"gain", o.gain},
+        {"holds", o.holds},
+        {"gain_gyro_alone", std::isfinite(o.raw_gain) ? json(o.raw_gain) : json()},
+        {"gain_applied", std::isfinite(o.applied_gain) ? json(o.applied_gain) : json()},
+        {"pairs_applied", o.applied_pairs},
+        {"axes", MatrixJson(o.axes)},
+        {"inverse", o.inverse},
+        {"verdict", o.verdict}};
   }
   out["timing_s"] = {
       {"read", result.read_s}, {"measure", result.measure_s}, {"loop", result.loop_s}};

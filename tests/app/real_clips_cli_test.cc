@@ -177,14 +177,21 @@ TEST(RealClips, GoproKarmaIsMostlyTranslation) {
   for (size_t at = page.find("<img "); at != std::string::npos; at = page.find("<img ", at + 1)) {
     ++images;
   }
-  EXPECT_EQ(images, 24u + 1u);  // the residual pictures, and the screening's
+  // The residual pictures, the screening's and the camera-fixed check's evidence (also a file).
+  EXPECT_EQ(images, 24u + 2u);
+  EXPECT_TRUE(fs::exists(dir / "plots/camera_fixed_evidence.png"));
+  EXPECT_TRUE(fs::exists(dir / "plots/camera_fixed_mask.png"));
   EXPECT_NE(page.find("The 24 of 30 pairs with the largest residual before"), std::string::npos);
   // Whatever it says, nothing confident and wrong: no effect stands beside an unexplained residual.
   EXPECT_TRUE(report["effects"].empty() || report["unexplained"] == false) << report.dump(2);
 }
 
 // The MAX re-renders its image from its own orientation estimate (HyperSmooth, EISE "Y"): the
-// image turns at about half the rate of the body's gyro. validate says so, and names no effect.
+// image turns at about 0.6 of the rate of the body's gyro. Its own per-frame rotation (IORI) is
+// tested on the images: on these 90 pairs the rotations pick a reading (55 % of the departure)
+// under which almost nothing is left to move, and the screening's test cannot confirm it, so it
+// is not applied (on the whole clip the reading CORI's axes give holds: docs/real-footage.md).
+// Either way validate names no effect of the sensor on the stabiliser's rendering.
 TEST(RealClips, GoproMaxStabilisedImageNamesNoEffect) {
   SHUTTERLAB_REAL_DATA(max, "incoming_rs/gopro_max_heromode/max-heromode.mp4");
   // The screening and the verdict run under ASan in ValidateVideo.*; 90 pairs of 848x480 there
@@ -192,15 +199,18 @@ TEST(RealClips, GoproMaxStabilisedImageNamesNoEffect) {
   if (kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const json report = ImportAndValidate(dir, max, "--max-frames 91");
+  const json& iori = report["image_orientation"];
+  ASSERT_TRUE(report.contains("image_orientation")) << report.dump(2);
+  EXPECT_LT(iori["gain_gyro_alone"].get<double>(), 0.7) << iori.dump();
+  EXPECT_EQ(iori["pairs_tested"], 90) << iori.dump();
+  EXPECT_EQ(iori["holds"], false) << iori.dump();
+  EXPECT_TRUE(iori["gain_applied"].is_null()) << iori.dump();
   const json& follow = report["screening"]["gyro_follow"];
   EXPECT_EQ(follow["determined"], true) << follow.dump();
   EXPECT_EQ(follow["follows"], false) << follow.dump();
-  EXPECT_LT(follow["gain"].get<double>(), 0.7) << follow.dump();
-  EXPECT_TRUE(report["effects"].empty()) << report.dump(2);
   EXPECT_EQ(report["unexplained"], true);
+  EXPECT_TRUE(report["effects"].empty()) << report.dump(2);
   EXPECT_EQ(report["verdict"]["level"], "problem");
-  // Its own per-frame rotation (IORI) was read and tested against the images.
-  EXPECT_TRUE(report.contains("image_orientation")) << report.dump(2);
   for (const json& c : report["claims"]) {
     EXPECT_EQ(c["verdict"].get<std::string>().rfind("not determined", 0), 0u) << c.dump();
   }

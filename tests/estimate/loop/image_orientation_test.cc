@@ -61,9 +61,9 @@ TEST(ImageOrientation, FindsTheReadingAndTheImageThenFollowsTheGyro) {
   ASSERT_TRUE(before.gyro_follow.determined) << before.gyro_follow.verdict;
   EXPECT_FALSE(before.gyro_follow.follows) << before.gyro_follow.verdict;
 
-  const ImageOrientationCheck check =
+  ImageOrientationCheck check =
       TestImageOrientation(model, gyro, clip.pairs, before.rotation, clip.iori);
-  ASSERT_TRUE(check.holds) << check.verdict;
+  EXPECT_FALSE(check.holds) << "judged only on the screening with the reading applied";
   EXPECT_TRUE(check.axes.isApprox(clip.truth_reading.axes)) << check.axes;
   EXPECT_TRUE(check.inverse);
   EXPECT_GT(check.share, 0.95) << check.verdict;
@@ -71,8 +71,11 @@ TEST(ImageOrientation, FindsTheReadingAndTheImageThenFollowsTheGyro) {
 
   EXPECT_TRUE(ApplyImageOrientation(check, clip.iori, &clip.pairs).empty());
   const PointScreen after = ScreenPoints(model, gyro, clip.pairs, noise, kStepPx, {});
-  EXPECT_TRUE(after.gyro_follow.follows) << after.gyro_follow.verdict;
-  EXPECT_NEAR(after.gyro_follow.gain, 1.0, 0.05) << after.gyro_follow.verdict;
+  // The stabilised camera turns too little for the screening's test: the rotations decide.
+  EXPECT_FALSE(after.gyro_follow.determined) << after.gyro_follow.verdict;
+  JudgeImageOrientation(before.gyro_follow, after.gyro_follow, &check);
+  EXPECT_TRUE(check.holds) << check.verdict;
+  EXPECT_LT(check.raw_gain, 0.7) << check.verdict;
   // Applied, the declared model explains the points to the noise.
   const LoopResult fit = FitEffects(model, gyro, clip.pairs, kNoisePx, {});
   EXPECT_LT(fit.after.rms_px, 1.3 * kNoisePx);
@@ -90,10 +93,13 @@ TEST(ImageOrientation, AnUnrelatedRotationDoesNotHold) {
     q = Eigen::Quaterniond(Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitX()) *
                            Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitY()));
   }
-  const PointScreen before =
-      ScreenPoints(model, gyro, clip.pairs, std::vector<double>(kPairs, kNoisePx), kStepPx, {});
-  const ImageOrientationCheck check =
+  const std::vector<double> noise(kPairs, kNoisePx);
+  const PointScreen before = ScreenPoints(model, gyro, clip.pairs, noise, kStepPx, {});
+  ImageOrientationCheck check =
       TestImageOrientation(model, gyro, clip.pairs, before.rotation, clip.iori);
+  ApplyImageOrientation(check, clip.iori, &clip.pairs);
+  const PointScreen after = ScreenPoints(model, gyro, clip.pairs, noise, kStepPx, {});
+  JudgeImageOrientation(before.gyro_follow, after.gyro_follow, &check);
   EXPECT_FALSE(check.holds) << check.verdict;
 }
 
