@@ -2,7 +2,6 @@
 // analysis forms the same sums in the same order, so everything it reports is equal to the bit.
 
 #include "estimate/paper/analyze.h"
-
 #include "sim/gyro_source.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/trace_audit.h"
@@ -10,9 +9,8 @@
 #include "tests/estimate/paper/paper_fixtures.h"
 #include "tests/render/render_fixtures.h"
 
-#include <gtest/gtest.h>
-
 #include <Eigen/Geometry>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <memory>
@@ -200,8 +198,8 @@ TEST(AnalyzeStream, TooFewSamplesAndTooShortLogsAsTheWholeTrace) {
   FlightLog log;
   std::vector<GyroSample> samples;
   for (int k = 0; k < 400; ++k)  // 8 s at 50 Hz
-    samples.push_back({static_cast<int64_t>(k) * 20'000'000,
-                       Eigen::Vector3d(k >= 300 ? 0.05 : 0.0, 0, 0)});
+    samples.push_back(
+        {static_cast<int64_t>(k) * 20'000'000, Eigen::Vector3d(k >= 300 ? 0.05 : 0.0, 0, 0)});
   log.gyro = GyroTrace(samples);
   AnalyzeOptions options = TurnedCameraOptions();
   ExpectSameResult(AnalyzeStream(SourceOf(log, 9), options), Analyze(log, options));
