@@ -573,7 +573,8 @@ ImportRecord PhoneRecord(const std::string& path, const PhoneClip& clip, const R
   record.gyro_samples = clip.gyro.size();
   record.gyro_rate_hz = clip.gyro.sampling().RateHz();
   record.gyro_columns = "gyro.txt gx,gy,gz (rad/s), the phone's sensor axes";
-  record.warnings = AuditTrace(clip.gyro);
+  record.warnings = clip.warnings;
+  for (LogWarning& warning : AuditTrace(clip.gyro)) record.warnings.push_back(std::move(warning));
   record.frame_count = frame_count;
   record.t_first_row = "start-of-frame time from framestamp.txt (line N = frame N)";
   record.exposures = std::move(exposures);

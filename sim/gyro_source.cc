@@ -26,6 +26,16 @@ GyroTrace ReadAllSamples(GyroSource* source, const std::string& path) {
   return trace;
 }
 
+void FillingSource::TakeTimeInOrder(const std::string& path, long line_number, int64_t t_ns,
+                                    std::string_view time_as_written) {
+  if (last_t_ns_ && t_ns < *last_t_ns_) {
+    throw IoError(IoMessage(
+        path, line_number,
+        "timestamp decreases (" + std::string(time_as_written) + " after an earlier, larger one)"));
+  }
+  last_t_ns_ = t_ns;
+}
+
 namespace {
 
 class ReadAheadSource : public GyroSource {

@@ -12,6 +12,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace shutterlab {
@@ -81,8 +82,17 @@ class FillingSource : public GyroSource {
     warnings_.push_back(CutLastLineWarning(
         line_number, last_t_ns ? std::optional<double>(*last_t_ns * 1e-9) : std::nullopt));
   }
+  void LeaveOutCutLastLine(long line_number) { LeaveOutCutLastLine(line_number, last_t_ns_); }
+  // Takes the time of the sample on line line_number of path, refusing one earlier than the
+  // sample before it (equal times are kept: a log may stamp two samples alike). time_as_written:
+  // its time field as the file holds it, for the message.
+  void TakeTimeInOrder(const std::string& path, long line_number, int64_t t_ns,
+                       std::string_view time_as_written);
+  // The time of the last sample taken, none before the first.
+  const std::optional<int64_t>& last_t_ns() const { return last_t_ns_; }
 
  private:
+  std::optional<int64_t> last_t_ns_;
   size_t chunk_samples_;
   std::vector<GyroSample> chunk_;
   std::vector<LogWarning> warnings_;

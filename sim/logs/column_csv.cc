@@ -168,11 +168,10 @@ class ColumnCsvSource : public FillingSource {
         chunk->push_back(ParseRow(*line, lines_.line_number()));
       } catch (const IoError&) {
         if (!lines_.unterminated()) throw;
-        LeaveOutCutLastLine(lines_.line_number(),
-                            any_ ? std::optional<int64_t>(last_t_ns_) : std::nullopt);
+        LeaveOutCutLastLine(lines_.line_number());
       }
     }
-    if (chunk->empty() && !any_) throw IoError(IoMessage(path_, 0, "no samples"));
+    if (chunk->empty() && !last_t_ns()) throw IoError(IoMessage(path_, 0, "no samples"));
   }
 
   GyroSample ParseRow(std::string_view line, long line_number) {
@@ -194,7 +193,7 @@ class ColumnCsvSource : public FillingSource {
                               chosen_.label[0] + " (time) is not a time in " +
                                   kUnitNames[static_cast<int>(time_unit_)] + ": '" +
                                   std::string(time_field) + "'"));
-    if (any_ && *t_ns < last_t_ns_)
+    if (last_t_ns() && *t_ns < *last_t_ns())
       throw IoError(IoMessage(path_, line_number,
                               "time goes backwards: " + chosen_.label[0] + " is " +
                                   std::string(time_field) + " here and " + previous_time_ +
@@ -209,8 +208,7 @@ class ColumnCsvSource : public FillingSource {
                                     std::string(field) + "'"));
       sample.omega_rad_s[k - 1] = *rate * rad_s_per_unit_;
     }
-    any_ = true;
-    last_t_ns_ = *t_ns;
+    TakeTimeInOrder(path_, line_number, *t_ns, time_field);  // in order: checked above
     previous_time_.assign(time_field.data(), time_field.size());
     previous_line_ = line_number;
     return sample;
@@ -224,8 +222,6 @@ class ColumnCsvSource : public FillingSource {
   double rad_s_per_unit_;
   char delimiter_;
   std::string path_;
-  bool any_ = false;
-  int64_t last_t_ns_ = 0;
   std::string previous_time_;  // the time field of the row before, for messages
   long previous_line_ = 0;
   std::vector<std::string_view> fields_;

@@ -327,10 +327,10 @@ class GcsvSource : public FillingSource {
         chunk->push_back(ReadRow(*line, n));
       } catch (const IoError&) {
         if (!lines_.unterminated()) throw;
-        LeaveOutCutLastLine(n, any_ ? std::optional<int64_t>(last_t_ns_) : std::nullopt);
+        LeaveOutCutLastLine(n);
       }
     }
-    if (chunk->empty() && !any_)
+    if (chunk->empty() && !last_t_ns())
       throw IoError(IoMessage(path_, 0, "no samples after the column line"));
   }
 
@@ -344,13 +344,7 @@ class GcsvSource : public FillingSource {
                                   ", found " + std::to_string(fields_.size())));
     }
     const GyroSample s = ParseSample(path_, n, fields_, header_, exact_unit_, to_out_);
-    if (any_ && s.t_ns < last_t_ns_) {
-      throw IoError(IoMessage(
-          path_, n,
-          "timestamp decreases (" + std::string(fields_[0]) + " after an earlier, larger one)"));
-    }
-    any_ = true;
-    last_t_ns_ = s.t_ns;
+    TakeTimeInOrder(path_, n, s.t_ns, fields_[0]);
     return s;
   }
   LineReader lines_;
@@ -358,8 +352,6 @@ class GcsvSource : public FillingSource {
   GcsvHeader header_;
   Eigen::Matrix3d to_out_;
   std::optional<TimeUnit> exact_unit_;
-  bool any_ = false;
-  int64_t last_t_ns_ = 0;
   std::vector<std::string_view> fields_;
 };
 

@@ -1,9 +1,8 @@
 #include "sim/logs/phone_clip.h"
 
 #include "sim/check.h"
+#include "sim/logs/column_csv.h"
 #include "sim/text_file.h"
-
-#include <Eigen/Core>
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +10,6 @@
 #include <optional>
 #include <regex>
 #include <string_view>
-#include <utility>
 
 namespace shutterlab {
 namespace fs = std::filesystem;
@@ -29,40 +27,26 @@ std::optional<std::string_view> FieldAfter(std::string_view line, std::string_vi
   return line.substr(begin, end - begin);
 }
 
-// gyro.txt: gx,gy,gz,t per line. Sets clip->gyro and clip->time_origin_ns.
+// gyro.txt: gx,gy,gz,t per line (rad/s, s), no header: the column reader, told so. Sets
+// clip->gyro, clip->time_origin_ns and clip->warnings (a last line cut inside is left out, said).
 void ReadGyroTxt(const std::string& gyro_path, PhoneClip* clip) {
-  const std::string gyro_text = ReadFileToString(gyro_path);
-  std::vector<std::string_view> fields;
-  std::vector<std::pair<double, Eigen::Vector3d>> rows;
-  LineCursor lines(gyro_text);
-  while (auto line = lines.Next()) {
-    if (line->empty()) continue;
-    SplitFields(*line, ',', &fields);
-    if (fields.size() < 4)
-      throw IoError(
-          IoMessage(gyro_path, lines.line_number(),
-                    "expected gx,gy,gz,t, got " + std::to_string(fields.size()) + " fields"));
-    double v[4];
-    for (int i = 0; i < 4; ++i) {
-      const auto value = ParseDouble(fields[i]);
-      if (!value)
-        throw IoError(IoMessage(gyro_path, lines.line_number(),
-                                "field " + std::to_string(i + 1) + " is not a number"));
-      v[i] = *value;
-    }
-    if (!rows.empty() && v[3] < rows.back().first)
-      throw IoError(IoMessage(gyro_path, lines.line_number(), "time goes backwards"));
-    rows.push_back({v[3], Eigen::Vector3d(v[0], v[1], v[2])});
-  }
-  if (rows.size() < 2) throw IoError(IoMessage(gyro_path, -1, "fewer than 2 samples"));
+  ColumnCsvOptions options;
+  options.columns = {"4", "1", "2", "3"};
+  options.delimiter = ',';
+  options.header = HeaderMode::kNo;
+  ColumnCsvLog log = ReadColumnCsv(gyro_path, options);
+  if (log.trace.size() < 2) throw IoError(IoMessage(gyro_path, -1, "fewer than 2 samples"));
   // Times are ~4.3e6 s on the device clock: subtract whole seconds so that files keep small
   // numbers.
-  clip->time_origin_ns = static_cast<int64_t>(std::floor(rows.front().first)) * 1000000000LL;
-  std::vector<GyroSample> samples;
-  samples.reserve(rows.size());
-  for (const auto& [t_s, omega] : rows)
-    samples.push_back({SecondsToNs(t_s) - clip->time_origin_ns, omega});
+  const int64_t first_t_ns = log.trace.samples().front().t_ns;
+  clip->time_origin_ns =
+      (first_t_ns >= 0 ? first_t_ns : first_t_ns - 999999999) / 1000000000 * 1000000000;
+  std::vector<GyroSample> samples = log.trace.samples();
+  for (GyroSample& s : samples) s.t_ns -= clip->time_origin_ns;
   clip->gyro = GyroTrace(std::move(samples));
+  clip->warnings = std::move(log.warnings);
+  for (LogWarning& warning : clip->warnings)  // on the trace's clock, as the audit's warnings
+    if (warning.t_s) *warning.t_s -= clip->time_origin_ns * 1e-9;
 }
 
 // framestamp.txt: one SOF time per line, line N = frame N. Sets clip->sof_ns.

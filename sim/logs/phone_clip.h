@@ -5,6 +5,7 @@
 // also .jpeg, .png). The text files are read here; the images are only listed.
 
 #include "sim/gyro_trace.h"
+#include "sim/log_warning.h"
 
 #include <cstdint>
 #include <map>
@@ -21,6 +22,7 @@ struct PhoneClip {
   std::map<int64_t, double> exposure_s;         // gyro_dump.txt: frame N -> exposure time
   double dump_sof_max_diff_s = 0.0;             // largest |SOF in gyro_dump.txt - framestamp.txt|
   std::map<int64_t, std::string> frame_images;  // frame N -> image path (frames/RE_frame-N.*)
+  std::vector<LogWarning> warnings;  // gyro.txt cut inside its last line: that line left out
 };
 
 // The first of gyro.txt, framestamp.txt and frames/ that the folder lacks; "" when it has all
@@ -29,7 +31,8 @@ std::string MissingPhoneClipPart(const std::string& folder);
 
 // Reads the folder's text files and lists its frame images. Throws IoError("PATH:LINE: problem") on
 // a malformed line, a blank line in framestamp.txt, times going backwards, an image with no
-// start-of-frame time, or no image at all.
+// start-of-frame time, or no image at all. A gyro.txt cut inside its last line is read up to the
+// last whole line, with a `truncated` warning in warnings.
 PhoneClip ReadPhoneClip(const std::string& folder);
 
 }  // namespace shutterlab

@@ -164,23 +164,16 @@ class RawCsvSource : public FillingSource {
         chunk->push_back(ReadRow(lines_.line_number()));
       } catch (const IoError&) {
         if (!lines_.unterminated()) throw;
-        LeaveOutCutLastLine(lines_.line_number(),
-                            any_ ? std::optional<int64_t>(last_t_ns_) : std::nullopt);
+        LeaveOutCutLastLine(lines_.line_number());
       }
     }
-    if (chunk->empty() && !any_) throw IoError(IoMessage(path_, 0, "no samples"));
+    if (chunk->empty() && !last_t_ns()) throw IoError(IoMessage(path_, 0, "no samples"));
   }
 
   // The sample of line n, split into fields_, after the one before.
   GyroSample ReadRow(long n) {
     const GyroSample s = ParseRow(n);
-    if (any_ && s.t_ns < last_t_ns_) {
-      throw IoError(IoMessage(
-          path_, n,
-          "timestamp decreases (" + std::string(fields_[0]) + " after an earlier, larger one)"));
-    }
-    any_ = true;
-    last_t_ns_ = s.t_ns;
+    TakeTimeInOrder(path_, n, s.t_ns, fields_[0]);
     return s;
   }
 
@@ -219,8 +212,7 @@ class RawCsvSource : public FillingSource {
   std::string path_;
   double rad_s_per_count_;
   TimeUnit time_unit_;
-  bool first_ = true, any_ = false;
-  int64_t last_t_ns_ = 0;
+  bool first_ = true;
   std::vector<std::string_view> fields_;
 };
 

@@ -315,7 +315,7 @@ TEST(ImportCli, BadInputsAreOneLineExitTwoAndNoOutput) {
   const size_t line3 = gyro.find('\n', gyro.find('\n') + 1) + 1;
   gyro.replace(line3, 5, "abcde");
   std::ofstream(clip + "/gyro.txt", std::ios::binary | std::ios::trunc) << gyro;
-  ExpectOneLineError("import " + clip + " --out " + out, "gyro.txt:3: field 1 is not a number",
+  ExpectOneLineError("import " + clip + " --out " + out, "gyro.txt:3: column 1 (x) is not a number",
                      out);
   fs::copy_file(kPhone + "/gyro.txt", clip + "/gyro.txt", fs::copy_options::overwrite_existing);
   std::ofstream(clip + "/frames/RE_frame-3000.jpg") << "x";

@@ -105,6 +105,28 @@ TEST(ReadValidationReport, ReadsBackTheFittedModelAndTheCovariances) {
   }
 }
 
+// fuzz/validation_report_fuzz's find (2,916,119 executions on 80032a5): a fitted camera whose width
+// is 6.4e68 pixels was cast to int (undefined behaviour). It is refused with the reason, naming the
+// file.
+TEST(ReadValidationReport, RefusesAFittedCameraWithAnImpossibleWidth) {
+  test::TempDir dir;
+  WriteFileAtomically(dir / "report.json", R"({"format": "validation/1", "frames": 2,
+    "before": {"rms_px": 1.0, "max_px": 2.0}, "after": {"rms_px": 0.1, "max_px": 0.2},
+    "noise_px": 0.1, "unexplained": false, "effects": [],
+    "fitted_model": {"camera": {"format": "rig/1",
+      "image": {"width": 644444444444444444444444444444444444444444444444444441444444444444444, "height": 48},
+      "intrinsics": {"fx": 50, "fy": 50, "cx": 31.5, "cy": 23.5},
+      "rolling_shutter": {"readout_s": 0.03}}}})");
+  try {
+    ReadValidationReport(dir / "report.json");
+    ADD_FAILURE() << "read a camera 6.4e68 pixels wide";
+  } catch (const IoError& error) {
+    const std::string what = error.what();
+    EXPECT_NE(what.find("report.json"), std::string::npos) << what;
+    EXPECT_NE(what.find("1048576"), std::string::npos) << what;
+  }
+}
+
 TEST(MeasureToJson, HasTheFormatsKeys) {
   MeasureReport report;
   report.measurement.field = cv::Mat(6, 8, CV_32FC2, cv::Scalar(0.5f, 0.0f));

@@ -52,7 +52,8 @@ void ExpectIoError(const fs::path& clip, const std::string& needle) {
     ReadPhoneClip(clip.string());
     ADD_FAILURE() << "no error, expected " << needle;
   } catch (const IoError& e) {
-    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos)
+        << e.what() << "\n  wanted: " << needle;
   }
 }
 
@@ -109,8 +110,9 @@ TEST(PhoneClip, MalformedFilesNameTheFileAndLine) {
     Write(clip / name, original);
   };
   with("gyro.txt", "0.1,0.2,0.3,1000.5\n0.1,0.2,1000.6\n",
-       "gyro.txt:2: expected gx,gy,gz,t, got 3 fields");
-  with("gyro.txt", "0.1,0.2,0.3,1000.5\n0.1,x,0.3,1000.6\n", "gyro.txt:2: field 2 is not a number");
+       "gyro.txt:2: column 4 (time) missing: the line has 3 fields");
+  with("gyro.txt", "0.1,0.2,0.3,1000.5\n0.1,x,0.3,1000.6\n",
+       "gyro.txt:2: column 2 (y) is not a number: 'x'");
   with("gyro.txt", "0.1,0.2,0.3,1000.5\n0.1,0.2,0.3,1000.4\n", "gyro.txt:2: time goes backwards");
   with("gyro.txt", "0.1,0.2,0.3,1000.5\n", "gyro.txt: fewer than 2 samples");
   with("framestamp.txt", "1000.25\n\n1000.375\n",
@@ -125,6 +127,31 @@ TEST(PhoneClip, MalformedFilesNameTheFileAndLine) {
   fs::remove(clip / "frames/RE_frame-1.jpg");
   fs::remove(clip / "frames/RE_frame-3.PNG");
   ExpectIoError(clip, "frames: no RE_frame-N.jpg images");
+}
+
+// A gyro.txt cut inside its last line (a copy stopped mid-write) is read up to the last whole line,
+// and says what it left out; the same line with its line break is an error.
+TEST(PhoneClip, GyroCutInsideItsLastLineIsReadAndSaid) {
+  test::TempDir dir;
+  const fs::path clip = MakeClip(dir);
+  const std::string whole = "0.1,0.2,0.3,1000.5\n0.1,0.2,0.3,1000.75\n0.4,0.5,0.6,1001.0\n";
+  // Cut 1 to 3 bytes before the end, the last line still reads (1001.0, "1001." or "1001");
+  // from 4 on it is short of a field or a time before the line above it ("100"): left out.
+  for (size_t cut = 4; cut < 19; ++cut) {
+    Write(clip / "gyro.txt", whole.substr(0, whole.size() - cut));
+    const PhoneClip read = ReadPhoneClip(clip.string());
+    ASSERT_EQ(read.gyro.size(), 2u) << "cut " << cut;
+    EXPECT_EQ(read.gyro.samples()[1].t_ns, 750'000'000) << "cut " << cut;
+    ASSERT_EQ(read.warnings.size(), 1u) << "cut " << cut;
+    EXPECT_EQ(read.warnings[0].kind, "truncated");
+    EXPECT_EQ(read.warnings[0].t_s, 0.75) << "the time of the last sample kept";
+    EXPECT_NE(read.warnings[0].message.find("line 3"), std::string::npos)
+        << read.warnings[0].message;
+  }
+  Write(clip / "gyro.txt", whole);
+  EXPECT_TRUE(ReadPhoneClip(clip.string()).warnings.empty());
+  Write(clip / "gyro.txt", whole.substr(0, whole.size() - 5) + "\n");
+  ExpectIoError(clip, "gyro.txt:3:");
 }
 
 // The shared data's phone clip (lhaippp/gyro-video-stabilization 20200109_145447).
