@@ -164,16 +164,57 @@ std::optional<TriggerFile> TriggersFromFlags(const AnalyzeCommand& command) {
   return triggers;
 }
 
-// What reading the trigger file lost goes with the log's warnings into the outputs (printed on
-// stderr already, when it was read), named by the file.
-void AddTriggerWarnings(const std::optional<TriggerFile>& triggers, const std::string& path,
-                        FlightLog* log) {
-  if (!triggers) return;
+// What reading the trigger file lost, named by the file: it goes with the log's warnings into the
+// outputs (printed on stderr already, when it was read).
+std::vector<LogWarning> TriggerWarnings(const std::optional<TriggerFile>& triggers,
+                                        const std::string& path) {
+  std::vector<LogWarning> warnings;
+  if (!triggers) return warnings;
   const std::string name = std::filesystem::path(path).filename().string();
   for (LogWarning w : triggers->warnings) {
     w.message = "trigger file " + name + ": " + w.message;
-    log->warnings.push_back(std::move(w));
+    warnings.push_back(std::move(w));
   }
+  return warnings;
+}
+
+void AddTriggerWarnings(const std::optional<TriggerFile>& triggers, const std::string& path,
+                        FlightLog* log) {
+  for (LogWarning& w : TriggerWarnings(triggers, path)) log->warnings.push_back(std::move(w));
+}
+
+// The image triggers of a trigger file on the log's clock, and what they are (options).
+void SetTriggers(const TriggerFile& triggers, const FlightLog& log, const std::string& path,
+                 AnalyzeOptions* options) {
+  options->triggers = TriggersOnLogClock(triggers, log, path);
+  options->triggers_source =
+      "trigger file " + std::filesystem::path(path).filename().string() + ": " + triggers.source;
+}
+
+// The log analysed as a stream (AnalyzeStream), in bounded memory whatever its length: what
+// `analyze LOG` does without --out (the report draws the whole trace) and --second (the pair is
+// fused on the whole traces).
+AnalyzeResult AnalyzeStreamed(const AnalyzeCommand& command, const FlightLogReadOptions& read,
+                              const std::optional<TriggerFile>& triggers, AnalyzeOptions options) {
+  // Opened once for the triggers (a GPS-timed file needs the log's GPS fixes); that stream is
+  // the analysis's first.
+  auto first =
+      std::make_shared<std::optional<FlightLogStream>>(OpenFlightLog(command.log_path, read));
+  if (triggers) SetTriggers(*triggers, (*first)->log, command.triggers_path, &options);
+  AnalyzeLogSource source;
+  source.open = [first, &command, &read] {
+    if (!*first) return OpenFlightLog(command.log_path, read);
+    FlightLogStream stream = std::move(**first);
+    first->reset();
+    return stream;
+  };
+  source.more_warnings = TriggerWarnings(triggers, command.triggers_path);
+  source.on_read = [&command](const std::vector<LogWarning>& warnings) {
+    PrintLogWarnings(command.log_path, warnings);
+  };
+  Progress progress("analyze", 1000);
+  options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
+  return AnalyzeStream(source, options);
 }
 
 AnalyzeReportOptions ReportFromFlags(const AnalyzeCommand& command) {
@@ -311,21 +352,24 @@ void Run(const AnalyzeCommand& command) {
   const std::optional<TriggerFile> triggers = TriggersFromFlags(command);
   const AnalyzeReportOptions report = ReportFromFlags(command);
   std::optional<SensorPair> pair;
-  FlightLog log = ReadLog(command, read, &pair);
-  AddTriggerWarnings(triggers, command.triggers_path, &log);
-  if (triggers) {
-    options.triggers = TriggersOnLogClock(*triggers, log, command.triggers_path);
-    options.triggers_source = "trigger file " +
-                              std::filesystem::path(command.triggers_path).filename().string() +
-                              ": " + triggers->source;
-  }
-  Progress progress("analyze", 1000);
-  options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
   AnalyzeResult result;
-  try {
-    result = Analyze(log, options);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(command.log_path + ": " + e.what());
+  if (command.out_dir.empty() && command.second_path.empty()) {
+    try {
+      result = AnalyzeStreamed(command, read, triggers, options);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(command.log_path + ": " + e.what());
+    }
+  } else {
+    FlightLog log = ReadLog(command, read, &pair);
+    AddTriggerWarnings(triggers, command.triggers_path, &log);
+    if (triggers) SetTriggers(*triggers, log, command.triggers_path, &options);
+    Progress progress("analyze", 1000);
+    options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
+    try {
+      result = Analyze(log, options);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(command.log_path + ": " + e.what());
+    }
   }
   if (!command.out_dir.empty()) {
     WriteAnalyzeOutputs(command.out_dir, result);

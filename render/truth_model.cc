@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace shutterlab {
 
@@ -57,6 +58,11 @@ GyroTrace CamRates(const GyroTrace& logged, const TrueModel& model) {
 
 CameraMotion::CameraMotion(const GyroTrace& logged, const TrueModel& model)
     : model_(model), world_from_cam_(CamRates(logged, model)) {
+  model_.Check();
+}
+
+CameraMotion::CameraMotion(const TrueModel& model, OrientationTrace world_from_cam)
+    : model_(model), world_from_cam_(std::move(world_from_cam)) {
   model_.Check();
 }
 

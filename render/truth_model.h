@@ -65,6 +65,10 @@ struct FrameMotion {
 class CameraMotion {
  public:
   CameraMotion(const GyroTrace& logged, const TrueModel& model);
+  // The same from the orientation of the camera (model.CamRate of the logged rates, integrated
+  // from the trace's first sample) already integrated: a stretch of a trace streamed past gives,
+  // for frames inside it, the frames of the whole trace.
+  CameraMotion(const TrueModel& model, OrientationTrace world_from_cam);
   // The motion of a frame whose first-read row is captured at camera time t_first_row_ns, in the
   // world of its own row 0 (the header's anchoring). With anchor_first_row_ns, in the world of
   // that frame's row 0 instead: every frame of a video shares one world (the first frame's), so

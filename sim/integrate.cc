@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace shutterlab {
 
@@ -43,8 +44,22 @@ OrientationTrace::OrientationTrace(const GyroTrace& body_rates, const Eigen::Qua
     omega_rad_s_[k] = body_rates[k].omega_rad_s;
     if (k == 0) continue;
     const double dt_s = (t_ns_[k] - t_ns_[k - 1]) * 1e-9;
-    q_[k] = (q_[k - 1] * ExpSO3(0.5 * (omega_rad_s_[k - 1] + omega_rad_s_[k]) * dt_s)).normalized();
+    q_[k] = OrientationStep(q_[k - 1], omega_rad_s_[k - 1], omega_rad_s_[k], dt_s);
   }
+}
+
+Eigen::Quaterniond OrientationStep(const Eigen::Quaterniond& q_prev, const Eigen::Vector3d& w_prev,
+                                   const Eigen::Vector3d& w, double dt_s) {
+  return (q_prev * ExpSO3(0.5 * (w_prev + w) * dt_s)).normalized();
+}
+
+OrientationTrace::OrientationTrace(std::vector<int64_t> t_ns,
+                                   std::vector<Eigen::Vector3d> omega_rad_s,
+                                   std::vector<Eigen::Quaterniond> world_from_body)
+    : t_ns_(std::move(t_ns)), omega_rad_s_(std::move(omega_rad_s)), q_(std::move(world_from_body)) {
+  SHUTTERLAB_CHECK(!t_ns_.empty() && omega_rad_s_.size() == t_ns_.size() &&
+                   q_.size() == t_ns_.size())
+      << "an orientation stretch needs as many rates and orientations as times, at least one";
 }
 
 Eigen::Quaterniond OrientationTrace::WorldFromBodyAt(int64_t t_ns, double offset_s) const {

@@ -31,6 +31,11 @@ PerAxisAngles IntegratePerAxis(const GyroTrace& trace, const Eigen::Vector3d& bi
 // Between samples the rate is taken as linear in time, so the orientation at t_k + tau is
 //   q_k * Exp(w_k tau + (w_{k+1} - w_k) tau^2 / (2 dt)),
 // which equals the trapezoid step at tau = dt: the lookup is exact to the sample, not a slerp.
+// One trapezoid step of that integration: world_from_body at a sample from the one before it
+// (q_prev, rate w_prev) and its own rate w, dt_s after it.
+Eigen::Quaterniond OrientationStep(const Eigen::Quaterniond& q_prev, const Eigen::Vector3d& w_prev,
+                                   const Eigen::Vector3d& w, double dt_s);
+
 class OrientationTrace {
  public:
   OrientationTrace() = default;
@@ -38,6 +43,11 @@ class OrientationTrace {
   // initial: world_from_body at the first sample.
   explicit OrientationTrace(const GyroTrace& body_rates,
                             const Eigen::Quaterniond& initial = Eigen::Quaterniond::Identity());
+  // A stretch of an orientation integrated elsewhere (a trace streamed past, OrientationStep),
+  // samples k: t_ns[k] (non-decreasing), the body rate and world_from_body there. Lookups inside
+  // the stretch give what the whole trace gives.
+  OrientationTrace(std::vector<int64_t> t_ns, std::vector<Eigen::Vector3d> omega_rad_s,
+                   std::vector<Eigen::Quaterniond> world_from_body);
 
   // world_from_body at t_ns + offset_s. Throws std::out_of_range when the instant is outside
   // [first sample, last sample]: a validator must not extrapolate silently.

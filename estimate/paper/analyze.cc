@@ -6,14 +6,18 @@
 #include "sim/check.h"
 #include "sim/civil_time.h"
 #include "sim/integrate.h"
+#include "sim/logs/flight_log_io.h"
 #include "sim/logs/log_clock.h"
 #include "sim/still_detect.h"
 #include "sim/text_file.h"
+#include "sim/trace_audit.h"
 #include "sim/units.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <deque>
+#include <exception>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -26,10 +30,16 @@ namespace {
 
 constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 
+// A sample's rate in camera axes less a bias (camera axes).
+GyroSample InCameraAxes(const GyroSample& s, const Eigen::Matrix3d& cam_from_gyro,
+                        const Eigen::Vector3d& bias_rad_s) {
+  return {s.t_ns, cam_from_gyro * s.omega_rad_s - bias_rad_s};
+}
+
 GyroTrace RotateTrace(const GyroTrace& trace, const Eigen::Matrix3d& cam_from_gyro,
                       const Eigen::Vector3d& bias_rad_s) {
   std::vector<GyroSample> samples = trace.samples();
-  for (GyroSample& s : samples) s.omega_rad_s = cam_from_gyro * s.omega_rad_s - bias_rad_s;
+  for (GyroSample& s : samples) s = InCameraAxes(s, cam_from_gyro, bias_rad_s);
   return GyroTrace(std::move(samples));
 }
 
@@ -80,55 +90,72 @@ struct ImageContext {
   int64_t sample_interval_ns = 0;  // the log's median: a readout must be longer than two
 };
 
-ImageResult AnalyzeImage(const ImageContext& context, const ImageTrigger& trigger,
-                         int64_t latency_ns) {
+// The first and last sample times of a trace.
+struct TraceSpan {
+  int64_t first_ns = 0, last_ns = 0;
+};
+
+// The image's exposure and whether the trace can judge it (in_trace, too_few_samples), from the
+// trace's ends and sampling alone: nothing of it is measured yet.
+ImageResult ImageTiming(const ImageContext& context, const ImageTrigger& trigger,
+                        int64_t latency_ns, const TraceSpan& span) {
   ImageResult image;
   image.name = trigger.name;
   image.trigger_t_ns = trigger.t_ns;
   image.t_ns = trigger.t_ns + latency_ns;
   image.flagged.assign(context.limits_m.size(), false);
-  const PerAxisAngles& angles = *context.angles;
   const int64_t readout_ns = SecondsToNs(context.rig.shutter.readout_s);
-  const int64_t end_ns = image.t_ns + readout_ns;
-  if (angles.size() < 2 || image.t_ns < angles.t_ns.front() || end_ns > angles.t_ns.back()) {
-    return image;
-  }
+  if (image.t_ns < span.first_ns || image.t_ns + readout_ns > span.last_ns) return image;
   image.in_trace = true;
-  if (readout_ns <= kMinWindowSampleIntervals * context.sample_interval_ns) {
-    image.too_few_samples = true;
-    return image;
-  }
-  const auto first = std::upper_bound(angles.t_ns.begin(), angles.t_ns.end(), image.t_ns);
+  image.too_few_samples = readout_ns <= kMinWindowSampleIntervals * context.sample_interval_ns;
+  return image;
+}
+
+// The ranges, D and flags of a judged image, from context's angles (and motion) covering its
+// readout: the whole trace, or a stretch of it that holds the samples either side of the readout.
+void MeasureImage(const ImageContext& context, ImageResult* image) {
+  const PerAxisAngles& angles = *context.angles;
+  const int64_t end_ns = image->t_ns + SecondsToNs(context.rig.shutter.readout_s);
+  const auto first = std::upper_bound(angles.t_ns.begin(), angles.t_ns.end(), image->t_ns);
   const auto last = std::lower_bound(angles.t_ns.begin(), angles.t_ns.end(), end_ns);
   const size_t i0 = static_cast<size_t>(first - angles.t_ns.begin());
   const size_t i1 = static_cast<size_t>(last - angles.t_ns.begin());
   double max_range_rad = 0.0;
   for (int axis = 0; axis < 3; ++axis) {
-    const double a_begin = AngleAt(angles, axis, image.t_ns);
+    const double a_begin = AngleAt(angles, axis, image->t_ns);
     const double a_end = AngleAt(angles, axis, end_ns);
     double lo = std::min(a_begin, a_end), hi = std::max(a_begin, a_end);
     for (size_t i = i0; i < i1; ++i) {
       lo = std::min(lo, angles.angle_rad[axis][i]);
       hi = std::max(hi, angles.angle_rad[axis][i]);
     }
-    image.range_arcsec[axis] = (hi - lo) * kArcsecPerRad;
+    image->range_arcsec[axis] = (hi - lo) * kArcsecPerRad;
     if (hi - lo > max_range_rad) {
       max_range_rad = hi - lo;
-      image.dominant_axis = axis;
+      image->dominant_axis = axis;
     }
   }
-  image.d_paper_m = context.rig.altitude_m * std::tan(max_range_rad);
+  image->d_paper_m = context.rig.altitude_m * std::tan(max_range_rad);
   for (size_t l = 0; l < context.limits_m.size(); ++l) {
-    image.flagged[l] = image.d_paper_m > context.limits_m[l];
+    image->flagged[l] = image->d_paper_m > context.limits_m[l];
   }
   if (context.motion != nullptr) {
     const FrameGeometry geometry(context.rig.camera, context.rig.altitude_m,
-                                 context.motion->Frame(image.t_ns),
+                                 context.motion->Frame(image->t_ns),
                                  cv::Size(context.rig.camera.width, context.rig.camera.height));
-    image.d_full_px = GridDistortionPx(geometry);
+    image->d_full_px = GridDistortionPx(geometry);
     const double f_px = 0.5 * (context.rig.camera.fx + context.rig.camera.fy);
-    image.d_full_m = image.d_full_px * context.rig.altitude_m / f_px;
+    image->d_full_m = image->d_full_px * context.rig.altitude_m / f_px;
   }
+}
+
+// One image on the whole trace (context.angles holds every sample, at least two).
+ImageResult AnalyzeImage(const ImageContext& context, const ImageTrigger& trigger,
+                         int64_t latency_ns) {
+  const PerAxisAngles& angles = *context.angles;
+  ImageResult image =
+      ImageTiming(context, trigger, latency_ns, {angles.t_ns.front(), angles.t_ns.back()});
+  if (image.judged()) MeasureImage(context, &image);
   return image;
 }
 
@@ -165,15 +192,16 @@ void ReportProgress(const AnalyzeOptions& options, double fraction) {
 }
 
 // The log's size, rate and gaps and the camera the analysis uses.
-void DescribeSource(const FlightLog& log, const AnalyzeOptions& options,
-                    const std::string& altitude_source, AnalyzeResult* result) {
-  const GyroTrace& gyro = log.gyro;
+// log: its metadata (its gyro may be empty: a streamed log); sampling: its samples'.
+void DescribeSource(const FlightLog& log, const TraceSampling& sampling,
+                    const AnalyzeOptions& options, const std::string& altitude_source,
+                    AnalyzeResult* result) {
   result->format = log.format;
   result->gyro_source = log.gyro_source;
-  result->samples = gyro.samples().size();
-  result->duration_s = (gyro.samples().back().t_ns - gyro.samples().front().t_ns) * 1e-9;
-  result->rate_hz = gyro.sampling().RateHz();
-  result->gaps = gyro.sampling().gap_indices.size();
+  result->samples = sampling.samples;
+  result->duration_s = (sampling.t_end_ns - sampling.t_begin_ns) * 1e-9;
+  result->rate_hz = sampling.RateHz();
+  result->gaps = sampling.gaps;
   result->log_warnings = log.warnings;
   result->altitude_method = log.altitude_source;
   result->limits_m = options.limits_m;
@@ -214,23 +242,26 @@ void AllanOfRates(const GyroTrace& rates, AnalyzeResult* result) {
   result->allan = AllanAnalysis(rates);
 }
 
-// The flight table for this camera's readout (result->flight), or why there is none
-// (result->flight_problem). Progress 0 to 0.7.
-void FlightTableForReadout(const GyroTrace& camera_rates, const AnalyzeOptions& options,
-                           AnalyzeResult* result) {
+// The flight table's options for this camera's readout, with the bias found (result->bias_rad_s).
+FlightOptions FlightOptionsForReadout(const AnalyzeOptions& options, const AnalyzeResult& result) {
   FlightOptions flight_options;
   flight_options.altitude_m = options.rig.altitude_m;
   flight_options.limits_m = options.limits_m;
   flight_options.windows_s = {options.rig.shutter.readout_s};
   flight_options.noise_allowance_arcsec = options.noise_allowance_arcsec;
-  flight_options.progress = [&options](double f) { ReportProgress(options, 0.7 * f); };
   flight_options.series = options.flight_series;
   flight_options.series_vector = false;  // the report plots the per-axis ranges only
+  // The still segment may lie anywhere (often after landing), so its bias is applied to every
+  // sample rather than starting the statistics after the segment as `flight --bias` does.
+  flight_options.known_bias_rad_s = result.bias_rad_s;
+  return flight_options;
+}
+
+// The flight table for this camera's readout (result->flight), or why there is none
+// (result->flight_problem): finish() gives the table or throws std::invalid_argument.
+void KeepFlightTable(const std::function<FlightResult()>& finish, AnalyzeResult* result) {
   try {
-    // The still segment may lie anywhere (often after landing), so its bias is applied to every
-    // sample rather than starting the statistics after the segment as `flight --bias` does.
-    flight_options.known_bias_rad_s = result->bias_rad_s;
-    result->flight = Flight(camera_rates, flight_options);
+    result->flight = finish();
     result->log_warnings.insert(result->log_warnings.end(), result->flight->warnings.begin(),
                                 result->flight->warnings.end());
   } catch (const std::invalid_argument& e) {
@@ -240,16 +271,16 @@ void FlightTableForReadout(const GyroTrace& camera_rates, const AnalyzeOptions& 
 
 // The images to analyse: the options' triggers, else one every options.every_s over the log, else
 // the log's camera events; *trigger_source says which.
-std::vector<ImageTrigger> ChooseTriggers(const FlightLog& log, const AnalyzeOptions& options,
+std::vector<ImageTrigger> ChooseTriggers(const FlightLog& log, const TraceSpan& span,
+                                         const AnalyzeOptions& options,
                                          std::string* trigger_source) {
-  const GyroTrace& gyro = log.gyro;
   std::vector<ImageTrigger> triggers = options.triggers;
   *trigger_source = options.triggers_source;
   if (triggers.empty() && options.every_s > 0) {
     *trigger_source = FormatNumber("every %g s", options.every_s);
     const int64_t every_ns = SecondsToNs(options.every_s);
-    const int64_t t0_ns = gyro.samples().front().t_ns;
-    const int64_t span_ns = gyro.samples().back().t_ns - t0_ns;
+    const int64_t t0_ns = span.first_ns;
+    const int64_t span_ns = span.last_ns - t0_ns;
     const int64_t count = span_ns / every_ns;
     for (int64_t k = 0; k < count; ++k) {
       triggers.push_back({ImageName(static_cast<size_t>(k)), t0_ns + k * every_ns});
@@ -306,28 +337,60 @@ int AxisToStabilise(const std::vector<ImageResult>& images, size_t images_in_tra
   return axis_to_stabilise;
 }
 
-// The what-if shares, recomputed (not scaled) with a fast readout and at half the altitude
-// (without D_full).
-void WhatIfShares(const ImageContext& context, const std::vector<ImageTrigger>& triggers,
-                  int64_t latency_ns, AnalyzeVerdict* verdict) {
+// The what-if cameras, whose shares are recomputed (not scaled) with a fast readout and at half
+// the altitude (without D_full).
+ImageContext FastReadoutContext(const ImageContext& context, double fast_readout_s) {
   ImageContext fast = context;
   fast.motion = nullptr;
-  fast.rig.shutter.readout_s = verdict->fast_readout_s;
+  fast.rig.shutter.readout_s = fast_readout_s;
+  return fast;
+}
+ImageContext HalfAltitudeContext(const ImageContext& context) {
   ImageContext low = context;
   low.motion = nullptr;
   low.rig.altitude_m = 0.5 * context.rig.altitude_m;
-  std::vector<ImageResult> fast_images, low_images;
-  for (const ImageTrigger& trigger : triggers) {
-    fast_images.push_back(AnalyzeImage(fast, trigger, latency_ns));
-    low_images.push_back(AnalyzeImage(low, trigger, latency_ns));
-  }
+  return low;
+}
+
+// The what-if shares from the images under the what-if cameras.
+void WhatIfShares(const std::vector<ImageResult>& fast_images,
+                  const std::vector<ImageResult>& low_images, size_t limits,
+                  AnalyzeVerdict* verdict) {
   // A fast readout may hold too few samples to judge any image: then no share, not 0 %.
   const bool fast_judged = std::any_of(fast_images.begin(), fast_images.end(),
                                        [](const ImageResult& image) { return image.judged(); });
   verdict->share_fast_readout_percent.clear();
-  if (fast_judged)
-    verdict->share_fast_readout_percent = SharesPercent(fast_images, context.limits_m.size());
-  verdict->share_half_altitude_percent = SharesPercent(low_images, context.limits_m.size());
+  if (fast_judged) verdict->share_fast_readout_percent = SharesPercent(fast_images, limits);
+  verdict->share_half_altitude_percent = SharesPercent(low_images, limits);
+}
+
+// The images judged under the context's camera, on the whole trace.
+std::vector<ImageResult> AnalyzeImages(const ImageContext& context,
+                                       const std::vector<ImageTrigger>& triggers,
+                                       int64_t latency_ns) {
+  std::vector<ImageResult> images;
+  images.reserve(triggers.size());
+  for (const ImageTrigger& trigger : triggers)
+    images.push_back(AnalyzeImage(context, trigger, latency_ns));
+  return images;
+}
+
+// The verdict on result->images (with the what-if shares from the images under the what-if
+// cameras, when asked for and an image is judged: what_if() gives {fast, low}).
+using WhatIfImages = std::pair<std::vector<ImageResult>, std::vector<ImageResult>>;
+void JudgeImages(const AnalyzeOptions& options, const std::function<WhatIfImages()>& what_if,
+                 AnalyzeResult* result) {
+  AnalyzeVerdict& verdict = result->verdict;
+  for (const ImageResult& image : result->images) {
+    verdict.images_in_trace += image.judged();
+    verdict.images_too_few_samples += image.in_trace && image.too_few_samples;
+  }
+  verdict.share_percent = SharesPercent(result->images, options.limits_m.size());
+  verdict.axis_to_stabilise = AxisToStabilise(result->images, verdict.images_in_trace);
+  if (options.what_if && verdict.images_in_trace > 0) {
+    const WhatIfImages images = what_if();
+    WhatIfShares(images.first, images.second, options.limits_m.size(), &verdict);
+  }
 }
 
 // The one-line verdict for a person.
@@ -399,25 +462,47 @@ void AnalyzeOptions::Check() const {
       << "trigger latency must be finite and below 1000 s (got " << trigger_latency_s << " s)";
 }
 
-AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options) {
+namespace {
+
+// The options with the log's altitude above ground when they ask for it and the log has one;
+// *altitude_source says which was used.
+AnalyzeOptions WithLogAltitude(const FlightLog& log, const AnalyzeOptions& given_options,
+                               std::string* altitude_source) {
   given_options.Check();
   AnalyzeOptions options = given_options;
-  std::string altitude_source = "camera";
+  *altitude_source = "camera";
   if (options.use_log_altitude && log.altitude_above_ground_m && *log.altitude_above_ground_m > 0) {
     options.rig.altitude_m = *log.altitude_above_ground_m;
-    altitude_source = "log";
+    *altitude_source = "log";
   }
+  return options;
+}
+
+}  // namespace
+
+AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options) {
+  std::string altitude_source;
+  const AnalyzeOptions options = WithLogAltitude(log, given_options, &altitude_source);
   const GyroTrace& gyro = log.gyro;
   SHUTTERLAB_CHECK(gyro.samples().size() >= 2) << "the log's gyro trace has fewer than 2 samples";
 
   AnalyzeResult result;
-  DescribeSource(log, options, altitude_source, &result);
+  const TraceSpan span{gyro.t_begin_ns(), gyro.samples().back().t_ns};
+  TraceSampling sampling;
+  sampling.samples = gyro.size();
+  sampling.t_begin_ns = span.first_ns;
+  sampling.t_end_ns = span.last_ns;
+  sampling.median_interval_ns = gyro.sampling().median_interval_ns;
+  sampling.gaps = gyro.sampling().gap_indices.size();
+  DescribeSource(log, sampling, options, altitude_source, &result);
   {
     // The bias is not known yet: the still search and the flight table take the rates as logged.
     const GyroTrace camera_rates =
         RotateTrace(gyro, options.rig.cam_from_gyro, Eigen::Vector3d::Zero());
     EstimateStillBias(camera_rates, options.estimate_bias, &result);
-    FlightTableForReadout(camera_rates, options, &result);
+    FlightOptions flight_options = FlightOptionsForReadout(options, result);
+    flight_options.progress = [&options](double f) { ReportProgress(options, 0.7 * f); };
+    KeepFlightTable([&] { return Flight(camera_rates, flight_options); }, &result);
   }
 
   // Per-image distortion, from the traces the result keeps for the report. The angles are the
@@ -428,28 +513,347 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
       AnalyzeTraces{std::move(rates), std::move(angles),
                     CameraMotion(gyro, AnalyzeTrueModel(options.rig, result.bias_rad_s))});
   if (options.allan) AllanOfRates(result.traces->camera_rates, &result);
-  const std::vector<ImageTrigger> triggers = ChooseTriggers(log, options, &result.trigger_source);
-  ImageContext context{&result.traces->angles, &result.traces->motion, options.rig,
-                       options.limits_m, gyro.sampling().median_interval_ns};
+  const std::vector<ImageTrigger> triggers =
+      ChooseTriggers(log, span, options, &result.trigger_source);
+  const ImageContext context{&result.traces->angles, &result.traces->motion, options.rig,
+                             options.limits_m, sampling.median_interval_ns};
   const int64_t latency_ns = SecondsToNs(options.trigger_latency_s);
   result.images.reserve(triggers.size());
   for (size_t i = 0; i < triggers.size(); ++i) {
     result.images.push_back(AnalyzeImage(context, triggers[i], latency_ns));
     ReportProgress(options, 0.7 + 0.25 * (i + 1) / triggers.size());
   }
-
   // The verdict, with the what-if shares recomputed (not scaled) under the changed camera.
-  AnalyzeVerdict& verdict = result.verdict;
-  for (const ImageResult& image : result.images) {
-    verdict.images_in_trace += image.judged();
-    verdict.images_too_few_samples += image.in_trace && image.too_few_samples;
+  JudgeImages(
+      options,
+      [&] {
+        return WhatIfImages{
+            AnalyzeImages(FastReadoutContext(context, result.verdict.fast_readout_s), triggers,
+                          latency_ns),
+            AnalyzeImages(HalfAltitudeContext(context), triggers, latency_ns)};
+      },
+      &result);
+  result.verdict.line = VerdictLine(result.verdict, result.images.empty(), result.rate_hz, options);
+  ReportProgress(options, 1.0);
+  return result;
+}
+
+namespace {
+
+// A source whose rates are turned into camera axes (InCameraAxes, no bias): the still search sees
+// what Analyze's search sees on the whole trace.
+class CameraAxesSource : public GyroSource {
+ public:
+  CameraAxesSource(std::unique_ptr<GyroSource> source, const Eigen::Matrix3d& cam_from_gyro)
+      : source_(std::move(source)), cam_from_gyro_(cam_from_gyro) {}
+  GyroChunk Next() override {
+    const GyroChunk chunk = source_->Next();
+    rotated_.resize(chunk.size);
+    for (size_t i = 0; i < chunk.size; ++i)
+      rotated_[i] = InCameraAxes(chunk.data[i], cam_from_gyro_, Eigen::Vector3d::Zero());
+    return {rotated_.data(), rotated_.size()};
   }
-  verdict.share_percent = SharesPercent(result.images, options.limits_m.size());
-  verdict.axis_to_stabilise = AxisToStabilise(result.images, verdict.images_in_trace);
-  if (options.what_if && verdict.images_in_trace > 0) {
-    WhatIfShares(context, triggers, latency_ns, &verdict);
+  double Fraction() const override { return source_->Fraction(); }
+  std::vector<LogWarning> Warnings() const override { return source_->Warnings(); }
+
+ private:
+  std::unique_ptr<GyroSource> source_;
+  Eigen::Matrix3d cam_from_gyro_;
+  std::vector<GyroSample> rotated_;
+};
+
+// One readout to measure: image `image` under the camera of context `variant`, [begin, end].
+struct ReadoutJob {
+  size_t image = 0;
+  size_t variant = 0;
+  int64_t begin_ns = 0, end_ns = 0;
+  bool done = false;
+};
+
+// The images' readouts measured as the trace streams past. The rates in camera axes less the bias,
+// their per-axis angles and the camera's orientation are integrated from the first sample exactly
+// as Analyze integrates them over the whole trace (IntegratePerAxis, CameraMotion), and kept only
+// from the sample before the earliest readout still open: memory O(chunk + longest readout).
+class StreamedReadouts {
+ public:
+  // contexts: one per camera variant (their angles and motion are set here; the first, the camera
+  // analysed, gets D_full, the what-if ones none); images[v]: the images under variant v, timed
+  // (ImageTiming); every judged one is measured.
+  StreamedReadouts(std::vector<ImageContext> contexts, std::vector<std::vector<ImageResult>> images,
+                   const TrueModel& model, const Eigen::Vector3d& bias_rad_s)
+      : contexts_(std::move(contexts)),
+        images_(std::move(images)),
+        model_(model),
+        bias_rad_s_(bias_rad_s) {
+    for (size_t v = 0; v < images_.size(); ++v) {
+      const int64_t readout_ns = SecondsToNs(contexts_[v].rig.shutter.readout_s);
+      for (size_t i = 0; i < images_[v].size(); ++i) {
+        const ImageResult& image = images_[v][i];
+        if (image.judged()) jobs_.push_back({i, v, image.t_ns, image.t_ns + readout_ns});
+      }
+    }
+    std::stable_sort(jobs_.begin(), jobs_.end(), [](const ReadoutJob& a, const ReadoutJob& b) {
+      return a.begin_ns < b.begin_ns;
+    });
   }
-  verdict.line = VerdictLine(verdict, result.images.empty(), result.rate_hz, options);
+
+  void Add(const GyroChunk& chunk) {
+    if (chunk.empty()) return;
+    for (const GyroSample& s : chunk) Integrate(s);
+    // A readout is measured once a sample past its end is kept: the lookups then see the samples
+    // either side of it, as on the whole trace.
+    const int64_t last_ns = kept_.back().t_ns;
+    for (size_t j = first_open_; j < jobs_.size() && jobs_[j].begin_ns <= last_ns; ++j) {
+      if (!jobs_[j].done && jobs_[j].end_ns < last_ns) Measure(&jobs_[j]);
+    }
+    while (first_open_ < jobs_.size() && jobs_[first_open_].done) ++first_open_;
+    Trim();
+  }
+
+  // After the last chunk: the readouts that end at the trace's last sample.
+  std::vector<std::vector<ImageResult>> Finish() {
+    for (size_t j = first_open_; j < jobs_.size(); ++j) {
+      if (!jobs_[j].done) Measure(&jobs_[j]);
+    }
+    return std::move(images_);
+  }
+
+ private:
+  struct Kept {
+    int64_t t_ns = 0;
+    double angle_rad[3] = {0.0, 0.0, 0.0};
+    Eigen::Vector3d cam_rate_rad_s;     // the full model's camera rate (TrueModel::CamRate)
+    Eigen::Quaterniond world_from_cam;  // its orientation
+  };
+
+  // The next sample: IntegratePerAxis's step (the bias already removed, as Analyze's rates) and
+  // OrientationTrace's.
+  void Integrate(const GyroSample& logged) {
+    const GyroSample rate = InCameraAxes(logged, model_.rig.cam_from_gyro, bias_rad_s_);
+    Kept next;
+    next.t_ns = logged.t_ns;
+    next.cam_rate_rad_s = model_.CamRate(logged.omega_rad_s);
+    if (kept_.empty()) {
+      next.world_from_cam = Eigen::Quaterniond::Identity().normalized();
+    } else {
+      const Kept& before = kept_.back();
+      const double dt_s = (next.t_ns - before.t_ns) * 1e-9;
+      for (int a = 0; a < 3; ++a)
+        next.angle_rad[a] = before.angle_rad[a] + rate.omega_rad_s[a] * dt_s;
+      next.world_from_cam =
+          OrientationStep(before.world_from_cam, before.cam_rate_rad_s, next.cam_rate_rad_s, dt_s);
+    }
+    kept_.push_back(next);
+  }
+
+  // Drops the samples before the one before the earliest open readout (all but the last when none
+  // is open yet).
+  void Trim() {
+    size_t keep_from = kept_.size() - 1;
+    if (first_open_ < jobs_.size())
+      keep_from = std::min(keep_from, LowerBound(jobs_[first_open_].begin_ns));
+    if (keep_from > 0) --keep_from;  // the sample before the readout's start
+    kept_.erase(kept_.begin(), kept_.begin() + static_cast<std::ptrdiff_t>(keep_from));
+  }
+
+  size_t LowerBound(int64_t t_ns) const {
+    return static_cast<size_t>(
+        std::lower_bound(kept_.begin(), kept_.end(), t_ns,
+                         [](const Kept& k, int64_t t) { return k.t_ns < t; }) -
+        kept_.begin());
+  }
+
+  // Measures a readout on the stretch of kept samples from the one before its start to the one
+  // after its end (where there is one).
+  void Measure(ReadoutJob* job) {
+    const size_t begin = LowerBound(job->begin_ns);
+    const size_t first = begin > 0 ? begin - 1 : 0;
+    size_t last =
+        static_cast<size_t>(std::upper_bound(kept_.begin(), kept_.end(), job->end_ns,
+                                             [](int64_t t, const Kept& k) { return t < k.t_ns; }) -
+                            kept_.begin());
+    last = std::min(last + 1, kept_.size());
+    PerAxisAngles angles;
+    std::vector<Eigen::Vector3d> rates;
+    std::vector<Eigen::Quaterniond> orientations;
+    for (size_t k = first; k < last; ++k) {
+      angles.t_ns.push_back(kept_[k].t_ns);
+      for (int a = 0; a < 3; ++a) angles.angle_rad[a].push_back(kept_[k].angle_rad[a]);
+      rates.push_back(kept_[k].cam_rate_rad_s);
+      orientations.push_back(kept_[k].world_from_cam);
+    }
+    ImageContext context = contexts_[job->variant];
+    context.angles = &angles;
+    std::optional<CameraMotion> motion;
+    if (job->variant == 0) {
+      motion.emplace(model_,
+                     OrientationTrace(angles.t_ns, std::move(rates), std::move(orientations)));
+      context.motion = &*motion;
+    }
+    MeasureImage(context, &images_[job->variant][job->image]);
+    job->done = true;
+  }
+
+  std::vector<ImageContext> contexts_;
+  std::vector<std::vector<ImageResult>> images_;
+  TrueModel model_;
+  Eigen::Vector3d bias_rad_s_;
+  std::vector<ReadoutJob> jobs_;  // by start time
+  size_t first_open_ = 0;         // jobs before it are done
+  std::deque<Kept> kept_;
+};
+
+// The log's streams, one per pass: the one opened first (for the log's metadata), then fresh ones,
+// each read a chunk ahead on a second thread.
+class LogPasses {
+ public:
+  LogPasses(const AnalyzeLogSource& source, const AnalyzeOptions& options, size_t passes)
+      : source_(source),
+        options_(options),
+        passes_(passes),
+        first_(source.open()),
+        metadata_(first_->log) {}
+  // The log but its samples: its format, camera events, altitude and the reader's warnings.
+  const FlightLog& log() const { return metadata_; }
+  FlightLogStream Next() {
+    FlightLogStream stream = first_ ? std::move(*first_) : source_.open();
+    first_.reset();
+    stream.gyro = ReadAhead(std::move(stream.gyro));
+    ++pass_;
+    return stream;
+  }
+  // The share of the whole analysis done when the current pass has read `fraction` of the log.
+  void Report(double fraction) const {
+    ReportProgress(options_, (std::min(pass_, passes_) - 1 + fraction) / passes_);
+  }
+
+ private:
+  const AnalyzeLogSource& source_;
+  const AnalyzeOptions& options_;
+  size_t passes_;
+  size_t pass_ = 0;
+  std::optional<FlightLogStream> first_;
+  FlightLog metadata_;
+};
+
+}  // namespace
+
+AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions& given_options) {
+  SHUTTERLAB_CHECK(!given_options.flight_series && !given_options.allan)
+      << "the streamed analysis keeps no flight series or Allan deviation (the report's)";
+  constexpr size_t kStillPasses = 5;  // DetectStillSegment on a source reads it at most five times
+  LogPasses passes(source, given_options, (given_options.estimate_bias ? kStillPasses : 0) + 2);
+  std::string altitude_source;
+  const AnalyzeOptions options = WithLogAltitude(passes.log(), given_options, &altitude_source);
+  const Eigen::Matrix3d& cam_from_gyro = options.rig.cam_from_gyro;
+  const auto consume = [&](const std::function<void(const GyroChunk&)>& take) {
+    FlightLogStream stream = passes.Next();
+    return ConsumeFlightLog(&stream, take, [&](double f) { passes.Report(f); });
+  };
+
+  // The still segment, on the rates in camera axes as logged (the bias is not known yet).
+  std::optional<StillSegment> still;
+  if (options.estimate_bias) {
+    try {
+      still = DetectStillSegment([&]() -> std::unique_ptr<GyroSource> {
+        FlightLogStream stream = passes.Next();
+        return std::make_unique<CameraAxesSource>(std::move(stream.gyro), cam_from_gyro);
+      });
+    } catch (const std::invalid_argument&) {
+      // no still stretch: zero bias, said so in the output
+    }
+  }
+
+  // The sampling, the warnings and the bias: the mean over the still segment's samples,
+  // [begin_s, end_s) after the first sample (bias.h SamplesInSegment), summed in order.
+  Eigen::Vector3d bias_sum = Eigen::Vector3d::Zero();
+  size_t bias_samples = 0;
+  std::optional<int64_t> t0_ns;
+  const StreamedLog read = consume([&](const GyroChunk& chunk) {
+    if (!t0_ns) t0_ns = chunk.data[0].t_ns;
+    if (!still) return;
+    const int64_t begin_ns = *t0_ns + SecondsToNs(still->segment.begin_s);
+    const int64_t end_ns = *t0_ns + SecondsToNs(still->segment.end_s);
+    for (const GyroSample& s : chunk) {
+      if (s.t_ns < begin_ns || s.t_ns >= end_ns) continue;
+      bias_sum += InCameraAxes(s, cam_from_gyro, Eigen::Vector3d::Zero()).omega_rad_s;
+      ++bias_samples;
+    }
+  });
+  FlightLog log = passes.log();
+  log.warnings = read.warnings;
+  log.warnings.insert(log.warnings.end(), source.more_warnings.begin(), source.more_warnings.end());
+  if (source.on_read) source.on_read(read.warnings);
+  SHUTTERLAB_CHECK(read.sampling.samples >= 2) << "the log's gyro trace has fewer than 2 samples";
+
+  AnalyzeResult result;
+  DescribeSource(log, read.sampling, options, altitude_source, &result);
+  result.bias_estimated = options.estimate_bias;
+  if (still) {
+    result.still_segment = still->segment;
+    result.bias_from_still = bias_samples >= kMinBiasSamples;  // EstimateBias's refusal
+    if (result.bias_from_still) result.bias_rad_s = bias_sum / static_cast<double>(bias_samples);
+  }
+
+  // The images, timed now that the trace's span is known, under the camera analysed and the
+  // what-if ones.
+  const TraceSpan span{read.sampling.t_begin_ns, read.sampling.t_end_ns};
+  const std::vector<ImageTrigger> triggers =
+      ChooseTriggers(log, span, options, &result.trigger_source);
+  std::vector<ImageContext> contexts{
+      {nullptr, nullptr, options.rig, options.limits_m, read.sampling.median_interval_ns}};
+  const int64_t latency_ns = SecondsToNs(options.trigger_latency_s);
+  const auto timed = [&](const ImageContext& context) {
+    std::vector<ImageResult> images;
+    for (const ImageTrigger& trigger : triggers)
+      images.push_back(ImageTiming(context, trigger, latency_ns, span));
+    return images;
+  };
+  std::vector<std::vector<ImageResult>> images{timed(contexts[0])};
+  const bool any_judged = std::any_of(images[0].begin(), images[0].end(),
+                                      [](const ImageResult& image) { return image.judged(); });
+  if (options.what_if && any_judged) {
+    contexts.push_back(FastReadoutContext(contexts[0], result.verdict.fast_readout_s));
+    contexts.push_back(HalfAltitudeContext(contexts[0]));
+    images.push_back(timed(contexts[1]));
+    images.push_back(timed(contexts[2]));
+  }
+
+  // The flight table and the images' readouts, in one pass.
+  std::unique_ptr<FlightStream> flight;
+  std::exception_ptr flight_refused;
+  try {
+    flight = std::make_unique<FlightStream>(FlightOptionsForReadout(options, result));
+  } catch (const std::invalid_argument&) {
+    flight_refused = std::current_exception();
+  }
+  StreamedReadouts readouts(contexts, std::move(images),
+                            AnalyzeTrueModel(options.rig, result.bias_rad_s), result.bias_rad_s);
+  std::vector<GyroSample> rotated;
+  consume([&](const GyroChunk& chunk) {
+    if (flight) {
+      rotated.resize(chunk.size);
+      for (size_t i = 0; i < chunk.size; ++i)
+        rotated[i] = InCameraAxes(chunk.data[i], cam_from_gyro, Eigen::Vector3d::Zero());
+      flight->Add(rotated.data(), rotated.size());
+    }
+    readouts.Add(chunk);
+  });
+  KeepFlightTable(
+      [&] {
+        if (flight_refused) std::rethrow_exception(flight_refused);
+        return flight->Finish();
+      },
+      &result);
+  std::vector<std::vector<ImageResult>> measured = readouts.Finish();
+  result.images = std::move(measured[0]);
+  JudgeImages(
+      options,
+      [&] {
+        return WhatIfImages{std::move(measured[1]), std::move(measured[2])};
+      },
+      &result);
+  result.verdict.line = VerdictLine(result.verdict, result.images.empty(), result.rate_hz, options);
   ReportProgress(options, 1.0);
   return result;
 }

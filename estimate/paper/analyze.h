@@ -32,6 +32,7 @@
 #include "sim/gyro_trace.h"
 #include "sim/integrate.h"
 #include "sim/logs/flight_log.h"
+#include "sim/logs/flight_log_io.h"
 #include "sim/logs/trigger_file.h"
 
 #include <array>
@@ -159,6 +160,27 @@ struct AnalyzeResult {
 };
 
 AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& options);
+
+// How AnalyzeStream reads a log too long to hold.
+struct AnalyzeLogSource {
+  // A fresh stream of the log from its start, each call (sim/logs/flight_log_io.h OpenFlightLog);
+  // the first one's FlightLogStream::log gives the metadata (format, camera events, altitude).
+  std::function<FlightLogStream()> open;
+  // Warnings that go after the log's own, as Analyze takes them in FlightLog::warnings (e.g. what
+  // reading a trigger file lost).
+  std::vector<LogWarning> more_warnings;
+  // Called once with the log's own warnings when it has been read through (may be empty).
+  std::function<void(const std::vector<LogWarning>&)> on_read;
+};
+
+// Analyze on a log read as a stream, in memory bounded by a chunk and the longest readout whatever
+// the log's length. The log is read seven times (two with estimate_bias false): the still search's
+// five passes (sim/still_detect.h), one for the sampling, warnings and bias, one for the flight
+// table and the images' readouts. The result is Analyze's on the log read whole, to the bit: the
+// same sums in the same order; the readouts are measured on a stretch of the same integration
+// kept while they are open. What it does not give is what only the report draws: traces is null,
+// and options.flight_series and options.allan must be false (std::invalid_argument).
+AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions& options);
 
 // The renderer's true model that D_full uses: the declared rig with no time offset (triggers are
 // on the log clock) and the bias (camera axes) removed as the gyro bias (gyro axes).

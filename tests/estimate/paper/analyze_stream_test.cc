@@ -1,0 +1,214 @@
+// AnalyzeStream against its brute-force twin: Analyze on the same log held whole. The streamed
+// analysis forms the same sums in the same order, so everything it reports is equal to the bit.
+
+#include "estimate/paper/analyze.h"
+#include "sim/gyro_source.h"
+#include "sim/logs/flight_log_io.h"
+#include "sim/trace_audit.h"
+#include "sim/units.h"
+#include "tests/estimate/paper/paper_fixtures.h"
+#include "tests/render/render_fixtures.h"
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+// The log as AnalyzeStream reads it: its metadata, and its samples in chunks of chunk_samples
+// (a few put chunk edges inside every readout).
+AnalyzeLogSource SourceOf(const FlightLog& log, size_t chunk_samples, int* opened = nullptr) {
+  AnalyzeLogSource source;
+  source.open = [&log, chunk_samples, opened] {
+    if (opened) ++*opened;
+    FlightLogStream stream;
+    stream.log = log;
+    stream.log.gyro = GyroTrace();
+    stream.gyro = std::make_unique<TraceSource>(log.gyro, chunk_samples);
+    return stream;
+  };
+  return source;
+}
+
+// The log as ReadFlightLog gives it: the audit's warnings after the reader's.
+FlightLog Audited(FlightLog log) {
+  for (LogWarning& w : AuditTrace(log.gyro)) log.warnings.push_back(std::move(w));
+  return log;
+}
+
+void ExpectSameImages(const std::vector<ImageResult>& streamed,
+                      const std::vector<ImageResult>& whole) {
+  ASSERT_EQ(streamed.size(), whole.size());
+  for (size_t i = 0; i < whole.size(); ++i) {
+    const ImageResult& s = streamed[i];
+    const ImageResult& w = whole[i];
+    SCOPED_TRACE(w.name);
+    EXPECT_EQ(s.name, w.name);
+    EXPECT_EQ(s.trigger_t_ns, w.trigger_t_ns);
+    EXPECT_EQ(s.t_ns, w.t_ns);
+    EXPECT_EQ(s.in_trace, w.in_trace);
+    EXPECT_EQ(s.too_few_samples, w.too_few_samples);
+    EXPECT_EQ(s.d_paper_m, w.d_paper_m);
+    EXPECT_EQ(s.d_full_m, w.d_full_m);
+    EXPECT_EQ(s.d_full_px, w.d_full_px);
+    EXPECT_EQ(s.range_arcsec, w.range_arcsec);
+    EXPECT_EQ(s.dominant_axis, w.dominant_axis);
+    EXPECT_EQ(s.flagged, w.flagged);
+  }
+}
+
+void ExpectSameResult(const AnalyzeResult& s, const AnalyzeResult& w) {
+  EXPECT_EQ(s.format, w.format);
+  EXPECT_EQ(s.gyro_source, w.gyro_source);
+  EXPECT_EQ(s.samples, w.samples);
+  EXPECT_EQ(s.duration_s, w.duration_s);
+  EXPECT_EQ(s.rate_hz, w.rate_hz);
+  EXPECT_EQ(s.gaps, w.gaps);
+  ASSERT_EQ(s.log_warnings.size(), w.log_warnings.size());
+  for (size_t i = 0; i < w.log_warnings.size(); ++i)
+    EXPECT_EQ(WarningLine(s.log_warnings[i]), WarningLine(w.log_warnings[i]));
+  EXPECT_EQ(s.bias_estimated, w.bias_estimated);
+  EXPECT_EQ(s.bias_from_still, w.bias_from_still);
+  EXPECT_EQ(s.still_segment.begin_s, w.still_segment.begin_s);
+  EXPECT_EQ(s.still_segment.end_s, w.still_segment.end_s);
+  EXPECT_EQ(s.bias_rad_s, w.bias_rad_s);
+  EXPECT_EQ(s.trigger_source, w.trigger_source);
+  EXPECT_EQ(s.altitude_m, w.altitude_m);
+  EXPECT_EQ(s.altitude_source, w.altitude_source);
+  EXPECT_EQ(s.flight_problem, w.flight_problem);
+  ASSERT_EQ(s.flight.has_value(), w.flight.has_value());
+  if (w.flight) {
+    EXPECT_EQ(FlightTable(*s.flight), FlightTable(*w.flight));
+  }
+  ExpectSameImages(s.images, w.images);
+  EXPECT_EQ(s.verdict.images_in_trace, w.verdict.images_in_trace);
+  EXPECT_EQ(s.verdict.images_too_few_samples, w.verdict.images_too_few_samples);
+  EXPECT_EQ(s.verdict.share_percent, w.verdict.share_percent);
+  EXPECT_EQ(s.verdict.axis_to_stabilise, w.verdict.axis_to_stabilise);
+  EXPECT_EQ(s.verdict.share_fast_readout_percent, w.verdict.share_fast_readout_percent);
+  EXPECT_EQ(s.verdict.share_half_altitude_percent, w.verdict.share_half_altitude_percent);
+  EXPECT_EQ(s.verdict.line, w.verdict.line);
+  EXPECT_EQ(AnalyzeReport(s), AnalyzeReport(w));
+  EXPECT_EQ(s.traces, nullptr);
+}
+
+// 12 s at 1 kHz: still with noise and a bias for 4 s, then a wobble about every axis with noise.
+FlightLog WobblyLog() {
+  std::mt19937 rng(15);
+  std::normal_distribution<double> noise(0.0, 2e-3);
+  const Eigen::Vector3d bias(0.004, -0.003, 0.002);
+  return test::StillThenRateLog(
+      12.0,
+      [&](double t_s) {
+        Eigen::Vector3d rate(0.3 * std::sin(7 * t_s), 0.2 * std::cos(11 * t_s), 0.1 * t_s);
+        for (int a = 0; a < 3; ++a) rate[a] += bias[a] + noise(rng);
+        return rate;
+      },
+      "wobble");
+}
+
+// The camera turned against the gyro, images out of time order, two outside the log, a latency.
+AnalyzeOptions TurnedCameraOptions() {
+  AnalyzeOptions options;
+  options.rig = test::MappingRig();
+  options.rig.camera.width = 320;  // a smaller grid keeps D_full cheap
+  options.rig.camera.height = 240;
+  options.rig.camera.cx = 159.5;
+  options.rig.camera.cy = 119.5;
+  options.rig.cam_from_gyro =
+      Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  options.trigger_latency_s = 0.0013;
+  for (const double t_s : {9.5, 1.0, 6.02, 4.7, 11.99, -0.5, 7.25, 6.0, 10.0101})
+    options.triggers.push_back({"t" + std::to_string(t_s), SecondsToNs(t_s)});
+  return options;
+}
+
+TEST(AnalyzeStream, EqualsTheWholeTraceAnalysisToTheBit) {
+  const FlightLog log = WobblyLog();
+  const AnalyzeOptions options = TurnedCameraOptions();
+  const AnalyzeResult whole = Analyze(Audited(log), options);
+  ASSERT_TRUE(whole.bias_from_still);
+  ASSERT_TRUE(whole.flight.has_value());
+  ASSERT_GT(whole.verdict.images_in_trace, 5u);
+  for (const size_t chunk : {size_t{5}, size_t{61}, size_t{4096}}) {
+    SCOPED_TRACE("chunk " + std::to_string(chunk));
+    int opened = 0;
+    ExpectSameResult(AnalyzeStream(SourceOf(log, chunk, &opened), options), whole);
+    EXPECT_EQ(opened, 7);  // five still passes, the sampling and the analysis
+  }
+}
+
+TEST(AnalyzeStream, EqualsTheWholeTraceWithoutStillSegmentEveryTriggersAndShortReadout) {
+  // No still stretch (zero bias), simulated triggers, a readout shorter than the what-if's 10 ms.
+  const FlightLog moving = test::StillThenRateLog(
+      6.0, [](double t_s) { return Eigen::Vector3d(0.2 + std::sin(3 * t_s), 0.1, -0.05 * t_s); },
+      "moving");
+  FlightLog log = moving;
+  std::vector<GyroSample> samples(moving.gyro.samples().begin() + 4500,
+                                  moving.gyro.samples().end());
+  log.gyro = GyroTrace(std::move(samples));
+  AnalyzeOptions options = TurnedCameraOptions();
+  options.triggers.clear();
+  options.every_s = 0.25;
+  options.rig.shutter.readout_s = 0.004;
+  const AnalyzeResult whole = Analyze(Audited(log), options);
+  ASSERT_FALSE(whole.bias_from_still);
+  ExpectSameResult(AnalyzeStream(SourceOf(log, 5), options), whole);
+  // Without the bias search: two passes.
+  options.estimate_bias = false;
+  options.what_if = false;
+  int opened = 0;
+  ExpectSameResult(AnalyzeStream(SourceOf(log, 64, &opened), options),
+                   Analyze(Audited(log), options));
+  EXPECT_EQ(opened, 2);
+}
+
+TEST(AnalyzeStream, EqualsTheWholeTraceWithCameraEventsLogAltitudeAndGaps) {
+  FlightLog log = WobblyLog();
+  // Two gaps (a warning each way) and the log's own camera events and altitude.
+  std::vector<GyroSample> samples;
+  for (const GyroSample& s : log.gyro.samples()) {
+    const double t_s = s.t_ns * 1e-9;
+    if ((t_s > 7.1 && t_s < 7.3) || (t_s > 9.0 && t_s < 9.05)) continue;
+    samples.push_back(s);
+  }
+  log.gyro = GyroTrace(std::move(samples));
+  for (int k = 0; k < 8; ++k)
+    log.camera_events.push_back({SecondsToNs(4.5 + 0.9 * k), 100 + k, "CAM"});
+  log.camera_events.push_back({SecondsToNs(5.0), -1, "TRIG"});
+  log.altitude_above_ground_m = 37.5;
+  log.altitude_source = "median CAM.RelAlt";
+  AnalyzeOptions options = TurnedCameraOptions();
+  options.triggers.clear();
+  options.use_log_altitude = true;
+  const AnalyzeResult whole = Analyze(Audited(log), options);
+  ASSERT_EQ(whole.altitude_source, "log");
+  ASSERT_GT(whole.gaps, 0u);
+  ExpectSameResult(AnalyzeStream(SourceOf(log, 11), options), whole);
+}
+
+TEST(AnalyzeStream, TooFewSamplesAndTooShortLogsAsTheWholeTrace) {
+  FlightLog log;
+  std::vector<GyroSample> samples;
+  for (int k = 0; k < 400; ++k)  // 8 s at 50 Hz
+    samples.push_back(
+        {static_cast<int64_t>(k) * 20'000'000, Eigen::Vector3d(k >= 300 ? 0.05 : 0.0, 0, 0)});
+  log.gyro = GyroTrace(samples);
+  AnalyzeOptions options = TurnedCameraOptions();
+  ExpectSameResult(AnalyzeStream(SourceOf(log, 9), options), Analyze(log, options));
+  log.gyro = GyroTrace(std::vector<GyroSample>(samples.begin(), samples.begin() + 1));
+  EXPECT_THROW(Analyze(log, options), std::invalid_argument);
+  EXPECT_THROW(AnalyzeStream(SourceOf(log, 9), options), std::invalid_argument);
+  options.allan = true;  // the report's: the streamed analysis refuses it
+  EXPECT_THROW(AnalyzeStream(SourceOf(WobblyLog(), 9), options), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace shutterlab
