@@ -9,9 +9,14 @@
 //  4. `flight` end to end as the command runs it (open, stream, audit, FlightStream), on one
 //     thread (CPU time) and on two (wall time), to compare with scripts/pandas_flight_bench.py.
 //
-// Usage: analysis_bench [--lines N] [--file PATH] [--generate-only]
+// Usage: analysis_bench [--lines N] [--file PATH] [--generate-only] [--streaming-only]
+//                       [--flight-only] [--repeat N] [--pandas]
 // Generates PATH (default /tmp/shutterlab_bench_gyro.csv) when it does not exist with N lines;
 // --generate-only stops there (the files for the memory measurements of docs/speed.md).
+// --flight-only times only `flight` end to end per-axis on one thread, --repeat times (a quick
+// A/B, and what `perf record` should look at); --pandas runs scripts/pandas_flight_bench.py on the
+// same file after each of those runs (interleaved, so that both see the same load) and prints the
+// ratio of the medians, CPU time against CPU time, and whether the percentages agree.
 // A table, not Google Benchmark: one run of each step is long enough (seconds) to need no repeats.
 
 #include "estimate/paper/flight.h"
@@ -23,6 +28,8 @@
 #include "sim/text_file.h"
 #include "sim/units.h"
 
+#include "bench/bench_util.h"
+#include <algorithm>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -214,10 +221,93 @@ void StreamingSections(const std::string& path, double file_mb, double t_from_ch
   std::printf("\n");
 }
 
+// The pandas reference (scripts/pandas_flight_bench.py) on the same file: its CPU time (read_csv +
+// analysis, as the script times itself) and its table, checked against ours.
+struct PandasRun {
+  double read_s = 0, analysis_s = 0;
+  bool same_table = false;
+};
+
+PandasRun RunPandas(const std::string& path, const FlightResult& ours) {
+  // From the repository root, as docs/speed.md runs it (__FILE__ may be relative to the build).
+  std::string script = "scripts/pandas_flight_bench.py";
+  if (!std::filesystem::exists(script)) script = bench::RepoPath(script);
+  const std::string command = "/usr/bin/python3 '" + script + "' '" + path + "'";
+  std::FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) throw std::runtime_error("cannot run " + command);
+  std::string output;
+  char line[512];
+  while (std::fgets(line, sizeof(line), pipe)) output += line;
+  if (pclose(pipe) != 0) throw std::runtime_error(command + " failed:\n" + output);
+  PandasRun run;
+  // Our rows at the script's precision, in its (sorted: limit, then window) order.
+  std::vector<std::string> rows;
+  for (const FlightRow& row : ours.rows) {
+    char text[128];
+    std::snprintf(text, sizeof(text), "%7.3f  %8.3f  %16.1f  %7zu  %15.4f", row.limit_m,
+                  row.window_s, row.threshold_arcsec, row.windows, row.flagged_percent);
+    rows.push_back(text);
+  }
+  std::sort(rows.begin(), rows.end());
+  size_t matched = 0;
+  size_t at = 0;
+  while (at < output.size()) {
+    const size_t eol = std::min(output.find('\n', at), output.size());
+    const std::string text = output.substr(at, eol - at);
+    std::sscanf(text.c_str(), "read_csv: %lf", &run.read_s);
+    std::sscanf(text.c_str(), "per-axis analysis: %lf", &run.analysis_s);
+    matched += matched < rows.size() && text == rows[matched];
+    at = eol + 1;
+  }
+  run.same_table = matched == rows.size();
+  if (run.read_s <= 0 || run.analysis_s <= 0)
+    throw std::runtime_error("unexpected output of " + command + ":\n" + output);
+  return run;
+}
+
+double Median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  return values[values.size() / 2];
+}
+
+// `flight` end to end, per-axis, one thread, `repeat` times (with the pandas reference after each
+// when asked): the "20x pandas" figure.
+int FlightAgainstPandas(const std::string& path, int repeat, bool pandas) {
+  FlightOptions options;
+  options.vector_criterion = false;
+  std::vector<double> ours_s, pandas_s;
+  bool same = true;
+  for (int r = 0; r < repeat; ++r) {
+    size_t warnings = 0;
+    const double c0 = Now();
+    const FlightResult result = StreamedFlight(path, options, /*read_ahead=*/false, &warnings);
+    ours_s.push_back(Now() - c0);
+    std::printf("flight end to end, per-axis, one thread: %.3f s CPU (%.1f M samples/s)",
+                ours_s.back(), result.samples / ours_s.back() / 1e6);
+    if (pandas) {
+      const PandasRun run = RunPandas(path, result);
+      pandas_s.push_back(run.read_s + run.analysis_s);
+      same &= run.same_table;
+      std::printf("; pandas %.2f s CPU (read_csv %.2f, analysis %.2f), table %s", pandas_s.back(),
+                  run.read_s, run.analysis_s, run.same_table ? "identical" : "DIFFERS");
+    }
+    std::printf("\n");
+    std::fflush(stdout);
+  }
+  std::printf("median of %d: flight %.3f s CPU", repeat, Median(ours_s));
+  if (pandas) {
+    std::printf(", pandas %.2f s CPU: flight is %.1fx faster (CPU time against CPU time)",
+                Median(pandas_s), Median(pandas_s) / Median(ours_s));
+  }
+  std::printf("\n");
+  return same ? 0 : 1;
+}
+
 int Main(int argc, char** argv) {
   size_t lines = 30000000;
   std::string path = "/tmp/shutterlab_bench_gyro.csv";
-  bool generate_only = false, streaming_only = false;
+  bool generate_only = false, streaming_only = false, flight_only = false, pandas = false;
+  int repeat = 1;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--lines" && i + 1 < argc)
@@ -228,9 +318,16 @@ int Main(int argc, char** argv) {
       generate_only = true;
     else if (arg == "--streaming-only")
       streaming_only = true;
+    else if (arg == "--flight-only")
+      flight_only = true;
+    else if (arg == "--pandas")
+      pandas = true;
+    else if (arg == "--repeat" && i + 1 < argc)
+      repeat = std::max(1, std::stoi(argv[++i]));
     else {
       std::fprintf(stderr,
-                   "usage: %s [--lines N] [--file PATH] [--generate-only] [--streaming-only]\n",
+                   "usage: %s [--lines N] [--file PATH] [--generate-only] [--streaming-only] "
+                   "[--flight-only] [--repeat N] [--pandas]\n",
                    argv[0]);
       return 2;
     }
@@ -243,6 +340,7 @@ int Main(int argc, char** argv) {
     std::printf("  generated in %.1f s\n", Now() - t0);
   }
   if (generate_only) return 0;
+  if (flight_only || pandas) return FlightAgainstPandas(path, repeat, pandas);
   const double file_mb = std::filesystem::file_size(path) / 1e6;
   std::printf("file: %s, %.1f MB\n\n", path.c_str(), file_mb);
 

@@ -49,9 +49,9 @@ class GyroSource {
 // A source that fills chunks of its own (the text readers): Fill is all it writes.
 class FillingSource : public GyroSource {
  public:
-  // Samples per chunk by default: 2 MiB, which stay in cache while the analysis takes them. Tests
+  // Samples per chunk by default: 512 KiB, which stay in L2 while the analysis takes them. Tests
   // and fuzz targets choose a few, which puts chunk edges everywhere in a small input.
-  static constexpr size_t kDefaultChunkSamples = 1 << 16;
+  static constexpr size_t kDefaultChunkSamples = 1 << 14;
   explicit FillingSource(size_t chunk_samples = kDefaultChunkSamples)
       : chunk_samples_(std::max<size_t>(chunk_samples, 1)) {}
   GyroChunk Next() final {

@@ -38,7 +38,85 @@ TraceAuditor::TraceAuditor(TraceAuditOptions options)
 }
 
 void TraceAuditor::Add(const GyroSample* samples, size_t count) {
-  for (size_t i = 0; i < count; ++i) Step(samples[i]);
+  if (count == 0) return;
+  // The whole chunk at once when nothing in it is refused: every rate finite and no time going
+  // back (their peaks on the way). Otherwise sample by sample, which refuses the first bad one
+  // with its message.
+  bool finite = true, ordered = true;
+  double chunk_peak[3] = {0.0, 0.0, 0.0};
+  int64_t previous_ns = samples_ > 0 ? t_last_ns_ : samples[0].t_ns;
+  for (size_t i = 0; i < count; ++i) {
+    const GyroSample& s = samples[i];
+    for (int a = 0; a < 3; ++a) {
+      const double w = s.omega_rad_s[a];
+      finite &= w - w == 0.0;  // false for inf and nan
+      chunk_peak[a] = std::max(chunk_peak[a], std::abs(w));
+    }
+    ordered &= s.t_ns >= previous_ns;
+    previous_ns = s.t_ns;
+  }
+  if (!finite || !ordered) {
+    for (size_t i = 0; i < count; ++i) Step(samples[i]);
+    return;
+  }
+  if (std::max({chunk_peak[0], chunk_peak[1], chunk_peak[2]}) >= limits_rad_s_[0]) {
+    for (size_t i = 0; i < count; ++i) NoteSaturation(samples[i]);
+  }
+  for (int a = 0; a < 3; ++a) peak_[a] = std::max(peak_[a], chunk_peak[a]);
+  size_t i = 0;
+  if (samples_ == 0) {
+    t_begin_ns_ = t_last_ns_ = samples[0].t_ns;
+    block_t_ns_.push_back(samples[0].t_ns);
+    i = 1;
+  }
+  samples_ += count;
+  while (i < count) i = AddTimesOfBlock(samples, i, count);
+}
+
+// The times of samples [i, count) that the current 1 s block takes, up to the one that closes it
+// (included; the block is then closed) or the chunk's end; returns where the rest begins. What
+// Step does per sample, with the running values in locals.
+size_t TraceAuditor::AddTimesOfBlock(const GyroSample* samples, size_t i, size_t count) {
+  const int64_t block_begin_ns = block_t_ns_.front();
+  size_t stop = i;
+  while (stop < count && samples[stop].t_ns - block_begin_ns < kRateBlockNs) ++stop;
+  const bool closes = stop < count;
+  stop += closes;  // the closing sample belongs to the block
+  const size_t old_size = block_t_ns_.size();
+  block_t_ns_.resize(old_size + (stop - i));
+  int64_t* block_t = block_t_ns_.data() + old_size;  // sample k goes to block_t[k - i]
+  int64_t last_ns = t_last_ns_, run_ns = 0;
+  size_t run = 0, duplicates = duplicates_;
+  for (size_t k = i; k < stop; ++k) {
+    const int64_t t = samples[k].t_ns;
+    const int64_t dt = t - last_ns;
+    if (dt == 0 && duplicates++ == 0) first_duplicate_ns_ = t;
+    if (dt != run_ns) {  // intervals reach the histogram as runs of equal ones
+      intervals_.AddRun(run_ns, run);
+      run_ns = dt;
+      run = 0;
+    }
+    ++run;
+    block_t[k - i] = t;
+    last_ns = t;
+  }
+  intervals_.AddRun(run_ns, run);
+  t_last_ns_ = last_ns;
+  duplicates_ = duplicates;
+  if (closes) CloseBlock(/*at_end=*/false);
+  return stop;
+}
+
+void TraceAuditor::NoteSaturation(const GyroSample& s) {
+  const Eigen::Vector3d v = s.omega_rad_s.cwiseAbs();
+  if (v.maxCoeff() < limits_rad_s_[0]) return;  // below every full scale: the usual case
+  for (int a = 0; a < 3; ++a) {
+    for (size_t c = 0; c < limits_rad_s_.size() && v[a] >= limits_rad_s_[c]; ++c) {
+      Saturation& at = saturation_[c];
+      if (at.count[a]++ == 0) at.first_ns[a] = s.t_ns;
+      at.last_ns[a] = s.t_ns;
+    }
+  }
 }
 
 void TraceAuditor::Step(const GyroSample& s) {
@@ -58,16 +136,8 @@ void TraceAuditor::Step(const GyroSample& s) {
     t_last_ns_ = s.t_ns;
     if (s.t_ns - block_t_ns_.front() >= kRateBlockNs) CloseBlock(/*at_end=*/false);
   }
-  const Eigen::Vector3d v = s.omega_rad_s.cwiseAbs();
-  for (int a = 0; a < 3; ++a) peak_[a] = std::max(peak_[a], v[a]);
-  if (v.maxCoeff() < limits_rad_s_[0]) return;  // below every full scale: the usual case
-  for (int a = 0; a < 3; ++a) {
-    for (size_t c = 0; c < limits_rad_s_.size() && v[a] >= limits_rad_s_[c]; ++c) {
-      Saturation& at = saturation_[c];
-      if (at.count[a]++ == 0) at.first_ns[a] = s.t_ns;
-      at.last_ns[a] = s.t_ns;
-    }
-  }
+  for (int a = 0; a < 3; ++a) peak_[a] = std::max(peak_[a], std::abs(s.omega_rad_s[a]));
+  NoteSaturation(s);
 }
 
 // Closes the block [block_begin, this sample) and judges the intervals into its samples: the one

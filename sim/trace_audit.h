@@ -75,7 +75,9 @@ class TraceAuditor {
     std::array<size_t, 3> count{};
     std::array<int64_t, 3> first_ns{}, last_ns{};
   };
-  void Step(const GyroSample& s);
+  void Step(const GyroSample& s);  // one sample, checked (Add's path for a refused chunk)
+  size_t AddTimesOfBlock(const GyroSample* samples, size_t i, size_t count);
+  void NoteSaturation(const GyroSample& s);
   void CloseBlock(bool at_end);
   void Judge(const Interval& interval, int64_t local_ns);
   void NoteBlockRate(int64_t median_ns, int64_t begin_ns);

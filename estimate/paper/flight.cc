@@ -15,11 +15,15 @@
 #include <sstream>
 #include <stdexcept>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace shutterlab {
 namespace {
 
 // Window starts per chunk: the chunk's ends, ranges and kernel buffers stay in L2.
-constexpr size_t kChunkWindows = 8192;
+constexpr size_t kChunkWindows = 2048;
 // The vector criterion's cheap upper bound skips the exact pairwise test only when it clears the
 // threshold by more than its own rounding (cosines near 1 carry ~1e-16 absolute error; the
 // sqrt(1 - c^2) terms ~1e-13 at the smallest angles we meet).
@@ -86,31 +90,37 @@ class AngleBuffer {
 
   // Appends samples [s, s + n), integrating them.
   void Push(const GyroSample* s, size_t n) {
+    if (n == 0) return;
     int64_t* t = t_.Grow(n);
     double* angle[3] = {angles_[0].Grow(n), angles_[1].Grow(n), angles_[2].Grow(n)};
-    double* q[4] = {nullptr, nullptr, nullptr, nullptr};
     if (with_q_) {
-      for (int k = 0; k < 4; ++k) q[k] = q_[k].Grow(n);
-    }
-    for (size_t i = 0; i < n; ++i) {
-      if (end_ + i > 0) {
-        const double dt_s = (s[i].t_ns - previous_.t_ns) * 1e-9;
-        for (int a = 0; a < 3; ++a) angle_[a] += (s[i].omega_rad_s[a] - bias_[a]) * dt_s;
-        if (with_q_) {
-          const Eigen::Vector3d wa = previous_.omega_rad_s - bias_;
-          const Eigen::Vector3d wb = s[i].omega_rad_s - bias_;
-          current_ = (current_ * ExpSO3(0.5 * (wa + wb) * dt_s)).normalized();
-        }
+      PushWithOrientations(s, n, t, angle);
+    } else {
+      // The per-axis recurrence alone, its state in registers: the common case, a tight loop.
+      size_t i = 0;
+      int64_t previous_t_ns = previous_.t_ns;
+      if (end_ == 0) {  // the first sample: angle 0
+        t[0] = previous_t_ns = s[0].t_ns;
+        for (int a = 0; a < 3; ++a) angle[a][0] = angle_[a];
+        i = 1;
       }
-      previous_ = s[i];
-      t[i] = s[i].t_ns;
-      for (int a = 0; a < 3; ++a) angle[a][i] = angle_[a];
-      if (with_q_) {
-        q[0][i] = current_.w();
-        q[1][i] = current_.x();
-        q[2][i] = current_.y();
-        q[3][i] = current_.z();
+      double ax = angle_[0], ay = angle_[1], az = angle_[2];
+      const double bx = bias_[0], by = bias_[1], bz = bias_[2];
+      for (; i < n; ++i) {
+        const double dt_s = (s[i].t_ns - previous_t_ns) * 1e-9;
+        ax += (s[i].omega_rad_s[0] - bx) * dt_s;
+        ay += (s[i].omega_rad_s[1] - by) * dt_s;
+        az += (s[i].omega_rad_s[2] - bz) * dt_s;
+        previous_t_ns = s[i].t_ns;
+        t[i] = s[i].t_ns;
+        angle[0][i] = ax;
+        angle[1][i] = ay;
+        angle[2][i] = az;
       }
+      angle_[0] = ax;
+      angle_[1] = ay;
+      angle_[2] = az;
+      previous_ = s[n - 1];
     }
     end_ += n;
   }
@@ -128,6 +138,7 @@ class AngleBuffer {
   }
   size_t end() const { return end_; }  // samples pushed in all
   int64_t t(size_t g) const { return t_.data()[g - base_]; }
+  const int64_t* times(size_t g) const { return t_.data() + (g - base_); }  // from sample g on
   // Index of the first sample from g on with time >= t_ns (end() when none).
   size_t LowerBound(size_t g, int64_t t_ns) const {
     return base_ + (std::lower_bound(t_.data() + (g - base_), t_.end(), t_ns) - t_.data());
@@ -139,6 +150,27 @@ class AngleBuffer {
   }
 
  private:
+  // Push with the orientations too (the vector criterion): both recurrences per sample.
+  void PushWithOrientations(const GyroSample* s, size_t n, int64_t* t, double* const* angle) {
+    double* q[4] = {q_[0].Grow(n), q_[1].Grow(n), q_[2].Grow(n), q_[3].Grow(n)};
+    for (size_t i = 0; i < n; ++i) {
+      if (end_ + i > 0) {
+        const double dt_s = (s[i].t_ns - previous_.t_ns) * 1e-9;
+        for (int a = 0; a < 3; ++a) angle_[a] += (s[i].omega_rad_s[a] - bias_[a]) * dt_s;
+        const Eigen::Vector3d wa = previous_.omega_rad_s - bias_;
+        const Eigen::Vector3d wb = s[i].omega_rad_s - bias_;
+        current_ = (current_ * ExpSO3(0.5 * (wa + wb) * dt_s)).normalized();
+      }
+      previous_ = s[i];
+      t[i] = s[i].t_ns;
+      for (int a = 0; a < 3; ++a) angle[a][i] = angle_[a];
+      q[0][i] = current_.w();
+      q[1][i] = current_.x();
+      q[2][i] = current_.y();
+      q[3][i] = current_.z();
+    }
+  }
+
   const Eigen::Vector3d bias_;
   const bool with_q_;
   size_t base_ = 0, end_ = 0;
@@ -243,20 +275,42 @@ FlightThresholds Thresholds(const FlightOptions& options) {
 // to the duration's rows (rows[l]: limit l's row of this duration, `stride` rows apart).
 void CountAxisFlags(const std::array<std::vector<double>, 3>& range, size_t m,
                     const std::vector<double>& threshold_rad, FlightRow* rows, size_t stride) {
-  // Per-axis counts: limit-outer loops with local counters in doubles (exact below 2^53), a
-  // form the compiler vectorises (compare, blend, add), unlike bool-to-integer sums.
   const double* rx = range[0].data();
   const double* ry = range[1].data();
   const double* rz = range[2].data();
   for (size_t l = 0; l < threshold_rad.size(); ++l) {
     const double th = threshold_rad[l];
-    double any = 0, fx = 0, fy = 0, fz = 0;
-    for (size_t i = 0; i < m; ++i) {
+    int64_t any = 0, fx = 0, fy = 0, fz = 0;
+    size_t i = 0;
+#if defined(__SSE2__)
+    // Two windows at a time: a comparison gives all ones (-1) per lane where a range is over.
+    const __m128d th2 = _mm_set1_pd(th);
+    __m128i any2 = _mm_setzero_si128(), fx2 = any2, fy2 = any2, fz2 = any2;
+    for (; i + 2 <= m; i += 2) {
+      const __m128d over_x = _mm_cmpgt_pd(_mm_loadu_pd(rx + i), th2);
+      const __m128d over_y = _mm_cmpgt_pd(_mm_loadu_pd(ry + i), th2);
+      const __m128d over_z = _mm_cmpgt_pd(_mm_loadu_pd(rz + i), th2);
+      fx2 = _mm_sub_epi64(fx2, _mm_castpd_si128(over_x));
+      fy2 = _mm_sub_epi64(fy2, _mm_castpd_si128(over_y));
+      fz2 = _mm_sub_epi64(fz2, _mm_castpd_si128(over_z));
+      any2 = _mm_sub_epi64(any2, _mm_castpd_si128(_mm_or_pd(over_x, _mm_or_pd(over_y, over_z))));
+    }
+    const auto lanes = [](__m128i v) {
+      int64_t lane[2];
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(lane), v);
+      return lane[0] + lane[1];
+    };
+    any = lanes(any2);
+    fx = lanes(fx2);
+    fy = lanes(fy2);
+    fz = lanes(fz2);
+#endif
+    for (; i < m; ++i) {
       const double x = rx[i], y = ry[i], z = rz[i];
-      fx += x > th ? 1.0 : 0.0;
-      fy += y > th ? 1.0 : 0.0;
-      fz += z > th ? 1.0 : 0.0;
-      any += (x > th || y > th || z > th) ? 1.0 : 0.0;
+      fx += x > th;
+      fy += y > th;
+      fz += z > th;
+      any += x > th || y > th || z > th;
     }
     FlightRow& row = rows[l * stride];
     row.flagged += static_cast<size_t>(any);
@@ -374,11 +428,29 @@ struct FlightStream::Impl {
       ++i;
     }
     if (!buffer || i == count) return;
-    const GyroSample* s = samples + i;
-    const size_t n = count - i;
+    // A chunk of window starts at a time, so that the samples are integrated, swept and dropped
+    // while they are in the cache.
+    for (; i < count; i += kChunkWindows)
+      AddAnalysed(samples + i, std::min(kChunkWindows, count - i));
+  }
+
+  // Samples after the bias segment: integrated, and every chunk of windows they complete swept.
+  void AddAnalysed(const GyroSample* s, size_t n) {
     if (buffer->end() == 0) t_first_analysed_ns = s[0].t_ns;
-    for (size_t k = buffer->end() == 0 ? 1 : 0; k < n; ++k)
-      intervals.Add(s[k].t_ns - (k > 0 ? s[k - 1].t_ns : t_last_analysed_ns));
+    // The intervals, handed to the histogram as runs of equal ones.
+    int64_t previous_ns = buffer->end() == 0 ? s[0].t_ns : t_last_analysed_ns, run_ns = 0;
+    size_t run = 0;
+    for (size_t k = buffer->end() == 0 ? 1 : 0; k < n; ++k) {
+      const int64_t dt = s[k].t_ns - previous_ns;
+      if (dt != run_ns) {
+        intervals.AddRun(run_ns, run);
+        run_ns = dt;
+        run = 0;
+      }
+      ++run;
+      previous_ns = s[k].t_ns;
+    }
+    intervals.AddRun(run_ns, run);
     t_last_analysed_ns = s[n - 1].t_ns;
     buffer->Push(s, n);
     SweepCompleteChunks();
@@ -434,15 +506,19 @@ struct FlightStream::Impl {
     const size_t n = buffer->end();
     // Every duration's window ends, then their ranges in one kernel pass (the block extrema of
     // the samples are shared), then the counts.
+    const int64_t* t = buffer->times(k0);  // local indices from here on: sample k0 is 0
     for (size_t wi = 0; wi < durations; ++wi) {
-      const size_t k_stop = std::min(k1, windows[wi]);
-      size_t m = 0;
-      for (size_t k = k0; k < k_stop; ++k) {
-        const int64_t t_end = buffer->t(k) + window_ns[wi];
-        while (e[wi] < n && buffer->t(e[wi]) < t_end) ++e[wi];
-        chunk_end[wi][m++] = static_cast<uint32_t>(e[wi] - k0);  // local: from sample k0
+      const size_t m = std::min(k1, std::max(k0, windows[wi])) - k0;
+      const int64_t window = window_ns[wi];
+      uint32_t* ends = chunk_end[wi].data();
+      size_t end = e[wi] - k0;  // window k0 - 1 ended there, at or after k0
+      for (size_t i = 0; i < m; ++i) {
+        const int64_t t_end = t[i] + window;
+        while (end < n - k0 && t[end] < t_end) ++end;
+        ends[i] = static_cast<uint32_t>(end);
       }
-      sets[wi].ends = chunk_end[wi].data();
+      e[wi] = end + k0;
+      sets[wi].ends = ends;
       sets[wi].count = m;
     }
     kernel.Run3Sets({buffer->angle(0, k0), buffer->angle(1, k0), buffer->angle(2, k0)}, 0, sets);

@@ -128,27 +128,34 @@ void BuildBlocks(const double* const* x, size_t base, size_t n, size_t block,
   double* smin = buffers[3].data();
   double* bmax = buffers[4].data();
   double* bmin = buffers[5].data();
-  for (int a = 0; a < kAxes; ++a) {
-    const double* xs = x[a] + base;
-    for (size_t b = 0; b < blocks; ++b) {
-      const size_t lo = b * block;
-      const size_t hi = std::min(n, lo + block);
-      double run_max = xs[lo], run_min = xs[lo];
-      for (size_t i = lo; i < hi; ++i) {
-        run_max = std::max(run_max, xs[i]);
-        run_min = std::min(run_min, xs[i]);
-        pmax[i * kAxes + a] = run_max;
-        pmin[i * kAxes + a] = run_min;
+  const double* xs[kAxes];
+  for (int a = 0; a < kAxes; ++a) xs[a] = x[a] + base;
+  // The axes side by side in each loop: their running extrema are independent chains, so that a
+  // sample costs about one max/min latency for all axes rather than one per axis.
+  for (size_t b = 0; b < blocks; ++b) {
+    const size_t lo = b * block;
+    const size_t hi = std::min(n, lo + block);
+    double run_max[kAxes], run_min[kAxes];
+    for (int a = 0; a < kAxes; ++a) run_max[a] = run_min[a] = xs[a][lo];
+    for (size_t i = lo; i < hi; ++i) {
+      for (int a = 0; a < kAxes; ++a) {
+        run_max[a] = std::max(run_max[a], xs[a][i]);
+        run_min[a] = std::min(run_min[a], xs[a][i]);
+        pmax[i * kAxes + a] = run_max[a];
+        pmin[i * kAxes + a] = run_min[a];
       }
-      bmax[b * kAxes + a] = run_max;
-      bmin[b * kAxes + a] = run_min;
-      run_max = xs[hi - 1];
-      run_min = xs[hi - 1];
-      for (size_t i = hi; i-- > lo;) {
-        run_max = std::max(run_max, xs[i]);
-        run_min = std::min(run_min, xs[i]);
-        smax[i * kAxes + a] = run_max;
-        smin[i * kAxes + a] = run_min;
+    }
+    for (int a = 0; a < kAxes; ++a) {
+      bmax[b * kAxes + a] = run_max[a];
+      bmin[b * kAxes + a] = run_min[a];
+      run_max[a] = run_min[a] = xs[a][hi - 1];
+    }
+    for (size_t i = hi; i-- > lo;) {
+      for (int a = 0; a < kAxes; ++a) {
+        run_max[a] = std::max(run_max[a], xs[a][i]);
+        run_min[a] = std::min(run_min[a], xs[a][i]);
+        smax[i * kAxes + a] = run_max[a];
+        smin[i * kAxes + a] = run_min[a];
       }
     }
   }
@@ -166,6 +173,8 @@ void QueryWindows(const double* const* x, const uint32_t* chunk_end, size_t k_be
   const double* smin = buffers[3].data();
   const double* bmax = buffers[4].data();
   const double* bmin = buffers[5].data();
+  double* outs[kAxes];  // locals: a store through one cannot then change another
+  for (int a = 0; a < kAxes; ++a) outs[a] = out[a];
   // Block index of the window's first sample, advanced incrementally (s grows by one per window).
   size_t first_block = 0, first_block_end = block;
   for (size_t k = k_begin; k < k_end; ++k) {
@@ -184,7 +193,7 @@ void QueryWindows(const double* const* x, const uint32_t* chunk_end, size_t k_be
           hi = std::max(hi, xs[i]);
           lo = std::min(lo, xs[i]);
         }
-        out[a][k - k_begin] = hi - lo;
+        outs[a][k - k_begin] = hi - lo;
       }
       continue;
     }
@@ -200,7 +209,7 @@ void QueryWindows(const double* const* x, const uint32_t* chunk_end, size_t k_be
         lo[a] = std::min(lo[a], bmin[b * kAxes + a]);
       }
     }
-    for (int a = 0; a < kAxes; ++a) out[a][k - k_begin] = hi[a] - lo[a];
+    for (int a = 0; a < kAxes; ++a) outs[a][k - k_begin] = hi[a] - lo[a];
   }
 }
 

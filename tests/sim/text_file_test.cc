@@ -58,19 +58,39 @@ TEST(FromCharsDouble, IsStdFromCharsOnEveryKindOfNumber) {
     texts.emplace_back(buffer, r.ptr);
     texts.push_back(std::to_string(rng() >> (rng() % 64)));
   }
+  size_t plain = 0;
   for (const std::string& text : texts) {
     const char* end = text.data() + text.size();
     double expected = -7.0, got = -7.0;
     const auto [expected_end, ec] = std::from_chars(text.data(), end, expected);
     const char* got_end = FromCharsDouble(text.data(), end, &got);
+    // The fast path alone, before a line end: the same number, or none (left to the caller).
+    const std::string line = text + "\n";
+    double fast = -7.0;
+    const char* fast_end = PlainDecimalBeforeLineEnd(line.data(), &fast);
     if (ec != std::errc()) {
       EXPECT_EQ(got_end, nullptr) << "'" << text << "'";
+      EXPECT_EQ(fast_end, nullptr) << "'" << text << "'";
       continue;
     }
     ASSERT_EQ(got_end, expected_end) << "'" << text << "'";
     EXPECT_EQ(std::memcmp(&got, &expected, sizeof(double)), 0)
         << "'" << text << "': " << got << " vs " << expected;
+    if (fast_end) {
+      ++plain;
+      ASSERT_EQ(fast_end - line.data(), expected_end - text.data()) << "'" << text << "'";
+      EXPECT_EQ(std::memcmp(&fast, &expected, sizeof(double)), 0)
+          << "'" << text << "': " << fast << " vs " << expected;
+    } else {
+      // Only what is not a plain decimal of at most 19 digits is left to the caller.
+      const bool exponent = text.find_first_of("eE") != std::string::npos;
+      size_t digits = 0;
+      for (char c : text) digits += c >= '0' && c <= '9';
+      EXPECT_TRUE(exponent || digits > 15 || text.find_first_of("+in") != std::string::npos)
+          << "'" << text << "' should take the fast path";
+    }
   }
+  EXPECT_GT(plain, texts.size() / 3);  // the loggers' fixed decimals among them
 }
 
 // The lines of a text read in blocks of any size are the lines LineCursor gives of it whole, with

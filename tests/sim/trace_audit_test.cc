@@ -230,6 +230,46 @@ TEST(TraceAuditor, StreamedInAnyChunksEqualsTheWholeTraceAudit) {
   }
 }
 
+// The chunk-at-once audit (its times in runs, its rates' peaks over the chunk) says exactly what
+// one sample at a time says, saturation included: every warning's line, time and count, and the
+// sampling.
+TEST(TraceAuditor, WholeChunksSayWhatOneSampleAtATimeSays) {
+  std::mt19937_64 rng(18);
+  for (int trial = 0; trial < 10; ++trial) {
+    std::vector<GyroSample> samples;
+    int64_t t = 0;
+    const int64_t period = 250'000 * (1 + static_cast<int64_t>(rng() % 8));
+    for (size_t k = 0; k < 6000; ++k) {
+      Eigen::Vector3d rate(std::sin(k * 0.01), std::cos(k * 0.013), 0.1);
+      if (rng() % 200 == 0) rate[rng() % 3] = (rng() % 2 ? 1 : -1) * 8.6;  // 500 deg/s clipped
+      samples.push_back({t, rate * (trial % 2 ? 1.0 : 2.0)});
+      const uint64_t r = rng() % 1000;
+      t += r < 3 ? period * 7 : r < 8 ? 0 : k > 3000 && trial % 3 == 0 ? 2 * period : period;
+    }
+    TraceAuditor one_by_one, chunked;
+    for (const GyroSample& s : samples) one_by_one.Add(&s, 1);
+    for (size_t i = 0; i < samples.size();) {
+      const size_t n = std::min<size_t>(samples.size() - i, 1 + rng() % 2500);
+      chunked.Add(samples.data() + i, n);
+      i += n;
+    }
+    const std::vector<LogWarning> expected = one_by_one.Finish(), got = chunked.Finish();
+    ASSERT_EQ(Joined(got), Joined(expected)) << trial;
+    ASSERT_NE(Joined(got).find("saturated"), std::string::npos) << trial;
+    for (size_t w = 0; w < got.size(); ++w) {
+      EXPECT_EQ(got[w].t_s, expected[w].t_s) << trial;
+      EXPECT_EQ(got[w].count, expected[w].count) << trial;
+    }
+    const TraceSampling a = chunked.Sampling(), b = one_by_one.Sampling();
+    EXPECT_EQ(a.samples, b.samples);
+    EXPECT_EQ(a.t_begin_ns, b.t_begin_ns);
+    EXPECT_EQ(a.t_end_ns, b.t_end_ns);
+    EXPECT_EQ(a.median_interval_ns, b.median_interval_ns);
+    EXPECT_EQ(a.gaps, b.gaps);
+    EXPECT_EQ(a.duplicate_timestamps, b.duplicate_timestamps);
+  }
+}
+
 TEST(TraceAuditor, RefusesWhatGyroTraceRefuses) {
   TraceAuditor auditor;
   std::vector<GyroSample> samples = Regular(10, 1'000'000);

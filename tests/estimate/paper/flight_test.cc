@@ -229,6 +229,62 @@ TEST(Flight, MatchesBruteForceOnRandomMotion) {
   }
 }
 
+// Brute-force twin of the per-axis criterion alone (no orientations: its own integration loop),
+// fed in chunks of random sizes (1 sample to several analysis chunks) so that every edge of the
+// integration, the window ends and the two-at-a-time counts is crossed: counts per axis and any
+// axis against SlidingRangeBruteForce of IntegratePerAxis, and equal to the vector run's per-axis
+// counts.
+TEST(Flight, PerAxisAloneMatchesBruteForceInChunksOfAnySize) {
+  const auto trace = RandomMotionTrace(9000, 11);
+  FlightOptions options = Options();
+  options.vector_criterion = false;
+  options.series = true;
+  std::mt19937_64 rng(11);
+  FlightStream stream(options);
+  for (size_t i = 0; i < trace.size();) {
+    const size_t n = std::min<size_t>(trace.size() - i, 1 + rng() % (rng() % 2 ? 9 : 5000));
+    stream.Add(trace.samples().data() + i, n);
+    i += n;
+  }
+  const FlightResult r = stream.Finish();
+  FlightOptions with_vector = options;
+  with_vector.vector_criterion = true;
+  with_vector.series = false;
+  const FlightResult v = Flight(trace, with_vector);
+
+  const auto angles = IntegratePerAxis(trace, Eigen::Vector3d::Zero(), 1000);
+  for (size_t wi = 0; wi < options.windows_s.size(); ++wi) {
+    const auto ends = WindowEndsByDuration(angles.t_ns, SecondsToNs(options.windows_s[wi]));
+    std::array<std::vector<double>, 3> range;
+    for (int a = 0; a < 3; ++a) range[a] = SlidingRangeBruteForce(angles.angle_rad[a], ends);
+    for (size_t l = 0; l < options.limits_m.size(); ++l) {
+      const double th = ThresholdRad(options.limits_m[l]);
+      size_t any = 0;
+      std::array<size_t, 3> per_axis{};
+      for (size_t k = 0; k < ends.size(); ++k) {
+        any += std::max({range[0][k], range[1][k], range[2][k]}) > th;
+        for (int a = 0; a < 3; ++a) per_axis[a] += range[a][k] > th;
+      }
+      const size_t row = l * options.windows_s.size() + wi;
+      EXPECT_EQ(r.rows[row].windows, ends.size());
+      EXPECT_EQ(r.rows[row].flagged, any) << "limit " << l << " window " << wi;
+      EXPECT_EQ(r.rows[row].flagged_axis, per_axis) << "limit " << l << " window " << wi;
+      EXPECT_GT(any, 0u);
+      EXPECT_LT(any, ends.size());
+      EXPECT_EQ(v.rows[row].flagged, any);
+      EXPECT_EQ(v.rows[row].flagged_axis, per_axis);
+    }
+    if (wi == 0) {
+      ASSERT_EQ(r.series.t_ns,
+                std::vector<int64_t>(angles.t_ns.begin(), angles.t_ns.begin() + ends.size()));
+      for (int a = 0; a < 3; ++a) {
+        for (size_t k = 0; k < ends.size(); ++k)
+          ASSERT_EQ(r.series.range_arcsec[a][k], range[a][k] * kArcsecPerRad) << a << " " << k;
+      }
+    }
+  }
+}
+
 TEST(Flight, BadInputIsRejected) {
   const auto trace = MakeTrace(0.5, [](size_t) { return Eigen::Vector3d::Zero(); });
   FlightOptions options = Options();

@@ -8,9 +8,14 @@
 
 #include <gtest/gtest.h>
 
+#include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -187,6 +192,103 @@ TEST(GyroCsv, ToleratesExtraColumnsAndCrLf) {
   ASSERT_EQ(trace.size(), 2u);
   EXPECT_EQ(trace[1].t_ns, 1'000'000);
   EXPECT_EQ(trace[1].omega_rad_s, Eigen::Vector3d(4, 5, 6));
+}
+
+// Brute-force twin of the fast row parser: every row of a gyro.csv in all the forms a writer may
+// use (fixed decimals of any length, shortest round-trip doubles, exponents, '+', spaces, long
+// digit runs, 0 to 12 time decimals, epoch seconds, extra columns, CR LF, empty lines, a last line
+// without its break) reads exactly as the general path reads it field by field (SplitFields,
+// ParseTimeInUnitNs) and std::from_chars reads its rates, whatever the block and chunk sizes.
+TEST(GyroCsv, FastRowsReadAsTheGeneralFieldByFieldPath) {
+  std::mt19937_64 rng(18);
+  const auto number = [&rng](double x) {
+    char buffer[64];
+    std::to_chars_result r{};
+    switch (rng() % 8) {
+      case 0:  // shortest round trip, exponents where it likes them
+        r = std::to_chars(buffer, buffer + sizeof(buffer), x);
+        break;
+      case 1:
+        r = std::to_chars(buffer, buffer + sizeof(buffer), x, std::chars_format::scientific,
+                          static_cast<int>(rng() % 10));
+        break;
+      case 2:  // more digits than the fast path takes (19 in all)
+        r = std::to_chars(buffer, buffer + sizeof(buffer), x * 1e6, std::chars_format::fixed,
+                          14 + static_cast<int>(rng() % 4));
+        break;
+      case 3:
+        return std::string(rng() % 2 ? " " : "+") + std::to_string(std::abs(x));
+      default:  // as loggers write them
+        r = std::to_chars(buffer, buffer + sizeof(buffer), x, std::chars_format::fixed,
+                          static_cast<int>(rng() % 13));
+    }
+    return std::string(buffer, r.ptr);
+  };
+  for (int trial = 0; trial < 40; ++trial) {
+    const bool crlf = rng() % 4 == 0, epoch = rng() % 2 == 0;
+    std::string text = crlf ? "t,gx,gy,gz\r\n" : "t,gx,gy,gz\n";
+    const int64_t t0_ns = epoch ? 1'700'000'000'000'000'000 : 0;
+    const int rows = 1 + static_cast<int>(rng() % 400);
+    for (int i = 0; i < rows; ++i) {
+      // A second apart, so that times cut to any number of decimals still do not decrease.
+      const int64_t t_ns =
+          t0_ns + i * int64_t{1'000'000'000} + static_cast<int64_t>(rng() % 1'000'000'000);
+      const int decimals = static_cast<int>(rng() % 13);  // 10 to 12: more than ns, general path
+      std::string line = std::to_string(t_ns / 1'000'000'000);
+      if (decimals > 0) {
+        char fraction[16];
+        std::snprintf(fraction, sizeof(fraction), "%09lld",
+                      static_cast<long long>(t_ns % 1'000'000'000));
+        line += "." + (std::string(fraction) + "000").substr(0, decimals);
+      }
+      for (int a = 0; a < 3; ++a) {
+        const double scale = std::pow(10.0, static_cast<int>(rng() % 9) - 4);
+        line += "," + number(scale * std::normal_distribution<double>()(rng));
+      }
+      if (rng() % 10 == 0) line += ",25.5,extra";
+      text += line + (crlf ? "\r\n" : "\n");
+      if (rng() % 50 == 0) text += "\n";
+    }
+    if (rng() % 3 == 0) text.resize(text.size() - (crlf ? 2 : 1));  // no break after the last row
+    // The reference: each non-empty line through the general field-by-field path.
+    std::vector<GyroSample> expected;
+    LineCursor lines(text);
+    lines.Next();  // the header
+    std::vector<std::string_view> fields;
+    while (auto line = lines.Next()) {
+      if (line->empty()) continue;
+      SplitFields(*line, ',', &fields);
+      ASSERT_GE(fields.size(), 4u);
+      GyroSample s;
+      const auto t_ns = ParseTimeInUnitNs(fields[0], TimeUnit::kSeconds);
+      ASSERT_TRUE(t_ns) << *line;
+      s.t_ns = *t_ns;
+      for (int a = 0; a < 3; ++a) {  // std::from_chars itself: no code shared with the reader
+        std::string_view field = fields[a + 1];
+        if (field.front() == '+') field.remove_prefix(1);
+        const auto [end, ec] =
+            std::from_chars(field.data(), field.data() + field.size(), s.omega_rad_s[a]);
+        ASSERT_TRUE(ec == std::errc() && end == field.data() + field.size()) << *line;
+      }
+      expected.push_back(s);
+    }
+    const size_t block_bytes = 16 + rng() % 3000, chunk = 1 + rng() % 300;
+    std::unique_ptr<GyroSource> source =
+        OpenGyroCsv(TextBlocks::InMemory(text, block_bytes), "mem.csv", chunk);
+    std::vector<GyroSample> got;
+    for (GyroChunk c = source->Next(); !c.empty(); c = source->Next())
+      got.insert(got.end(), c.data, c.data + c.size);
+    EXPECT_TRUE(source->Warnings().empty()) << trial;
+    ASSERT_EQ(got.size(), expected.size()) << trial;
+    for (size_t i = 0; i < got.size(); ++i) {
+      ASSERT_EQ(got[i].t_ns, expected[i].t_ns) << trial << " row " << i;
+      for (int a = 0; a < 3; ++a) {
+        ASSERT_EQ(std::memcmp(&got[i].omega_rad_s[a], &expected[i].omega_rad_s[a], sizeof(double)),
+                  0)
+            << trial << " row " << i << " axis " << a;
+      }
+    }
+  }
 }
 
 // Each bad file gives an IoError whose message names the file, the line and the problem.
