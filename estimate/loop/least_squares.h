@@ -5,9 +5,11 @@
 // Cost: sum_i w_i rho(|r_i|), rho(s) = s^2 / 2 for s <= delta, delta (s - delta / 2) beyond
 // (Huber 1964): a point far off the model pulls with a bounded force, so a few bad measurements
 // cannot steer the fit, while Gaussian points (|r| << delta) are fitted by plain least squares.
-// Each iteration linearises with the Huber weights of the current residual (IRLS) and solves
-// (A + lambda diag(A)) dx = g, A = J^T W J (Marquardt's scaling makes it unit-free), accepting the
-// step only when the robust cost decreases.
+// Each iteration linearises at the current residual and solves (H + lambda diag(A)) dx = g, H the
+// cost's Gauss-Newton Hessian (a point beyond delta curves only across its residual), A = J^T W J
+// with the Huber weights W (IRLS; Marquardt's scaling makes it unit-free), g = J^T W r; a step is
+// accepted only when the robust cost decreases, and then doubled while it decreases further.
+// `normal` is A at the solution (the covariances' information matrix).
 
 #include <Eigen/Core>
 

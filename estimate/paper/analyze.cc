@@ -541,16 +541,18 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
 namespace {
 
 // A source whose rates are turned into camera axes (InCameraAxes, no bias): the still search sees
-// what Analyze's search sees on the whole trace.
+// what Analyze's search sees on the whole trace. report gets the share read after each chunk.
 class CameraAxesSource : public GyroSource {
  public:
-  CameraAxesSource(std::unique_ptr<GyroSource> source, const Eigen::Matrix3d& cam_from_gyro)
-      : source_(std::move(source)), cam_from_gyro_(cam_from_gyro) {}
+  CameraAxesSource(std::unique_ptr<GyroSource> source, const Eigen::Matrix3d& cam_from_gyro,
+                   std::function<void(double)> report)
+      : source_(std::move(source)), cam_from_gyro_(cam_from_gyro), report_(std::move(report)) {}
   GyroChunk Next() override {
     const GyroChunk chunk = source_->Next();
     rotated_.resize(chunk.size);
     for (size_t i = 0; i < chunk.size; ++i)
       rotated_[i] = InCameraAxes(chunk.data[i], cam_from_gyro_, Eigen::Vector3d::Zero());
+    report_(source_->Fraction());
     return {rotated_.data(), rotated_.size()};
   }
   double Fraction() const override { return source_->Fraction(); }
@@ -559,6 +561,7 @@ class CameraAxesSource : public GyroSource {
  private:
   std::unique_ptr<GyroSource> source_;
   Eigen::Matrix3d cam_from_gyro_;
+  std::function<void(double)> report_;
   std::vector<GyroSample> rotated_;
 };
 
@@ -757,7 +760,8 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
     try {
       still = DetectStillSegment([&]() -> std::unique_ptr<GyroSource> {
         FlightLogStream stream = passes.Next();
-        return std::make_unique<CameraAxesSource>(std::move(stream.gyro), cam_from_gyro);
+        return std::make_unique<CameraAxesSource>(std::move(stream.gyro), cam_from_gyro,
+                                                  [&](double f) { passes.Report(f); });
       });
     } catch (const std::invalid_argument&) {
       // no still stretch: zero bias, said so in the output

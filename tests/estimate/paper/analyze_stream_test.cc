@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -142,6 +143,25 @@ TEST(AnalyzeStream, EqualsTheWholeTraceAnalysisToTheBit) {
     int opened = 0;
     ExpectSameResult(AnalyzeStream(SourceOf(log, chunk, &opened), options), whole);
     EXPECT_EQ(opened, 7);  // five still passes, the sampling and the analysis
+  }
+}
+
+// Progress runs from the first pass to the last, never back: each of the seven passes moves it.
+TEST(AnalyzeStream, ProgressMovesThroughEveryPass) {
+  const FlightLog log = WobblyLog();
+  AnalyzeOptions options = TurnedCameraOptions();
+  std::vector<double> fractions;
+  options.progress = [&fractions](double f) { fractions.push_back(f); };
+  AnalyzeStream(SourceOf(log, 4096), options);
+  ASSERT_FALSE(fractions.empty());
+  EXPECT_LT(fractions.front(), 1.0 / 7);
+  EXPECT_EQ(fractions.back(), 1.0);
+  for (size_t i = 1; i < fractions.size(); ++i) EXPECT_GE(fractions[i], fractions[i - 1]) << i;
+  for (int pass = 0; pass < 7; ++pass) {
+    // Some report inside each pass's share.
+    EXPECT_TRUE(std::any_of(fractions.begin(), fractions.end(),
+                            [pass](double f) { return f > pass / 7.0 && f <= (pass + 1) / 7.0; }))
+        << "pass " << pass;
   }
 }
 
