@@ -192,8 +192,8 @@ void SetTriggers(const TriggerFile& triggers, const FlightLog& log, const std::s
 }
 
 // The log analysed as a stream (AnalyzeStream), in bounded memory whatever its length: what
-// `analyze LOG` does without --out (the report draws the whole trace) and --second (the pair is
-// fused on the whole traces).
+// `analyze LOG` does for a regular file without --out (the report draws the whole trace) and
+// --second (the pair is fused on the whole traces).
 AnalyzeResult AnalyzeStreamed(const AnalyzeCommand& command, const FlightLogReadOptions& read,
                               const std::optional<TriggerFile>& triggers, AnalyzeOptions options) {
   // Opened once for the triggers (a GPS-timed file needs the log's GPS fixes); that stream is
@@ -353,7 +353,10 @@ void Run(const AnalyzeCommand& command) {
   const AnalyzeReportOptions report = ReportFromFlags(command);
   std::optional<SensorPair> pair;
   AnalyzeResult result;
-  if (command.out_dir.empty() && command.second_path.empty()) {
+  // The stream reads the log several times: a pipe or a FIFO can be read once only, so such a
+  // log is read whole, as with --out and --second.
+  if (command.out_dir.empty() && command.second_path.empty() &&
+      std::filesystem::is_regular_file(command.log_path)) {
     try {
       result = AnalyzeStreamed(command, read, triggers, options);
     } catch (const std::invalid_argument& e) {

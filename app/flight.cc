@@ -9,6 +9,7 @@
 #include "sim/check.h"
 #include "sim/units.h"
 
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <stdexcept>
@@ -42,7 +43,11 @@ void Run(const FlightCommand& command) {
   std::vector<LogWarning> warnings;
   FlightResult result;
   TracePair pair;
-  if (!command.trace.second_path.empty()) {
+  // --auto-bias reads the log in passes: a pipe or a FIFO can be read once only, so it is read
+  // whole.
+  const bool passes_possible =
+      !command.trace.auto_bias || std::filesystem::is_regular_file(command.trace.path);
+  if (!command.trace.second_path.empty() || !passes_possible) {
     // A pair is fused on the whole traces.
     Progress progress("flight", 1000);
     options.progress = [&progress](double fraction) {

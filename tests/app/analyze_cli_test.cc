@@ -1,3 +1,4 @@
+#include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
 #include "tests/estimate/report/report_test_util.h"
@@ -8,9 +9,11 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 namespace shutterlab {
 namespace {
@@ -96,6 +99,31 @@ TEST(AnalyzeCli, EveryTakesPrecedenceAndOneImageIsSingular) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("triggers: every 40 s"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("verdict: 1 image,"), std::string::npos) << r.output;
+}
+
+// `analyze LOG` reads a regular file as a stream, several times; a log on a pipe can be read once
+// only, so it is read whole: the same images and flight table either way.
+TEST(AnalyzeCli, ALogOnAPipeIsReadOnceWithTheSameResult) {
+  test::TempDir dir;
+  std::vector<GyroSample> samples;
+  for (int i = 0; i < 12000; ++i) {  // 1 kHz, still for 5 s, then turning
+    const double t = i * 1e-3;
+    const double turning = t < 5.0 ? 0.0 : 0.4 * std::sin(3.0 * t);
+    samples.push_back({static_cast<int64_t>(i) * 1000000,
+                       Eigen::Vector3d(0.01 + turning, 0.5 * turning, 0.002 * std::cos(50 * t))});
+  }
+  const std::string path = dir / "gyro.csv";
+  WriteGyroCsv(path, GyroTrace(std::move(samples)));
+  const std::string args = " --every 1s --json";
+  const auto from_file = RunShutterlab("analyze " + path + args);
+  ASSERT_EQ(from_file.exit_code, 0) << from_file.output;
+  const auto from_pipe = RunShutterlab("analyze /dev/stdin --format gyro.csv" + args, path);
+  ASSERT_EQ(from_pipe.exit_code, 0) << from_pipe.output;
+  const nlohmann::json file_json = nlohmann::json::parse(from_file.out);
+  const nlohmann::json pipe_json = nlohmann::json::parse(from_pipe.out);
+  ASSERT_EQ(file_json["images"].size(), 11u);  // at 1, 2, ... 11 s of the 12 s log
+  EXPECT_EQ(pipe_json["images"], file_json["images"]);
+  EXPECT_EQ(pipe_json["flight"], file_json["flight"]);
 }
 
 TEST(AnalyzeCli, TableHasVerdict) {

@@ -16,14 +16,16 @@ struct CommandResult {
   std::string err;     // stderr alone (warnings, progress, errors)
 };
 
-// Runs the shutterlab executable with the given argument string (shell syntax).
-inline CommandResult RunShutterlab(const std::string& args) {
+// Runs the shutterlab executable with the given argument string (shell syntax); stdin_file, when
+// given, is piped to its standard input by `cat` (so /dev/stdin is a pipe, readable once only).
+inline CommandResult RunShutterlab(const std::string& args, const std::string& stdin_file = "") {
   CommandResult result{-1, "", "", ""};
   char err_path[] = "/tmp/shutterlab_stderr_XXXXXX";
   const int fd = ::mkstemp(err_path);
   if (fd < 0) return result;
   ::close(fd);
-  const std::string command = std::string(SHUTTERLAB_BINARY) + " " + args + " 2>" + err_path;
+  const std::string command = (stdin_file.empty() ? "" : "cat '" + stdin_file + "' | ") +
+                              std::string(SHUTTERLAB_BINARY) + " " + args + " 2>" + err_path;
   FILE* pipe = ::popen(command.c_str(), "r");
   if (pipe) {
     char buffer[4096];
