@@ -178,7 +178,9 @@ struct AnalyzeLogSource {
 // five passes (sim/still_detect.h), one for the sampling, warnings and bias, one for the flight
 // table and the images' readouts. The result is Analyze's on the log read whole, to the bit: the
 // same sums in the same order; the readouts are measured on a stretch of the same integration
-// kept while they are open. What it does not give is what only the report draws: traces is null,
+// kept while they are open. (Where the sample intervals take over 65,536 distinct values, the
+// median interval and the gap count come from bucketed intervals: sim/interval_histogram.h.)
+// What it does not give is what only the report draws: traces is null,
 // and options.flight_series and options.allan must be false (std::invalid_argument).
 AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions& options);
 
