@@ -54,11 +54,11 @@ const char* ParseRowFast(const char* p, const char* end, GyroSample* s) {
     p = next;
     if (axis < 2 && *p != ',') return nullptr;
   }
-  if (*p == '\r') ++p;
   if (*p == ',') {  // extra columns: ignored
     p = static_cast<const char*>(std::memchr(p, '\n', end - p));
     return p + 1;
   }
+  if (*p == '\r') ++p;  // a CRLF line end; a '\r' anywhere else is the general path's to refuse
   return *p == '\n' ? p + 1 : nullptr;
 }
 
