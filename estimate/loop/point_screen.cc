@@ -43,7 +43,6 @@ bool CameraFixedRegion::Contains(double u, double v) const {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // A frame needs this many points for its consensus to judge any of them.
 constexpr size_t kMinConsensusPoints = 20;
 // A residual's median over its per-component sigma: |e| of a 2-D Gaussian is Rayleigh (median

@@ -30,7 +30,6 @@ namespace shutterlab {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 
 // Grid rows or columns: every kGridStepPx-th plus the last one (as analyze's D_full).
 std::vector<int> GridLines(int size) {

@@ -55,7 +55,6 @@ void RecorderOptions::Check() const {
 
 namespace {
 
-constexpr int64_t kNsPerS = 1000000000;
 int64_t ToNs(double s) { return static_cast<int64_t>(std::llround(s * 1e9)); }
 
 // Everything about one sensor during a recording. The reader owns the reader fields, the writer
