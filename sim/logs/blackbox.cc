@@ -292,10 +292,10 @@ std::string CompileFrameDef(int kind, const LogHeader& h, FrameDef* def) {
       }
     }
   }
-  def->ops.clear();
-  for (size_t i = 0; i < n;) {
+  // Every field's predictor, the fields inside an encoded group too (a group's later field
+  // predicted from motor[0] with no motor[0] field read before the ring buffer).
+  for (size_t i = 0; i < n; ++i) {
     const int pred = def->predictor[i];
-    const int enc = def->encoding[i];
     if (pred != blackbox::kPredictHomeCoord1 && !KnownPredictor(pred)) {
       return frame + ": unsupported predictor " + std::to_string(pred) + " for field " +
              def->names[i];
@@ -306,6 +306,11 @@ std::string CompileFrameDef(int kind, const LogHeader& h, FrameDef* def) {
       return frame + ": field " + def->names[i] +
              " is predicted from motor[0], which is not decoded before it";
     }
+  }
+  def->ops.clear();
+  for (size_t i = 0; i < n;) {
+    const int pred = def->predictor[i];
+    const int enc = def->encoding[i];
     if (pred == blackbox::kPredictIncrement) {
       def->ops.push_back({kIncrementOp, 1, static_cast<uint16_t>(i)});
       ++i;

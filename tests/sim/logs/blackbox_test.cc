@@ -678,6 +678,29 @@ TEST(Blackbox, RejectsInputThatIsNotALogWithAMessageNamingThePath) {
   EXPECT_THROW(DecodeBlackbox(unknown, "unknown.bbl"), IoError);
 }
 
+// Regression (fuzz/flight_log_fuzz on 2a2eb04, 169,291 executions): only the first field of an
+// encoded group had its predictor checked, so a later member predicted from motor[0] read the
+// frame before motor[0] was decoded, and with no motor[0] field at all, before the ring buffer
+// (a heap overflow under ASan). Every member is checked now.
+TEST(Blackbox, AGroupMemberPredictedFromMotor0DecodedAfterItIsRefused) {
+  SyntheticOptions o;
+  std::string bad = MakeSyntheticLog(o).bytes;
+  // axisP[0..2] are one Tag2_3S32 group in P frames; axisP[1] now predicts from motor[0].
+  const std::string line = "H Field P predictor:6,2,1,1,1,";
+  const size_t at = bad.find(line);
+  ASSERT_NE(at, std::string::npos);
+  bad.replace(at, line.size(), "H Field P predictor:6,2,1,5,1,");  // 5: motor[0]
+  try {
+    DecodeBlackbox(bad, "group.bbl");
+    FAIL() << "a group member predicted from a later motor[0] must not decode";
+  } catch (const IoError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("axisP[1] is predicted from motor[0], which is not decoded before it"),
+              std::string::npos)
+        << what;
+  }
+}
+
 TEST(Blackbox, RandomBodiesAfterAValidHeaderNeverCrashOrHang) {
   SyntheticOptions o;
   const std::string header = SyntheticHeader(o);
