@@ -353,10 +353,10 @@ void Run(const AnalyzeCommand& command) {
   const AnalyzeReportOptions report = ReportFromFlags(command);
   std::optional<SensorPair> pair;
   AnalyzeResult result;
-  // The stream reads the log several times: a pipe or a FIFO can be read once only, so such a
-  // log is read whole, as with --out and --second.
+  // The stream reads the log several times; a log on a pipe is read whole, as with --out and
+  // --second.
   if (command.out_dir.empty() && command.second_path.empty() &&
-      std::filesystem::is_regular_file(command.log_path)) {
+      ReadableInPasses(command.log_path)) {
     try {
       result = AnalyzeStreamed(command, read, triggers, options);
     } catch (const std::invalid_argument& e) {

@@ -9,7 +9,6 @@
 #include "sim/check.h"
 #include "sim/units.h"
 
-#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <stdexcept>
@@ -43,10 +42,8 @@ void Run(const FlightCommand& command) {
   std::vector<LogWarning> warnings;
   FlightResult result;
   TracePair pair;
-  // --auto-bias reads the log in passes: a pipe or a FIFO can be read once only, so it is read
-  // whole.
-  const bool passes_possible =
-      !command.trace.auto_bias || std::filesystem::is_regular_file(command.trace.path);
+  // --auto-bias reads the log in passes; a log on a pipe is read whole.
+  const bool passes_possible = !command.trace.auto_bias || ReadableInPasses(command.trace.path);
   if (!command.trace.second_path.empty() || !passes_possible) {
     // A pair is fused on the whole traces.
     Progress progress("flight", 1000);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <utility>
@@ -168,6 +169,8 @@ BiasSegment TraceOptions::Segment(const GyroTrace& trace) const {
   if (!auto_bias) return ParseBiasSegment(bias);
   return NoteStillSegment(DetectStillSegment(trace));
 }
+
+bool ReadableInPasses(const std::string& path) { return std::filesystem::is_regular_file(path); }
 
 BiasSegment TraceOptions::StreamedSegment() const {
   if (!auto_bias) return ParseBiasSegment(bias);

@@ -70,6 +70,9 @@ struct TraceOptions {
 
 // What the reader could not read or trust, one "warning: PATH: LINE" on stderr each, so that no
 // command analyses less than the file holds without saying so.
+// Whether the log at path can be read more than once (a streamed analysis's passes): a regular
+// file can; a pipe or a FIFO (/dev/stdin) is drained by the first read and must be read whole.
+bool ReadableInPasses(const std::string& path);
 void PrintLogWarnings(const std::string& path, const std::vector<LogWarning>& warnings);
 
 // Runs analysis(trace, options) the way every trace command does: --bias is parsed and the options
