@@ -147,9 +147,9 @@ row() { printf '%-18s %12s %9s %9s %10s  %s\n' "$@" | tee -a "$table"; }
 row target executions "wall s" "CPU s" "exec/CPU s" result
 children_cpu() {  # cpu_now: user + system seconds of this shell's finished children (`times`,
   # run in this shell, not in a subshell, which would have children of its own)
-  times >"$build/artifacts/times.txt"
+  times >"$build/artifacts/times.$$.txt"  # per run: two campaigns may share DIR
   cpu_now=$(awk 'NR == 2 { split($0, f, /[ ms]+/); print f[1] * 60 + f[2] + f[3] * 60 + f[4] }' \
-    "$build/artifacts/times.txt")
+    "$build/artifacts/times.$$.txt")
 }
 for t in "${targets[@]}"; do
   log="$build/artifacts/$t.log"
