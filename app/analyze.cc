@@ -191,6 +191,26 @@ void SetTriggers(const TriggerFile& triggers, const FlightLog& log, const std::s
       "trigger file " + std::filesystem::path(path).filename().string() + ": " + triggers.source;
 }
 
+// The log as AnalyzeStream reads it: first is its first stream, already opened (its metadata
+// read); each later pass opens the log again. Prints the log's warnings when it has been read
+// through; the trigger file's go after them.
+AnalyzeLogSource StreamSource(const AnalyzeCommand& command, const FlightLogReadOptions& read,
+                              const std::optional<TriggerFile>& triggers, FlightLogStream first) {
+  auto first_left = std::make_shared<std::optional<FlightLogStream>>(std::move(first));
+  AnalyzeLogSource source;
+  source.open = [first_left, &command, &read] {
+    if (!*first_left) return OpenFlightLog(command.log_path, read);
+    FlightLogStream stream = std::move(**first_left);
+    first_left->reset();
+    return stream;
+  };
+  source.more_warnings = TriggerWarnings(triggers, command.triggers_path);
+  source.on_read = [&command](const std::vector<LogWarning>& warnings) {
+    PrintLogWarnings(command.log_path, warnings);
+  };
+  return source;
+}
+
 // The log analysed as a stream (AnalyzeStream), in bounded memory whatever its length: what
 // `analyze LOG` does for a regular file without --out (the report draws the whole trace) and
 // --second (the pair is fused on the whole traces).
@@ -198,20 +218,9 @@ AnalyzeResult AnalyzeStreamed(const AnalyzeCommand& command, const FlightLogRead
                               const std::optional<TriggerFile>& triggers, AnalyzeOptions options) {
   // Opened once for the triggers (a GPS-timed file needs the log's GPS fixes); that stream is
   // the analysis's first.
-  auto first =
-      std::make_shared<std::optional<FlightLogStream>>(OpenFlightLog(command.log_path, read));
-  if (triggers) SetTriggers(*triggers, (*first)->log, command.triggers_path, &options);
-  AnalyzeLogSource source;
-  source.open = [first, &command, &read] {
-    if (!*first) return OpenFlightLog(command.log_path, read);
-    FlightLogStream stream = std::move(**first);
-    first->reset();
-    return stream;
-  };
-  source.more_warnings = TriggerWarnings(triggers, command.triggers_path);
-  source.on_read = [&command](const std::vector<LogWarning>& warnings) {
-    PrintLogWarnings(command.log_path, warnings);
-  };
+  FlightLogStream first = OpenFlightLog(command.log_path, read);
+  if (triggers) SetTriggers(*triggers, first.log, command.triggers_path, &options);
+  const AnalyzeLogSource source = StreamSource(command, read, triggers, std::move(first));
   Progress progress("analyze", 1000);
   options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
   return AnalyzeStream(source, options);
@@ -251,6 +260,34 @@ FlightLog ReadLog(const AnalyzeCommand& command, const FlightLogReadOptions& rea
   log.gyro = (*pair)->fused;
   log.warnings.insert(log.warnings.end(), second.warnings.begin(), second.warnings.end());
   return log;
+}
+
+// The photos placed and analysed on the LOG. A regular file without --out (the report draws the
+// whole trace) and --second (the pair is fused on the whole traces) is read as a stream, in
+// bounded memory whatever its length; else the log is read whole.
+PhotoFlightResult PhotosOnLog(const AnalyzeCommand& command, const FlightLogReadOptions& read,
+                              const PhotoSet& set, const std::optional<TriggerFile>& triggers,
+                              const PhotoFlightOptions& options, std::optional<SensorPair>* pair) {
+  const TriggerFile* trigger_file = triggers ? &*triggers : nullptr;
+  const bool streamed =
+      command.out_dir.empty() && command.second_path.empty() && ReadableInPasses(command.log_path);
+  if (streamed) {
+    FlightLogStream first = OpenFlightLog(command.log_path, read);
+    const FlightLog metadata = first.log;  // the samples stay in the stream
+    const AnalyzeLogSource source = StreamSource(command, read, triggers, std::move(first));
+    try {
+      return AnalyzePhotoFlightStream(set, metadata, source, trigger_file, options);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(command.log_path + ": " + e.what());
+    }
+  }
+  FlightLog log = ReadLog(command, read, pair);
+  AddTriggerWarnings(triggers, command.triggers_path, &log);
+  try {
+    return AnalyzePhotoFlight(set, log, trigger_file, options);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(command.log_path + ": " + e.what());
+  }
 }
 
 // --photos DIR [LOG]: the photos alone (translation from their speed), or placed on the log.
@@ -305,19 +342,12 @@ void RunPhotos(const AnalyzeCommand& command) {
     }
     return;
   }
-  std::optional<SensorPair> pair;
-  FlightLog log = ReadLog(command, *log_read, &pair);
-  AddTriggerWarnings(triggers, command.triggers_path, &log);
   Progress progress("analyze", 1000);
   options.analyze.progress = [&progress](double f) {
     progress.Update(static_cast<size_t>(f * 1000));
   };
-  PhotoFlightResult result;
-  try {
-    result = AnalyzePhotoFlight(set, log, triggers ? &*triggers : nullptr, options);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(command.log_path + ": " + e.what());
-  }
+  std::optional<SensorPair> pair;
+  const PhotoFlightResult result = PhotosOnLog(command, *log_read, set, triggers, options, &pair);
   if (result.lens) {
     for (const std::string& note : result.lens->notes) std::cerr << "note: " << note << "\n";
   }

@@ -105,15 +105,8 @@ TEST(AnalyzeCli, EveryTakesPrecedenceAndOneImageIsSingular) {
 // only, so it is read whole: the same images and flight table either way.
 TEST(AnalyzeCli, ALogOnAPipeIsReadOnceWithTheSameResult) {
   test::TempDir dir;
-  std::vector<GyroSample> samples;
-  for (int i = 0; i < 12000; ++i) {  // 1 kHz, still for 5 s, then turning
-    const double t = i * 1e-3;
-    const double turning = t < 5.0 ? 0.0 : 0.4 * std::sin(3.0 * t);
-    samples.push_back({static_cast<int64_t>(i) * 1000000,
-                       Eigen::Vector3d(0.01 + turning, 0.5 * turning, 0.002 * std::cos(50 * t))});
-  }
   const std::string path = dir / "gyro.csv";
-  WriteGyroCsv(path, GyroTrace(std::move(samples)));
+  test::WriteStillThenTurningGyroCsv(path);
   const std::string args = " --every 1s --json";
   const auto from_file = RunShutterlab("analyze " + path + args);
   ASSERT_EQ(from_file.exit_code, 0) << from_file.output;
