@@ -404,9 +404,10 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
   cmd->add_option("--photo-utc-offset", command->photo_utc_offset,
                   "the photos' camera clock zone, e.g. +08:00 (else EXIF OffsetTimeOriginal, the "
                   "offset fitted to the log's events, or the one zone that fits the log)");
-  cmd->add_option("--format", command->format,
-                  "auto, ulog, dataflash, blackbox, gopro, gyro.csv, gcsv, raw (columns: set by "
-                  "--columns)")
+  cmd->add_option(
+         "--format", command->format,
+         "auto, ulog, dataflash, blackbox, gopro, gyro.csv, gcsv, raw, gyro_dump (columns: set by "
+         "--columns)")
       ->capture_default_str();
   cmd->add_option("--log-index", command->log_index,
                   "blackbox: which log of the file (-1 = longest)")
