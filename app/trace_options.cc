@@ -145,24 +145,6 @@ BiasSegment NoteStillSegment(const StillSegment& still) {
   return still.segment;
 }
 
-// A source that reports the share it has read after each chunk.
-class ReportingSource : public GyroSource {
- public:
-  ReportingSource(std::unique_ptr<GyroSource> source, std::function<void(double)> report)
-      : source_(std::move(source)), report_(std::move(report)) {}
-  GyroChunk Next() override {
-    const GyroChunk chunk = source_->Next();
-    report_(source_->Fraction());
-    return chunk;
-  }
-  double Fraction() const override { return source_->Fraction(); }
-  std::vector<LogWarning> Warnings() const override { return source_->Warnings(); }
-
- private:
-  std::unique_ptr<GyroSource> source_;
-  std::function<void(double)> report_;
-};
-
 }  // namespace
 
 BiasSegment TraceOptions::Segment(const GyroTrace& trace) const {

@@ -208,7 +208,10 @@ StreamedLog ConsumeFlightLog(FlightLogStream* stream,
   StreamedLog out;
   out.warnings = stream->log.warnings;
   for (LogWarning& warning : stream->gyro->Warnings()) out.warnings.push_back(std::move(warning));
-  for (LogWarning& warning : auditor.Finish()) out.warnings.push_back(std::move(warning));
+  std::vector<LogWarning> audit = auditor.Finish();
+  if (stream->audit_warnings) {
+    for (LogWarning& warning : audit) out.warnings.push_back(std::move(warning));
+  }
   out.sampling = auditor.Sampling();
   return out;
 }
