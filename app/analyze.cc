@@ -142,9 +142,8 @@ AnalyzeOptions AnalyzeOptionsFromFlags(const AnalyzeCommand& command,
   options.use_log_altitude = !command.altitude_given && command.camera_path.empty();
   if (!command.every.empty()) options.every_s = ParseDurationS(command.every);
   options.trigger_latency_s = ParseDurationS(command.latency);
-  // The report shades the flagged windows and draws their histograms from the flight series, and
-  // plots the Allan deviation.
-  options.flight_series = !command.out_dir.empty();
+  // The report's charts, shading, histograms and pictures, and its Allan deviation.
+  if (!command.out_dir.empty()) options.plots = AnalyzePlotOptions{};
   options.allan = !command.out_dir.empty();
   return options;
 }
