@@ -142,9 +142,8 @@ AnalyzeOptions AnalyzeOptionsFromFlags(const AnalyzeCommand& command,
   options.use_log_altitude = !command.altitude_given && command.camera_path.empty();
   if (!command.every.empty()) options.every_s = ParseDurationS(command.every);
   options.trigger_latency_s = ParseDurationS(command.latency);
-  // The report shades the flagged windows and draws their histograms from the flight series, and
-  // plots the Allan deviation.
-  options.flight_series = !command.out_dir.empty();
+  // The report's charts, shading, histograms and pictures, and its Allan deviation.
+  if (!command.out_dir.empty()) options.plots = AnalyzePlotOptions{};
   options.allan = !command.out_dir.empty();
   return options;
 }
@@ -505,9 +504,10 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
   cmd->add_option("--photo-utc-offset", command->photo_utc_offset,
                   "the photos' camera clock zone, e.g. +08:00 (else EXIF OffsetTimeOriginal, the "
                   "offset fitted to the log's events, or the one zone that fits the log)");
-  cmd->add_option("--format", command->format,
-                  "auto, ulog, dataflash, blackbox, gopro, gyro.csv, gcsv, raw (columns: set by "
-                  "--columns)")
+  cmd->add_option(
+         "--format", command->format,
+         "auto, ulog, dataflash, blackbox, gopro, gyro.csv, gcsv, raw, gyro_dump (columns: set by "
+         "--columns)")
       ->capture_default_str();
   cmd->add_option("--log-index", command->log_index,
                   "blackbox: which log of the file (-1 = longest)")

@@ -53,10 +53,10 @@ void TraceOptions::Add(CLI::App* command, bool with_bias) {
       ->required()
       ->check(CLI::ExistingFile);
   command
-      ->add_option(
-          "--format", format,
-          "log format: auto, csv, gcsv, raw, ulog, blackbox, dataflash, gopro (columns: set by "
-          "--columns)")
+      ->add_option("--format", format,
+                   "log format: auto, csv, gcsv, raw, ulog, blackbox, dataflash, gopro, gyro_dump "
+                   "(columns: set by "
+                   "--columns)")
       ->capture_default_str();
   command->add_flag("--raw", raw, "the log holds raw int16 counts (the source paper's logger)");
   command

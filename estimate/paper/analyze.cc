@@ -95,6 +95,59 @@ struct TraceSpan {
   int64_t first_ns = 0, last_ns = 0;
 };
 
+// AnalyzePlots built as the samples and the images come, in the same order from the whole trace as
+// from a stream, so that both give the same plots.
+class PlotBuilder {
+ public:
+  PlotBuilder(const AnalyzePlotOptions& options, size_t samples, const TraceSpan& span)
+      : worst_images_(options.worst_images),
+        envelope_(6, options.chart_buckets, samples, span.first_ns * 1e-9, span.last_ns * 1e-9) {}
+
+  // The next sample: its rate in camera axes less the bias, and its per-axis angles.
+  void AddSample(int64_t t_ns, const Eigen::Vector3d& rate_rad_s, const double* angle_rad) {
+    const double y[6] = {rate_rad_s[0] * kDegPerRad, rate_rad_s[1] * kDegPerRad,
+                         rate_rad_s[2] * kDegPerRad, angle_rad[0] * kDegPerRad,
+                         angle_rad[1] * kDegPerRad,  angle_rad[2] * kDegPerRad};
+    envelope_.Add(t_ns * 1e-9, y);
+  }
+
+  // A judged image (its index in the result's images): its frame, asked of frame() only when it
+  // ranks among the worst so far.
+  void OfferImage(size_t image, double d_full_m, const std::function<FrameMotion()>& frame) {
+    const auto worse = [](const Ranked& a, const Ranked& b) {
+      return a.d_full_m > b.d_full_m || (a.d_full_m == b.d_full_m && a.worst.image < b.worst.image);
+    };
+    Ranked candidate{d_full_m, {image, {}}};
+    if (worst_.size() == worst_images_ && (worst_.empty() || !worse(candidate, worst_.back())))
+      return;
+    candidate.worst.frame = frame();
+    worst_.insert(std::upper_bound(worst_.begin(), worst_.end(), candidate, worse),
+                  std::move(candidate));
+    if (worst_.size() > worst_images_) worst_.pop_back();
+  }
+
+  std::shared_ptr<const AnalyzePlots> Finish() {
+    envelope_.Finish();
+    auto plots = std::make_shared<AnalyzePlots>();
+    plots->t_s = envelope_.x();
+    for (int a = 0; a < 3; ++a) {
+      plots->rate_deg_s[a] = envelope_.y()[a];
+      plots->angle_deg[a] = envelope_.y()[3 + a];
+    }
+    for (Ranked& ranked : worst_) plots->worst.push_back(std::move(ranked.worst));
+    return plots;
+  }
+
+ private:
+  struct Ranked {
+    double d_full_m = 0.0;
+    AnalyzePlots::WorstImage worst;
+  };
+  size_t worst_images_;
+  MinMaxEnvelope envelope_;
+  std::vector<Ranked> worst_;  // worst first
+};
+
 // The image's exposure and whether the trace can judge it (in_trace, too_few_samples), from the
 // trace's ends and sampling alone: nothing of it is measured yet.
 ImageResult ImageTiming(const ImageContext& context, const ImageTrigger& trigger,
@@ -249,8 +302,10 @@ FlightOptions FlightOptionsForReadout(const AnalyzeOptions& options, const Analy
   flight_options.limits_m = options.limits_m;
   flight_options.windows_s = {options.rig.shutter.readout_s};
   flight_options.noise_allowance_arcsec = options.noise_allowance_arcsec;
-  flight_options.series = options.flight_series;
-  flight_options.series_vector = false;  // the report plots the per-axis ranges only
+  if (options.plots) {
+    flight_options.summary = true;
+    flight_options.summary_max_intervals = options.plots->chart_buckets;
+  }
   // The still segment may lie anywhere (often after landing), so its bias is applied to every
   // sample rather than starting the statistics after the segment as `flight --bias` does.
   flight_options.known_bias_rad_s = result.bias_rad_s;
@@ -441,8 +496,13 @@ TrueModel AnalyzeTrueModel(const RigModel& rig, const Eigen::Vector3d& bias_cam_
   return model;
 }
 
+void AnalyzePlotOptions::Check() const {
+  SHUTTERLAB_CHECK(chart_buckets >= 10) << "chart_buckets must be >= 10";
+}
+
 void AnalyzeOptions::Check() const {
   rig.Check();
+  if (plots) plots->Check();
   SHUTTERLAB_CHECK(rig.shutter.readout_s > 0 && rig.shutter.readout_s < 10.0)
       << "readout must be in (0, 10) s (got " << rig.shutter.readout_s << " s)";
   SHUTTERLAB_CHECK(std::isfinite(rig.altitude_m) && rig.altitude_m > 0)
@@ -476,6 +536,24 @@ AnalyzeOptions WithLogAltitude(const FlightLog& log, const AnalyzeOptions& given
     *altitude_source = "log";
   }
   return options;
+}
+
+// The plots of the traces held whole.
+std::shared_ptr<const AnalyzePlots> WholeTracePlots(const AnalyzePlotOptions& options,
+                                                    const AnalyzeTraces& traces,
+                                                    const std::vector<ImageResult>& images) {
+  const auto& samples = traces.camera_rates.samples();
+  PlotBuilder plots(options, samples.size(), {samples.front().t_ns, samples.back().t_ns});
+  for (size_t k = 0; k < samples.size(); ++k) {
+    const double angle_rad[3] = {traces.angles.angle_rad[0][k], traces.angles.angle_rad[1][k],
+                                 traces.angles.angle_rad[2][k]};
+    plots.AddSample(samples[k].t_ns, samples[k].omega_rad_s, angle_rad);
+  }
+  for (size_t i = 0; i < images.size(); ++i) {
+    if (!images[i].judged()) continue;
+    plots.OfferImage(i, images[i].d_full_m, [&] { return traces.motion.Frame(images[i].t_ns); });
+  }
+  return plots.Finish();
 }
 
 }  // namespace
@@ -523,6 +601,7 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
     result.images.push_back(AnalyzeImage(context, triggers[i], latency_ns));
     ReportProgress(options, 0.7 + 0.25 * (i + 1) / triggers.size());
   }
+  if (options.plots) result.plots = WholeTracePlots(*options.plots, *result.traces, result.images);
   // The verdict, with the what-if shares recomputed (not scaled) under the changed camera.
   JudgeImages(
       options,
@@ -582,12 +661,14 @@ class StreamedReadouts {
   // contexts: one per camera variant (their angles and motion are set here; the first, the camera
   // analysed, gets D_full, the what-if ones none); images[v]: the images under variant v, timed
   // (ImageTiming); every judged one is measured.
+  // plots, when not null, is given every sample and every judged image of the camera analysed.
   StreamedReadouts(std::vector<ImageContext> contexts, std::vector<std::vector<ImageResult>> images,
-                   const TrueModel& model, const Eigen::Vector3d& bias_rad_s)
+                   const TrueModel& model, const Eigen::Vector3d& bias_rad_s, PlotBuilder* plots)
       : contexts_(std::move(contexts)),
         images_(std::move(images)),
         model_(model),
-        bias_rad_s_(bias_rad_s) {
+        bias_rad_s_(bias_rad_s),
+        plots_(plots) {
     for (size_t v = 0; v < images_.size(); ++v) {
       const int64_t readout_ns = SecondsToNs(contexts_[v].rig.shutter.readout_s);
       for (size_t i = 0; i < images_[v].size(); ++i) {
@@ -646,6 +727,7 @@ class StreamedReadouts {
       next.world_from_cam =
           OrientationStep(before.world_from_cam, before.cam_rate_rad_s, next.cam_rate_rad_s, dt_s);
     }
+    if (plots_ != nullptr) plots_->AddSample(next.t_ns, rate.omega_rad_s, next.angle_rad);
     kept_.push_back(next);
   }
 
@@ -693,7 +775,10 @@ class StreamedReadouts {
                      OrientationTrace(angles.t_ns, std::move(rates), std::move(orientations)));
       context.motion = &*motion;
     }
-    MeasureImage(context, &images_[job->variant][job->image]);
+    ImageResult& image = images_[job->variant][job->image];
+    MeasureImage(context, &image);
+    if (motion && plots_ != nullptr)
+      plots_->OfferImage(job->image, image.d_full_m, [&] { return motion->Frame(image.t_ns); });
     job->done = true;
   }
 
@@ -701,6 +786,7 @@ class StreamedReadouts {
   std::vector<std::vector<ImageResult>> images_;
   TrueModel model_;
   Eigen::Vector3d bias_rad_s_;
+  PlotBuilder* plots_;
   std::vector<ReadoutJob> jobs_;  // by start time
   size_t first_open_ = 0;         // jobs before it are done
   std::deque<Kept> kept_;
@@ -742,8 +828,8 @@ class LogPasses {
 }  // namespace
 
 AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions& given_options) {
-  SHUTTERLAB_CHECK(!given_options.flight_series && !given_options.allan)
-      << "the streamed analysis keeps no flight series or Allan deviation (the report's)";
+  SHUTTERLAB_CHECK(!given_options.allan)
+      << "the streamed analysis computes no Allan deviation (the report's)";
   constexpr size_t kStillPasses = 5;  // DetectStillSegment on a source reads it at most five times
   LogPasses passes(source, given_options, (given_options.estimate_bias ? kStillPasses : 0) + 2);
   std::string altitude_source;
@@ -831,8 +917,11 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
   } catch (const std::invalid_argument&) {
     flight_refused = std::current_exception();
   }
+  std::optional<PlotBuilder> plots;
+  if (options.plots) plots.emplace(*options.plots, read.sampling.samples, span);
   StreamedReadouts readouts(contexts, std::move(images),
-                            AnalyzeTrueModel(options.rig, result.bias_rad_s), result.bias_rad_s);
+                            AnalyzeTrueModel(options.rig, result.bias_rad_s), result.bias_rad_s,
+                            plots ? &*plots : nullptr);
   std::vector<GyroSample> rotated;
   consume([&](const GyroChunk& chunk) {
     if (flight) {
@@ -851,6 +940,7 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
       &result);
   std::vector<std::vector<ImageResult>> measured = readouts.Finish();
   result.images = std::move(measured[0]);
+  if (plots) result.plots = plots->Finish();
   JudgeImages(
       options,
       [&] {

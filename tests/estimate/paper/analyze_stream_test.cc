@@ -101,6 +101,37 @@ void ExpectSameResult(const AnalyzeResult& s, const AnalyzeResult& w) {
   EXPECT_EQ(s.verdict.line, w.verdict.line);
   EXPECT_EQ(AnalyzeReport(s), AnalyzeReport(w));
   EXPECT_EQ(s.traces, nullptr);
+  // What a report draws.
+  ASSERT_EQ(s.plots != nullptr, w.plots != nullptr);
+  if (w.plots) {
+    EXPECT_EQ(s.plots->t_s, w.plots->t_s);
+    EXPECT_EQ(s.plots->rate_deg_s, w.plots->rate_deg_s);
+    EXPECT_EQ(s.plots->angle_deg, w.plots->angle_deg);
+    ASSERT_EQ(s.plots->worst.size(), w.plots->worst.size());
+    for (size_t i = 0; i < w.plots->worst.size(); ++i) {
+      EXPECT_EQ(s.plots->worst[i].image, w.plots->worst[i].image);
+      const FrameMotion& sf = s.plots->worst[i].frame;
+      const FrameMotion& wf = w.plots->worst[i].frame;
+      ASSERT_EQ(sf.world_from_cam.size(), wf.world_from_cam.size());
+      for (size_t row = 0; row < wf.world_from_cam.size(); ++row) {
+        ASSERT_EQ(sf.world_from_cam[row], wf.world_from_cam[row]) << row;
+        ASSERT_EQ(sf.cam_center_m[row], wf.cam_center_m[row]) << row;
+      }
+      EXPECT_EQ(sf.world_from_ref, wf.world_from_ref);
+    }
+  }
+  if (w.flight) {
+    ASSERT_EQ(s.flight->summary.has_value(), w.flight->summary.has_value());
+    if (w.flight->summary) {
+      const FlightWindowSummary& ss = *s.flight->summary;
+      const FlightWindowSummary& ws = *w.flight->summary;
+      EXPECT_EQ(ss.windows, ws.windows);
+      ASSERT_EQ(ss.flagged.size(), ws.flagged.size());
+      for (size_t l = 0; l < ws.flagged.size(); ++l)
+        EXPECT_EQ(ss.flagged[l].intervals(), ws.flagged[l].intervals());
+      for (int a = 0; a < 3; ++a) EXPECT_TRUE(ss.range_arcsec[a] == ws.range_arcsec[a]);
+    }
+  }
 }
 
 // 12 s at 1 kHz: still with noise and a bias for 4 s, then a wobble about every axis with noise.
@@ -129,6 +160,8 @@ AnalyzeOptions TurnedCameraOptions() {
   options.rig.cam_from_gyro =
       Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   options.trigger_latency_s = 0.0013;
+  // The report's plots: 12,000 samples cut to 300 buckets' envelopes, two worst images' frames.
+  options.plots = AnalyzePlotOptions{300, 2};
   for (const double t_s : {9.5, 1.0, 6.02, 4.7, 11.99, -0.5, 7.25, 6.0, 10.0101})
     options.triggers.push_back({"t" + std::to_string(t_s), SecondsToNs(t_s)});
   return options;
@@ -141,6 +174,9 @@ TEST(AnalyzeStream, EqualsTheWholeTraceAnalysisToTheBit) {
   ASSERT_TRUE(whole.bias_from_still);
   ASSERT_TRUE(whole.flight.has_value());
   ASSERT_GT(whole.verdict.images_in_trace, 5u);
+  ASSERT_EQ(whole.plots->t_s.size(), 600u);
+  ASSERT_EQ(whole.plots->worst.size(), 2u);
+  ASSERT_FALSE(whole.flight->summary->flagged[0].intervals().empty());
   for (const size_t chunk : {size_t{5}, size_t{61}, size_t{4096}}) {
     SCOPED_TRACE("chunk " + std::to_string(chunk));
     int opened = 0;
