@@ -191,7 +191,7 @@ void SetTriggers(const TriggerFile& triggers, const FlightLog& log, const std::s
 }
 
 // The log analysed as a stream (AnalyzeStream), in bounded memory whatever its length: what
-// `analyze LOG` does for a regular file without --out (the report draws the whole trace) and
+// `analyze LOG` does for a regular file, with --out too (the report draws bounded plots), without
 // --second (the pair is fused on the whole traces).
 AnalyzeResult AnalyzeStreamed(const AnalyzeCommand& command, const FlightLogReadOptions& read,
                               const std::optional<TriggerFile>& triggers, AnalyzeOptions options) {
@@ -352,10 +352,8 @@ void Run(const AnalyzeCommand& command) {
   const AnalyzeReportOptions report = ReportFromFlags(command);
   std::optional<SensorPair> pair;
   AnalyzeResult result;
-  // The stream reads the log several times; a log on a pipe is read whole, as with --out and
-  // --second.
-  if (command.out_dir.empty() && command.second_path.empty() &&
-      ReadableInPasses(command.log_path)) {
+  // The stream reads the log several times; a log on a pipe is read whole, as with --second.
+  if (command.second_path.empty() && ReadableInPasses(command.log_path)) {
     try {
       result = AnalyzeStreamed(command, read, triggers, options);
     } catch (const std::invalid_argument& e) {

@@ -180,8 +180,11 @@ struct AnalyzeResult {
   AnalyzeVerdict verdict;
   // With AnalyzeOptions::allan, the Allan deviation of the camera-axis rates (bias removed): on the
   // still segment when one was found with 20 samples or more (allan_on_still), else on the whole
-  // log, where the flight's motion dominates and it bounds the gyro's noise from above. Empty
-  // (AllanResult::empty) when too few samples; nullopt when not asked for.
+  // log, where the flight's motion dominates and it bounds the gyro's noise from above. Computed
+  // as the log streams past (AllanStream: AllanAnalysis's taus, its exact values up to
+  // kAllanExactClusterMax samples a cluster, within a small part of its scatter beyond), with the
+  // mean it removes formed from the rates as logged less the bias. Empty (AllanResult::empty) when
+  // too few samples; nullopt when not asked for.
   std::optional<AllanResult> allan;
   bool allan_on_still = false;
   // Set by Analyze, never null there; shared, so that copying a result does not copy the traces.
@@ -213,7 +216,7 @@ struct AnalyzeLogSource {
 // median interval and the gap count come from bucketed intervals: sim/interval_histogram.h.)
 // With options.plots, AnalyzeResult::plots and the flight's window summary are the same as
 // Analyze's (the same values fed to the same accumulators in the same order). What it does not
-// give: traces is null, and options.allan must be false (std::invalid_argument).
+// give: traces is null. With options.allan the Allan deviation is Analyze's too.
 AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions& options);
 
 // The renderer's true model that D_full uses: the declared rig with no time offset (triggers are
