@@ -22,8 +22,9 @@
 // DetectStillSegment finds, else zero (AnalyzeResult::bias_from_still says which; with
 // AnalyzeOptions::estimate_bias false, zero without a search); it applies to
 // every sample, the flight table's included (FlightOptions::known_bias_rad_s).
-// The result keeps the traces the images came from (AnalyzeTraces: the camera-axis rates, their
-// per-axis angles, the full model's motion), each built once, for the report to draw.
+// Analyze's result keeps the traces the images came from (AnalyzeTraces: the camera-axis rates,
+// their per-axis angles, the full model's motion), each built once; with AnalyzeOptions::plots
+// both Analyze and AnalyzeStream keep what a report draws in bounded memory (AnalyzePlots).
 
 #include "estimate/paper/allan.h"
 #include "estimate/paper/flight.h"
@@ -124,8 +125,8 @@ struct AnalyzeVerdict {
   std::string line;                                 // the one-line verdict for a person
 };
 
-// What the per-image analysis was computed from, kept so that a report draws it rather than
-// computing it again from the log.
+// What the per-image analysis was computed from, when the log is held whole (Analyze), for callers
+// that look at the traces themselves (a report draws AnalyzePlots instead).
 struct AnalyzeTraces {
   // The log's rates in camera axes with the bias removed (rig.cam_from_gyro * w - bias), rad/s, on
   // the log's gyro clock.
