@@ -130,6 +130,19 @@ TextBlocks::~TextBlocks() {
   if (fd_ >= 0) ::close(fd_);
 }
 
+size_t TextBlocks::Read(size_t at, size_t max_bytes) {
+  while (true) {
+    const ssize_t n = ::read(fd_, buffer_.get() + at, max_bytes);
+    if (n > 0) return static_cast<size_t>(n);
+    if (n == 0) {
+      end_of_file_ = true;
+      return 0;
+    }
+    if (errno != EINTR)
+      throw IoError(IoMessage(path_, 0, std::string("read failed: ") + std::strerror(errno)));
+  }
+}
+
 std::string_view TextBlocks::Next() {
   if (fd_ < 0) {  // in memory: cut at the last line end within a block (or the next one after)
     const size_t begin = handed_out_;
@@ -153,15 +166,7 @@ std::string_view TextBlocks::Next() {
   carry_begin_ = carry_end_ = 0;
   size_t searched = 0;
   while (true) {
-    while (!end_of_file_ && filled < capacity_) {
-      const ssize_t n = ::read(fd_, buffer_.get() + filled, capacity_ - filled);
-      if (n < 0) {
-        if (errno == EINTR) continue;
-        throw IoError(IoMessage(path_, 0, std::string("read failed: ") + std::strerror(errno)));
-      }
-      if (n == 0) end_of_file_ = true;
-      filled += static_cast<size_t>(n);
-    }
+    while (!end_of_file_ && filled < capacity_) filled += Read(filled, capacity_ - filled);
     const void* last =
         filled > searched ? ::memrchr(buffer_.get() + searched, '\n', filled - searched) : nullptr;
     if (last != nullptr || end_of_file_) {
@@ -178,6 +183,22 @@ std::string_view TextBlocks::Next() {
     buffer_ = std::move(larger);
     capacity_ *= 2;
   }
+}
+
+std::string_view TextBlocks::Peek(size_t bytes) {
+  SHUTTERLAB_CHECK(handed_out_ == 0) << "TextBlocks::Peek after Next";
+  if (fd_ < 0) return memory_.substr(0, bytes);
+  bytes = std::min(bytes, capacity_);
+  // The carried bytes are the next block's start. No more than asked: the rest comes in Next's
+  // reads, without touching the whole block now.
+  while (!end_of_file_ && carry_end_ < bytes) carry_end_ += Read(carry_end_, bytes - carry_end_);
+  return {buffer_.get(), std::min(bytes, carry_end_)};
+}
+
+std::string TextBlocks::TakeRest() {
+  std::string rest;
+  for (std::string_view block = Next(); !block.empty(); block = Next()) rest.append(block);
+  return rest;
 }
 
 double TextBlocks::Fraction() const {

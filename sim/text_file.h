@@ -58,6 +58,11 @@ class TextBlocks {
   // The next run of whole lines: up to and including a '\n', or the input's last line when it has
   // none. Empty at the end. Valid until the next call. Throws IoError when a read fails.
   std::string_view Next();
+  // Up to `bytes` of the input's start, without handing them out: Next gives them again. Only
+  // before the first Next. A pipe is read once, so a look at its start must come from here.
+  std::string_view Peek(size_t bytes);
+  // The rest of the input, whole (a binary log on a pipe: its reader decodes it whole).
+  std::string TakeRest();
   // The share of the input handed out so far, 0..1.
   double Fraction() const;
   // The input's length in bytes; 0 when unknown (a pipe).
@@ -65,6 +70,9 @@ class TextBlocks {
 
  private:
   TextBlocks() = default;
+  // One read() of up to max_bytes into buffer_ at `at` (again on EINTR): the bytes read, 0 at the
+  // end (end_of_file_ set). Throws IoError when it fails.
+  size_t Read(size_t at, size_t max_bytes);
   std::string path_;
   int fd_ = -1;
   uint64_t size_ = 0;                       // of the file (0 when unknown)

@@ -12,7 +12,7 @@
 #include "sim/units.h"
 
 #include <algorithm>
-#include <fstream>
+#include <filesystem>
 #include <utility>
 
 namespace shutterlab {
@@ -20,15 +20,6 @@ namespace {
 
 // Enough for every magic and for a blackbox / CSV header line.
 constexpr size_t kDetectBytes = 16 * 1024;
-
-std::string ReadPrefix(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(IoMessage(path, 0, "cannot open file"));
-  std::string bytes(kDetectBytes, '\0');
-  in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  bytes.resize(static_cast<size_t>(in.gcount()));
-  return bytes;
-}
 
 }  // namespace
 
@@ -103,40 +94,53 @@ class DetectedSource : public GyroSource {
   LogFormat format_;
 };
 
-// The plain gyro logs and the column reader, streamed a block at a time.
-FlightLogStream OpenText(const std::string& path, LogFormat format,
+// The plain gyro logs and the column reader, streamed a block at a time from input (path's).
+FlightLogStream OpenText(TextBlocks input, const std::string& path, LogFormat format,
                          const FlightLogReadOptions& options) {
   FlightLogStream stream;
   FlightLog& log = stream.log;
   log.format = LogFormatName(format);
   if (format == LogFormat::kColumns) {
-    ColumnCsvStream columns = OpenColumnCsv(TextBlocks::OfFile(path), path, options.columns);
+    ColumnCsvStream columns = OpenColumnCsv(std::move(input), path, options.columns);
     log.gyro_source = std::move(columns.log.source);
     stream.gyro = std::move(columns.samples);
   } else if (format == LogFormat::kGcsv) {
-    GcsvStream gcsv =
-        OpenGcsv(TextBlocks::OfFile(path), path);  // its header's assumptions: warnings
+    GcsvStream gcsv = OpenGcsv(std::move(input), path);  // its header's assumptions: warnings
     log.warnings = std::move(gcsv.log.warnings);
     log.gyro_source = "gcsv";
     stream.gyro = std::move(gcsv.samples);
   } else if (format == LogFormat::kRaw) {
     options.raw.Check();
     log.gyro_source = "raw counts";
-    stream.gyro =
-        OpenRawCsv(TextBlocks::OfFile(path), path, options.raw.range_dps, options.raw.time_unit);
+    stream.gyro = OpenRawCsv(std::move(input), path, options.raw.range_dps, options.raw.time_unit);
     stream.audit.full_scale_rad_s = options.raw.range_dps * kRadPerDeg;
   } else {
     log.gyro_source = "t,gx,gy,gz";
-    stream.gyro = OpenGyroCsv(TextBlocks::OfFile(path), path);
+    stream.gyro = OpenGyroCsv(std::move(input), path);
   }
   log.gyro_sources_available = {log.gyro_source};
   return stream;
 }
 
 // The binary logs are decoded whole (the best gyro stream is chosen once every one is known),
-// then handed on in slices.
-FlightLog ReadBinary(const std::string& path, LogFormat format,
+// then handed on in slices. A file is read by its reader; a pipe (input, read once) is taken whole.
+FlightLog ReadBinary(TextBlocks input, const std::string& path, LogFormat format,
                      const FlightLogReadOptions& options) {
+  if (!std::filesystem::is_regular_file(path)) {
+    // An MP4's sample tables may follow its samples (moov after mdat): it needs a file to seek.
+    if (format == LogFormat::kGoproMp4)
+      throw IoError(
+          IoMessage(path, 0, "a GoPro MP4 cannot be read from a pipe: save it to a file"));
+    const std::string bytes = input.TakeRest();
+    switch (format) {
+      case LogFormat::kULog:
+        return ParseULog(bytes, path);
+      case LogFormat::kDataFlash:
+        return ParseDataFlash(bytes, path);
+      default:
+        return DecodeBlackbox(bytes, path, options.log_index);
+    }
+  }
   switch (format) {
     case LogFormat::kULog:
       return ReadULog(path);
@@ -153,18 +157,20 @@ FlightLog ReadBinary(const std::string& path, LogFormat format,
 
 FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOptions& options) {
   options.Check();
+  // Opened once, and its start looked at through the same opening: a pipe can be read only once.
+  TextBlocks input = TextBlocks::OfFile(path);
   LogFormat format = options.format;
-  if (format == LogFormat::kAuto) format = DetectFlightLogFormat(ReadPrefix(path), path);
+  if (format == LogFormat::kAuto) format = DetectFlightLogFormat(input.Peek(kDetectBytes), path);
   if (format == LogFormat::kULog || format == LogFormat::kDataFlash ||
       format == LogFormat::kBlackbox || format == LogFormat::kGoproMp4) {
     FlightLogStream stream;
-    stream.log = ReadBinary(path, format, options);
+    stream.log = ReadBinary(std::move(input), path, format, options);
     stream.gyro = std::make_unique<TraceSource>(std::move(stream.log.gyro));
     stream.log.gyro = GyroTrace();
     return stream;
   }
   try {
-    FlightLogStream stream = OpenText(path, format, options);
+    FlightLogStream stream = OpenText(std::move(input), path, format, options);
     if (options.format == LogFormat::kAuto)
       stream.gyro = std::make_unique<DetectedSource>(std::move(stream.gyro), format);
     return stream;

@@ -149,9 +149,9 @@ TEST(FlightCli, AutoBiasStreamedEqualsTheWholeTrace) {
   nlohmann::json streamed = nlohmann::json::parse(r.out);
   streamed.erase("warnings");
   EXPECT_EQ(streamed, whole) << streamed.dump(1) << "\n" << whole.dump(1);
-  // A log on a pipe can be read once only (and its format is named: nothing to sniff it by): it
-  // is read whole, with the same result.
-  const auto piped = RunShutterlab("flight /dev/stdin --format gyro.csv --auto-bias --json", path);
+  // A log on a pipe can be read once only: its format is found from its start, and it is read
+  // whole, with the same result.
+  const auto piped = RunShutterlab("flight /dev/stdin --auto-bias --json", path);
   ASSERT_EQ(piped.exit_code, 0) << piped.output;
   nlohmann::json from_pipe = nlohmann::json::parse(piped.out);
   from_pipe.erase("warnings");

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cstdio>
 #include <cstring>
@@ -156,6 +157,29 @@ TEST(TextBlocks, AFileOfAnySizeIsReadWholeWithTheDefaultBlock) {
       EXPECT_EQ(joined, content) << "size " << content.size();
     }
   }
+}
+
+TEST(TextBlocks, APeekAtTheStartIsHandedOutAgain) {
+  // In memory, from a file with blocks smaller and larger than the look, and an empty file.
+  test::TempDir dir;
+  const std::string path = dir / "text.txt";
+  std::string text;
+  for (int i = 0; text.size() < 50000; ++i) text += std::to_string(i * 7919) + ",x\n";
+  for (const std::string& content : {text, std::string("ab"), std::string()}) {
+    WriteFileAtomically(path, content);
+    for (size_t block : {size_t{8}, size_t{4096}, TextBlocks::kBlockBytes}) {
+      TextBlocks from_file = TextBlocks::OfFile(path, block);
+      TextBlocks in_memory = TextBlocks::InMemory(content, block);
+      const std::string peeked(from_file.Peek(1000));
+      EXPECT_EQ(peeked, content.substr(0, std::min<size_t>({1000, block, content.size()})));
+      EXPECT_EQ(std::string(in_memory.Peek(1000)), content.substr(0, 1000));
+      EXPECT_EQ(from_file.TakeRest(), content) << "block " << block;
+      EXPECT_EQ(in_memory.TakeRest(), content);
+    }
+  }
+  TextBlocks started = TextBlocks::InMemory("a\nb\n", 2);
+  started.Next();
+  EXPECT_THROW(started.Peek(1), std::invalid_argument);
 }
 
 TEST(FormatNumber, KeepsTextLongerThanItsStackBuffer) {

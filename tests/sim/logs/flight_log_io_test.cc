@@ -3,16 +3,20 @@
 #include "sim/check.h"
 #include "sim/logs/gopro_telemetry.h"
 #include "sim/logs/gyro_io.h"
+#include "sim/logs/ulog_write.h"
 #include "sim/text_file.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
 #include <string>
+#include <thread>
+#include <unistd.h>
 #include <vector>
 
 namespace shutterlab {
@@ -141,6 +145,74 @@ TEST(ReadFlightLog, WrapsGyroCsv) {
   EXPECT_EQ(log.gyro.samples().size(), 2u);
   EXPECT_TRUE(log.camera_events.empty());
   EXPECT_FALSE(log.altitude_above_ground_m.has_value());
+}
+
+// What ReadFlightLog makes of bytes that come down a pipe: readable once, of no known size, and
+// not seekable, like a log given as /dev/stdin.
+FlightLog ReadFromPipe(const std::string& bytes, const FlightLogReadOptions& options = {}) {
+  std::signal(SIGPIPE, SIG_IGN);  // a reader that stops early closes the pipe on the writer
+  int fds[2];
+  SHUTTERLAB_CHECK(::pipe(fds) == 0) << "pipe";
+  std::thread writer([&bytes, fd = fds[1]] {
+    for (size_t done = 0; done < bytes.size();) {
+      const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+      if (n <= 0) break;
+      done += static_cast<size_t>(n);
+    }
+    ::close(fd);
+  });
+  struct Cleanup {
+    std::thread& writer;
+    int read_fd;
+    ~Cleanup() {
+      ::close(read_fd);  // before the join: a writer still writing then stops
+      writer.join();
+    }
+  } cleanup{writer, fds[0]};
+  return ReadFlightLog("/proc/self/fd/" + std::to_string(fds[0]), options);
+}
+
+// A log on a pipe is detected by a look at its start and read through the same opening: the
+// format is not needed, and the result is the file's.
+TEST(ReadFlightLog, ALogOnAPipeIsDetectedAndReadOnce) {
+  test::TempDir dir;
+  std::vector<GyroSample> samples;
+  for (int i = 0; i < 20000; ++i)  // larger than a look at the start (16 KiB) as text and ULog
+    samples.push_back(
+        {static_cast<int64_t>(i + 1) * 500000, Eigen::Vector3d(0.01 * i, -0.25, 1e-3 * (i % 7))});
+  const GyroTrace trace(std::move(samples));
+  WriteGyroCsv(dir / "gyro.csv", trace);
+  const std::string ulog = SerializeULog(trace, {});
+  WriteFileAtomically(dir / "log.ulg", ulog);
+  for (const auto& [name, bytes] :
+       {std::pair<std::string, std::string>{"gyro.csv", ReadFileToString(dir / "gyro.csv")},
+        {"log.ulg", ulog}}) {
+    const FlightLog from_file = ReadFlightLog(dir / name);
+    const FlightLog from_pipe = ReadFromPipe(bytes);
+    EXPECT_EQ(from_pipe.format, from_file.format) << name;
+    EXPECT_EQ(from_pipe.gyro_source, from_file.gyro_source) << name;
+    ASSERT_EQ(from_pipe.gyro.samples().size(), trace.samples().size()) << name;
+    for (size_t i = 0; i < trace.samples().size(); ++i) {
+      ASSERT_EQ(from_pipe.gyro.samples()[i].t_ns, from_file.gyro.samples()[i].t_ns) << name << i;
+      ASSERT_EQ(from_pipe.gyro.samples()[i].omega_rad_s, from_file.gyro.samples()[i].omega_rad_s)
+          << name << i;
+    }
+  }
+  // A format named is read from a pipe too; a GoPro clip cannot be (its tables may follow its
+  // samples), and says so.
+  FlightLogReadOptions ulog_named;
+  ulog_named.format = LogFormat::kULog;
+  EXPECT_EQ(ReadFromPipe(ulog, ulog_named).gyro.samples().size(), trace.samples().size());
+  try {
+    ReadFromPipe(std::string("\0\0\0\x10"
+                             "ftypmp42\0\0\0\0",
+                             16) +
+                 std::string(100, 'x'));
+    FAIL() << "an MP4 on a pipe was read";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot be read from a pipe"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(ReadFlightLog, HonoursTheLogIndex) {
