@@ -286,7 +286,7 @@ AnalyzeLogSource StreamSource(const AnalyzeCommand& command, const FlightLogRead
 }
 
 // The log analysed as a stream (AnalyzeStream), in bounded memory whatever its length: what
-// `analyze LOG` does for regular files without --out (the report draws the whole trace).
+// `analyze LOG` does for regular files, with --out too (the report draws bounded plots).
 AnalyzeResult AnalyzeStreamed(const AnalyzeCommand& command, const FlightLogReadOptions& read,
                               const std::optional<TriggerFile>& triggers, AnalyzeOptions options,
                               std::optional<SensorPair>* pair) {
@@ -455,8 +455,8 @@ void Run(const AnalyzeCommand& command) {
   const AnalyzeReportOptions report = ReportFromFlags(command);
   std::optional<SensorPair> pair;
   AnalyzeResult result;
-  // The stream reads the log several times; a log on a pipe is read whole, as with --out.
-  if (command.out_dir.empty() && LogsReadableInPasses(command)) {
+  // The stream reads the log several times; a log on a pipe is read whole.
+  if (LogsReadableInPasses(command)) {
     try {
       result = AnalyzeStreamed(command, read, triggers, options, &pair);
     } catch (const std::invalid_argument& e) {

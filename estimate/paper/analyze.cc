@@ -6,6 +6,7 @@
 #include "sim/check.h"
 #include "sim/civil_time.h"
 #include "sim/integrate.h"
+#include "sim/interval_histogram.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/logs/log_clock.h"
 #include "sim/still_detect.h"
@@ -278,21 +279,37 @@ void EstimateStillBias(const GyroTrace& camera_rates, bool estimate_bias, Analyz
   }
 }
 
-// The Allan deviation of the camera-axis rates, on the still segment when it holds enough samples
-// (AnalyzeResult::allan, allan_on_still).
-void AllanOfRates(const GyroTrace& rates, AnalyzeResult* result) {
-  result->allan_on_still = false;
-  if (result->bias_from_still) {
-    // [begin_s, end_s): the samples the bias was averaged over, not one more.
-    const auto [begin, end] = SamplesInSegment(rates, result->still_segment);
-    std::vector<GyroSample> still(rates.samples().begin() + begin, rates.samples().begin() + end);
-    if (still.size() >= 20) {
-      result->allan = AllanAnalysis(GyroTrace(std::move(still)));
-      result->allan_on_still = true;
-      return;
+// What the Allan deviation needs to know of its segment before it reads it (AllanStream): the
+// segment's samples, their intervals, and the sum of their rates after the first, in camera axes
+// as logged (the bias is not known yet when a stream reads them).
+struct AllanSegment {
+  size_t samples = 0;
+  IntervalHistogram intervals;
+  Eigen::Vector3d rate_sum_rad_s = Eigen::Vector3d::Zero();
+  int64_t previous_t_ns = 0;
+
+  void Add(const GyroSample& camera_as_logged) {
+    if (samples > 0) {
+      intervals.Add(camera_as_logged.t_ns - previous_t_ns);
+      rate_sum_rad_s += camera_as_logged.omega_rad_s;
     }
+    previous_t_ns = camera_as_logged.t_ns;
+    ++samples;
   }
-  result->allan = AllanAnalysis(rates);
+  // The stream to give the segment's rates less the bias: AllanAnalysis removes their mean.
+  AllanStream Open(const Eigen::Vector3d& bias_rad_s) const {
+    const Eigen::Vector3d mean =
+        samples > 1
+            ? Eigen::Vector3d(rate_sum_rad_s / static_cast<double>(samples - 1) - bias_rad_s)
+            : Eigen::Vector3d::Zero();
+    return AllanStream(samples, intervals.Median(), mean);
+  }
+};
+
+// Whether the Allan deviation is taken on the still segment (one was found, with 20 samples or
+// more in it), else on the whole log (AnalyzeResult::allan_on_still).
+bool AllanOnStill(const AnalyzeResult& result, const AllanSegment& still) {
+  return result.bias_from_still && still.samples >= 20;
 }
 
 // The flight table's options for this camera's readout, with the bias found (result->bias_rad_s).
@@ -538,6 +555,26 @@ AnalyzeOptions WithLogAltitude(const FlightLog& log, const AnalyzeOptions& given
   return options;
 }
 
+// The Allan deviation of the camera-axis rates (result->traces) as AnalyzeStream computes it.
+void AllanOfWholeTrace(const GyroTrace& gyro, const Eigen::Matrix3d& cam_from_gyro,
+                       AnalyzeResult* result) {
+  const GyroTrace& rates = result->traces->camera_rates;
+  AllanSegment whole, still;
+  const auto [begin, end] =
+      result->bias_from_still ? SamplesInSegment(rates, result->still_segment) : SampleRange{0, 0};
+  for (size_t k = 0; k < gyro.size(); ++k) {
+    const GyroSample as_logged = InCameraAxes(gyro[k], cam_from_gyro, Eigen::Vector3d::Zero());
+    whole.Add(as_logged);
+    if (k >= begin && k < end) still.Add(as_logged);
+  }
+  result->allan_on_still = AllanOnStill(*result, still);
+  AllanStream allan = (result->allan_on_still ? still : whole).Open(result->bias_rad_s);
+  const size_t first = result->allan_on_still ? begin : 0;
+  const size_t last = result->allan_on_still ? end : rates.size();
+  for (size_t k = first; k < last; ++k) allan.Add(rates[k]);
+  result->allan = allan.Finish();
+}
+
 // The plots of the traces held whole.
 std::shared_ptr<const AnalyzePlots> WholeTracePlots(const AnalyzePlotOptions& options,
                                                     const AnalyzeTraces& traces,
@@ -590,7 +627,7 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
   result.traces = std::make_shared<const AnalyzeTraces>(
       AnalyzeTraces{std::move(rates), std::move(angles),
                     CameraMotion(gyro, AnalyzeTrueModel(options.rig, result.bias_rad_s))});
-  if (options.allan) AllanOfRates(result.traces->camera_rates, &result);
+  if (options.allan) AllanOfWholeTrace(gyro, options.rig.cam_from_gyro, &result);
   const std::vector<ImageTrigger> triggers =
       ChooseTriggers(log, span, options, &result.trigger_source);
   const ImageContext context{&result.traces->angles, &result.traces->motion, options.rig,
@@ -828,8 +865,6 @@ class LogPasses {
 }  // namespace
 
 AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions& given_options) {
-  SHUTTERLAB_CHECK(!given_options.allan)
-      << "the streamed analysis computes no Allan deviation (the report's)";
   constexpr size_t kStillPasses = 5;  // DetectStillSegment on a source reads it at most five times
   LogPasses passes(source, given_options, (given_options.estimate_bias ? kStillPasses : 0) + 2);
   std::string altitude_source;
@@ -856,18 +891,31 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
 
   // The sampling, the warnings and the bias: the mean over the still segment's samples,
   // [begin_s, end_s) after the first sample (bias.h SamplesInSegment), summed in order.
+  // With options.allan, what the Allan deviation needs of the whole log and of the segment.
   Eigen::Vector3d bias_sum = Eigen::Vector3d::Zero();
   size_t bias_samples = 0;
   std::optional<int64_t> t0_ns;
+  int64_t still_begin_ns = 0, still_end_ns = 0;
+  AllanSegment allan_whole, allan_still;
   const StreamedLog read = consume([&](const GyroChunk& chunk) {
-    if (!t0_ns) t0_ns = chunk.data[0].t_ns;
+    if (!t0_ns) {
+      t0_ns = chunk.data[0].t_ns;
+      if (still) {
+        still_begin_ns = *t0_ns + SecondsToNs(still->segment.begin_s);
+        still_end_ns = *t0_ns + SecondsToNs(still->segment.end_s);
+      }
+    }
+    if (options.allan) {
+      for (const GyroSample& s : chunk)
+        allan_whole.Add(InCameraAxes(s, cam_from_gyro, Eigen::Vector3d::Zero()));
+    }
     if (!still) return;
-    const int64_t begin_ns = *t0_ns + SecondsToNs(still->segment.begin_s);
-    const int64_t end_ns = *t0_ns + SecondsToNs(still->segment.end_s);
     for (const GyroSample& s : chunk) {
-      if (s.t_ns < begin_ns || s.t_ns >= end_ns) continue;
-      bias_sum += InCameraAxes(s, cam_from_gyro, Eigen::Vector3d::Zero()).omega_rad_s;
+      if (s.t_ns < still_begin_ns || s.t_ns >= still_end_ns) continue;
+      const GyroSample as_logged = InCameraAxes(s, cam_from_gyro, Eigen::Vector3d::Zero());
+      bias_sum += as_logged.omega_rad_s;
       ++bias_samples;
+      if (options.allan) allan_still.Add(as_logged);
     }
   });
   FlightLog log = passes.log();
@@ -883,6 +931,13 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
     result.still_segment = still->segment;
     result.bias_from_still = bias_samples >= kMinBiasSamples;  // EstimateBias's refusal
     if (result.bias_from_still) result.bias_rad_s = bias_sum / static_cast<double>(bias_samples);
+  }
+
+  // The Allan deviation, on the still segment or the whole log, in the last pass.
+  std::optional<AllanStream> allan;
+  if (options.allan) {
+    result.allan_on_still = AllanOnStill(result, allan_still);
+    allan = (result.allan_on_still ? allan_still : allan_whole).Open(result.bias_rad_s);
   }
 
   // The images, timed now that the trace's span is known, under the camera analysed and the
@@ -924,6 +979,12 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
                             plots ? &*plots : nullptr);
   std::vector<GyroSample> rotated;
   consume([&](const GyroChunk& chunk) {
+    if (allan) {
+      for (const GyroSample& s : chunk) {
+        if (result.allan_on_still && (s.t_ns < still_begin_ns || s.t_ns >= still_end_ns)) continue;
+        allan->Add(InCameraAxes(s, cam_from_gyro, result.bias_rad_s));
+      }
+    }
     if (flight) {
       rotated.resize(chunk.size);
       for (size_t i = 0; i < chunk.size; ++i)
@@ -941,6 +1002,7 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
   std::vector<std::vector<ImageResult>> measured = readouts.Finish();
   result.images = std::move(measured[0]);
   if (plots) result.plots = plots->Finish();
+  if (allan) result.allan = allan->Finish();
   JudgeImages(
       options,
       [&] {

@@ -22,8 +22,9 @@
 // DetectStillSegment finds, else zero (AnalyzeResult::bias_from_still says which; with
 // AnalyzeOptions::estimate_bias false, zero without a search); it applies to
 // every sample, the flight table's included (FlightOptions::known_bias_rad_s).
-// The result keeps the traces the images came from (AnalyzeTraces: the camera-axis rates, their
-// per-axis angles, the full model's motion), each built once, for the report to draw.
+// Analyze's result keeps the traces the images came from (AnalyzeTraces: the camera-axis rates,
+// their per-axis angles, the full model's motion), each built once; with AnalyzeOptions::plots
+// both Analyze and AnalyzeStream keep what a report draws in bounded memory (AnalyzePlots).
 
 #include "estimate/paper/allan.h"
 #include "estimate/paper/flight.h"
@@ -124,8 +125,8 @@ struct AnalyzeVerdict {
   std::string line;                                 // the one-line verdict for a person
 };
 
-// What the per-image analysis was computed from, kept so that a report draws it rather than
-// computing it again from the log.
+// What the per-image analysis was computed from, when the log is held whole (Analyze), for callers
+// that look at the traces themselves (a report draws AnalyzePlots instead).
 struct AnalyzeTraces {
   // The log's rates in camera axes with the bias removed (rig.cam_from_gyro * w - bias), rad/s, on
   // the log's gyro clock.
@@ -180,8 +181,11 @@ struct AnalyzeResult {
   AnalyzeVerdict verdict;
   // With AnalyzeOptions::allan, the Allan deviation of the camera-axis rates (bias removed): on the
   // still segment when one was found with 20 samples or more (allan_on_still), else on the whole
-  // log, where the flight's motion dominates and it bounds the gyro's noise from above. Empty
-  // (AllanResult::empty) when too few samples; nullopt when not asked for.
+  // log, where the flight's motion dominates and it bounds the gyro's noise from above. Computed
+  // as the log streams past (AllanStream: AllanAnalysis's taus, its exact values up to
+  // kAllanExactClusterMax samples a cluster, within a small part of its scatter beyond), with the
+  // mean it removes formed from the rates as logged less the bias. Empty (AllanResult::empty) when
+  // too few samples; nullopt when not asked for.
   std::optional<AllanResult> allan;
   bool allan_on_still = false;
   // Set by Analyze, never null there; shared, so that copying a result does not copy the traces.
@@ -213,7 +217,7 @@ struct AnalyzeLogSource {
 // median interval and the gap count come from bucketed intervals: sim/interval_histogram.h.)
 // With options.plots, AnalyzeResult::plots and the flight's window summary are the same as
 // Analyze's (the same values fed to the same accumulators in the same order). What it does not
-// give: traces is null, and options.allan must be false (std::invalid_argument).
+// give: traces is null. With options.allan the Allan deviation is Analyze's too.
 AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions& options);
 
 // The renderer's true model that D_full uses: the declared rig with no time offset (triggers are

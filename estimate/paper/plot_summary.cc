@@ -105,7 +105,7 @@ LogBinHistogram::LogBinHistogram() : counts_(kEndKey - kFirstKey + 1, 0) {}
 
 size_t LogBinHistogram::Index(double value) {
   const uint64_t key = Bits(value) >> kDroppedBits;  // value >= 0: the sign bit is clear
-  if (key < kFirstKey) return 0;                      // underflow: [0, 2^kMinExponent)
+  if (key < kFirstKey) return 0;                     // underflow: [0, 2^kMinExponent)
   return static_cast<size_t>(std::min(key, kEndKey - 1) - kFirstKey + 1);
 }
 

@@ -102,6 +102,17 @@ void ExpectSameResult(const AnalyzeResult& s, const AnalyzeResult& w) {
   EXPECT_EQ(AnalyzeReport(s), AnalyzeReport(w));
   EXPECT_EQ(s.traces, nullptr);
   // What a report draws.
+  EXPECT_EQ(s.allan_on_still, w.allan_on_still);
+  ASSERT_EQ(s.allan.has_value(), w.allan.has_value());
+  if (w.allan) {
+    EXPECT_EQ(s.allan->tau0_s, w.allan->tau0_s);
+    EXPECT_EQ(s.allan->tau_s, w.allan->tau_s);
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_EQ(s.allan->adev_rad_s[a], w.allan->adev_rad_s[a]);
+      EXPECT_EQ(s.allan->axes[a].arw_deg_sqrt_h, w.allan->axes[a].arw_deg_sqrt_h);
+      EXPECT_EQ(s.allan->axes[a].bias_instability_deg_h, w.allan->axes[a].bias_instability_deg_h);
+    }
+  }
   ASSERT_EQ(s.plots != nullptr, w.plots != nullptr);
   if (w.plots) {
     EXPECT_EQ(s.plots->t_s, w.plots->t_s);
@@ -139,14 +150,17 @@ FlightLog WobblyLog() {
   std::mt19937 rng(15);
   std::normal_distribution<double> noise(0.0, 2e-3);
   const Eigen::Vector3d bias(0.004, -0.003, 0.002);
-  return test::StillThenRateLog(
-      12.0,
-      [&](double t_s) {
-        Eigen::Vector3d rate(0.3 * std::sin(7 * t_s), 0.2 * std::cos(11 * t_s), 0.1 * t_s);
-        for (int a = 0; a < 3; ++a) rate[a] += bias[a] + noise(rng);
-        return rate;
-      },
-      "wobble");
+  FlightLog log = test::StillThenRateLog(
+      12.0, [](double) { return Eigen::Vector3d::Zero(); }, "wobble");
+  std::vector<GyroSample> samples = log.gyro.samples();
+  for (GyroSample& s : samples) {
+    const double t_s = s.t_ns * 1e-9;
+    if (t_s > 4.0)
+      s.omega_rad_s = Eigen::Vector3d(0.3 * std::sin(7 * t_s), 0.2 * std::cos(11 * t_s), 0.1 * t_s);
+    for (int a = 0; a < 3; ++a) s.omega_rad_s[a] += bias[a] + noise(rng);
+  }
+  log.gyro = GyroTrace(std::move(samples));
+  return log;
 }
 
 // The camera turned against the gyro, images out of time order, two outside the log, a latency.
@@ -162,6 +176,7 @@ AnalyzeOptions TurnedCameraOptions() {
   options.trigger_latency_s = 0.0013;
   // The report's plots: 12,000 samples cut to 300 buckets' envelopes, two worst images' frames.
   options.plots = AnalyzePlotOptions{300, 2};
+  options.allan = true;
   for (const double t_s : {9.5, 1.0, 6.02, 4.7, 11.99, -0.5, 7.25, 6.0, 10.0101})
     options.triggers.push_back({"t" + std::to_string(t_s), SecondsToNs(t_s)});
   return options;
@@ -176,6 +191,21 @@ TEST(AnalyzeStream, EqualsTheWholeTraceAnalysisToTheBit) {
   ASSERT_GT(whole.verdict.images_in_trace, 5u);
   ASSERT_EQ(whole.plots->t_s.size(), 600u);
   ASSERT_EQ(whole.plots->worst.size(), 2u);
+  ASSERT_TRUE(whole.allan_on_still);
+  ASSERT_FALSE(whole.allan->empty());
+  // The Allan deviation is AllanAnalysis's on the still segment's rates: its clusters are all
+  // exact here, and only the mean it removes is formed in another order.
+  const GyroTrace& rates = whole.traces->camera_rates;
+  const auto [begin, end] = SamplesInSegment(rates, whole.still_segment);
+  const AllanResult held = AllanAnalysis(GyroTrace(
+      std::vector<GyroSample>(rates.samples().begin() + begin, rates.samples().begin() + end)));
+  ASSERT_EQ(whole.allan->tau_s, held.tau_s);
+  ASSERT_GT(held.adev_rad_s[0][0], 1e-4);  // the still segment holds noise
+  for (int a = 0; a < 3; ++a) {
+    for (size_t i = 0; i < held.tau_s.size(); ++i)
+      EXPECT_NEAR(whole.allan->adev_rad_s[a][i], held.adev_rad_s[a][i],
+                  1e-9 * held.adev_rad_s[a][i]);
+  }
   ASSERT_FALSE(whole.flight->summary->flagged[0].intervals().empty());
   for (const size_t chunk : {size_t{5}, size_t{61}, size_t{4096}}) {
     SCOPED_TRACE("chunk " + std::to_string(chunk));
@@ -265,8 +295,6 @@ TEST(AnalyzeStream, TooFewSamplesAndTooShortLogsAsTheWholeTrace) {
   log.gyro = GyroTrace(std::vector<GyroSample>(samples.begin(), samples.begin() + 1));
   EXPECT_THROW(Analyze(log, options), std::invalid_argument);
   EXPECT_THROW(AnalyzeStream(SourceOf(log, 9), options), std::invalid_argument);
-  options.allan = true;  // the report's: the streamed analysis refuses it
-  EXPECT_THROW(AnalyzeStream(SourceOf(WobblyLog(), 9), options), std::invalid_argument);
 }
 
 // `analyze --photos DIR LOG` streamed (AnalyzePhotoFlightStream: the log's metadata places the

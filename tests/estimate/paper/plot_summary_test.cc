@@ -23,8 +23,8 @@ TEST(LogBinHistogram, QuantilesAndCountsWithinOneBinOfTheSortedValues) {
   for (double v : values) histogram.Add(v);
   std::sort(values.begin(), values.end());
   ASSERT_EQ(histogram.total(), values.size());
-  for (const size_t rank : {size_t{0}, size_t{3}, size_t{100}, size_t{10000}, size_t{19900},
-                            values.size() - 2}) {
+  for (const size_t rank :
+       {size_t{0}, size_t{3}, size_t{100}, size_t{10000}, size_t{19900}, values.size() - 2}) {
     const double exact = values[rank];
     EXPECT_NEAR(histogram.Quantile(rank), exact, std::max(exact / 1024.0, 6e-8)) << rank;
   }
