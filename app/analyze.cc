@@ -336,14 +336,13 @@ FlightLog ReadLog(const AnalyzeCommand& command, const FlightLogReadOptions& rea
   return log;
 }
 
-// The photos placed and analysed on the LOG. Regular files without --out (the report draws the
-// whole trace) are read as streams, in bounded memory whatever their length; else the log (and
-// --second's) is read whole.
+// The photos placed and analysed on the LOG. Regular files are read as streams, in bounded memory
+// whatever their length; a log on a pipe (and --second's) is read whole.
 PhotoFlightResult PhotosOnLog(const AnalyzeCommand& command, const FlightLogReadOptions& read,
                               const PhotoSet& set, const std::optional<TriggerFile>& triggers,
                               const PhotoFlightOptions& options, std::optional<SensorPair>* pair) {
   const TriggerFile* trigger_file = triggers ? &*triggers : nullptr;
-  if (command.out_dir.empty() && LogsReadableInPasses(command)) {
+  if (LogsReadableInPasses(command)) {
     FlightLogStream first = OpenFlightLog(command.log_path, read);
     const FlightLog metadata = first.log;  // the samples stay in the stream
     const AnalyzeLogSource source = StreamSource(command, read, triggers, std::move(first), pair);
