@@ -153,8 +153,8 @@ RigModel AnalyzeCamera() {
 void StepAnalyze(DemoContext& context) {
   AnalyzeOptions options;
   options.rig = AnalyzeCamera();
-  options.flight_series = true;  // the report's shading and histograms; triggers: the log's own
-  options.allan = true;          // the report's noise plot
+  options.plots = AnalyzePlotOptions{};  // the report's charts; triggers: the log's own
+  options.allan = true;                  // the report's noise plot
   AnalyzeResult result;
   {
     Progress progress("analyze", 1000);

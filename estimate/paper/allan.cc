@@ -181,6 +181,94 @@ AllanResult AllanAnalysis(const GyroTrace& trace, size_t first, int points_per_d
   return result;
 }
 
+AllanStream::AllanStream(size_t samples, int64_t median_interval_ns,
+                         const Eigen::Vector3d& mean_rad_s, int points_per_decade)
+    : samples_(samples), tau0_s_(median_interval_ns * 1e-9), mean_rad_s_(mean_rad_s) {
+  if (samples_ < 2) return;  // no rate: an empty result, as AllanAnalysis gives
+  sizes_ = AllanClusterSizes(samples_ - 1, points_per_decade);
+  if (sizes_.empty()) return;
+  SHUTTERLAB_CHECK(tau0_s_ > 0.0) << "Allan: the trace has no positive sample interval";
+  while (dense_ < sizes_.size() && sizes_[dense_] <= kAllanExactClusterMax) ++dense_;
+  dense_sums_.assign(dense_, {0.0, 0.0, 0.0});
+  if (dense_ > 0) ring_.assign(2 * sizes_[dense_ - 1] + 1, {0.0, 0.0, 0.0});
+  for (size_t i = dense_; i < sizes_.size(); ++i) {
+    Sparse sparse;
+    sparse.m = sizes_[i];
+    sparse.stride = (sparse.m + kAllanSparseTerms - 1) / kAllanSparseTerms;
+    sparse.mid_phase = sparse.m % sparse.stride;
+    sparse.end_phase = (2 * sparse.m) % sparse.stride;
+    sparse.at_start.resize(2 * sparse.m / sparse.stride + 2);
+    sparse.at_mid.resize(sparse.m / sparse.stride + 2);
+    sparse_.push_back(std::move(sparse));
+  }
+}
+
+void AllanStream::Add(const GyroSample& sample) {
+  const size_t j = added_++;
+  if (sizes_.empty()) return;
+  // IntegratePerAxis with the mean as the bias: angle_j = sum over i <= j of (w_i - mean) dt_i.
+  if (j > 0) {
+    const double dt_s = (sample.t_ns - previous_t_ns_) * 1e-9;
+    for (int a = 0; a < 3; ++a) angle_[a] += (sample.omega_rad_s[a] - mean_rad_s_[a]) * dt_s;
+  }
+  previous_t_ns_ = sample.t_ns;
+  // OverlappingAllanDeviation's term k = j - 2m, for every exact m it is complete for.
+  if (dense_ > 0) {
+    const size_t size = ring_.size();
+    ring_[j % size] = angle_;
+    for (size_t i = 0; i < dense_ && 2 * sizes_[i] <= j; ++i) {
+      const size_t m = sizes_[i];
+      const std::array<double, 3>& mid = ring_[(j - m) % size];
+      const std::array<double, 3>& start = ring_[(j - 2 * m) % size];
+      for (int a = 0; a < 3; ++a) {
+        const double d = angle_[a] - 2.0 * mid[a] + start[a];
+        dense_sums_[i][a] += d * d;
+      }
+    }
+  }
+  // The longer clusters: the terms whose start index is a multiple of the stride.
+  for (Sparse& sparse : sparse_) {
+    const size_t s = sparse.stride;
+    if (sparse.phase == 0) sparse.at_start[(j / s) % sparse.at_start.size()] = angle_;
+    if (sparse.phase == sparse.mid_phase && j >= sparse.m)
+      sparse.at_mid[((j - sparse.m) / s) % sparse.at_mid.size()] = angle_;
+    if (sparse.phase == sparse.end_phase && j >= 2 * sparse.m) {
+      const size_t k = j - 2 * sparse.m;  // a multiple of s
+      const std::array<double, 3>& start = sparse.at_start[(k / s) % sparse.at_start.size()];
+      const std::array<double, 3>& mid = sparse.at_mid[(k / s) % sparse.at_mid.size()];
+      for (int a = 0; a < 3; ++a) {
+        const double d = angle_[a] - 2.0 * mid[a] + start[a];
+        sparse.sum[a] += d * d;
+      }
+      ++sparse.terms;
+    }
+    if (++sparse.phase == s) sparse.phase = 0;
+  }
+}
+
+AllanResult AllanStream::Finish() const {
+  SHUTTERLAB_CHECK(added_ == samples_)
+      << "Allan: " << added_ << " samples came of the " << samples_ << " announced";
+  AllanResult result;
+  if (sizes_.empty()) return result;
+  result.tau0_s = tau0_s_;
+  for (const size_t m : sizes_) result.tau_s.push_back(static_cast<double>(m) * tau0_s_);
+  for (size_t i = 0; i < sizes_.size(); ++i) {
+    const double tau_s = result.tau_s[i];
+    const bool exact = i < dense_;
+    const double terms =
+        static_cast<double>(exact ? samples_ - 2 * sizes_[i] : sparse_[i - dense_].terms);
+    const std::array<double, 3>& sum = exact ? dense_sums_[i] : sparse_[i - dense_].sum;
+    for (int a = 0; a < 3; ++a)
+      result.adev_rad_s[a].push_back(std::sqrt(sum[a] / (2.0 * tau_s * tau_s * terms)));
+  }
+  for (int a = 0; a < 3; ++a) {
+    result.axes[a] = ReadAllanCoefficients(result.tau_s, result.adev_rad_s[a],
+                                           static_cast<double>(samples_ - 1) * tau0_s_);
+  }
+  return result;
+}
+
 std::string AllanCsv(const AllanResult& result) {
   std::string out = "tau_s,adev_x,adev_y,adev_z\n";
   for (size_t i = 0; i < result.tau_s.size(); ++i) {

@@ -11,7 +11,9 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -76,6 +78,47 @@ struct AllanResult {
 // A constant bias does not change the result. Returns an empty result when the segment holds
 // fewer than 20 rates (no tau with at least a few clusters).
 AllanResult AllanAnalysis(const GyroTrace& trace, size_t first = 0, int points_per_decade = 10);
+
+// AllanAnalysis on a segment that arrives a sample at a time (a log too long to hold), in memory
+// bounded whatever its length. What AllanAnalysis reads off the whole segment first must be given:
+// its sample count, median interval, and the mean rate it removes (of the samples after the
+// first). The taus are AllanAnalysis's. Cluster sizes up to kAllanExactClusterMax samples are
+// OverlappingAllanDeviation's sums, the same terms in the same order (equal to the bit for equal
+// inputs); a longer cluster m averages every s-th term, s = ceil(m / kAllanSparseTerms), and so
+// differs from the overlapping estimate by a small part of the estimate's own scatter.
+inline constexpr size_t kAllanExactClusterMax = 1024;
+inline constexpr size_t kAllanSparseTerms = 256;
+class AllanStream {
+ public:
+  AllanStream(size_t samples, int64_t median_interval_ns, const Eigen::Vector3d& mean_rad_s,
+              int points_per_decade = 10);
+  // The segment's next sample (time order).
+  void Add(const GyroSample& sample);
+  // After the segment's last sample (throws std::invalid_argument when fewer or more came than
+  // announced).
+  AllanResult Finish() const;
+
+ private:
+  // A cluster size longer than kAllanExactClusterMax: the angle at the indices its terms need.
+  struct Sparse {
+    size_t m = 0, stride = 0, phase = 0;                  // phase: the current index modulo stride
+    size_t mid_phase = 0, end_phase = 0;                  // m and 2m modulo stride
+    std::vector<std::array<double, 3>> at_start, at_mid;  // rings: indices = 0 and = m (mod s)
+    std::array<double, 3> sum{};
+    size_t terms = 0;
+  };
+  size_t samples_;
+  double tau0_s_;
+  Eigen::Vector3d mean_rad_s_;
+  std::vector<size_t> sizes_;
+  size_t dense_ = 0;  // sizes_[0, dense_) are exact
+  std::vector<std::array<double, 3>> dense_sums_;
+  std::vector<std::array<double, 3>> ring_;  // the last 2 m + 1 angles of the longest exact m
+  std::vector<Sparse> sparse_;
+  size_t added_ = 0;
+  int64_t previous_t_ns_ = 0;
+  std::array<double, 3> angle_{};
+};
 
 // CSV for --allan: header "tau_s,adev_x,adev_y,adev_z", one line per tau, rad/s.
 std::string AllanCsv(const AllanResult& result);

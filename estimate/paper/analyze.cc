@@ -6,6 +6,7 @@
 #include "sim/check.h"
 #include "sim/civil_time.h"
 #include "sim/integrate.h"
+#include "sim/interval_histogram.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/logs/log_clock.h"
 #include "sim/still_detect.h"
@@ -93,6 +94,59 @@ struct ImageContext {
 // The first and last sample times of a trace.
 struct TraceSpan {
   int64_t first_ns = 0, last_ns = 0;
+};
+
+// AnalyzePlots built as the samples and the images come, in the same order from the whole trace as
+// from a stream, so that both give the same plots.
+class PlotBuilder {
+ public:
+  PlotBuilder(const AnalyzePlotOptions& options, size_t samples, const TraceSpan& span)
+      : worst_images_(options.worst_images),
+        envelope_(6, options.chart_buckets, samples, span.first_ns * 1e-9, span.last_ns * 1e-9) {}
+
+  // The next sample: its rate in camera axes less the bias, and its per-axis angles.
+  void AddSample(int64_t t_ns, const Eigen::Vector3d& rate_rad_s, const double* angle_rad) {
+    const double y[6] = {rate_rad_s[0] * kDegPerRad, rate_rad_s[1] * kDegPerRad,
+                         rate_rad_s[2] * kDegPerRad, angle_rad[0] * kDegPerRad,
+                         angle_rad[1] * kDegPerRad,  angle_rad[2] * kDegPerRad};
+    envelope_.Add(t_ns * 1e-9, y);
+  }
+
+  // A judged image (its index in the result's images): its frame, asked of frame() only when it
+  // ranks among the worst so far.
+  void OfferImage(size_t image, double d_full_m, const std::function<FrameMotion()>& frame) {
+    const auto worse = [](const Ranked& a, const Ranked& b) {
+      return a.d_full_m > b.d_full_m || (a.d_full_m == b.d_full_m && a.worst.image < b.worst.image);
+    };
+    Ranked candidate{d_full_m, {image, {}}};
+    if (worst_.size() == worst_images_ && (worst_.empty() || !worse(candidate, worst_.back())))
+      return;
+    candidate.worst.frame = frame();
+    worst_.insert(std::upper_bound(worst_.begin(), worst_.end(), candidate, worse),
+                  std::move(candidate));
+    if (worst_.size() > worst_images_) worst_.pop_back();
+  }
+
+  std::shared_ptr<const AnalyzePlots> Finish() {
+    envelope_.Finish();
+    auto plots = std::make_shared<AnalyzePlots>();
+    plots->t_s = envelope_.x();
+    for (int a = 0; a < 3; ++a) {
+      plots->rate_deg_s[a] = envelope_.y()[a];
+      plots->angle_deg[a] = envelope_.y()[3 + a];
+    }
+    for (Ranked& ranked : worst_) plots->worst.push_back(std::move(ranked.worst));
+    return plots;
+  }
+
+ private:
+  struct Ranked {
+    double d_full_m = 0.0;
+    AnalyzePlots::WorstImage worst;
+  };
+  size_t worst_images_;
+  MinMaxEnvelope envelope_;
+  std::vector<Ranked> worst_;  // worst first
 };
 
 // The image's exposure and whether the trace can judge it (in_trace, too_few_samples), from the
@@ -225,21 +279,37 @@ void EstimateStillBias(const GyroTrace& camera_rates, bool estimate_bias, Analyz
   }
 }
 
-// The Allan deviation of the camera-axis rates, on the still segment when it holds enough samples
-// (AnalyzeResult::allan, allan_on_still).
-void AllanOfRates(const GyroTrace& rates, AnalyzeResult* result) {
-  result->allan_on_still = false;
-  if (result->bias_from_still) {
-    // [begin_s, end_s): the samples the bias was averaged over, not one more.
-    const auto [begin, end] = SamplesInSegment(rates, result->still_segment);
-    std::vector<GyroSample> still(rates.samples().begin() + begin, rates.samples().begin() + end);
-    if (still.size() >= 20) {
-      result->allan = AllanAnalysis(GyroTrace(std::move(still)));
-      result->allan_on_still = true;
-      return;
+// What the Allan deviation needs to know of its segment before it reads it (AllanStream): the
+// segment's samples, their intervals, and the sum of their rates after the first, in camera axes
+// as logged (the bias is not known yet when a stream reads them).
+struct AllanSegment {
+  size_t samples = 0;
+  IntervalHistogram intervals;
+  Eigen::Vector3d rate_sum_rad_s = Eigen::Vector3d::Zero();
+  int64_t previous_t_ns = 0;
+
+  void Add(const GyroSample& camera_as_logged) {
+    if (samples > 0) {
+      intervals.Add(camera_as_logged.t_ns - previous_t_ns);
+      rate_sum_rad_s += camera_as_logged.omega_rad_s;
     }
+    previous_t_ns = camera_as_logged.t_ns;
+    ++samples;
   }
-  result->allan = AllanAnalysis(rates);
+  // The stream to give the segment's rates less the bias: AllanAnalysis removes their mean.
+  AllanStream Open(const Eigen::Vector3d& bias_rad_s) const {
+    const Eigen::Vector3d mean =
+        samples > 1
+            ? Eigen::Vector3d(rate_sum_rad_s / static_cast<double>(samples - 1) - bias_rad_s)
+            : Eigen::Vector3d::Zero();
+    return AllanStream(samples, intervals.Median(), mean);
+  }
+};
+
+// Whether the Allan deviation is taken on the still segment (one was found, with 20 samples or
+// more in it), else on the whole log (AnalyzeResult::allan_on_still).
+bool AllanOnStill(const AnalyzeResult& result, const AllanSegment& still) {
+  return result.bias_from_still && still.samples >= 20;
 }
 
 // The flight table's options for this camera's readout, with the bias found (result->bias_rad_s).
@@ -249,8 +319,10 @@ FlightOptions FlightOptionsForReadout(const AnalyzeOptions& options, const Analy
   flight_options.limits_m = options.limits_m;
   flight_options.windows_s = {options.rig.shutter.readout_s};
   flight_options.noise_allowance_arcsec = options.noise_allowance_arcsec;
-  flight_options.series = options.flight_series;
-  flight_options.series_vector = false;  // the report plots the per-axis ranges only
+  if (options.plots) {
+    flight_options.summary = true;
+    flight_options.summary_max_intervals = options.plots->chart_buckets;
+  }
   // The still segment may lie anywhere (often after landing), so its bias is applied to every
   // sample rather than starting the statistics after the segment as `flight --bias` does.
   flight_options.known_bias_rad_s = result.bias_rad_s;
@@ -441,8 +513,13 @@ TrueModel AnalyzeTrueModel(const RigModel& rig, const Eigen::Vector3d& bias_cam_
   return model;
 }
 
+void AnalyzePlotOptions::Check() const {
+  SHUTTERLAB_CHECK(chart_buckets >= 10) << "chart_buckets must be >= 10";
+}
+
 void AnalyzeOptions::Check() const {
   rig.Check();
+  if (plots) plots->Check();
   SHUTTERLAB_CHECK(rig.shutter.readout_s > 0 && rig.shutter.readout_s < 10.0)
       << "readout must be in (0, 10) s (got " << rig.shutter.readout_s << " s)";
   SHUTTERLAB_CHECK(std::isfinite(rig.altitude_m) && rig.altitude_m > 0)
@@ -476,6 +553,44 @@ AnalyzeOptions WithLogAltitude(const FlightLog& log, const AnalyzeOptions& given
     *altitude_source = "log";
   }
   return options;
+}
+
+// The Allan deviation of the camera-axis rates (result->traces) as AnalyzeStream computes it.
+void AllanOfWholeTrace(const GyroTrace& gyro, const Eigen::Matrix3d& cam_from_gyro,
+                       AnalyzeResult* result) {
+  const GyroTrace& rates = result->traces->camera_rates;
+  AllanSegment whole, still;
+  const auto [begin, end] =
+      result->bias_from_still ? SamplesInSegment(rates, result->still_segment) : SampleRange{0, 0};
+  for (size_t k = 0; k < gyro.size(); ++k) {
+    const GyroSample as_logged = InCameraAxes(gyro[k], cam_from_gyro, Eigen::Vector3d::Zero());
+    whole.Add(as_logged);
+    if (k >= begin && k < end) still.Add(as_logged);
+  }
+  result->allan_on_still = AllanOnStill(*result, still);
+  AllanStream allan = (result->allan_on_still ? still : whole).Open(result->bias_rad_s);
+  const size_t first = result->allan_on_still ? begin : 0;
+  const size_t last = result->allan_on_still ? end : rates.size();
+  for (size_t k = first; k < last; ++k) allan.Add(rates[k]);
+  result->allan = allan.Finish();
+}
+
+// The plots of the traces held whole.
+std::shared_ptr<const AnalyzePlots> WholeTracePlots(const AnalyzePlotOptions& options,
+                                                    const AnalyzeTraces& traces,
+                                                    const std::vector<ImageResult>& images) {
+  const auto& samples = traces.camera_rates.samples();
+  PlotBuilder plots(options, samples.size(), {samples.front().t_ns, samples.back().t_ns});
+  for (size_t k = 0; k < samples.size(); ++k) {
+    const double angle_rad[3] = {traces.angles.angle_rad[0][k], traces.angles.angle_rad[1][k],
+                                 traces.angles.angle_rad[2][k]};
+    plots.AddSample(samples[k].t_ns, samples[k].omega_rad_s, angle_rad);
+  }
+  for (size_t i = 0; i < images.size(); ++i) {
+    if (!images[i].judged()) continue;
+    plots.OfferImage(i, images[i].d_full_m, [&] { return traces.motion.Frame(images[i].t_ns); });
+  }
+  return plots.Finish();
 }
 
 }  // namespace
@@ -512,7 +627,7 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
   result.traces = std::make_shared<const AnalyzeTraces>(
       AnalyzeTraces{std::move(rates), std::move(angles),
                     CameraMotion(gyro, AnalyzeTrueModel(options.rig, result.bias_rad_s))});
-  if (options.allan) AllanOfRates(result.traces->camera_rates, &result);
+  if (options.allan) AllanOfWholeTrace(gyro, options.rig.cam_from_gyro, &result);
   const std::vector<ImageTrigger> triggers =
       ChooseTriggers(log, span, options, &result.trigger_source);
   const ImageContext context{&result.traces->angles, &result.traces->motion, options.rig,
@@ -523,6 +638,7 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
     result.images.push_back(AnalyzeImage(context, triggers[i], latency_ns));
     ReportProgress(options, 0.7 + 0.25 * (i + 1) / triggers.size());
   }
+  if (options.plots) result.plots = WholeTracePlots(*options.plots, *result.traces, result.images);
   // The verdict, with the what-if shares recomputed (not scaled) under the changed camera.
   JudgeImages(
       options,
@@ -582,12 +698,14 @@ class StreamedReadouts {
   // contexts: one per camera variant (their angles and motion are set here; the first, the camera
   // analysed, gets D_full, the what-if ones none); images[v]: the images under variant v, timed
   // (ImageTiming); every judged one is measured.
+  // plots, when not null, is given every sample and every judged image of the camera analysed.
   StreamedReadouts(std::vector<ImageContext> contexts, std::vector<std::vector<ImageResult>> images,
-                   const TrueModel& model, const Eigen::Vector3d& bias_rad_s)
+                   const TrueModel& model, const Eigen::Vector3d& bias_rad_s, PlotBuilder* plots)
       : contexts_(std::move(contexts)),
         images_(std::move(images)),
         model_(model),
-        bias_rad_s_(bias_rad_s) {
+        bias_rad_s_(bias_rad_s),
+        plots_(plots) {
     for (size_t v = 0; v < images_.size(); ++v) {
       const int64_t readout_ns = SecondsToNs(contexts_[v].rig.shutter.readout_s);
       for (size_t i = 0; i < images_[v].size(); ++i) {
@@ -646,6 +764,7 @@ class StreamedReadouts {
       next.world_from_cam =
           OrientationStep(before.world_from_cam, before.cam_rate_rad_s, next.cam_rate_rad_s, dt_s);
     }
+    if (plots_ != nullptr) plots_->AddSample(next.t_ns, rate.omega_rad_s, next.angle_rad);
     kept_.push_back(next);
   }
 
@@ -693,7 +812,10 @@ class StreamedReadouts {
                      OrientationTrace(angles.t_ns, std::move(rates), std::move(orientations)));
       context.motion = &*motion;
     }
-    MeasureImage(context, &images_[job->variant][job->image]);
+    ImageResult& image = images_[job->variant][job->image];
+    MeasureImage(context, &image);
+    if (motion && plots_ != nullptr)
+      plots_->OfferImage(job->image, image.d_full_m, [&] { return motion->Frame(image.t_ns); });
     job->done = true;
   }
 
@@ -701,6 +823,7 @@ class StreamedReadouts {
   std::vector<std::vector<ImageResult>> images_;
   TrueModel model_;
   Eigen::Vector3d bias_rad_s_;
+  PlotBuilder* plots_;
   std::vector<ReadoutJob> jobs_;  // by start time
   size_t first_open_ = 0;         // jobs before it are done
   std::deque<Kept> kept_;
@@ -742,8 +865,6 @@ class LogPasses {
 }  // namespace
 
 AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions& given_options) {
-  SHUTTERLAB_CHECK(!given_options.flight_series && !given_options.allan)
-      << "the streamed analysis keeps no flight series or Allan deviation (the report's)";
   constexpr size_t kStillPasses = 5;  // DetectStillSegment on a source reads it at most five times
   LogPasses passes(source, given_options, (given_options.estimate_bias ? kStillPasses : 0) + 2);
   std::string altitude_source;
@@ -770,18 +891,31 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
 
   // The sampling, the warnings and the bias: the mean over the still segment's samples,
   // [begin_s, end_s) after the first sample (bias.h SamplesInSegment), summed in order.
+  // With options.allan, what the Allan deviation needs of the whole log and of the segment.
   Eigen::Vector3d bias_sum = Eigen::Vector3d::Zero();
   size_t bias_samples = 0;
   std::optional<int64_t> t0_ns;
+  int64_t still_begin_ns = 0, still_end_ns = 0;
+  AllanSegment allan_whole, allan_still;
   const StreamedLog read = consume([&](const GyroChunk& chunk) {
-    if (!t0_ns) t0_ns = chunk.data[0].t_ns;
+    if (!t0_ns) {
+      t0_ns = chunk.data[0].t_ns;
+      if (still) {
+        still_begin_ns = *t0_ns + SecondsToNs(still->segment.begin_s);
+        still_end_ns = *t0_ns + SecondsToNs(still->segment.end_s);
+      }
+    }
+    if (options.allan) {
+      for (const GyroSample& s : chunk)
+        allan_whole.Add(InCameraAxes(s, cam_from_gyro, Eigen::Vector3d::Zero()));
+    }
     if (!still) return;
-    const int64_t begin_ns = *t0_ns + SecondsToNs(still->segment.begin_s);
-    const int64_t end_ns = *t0_ns + SecondsToNs(still->segment.end_s);
     for (const GyroSample& s : chunk) {
-      if (s.t_ns < begin_ns || s.t_ns >= end_ns) continue;
-      bias_sum += InCameraAxes(s, cam_from_gyro, Eigen::Vector3d::Zero()).omega_rad_s;
+      if (s.t_ns < still_begin_ns || s.t_ns >= still_end_ns) continue;
+      const GyroSample as_logged = InCameraAxes(s, cam_from_gyro, Eigen::Vector3d::Zero());
+      bias_sum += as_logged.omega_rad_s;
       ++bias_samples;
+      if (options.allan) allan_still.Add(as_logged);
     }
   });
   FlightLog log = passes.log();
@@ -797,6 +931,13 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
     result.still_segment = still->segment;
     result.bias_from_still = bias_samples >= kMinBiasSamples;  // EstimateBias's refusal
     if (result.bias_from_still) result.bias_rad_s = bias_sum / static_cast<double>(bias_samples);
+  }
+
+  // The Allan deviation, on the still segment or the whole log, in the last pass.
+  std::optional<AllanStream> allan;
+  if (options.allan) {
+    result.allan_on_still = AllanOnStill(result, allan_still);
+    allan = (result.allan_on_still ? allan_still : allan_whole).Open(result.bias_rad_s);
   }
 
   // The images, timed now that the trace's span is known, under the camera analysed and the
@@ -831,10 +972,19 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
   } catch (const std::invalid_argument&) {
     flight_refused = std::current_exception();
   }
+  std::optional<PlotBuilder> plots;
+  if (options.plots) plots.emplace(*options.plots, read.sampling.samples, span);
   StreamedReadouts readouts(contexts, std::move(images),
-                            AnalyzeTrueModel(options.rig, result.bias_rad_s), result.bias_rad_s);
+                            AnalyzeTrueModel(options.rig, result.bias_rad_s), result.bias_rad_s,
+                            plots ? &*plots : nullptr);
   std::vector<GyroSample> rotated;
   consume([&](const GyroChunk& chunk) {
+    if (allan) {
+      for (const GyroSample& s : chunk) {
+        if (result.allan_on_still && (s.t_ns < still_begin_ns || s.t_ns >= still_end_ns)) continue;
+        allan->Add(InCameraAxes(s, cam_from_gyro, result.bias_rad_s));
+      }
+    }
     if (flight) {
       rotated.resize(chunk.size);
       for (size_t i = 0; i < chunk.size; ++i)
@@ -851,6 +1001,8 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
       &result);
   std::vector<std::vector<ImageResult>> measured = readouts.Finish();
   result.images = std::move(measured[0]);
+  if (plots) result.plots = plots->Finish();
+  if (allan) result.allan = allan->Finish();
   JudgeImages(
       options,
       [&] {

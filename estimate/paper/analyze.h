@@ -22,8 +22,9 @@
 // DetectStillSegment finds, else zero (AnalyzeResult::bias_from_still says which; with
 // AnalyzeOptions::estimate_bias false, zero without a search); it applies to
 // every sample, the flight table's included (FlightOptions::known_bias_rad_s).
-// The result keeps the traces the images came from (AnalyzeTraces: the camera-axis rates, their
-// per-axis angles, the full model's motion), each built once, for the report to draw.
+// Analyze's result keeps the traces the images came from (AnalyzeTraces: the camera-axis rates,
+// their per-axis angles, the full model's motion), each built once; with AnalyzeOptions::plots
+// both Analyze and AnalyzeStream keep what a report draws in bounded memory (AnalyzePlots).
 
 #include "estimate/paper/allan.h"
 #include "estimate/paper/flight.h"
@@ -55,6 +56,16 @@ struct ImageTrigger {
   int64_t t_ns = 0;  // trigger time on the log's gyro clock
 };
 
+// What a report draws (AnalyzeOptions::plots, AnalyzeResult::plots).
+struct AnalyzePlotOptions {
+  // The time charts' buckets: the rates and angles are cut to min/max envelopes over this many
+  // equal time spans, as DownsampleMinMax cuts them (estimate/report/html_report.h); the flagged
+  // readout windows are kept as up to this many intervals per limit.
+  size_t chart_buckets = 4000;
+  size_t worst_images = 3;  // the full model's frames kept for the images with the largest D_full
+  void Check() const;       // throws std::invalid_argument naming the first bad field
+};
+
 struct AnalyzeOptions {
   RigModel rig;                              // camera, readout, altitude_m, cam_from_gyro
   std::vector<double> limits_m{0.05, 0.10};  // acceptable smear on the ground
@@ -73,8 +84,9 @@ struct AnalyzeOptions {
   // false: zero bias and no still-segment search (calibrated flight-controller rates, or a
   // caller that removed the bias itself, e.g. `validate` on synthetic truth).
   bool estimate_bias = true;
-  // Keep the flight table's per-window ranges (FlightResult::series, readout window) for plots.
-  bool flight_series = false;
+  // Keep what a report draws (AnalyzeResult::plots and the flight table's window summary,
+  // FlightResult::summary), in memory that does not grow with the log.
+  std::optional<AnalyzePlotOptions> plots;
   // Compute the Allan deviation of the camera-axis rates (AnalyzeResult::allan) for the report.
   bool allan = false;
   std::function<void(double)> progress;  // fraction done (0..1); may be empty
@@ -113,8 +125,8 @@ struct AnalyzeVerdict {
   std::string line;                                 // the one-line verdict for a person
 };
 
-// What the per-image analysis was computed from, kept so that a report draws it rather than
-// computing it again from the log.
+// What the per-image analysis was computed from, when the log is held whole (Analyze), for callers
+// that look at the traces themselves (a report draws AnalyzePlots instead).
 struct AnalyzeTraces {
   // The log's rates in camera axes with the bias removed (rig.cam_from_gyro * w - bias), rad/s, on
   // the log's gyro clock.
@@ -125,6 +137,24 @@ struct AnalyzeTraces {
   // The full model's motion (AnalyzeTrueModel of the rig analysed, the log's altitude when used):
   // D_full comes from its frames.
   CameraMotion motion;
+};
+
+// What a report draws of the analysis (AnalyzeOptions::plots), the same whether the log was read
+// whole (Analyze) or streamed (AnalyzeStream), and bounded whatever the log's length.
+struct AnalyzePlots {
+  // The camera-axis rates (deg/s, bias removed) and their per-axis angles (deg, the paper's sum)
+  // against time on the log clock (s): DownsampleMinMax(chart, chart_buckets) of the whole traces
+  // (AnalyzeTraces::camera_rates and angles times kDegPerRad), the same numbers.
+  std::vector<double> t_s;
+  std::array<std::vector<double>, 3> rate_deg_s, angle_deg;
+  // The full model's frame (render/truth_model.h CameraMotion::Frame at the image's t_ns) of the
+  // judged images with the largest D_full, largest first (ties: the earlier image), at most
+  // worst_images of them.
+  struct WorstImage {
+    size_t image = 0;  // index in AnalyzeResult::images
+    FrameMotion frame;
+  };
+  std::vector<WorstImage> worst;
 };
 
 struct AnalyzeResult {
@@ -151,12 +181,17 @@ struct AnalyzeResult {
   AnalyzeVerdict verdict;
   // With AnalyzeOptions::allan, the Allan deviation of the camera-axis rates (bias removed): on the
   // still segment when one was found with 20 samples or more (allan_on_still), else on the whole
-  // log, where the flight's motion dominates and it bounds the gyro's noise from above. Empty
-  // (AllanResult::empty) when too few samples; nullopt when not asked for.
+  // log, where the flight's motion dominates and it bounds the gyro's noise from above. Computed
+  // as the log streams past (AllanStream: AllanAnalysis's taus, its exact values up to
+  // kAllanExactClusterMax samples a cluster, within a small part of its scatter beyond), with the
+  // mean it removes formed from the rates as logged less the bias. Empty (AllanResult::empty) when
+  // too few samples; nullopt when not asked for.
   std::optional<AllanResult> allan;
   bool allan_on_still = false;
   // Set by Analyze, never null there; shared, so that copying a result does not copy the traces.
   std::shared_ptr<const AnalyzeTraces> traces;
+  // With AnalyzeOptions::plots; shared as the traces are.
+  std::shared_ptr<const AnalyzePlots> plots;
 };
 
 AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& options);
@@ -180,8 +215,9 @@ struct AnalyzeLogSource {
 // same sums in the same order; the readouts are measured on a stretch of the same integration
 // kept while they are open. (Where the sample intervals take over 65,536 distinct values, the
 // median interval and the gap count come from bucketed intervals: sim/interval_histogram.h.)
-// What it does not give is what only the report draws: traces is null,
-// and options.flight_series and options.allan must be false (std::invalid_argument).
+// With options.plots, AnalyzeResult::plots and the flight's window summary are the same as
+// Analyze's (the same values fed to the same accumulators in the same order). What it does not
+// give: traces is null. With options.allan the Allan deviation is Analyze's too.
 AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions& options);
 
 // The renderer's true model that D_full uses: the declared rig with no time offset (triggers are

@@ -408,6 +408,12 @@ struct FlightStream::Impl {
     }
     rows.resize(options.limits_m.size() * durations);
     if (options.series) series.window_s = options.windows_s[0];
+    if (options.summary) {
+      summary.emplace();
+      summary->window_s = options.windows_s[0];
+      summary->flagged.assign(options.limits_m.size(),
+                              IntervalUnion(options.summary_max_intervals));
+    }
   }
 
   void Add(const GyroSample* samples, size_t count) {
@@ -543,6 +549,23 @@ struct FlightStream::Impl {
           }
         }
       }
+      if (summary && wi == 0) Summarise(k0, m, range);
+    }
+  }
+
+  // The windows starting at k0 .. k0 + m - 1 into the summary: the same values FlaggedIntervalsS
+  // and a histogram read from the series.
+  void Summarise(size_t k0, size_t m, const std::array<std::vector<double>, 3>& range) {
+    for (size_t i = 0; i < m; ++i) {
+      const double r[3] = {range[0][i] * kArcsecPerRad, range[1][i] * kArcsecPerRad,
+                           range[2][i] * kArcsecPerRad};
+      for (int a = 0; a < 3; ++a) summary->range_arcsec[a].Add(r[a]);
+      const double largest = std::max({r[0], r[1], r[2]});
+      for (size_t l = 0; l < summary->flagged.size(); ++l) {
+        if (largest <= thresholds.threshold_rad[l] * kArcsecPerRad) continue;
+        const double begin_s = buffer->t(k0 + i) * 1e-9;
+        summary->flagged[l].Add(begin_s, begin_s + summary->window_s);
+      }
     }
   }
 
@@ -576,6 +599,7 @@ struct FlightStream::Impl {
   SlidingRangeKernel kernel;
   std::vector<FlightRow> rows;
   FlightSeries series;
+  std::optional<FlightWindowSummary> summary;
 };
 
 FlightResult FlightStream::Impl::Finish() {
@@ -623,6 +647,14 @@ FlightResult FlightStream::Impl::Finish() {
   result.rows = std::move(rows);
   if (options.series && !too_few[0]) result.series = std::move(series);
   result.series.window_s = options.series ? options.windows_s[0] : 0.0;
+  if (summary && !too_few[0]) {
+    summary->windows = windows[0];
+    result.summary = std::move(summary);
+  } else if (summary) {
+    result.summary.emplace();  // not analysed: nothing to draw
+    result.summary->window_s = options.windows_s[0];
+    result.summary->flagged.resize(options.limits_m.size());
+  }
   for (size_t wi = 0; wi < durations; ++wi) {
     for (size_t l = 0; l < thresholds.threshold_rad.size(); ++l) {
       FlightRow& row = result.rows[l * durations + wi];

@@ -11,6 +11,7 @@
 // The vector criterion flags a window when the rotation angle between any two orientations in it
 // (SO(3) trapezoid integration of the same bias-corrected rates) exceeds the same threshold.
 
+#include "estimate/paper/plot_summary.h"
 #include "sim/bias.h"
 #include "sim/gyro_trace.h"
 #include "sim/log_warning.h"
@@ -37,6 +38,10 @@ struct FlightOptions {
   std::optional<Eigen::Vector3d> known_bias_rad_s;
   bool vector_criterion = true;  // also flag by the SO(3) angle (costs ~2x)
   bool series = false;           // fill FlightResult::series for windows_s[0]
+  // Fill FlightResult::summary for windows_s[0]: what a plot draws of the series, in bounded
+  // memory; its flagged intervals per limit are kept up to this many (0: no cap).
+  bool summary = false;
+  size_t summary_max_intervals = 4000;
   // The series' exact per-window vector angle too (O(samples x window samples): slow at kHz rates;
   // the per-axis ranges cost nothing extra).
   bool series_vector = true;
@@ -78,6 +83,19 @@ struct FlightSeries {
                                       // the vector criterion or series_vector
 };
 
+// What a plot draws of the windows of windows_s[0] (FlightOptions::summary), in memory that does
+// not grow with the trace: the series' flagged intervals and a fine histogram of its ranges.
+struct FlightWindowSummary {
+  double window_s = 0;
+  size_t windows = 0;  // 0 when the windows were not analysed (too few samples)
+  // Per limit (FlightOptions::limits_m order): FlaggedIntervalsS(series, the limit's threshold),
+  // the same intervals, until there are more than summary_max_intervals of them; then the shortest
+  // gaps are filled (IntervalUnion::filled_gap says up to which length).
+  std::vector<IntervalUnion> flagged;
+  // Per axis: the series' ranges, arcsec (range_arcsec), within 0.1 % of their value.
+  std::array<LogBinHistogram, 3> range_arcsec;
+};
+
 struct FlightResult {
   double altitude_m = 0;
   double noise_allowance_arcsec = 0;
@@ -88,6 +106,7 @@ struct FlightResult {
   bool vector_criterion = false;
   std::vector<FlightRow> rows;  // limit-major: for each limit, each window (Table 4 order)
   FlightSeries series;
+  std::optional<FlightWindowSummary> summary;  // with FlightOptions::summary
   // A too_few_samples warning (docs/FORMATS.md "Warnings") naming the rows the sampling rate could
   // not answer and the shortest window it allows; empty when every row was analysed. Commands add
   // it to the log's warnings.

@@ -37,7 +37,9 @@ std::string Cm(double m) { return Fmt("%.0f cm", m * 100.0); }
 
 std::vector<ChartShading> FlaggedShadings(const AnalyzeResult& result) {
   std::vector<ChartShading> shadings;
-  if (!result.flight || result.flight->series.t_ns.empty()) return shadings;
+  if (!result.flight || !result.flight->summary || result.flight->summary->windows == 0)
+    return shadings;
+  const FlightWindowSummary& summary = *result.flight->summary;
   // Loosest limit first so the stricter, wider shading lies below it.
   for (size_t r = 0; r < result.flight->rows.size(); ++r) {
     const FlightRow& row = result.flight->rows[r];
@@ -45,49 +47,39 @@ std::vector<ChartShading> FlaggedShadings(const AnalyzeResult& result) {
     const size_t l =
         static_cast<size_t>(std::find(result.limits_m.begin(), result.limits_m.end(), row.limit_m) -
                             result.limits_m.begin());
+    const IntervalUnion& flagged = summary.flagged.at(l);
     ChartShading shading;
     shading.label = "readout windows (" + Fmt("%g", row.window_s * 1e3) + " ms) over " +
                     Cm(row.limit_m) + " (" + Fmt("%.1f", row.threshold_arcsec) +
                     "\" on any axis): " + Fmt("%.1f", row.flagged_percent) + " % of windows";
+    if (flagged.filled_gap() > 0) {
+      shading.label += " (gaps up to " + Fmt("%.3g", flagged.filled_gap()) +
+                       " s between them shaded too, to keep the chart's intervals few)";
+    }
     shading.color = kShades[std::min<size_t>(l, std::size(kShades) - 1)];
-    shading.intervals = FlaggedIntervalsS(result.flight->series, row.threshold_arcsec);
+    shading.intervals = flagged.intervals();
     shadings.push_back(std::move(shading));
   }
   return shadings;
 }
 
-void AddRateAndAngleCharts(HtmlPage* page, const AnalyzeTraces& traces, const AnalyzeResult& result,
-                           const AnalyzeReportOptions& report) {
-  const auto& samples = traces.camera_rates.samples();
+// The rates and angles as the analysis cut them to envelopes (AnalyzePlots).
+void AddRateAndAngleCharts(HtmlPage* page, const AnalyzePlots& plots, const AnalyzeResult& result) {
   Chart rate;
   rate.title = "Rotation rate, camera axes (bias removed)";
   rate.x_label = "time on the log clock (s)";
   rate.y_label = "rate (deg/s)";
-  rate.x.reserve(samples.size());
-  rate.series.resize(3);
-  for (int a = 0; a < 3; ++a) {
-    rate.series[a].label = kAxisLabels[a];
-    rate.series[a].y.reserve(samples.size());
-  }
-  for (const GyroSample& s : samples) {
-    rate.x.push_back(s.t_ns * 1e-9);
-    for (int a = 0; a < 3; ++a) rate.series[a].y.push_back(s.omega_rad_s[a] * kDegPerRad);
-  }
-  const std::vector<ChartShading> shadings = FlaggedShadings(result);
-  rate.shadings = shadings;
-  page->AddChart(DownsampleMinMax(rate, report.chart_buckets));
+  rate.x = plots.t_s;
+  for (int a = 0; a < 3; ++a) rate.series.emplace_back(kAxisLabels[a], plots.rate_deg_s[a]);
+  rate.shadings = FlaggedShadings(result);
+  page->AddChart(rate);
 
   Chart angle = rate;  // the same x; the per-axis angles of the paper's model
   angle.title = "Integrated angle per camera axis (the paper's per-axis sum)";
   angle.y_label = "angle (deg)";
-  const PerAxisAngles& angles = traces.angles;
-  for (int a = 0; a < 3; ++a) {
-    for (size_t i = 0; i < angle.x.size(); ++i) {
-      angle.series[a].y[i] = angles.angle_rad[a][i] * kDegPerRad;
-    }
-  }
+  for (int a = 0; a < 3; ++a) angle.series[a].y = plots.angle_deg[a];
   angle.shadings.clear();  // the rate chart says which windows are flagged; keep this one clear
-  page->AddChart(DownsampleMinMax(angle, report.chart_buckets));
+  page->AddChart(angle);
 }
 
 void AddDistortionChart(HtmlPage* page, const AnalyzeResult& result) {
@@ -118,33 +110,35 @@ void AddDistortionChart(HtmlPage* page, const AnalyzeResult& result) {
 
 void AddWindowHistograms(HtmlPage* page, const FlightResult& flight,
                          const AnalyzeReportOptions& report) {
-  const FlightSeries& series = flight.series;
-  // Upper edge: past the largest threshold and the bulk of the windows; the rest go in the last
-  // bin.
-  std::vector<double> all;
-  for (int a = 0; a < 3; ++a)
-    all.insert(all.end(), series.range_arcsec[a].begin(), series.range_arcsec[a].end());
-  const size_t p = std::min(all.size() - 1, static_cast<size_t>(0.995 * all.size()));
-  std::nth_element(all.begin(), all.begin() + p, all.end());
-  double upper = all[p];
+  const FlightWindowSummary& summary = *flight.summary;
+  // Upper edge: past the largest threshold and the bulk (99.5 %) of the windows; the rest go in
+  // the last bin. The summary's histogram places the 99.5th percentile within 0.1 %.
+  LogBinHistogram all;
+  for (int a = 0; a < 3; ++a) all.Merge(summary.range_arcsec[a]);
+  const uint64_t p =
+      std::min<uint64_t>(all.total() - 1, static_cast<uint64_t>(0.995 * all.total()));
+  double upper = all.Quantile(p);
   for (const FlightRow& row : flight.rows) upper = std::max(upper, 1.15 * row.threshold_arcsec);
   const int bins = report.histogram_bins;
   const double width = upper / bins;
   Chart chart;
-  chart.title = "Readout windows (" + Fmt("%g", series.window_s * 1e3) +
+  chart.title = "Readout windows (" + Fmt("%g", summary.window_s * 1e3) +
                 " ms) by the range of each axis's angle";
   chart.kind = ChartKind::kHistogram;
   chart.x_label = "range within the window (arcsec); the last bin holds everything above";
   chart.y_label = "windows (%)";
   for (int b = 0; b <= bins; ++b) chart.x.push_back(b * width);
-  const double n = static_cast<double>(series.t_ns.size());
+  const double n = static_cast<double>(summary.windows);
   for (int a = 0; a < 3; ++a) {
-    std::vector<double> counts(bins, 0.0);
-    for (double r : series.range_arcsec[a]) {
-      counts[std::min(bins - 1, static_cast<int>(r / width))] += 1.0;
-    }
+    const LogBinHistogram& ranges = summary.range_arcsec[a];
     ChartSeries s(kAxisLabels[a]);
-    for (double c : counts) s.y.push_back(100.0 * c / n);
+    double below = 0.0;  // windows below the bin's left edge
+    for (int b = 0; b < bins; ++b) {
+      const double next =
+          b + 1 < bins ? ranges.CountBelow((b + 1) * width) : static_cast<double>(ranges.total());
+      s.y.push_back(100.0 * (next - below) / n);
+      below = next;
+    }
     s.y.push_back(s.y.back());  // the right edge of the last bin
     chart.series.push_back(std::move(s));
   }
@@ -268,12 +262,12 @@ void AddImageTable(HtmlPage* page, const AnalyzeResult& result) {
 }
 
 // |d| heatmap of one frame under the full model, over the rendered scene when there is one.
-cv::Mat WorstImagePicture(const CameraMotion& motion, const RigModel& rig, const ImageResult& image,
+cv::Mat WorstImagePicture(const FrameMotion& frame, const RigModel& rig,
                           const AnalyzeReportOptions& report) {
   const PinholeCamera& camera = rig.camera;
   const cv::Size scene_size =
       report.scene.empty() ? cv::Size(camera.width, camera.height) : report.scene.size();
-  const FrameGeometry geometry(camera, rig.altitude_m, motion.Frame(image.t_ns), scene_size);
+  const FrameGeometry geometry(camera, rig.altitude_m, frame, scene_size);
   cv::Mat picture = DisplacementHeatmap(DisplacementField(geometry));
   if (!report.scene.empty()) {
     cv::Mat rendered;
@@ -288,15 +282,11 @@ cv::Mat WorstImagePicture(const CameraMotion& motion, const RigModel& rig, const
 
 void AddWorstImages(HtmlPage* page, const RigModel& rig, const AnalyzeResult& result,
                     const AnalyzeReportOptions& report) {
-  std::vector<const ImageResult*> worst;
-  for (const ImageResult& image : result.images) {
-    if (image.judged()) worst.push_back(&image);
-  }
-  std::sort(worst.begin(), worst.end(),
-            [](const ImageResult* a, const ImageResult* b) { return a->d_full_m > b->d_full_m; });
-  if (worst.size() > report.worst_images) worst.resize(report.worst_images);
+  const std::vector<AnalyzePlots::WorstImage>& worst = result.plots->worst;
   if (worst.empty()) {
-    page->Paragraph("No image lies inside the log.");
+    page->Paragraph(result.verdict.images_in_trace == 0
+                        ? "No image lies inside the log."
+                        : "No pictures of the worst images asked for.");
     return;
   }
   page->Paragraph(
@@ -307,8 +297,9 @@ void AddWorstImages(HtmlPage* page, const RigModel& rig, const AnalyzeResult& re
                                              (report.scene_name.empty() ? std::string("the scene")
                                                                         : report.scene_name) +
                                              " rendered through the same rolling-shutter frame."));
-  for (const ImageResult* image : worst) {
-    page->Image(WorstImagePicture(result.traces->motion, rig, *image, report),
+  for (const AnalyzePlots::WorstImage& kept : worst) {
+    const ImageResult* image = &result.images.at(kept.image);
+    page->Image(WorstImagePicture(kept.frame, rig, report),
                 image->name + " at " + Fmt("%.2f", image->t_ns * 1e-9) + " s: D full " +
                     Fmt("%.1f", image->d_full_m * 100) + " cm (" + Fmt("%.1f", image->d_full_px) +
                     " px), D paper " + Fmt("%.1f", image->d_paper_m * 100) + " cm, axis " +
@@ -321,7 +312,6 @@ void AddWorstImages(HtmlPage* page, const RigModel& rig, const AnalyzeResult& re
 void AnalyzeReportOptions::Check() const {
   SHUTTERLAB_CHECK(scene.empty() || (scene.depth() == CV_8U && scene.channels() == 3))
       << "the report's scene must be an 8-bit RGB image";
-  SHUTTERLAB_CHECK(chart_buckets >= 10) << "chart_buckets must be >= 10";
   SHUTTERLAB_CHECK(histogram_bins >= 2) << "histogram_bins must be >= 2";
   SHUTTERLAB_CHECK(picture_width_px >= 64) << "picture_width_px must be >= 64";
 }
@@ -329,8 +319,9 @@ void AnalyzeReportOptions::Check() const {
 HtmlPage AnalyzeReportPage(const AnalyzeOptions& options, const AnalyzeResult& result,
                            const AnalyzeReportOptions& report) {
   report.Check();
-  SHUTTERLAB_CHECK(result.traces != nullptr)
-      << "the report draws the traces Analyze keeps: give it a result of Analyze";
+  SHUTTERLAB_CHECK(result.plots != nullptr)
+      << "the report draws what the analysis kept for it: give it a result of Analyze or "
+         "AnalyzeStream with AnalyzeOptions::plots";
   RigModel rig = options.rig;
   rig.altitude_m = result.altitude_m;
   HtmlPage page("Rolling-shutter flight report" +
@@ -389,12 +380,11 @@ HtmlPage AnalyzeReportPage(const AnalyzeOptions& options, const AnalyzeResult& r
   }
 
   page.Heading("Rotation during the flight");
-  if (!result.flight || result.flight->series.t_ns.empty()) {
+  if (!result.flight || !result.flight->summary || result.flight->summary->windows == 0) {
     page.Paragraph(
-        "Flagged windows are not shaded: the flight table's per-window series was not "
-        "computed.");
+        "Flagged windows are not shaded: the flight table's readout windows were not analysed.");
   }
-  AddRateAndAngleCharts(&page, *result.traces, result, report);
+  AddRateAndAngleCharts(&page, *result.plots, result);
 
   page.Heading("Distortion per image");
   page.Paragraph(
@@ -406,7 +396,7 @@ HtmlPage AnalyzeReportPage(const AnalyzeOptions& options, const AnalyzeResult& r
 
   page.Heading("Readout windows (flight table)");
   AddFlightTable(&page, result);
-  if (result.flight && !result.flight->series.t_ns.empty()) {
+  if (result.flight && result.flight->summary && result.flight->summary->windows > 0) {
     AddWindowHistograms(&page, *result.flight, report);
   }
 

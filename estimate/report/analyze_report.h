@@ -6,10 +6,10 @@
 // log), the flight and per-image tables, and for the worst images (by D_full) a heatmap of the
 // expected displacement |d| (render/rs_warp.h DisplacementField), blended over the nadir scene
 // rendered through the same frame when a scene is given. Built with estimate/html_report.h.
-// The page draws what Analyze computed (AnalyzeResult::traces: the rates, angles and camera
-// motion; AnalyzeResult::allan); it integrates and analyses nothing again.
-//
-// Long traces are cut to min/max envelopes (DownsampleMinMax) so the page stays a few MB.
+// The page draws what the analysis kept for it (AnalyzeResult::plots: the rates and angles cut to
+// min/max envelopes, the worst images' frames; FlightResult::summary: the flagged windows and a
+// histogram of their ranges; AnalyzeResult::allan); it integrates and analyses nothing again, and
+// it is the same page whether the log was read whole (Analyze) or streamed (AnalyzeStream).
 
 #include "estimate/paper/analyze.h"
 #include "estimate/report/html_report.h"
@@ -27,17 +27,16 @@ struct AnalyzeReportOptions {
   // Where the camera and its readout came from, when the caller knows more than the rig (e.g.
   // analyze --photos: "the photos' DJI FC8482 ..., readout 16 ms (table: ...)"); shown beside it.
   std::string camera_source;
-  size_t worst_images = 3;
-  size_t chart_buckets = 4000;  // DownsampleMinMax buckets of the time charts
   int histogram_bins = 60;
   int picture_width_px = 380;  // pictures are scaled to this width (scale bar included): 3 a row
   void Check() const;
 };
 
-// options: those given to Analyze (the rig; the altitude used is result.altitude_m). result must
-// come from Analyze (it holds the traces drawn; throws std::invalid_argument otherwise), with
-// AnalyzeOptions::flight_series and allan set, else the window histograms and the shading, or the
-// Allan deviation, are left out (said on the page).
+// options: those given to the analysis (the rig; the altitude used is result.altitude_m). result
+// must come from Analyze or AnalyzeStream with AnalyzeOptions::plots (throws
+// std::invalid_argument otherwise: it holds what is drawn), and AnalyzeOptions::allan, else the
+// Allan deviation is left out (said on the page). How many time buckets and worst images are
+// drawn is the analysis's choice (AnalyzePlotOptions).
 HtmlPage AnalyzeReportPage(const AnalyzeOptions& options, const AnalyzeResult& result,
                            const AnalyzeReportOptions& report);
 

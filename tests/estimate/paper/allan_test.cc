@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <random>
 #include <vector>
 
@@ -185,6 +187,68 @@ TEST(AllanCsv, HeaderAndOneLinePerTau) {
   r.tau_s = {0.5, 1.0};
   for (int a = 0; a < 3; ++a) r.adev_rad_s[a] = {1.0 + a, 0.25 * (a + 1)};
   EXPECT_EQ(AllanCsv(r), "tau_s,adev_x,adev_y,adev_z\n0.5,1,2,3\n1,0.25,0.5,0.75\n");
+}
+
+// AllanStream against AllanAnalysis on the segment held whole: the same taus; the exact clusters
+// equal to the bit; the longer ones, from every s-th term, within a small part of the estimate's
+// own scatter; the same coefficients within that. White noise, a random walk and a slow swing,
+// with jittered intervals and a logging gap (each sample's own interval enters the angle).
+TEST(AllanStream, EqualsAllanAnalysisOnTheWholeSegment) {
+  std::mt19937_64 rng(21);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  std::uniform_int_distribution<int64_t> jitter(-20'000, 20'000);
+  const size_t n = 40000;
+  std::vector<GyroSample> samples(n);
+  Eigen::Vector3d walk(0.01, -0.02, 0.005);
+  for (size_t k = 0; k < n; ++k) {
+    samples[k].t_ns = 5'000'000'000 + static_cast<int64_t>(k) * 1'000'000 + jitter(rng) +
+                      (k >= 30000 ? 40'000'000 : 0);
+    for (int a = 0; a < 3; ++a) walk[a] += 2e-5 * unit(rng);
+    samples[k].omega_rad_s = walk + 0.003 * Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) +
+                             Eigen::Vector3d(0.002 * std::sin(k * 1e-3), 0.0, 0.0);
+  }
+  const GyroTrace trace(samples);
+  const AllanResult whole = AllanAnalysis(trace);
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();  // AllanAnalysis's: the rates after the first
+  for (size_t k = 1; k < n; ++k) mean += trace[k].omega_rad_s;
+  mean /= static_cast<double>(n - 1);
+  AllanStream stream(n, trace.sampling().median_interval_ns, mean);
+  for (const GyroSample& s : trace.samples()) stream.Add(s);
+  const AllanResult streamed = stream.Finish();
+  ASSERT_EQ(streamed.tau_s, whole.tau_s);
+  EXPECT_EQ(streamed.tau0_s, whole.tau0_s);
+  size_t sparse = 0;
+  double worst = 0.0;
+  for (size_t i = 0; i < whole.tau_s.size(); ++i) {
+    const size_t m = static_cast<size_t>(std::llround(whole.tau_s[i] / whole.tau0_s));
+    for (int a = 0; a < 3; ++a) {
+      const double w = whole.adev_rad_s[a][i], s = streamed.adev_rad_s[a][i];
+      if (m <= kAllanExactClusterMax) {
+        ASSERT_EQ(s, w) << "m " << m << " axis " << a;
+      } else {
+        worst = std::max(worst, std::abs(s / w - 1.0));
+        // The overlapping estimate's own relative scatter at this m is ~ 1 / sqrt(n / m).
+        EXPECT_NEAR(s / w, 1.0, 0.1 * std::sqrt(static_cast<double>(m) / n)) << "m " << m;
+      }
+    }
+    sparse += m > kAllanExactClusterMax;
+  }
+  EXPECT_GE(sparse, 5u);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(streamed.axes[a].arw_deg_sqrt_h, whole.axes[a].arw_deg_sqrt_h,
+                1e-3 * whole.axes[a].arw_deg_sqrt_h);
+    EXPECT_NEAR(streamed.axes[a].bias_instability_deg_h, whole.axes[a].bias_instability_deg_h,
+                0.02 * whole.axes[a].bias_instability_deg_h);
+  }
+  std::cout << "AllanStream: " << sparse << " sparse taus, largest relative difference " << worst
+            << "\n";
+  // Fewer or more samples than announced is a caller's error; too short a segment is empty.
+  AllanStream short_of_one(n, trace.sampling().median_interval_ns, mean);
+  for (size_t k = 0; k + 1 < n; ++k) short_of_one.Add(trace[k]);
+  EXPECT_THROW(short_of_one.Finish(), std::invalid_argument);
+  AllanStream tiny(5, 1'000'000, mean);
+  for (size_t k = 0; k < 5; ++k) tiny.Add(trace[k]);
+  EXPECT_TRUE(tiny.Finish().empty());
 }
 
 }  // namespace

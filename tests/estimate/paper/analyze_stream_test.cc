@@ -2,6 +2,9 @@
 // analysis forms the same sums in the same order, so everything it reports is equal to the bit.
 
 #include "estimate/paper/analyze.h"
+#include "estimate/paper/photo_flight.h"
+#include "render/photo_set.h"
+#include "sim/civil_time.h"
 #include "sim/gyro_source.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/trace_audit.h"
@@ -98,6 +101,48 @@ void ExpectSameResult(const AnalyzeResult& s, const AnalyzeResult& w) {
   EXPECT_EQ(s.verdict.line, w.verdict.line);
   EXPECT_EQ(AnalyzeReport(s), AnalyzeReport(w));
   EXPECT_EQ(s.traces, nullptr);
+  // What a report draws.
+  EXPECT_EQ(s.allan_on_still, w.allan_on_still);
+  ASSERT_EQ(s.allan.has_value(), w.allan.has_value());
+  if (w.allan) {
+    EXPECT_EQ(s.allan->tau0_s, w.allan->tau0_s);
+    EXPECT_EQ(s.allan->tau_s, w.allan->tau_s);
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_EQ(s.allan->adev_rad_s[a], w.allan->adev_rad_s[a]);
+      EXPECT_EQ(s.allan->axes[a].arw_deg_sqrt_h, w.allan->axes[a].arw_deg_sqrt_h);
+      EXPECT_EQ(s.allan->axes[a].bias_instability_deg_h, w.allan->axes[a].bias_instability_deg_h);
+    }
+  }
+  ASSERT_EQ(s.plots != nullptr, w.plots != nullptr);
+  if (w.plots) {
+    EXPECT_EQ(s.plots->t_s, w.plots->t_s);
+    EXPECT_EQ(s.plots->rate_deg_s, w.plots->rate_deg_s);
+    EXPECT_EQ(s.plots->angle_deg, w.plots->angle_deg);
+    ASSERT_EQ(s.plots->worst.size(), w.plots->worst.size());
+    for (size_t i = 0; i < w.plots->worst.size(); ++i) {
+      EXPECT_EQ(s.plots->worst[i].image, w.plots->worst[i].image);
+      const FrameMotion& sf = s.plots->worst[i].frame;
+      const FrameMotion& wf = w.plots->worst[i].frame;
+      ASSERT_EQ(sf.world_from_cam.size(), wf.world_from_cam.size());
+      for (size_t row = 0; row < wf.world_from_cam.size(); ++row) {
+        ASSERT_EQ(sf.world_from_cam[row], wf.world_from_cam[row]) << row;
+        ASSERT_EQ(sf.cam_center_m[row], wf.cam_center_m[row]) << row;
+      }
+      EXPECT_EQ(sf.world_from_ref, wf.world_from_ref);
+    }
+  }
+  if (w.flight) {
+    ASSERT_EQ(s.flight->summary.has_value(), w.flight->summary.has_value());
+    if (w.flight->summary) {
+      const FlightWindowSummary& ss = *s.flight->summary;
+      const FlightWindowSummary& ws = *w.flight->summary;
+      EXPECT_EQ(ss.windows, ws.windows);
+      ASSERT_EQ(ss.flagged.size(), ws.flagged.size());
+      for (size_t l = 0; l < ws.flagged.size(); ++l)
+        EXPECT_EQ(ss.flagged[l].intervals(), ws.flagged[l].intervals());
+      for (int a = 0; a < 3; ++a) EXPECT_TRUE(ss.range_arcsec[a] == ws.range_arcsec[a]);
+    }
+  }
 }
 
 // 12 s at 1 kHz: still with noise and a bias for 4 s, then a wobble about every axis with noise.
@@ -105,14 +150,17 @@ FlightLog WobblyLog() {
   std::mt19937 rng(15);
   std::normal_distribution<double> noise(0.0, 2e-3);
   const Eigen::Vector3d bias(0.004, -0.003, 0.002);
-  return test::StillThenRateLog(
-      12.0,
-      [&](double t_s) {
-        Eigen::Vector3d rate(0.3 * std::sin(7 * t_s), 0.2 * std::cos(11 * t_s), 0.1 * t_s);
-        for (int a = 0; a < 3; ++a) rate[a] += bias[a] + noise(rng);
-        return rate;
-      },
-      "wobble");
+  FlightLog log = test::StillThenRateLog(
+      12.0, [](double) { return Eigen::Vector3d::Zero(); }, "wobble");
+  std::vector<GyroSample> samples = log.gyro.samples();
+  for (GyroSample& s : samples) {
+    const double t_s = s.t_ns * 1e-9;
+    if (t_s > 4.0)
+      s.omega_rad_s = Eigen::Vector3d(0.3 * std::sin(7 * t_s), 0.2 * std::cos(11 * t_s), 0.1 * t_s);
+    for (int a = 0; a < 3; ++a) s.omega_rad_s[a] += bias[a] + noise(rng);
+  }
+  log.gyro = GyroTrace(std::move(samples));
+  return log;
 }
 
 // The camera turned against the gyro, images out of time order, two outside the log, a latency.
@@ -126,6 +174,9 @@ AnalyzeOptions TurnedCameraOptions() {
   options.rig.cam_from_gyro =
       Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   options.trigger_latency_s = 0.0013;
+  // The report's plots: 12,000 samples cut to 300 buckets' envelopes, two worst images' frames.
+  options.plots = AnalyzePlotOptions{300, 2};
+  options.allan = true;
   for (const double t_s : {9.5, 1.0, 6.02, 4.7, 11.99, -0.5, 7.25, 6.0, 10.0101})
     options.triggers.push_back({"t" + std::to_string(t_s), SecondsToNs(t_s)});
   return options;
@@ -138,6 +189,24 @@ TEST(AnalyzeStream, EqualsTheWholeTraceAnalysisToTheBit) {
   ASSERT_TRUE(whole.bias_from_still);
   ASSERT_TRUE(whole.flight.has_value());
   ASSERT_GT(whole.verdict.images_in_trace, 5u);
+  ASSERT_EQ(whole.plots->t_s.size(), 600u);
+  ASSERT_EQ(whole.plots->worst.size(), 2u);
+  ASSERT_TRUE(whole.allan_on_still);
+  ASSERT_FALSE(whole.allan->empty());
+  // The Allan deviation is AllanAnalysis's on the still segment's rates: its clusters are all
+  // exact here, and only the mean it removes is formed in another order.
+  const GyroTrace& rates = whole.traces->camera_rates;
+  const auto [begin, end] = SamplesInSegment(rates, whole.still_segment);
+  const AllanResult held = AllanAnalysis(GyroTrace(
+      std::vector<GyroSample>(rates.samples().begin() + begin, rates.samples().begin() + end)));
+  ASSERT_EQ(whole.allan->tau_s, held.tau_s);
+  ASSERT_GT(held.adev_rad_s[0][0], 1e-4);  // the still segment holds noise
+  for (int a = 0; a < 3; ++a) {
+    for (size_t i = 0; i < held.tau_s.size(); ++i)
+      EXPECT_NEAR(whole.allan->adev_rad_s[a][i], held.adev_rad_s[a][i],
+                  1e-9 * held.adev_rad_s[a][i]);
+  }
+  ASSERT_FALSE(whole.flight->summary->flagged[0].intervals().empty());
   for (const size_t chunk : {size_t{5}, size_t{61}, size_t{4096}}) {
     SCOPED_TRACE("chunk " + std::to_string(chunk));
     int opened = 0;
@@ -226,8 +295,69 @@ TEST(AnalyzeStream, TooFewSamplesAndTooShortLogsAsTheWholeTrace) {
   log.gyro = GyroTrace(std::vector<GyroSample>(samples.begin(), samples.begin() + 1));
   EXPECT_THROW(Analyze(log, options), std::invalid_argument);
   EXPECT_THROW(AnalyzeStream(SourceOf(log, 9), options), std::invalid_argument);
-  options.allan = true;  // the report's: the streamed analysis refuses it
-  EXPECT_THROW(AnalyzeStream(SourceOf(WobblyLog(), 9), options), std::invalid_argument);
+}
+
+// `analyze --photos DIR LOG` streamed (AnalyzePhotoFlightStream: the log's metadata places the
+// photos, AnalyzeStream analyses them) against the log read whole (AnalyzePhotoFlight). Nine
+// photos from a camera clock at UTC+08:00, off by a few ms: seven paired with the log's camera
+// events through its GPS time (one exposed too late for its readout to fit in the log), two
+// without an event placed by their capture time.
+TEST(AnalyzeStream, PhotoFlightEqualsTheWholeLogToTheBit) {
+  constexpr int64_t kUtcAtLogZeroNs = 1'721'091'600'000'000'000;  // 2024-07-16 01:00:00 UTC
+  constexpr int64_t kZoneNs = 8 * 3'600'000'000'000LL;
+  FlightLog log = WobblyLog();
+  for (int k = 0; k <= 12; ++k)
+    log.utc_fixes.push_back({k * kNsPerSecond, kUtcAtLogZeroNs + k * kNsPerSecond});
+  std::vector<int64_t> exposures_ns;
+  for (int k = 0; k < 8; ++k) exposures_ns.push_back(SecondsToNs(4.3 + 0.9 * k));
+  exposures_ns.push_back(SecondsToNs(11.995));
+  const int error_ms[9] = {3, -2, 5, 0, 1, -4, 2, 0, 6};
+  PhotoSet set;
+  for (size_t k = 0; k < exposures_ns.size(); ++k) {
+    if (k != 6 && k != 7)
+      log.camera_events.push_back({exposures_ns[k], static_cast<int64_t>(k), "camera_capture"});
+    PhotoMetadata m;
+    m.width = 320;
+    m.height = 240;
+    m.focal_length_35mm = 24.0;
+    m.relative_altitude_m = 60.0;
+    m.speed_m_s = Eigen::Vector3d(5.0, 1.0, 0.0);
+    ClockFace face;
+    face.face_ns = kUtcAtLogZeroNs + exposures_ns[k] + kZoneNs + error_ms[k] * 1'000'000LL;
+    face.resolution_s = 1e-3;
+    m.capture_time = face;
+    set.photos.push_back(MakePhotoRecord("/p/DJI_000" + std::to_string(k + 1) + ".JPG", m, {}));
+  }
+  PhotoFlightOptions options;
+  options.analyze = TurnedCameraOptions();
+  options.analyze.rig.shutter.readout_s = 0.02;
+  options.readout_given = true;
+  const PhotoFlightResult whole = AnalyzePhotoFlight(set, Audited(log), nullptr, options);
+  ASSERT_EQ(whole.clock.paired, 7u) << whole.clock.method;
+  ASSERT_EQ(whole.log.images.size(), 9u) << whole.clock.method;
+  ASSERT_EQ(whole.log.verdict.images_in_trace, 8u);
+  ASSERT_TRUE(whole.log.bias_from_still);
+  FlightLog metadata = log;
+  metadata.gyro = GyroTrace();
+  const PhotoFlightResult streamed =
+      AnalyzePhotoFlightStream(set, metadata, SourceOf(log, 61), nullptr, options);
+  ExpectSameResult(streamed.log, whole.log);
+  EXPECT_EQ(streamed.camera_source, whole.camera_source);
+  EXPECT_EQ(streamed.clock.method, whole.clock.method);
+  EXPECT_EQ(streamed.clock.clock_offset_s, whole.clock.clock_offset_s);
+  ASSERT_EQ(streamed.photos.photos.size(), whole.photos.photos.size());
+  for (size_t i = 0; i < whole.photos.photos.size(); ++i) {
+    const PhotoResult& s = streamed.photos.photos[i];
+    const PhotoResult& w = whole.photos.photos[i];
+    SCOPED_TRACE(w.name);
+    EXPECT_EQ(s.placement.t_ns, w.placement.t_ns);
+    EXPECT_EQ(s.placement.residual_s, w.placement.residual_s);
+    EXPECT_EQ(s.d_rotation_px, w.d_rotation_px);
+    EXPECT_EQ(s.d_rotation_m, w.d_rotation_m);
+    EXPECT_EQ(s.d_paper_m, w.d_paper_m);
+    EXPECT_EQ(s.flagged, w.flagged);
+  }
+  EXPECT_EQ(PhotoAnalysisReport(set, streamed.photos), PhotoAnalysisReport(set, whole.photos));
 }
 
 }  // namespace

@@ -10,8 +10,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <memory>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -34,7 +37,7 @@ AnalyzeOptions SmallCamera() {
   AnalyzeOptions options;
   // A small frame keeps the heatmaps cheap (under sanitizers too): 160x120, f 140 px, 30 ms, 50 m.
   options.rig = test::NadirRig(160, 120, 140.0);
-  options.flight_series = true;
+  options.plots = AnalyzePlotOptions{};
   options.allan = true;
   return options;
 }
@@ -48,10 +51,10 @@ TEST(AnalyzeReport, ChartsHoldTheAnalysedValues) {
   options.triggers = {{"quiet", SecondsToNs(5.0)},
                       {"shaken", SecondsToNs(6.5)},
                       {"late", SecondsToNs(9.99)}};  // readout past the log's end
+  options.plots->worst_images = 1;
   const AnalyzeResult result = Analyze(log, options);
   AnalyzeReportOptions report;
   report.log_name = "flight<1>.bbl";
-  report.worst_images = 1;
   const std::string html = AnalyzeReportPage(options, result, report).Html();
   EXPECT_TRUE(test::SelfContained(html));
   EXPECT_NE(html.find("var uPlot="), std::string::npos);
@@ -115,9 +118,9 @@ TEST(AnalyzeReport, SceneIsRenderedUnderTheHeatmap) {
   const FlightLog log = StepLog(8.0, RateForGroundSmear(0.02), RateForGroundSmear(0.07));
   AnalyzeOptions options = SmallCamera();
   options.triggers = {{"shaken", SecondsToNs(6.5)}};
+  options.plots->worst_images = 1;
   const AnalyzeResult result = Analyze(log, options);
   AnalyzeReportOptions report;
-  report.worst_images = 1;
   const std::string plain = AnalyzeReportPage(options, result, report).Html();
   report.scene = cv::Mat(240, 320, CV_8UC3, cv::Scalar(250, 250, 250));
   report.scene_name = "white.png";
@@ -130,10 +133,9 @@ TEST(AnalyzeReport, LongTracesAreEnveloped) {
   const FlightLog log = StepLog(30.0, RateForGroundSmear(0.02), RateForGroundSmear(0.07));
   AnalyzeOptions options = SmallCamera();
   options.every_s = 5.0;
+  options.plots = AnalyzePlotOptions{100, 0};
   const AnalyzeResult result = Analyze(log, options);
   AnalyzeReportOptions report;
-  report.chart_buckets = 100;
-  report.worst_images = 0;
   const auto charts = test::ChartBlocks(AnalyzeReportPage(options, result, report).Html());
   ASSERT_GE(charts.size(), 2u);
   EXPECT_EQ(charts[0]["data"][0].size(), 200u);  // 100 buckets, min and max each
@@ -141,14 +143,13 @@ TEST(AnalyzeReport, LongTracesAreEnveloped) {
   EXPECT_EQ(charts[2]["data"][0].size(), 6u);  // images every 5 s of 30 s: 0, 5, ..., 25 s
 }
 
-TEST(AnalyzeReport, DrawsTheResultsTracesAndIntegratesNothingAgain) {
+TEST(AnalyzeReport, DrawsTheResultsPlotsAndIntegratesNothingAgain) {
   const FlightLog log = StepLog(10.0, RateForGroundSmear(0.02), RateForGroundSmear(0.07));
   AnalyzeOptions options = SmallCamera();
   options.triggers = {{"shaken", SecondsToNs(6.5)}};
+  options.plots = AnalyzePlotOptions{6000, 0};  // 10001 samples: drawn one by one, no envelope
   AnalyzeResult result = Analyze(log, options);
   AnalyzeReportOptions report;
-  report.worst_images = 0;
-  report.chart_buckets = 6000;  // 10001 samples: drawn one by one, no envelope
   const AnalyzeTraces& kept = *result.traces;
   const auto rate_and_angle = [&](const AnalyzeResult& r) {
     const auto charts = test::ChartBlocks(AnalyzeReportPage(options, r, report).Html());
@@ -164,22 +165,97 @@ TEST(AnalyzeReport, DrawsTheResultsTracesAndIntegratesNothingAgain) {
       ASSERT_EQ(angle["data"][a + 1][k].get<double>(), kept.angles.angle_rad[a][k] * kDegPerRad);
     }
   }
-  // Traces put in the result by hand are what the page shows: it takes them, it does not
-  // compute them again.
-  AnalyzeTraces doubled = kept;
-  for (auto& axis : doubled.angles.angle_rad) {
+  // Plots put in the result by hand are what the page shows: it takes them, it does not compute
+  // them again.
+  AnalyzePlots doubled = *result.plots;
+  for (auto& axis : doubled.angle_deg) {
     for (double& v : axis) v *= 2.0;
   }
   AnalyzeResult altered = result;
-  altered.traces = std::make_shared<const AnalyzeTraces>(std::move(doubled));
+  altered.plots = std::make_shared<const AnalyzePlots>(std::move(doubled));
   const auto [same_rate, doubled_angle] = rate_and_angle(altered);
   EXPECT_EQ(same_rate["data"], rate["data"]);
   const size_t last = kept.angles.size() - 1;
   EXPECT_EQ(doubled_angle["data"][1][last].get<double>(),
             2.0 * kept.angles.angle_rad[0][last] * kDegPerRad);
   EXPECT_NE(kept.angles.angle_rad[0][last], 0.0);
-  // A result that did not come from Analyze has nothing to draw.
+  // A result analysed without plots has nothing to draw.
+  AnalyzeOptions no_plots = options;
+  no_plots.plots.reset();
+  EXPECT_THROW(AnalyzeReportPage(options, Analyze(log, no_plots), report), std::invalid_argument);
   EXPECT_THROW(AnalyzeReportPage(options, AnalyzeResult(), report), std::invalid_argument);
+}
+
+// The shading and the window histograms drawn from the flight's bounded summary, against what the
+// whole per-window series gives: the same flagged intervals; the histogram's upper edge within
+// 0.1 % of the exact 99.5th percentile and each bin's share within 0.05 percentage points.
+TEST(AnalyzeReport, ShadingAndHistogramsMatchTheWholeSeries) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  const FlightLog log = test::StillThenRateLog(
+      20.0,
+      [&](double t_s) {
+        return Eigen::Vector3d(0.15 * std::sin(2 * t_s) + noise(rng),
+                               0.02 * std::sin(5 * t_s) + noise(rng), noise(rng));
+      },
+      "noisy");
+  AnalyzeOptions options = SmallCamera();
+  options.every_s = 3.0;
+  options.plots->worst_images = 0;
+  const AnalyzeResult result = Analyze(log, options);
+  // The whole series, as the report drew it before: the same flight options with series on.
+  FlightOptions flight;
+  flight.limits_m = options.limits_m;
+  flight.windows_s = {options.rig.shutter.readout_s};
+  flight.known_bias_rad_s = result.bias_rad_s;
+  flight.series = true;
+  flight.series_vector = false;
+  const FlightSeries series = Flight(log.gyro, flight).series;
+  ASSERT_GT(series.t_ns.size(), 10000u);
+  AnalyzeReportOptions report;
+  const auto charts = test::ChartBlocks(AnalyzeReportPage(options, result, report).Html());
+  const nlohmann::json& rate = charts.at(0);
+  for (size_t l = 0; l < result.flight->rows.size(); ++l) {
+    const auto exact = FlaggedIntervalsS(series, result.flight->rows[l].threshold_arcsec);
+    const auto& drawn = rate["shadings"][l]["intervals"];
+    ASSERT_EQ(drawn.size(), exact.size()) << l;
+    for (size_t i = 0; i < exact.size(); ++i) {
+      EXPECT_EQ(drawn[i][0].get<double>(), exact[i].first);
+      EXPECT_EQ(drawn[i][1].get<double>(), exact[i].second);
+    }
+  }
+  ASSERT_GT(rate["shadings"][0]["intervals"].size(), 3u);
+  // The exact histogram: the 99.5th percentile of every range, the counts by bin.
+  std::vector<double> all;
+  for (int a = 0; a < 3; ++a)
+    all.insert(all.end(), series.range_arcsec[a].begin(), series.range_arcsec[a].end());
+  const size_t p = std::min(all.size() - 1, static_cast<size_t>(0.995 * all.size()));
+  std::nth_element(all.begin(), all.begin() + p, all.end());
+  double upper = all[p];
+  const double percentile = upper;
+  for (const FlightRow& row : result.flight->rows)
+    upper = std::max(upper, 1.15 * row.threshold_arcsec);
+  ASSERT_EQ(upper, percentile);  // the percentile sets the edge here, not the thresholds
+  const nlohmann::json& histogram = charts.at(3);
+  ASSERT_EQ(histogram["kind"], "histogram");
+  const int bins = report.histogram_bins;
+  const double drawn_upper = histogram["data"][0][bins].get<double>();
+  EXPECT_NEAR(drawn_upper, upper, 1e-3 * upper);
+  const double width = upper / bins;
+  double worst = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    std::vector<double> counts(bins, 0.0);
+    for (double r : series.range_arcsec[a])
+      counts[std::min(bins - 1, static_cast<int>(r / width))]++;
+    for (int b = 0; b < bins; ++b) {
+      const double exact = 100.0 * counts[b] / series.t_ns.size();
+      const double drawn = histogram["data"][a + 1][b].get<double>();
+      worst = std::max(worst, std::abs(drawn - exact));
+      EXPECT_NEAR(drawn, exact, 0.05) << a << " " << b;
+    }
+  }
+  std::cout << "window histogram: edge " << drawn_upper << " vs " << upper
+            << " arcsec, largest bin difference " << worst << " percentage points\n";
 }
 
 TEST(FlaggedIntervalsS, MergesOverlappingWindows) {

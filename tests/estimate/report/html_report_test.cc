@@ -1,5 +1,6 @@
 #include "estimate/report/html_report.h"
 
+#include "estimate/paper/plot_summary.h"
 #include "sim/text_file.h"
 #include "tests/estimate/report/report_test_util.h"
 #include "tests/test_util.h"
@@ -10,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <random>
 #include <regex>
 #include <string>
 #include <vector>
@@ -149,6 +151,56 @@ TEST(DownsampleMinMax, KeepsEachBucketsExtremesInOrder) {
   EXPECT_DOUBLE_EQ(small.series[0].y[1], std::sin(0.99));
   // Short charts are left alone.
   EXPECT_EQ(DownsampleMinMax(chart, 5000).x.size(), n);
+}
+
+// The streamed envelope against its whole-chart twin: the same x and values, to the bit, on
+// charts shorter than the buckets, at the 2 * buckets edge, and long ones; with jittered x, ties,
+// NaNs and infinities, a flat series, and a chart whose x does not move.
+TEST(MinMaxEnvelope, EqualsDownsampleMinMaxOfTheWholeChart) {
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<double> jitter(0.0, 0.9);
+  std::uniform_int_distribution<int> level(-3, 3);
+  const size_t buckets = 50;
+  for (const size_t n : {size_t{1}, size_t{2}, size_t{37}, size_t{100}, size_t{101}, size_t{173},
+                         size_t{1000}, size_t{20011}}) {
+    for (const bool flat_x : {false, true}) {
+      SCOPED_TRACE("n " + std::to_string(n) + (flat_x ? ", flat x" : ""));
+      Chart chart;
+      chart.series = {ChartSeries("a"), ChartSeries("b"), ChartSeries("c")};
+      for (size_t i = 0; i < n; ++i) {
+        // Uneven steps (a gap every 97 points), x in seconds of a nanosecond clock as the report.
+        const double t_ns = i * 1e6 + jitter(rng) * 1e6 + (i / 97) * 3e7;
+        chart.x.push_back(flat_x ? 5.0 : std::round(t_ns) * 1e-9);
+        chart.series[0].y.push_back(std::sin(i * 0.013) * 100.0);
+        chart.series[1].y.push_back(level(rng));  // many ties: the first extreme wins
+        double c = i % 11 == 3 ? std::numeric_limits<double>::quiet_NaN() : level(rng) * 0.5;
+        if (i % 13 == 5) c = std::numeric_limits<double>::infinity();
+        if (i >= 200 && i < 400) c = std::numeric_limits<double>::quiet_NaN();  // empty buckets
+        chart.series[2].y.push_back(c);
+      }
+      const Chart whole = DownsampleMinMax(chart, buckets);
+      MinMaxEnvelope envelope(3, buckets, n, chart.x.front(), chart.x.back());
+      for (size_t i = 0; i < n; ++i) {
+        const double y[3] = {chart.series[0].y[i], chart.series[1].y[i], chart.series[2].y[i]};
+        envelope.Add(chart.x[i], y);
+      }
+      envelope.Finish();
+      ASSERT_EQ(envelope.x(), whole.x);
+      for (size_t k = 0; k < 3; ++k) {
+        const std::vector<double>& a = envelope.y()[k];
+        const std::vector<double>& b = whole.series[k].y;
+        ASSERT_EQ(a.size(), b.size()) << k;
+        for (size_t i = 0; i < b.size(); ++i) {
+          if (std::isnan(b[i])) {
+            ASSERT_TRUE(std::isnan(a[i])) << k << " " << i;
+          } else {
+            ASSERT_EQ(a[i], b[i]) << k << " " << i;
+          }
+        }
+      }
+      if (n > 2 * buckets && !flat_x) EXPECT_LE(whole.x.size(), 2 * buckets);
+    }
+  }
 }
 
 }  // namespace
