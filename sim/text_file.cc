@@ -96,8 +96,8 @@ TextBlocks TextBlocks::OfFile(const std::string& path, size_t block_bytes) {
   if (::fstat(blocks.fd_, &info) == 0 && S_ISREG(info.st_mode)) {
     blocks.size_ = static_cast<uint64_t>(info.st_size);
     // A block no larger than the file needs (with room to see its end in the same read), so that
-    // a small log does not allocate and fault in 4 MiB; a file that grows meanwhile is still read
-    // whole, in more reads.
+    // a small log does not allocate and fault in a whole block; a file that grows meanwhile is
+    // still read whole, in more reads.
     constexpr uint64_t kSmallestBlock = 4 << 10;
     blocks.capacity_ = static_cast<size_t>(
         std::min<uint64_t>(blocks.capacity_, std::max(blocks.size_ + 1, kSmallestBlock)));

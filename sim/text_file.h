@@ -47,7 +47,9 @@ void WriteFileAtomically(const std::string& path, std::string_view content);
 // put every line end at a block edge somewhere).
 class TextBlocks {
  public:
-  static constexpr size_t kBlockBytes = 4 << 20;
+  // A block the parser finds still in the L2 cache after read() copied it there (flight on a
+  // 30-million-line gyro.csv: 1.38 s CPU with 4 MiB blocks, 1.34-1.36 s with 256 KiB, same run).
+  static constexpr size_t kBlockBytes = 256 << 10;
   // A file; throws IoError naming the path when it cannot be opened.
   static TextBlocks OfFile(const std::string& path, size_t block_bytes = kBlockBytes);
   // A text in memory, which must outlive the blocks.

@@ -19,6 +19,12 @@ constexpr int64_t kRateBlockNs = 1'000'000'000;
 constexpr size_t kMinBlockIntervals = 8;
 constexpr size_t kMaxRateChangesListed = 4;
 
+// An interval is a gap when it is longer than kGapFactor times the local one (none when the local
+// interval is 0: times stamped alike).
+bool IsGap(int64_t dt_ns, int64_t local_ns) {
+  return local_ns != 0 && dt_ns > SamplingReport::kGapFactor * local_ns;
+}
+
 // The candidate full scales (rad/s, ascending): the stated one, or the common ones.
 std::vector<double> FullScaleCandidates(const TraceAuditOptions& options) {
   if (options.full_scale_rad_s) return {*options.full_scale_rad_s};
@@ -153,19 +159,25 @@ void TraceAuditor::CloseBlock(bool at_end) {
     if (into_block_) Judge(*into_block_, *previous_median_ns_);
     for (size_t i = 0; i < inside; ++i) Judge(interval(i), *previous_median_ns_);
   } else if (pushed > 0) {
-    // A block of equal intervals (a logger that stamps a fixed period) is its own median, found
-    // without the selection.
-    bool equal = true;
-    for (size_t i = 1; i < pushed; ++i) equal &= t[i + 1] - t[i] == t[1] - t[0];
-    int64_t median_ns = t[1] - t[0];
-    if (!equal) {
+    // The shortest and longest interval first: a block of equal ones (a logger that stamps a
+    // fixed period) is its own median, without the selection, and no interval inside a block
+    // whose longest is no gap needs judging.
+    int64_t shortest_ns = t[1] - t[0], longest_ns = shortest_ns;
+    for (size_t i = 1; i < pushed; ++i) {
+      shortest_ns = std::min(shortest_ns, t[i + 1] - t[i]);
+      longest_ns = std::max(longest_ns, t[i + 1] - t[i]);
+    }
+    int64_t median_ns = shortest_ns;
+    if (shortest_ns != longest_ns) {
       std::vector<int64_t> dts(pushed);
       for (size_t i = 0; i < pushed; ++i) dts[i] = t[i + 1] - t[i];
       median_ns = UpperMedian(std::move(dts));
     }
     // The interval into the block joins two blocks: the slower rate judges it.
     if (into_block_) Judge(*into_block_, std::max(median_ns, previous_median_ns_.value_or(0)));
-    for (size_t i = 0; i < inside; ++i) Judge(interval(i), median_ns);
+    if (IsGap(longest_ns, median_ns)) {
+      for (size_t i = 0; i < inside; ++i) Judge(interval(i), median_ns);
+    }
     NoteBlockRate(median_ns, t.front());
     previous_median_ns_ = median_ns;
   }
@@ -176,7 +188,7 @@ void TraceAuditor::CloseBlock(bool at_end) {
 }
 
 void TraceAuditor::Judge(const Interval& interval, int64_t local_ns) {
-  if (local_ns == 0 || interval.dt_ns <= SamplingReport::kGapFactor * local_ns) return;
+  if (!IsGap(interval.dt_ns, local_ns)) return;
   if (gaps_++ == 0) first_gap_at_ns_ = interval.t_before_ns;
   missing_ns_ += interval.dt_ns - local_ns;
   if (interval.dt_ns > longest_ns_) {
