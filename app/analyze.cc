@@ -28,7 +28,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -190,27 +192,106 @@ void SetTriggers(const TriggerFile& triggers, const FlightLog& log, const std::s
       "trigger file " + std::filesystem::path(path).filename().string() + ": " + triggers.source;
 }
 
-// The log analysed as a stream (AnalyzeStream), in bounded memory whatever its length: what
-// `analyze LOG` does for a regular file, with --out too (the report draws bounded plots), without
-// --second (the pair is fused on the whole traces).
-AnalyzeResult AnalyzeStreamed(const AnalyzeCommand& command, const FlightLogReadOptions& read,
-                              const std::optional<TriggerFile>& triggers, AnalyzeOptions options) {
-  // Opened once for the triggers (a GPS-timed file needs the log's GPS fixes); that stream is
-  // the analysis's first.
-  auto first =
-      std::make_shared<std::optional<FlightLogStream>>(OpenFlightLog(command.log_path, read));
-  if (triggers) SetTriggers(*triggers, (*first)->log, command.triggers_path, &options);
+// Whether LOG, and --second's LOG2, can be read in passes, as the streamed analyses read them.
+bool LogsReadableInPasses(const AnalyzeCommand& command) {
+  return ReadableInPasses(command.log_path) &&
+         (command.second_path.empty() || ReadableInPasses(command.second_path));
+}
+
+// With --second, the pair as AnalyzeStream reads it, fused on the first log's clock: each log read
+// through once for what it lost (printed by its name, as the whole read prints it) and the
+// second's sampling, the still segment searched on the first (five passes), the pair fitted
+// (three passes over both: sim/sensor_pair.h FitSensorPair), then fused chunk by chunk each time
+// the analysis opens it. The same pair and fused samples as FuseSensorPair on the logs read whole.
+AnalyzeLogSource PairStreamSource(const AnalyzeCommand& command, const FlightLogReadOptions& read,
+                                  const std::optional<TriggerFile>& triggers, FlightLogStream first,
+                                  std::optional<SensorPair>* pair) {
+  const auto samples_of = [&read](const std::string& path) -> OpenGyroSource {
+    return [&read, path] { return OpenFlightLog(path, read).gyro; };
+  };
+  // Progress over the ten passes before the analysis: each log's, the still search's five and the
+  // fit's three (counted on the first log).
+  constexpr int kPasses = 10;
+  int passes_begun = 0;
+  Progress progress("pair", 1000);
+  const auto next_pass = [&]() -> std::function<void(double)> {
+    const int pass = passes_begun++;
+    return [&progress, pass](double f) {
+      progress.Update(static_cast<size_t>(std::min(pass + f, 1.0 * kPasses) / kPasses * 1000));
+    };
+  };
+  const OpenGyroSource first_passes = [&] {
+    return std::make_unique<ReportingSource>(samples_of(command.log_path)(), next_pass());
+  };
+  const auto ignore = [](const GyroChunk&) {};
+  const StreamedLog first_read = ConsumeFlightLog(&first, ignore, next_pass());
+  PrintLogWarnings(command.log_path, first_read.warnings);
+  FlightLogStream second = OpenFlightLog(command.second_path, read);
+  const StreamedLog second_read = ConsumeFlightLog(&second, ignore, next_pass());
+  PrintLogWarnings(command.second_path, second_read.warnings);
+  SensorPairOptions pair_options;
+  try {
+    pair_options.still = DetectStillSegment(first_passes).segment;
+  } catch (const std::invalid_argument&) {
+  }
+  const int64_t second_interval_ns = second_read.sampling.median_interval_ns;
+  try {
+    *pair = FitSensorPair(first_passes, samples_of(command.second_path), second_interval_ns,
+                          pair_options);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(command.log_path + " + " + command.second_path + ": " + e.what());
+  }
+  // The fused log: the first's metadata, both logs' warnings, the fused samples.
+  FlightLog fused = std::move(first.log);
+  fused.warnings = first_read.warnings;
+  fused.warnings.insert(fused.warnings.end(), second_read.warnings.begin(),
+                        second_read.warnings.end());
   AnalyzeLogSource source;
-  source.open = [first, &command, &read] {
-    if (!*first) return OpenFlightLog(command.log_path, read);
-    FlightLogStream stream = std::move(**first);
-    first->reset();
+  source.open = [fused, fit = **pair, samples_of, &command, second_interval_ns] {
+    FlightLogStream stream;
+    stream.log = fused;
+    stream.gyro = FusedPairSource(samples_of(command.log_path)(), samples_of(command.second_path)(),
+                                  fit, second_interval_ns);
+    stream.audit_warnings = false;  // both logs' audits are in fused.warnings
+    return stream;
+  };
+  source.more_warnings = TriggerWarnings(triggers, command.triggers_path);
+  return source;
+}
+
+// The log as AnalyzeStream reads it: first is its first stream, already opened (its metadata
+// read); each later pass opens the log again. Prints the log's warnings when it has been read
+// through; the trigger file's go after them. With --second, the pair fused (PairStreamSource).
+AnalyzeLogSource StreamSource(const AnalyzeCommand& command, const FlightLogReadOptions& read,
+                              const std::optional<TriggerFile>& triggers, FlightLogStream first,
+                              std::optional<SensorPair>* pair) {
+  if (!command.second_path.empty())
+    return PairStreamSource(command, read, triggers, std::move(first), pair);
+  auto first_left = std::make_shared<std::optional<FlightLogStream>>(std::move(first));
+  AnalyzeLogSource source;
+  source.open = [first_left, &command, &read] {
+    if (!*first_left) return OpenFlightLog(command.log_path, read);
+    FlightLogStream stream = std::move(**first_left);
+    first_left->reset();
     return stream;
   };
   source.more_warnings = TriggerWarnings(triggers, command.triggers_path);
   source.on_read = [&command](const std::vector<LogWarning>& warnings) {
     PrintLogWarnings(command.log_path, warnings);
   };
+  return source;
+}
+
+// The log analysed as a stream (AnalyzeStream), in bounded memory whatever its length: what
+// `analyze LOG` does for regular files, with --out too (the report draws bounded plots).
+AnalyzeResult AnalyzeStreamed(const AnalyzeCommand& command, const FlightLogReadOptions& read,
+                              const std::optional<TriggerFile>& triggers, AnalyzeOptions options,
+                              std::optional<SensorPair>* pair) {
+  // Opened once for the triggers (a GPS-timed file needs the log's GPS fixes); that stream is
+  // the analysis's first.
+  FlightLogStream first = OpenFlightLog(command.log_path, read);
+  if (triggers) SetTriggers(*triggers, first.log, command.triggers_path, &options);
+  const AnalyzeLogSource source = StreamSource(command, read, triggers, std::move(first), pair);
   Progress progress("analyze", 1000);
   options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
   return AnalyzeStream(source, options);
@@ -250,6 +331,32 @@ FlightLog ReadLog(const AnalyzeCommand& command, const FlightLogReadOptions& rea
   log.gyro = (*pair)->fused;
   log.warnings.insert(log.warnings.end(), second.warnings.begin(), second.warnings.end());
   return log;
+}
+
+// The photos placed and analysed on the LOG. Regular files are read as streams, in bounded memory
+// whatever their length, with --out too (the report draws bounded plots); a log on a pipe (and
+// --second's) is read whole.
+PhotoFlightResult PhotosOnLog(const AnalyzeCommand& command, const FlightLogReadOptions& read,
+                              const PhotoSet& set, const std::optional<TriggerFile>& triggers,
+                              const PhotoFlightOptions& options, std::optional<SensorPair>* pair) {
+  const TriggerFile* trigger_file = triggers ? &*triggers : nullptr;
+  if (LogsReadableInPasses(command)) {
+    FlightLogStream first = OpenFlightLog(command.log_path, read);
+    const FlightLog metadata = first.log;  // the samples stay in the stream
+    const AnalyzeLogSource source = StreamSource(command, read, triggers, std::move(first), pair);
+    try {
+      return AnalyzePhotoFlightStream(set, metadata, source, trigger_file, options);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(command.log_path + ": " + e.what());
+    }
+  }
+  FlightLog log = ReadLog(command, read, pair);
+  AddTriggerWarnings(triggers, command.triggers_path, &log);
+  try {
+    return AnalyzePhotoFlight(set, log, trigger_file, options);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(command.log_path + ": " + e.what());
+  }
 }
 
 // --photos DIR [LOG]: the photos alone (translation from their speed), or placed on the log.
@@ -304,19 +411,12 @@ void RunPhotos(const AnalyzeCommand& command) {
     }
     return;
   }
-  std::optional<SensorPair> pair;
-  FlightLog log = ReadLog(command, *log_read, &pair);
-  AddTriggerWarnings(triggers, command.triggers_path, &log);
   Progress progress("analyze", 1000);
   options.analyze.progress = [&progress](double f) {
     progress.Update(static_cast<size_t>(f * 1000));
   };
-  PhotoFlightResult result;
-  try {
-    result = AnalyzePhotoFlight(set, log, triggers ? &*triggers : nullptr, options);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(command.log_path + ": " + e.what());
-  }
+  std::optional<SensorPair> pair;
+  const PhotoFlightResult result = PhotosOnLog(command, *log_read, set, triggers, options, &pair);
   if (result.lens) {
     for (const std::string& note : result.lens->notes) std::cerr << "note: " << note << "\n";
   }
@@ -352,10 +452,10 @@ void Run(const AnalyzeCommand& command) {
   const AnalyzeReportOptions report = ReportFromFlags(command);
   std::optional<SensorPair> pair;
   AnalyzeResult result;
-  // The stream reads the log several times; a log on a pipe is read whole, as with --second.
-  if (command.second_path.empty() && ReadableInPasses(command.log_path)) {
+  // The stream reads the log several times; a log on a pipe is read whole.
+  if (LogsReadableInPasses(command)) {
     try {
-      result = AnalyzeStreamed(command, read, triggers, options);
+      result = AnalyzeStreamed(command, read, triggers, options, &pair);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(command.log_path + ": " + e.what());
     }
@@ -401,9 +501,10 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
   cmd->add_option("--photo-utc-offset", command->photo_utc_offset,
                   "the photos' camera clock zone, e.g. +08:00 (else EXIF OffsetTimeOriginal, the "
                   "offset fitted to the log's events, or the one zone that fits the log)");
-  cmd->add_option("--format", command->format,
-                  "auto, ulog, dataflash, blackbox, gopro, gyro.csv, gcsv, raw (columns: set by "
-                  "--columns)")
+  cmd->add_option(
+         "--format", command->format,
+         "auto, ulog, dataflash, blackbox, gopro, gyro.csv, gcsv, raw, gyro_dump (columns: set by "
+         "--columns)")
       ->capture_default_str();
   cmd->add_option("--log-index", command->log_index,
                   "blackbox: which log of the file (-1 = longest)")

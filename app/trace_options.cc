@@ -53,10 +53,10 @@ void TraceOptions::Add(CLI::App* command, bool with_bias) {
       ->required()
       ->check(CLI::ExistingFile);
   command
-      ->add_option(
-          "--format", format,
-          "log format: auto, csv, gcsv, raw, ulog, blackbox, dataflash, gopro (columns: set by "
-          "--columns)")
+      ->add_option("--format", format,
+                   "log format: auto, csv, gcsv, raw, ulog, blackbox, dataflash, gopro, gyro_dump "
+                   "(columns: set by "
+                   "--columns)")
       ->capture_default_str();
   command->add_flag("--raw", raw, "the log holds raw int16 counts (the source paper's logger)");
   command
@@ -144,24 +144,6 @@ BiasSegment NoteStillSegment(const StillSegment& still) {
                still.segment.end_s);
   return still.segment;
 }
-
-// A source that reports the share it has read after each chunk.
-class ReportingSource : public GyroSource {
- public:
-  ReportingSource(std::unique_ptr<GyroSource> source, std::function<void(double)> report)
-      : source_(std::move(source)), report_(std::move(report)) {}
-  GyroChunk Next() override {
-    const GyroChunk chunk = source_->Next();
-    report_(source_->Fraction());
-    return chunk;
-  }
-  double Fraction() const override { return source_->Fraction(); }
-  std::vector<LogWarning> Warnings() const override { return source_->Warnings(); }
-
- private:
-  std::unique_ptr<GyroSource> source_;
-  std::function<void(double)> report_;
-};
 
 }  // namespace
 

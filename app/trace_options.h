@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -70,10 +71,30 @@ struct TraceOptions {
 
 // What the reader could not read or trust, one "warning: PATH: LINE" on stderr each, so that no
 // command analyses less than the file holds without saying so.
+void PrintLogWarnings(const std::string& path, const std::vector<LogWarning>& warnings);
+
 // Whether the log at path can be read more than once (a streamed analysis's passes): a regular
 // file can; a pipe or a FIFO (/dev/stdin) is drained by the first read and must be read whole.
 bool ReadableInPasses(const std::string& path);
-void PrintLogWarnings(const std::string& path, const std::vector<LogWarning>& warnings);
+
+// A source that reports the share it has read after each chunk: the progress of a pass of a read
+// in several (the still search's, the sensor pair's).
+class ReportingSource : public GyroSource {
+ public:
+  ReportingSource(std::unique_ptr<GyroSource> source, std::function<void(double)> report)
+      : source_(std::move(source)), report_(std::move(report)) {}
+  GyroChunk Next() override {
+    const GyroChunk chunk = source_->Next();
+    report_(source_->Fraction());
+    return chunk;
+  }
+  double Fraction() const override { return source_->Fraction(); }
+  std::vector<LogWarning> Warnings() const override { return source_->Warnings(); }
+
+ private:
+  std::unique_ptr<GyroSource> source_;
+  std::function<void(double)> report_;
+};
 
 // Runs analysis(trace, options) the way every trace command does: --bias is parsed and the options
 // checked before the (possibly long) read, the log's warnings are printed (and handed back in

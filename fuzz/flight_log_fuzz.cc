@@ -1,6 +1,6 @@
 // libFuzzer target: any file handed to a command that takes a log (sim/logs/flight_log_io.h
-// ReadFlightLog): format detection, then gyro.csv, Gyroflow .gcsv, raw counts, the blackbox CSV
-// export or a binary log, then the trace audit.
+// ReadFlightLog): format detection, then gyro.csv, Gyroflow .gcsv, raw counts, a gyro dump, the
+// blackbox CSV export or a binary log, then the trace audit.
 #include "sim/logs/flight_log_io.h"
 
 #include "fuzz/fuzz_util.h"

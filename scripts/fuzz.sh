@@ -67,6 +67,7 @@ text_seeds() {  # text_seeds TARGET [PREFIX]: small files of every text format, 
   printf "${p}"'0,12,-5,3\n1000,13,-4,3\n2000,32767,-32768,0\n' >"$dir/raw.csv"
   printf "${p}"'time,x,y,z\n0,12,-5,3\n1,13,-4,3\n' >"$dir/raw_header.csv"
   printf "${p}"'GYROFLOW IMU LOG\nversion,1.3\nid,x\norientation,XYZ\ntscale,0.001\ngscale,1\nt,gx,gy,gz\n0,0.1,0.2,0.3\n1,0.1,0.2,0.3\n' >"$dir/log.gcsv"
+  printf "${p}"'SOF  10246,  frameNum :1 exp time 0.005\nframeid:1 gyro:0 x 0.003973 y -0.038 z 1e-3 ts 10741\nframeid:2 gyro:0 x 0.003973 y -0.038 z 1e-3 ts 10741\nframeid:2 gyro:1 x 0 y 0 z 0 ts 13167.5\n' >"$dir/gyro_dump.txt"
   printf "${p}"'CAMERA IMU LOG\nversion,1.1\norientation,yXZ\ntscale,1e-6\ngscale,0.0174533\nascale,1\nt,gx,gy,gz,ax,ay,az\n0,1,2,3,0,0,1\n1000,1,2,3,0,0,1\n' >"$dir/camera.gcsv"
 }
 ulogs=("$data"/gyro/px4_ulog/*.ulg)
@@ -85,6 +86,9 @@ for t in "${targets[@]}"; do
       seed flight_log mp4 "${mp4s[@]}"
       text_seeds flight_log ;;
     gyro_csv | gcsv) text_seeds "$t" '\x05' ;;  # blocks of 6 bytes
+    gyro_dump)  # blocks of 9 bytes
+      text_seeds "$t" '\x20'
+      seed gyro_dump prefix "$data"/rs/phone_gyro_video_20200109_145447/gyro_dump.txt ;;
     raw_csv) text_seeds "$t" '\x10' ;;          # 250 deg/s, seconds, blocks of 5 bytes
     mp4) seed mp4 mp4 "${mp4s[@]}" ;;
     gpmf)

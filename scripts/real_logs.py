@@ -30,6 +30,7 @@ LOGS = [
     ("rs/gopro_karma/karma.mp4", []),
     ("incoming_rs/gopro_max_heromode/max-heromode.mp4", []),
     ("rs/phone_gyro_video_20200109_145447/gyro.txt", ["--columns", "4,1,2,3"]),
+    ("rs/phone_gyro_video_20200109_145447/gyro_dump.txt", []),
 ]
 COMMANDS = [
     ("flight", ["flight", "--json"]),

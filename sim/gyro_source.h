@@ -83,6 +83,8 @@ class FillingSource : public GyroSource {
         line_number, last_t_ns ? std::optional<double>(*last_t_ns * 1e-9) : std::nullopt));
   }
   void LeaveOutCutLastLine(long line_number) { LeaveOutCutLastLine(line_number, last_t_ns_); }
+  // Another thing the reader left out or doubted (Warnings).
+  void AddWarning(LogWarning warning) { warnings_.push_back(std::move(warning)); }
   // Takes the time of the sample on line line_number of path, refusing one earlier than the
   // sample before it (equal times are kept: a log may stamp two samples alike). time_as_written:
   // its time field as the file holds it, for the message.

@@ -56,6 +56,54 @@ Eigen::Vector3d Mean(const std::vector<Eigen::Vector3d>& v) {
   return sum / static_cast<double>(v.size());
 }
 
+// Per-axis variance about the mean of the vectors added, from their sum and sum of squares.
+struct VarianceSum {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero(), sum_sq = Eigen::Vector3d::Zero();
+  size_t n = 0;
+  void Add(const Eigen::Vector3d& v) {
+    sum += v;
+    sum_sq += v.cwiseProduct(v);
+    ++n;
+  }
+  Eigen::Vector3d Variance() const {
+    const double count = static_cast<double>(n);
+    return (sum_sq / count - (sum / count).cwiseProduct(sum / count)).cwiseMax(0.0);
+  }
+};
+
+// Per-axis variance about the mean of v[k] over k in [begin, end).
+Eigen::Vector3d Variance(const std::vector<Eigen::Vector3d>& v, size_t begin, size_t end) {
+  VarianceSum sum;
+  for (size_t k = begin; k < end; ++k) sum.Add(v[k]);
+  return sum.Variance();
+}
+
+// Inverse-variance weights of a per axis from both sensors' variances over the still segment.
+Eigen::Vector3d WeightsOfA(const Eigen::Vector3d& var_a, const Eigen::Vector3d& var_b) {
+  Eigen::Vector3d weight_a;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double total = var_a[axis] + var_b[axis];
+    weight_a[axis] = total > 0 ? var_b[axis] / total : 0.5;
+  }
+  return weight_a;
+}
+
+// The rotation R minimising sum |da - R db|^2 from h = sum db da^T (Kabsch, the determinant
+// forced to +1).
+Eigen::Matrix3d KabschRotation(const Eigen::Matrix3d& h) {
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  return svd.matrixV() * d * svd.matrixU().transpose();
+}
+
+// The fit's signal-to-residual measure: the second-largest variance of a's rates (cov_a / n) over
+// the per-axis residual variance.
+double MountingSignalRatio(const Eigen::Matrix3d& cov_a, double n, double residual_var) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(cov_a / n);  // ascending
+  return residual_var > 0 ? eigen.eigenvalues()[1] / residual_var : 0.0;
+}
+
 // Kabsch: the rotation R minimising sum |(a - mean a) - R (b - mean b)|^2; *ratio the fit's
 // signal-to-residual measure; *residual_var the per-axis residual variance.
 Eigen::Matrix3d FitMounting(const Pairs& pairs, double* ratio, double* residual_var) {
@@ -67,29 +115,14 @@ Eigen::Matrix3d FitMounting(const Pairs& pairs, double* ratio, double* residual_
     cov_a += da * da.transpose();
   }
   const double n = static_cast<double>(pairs.a.size());
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
-  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
-  const Eigen::Matrix3d r = svd.matrixV() * d * svd.matrixU().transpose();
+  const Eigen::Matrix3d r = KabschRotation(h);
   double residual = 0;
   for (size_t k = 0; k < pairs.a.size(); ++k) {
     residual += ((pairs.a[k] - mean_a) - r * (pairs.b[k] - mean_b)).squaredNorm();
   }
   *residual_var = residual / (3 * n);
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(cov_a / n);  // ascending
-  *ratio = *residual_var > 0 ? eigen.eigenvalues()[1] / *residual_var : 0.0;
+  *ratio = MountingSignalRatio(cov_a, n, *residual_var);
   return r;
-}
-
-// Per-axis variance about the mean of v[k] over k in [begin, end).
-Eigen::Vector3d Variance(const std::vector<Eigen::Vector3d>& v, size_t begin, size_t end) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero(), sum_sq = Eigen::Vector3d::Zero();
-  for (size_t k = begin; k < end; ++k) {
-    sum += v[k];
-    sum_sq += v[k].cwiseProduct(v[k]);
-  }
-  const double n = static_cast<double>(end - begin);
-  return (sum_sq / n - (sum / n).cwiseProduct(sum / n)).cwiseMax(0.0);
 }
 
 }  // namespace
@@ -122,12 +155,7 @@ SensorPair FuseSensorPair(const GyroTrace& a, const GyroTrace& b,
       if (t_s < options.still->end_s) end = k + 1;
     }
     if (end > begin + 100) {
-      const Eigen::Vector3d var_a = Variance(pairs.a, begin, end),
-                            var_b = Variance(pairs.b, begin, end);
-      for (int axis = 0; axis < 3; ++axis) {
-        const double total = var_a[axis] + var_b[axis];
-        result.weight_a[axis] = total > 0 ? var_b[axis] / total : 0.5;
-      }
+      result.weight_a = WeightsOfA(Variance(pairs.a, begin, end), Variance(pairs.b, begin, end));
       result.weights_from_still = true;
     }
   }
@@ -139,6 +167,180 @@ SensorPair FuseSensorPair(const GyroTrace& a, const GyroTrace& b,
   }
   result.fused = GyroTrace(std::move(fused));
   return result;
+}
+
+namespace {
+
+// b's samples walked alongside a's times as PairSamples walks them: for each time, b's nearest
+// sample, when within half of b's median interval.
+class PartnerFinder {
+ public:
+  PartnerFinder(std::unique_ptr<GyroSource> b, int64_t b_median_interval_ns)
+      : b_(std::move(b)), half_ns_(std::max<int64_t>(b_median_interval_ns / 2, 1)) {
+    SHUTTERLAB_CHECK(HasNext()) << "both sensors need samples";
+    current_ = buffer_[next_++];
+  }
+  // b's rate nearest to t_ns (the times asked in a's order), or null.
+  const Eigen::Vector3d* Find(int64_t t_ns) {
+    while (HasNext() &&
+           std::llabs(buffer_[next_].t_ns - t_ns) <= std::llabs(current_.t_ns - t_ns)) {
+      current_ = buffer_[next_++];
+    }
+    return std::llabs(current_.t_ns - t_ns) <= half_ns_ ? &current_.omega_rad_s : nullptr;
+  }
+
+ private:
+  bool HasNext() {
+    if (next_ < buffer_.size()) return true;
+    if (done_) return false;
+    next_ = 0;
+    done_ = !b_->NextInto(&buffer_);
+    return !done_;
+  }
+  std::unique_ptr<GyroSource> b_;
+  int64_t half_ns_;
+  std::vector<GyroSample> buffer_;
+  size_t next_ = 0;
+  bool done_ = false;
+  GyroSample current_;
+};
+
+// One pass over the pairs, in a's order: visit(a's sample, b's partner rate). Returns the number
+// of a's samples without a partner and *a_begin_ns, a's first time; throws when either trace is
+// empty.
+template <typename Visit>
+size_t ForEachPair(const OpenGyroSource& open_a, const OpenGyroSource& open_b,
+                   int64_t b_median_interval_ns, const Visit& visit,
+                   int64_t* a_begin_ns = nullptr) {
+  std::unique_ptr<GyroSource> a = open_a();
+  std::vector<GyroSample> chunk;
+  SHUTTERLAB_CHECK(a->NextInto(&chunk)) << "both sensors need samples";
+  if (a_begin_ns) *a_begin_ns = chunk.front().t_ns;
+  PartnerFinder b(open_b(), b_median_interval_ns);
+  size_t unpaired = 0;
+  do {
+    for (const GyroSample& s : chunk) {
+      if (const Eigen::Vector3d* partner = b.Find(s.t_ns)) {
+        visit(s, *partner);
+      } else {
+        ++unpaired;
+      }
+    }
+  } while (a->NextInto(&chunk));
+  return unpaired;
+}
+
+// What the last pass sums for one choice of the mounting: the difference a - a_from_b b over all
+// pairs, and both sensors over the still segment's pairs.
+struct FusionSums {
+  explicit FusionSums(const Eigen::Matrix3d& mounting) : a_from_b(mounting) {}
+  Eigen::Matrix3d a_from_b;
+  VarianceSum diff, still_a, still_b;
+  void Add(const Eigen::Vector3d& a, const Eigen::Vector3d& b, bool still) {
+    const Eigen::Vector3d b_in_a = a_from_b * b;
+    diff.Add(a - b_in_a);
+    if (still) {
+      still_a.Add(a);
+      still_b.Add(b_in_a);
+    }
+  }
+};
+
+// A fused chunk from each of a's chunks (FusedPairSource).
+class FusedSource : public GyroSource {
+ public:
+  FusedSource(std::unique_ptr<GyroSource> a, std::unique_ptr<GyroSource> b, const SensorPair& pair,
+              int64_t b_median_interval_ns)
+      : a_(std::move(a)),
+        b_(std::move(b), b_median_interval_ns),
+        a_from_b_(pair.a_from_b),
+        weight_a_(pair.weight_a) {}
+  GyroChunk Next() override {
+    fused_.clear();
+    while (fused_.empty() && a_->NextInto(&chunk_)) {
+      for (const GyroSample& s : chunk_) {
+        const Eigen::Vector3d* partner = b_.Find(s.t_ns);
+        if (!partner) continue;
+        const Eigen::Vector3d b_in_a = a_from_b_ * *partner;
+        fused_.push_back({s.t_ns, weight_a_.cwiseProduct(s.omega_rad_s) +
+                                      (Eigen::Vector3d::Ones() - weight_a_).cwiseProduct(b_in_a)});
+      }
+    }
+    return {fused_.data(), fused_.size()};
+  }
+  double Fraction() const override { return a_->Fraction(); }
+
+ private:
+  std::unique_ptr<GyroSource> a_;
+  PartnerFinder b_;
+  Eigen::Matrix3d a_from_b_;
+  Eigen::Vector3d weight_a_;
+  std::vector<GyroSample> chunk_, fused_;
+};
+
+}  // namespace
+
+SensorPair FitSensorPair(const OpenGyroSource& open_a, const OpenGyroSource& open_b,
+                         int64_t b_median_interval_ns, const SensorPairOptions& options) {
+  options.Check();
+  SensorPair result;
+  // 1: the means, and the pairs in the still segment (by index, as FuseSensorPair counts them).
+  Eigen::Vector3d sum_a = Eigen::Vector3d::Zero(), sum_b = Eigen::Vector3d::Zero();
+  int64_t a_begin_ns = 0;
+  size_t still_begin = 0, still_end = 0;
+  const auto sum = [&](const GyroSample& a, const Eigen::Vector3d& b) {
+    sum_a += a.omega_rad_s;
+    sum_b += b;
+    ++result.paired;
+    if (!options.still) return;
+    const double t_s = (a.t_ns - a_begin_ns) * 1e-9;
+    if (t_s < options.still->begin_s) still_begin = result.paired;
+    if (t_s < options.still->end_s) still_end = result.paired;
+  };
+  result.unpaired = ForEachPair(open_a, open_b, b_median_interval_ns, sum, &a_begin_ns);
+  SHUTTERLAB_CHECK(result.paired >= 10)
+      << "the two sensors share only " << result.paired
+      << " sample times: are they on one clock? (a pair is within half of the second's interval)";
+  const double n = static_cast<double>(result.paired);
+  const Eigen::Vector3d mean_a = sum_a / n, mean_b = sum_b / n;
+  // 2: the cross-covariance, and the mounting it fits.
+  Eigen::Matrix3d h = Eigen::Matrix3d::Zero(), cov_a = Eigen::Matrix3d::Zero();
+  ForEachPair(open_a, open_b, b_median_interval_ns,
+              [&](const GyroSample& a, const Eigen::Vector3d& b) {
+                const Eigen::Vector3d da = a.omega_rad_s - mean_a, db = b - mean_b;
+                h += db * da.transpose();
+                cov_a += da * da.transpose();
+              });
+  const Eigen::Matrix3d fitted = KabschRotation(h);
+  // 3: the fit's residual, and the variances under either mounting (the residual decides which).
+  double residual = 0;
+  FusionSums with_fitted(fitted), with_prior(options.a_from_b_prior);
+  size_t k = 0;
+  ForEachPair(open_a, open_b, b_median_interval_ns,
+              [&](const GyroSample& a, const Eigen::Vector3d& b) {
+                residual += ((a.omega_rad_s - mean_a) - fitted * (b - mean_b)).squaredNorm();
+                const bool still = k >= still_begin && k < still_end;
+                ++k;
+                with_fitted.Add(a.omega_rad_s, b, still);
+                with_prior.Add(a.omega_rad_s, b, still);
+              });
+  result.mounting_signal_ratio = MountingSignalRatio(cov_a, n, residual / (3 * n));
+  result.mounting_fitted = result.mounting_signal_ratio > kMountingSignalRatio;
+  const FusionSums& sums = result.mounting_fitted ? with_fitted : with_prior;
+  result.a_from_b = sums.a_from_b;
+  result.mounting_angle_deg = Eigen::AngleAxisd(result.a_from_b).angle() * 180.0 / kPi;
+  result.residual_rms_rad_s = std::sqrt(sums.diff.Variance().mean());
+  if (options.still && still_end > still_begin + 100) {
+    result.weight_a = WeightsOfA(sums.still_a.Variance(), sums.still_b.Variance());
+    result.weights_from_still = true;
+  }
+  return result;
+}
+
+std::unique_ptr<GyroSource> FusedPairSource(std::unique_ptr<GyroSource> a,
+                                            std::unique_ptr<GyroSource> b, const SensorPair& pair,
+                                            int64_t b_median_interval_ns) {
+  return std::make_unique<FusedSource>(std::move(a), std::move(b), pair, b_median_interval_ns);
 }
 
 std::string SensorPairText(const SensorPair& pair, const std::string& a_name,

@@ -18,10 +18,14 @@
 // 1 / sqrt(2) of either's.
 
 #include "sim/bias.h"
+#include "sim/gyro_source.h"
 #include "sim/gyro_trace.h"
 
 #include <Eigen/Core>
 
+#include <cstdint>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -56,6 +60,25 @@ struct SensorPair {
 
 // Throws std::invalid_argument when fewer than 10 samples pair up.
 SensorPair FuseSensorPair(const GyroTrace& a, const GyroTrace& b, const SensorPairOptions& options);
+
+// A fresh source of a trace from its start, each call.
+using OpenGyroSource = std::function<std::unique_ptr<GyroSource>()>;
+
+// FuseSensorPair's estimate on two traces too long to hold, read as streams: every field but
+// fused (left empty) equal to FuseSensorPair's to the bit (the same sums in the same order).
+// b_median_interval_ns: b's median sample interval (GyroTrace::sampling, or a streamed trace's
+// TraceSampling), which sets the pairing's reach. Reads both traces three times (the means; the
+// cross-covariance; the fit's residual and the variances), in memory bounded by a chunk of each
+// whatever their length. Throws std::invalid_argument as FuseSensorPair does.
+SensorPair FitSensorPair(const OpenGyroSource& open_a, const OpenGyroSource& open_b,
+                         int64_t b_median_interval_ns, const SensorPairOptions& options);
+
+// A fitted pair's fused trace as a stream (FuseSensorPair's `fused`, chunk by chunk): a's samples
+// with a partner in b, fused with pair's mounting and weights. a and b are fresh sources of the
+// traces pair was fitted on.
+std::unique_ptr<GyroSource> FusedPairSource(std::unique_ptr<GyroSource> a,
+                                            std::unique_ptr<GyroSource> b, const SensorPair& pair,
+                                            int64_t b_median_interval_ns);
 
 // Two lines for a person: the pairing, the mounting and the weights.
 std::string SensorPairText(const SensorPair& pair, const std::string& a_name,

@@ -153,9 +153,16 @@ void TraceAuditor::CloseBlock(bool at_end) {
     if (into_block_) Judge(*into_block_, *previous_median_ns_);
     for (size_t i = 0; i < inside; ++i) Judge(interval(i), *previous_median_ns_);
   } else if (pushed > 0) {
-    std::vector<int64_t> dts(pushed);
-    for (size_t i = 0; i < pushed; ++i) dts[i] = t[i + 1] - t[i];
-    const int64_t median_ns = UpperMedian(std::move(dts));
+    // A block of equal intervals (a logger that stamps a fixed period) is its own median, found
+    // without the selection.
+    bool equal = true;
+    for (size_t i = 1; i < pushed; ++i) equal &= t[i + 1] - t[i] == t[1] - t[0];
+    int64_t median_ns = t[1] - t[0];
+    if (!equal) {
+      std::vector<int64_t> dts(pushed);
+      for (size_t i = 0; i < pushed; ++i) dts[i] = t[i + 1] - t[i];
+      median_ns = UpperMedian(std::move(dts));
+    }
     // The interval into the block joins two blocks: the slower rate judges it.
     if (into_block_) Judge(*into_block_, std::max(median_ns, previous_median_ns_.value_or(0)));
     for (size_t i = 0; i < inside; ++i) Judge(interval(i), median_ns);

@@ -55,7 +55,8 @@ struct PhotoClock {
   size_t paired = 0, placed = 0;
 };
 
-// triggers: a trigger file, or null for the log's own camera events.
+// triggers: a trigger file, or null for the log's own camera events. Reads the log's camera events
+// and GPS fixes, never its samples: a streamed log's metadata (FlightLogStream::log) serves.
 PhotoClock PlacePhotos(const PhotoSet& set, const FlightLog& log, const TriggerFile* triggers,
                        const PhotoClockOptions& options);
 

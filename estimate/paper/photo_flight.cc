@@ -5,6 +5,7 @@
 #include "sim/units.h"
 
 #include <cmath>
+#include <functional>
 #include <map>
 #include <tuple>
 
@@ -57,9 +58,14 @@ void PhotoFlightOptions::Check() const {
   clock.Check();
 }
 
-PhotoFlightResult AnalyzePhotoFlight(const PhotoSet& set, const FlightLog& log,
-                                     const TriggerFile* triggers,
-                                     const PhotoFlightOptions& options) {
+namespace {
+
+// The photos placed on the log (its camera events and GPS fixes: never its samples), the camera
+// and the options analyze is given, and once analyze has run on them (analyze), each photo's
+// rotation beside its translation.
+PhotoFlightResult PhotoFlight(const PhotoSet& set, const FlightLog& log,
+                              const TriggerFile* triggers, const PhotoFlightOptions& options,
+                              const std::function<AnalyzeResult(const AnalyzeOptions&)>& analyze) {
   options.Check();
   PhotoFlightResult out;
   out.clock = PlacePhotos(set, log, triggers, options.clock);
@@ -91,7 +97,7 @@ PhotoFlightResult AnalyzePhotoFlight(const PhotoSet& set, const FlightLog& log,
   a.triggers_source = "photos: " + out.clock.method;
   a.every_s = 0.0;
   a.log_events = false;
-  out.log = Analyze(log, a);
+  out.log = analyze(a);
   out.analyzed = std::move(a);
 
   PhotoAnalysisOptions photo_options = options.photos;
@@ -103,6 +109,23 @@ PhotoFlightResult AnalyzePhotoFlight(const PhotoSet& set, const FlightLog& log,
   out.photos.residual_rms_s = out.clock.residual_rms_s;
   out.photos.residual_max_s = out.clock.residual_max_s;
   return out;
+}
+
+}  // namespace
+
+PhotoFlightResult AnalyzePhotoFlight(const PhotoSet& set, const FlightLog& log,
+                                     const TriggerFile* triggers,
+                                     const PhotoFlightOptions& options) {
+  return PhotoFlight(set, log, triggers, options,
+                     [&log](const AnalyzeOptions& a) { return Analyze(log, a); });
+}
+
+PhotoFlightResult AnalyzePhotoFlightStream(const PhotoSet& set, const FlightLog& metadata,
+                                           const AnalyzeLogSource& source,
+                                           const TriggerFile* triggers,
+                                           const PhotoFlightOptions& options) {
+  return PhotoFlight(set, metadata, triggers, options,
+                     [&source](const AnalyzeOptions& a) { return AnalyzeStream(source, a); });
 }
 
 }  // namespace shutterlab

@@ -5,6 +5,7 @@
 #include "sim/logs/dataflash.h"
 #include "sim/logs/gcsv.h"
 #include "sim/logs/gopro_telemetry.h"
+#include "sim/logs/gyro_dump.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/logs/ulog.h"
 #include "sim/text_file.h"
@@ -41,7 +42,7 @@ LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string&
     if (first_bytes[i] == '\0') {
       throw IoError(IoMessage(path, 0,
                               "unknown log format: not ULog, DataFlash, blackbox, GoPro MP4, "
-                              "gyro.csv, .gcsv or raw counts (binary content)"));
+                              "gyro.csv, .gcsv, raw counts or a gyro dump (binary content)"));
     }
   }
   // The prefix may end mid-line; drop the partial last line so that it cannot mislead detection.
@@ -50,12 +51,14 @@ LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string&
     const size_t last_newline = text.rfind('\n');
     if (last_newline != std::string_view::npos) text = text.substr(0, last_newline + 1);
   }
+  if (LooksLikeGyroDump(text)) return LogFormat::kGyroDump;
   try {
     return DetectGyroFormat(text, path);  // kGyroCsv, kGcsv or kRaw
   } catch (const IoError& e) {
-    throw IoError(std::string(e.what()) +
-                  " (unknown log format: not ULog, DataFlash, blackbox, GoPro MP4, gyro.csv, .gcsv "
-                  "or raw counts)");
+    throw IoError(
+        std::string(e.what()) +
+        " (unknown log format: not ULog, DataFlash, blackbox, GoPro MP4, gyro.csv, .gcsv, "
+        "raw counts or a gyro dump; --columns reads any delimited file)");
   }
 }
 
@@ -109,6 +112,9 @@ FlightLogStream OpenText(TextBlocks input, const std::string& path, LogFormat fo
     log.warnings = std::move(gcsv.log.warnings);
     log.gyro_source = "gcsv";
     stream.gyro = std::move(gcsv.samples);
+  } else if (format == LogFormat::kGyroDump) {
+    log.gyro_source = "frameid/gyro lines (x,y,z rad/s, ts us)";
+    stream.gyro = OpenGyroDump(std::move(input), path);
   } else if (format == LogFormat::kRaw) {
     options.raw.Check();
     log.gyro_source = "raw counts";
@@ -202,7 +208,10 @@ StreamedLog ConsumeFlightLog(FlightLogStream* stream,
   StreamedLog out;
   out.warnings = stream->log.warnings;
   for (LogWarning& warning : stream->gyro->Warnings()) out.warnings.push_back(std::move(warning));
-  for (LogWarning& warning : auditor.Finish()) out.warnings.push_back(std::move(warning));
+  std::vector<LogWarning> audit = auditor.Finish();
+  if (stream->audit_warnings) {
+    for (LogWarning& warning : audit) out.warnings.push_back(std::move(warning));
+  }
   out.sampling = auditor.Sampling();
   return out;
 }

@@ -47,6 +47,9 @@ struct FlightLogStream {
   FlightLog log;                     // all but the samples (log.gyro stays empty)
   std::unique_ptr<GyroSource> gyro;  // the samples; reading errors are thrown from Next
   TraceAuditOptions audit;           // for the trace audit (raw counts: their stated range)
+  // false: the samples are made from logs audited already (a fused pair), whose warnings are in
+  // log.warnings; ConsumeFlightLog then adds no audit of these (it still gives their sampling).
+  bool audit_warnings = true;
 };
 // Detects the format and reads what comes before the samples (a text log's header, a whole binary
 // log); throws IoError as ReadFlightLog does.

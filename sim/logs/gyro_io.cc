@@ -280,6 +280,7 @@ GyroTrace ReadGyro(const std::string& path, const GyroReadOptions& options) {
     case LogFormat::kBlackbox:
     case LogFormat::kDataFlash:
     case LogFormat::kGoproMp4:
+    case LogFormat::kGyroDump:
     case LogFormat::kColumns:
       break;  // refused by options.Check()
   }

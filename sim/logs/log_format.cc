@@ -20,6 +20,7 @@ constexpr FormatNames kFormatNames[] = {
     {LogFormat::kBlackbox, {"blackbox", "betaflight", "bbl"}},
     {LogFormat::kDataFlash, {"dataflash", "bin", "ardupilot"}},
     {LogFormat::kGoproMp4, {"gopro", "mp4"}},
+    {LogFormat::kGyroDump, {"gyro_dump", "dump"}},
     {LogFormat::kColumns, {"columns"}},
 };
 
@@ -55,7 +56,7 @@ LogFormat ParseLogFormat(const std::string& name) {
   const LogFormat format = FindFormat(ToLower(name), &found);
   SHUTTERLAB_CHECK(found)
       << "unknown log format '" << name
-      << "' (auto, ulog, dataflash, blackbox, gopro, gyro.csv, gcsv, raw, columns)";
+      << "' (auto, ulog, dataflash, blackbox, gopro, gyro.csv, gcsv, raw, gyro_dump, columns)";
   return format;
 }
 

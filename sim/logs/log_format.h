@@ -18,6 +18,8 @@ enum class LogFormat {
   kBlackbox,   // Betaflight / INAV blackbox, native or CSV export
   kDataFlash,  // ArduPilot .bin
   kGoproMp4,   // a GoPro MP4 with GPMF telemetry (its GYRO stream; sim/logs/gopro_telemetry.h)
+  kGyroDump,   // a phone capture app's gyro_dump.txt ("frameid:N gyro:K x .. ts .." lines;
+               // sim/logs/gyro_dump.h)
   kColumns,    // any delimited file read by the columns the user names (sim/logs/column_csv.h);
                // never detected: chosen by --columns / --format columns
 };
@@ -25,12 +27,13 @@ enum class LogFormat {
 // kGyroCsv, kGcsv and kRaw: the plain gyro logs that ReadGyro reads.
 bool IsPlainGyroFormat(LogFormat format);
 
-// "auto", "gyro.csv", "gcsv", "raw", "ulog", "blackbox", "dataflash", "gopro", "columns".
+// "auto", "gyro.csv", "gcsv", "raw", "ulog", "blackbox", "dataflash", "gopro", "gyro_dump",
+// "columns".
 const char* LogFormatName(LogFormat format);
 
 // Any name of the table, case-insensitive: "auto", "ulog" / "ulg" / "px4", "dataflash" / "bin" /
 // "ardupilot", "blackbox" / "betaflight" / "bbl", "gopro" / "mp4", "gyro.csv" / "csv", "gcsv",
-// "raw", "columns";
+// "raw", "gyro_dump" / "dump", "columns";
 // throws std::invalid_argument naming the text otherwise.
 LogFormat ParseLogFormat(const std::string& name);
 

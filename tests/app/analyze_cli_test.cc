@@ -1,3 +1,4 @@
+#include "sim/logs/flight_log_io.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
@@ -5,6 +6,7 @@
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -12,6 +14,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -105,15 +108,8 @@ TEST(AnalyzeCli, EveryTakesPrecedenceAndOneImageIsSingular) {
 // only, so it is read whole: the same images, flight table and report either way.
 TEST(AnalyzeCli, ALogOnAPipeIsReadOnceWithTheSameResult) {
   test::TempDir dir;
-  std::vector<GyroSample> samples;
-  for (int i = 0; i < 12000; ++i) {  // 1 kHz, still for 5 s, then turning
-    const double t = i * 1e-3;
-    const double turning = t < 5.0 ? 0.0 : 0.4 * std::sin(3.0 * t);
-    samples.push_back({static_cast<int64_t>(i) * 1000000,
-                       Eigen::Vector3d(0.01 + turning, 0.5 * turning, 0.002 * std::cos(50 * t))});
-  }
   const std::string path = dir / "gyro.csv";
-  WriteGyroCsv(path, GyroTrace(std::move(samples)));
+  test::WriteStillThenTurningGyroCsv(path);
   const std::string args = " --every 1s --size 320x240 --focal-px 280 --json --out ";
   const auto from_file = RunShutterlab("analyze " + path + args + (dir / "file"));
   ASSERT_EQ(from_file.exit_code, 0) << from_file.output;
@@ -212,6 +208,81 @@ TEST(AnalyzeCli, SyntheticULogWithItsOwnTriggersAndAltitude) {
   EXPECT_NEAR(json["images"][0]["trigger_t"].get<double>(), 3.0, 1e-6);
   EXPECT_EQ(json["camera"]["altitude_m"].get<double>(), 40.0);
   EXPECT_EQ(json["triggers"].get<std::string>().rfind("camera events", 0), 0u) << json["triggers"];
+}
+
+// A second gyro beside the first: the first's rates seen through b_from_a, 0.3 ms later, with its
+// own noise (seeded), every other sample, written as DIR/a.csv and DIR/b.csv.
+void WriteSensorPair(const GyroTrace& a, const Eigen::Matrix3d& b_from_a, const std::string& dir) {
+  std::mt19937 rng(18);
+  std::normal_distribution<double> noise(0.0, 0.003);
+  std::vector<GyroSample> b;
+  for (size_t k = 0; k < a.size(); k += 2) {
+    b.push_back({a[k].t_ns + 300'000, b_from_a * a[k].omega_rad_s +
+                                          Eigen::Vector3d(noise(rng), noise(rng), noise(rng))});
+  }
+  WriteGyroCsv(dir + "/a.csv", a);
+  WriteGyroCsv(dir + "/b.csv", GyroTrace(std::move(b)));
+}
+
+// `analyze A --second B` on regular files fuses the pair as streams, in bounded memory; with B on
+// a pipe both are read whole and fused there: the same JSON (pair, images, flight), and with
+// text the same table. Returns the streamed JSON.
+nlohmann::json ExpectPairStreamedAsWhole(const std::string& dir, const std::string& args,
+                                         bool text) {
+  const std::string streamed_args = "analyze " + dir + "/a.csv --second " + dir + "/b.csv" + args;
+  const std::string whole_args =
+      "analyze " + dir + "/a.csv --second /dev/stdin --format gyro.csv" + args;
+  if (text) {
+    const auto streamed = RunShutterlab(streamed_args);
+    const auto whole = RunShutterlab(whole_args, dir + "/b.csv");
+    EXPECT_EQ(streamed.exit_code, 0) << streamed.output;
+    EXPECT_EQ(streamed.out.substr(streamed.out.find('\n')), whole.out.substr(whole.out.find('\n')))
+        << "all but the first line, which names the second log";
+  }
+  const auto streamed = RunShutterlab(streamed_args + " --json");
+  EXPECT_EQ(streamed.exit_code, 0) << streamed.output;
+  const auto whole = RunShutterlab(whole_args + " --json", dir + "/b.csv");
+  EXPECT_EQ(whole.exit_code, 0) << whole.output;
+  nlohmann::json s = nlohmann::json::parse(streamed.out), w = nlohmann::json::parse(whole.out);
+  EXPECT_EQ(s["pair"]["second_log"], dir + "/b.csv");
+  nlohmann::json s_unnamed = s;
+  s_unnamed["pair"].erase("second_log");  // named as given: /dev/stdin for the pipe
+  w["pair"].erase("second_log");
+  EXPECT_EQ(s_unnamed, w);
+  return s;
+}
+
+TEST(AnalyzeCli, ASensorPairStreamedGivesTheWholeReadsResult) {
+  test::TempDir dir;
+  std::mt19937 rng(15);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  std::vector<GyroSample> samples;
+  for (int i = 0; i < 12000; ++i) {  // 1 kHz, still for 5 s, then turning about every axis
+    const double t = i * 1e-3;
+    const double turning = t < 5.0 ? 0.0 : 1.0;
+    samples.push_back({static_cast<int64_t>(i) * 1000000,
+                       turning * Eigen::Vector3d(0.4 * std::sin(3.0 * t), 0.3 * std::cos(5.0 * t),
+                                                 0.3 * std::sin(2.0 * t)) +
+                           Eigen::Vector3d(0.01 + noise(rng), noise(rng), noise(rng))});
+  }
+  const Eigen::Matrix3d b_from_a =
+      Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, -1).normalized()).toRotationMatrix();
+  WriteSensorPair(GyroTrace(std::move(samples)), b_from_a, dir.path());
+  const nlohmann::json pair = ExpectPairStreamedAsWhole(dir.path(), " --every 1s", true)["pair"];
+  EXPECT_TRUE(pair["mounting_fitted"].get<bool>());
+  EXPECT_NEAR(pair["mounting_angle_deg"].get<double>(), 0.5 * 180 / M_PI, 0.1);
+  EXPECT_TRUE(pair["weights_from_still"].get<bool>());
+  EXPECT_EQ(pair["paired"], 12000)
+      << "the second's nearest sample is within half its 2 ms interval";
+}
+
+// The same on real motion: a PX4 flight's gyro (its gaps included) and a second gyro made from it.
+TEST(AnalyzeCli, ASensorPairOnARealFlightStreamedGivesTheWholeReadsResult) {
+  SHUTTERLAB_REAL_DATA(log, "gyro/px4_ulog/sample.ulg");
+  test::TempDir dir;
+  WriteSensorPair(ReadFlightLog(log).gyro,
+                  Eigen::AngleAxisd(2.0, Eigen::Vector3d(0, 0, 1)).toRotationMatrix(), dir.path());
+  ExpectPairStreamedAsWhole(dir.path(), " --every 5s", false);
 }
 
 }  // namespace

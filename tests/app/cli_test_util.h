@@ -1,11 +1,18 @@
 #pragma once
 // Running the shutterlab executable from the command-line tests.
 
+#include "sim/gyro_trace.h"
+#include "sim/logs/gyro_io.h"
+
+#include <Eigen/Core>
+
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <vector>
 
 namespace shutterlab::test {
 
@@ -43,6 +50,18 @@ inline CommandResult RunShutterlab(const std::string& args, const std::string& s
   std::remove(err_path);
   result.output = result.out + result.err;
   return result;
+}
+
+// A gyro.csv of 12 s at 1 kHz: still for 5 s (a small bias), then turning about x and y.
+inline void WriteStillThenTurningGyroCsv(const std::string& path) {
+  std::vector<GyroSample> samples;
+  for (int i = 0; i < 12000; ++i) {
+    const double t = i * 1e-3;
+    const double turning = t < 5.0 ? 0.0 : 0.4 * std::sin(3.0 * t);
+    samples.push_back({static_cast<int64_t>(i) * 1000000,
+                       Eigen::Vector3d(0.01 + turning, 0.5 * turning, 0.002 * std::cos(50 * t))});
+  }
+  WriteGyroCsv(path, GyroTrace(std::move(samples)));
 }
 
 }  // namespace shutterlab::test

@@ -1,6 +1,7 @@
 // `analyze --photos`: a folder of photos, without and with a log.
 
 #include "sim/civil_time.h"
+#include "sim/logs/gyro_io.h"
 #include "sim/logs/ulog_write.h"
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
@@ -160,6 +161,77 @@ TEST(PhotosCli, PlacesPhotosOnASyntheticLogAndReportsTheResidual) {
   EXPECT_NE(page.find("the photos&#39; DJI FC8482 (5 of 5 photos), 400x300, f 277 px"),
             std::string::npos);
   EXPECT_NE(page.find("readout 16 ms (table: dji fc8482"), std::string::npos);
+
+  // Without --out the ULog is read as a stream, in bounded memory (with --out above, whole, for
+  // the report's traces): the same JSON but for the report's Allan deviation.
+  const auto streamed = RunShutterlab("analyze --photos " + (dir / "photos") + " " +
+                                      (dir / "flight.ulg") + " --json");
+  ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
+  nlohmann::json whole = j;
+  whole.erase("allan");
+  EXPECT_EQ(nlohmann::json::parse(streamed.out), whole);
+}
+
+// A gyro.csv, the log that grows long, with the photos named by a trigger file on its clock:
+// read as a stream from a file and whole from a pipe, the same JSON and text.
+TEST(PhotosCli, AGyroCsvWithTriggersStreamedGivesTheWholeReadsResult) {
+  test::TempDir dir;
+  test::WriteStillThenTurningGyroCsv(dir / "gyro.csv");
+  std::filesystem::create_directories(dir / "photos");
+  std::string triggers = "image,t\n";
+  for (int k = 0; k < 4; ++k) {
+    test::FixturePhoto p;
+    p.width = 400;
+    p.height = 300;
+    p.focal_length_35mm = 24;
+    const std::string name = "IMG_000" + std::to_string(k + 1) + ".JPG";
+    WriteFileAtomically(dir / ("photos/" + name), test::JpegWithMetadata(p));
+    triggers += name + "," + std::to_string(6 + 1.7 * k) + "\n";
+  }
+  triggers += "IMG_0009.JPG,11.99\n";  // no such photo
+  WriteFileAtomically(dir / "triggers.csv", triggers);
+  for (const std::string json : {" --json", ""}) {
+    const std::string args = " --photos " + (dir / "photos") + " --readout 20ms --altitude 80" +
+                             " --triggers " + (dir / "triggers.csv") + json;
+    const auto streamed = RunShutterlab("analyze " + (dir / "gyro.csv") + args);
+    ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
+    const auto piped =
+        RunShutterlab("analyze /dev/stdin --format gyro.csv" + args, dir / "gyro.csv");
+    ASSERT_EQ(piped.exit_code, 0) << piped.output;
+    if (json.empty()) {
+      EXPECT_EQ(streamed.out, piped.out);
+      continue;
+    }
+    const nlohmann::json s = nlohmann::json::parse(streamed.out);
+    ASSERT_EQ(s["images"].size(), 4u) << streamed.out;
+    EXPECT_GT(s["photos"]["photos"][3]["D_rotation_m"].get<double>(), 0.0) << streamed.out;
+    EXPECT_EQ(s, nlohmann::json::parse(piped.out));
+  }
+}
+
+// Real photos on a real log: the three DJI photos named by a trigger file on the PX4 log's clock
+// (they were not taken on that flight: this checks the streamed analysis against the whole read
+// on real bytes, not the photos' truth). The second photo's readout falls in a fast turn.
+TEST(PhotosCli, RealPhotosOnARealLogStreamedAsReadWhole) {
+  SHUTTERLAB_REAL_DATA(photos, "incoming/dji_fc8482_clusterodm");
+  SHUTTERLAB_REAL_DATA(log, "gyro/px4_ulog/sample.ulg");
+  test::TempDir dir;
+  WriteFileAtomically(dir / "t.csv",
+                      "image,t\ntest-photo-1.jpg,112.7\ntest-photo-2.jpg,117.614\n"
+                      "test-photo-3.jpg,160.3\n");
+  const std::string args =
+      "analyze --photos " + photos + " " + log + " --triggers " + (dir / "t.csv") + " --json";
+  const auto streamed = RunShutterlab(args);
+  ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
+  const auto whole = RunShutterlab(args + " --out " + (dir / "o"));
+  ASSERT_EQ(whole.exit_code, 0) << whole.output;
+  const nlohmann::json s = nlohmann::json::parse(streamed.out);
+  nlohmann::json w = nlohmann::json::parse(whole.out);
+  w.erase("allan");  // the report's
+  EXPECT_EQ(s, w);
+  ASSERT_EQ(s["images"].size(), 3u);
+  EXPECT_GT(s["photos"]["photos"][1]["D_rotation_m"].get<double>(), 0.5) << streamed.out;
+  EXPECT_EQ(s["warnings"].size(), 2u) << "the log's two gap warnings";
 }
 
 }  // namespace

@@ -12,7 +12,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <random>
+#include <string>
+#include <vector>
 
 namespace shutterlab {
 namespace {
@@ -116,6 +119,85 @@ TEST(SensorPair, SensorsOnDifferentClocksAreRefused) {
   const GyroTrace b =
       Sensor(Eigen::Matrix3d::Identity(), 0.006, Eigen::Vector3d::Zero(), 5000000000, 0.0, 8, 0.1);
   EXPECT_THROW(FuseSensorPair(a, b, SensorPairOptions{}), std::invalid_argument);
+}
+
+// The pair read as streams (FitSensorPair, FusedPairSource) against FuseSensorPair on the traces
+// held whole: the same sums in the same order, so every field and every fused sample to the bit.
+// Chunks of a few samples put their edges everywhere.
+void ExpectStreamedEqualsWhole(const GyroTrace& a, const GyroTrace& b,
+                               const SensorPairOptions& options) {
+  const SensorPair whole = FuseSensorPair(a, b, options);
+  const int64_t b_interval_ns = b.sampling().median_interval_ns;
+  for (const size_t chunk : {size_t{7}, size_t{4096}}) {
+    SCOPED_TRACE("chunk " + std::to_string(chunk));
+    const OpenGyroSource open_a = [&a, chunk] { return std::make_unique<TraceSource>(a, chunk); };
+    const OpenGyroSource open_b = [&b, chunk] {
+      return std::make_unique<TraceSource>(b, chunk + 3);
+    };
+    const SensorPair fit = FitSensorPair(open_a, open_b, b_interval_ns, options);
+    EXPECT_EQ(fit.paired, whole.paired);
+    EXPECT_EQ(fit.unpaired, whole.unpaired);
+    EXPECT_EQ(fit.mounting_fitted, whole.mounting_fitted);
+    EXPECT_EQ(fit.a_from_b, whole.a_from_b);
+    EXPECT_EQ(fit.mounting_angle_deg, whole.mounting_angle_deg);
+    EXPECT_EQ(fit.mounting_signal_ratio, whole.mounting_signal_ratio);
+    EXPECT_EQ(fit.weight_a, whole.weight_a);
+    EXPECT_EQ(fit.weights_from_still, whole.weights_from_still);
+    EXPECT_EQ(fit.residual_rms_rad_s, whole.residual_rms_rad_s);
+    EXPECT_TRUE(fit.fused.empty());
+    std::unique_ptr<GyroSource> fused = FusedPairSource(open_a(), open_b(), fit, b_interval_ns);
+    const GyroTrace streamed = ReadAllSamples(fused.get());
+    ASSERT_EQ(streamed.size(), whole.fused.size());
+    for (size_t k = 0; k < streamed.size(); ++k) {
+      ASSERT_EQ(streamed[k].t_ns, whole.fused[k].t_ns) << k;
+      ASSERT_EQ(streamed[k].omega_rad_s, whole.fused[k].omega_rad_s) << k;
+    }
+  }
+}
+
+TEST(SensorPair, StreamedEqualsTheWholeTracesToTheBit) {
+  // Moving, the second turned against the first and sampled at half the rate, 0.2 s of it lost
+  // (a's samples there have no partner); weights from a still segment.
+  const Eigen::Matrix3d b_from_a =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  const GyroTrace a = Sensor(Eigen::Matrix3d::Identity(), 0.004, {0.01, 0.0, 0.0}, 0, 0.5, 9, 1.0);
+  const GyroTrace b_full = Sensor(b_from_a, 0.008, {0.0, 0.02, -0.01}, 30000, 0.5, 10, 1.0);
+  std::vector<GyroSample> b_samples;
+  for (size_t k = 0; k < b_full.size(); k += 2) {
+    if (b_full[k].t_ns < 400'000'000 || b_full[k].t_ns > 600'000'000)
+      b_samples.push_back(b_full[k]);
+  }
+  const GyroTrace b(std::move(b_samples));
+  SensorPairOptions options;
+  options.still = BiasSegment{0.1, 0.35};
+  const SensorPair whole = FuseSensorPair(a, b, options);
+  ASSERT_TRUE(whole.mounting_fitted);
+  ASSERT_TRUE(whole.weights_from_still);
+  ASSERT_GT(whole.unpaired, 1000u);
+  EXPECT_LT(Eigen::AngleAxisd(whole.a_from_b * b_from_a).angle() * 180 / kPi, 0.1);
+  ExpectStreamedEqualsWhole(a, b, options);
+  // Still sensors: the mounting cannot be fitted and the prior is kept; no still segment.
+  const Eigen::Matrix3d prior = b_from_a.transpose();
+  const GyroTrace still_a =
+      Sensor(Eigen::Matrix3d::Identity(), 0.006, Eigen::Vector3d::Zero(), 0, 0.0, 11, 0.5);
+  const GyroTrace still_b = Sensor(b_from_a, 0.006, Eigen::Vector3d::Zero(), 20000, 0.0, 12, 0.5);
+  SensorPairOptions with_prior;
+  with_prior.a_from_b_prior = prior;
+  ASSERT_FALSE(FuseSensorPair(still_a, still_b, with_prior).mounting_fitted);
+  ExpectStreamedEqualsWhole(still_a, still_b, with_prior);
+}
+
+TEST(SensorPair, StreamedRefusesWhatTheWholeRefuses) {
+  const GyroTrace a =
+      Sensor(Eigen::Matrix3d::Identity(), 0.006, Eigen::Vector3d::Zero(), 0, 0.0, 7, 0.1);
+  const GyroTrace b =
+      Sensor(Eigen::Matrix3d::Identity(), 0.006, Eigen::Vector3d::Zero(), 5000000000, 0.0, 8, 0.1);
+  const OpenGyroSource open_a = [&a] { return std::make_unique<TraceSource>(a, 64); };
+  const OpenGyroSource open_b = [&b] { return std::make_unique<TraceSource>(b, 64); };
+  const OpenGyroSource open_empty = [] { return std::make_unique<TraceSource>(GyroTrace(), 64); };
+  EXPECT_THROW(FitSensorPair(open_a, open_b, kPeriodNs, {}), std::invalid_argument);
+  EXPECT_THROW(FitSensorPair(open_a, open_empty, kPeriodNs, {}), std::invalid_argument);
+  EXPECT_THROW(FitSensorPair(open_empty, open_a, kPeriodNs, {}), std::invalid_argument);
 }
 
 }  // namespace

@@ -2,6 +2,9 @@
 // analysis forms the same sums in the same order, so everything it reports is equal to the bit.
 
 #include "estimate/paper/analyze.h"
+#include "estimate/paper/photo_flight.h"
+#include "render/photo_set.h"
+#include "sim/civil_time.h"
 #include "sim/gyro_source.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/trace_audit.h"
@@ -292,6 +295,69 @@ TEST(AnalyzeStream, TooFewSamplesAndTooShortLogsAsTheWholeTrace) {
   log.gyro = GyroTrace(std::vector<GyroSample>(samples.begin(), samples.begin() + 1));
   EXPECT_THROW(Analyze(log, options), std::invalid_argument);
   EXPECT_THROW(AnalyzeStream(SourceOf(log, 9), options), std::invalid_argument);
+}
+
+// `analyze --photos DIR LOG` streamed (AnalyzePhotoFlightStream: the log's metadata places the
+// photos, AnalyzeStream analyses them) against the log read whole (AnalyzePhotoFlight). Nine
+// photos from a camera clock at UTC+08:00, off by a few ms: seven paired with the log's camera
+// events through its GPS time (one exposed too late for its readout to fit in the log), two
+// without an event placed by their capture time.
+TEST(AnalyzeStream, PhotoFlightEqualsTheWholeLogToTheBit) {
+  constexpr int64_t kUtcAtLogZeroNs = 1'721'091'600'000'000'000;  // 2024-07-16 01:00:00 UTC
+  constexpr int64_t kZoneNs = 8 * 3'600'000'000'000LL;
+  FlightLog log = WobblyLog();
+  for (int k = 0; k <= 12; ++k)
+    log.utc_fixes.push_back({k * kNsPerSecond, kUtcAtLogZeroNs + k * kNsPerSecond});
+  std::vector<int64_t> exposures_ns;
+  for (int k = 0; k < 8; ++k) exposures_ns.push_back(SecondsToNs(4.3 + 0.9 * k));
+  exposures_ns.push_back(SecondsToNs(11.995));
+  const int error_ms[9] = {3, -2, 5, 0, 1, -4, 2, 0, 6};
+  PhotoSet set;
+  for (size_t k = 0; k < exposures_ns.size(); ++k) {
+    if (k != 6 && k != 7)
+      log.camera_events.push_back({exposures_ns[k], static_cast<int64_t>(k), "camera_capture"});
+    PhotoMetadata m;
+    m.width = 320;
+    m.height = 240;
+    m.focal_length_35mm = 24.0;
+    m.relative_altitude_m = 60.0;
+    m.speed_m_s = Eigen::Vector3d(5.0, 1.0, 0.0);
+    ClockFace face;
+    face.face_ns = kUtcAtLogZeroNs + exposures_ns[k] + kZoneNs + error_ms[k] * 1'000'000LL;
+    face.resolution_s = 1e-3;
+    m.capture_time = face;
+    set.photos.push_back(MakePhotoRecord("/p/DJI_000" + std::to_string(k + 1) + ".JPG", m, {}));
+  }
+  PhotoFlightOptions options;
+  options.analyze = TurnedCameraOptions();
+  options.analyze.rig.shutter.readout_s = 0.02;
+  options.readout_given = true;
+  const PhotoFlightResult whole = AnalyzePhotoFlight(set, Audited(log), nullptr, options);
+  ASSERT_EQ(whole.clock.paired, 7u) << whole.clock.method;
+  ASSERT_EQ(whole.log.images.size(), 9u) << whole.clock.method;
+  ASSERT_EQ(whole.log.verdict.images_in_trace, 8u);
+  ASSERT_TRUE(whole.log.bias_from_still);
+  FlightLog metadata = log;
+  metadata.gyro = GyroTrace();
+  const PhotoFlightResult streamed =
+      AnalyzePhotoFlightStream(set, metadata, SourceOf(log, 61), nullptr, options);
+  ExpectSameResult(streamed.log, whole.log);
+  EXPECT_EQ(streamed.camera_source, whole.camera_source);
+  EXPECT_EQ(streamed.clock.method, whole.clock.method);
+  EXPECT_EQ(streamed.clock.clock_offset_s, whole.clock.clock_offset_s);
+  ASSERT_EQ(streamed.photos.photos.size(), whole.photos.photos.size());
+  for (size_t i = 0; i < whole.photos.photos.size(); ++i) {
+    const PhotoResult& s = streamed.photos.photos[i];
+    const PhotoResult& w = whole.photos.photos[i];
+    SCOPED_TRACE(w.name);
+    EXPECT_EQ(s.placement.t_ns, w.placement.t_ns);
+    EXPECT_EQ(s.placement.residual_s, w.placement.residual_s);
+    EXPECT_EQ(s.d_rotation_px, w.d_rotation_px);
+    EXPECT_EQ(s.d_rotation_m, w.d_rotation_m);
+    EXPECT_EQ(s.d_paper_m, w.d_paper_m);
+    EXPECT_EQ(s.flagged, w.flagged);
+  }
+  EXPECT_EQ(PhotoAnalysisReport(set, streamed.photos), PhotoAnalysisReport(set, whole.photos));
 }
 
 }  // namespace

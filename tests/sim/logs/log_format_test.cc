@@ -9,9 +9,9 @@ namespace shutterlab {
 namespace {
 
 TEST(LogFormat, NamesRoundTripThroughBothParsers) {
-  for (LogFormat f :
-       {LogFormat::kAuto, LogFormat::kGyroCsv, LogFormat::kGcsv, LogFormat::kRaw, LogFormat::kULog,
-        LogFormat::kBlackbox, LogFormat::kDataFlash, LogFormat::kGoproMp4, LogFormat::kColumns}) {
+  for (LogFormat f : {LogFormat::kAuto, LogFormat::kGyroCsv, LogFormat::kGcsv, LogFormat::kRaw,
+                      LogFormat::kULog, LogFormat::kBlackbox, LogFormat::kDataFlash,
+                      LogFormat::kGoproMp4, LogFormat::kGyroDump, LogFormat::kColumns}) {
     EXPECT_EQ(ParseLogFormat(LogFormatName(f)), f) << LogFormatName(f);
     if (f == LogFormat::kAuto || IsPlainGyroFormat(f)) {
       EXPECT_EQ(ParseGyroFormat(LogFormatName(f)), f) << LogFormatName(f);
@@ -23,6 +23,7 @@ TEST(LogFormat, NamesRoundTripThroughBothParsers) {
   EXPECT_EQ(ParseLogFormat("px4"), LogFormat::kULog);
   EXPECT_EQ(ParseLogFormat("bin"), LogFormat::kDataFlash);
   EXPECT_EQ(ParseLogFormat("MP4"), LogFormat::kGoproMp4);
+  EXPECT_EQ(ParseLogFormat("dump"), LogFormat::kGyroDump);
 }
 
 TEST(LogFormat, UnknownNamesAreNamedWithTheChoices) {
@@ -31,7 +32,7 @@ TEST(LogFormat, UnknownNamesAreNamedWithTheChoices) {
     FAIL();
   } catch (const std::invalid_argument& e) {
     EXPECT_EQ(std::string(e.what()).rfind("unknown log format 'jpeg' (auto, ulog, dataflash, "
-                                          "blackbox, gopro, gyro.csv, gcsv, raw, "
+                                          "blackbox, gopro, gyro.csv, gcsv, raw, gyro_dump, "
                                           "columns)",
                                           0),
               0u)

@@ -1,0 +1,20 @@
+// libFuzzer target: a phone capture app's gyro dump (sim/logs/gyro_dump.h OpenGyroDump), a block at
+// a time. The first input byte picks the block size (1 to 64 bytes) and the samples per chunk
+// (fuzz::ChunkSamples); the rest is the file's text. Every chunk goes through the trace audit.
+#include "sim/logs/gyro_dump.h"
+#include "sim/trace_audit.h"
+
+#include "fuzz/fuzz_util.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  using namespace shutterlab;
+  if (size == 0) return 0;
+  const std::string_view text = fuzz::Bytes(data + 1, size - 1);
+  fuzz::Expect([&] {
+    auto source = OpenGyroDump(TextBlocks::InMemory(text, 1 + (data[0] >> 2)), "gyro_dump.txt",
+                               fuzz::ChunkSamples(data[0]));
+    fuzz::AuditEveryChunk(source.get());
+    LooksLikeGyroDump(text);
+  });
+  return 0;
+}
