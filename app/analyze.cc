@@ -239,7 +239,10 @@ AnalyzeLogSource PairStreamSource(const AnalyzeCommand& command, const FlightLog
     *pair = FitSensorPair(first_passes, samples_of(command.second_path), second_interval_ns,
                           pair_options);
   } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(command.log_path + " + " + command.second_path + ": " + e.what());
+    // Named by both logs, as the whole read names it: an IoError, so that the caller's wrapping
+    // of the analysis's errors in the first log's name does not name it twice.
+    throw IoError(command.log_path + " + " + command.second_path + ": " +
+                  WithoutCheckLocation(e.what()));
   }
   // The fused log: the first's metadata, both logs' warnings, the fused samples.
   FlightLog fused = std::move(first.log);

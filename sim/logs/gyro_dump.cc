@@ -79,9 +79,8 @@ class GyroDumpSource : public FillingSource {
       const std::string_view field = words_[3 + 2 * axis];
       const auto value = ParseDouble(field);
       if (!value) {
-        throw IoError(IoMessage(path_, n,
-                                std::string(kKeys[axis]) + " is not a number: '" +
-                                    std::string(field) + "'"));
+        throw IoError(IoMessage(
+            path_, n, std::string(kKeys[axis]) + " is not a number: '" + std::string(field) + "'"));
       }
       s.omega_rad_s[axis] = *value;
     }

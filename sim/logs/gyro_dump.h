@@ -23,7 +23,8 @@ bool LooksLikeGyroDump(std::string_view first_bytes);
 // messages. Start-of-frame lines are skipped. Throws IoError "PATH:LINE: problem" on a gyro line of
 // another shape, a value that is not a number, or a time going backwards; a last line cut short
 // (no line break) is left out with a `truncated` warning.
-std::unique_ptr<GyroSource> OpenGyroDump(TextBlocks blocks, const std::string& path,
-                                         size_t chunk_samples = FillingSource::kDefaultChunkSamples);
+std::unique_ptr<GyroSource> OpenGyroDump(
+    TextBlocks blocks, const std::string& path,
+    size_t chunk_samples = FillingSource::kDefaultChunkSamples);
 
 }  // namespace shutterlab

@@ -274,6 +274,18 @@ TEST(AnalyzeCli, ASensorPairStreamedGivesTheWholeReadsResult) {
   EXPECT_TRUE(pair["weights_from_still"].get<bool>());
   EXPECT_EQ(pair["paired"], 12000)
       << "the second's nearest sample is within half its 2 ms interval";
+
+  // A second log on another clock is refused in one line naming both logs, as the whole read does.
+  std::vector<GyroSample> far;
+  for (int k = 0; k < 100; ++k)
+    far.push_back({100'000'000'000 + k * 2'000'000LL, Eigen::Vector3d::Zero()});
+  WriteGyroCsv(dir / "far.csv", GyroTrace(std::move(far)));
+  const auto refused =
+      RunShutterlab("analyze " + (dir / "a.csv") + " --second " + (dir / "far.csv"));
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_EQ(refused.err, "error: " + (dir / "a.csv") + " + " + (dir / "far.csv") +
+                             ": the two sensors share only 0 sample times: are they on one clock? "
+                             "(a pair is within half of the second's interval)\n");
 }
 
 // The same on real motion: a PX4 flight's gyro (its gaps included) and a second gyro made from it.
