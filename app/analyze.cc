@@ -337,8 +337,7 @@ FlightLog ReadLog(const AnalyzeCommand& command, const FlightLogReadOptions& rea
 }
 
 // The photos placed and analysed on the LOG. Regular files are read as streams, in bounded memory
-// whatever their length, with --out too (the report draws bounded plots); a log on a pipe (and
-// --second's) is read whole.
+// whatever their length; a log on a pipe (and --second's) is read whole.
 PhotoFlightResult PhotosOnLog(const AnalyzeCommand& command, const FlightLogReadOptions& read,
                               const PhotoSet& set, const std::optional<TriggerFile>& triggers,
                               const PhotoFlightOptions& options, std::optional<SensorPair>* pair) {

@@ -61,8 +61,8 @@ PhotoFlightResult AnalyzePhotoFlight(const PhotoSet& set, const FlightLog& log,
 // The same on a log too long to hold, in memory bounded whatever its length: metadata is the log
 // without its samples (FlightLogStream::log: the camera events and GPS fixes place the photos),
 // source gives the samples to AnalyzeStream with the photos as its triggers. The result is
-// AnalyzePhotoFlight's on the log read whole, to the bit (the report's plots and Allan deviation
-// included, as AnalyzeStream gives them), but for AnalyzeResult::traces (null).
+// AnalyzePhotoFlight's on the log read whole, to the bit, but for AnalyzeResult::traces (null; the
+// report draws AnalyzeResult::plots, the same either way).
 PhotoFlightResult AnalyzePhotoFlightStream(const PhotoSet& set, const FlightLog& metadata,
                                            const AnalyzeLogSource& source,
                                            const TriggerFile* triggers,

@@ -162,8 +162,21 @@ TEST(PhotosCli, PlacesPhotosOnASyntheticLogAndReportsTheResidual) {
             std::string::npos);
   EXPECT_NE(page.find("readout 16 ms (table: dji fc8482"), std::string::npos);
 
-  // Without --out the ULog is read as a stream, in bounded memory (with --out above, whole, for
-  // the report's traces): the same JSON but for the report's Allan deviation.
+  // The ULog is read as a stream, in bounded memory; on a pipe whole: the same JSON, --out's files
+  // and page. Without --out the same JSON but for the report's Allan deviation.
+  const auto piped = RunShutterlab(
+      "analyze --photos " + (dir / "photos") + " /dev/stdin --json --out " + (dir / "piped"),
+      dir / "flight.ulg");
+  ASSERT_EQ(piped.exit_code, 0) << piped.output;
+  EXPECT_EQ(nlohmann::json::parse(piped.out), j);
+  for (const std::string file : {"photos.csv", "images.csv", "exclude.txt"})
+    EXPECT_EQ(ReadFileToString(dir / ("piped/" + file)), ReadFileToString(dir / ("out/" + file)))
+        << file;
+  std::string page_streamed = ReadFileToString(dir / "out/report.html");
+  for (size_t at = page_streamed.find("flight.ulg"); at != std::string::npos;
+       at = page_streamed.find("flight.ulg", at))
+    page_streamed.replace(at, 10, "stdin");  // the page names the log
+  EXPECT_EQ(ReadFileToString(dir / "piped/report.html"), page_streamed);
   const auto streamed = RunShutterlab("analyze --photos " + (dir / "photos") + " " +
                                       (dir / "flight.ulg") + " --json");
   ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
@@ -219,16 +232,14 @@ TEST(PhotosCli, RealPhotosOnARealLogStreamedAsReadWhole) {
   WriteFileAtomically(dir / "t.csv",
                       "image,t\ntest-photo-1.jpg,112.7\ntest-photo-2.jpg,117.614\n"
                       "test-photo-3.jpg,160.3\n");
-  const std::string args =
-      "analyze --photos " + photos + " " + log + " --triggers " + (dir / "t.csv") + " --json";
-  const auto streamed = RunShutterlab(args);
+  const std::string args = " --triggers " + (dir / "t.csv") + " --json";
+  const auto streamed = RunShutterlab("analyze --photos " + photos + " " + log + args);
   ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
-  const auto whole = RunShutterlab(args + " --out " + (dir / "o"));
+  // On a pipe the log is read whole, once.
+  const auto whole = RunShutterlab("analyze --photos " + photos + " /dev/stdin" + args, log);
   ASSERT_EQ(whole.exit_code, 0) << whole.output;
   const nlohmann::json s = nlohmann::json::parse(streamed.out);
-  nlohmann::json w = nlohmann::json::parse(whole.out);
-  w.erase("allan");  // the report's
-  EXPECT_EQ(s, w);
+  EXPECT_EQ(s, nlohmann::json::parse(whole.out));
   ASSERT_EQ(s["images"].size(), 3u);
   EXPECT_GT(s["photos"]["photos"][1]["D_rotation_m"].get<double>(), 0.5) << streamed.out;
   EXPECT_EQ(s["warnings"].size(), 2u) << "the log's two gap warnings";
