@@ -105,16 +105,35 @@ TEST(AnalyzeCli, EveryTakesPrecedenceAndOneImageIsSingular) {
 }
 
 // `analyze LOG` reads a regular file as a stream, several times; a log on a pipe can be read once
-// only, so it is read whole: the same images and flight table either way.
+// only, so it is read whole: the same images, flight table and report either way.
 TEST(AnalyzeCli, ALogOnAPipeIsReadOnceWithTheSameResult) {
   test::TempDir dir;
   const std::string path = dir / "gyro.csv";
   test::WriteStillThenTurningGyroCsv(path);
-  const std::string args = " --every 1s --json";
-  const auto from_file = RunShutterlab("analyze " + path + args);
+  const std::string args = " --every 1s --size 320x240 --focal-px 280 --json --out ";
+  const auto from_file = RunShutterlab("analyze " + path + args + (dir / "file"));
   ASSERT_EQ(from_file.exit_code, 0) << from_file.output;
-  const auto from_pipe = RunShutterlab("analyze /dev/stdin" + args, path);  // format found
+  const auto from_pipe =
+      RunShutterlab("analyze /dev/stdin" + args + (dir / "pipe"), path);  // format found
   ASSERT_EQ(from_pipe.exit_code, 0) << from_pipe.output;
+  for (const char* name : {"images.csv", "exclude.txt"})
+    EXPECT_EQ(ReadFileToString(dir / ("pipe/" + std::string(name))),
+              ReadFileToString(dir / ("file/" + std::string(name))))
+        << name;
+  // The report's charts and pictures (its title names the log: "gyro.csv", "stdin").
+  const std::string file_page = ReadFileToString(dir / "file/report.html");
+  const std::string pipe_page = ReadFileToString(dir / "pipe/report.html");
+  ASSERT_EQ(test::ChartBlocks(file_page).size(), 5u);
+  EXPECT_EQ(test::ChartBlocks(pipe_page), test::ChartBlocks(file_page));
+  const auto pictures = [](const std::string& page) {
+    std::vector<std::string> found;
+    for (size_t at = page.find("data:image/png"); at != std::string::npos;
+         at = page.find("data:image/png", at + 1))
+      found.push_back(page.substr(at, page.find('"', at) - at));
+    return found;
+  };
+  EXPECT_EQ(pictures(pipe_page).size(), 3u);
+  EXPECT_EQ(pictures(pipe_page), pictures(file_page));
   const nlohmann::json file_json = nlohmann::json::parse(from_file.out);
   const nlohmann::json pipe_json = nlohmann::json::parse(from_pipe.out);
   ASSERT_EQ(file_json["images"].size(), 11u);  // at 1, 2, ... 11 s of the 12 s log
