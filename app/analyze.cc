@@ -198,6 +198,20 @@ bool LogsReadableInPasses(const AnalyzeCommand& command) {
          (command.second_path.empty() || ReadableInPasses(command.second_path));
 }
 
+// LOG and --second's LOG2 as a streamed analysis first opened them (app/trace_options.h LogStamp).
+struct LogStamps {
+  LogStamp first;
+  std::optional<LogStamp> second;
+  explicit LogStamps(const AnalyzeCommand& command) : first(LogStamp::Of(command.log_path)) {
+    if (!command.second_path.empty()) second = LogStamp::Of(command.second_path);
+  }
+  // After the last pass: it read the logs as the first did (IoError otherwise).
+  void CheckUnchanged() const {
+    first.CheckUnchanged();
+    if (second) second->CheckUnchanged();
+  }
+};
+
 // With --second, the pair as AnalyzeStream reads it, fused on the first log's clock: each log read
 // through once for what it lost (printed by its name, as the whole read prints it) and the
 // second's sampling, the still segment searched on the first (five passes), the pair fitted
@@ -205,9 +219,9 @@ bool LogsReadableInPasses(const AnalyzeCommand& command) {
 // the analysis opens it. The same pair and fused samples as FuseSensorPair on the logs read whole.
 AnalyzeLogSource PairStreamSource(const AnalyzeCommand& command, const FlightLogReadOptions& read,
                                   const std::optional<TriggerFile>& triggers, FlightLogStream first,
-                                  std::optional<SensorPair>* pair) {
-  const auto samples_of = [&read](const std::string& path) -> OpenGyroSource {
-    return [&read, path] { return OpenFlightLog(path, read).gyro; };
+                                  const LogStamps& stamps, std::optional<SensorPair>* pair) {
+  const auto samples_of = [&read](const LogStamp& stamp) -> OpenGyroSource {
+    return [&read, stamp] { return ReopenFlightLog(stamp, read).gyro; };
   };
   // Progress over the ten passes before the analysis: each log's, the still search's five and the
   // fit's three (counted on the first log).
@@ -221,12 +235,12 @@ AnalyzeLogSource PairStreamSource(const AnalyzeCommand& command, const FlightLog
     };
   };
   const OpenGyroSource first_passes = [&] {
-    return std::make_unique<ReportingSource>(samples_of(command.log_path)(), next_pass());
+    return std::make_unique<ReportingSource>(samples_of(stamps.first)(), next_pass());
   };
   const auto ignore = [](const GyroChunk&) {};
   const StreamedLog first_read = ConsumeFlightLog(&first, ignore, next_pass());
   PrintLogWarnings(command.log_path, first_read.warnings);
-  FlightLogStream second = OpenFlightLog(command.second_path, read);
+  FlightLogStream second = ReopenFlightLog(*stamps.second, read);
   const StreamedLog second_read = ConsumeFlightLog(&second, ignore, next_pass());
   PrintLogWarnings(command.second_path, second_read.warnings);
   SensorPairOptions pair_options;
@@ -236,8 +250,8 @@ AnalyzeLogSource PairStreamSource(const AnalyzeCommand& command, const FlightLog
   }
   const int64_t second_interval_ns = second_read.sampling.median_interval_ns;
   try {
-    *pair = FitSensorPair(first_passes, samples_of(command.second_path), second_interval_ns,
-                          pair_options);
+    *pair =
+        FitSensorPair(first_passes, samples_of(*stamps.second), second_interval_ns, pair_options);
   } catch (const std::invalid_argument& e) {
     // Named by both logs, as the whole read names it: an IoError, so that the caller's wrapping
     // of the analysis's errors in the first log's name does not name it twice.
@@ -250,11 +264,11 @@ AnalyzeLogSource PairStreamSource(const AnalyzeCommand& command, const FlightLog
   fused.warnings.insert(fused.warnings.end(), second_read.warnings.begin(),
                         second_read.warnings.end());
   AnalyzeLogSource source;
-  source.open = [fused, fit = **pair, samples_of, &command, second_interval_ns] {
+  source.open = [fused, fit = **pair, first_samples = samples_of(stamps.first),
+                 second_samples = samples_of(*stamps.second), second_interval_ns] {
     FlightLogStream stream;
     stream.log = fused;
-    stream.gyro = FusedPairSource(samples_of(command.log_path)(), samples_of(command.second_path)(),
-                                  fit, second_interval_ns);
+    stream.gyro = FusedPairSource(first_samples(), second_samples(), fit, second_interval_ns);
     stream.audit_warnings = false;  // both logs' audits are in fused.warnings
     return stream;
   };
@@ -267,13 +281,13 @@ AnalyzeLogSource PairStreamSource(const AnalyzeCommand& command, const FlightLog
 // through; the trigger file's go after them. With --second, the pair fused (PairStreamSource).
 AnalyzeLogSource StreamSource(const AnalyzeCommand& command, const FlightLogReadOptions& read,
                               const std::optional<TriggerFile>& triggers, FlightLogStream first,
-                              std::optional<SensorPair>* pair) {
+                              const LogStamps& stamps, std::optional<SensorPair>* pair) {
   if (!command.second_path.empty())
-    return PairStreamSource(command, read, triggers, std::move(first), pair);
+    return PairStreamSource(command, read, triggers, std::move(first), stamps, pair);
   auto first_left = std::make_shared<std::optional<FlightLogStream>>(std::move(first));
   AnalyzeLogSource source;
-  source.open = [first_left, &command, &read] {
-    if (!*first_left) return OpenFlightLog(command.log_path, read);
+  source.open = [first_left, stamp = stamps.first, &read] {
+    if (!*first_left) return ReopenFlightLog(stamp, read);
     FlightLogStream stream = std::move(**first_left);
     first_left->reset();
     return stream;
@@ -292,12 +306,16 @@ AnalyzeResult AnalyzeStreamed(const AnalyzeCommand& command, const FlightLogRead
                               std::optional<SensorPair>* pair) {
   // Opened once for the triggers (a GPS-timed file needs the log's GPS fixes); that stream is
   // the analysis's first.
+  const LogStamps stamps(command);
   FlightLogStream first = OpenFlightLog(command.log_path, read);
   if (triggers) SetTriggers(*triggers, first.log, command.triggers_path, &options);
-  const AnalyzeLogSource source = StreamSource(command, read, triggers, std::move(first), pair);
+  const AnalyzeLogSource source =
+      StreamSource(command, read, triggers, std::move(first), stamps, pair);
   Progress progress("analyze", 1000);
   options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
-  return AnalyzeStream(source, options);
+  AnalyzeResult result = AnalyzeStream(source, options);
+  stamps.CheckUnchanged();
+  return result;
 }
 
 AnalyzeReportOptions ReportFromFlags(const AnalyzeCommand& command) {
@@ -337,17 +355,22 @@ FlightLog ReadLog(const AnalyzeCommand& command, const FlightLogReadOptions& rea
 }
 
 // The photos placed and analysed on the LOG. Regular files are read as streams, in bounded memory
-// whatever their length; a log on a pipe (and --second's) is read whole.
+// whatever their length; a log on a pipe (LOG or LOG2) is read whole.
 PhotoFlightResult PhotosOnLog(const AnalyzeCommand& command, const FlightLogReadOptions& read,
                               const PhotoSet& set, const std::optional<TriggerFile>& triggers,
                               const PhotoFlightOptions& options, std::optional<SensorPair>* pair) {
   const TriggerFile* trigger_file = triggers ? &*triggers : nullptr;
   if (LogsReadableInPasses(command)) {
+    const LogStamps stamps(command);
     FlightLogStream first = OpenFlightLog(command.log_path, read);
     const FlightLog metadata = first.log;  // the samples stay in the stream
-    const AnalyzeLogSource source = StreamSource(command, read, triggers, std::move(first), pair);
+    const AnalyzeLogSource source =
+        StreamSource(command, read, triggers, std::move(first), stamps, pair);
     try {
-      return AnalyzePhotoFlightStream(set, metadata, source, trigger_file, options);
+      PhotoFlightResult result =
+          AnalyzePhotoFlightStream(set, metadata, source, trigger_file, options);
+      stamps.CheckUnchanged();
+      return result;
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(command.log_path + ": " + e.what());
     }

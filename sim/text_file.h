@@ -214,6 +214,13 @@ void AppendDouble(double value, std::string* out);
 // Appends t_ns as seconds with nine decimals, exactly (no floating-point rounding).
 void AppendSecondsFromNs(int64_t t_ns, std::string* out);
 
+// The text without a leading UTF-8 byte-order mark (what some editors put before a file's first
+// line).
+inline std::string_view StripBom(std::string_view line) {
+  if (line.substr(0, 3) == "\xEF\xBB\xBF") line.remove_prefix(3);
+  return line;
+}
+
 // Lowercase copy of a string (ASCII).
 std::string ToLower(std::string_view s);
 

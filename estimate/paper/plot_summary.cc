@@ -104,8 +104,9 @@ const uint64_t kEndKey = Bits(std::ldexp(1.0, LogBinHistogram::kMaxExponent)) >>
 LogBinHistogram::LogBinHistogram() : counts_(kEndKey - kFirstKey + 1, 0) {}
 
 size_t LogBinHistogram::Index(double value) {
-  const uint64_t key = Bits(value) >> kDroppedBits;  // value >= 0: the sign bit is clear
-  if (key < kFirstKey) return 0;                     // underflow: [0, 2^kMinExponent)
+  if (!(value > 0.0)) return 0;  // 0, -0 (its sign bit would read as a huge key) and below
+  const uint64_t key = Bits(value) >> kDroppedBits;
+  if (key < kFirstKey) return 0;  // underflow: [0, 2^kMinExponent)
   return static_cast<size_t>(std::min(key, kEndKey - 1) - kFirstKey + 1);
 }
 

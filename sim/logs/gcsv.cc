@@ -69,11 +69,6 @@ std::string ValueAfterKey(std::string_view line) {
   return std::string(value);
 }
 
-std::string_view StripBom(std::string_view line) {
-  if (line.size() >= 3 && line.substr(0, 3) == "\xEF\xBB\xBF") line.remove_prefix(3);
-  return line;
-}
-
 bool IsReservedKey(const std::string& key) {
   static const char* const kReserved[] = {"version",
                                           "id",

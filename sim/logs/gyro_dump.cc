@@ -12,7 +12,7 @@ namespace {
 
 // The first non-blank line of text (without a '\r').
 std::string_view FirstLine(std::string_view text) {
-  LineCursor lines(text);
+  LineCursor lines(StripBom(text));
   while (auto line = lines.Next()) {
     if (line->find_first_not_of(" \t") != std::string_view::npos) return *line;
   }
@@ -50,8 +50,8 @@ class GyroDumpSource : public FillingSource {
         Finish();
         break;
       }
-      SplitWords(*line, &words_);
-      if (words_.empty() || StartsWith(words_[0], "SOF")) continue;
+      SplitWords(lines_.line_number() == 1 ? StripBom(*line) : *line, &words_);
+      if (words_.empty() || words_[0] == "SOF") continue;
       std::optional<GyroSample> sample;
       try {
         sample = ReadLine(lines_.line_number());

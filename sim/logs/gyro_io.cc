@@ -17,11 +17,6 @@ bool IsGyroCsvHeader(const std::vector<std::string_view>& fields) {
          ToLower(fields[2]) == "gy" && ToLower(fields[3]) == "gz";
 }
 
-std::string_view StripBom(std::string_view line) {
-  if (line.size() >= 3 && line.substr(0, 3) == "\xEF\xBB\xBF") line.remove_prefix(3);
-  return line;
-}
-
 // Parses one ordinary row "t,gx,gy,gz[,...]\n" at p in a single pass: t a plain decimal of at
 // most 10 whole digits (at most 9e9 s, so that t_ns fits int64) and 9 fraction digits, rates plain
 // decimals (PlainDecimalBeforeLineEnd), no spaces. The caller guarantees a '\n' at or after p

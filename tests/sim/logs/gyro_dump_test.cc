@@ -65,6 +65,10 @@ TEST(GyroDump, IsDetectedByItsFirstLine) {
   EXPECT_FALSE(LooksLikeGyroDump("t,gx,gy,gz\n0,1,2,3\n"));
   EXPECT_FALSE(LooksLikeGyroDump("SOFA,1,2,3\n"));
   EXPECT_FALSE(LooksLikeGyroDump(""));
+  // With a byte-order mark, as some editors save it: the same dump.
+  const std::string with_bom = std::string("\xEF\xBB\xBF") + kDump;
+  EXPECT_TRUE(LooksLikeGyroDump(with_bom));
+  EXPECT_EQ(ReadAll(with_bom, 4096, 16).size(), 4u);
   test::TempDir dir;
   WriteFileAtomically(dir / "gyro_dump.txt", kDump);
   const FlightLog log = ReadFlightLog(dir / "gyro_dump.txt");
@@ -87,6 +91,7 @@ TEST(GyroDump, BadLinesAreOneLineErrorsNamingTheLineAndACutLastLineIsSaid) {
       {good + "frameid:1 gyro:1 x 1 y 2 z 3 ts -\n", 2, "ts is not a finite time"},
       {good + "frameid:1 gyro:1 x 1 y 2 z 3 ts 99\n", 2, "timestamp decreases"},
       {good + "gyro:1 frameid:1 x 1 y 2 z 3 ts 200\n", 2, "expected 'frameid:N"},
+      {good + "SOFTWARE 2.1\n", 2, "expected 'frameid:N"},  // only the word SOF starts a frame
       {"SOF  1,  frameNum :1 exp time 0.005\n", 0, "no gyro lines"},
   };
   for (const Case& c : cases) {
