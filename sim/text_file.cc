@@ -31,14 +31,15 @@ std::string ReadFileToString(const std::string& path) {
   return content;
 }
 
-MappedFile::MappedFile(const std::string& path) {
+MappedFile::MappedFile(const std::string& path, Paging paging) {
   const int fd = ::open(path.c_str(), O_RDONLY);
   if (fd < 0)
     throw IoError(IoMessage(path, 0, std::string("cannot open: ") + std::strerror(errno)));
   struct stat info {};
   if (::fstat(fd, &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0) {
-    void* p = ::mmap(nullptr, static_cast<size_t>(info.st_size), PROT_READ,
-                     MAP_PRIVATE | MAP_POPULATE, fd, 0);
+    const int populate = paging == Paging::kWhole ? MAP_POPULATE : 0;
+    void* p = ::mmap(nullptr, static_cast<size_t>(info.st_size), PROT_READ, MAP_PRIVATE | populate,
+                     fd, 0);
     if (p != MAP_FAILED) {
       data_ = static_cast<const char*>(p);
       size_ = static_cast<size_t>(info.st_size);
@@ -55,6 +56,17 @@ MappedFile::MappedFile(const std::string& path) {
 
 MappedFile::~MappedFile() {
   if (mapped_) ::munmap(const_cast<char*>(data_), size_);
+}
+
+void MappedFile::ReleaseBefore(size_t offset) {
+  if (!mapped_) return;
+  const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
+  const size_t end = std::min(offset, size_) / page * page;  // whole pages only
+  if (end <= released_) return;
+  // MADV_DONTNEED on a private read-only file mapping drops the pages from this process; the
+  // page cache keeps them, so a later touch costs a minor fault, not a read from disk.
+  ::madvise(const_cast<char*>(data_) + released_, end - released_, MADV_DONTNEED);
+  released_ = end;
 }
 
 void AdviseHugePages(const void* data, size_t bytes) {

@@ -20,16 +20,25 @@ std::string ReadFileToString(const std::string& path);
 // parsing on large logs (about 11 us per 4 KiB page on our machines). Throws IoError.
 class MappedFile {
  public:
-  explicit MappedFile(const std::string& path);
+  // kWhole: every page read in when mapped (a file parsed whole). kStreamed: pages read in as they
+  // are touched, and handed back by ReleaseBefore, so that a binary log of any length is read
+  // front to back in bounded memory.
+  enum class Paging { kWhole, kStreamed };
+  explicit MappedFile(const std::string& path, Paging paging = Paging::kWhole);
   ~MappedFile();
   MappedFile(const MappedFile&) = delete;
   MappedFile& operator=(const MappedFile&) = delete;
   std::string_view text() const { return {data_, size_}; }
+  // Hands the whole pages before byte `offset` back to the kernel (they leave the process's
+  // resident memory; touching them again reads them again from the file). A no-op for a file that
+  // is not mapped (a pipe, read whole).
+  void ReleaseBefore(size_t offset);
 
  private:
   const char* data_ = nullptr;
   size_t size_ = 0;
   bool mapped_ = false;
+  size_t released_ = 0;  // bytes from the start already handed back
   std::string fallback_;
 };
 

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <random>
 #include <string>
+#include <unistd.h>
 #include <vector>
 
 namespace shutterlab {
@@ -187,6 +188,43 @@ TEST(FormatNumber, KeepsTextLongerThanItsStackBuffer) {
   const std::string sentence(100, 'x');
   const std::string formatted = FormatNumber((sentence + " %.1f s").c_str(), 2.5);
   EXPECT_EQ(formatted, sentence + " 2.5 s");
+}
+
+// Resident memory of this process in bytes (/proc/self/statm's second field, in pages).
+size_t ResidentBytes() {
+  std::FILE* f = std::fopen("/proc/self/statm", "r");
+  long pages_total = 0, pages_resident = 0;
+  const bool read = f && std::fscanf(f, "%ld %ld", &pages_total, &pages_resident) == 2;
+  if (f) std::fclose(f);
+  return read ? static_cast<size_t>(pages_resident) * static_cast<size_t>(::sysconf(_SC_PAGESIZE))
+              : 0;
+}
+
+TEST(MappedFile, AStreamedFileReadsWholeAndItsReleasedPagesLeaveResidentMemory) {
+  test::TempDir dir;
+  const std::string path = dir / "log.bin";
+  std::string content(16 << 20, '\0');
+  for (size_t i = 0; i < content.size(); ++i) content[i] = static_cast<char>(i * 2654435761u >> 24);
+  WriteFileAtomically(path, content);
+  MappedFile mapped(path, MappedFile::Paging::kStreamed);
+  ASSERT_EQ(mapped.text().size(), content.size());
+  const size_t before = ResidentBytes();
+  ASSERT_GT(before, 0u) << "/proc/self/statm unreadable";
+  // Read front to back in 1 MiB steps, handing back what was read (an odd offset: whole pages
+  // only).
+  size_t peak = before;
+  for (size_t at = 0; at < content.size(); at += 1 << 20) {
+    EXPECT_EQ(mapped.text().substr(at, 1 << 20), std::string_view(content).substr(at, 1 << 20));
+    peak = std::max(peak, ResidentBytes());
+    mapped.ReleaseBefore(at + (1 << 20) - 7);
+  }
+  mapped.ReleaseBefore(content.size());
+  // Never more than a few MiB of the 16 MiB resident at once, and none of it at the end.
+  EXPECT_LT(peak - before, size_t{4} << 20);
+  EXPECT_LT(ResidentBytes(), before + (size_t{1} << 20));
+  // Released pages read again, the same bytes.
+  EXPECT_EQ(mapped.text().substr(12345, 100), std::string_view(content).substr(12345, 100));
+  EXPECT_EQ(mapped.text(), content);
 }
 
 }  // namespace
