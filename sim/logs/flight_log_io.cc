@@ -159,6 +159,16 @@ FlightLog ReadBinary(TextBlocks input, const std::string& path, LogFormat format
   }
 }
 
+// A ULog is read in two passes over the file (sim/logs/ulog.h OpenULog); a pipe is taken whole.
+FlightLogStream OpenULogStream(TextBlocks input, const std::string& path) {
+  ULogStream ulog = std::filesystem::is_regular_file(path) ? OpenULog(path)
+                                                           : OpenULogBytes(input.TakeRest(), path);
+  FlightLogStream stream;
+  stream.log = std::move(ulog.log);
+  stream.gyro = std::move(ulog.gyro);
+  return stream;
+}
+
 }  // namespace
 
 FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOptions& options) {
@@ -167,8 +177,9 @@ FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOption
   TextBlocks input = TextBlocks::OfFile(path);
   LogFormat format = options.format;
   if (format == LogFormat::kAuto) format = DetectFlightLogFormat(input.Peek(kDetectBytes), path);
-  if (format == LogFormat::kULog || format == LogFormat::kDataFlash ||
-      format == LogFormat::kBlackbox || format == LogFormat::kGoproMp4) {
+  if (format == LogFormat::kULog) return OpenULogStream(std::move(input), path);
+  if (format == LogFormat::kDataFlash || format == LogFormat::kBlackbox ||
+      format == LogFormat::kGoproMp4) {
     FlightLogStream stream;
     stream.log = ReadBinary(std::move(input), path, format, options);
     stream.gyro = std::make_unique<TraceSource>(std::move(stream.log.gyro));
