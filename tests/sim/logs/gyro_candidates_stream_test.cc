@@ -102,9 +102,8 @@ bool RefChoose(std::vector<GyroCandidate> candidates, FlightLog* log) {
       usable.push_back(std::move(cleaned));
   }
   if (usable.empty()) return false;
-  std::stable_sort(usable.begin(), usable.end(), [](const RefCleaned& a, const RefCleaned& b) {
-    return a.rate_hz > b.rate_hz;
-  });
+  std::stable_sort(usable.begin(), usable.end(),
+                   [](const RefCleaned& a, const RefCleaned& b) { return a.rate_hz > b.rate_hz; });
   const double best_rate = usable.front().rate_hz;
   size_t chosen = 0;
   for (size_t i = 1; i < usable.size(); ++i) {
@@ -121,8 +120,7 @@ bool RefChoose(std::vector<GyroCandidate> candidates, FlightLog* log) {
     char rate[64];
     std::snprintf(rate, sizeof(rate), "%.1f Hz", c.rate_hz);
     log->gyro_sources_available.push_back(c.candidate.name + " (" + rate + ", " +
-                                          std::to_string(c.candidate.samples.size()) +
-                                          " samples)");
+                                          std::to_string(c.candidate.samples.size()) + " samples)");
   }
   RefCleaned& best = usable.front();
   const std::string& name = best.candidate.name;
@@ -235,8 +233,8 @@ Fed RandomStream(std::mt19937_64* rng, int index) {
       }
       default:  // the times reversed over a stretch
         std::reverse(fed.samples.begin() + static_cast<std::ptrdiff_t>(i),
-                     fed.samples.begin() + static_cast<std::ptrdiff_t>(
-                                               std::min(fed.samples.size(), i + 20)));
+                     fed.samples.begin() +
+                         static_cast<std::ptrdiff_t>(std::min(fed.samples.size(), i + 20)));
         break;
     }
   }
@@ -313,8 +311,8 @@ TEST(GyroCandidatesStream, RandomCandidatesGiveTheReferenceResultEveryWay) {
     const std::string what = "trial " + std::to_string(trial);
     if (ref_ok) ExpectSameLog(whole, reference, what + " (whole)");
     // Limits small enough to be exceeded by some (then redone without), and the defaults.
-    for (CandidateLimits limits : {CandidateLimits{4, 6}, CandidateLimits{40, 1000},
-                                   CandidateLimits{}}) {
+    for (CandidateLimits limits :
+         {CandidateLimits{4, 6}, CandidateLimits{40, 1000}, CandidateLimits{}}) {
       FlightLog streamed;
       bool read_in_memory = false;
       ASSERT_EQ(StreamedChoose(feds, limits, &streamed, &read_in_memory), ref_ok) << what;
