@@ -128,45 +128,60 @@ FlightLogStream OpenText(TextBlocks input, const std::string& path, LogFormat fo
   return stream;
 }
 
-// The binary logs are decoded whole (the best gyro stream is chosen once every one is known),
-// then handed on in slices. A file is read by its reader; a pipe (input, read once) is taken whole.
-FlightLog ReadBinary(TextBlocks input, const std::string& path, LogFormat format,
-                     const FlightLogReadOptions& options) {
-  if (!std::filesystem::is_regular_file(path)) {
-    // An MP4's sample tables may follow its samples (moov after mdat): it needs a file to seek.
-    if (format == LogFormat::kGoproMp4)
-      throw IoError(
-          IoMessage(path, 0, "a GoPro MP4 cannot be read from a pipe: save it to a file"));
-    const std::string bytes = input.TakeRest();
-    switch (format) {
-      case LogFormat::kULog:
-        return ParseULog(bytes, path);
-      case LogFormat::kDataFlash:
-        return ParseDataFlash(bytes, path);
-      default:
-        return DecodeBlackbox(bytes, path, options.log_index);
-    }
-  }
-  switch (format) {
-    case LogFormat::kULog:
-      return ReadULog(path);
-    case LogFormat::kDataFlash:
-      return ReadDataFlash(path);
-    case LogFormat::kGoproMp4:
-      return ReadGoproFlightLog(path);
-    default:
-      return ReadBlackbox(path, options.log_index);
-  }
+// A binary log decoded whole (the best gyro stream is chosen once every one is known), handed on
+// in slices.
+FlightLogStream WholeLogStream(FlightLog log) {
+  FlightLogStream stream;
+  stream.log = std::move(log);
+  stream.gyro = std::make_unique<TraceSource>(std::move(stream.log.gyro));
+  stream.log.gyro = GyroTrace();
+  return stream;
 }
 
-// A ULog is read in two passes over the file (sim/logs/ulog.h OpenULog); a pipe is taken whole.
-FlightLogStream OpenULogStream(TextBlocks input, const std::string& path) {
+// One open function per binary format, each returning its own stream: a file is read by its
+// reader; a pipe (input, read once) is taken whole.
+FlightLogStream OpenULogLog(TextBlocks input, const std::string& path) {
+  // Read in two passes over the file (sim/logs/ulog.h OpenULog).
   ULogStream ulog = std::filesystem::is_regular_file(path) ? OpenULog(path)
                                                            : OpenULogBytes(input.TakeRest(), path);
   FlightLogStream stream;
   stream.log = std::move(ulog.log);
   stream.gyro = std::move(ulog.gyro);
   return stream;
+}
+
+FlightLogStream OpenDataFlashLog(TextBlocks input, const std::string& path) {
+  if (!std::filesystem::is_regular_file(path))
+    return WholeLogStream(ParseDataFlash(input.TakeRest(), path));
+  return WholeLogStream(ReadDataFlash(path));
+}
+
+FlightLogStream OpenBlackboxLog(TextBlocks input, const std::string& path, int log_index) {
+  if (!std::filesystem::is_regular_file(path))
+    return WholeLogStream(DecodeBlackbox(input.TakeRest(), path, log_index));
+  return WholeLogStream(ReadBlackbox(path, log_index));
+}
+
+// Decoded whole: its gyro is ~200 Hz (an hour is 720,000 samples), and its sample tables may
+// follow its samples (moov after mdat), so it needs a file to seek.
+FlightLogStream OpenGoproLog(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path))
+    throw IoError(IoMessage(path, 0, "a GoPro MP4 cannot be read from a pipe: save it to a file"));
+  return WholeLogStream(ReadGoproFlightLog(path));
+}
+
+FlightLogStream OpenBinary(TextBlocks input, const std::string& path, LogFormat format,
+                           const FlightLogReadOptions& options) {
+  switch (format) {
+    case LogFormat::kULog:
+      return OpenULogLog(std::move(input), path);
+    case LogFormat::kDataFlash:
+      return OpenDataFlashLog(std::move(input), path);
+    case LogFormat::kGoproMp4:
+      return OpenGoproLog(path);
+    default:
+      return OpenBlackboxLog(std::move(input), path, options.log_index);
+  }
 }
 
 }  // namespace
@@ -177,14 +192,9 @@ FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOption
   TextBlocks input = TextBlocks::OfFile(path);
   LogFormat format = options.format;
   if (format == LogFormat::kAuto) format = DetectFlightLogFormat(input.Peek(kDetectBytes), path);
-  if (format == LogFormat::kULog) return OpenULogStream(std::move(input), path);
-  if (format == LogFormat::kDataFlash || format == LogFormat::kBlackbox ||
-      format == LogFormat::kGoproMp4) {
-    FlightLogStream stream;
-    stream.log = ReadBinary(std::move(input), path, format, options);
-    stream.gyro = std::make_unique<TraceSource>(std::move(stream.log.gyro));
-    stream.log.gyro = GyroTrace();
-    return stream;
+  if (format == LogFormat::kULog || format == LogFormat::kDataFlash ||
+      format == LogFormat::kBlackbox || format == LogFormat::kGoproMp4) {
+    return OpenBinary(std::move(input), path, format, options);
   }
   try {
     FlightLogStream stream = OpenText(std::move(input), path, format, options);
