@@ -1010,7 +1010,6 @@ void DecodeRecord(const std::string& topic, const TopicDecoder& d, std::string_v
 
 // What pass 1 gathers from the data messages before choosing the gyro source.
 struct DecodedTopics {
-  std::vector<internal::GyroCandidate> candidates;
   std::vector<CameraEvent> events;
   std::vector<UtcFix> utc_fixes;
   std::vector<double> dist_bottom_m;
@@ -1066,6 +1065,8 @@ class GyroSweep final : public DataSink {
         emit_(std::move(emit)) {
     parser_.Start();
   }
+  GyroSweep(const GyroSweep&) = delete;  // its parser hands data to this object
+  GyroSweep& operator=(const GyroSweep&) = delete;
   // Reads the next message; false at the end.
   bool Step() { return parser_.Step(); }
   void RunToEnd() {
@@ -1085,22 +1086,30 @@ class GyroSweep final : public DataSink {
   std::optional<TopicDecoder> decoder_;
 };
 
-// Pass 1: the parse with every data message decoded, each gyro stream (topic instance) fed to its
-// candidate, then the choice.
+// What pass 1 hands to pass 2: the log without samples, and how to read and clean them.
+struct ULogPass1 {
+  FlightLog log;
+  std::vector<size_t> gyro_subs;  // the chosen topic instance's subscriptions, in order
+  std::optional<internal::CandidateSummary> chosen;
+};
+
+// Pass 1: the parse with every data message decoded, each gyro stream (topic instance) fed to the
+// summary of its candidate, then the choice.
 class ULogSummary final : public DataSink {
  public:
-  explicit ULogSummary(const ULogInput& input)
-      : input_(input), parser_(input.bytes, input.path, this, input.file.get()) {}
-  // The log without its samples' source: format, warnings, records_skipped, events, altitude,
-  // the chosen gyro source (and, for now, its samples).
-  FlightLog Run();
+  ULogSummary(const ULogInput& input, const internal::CandidateLimits& limits)
+      : input_(input), limits_(limits), parser_(input.bytes, input.path, this, input.file.get()) {}
+  ULogSummary(const ULogSummary&) = delete;  // its parser hands data to this object
+  ULogSummary& operator=(const ULogSummary&) = delete;
+  // Throws IoError as ReadULog does.
+  ULogPass1 Run();
   void OnData(size_t sub_index, const Subscription& sub, std::string_view data) override;
 
  private:
   // One topic instance's gyro candidate, fed in log order.
   struct GyroStream {
-    internal::GyroCandidate candidate;
-    size_t last_sub = 0;       // the subscription that fed it last
+    std::optional<internal::CandidateSummary> summary;  // from its first sample on
+    size_t last_sub = 0;                                // the subscription that fed it last
     bool interleaved = false;  // an earlier subscription fed it after a later one
   };
   struct SubState {
@@ -1109,14 +1118,28 @@ class ULogSummary final : public DataSink {
     TopicRecords records;
     GyroStream* gyro = nullptr;  // a gyro topic's stream (std::map nodes stay put)
   };
+  // A gyro topic instance as the choice sees it.
+  struct Candidate {
+    internal::CandidateSummary summary;
+    std::vector<size_t> subs;
+  };
   SubState& State(size_t sub_index, const Subscription& sub);
-  // Feeds the stream again from its subscriptions one after another: the order the candidate's
-  // samples are cleaned in (a topic removed and added again, its two subscriptions' data mixed).
-  void Refeed(const std::vector<size_t>& subs, GyroStream* stream) const;
-  // Everything but the gyro samples, gathered per topic instance in topic order.
-  DecodedTopics Gather();
+  // The stream's summary made again from its subscriptions one after another (the order its
+  // samples are cleaned in), named as its last subscription names it.
+  internal::CandidateSummary Refeed(const std::vector<size_t>& subs, const TopicDecoder& last,
+                                    const internal::CandidateLimits& limits) const;
+  // The finished, exact summary of a stream; a disorder too deep for the limits makes it again
+  // without (bounded: the summary that was not exact, for the warning).
+  internal::CandidateSummary Finish(const std::vector<size_t>& subs, const TopicDecoder& last,
+                                    GyroStream* stream,
+                                    std::vector<internal::CandidateSummary>* bounded) const;
+  // Everything but the gyro samples, gathered per topic instance in topic order, and the gyro
+  // candidates in that order.
+  DecodedTopics Gather(std::vector<Candidate>* candidates,
+                       std::vector<internal::CandidateSummary>* bounded);
 
   const ULogInput& input_;
+  internal::CandidateLimits limits_;
   ULogParser parser_;
   std::vector<SubState> subs_;  // by subscription index
   std::map<std::pair<std::string, int>, GyroStream> gyro_;
@@ -1135,17 +1158,19 @@ ULogSummary::SubState& ULogSummary::State(size_t sub_index, const Subscription& 
 
 void ULogSummary::OnData(size_t sub_index, const Subscription& sub, std::string_view data) {
   SubState& state = State(sub_index, sub);
-  if (!state.decoder.gyro()) {
-    DecodeRecord(sub.topic, state.decoder, data, &state.records);
+  const TopicDecoder& d = state.decoder;
+  if (!d.gyro()) {
+    DecodeRecord(sub.topic, d, data, &state.records);
     return;
   }
   GyroStream& stream = *state.gyro;
   bool fed = false;
-  const bool read = DecodeGyro(state.decoder, data,
-                               [&](const std::optional<int64_t>& t_ns, const Eigen::Vector3d& w) {
-                                 internal::AddCandidateSample(t_ns, w, &stream.candidate);
-                                 fed = true;
-                               });
+  const bool read =
+      DecodeGyro(d, data, [&](const std::optional<int64_t>& t_ns, const Eigen::Vector3d& w) {
+        if (!stream.summary) stream.summary.emplace(d.candidate_name, d.preference, limits_);
+        stream.summary->Add(t_ns, w);
+        fed = true;
+      });
   if (!read) parser_.SkipData(sub.topic, 1);
   if (fed) {
     if (sub_index < stream.last_sub) stream.interleaved = true;
@@ -1153,17 +1178,39 @@ void ULogSummary::OnData(size_t sub_index, const Subscription& sub, std::string_
   }
 }
 
-void ULogSummary::Refeed(const std::vector<size_t>& subs, GyroStream* stream) const {
-  stream->candidate.samples.clear();
-  stream->candidate.unreadable_time = 0;
+internal::CandidateSummary ULogSummary::Refeed(const std::vector<size_t>& subs,
+                                               const TopicDecoder& last,
+                                               const internal::CandidateLimits& limits) const {
+  internal::CandidateSummary summary(last.candidate_name, last.preference, limits);
   for (size_t sub : subs) {
     GyroSweep(input_, sub, [&](const std::optional<int64_t>& t_ns, const Eigen::Vector3d& w) {
-      internal::AddCandidateSample(t_ns, w, &stream->candidate);
+      summary.Add(t_ns, w);
     }).RunToEnd();
   }
+  return summary;
 }
 
-DecodedTopics ULogSummary::Gather() {
+internal::CandidateSummary ULogSummary::Finish(
+    const std::vector<size_t>& subs, const TopicDecoder& last, GyroStream* stream,
+    std::vector<internal::CandidateSummary>* bounded) const {
+  // Fed in file order, which is the subscriptions' order unless their data interleave; named by
+  // the first subscription that fed it, which is the last one's name unless a format changed.
+  internal::CandidateSummary summary = stream->interleaved ||
+                                               stream->summary->name() != last.candidate_name ||
+                                               stream->summary->preference() != last.preference
+                                           ? Refeed(subs, last, limits_)
+                                           : std::move(*stream->summary);
+  stream->summary.reset();
+  summary.Finish();
+  if (summary.exact()) return summary;
+  bounded->push_back(std::move(summary));
+  internal::CandidateSummary whole = Refeed(subs, last, internal::CandidateLimits::Unbounded());
+  whole.Finish();
+  return whole;
+}
+
+DecodedTopics ULogSummary::Gather(std::vector<Candidate>* candidates,
+                                  std::vector<internal::CandidateSummary>* bounded) {
   DecodedTopics topics;
   // Subscriptions of the same topic and instance (a topic removed and added again) share one
   // stream.
@@ -1175,14 +1222,13 @@ DecodedTopics ULogSummary::Gather() {
   }
   for (const auto& [key, indices] : streams) {
     GyroStream* gyro = nullptr;
+    const TopicDecoder* last_gyro = nullptr;
     std::vector<size_t> gyro_subs;
     for (size_t i : indices) {
       SubState& state = subs_[i];
-      const TopicDecoder& d = state.decoder;
-      if (d.gyro()) {
+      if (state.decoder.gyro()) {
         gyro = state.gyro;
-        gyro->candidate.name = d.candidate_name;
-        gyro->candidate.preference = d.preference;
+        last_gyro = &state.decoder;
         gyro_subs.push_back(i);
         continue;
       }
@@ -1195,17 +1241,20 @@ DecodedTopics ULogSummary::Gather() {
       if (r.last_z_m && std::isfinite(*r.last_z_m)) topics.home_z_m = r.last_z_m;
       r = TopicRecords();
     }
-    if (!gyro) continue;
-    if (gyro->interleaved) Refeed(gyro_subs, gyro);
-    if (!gyro->candidate.samples.empty()) topics.candidates.push_back(std::move(gyro->candidate));
+    // A stream none of whose messages gave a sample with a readable time is no candidate.
+    if (!gyro || !gyro->summary) continue;
+    candidates->push_back({Finish(gyro_subs, *last_gyro, gyro, bounded), gyro_subs});
   }
   return topics;
 }
 
-FlightLog ULogSummary::Run() {
+ULogPass1 ULogSummary::Run() {
   parser_.Start();
   while (parser_.Step()) continue;
-  DecodedTopics topics = Gather();
+  std::vector<Candidate> candidates;
+  std::vector<internal::CandidateSummary> bounded;
+  DecodedTopics topics = Gather(&candidates, &bounded);
+  ULogPass1 out;
   FlightLog& log = parser_.log();
   std::stable_sort(topics.events.begin(), topics.events.end(),
                    [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
@@ -1215,21 +1264,103 @@ FlightLog ULogSummary::Run() {
   log.utc_fixes = std::move(topics.utc_fixes);
   KeepOneCameraEventKind(&log);
   SetAltitudeAboveGround(topics, &log);
-  if (!internal::ChooseGyroSource(std::move(topics.candidates), &log)) {
+  std::vector<internal::CandidateSummary> summaries;
+  for (Candidate& c : candidates) summaries.push_back(std::move(c.summary));
+  const std::optional<size_t> chosen = internal::ChooseGyroSummary(summaries, &log);
+  if (!chosen) {
     throw IoError(IoMessage(input_.path, 0,
                             "no usable gyro data (looked for sensor_gyro_fifo, sensor_gyro, "
                             "vehicle_angular_velocity, sensor_combined)"));
   }
+  if (!bounded.empty()) log.warnings.push_back(internal::ReadInMemoryWarning(bounded));
   parser_.SummariseWarnings();
-  return std::move(log);
+  out.log = std::move(log);
+  out.gyro_subs = std::move(candidates[*chosen].subs);
+  out.chosen = std::move(summaries[*chosen]);
+  return out;
 }
 
-ULogStream Open(std::unique_ptr<ULogInput> input, size_t chunk_samples) {
-  (void)chunk_samples;
+// Pass 2: the chosen stream's samples read again (one sweep per subscription of its topic
+// instance, in order) and cleaned, handed on in chunks.
+class ULogGyroSource final : public FillingSource {
+ public:
+  ULogGyroSource(std::unique_ptr<ULogInput> input, ULogPass1* pass1, size_t chunk_samples)
+      : FillingSource(chunk_samples),
+        input_(std::move(input)),
+        subs_(std::move(pass1->gyro_subs)),
+        cleaner_(*pass1->chosen) {}
+  double Fraction() const override {
+    if (finished_ || subs_.empty()) return 1.0;
+    const double done = sweep_ ? static_cast<double>(next_sub_ - 1) + sweep_->Fraction()
+                               : static_cast<double>(next_sub_);
+    return done / static_cast<double>(subs_.size());
+  }
+
+ protected:
+  void Fill(std::vector<GyroSample>* chunk) override;
+
+ private:
+  // Refuses a file that is not the one pass 1 read (a log still being recorded).
+  void CheckUnchanged() const;
+
+  std::unique_ptr<ULogInput> input_;
+  std::vector<size_t> subs_;
+  internal::CandidateCleaner cleaner_;
+  std::optional<GyroSweep> sweep_;
+  size_t next_sub_ = 0;  // subs_ index of the next sweep
+  bool finished_ = false;
+  std::vector<GyroSample> ready_;  // cleaned samples from ready_begin_ on, not handed on yet
+  size_t ready_begin_ = 0;
+};
+
+void ULogGyroSource::CheckUnchanged() const {
+  if (!input_->file_size) return;
+  std::error_code error;
+  const uintmax_t now = std::filesystem::file_size(input_->path, error);
+  if (error || now == *input_->file_size) return;
+  throw IoError(
+      IoMessage(input_->path, 0,
+                "changed while it was read in passes (" + std::to_string(*input_->file_size) +
+                    " bytes, now " + std::to_string(now) +
+                    "): is it still being recorded? Analyse a copy, or the finished log"));
+}
+
+void ULogGyroSource::Fill(std::vector<GyroSample>* chunk) {
+  CheckUnchanged();
+  const size_t want = chunk_samples();
+  while (ready_.size() - ready_begin_ < want && !finished_) {
+    if (!sweep_) {
+      if (next_sub_ == subs_.size()) {
+        finished_ = true;
+        if (!cleaner_.Finish(&ready_)) {
+          throw IoError(IoMessage(input_->path, 0,
+                                  "its gyro samples read differently the second time: is it "
+                                  "still being recorded? Analyse a copy, or the finished log"));
+        }
+        break;
+      }
+      sweep_.emplace(*input_, subs_[next_sub_++],
+                     [this](const std::optional<int64_t>& t_ns, const Eigen::Vector3d& w) {
+                       cleaner_.Add(t_ns, w, &ready_);
+                     });
+    }
+    if (!sweep_->Step()) sweep_.reset();
+  }
+  const size_t n = std::min(want, ready_.size() - ready_begin_);
+  chunk->insert(chunk->end(), ready_.begin() + ready_begin_, ready_.begin() + ready_begin_ + n);
+  ready_begin_ += n;
+  if (ready_begin_ > want || ready_begin_ == ready_.size()) {
+    ready_.erase(ready_.begin(), ready_.begin() + ready_begin_);
+    ready_begin_ = 0;
+  }
+}
+
+ULogStream Open(std::unique_ptr<ULogInput> input, size_t chunk_samples,
+                const internal::CandidateLimits& limits = {}) {
+  ULogPass1 pass1 = ULogSummary(*input, limits).Run();
   ULogStream stream;
-  stream.log = ULogSummary(*input).Run();
-  stream.gyro = std::make_unique<TraceSource>(std::move(stream.log.gyro), chunk_samples);
-  stream.log.gyro = GyroTrace();
+  stream.gyro = std::make_unique<ULogGyroSource>(std::move(input), &pass1, chunk_samples);
+  stream.log = std::move(pass1.log);
   return stream;
 }
 

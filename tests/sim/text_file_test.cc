@@ -211,12 +211,14 @@ TEST(MappedFile, AStreamedFileReadsWholeAndItsReleasedPagesLeaveResidentMemory) 
   const size_t before = ResidentBytes();
   ASSERT_GT(before, 0u) << "/proc/self/statm unreadable";
   // Read front to back in 1 MiB steps, handing back what was read (an odd offset: whole pages
-  // only).
+  // only), twice: the second pass (a reader's pass 2) hands its pages back as well.
   size_t peak = before;
-  for (size_t at = 0; at < content.size(); at += 1 << 20) {
-    EXPECT_EQ(mapped.text().substr(at, 1 << 20), std::string_view(content).substr(at, 1 << 20));
-    peak = std::max(peak, ResidentBytes());
-    mapped.ReleaseBefore(at + (1 << 20) - 7);
+  for (int pass = 0; pass < 2; ++pass) {
+    for (size_t at = 0; at < content.size(); at += 1 << 20) {
+      EXPECT_EQ(mapped.text().substr(at, 1 << 20), std::string_view(content).substr(at, 1 << 20));
+      peak = std::max(peak, ResidentBytes());
+      mapped.ReleaseBefore(at + (1 << 20) - 7);
+    }
   }
   mapped.ReleaseBefore(content.size());
   // Never more than a few MiB of the 16 MiB resident at once, and none of it at the end.
