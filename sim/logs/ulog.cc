@@ -1389,12 +1389,19 @@ ULogStream OpenULog(const std::string& path, size_t chunk_samples) {
 }
 
 ULogStream OpenULogBytes(std::string bytes, const std::string& path, size_t chunk_samples) {
+  return internal::OpenULogBytes(std::move(bytes), path, chunk_samples, {});
+}
+
+namespace internal {
+ULogStream OpenULogBytes(std::string bytes, const std::string& path, size_t chunk_samples,
+                         const CandidateLimits& limits) {
   auto input = std::make_unique<ULogInput>();
   input->path = path;
   input->owned = std::move(bytes);
   input->bytes = input->owned;
-  return Open(std::move(input), chunk_samples);
+  return Open(std::move(input), chunk_samples, limits);
 }
+}  // namespace internal
 
 FlightLog ParseULog(std::string_view bytes, const std::string& path) {
   auto input = std::make_unique<ULogInput>();

@@ -8,6 +8,7 @@
 
 #include "sim/gyro_source.h"
 #include "sim/logs/flight_log.h"
+#include "sim/logs/gyro_candidates.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -60,6 +61,13 @@ ULogStream OpenULog(const std::string& path,
 // Bytes already in memory (a pipe's, read whole), owned by the stream.
 ULogStream OpenULogBytes(std::string bytes, const std::string& path,
                          size_t chunk_samples = FillingSource::kDefaultChunkSamples);
+
+namespace internal {
+// OpenULogBytes with the limits of pass 1's candidate summaries chosen: small limits take the
+// fallback (a topic instance's times held whole, with a warning) on small inputs (tests, fuzzing).
+ULogStream OpenULogBytes(std::string bytes, const std::string& path, size_t chunk_samples,
+                         const CandidateLimits& limits);
+}  // namespace internal
 
 // A vehicle below this height is taken to be on the ground when the altitude median is formed.
 inline constexpr double kAirborneAltitudeM = 1.0;
