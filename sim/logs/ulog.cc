@@ -1054,14 +1054,21 @@ struct ULogInput {
   std::optional<uintmax_t> file_size;
 };
 
-// Pass over the bytes that hands the gyro samples of one subscription to emit, in log order
-// (pass 2, and pass 1 again for a topic instance whose subscriptions' data interleave).
+// The passes over the bytes that give a topic instance's gyro samples in the order they are
+// cleaned in, each sweep reading some of its subscriptions: all of them in one sweep when their
+// data come one subscription after another in the file (as a topic removed and added again
+// leaves it), else one sweep per subscription.
+using Sweeps = std::vector<std::vector<size_t>>;
+
+// Pass over the bytes that hands the gyro samples of some subscriptions to emit, in log order
+// (pass 2, and pass 1 again for a topic instance that needs it).
 class GyroSweep final : public DataSink {
  public:
   using Emit = std::function<void(const std::optional<int64_t>&, const Eigen::Vector3d&)>;
-  GyroSweep(const ULogInput& input, size_t sub_index, Emit emit)
+  GyroSweep(const ULogInput& input, std::vector<size_t> subs, Emit emit)
       : parser_(input.bytes, input.path, this, input.file.get()),
-        sub_index_(sub_index),
+        subs_(std::move(subs)),
+        decoders_(subs_.size()),
         emit_(std::move(emit)) {
     parser_.Start();
   }
@@ -1074,22 +1081,24 @@ class GyroSweep final : public DataSink {
   }
   double Fraction() const { return parser_.Fraction(); }
   void OnData(size_t sub_index, const Subscription& sub, std::string_view data) override {
-    if (sub_index != sub_index_) return;
-    if (!decoder_) decoder_ = MakeTopicDecoder(sub.topic, sub.multi_id, *sub.layout);
-    DecodeGyro(*decoder_, data, emit_);
+    const auto it = std::find(subs_.begin(), subs_.end(), sub_index);
+    if (it == subs_.end()) return;
+    std::optional<TopicDecoder>& decoder = decoders_[it - subs_.begin()];
+    if (!decoder) decoder = MakeTopicDecoder(sub.topic, sub.multi_id, *sub.layout);
+    DecodeGyro(*decoder, data, emit_);
   }
 
  private:
   ULogParser parser_;
-  size_t sub_index_;
+  std::vector<size_t> subs_;
+  std::vector<std::optional<TopicDecoder>> decoders_;  // each subscription's, from its layout
   Emit emit_;
-  std::optional<TopicDecoder> decoder_;
 };
 
 // What pass 1 hands to pass 2: the log without samples, and how to read and clean them.
 struct ULogPass1 {
   FlightLog log;
-  std::vector<size_t> gyro_subs;  // the chosen topic instance's subscriptions, in order
+  Sweeps sweeps;  // that read the chosen topic instance's samples
   std::optional<internal::CandidateSummary> chosen;
 };
 
@@ -1121,16 +1130,15 @@ class ULogSummary final : public DataSink {
   // A gyro topic instance as the choice sees it.
   struct Candidate {
     internal::CandidateSummary summary;
-    std::vector<size_t> subs;
+    Sweeps sweeps;
   };
   SubState& State(size_t sub_index, const Subscription& sub);
-  // The stream's summary made again from its subscriptions one after another (the order its
-  // samples are cleaned in), named as its last subscription names it.
-  internal::CandidateSummary Refeed(const std::vector<size_t>& subs, const TopicDecoder& last,
+  // The stream's summary made again from its sweeps, named as its last subscription names it.
+  internal::CandidateSummary Refeed(const Sweeps& sweeps, const TopicDecoder& last,
                                     const internal::CandidateLimits& limits) const;
   // The finished, exact summary of a stream; a disorder too deep for the limits makes it again
   // without (bounded: the summary that was not exact, for the warning).
-  internal::CandidateSummary Finish(const std::vector<size_t>& subs, const TopicDecoder& last,
+  internal::CandidateSummary Finish(const Sweeps& sweeps, const TopicDecoder& last,
                                     GyroStream* stream,
                                     std::vector<internal::CandidateSummary>* bounded) const;
   // Everything but the gyro samples, gathered per topic instance in topic order, and the gyro
@@ -1178,12 +1186,11 @@ void ULogSummary::OnData(size_t sub_index, const Subscription& sub, std::string_
   }
 }
 
-internal::CandidateSummary ULogSummary::Refeed(const std::vector<size_t>& subs,
-                                               const TopicDecoder& last,
+internal::CandidateSummary ULogSummary::Refeed(const Sweeps& sweeps, const TopicDecoder& last,
                                                const internal::CandidateLimits& limits) const {
   internal::CandidateSummary summary(last.candidate_name, last.preference, limits);
-  for (size_t sub : subs) {
-    GyroSweep(input_, sub, [&](const std::optional<int64_t>& t_ns, const Eigen::Vector3d& w) {
+  for (const std::vector<size_t>& subs : sweeps) {
+    GyroSweep(input_, subs, [&](const std::optional<int64_t>& t_ns, const Eigen::Vector3d& w) {
       summary.Add(t_ns, w);
     }).RunToEnd();
   }
@@ -1191,20 +1198,20 @@ internal::CandidateSummary ULogSummary::Refeed(const std::vector<size_t>& subs,
 }
 
 internal::CandidateSummary ULogSummary::Finish(
-    const std::vector<size_t>& subs, const TopicDecoder& last, GyroStream* stream,
+    const Sweeps& sweeps, const TopicDecoder& last, GyroStream* stream,
     std::vector<internal::CandidateSummary>* bounded) const {
   // Fed in file order, which is the subscriptions' order unless their data interleave; named by
   // the first subscription that fed it, which is the last one's name unless a format changed.
   internal::CandidateSummary summary = stream->interleaved ||
                                                stream->summary->name() != last.candidate_name ||
                                                stream->summary->preference() != last.preference
-                                           ? Refeed(subs, last, limits_)
+                                           ? Refeed(sweeps, last, limits_)
                                            : std::move(*stream->summary);
   stream->summary.reset();
   summary.Finish();
   if (summary.exact()) return summary;
   bounded->push_back(std::move(summary));
-  internal::CandidateSummary whole = Refeed(subs, last, internal::CandidateLimits::Unbounded());
+  internal::CandidateSummary whole = Refeed(sweeps, last, internal::CandidateLimits::Unbounded());
   whole.Finish();
   return whole;
 }
@@ -1243,7 +1250,14 @@ DecodedTopics ULogSummary::Gather(std::vector<Candidate>* candidates,
     }
     // A stream none of whose messages gave a sample with a readable time is no candidate.
     if (!gyro || !gyro->summary) continue;
-    candidates->push_back({Finish(gyro_subs, *last_gyro, gyro, bounded), gyro_subs});
+    Sweeps sweeps;
+    if (gyro->interleaved) {
+      for (size_t i : gyro_subs) sweeps.push_back({i});
+    } else {
+      sweeps.push_back(gyro_subs);
+    }
+    internal::CandidateSummary summary = Finish(sweeps, *last_gyro, gyro, bounded);
+    candidates->push_back({std::move(summary), std::move(sweeps)});
   }
   return topics;
 }
@@ -1275,25 +1289,25 @@ ULogPass1 ULogSummary::Run() {
   if (!bounded.empty()) log.warnings.push_back(internal::ReadInMemoryWarning(bounded));
   parser_.SummariseWarnings();
   out.log = std::move(log);
-  out.gyro_subs = std::move(candidates[*chosen].subs);
+  out.sweeps = std::move(candidates[*chosen].sweeps);
   out.chosen = std::move(summaries[*chosen]);
   return out;
 }
 
-// Pass 2: the chosen stream's samples read again (one sweep per subscription of its topic
-// instance, in order) and cleaned, handed on in chunks.
+// Pass 2: the chosen stream's samples read again (its sweeps, in order) and cleaned, handed on in
+// chunks.
 class ULogGyroSource final : public FillingSource {
  public:
   ULogGyroSource(std::unique_ptr<ULogInput> input, ULogPass1* pass1, size_t chunk_samples)
       : FillingSource(chunk_samples),
         input_(std::move(input)),
-        subs_(std::move(pass1->gyro_subs)),
+        sweeps_(std::move(pass1->sweeps)),
         cleaner_(*pass1->chosen) {}
   double Fraction() const override {
-    if (finished_ || subs_.empty()) return 1.0;
-    const double done = sweep_ ? static_cast<double>(next_sub_ - 1) + sweep_->Fraction()
-                               : static_cast<double>(next_sub_);
-    return done / static_cast<double>(subs_.size());
+    if (finished_ || sweeps_.empty()) return 1.0;
+    const double done = sweep_ ? static_cast<double>(next_sweep_ - 1) + sweep_->Fraction()
+                               : static_cast<double>(next_sweep_);
+    return done / static_cast<double>(sweeps_.size());
   }
 
  protected:
@@ -1304,10 +1318,10 @@ class ULogGyroSource final : public FillingSource {
   void CheckUnchanged() const;
 
   std::unique_ptr<ULogInput> input_;
-  std::vector<size_t> subs_;
+  Sweeps sweeps_;
   internal::CandidateCleaner cleaner_;
   std::optional<GyroSweep> sweep_;
-  size_t next_sub_ = 0;  // subs_ index of the next sweep
+  size_t next_sweep_ = 0;
   bool finished_ = false;
   std::vector<GyroSample> ready_;  // cleaned samples from ready_begin_ on, not handed on yet
   size_t ready_begin_ = 0;
@@ -1330,7 +1344,7 @@ void ULogGyroSource::Fill(std::vector<GyroSample>* chunk) {
   const size_t want = chunk_samples();
   while (ready_.size() - ready_begin_ < want && !finished_) {
     if (!sweep_) {
-      if (next_sub_ == subs_.size()) {
+      if (next_sweep_ == sweeps_.size()) {
         finished_ = true;
         if (!cleaner_.Finish(&ready_)) {
           throw IoError(IoMessage(input_->path, 0,
@@ -1339,7 +1353,7 @@ void ULogGyroSource::Fill(std::vector<GyroSample>* chunk) {
         }
         break;
       }
-      sweep_.emplace(*input_, subs_[next_sub_++],
+      sweep_.emplace(*input_, sweeps_[next_sweep_++],
                      [this](const std::optional<int64_t>& t_ns, const Eigen::Vector3d& w) {
                        cleaner_.Add(t_ns, w, &ready_);
                      });
