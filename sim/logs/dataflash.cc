@@ -735,20 +735,19 @@ class DataFlashSource : public FillingSource {
  protected:
   void Fill(std::vector<GyroSample>* chunk) override {
     CheckUnchanged();
-    while (pending_.size() - taken_ < chunk_samples() && !done_) {
+    // What the last chunk left (less than a message's samples, or the cleaner's last release) moves
+    // to the front, so that pending_ holds about a chunk.
+    pending_.erase(pending_.begin(), pending_.begin() + taken_);
+    taken_ = 0;
+    while (pending_.size() < chunk_samples() && !done_) {
       if (!parser_->Step()) {
         done_ = true;
         if (!cleaner_.Finish(&pending_)) Changed();
       }
       ReleaseBehind(bytes_->file.get(), parser_->position(), &released_);
     }
-    const size_t n = std::min(chunk_samples(), pending_.size() - taken_);
-    chunk->insert(chunk->end(), pending_.begin() + taken_, pending_.begin() + taken_ + n);
-    taken_ += n;
-    if (taken_ == pending_.size()) {
-      pending_.clear();
-      taken_ = 0;
-    }
+    taken_ = std::min(chunk_samples(), pending_.size());
+    chunk->insert(chunk->end(), pending_.begin(), pending_.begin() + taken_);
   }
 
  private:
@@ -774,7 +773,7 @@ class DataFlashSource : public FillingSource {
   internal::CandidateCleaner cleaner_;
   GyroSinks sinks_;
   std::unique_ptr<DataFlashParser> parser_;
-  std::vector<GyroSample> pending_;  // cleaned, not yet handed out (from taken_)
+  std::vector<GyroSample> pending_;  // cleaned samples; the first taken_ handed out already
   size_t taken_ = 0;
   size_t released_ = 0;
   bool done_ = false;
