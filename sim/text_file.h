@@ -30,9 +30,9 @@ class MappedFile {
   MappedFile& operator=(const MappedFile&) = delete;
   std::string_view text() const { return {data_, size_}; }
   // Hands the whole pages before byte `offset` back to the kernel (they leave the process's
-  // resident memory; touching them again reads them again from the file). An offset behind the
-  // last one starts a new pass from the front: the pages before it are handed back again. A no-op
-  // for a file that is not mapped (a pipe, read whole).
+  // resident memory; touching them again reads them again from the file). An offset before the
+  // last one starts again from the file's start: a reader's next pass over the file hands its
+  // pages back the same way. A no-op for a file that is not mapped (a pipe, read whole).
   void ReleaseBefore(size_t offset);
 
  private:

@@ -150,10 +150,13 @@ FlightLogStream OpenULogLog(TextBlocks input, const std::string& path) {
   return stream;
 }
 
+// Streamed: two passes over the mapped file (sim/logs/dataflash.h OpenDataFlash).
 FlightLogStream OpenDataFlashLog(TextBlocks input, const std::string& path) {
-  if (!std::filesystem::is_regular_file(path))
-    return WholeLogStream(ParseDataFlash(input.TakeRest(), path));
-  return WholeLogStream(ReadDataFlash(path));
+  DataFlashStream dataflash = OpenDataFlash(std::move(input), path);
+  FlightLogStream stream;
+  stream.log = std::move(dataflash.log);
+  stream.gyro = std::move(dataflash.samples);
+  return stream;
 }
 
 FlightLogStream OpenBlackboxLog(TextBlocks input, const std::string& path, int log_index) {
