@@ -7,7 +7,7 @@ vehicle_local_position (dist_bottom 50 m) at 10 Hz. The motion is a smooth sway 
 plus a small deterministic jitter, repeated every 4096 messages (the file's size and parse work
 are what matter, not its content).
 
-Usage: scripts/big_ulog.py SAMPLES OUT.ulg [--rate-hz 4000]   (stdlib only)
+Usage: scripts/ulog_big.py SAMPLES OUT.ulg [--rate-hz 4000]   (stdlib only)
 """
 import argparse
 import math
