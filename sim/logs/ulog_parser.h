@@ -58,7 +58,6 @@ struct Layout {
 
 using FormatMap = std::unordered_map<std::string, std::vector<FieldDef>>;
 
-
 // Reads a field as a double; NaN when it lies outside data.
 double ReadNumber(std::string_view data, const FlatField& f);
 // Reads an integer microsecond time as ns; nullopt for a non-integer field, out of range, or
