@@ -154,30 +154,6 @@ BiasSegment TraceOptions::Segment(const GyroTrace& trace) const {
 
 bool ReadableInPasses(const std::string& path) { return std::filesystem::is_regular_file(path); }
 
-LogStamp LogStamp::Of(const std::string& path) {
-  std::error_code error;
-  LogStamp stamp;
-  stamp.path = path;
-  stamp.size_bytes = std::filesystem::file_size(path, error);
-  stamp.modified = std::filesystem::last_write_time(path, error);
-  return stamp;
-}
-
-void LogStamp::CheckUnchanged() const {
-  const LogStamp now = Of(path);
-  if (now.size_bytes == size_bytes && now.modified == modified) return;
-  throw IoError(
-      IoMessage(path, 0,
-                "changed while it was read in passes (" + std::to_string(size_bytes) +
-                    " bytes, now " + std::to_string(now.size_bytes) +
-                    "): is it still being recorded? Analyse a copy, or the finished log"));
-}
-
-FlightLogStream ReopenFlightLog(const LogStamp& stamp, const FlightLogReadOptions& read) {
-  stamp.CheckUnchanged();
-  return OpenFlightLog(stamp.path, read);
-}
-
 BiasSegment TraceOptions::StreamedSegment() const {
   if (!auto_bias) return ParseBiasSegment(bias);
   constexpr size_t kPasses = 5;  // DetectStillSegment on a source reads it at most five times

@@ -9,8 +9,6 @@
 
 #include <CLI/CLI.hpp>
 
-#include <cstdint>
-#include <filesystem>
 #include <functional>
 #include <memory>
 #include <stdexcept>
@@ -78,20 +76,6 @@ void PrintLogWarnings(const std::string& path, const std::vector<LogWarning>& wa
 // Whether the log at path can be read more than once (a streamed analysis's passes): a regular
 // file can; a pipe or a FIFO (/dev/stdin) is drained by the first read and must be read whole.
 bool ReadableInPasses(const std::string& path);
-
-// A log file's size and modification time when a streamed analysis first opened it. A log still
-// being written grows between the passes, which would then disagree (one pass's samples not the
-// next's): every later pass, and the end, checks that the file is as it was.
-struct LogStamp {
-  std::string path;
-  std::uintmax_t size_bytes = 0;
-  std::filesystem::file_time_type modified;
-  static LogStamp Of(const std::string& path);
-  // Throws IoError naming the file when it changed since the stamp.
-  void CheckUnchanged() const;
-};
-// Opens the log again for another pass of a streamed analysis, after LogStamp::CheckUnchanged.
-FlightLogStream ReopenFlightLog(const LogStamp& stamp, const FlightLogReadOptions& read);
 
 // A source that reports the share it has read after each chunk: the progress of a pass of a read
 // in several (the still search's, the sensor pair's).

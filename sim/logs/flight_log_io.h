@@ -10,6 +10,8 @@
 #include "sim/logs/log_format.h"
 #include "sim/trace_audit.h"
 
+#include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <string>
@@ -55,6 +57,21 @@ struct FlightLogStream {
 // Detects the format and reads what comes before the samples (a text log's header, a whole binary
 // log); throws IoError as ReadFlightLog does.
 FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOptions& options = {});
+
+// A log file's size and modification time when a reading in several passes (a streamed analysis,
+// the still search) first opened it. A log still being written grows between the passes, which
+// would then disagree (one pass's samples not the next's): every later pass, and the end, checks
+// that the file is as it was.
+struct LogStamp {
+  std::string path;
+  std::uintmax_t size_bytes = 0;
+  std::filesystem::file_time_type modified;
+  static LogStamp Of(const std::string& path);
+  // Throws IoError naming the file when it changed since the stamp.
+  void CheckUnchanged() const;
+};
+// Opens the log again for another pass of a reading in several, after LogStamp::CheckUnchanged.
+FlightLogStream ReopenFlightLog(const LogStamp& stamp, const FlightLogReadOptions& read = {});
 
 // What a streamed log lost (the reader's warnings, then the trace audit's, as ReadFlightLog gives
 // them) and how it was sampled.

@@ -4,6 +4,7 @@
 #include "sim/logs/gopro_telemetry.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/logs/ulog_write.h"
+#include "sim/still_detect.h"
 #include "sim/text_file.h"
 #include "tests/test_util.h"
 
@@ -13,6 +14,8 @@
 #include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <memory>
+#include <pthread.h>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -150,10 +153,15 @@ TEST(ReadFlightLog, WrapsGyroCsv) {
 // What ReadFlightLog makes of bytes that come down a pipe: readable once, of no known size, and
 // not seekable, like a log given as /dev/stdin.
 FlightLog ReadFromPipe(const std::string& bytes, const FlightLogReadOptions& options = {}) {
-  std::signal(SIGPIPE, SIG_IGN);  // a reader that stops early closes the pipe on the writer
   int fds[2];
   SHUTTERLAB_CHECK(::pipe(fds) == 0) << "pipe";
   std::thread writer([&bytes, fd = fds[1]] {
+    // A reader that stops early closes the pipe: the writer's write() then fails with EPIPE
+    // instead of raising SIGPIPE, which is sent to the writing thread and blocked in it alone.
+    sigset_t pipe_signal;
+    sigemptyset(&pipe_signal);
+    sigaddset(&pipe_signal, SIGPIPE);
+    pthread_sigmask(SIG_BLOCK, &pipe_signal, nullptr);
     for (size_t done = 0; done < bytes.size();) {
       const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
       if (n <= 0) break;
@@ -213,6 +221,41 @@ TEST(ReadFlightLog, ALogOnAPipeIsDetectedAndReadOnce) {
     EXPECT_NE(std::string(e.what()).find("cannot be read from a pipe"), std::string::npos)
         << e.what();
   }
+}
+
+// A log still being recorded grows between the passes of a reading in several: the pass after the
+// change is refused in one line that names the file and says what to do, never read as another log.
+TEST(ReopenFlightLog, ALogThatGrowsBetweenPassesIsRefused) {
+  test::TempDir dir;
+  const std::string path = dir / "gyro.csv";
+  std::string text = "t,gx,gy,gz\n";
+  for (int i = 0; i < 4000; ++i) text += std::to_string(i * 0.002) + ",0.001,-0.002,0.003\n";
+  WriteFileAtomically(path, text);
+  const LogStamp stamp = LogStamp::Of(path);
+  EXPECT_EQ(stamp.size_bytes, text.size());
+  EXPECT_NO_THROW(stamp.CheckUnchanged());
+  // The still search reads the log in passes through ReopenFlightLog; the recorder appends after
+  // the first.
+  const std::string appended = "8.0,0.001,-0.002,0.003\n";
+  int passes = 0;
+  const auto open = [&]() -> std::unique_ptr<GyroSource> {
+    if (passes++ == 1) std::ofstream(path, std::ios::app) << appended;
+    return ReopenFlightLog(stamp).gyro;
+  };
+  try {
+    DetectStillSegment(open);
+    FAIL() << "a log that grew between passes was read";
+  } catch (const IoError& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.rfind(path, 0), 0u) << message;
+    EXPECT_NE(message.find("changed while it was read in passes (" + std::to_string(text.size()) +
+                           " bytes, now " + std::to_string(text.size() + appended.size()) + ")"),
+              std::string::npos)
+        << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+  EXPECT_EQ(passes, 2);
+  EXPECT_THROW(stamp.CheckUnchanged(), IoError);
 }
 
 TEST(ReadFlightLog, HonoursTheLogIndex) {
