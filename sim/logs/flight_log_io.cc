@@ -130,8 +130,7 @@ FlightLogStream OpenText(TextBlocks input, const std::string& path, LogFormat fo
 
 // The binary logs are decoded whole (the best gyro stream is chosen once every one is known),
 // then handed on in slices. A file is read by its reader; a pipe (input, read once) is taken whole.
-FlightLog ReadBinary(TextBlocks input, const std::string& path, LogFormat format,
-                     const FlightLogReadOptions& options) {
+FlightLog ReadBinary(TextBlocks input, const std::string& path, LogFormat format) {
   if (!std::filesystem::is_regular_file(path)) {
     // An MP4's sample tables may follow its samples (moov after mdat): it needs a file to seek.
     if (format == LogFormat::kGoproMp4)
@@ -180,7 +179,7 @@ FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOption
   if (format == LogFormat::kULog || format == LogFormat::kDataFlash ||
       format == LogFormat::kGoproMp4) {
     FlightLogStream stream;
-    stream.log = ReadBinary(std::move(input), path, format, options);
+    stream.log = ReadBinary(std::move(input), path, format);
     stream.gyro = std::make_unique<TraceSource>(std::move(stream.log.gyro));
     stream.log.gyro = GyroTrace();
     return stream;
