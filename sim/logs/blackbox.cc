@@ -1165,7 +1165,8 @@ class BlackboxCsvSource : public FillingSource {
         cursor_(cursor),
         columns_(columns) {}
   double Fraction() const override {
-    return bytes_->view().empty() ? 1.0 : static_cast<double>(read_bytes_) / bytes_->view().size();
+    if (ended_ || bytes_->view().empty()) return 1.0;
+    return static_cast<double>(read_bytes_) / bytes_->view().size();
   }
 
  protected:
@@ -1251,6 +1252,7 @@ class BlackboxFrameSource : public FillingSource {
         main_frames_(log.info.main_frames) {}
   // The share of the chosen log's bytes decoded.
   double Fraction() const override {
+    if (ended_) return 1.0;  // a LOG_END event may end it before its last byte
     if (!decoder_) return 0.0;
     return end_ > begin_ ? static_cast<double>(std::min(decoder_->position(), end_) - begin_) /
                                static_cast<double>(end_ - begin_)
