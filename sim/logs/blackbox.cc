@@ -55,7 +55,9 @@ constexpr int64_t kMaxTabulatedIInterval = 1 << 16;
 constexpr size_t kReleaseEveryBytes = size_t{4} << 20;
 
 // A blackbox file's bytes for as long as a stream reads them: a file mapped page by page
-// (MappedFile::Paging::kStreamed), a pipe's bytes taken whole, or a caller's buffer.
+// (MappedFile::Paging::kStreamed), a pipe's bytes taken whole, or a caller's buffer. The file is
+// read front to back several times (the search for the logs, pass 1, pass 2); each reading maps
+// it afresh (StartReading), because a mapping hands its pages back (ReleaseBefore) only once.
 class BlackboxBytes {
  public:
   static std::unique_ptr<BlackboxBytes> OfFile(const std::string& path) {
@@ -64,6 +66,17 @@ class BlackboxBytes {
     bytes->mapped_ = std::make_unique<MappedFile>(path, MappedFile::Paging::kStreamed);
     bytes->view_ = bytes->mapped_->text();
     return bytes;
+  }
+  // Before another reading front to back: a file is mapped again (its bytes unchanged, else
+  // IoError), with every page of the last reading handed back. view() and data() change.
+  void StartReading() {
+    if (!mapped_) return;
+    CheckUnchanged();
+    mapped_.reset();
+    mapped_ = std::make_unique<MappedFile>(path_, MappedFile::Paging::kStreamed);
+    const size_t size = view_.size();
+    view_ = mapped_->text();
+    if (view_.size() != size) ThrowChanged(size, view_.size());
   }
   static std::unique_ptr<BlackboxBytes> Owning(std::string content, const std::string& path) {
     auto bytes = std::make_unique<BlackboxBytes>(path);
@@ -91,10 +104,7 @@ class BlackboxBytes {
     if (!mapped_) return;
     const FileStamp now = Stamp();
     if (now.size_bytes == view_.size() && now.modified == modified_) return;
-    throw IoError(IoMessage(path_, 0,
-                            "changed while it was read (" + std::to_string(view_.size()) +
-                                " bytes, now " + std::to_string(now.size_bytes) +
-                                "): is it still being recorded? Read a copy, or the finished log"));
+    ThrowChanged(view_.size(), now.size_bytes);
   }
 
  private:
@@ -102,6 +112,12 @@ class BlackboxBytes {
     uintmax_t size_bytes = 0;
     std::filesystem::file_time_type modified;
   };
+  [[noreturn]] void ThrowChanged(uintmax_t was_bytes, uintmax_t now_bytes) const {
+    throw IoError(IoMessage(path_, 0,
+                            "changed while it was read (" + std::to_string(was_bytes) +
+                                " bytes, now " + std::to_string(now_bytes) +
+                                "): is it still being recorded? Read a copy, or the finished log"));
+  }
   FileStamp Stamp() const {
     std::error_code error;
     FileStamp stamp;
@@ -1009,6 +1025,7 @@ DecodedFile DecodeAllLogs(BlackboxBytes* bytes, const std::vector<size_t>& start
     throw IoError(IoMessage(
         path, 0, "not a blackbox log: no 'H Product:Blackbox flight data recorder' header"));
   }
+  bytes->StartReading();
   DecodedFile file;
   file.leading_garbage_bytes = starts.front();
   for (size_t k = 0; k < starts.size(); ++k) {
@@ -1216,6 +1233,7 @@ class BlackboxCsvSource : public FillingSource {
 // A CSV export: its header now, its rows as they are taken.
 BlackboxStream OpenCsv(std::unique_ptr<BlackboxBytes> bytes, size_t chunk_samples) {
   const std::string& path = bytes->path();
+  bytes->StartReading();
   LineCursor cursor(bytes->view());
   std::optional<std::string_view> line = cursor.Next();
   if (!line) throw IoError(IoMessage(path, 1, "empty file"));
@@ -1262,12 +1280,13 @@ class BlackboxFrameSource : public FillingSource {
  protected:
   void Fill(std::vector<GyroSample>* chunk) override {
     if (ended_) return;
-    bytes_->CheckUnchanged();
     if (!decoder_) {
+      bytes_->StartReading();
       PreparedLog prepared = PrepareLog(bytes_->data(), begin_, end_, index_, bytes_->path());
       decoder_ = std::make_unique<LogDecoder>(bytes_.get(), end_, std::move(prepared.header),
                                               prepared.rad_per_lsb);
     }
+    bytes_->CheckUnchanged();
     ReserveChunk(chunk, end_ - std::min(decoder_->position(), end_));
     ended_ = decoder_->Run(&counts_, chunk, chunk_samples());
     if (ended_ && counts_.info.main_frames != main_frames_) {
