@@ -212,63 +212,25 @@ struct LogStamps {
   }
 };
 
-// With --second, the pair as AnalyzeStream reads it, fused on the first log's clock: each log read
-// through once for what it lost (printed by its name, as the whole read prints it) and the
-// second's sampling, the still segment searched on the first (five passes), the pair fitted
-// (three passes over both: sim/sensor_pair.h FitSensorPair), then fused chunk by chunk each time
-// the analysis opens it. The same pair and fused samples as FuseSensorPair on the logs read whole.
+// With --second, the pair as AnalyzeStream reads it, fused on the first log's clock
+// (FitPairInPasses; the still segment that weighs the fusion searched on the first log), fused
+// chunk by chunk each time the analysis opens it. The same pair and fused samples as
+// FuseSensorPair on the logs read whole.
 AnalyzeLogSource PairStreamSource(const AnalyzeCommand& command, const FlightLogReadOptions& read,
                                   const std::optional<TriggerFile>& triggers, FlightLogStream first,
                                   const LogStamps& stamps, std::optional<SensorPair>* pair) {
-  const auto samples_of = [&read](const LogStamp& stamp) -> OpenGyroSource {
-    return [&read, stamp] { return ReopenFlightLog(stamp, read).gyro; };
-  };
-  // Progress over the ten passes before the analysis: each log's, the still search's five and the
-  // fit's three (counted on the first log).
-  constexpr int kPasses = 10;
-  int passes_begun = 0;
-  Progress progress("pair", 1000);
-  const auto next_pass = [&]() -> std::function<void(double)> {
-    const int pass = passes_begun++;
-    return [&progress, pass](double f) {
-      progress.Update(static_cast<size_t>(std::min(pass + f, 1.0 * kPasses) / kPasses * 1000));
-    };
-  };
-  const OpenGyroSource first_passes = [&] {
-    return std::make_unique<ReportingSource>(samples_of(stamps.first)(), next_pass());
-  };
-  const auto ignore = [](const GyroChunk&) {};
-  const StreamedLog first_read = ConsumeFlightLog(&first, ignore, next_pass());
-  PrintLogWarnings(command.log_path, first_read.warnings);
-  FlightLogStream second = ReopenFlightLog(*stamps.second, read);
-  const StreamedLog second_read = ConsumeFlightLog(&second, ignore, next_pass());
-  PrintLogWarnings(command.second_path, second_read.warnings);
-  SensorPairOptions pair_options;
-  try {
-    pair_options.still = DetectStillSegment(first_passes).segment;
-  } catch (const std::invalid_argument&) {
-  }
-  const int64_t second_interval_ns = second_read.sampling.median_interval_ns;
-  try {
-    *pair =
-        FitSensorPair(first_passes, samples_of(*stamps.second), second_interval_ns, pair_options);
-  } catch (const std::invalid_argument& e) {
-    // Named by both logs, as the whole read names it: an IoError, so that the caller's wrapping
-    // of the analysis's errors in the first log's name does not name it twice.
-    throw IoError(command.log_path + " + " + command.second_path + ": " +
-                  WithoutCheckLocation(e.what()));
-  }
+  FlightLog first_log = first.log;
+  auto fitted = std::make_shared<const PairInPasses>(
+      FitPairInPasses(stamps.first, *stamps.second, read, std::move(first), std::nullopt));
+  *pair = fitted->pair;
   // The fused log: the first's metadata, both logs' warnings, the fused samples.
-  FlightLog fused = std::move(first.log);
-  fused.warnings = first_read.warnings;
-  fused.warnings.insert(fused.warnings.end(), second_read.warnings.begin(),
-                        second_read.warnings.end());
+  FlightLog fused = std::move(first_log);
+  fused.warnings = fitted->warnings;
   AnalyzeLogSource source;
-  source.open = [fused, fit = **pair, first_samples = samples_of(stamps.first),
-                 second_samples = samples_of(*stamps.second), second_interval_ns] {
+  source.open = [fused, fitted] {
     FlightLogStream stream;
     stream.log = fused;
-    stream.gyro = FusedPairSource(first_samples(), second_samples(), fit, second_interval_ns);
+    stream.gyro = fitted->OpenFused();
     stream.audit_warnings = false;  // both logs' audits are in fused.warnings
     return stream;
   };

@@ -42,10 +42,12 @@ void Run(const FlightCommand& command) {
   std::vector<LogWarning> warnings;
   FlightResult result;
   TracePair pair;
-  // --auto-bias reads the log in passes; a log on a pipe is read whole.
-  const bool passes_possible = !command.trace.auto_bias || ReadableInPasses(command.trace.path);
-  if (!command.trace.second_path.empty() || !passes_possible) {
-    // A pair is fused on the whole traces.
+  const bool with_second = !command.trace.second_path.empty();
+  // --auto-bias and --second read the logs in passes; a log on a pipe is read whole.
+  const bool passes_possible = (!command.trace.auto_bias && !with_second) ||
+                               (ReadableInPasses(command.trace.path) &&
+                                (!with_second || ReadableInPasses(command.trace.second_path)));
+  if (!passes_possible) {
     Progress progress("flight", 1000);
     options.progress = [&progress](double fraction) {
       progress.Update(static_cast<size_t>(fraction * 1000));
@@ -53,15 +55,31 @@ void Run(const FlightCommand& command) {
     result = AnalyzeTrace(command.trace, options, Flight, &warnings, &pair);
   } else {
     // Streamed: memory stays bounded whatever the log's length. The still segment may lie anywhere
-    // in the log: --auto-bias finds it in passes of its own before this one.
+    // in the log: --auto-bias finds it in passes of its own before this one. With --second, the
+    // pair is fitted in passes too and its fused samples analysed as they are made.
     options.Check();
     options.bias = command.trace.StreamedSegment();
     FlightStream flight(options);
-    warnings =
-        command.trace
-            .Stream("flight",
-                    [&flight](const GyroChunk& chunk) { flight.Add(chunk.data, chunk.size); })
-            .warnings;
+    const auto add = [&flight](const GyroChunk& chunk) { flight.Add(chunk.data, chunk.size); };
+    if (with_second) {
+      const LogStamp first = LogStamp::Of(command.trace.path);
+      const LogStamp second = LogStamp::Of(command.trace.second_path);
+      const FlightLogReadOptions read = command.trace.ReadOptions();
+      const PairInPasses fitted =
+          FitPairInPasses(first, second, read, ReopenFlightLog(first, read), options.bias);
+      pair.pair = fitted.pair;
+      warnings = fitted.warnings;
+      std::unique_ptr<GyroSource> fused = ReadAhead(fitted.OpenFused());
+      Progress progress("flight", 1000);
+      for (GyroChunk chunk = fused->Next(); !chunk.empty(); chunk = fused->Next()) {
+        add(chunk);
+        progress.Update(static_cast<size_t>(fused->Fraction() * 1000));
+      }
+      first.CheckUnchanged();
+      second.CheckUnchanged();
+    } else {
+      warnings = command.trace.Stream("flight", add).warnings;
+    }
     try {
       result = flight.Finish();
     } catch (const std::invalid_argument& e) {

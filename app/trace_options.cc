@@ -154,6 +154,62 @@ BiasSegment TraceOptions::Segment(const GyroTrace& trace) const {
 
 bool ReadableInPasses(const std::string& path) { return std::filesystem::is_regular_file(path); }
 
+std::unique_ptr<GyroSource> PairInPasses::OpenFused() const {
+  return FusedPairSource(ReopenFlightLog(first, read).gyro, ReopenFlightLog(second, read).gyro,
+                         pair, second_interval_ns);
+}
+
+PairInPasses FitPairInPasses(const LogStamp& first, const LogStamp& second,
+                             const FlightLogReadOptions& read, FlightLogStream first_stream,
+                             const std::optional<BiasSegment>& still) {
+  PairInPasses out;
+  out.first = first;
+  out.second = second;
+  out.read = read;
+  const auto samples_of = [&read](const LogStamp& stamp) -> OpenGyroSource {
+    return [&read, stamp] { return ReopenFlightLog(stamp, read).gyro; };
+  };
+  // Progress over the passes: each log's, the still search's five and the fit's three (counted on
+  // the first log).
+  const int passes = 2 + (still ? 0 : 5) + 3;
+  int passes_begun = 0;
+  Progress progress("pair", 1000);
+  const auto next_pass = [&]() -> std::function<void(double)> {
+    const int pass = passes_begun++;
+    return [&progress, pass, passes](double f) {
+      progress.Update(static_cast<size_t>(std::min(pass + f, 1.0 * passes) / passes * 1000));
+    };
+  };
+  const OpenGyroSource first_passes = [&] {
+    return std::make_unique<ReportingSource>(samples_of(first)(), next_pass());
+  };
+  const auto ignore = [](const GyroChunk&) {};
+  const StreamedLog first_read = ConsumeFlightLog(&first_stream, ignore, next_pass());
+  PrintLogWarnings(first.path, first_read.warnings);
+  FlightLogStream second_stream = ReopenFlightLog(second, read);
+  const StreamedLog second_read = ConsumeFlightLog(&second_stream, ignore, next_pass());
+  PrintLogWarnings(second.path, second_read.warnings);
+  out.warnings = first_read.warnings;
+  out.warnings.insert(out.warnings.end(), second_read.warnings.begin(), second_read.warnings.end());
+  SensorPairOptions options;
+  options.still = still;
+  if (!still) {
+    try {
+      options.still = DetectStillSegment(first_passes).segment;
+    } catch (const std::invalid_argument&) {
+    }
+  }
+  out.second_interval_ns = second_read.sampling.median_interval_ns;
+  try {
+    out.pair = FitSensorPair(first_passes, samples_of(second), out.second_interval_ns, options);
+  } catch (const std::invalid_argument& e) {
+    // Named by both logs, as the whole read names them: an IoError, so that a caller's wrapping of
+    // the analysis's errors in the first log's name does not name it twice.
+    throw IoError(first.path + " + " + second.path + ": " + WithoutCheckLocation(e.what()));
+  }
+  return out;
+}
+
 BiasSegment TraceOptions::StreamedSegment() const {
   if (!auto_bias) return ParseBiasSegment(bias);
   constexpr size_t kPasses = 5;  // DetectStillSegment on a source reads it at most five times

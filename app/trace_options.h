@@ -11,6 +11,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -95,6 +96,28 @@ class ReportingSource : public GyroSource {
   std::unique_ptr<GyroSource> source_;
   std::function<void(double)> report_;
 };
+
+// --second's pair read in passes, in bounded memory whatever the logs' length (the streamed
+// `flight` and `analyze`): each log read through once for what it lost (printed under its name, as
+// the whole read prints it) and the second's sampling, the still segment searched on the first log
+// when none is given (five passes), then the pair fitted (three passes over both: sim/sensor_pair.h
+// FitSensorPair). The same pair as FuseSensorPair on the logs read whole, and the same fused
+// samples from OpenFused.
+struct PairInPasses {
+  SensorPair pair;                   // every field but fused
+  std::vector<LogWarning> warnings;  // the first log's, then the second's
+  LogStamp first, second;
+  FlightLogReadOptions read;
+  int64_t second_interval_ns = 0;  // the second log's median sample interval
+  // The fused samples from the start (both logs opened again, after LogStamp::CheckUnchanged).
+  std::unique_ptr<GyroSource> OpenFused() const;
+};
+// first_stream: the first log, opened already (its metadata read). still: the segment that weighs
+// the fusion; nullopt: searched on the first log (equal weights when none is found). Shows progress
+// on a terminal. Throws IoError naming both logs when they do not pair.
+PairInPasses FitPairInPasses(const LogStamp& first, const LogStamp& second,
+                             const FlightLogReadOptions& read, FlightLogStream first_stream,
+                             const std::optional<BiasSegment>& still);
 
 // Runs analysis(trace, options) the way every trace command does: --bias is parsed and the options
 // checked before the (possibly long) read, the log's warnings are printed (and handed back in

@@ -23,6 +23,8 @@ namespace {
 
 using test::RunShutterlab;
 using test::SourcePath;
+using test::StillThenTurningTrace;
+using test::WriteSensorPair;
 
 std::string Bbl() { return test::RealDataPath("gyro/betaflight_blackbox/btfl_001.bbl"); }
 
@@ -210,20 +212,6 @@ TEST(AnalyzeCli, SyntheticULogWithItsOwnTriggersAndAltitude) {
   EXPECT_EQ(json["triggers"].get<std::string>().rfind("camera events", 0), 0u) << json["triggers"];
 }
 
-// A second gyro beside the first: the first's rates seen through b_from_a, 0.3 ms later, with its
-// own noise (seeded), every other sample, written as DIR/a.csv and DIR/b.csv.
-void WriteSensorPair(const GyroTrace& a, const Eigen::Matrix3d& b_from_a, const std::string& dir) {
-  std::mt19937 rng(18);
-  std::normal_distribution<double> noise(0.0, 0.003);
-  std::vector<GyroSample> b;
-  for (size_t k = 0; k < a.size(); k += 2) {
-    b.push_back({a[k].t_ns + 300'000, b_from_a * a[k].omega_rad_s +
-                                          Eigen::Vector3d(noise(rng), noise(rng), noise(rng))});
-  }
-  WriteGyroCsv(dir + "/a.csv", a);
-  WriteGyroCsv(dir + "/b.csv", GyroTrace(std::move(b)));
-}
-
 // `analyze A --second B` on regular files fuses the pair as streams, in bounded memory; with B on
 // a pipe both are read whole and fused there: the same JSON (pair, images, flight), and with
 // text the same table. Returns the streamed JSON.
@@ -254,20 +242,9 @@ nlohmann::json ExpectPairStreamedAsWhole(const std::string& dir, const std::stri
 
 TEST(AnalyzeCli, ASensorPairStreamedGivesTheWholeReadsResult) {
   test::TempDir dir;
-  std::mt19937 rng(15);
-  std::normal_distribution<double> noise(0.0, 0.002);
-  std::vector<GyroSample> samples;
-  for (int i = 0; i < 12000; ++i) {  // 1 kHz, still for 5 s, then turning about every axis
-    const double t = i * 1e-3;
-    const double turning = t < 5.0 ? 0.0 : 1.0;
-    samples.push_back({static_cast<int64_t>(i) * 1000000,
-                       turning * Eigen::Vector3d(0.4 * std::sin(3.0 * t), 0.3 * std::cos(5.0 * t),
-                                                 0.3 * std::sin(2.0 * t)) +
-                           Eigen::Vector3d(0.01 + noise(rng), noise(rng), noise(rng))});
-  }
   const Eigen::Matrix3d b_from_a =
       Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, -1).normalized()).toRotationMatrix();
-  WriteSensorPair(GyroTrace(std::move(samples)), b_from_a, dir.path());
+  WriteSensorPair(StillThenTurningTrace(), b_from_a, dir.path());
   const nlohmann::json pair = ExpectPairStreamedAsWhole(dir.path(), " --every 1s", true)["pair"];
   EXPECT_TRUE(pair["mounting_fitted"].get<bool>());
   EXPECT_NEAR(pair["mounting_angle_deg"].get<double>(), 0.5 * 180 / M_PI, 0.1);

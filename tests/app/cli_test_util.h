@@ -5,10 +5,12 @@
 #include "sim/logs/gyro_io.h"
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <random>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -62,6 +64,38 @@ inline void WriteStillThenTurningGyroCsv(const std::string& path) {
                        Eigen::Vector3d(0.01 + turning, 0.5 * turning, 0.002 * std::cos(50 * t))});
   }
   WriteGyroCsv(path, GyroTrace(std::move(samples)));
+}
+
+// 12 s at 1 kHz, still for 5 s, then turning about every axis, with a bias of 0.01 rad/s on x and
+// seeded noise: motion a sensor pair's mounting can be fitted from, after a still stretch.
+inline GyroTrace StillThenTurningTrace() {
+  std::mt19937 rng(15);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  std::vector<GyroSample> samples;
+  for (int i = 0; i < 12000; ++i) {
+    const double t = i * 1e-3;
+    const double turning = t < 5.0 ? 0.0 : 1.0;
+    samples.push_back({static_cast<int64_t>(i) * 1000000,
+                       turning * Eigen::Vector3d(0.4 * std::sin(3.0 * t), 0.3 * std::cos(5.0 * t),
+                                                 0.3 * std::sin(2.0 * t)) +
+                           Eigen::Vector3d(0.01 + noise(rng), noise(rng), noise(rng))});
+  }
+  return GyroTrace(std::move(samples));
+}
+
+// A second gyro beside the first: the first's rates seen through b_from_a, 0.3 ms later, with its
+// own noise (seeded), every other sample, written as DIR/a.csv and DIR/b.csv.
+inline void WriteSensorPair(const GyroTrace& a, const Eigen::Matrix3d& b_from_a,
+                            const std::string& dir) {
+  std::mt19937 rng(18);
+  std::normal_distribution<double> noise(0.0, 0.003);
+  std::vector<GyroSample> b;
+  for (size_t k = 0; k < a.size(); k += 2) {
+    b.push_back({a[k].t_ns + 300'000, b_from_a * a[k].omega_rad_s +
+                                          Eigen::Vector3d(noise(rng), noise(rng), noise(rng))});
+  }
+  WriteGyroCsv(dir + "/a.csv", a);
+  WriteGyroCsv(dir + "/b.csv", GyroTrace(std::move(b)));
 }
 
 }  // namespace shutterlab::test

@@ -1,6 +1,7 @@
 #include "estimate/paper/flight.h"
 #include "estimate/report/analysis_json.h"
 #include "sim/logs/gyro_io.h"
+#include "sim/sensor_pair.h"
 #include "sim/still_detect.h"
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
@@ -20,7 +21,9 @@ namespace shutterlab {
 namespace {
 
 using test::RunShutterlab;
+using test::StillThenTurningTrace;
 using test::TempDir;
+using test::WriteSensorPair;
 
 // 1 kHz; 5 s still (the default bias segment), then 2 s at a constant y rate that turns 300" in the
 // 9 ms a 10 ms window spans: over the 5 cm threshold (226"), under the 10 cm one (433").
@@ -156,6 +159,42 @@ TEST(FlightCli, AutoBiasStreamedEqualsTheWholeTrace) {
   nlohmann::json from_pipe = nlohmann::json::parse(piped.out);
   from_pipe.erase("warnings");
   EXPECT_EQ(from_pipe, whole);
+}
+
+// `flight A --second B` on regular files fits the pair in passes and analyses the fused samples as
+// they are made, in bounded memory: the same table as the pair fused whole (FuseSensorPair) and
+// analysed (Flight), with --bias and with --auto-bias; with B on a pipe, read whole, the same.
+TEST(FlightCli, ASensorPairStreamedEqualsTheWholeFusion) {
+  TempDir dir;
+  const Eigen::Matrix3d b_from_a =
+      Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, -1).normalized()).toRotationMatrix();
+  WriteSensorPair(StillThenTurningTrace(), b_from_a, dir.path());
+  const GyroTrace a = ReadGyroCsv(dir / "a.csv"), b = ReadGyroCsv(dir / "b.csv");
+  for (const std::string bias : {"--bias 0:4", "--auto-bias"}) {
+    SensorPairOptions pair_options;
+    pair_options.still =
+        bias == "--auto-bias" ? DetectStillSegment(a).segment : BiasSegment{0.0, 4.0};
+    const SensorPair fused = FuseSensorPair(a, b, pair_options);
+    FlightOptions options;
+    options.bias = *pair_options.still;
+    nlohmann::json whole = FlightToJson(Flight(fused.fused, options));
+    whole["pair"] = SensorPairToJson(fused, dir / "b.csv");
+    const auto r = RunShutterlab("flight " + (dir / "a.csv") + " --second " + (dir / "b.csv") +
+                                 " " + bias + " --json");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    nlohmann::json streamed = nlohmann::json::parse(r.out);
+    streamed.erase("warnings");
+    EXPECT_EQ(streamed, whole) << bias << "\n" << streamed.dump(1) << "\n" << whole.dump(1);
+    EXPECT_TRUE(streamed["pair"]["mounting_fitted"].get<bool>()) << bias;
+    const auto piped = RunShutterlab(
+        "flight " + (dir / "a.csv") + " --second /dev/stdin --format gyro.csv " + bias + " --json",
+        dir / "b.csv");
+    ASSERT_EQ(piped.exit_code, 0) << piped.output;
+    nlohmann::json from_pipe = nlohmann::json::parse(piped.out);
+    from_pipe.erase("warnings");
+    from_pipe["pair"]["second_log"] = dir / "b.csv";  // named as given: /dev/stdin
+    EXPECT_EQ(from_pipe, whole) << bias;
+  }
 }
 
 TEST(FlightCli, BadInputExitsTwoWithOneLine) {
