@@ -61,6 +61,8 @@ constexpr size_t kReleaseEveryBytes = size_t{4} << 20;
 class BlackboxBytes {
  public:
   static std::unique_ptr<BlackboxBytes> OfFile(const std::string& path) {
+    // Not a regular file (a pipe): read once, whole.
+    if (!std::filesystem::is_regular_file(path)) return Owning(ReadFileToString(path), path);
     auto bytes = std::make_unique<BlackboxBytes>(path);
     bytes->modified_ = bytes->Stamp().modified;  // before mapping: a later write shows
     bytes->mapped_ = std::make_unique<MappedFile>(path, MappedFile::Paging::kStreamed);
