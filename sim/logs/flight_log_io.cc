@@ -130,8 +130,7 @@ FlightLogStream OpenText(TextBlocks input, const std::string& path, LogFormat fo
 
 // The binary logs are decoded whole (the best gyro stream is chosen once every one is known),
 // then handed on in slices. A file is read by its reader; a pipe (input, read once) is taken whole.
-FlightLog ReadBinary(TextBlocks input, const std::string& path, LogFormat format,
-                     const FlightLogReadOptions& options) {
+FlightLog ReadBinary(TextBlocks input, const std::string& path, LogFormat format) {
   if (!std::filesystem::is_regular_file(path)) {
     // An MP4's sample tables may follow its samples (moov after mdat): it needs a file to seek.
     if (format == LogFormat::kGoproMp4)
@@ -141,10 +140,8 @@ FlightLog ReadBinary(TextBlocks input, const std::string& path, LogFormat format
     switch (format) {
       case LogFormat::kULog:
         return ParseULog(bytes, path);
-      case LogFormat::kDataFlash:
+      default:  // kDataFlash (blackbox logs are streamed: OpenBlackboxLog)
         return ParseDataFlash(bytes, path);
-      default:
-        return DecodeBlackbox(bytes, path, options.log_index);
     }
   }
   switch (format) {
@@ -152,11 +149,22 @@ FlightLog ReadBinary(TextBlocks input, const std::string& path, LogFormat format
       return ReadULog(path);
     case LogFormat::kDataFlash:
       return ReadDataFlash(path);
-    case LogFormat::kGoproMp4:
+    default:  // kGoproMp4 (blackbox logs are streamed: OpenBlackboxLog)
       return ReadGoproFlightLog(path);
-    default:
-      return ReadBlackbox(path, options.log_index);
   }
+}
+
+// A blackbox log, streamed (sim/logs/blackbox.h OpenBlackbox): a file mapped and read in two
+// passes; a pipe (input, read once) taken whole, then read the same way.
+FlightLogStream OpenBlackboxLog(TextBlocks input, const std::string& path,
+                                const FlightLogReadOptions& options) {
+  BlackboxStream blackbox = std::filesystem::is_regular_file(path)
+                                ? OpenBlackbox(path, options.log_index)
+                                : OpenBlackboxBytes(input.TakeRest(), path, options.log_index);
+  FlightLogStream stream;
+  stream.log = std::move(blackbox.log);
+  stream.gyro = std::move(blackbox.samples);
+  return stream;
 }
 
 }  // namespace
@@ -167,10 +175,11 @@ FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOption
   TextBlocks input = TextBlocks::OfFile(path);
   LogFormat format = options.format;
   if (format == LogFormat::kAuto) format = DetectFlightLogFormat(input.Peek(kDetectBytes), path);
+  if (format == LogFormat::kBlackbox) return OpenBlackboxLog(std::move(input), path, options);
   if (format == LogFormat::kULog || format == LogFormat::kDataFlash ||
-      format == LogFormat::kBlackbox || format == LogFormat::kGoproMp4) {
+      format == LogFormat::kGoproMp4) {
     FlightLogStream stream;
-    stream.log = ReadBinary(std::move(input), path, format, options);
+    stream.log = ReadBinary(std::move(input), path, format);
     stream.gyro = std::make_unique<TraceSource>(std::move(stream.log.gyro));
     stream.log.gyro = GyroTrace();
     return stream;
