@@ -42,9 +42,10 @@ LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string&
 FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& options = {});
 
 // A log opened to be read as a stream. The text logs (gyro.csv, .gcsv, raw counts, --columns) are
-// parsed a block at a time as the chunks are taken, in bounded memory whatever their length; the
-// binary logs (ULog, DataFlash, blackbox, GoPro MP4) are decoded whole when opened, then handed on
-// in slices.
+// parsed a block at a time as the chunks are taken, in bounded memory whatever their length; so is
+// a DataFlash file, in two passes over its mapped bytes (sim/logs/dataflash.h OpenDataFlash); the
+// other binary logs (ULog, blackbox, GoPro MP4) are decoded whole when opened, then handed on in
+// slices.
 struct FlightLogStream {
   FlightLog log;                     // all but the samples (log.gyro stays empty)
   std::unique_ptr<GyroSource> gyro;  // the samples; reading errors are thrown from Next
