@@ -62,6 +62,9 @@ void MappedFile::ReleaseBefore(size_t offset) {
   if (!mapped_) return;
   const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
   const size_t end = std::min(offset, size_) / page * page;  // whole pages only
+  // Behind what was handed back: a new pass from the start (a reader's second pass), whose pages
+  // are resident again; hand them back as it goes, as in the first.
+  if (end < released_) released_ = 0;
   if (end <= released_) return;
   // MADV_DONTNEED on a private read-only file mapping drops the pages from this process; the
   // page cache keeps them, so a later touch costs a minor fault, not a read from disk.

@@ -32,8 +32,9 @@ class MappedFile {
   // Whether the file is mapped (false: read into memory, as a pipe is).
   bool mapped() const { return mapped_; }
   // Hands the whole pages before byte `offset` back to the kernel (they leave the process's
-  // resident memory; touching them again reads them again from the file). A no-op for a file that
-  // is not mapped (a pipe, read whole).
+  // resident memory; touching them again reads them again from the file). An offset before the
+  // last one starts again from the file's start: a reader's next pass over the file hands its
+  // pages back the same way. A no-op for a file that is not mapped (a pipe, read whole).
   void ReleaseBefore(size_t offset);
 
  private:

@@ -11,8 +11,10 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 #include <utility>
@@ -252,10 +254,30 @@ struct BatchHeader {
   size_t received = 0;  // samples its ISBD packets delivered
 };
 
+// The gyro streams a DataFlash log may hold, best raw first (their preference).
+enum GyroKind { kGyr = 0, kIsbd = 1, kImu = 2 };
+constexpr const char* kGyroKindNames[] = {"GYR", "ISBD", "IMU"};
+
+// Where the samples go: pass 1 summarises every stream (summaries), pass 2 cleans the chosen one
+// (cleaner, target) into out.
+struct GyroSinks {
+  internal::CandidateLimits limits;
+  std::map<std::string, internal::CandidateSummary> summaries;  // by name: the candidates' order
+  std::string target;
+  internal::CandidateCleaner* cleaner = nullptr;
+  std::vector<GyroSample>* out = nullptr;
+};
+
 class DataFlashParser {
  public:
-  DataFlashParser(std::string_view bytes, const std::string& path) : bytes_(bytes), path_(path) {}
-  FlightLog Run();
+  DataFlashParser(std::string_view bytes, const std::string& path, GyroSinks* sinks)
+      : bytes_(bytes), path_(path), sinks_(sinks) {}
+  // Pass 1: every message but the samples, which go to the summaries; throws IoError when the
+  // bytes are not DataFlash.
+  FlightLog Run(MappedFile* file);
+  // Reads the next message (or skips a corrupt stretch); false at the end of the bytes.
+  bool Step();
+  size_t position() const { return pos_; }
 
  private:
   void Warn(const std::string& kind, size_t offset, const std::string& text) {
@@ -288,20 +310,32 @@ class DataFlashParser {
   // FMT message could change it (a log holds thousands of gyro messages per second).
   const Eigen::Vector3d& GyroScale(uint8_t type, const Format& fmt);
   void Finish();
-  internal::GyroCandidate& Candidate(const std::string& base, int instance, int preference) {
-    const std::string name = base + (instance ? "/" + std::to_string(instance) : "");
-    auto& c = candidates_[name];
-    c.name = name;
-    c.preference = preference;
-    return c;
+  // A sample of stream kind/instance ("NAME" for instance 0, "NAME/N" otherwise).
+  void AddSample(GyroKind kind, int instance, const std::optional<int64_t>& t_ns,
+                 const Eigen::Vector3d& rate) {
+    Sink& sink = sink_by_stream_[kind][static_cast<uint8_t>(instance)];
+    if (!sink.resolved) Resolve(kind, instance, &sink);
+    if (sink.summary) {
+      sink.summary->Add(t_ns, rate);
+    } else if (sink.clean) {
+      sinks_->cleaner->Add(t_ns, rate, sinks_->out);
+    }
   }
+  struct Sink {
+    bool resolved = false;
+    internal::CandidateSummary* summary = nullptr;  // pass 1
+    bool clean = false;                             // pass 2: the chosen stream
+  };
+  void Resolve(GyroKind kind, int instance, Sink* sink);
 
   std::string_view bytes_;
   std::string path_;
+  GyroSinks* sinks_;
+  size_t pos_ = 0;
   FlightLog log_;
   std::array<std::optional<Format>, 256> formats_;
   std::map<std::string, size_t> warning_counts_;
-  std::map<std::string, internal::GyroCandidate> candidates_;
+  std::array<std::array<Sink, 256>, 3> sink_by_stream_;
   std::map<int64_t, BatchHeader> batches_;  // by ISBH.N
   std::vector<double> cam_rel_alt_m_;
   size_t skipped_bytes_ = 0;
@@ -313,6 +347,18 @@ class DataFlashParser {
   size_t camera_events_without_time_ = 0;
   int64_t last_t_ns_ = 0;  // the latest gyro sample time read so far
 };
+
+void DataFlashParser::Resolve(GyroKind kind, int instance, Sink* sink) {
+  const std::string name =
+      std::string(kGyroKindNames[kind]) + (instance ? "/" + std::to_string(instance) : "");
+  sink->resolved = true;
+  if (sinks_->cleaner) {
+    sink->clean = name == sinks_->target;
+    return;
+  }
+  sink->summary = &sinks_->summaries.try_emplace(name, name, static_cast<int>(kind), sinks_->limits)
+                       .first->second;
+}
 
 size_t DataFlashParser::KnownAt(size_t q) const {
   if (bytes_.size() - q < kHeaderBytes) return 0;
@@ -428,12 +474,10 @@ void DataFlashParser::HandleGyro(uint8_t type, const Format& fmt, std::string_vi
   int instance = name == "IMU2" ? 1 : name == "IMU3" ? 2 : 0;
   if (const Field* i = fmt.Find("I")) instance = static_cast<int>(ToInt(ReadNumber(p, *i)) & 0xff);
   const Eigen::Vector3d& scale = GyroScale(type, fmt);
-  auto& c = Candidate(name == "GYR" ? "GYR" : "IMU", instance, name == "GYR" ? 0 : 2);
   last_t_ns_ = std::max(last_t_ns_, t_ns.value_or(0));
-  internal::AddCandidateSample(
-      t_ns,
-      Eigen::Vector3d(ReadNumber(p, *x), ReadNumber(p, *y), ReadNumber(p, *z)).cwiseProduct(scale),
-      &c);
+  AddSample(
+      name == "GYR" ? kGyr : kImu, instance, t_ns,
+      Eigen::Vector3d(ReadNumber(p, *x), ReadNumber(p, *y), ReadNumber(p, *z)).cwiseProduct(scale));
 }
 
 void DataFlashParser::HandleBatchHeader(const Format& fmt, std::string_view p) {
@@ -478,14 +522,13 @@ void DataFlashParser::HandleBatchData(const Format& fmt, std::string_view p) {
   BatchHeader& h = it->second;
   const int64_t seqno = ToInt(ReadNumber(p, *seq));
   if (seqno < 0 || static_cast<uint64_t>(seqno) * kBatchSamples >= h.count) return;
-  auto& c = Candidate("ISBD", h.instance, 1);
   for (size_t k = 0; k < kBatchSamples; ++k) {
     const size_t index = static_cast<size_t>(seqno) * kBatchSamples + k;
     if (index >= h.count) break;
     const int64_t t_ns = h.sample_ns + std::llround(static_cast<double>(index) * 1e9 / h.rate_hz);
-    c.samples.push_back(
-        {t_ns, Eigen::Vector3d(ReadNumber(p, *x, k), ReadNumber(p, *y, k), ReadNumber(p, *z, k)) /
-                   h.mul});
+    AddSample(
+        kIsbd, h.instance, t_ns,
+        Eigen::Vector3d(ReadNumber(p, *x, k), ReadNumber(p, *y, k), ReadNumber(p, *z, k)) / h.mul);
     ++h.received;
     last_t_ns_ = std::max(last_t_ns_, t_ns);
   }
@@ -592,71 +635,193 @@ void DataFlashParser::Finish() {
   }
 }
 
-FlightLog DataFlashParser::Run() {
-  log_.format = "dataflash";
-  if (!LooksLikeDataFlash(bytes_)) {
-    throw IoError(
-        IoMessage(path_, 0, "byte 0: not an ArduPilot DataFlash log (expected 0xA3 0x95 0x80)"));
-  }
+bool DataFlashParser::Step() {
   const size_t n = bytes_.size();
-  size_t pos = 0;
-  while (pos < n) {
-    if (n - pos < kHeaderBytes) {
-      Warn("truncated", pos, "file ends inside a message header (truncated?)");
-      break;
-    }
-    const size_t len = KnownAt(pos);
-    if (len == 0) {
-      const size_t next = Resync(pos + 1);
-      ++log_.records_skipped;
-      skipped_bytes_ += next - pos;
-      Warn("corrupt", pos,
-           "no known message starts here (type " +
-               std::to_string(static_cast<uint8_t>(bytes_[pos + 2])) + "); skipped " +
-               std::to_string(next - pos) + " bytes");
-      pos = next;
-      continue;
-    }
-    if (len > n - pos) {
-      Warn("truncated", pos,
-           "file ends inside a message of " + std::to_string(len) + " bytes (truncated?)");
-      break;
-    }
-    const uint8_t type = static_cast<uint8_t>(bytes_[pos + 2]);
-    const bool defines_next = type == kFmtType && pos + len + kHeaderBytes <= n &&
-                              bytes_[pos + len + 2] == bytes_[pos + kHeaderBytes];
-    if (!defines_next && !NextHeaderOk(pos + len)) {
-      // A damaged type byte makes a message of another length: what follows no longer starts
-      // with a header, and a valid message starts inside this one. Decoding it would turn
-      // payload bytes into samples. (When no valid message starts inside it, only what follows
-      // is damaged; the next pass of the loop skips that.)
-      const size_t next = Resync(pos + 1);
-      if (next >= pos + len) {
-        Accept(pos, len);
-        pos += len;
-        continue;
-      }
+  const size_t pos = pos_;
+  if (pos >= n) return false;
+  if (n - pos < kHeaderBytes) {
+    Warn("truncated", pos, "file ends inside a message header (truncated?)");
+    pos_ = n;
+    return false;
+  }
+  const size_t len = KnownAt(pos);
+  if (len == 0) {
+    const size_t next = Resync(pos + 1);
+    ++log_.records_skipped;
+    skipped_bytes_ += next - pos;
+    Warn("corrupt", pos,
+         "no known message starts here (type " +
+             std::to_string(static_cast<uint8_t>(bytes_[pos + 2])) + "); skipped " +
+             std::to_string(next - pos) + " bytes");
+    pos_ = next;
+    return true;
+  }
+  if (len > n - pos) {
+    Warn("truncated", pos,
+         "file ends inside a message of " + std::to_string(len) + " bytes (truncated?)");
+    pos_ = n;
+    return false;
+  }
+  const uint8_t type = static_cast<uint8_t>(bytes_[pos + 2]);
+  const bool defines_next = type == kFmtType && pos + len + kHeaderBytes <= n &&
+                            bytes_[pos + len + 2] == bytes_[pos + kHeaderBytes];
+  if (!defines_next && !NextHeaderOk(pos + len)) {
+    // A damaged type byte makes a message of another length: what follows no longer starts
+    // with a header, and a valid message starts inside this one. Decoding it would turn
+    // payload bytes into samples. (When no valid message starts inside it, only what follows
+    // is damaged; the next step skips that.)
+    const size_t next = Resync(pos + 1);
+    if (next < pos + len) {
       ++log_.records_skipped;
       skipped_bytes_ += next - pos;
       Warn("corrupt", pos,
            "message (type " + std::to_string(static_cast<uint8_t>(bytes_[pos + 2])) +
                ") not followed by a valid message; skipped " + std::to_string(next - pos) +
                " bytes");
-      pos = next;
-      continue;
+      pos_ = next;
+      return true;
     }
-    Accept(pos, len);
-    pos += len;
+  }
+  Accept(pos, len);
+  pos_ = pos + len;
+  return true;
+}
+
+// Hands the pages already read back every few MiB, so that resident memory stays bounded.
+void ReleaseBehind(MappedFile* file, size_t position, size_t* released) {
+  constexpr size_t kReleaseBytes = 8 << 20;
+  if (!file || position < *released + kReleaseBytes) return;
+  file->ReleaseBefore(position);
+  *released = position;
+}
+
+FlightLog DataFlashParser::Run(MappedFile* file) {
+  log_.format = "dataflash";
+  if (!LooksLikeDataFlash(bytes_)) {
+    throw IoError(
+        IoMessage(path_, 0, "byte 0: not an ArduPilot DataFlash log (expected 0xA3 0x95 0x80)"));
+  }
+  size_t released = 0;
+  while (Step()) ReleaseBehind(file, pos_, &released);
+  Finish();
+  return std::move(log_);
+}
+
+// The bytes of a log: a file mapped to be read front to back, or bytes in memory (owned: a pipe's;
+// borrowed: the caller's).
+struct DataFlashBytes {
+  std::string path;
+  std::unique_ptr<MappedFile> file;
+  std::string owned;
+  std::string_view bytes;
+};
+
+// Pass 2: the chosen stream's cleaned samples, parsed again from the bytes a chunk at a time.
+class DataFlashSource : public FillingSource {
+ public:
+  DataFlashSource(std::shared_ptr<DataFlashBytes> bytes, internal::CandidateCleaner cleaner,
+                  std::string target, size_t chunk_samples)
+      : FillingSource(chunk_samples), bytes_(std::move(bytes)), cleaner_(std::move(cleaner)) {
+    sinks_.target = std::move(target);
+    sinks_.cleaner = &cleaner_;
+    sinks_.out = &pending_;
+    parser_ = std::make_unique<DataFlashParser>(bytes_->bytes, bytes_->path, &sinks_);
+  }
+  double Fraction() const override {
+    return bytes_->bytes.empty() ? 1.0
+                                 : static_cast<double>(parser_->position()) / bytes_->bytes.size();
   }
 
-  Finish();
-  std::vector<internal::GyroCandidate> candidates;
-  for (auto& [name, c] : candidates_) candidates.push_back(std::move(c));
-  if (!internal::ChooseGyroSource(std::move(candidates), &log_)) {
-    throw IoError(
-        IoMessage(path_, 0, "no usable gyro data (looked for GYR, ISBH/ISBD gyro batches, IMU)"));
+ protected:
+  void Fill(std::vector<GyroSample>* chunk) override {
+    CheckUnchanged();
+    // What the last chunk left (less than a message's samples, or the cleaner's last release) moves
+    // to the front, so that pending_ holds about a chunk.
+    pending_.erase(pending_.begin(), pending_.begin() + taken_);
+    taken_ = 0;
+    while (pending_.size() < chunk_samples() && !done_) {
+      if (!parser_->Step()) {
+        done_ = true;
+        if (!cleaner_.Finish(&pending_)) Changed();
+      }
+      ReleaseBehind(bytes_->file.get(), parser_->position(), &released_);
+    }
+    taken_ = std::min(chunk_samples(), pending_.size());
+    chunk->insert(chunk->end(), pending_.begin(), pending_.begin() + taken_);
   }
-  return std::move(log_);
+
+ private:
+  // A mapped file cut while mapped would fault on its lost pages; one that grew is not the file
+  // pass 1 read. Either way, one line naming it.
+  void CheckUnchanged() const {
+    if (!bytes_->file) return;
+    std::error_code error;
+    const std::uintmax_t now = std::filesystem::file_size(bytes_->path, error);
+    if (!error && now == bytes_->bytes.size()) return;
+    Changed(error ? 0 : now);
+  }
+  [[noreturn]] void Changed(std::uintmax_t now = 0) const {
+    throw IoError(IoMessage(bytes_->path, 0,
+                            "changed while it was read in passes (" +
+                                std::to_string(bytes_->bytes.size()) + " bytes, now " +
+                                std::to_string(now) +
+                                "): is it still being recorded? Analyse a copy, or the finished "
+                                "log"));
+  }
+
+  std::shared_ptr<DataFlashBytes> bytes_;
+  internal::CandidateCleaner cleaner_;
+  GyroSinks sinks_;
+  std::unique_ptr<DataFlashParser> parser_;
+  std::vector<GyroSample> pending_;  // cleaned samples; the first taken_ handed out already
+  size_t taken_ = 0;
+  size_t released_ = 0;
+  bool done_ = false;
+};
+
+// Pass 1 (again without limits when a stream's disorder or intervals exceed them), the choice,
+// and pass 2 handed out as the stream's samples.
+DataFlashStream OpenBytes(std::shared_ptr<DataFlashBytes> bytes, size_t chunk_samples,
+                          internal::CandidateLimits limits = {}) {
+  GyroSinks sinks;
+  sinks.limits = limits;
+  FlightLog log = DataFlashParser(bytes->bytes, bytes->path, &sinks).Run(bytes->file.get());
+  std::vector<internal::CandidateSummary> summaries;
+  auto finish = [&] {
+    summaries.clear();
+    summaries.reserve(sinks.summaries.size());
+    for (auto& [name, summary] : sinks.summaries) {
+      summary.Finish();
+      summaries.push_back(std::move(summary));
+    }
+    return std::all_of(summaries.begin(), summaries.end(),
+                       [](const internal::CandidateSummary& s) { return s.exact(); });
+  };
+  if (!finish()) {
+    const LogWarning in_memory = internal::ReadInMemoryWarning(summaries);
+    GyroSinks unbounded;
+    unbounded.limits = internal::CandidateLimits::Unbounded();
+    log = DataFlashParser(bytes->bytes, bytes->path, &unbounded).Run(bytes->file.get());
+    sinks = std::move(unbounded);
+    finish();
+    log.warnings.push_back(in_memory);
+  }
+  const std::optional<size_t> chosen = internal::ChooseGyroSummary(summaries, &log);
+  if (!chosen) {
+    throw IoError(IoMessage(bytes->path, 0,
+                            "no usable gyro data (looked for GYR, ISBH/ISBD gyro batches, IMU)"));
+  }
+  DataFlashStream stream;
+  stream.log = std::move(log);
+  stream.samples = std::make_unique<DataFlashSource>(std::move(bytes),
+                                                     internal::CandidateCleaner(summaries[*chosen]),
+                                                     summaries[*chosen].name(), chunk_samples);
+  return stream;
+}
+
+FlightLog ReadWhole(DataFlashStream stream) {
+  stream.log.gyro = ReadAllSamples(stream.samples.get());
+  return std::move(stream.log);
 }
 
 }  // namespace
@@ -669,13 +834,33 @@ bool LooksLikeDataFlash(std::string_view first_bytes) {
   return true;
 }
 
+DataFlashStream OpenDataFlash(TextBlocks input, const std::string& path, size_t chunk_samples) {
+  auto bytes = std::make_shared<DataFlashBytes>();
+  bytes->path = path;
+  if (std::filesystem::is_regular_file(path)) {
+    bytes->file = std::make_unique<MappedFile>(path, MappedFile::Paging::kStreamed);
+    bytes->bytes = bytes->file->text();
+  } else {
+    bytes->owned = input.TakeRest();
+    bytes->bytes = bytes->owned;
+  }
+  return OpenBytes(std::move(bytes), chunk_samples);
+}
+
+DataFlashStream OpenDataFlash(std::string_view bytes, const std::string& path, size_t chunk_samples,
+                              internal::CandidateLimits limits) {
+  auto borrowed = std::make_shared<DataFlashBytes>();
+  borrowed->path = path;
+  borrowed->bytes = bytes;
+  return OpenBytes(std::move(borrowed), chunk_samples, limits);
+}
+
 FlightLog ParseDataFlash(std::string_view bytes, const std::string& path) {
-  return DataFlashParser(bytes, path).Run();
+  return ReadWhole(OpenDataFlash(bytes, path));
 }
 
 FlightLog ReadDataFlash(const std::string& path) {
-  const std::string bytes = ReadFileToString(path);
-  return ParseDataFlash(bytes, path);
+  return ReadWhole(OpenDataFlash(TextBlocks::OfFile(path), path));
 }
 
 }  // namespace shutterlab

@@ -8,8 +8,13 @@
 // N(char[16]) Z(char[64]) M(uint8 mode) c C(int16/uint16 * 0.01) e E(int32/uint32 * 0.01)
 // L(int32 * 1e-7 degrees) a(int16[32]) g(float16).
 
+#include "sim/gyro_source.h"
 #include "sim/logs/flight_log.h"
+#include "sim/logs/gyro_candidates.h"
+#include "sim/text_file.h"
 
+#include <cstddef>
+#include <memory>
 #include <string>
 #include <string_view>
 
@@ -37,5 +42,28 @@ FlightLog ReadDataFlash(const std::string& path);
 
 // The same on bytes already in memory; path is used in messages only.
 FlightLog ParseDataFlash(std::string_view bytes, const std::string& path);
+
+// A DataFlash log read in two passes over its bytes, in memory that does not grow with the number
+// of gyro samples. Opening makes pass 1: everything but the samples (formats, camera events, GPS
+// fixes, altitude, warnings, records_skipped), and of each gyro stream a bounded summary
+// (sim/logs/gyro_candidates.h CandidateSummary) from which the stream is chosen. `samples` is pass
+// 2: it parses the bytes again and hands out the chosen stream's cleaned samples in chunks of
+// chunk_samples, exactly those ReadDataFlash gives; Fraction() is the share of the bytes parsed. A
+// file is mapped and its pages handed back behind the parser every 8 MiB; a file that changed
+// between the passes (still being recorded) is an IoError naming it. A stream too disordered for
+// the summary's limits is summarised again without them (memory then grows with it), said in a
+// "memory" warning.
+struct DataFlashStream {
+  FlightLog log;  // all but the samples (log.gyro stays empty)
+  std::unique_ptr<GyroSource> samples;
+};
+// A file (input's path), or a pipe (input taken whole into memory).
+DataFlashStream OpenDataFlash(TextBlocks input, const std::string& path,
+                              size_t chunk_samples = FillingSource::kDefaultChunkSamples);
+// Bytes in memory, which must outlive the stream; path is used in messages only. limits: pass 1's
+// (tests and fuzzing choose small ones to reach the way without them).
+DataFlashStream OpenDataFlash(std::string_view bytes, const std::string& path,
+                              size_t chunk_samples = FillingSource::kDefaultChunkSamples,
+                              internal::CandidateLimits limits = {});
 
 }  // namespace shutterlab

@@ -128,29 +128,64 @@ FlightLogStream OpenText(TextBlocks input, const std::string& path, LogFormat fo
   return stream;
 }
 
-// The binary logs are decoded whole (the best gyro stream is chosen once every one is known),
-// then handed on in slices. A file is read by its reader; a pipe (input, read once) is taken whole.
-FlightLog ReadBinary(TextBlocks input, const std::string& path, LogFormat format) {
-  if (!std::filesystem::is_regular_file(path)) {
-    // An MP4's sample tables may follow its samples (moov after mdat): it needs a file to seek.
-    if (format == LogFormat::kGoproMp4)
-      throw IoError(
-          IoMessage(path, 0, "a GoPro MP4 cannot be read from a pipe: save it to a file"));
-    const std::string bytes = input.TakeRest();
-    switch (format) {
-      case LogFormat::kULog:
-        return ParseULog(bytes, path);
-      default:  // kDataFlash (blackbox logs are streamed: OpenBlackboxLog)
-        return ParseDataFlash(bytes, path);
-    }
-  }
+// A binary log decoded whole (the best gyro stream is chosen once every one is known), handed on
+// in slices.
+FlightLogStream WholeLogStream(FlightLog log) {
+  FlightLogStream stream;
+  stream.log = std::move(log);
+  stream.gyro = std::make_unique<TraceSource>(std::move(stream.log.gyro));
+  stream.log.gyro = GyroTrace();
+  return stream;
+}
+
+// One open function per binary format, each returning its own stream: a file is read by its
+// reader; a pipe (input, read once) is taken whole.
+FlightLogStream OpenULogLog(TextBlocks input, const std::string& path) {
+  if (!std::filesystem::is_regular_file(path))
+    return WholeLogStream(ParseULog(input.TakeRest(), path));
+  return WholeLogStream(ReadULog(path));
+}
+
+// Streamed: two passes over the mapped file (sim/logs/dataflash.h OpenDataFlash).
+FlightLogStream OpenDataFlashLog(TextBlocks input, const std::string& path) {
+  DataFlashStream dataflash = OpenDataFlash(std::move(input), path);
+  FlightLogStream stream;
+  stream.log = std::move(dataflash.log);
+  stream.gyro = std::move(dataflash.samples);
+  return stream;
+}
+
+// Streamed (sim/logs/blackbox.h OpenBlackbox): a file mapped and read in two passes; a pipe
+// (input, read once) taken whole, then read the same way.
+FlightLogStream OpenBlackboxLog(TextBlocks input, const std::string& path, int log_index) {
+  BlackboxStream blackbox = std::filesystem::is_regular_file(path)
+                                ? OpenBlackbox(path, log_index)
+                                : OpenBlackboxBytes(input.TakeRest(), path, log_index);
+  FlightLogStream stream;
+  stream.log = std::move(blackbox.log);
+  stream.gyro = std::move(blackbox.samples);
+  return stream;
+}
+
+// Decoded whole: its gyro is ~200 Hz (an hour is 720,000 samples), and its sample tables may
+// follow its samples (moov after mdat), so it needs a file to seek.
+FlightLogStream OpenGoproLog(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path))
+    throw IoError(IoMessage(path, 0, "a GoPro MP4 cannot be read from a pipe: save it to a file"));
+  return WholeLogStream(ReadGoproFlightLog(path));
+}
+
+FlightLogStream OpenBinary(TextBlocks input, const std::string& path, LogFormat format,
+                           const FlightLogReadOptions& options) {
   switch (format) {
     case LogFormat::kULog:
-      return ReadULog(path);
+      return OpenULogLog(std::move(input), path);
     case LogFormat::kDataFlash:
-      return ReadDataFlash(path);
-    default:  // kGoproMp4 (blackbox logs are streamed: OpenBlackboxLog)
-      return ReadGoproFlightLog(path);
+      return OpenDataFlashLog(std::move(input), path);
+    case LogFormat::kGoproMp4:
+      return OpenGoproLog(path);
+    default:
+      return OpenBlackboxLog(std::move(input), path, options.log_index);
   }
 }
 
@@ -175,14 +210,9 @@ FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOption
   TextBlocks input = TextBlocks::OfFile(path);
   LogFormat format = options.format;
   if (format == LogFormat::kAuto) format = DetectFlightLogFormat(input.Peek(kDetectBytes), path);
-  if (format == LogFormat::kBlackbox) return OpenBlackboxLog(std::move(input), path, options);
   if (format == LogFormat::kULog || format == LogFormat::kDataFlash ||
-      format == LogFormat::kGoproMp4) {
-    FlightLogStream stream;
-    stream.log = ReadBinary(std::move(input), path, format);
-    stream.gyro = std::make_unique<TraceSource>(std::move(stream.log.gyro));
-    stream.log.gyro = GyroTrace();
-    return stream;
+      format == LogFormat::kBlackbox || format == LogFormat::kGoproMp4) {
+    return OpenBinary(std::move(input), path, format, options);
   }
   try {
     FlightLogStream stream = OpenText(std::move(input), path, format, options);

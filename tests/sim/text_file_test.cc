@@ -227,5 +227,27 @@ TEST(MappedFile, AStreamedFileReadsWholeAndItsReleasedPagesLeaveResidentMemory) 
   EXPECT_EQ(mapped.text(), content);
 }
 
+TEST(MappedFile, ASecondPassHandsItsPagesBackToo) {
+  // A reader in two passes (DataFlash: pass 1 for the summaries, pass 2 for the samples) reads the
+  // file twice front to back; the second pass stays as small as the first.
+  test::TempDir dir;
+  const std::string path = dir / "log.bin";
+  std::string content(16 << 20, '\0');
+  for (size_t i = 0; i < content.size(); ++i) content[i] = static_cast<char>(i * 40503u >> 8);
+  WriteFileAtomically(path, content);
+  MappedFile mapped(path, MappedFile::Paging::kStreamed);
+  const size_t before = ResidentBytes();
+  for (int pass = 0; pass < 2; ++pass) {
+    size_t peak = before;
+    for (size_t at = 0; at < content.size(); at += 1 << 20) {
+      ASSERT_EQ(mapped.text()[at + 99], content[at + 99]);
+      EXPECT_EQ(mapped.text().substr(at, 1 << 20), std::string_view(content).substr(at, 1 << 20));
+      peak = std::max(peak, ResidentBytes());
+      mapped.ReleaseBefore(at + (1 << 20));
+    }
+    EXPECT_LT(peak - before, size_t{4} << 20) << "pass " << pass;
+  }
+}
+
 }  // namespace
 }  // namespace shutterlab

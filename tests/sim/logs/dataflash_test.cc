@@ -11,6 +11,8 @@
 
 #include <algorithm>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <random>
 #include <string>
 #include <vector>
@@ -447,6 +449,191 @@ TEST(DataFlash, ReadsFromDisk) {
   WriteFileAtomically(path, FlightFile(50).bytes());
   EXPECT_EQ(ReadDataFlash(path).gyro.size(), 50u);
   EXPECT_THROW(ReadDataFlash(dir / "missing.bin"), IoError);
+}
+
+// ---- The streamed reader (OpenDataFlash): pass 2 in chunks gives what the whole read gives.
+
+// What a streamed read gives: the log, or the error's text.
+struct Outcome {
+  FlightLog log;
+  std::string error;
+};
+
+Outcome Streamed(std::string_view bytes, const std::string& path, size_t chunk_samples,
+                 internal::CandidateLimits limits) {
+  Outcome out;
+  try {
+    DataFlashStream stream = OpenDataFlash(bytes, path, chunk_samples, limits);
+    out.log = std::move(stream.log);
+    std::vector<GyroSample> samples;
+    for (GyroChunk chunk = stream.samples->Next(); !chunk.empty(); chunk = stream.samples->Next()) {
+      EXPECT_LE(chunk.size, chunk_samples);
+      samples.insert(samples.end(), chunk.begin(), chunk.end());
+    }
+    EXPECT_EQ(stream.samples->Fraction(), 1.0);
+    out.log.gyro = GyroTrace(std::move(samples));
+  } catch (const IoError& e) {
+    out.error = e.what();
+  }
+  return out;
+}
+
+Outcome Whole(std::string_view bytes, const std::string& path) {
+  Outcome out;
+  try {
+    out.log = ParseDataFlash(bytes, path);
+  } catch (const IoError& e) {
+    out.error = e.what();
+  }
+  return out;
+}
+
+// Equal in every field; a "memory" warning (pass 1 redone without limits) is allowed in `a` only.
+void ExpectSameOutcome(const Outcome& a, const Outcome& b, const std::string& what) {
+  ASSERT_EQ(a.error, b.error) << what;
+  EXPECT_EQ(a.log.format, b.log.format) << what;
+  EXPECT_EQ(a.log.gyro_source, b.log.gyro_source) << what;
+  EXPECT_EQ(a.log.gyro_sources_available, b.log.gyro_sources_available) << what;
+  EXPECT_EQ(a.log.records_skipped, b.log.records_skipped) << what;
+  EXPECT_EQ(a.log.altitude_above_ground_m, b.log.altitude_above_ground_m) << what;
+  EXPECT_EQ(a.log.camera_events.size(), b.log.camera_events.size()) << what;
+  EXPECT_EQ(a.log.utc_fixes.size(), b.log.utc_fixes.size()) << what;
+  std::vector<std::string> wa, wb;
+  for (const LogWarning& w : a.log.warnings) {
+    if (w.kind != "memory") wa.push_back(w.kind + ": " + w.message);
+  }
+  for (const LogWarning& w : b.log.warnings) wb.push_back(w.kind + ": " + w.message);
+  EXPECT_EQ(wa, wb) << what;
+  ASSERT_EQ(a.log.gyro.size(), b.log.gyro.size()) << what;
+  for (size_t i = 0; i < a.log.gyro.size(); ++i) {
+    ASSERT_EQ(a.log.gyro[i].t_ns, b.log.gyro[i].t_ns) << what << " sample " << i;
+    ASSERT_EQ(a.log.gyro[i].omega_rad_s, b.log.gyro[i].omega_rad_s) << what << " sample " << i;
+  }
+}
+
+// A GYR stream with its times out of order: 40 samples stamped 300 samples late and a run of 5
+// stamped back by 20 samples (both are sorted), so that pass 2 must hold samples back.
+std::string DisorderedFile() {
+  DataFlashBuilder b;
+  for (int k = 0; k < 1200; ++k) {
+    int64_t sample_us = 2'000'000 + k * 1000;
+    if (k >= 500 && k < 540) sample_us += 300'000;
+    if (k >= 900 && k < 905) sample_us -= 20'000;
+    b.Gyr(sample_us + 250, 0, static_cast<uint64_t>(sample_us), 0.5f * k, 0.0f, 1.0f);
+    if (k % 3 == 0) b.Imu(2'000'500 + k * 1000, 0, 0.1f, 0.2f, 0.3f);
+  }
+  return b.bytes();
+}
+
+// Gyro batches (ISBH/ISBD) at 2 kHz, a batch of 100 samples every 50 ms, one cut short.
+std::string BatchFile() {
+  DataFlashBuilder b;
+  for (uint16_t n = 0; n < 20; ++n) {
+    const uint64_t start_us = 1'000'000 + n * 50'000;
+    b.Isbh(n, 1, 0, 100, 100, start_us, 2000.0f);
+    for (uint16_t seq = 0; seq < (n == 7 ? 2 : 4); ++seq) {
+      std::vector<int16_t> x(32), y(32), z(32);
+      for (int k = 0; k < 32; ++k) x[k] = static_cast<int16_t>(n * 100 + seq * 32 + k);
+      b.Isbd(n, seq, x, y, z);
+    }
+  }
+  for (int k = 0; k < 200; ++k) b.Imu(1'000'000 + k * 5000, 0, 0.1f, 0.2f, 0.3f);
+  return b.bytes();
+}
+
+TEST(DataFlashStream, ChunksAndLimitsDoNotChangeWhatIsRead) {
+  std::vector<std::pair<std::string, std::string>> inputs = {
+      {"flight.bin", FlightFile(600).bytes()},
+      {"disordered.bin", DisorderedFile()},
+      {"batches.bin", BatchFile()}};
+  // Cut and damaged copies, as RandomDamageGivesErrorOrPartialResult makes them.
+  std::mt19937_64 rng(15);
+  for (size_t i = 0, n = inputs.size(); i < n; ++i) {
+    const std::string bytes = inputs[i].second;
+    std::uniform_int_distribution<size_t> where(0, bytes.size() - 1);
+    for (int trial = 0; trial < 6; ++trial) {
+      std::string copy = bytes.substr(0, where(rng));
+      for (int k = 0; k < trial * 3 && !copy.empty(); ++k)
+        copy[where(rng) % copy.size()] = static_cast<char>(rng() & 0xff);
+      inputs.push_back({"copy_" + std::to_string(i) + "_" + std::to_string(trial), copy});
+    }
+  }
+  size_t redone = 0;
+  for (const auto& [name, bytes] : inputs) {
+    const Outcome whole = Whole(bytes, name);
+    for (size_t chunk : {1, 7, 1000}) {
+      for (internal::CandidateLimits limits :
+           {internal::CandidateLimits{}, internal::CandidateLimits{8, 4}}) {
+        const Outcome streamed = Streamed(bytes, name, chunk, limits);
+        redone += test::AnyWarningContains(streamed.log.warnings, "held in memory whole");
+        ExpectSameOutcome(streamed, whole,
+                          name + " chunk " + std::to_string(chunk) + " reorder limit " +
+                              std::to_string(limits.reorder_samples));
+        if (HasFailure()) return;
+      }
+    }
+  }
+  EXPECT_GT(redone, 3u);  // small limits do send some logs the way without limits
+  // The disordered stream is read sorted, all of it, with the disorder said.
+  const FlightLog log = ParseDataFlash(DisorderedFile(), "disordered.bin");
+  EXPECT_EQ(log.gyro.size(), 1200u);
+  // (Counted where the times step back: after the late run, and at the run stamped early.)
+  EXPECT_TRUE(AnyWarningContains(log, "GYR: 2 samples were out of time order and were sorted"))
+      << test::JoinedWarnings(log.warnings);
+}
+
+TEST(DataFlashStream, AFileIsReadTheSameWayAsBytesInMemory) {
+  test::TempDir dir;
+  const std::string path = dir / "batches.bin";
+  const std::string bytes = BatchFile();
+  WriteFileAtomically(path, bytes);
+  DataFlashStream stream = OpenDataFlash(TextBlocks::OfFile(path), path, 5);
+  Outcome from_file;
+  from_file.log = std::move(stream.log);
+  from_file.log.gyro = ReadAllSamples(stream.samples.get());
+  ExpectSameOutcome(from_file, Whole(bytes, path), "file");
+  EXPECT_EQ(from_file.log.gyro_source, "ISBD");
+  EXPECT_EQ(from_file.log.gyro.size(), 19u * 100 + 64);
+}
+
+TEST(DataFlashStream, AFileChangedBetweenThePassesIsRefusedInOneLine) {
+  test::TempDir dir;
+  const std::string path = dir / "recording.bin";
+  const std::string bytes = FlightFile(300).bytes();
+  for (const char* change : {"grown", "cut"}) {
+    WriteFileAtomically(path, bytes);
+    DataFlashStream stream = OpenDataFlash(TextBlocks::OfFile(path), path, 16);
+    if (std::string(change) == "grown") {
+      std::ofstream(path, std::ios::app | std::ios::binary) << bytes.substr(0, 100);
+    } else {
+      std::filesystem::resize_file(path, bytes.size() / 2);
+    }
+    try {
+      ReadAllSamples(stream.samples.get());
+      FAIL() << change << ": a changed file must be refused";
+    } catch (const IoError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(path + ": changed while it was read in passes"), std::string::npos)
+          << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  }
+}
+
+TEST(DataFlashStream, RealLogsStreamedInSmallChunksAreReadAsWhole) {
+  for (const char* relative :
+       {"incoming/ardupilot_log171/log171.bin", "incoming/ardupilot_isb_80k/backend_log_80k.bin",
+        "incoming/ardupilot_pymavlink_test/test.BIN"}) {
+    SHUTTERLAB_REAL_DATA(path, relative);
+    const std::string bytes = ReadFileToString(path);
+    DataFlashStream stream = OpenDataFlash(TextBlocks::OfFile(path), path, 13);
+    Outcome streamed;
+    streamed.log = std::move(stream.log);
+    streamed.log.gyro = ReadAllSamples(stream.samples.get());
+    ExpectSameOutcome(Streamed(bytes, path, 1 << 14, internal::CandidateLimits{16, 16}), streamed,
+                      relative);
+    EXPECT_GE(streamed.log.gyro.size(), 2u) << relative;
+  }
 }
 
 }  // namespace
