@@ -141,9 +141,13 @@ FlightLogStream WholeLogStream(FlightLog log) {
 // One open function per binary format, each returning its own stream: a file is read by its
 // reader; a pipe (input, read once) is taken whole.
 FlightLogStream OpenULogLog(TextBlocks input, const std::string& path) {
-  if (!std::filesystem::is_regular_file(path))
-    return WholeLogStream(ParseULog(input.TakeRest(), path));
-  return WholeLogStream(ReadULog(path));
+  // Read in two passes over the file (sim/logs/ulog.h OpenULog).
+  ULogStream ulog = std::filesystem::is_regular_file(path) ? OpenULog(path)
+                                                           : OpenULogBytes(input.TakeRest(), path);
+  FlightLogStream stream;
+  stream.log = std::move(ulog.log);
+  stream.gyro = std::move(ulog.gyro);
+  return stream;
 }
 
 // Streamed: two passes over the mapped file (sim/logs/dataflash.h OpenDataFlash).
