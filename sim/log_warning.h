@@ -12,7 +12,7 @@ namespace shutterlab {
 struct LogWarning {
   // truncated, partial_batch, gap, time_backwards, duplicate_time, rate_change, saturated,
   // too_few_samples, unused_source (the contract's words), or corrupt, format, unit, assumption,
-  // repeated_sample.
+  // repeated_sample, memory.
   std::string kind;
   std::string message;  // one line, with counts and times
   // The trace time of the first occurrence (s on the log's clock) and the count, where they apply.

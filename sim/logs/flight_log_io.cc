@@ -159,10 +159,16 @@ FlightLogStream OpenDataFlashLog(TextBlocks input, const std::string& path) {
   return stream;
 }
 
+// Streamed (sim/logs/blackbox.h OpenBlackbox): a file mapped and read in two passes; a pipe
+// (input, read once) taken whole, then read the same way.
 FlightLogStream OpenBlackboxLog(TextBlocks input, const std::string& path, int log_index) {
-  if (!std::filesystem::is_regular_file(path))
-    return WholeLogStream(DecodeBlackbox(input.TakeRest(), path, log_index));
-  return WholeLogStream(ReadBlackbox(path, log_index));
+  BlackboxStream blackbox = std::filesystem::is_regular_file(path)
+                                ? OpenBlackbox(path, log_index)
+                                : OpenBlackboxBytes(input.TakeRest(), path, log_index);
+  FlightLogStream stream;
+  stream.log = std::move(blackbox.log);
+  stream.gyro = std::move(blackbox.samples);
+  return stream;
 }
 
 // Decoded whole: its gyro is ~200 Hz (an hour is 720,000 samples), and its sample tables may
@@ -185,6 +191,19 @@ FlightLogStream OpenBinary(TextBlocks input, const std::string& path, LogFormat 
     default:
       return OpenBlackboxLog(std::move(input), path, options.log_index);
   }
+}
+
+// A blackbox log, streamed (sim/logs/blackbox.h OpenBlackbox): a file mapped and read in two
+// passes; a pipe (input, read once) taken whole, then read the same way.
+FlightLogStream OpenBlackboxLog(TextBlocks input, const std::string& path,
+                                const FlightLogReadOptions& options) {
+  BlackboxStream blackbox = std::filesystem::is_regular_file(path)
+                                ? OpenBlackbox(path, options.log_index)
+                                : OpenBlackboxBytes(input.TakeRest(), path, options.log_index);
+  FlightLogStream stream;
+  stream.log = std::move(blackbox.log);
+  stream.gyro = std::move(blackbox.samples);
+  return stream;
 }
 
 }  // namespace
