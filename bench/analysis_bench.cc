@@ -470,11 +470,4 @@ int Main(int argc, char** argv) {
 }  // namespace
 }  // namespace shutterlab
 
-int main(int argc, char** argv) {
-  try {
-    return shutterlab::Main(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return shutterlab::bench::RunMain(shutterlab::Main, argc, argv); }

@@ -20,6 +20,16 @@
 
 namespace shutterlab::bench {
 
+// A benchmark's main: runs main_body, and an exception ends it with a one-line error (exit 1).
+inline int RunMain(int (*main_body)(int, char**), int argc, char** argv) {
+  try {
+    return main_body(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+}
+
 // A path inside the repository (this file's folder's parent).
 inline std::string RepoPath(const std::string& relative) {
   const std::string here = __FILE__;

@@ -5,6 +5,7 @@
 
 #include "sim/check.h"
 #include "sim/gyro_source.h"
+#include "sim/logs/flight_log.h"
 #include "sim/trace_audit.h"
 
 #include <cstdint>
@@ -41,6 +42,52 @@ inline void AuditEveryChunk(GyroSource* source, const TraceAuditOptions& options
     auditor.Add(chunk.data, chunk.size);
   auditor.Finish();
   auditor.Sampling();
+}
+
+// Every sample and warning of a source after the log's own, as ReadFlightLog gives them.
+inline FlightLog TakeAll(FlightLog* log, GyroSource* source) {
+  FlightLog out = std::move(*log);
+  out.gyro = ReadAllSamples(source);
+  for (LogWarning& warning : source->Warnings()) out.warnings.push_back(std::move(warning));
+  return out;
+}
+
+// What a reading gave, to compare two ways of reading the same bytes: its error, or its log
+// (samples and warning times bit for bit, sources, records_skipped, warnings).
+struct Outcome {
+  std::string error;
+  std::string log;
+  bool operator!=(const Outcome& other) const { return error != other.error || log != other.log; }
+};
+
+template <typename T>
+void AppendBits(const T& value, std::string* out) {
+  out->append(reinterpret_cast<const char*>(&value), sizeof(value));
+}
+
+// Runs read() (which returns a FlightLog) and describes what it gave.
+template <typename Read>
+Outcome ReadOutcome(const Read& read) {
+  Outcome out;
+  try {
+    const FlightLog log = read();
+    out.log = log.format + "|" + log.gyro_source + "|" + std::to_string(log.records_skipped) + "|";
+    for (const std::string& source : log.gyro_sources_available) out.log += source + ",";
+    for (const LogWarning& w : log.warnings) {
+      out.log += "|" + w.kind + ":" + w.message;
+      AppendBits(w.t_s.value_or(-1.0), &out.log);
+      AppendBits(w.count.value_or(~size_t{0}), &out.log);
+    }
+    for (const GyroSample& sample : log.gyro.samples()) {
+      AppendBits(sample.t_ns, &out.log);
+      for (int axis = 0; axis < 3; ++axis) AppendBits(sample.omega_rad_s[axis], &out.log);
+    }
+  } catch (const IoError& e) {
+    out.error = e.what();
+  } catch (const std::invalid_argument& e) {
+    out.error = std::string("invalid argument: ") + e.what();
+  }
+  return out;
 }
 
 // For the readers that take a path: the bytes in a file of this process, rewritten per input.

@@ -108,6 +108,21 @@ TextBlocks TextBlocks::OfFile(const std::string& path, size_t block_bytes) {
   if (blocks.fd_ < 0)
     throw IoError(IoMessage(path, 0, std::string("cannot open: ") + std::strerror(errno)));
   struct stat info {};
+  if (::fstat(blocks.fd_, &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0) {
+    // A regular file is mapped and its blocks handed out in place, each block's pages handed back
+    // when the next is taken: bounded memory without read()'s copy into a buffer (11 % of
+    // `flight` on a 30-million-line gyro.csv). What it holds when opened is read; a file that
+    // grows meanwhile is read as it was (its last line cut there is said, as any cut line is).
+    auto mapped = std::make_unique<MappedFile>(path, MappedFile::Paging::kStreamed);
+    if (mapped->mapped()) {
+      ::close(blocks.fd_);
+      blocks.fd_ = -1;
+      blocks.memory_ = mapped->text();
+      blocks.size_ = blocks.memory_.size();
+      blocks.mapped_ = std::move(mapped);
+      return blocks;
+    }
+  }
   if (::fstat(blocks.fd_, &info) == 0 && S_ISREG(info.st_mode)) {
     blocks.size_ = static_cast<uint64_t>(info.st_size);
     // A block no larger than the file needs (with room to see its end in the same read), so that
@@ -135,6 +150,7 @@ TextBlocks::TextBlocks(TextBlocks&& other) noexcept
       size_(other.size_),
       handed_out_(other.handed_out_),
       memory_(other.memory_),
+      mapped_(std::move(other.mapped_)),
       buffer_(std::move(other.buffer_)),
       capacity_(other.capacity_),
       carry_begin_(other.carry_begin_),
@@ -161,6 +177,7 @@ size_t TextBlocks::Read(size_t at, size_t max_bytes) {
 std::string_view TextBlocks::Next() {
   if (fd_ < 0) {  // in memory: cut at the last line end within a block (or the next one after)
     const size_t begin = handed_out_;
+    if (mapped_) mapped_->ReleaseBefore(begin);
     if (begin >= memory_.size()) return {};
     size_t end = std::min(memory_.size(), begin + capacity_);
     if (end < memory_.size()) {

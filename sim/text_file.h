@@ -29,6 +29,8 @@ class MappedFile {
   MappedFile(const MappedFile&) = delete;
   MappedFile& operator=(const MappedFile&) = delete;
   std::string_view text() const { return {data_, size_}; }
+  // Whether the file is mapped (false: read into memory, as a pipe is).
+  bool mapped() const { return mapped_; }
   // Hands the whole pages before byte `offset` back to the kernel (they leave the process's
   // resident memory; touching them again reads them again from the file). An offset before the
   // last one starts again from the file's start: a reader's next pass over the file hands its
@@ -53,7 +55,8 @@ void AdviseHugePages(const void* data, size_t bytes);
 void WriteFileAtomically(const std::string& path, std::string_view content);
 
 // A text file read in blocks of whole lines, so that a file of any length is parsed in bounded
-// memory (a block, plus the longest line). Also over a text in memory (tests, fuzzing: small blocks
+// memory (a block, plus the longest line): a regular file mapped (MappedFile kStreamed), a pipe
+// read into a buffer. Also over a text in memory (tests, fuzzing: small blocks
 // put every line end at a block edge somewhere).
 class TextBlocks {
  public:
@@ -90,8 +93,9 @@ class TextBlocks {
   int fd_ = -1;
   uint64_t size_ = 0;                       // of the file (0 when unknown)
   uint64_t handed_out_ = 0;                 // bytes returned by Next
-  std::string_view memory_;                 // the text in memory, or empty for a file
-  std::unique_ptr<char[]> buffer_;          // a file's block
+  std::string_view memory_;                 // the text in memory (or mapped), else empty
+  std::unique_ptr<MappedFile> mapped_;      // a regular file, mapped: memory_ is its text
+  std::unique_ptr<char[]> buffer_;          // a pipe's block
   size_t capacity_ = 0;                     // of buffer_
   size_t carry_begin_ = 0, carry_end_ = 0;  // a started last line, kept for the next block
   bool end_of_file_ = false;

@@ -12,8 +12,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <utility>
 
@@ -48,6 +50,90 @@ constexpr uint8_t kIncrementOp = 255;
 constexpr int kEventLogEnd = 255;  // firmware FLIGHT_LOG_EVENT_LOG_END
 // Larger I intervals (never written by a firmware) are handled without the skip table.
 constexpr int64_t kMaxTabulatedIInterval = 1 << 16;
+// Bytes read between two hand-backs of the pages behind (MappedFile::ReleaseBefore): what a
+// streamed file keeps resident.
+constexpr size_t kReleaseEveryBytes = size_t{4} << 20;
+
+// A blackbox file's bytes for as long as a stream reads them: a file mapped page by page
+// (MappedFile::Paging::kStreamed), a pipe's bytes taken whole, or a caller's buffer. The file is
+// read front to back several times (the search for the logs, pass 1, pass 2); each reading maps
+// it afresh (StartReading), because a mapping hands its pages back (ReleaseBefore) only once.
+class BlackboxBytes {
+ public:
+  static std::unique_ptr<BlackboxBytes> OfFile(const std::string& path) {
+    // Not a regular file (a pipe): read once, whole.
+    if (!std::filesystem::is_regular_file(path)) return Owning(ReadFileToString(path), path);
+    auto bytes = std::make_unique<BlackboxBytes>(path);
+    bytes->modified_ = bytes->Stamp().modified;  // before mapping: a later write shows
+    bytes->mapped_ = std::make_unique<MappedFile>(path, MappedFile::Paging::kStreamed);
+    bytes->view_ = bytes->mapped_->text();
+    return bytes;
+  }
+  // Before another reading front to back: a file is mapped again (its bytes unchanged, else
+  // IoError), with every page of the last reading handed back. view() and data() change.
+  void StartReading() {
+    if (!mapped_) return;
+    CheckUnchanged();
+    mapped_.reset();
+    mapped_ = std::make_unique<MappedFile>(path_, MappedFile::Paging::kStreamed);
+    const size_t size = view_.size();
+    view_ = mapped_->text();
+    if (view_.size() != size) ThrowChanged(size, view_.size());
+  }
+  static std::unique_ptr<BlackboxBytes> Owning(std::string content, const std::string& path) {
+    auto bytes = std::make_unique<BlackboxBytes>(path);
+    bytes->owned_ = std::move(content);
+    bytes->view_ = bytes->owned_;
+    return bytes;
+  }
+  static std::unique_ptr<BlackboxBytes> Borrowing(std::string_view content,
+                                                  const std::string& path) {
+    auto bytes = std::make_unique<BlackboxBytes>(path);
+    bytes->view_ = content;
+    return bytes;
+  }
+  explicit BlackboxBytes(std::string path) : path_(std::move(path)) {}
+
+  std::string_view view() const { return view_; }
+  const uint8_t* data() const { return reinterpret_cast<const uint8_t*>(view_.data()); }
+  const std::string& path() const { return path_; }
+  void ReleaseBefore(size_t offset) {
+    if (mapped_) mapped_->ReleaseBefore(offset);
+  }
+  // A mapped file must still be what was mapped: one that grew (still being recorded) or shrank
+  // (a page past its new end would kill the process with SIGBUS) is refused in one line.
+  void CheckUnchanged() const {
+    if (!mapped_) return;
+    const FileStamp now = Stamp();
+    if (now.size_bytes == view_.size() && now.modified == modified_) return;
+    ThrowChanged(view_.size(), now.size_bytes);
+  }
+
+ private:
+  struct FileStamp {
+    uintmax_t size_bytes = 0;
+    std::filesystem::file_time_type modified;
+  };
+  [[noreturn]] void ThrowChanged(uintmax_t was_bytes, uintmax_t now_bytes) const {
+    throw IoError(IoMessage(path_, 0,
+                            "changed while it was read (" + std::to_string(was_bytes) +
+                                " bytes, now " + std::to_string(now_bytes) +
+                                "): is it still being recorded? Read a copy, or the finished log"));
+  }
+  FileStamp Stamp() const {
+    std::error_code error;
+    FileStamp stamp;
+    stamp.size_bytes = std::filesystem::file_size(path_, error);
+    stamp.modified = std::filesystem::last_write_time(path_, error);
+    return stamp;
+  }
+
+  std::string path_;
+  std::unique_ptr<MappedFile> mapped_;
+  std::string owned_;
+  std::string_view view_;
+  std::filesystem::file_time_type modified_;  // of a mapped file
+};
 
 // The six frame kinds; 'H' is the GPS home frame once the header is over.
 int FrameKind(int marker) {
@@ -392,10 +478,10 @@ void IdentifyFields(LogHeader* h) {
   }
 }
 
-// Everything one log yields.
+// Everything one log yields but its samples.
 struct DecodedLog {
   BlackboxLogInfo info;
-  std::vector<GyroSample> samples;
+  int64_t first_t_ns = 0, last_t_ns = 0;  // of the first and last accepted main frame
   std::vector<LogWarning> warnings;
   size_t corrupt_frames = 0;
   size_t rejected_main_frames = 0;
@@ -408,11 +494,15 @@ struct DecodedLog {
 // The frame decoder of one log: header state, the three-frame main history, and the loop over
 // the data that mirrors blackbox-tools' flightLogParse (a frame is accepted when the byte after it
 // starts another frame or ends the log; otherwise it is corrupt and the search for the next frame
-// restarts one byte after its start).
+// restarts one byte after its start). The loop pauses once a chunk of samples is full and resumes
+// where it stopped, so that the samples of a log of any length are handed on in bounded memory.
 class LogDecoder {
  public:
-  LogDecoder(const uint8_t* data, size_t end, const LogHeader& header, double rad_per_lsb)
-      : data_(data), end_(end), h_(header), rad_per_lsb_(rad_per_lsb) {
+  // bytes: the file, whose pages the decoder hands back behind itself.
+  LogDecoder(BlackboxBytes* bytes, size_t end, LogHeader header, double rad_per_lsb)
+      : bytes_(bytes), data_(bytes->data()), h_(std::move(header)), rad_per_lsb_(rad_per_lsb) {
+    at_.pos = h_.data_begin;
+    at_.end = end;
     const size_t n = h_.defs[kKindI].count();
     // The skip count after iteration k depends only on k mod the I interval: tabulate it once
     // (the direct count costs two 64-bit divisions per skipped iteration on every P frame).
@@ -429,56 +519,76 @@ class LogDecoder {
     home_.assign(h_.defs[kKindH].count() + 1, 0);
   }
 
-  void Run(DecodedLog* out) {
-    // Main frames take at least a few bytes each; reserving avoids regrowing a large trace.
-    // A header that claims to run past the data (found by fuzz/flight_log_fuzz) reserves nothing.
-    out->samples.reserve((end_ > h_.data_begin ? (end_ - h_.data_begin) / 8 : 0) + 16);
-    size_t pos = h_.data_begin;
-    size_t end = end_;  // a LOG_END event moves it to just after itself
-    bool have_last = false;
-    int last_kind = -1;
-    size_t frame_start = 0;
-    bool premature_eof = false;
+  // Decodes on, counting into *out, until the log ends (true) or, when samples is given, it holds
+  // max_samples (false: call again for more). Accepted main frames are appended to *samples.
+  bool Run(DecodedLog* out, std::vector<GyroSample>* samples, size_t max_samples) {
+    samples_ = samples;
+    Cursor c = at_;  // in registers while the loop runs
     while (true) {
-      const int command = pos < end ? data_[pos++] : -1;
-      if (have_last) {
-        const size_t frame_size = (command < 0 ? pos : pos - 1) - frame_start;
+      if (samples && samples->size() >= max_samples) {
+        at_ = c;
+        return false;
+      }
+      if (c.pos >= release_at_) {
+        // Pages behind the position are done with (a corrupt frame moves back at most
+        // kMaxFrameBytes: such a page is read again, never wrongly).
+        bytes_->ReleaseBefore(c.pos > kMaxFrameBytes ? c.pos - kMaxFrameBytes : 0);
+        release_at_ = c.pos + kReleaseEveryBytes;
+      }
+      const int command = c.pos < c.end ? data_[c.pos++] : -1;
+      if (c.have_last) {
+        const size_t frame_size = (command < 0 ? c.pos : c.pos - 1) - c.frame_start;
         const bool next_starts_frame = command >= 0 && FrameKind(command) >= 0;
-        const bool looks_complete = next_starts_frame || (command < 0 && !premature_eof);
+        const bool looks_complete = next_starts_frame || (command < 0 && !c.premature_eof);
         if (frame_size <= kMaxFrameBytes && looks_complete) {
-          Complete(last_kind, out);
+          Complete(c.last_kind, out);
         } else {
           // Corrupt: resynchronise on the next plausible frame start after this frame's marker.
           // Frame starts only move forward, so the loop ends.
           ++out->corrupt_frames;
           main_valid_ = false;
-          pos = frame_start + 1;
-          have_last = false;
-          premature_eof = false;
+          c.pos = c.frame_start + 1;
+          c.have_last = false;
+          c.premature_eof = false;
           continue;
         }
-        have_last = false;
+        c.have_last = false;
       }
       if (command < 0) break;
-      frame_start = pos - 1;
+      c.frame_start = c.pos - 1;
       const int kind = FrameKind(command);
       if (kind >= 0 && (kind == kKindE || h_.defs[kind].usable)) {
         // A frame may not be longer than kMaxFrameBytes: reading stops there (and the frame is
         // corrupt), so one attempt costs at most that many bytes however garbled the input.
-        ByteReader r{data_, pos, std::min(end, frame_start + kMaxFrameBytes), false};
+        ByteReader r{data_, c.pos, std::min(c.end, c.frame_start + kMaxFrameBytes), false};
         Parse(kind, &r);
-        pos = r.pos;
-        premature_eof = r.eof;
-        if (kind == kKindE && event_valid_ && event_ == kEventLogEnd) end = pos;
-        have_last = true;
-        last_kind = kind;
+        c.pos = r.pos;
+        c.premature_eof = r.eof;
+        if (kind == kKindE && event_valid_ && event_ == kEventLogEnd) c.end = c.pos;
+        c.have_last = true;
+        c.last_kind = kind;
       } else {
         main_valid_ = false;  // a byte that starts no known frame: the main stream lost sync
       }
     }
+    at_ = c;
+    return true;
   }
 
+  // The byte the decoder has reached.
+  size_t position() const { return at_.pos; }
+
  private:
+  // Where the loop over the bytes stands between two calls of Run.
+  struct Cursor {
+    size_t pos = 0;
+    size_t end = 0;  // a LOG_END event moves it to just after itself
+    bool have_last = false;
+    int last_kind = -1;
+    size_t frame_start = 0;
+    bool premature_eof = false;
+  };
+
   int64_t* Slot(int index) { return index < 0 ? nullptr : ring_.data() + index * n_main_; }
 
   bool ShouldHaveFrame(uint32_t iteration) const {
@@ -699,13 +809,17 @@ class LogDecoder {
   void AcceptMain(const int64_t* frame, DecodedLog* out) {
     last_iteration_ = static_cast<uint32_t>(frame[h_.idx_iteration]);
     last_time_us_ = frame[h_.idx_time];
+    const int64_t t_ns = last_time_us_ * 1000;
+    if (out->info.main_frames++ == 0) out->first_t_ns = t_ns;
+    out->last_t_ns = t_ns;
+    if (!samples_) return;
     GyroSample sample;
-    sample.t_ns = last_time_us_ * 1000;
+    sample.t_ns = t_ns;
     sample.omega_rad_s = Eigen::Vector3d(static_cast<double>(frame[h_.idx_gyro[0]]),
                                          static_cast<double>(frame[h_.idx_gyro[1]]),
                                          static_cast<double>(frame[h_.idx_gyro[2]])) *
                          rad_per_lsb_;
-    out->samples.push_back(sample);
+    samples_->push_back(sample);
   }
 
   void Complete(int kind, DecodedLog* out) {
@@ -771,10 +885,13 @@ class LogDecoder {
     }
   }
 
+  BlackboxBytes* bytes_;
   const uint8_t* data_;
-  size_t end_;
-  const LogHeader& h_;
+  const LogHeader h_;
   double rad_per_lsb_;
+  Cursor at_;
+  size_t release_at_ = 0;
+  std::vector<GyroSample>* samples_ = nullptr;  // where accepted main frames go; none: counted
   size_t n_main_ = 0;
   std::vector<int64_t> ring_;
   int cur_ = 0, prev_ = -1, prev2_ = -1;
@@ -792,11 +909,19 @@ class LogDecoder {
   int64_t resume_time_us_ = 0;
 };
 
-// Decodes the log in [begin, end). Throws IoError (naming the path and the log) when its header
-// does not define what the gyro trace needs.
-DecodedLog DecodeLog(const uint8_t* data, size_t begin, size_t end, int index,
-                     const std::string& path) {
-  DecodedLog out;
+// A log's header, checked and compiled, ready for LogDecoder.
+struct PreparedLog {
+  DecodedLog out;  // info, the header's warnings, the gyro fields
+  LogHeader header;
+  double rad_per_lsb = 0.0;
+};
+
+// Reads the header of the log in [begin, end). Throws IoError (naming the path and the log) when
+// it does not define what the gyro trace needs.
+PreparedLog PrepareLog(const uint8_t* data, size_t begin, size_t end, int index,
+                       const std::string& path) {
+  PreparedLog prepared;
+  DecodedLog& out = prepared.out;
   out.info.index = index;
   out.info.begin_byte = begin;
   out.info.size_bytes = end - begin;
@@ -806,7 +931,8 @@ DecodedLog DecodeLog(const uint8_t* data, size_t begin, size_t end, int index,
     throw IoError(IoMessage(path, 0, where + ": " + problem));
   };
 
-  LogHeader h = ParseHeader(data, begin, end);
+  LogHeader& h = prepared.header;
+  h = ParseHeader(data, begin, end);
   out.info.firmware = h.firmware_revision;
   out.info.craft_name = h.craft_name;
   if (!h.defs[kKindI].has_names)
@@ -837,37 +963,55 @@ DecodedLog DecodeLog(const uint8_t* data, size_t begin, size_t end, int index,
     if (!problem.empty())
       out.warnings.push_back({"format", where + ": " + problem + "; those frames are skipped"});
   }
-  const double rad_per_lsb = GyroRadPerSecondPerLsb(h, &out.warnings);
+  prepared.rad_per_lsb = GyroRadPerSecondPerLsb(h, &out.warnings);
   out.gyro_field =
       h.defs[kKindI].names[h.idx_gyro[0]].substr(0, h.defs[kKindI].names[h.idx_gyro[0]].find('['));
   out.has_gyro_unfilt = h.has_gyro_unfilt;
+  return prepared;
+}
 
-  LogDecoder decoder(data, end, h, rad_per_lsb);
-  decoder.Run(&out);
+// Decodes the log in [begin, end) of bytes, counting its frames; with_rate also gives its median
+// rate (from every sample's time, held while it decodes: for ListBlackboxLogs). Throws IoError as
+// PrepareLog does.
+DecodedLog DecodeLog(BlackboxBytes* bytes, size_t begin, size_t end, int index,
+                     const std::string& path, bool with_rate) {
+  PreparedLog prepared = PrepareLog(bytes->data(), begin, end, index, path);
+  DecodedLog out = std::move(prepared.out);
+  LogDecoder decoder(bytes, end, std::move(prepared.header), prepared.rad_per_lsb);
+  std::vector<GyroSample> samples;
+  decoder.Run(&out, with_rate ? &samples : nullptr, std::numeric_limits<size_t>::max());
 
-  out.info.main_frames = out.samples.size();
   out.info.skipped_frames = out.corrupt_frames + out.rejected_main_frames;
-  if (out.samples.size() >= 2) {
-    out.info.duration_s = (out.samples.back().t_ns - out.samples.front().t_ns) * 1e-9;
-    std::vector<int64_t> dt(out.samples.size() - 1);
-    for (size_t k = 0; k + 1 < out.samples.size(); ++k)
-      dt[k] = out.samples[k + 1].t_ns - out.samples[k].t_ns;
-    const int64_t median_dt = UpperMedian(std::move(dt));
-    if (median_dt > 0) out.info.rate_hz = 1e9 / static_cast<double>(median_dt);
+  if (out.info.main_frames >= 2) {
+    out.info.duration_s = (out.last_t_ns - out.first_t_ns) * 1e-9;
+    if (with_rate) {
+      std::vector<int64_t> dt(samples.size() - 1);
+      for (size_t k = 0; k + 1 < samples.size(); ++k) dt[k] = samples[k + 1].t_ns - samples[k].t_ns;
+      const int64_t median_dt = UpperMedian(std::move(dt));
+      if (median_dt > 0) out.info.rate_hz = 1e9 / static_cast<double>(median_dt);
+    }
   }
   return out;
 }
 
-// Start offsets of the logs in a file (blackbox-tools flightLogCreate: every start marker).
-std::vector<size_t> FindLogStarts(std::string_view bytes) {
+// Start offsets of the logs in a file (blackbox-tools flightLogCreate: every start marker),
+// searched a block at a time so that the pages behind go back as the search moves on.
+std::vector<size_t> FindLogStarts(BlackboxBytes* bytes) {
+  const std::string_view all = bytes->view();
   std::vector<size_t> starts;
   const std::boyer_moore_horspool_searcher searcher(kLogStartMarker.begin(), kLogStartMarker.end());
-  auto it = bytes.begin();
-  while (true) {
-    it = std::search(it, bytes.end(), searcher);
-    if (it == bytes.end()) break;
-    starts.push_back(static_cast<size_t>(it - bytes.begin()));
-    it += kLogStartMarker.size();
+  size_t from = 0;  // where the search goes on (past the last marker found)
+  for (size_t block = 0; block < all.size(); block += kReleaseEveryBytes) {
+    // A marker that starts in this block may end in the next.
+    const auto block_end =
+        all.begin() + std::min(all.size(), block + kReleaseEveryBytes + kLogStartMarker.size() - 1);
+    auto it = all.begin() + std::max(from, block);
+    while ((it = std::search(it, block_end, searcher)) != block_end) {
+      starts.push_back(static_cast<size_t>(it - all.begin()));
+      it += kLogStartMarker.size();
+      from = static_cast<size_t>(it - all.begin());
+    }
+    bytes->ReleaseBefore(block);
   }
   return starts;
 }
@@ -877,19 +1021,19 @@ struct DecodedFile {
   size_t leading_garbage_bytes = 0;
 };
 
-DecodedFile DecodeAllLogs(std::string_view bytes, const std::string& path) {
-  const std::vector<size_t> starts = FindLogStarts(bytes);
+DecodedFile DecodeAllLogs(BlackboxBytes* bytes, const std::vector<size_t>& starts,
+                          const std::string& path, bool with_rate) {
   if (starts.empty()) {
     throw IoError(IoMessage(
         path, 0, "not a blackbox log: no 'H Product:Blackbox flight data recorder' header"));
   }
-  const auto* data = reinterpret_cast<const uint8_t*>(bytes.data());
+  bytes->StartReading();
   DecodedFile file;
   file.leading_garbage_bytes = starts.front();
   for (size_t k = 0; k < starts.size(); ++k) {
-    const size_t end = k + 1 < starts.size() ? starts[k + 1] : bytes.size();
+    const size_t end = k + 1 < starts.size() ? starts[k + 1] : bytes->view().size();
     try {
-      file.logs.push_back(DecodeLog(data, starts[k], end, static_cast<int>(k), path));
+      file.logs.push_back(DecodeLog(bytes, starts[k], end, static_cast<int>(k), path, with_rate));
     } catch (const IoError& e) {
       DecodedLog failed;
       failed.info.index = static_cast<int>(k);
@@ -1029,37 +1173,78 @@ GyroSample BlackboxCsvRow(std::string_view line, const CsvColumns& columns, cons
   return sample;
 }
 
-FlightLog ReadBlackboxCsv(std::string_view text, const std::string& path) {
-  LineCursor cursor(text);
-  std::optional<std::string_view> line = cursor.Next();
-  if (line && line->size() >= 3 && line->substr(0, 3) == "\xEF\xBB\xBF") line->remove_prefix(3);
-  if (!line) throw IoError(IoMessage(path, 1, "empty file"));
-  std::string problem;
-  const std::optional<CsvColumns> columns = ParseCsvHeader(*line, &problem);
-  if (!columns) throw IoError(IoMessage(path, 1, problem));
+// The samples of blackbox_decode's CSV, parsed a chunk of rows at a time.
+class BlackboxCsvSource : public FillingSource {
+ public:
+  // cursor: past the header line of bytes' text.
+  BlackboxCsvSource(std::unique_ptr<BlackboxBytes> bytes, LineCursor cursor, CsvColumns columns,
+                    size_t chunk_samples)
+      : FillingSource(chunk_samples),
+        bytes_(std::move(bytes)),
+        cursor_(cursor),
+        columns_(columns) {}
+  double Fraction() const override {
+    if (ended_ || bytes_->view().empty()) return 1.0;
+    return static_cast<double>(read_bytes_) / bytes_->view().size();
+  }
 
-  std::vector<GyroSample> samples;
-  std::vector<std::string_view> fields;
-  std::vector<LogWarning> cut;
-  while ((line = cursor.Next())) {
-    if (line->find_first_not_of(" \t") == std::string_view::npos) continue;
-    try {
-      const GyroSample sample =
-          BlackboxCsvRow(*line, *columns, path, cursor.line_number(), &fields);
-      if (!samples.empty() && sample.t_ns < samples.back().t_ns)
-        throw IoError(IoMessage(path, cursor.line_number(), "time goes backwards"));
-      samples.push_back(sample);
-    } catch (const IoError&) {
-      if (!cursor.unterminated()) throw;  // only the last line may be cut
-      cut.push_back(CutLastLineWarning(
-          cursor.line_number(),
-          samples.empty() ? std::nullopt : std::optional<double>(samples.back().t_ns * 1e-9)));
+ protected:
+  void Fill(std::vector<GyroSample>* chunk) override {
+    if (ended_) return;
+    bytes_->CheckUnchanged();
+    const std::string& path = bytes_->path();
+    ReserveChunk(chunk, bytes_->view().size() - read_bytes_);
+    while (chunk->size() < chunk_samples()) {
+      const std::optional<std::string_view> line = cursor_.Next();
+      if (!line) {
+        ended_ = true;
+        if (!last_t_ns_) throw IoError(IoMessage(path, cursor_.line_number(), "no data rows"));
+        return;
+      }
+      read_bytes_ = static_cast<size_t>(line->data() + line->size() - bytes_->view().data());
+      if (read_bytes_ >= released_ + kReleaseEveryBytes) {
+        bytes_->ReleaseBefore(read_bytes_);
+        released_ = read_bytes_;
+      }
+      if (line->find_first_not_of(" \t") == std::string_view::npos) continue;
+      try {
+        const GyroSample sample =
+            BlackboxCsvRow(*line, columns_, path, cursor_.line_number(), &fields_);
+        if (last_t_ns_ && sample.t_ns < *last_t_ns_)
+          throw IoError(IoMessage(path, cursor_.line_number(), "time goes backwards"));
+        chunk->push_back(sample);
+        last_t_ns_ = sample.t_ns;
+      } catch (const IoError&) {
+        if (!cursor_.unterminated()) throw;  // only the last line may be cut
+        LeaveOutCutLastLine(cursor_.line_number(), last_t_ns_);
+      }
     }
   }
-  if (samples.empty()) throw IoError(IoMessage(path, cursor.line_number(), "no data rows"));
 
-  FlightLog log;
-  log.gyro = GyroTrace(std::move(samples));
+ private:
+  std::unique_ptr<BlackboxBytes> bytes_;
+  LineCursor cursor_;
+  CsvColumns columns_;
+  std::vector<std::string_view> fields_;
+  std::optional<int64_t> last_t_ns_;  // of the last row taken
+  size_t read_bytes_ = 0;             // up to the end of the last line read
+  size_t released_ = 0;
+  bool ended_ = false;
+};
+
+// A CSV export: its header now, its rows as they are taken.
+BlackboxStream OpenCsv(std::unique_ptr<BlackboxBytes> bytes, size_t chunk_samples) {
+  const std::string& path = bytes->path();
+  bytes->StartReading();
+  LineCursor cursor(bytes->view());
+  std::optional<std::string_view> line = cursor.Next();
+  if (!line) throw IoError(IoMessage(path, 1, "empty file"));
+  std::string problem;
+  const std::optional<CsvColumns> columns = ParseCsvHeader(StripBom(*line), &problem);
+  if (!columns) throw IoError(IoMessage(path, 1, problem));
+
+  BlackboxStream stream;
+  FlightLog& log = stream.log;
   log.format = "betaflight_csv";
   log.gyro_source = "gyroADC";
   log.gyro_sources_available = {"gyroADC"};
@@ -1068,11 +1253,68 @@ FlightLog ReadBlackboxCsv(std::string_view text, const std::string& path) {
                             "gyroADC has no unit in the CSV header; taken as deg/s (Betaflight >= "
                             "3 logs gyro_scale 1.0)"});
   }
-  log.warnings.insert(log.warnings.end(), cut.begin(), cut.end());
-  return log;
+  stream.samples =
+      std::make_unique<BlackboxCsvSource>(std::move(bytes), cursor, *columns, chunk_samples);
+  return stream;
 }
 
-FlightLog ToFlightLog(DecodedFile file, int log_index, const std::string& path) {
+// Pass 2 over a native file: the chosen log decoded again, its samples handed on a chunk at a time.
+class BlackboxFrameSource : public FillingSource {
+ public:
+  // log: the chosen log as pass 1 decoded it.
+  BlackboxFrameSource(std::unique_ptr<BlackboxBytes> bytes, const DecodedLog& log,
+                      size_t chunk_samples)
+      : FillingSource(chunk_samples),
+        bytes_(std::move(bytes)),
+        index_(log.info.index),
+        begin_(log.info.begin_byte),
+        end_(log.info.begin_byte + log.info.size_bytes),
+        main_frames_(log.info.main_frames) {}
+  // The share of the chosen log's bytes decoded.
+  double Fraction() const override {
+    if (ended_) return 1.0;  // a LOG_END event may end it before its last byte
+    if (!decoder_) return 0.0;
+    return end_ > begin_ ? static_cast<double>(std::min(decoder_->position(), end_) - begin_) /
+                               static_cast<double>(end_ - begin_)
+                         : 1.0;
+  }
+
+ protected:
+  void Fill(std::vector<GyroSample>* chunk) override {
+    if (ended_) return;
+    if (!decoder_) {
+      bytes_->StartReading();
+      PreparedLog prepared = PrepareLog(bytes_->data(), begin_, end_, index_, bytes_->path());
+      decoder_ = std::make_unique<LogDecoder>(bytes_.get(), end_, std::move(prepared.header),
+                                              prepared.rad_per_lsb);
+    }
+    bytes_->CheckUnchanged();
+    ReserveChunk(chunk, end_ - std::min(decoder_->position(), end_));
+    ended_ = decoder_->Run(&counts_, chunk, chunk_samples());
+    if (ended_ && counts_.info.main_frames != main_frames_) {
+      // Only bytes that changed since pass 1 decode differently.
+      throw IoError(
+          IoMessage(bytes_->path(), 0,
+                    "changed while it was read (log " + std::to_string(index_) + " held " +
+                        Plural(main_frames_, "main frame") + ", then " +
+                        std::to_string(counts_.info.main_frames) +
+                        "): is it still being recorded? Read a copy, or the finished log"));
+    }
+  }
+
+ private:
+  std::unique_ptr<BlackboxBytes> bytes_;
+  int index_;
+  size_t begin_, end_;
+  size_t main_frames_;  // what pass 1 found
+  std::unique_ptr<LogDecoder> decoder_;
+  DecodedLog counts_;  // pass 2's own counts
+  bool ended_ = false;
+};
+
+// Which log of the file to read: log_index, or -1 for the one with the most main frames (the
+// first of equals). Throws IoError when it is out of range or cannot be read.
+int ChooseLog(const DecodedFile& file, int log_index, const std::string& path) {
   const int count = static_cast<int>(file.logs.size());
   int chosen = log_index;
   if (log_index < -1 || log_index >= count) {
@@ -1096,13 +1338,19 @@ FlightLog ToFlightLog(DecodedFile file, int log_index, const std::string& path) 
       throw IoError(IoMessage(path, 0, "no log in the file holds a main frame"));
     }
   }
-  DecodedLog& log = file.logs[chosen];
+  const DecodedLog& log = file.logs[chosen];
   if (!log.info.problem.empty()) throw IoError(log.info.problem);
-  const std::string where = "log " + std::to_string(chosen);
-  if (log.samples.empty()) throw IoError(IoMessage(path, 0, where + " holds no main frame"));
+  if (log.info.main_frames == 0)
+    throw IoError(IoMessage(path, 0, "log " + std::to_string(chosen) + " holds no main frame"));
+  return chosen;
+}
 
+// All of the chosen log but its samples: the sources, records_skipped and what was lost.
+FlightLog DescribeLog(DecodedFile& file, int chosen, int log_index) {
+  const int count = static_cast<int>(file.logs.size());
+  DecodedLog& log = file.logs[chosen];
+  const std::string where = "log " + std::to_string(chosen);
   FlightLog out;
-  out.gyro = GyroTrace(std::move(log.samples));
   out.format = "betaflight";
   out.gyro_source = log.gyro_field;
   out.gyro_sources_available = {log.gyro_field};
@@ -1154,9 +1402,63 @@ FlightLog ToFlightLog(DecodedFile file, int log_index, const std::string& path) 
     out.warnings.push_back(
         {"truncated",
          where + ": no LOG_END event (the recording was cut off or the file truncated)",
-         out.gyro.empty() ? std::nullopt : std::optional<double>(out.gyro.t_end_ns() * 1e-9)});
+         std::optional<double>(log.last_t_ns * 1e-9)});
   }
   return out;
+}
+
+// A native file: pass 1 decodes every log, counting, to choose one and say what it lost; its
+// samples come from pass 2 (BlackboxFrameSource). starts: FindLogStarts's.
+BlackboxStream OpenNative(std::unique_ptr<BlackboxBytes> bytes, const std::vector<size_t>& starts,
+                          int log_index, size_t chunk_samples,
+                          size_t* leading_garbage_bytes = nullptr) {
+  DecodedFile file = DecodeAllLogs(bytes.get(), starts, bytes->path(), false);
+  if (leading_garbage_bytes) *leading_garbage_bytes = file.leading_garbage_bytes;
+  const int chosen = ChooseLog(file, log_index, bytes->path());
+  BlackboxStream stream;
+  stream.log = DescribeLog(file, chosen, log_index);
+  stream.samples =
+      std::make_unique<BlackboxFrameSource>(std::move(bytes), file.logs[chosen], chunk_samples);
+  return stream;
+}
+
+// A native file or a CSV export (a file with no start marker whose first line is the export's).
+BlackboxStream OpenAny(std::unique_ptr<BlackboxBytes> bytes, int log_index, size_t chunk_samples) {
+  const std::vector<size_t> starts = FindLogStarts(bytes.get());
+  if (starts.empty() && LooksLikeCsvHeader(FirstLine(bytes->view()))) {
+    if (log_index > 0) {
+      throw IoError(IoMessage(bytes->path(), 0,
+                              "log index " + std::to_string(log_index) +
+                                  " out of range: a CSV export holds 1 log (0)"));
+    }
+    return OpenCsv(std::move(bytes), chunk_samples);
+  }
+  return OpenNative(std::move(bytes), starts, log_index, chunk_samples);
+}
+
+FlightLog ReadWhole(BlackboxStream stream) {
+  FlightLog log = std::move(stream.log);
+  log.gyro = ReadAllSamples(stream.samples.get());
+  for (LogWarning& warning : stream.samples->Warnings()) log.warnings.push_back(std::move(warning));
+  return log;
+}
+
+std::vector<BlackboxLogInfo> ListLogs(std::unique_ptr<BlackboxBytes> bytes) {
+  const std::vector<size_t> starts = FindLogStarts(bytes.get());
+  if (starts.empty() && LooksLikeCsvHeader(FirstLine(bytes->view()))) {
+    BlackboxLogInfo info;
+    info.size_bytes = bytes->view().size();
+    const FlightLog log = ReadWhole(OpenCsv(std::move(bytes), FillingSource::kDefaultChunkSamples));
+    info.main_frames = log.gyro.size();
+    info.duration_s = log.gyro.DurationS();
+    info.rate_hz = log.gyro.sampling().RateHz();
+    return {info};
+  }
+  DecodedFile file = DecodeAllLogs(bytes.get(), starts, bytes->path(), true);
+  std::vector<BlackboxLogInfo> infos;
+  infos.reserve(file.logs.size());
+  for (DecodedLog& log : file.logs) infos.push_back(std::move(log.info));
+  return infos;
 }
 
 }  // namespace
@@ -1168,47 +1470,42 @@ bool LooksLikeBlackbox(std::string_view first_bytes) {
   return LooksLikeCsvHeader(FirstLine(first_bytes));
 }
 
+BlackboxStream OpenBlackbox(const std::string& path, int log_index, size_t chunk_samples) {
+  return OpenAny(BlackboxBytes::OfFile(path), log_index, chunk_samples);
+}
+
+BlackboxStream OpenBlackboxBytes(std::string bytes, const std::string& path, int log_index,
+                                 size_t chunk_samples) {
+  return OpenAny(BlackboxBytes::Owning(std::move(bytes), path), log_index, chunk_samples);
+}
+
+BlackboxStream OpenBlackboxBuffer(std::string_view bytes, const std::string& path, int log_index,
+                                  size_t chunk_samples) {
+  return OpenAny(BlackboxBytes::Borrowing(bytes, path), log_index, chunk_samples);
+}
+
 FlightLog DecodeBlackbox(std::string_view bytes, const std::string& path, int log_index,
                          BlackboxDecodeStats* stats) {
-  DecodedFile file = DecodeAllLogs(bytes, path);
-  if (stats) stats->bytes_decoded = bytes.size() - file.leading_garbage_bytes;
-  return ToFlightLog(std::move(file), log_index, path);
+  auto borrowed = BlackboxBytes::Borrowing(bytes, path);
+  const std::vector<size_t> starts = FindLogStarts(borrowed.get());
+  size_t leading_garbage_bytes = 0;
+  BlackboxStream stream = OpenNative(std::move(borrowed), starts, log_index,
+                                     FillingSource::kDefaultChunkSamples, &leading_garbage_bytes);
+  if (stats) stats->bytes_decoded = bytes.size() - leading_garbage_bytes;
+  return ReadWhole(std::move(stream));
 }
 
 std::vector<BlackboxLogInfo> ListBlackboxLogsInBuffer(std::string_view bytes,
                                                       const std::string& path) {
-  DecodedFile file = DecodeAllLogs(bytes, path);
-  std::vector<BlackboxLogInfo> infos;
-  infos.reserve(file.logs.size());
-  for (DecodedLog& log : file.logs) infos.push_back(std::move(log.info));
-  return infos;
+  return ListLogs(BlackboxBytes::Borrowing(bytes, path));
 }
 
 std::vector<BlackboxLogInfo> ListBlackboxLogs(const std::string& path) {
-  const std::string bytes = ReadFileToString(path);
-  if (FindLogStarts(bytes).empty() && LooksLikeCsvHeader(FirstLine(bytes))) {
-    const FlightLog log = ReadBlackboxCsv(bytes, path);
-    BlackboxLogInfo info;
-    info.size_bytes = bytes.size();
-    info.main_frames = log.gyro.size();
-    info.duration_s = log.gyro.DurationS();
-    info.rate_hz = log.gyro.sampling().RateHz();
-    return {info};
-  }
-  return ListBlackboxLogsInBuffer(bytes, path);
+  return ListLogs(BlackboxBytes::OfFile(path));
 }
 
 FlightLog ReadBlackbox(const std::string& path, int log_index) {
-  const std::string bytes = ReadFileToString(path);
-  if (FindLogStarts(bytes).empty() && LooksLikeCsvHeader(FirstLine(bytes))) {
-    if (log_index > 0) {
-      throw IoError(IoMessage(path, 0,
-                              "log index " + std::to_string(log_index) +
-                                  " out of range: a CSV export holds 1 log (0)"));
-    }
-    return ReadBlackboxCsv(bytes, path);
-  }
-  return DecodeBlackbox(bytes, path, log_index);
+  return ReadWhole(OpenBlackbox(path, log_index));
 }
 
 }  // namespace shutterlab

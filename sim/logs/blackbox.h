@@ -16,9 +16,11 @@
 // counted (FlightLog::records_skipped, one warning line per kind), as blackbox-tools does; a file
 // that has no usable header or no main frame throws IoError naming the path and the problem.
 
+#include "sim/gyro_source.h"
 #include "sim/logs/flight_log.h"
 
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -48,14 +50,42 @@ struct BlackboxLogInfo {
 bool LooksLikeBlackbox(std::string_view first_bytes);
 
 // Lists every log in a blackbox file (a CSV export is one log). Decodes each log fully to count
-// its frames. Throws IoError when the file cannot be read or is not a blackbox log.
+// its frames (and holds one log's sample times at a time, for its rate). Throws IoError when the
+// file cannot be read or is not a blackbox log.
 std::vector<BlackboxLogInfo> ListBlackboxLogs(const std::string& path);
 
-// Reads one log of a blackbox file: log_index from ListBlackboxLogs, or -1 for the one with the
-// most main frames (the first of equals). FlightLog::format is "betaflight" (native) or
-// "betaflight_csv"; gyro_source "gyroADC". Throws IoError when the file is not a blackbox log,
-// log_index is out of range, the chosen log's header lacks what the gyro needs, or it holds no
-// main frame.
+// A blackbox log opened to be read as a stream, in memory that does not grow with its length.
+// Opening reads the file once (pass 1: the logs' start markers, then every log decoded without
+// keeping a sample, to choose one and to count what it lost); `log` then holds all but the
+// samples (log.gyro stays empty), with every warning of the reader. `samples` decodes the chosen
+// log again (pass 2) and hands its samples on in chunks of chunk_samples. A CSV export is read in
+// one pass, a chunk of rows at a time; a row that does not read throws IoError from Next, and a
+// cut last line is left out and said in samples->Warnings() (its only warnings).
+// A mapped file's pages are handed back behind the decoder every few MiB; a file that changes
+// between the passes (still being recorded) makes Next throw IoError naming it.
+struct BlackboxStream {
+  FlightLog log;
+  std::unique_ptr<GyroSource> samples;
+};
+
+// Opens one log of a blackbox file, native or CSV export: log_index from ListBlackboxLogs, or -1
+// for the one with the most main frames (the first of equals). FlightLog::format is "betaflight"
+// (native) or "betaflight_csv"; gyro_source "gyroADC". Throws IoError when the file is not a
+// blackbox log, log_index is out of range, the chosen log's header lacks what the gyro needs, or it
+// holds no main frame.
+BlackboxStream OpenBlackbox(const std::string& path, int log_index = -1,
+                            size_t chunk_samples = FillingSource::kDefaultChunkSamples);
+// The same over bytes already read (a log on a pipe), which the stream keeps; `path` only names
+// the source in messages.
+BlackboxStream OpenBlackboxBytes(std::string bytes, const std::string& path, int log_index = -1,
+                                 size_t chunk_samples = FillingSource::kDefaultChunkSamples);
+// The same over a caller's buffer, which must outlive the stream (tests, fuzzing).
+BlackboxStream OpenBlackboxBuffer(std::string_view bytes, const std::string& path,
+                                  int log_index = -1,
+                                  size_t chunk_samples = FillingSource::kDefaultChunkSamples);
+
+// Reads one log of a blackbox file whole: OpenBlackbox's log with every sample and the samples'
+// warnings after its own.
 FlightLog ReadBlackbox(const std::string& path, int log_index = -1);
 
 // Decoding statistics of the last call, for the benchmark and tests: bytes of the decoded logs.
@@ -68,7 +98,7 @@ struct BlackboxDecodeStats {
 // corruption tests that mutate the bytes without touching the disk.
 FlightLog DecodeBlackbox(std::string_view bytes, const std::string& path, int log_index = -1,
                          BlackboxDecodeStats* stats = nullptr);
-// ListBlackboxLogs on an in-memory native blackbox file.
+// ListBlackboxLogs on a blackbox file in memory.
 std::vector<BlackboxLogInfo> ListBlackboxLogsInBuffer(std::string_view bytes,
                                                       const std::string& path);
 

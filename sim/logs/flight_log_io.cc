@@ -141,9 +141,13 @@ FlightLogStream WholeLogStream(FlightLog log) {
 // One open function per binary format, each returning its own stream: a file is read by its
 // reader; a pipe (input, read once) is taken whole.
 FlightLogStream OpenULogLog(TextBlocks input, const std::string& path) {
-  if (!std::filesystem::is_regular_file(path))
-    return WholeLogStream(ParseULog(input.TakeRest(), path));
-  return WholeLogStream(ReadULog(path));
+  // Read in two passes over the file (sim/logs/ulog.h OpenULog).
+  ULogStream ulog = std::filesystem::is_regular_file(path) ? OpenULog(path)
+                                                           : OpenULogBytes(input.TakeRest(), path);
+  FlightLogStream stream;
+  stream.log = std::move(ulog.log);
+  stream.gyro = std::move(ulog.gyro);
+  return stream;
 }
 
 // Streamed: two passes over the mapped file (sim/logs/dataflash.h OpenDataFlash).
@@ -155,10 +159,16 @@ FlightLogStream OpenDataFlashLog(TextBlocks input, const std::string& path) {
   return stream;
 }
 
+// Streamed (sim/logs/blackbox.h OpenBlackbox): a file mapped and read in two passes; a pipe
+// (input, read once) taken whole, then read the same way.
 FlightLogStream OpenBlackboxLog(TextBlocks input, const std::string& path, int log_index) {
-  if (!std::filesystem::is_regular_file(path))
-    return WholeLogStream(DecodeBlackbox(input.TakeRest(), path, log_index));
-  return WholeLogStream(ReadBlackbox(path, log_index));
+  BlackboxStream blackbox = std::filesystem::is_regular_file(path)
+                                ? OpenBlackbox(path, log_index)
+                                : OpenBlackboxBytes(input.TakeRest(), path, log_index);
+  FlightLogStream stream;
+  stream.log = std::move(blackbox.log);
+  stream.gyro = std::move(blackbox.samples);
+  return stream;
 }
 
 // Decoded whole: its gyro is ~200 Hz (an hour is 720,000 samples), and its sample tables may
@@ -181,6 +191,19 @@ FlightLogStream OpenBinary(TextBlocks input, const std::string& path, LogFormat 
     default:
       return OpenBlackboxLog(std::move(input), path, options.log_index);
   }
+}
+
+// A blackbox log, streamed (sim/logs/blackbox.h OpenBlackbox): a file mapped and read in two
+// passes; a pipe (input, read once) taken whole, then read the same way.
+FlightLogStream OpenBlackboxLog(TextBlocks input, const std::string& path,
+                                const FlightLogReadOptions& options) {
+  BlackboxStream blackbox = std::filesystem::is_regular_file(path)
+                                ? OpenBlackbox(path, options.log_index)
+                                : OpenBlackboxBytes(input.TakeRest(), path, options.log_index);
+  FlightLogStream stream;
+  stream.log = std::move(blackbox.log);
+  stream.gyro = std::move(blackbox.samples);
+  return stream;
 }
 
 }  // namespace

@@ -42,10 +42,11 @@ LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string&
 FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& options = {});
 
 // A log opened to be read as a stream. The text logs (gyro.csv, .gcsv, raw counts, --columns) are
-// parsed a block at a time as the chunks are taken, in bounded memory whatever their length; so is
-// a DataFlash file, in two passes over its mapped bytes (sim/logs/dataflash.h OpenDataFlash); the
-// other binary logs (ULog, blackbox, GoPro MP4) are decoded whole when opened, then handed on in
-// slices.
+// parsed a block at a time as the chunks are taken, in bounded memory whatever their length; so
+// are the flight-controller logs, each in two passes over its mapped bytes: a first when opened
+// (everything but the samples, and what choosing and cleaning the gyro stream needs), the samples
+// decoded again as they are taken (sim/logs/ulog.h, dataflash.h, blackbox.h). A GoPro MP4 is
+// decoded whole when opened (its gyro is ~200 Hz), then handed on in slices.
 struct FlightLogStream {
   FlightLog log;                     // all but the samples (log.gyro stays empty)
   std::unique_ptr<GyroSource> gyro;  // the samples; reading errors are thrown from Next

@@ -131,8 +131,10 @@ void CandidateSummary::AddKept(int64_t t_ns) {
   InsertInTimeOrder(&held_, std::make_pair(t_ns, seq),
                     [](const std::pair<int64_t, size_t>& h) { return h.first; });
   while (held_.size() > limits_.reorder_samples) {
-    TakeSorted(held_.front().first, held_.front().second);
+    // Taken off first: TakeSorted empties held_ when the intervals exceed their limit.
+    const std::pair<int64_t, size_t> first = held_.front();
     held_.pop_front();
+    TakeSorted(first.first, first.second);
     if (!exact_) return;
   }
 }

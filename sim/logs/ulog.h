@@ -6,9 +6,13 @@
 // follows PX4/pyulog core.py where the spec is silent (data messages may omit trailing _padding
 // fields; an unknown message type means corruption).
 
+#include "sim/gyro_source.h"
 #include "sim/logs/flight_log.h"
+#include "sim/logs/gyro_candidates.h"
 
+#include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -39,6 +43,31 @@ FlightLog ReadULog(const std::string& path);
 
 // The same on bytes already in memory; path is used in messages only.
 FlightLog ParseULog(std::string_view bytes, const std::string& path);
+
+// A ULog read as a stream, in memory that does not grow with the number of gyro samples. Opening
+// reads the file once (pass 1): everything but the gyro samples, and of each gyro candidate only
+// what choosing and cleaning it needs; `gyro` then reads the file again (pass 2) and hands on the
+// chosen candidate's cleaned samples in chunks of at most chunk_samples. Together they give
+// exactly what ReadULog gives (ReadULog is this stream read whole).
+struct ULogStream {
+  FlightLog log;                     // all but the samples (log.gyro stays empty)
+  std::unique_ptr<GyroSource> gyro;  // the samples; Fraction() is the share of the file read
+};
+// A file, mapped and read front to back: the pages behind the parse are handed back as it goes.
+// Throws IoError as ReadULog does; the source throws IoError when the file has changed (still
+// being recorded) between the passes.
+ULogStream OpenULog(const std::string& path,
+                    size_t chunk_samples = FillingSource::kDefaultChunkSamples);
+// Bytes already in memory (a pipe's, read whole), owned by the stream.
+ULogStream OpenULogBytes(std::string bytes, const std::string& path,
+                         size_t chunk_samples = FillingSource::kDefaultChunkSamples);
+
+namespace internal {
+// OpenULogBytes with the limits of pass 1's candidate summaries chosen: small limits take the
+// fallback (a topic instance's times held whole, with a warning) on small inputs (tests, fuzzing).
+ULogStream OpenULogBytes(std::string bytes, const std::string& path, size_t chunk_samples,
+                         const CandidateLimits& limits);
+}  // namespace internal
 
 // A vehicle below this height is taken to be on the ground when the altitude median is formed.
 inline constexpr double kAirborneAltitudeM = 1.0;

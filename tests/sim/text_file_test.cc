@@ -172,7 +172,7 @@ TEST(TextBlocks, APeekAtTheStartIsHandedOutAgain) {
       TextBlocks from_file = TextBlocks::OfFile(path, block);
       TextBlocks in_memory = TextBlocks::InMemory(content, block);
       const std::string peeked(from_file.Peek(1000));
-      EXPECT_EQ(peeked, content.substr(0, std::min<size_t>({1000, block, content.size()})));
+      EXPECT_EQ(peeked, content.substr(0, 1000));  // a regular file is mapped: whatever the block
       EXPECT_EQ(std::string(in_memory.Peek(1000)), content.substr(0, 1000));
       EXPECT_EQ(from_file.TakeRest(), content) << "block " << block;
       EXPECT_EQ(in_memory.TakeRest(), content);

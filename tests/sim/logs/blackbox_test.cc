@@ -978,5 +978,202 @@ TEST(BlackboxCsv, BadRowsNameTheLine) {
   EXPECT_THROW(ReadBlackbox(path, 1), IoError);
 }
 
+// ---- Streaming: the samples decoded again a chunk at a time ----
+
+// Everything a stream gives, read chunk by chunk: each chunk holds chunk_samples but the last.
+struct Streamed {
+  FlightLog log;  // with every sample and the samples' warnings after the log's own
+  size_t chunks = 0;
+};
+
+Streamed ReadInChunks(BlackboxStream stream, size_t chunk_samples) {
+  Streamed out;
+  std::vector<GyroSample> samples;
+  double fraction = 0.0;
+  for (GyroChunk chunk = stream.samples->Next(); !chunk.empty(); chunk = stream.samples->Next()) {
+    EXPECT_LE(chunk.size, chunk_samples);
+    if (out.chunks > 0) {
+      EXPECT_EQ(samples.size() % chunk_samples, 0u) << "only the last chunk is short";
+    }
+    samples.insert(samples.end(), chunk.begin(), chunk.end());
+    ++out.chunks;
+    EXPECT_GE(stream.samples->Fraction(), fraction);
+    fraction = stream.samples->Fraction();
+  }
+  EXPECT_EQ(stream.samples->Fraction(), 1.0);
+  out.log = std::move(stream.log);
+  if (!samples.empty()) out.log.gyro = GyroTrace(std::move(samples));
+  for (LogWarning& w : stream.samples->Warnings()) out.log.warnings.push_back(std::move(w));
+  return out;
+}
+
+std::string WarningsText(const std::vector<LogWarning>& warnings) {
+  std::string text;
+  for (const LogWarning& w : warnings) {
+    char t_s[32] = "-";
+    if (w.t_s) std::snprintf(t_s, sizeof(t_s), "%a", *w.t_s);  // every bit
+    text += w.kind + ": " + w.message + " @" + t_s + " x" +
+            (w.count ? std::to_string(*w.count) : std::string("-")) + "\n";
+  }
+  return text;
+}
+
+// Bit for bit: the same samples, sources, records_skipped and warnings (order and text).
+void ExpectSameLog(const FlightLog& a, const FlightLog& b, const std::string& what) {
+  ASSERT_EQ(a.gyro.size(), b.gyro.size()) << what;
+  for (size_t k = 0; k < a.gyro.size(); ++k) {
+    ASSERT_EQ(a.gyro[k].t_ns, b.gyro[k].t_ns) << what << " sample " << k;
+    for (int axis = 0; axis < 3; ++axis) {
+      ASSERT_EQ(
+          std::memcmp(&a.gyro[k].omega_rad_s[axis], &b.gyro[k].omega_rad_s[axis], sizeof(double)),
+          0)
+          << what << " sample " << k;
+    }
+  }
+  EXPECT_EQ(a.format, b.format) << what;
+  EXPECT_EQ(a.gyro_source, b.gyro_source) << what;
+  EXPECT_EQ(a.gyro_sources_available, b.gyro_sources_available) << what;
+  EXPECT_EQ(a.records_skipped, b.records_skipped) << what;
+  EXPECT_EQ(WarningsText(a.warnings), WarningsText(b.warnings)) << what;
+}
+
+// The decoder pauses when a chunk is full and goes on where it stopped: at every chunk size the
+// samples and what was lost equal one uninterrupted decode's (the twin: a chunk larger than the
+// log), on clean, multi-log, cut and damaged inputs.
+TEST(BlackboxStream, ChunksOfAnySizeGiveTheUninterruptedDecodeBitForBit) {
+  SyntheticOptions a_options;
+  a_options.frames = 70;
+  a_options.frames_after_resume = 30;
+  SyntheticOptions b_options;
+  b_options.seed = 3;
+  b_options.t0_us = (int64_t{1} << 32) - 30000;  // the clock wraps inside it
+  const Synthetic a = MakeSyntheticLog(a_options);
+  const Synthetic b = MakeSyntheticLog(b_options);
+  std::vector<std::string> inputs = {a.bytes, "\xFF" + a.bytes + b.bytes + a.bytes,
+                                     b.bytes.substr(0, b.bytes.size() * 3 / 5)};
+  std::mt19937_64 rng(21);
+  for (int trial = 0; trial < 4; ++trial) {
+    std::string damaged = a.bytes + b.bytes;
+    std::uniform_int_distribution<size_t> where(SyntheticHeader(a_options).size(),
+                                                damaged.size() - 1);
+    for (int k = 0; k < 12; ++k) damaged[where(rng)] = static_cast<char>(rng());
+    inputs.push_back(damaged);
+  }
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    for (const int log_index : {-1, 0}) {
+      const std::string what = "input " + std::to_string(i) + " log " + std::to_string(log_index);
+      const Streamed whole = ReadInChunks(
+          OpenBlackboxBuffer(inputs[i], "s.bbl", log_index, size_t{1} << 30), size_t{1} << 30);
+      ASSERT_LE(whole.chunks, 1u) << what;
+      ExpectSameLog(whole.log, DecodeBlackbox(inputs[i], "s.bbl", log_index), what);
+      for (const size_t chunk : {1, 2, 3, 7, 64}) {
+        const Streamed streamed =
+            ReadInChunks(OpenBlackboxBuffer(inputs[i], "s.bbl", log_index, chunk), chunk);
+        ExpectSameLog(streamed.log, whole.log, what + " chunk " + std::to_string(chunk));
+      }
+    }
+  }
+  // And against the exact truth (logs whose every frame decodes: the resumes above may lose the
+  // I interval after them, whose first frame's jitter puts it before the resume's time).
+  SyntheticOptions c_options = b_options;
+  c_options.frames_after_resume = 0;
+  const Synthetic c = MakeSyntheticLog(c_options);
+  const Synthetic d = MakeSyntheticLog(SyntheticOptions{});
+  const std::string file = d.bytes + c.bytes;
+  ExpectMatchesSynthetic(ReadInChunks(OpenBlackboxBuffer(file, "s.bbl", -1, 5), 5).log, d,
+                         kRadPerDeg);
+  ExpectMatchesSynthetic(ReadInChunks(OpenBlackboxBuffer(file, "s.bbl", 1, 4), 4).log, c,
+                         kRadPerDeg);
+}
+
+// A real file read from its mapping in small chunks, and cut and damaged copies of it read from
+// memory, equal the uninterrupted decode.
+TEST(BlackboxStream, RealLogsInSmallChunksEqualTheUninterruptedDecode) {
+  SHUTTERLAB_NEED_REAL_DATA();
+  for (const char* leaf : {"LOG00037.BFL", "btfl_001.bbl"}) {
+    const std::string path = DataPath(leaf);
+    const std::string bytes = ReadFileToString(path);
+    const FlightLog whole = DecodeBlackbox(bytes, path);
+    ExpectSameLog(ReadInChunks(OpenBlackbox(path, -1, 1000), 1000).log, whole, leaf);
+    ExpectSameLog(ReadBlackbox(path), whole, leaf);
+  }
+  const std::string bytes = ReadFileToString(DataPath("LOG00037.BFL"));
+  std::mt19937_64 rng(8);
+  for (int trial = 0; trial < 4; ++trial) {
+    std::string copy = bytes.substr(
+        0, std::uniform_int_distribution<size_t>(bytes.size() / 4, bytes.size() - 1)(rng));
+    for (int k = 0; k < 8 * trial; ++k)
+      copy[std::uniform_int_distribution<size_t>(5000, copy.size() - 1)(rng)] ^= 0x5A;
+    const size_t chunk = 1 + trial * 37;
+    ExpectSameLog(ReadInChunks(OpenBlackboxBuffer(copy, "copy", -1, chunk), chunk).log,
+                  DecodeBlackbox(copy, "copy"), "trial " + std::to_string(trial));
+  }
+}
+
+TEST(BlackboxStream, OpeningKeepsNoSampleAndSaysWhatWasLost) {
+  SyntheticOptions o;
+  o.log_end = false;
+  const Synthetic s = MakeSyntheticLog(o);
+  BlackboxStream stream = OpenBlackboxBuffer(s.bytes, "open.bbl", -1, 16);
+  EXPECT_TRUE(stream.log.gyro.empty());
+  EXPECT_EQ(stream.samples->Fraction(), 0.0);
+  // The warnings of the whole log are known before a sample is taken: the pause, the cut end.
+  EXPECT_TRUE(test::AnyWarningContains(stream.log.warnings, "paused and resumed 1 time"));
+  EXPECT_TRUE(test::AnyWarningContains(stream.log.warnings, "no LOG_END"));
+  EXPECT_EQ(ReadInChunks(std::move(stream), 16).log.gyro.size(), s.t_us.size());
+}
+
+TEST(BlackboxStream, AFileThatChangesBetweenThePassesIsRefusedInOneLine) {
+  test::TempDir dir;
+  const std::string path = dir / "growing.bbl";
+  SyntheticOptions o;
+  o.log_end = false;
+  const Synthetic s = MakeSyntheticLog(o);
+  for (const bool grow : {true, false}) {
+    WriteFileAtomically(path, s.bytes);
+    BlackboxStream stream = OpenBlackbox(path, -1, 8);
+    ASSERT_FALSE(stream.samples->Next().empty());
+    {
+      // Still being recorded: more frames appended in place; or cut short (a mapped page past
+      // the new end would kill the process).
+      std::ofstream out(
+          path, grow ? std::ios::binary | std::ios::app : std::ios::binary | std::ios::trunc);
+      out << (grow ? s.bytes.substr(s.bytes.size() / 2) : s.bytes.substr(0, 5000));
+    }
+    try {
+      while (!stream.samples->Next().empty()) {
+      }
+      FAIL() << "a changed file must be refused";
+    } catch (const IoError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(path), std::string::npos) << what;
+      EXPECT_NE(what.find("changed while it was read"), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  }
+}
+
+TEST(BlackboxStream, CsvExportInTinyChunksEqualsTheWholeRead) {
+  test::TempDir dir;
+  const std::string path = dir / "export.csv";
+  std::string csv = "loopIteration, time (us), gyroADC[0], gyroADC[1], gyroADC[2]\n";
+  for (int k = 0; k < 40; ++k) {
+    csv += std::to_string(k) + ", " + std::to_string(1000 + 500 * k) + ", " +
+           std::to_string(k % 7 - 3) + ", " + std::to_string(-k) + ", 12\n";
+    if (k == 20) csv += "\n";  // blank lines are skipped
+  }
+  csv += "40, 210";  // cut inside its last line
+  WriteFileAtomically(path, csv);
+  const FlightLog whole = ReadBlackbox(path);
+  ASSERT_EQ(whole.gyro.size(), 40u);
+  ASSERT_TRUE(test::AnyWarningContains(whole.warnings, "line 43"));
+  for (const size_t chunk : {1, 3, 40, 1000}) {
+    const Streamed streamed = ReadInChunks(OpenBlackbox(path, -1, chunk), chunk);
+    ExpectSameLog(streamed.log, whole, "chunk " + std::to_string(chunk));
+  }
+  // On a pipe the bytes come whole and are read the same way.
+  ExpectSameLog(ReadInChunks(OpenBlackboxBytes(csv, path, -1, 2), 2).log, whole, "pipe");
+}
+
 }  // namespace
 }  // namespace shutterlab

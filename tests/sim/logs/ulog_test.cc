@@ -9,6 +9,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <limits>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -581,6 +584,239 @@ TEST(ULog, ByteFlippedCopiesGiveErrorOrPartialResult) {
       copy[at] = static_cast<char>(value(rng));
     }
     ExpectGracefulOn(copy, full_samples, full_samples, "early_flipped_" + std::to_string(trial));
+  }
+}
+
+// ------------------------------------------------------------------------------ streamed
+
+constexpr char kGyroFormat[] =
+    "sensor_gyro:uint64_t timestamp;uint64_t timestamp_sample;uint32_t device_id;float x;float y;"
+    "float z;";
+
+std::string GyroRecord(uint64_t t_us, float x, float y, float z) {
+  std::string r;
+  test::PutLittleEndian<uint64_t>(&r, t_us);
+  test::PutLittleEndian<uint64_t>(&r, t_us);
+  test::PutLittleEndian<uint32_t>(&r, 1);
+  for (float v : {x, y, z}) test::PutLittleEndian<float>(&r, v);
+  return r;
+}
+
+// A log with every kind of gyro stream and trouble the cleaning handles, drawn from rng: a
+// sensor_gyro_fifo instance with partial batches, two sensor_gyro instances and sensor_combined
+// whose times are now and then zero, bent back or forward, or far ahead, NaN rates, a dropout,
+// camera events, and sensor_gyro instance 0 removed and added again under another msg_id.
+std::string RandomULog(std::mt19937_64& rng) {
+  ULogBuilder b;
+  b.FlagBits(0);
+  b.Format(kFifoFormat);
+  b.Format(kCombinedFormat);
+  b.Format(kGyroFormat);
+  b.Format("camera_capture:uint64_t timestamp;uint32_t seq;");
+  b.AddLogged(0, 0, "sensor_gyro_fifo");
+  b.AddLogged(0, 1, "sensor_gyro");
+  b.AddLogged(1, 2, "sensor_gyro");
+  b.AddLogged(0, 3, "sensor_combined");
+  b.AddLogged(0, 4, "camera_capture");
+  std::uniform_int_distribution<int> trouble(0, 60);
+  auto bent = [&](uint64_t t_us) -> uint64_t {
+    switch (trouble(rng)) {
+      case 0:
+        return 0;
+      case 1:
+        return t_us + 100'000'000;  // 100 s ahead
+      case 2:
+        return t_us - 3000;
+      case 3:
+        return t_us + 1500;
+      default:
+        return t_us;
+    }
+  };
+  uint16_t gyro0_id = 1;
+  uint64_t t_us = 1'000'000;
+  const int messages = 200 + static_cast<int>(rng() % 300);
+  for (int m = 0; m < messages; ++m) {
+    t_us += 1000 + rng() % 3;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    b.Data(gyro0_id, GyroRecord(bent(t_us), 0.01f * m, trouble(rng) == 0 ? nan : 0.2f, -0.1f));
+    if (m % 2 == 0) b.Data(2, GyroRecord(bent(t_us), 0.0f, 0.1f, 0.2f));
+    if (m % 4 == 0) b.Data(3, CombinedRecord(bent(t_us), 0.3f, 0.2f, 0.1f));
+    if (m % 8 == 0) {
+      const uint8_t n = static_cast<uint8_t>(rng() % 33);
+      std::vector<int16_t> x(n), y(n, -5), z(n, 9);
+      for (uint8_t i = 0; i < n; ++i) x[i] = static_cast<int16_t>(m + i);
+      b.Data(0, FifoRecord(t_us, bent(t_us), 250.0f, 0.001f, n, x, y, z));
+    }
+    if (m % 50 == 7) {
+      std::string r;
+      test::PutLittleEndian<uint64_t>(&r, t_us + 10);
+      test::PutLittleEndian<uint32_t>(&r, static_cast<uint32_t>(m));
+      b.Data(4, r);
+    }
+    if (m == messages / 3) b.Dropout(25);
+    if (m == messages / 2) {
+      b.Message('R', std::string("\x01\x00", 2));
+      gyro0_id = 5;
+      b.AddLogged(0, gyro0_id, "sensor_gyro");
+    }
+  }
+  return b.bytes();
+}
+
+void ExpectSameLog(const FlightLog& a, const FlightLog& b, const std::string& what) {
+  EXPECT_EQ(a.format, b.format) << what;
+  EXPECT_EQ(a.gyro_source, b.gyro_source) << what;
+  EXPECT_EQ(a.gyro_sources_available, b.gyro_sources_available) << what;
+  EXPECT_EQ(a.records_skipped, b.records_skipped) << what;
+  ASSERT_EQ(a.warnings.size(), b.warnings.size()) << what;
+  for (size_t i = 0; i < a.warnings.size(); ++i) {
+    EXPECT_EQ(a.warnings[i].kind, b.warnings[i].kind) << what;
+    EXPECT_EQ(a.warnings[i].message, b.warnings[i].message) << what;
+    EXPECT_EQ(a.warnings[i].t_s, b.warnings[i].t_s) << what;
+    EXPECT_EQ(a.warnings[i].count, b.warnings[i].count) << what;
+  }
+  ASSERT_EQ(a.camera_events.size(), b.camera_events.size()) << what;
+  for (size_t i = 0; i < a.camera_events.size(); ++i) {
+    EXPECT_EQ(a.camera_events[i].t_ns, b.camera_events[i].t_ns) << what;
+    EXPECT_EQ(a.camera_events[i].sequence, b.camera_events[i].sequence) << what;
+    EXPECT_EQ(a.camera_events[i].kind, b.camera_events[i].kind) << what;
+  }
+  ASSERT_EQ(a.utc_fixes.size(), b.utc_fixes.size()) << what;
+  EXPECT_EQ(a.altitude_above_ground_m, b.altitude_above_ground_m) << what;
+  EXPECT_EQ(a.altitude_source, b.altitude_source) << what;
+  ASSERT_EQ(a.gyro.size(), b.gyro.size()) << what;
+  for (size_t i = 0; i < a.gyro.size(); ++i) {
+    ASSERT_EQ(a.gyro[i].t_ns, b.gyro[i].t_ns) << what << " sample " << i;
+    ASSERT_EQ(a.gyro[i].omega_rad_s, b.gyro[i].omega_rad_s) << what << " sample " << i;
+  }
+}
+
+// The stream read chunk by chunk (each at most chunk_samples, Fraction rising to 1), as a log.
+FlightLog ReadInChunks(ULogStream stream, size_t chunk_samples, const std::string& what) {
+  std::vector<GyroSample> samples;
+  double fraction = 0.0;
+  for (GyroChunk chunk = stream.gyro->Next(); !chunk.empty(); chunk = stream.gyro->Next()) {
+    EXPECT_LE(chunk.size, chunk_samples) << what;
+    samples.insert(samples.end(), chunk.begin(), chunk.end());
+    EXPECT_GE(stream.gyro->Fraction(), fraction) << what;
+    fraction = stream.gyro->Fraction();
+  }
+  EXPECT_EQ(stream.gyro->Fraction(), 1.0) << what;
+  FlightLog log = std::move(stream.log);
+  log.gyro = GyroTrace(std::move(samples));
+  return log;
+}
+
+// What reading `bytes` whole gives (or the error it throws) and what the stream gives in chunks of
+// 1 and 7 samples, with the default limits and with limits so small that most topic instances
+// take the fallback: the same, but for the fallback's one warning.
+void ExpectStreamedAsWhole(const std::string& bytes, const std::string& what) {
+  std::optional<FlightLog> whole;
+  std::string error;
+  try {
+    whole = ParseULog(bytes, what);
+  } catch (const IoError& e) {
+    error = e.what();
+  }
+  const internal::CandidateLimits tiny{2, 2};
+  for (const auto& limits : {internal::CandidateLimits{}, tiny}) {
+    for (size_t chunk : {size_t{1}, size_t{7}}) {
+      const std::string how = what + " chunk " + std::to_string(chunk) +
+                              (limits.reorder_samples == 2 ? " tiny limits" : "");
+      try {
+        FlightLog log =
+            ReadInChunks(internal::OpenULogBytes(bytes, what, chunk, limits), chunk, how);
+        ASSERT_TRUE(whole.has_value()) << how << ": streamed read, whole threw " << error;
+        auto memory = std::find_if(log.warnings.begin(), log.warnings.end(),
+                                   [](const LogWarning& w) { return w.kind == "memory"; });
+        if (memory != log.warnings.end()) {
+          EXPECT_EQ(limits.reorder_samples, 2u) << how << ": " << memory->message;
+          log.warnings.erase(memory);
+        }
+        ExpectSameLog(log, *whole, how);
+      } catch (const IoError& e) {
+        EXPECT_EQ(std::string(e.what()), error) << how;
+      }
+    }
+  }
+}
+
+TEST(ULogStream, RandomLogsReadInTinyChunksAsWhole) {
+  std::mt19937_64 rng(20261126);
+  size_t fallbacks = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    const std::string bytes = RandomULog(rng);
+    ExpectStreamedAsWhole(bytes, "random_" + std::to_string(trial));
+    ULogStream tiny = internal::OpenULogBytes(bytes, "tiny", 64, {2, 2});
+    for (const LogWarning& w : tiny.log.warnings) fallbacks += w.kind == "memory";
+  }
+  EXPECT_GE(fallbacks, 20u) << "tiny limits should make most logs take the fallback";
+}
+
+TEST(ULogStream, RealLogsAndDamagedCopiesReadInTinyChunksAsWhole) {
+  SHUTTERLAB_NEED_REAL_DATA();
+  const std::string bytes = ReadFileToString(SamplePath("sample_log_small.ulg"));
+  ExpectStreamedAsWhole(bytes, "sample_log_small");
+  std::mt19937_64 rng(17);
+  std::uniform_int_distribution<size_t> where(16, bytes.size() - 1);
+  for (int trial = 0; trial < 3; ++trial) {
+    const size_t cut = where(rng);
+    ExpectStreamedAsWhole(bytes.substr(0, cut), "cut_at_" + std::to_string(cut));
+    std::string copy = bytes;
+    for (int k = 0; k < 40; ++k) copy[where(rng)] = static_cast<char>(rng());
+    ExpectStreamedAsWhole(copy, "flipped_" + std::to_string(trial));
+  }
+}
+
+TEST(ULogStream, InterleavedSubscriptionsOfOneInstanceAreCleanedOneAfterTheOther) {
+  // Two subscriptions of sensor_gyro instance 0 whose messages alternate: the candidate is the
+  // first subscription's samples, then the second's (the order the reader always took), so one
+  // sample is out of time order and the sort merges them.
+  ULogBuilder b;
+  b.FlagBits(0);
+  b.Format(kGyroFormat);
+  b.AddLogged(0, 0, "sensor_gyro");
+  b.AddLogged(0, 1, "sensor_gyro");
+  std::vector<int64_t> expected_t_ns;
+  for (int k = 0; k < 40; ++k) {
+    const uint64_t t_us = 1'000'000 + k * 1000;
+    b.Data(static_cast<uint16_t>(k % 2), GyroRecord(t_us, static_cast<float>(k), 0.0f, 0.0f));
+    expected_t_ns.push_back(static_cast<int64_t>(t_us) * 1000);
+  }
+  ExpectStreamedAsWhole(b.bytes(), "interleaved");
+  const FlightLog log = ParseULog(b.bytes(), "interleaved");
+  ASSERT_EQ(log.gyro.size(), expected_t_ns.size());
+  for (size_t k = 0; k < expected_t_ns.size(); ++k) {
+    EXPECT_EQ(log.gyro[k].t_ns, expected_t_ns[k]) << k;
+    EXPECT_EQ(log.gyro[k].omega_rad_s.x(), static_cast<double>(k)) << k;
+  }
+  EXPECT_TRUE(AnyWarningContains(log, "sensor_gyro.x,y,z: 1 samples were out of time order"));
+}
+
+TEST(ULogStream, AFileThatChangesBetweenThePassesIsRefusedInOneLine) {
+  test::TempDir dir;
+  const std::string path = dir / "growing.ulg";
+  ULogBuilder b;
+  b.FlagBits(0);
+  b.Format(kGyroFormat);
+  b.AddLogged(0, 0, "sensor_gyro");
+  for (int k = 0; k < 100; ++k) b.Data(0, GyroRecord(1'000'000 + k * 1000, 0.1f, 0.2f, 0.3f));
+  WriteFileAtomically(path, b.bytes());
+  EXPECT_EQ(ReadAllSamples(OpenULog(path).gyro.get()).size(), 100u);
+  ULogStream stream = OpenULog(path, 8);
+  // Still being recorded: a message appended in place.
+  const size_t size = b.bytes().size();
+  b.Data(0, GyroRecord(1'100'000, 0.1f, 0.2f, 0.3f));
+  std::ofstream(path, std::ios::app | std::ios::binary) << b.bytes().substr(size);
+  try {
+    stream.gyro->Next();
+    ADD_FAILURE() << "a file that grew between the passes was read";
+  } catch (const IoError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find(path), std::string::npos) << message;
+    EXPECT_NE(message.find("changed while it was read"), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
   }
 }
 
