@@ -754,17 +754,19 @@ class DataFlashSource : public FillingSource {
   // A mapped file cut while mapped would fault on its lost pages; one that grew is not the file
   // pass 1 read. Either way, one line naming it.
   void CheckUnchanged() const {
-    if (!bytes_->file) return;
+    if (bytes_->file && SizeNow() != bytes_->bytes.size()) Changed();
+  }
+  std::uintmax_t SizeNow() const {
     std::error_code error;
     const std::uintmax_t now = std::filesystem::file_size(bytes_->path, error);
-    if (!error && now == bytes_->bytes.size()) return;
-    Changed(error ? 0 : now);
+    return error ? 0 : now;
   }
-  [[noreturn]] void Changed(std::uintmax_t now = 0) const {
+  // Also when pass 2 met other samples than pass 1 (a file rewritten at the same size).
+  [[noreturn]] void Changed() const {
     throw IoError(IoMessage(bytes_->path, 0,
                             "changed while it was read in passes (" +
                                 std::to_string(bytes_->bytes.size()) + " bytes, now " +
-                                std::to_string(now) +
+                                std::to_string(SizeNow()) +
                                 "): is it still being recorded? Analyse a copy, or the finished "
                                 "log"));
   }

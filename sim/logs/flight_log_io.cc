@@ -193,19 +193,6 @@ FlightLogStream OpenBinary(TextBlocks input, const std::string& path, LogFormat 
   }
 }
 
-// A blackbox log, streamed (sim/logs/blackbox.h OpenBlackbox): a file mapped and read in two
-// passes; a pipe (input, read once) taken whole, then read the same way.
-FlightLogStream OpenBlackboxLog(TextBlocks input, const std::string& path,
-                                const FlightLogReadOptions& options) {
-  BlackboxStream blackbox = std::filesystem::is_regular_file(path)
-                                ? OpenBlackbox(path, options.log_index)
-                                : OpenBlackboxBytes(input.TakeRest(), path, options.log_index);
-  FlightLogStream stream;
-  stream.log = std::move(blackbox.log);
-  stream.gyro = std::move(blackbox.samples);
-  return stream;
-}
-
 }  // namespace
 
 FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOptions& options) {
