@@ -27,7 +27,7 @@ void Run(const AccuracyCommand& command) {
   if (command.json) {
     auto json = AccuracyToJson(result);
     json["warnings"] = WarningsToJson(warnings);
-    std::cout << json.dump(2) << "\n";
+    std::cout << JsonText(json) << "\n";
   } else {
     std::cout << AccuracyTable(result);
   }

@@ -392,7 +392,7 @@ void RunPhotos(const AnalyzeCommand& command) {
     const PhotoAnalysis analysis = AnalyzePhotos(set, options.photos);
     if (!command.out_dir.empty()) WritePhotoOutputs(command.out_dir, set, analysis);
     if (command.json) {
-      std::cout << PhotoAnalysisToJson(set, analysis).dump(2) << "\n";
+      std::cout << JsonText(PhotoAnalysisToJson(set, analysis)) << "\n";
     } else {
       std::cout << PhotoAnalysisReport(set, analysis);
     }
@@ -419,7 +419,7 @@ void RunPhotos(const AnalyzeCommand& command) {
     if (result.lens) json["lens_profile"] = LensProfileUseJson(*result.lens);
     json["photos"] = PhotoAnalysisToJson(set, result.photos);
     json["photos"]["camera_source"] = result.camera_source;
-    std::cout << json.dump(2) << "\n";
+    std::cout << JsonText(json) << "\n";
   } else {
     if (pair) std::cout << SensorPairText(*pair, command.log_path, command.second_path) << "\n";
     std::cout << AnalyzeReport(result.log) << "\ncamera analysed: " << result.camera_source
@@ -466,7 +466,7 @@ void Run(const AnalyzeCommand& command) {
     auto json = AnalyzeToJson(result);
     if (pair) json["pair"] = SensorPairToJson(*pair, command.second_path);
     if (lens) json["lens_profile"] = LensProfileUseJson(*lens);
-    std::cout << json.dump(2) << "\n";
+    std::cout << JsonText(json) << "\n";
   } else {
     if (pair) std::cout << SensorPairText(*pair, command.log_path, command.second_path) << "\n";
     std::cout << AnalyzeReport(result);

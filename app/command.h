@@ -6,6 +6,7 @@
 // 1 an internal error.
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <functional>
 #include <memory>
@@ -29,6 +30,13 @@ std::vector<RegisteredCommand>& Registry();
 
 // Prints progress "label: 42%" on a terminal (stderr), overwriting the line; silent when stderr
 // is not a terminal, so logs and CI stay clean.
+// A --json document as printed: indented, with any byte that is not UTF-8 (a file name, or a
+// topic name read from a damaged log) replaced by U+FFFD instead of stopping the command.
+template <typename Json>
+std::string JsonText(const Json& json) {
+  return json.dump(2, ' ', false, Json::error_handler_t::replace);
+}
+
 class Progress {
  public:
   Progress(std::string label, size_t total);

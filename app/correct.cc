@@ -121,7 +121,7 @@ void Run(CorrectCommand& command) {
     for (const std::string& note : f.notes) std::cerr << "note: " << note << "\n";
   }
   if (command.json) {
-    std::cout << CorrectionToJson(summary).dump(2) << "\n";
+    std::cout << JsonText(CorrectionToJson(summary)) << "\n";
   } else {
     std::cout << CorrectionTable(summary);
   }

@@ -93,7 +93,7 @@ void Run(const FlightCommand& command) {
     if (!command.trace.second_path.empty())
       json["pair"] = SensorPairToJson(pair.pair, command.trace.second_path);
     json["warnings"] = WarningsToJson(warnings);
-    std::cout << json.dump(2) << "\n";
+    std::cout << JsonText(json) << "\n";
   } else {
     if (!command.trace.second_path.empty()) {
       std::cout << SensorPairText(pair.pair, command.trace.path, command.trace.second_path) << "\n";

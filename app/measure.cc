@@ -71,7 +71,7 @@ void Run(const MeasureCommand& command) {
   if (!truth.empty()) report.truth = CompareFields(report.measurement.field, truth);
   if (!command.out_dir.empty()) WriteMeasureOutputs(command.out_dir, report.measurement);
   if (command.json) {
-    std::cout << MeasureToJson(report).dump(2) << "\n";
+    std::cout << JsonText(MeasureToJson(report)) << "\n";
   } else {
     std::cout << MeasureText(report);
   }

@@ -43,7 +43,7 @@ void Run(const NoiseCommand& command) {
     if (first)
       json["pair"] = NoisePairToJson(pair.pair, command.trace.second_path, *first, *second, result);
     json["warnings"] = WarningsToJson(warnings);
-    std::cout << json.dump(2) << "\n";
+    std::cout << JsonText(json) << "\n";
   } else {
     if (first)
       std::cout << SensorPairText(pair.pair, command.trace.path, command.trace.second_path) << "\n";

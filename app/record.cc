@@ -206,7 +206,8 @@ void Run(const RecordCommand& command) {
   const RecordSummary summary = Record(sensors, options, *clock);
   if (tty) std::fprintf(stderr, "\r\033[K");
   if (command.json) {
-    std::cout << RecordSummaryToJson(summary, options.trigger ? options.triggers_path : "").dump(2)
+    std::cout << JsonText(
+                     RecordSummaryToJson(summary, options.trigger ? options.triggers_path : ""))
               << "\n";
     return;
   }

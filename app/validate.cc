@@ -63,9 +63,9 @@ void Run(const ValidateCommand& command) {
   PrintLogWarnings((std::filesystem::path(command.dataset) / "gyro.csv").string(), result.warnings);
   const nlohmann::json json = ValidationToJson(result);
   if (!command.out_dir.empty()) WriteValidationPlots(command.out_dir, result);
-  if (!command.report_path.empty()) WriteFileAtomically(command.report_path, json.dump(2) + "\n");
+  if (!command.report_path.empty()) WriteFileAtomically(command.report_path, JsonText(json) + "\n");
   if (command.json) {
-    std::cout << json.dump(2) << "\n";
+    std::cout << JsonText(json) << "\n";
   } else {
     std::cout << ValidationReport(result);
   }

@@ -197,6 +197,19 @@ TEST(FlightCli, ASensorPairStreamedEqualsTheWholeFusion) {
   }
 }
 
+// A file name that is not UTF-8 goes into --json as U+FFFD, never stops the command (it stopped
+// with an internal error on the second log's name).
+TEST(FlightCli, AFileNameThatIsNotUtf8IsPrintedReplaced) {
+  TempDir dir;
+  const std::string path = dir / "gyro\xff.csv";
+  WriteSensorPair(StillThenTurningTrace(), Eigen::Matrix3d::Identity(), dir.path());
+  std::filesystem::rename(dir / "b.csv", path);
+  const auto r = RunShutterlab("flight " + (dir / "a.csv") + " --second '" + path + "' --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json json = nlohmann::json::parse(r.out);
+  EXPECT_EQ(json["pair"]["second_log"].get<std::string>(), dir / "gyro\xEF\xBF\xBD.csv");
+}
+
 TEST(FlightCli, BadInputExitsTwoWithOneLine) {
   TempDir dir;
   const std::string trace = WriteTrace(dir);
