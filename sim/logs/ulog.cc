@@ -33,8 +33,6 @@ using ulog::ReadTimeNs;
 using ulog::Subscription;
 using ulog::ULogParser;
 
-constexpr char kMagic[7] = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35};
-
 // Looks up fields of one layout once, then reads them per message.
 struct Fields {
   const Layout& layout;
@@ -613,8 +611,8 @@ FlightLog ReadWhole(ULogStream stream) {
 }  // namespace
 
 bool LooksLikeULog(std::string_view first_bytes) {
-  return first_bytes.size() >= sizeof(kMagic) &&
-         std::memcmp(first_bytes.data(), kMagic, sizeof(kMagic)) == 0;
+  return first_bytes.size() >= sizeof(ulog::kMagic) &&
+         std::memcmp(first_bytes.data(), ulog::kMagic, sizeof(ulog::kMagic)) == 0;
 }
 
 ULogStream OpenULog(const std::string& path, size_t chunk_samples) {

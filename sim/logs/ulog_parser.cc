@@ -1,7 +1,6 @@
 #include "sim/logs/ulog_parser.h"
 
 #include "sim/check.h"
-#include "sim/logs/ulog.h"  // LooksLikeULog
 
 #include <algorithm>
 #include <cstdio>
@@ -637,7 +636,8 @@ void ULogParser::Start() {
   log_.format = "ulog";
   if (bytes_.size() < kFileHeaderBytes)
     Fail(0, "file too short for a ULog header (" + std::to_string(bytes_.size()) + " bytes)");
-  if (!LooksLikeULog(bytes_)) Fail(0, "not a ULog file (bad magic)");
+  if (bytes_.substr(0, sizeof(kMagic)) != std::string_view(kMagic, sizeof(kMagic)))
+    Fail(0, "not a ULog file (bad magic)");
   const int version = static_cast<uint8_t>(bytes_[7]);
   if (version > 1)
     log_.warnings.push_back({"format", "ULog file version " + std::to_string(version) +

@@ -22,6 +22,9 @@
 namespace shutterlab {
 namespace ulog {
 
+// A ULog file's first seven bytes: "ULog" 0x01 0x12 0x35.
+inline constexpr char kMagic[7] = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35};
+
 enum class Scalar : uint8_t {
   kInt8,
   kUInt8,

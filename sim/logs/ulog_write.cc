@@ -2,6 +2,7 @@
 
 #include "sim/check.h"
 #include "sim/logs/ulog.h"  // kAirborneAltitudeM
+#include "sim/logs/ulog_parser.h"
 #include "sim/text_file.h"
 
 #include <algorithm>
@@ -14,7 +15,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr char kMagic[7] = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35};
 constexpr uint8_t kFileVersion = 1;
 constexpr uint64_t kAltitudePeriodUs = 100'000;  // 10 Hz, as PX4 logs vehicle_local_position
 
@@ -145,7 +145,7 @@ std::string SerializeULog(const GyroTrace& gyro, const std::vector<CameraEvent>&
 
   std::string out;
   out.reserve(64 * records.size() + 1024);
-  out.append(kMagic, sizeof(kMagic));
+  out.append(ulog::kMagic, sizeof(ulog::kMagic));
   PutU8(kFileVersion, &out);
   PutU64(records.front().t_us, &out);  // when logging started: the first data message
   // Flag bits, required right after the header: no compat or incompat flags, no appended data.
