@@ -4,6 +4,7 @@
 #include "sim/logs/blackbox_codec.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
+#include "tests/sim/logs/same_log.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -21,6 +22,8 @@
 
 namespace shutterlab {
 namespace {
+
+using test::ExpectSameLog;
 
 // Rates are integer counts times one double factor: the reader must reproduce them to rounding.
 constexpr double kRateTolRadS = 1e-12;
@@ -1005,36 +1008,6 @@ Streamed ReadInChunks(BlackboxStream stream, size_t chunk_samples) {
   if (!samples.empty()) out.log.gyro = GyroTrace(std::move(samples));
   for (LogWarning& w : stream.samples->Warnings()) out.log.warnings.push_back(std::move(w));
   return out;
-}
-
-std::string WarningsText(const std::vector<LogWarning>& warnings) {
-  std::string text;
-  for (const LogWarning& w : warnings) {
-    char t_s[32] = "-";
-    if (w.t_s) std::snprintf(t_s, sizeof(t_s), "%a", *w.t_s);  // every bit
-    text += w.kind + ": " + w.message + " @" + t_s + " x" +
-            (w.count ? std::to_string(*w.count) : std::string("-")) + "\n";
-  }
-  return text;
-}
-
-// Bit for bit: the same samples, sources, records_skipped and warnings (order and text).
-void ExpectSameLog(const FlightLog& a, const FlightLog& b, const std::string& what) {
-  ASSERT_EQ(a.gyro.size(), b.gyro.size()) << what;
-  for (size_t k = 0; k < a.gyro.size(); ++k) {
-    ASSERT_EQ(a.gyro[k].t_ns, b.gyro[k].t_ns) << what << " sample " << k;
-    for (int axis = 0; axis < 3; ++axis) {
-      ASSERT_EQ(
-          std::memcmp(&a.gyro[k].omega_rad_s[axis], &b.gyro[k].omega_rad_s[axis], sizeof(double)),
-          0)
-          << what << " sample " << k;
-    }
-  }
-  EXPECT_EQ(a.format, b.format) << what;
-  EXPECT_EQ(a.gyro_source, b.gyro_source) << what;
-  EXPECT_EQ(a.gyro_sources_available, b.gyro_sources_available) << what;
-  EXPECT_EQ(a.records_skipped, b.records_skipped) << what;
-  EXPECT_EQ(WarningsText(a.warnings), WarningsText(b.warnings)) << what;
 }
 
 // The decoder pauses when a chunk is full and goes on where it stopped: at every chunk size the

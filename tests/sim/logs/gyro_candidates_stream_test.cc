@@ -4,6 +4,7 @@
 
 #include "sim/logs/gyro_candidates.h"
 #include "sim/units.h"
+#include "tests/sim/logs/same_log.h"
 
 #include <gtest/gtest.h>
 
@@ -20,6 +21,8 @@
 
 namespace shutterlab {
 namespace {
+
+using test::ExpectSameLog;
 
 using internal::CandidateCleaner;
 using internal::CandidateLimits;
@@ -277,23 +280,6 @@ bool StreamedChoose(const std::vector<Fed>& feds, CandidateLimits limits, Flight
   EXPECT_TRUE(cleaner.Finish(&out));
   log->gyro = GyroTrace(std::move(out));
   return true;
-}
-
-void ExpectSameLog(const FlightLog& a, const FlightLog& b, const std::string& what) {
-  EXPECT_EQ(a.gyro_source, b.gyro_source) << what;
-  EXPECT_EQ(a.gyro_sources_available, b.gyro_sources_available) << what;
-  EXPECT_EQ(a.records_skipped, b.records_skipped) << what;
-  ASSERT_EQ(a.warnings.size(), b.warnings.size()) << what;
-  for (size_t i = 0; i < a.warnings.size(); ++i) {
-    EXPECT_EQ(a.warnings[i].kind, b.warnings[i].kind) << what;
-    EXPECT_EQ(a.warnings[i].message, b.warnings[i].message) << what;
-    EXPECT_EQ(a.warnings[i].count, b.warnings[i].count) << what;
-  }
-  ASSERT_EQ(a.gyro.size(), b.gyro.size()) << what;
-  for (size_t i = 0; i < a.gyro.size(); ++i) {
-    ASSERT_EQ(a.gyro[i].t_ns, b.gyro[i].t_ns) << what << " sample " << i;
-    ASSERT_EQ(a.gyro[i].omega_rad_s, b.gyro[i].omega_rad_s) << what << " sample " << i;
-  }
 }
 
 TEST(GyroCandidatesStream, RandomCandidatesGiveTheReferenceResultEveryWay) {

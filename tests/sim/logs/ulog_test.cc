@@ -2,6 +2,7 @@
 
 #include "sim/check.h"
 #include "sim/text_file.h"
+#include "tests/sim/logs/same_log.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -18,6 +19,8 @@
 
 namespace shutterlab {
 namespace {
+
+using test::ExpectSameLog;
 
 // Writes a ULog file message by message, as PX4's logger lays it out.
 class ULogBuilder {
@@ -662,34 +665,6 @@ std::string RandomULog(std::mt19937_64& rng) {
     }
   }
   return b.bytes();
-}
-
-void ExpectSameLog(const FlightLog& a, const FlightLog& b, const std::string& what) {
-  EXPECT_EQ(a.format, b.format) << what;
-  EXPECT_EQ(a.gyro_source, b.gyro_source) << what;
-  EXPECT_EQ(a.gyro_sources_available, b.gyro_sources_available) << what;
-  EXPECT_EQ(a.records_skipped, b.records_skipped) << what;
-  ASSERT_EQ(a.warnings.size(), b.warnings.size()) << what;
-  for (size_t i = 0; i < a.warnings.size(); ++i) {
-    EXPECT_EQ(a.warnings[i].kind, b.warnings[i].kind) << what;
-    EXPECT_EQ(a.warnings[i].message, b.warnings[i].message) << what;
-    EXPECT_EQ(a.warnings[i].t_s, b.warnings[i].t_s) << what;
-    EXPECT_EQ(a.warnings[i].count, b.warnings[i].count) << what;
-  }
-  ASSERT_EQ(a.camera_events.size(), b.camera_events.size()) << what;
-  for (size_t i = 0; i < a.camera_events.size(); ++i) {
-    EXPECT_EQ(a.camera_events[i].t_ns, b.camera_events[i].t_ns) << what;
-    EXPECT_EQ(a.camera_events[i].sequence, b.camera_events[i].sequence) << what;
-    EXPECT_EQ(a.camera_events[i].kind, b.camera_events[i].kind) << what;
-  }
-  ASSERT_EQ(a.utc_fixes.size(), b.utc_fixes.size()) << what;
-  EXPECT_EQ(a.altitude_above_ground_m, b.altitude_above_ground_m) << what;
-  EXPECT_EQ(a.altitude_source, b.altitude_source) << what;
-  ASSERT_EQ(a.gyro.size(), b.gyro.size()) << what;
-  for (size_t i = 0; i < a.gyro.size(); ++i) {
-    ASSERT_EQ(a.gyro[i].t_ns, b.gyro[i].t_ns) << what << " sample " << i;
-    ASSERT_EQ(a.gyro[i].omega_rad_s, b.gyro[i].omega_rad_s) << what << " sample " << i;
-  }
 }
 
 // The stream read chunk by chunk (each at most chunk_samples, Fraction rising to 1), as a log.
