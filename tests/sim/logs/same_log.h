@@ -37,9 +37,9 @@ inline void ExpectSameLog(const FlightLog& a, const FlightLog& b, const std::str
   ASSERT_EQ(a.gyro.size(), b.gyro.size()) << what;
   for (size_t i = 0; i < a.gyro.size(); ++i) {
     ASSERT_EQ(a.gyro[i].t_ns, b.gyro[i].t_ns) << what << " sample " << i;
-    ASSERT_EQ(std::memcmp(a.gyro[i].omega_rad_s.data(), b.gyro[i].omega_rad_s.data(),
-                          3 * sizeof(double)),
-              0)
+    ASSERT_EQ(
+        std::memcmp(a.gyro[i].omega_rad_s.data(), b.gyro[i].omega_rad_s.data(), 3 * sizeof(double)),
+        0)
         << what << " sample " << i;
   }
 }
