@@ -45,8 +45,8 @@ auto ReadThroughPipe(const std::string& bytes, Read read) {
 
 // What ReadFlightLog makes of bytes that come down a pipe.
 inline FlightLog ReadFromPipe(const std::string& bytes, const FlightLogReadOptions& options = {}) {
-  return ReadThroughPipe(bytes,
-                         [&options](const std::string& path) { return ReadFlightLog(path, options); });
+  return ReadThroughPipe(
+      bytes, [&options](const std::string& path) { return ReadFlightLog(path, options); });
 }
 
 }  // namespace shutterlab::test
