@@ -269,7 +269,7 @@ AnalyzeResult AnalyzeStreamed(const AnalyzeCommand& command, const FlightLogRead
   // Opened once for the triggers (a GPS-timed file needs the log's GPS fixes); that stream is
   // the analysis's first.
   const LogStamps stamps(command);
-  FlightLogStream first = OpenFlightLog(command.log_path, read);
+  FlightLogStream first = OpenFlightLogShowingProgress(command.log_path, read, "analyze");
   if (triggers) SetTriggers(*triggers, first.log, command.triggers_path, &options);
   const AnalyzeLogSource source =
       StreamSource(command, read, triggers, std::move(first), stamps, pair);
@@ -324,7 +324,7 @@ PhotoFlightResult PhotosOnLog(const AnalyzeCommand& command, const FlightLogRead
   const TriggerFile* trigger_file = triggers ? &*triggers : nullptr;
   if (LogsReadableInPasses(command)) {
     const LogStamps stamps(command);
-    FlightLogStream first = OpenFlightLog(command.log_path, read);
+    FlightLogStream first = OpenFlightLogShowingProgress(command.log_path, read, "analyze");
     const FlightLog metadata = first.log;  // the samples stay in the stream
     const AnalyzeLogSource source =
         StreamSource(command, read, triggers, std::move(first), stamps, pair);
@@ -478,8 +478,8 @@ const CommandRegistration kRegistration(80, [](CLI::App& app) {
                                  "per-image rolling-shutter distortion from a flight log (ULog, "
                                  "DataFlash, blackbox, GoPro MP4, gyro.csv, any CSV by --columns)");
   auto command = std::make_shared<AnalyzeCommand>();
-  cmd->add_option("LOG", command->log_path, "flight or gyro log (optional with --photos)")
-      ->check(CLI::ExistingFile);
+  CheckLogPath(cmd->add_option("LOG", command->log_path,
+                               "flight or gyro log (optional with --photos; - = stdin)"));
   cmd->add_option("--photos", command->photos_dir,
                   "a folder of photos (or one photo): per-photo distortion from their metadata; "
                   "without LOG the translation part from the recorded flight speed, with LOG "

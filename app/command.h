@@ -28,8 +28,6 @@ struct RegisteredCommand {
 };
 std::vector<RegisteredCommand>& Registry();
 
-// Prints progress "label: 42%" on a terminal (stderr), overwriting the line; silent when stderr
-// is not a terminal, so logs and CI stay clean.
 // A --json document as printed: indented, with any byte that is not UTF-8 (a file name, or a
 // topic name read from a damaged log) replaced by U+FFFD instead of stopping the command.
 template <typename Json>
@@ -37,10 +35,23 @@ std::string JsonText(const Json& json) {
   return json.dump(2, ' ', false, Json::error_handler_t::replace);
 }
 
+// A log named on the command line: "-" reads the standard input (`cat log.ulg | shutterlab flight
+// -`, as /dev/stdin); anything else must be an existing file.
+inline CLI::Option* CheckLogPath(CLI::Option* option) {
+  return option
+      ->transform([](std::string path) { return path == "-" ? std::string("/dev/stdin") : path; },
+                  "- = stdin")
+      ->check(CLI::ExistingFile);
+}
+
+// Prints progress "label: 42%" on a terminal (stderr), overwriting the line; silent when stderr
+// is not a terminal, so logs and CI stay clean.
 class Progress {
  public:
   Progress(std::string label, size_t total);
   void Update(size_t done);
+  // Whether it prints (stderr is a terminal): work done only to feed it can be left undone.
+  bool enabled() const { return enabled_; }
   ~Progress();
 
  private:

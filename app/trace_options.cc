@@ -46,12 +46,11 @@ void ColumnFlags::Apply(FlightLogReadOptions* options) const {
 }
 
 void TraceOptions::Add(CLI::App* command, bool with_bias) {
-  command
-      ->add_option("TRACE", path,
-                   "gyro log: gyro.csv, Gyroflow .gcsv, raw-count CSV, PX4 ULog, Betaflight "
-                   "blackbox, ArduPilot DataFlash, GoPro MP4")
-      ->required()
-      ->check(CLI::ExistingFile);
+  CheckLogPath(command
+                   ->add_option("TRACE", path,
+                                "gyro log: gyro.csv, Gyroflow .gcsv, raw-count CSV, PX4 ULog, "
+                                "Betaflight blackbox, ArduPilot DataFlash, GoPro MP4 (- = stdin)")
+                   ->required());
   command
       ->add_option("--format", format,
                    "log format: auto, csv, gcsv, raw, ulog, blackbox, dataflash, gopro, gyro_dump "
@@ -77,11 +76,10 @@ void TraceOptions::Add(CLI::App* command, bool with_bias) {
 }
 
 void TraceOptions::AddSecond(CLI::App* command) {
-  command
-      ->add_option("--second", second_path,
-                   "a second sensor's log on the same clock (record --device twice): paired, the "
-                   "mounting fitted from the motion, and fused")
-      ->check(CLI::ExistingFile);
+  CheckLogPath(command->add_option(
+      "--second", second_path,
+      "a second sensor's log on the same clock (record --device twice): paired, the mounting "
+      "fitted from the motion, and fused"));
 }
 
 SensorPair TraceOptions::LoadSecondAndFuse(const GyroTrace& first, const BiasSegment& still,
@@ -116,9 +114,20 @@ FlightLog TraceOptions::Load() const {
   return log;
 }
 
+FlightLogStream OpenFlightLogShowingProgress(const std::string& path, FlightLogReadOptions read,
+                                             const std::string& label) {
+  Progress progress(label + " (opening)", 1000);
+  if (progress.enabled()) {
+    read.opening_progress = [&progress](double fraction) {
+      progress.Update(static_cast<size_t>(fraction * 1000));
+    };
+  }
+  return OpenFlightLog(path, read);
+}
+
 StreamedLog TraceOptions::Stream(const std::string& label,
                                  const std::function<void(const GyroChunk&)>& consume) const {
-  FlightLogStream stream = OpenFlightLog(path, ReadOptions());
+  FlightLogStream stream = OpenFlightLogShowingProgress(path, ReadOptions(), label);
   stream.gyro = ReadAhead(std::move(stream.gyro));
   StreamedLog streamed;
   {

@@ -70,6 +70,11 @@ struct TraceOptions {
   BiasSegment StreamedSegment() const;
 };
 
+// OpenFlightLog showing the progress of the opening's pass 1 (a flight-controller log's: tens of
+// seconds on 10^8 samples) on a terminal, as "LABEL (opening): 42%", cleared once opened.
+FlightLogStream OpenFlightLogShowingProgress(const std::string& path, FlightLogReadOptions read,
+                                             const std::string& label);
+
 // What the reader could not read or trust, one "warning: PATH: LINE" on stderr each, so that no
 // command analyses less than the file holds without saying so.
 void PrintLogWarnings(const std::string& path, const std::vector<LogWarning>& warnings);

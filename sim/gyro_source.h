@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -25,6 +26,13 @@ struct GyroChunk {
   const GyroSample* begin() const { return data; }
   const GyroSample* end() const { return data + size; }
 };
+
+// Told the share (0..1) of a log's bytes that a reader's opening pass has read, as it goes: a
+// flight-controller log's pass 1, before its samples can be taken (tens of seconds on 10^8
+// samples), whose progress a terminal shows before the samples' own (GyroSource::Fraction).
+using OpeningProgress = std::function<void(double)>;
+// An opening pass reports every this many messages: a call per few hundred KiB.
+inline constexpr size_t kOpeningProgressMessages = 4096;
 
 class GyroSource {
  public:

@@ -85,9 +85,15 @@ class BlackboxBytes {
   std::string_view view() const { return view_; }
   const uint8_t* data() const { return reinterpret_cast<const uint8_t*>(view_.data()); }
   const std::string& path() const { return path_; }
+  // Called every few MiB as the decoder moves on (kReleaseEveryBytes).
   void ReleaseBefore(size_t offset) {
     if (mapped_) mapped_->ReleaseBefore(offset);
+    if (progress_ && !view_.empty())
+      progress_(static_cast<double>(std::min(offset, view_.size())) /
+                static_cast<double>(view_.size()));
   }
+  // Tells progress (empty: no one) the share of the bytes read as ReleaseBefore is called: pass 1.
+  void ReportReading(OpeningProgress progress) { progress_ = std::move(progress); }
   // A mapped file must still be what was mapped: one that grew (still being recorded), was
   // rewritten, or shrank (a page past its new end would kill the process with SIGBUS) is refused
   // in one line.
@@ -100,6 +106,7 @@ class BlackboxBytes {
   std::unique_ptr<MappedFile> mapped_;
   std::string owned_;
   std::string_view view_;
+  OpeningProgress progress_;
 };
 
 // The six frame kinds; 'H' is the GPS home frame once the header is over.
@@ -1378,8 +1385,11 @@ FlightLog DescribeLog(DecodedFile& file, int chosen, int log_index) {
 // samples come from pass 2 (BlackboxFrameSource). starts: FindLogStarts's.
 BlackboxStream OpenNative(std::unique_ptr<BlackboxBytes> bytes, const std::vector<size_t>& starts,
                           int log_index, size_t chunk_samples,
-                          size_t* leading_garbage_bytes = nullptr) {
+                          size_t* leading_garbage_bytes = nullptr,
+                          const OpeningProgress& progress = {}) {
+  bytes->ReportReading(progress);  // the decoding only: the search for the logs is quick
   DecodedFile file = DecodeAllLogs(bytes.get(), starts, bytes->path(), false);
+  bytes->ReportReading({});
   if (leading_garbage_bytes) *leading_garbage_bytes = file.leading_garbage_bytes;
   const int chosen = ChooseLog(file, log_index, bytes->path());
   BlackboxStream stream;
@@ -1390,7 +1400,8 @@ BlackboxStream OpenNative(std::unique_ptr<BlackboxBytes> bytes, const std::vecto
 }
 
 // A native file or a CSV export (a file with no start marker whose first line is the export's).
-BlackboxStream OpenAny(std::unique_ptr<BlackboxBytes> bytes, int log_index, size_t chunk_samples) {
+BlackboxStream OpenAny(std::unique_ptr<BlackboxBytes> bytes, int log_index, size_t chunk_samples,
+                       const OpeningProgress& progress = {}) {
   const std::vector<size_t> starts = FindLogStarts(bytes.get());
   if (starts.empty() && LooksLikeCsvHeader(FirstLine(bytes->view()))) {
     if (log_index > 0) {
@@ -1400,7 +1411,7 @@ BlackboxStream OpenAny(std::unique_ptr<BlackboxBytes> bytes, int log_index, size
     }
     return OpenCsv(std::move(bytes), chunk_samples);
   }
-  return OpenNative(std::move(bytes), starts, log_index, chunk_samples);
+  return OpenNative(std::move(bytes), starts, log_index, chunk_samples, nullptr, progress);
 }
 
 FlightLog ReadWhole(BlackboxStream stream) {
@@ -1442,8 +1453,9 @@ BlackboxStream OpenBlackbox(const std::string& path, int log_index, size_t chunk
                       chunk_samples);
 }
 
-BlackboxStream OpenBlackbox(std::unique_ptr<MappedFile> file, int log_index, size_t chunk_samples) {
-  return OpenAny(BlackboxBytes::OfMapped(std::move(file)), log_index, chunk_samples);
+BlackboxStream OpenBlackbox(std::unique_ptr<MappedFile> file, int log_index, size_t chunk_samples,
+                            const OpeningProgress& progress) {
+  return OpenAny(BlackboxBytes::OfMapped(std::move(file)), log_index, chunk_samples, progress);
 }
 
 BlackboxStream OpenBlackboxBytes(std::string bytes, const std::string& path, int log_index,

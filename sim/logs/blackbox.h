@@ -78,9 +78,11 @@ struct BlackboxStream {
 BlackboxStream OpenBlackbox(const std::string& path, int log_index = -1,
                             size_t chunk_samples = FillingSource::kDefaultChunkSamples);
 // The same over a file mapped already (a pipe's bytes copied to a temporary file:
-// TextBlocks::TakeMapped).
+// TextBlocks::TakeMapped); progress (may be empty) is given the share of the bytes pass 1 has
+// decoded, every few MiB.
 BlackboxStream OpenBlackbox(std::unique_ptr<MappedFile> file, int log_index = -1,
-                            size_t chunk_samples = FillingSource::kDefaultChunkSamples);
+                            size_t chunk_samples = FillingSource::kDefaultChunkSamples,
+                            const OpeningProgress& progress = {});
 // The same over bytes already in memory, which the stream keeps; `path` only names the source in
 // messages.
 BlackboxStream OpenBlackboxBytes(std::string bytes, const std::string& path, int log_index = -1,

@@ -273,8 +273,8 @@ class DataFlashParser {
   DataFlashParser(std::string_view bytes, const std::string& path, GyroSinks* sinks)
       : bytes_(bytes), path_(path), sinks_(sinks) {}
   // Pass 1: every message but the samples, which go to the summaries; throws IoError when the
-  // bytes are not DataFlash.
-  FlightLog Run(MappedFile* file);
+  // bytes are not DataFlash. progress (may be empty): the share read, every few thousand messages.
+  FlightLog Run(MappedFile* file, const OpeningProgress& progress = {});
   // Reads the next message (or skips a corrupt stretch); false at the end of the bytes.
   bool Step();
   size_t position() const { return pos_; }
@@ -695,14 +695,18 @@ void ReleaseBehind(MappedFile* file, size_t position, size_t* released) {
   *released = position;
 }
 
-FlightLog DataFlashParser::Run(MappedFile* file) {
+FlightLog DataFlashParser::Run(MappedFile* file, const OpeningProgress& progress) {
   log_.format = "dataflash";
   if (!LooksLikeDataFlash(bytes_)) {
     throw IoError(
         IoMessage(path_, 0, "byte 0: not an ArduPilot DataFlash log (expected 0xA3 0x95 0x80)"));
   }
   size_t released = 0;
-  while (Step()) ReleaseBehind(file, pos_, &released);
+  for (size_t messages = 1; Step(); ++messages) {
+    ReleaseBehind(file, pos_, &released);
+    if (progress && messages % kOpeningProgressMessages == 0)
+      progress(static_cast<double>(pos_) / static_cast<double>(bytes_.size()));
+  }
   Finish();
   return std::move(log_);
 }
@@ -783,10 +787,12 @@ class DataFlashSource : public FillingSource {
 // Pass 1 (again without limits when a stream's disorder or intervals exceed them), the choice,
 // and pass 2 handed out as the stream's samples.
 DataFlashStream OpenBytes(std::shared_ptr<DataFlashBytes> bytes, size_t chunk_samples,
-                          internal::CandidateLimits limits = {}) {
+                          internal::CandidateLimits limits = {},
+                          const OpeningProgress& progress = {}) {
   GyroSinks sinks;
   sinks.limits = limits;
-  FlightLog log = DataFlashParser(bytes->bytes, bytes->path, &sinks).Run(bytes->file.get());
+  FlightLog log =
+      DataFlashParser(bytes->bytes, bytes->path, &sinks).Run(bytes->file.get(), progress);
   std::vector<internal::CandidateSummary> summaries;
   auto finish = [&] {
     summaries.clear();
@@ -840,12 +846,13 @@ DataFlashStream OpenDataFlash(const std::string& path, size_t chunk_samples) {
                        chunk_samples);
 }
 
-DataFlashStream OpenDataFlash(std::unique_ptr<MappedFile> file, size_t chunk_samples) {
+DataFlashStream OpenDataFlash(std::unique_ptr<MappedFile> file, size_t chunk_samples,
+                              const OpeningProgress& progress) {
   auto bytes = std::make_shared<DataFlashBytes>();
   bytes->path = file->path();
   bytes->bytes = file->text();
   bytes->file = std::move(file);
-  return OpenBytes(std::move(bytes), chunk_samples);
+  return OpenBytes(std::move(bytes), chunk_samples, {}, progress);
 }
 
 DataFlashStream OpenDataFlash(std::string_view bytes, const std::string& path, size_t chunk_samples,

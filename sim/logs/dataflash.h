@@ -59,11 +59,13 @@ struct DataFlashStream {
   std::unique_ptr<GyroSource> samples;
 };
 // A file, mapped; the same over a file mapped already (a pipe's bytes copied to a temporary file:
-// TextBlocks::TakeMapped).
+// TextBlocks::TakeMapped), where progress (may be empty) is given the share of the bytes pass 1
+// has read as it goes.
 DataFlashStream OpenDataFlash(const std::string& path,
                               size_t chunk_samples = FillingSource::kDefaultChunkSamples);
 DataFlashStream OpenDataFlash(std::unique_ptr<MappedFile> file,
-                              size_t chunk_samples = FillingSource::kDefaultChunkSamples);
+                              size_t chunk_samples = FillingSource::kDefaultChunkSamples,
+                              const OpeningProgress& progress = {});
 // Bytes in memory, which must outlive the stream; path is used in messages only. limits: pass 1's
 // (tests and fuzzing choose small ones to reach the way without them).
 DataFlashStream OpenDataFlash(std::string_view bytes, const std::string& path,

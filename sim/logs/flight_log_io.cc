@@ -141,25 +141,27 @@ FlightLogStream WholeLogStream(FlightLog log) {
 // One open function per binary format, each returning its own stream, read in two passes over
 // the mapped input: a file's own mapping; a pipe's bytes copied to a temporary file first
 // (TextBlocks::TakeMapped, the one place a pipe is taken whole), so that a log on a pipe is read
-// in the same bounded memory as a file.
-FlightLogStream OpenULogLog(TextBlocks input) {
-  ULogStream ulog = OpenULog(input.TakeMapped());  // sim/logs/ulog.h
+// in the same bounded memory as a file. progress: pass 1's (may be empty).
+FlightLogStream OpenULogLog(TextBlocks input, const OpeningProgress& progress) {
+  ULogStream ulog = OpenULog(input.TakeMapped(), FillingSource::kDefaultChunkSamples, progress);
   FlightLogStream stream;
   stream.log = std::move(ulog.log);
   stream.gyro = std::move(ulog.gyro);
   return stream;
 }
 
-FlightLogStream OpenDataFlashLog(TextBlocks input) {
-  DataFlashStream dataflash = OpenDataFlash(input.TakeMapped());  // sim/logs/dataflash.h
+FlightLogStream OpenDataFlashLog(TextBlocks input, const OpeningProgress& progress) {
+  DataFlashStream dataflash =
+      OpenDataFlash(input.TakeMapped(), FillingSource::kDefaultChunkSamples, progress);
   FlightLogStream stream;
   stream.log = std::move(dataflash.log);
   stream.gyro = std::move(dataflash.samples);
   return stream;
 }
 
-FlightLogStream OpenBlackboxLog(TextBlocks input, int log_index) {
-  BlackboxStream blackbox = OpenBlackbox(input.TakeMapped(), log_index);  // sim/logs/blackbox.h
+FlightLogStream OpenBlackboxLog(TextBlocks input, int log_index, const OpeningProgress& progress) {
+  BlackboxStream blackbox =
+      OpenBlackbox(input.TakeMapped(), log_index, FillingSource::kDefaultChunkSamples, progress);
   FlightLogStream stream;
   stream.log = std::move(blackbox.log);
   stream.gyro = std::move(blackbox.samples);
@@ -176,16 +178,27 @@ FlightLogStream OpenGoproLog(const std::string& path) {
 
 FlightLogStream OpenBinary(TextBlocks input, const std::string& path, LogFormat format,
                            const FlightLogReadOptions& options) {
-  switch (format) {
-    case LogFormat::kULog:
-      return OpenULogLog(std::move(input));
-    case LogFormat::kDataFlash:
-      return OpenDataFlashLog(std::move(input));
-    case LogFormat::kGoproMp4:
-      return OpenGoproLog(path);
-    default:
-      return OpenBlackboxLog(std::move(input), options.log_index);
+  if (format == LogFormat::kGoproMp4) return OpenGoproLog(path);
+  // Never less than before: a reader may read some bytes twice (DataFlash's pass 1 again without
+  // its limits).
+  OpeningProgress progress;
+  double shown = 0.0;
+  if (options.opening_progress) {
+    progress = [&options, &shown](double fraction) {
+      shown = std::max(shown, std::min(fraction, 1.0));
+      options.opening_progress(shown);
+    };
   }
+  FlightLogStream stream;
+  if (format == LogFormat::kULog) {
+    stream = OpenULogLog(std::move(input), progress);
+  } else if (format == LogFormat::kDataFlash) {
+    stream = OpenDataFlashLog(std::move(input), progress);
+  } else {
+    stream = OpenBlackboxLog(std::move(input), options.log_index, progress);
+  }
+  if (progress) progress(1.0);
+  return stream;
 }
 
 }  // namespace

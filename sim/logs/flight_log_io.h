@@ -5,6 +5,7 @@
 // logs are wrapped into a FlightLog with no camera events and no altitude, so that `analyze` treats
 // every source alike.
 
+#include "sim/gyro_source.h"
 #include "sim/logs/column_csv.h"
 #include "sim/logs/flight_log.h"
 #include "sim/logs/log_format.h"
@@ -24,6 +25,10 @@ struct FlightLogReadOptions {
   int log_index = -1;        // blackbox files only: which log (ListBlackboxLogs); -1 = the longest
   RawCountOptions raw;       // raw-count logs only
   ColumnCsvOptions columns;  // format kColumns only (its columns, delimiter, header and units)
+  // The flight-controller logs (ULog, DataFlash, blackbox) only: told the share of the log read by
+  // the opening's pass 1 (tens of seconds on 10^8 samples) as it goes, never less than before, and
+  // 1 at its end. Empty: not told (what a command leaves it when stderr is no terminal).
+  OpeningProgress opening_progress;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };

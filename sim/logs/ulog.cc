@@ -326,8 +326,13 @@ struct ULogPass1 {
 // summary of its candidate, then the choice.
 class ULogSummary final : public DataSink {
  public:
-  ULogSummary(const ULogInput& input, const internal::CandidateLimits& limits)
-      : input_(input), limits_(limits), parser_(input.bytes, input.path, this, input.file.get()) {}
+  // progress (may be empty): the share of the bytes read, every few thousand messages.
+  ULogSummary(const ULogInput& input, const internal::CandidateLimits& limits,
+              const OpeningProgress& progress)
+      : input_(input),
+        limits_(limits),
+        progress_(progress),
+        parser_(input.bytes, input.path, this, input.file.get()) {}
   ULogSummary(const ULogSummary&) = delete;  // its parser hands data to this object
   ULogSummary& operator=(const ULogSummary&) = delete;
   // Throws IoError as ReadULog does.
@@ -368,6 +373,7 @@ class ULogSummary final : public DataSink {
 
   const ULogInput& input_;
   internal::CandidateLimits limits_;
+  const OpeningProgress& progress_;
   ULogParser parser_;
   std::vector<SubState> subs_;  // by subscription index
   std::map<std::pair<std::string, int>, GyroStream> gyro_;
@@ -484,7 +490,9 @@ DecodedTopics ULogSummary::Gather(std::vector<Candidate>* candidates,
 
 ULogPass1 ULogSummary::Run() {
   parser_.Start();
-  while (parser_.Step()) continue;
+  for (size_t messages = 1; parser_.Step(); ++messages) {
+    if (progress_ && messages % kOpeningProgressMessages == 0) progress_(parser_.Fraction());
+  }
   std::vector<Candidate> candidates;
   std::vector<internal::CandidateSummary> bounded;
   DecodedTopics topics = Gather(&candidates, &bounded);
@@ -582,8 +590,9 @@ void ULogGyroSource::Fill(std::vector<GyroSample>* chunk) {
 }
 
 ULogStream Open(std::unique_ptr<ULogInput> input, size_t chunk_samples,
-                const internal::CandidateLimits& limits = {}) {
-  ULogPass1 pass1 = ULogSummary(*input, limits).Run();
+                const internal::CandidateLimits& limits = {},
+                const OpeningProgress& progress = {}) {
+  ULogPass1 pass1 = ULogSummary(*input, limits, progress).Run();
   ULogStream stream;
   stream.gyro = std::make_unique<ULogGyroSource>(std::move(input), &pass1, chunk_samples);
   stream.log = std::move(pass1.log);
@@ -608,12 +617,13 @@ ULogStream OpenULog(const std::string& path, size_t chunk_samples) {
   return OpenULog(std::make_unique<MappedFile>(path, MappedFile::Paging::kStreamed), chunk_samples);
 }
 
-ULogStream OpenULog(std::unique_ptr<MappedFile> file, size_t chunk_samples) {
+ULogStream OpenULog(std::unique_ptr<MappedFile> file, size_t chunk_samples,
+                    const OpeningProgress& progress) {
   auto input = std::make_unique<ULogInput>();
   input->path = file->path();
   input->bytes = file->text();
   input->file = std::move(file);
-  return Open(std::move(input), chunk_samples);
+  return Open(std::move(input), chunk_samples, {}, progress);
 }
 
 namespace internal {

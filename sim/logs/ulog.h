@@ -59,9 +59,11 @@ struct ULogStream {
 // being recorded, or rewritten: MappedFile::CheckUnchanged) between the passes.
 ULogStream OpenULog(const std::string& path,
                     size_t chunk_samples = FillingSource::kDefaultChunkSamples);
-// The same over a file mapped already (a pipe's bytes copied: TextBlocks::TakeMapped).
+// The same over a file mapped already (a pipe's bytes copied: TextBlocks::TakeMapped); progress
+// (may be empty) is given the share of the bytes pass 1 has read as it goes.
 ULogStream OpenULog(std::unique_ptr<MappedFile> file,
-                    size_t chunk_samples = FillingSource::kDefaultChunkSamples);
+                    size_t chunk_samples = FillingSource::kDefaultChunkSamples,
+                    const OpeningProgress& progress = {});
 
 namespace internal {
 // Bytes in memory, owned by the stream, with the limits of pass 1's candidate summaries chosen:

@@ -1,6 +1,7 @@
 #include "estimate/paper/flight.h"
 #include "estimate/report/analysis_json.h"
 #include "sim/logs/gyro_io.h"
+#include "sim/logs/ulog_write.h"
 #include "sim/sensor_pair.h"
 #include "sim/still_detect.h"
 #include "sim/text_file.h"
@@ -12,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -59,6 +61,48 @@ TEST(FlightCli, JsonFollowsFormats) {
   EXPECT_EQ(j["rows"][0]["flagged_percent_vector"], 100.0);
   EXPECT_EQ(j["rows"][2]["flagged_percent"], 0.0);    // 10 cm, 10 ms: 300" < 433"
   EXPECT_EQ(j["rows"][3]["flagged_percent"], 100.0);  // 10 cm, 20 ms: 633" > 433"
+}
+
+// "-" names the standard input: a ULog on a pipe is copied to a temporary file and read in its two
+// passes, with the same output as the file, and no copy left in $TMPDIR.
+TEST(FlightCli, ADashReadsALogOnThePipe) {
+  test::TempDir dir;
+  std::vector<GyroSample> samples;
+  for (int i = 0; i < 8000; ++i) {
+    const double t_s = i * 1e-3;
+    samples.push_back({static_cast<int64_t>(i + 1) * 1000000,
+                       Eigen::Vector3d(0.3 * std::sin(7 * t_s), 0.01, -0.2 * std::cos(3 * t_s))});
+  }
+  const std::string path = dir / "log.ulg";
+  WriteFileAtomically(path, SerializeULog(GyroTrace(std::move(samples)), {}));
+  std::filesystem::create_directories(dir / "tmp");
+  const auto file = RunShutterlab("flight " + path + " --json");
+  ASSERT_EQ(file.exit_code, 0) << file.output;
+  const auto piped = RunShutterlab("flight - --json", path);
+  ASSERT_EQ(piped.exit_code, 0) << piped.output;
+  EXPECT_EQ(piped.out, file.out);
+  // The copy goes to $TMPDIR: none is left there; a folder that is not there is named in one line.
+  const auto piped_with_tmpdir = [&path](const std::string& folder) {
+    const char* old = std::getenv("TMPDIR");
+    const std::string restore = old ? old : "";
+    ::setenv("TMPDIR", folder.c_str(), 1);  // the command's environment
+    const auto r = RunShutterlab("flight - --json", path);
+    if (old) {
+      ::setenv("TMPDIR", restore.c_str(), 1);
+    } else {
+      ::unsetenv("TMPDIR");
+    }
+    return r;
+  };
+  const auto in_tmp = piped_with_tmpdir(dir / "tmp");
+  EXPECT_EQ(in_tmp.out, file.out) << in_tmp.output;
+  const auto missing = piped_with_tmpdir(dir / "missing");
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_NE(
+      missing.err.find("/dev/stdin: cannot copy it to a temporary file in " + (dir / "missing")),
+      std::string::npos)
+      << missing.err;
+  EXPECT_TRUE(std::filesystem::is_empty(dir / "tmp"));
 }
 
 TEST(FlightCli, WarningsGoToStderrAndIntoTheJson) {

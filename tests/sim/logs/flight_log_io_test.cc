@@ -334,6 +334,44 @@ TEST(OpenFlightLog, ALogRewrittenAtTheSameSizeBetweenThePassesIsRefused) {
   }
 }
 
+// The opening's pass 1 tells how far it has read: never backwards, from 0 to exactly 1, with
+// shares between on a log of many messages; the log read is the same as without.
+TEST(OpenFlightLog, TheOpeningPassTellsItsProgressUpToOne) {
+  SHUTTERLAB_NEED_REAL_DATA();
+  test::TempDir dir;
+  // Three logs in one blackbox file (5.6 MB): its decoder tells its share every 4 MiB.
+  const std::string blackbox =
+      ReadFileToString(test::RealDataPath("gyro/betaflight_blackbox/btfl_002.bbl"));
+  WriteFileAtomically(dir / "three.bbl", blackbox + blackbox + blackbox);
+  for (const std::string& path :
+       {test::RealDataPath("gyro/px4_ulog/sample.ulg"),
+        test::RealDataPath("incoming/ardupilot_log171/log171.bin"), dir / "three.bbl"}) {
+    std::vector<double> told;
+    FlightLogReadOptions options;
+    options.opening_progress = [&told](double fraction) { told.push_back(fraction); };
+    FlightLogStream stream = OpenFlightLog(path, options);
+    ASSERT_FALSE(told.empty()) << path;
+    EXPECT_GE(told.front(), 0.0) << path;
+    EXPECT_EQ(told.back(), 1.0) << path;
+    EXPECT_TRUE(std::is_sorted(told.begin(), told.end())) << path;
+    EXPECT_TRUE(std::any_of(told.begin(), told.end(), [](double f) { return f > 0 && f < 1; }))
+        << path << ": " << told.size() << " shares told";
+    const size_t told_opening = told.size();
+    FlightLog log = std::move(stream.log);
+    log.gyro = ReadAllSamples(stream.gyro.get());
+    for (LogWarning& warning : stream.gyro->Warnings()) log.warnings.push_back(std::move(warning));
+    EXPECT_EQ(told.size(), told_opening) << path << ": told after the opening";
+    FlightLog whole = ReadFlightLog(path);
+    whole.warnings.resize(log.warnings.size());  // without the trace audit's, which come last
+    test::ExpectSameLog(log, whole, path);
+  }
+  // A text log has no opening pass.
+  WriteFileAtomically(dir / "gyro.csv", "t,gx,gy,gz\n0,0,0,0\n0.001,0,0,0\n");
+  FlightLogReadOptions options;
+  options.opening_progress = [](double) { ADD_FAILURE() << "a text log told an opening pass"; };
+  EXPECT_EQ(ReadFlightLog(dir / "gyro.csv", options).gyro.size(), 2u);
+}
+
 // A log still being recorded grows between the passes of a reading in several: the pass after the
 // change is refused in one line that names the file and says what to do, never read as another log.
 TEST(ReopenFlightLog, ALogThatGrowsBetweenPassesIsRefused) {
