@@ -178,7 +178,11 @@ void TraceAuditor::CloseBlock(bool at_end) {
     if (IsGap(longest_ns, median_ns)) {
       for (size_t i = 0; i < inside; ++i) Judge(interval(i), median_ns);
     }
-    NoteBlockRate(median_ns, t.front());
+    // A block where most samples share the time of the one before (a logger that stamps a
+    // burst of samples with one time) has a median of 0: its rate is then its samples over its
+    // span, not "0 Hz".
+    NoteBlockRate(median_ns > 0 ? median_ns : (t.back() - t.front()) / static_cast<int64_t>(pushed),
+                  t.front());
     previous_median_ns_ = median_ns;
   }
   if (!at_end) into_block_ = interval(pushed - 1);
@@ -200,6 +204,7 @@ void TraceAuditor::Judge(const Interval& interval, int64_t local_ns) {
 // A block whose rate differs from the current run's by more than the factor starts a new run.
 void TraceAuditor::NoteBlockRate(int64_t median_ns, int64_t begin_ns) {
   if (run_count_ > 0) {
+    if (median_ns == last_run_median_ns_) return;  // also two blocks each stamped at one time
     const double ratio = static_cast<double>(median_ns) / std::max<int64_t>(1, last_run_median_ns_);
     if (ratio < options_.rate_change_factor && ratio > 1.0 / options_.rate_change_factor) return;
   }

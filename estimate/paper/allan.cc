@@ -11,6 +11,11 @@
 namespace shutterlab {
 namespace {
 
+// Why a segment long enough has no Allan deviation.
+constexpr const char* kNoSamplePeriod =
+    "the median sample interval is 0 (most samples share the time of the one before: see "
+    "duplicate_time), and the Allan deviation needs a positive sample period";
+
 // sigma(tau) of bias instability (flicker rate noise) flattens at sqrt(2 ln2 / pi) B (IEEE 952,
 // C.4).
 constexpr double kFlickerFloorFactor = 0.664;
@@ -163,8 +168,11 @@ AllanResult AllanAnalysis(const GyroTrace& trace, size_t first, int points_per_d
   const size_t n_rates = trace.size() - first - 1;  // the first sample has no interval before it
   const std::vector<size_t> sizes = AllanClusterSizes(n_rates, points_per_decade);
   if (sizes.empty()) return result;
+  if (trace.sampling().median_interval_ns <= 0) {
+    result.not_computed = kNoSamplePeriod;
+    return result;
+  }
   result.tau0_s = trace.sampling().median_interval_ns * 1e-9;
-  SHUTTERLAB_CHECK(result.tau0_s > 0.0) << "Allan: the trace has no positive sample interval";
   // Remove the segment's mean rate first: the angle stays near zero (no precision lost to drift)
   // and the result does not depend on a constant bias even where logging gaps make the sampling
   // uneven.
@@ -187,7 +195,11 @@ AllanStream::AllanStream(size_t samples, int64_t median_interval_ns,
   if (samples_ < 2) return;  // no rate: an empty result, as AllanAnalysis gives
   sizes_ = AllanClusterSizes(samples_ - 1, points_per_decade);
   if (sizes_.empty()) return;
-  SHUTTERLAB_CHECK(tau0_s_ > 0.0) << "Allan: the trace has no positive sample interval";
+  if (tau0_s_ <= 0.0) {  // Add then does nothing, and Finish says why
+    sizes_.clear();
+    no_sample_period_ = true;
+    return;
+  }
   while (dense_ < sizes_.size() && sizes_[dense_] <= kAllanExactClusterMax) ++dense_;
   dense_sums_.assign(dense_, {0.0, 0.0, 0.0});
   if (dense_ > 0) ring_.assign(2 * sizes_[dense_ - 1] + 1, {0.0, 0.0, 0.0});
@@ -250,6 +262,7 @@ AllanResult AllanStream::Finish() const {
   SHUTTERLAB_CHECK(added_ == samples_)
       << "Allan: " << added_ << " samples came of the " << samples_ << " announced";
   AllanResult result;
+  if (no_sample_period_) result.not_computed = kNoSamplePeriod;
   if (sizes_.empty()) return result;
   result.tau0_s = tau0_s_;
   for (const size_t m : sizes_) result.tau_s.push_back(static_cast<double>(m) * tau0_s_);

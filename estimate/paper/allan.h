@@ -69,6 +69,9 @@ struct AllanResult {
   std::vector<double> tau_s;          // ascending
   std::vector<double> adev_rad_s[3];  // x, y, z (gyro axes), rad/s
   AllanCoefficients axes[3];
+  // Why there is no result though the segment is long enough (empty when there is one, or when
+  // it is too short): the estimator needs a positive sample period.
+  std::string not_computed;
   bool empty() const { return tau_s.empty(); }
 };
 
@@ -76,7 +79,8 @@ struct AllanResult {
 // uniform at the median interval tau0 (the estimator needs it); each sample's contribution to the
 // angle uses its own interval, so jitter and logging gaps enter as they do in the per-axis angles.
 // A constant bias does not change the result. Returns an empty result when the segment holds
-// fewer than 20 rates (no tau with at least a few clusters).
+// fewer than 20 rates (no tau with at least a few clusters), and an empty one with not_computed
+// said when the median interval is 0 (most samples share the time of the one before).
 AllanResult AllanAnalysis(const GyroTrace& trace, size_t first = 0, int points_per_decade = 10);
 
 // AllanAnalysis on a segment that arrives a sample at a time (a log too long to hold), in memory
@@ -111,7 +115,8 @@ class AllanStream {
   double tau0_s_;
   Eigen::Vector3d mean_rad_s_;
   std::vector<size_t> sizes_;
-  size_t dense_ = 0;  // sizes_[0, dense_) are exact
+  bool no_sample_period_ = false;  // the median interval was 0: no result, and Finish says so
+  size_t dense_ = 0;               // sizes_[0, dense_) are exact
   std::vector<std::array<double, 3>> dense_sums_;
   std::vector<std::array<double, 3>> ring_;  // the last 2 m + 1 angles of the longest exact m
   std::vector<Sparse> sparse_;

@@ -93,7 +93,10 @@ std::string NoiseTable(const NoiseResult& result) {
            FormatNumber(" %11.2f", n.range_max_arcsec) + "\n";
   }
   if (result.allan.empty()) {
-    out += "\nAllan deviation: record too short\n";
+    out += "\nAllan deviation: " +
+           (result.allan.not_computed.empty() ? "record too short"
+                                              : "not computed: " + result.allan.not_computed) +
+           "\n";
     return out;
   }
   out += "\nAllan deviation (tau " + FormatNumber("%.3g", result.allan.tau_s.front()) + " .. " +

@@ -34,6 +34,7 @@ nlohmann::ordered_json NoiseToJson(const NoiseResult& result) {
     axes[kAxisNames[a]] = axis;
   }
   j["axes"] = axes;
+  if (!result.allan.not_computed.empty()) j["allan_not_computed"] = result.allan.not_computed;
   return j;
 }
 

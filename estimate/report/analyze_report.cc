@@ -171,7 +171,11 @@ void AddAllan(HtmlPage* page, const AnalyzeResult& result) {
   }
   const AllanResult& allan = *result.allan;
   if (allan.empty()) {
-    page->Paragraph("Allan deviation: too few samples on " + on + ".");
+    page->Paragraph("Allan deviation: " +
+                    (allan.not_computed.empty()
+                         ? "too few samples on " + on
+                         : "not computed on " + on + ": " + allan.not_computed) +
+                    ".");
     return;
   }
   page->Paragraph("Allan deviation of the camera-axis rates on " + on + ".");

@@ -104,9 +104,11 @@ std::optional<std::pair<std::string, std::vector<FieldDef>>> ParseFormat(std::st
   return std::make_pair(std::move(name), std::move(fields));
 }
 
-// Flattens a (possibly nested) format into out; returns an error text or "".
+// Flattens a (possibly nested) format into out; returns an error text or "". Without names, only
+// the sizes: a topic the reader does not keep needs no field map (building one, a string per array
+// element, was most of the cost of a subscription), yet its sizes and errors are the same.
 std::string Flatten(const FormatMap& formats, const std::string& type, const std::string& prefix,
-                    int depth, size_t* offset, Layout* out) {
+                    int depth, bool with_names, size_t* fields, size_t* offset, Layout* out) {
   if (depth > kMaxNestingDepth) return "nesting deeper than " + std::to_string(kMaxNestingDepth);
   auto it = formats.find(type);
   if (it == formats.end()) return "no format definition for type '" + type + "'";
@@ -122,14 +124,18 @@ std::string Flatten(const FormatMap& formats, const std::string& type, const std
       continue;  // padding is not a field, and never ends the part a data message must carry
     }
     for (size_t i = 0; i < f.count; ++i) {
-      const std::string name = prefix + f.name + (f.count > 1 ? "[" + std::to_string(i) + "]" : "");
+      const std::string name =
+          with_names ? prefix + f.name + (f.count > 1 ? "[" + std::to_string(i) + "]" : "") : "";
       if (scalar) {
-        if (out->fields.size() >= kMaxFlatFields) return "too many fields";
-        out->fields.emplace(name, FlatField{scalar->first, *offset});
+        if (*fields >= kMaxFlatFields) return "too many fields";
+        // emplace keeps the first of two fields of one name, which still counts
+        if (with_names) out->fields.emplace(name, FlatField{scalar->first, *offset});
+        ++*fields;
         *offset += scalar->second;
       } else {
         const size_t before = *offset;
-        const std::string err = Flatten(formats, f.type, name + ".", depth + 1, offset, out);
+        const std::string err = Flatten(formats, f.type, with_names ? name + "." : "", depth + 1,
+                                        with_names, fields, offset, out);
         if (!err.empty()) return err;
         // An empty nested type would let a large array spin without growing the message.
         if (*offset == before) return "nested type '" + f.type + "' has no bytes";
@@ -380,8 +386,8 @@ std::shared_ptr<const Layout> ULogParser::LayoutFor(const std::string& topic, st
   auto it = layouts_.find(topic);
   if (it != layouts_.end()) return it->second;
   auto layout = std::make_shared<Layout>();
-  size_t offset = 0;
-  *error = Flatten(formats_, topic, "", 0, &offset, layout.get());
+  size_t offset = 0, fields = 0;
+  *error = Flatten(formats_, topic, "", 0, WantedTopic(topic), &fields, &offset, layout.get());
   if (!error->empty()) return nullptr;
   layouts_.emplace(topic, layout);
   return layout;

@@ -89,6 +89,26 @@ TEST(AnalyzeCli, ReportWithSceneIsSelfContainedAndMatchesTheTable) {
   EXPECT_LT(html.size(), 6u << 20);
 }
 
+TEST(AnalyzeCli, ReportOfSamplesStampedInBurstsSaysWhyItHasNoAllan) {
+  // Samples stamped in threes with one time (a median interval of 0): the report is written, its
+  // Allan section says why it has no deviation (`analyze --out` stopped in that section before).
+  test::TempDir dir;
+  std::vector<GyroSample> samples(20 * 3000);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  for (size_t k = 0; k < samples.size(); ++k) {
+    samples[k].t_ns = static_cast<int64_t>(k / 3) * 1'000'000;
+    samples[k].omega_rad_s = Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+  }
+  WriteGyroCsv(dir / "bursts.csv", GyroTrace(std::move(samples)));
+  const auto r =
+      RunShutterlab("analyze " + (dir / "bursts.csv") + " --every 2s --out " + (dir / "out"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string html = ReadFileToString(dir / "out/report.html");
+  EXPECT_NE(html.find("Allan deviation: not computed on"), std::string::npos);
+  EXPECT_NE(html.find("the median sample interval is 0"), std::string::npos);
+}
+
 TEST(AnalyzeCli, SceneWithoutOutIsExitTwo) {
   SHUTTERLAB_NEED_REAL_DATA();
   const auto r =

@@ -66,6 +66,41 @@ TEST(NoiseCli, PrintsJsonAndWritesTheAllanCsv) {
   EXPECT_GT(LineCount(csv), 20u);
 }
 
+// A logger that stamps its samples in threes with one time, every 1 ms, for still_s of noise: a
+// median interval of 0.
+void WriteBurstStampedTrace(const std::string& path, double still_s) {
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0.0, kSigmaRadS);
+  std::vector<GyroSample> samples(static_cast<size_t>(still_s * 3000));
+  for (size_t k = 0; k < samples.size(); ++k) {
+    samples[k].t_ns = static_cast<int64_t>(k / 3) * kPeriodNs;
+    samples[k].omega_rad_s = Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+  }
+  WriteGyroCsv(path, GyroTrace(std::move(samples)));
+}
+
+TEST(NoiseCli, SamplesStampedInBurstsHaveNoAllanAndSayWhy) {
+  // The Allan deviation needs a sample period; with a median interval of 0 it is not computed,
+  // and the command says why instead of stopping (it stopped with "Allan: the trace has no
+  // positive sample interval"). The sampling itself is stated once, as duplicate_time.
+  test::TempDir dir;
+  const std::string trace = dir / "bursts.csv";
+  WriteBurstStampedTrace(trace, 8.0);
+  const auto json = RunShutterlab("noise " + trace + " --json");
+  ASSERT_EQ(json.exit_code, 0) << json.output;
+  const nlohmann::json j = nlohmann::json::parse(json.out);
+  EXPECT_NE(j.at("allan_not_computed").get<std::string>().find("median sample interval is 0"),
+            std::string::npos);
+  EXPECT_FALSE(j["axes"]["x"].contains("arw_deg_sqrt_h"));
+  EXPECT_NE(json.err.find("duplicate_time"), std::string::npos) << json.err;
+  EXPECT_EQ(json.err.find("rate_change"), std::string::npos) << json.err;
+  const auto table = RunShutterlab("noise " + trace);
+  ASSERT_EQ(table.exit_code, 0) << table.output;
+  EXPECT_NE(table.out.find("Allan deviation: not computed: the median sample interval is 0"),
+            std::string::npos)
+      << table.out;
+}
+
 TEST(NoiseCli, TableHasOneRowPerAxis) {
   test::TempDir dir;
   const std::string trace = dir / "still.csv";

@@ -72,6 +72,28 @@ TEST(AuditTrace, SampleRateChangesAreListedWithTheirTimes) {
   EXPECT_DOUBLE_EQ(*lines[0].t_s, 3.0);
 }
 
+TEST(AuditTrace, BurstsStampedWithOneTimeHaveTheirRateAndChangeIt) {
+  // A logger that stamps its samples in threes with one time, every 1 ms (3 kHz of samples, a
+  // median interval of 0) for 4 s, then one sample every 1 ms for 3 s: the first run's rate is
+  // its samples over its span, and the change to 1 kHz is the one change (each block was a
+  // "change" from "0 Hz" to "0 Hz" before).
+  std::vector<GyroSample> samples;
+  for (size_t k = 0; k < 12000; ++k)
+    samples.push_back({static_cast<int64_t>(k / 3) * 1'000'000, Eigen::Vector3d::Zero()});
+  for (const GyroSample& s : Regular(3000, 1'000'000, 4'000'000'000)) samples.push_back(s);
+  const std::vector<LogWarning> lines = AuditTrace(GyroTrace(samples));
+  ASSERT_EQ(lines.size(), 2u) << Joined(lines);
+  EXPECT_EQ(lines[0].kind, "duplicate_time");
+  EXPECT_EQ(lines[0].count, 8000u);
+  EXPECT_EQ(WarningLine(lines[1]),
+            "rate_change: sample rate changes 1 time(s): 3000 Hz, then 1000 Hz from 4.000 s");
+  // Stamped in threes throughout: one rate, no change.
+  samples.resize(12000);
+  const std::vector<LogWarning> one_rate = AuditTrace(GyroTrace(samples));
+  ASSERT_EQ(one_rate.size(), 1u) << Joined(one_rate);
+  EXPECT_EQ(one_rate[0].kind, "duplicate_time");
+}
+
 TEST(AuditTrace, JitterIsNotARateChange) {
   std::vector<GyroSample> samples = Regular(8000, 1'000'000);
   for (size_t k = 0; k < samples.size(); ++k)
