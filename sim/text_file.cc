@@ -7,6 +7,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fcntl.h>
 #include <fstream>
@@ -31,35 +32,163 @@ std::string ReadFileToString(const std::string& path) {
   return content;
 }
 
-MappedFile::MappedFile(const std::string& path, Paging paging) {
-  const int fd = ::open(path.c_str(), O_RDONLY);
-  if (fd < 0)
-    throw IoError(IoMessage(path, 0, std::string("cannot open: ") + std::strerror(errno)));
+namespace {
+
+LogStamp StampOf(const struct stat& info, const std::string& path) {
+  LogStamp stamp;
+  stamp.path = path;
+  stamp.size_bytes = static_cast<uint64_t>(info.st_size);
+  stamp.modified_ns = static_cast<int64_t>(info.st_mtim.tv_sec) * 1000000000 + info.st_mtim.tv_nsec;
+  stamp.device = static_cast<uint64_t>(info.st_dev);
+  stamp.inode = static_cast<uint64_t>(info.st_ino);
+  return stamp;
+}
+
+// Where temporary copies go: $TMPDIR, else /tmp.
+std::string TemporaryFolder() {
+  const char* folder = std::getenv("TMPDIR");
+  return folder && *folder ? folder : "/tmp";
+}
+
+// Writes all of [data, data + size) to fd; false (errno set) when a write fails.
+bool WriteAll(int fd, const char* data, size_t size) {
+  while (size > 0) {
+    const ssize_t n = ::write(fd, data, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    data += n;
+    size -= static_cast<size_t>(n);
+  }
+  return true;
+}
+
+// Closes a descriptor when it goes out of scope.
+struct Descriptor {
+  int fd;
+  ~Descriptor() {
+    if (fd >= 0) ::close(fd);
+  }
+};
+
+}  // namespace
+
+LogStamp LogStamp::Of(const std::string& path) {
   struct stat info {};
-  if (::fstat(fd, &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0) {
-    const int populate = paging == Paging::kWhole ? MAP_POPULATE : 0;
-    void* p = ::mmap(nullptr, static_cast<size_t>(info.st_size), PROT_READ, MAP_PRIVATE | populate,
-                     fd, 0);
-    if (p != MAP_FAILED) {
-      data_ = static_cast<const char*>(p);
-      size_ = static_cast<size_t>(info.st_size);
-      mapped_ = true;
+  if (::stat(path.c_str(), &info) != 0) {
+    LogStamp none;
+    none.path = path;
+    return none;
+  }
+  return StampOf(info, path);
+}
+
+LogStamp LogStamp::Of(int fd, const std::string& path) {
+  struct stat info {};
+  if (::fstat(fd, &info) != 0)
+    throw IoError(IoMessage(path, 0, std::string("cannot read: ") + std::strerror(errno)));
+  return StampOf(info, path);
+}
+
+void LogStamp::CheckUnchanged() const {
+  const LogStamp now = Of(path);
+  if (now.size_bytes == size_bytes && now.modified_ns == modified_ns && now.device == device &&
+      now.inode == inode)
+    return;
+  const std::string what =
+      now.size_bytes == size_bytes
+          ? "rewritten, still " + std::to_string(size_bytes) + " bytes"
+          : std::to_string(size_bytes) + " bytes, now " + std::to_string(now.size_bytes);
+  throw IoError(IoMessage(path, 0,
+                          "changed while it was read in passes (" + what +
+                              "): is it still being recorded? Analyse a copy, or the finished "
+                              "log"));
+}
+
+MappedFile::MappedFile(const std::string& path, Paging paging) : path_(path) {
+  const Descriptor file{::open(path.c_str(), O_RDONLY | O_CLOEXEC)};
+  if (file.fd < 0)
+    throw IoError(IoMessage(path, 0, std::string("cannot open: ") + std::strerror(errno)));
+  Open(file.fd, paging);
+}
+
+MappedFile::MappedFile(int fd, const std::string& path, Paging paging) : path_(path) {
+  Open(fd, paging);
+}
+
+void MappedFile::Open(int fd, Paging paging) {
+  struct stat info {};
+  if (::fstat(fd, &info) != 0)
+    throw IoError(IoMessage(path_, 0, std::string("cannot read: ") + std::strerror(errno)));
+  if (S_ISREG(info.st_mode) && info.st_size > 0) {
+    Map(fd, static_cast<size_t>(info.st_size), paging);
+    if (!data_)
+      throw IoError(IoMessage(path_, 0, std::string("cannot map: ") + std::strerror(errno)));
+    stamp_ = StampOf(info, path_);
+    return;
+  }
+  // Not a file to map (a pipe; an empty regular file, or one such as /proc's that says it is).
+  Copy({}, fd, paging);
+}
+
+std::unique_ptr<MappedFile> MappedFile::Copied(std::string_view head, int fd,
+                                               const std::string& path, Paging paging) {
+  std::unique_ptr<MappedFile> copied(new MappedFile());
+  copied->path_ = path;
+  copied->Copy(head, fd, paging);
+  return copied;
+}
+
+void MappedFile::Map(int fd, size_t size, Paging paging) {
+  const int populate = paging == Paging::kWhole ? MAP_POPULATE : 0;
+  void* p = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE | populate, fd, 0);
+  if (p == MAP_FAILED) return;
+  data_ = static_cast<const char*>(p);
+  size_ = size;
+}
+
+void MappedFile::Copy(std::string_view head, int fd, Paging paging) {
+  const std::string folder = TemporaryFolder();
+  std::string name = folder + "/shutterlab-XXXXXX";
+  const Descriptor copy{::mkostemp(name.data(), O_CLOEXEC)};
+  const auto failed = [&](const std::string& reason) {
+    return IoError(IoMessage(path_, 0,
+                             "cannot copy it to a temporary file in " + folder + ": " + reason +
+                                 " (TMPDIR names another folder)"));
+  };
+  if (copy.fd < 0) throw failed(std::strerror(errno));
+  // Unlinked at once: the file lives as long as its descriptor and mapping, never past the process.
+  ::unlink(name.c_str());
+  if (!WriteAll(copy.fd, head.data(), head.size())) throw failed(std::strerror(errno));
+  if (fd >= 0) {
+    // 1 MiB a read: a pipe hands out at most its buffer (64 KiB) a read, a file more.
+    constexpr size_t kCopyBytes = 1 << 20;
+    std::unique_ptr<char[]> buffer(new char[kCopyBytes]);
+    while (true) {
+      const ssize_t n = ::read(fd, buffer.get(), kCopyBytes);
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0)
+        throw IoError(IoMessage(path_, 0, std::string("read failed: ") + std::strerror(errno)));
+      if (n == 0) break;
+      if (!WriteAll(copy.fd, buffer.get(), static_cast<size_t>(n)))
+        throw failed(std::strerror(errno));
     }
   }
-  ::close(fd);
-  if (!mapped_) {
-    fallback_ = ReadFileToString(path);
-    data_ = fallback_.data();
-    size_ = fallback_.size();
+  struct stat info {};
+  if (::fstat(copy.fd, &info) != 0) throw failed(std::strerror(errno));
+  if (info.st_size == 0) {
+    data_ = "";
+    return;
   }
+  Map(copy.fd, static_cast<size_t>(info.st_size), paging);
+  if (!data_) throw failed(std::string("cannot map it: ") + std::strerror(errno));
 }
 
 MappedFile::~MappedFile() {
-  if (mapped_) ::munmap(const_cast<char*>(data_), size_);
+  if (size_ > 0) ::munmap(const_cast<char*>(data_), size_);
 }
 
 void MappedFile::ReleaseBefore(size_t offset) {
-  if (!mapped_) return;
+  if (size_ == 0) return;
   const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
   const size_t end = std::min(offset, size_) / page * page;  // whole pages only
   // Behind what was handed back: a new pass from the start (a reader's second pass), whose pages
@@ -70,6 +199,10 @@ void MappedFile::ReleaseBefore(size_t offset) {
   // page cache keeps them, so a later touch costs a minor fault, not a read from disk.
   ::madvise(const_cast<char*>(data_) + released_, end - released_, MADV_DONTNEED);
   released_ = end;
+}
+
+void MappedFile::CheckUnchanged() const {
+  if (stamp_) stamp_->CheckUnchanged();
 }
 
 void AdviseHugePages(const void* data, size_t bytes) {
@@ -104,26 +237,25 @@ TextBlocks TextBlocks::OfFile(const std::string& path, size_t block_bytes) {
   TextBlocks blocks;
   blocks.path_ = path;
   blocks.capacity_ = std::max<size_t>(block_bytes, 1);
-  blocks.fd_ = ::open(path.c_str(), O_RDONLY);
+  blocks.fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (blocks.fd_ < 0)
     throw IoError(IoMessage(path, 0, std::string("cannot open: ") + std::strerror(errno)));
   struct stat info {};
-  if (::fstat(blocks.fd_, &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0) {
-    // A regular file is mapped and its blocks handed out in place, each block's pages handed back
-    // when the next is taken: bounded memory without read()'s copy into a buffer (11 % of
-    // `flight` on a 30-million-line gyro.csv). What it holds when opened is read; a file that
-    // grows meanwhile is read as it was (its last line cut there is said, as any cut line is).
-    auto mapped = std::make_unique<MappedFile>(path, MappedFile::Paging::kStreamed);
-    if (mapped->mapped()) {
-      ::close(blocks.fd_);
-      blocks.fd_ = -1;
-      blocks.memory_ = mapped->text();
-      blocks.size_ = blocks.memory_.size();
-      blocks.mapped_ = std::move(mapped);
-      return blocks;
-    }
+  const bool regular = ::fstat(blocks.fd_, &info) == 0 && S_ISREG(info.st_mode);
+  if (regular && info.st_size > 0) {
+    // A regular file is mapped (through the descriptor just opened) and its blocks handed out in
+    // place, each block's pages handed back when the next is taken: bounded memory without
+    // read()'s copy into a buffer (11 % of `flight` on a 30-million-line gyro.csv). What it holds
+    // when opened is read; a file that grows meanwhile is read as it was (its last line cut there
+    // is said, as any cut line is).
+    blocks.mapped_ = std::make_unique<MappedFile>(blocks.fd_, path, MappedFile::Paging::kStreamed);
+    ::close(blocks.fd_);
+    blocks.fd_ = -1;
+    blocks.memory_ = blocks.mapped_->text();
+    blocks.size_ = blocks.memory_.size();
+    return blocks;
   }
-  if (::fstat(blocks.fd_, &info) == 0 && S_ISREG(info.st_mode)) {
+  if (regular) {
     blocks.size_ = static_cast<uint64_t>(info.st_size);
     // A block no larger than the file needs (with room to see its end in the same read), so that
     // a small log does not allocate and fault in a whole block; a file that grows meanwhile is
@@ -227,10 +359,23 @@ std::string_view TextBlocks::Peek(size_t bytes) {
   return {buffer_.get(), std::min(bytes, carry_end_)};
 }
 
-std::string TextBlocks::TakeRest() {
-  std::string rest;
-  for (std::string_view block = Next(); !block.empty(); block = Next()) rest.append(block);
-  return rest;
+std::unique_ptr<MappedFile> TextBlocks::TakeMapped() {
+  SHUTTERLAB_CHECK(handed_out_ == 0) << "TextBlocks::TakeMapped after Next";
+  std::unique_ptr<MappedFile> mapped = std::move(mapped_);
+  if (!mapped) {
+    // A pipe: what Peek read first, then the rest; or a text in memory.
+    const std::string_view head =
+        fd_ >= 0 ? std::string_view(buffer_.get() + carry_begin_, carry_end_ - carry_begin_)
+                 : memory_;
+    mapped = MappedFile::Copied(head, fd_, path_, MappedFile::Paging::kStreamed);
+  }
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  memory_ = {};
+  size_ = 0;
+  carry_begin_ = carry_end_ = 0;
+  end_of_file_ = true;
+  return mapped;
 }
 
 double TextBlocks::Fraction() const {

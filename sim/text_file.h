@@ -15,9 +15,29 @@ namespace shutterlab {
 // Reads a whole file; throws IoError naming the path when it cannot.
 std::string ReadFileToString(const std::string& path);
 
-// A whole file, read-only, mapped into memory (falls back to reading for pipes and the like).
-// Mapping avoids the zero-fill and first-touch faults of a fresh buffer, which cost more than
-// parsing on large logs (about 11 us per 4 KiB page on our machines). Throws IoError.
+// A file's size, modification time and identity (device, inode) when a reading in several passes
+// first opened it. A log still being recorded grows between the passes, and one rewritten or
+// replaced (even at the same size) holds other bytes: either would give one pass's samples to the
+// next. Every later pass, and the end, checks that the file is as it was.
+struct LogStamp {
+  std::string path;
+  uint64_t size_bytes = 0;
+  int64_t modified_ns = 0;
+  uint64_t device = 0, inode = 0;
+  // The file at path now (all zero when it cannot be looked at: opening it then says why).
+  static LogStamp Of(const std::string& path);
+  // The file an open descriptor reads, whatever path names later; path names it in messages.
+  static LogStamp Of(int fd, const std::string& path);
+  // Throws IoError, one line naming the file, when it is no longer what the stamp describes.
+  void CheckUnchanged() const;
+};
+
+// A whole file, read-only, mapped into memory. Mapping avoids the zero-fill and first-touch faults
+// of a fresh buffer, which cost more than parsing on large logs (about 11 us per 4 KiB page on our
+// machines). What cannot be mapped (a pipe, a FIFO, /dev/stdin) is first copied to a temporary
+// file, unlinked as soon as it is made (it never outlives the process), in $TMPDIR (else /tmp),
+// and that is mapped: a log on a pipe is then read in passes, in bounded memory, as a file is.
+// Throws IoError naming the file (and the temporary folder when the copy fails, as on a full disk).
 class MappedFile {
  public:
   // kWhole: every page read in when mapped (a file parsed whole). kStreamed: pages read in as they
@@ -25,24 +45,45 @@ class MappedFile {
   // front to back in bounded memory.
   enum class Paging { kWhole, kStreamed };
   explicit MappedFile(const std::string& path, Paging paging = Paging::kWhole);
+  // The file an open descriptor reads (a regular file whole; anything else from where it stands,
+  // copied first), without opening it again. The descriptor stays the caller's to close (the
+  // mapping outlives it); path names the file in messages.
+  MappedFile(int fd, const std::string& path, Paging paging);
+  // The bytes of a descriptor that cannot be mapped (a pipe) from where it stands, after `head`
+  // (bytes already read from it, such as a look at its start), copied to a temporary file and
+  // mapped. The descriptor stays the caller's.
+  static std::unique_ptr<MappedFile> Copied(std::string_view head, int fd, const std::string& path,
+                                            Paging paging);
   ~MappedFile();
   MappedFile(const MappedFile&) = delete;
   MappedFile& operator=(const MappedFile&) = delete;
   std::string_view text() const { return {data_, size_}; }
-  // Whether the file is mapped (false: read into memory, as a pipe is).
-  bool mapped() const { return mapped_; }
+  const std::string& path() const { return path_; }
+  // Whether the bytes are a copy (a pipe's), not the named file's own.
+  bool copied() const { return !stamp_; }
   // Hands the whole pages before byte `offset` back to the kernel (they leave the process's
   // resident memory; touching them again reads them again from the file). An offset before the
   // last one starts again from the file's start: a reader's next pass over the file hands its
-  // pages back the same way. A no-op for a file that is not mapped (a pipe, read whole).
+  // pages back the same way.
   void ReleaseBefore(size_t offset);
+  // Throws IoError, one line naming the file, when the file mapped has changed since (LogStamp):
+  // a log still being recorded, or rewritten, whose pages would give other bytes than a pass
+  // before read (or SIGBUS past a new end). Nothing to check for a copy, which nothing else
+  // writes.
+  void CheckUnchanged() const;
 
  private:
+  MappedFile() = default;
+  void Open(int fd, Paging paging);
+  void Map(int fd, size_t size, Paging paging);
+  // Copies fd's bytes after head into an unlinked temporary file and maps it.
+  void Copy(std::string_view head, int fd, Paging paging);
+
+  std::string path_;
   const char* data_ = nullptr;
   size_t size_ = 0;
-  bool mapped_ = false;
-  size_t released_ = 0;  // bytes from the start already handed back
-  std::string fallback_;
+  size_t released_ = 0;            // bytes from the start already handed back
+  std::optional<LogStamp> stamp_;  // of the named file mapped; none for a copy
 };
 
 // Asks the kernel for transparent huge pages on the page-aligned part of [data, data + bytes),
@@ -77,8 +118,10 @@ class TextBlocks {
   // Up to `bytes` of the input's start, without handing them out: Next gives them again. Only
   // before the first Next. A pipe is read once, so a look at its start must come from here.
   std::string_view Peek(size_t bytes);
-  // The rest of the input, whole (a binary log on a pipe: its reader decodes it whole).
-  std::string TakeRest();
+  // The whole input mapped, for a reader that reads it in passes (a binary log): a file's own
+  // mapping (not opened again), a pipe's bytes copied to a temporary file (MappedFile::Copied, the
+  // bytes looked at by Peek first). Only before the first Next; the blocks are empty after.
+  std::unique_ptr<MappedFile> TakeMapped();
   // The share of the input handed out so far, 0..1.
   double Fraction() const;
   // The input's length in bytes; 0 when unknown (a pipe).

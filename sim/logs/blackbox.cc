@@ -12,7 +12,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <filesystem>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -55,31 +54,20 @@ constexpr int64_t kMaxTabulatedIInterval = 1 << 16;
 constexpr size_t kReleaseEveryBytes = size_t{4} << 20;
 
 // A blackbox file's bytes for as long as a stream reads them: a file mapped page by page
-// (MappedFile::Paging::kStreamed), a pipe's bytes taken whole, or a caller's buffer. The file is
-// read front to back several times (the search for the logs, pass 1, pass 2); each reading maps
-// it afresh (StartReading), because a mapping hands its pages back (ReleaseBefore) only once.
+// (MappedFile::Paging::kStreamed; a pipe's bytes copied to a temporary file first), or a caller's
+// buffer (owned or borrowed). The file is read front to back several times (the search for the
+// logs, pass 1, pass 2); each reading hands its pages back behind it (ReleaseBefore starts again
+// from the file's start for the next).
 class BlackboxBytes {
  public:
-  static std::unique_ptr<BlackboxBytes> OfFile(const std::string& path) {
-    // Not a regular file (a pipe): read once, whole.
-    if (!std::filesystem::is_regular_file(path)) return Owning(ReadFileToString(path), path);
-    auto bytes = std::make_unique<BlackboxBytes>(path);
-    bytes->modified_ = bytes->Stamp().modified;  // before mapping: a later write shows
-    bytes->mapped_ = std::make_unique<MappedFile>(path, MappedFile::Paging::kStreamed);
-    bytes->view_ = bytes->mapped_->text();
+  static std::unique_ptr<BlackboxBytes> OfMapped(std::unique_ptr<MappedFile> mapped) {
+    auto bytes = std::make_unique<BlackboxBytes>(mapped->path());
+    bytes->view_ = mapped->text();
+    bytes->mapped_ = std::move(mapped);
     return bytes;
   }
-  // Before another reading front to back: a file is mapped again (its bytes unchanged, else
-  // IoError), with every page of the last reading handed back. view() and data() change.
-  void StartReading() {
-    if (!mapped_) return;
-    CheckUnchanged();
-    mapped_.reset();
-    mapped_ = std::make_unique<MappedFile>(path_, MappedFile::Paging::kStreamed);
-    const size_t size = view_.size();
-    view_ = mapped_->text();
-    if (view_.size() != size) ThrowChanged(size, view_.size());
-  }
+  // Before another reading front to back: a file must still be what was mapped.
+  void StartReading() { CheckUnchanged(); }
   static std::unique_ptr<BlackboxBytes> Owning(std::string content, const std::string& path) {
     auto bytes = std::make_unique<BlackboxBytes>(path);
     bytes->owned_ = std::move(content);
@@ -100,39 +88,18 @@ class BlackboxBytes {
   void ReleaseBefore(size_t offset) {
     if (mapped_) mapped_->ReleaseBefore(offset);
   }
-  // A mapped file must still be what was mapped: one that grew (still being recorded) or shrank
-  // (a page past its new end would kill the process with SIGBUS) is refused in one line.
+  // A mapped file must still be what was mapped: one that grew (still being recorded), was
+  // rewritten, or shrank (a page past its new end would kill the process with SIGBUS) is refused
+  // in one line.
   void CheckUnchanged() const {
-    if (!mapped_) return;
-    const FileStamp now = Stamp();
-    if (now.size_bytes == view_.size() && now.modified == modified_) return;
-    ThrowChanged(view_.size(), now.size_bytes);
+    if (mapped_) mapped_->CheckUnchanged();
   }
 
  private:
-  struct FileStamp {
-    uintmax_t size_bytes = 0;
-    std::filesystem::file_time_type modified;
-  };
-  [[noreturn]] void ThrowChanged(uintmax_t was_bytes, uintmax_t now_bytes) const {
-    throw IoError(IoMessage(path_, 0,
-                            "changed while it was read (" + std::to_string(was_bytes) +
-                                " bytes, now " + std::to_string(now_bytes) +
-                                "): is it still being recorded? Read a copy, or the finished log"));
-  }
-  FileStamp Stamp() const {
-    std::error_code error;
-    FileStamp stamp;
-    stamp.size_bytes = std::filesystem::file_size(path_, error);
-    stamp.modified = std::filesystem::last_write_time(path_, error);
-    return stamp;
-  }
-
   std::string path_;
   std::unique_ptr<MappedFile> mapped_;
   std::string owned_;
   std::string_view view_;
-  std::filesystem::file_time_type modified_;  // of a mapped file
 };
 
 // The six frame kinds; 'H' is the GPS home frame once the header is over.
@@ -1471,7 +1438,12 @@ bool LooksLikeBlackbox(std::string_view first_bytes) {
 }
 
 BlackboxStream OpenBlackbox(const std::string& path, int log_index, size_t chunk_samples) {
-  return OpenAny(BlackboxBytes::OfFile(path), log_index, chunk_samples);
+  return OpenBlackbox(std::make_unique<MappedFile>(path, MappedFile::Paging::kStreamed), log_index,
+                      chunk_samples);
+}
+
+BlackboxStream OpenBlackbox(std::unique_ptr<MappedFile> file, int log_index, size_t chunk_samples) {
+  return OpenAny(BlackboxBytes::OfMapped(std::move(file)), log_index, chunk_samples);
 }
 
 BlackboxStream OpenBlackboxBytes(std::string bytes, const std::string& path, int log_index,
@@ -1501,7 +1473,8 @@ std::vector<BlackboxLogInfo> ListBlackboxLogsInBuffer(std::string_view bytes,
 }
 
 std::vector<BlackboxLogInfo> ListBlackboxLogs(const std::string& path) {
-  return ListLogs(BlackboxBytes::OfFile(path));
+  return ListLogs(
+      BlackboxBytes::OfMapped(std::make_unique<MappedFile>(path, MappedFile::Paging::kStreamed)));
 }
 
 FlightLog ReadBlackbox(const std::string& path, int log_index) {

@@ -18,6 +18,7 @@
 
 #include "sim/gyro_source.h"
 #include "sim/logs/flight_log.h"
+#include "sim/text_file.h"
 
 #include <cstddef>
 #include <memory>
@@ -62,7 +63,8 @@ std::vector<BlackboxLogInfo> ListBlackboxLogs(const std::string& path);
 // one pass, a chunk of rows at a time; a row that does not read throws IoError from Next, and a
 // cut last line is left out and said in samples->Warnings() (its only warnings).
 // A mapped file's pages are handed back behind the decoder every few MiB; a file that changes
-// between the passes (still being recorded) makes Next throw IoError naming it.
+// between the passes (still being recorded, or rewritten: MappedFile::CheckUnchanged) makes Next
+// throw IoError naming it.
 struct BlackboxStream {
   FlightLog log;
   std::unique_ptr<GyroSource> samples;
@@ -75,8 +77,12 @@ struct BlackboxStream {
 // holds no main frame.
 BlackboxStream OpenBlackbox(const std::string& path, int log_index = -1,
                             size_t chunk_samples = FillingSource::kDefaultChunkSamples);
-// The same over bytes already read (a log on a pipe), which the stream keeps; `path` only names
-// the source in messages.
+// The same over a file mapped already (a pipe's bytes copied to a temporary file:
+// TextBlocks::TakeMapped).
+BlackboxStream OpenBlackbox(std::unique_ptr<MappedFile> file, int log_index = -1,
+                            size_t chunk_samples = FillingSource::kDefaultChunkSamples);
+// The same over bytes already in memory, which the stream keeps; `path` only names the source in
+// messages.
 BlackboxStream OpenBlackboxBytes(std::string bytes, const std::string& path, int log_index = -1,
                                  size_t chunk_samples = FillingSource::kDefaultChunkSamples);
 // The same over a caller's buffer, which must outlive the stream (tests, fuzzing).

@@ -707,12 +707,11 @@ FlightLog DataFlashParser::Run(MappedFile* file) {
   return std::move(log_);
 }
 
-// The bytes of a log: a file mapped to be read front to back, or bytes in memory (owned: a pipe's;
-// borrowed: the caller's).
+// The bytes of a log: a file mapped to be read front to back (a pipe's copied to a temporary file
+// first), or the caller's bytes in memory.
 struct DataFlashBytes {
   std::string path;
   std::unique_ptr<MappedFile> file;
-  std::string owned;
   std::string_view bytes;
 };
 
@@ -751,10 +750,10 @@ class DataFlashSource : public FillingSource {
   }
 
  private:
-  // A mapped file cut while mapped would fault on its lost pages; one that grew is not the file
-  // pass 1 read. Either way, one line naming it.
+  // A mapped file cut while mapped would fault on its lost pages; one that grew or was rewritten
+  // is not the file pass 1 read. Either way, one line naming it.
   void CheckUnchanged() const {
-    if (bytes_->file && SizeNow() != bytes_->bytes.size()) Changed();
+    if (bytes_->file) bytes_->file->CheckUnchanged();
   }
   std::uintmax_t SizeNow() const {
     std::error_code error;
@@ -836,16 +835,16 @@ bool LooksLikeDataFlash(std::string_view first_bytes) {
   return true;
 }
 
-DataFlashStream OpenDataFlash(TextBlocks input, const std::string& path, size_t chunk_samples) {
+DataFlashStream OpenDataFlash(const std::string& path, size_t chunk_samples) {
+  return OpenDataFlash(std::make_unique<MappedFile>(path, MappedFile::Paging::kStreamed),
+                       chunk_samples);
+}
+
+DataFlashStream OpenDataFlash(std::unique_ptr<MappedFile> file, size_t chunk_samples) {
   auto bytes = std::make_shared<DataFlashBytes>();
-  bytes->path = path;
-  if (std::filesystem::is_regular_file(path)) {
-    bytes->file = std::make_unique<MappedFile>(path, MappedFile::Paging::kStreamed);
-    bytes->bytes = bytes->file->text();
-  } else {
-    bytes->owned = input.TakeRest();
-    bytes->bytes = bytes->owned;
-  }
+  bytes->path = file->path();
+  bytes->bytes = file->text();
+  bytes->file = std::move(file);
   return OpenBytes(std::move(bytes), chunk_samples);
 }
 
@@ -861,8 +860,6 @@ FlightLog ParseDataFlash(std::string_view bytes, const std::string& path) {
   return ReadWhole(OpenDataFlash(bytes, path));
 }
 
-FlightLog ReadDataFlash(const std::string& path) {
-  return ReadWhole(OpenDataFlash(TextBlocks::OfFile(path), path));
-}
+FlightLog ReadDataFlash(const std::string& path) { return ReadWhole(OpenDataFlash(path)); }
 
 }  // namespace shutterlab

@@ -50,15 +50,19 @@ FlightLog ParseDataFlash(std::string_view bytes, const std::string& path);
 // 2: it parses the bytes again and hands out the chosen stream's cleaned samples in chunks of
 // chunk_samples, exactly those ReadDataFlash gives; Fraction() is the share of the bytes parsed. A
 // file is mapped and its pages handed back behind the parser every 8 MiB; a file that changed
-// between the passes (still being recorded) is an IoError naming it. A stream too disordered for
+// between the passes (still being recorded, or rewritten: MappedFile::CheckUnchanged) is an
+// IoError naming it. A stream too disordered for
 // the summary's limits is summarised again without them (memory then grows with it), said in a
 // "memory" warning.
 struct DataFlashStream {
   FlightLog log;  // all but the samples (log.gyro stays empty)
   std::unique_ptr<GyroSource> samples;
 };
-// A file (input's path), or a pipe (input taken whole into memory).
-DataFlashStream OpenDataFlash(TextBlocks input, const std::string& path,
+// A file, mapped; the same over a file mapped already (a pipe's bytes copied to a temporary file:
+// TextBlocks::TakeMapped).
+DataFlashStream OpenDataFlash(const std::string& path,
+                              size_t chunk_samples = FillingSource::kDefaultChunkSamples);
+DataFlashStream OpenDataFlash(std::unique_ptr<MappedFile> file,
                               size_t chunk_samples = FillingSource::kDefaultChunkSamples);
 // Bytes in memory, which must outlive the stream; path is used in messages only. limits: pass 1's
 // (tests and fuzzing choose small ones to reach the way without them).

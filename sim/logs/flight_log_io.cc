@@ -138,33 +138,28 @@ FlightLogStream WholeLogStream(FlightLog log) {
   return stream;
 }
 
-// One open function per binary format, each returning its own stream: a file is read by its
-// reader; a pipe (input, read once) is taken whole.
-FlightLogStream OpenULogLog(TextBlocks input, const std::string& path) {
-  // Read in two passes over the file (sim/logs/ulog.h OpenULog).
-  ULogStream ulog = std::filesystem::is_regular_file(path) ? OpenULog(path)
-                                                           : OpenULogBytes(input.TakeRest(), path);
+// One open function per binary format, each returning its own stream, read in two passes over
+// the mapped input: a file's own mapping; a pipe's bytes copied to a temporary file first
+// (TextBlocks::TakeMapped, the one place a pipe is taken whole), so that a log on a pipe is read
+// in the same bounded memory as a file.
+FlightLogStream OpenULogLog(TextBlocks input) {
+  ULogStream ulog = OpenULog(input.TakeMapped());  // sim/logs/ulog.h
   FlightLogStream stream;
   stream.log = std::move(ulog.log);
   stream.gyro = std::move(ulog.gyro);
   return stream;
 }
 
-// Streamed: two passes over the mapped file (sim/logs/dataflash.h OpenDataFlash).
-FlightLogStream OpenDataFlashLog(TextBlocks input, const std::string& path) {
-  DataFlashStream dataflash = OpenDataFlash(std::move(input), path);
+FlightLogStream OpenDataFlashLog(TextBlocks input) {
+  DataFlashStream dataflash = OpenDataFlash(input.TakeMapped());  // sim/logs/dataflash.h
   FlightLogStream stream;
   stream.log = std::move(dataflash.log);
   stream.gyro = std::move(dataflash.samples);
   return stream;
 }
 
-// Streamed (sim/logs/blackbox.h OpenBlackbox): a file mapped and read in two passes; a pipe
-// (input, read once) taken whole, then read the same way.
-FlightLogStream OpenBlackboxLog(TextBlocks input, const std::string& path, int log_index) {
-  BlackboxStream blackbox = std::filesystem::is_regular_file(path)
-                                ? OpenBlackbox(path, log_index)
-                                : OpenBlackboxBytes(input.TakeRest(), path, log_index);
+FlightLogStream OpenBlackboxLog(TextBlocks input, int log_index) {
+  BlackboxStream blackbox = OpenBlackbox(input.TakeMapped(), log_index);  // sim/logs/blackbox.h
   FlightLogStream stream;
   stream.log = std::move(blackbox.log);
   stream.gyro = std::move(blackbox.samples);
@@ -183,13 +178,13 @@ FlightLogStream OpenBinary(TextBlocks input, const std::string& path, LogFormat 
                            const FlightLogReadOptions& options) {
   switch (format) {
     case LogFormat::kULog:
-      return OpenULogLog(std::move(input), path);
+      return OpenULogLog(std::move(input));
     case LogFormat::kDataFlash:
-      return OpenDataFlashLog(std::move(input), path);
+      return OpenDataFlashLog(std::move(input));
     case LogFormat::kGoproMp4:
       return OpenGoproLog(path);
     default:
-      return OpenBlackboxLog(std::move(input), path, options.log_index);
+      return OpenBlackboxLog(std::move(input), options.log_index);
   }
 }
 
@@ -224,25 +219,6 @@ FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& opt
   for (LogWarning& warning : AuditTrace(log.gyro, stream.audit))
     log.warnings.push_back(std::move(warning));
   return log;
-}
-
-LogStamp LogStamp::Of(const std::string& path) {
-  std::error_code error;
-  LogStamp stamp;
-  stamp.path = path;
-  stamp.size_bytes = std::filesystem::file_size(path, error);
-  stamp.modified = std::filesystem::last_write_time(path, error);
-  return stamp;
-}
-
-void LogStamp::CheckUnchanged() const {
-  const LogStamp now = Of(path);
-  if (now.size_bytes == size_bytes && now.modified == modified) return;
-  throw IoError(
-      IoMessage(path, 0,
-                "changed while it was read in passes (" + std::to_string(size_bytes) +
-                    " bytes, now " + std::to_string(now.size_bytes) +
-                    "): is it still being recorded? Analyse a copy, or the finished log"));
 }
 
 FlightLogStream ReopenFlightLog(const LogStamp& stamp, const FlightLogReadOptions& read) {

@@ -8,10 +8,10 @@
 #include "sim/logs/column_csv.h"
 #include "sim/logs/flight_log.h"
 #include "sim/logs/log_format.h"
+#include "sim/text_file.h"
 #include "sim/trace_audit.h"
 
 #include <cstdint>
-#include <filesystem>
 #include <functional>
 #include <memory>
 #include <string>
@@ -59,19 +59,8 @@ struct FlightLogStream {
 // log); throws IoError as ReadFlightLog does.
 FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOptions& options = {});
 
-// A log file's size and modification time when a reading in several passes (a streamed analysis,
-// the still search) first opened it. A log still being written grows between the passes, which
-// would then disagree (one pass's samples not the next's): every later pass, and the end, checks
-// that the file is as it was.
-struct LogStamp {
-  std::string path;
-  std::uintmax_t size_bytes = 0;
-  std::filesystem::file_time_type modified;
-  static LogStamp Of(const std::string& path);
-  // Throws IoError naming the file when it changed since the stamp.
-  void CheckUnchanged() const;
-};
-// Opens the log again for another pass of a reading in several, after LogStamp::CheckUnchanged.
+// Opens the log again for another pass of a reading in several, after LogStamp::CheckUnchanged
+// (sim/text_file.h).
 FlightLogStream ReopenFlightLog(const LogStamp& stamp, const FlightLogReadOptions& read = {});
 
 // What a streamed log lost (the reader's warnings, then the trace audit's, as ReadFlightLog gives

@@ -11,7 +11,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <functional>
 #include <limits>
 #include <map>
@@ -266,15 +265,13 @@ void SetAltitudeAboveGround(const DecodedTopics& topics, FlightLog* log) {
   }
 }
 
-// The bytes both passes read: a file mapped page by page (pages handed back behind the parse), or
-// bytes in memory (a pipe's, taken whole; a caller's).
+// The bytes both passes read: a file mapped page by page (pages handed back behind the parse; a
+// pipe's copied to a temporary file first), or bytes in memory (a caller's).
 struct ULogInput {
   std::string path;
   std::unique_ptr<MappedFile> file;
   std::string owned;
   std::string_view bytes;
-  // A regular file's size when opened: pass 2 refuses a file that has changed since.
-  std::optional<uintmax_t> file_size;
 };
 
 // The passes over the bytes that give a topic instance's gyro samples in the order they are
@@ -551,15 +548,7 @@ class ULogGyroSource final : public FillingSource {
 };
 
 void ULogGyroSource::CheckUnchanged() const {
-  if (!input_->file_size) return;
-  std::error_code error;
-  const uintmax_t now = std::filesystem::file_size(input_->path, error);
-  if (error || now == *input_->file_size) return;
-  throw IoError(
-      IoMessage(input_->path, 0,
-                "changed while it was read in passes (" + std::to_string(*input_->file_size) +
-                    " bytes, now " + std::to_string(now) +
-                    "): is it still being recorded? Analyse a copy, or the finished log"));
+  if (input_->file) input_->file->CheckUnchanged();
 }
 
 void ULogGyroSource::Fill(std::vector<GyroSample>* chunk) {
@@ -616,17 +605,15 @@ bool LooksLikeULog(std::string_view first_bytes) {
 }
 
 ULogStream OpenULog(const std::string& path, size_t chunk_samples) {
-  auto input = std::make_unique<ULogInput>();
-  input->path = path;
-  input->file = std::make_unique<MappedFile>(path, MappedFile::Paging::kStreamed);
-  input->bytes = input->file->text();
-  std::error_code error;
-  if (std::filesystem::is_regular_file(path, error)) input->file_size = input->bytes.size();
-  return Open(std::move(input), chunk_samples);
+  return OpenULog(std::make_unique<MappedFile>(path, MappedFile::Paging::kStreamed), chunk_samples);
 }
 
-ULogStream OpenULogBytes(std::string bytes, const std::string& path, size_t chunk_samples) {
-  return internal::OpenULogBytes(std::move(bytes), path, chunk_samples, {});
+ULogStream OpenULog(std::unique_ptr<MappedFile> file, size_t chunk_samples) {
+  auto input = std::make_unique<ULogInput>();
+  input->path = file->path();
+  input->bytes = file->text();
+  input->file = std::move(file);
+  return Open(std::move(input), chunk_samples);
 }
 
 namespace internal {

@@ -9,6 +9,7 @@
 #include "sim/gyro_source.h"
 #include "sim/logs/flight_log.h"
 #include "sim/logs/gyro_candidates.h"
+#include "sim/text_file.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -55,16 +56,17 @@ struct ULogStream {
 };
 // A file, mapped and read front to back: the pages behind the parse are handed back as it goes.
 // Throws IoError as ReadULog does; the source throws IoError when the file has changed (still
-// being recorded) between the passes.
+// being recorded, or rewritten: MappedFile::CheckUnchanged) between the passes.
 ULogStream OpenULog(const std::string& path,
                     size_t chunk_samples = FillingSource::kDefaultChunkSamples);
-// Bytes already in memory (a pipe's, read whole), owned by the stream.
-ULogStream OpenULogBytes(std::string bytes, const std::string& path,
-                         size_t chunk_samples = FillingSource::kDefaultChunkSamples);
+// The same over a file mapped already (a pipe's bytes copied: TextBlocks::TakeMapped).
+ULogStream OpenULog(std::unique_ptr<MappedFile> file,
+                    size_t chunk_samples = FillingSource::kDefaultChunkSamples);
 
 namespace internal {
-// OpenULogBytes with the limits of pass 1's candidate summaries chosen: small limits take the
-// fallback (a topic instance's times held whole, with a warning) on small inputs (tests, fuzzing).
+// Bytes in memory, owned by the stream, with the limits of pass 1's candidate summaries chosen:
+// small limits take the fallback (a topic instance's times held whole, with a warning) on small
+// inputs (tests, fuzzing).
 ULogStream OpenULogBytes(std::string bytes, const std::string& path, size_t chunk_samples,
                          const CandidateLimits& limits);
 }  // namespace internal

@@ -174,8 +174,8 @@ TEST(TextBlocks, APeekAtTheStartIsHandedOutAgain) {
       const std::string peeked(from_file.Peek(1000));
       EXPECT_EQ(peeked, content.substr(0, 1000));  // a regular file is mapped: whatever the block
       EXPECT_EQ(std::string(in_memory.Peek(1000)), content.substr(0, 1000));
-      EXPECT_EQ(from_file.TakeRest(), content) << "block " << block;
-      EXPECT_EQ(in_memory.TakeRest(), content);
+      EXPECT_EQ(from_file.TakeMapped()->text(), content) << "block " << block;
+      EXPECT_EQ(in_memory.TakeMapped()->text(), content);
     }
   }
   TextBlocks started = TextBlocks::InMemory("a\nb\n", 2);

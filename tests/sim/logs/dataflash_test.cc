@@ -587,7 +587,7 @@ TEST(DataFlashStream, AFileIsReadTheSameWayAsBytesInMemory) {
   const std::string path = dir / "batches.bin";
   const std::string bytes = BatchFile();
   WriteFileAtomically(path, bytes);
-  DataFlashStream stream = OpenDataFlash(TextBlocks::OfFile(path), path, 5);
+  DataFlashStream stream = OpenDataFlash(path, 5);
   Outcome from_file;
   from_file.log = std::move(stream.log);
   from_file.log.gyro = ReadAllSamples(stream.samples.get());
@@ -602,7 +602,7 @@ TEST(DataFlashStream, AFileChangedBetweenThePassesIsRefusedInOneLine) {
   const std::string bytes = FlightFile(300).bytes();
   for (const char* change : {"grown", "cut"}) {
     WriteFileAtomically(path, bytes);
-    DataFlashStream stream = OpenDataFlash(TextBlocks::OfFile(path), path, 16);
+    DataFlashStream stream = OpenDataFlash(path, 16);
     if (std::string(change) == "grown") {
       std::ofstream(path, std::ios::app | std::ios::binary) << bytes.substr(0, 100);
     } else {
@@ -626,7 +626,7 @@ TEST(DataFlashStream, RealLogsStreamedInSmallChunksAreReadAsWhole) {
         "incoming/ardupilot_pymavlink_test/test.BIN"}) {
     SHUTTERLAB_REAL_DATA(path, relative);
     const std::string bytes = ReadFileToString(path);
-    DataFlashStream stream = OpenDataFlash(TextBlocks::OfFile(path), path, 13);
+    DataFlashStream stream = OpenDataFlash(path, 13);
     Outcome streamed;
     streamed.log = std::move(stream.log);
     streamed.log.gyro = ReadAllSamples(stream.samples.get());

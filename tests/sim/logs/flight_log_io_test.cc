@@ -6,24 +6,31 @@
 #include "sim/logs/ulog_write.h"
 #include "sim/still_detect.h"
 #include "sim/text_file.h"
+#include "tests/sim/logs/pipe_util.h"
+#include "tests/sim/logs/same_log.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <chrono>
 #include <csignal>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <pthread.h>
+#include <optional>
 #include <stdexcept>
 #include <string>
-#include <thread>
-#include <unistd.h>
+#include <sys/resource.h>
 #include <vector>
 
 namespace shutterlab {
 namespace {
+
+using test::ReadFromPipe;
 
 TEST(ReadFlightLog, DetectsAndReadsEveryRealLog) {
   struct Case {
@@ -150,36 +157,6 @@ TEST(ReadFlightLog, WrapsGyroCsv) {
   EXPECT_FALSE(log.altitude_above_ground_m.has_value());
 }
 
-// What ReadFlightLog makes of bytes that come down a pipe: readable once, of no known size, and
-// not seekable, like a log given as /dev/stdin.
-FlightLog ReadFromPipe(const std::string& bytes, const FlightLogReadOptions& options = {}) {
-  int fds[2];
-  SHUTTERLAB_CHECK(::pipe(fds) == 0) << "pipe";
-  std::thread writer([&bytes, fd = fds[1]] {
-    // A reader that stops early closes the pipe: the writer's write() then fails with EPIPE
-    // instead of raising SIGPIPE, which is sent to the writing thread and blocked in it alone.
-    sigset_t pipe_signal;
-    sigemptyset(&pipe_signal);
-    sigaddset(&pipe_signal, SIGPIPE);
-    pthread_sigmask(SIG_BLOCK, &pipe_signal, nullptr);
-    for (size_t done = 0; done < bytes.size();) {
-      const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-      if (n <= 0) break;
-      done += static_cast<size_t>(n);
-    }
-    ::close(fd);
-  });
-  struct Cleanup {
-    std::thread& writer;
-    int read_fd;
-    ~Cleanup() {
-      ::close(read_fd);  // before the join: a writer still writing then stops
-      writer.join();
-    }
-  } cleanup{writer, fds[0]};
-  return ReadFlightLog("/proc/self/fd/" + std::to_string(fds[0]), options);
-}
-
 // A log on a pipe is detected by a look at its start and read through the same opening: the
 // format is not needed, and the result is the file's.
 TEST(ReadFlightLog, ALogOnAPipeIsDetectedAndReadOnce) {
@@ -220,6 +197,140 @@ TEST(ReadFlightLog, ALogOnAPipeIsDetectedAndReadOnce) {
   } catch (const IoError& e) {
     EXPECT_NE(std::string(e.what()).find("cannot be read from a pipe"), std::string::npos)
         << e.what();
+  }
+}
+
+// A binary log on a pipe is copied to a temporary file and read in the same two passes as the file
+// (MappedFile::Copied): the same log in every field, and a log cut inside a message (a pipe closed
+// early, a copy still being recorded) says it was truncated, as the file does.
+TEST(ReadFlightLog, EveryBinaryFormatOnAPipeIsReadAsItsFile) {
+  SHUTTERLAB_NEED_REAL_DATA();
+  test::TempDir dir;
+  for (const char* relative :
+       {"gyro/px4_ulog/sample_log_small.ulg", "gyro/betaflight_blackbox/LOG00037.BFL",
+        "incoming/ardupilot_pymavlink_test/test.BIN"}) {
+    const std::string bytes = ReadFileToString(test::RealDataPath(relative));
+    // Whole, and cut at 60 % (inside a message: these formats' messages are not aligned to it).
+    for (const size_t size : {bytes.size(), bytes.size() * 6 / 10}) {
+      const std::string what = std::string(relative) + " (" + std::to_string(size) + " bytes)";
+      const std::string path = dir / "log";
+      WriteFileAtomically(path, bytes.substr(0, size));
+      const FlightLog from_file = ReadFlightLog(path);
+      const FlightLog from_pipe = ReadFromPipe(bytes.substr(0, size));
+      test::ExpectSameLog(from_pipe, from_file, what);
+      EXPECT_GE(from_pipe.gyro.size(), 2u) << what;
+      if (size < bytes.size()) {
+        EXPECT_TRUE(std::any_of(from_pipe.warnings.begin(), from_pipe.warnings.end(),
+                                [](const LogWarning& w) { return w.kind == "truncated"; }))
+            << what << ": " << test::JoinedWarnings(from_pipe.warnings);
+      }
+    }
+  }
+}
+
+// Sets an environment variable for as long as it lives.
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const std::string& value) : name_(name) {
+    if (const char* old = std::getenv(name)) old_ = old;
+    ::setenv(name, value.c_str(), 1);
+  }
+  ~ScopedEnv() {
+    if (old_) {
+      ::setenv(name_, old_->c_str(), 1);
+    } else {
+      ::unsetenv(name_);
+    }
+  }
+
+ private:
+  const char* name_;
+  std::optional<std::string> old_;
+};
+
+// The copy lives in $TMPDIR unlinked from the start: nothing is left there while the log is read,
+// nor after. A copy that cannot be written (a full disk; here a file-size limit) is refused in one
+// line naming the input and the folder.
+TEST(ReadFlightLog, APipesCopyLeavesNoFileAndAFailedCopySaysWhere) {
+  test::TempDir dir;
+  const std::string folder = dir / "tmp";
+  std::filesystem::create_directories(folder);
+  const ScopedEnv tmpdir("TMPDIR", folder);
+  std::vector<GyroSample> samples;
+  for (int i = 0; i < 20000; ++i)
+    samples.push_back({static_cast<int64_t>(i + 1) * 500000, Eigen::Vector3d(0.01 * i, -0.25, 0)});
+  const std::string ulog = SerializeULog(GyroTrace(std::move(samples)), {});
+  ASSERT_GT(ulog.size(), size_t{256} << 10);
+  const size_t read = test::ReadThroughPipe(ulog, [&](const std::string& path) {
+    FlightLogStream stream = OpenFlightLog(path);
+    EXPECT_TRUE(std::filesystem::is_empty(folder)) << "a copy left a name in " << folder;
+    return ReadAllSamples(stream.gyro.get()).size();
+  });
+  EXPECT_EQ(read, 20000u);
+  EXPECT_TRUE(std::filesystem::is_empty(folder));
+
+  const auto expect_refused = [&](const std::string& in_folder, const std::string& reason) {
+    try {
+      ReadFromPipe(ulog);
+      FAIL() << "a copy that failed was read";
+    } catch (const IoError& e) {
+      const std::string message = e.what();
+      EXPECT_EQ(message.rfind("/proc/self/fd/", 0), 0u) << message;  // the input, first
+      EXPECT_NE(message.find("cannot copy it to a temporary file in " + in_folder + ": " + reason),
+                std::string::npos)
+          << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    }
+  };
+  // A disk that fills up: writes past a limit fail (EFBIG, as ENOSPC would), the signal that
+  // limit raises ignored as the shell's default would not.
+  struct rlimit old_limit {};
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  struct rlimit small = old_limit;
+  small.rlim_cur = 64 << 10;
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
+  expect_refused(folder, std::strerror(EFBIG));
+  ::setrlimit(RLIMIT_FSIZE, &old_limit);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_TRUE(std::filesystem::is_empty(folder));
+  // A folder that is not there.
+  const ScopedEnv missing("TMPDIR", dir / "missing");
+  expect_refused(dir / "missing", std::strerror(ENOENT));
+}
+
+// Every binary reader checks the file between its passes against the stamp taken when it was
+// mapped (MappedFile::CheckUnchanged): a log rewritten in place at the same size, whose second
+// pass would read other bytes than the first, is refused in one line naming it.
+TEST(OpenFlightLog, ALogRewrittenAtTheSameSizeBetweenThePassesIsRefused) {
+  SHUTTERLAB_NEED_REAL_DATA();
+  test::TempDir dir;
+  for (const char* relative :
+       {"gyro/px4_ulog/sample_log_small.ulg", "gyro/betaflight_blackbox/LOG00037.BFL",
+        "incoming/ardupilot_pymavlink_test/test.BIN"}) {
+    const std::string path = dir / std::filesystem::path(relative).filename().string();
+    std::string bytes = ReadFileToString(test::RealDataPath(relative));
+    WriteFileAtomically(path, bytes);
+    FlightLogStream stream = OpenFlightLog(path);  // pass 1
+    // Rewritten in place (the same inode, the same size), a second later than it was.
+    const auto modified = std::filesystem::last_write_time(path);
+    std::reverse(bytes.begin() + bytes.size() / 2, bytes.end());
+    {
+      std::fstream out(path, std::ios::in | std::ios::out | std::ios::binary);
+      out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    }
+    std::filesystem::last_write_time(path, modified + std::chrono::seconds(1));
+    ASSERT_EQ(std::filesystem::file_size(path), bytes.size());
+    try {
+      ReadAllSamples(stream.gyro.get());  // pass 2
+      FAIL() << relative << ": a rewritten log was read";
+    } catch (const IoError& e) {
+      EXPECT_EQ(std::string(e.what()),
+                path + ": changed while it was read in passes (rewritten, still " +
+                    std::to_string(bytes.size()) +
+                    " bytes): is it still being recorded? Analyse a copy, or the finished log")
+          << relative;
+    }
   }
 }
 
