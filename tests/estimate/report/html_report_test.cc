@@ -198,7 +198,9 @@ TEST(MinMaxEnvelope, EqualsDownsampleMinMaxOfTheWholeChart) {
           }
         }
       }
-      if (n > 2 * buckets && !flat_x) EXPECT_LE(whole.x.size(), 2 * buckets);
+      if (n > 2 * buckets && !flat_x) {
+        EXPECT_LE(whole.x.size(), 2 * buckets);
+      }
     }
   }
 }
