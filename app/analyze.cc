@@ -23,7 +23,6 @@
 #include "sim/logs/gyro_io.h"
 #include "sim/logs/trigger_file.h"
 #include "sim/sensor_pair.h"
-#include "sim/still_detect.h"
 #include "sim/units.h"
 
 #include <nlohmann/json.hpp>
@@ -179,11 +178,6 @@ std::vector<LogWarning> TriggerWarnings(const std::optional<TriggerFile>& trigge
   return warnings;
 }
 
-void AddTriggerWarnings(const std::optional<TriggerFile>& triggers, const std::string& path,
-                        FlightLog* log) {
-  for (LogWarning& w : TriggerWarnings(triggers, path)) log->warnings.push_back(std::move(w));
-}
-
 // The image triggers of a trigger file on the log's clock, and what they are (options).
 void SetTriggers(const TriggerFile& triggers, const FlightLog& log, const std::string& path,
                  AnalyzeOptions* options) {
@@ -192,18 +186,13 @@ void SetTriggers(const TriggerFile& triggers, const FlightLog& log, const std::s
       "trigger file " + std::filesystem::path(path).filename().string() + ": " + triggers.source;
 }
 
-// Whether LOG, and --second's LOG2, can be read in passes, as the streamed analyses read them.
-bool LogsReadableInPasses(const AnalyzeCommand& command) {
-  return ReadableInPasses(command.log_path) &&
-         (command.second_path.empty() || ReadableInPasses(command.second_path));
-}
-
-// LOG and --second's LOG2 as a streamed analysis first opened them (app/trace_options.h LogStamp).
-struct LogStamps {
-  LogStamp first;
-  std::optional<LogStamp> second;
-  explicit LogStamps(const AnalyzeCommand& command) : first(LogStamp::Of(command.log_path)) {
-    if (!command.second_path.empty()) second = LogStamp::Of(command.second_path);
+// LOG and --second's LOG2, opened for the streamed analysis's passes (a log on a pipe copied once
+// to a temporary file that every pass reads).
+struct AnalyzedLogs {
+  ReopenableFile first;
+  std::optional<ReopenableFile> second;
+  explicit AnalyzedLogs(const AnalyzeCommand& command) : first(command.log_path) {
+    if (!command.second_path.empty()) second.emplace(command.second_path);
   }
   // After the last pass: it read the logs as the first did (IoError otherwise).
   void CheckUnchanged() const {
@@ -218,10 +207,10 @@ struct LogStamps {
 // FuseSensorPair on the logs read whole.
 AnalyzeLogSource PairStreamSource(const AnalyzeCommand& command, const FlightLogReadOptions& read,
                                   const std::optional<TriggerFile>& triggers, FlightLogStream first,
-                                  const LogStamps& stamps, std::optional<SensorPair>* pair) {
+                                  const AnalyzedLogs& logs, std::optional<SensorPair>* pair) {
   FlightLog first_log = first.log;
   auto fitted = std::make_shared<const PairInPasses>(
-      FitPairInPasses(stamps.first, *stamps.second, read, std::move(first), std::nullopt));
+      FitPairInPasses(logs.first, *logs.second, read, std::move(first), std::nullopt));
   *pair = fitted->pair;
   // The fused log: the first's metadata, both logs' warnings, the fused samples.
   FlightLog fused = std::move(first_log);
@@ -243,13 +232,13 @@ AnalyzeLogSource PairStreamSource(const AnalyzeCommand& command, const FlightLog
 // through; the trigger file's go after them. With --second, the pair fused (PairStreamSource).
 AnalyzeLogSource StreamSource(const AnalyzeCommand& command, const FlightLogReadOptions& read,
                               const std::optional<TriggerFile>& triggers, FlightLogStream first,
-                              const LogStamps& stamps, std::optional<SensorPair>* pair) {
+                              const AnalyzedLogs& logs, std::optional<SensorPair>* pair) {
   if (!command.second_path.empty())
-    return PairStreamSource(command, read, triggers, std::move(first), stamps, pair);
+    return PairStreamSource(command, read, triggers, std::move(first), logs, pair);
   auto first_left = std::make_shared<std::optional<FlightLogStream>>(std::move(first));
   AnalyzeLogSource source;
-  source.open = [first_left, stamp = stamps.first, &read] {
-    if (!*first_left) return ReopenFlightLog(stamp, read);
+  source.open = [first_left, file = logs.first, &read] {
+    if (!*first_left) return OpenFlightLog(file, read);
     FlightLogStream stream = std::move(**first_left);
     first_left->reset();
     return stream;
@@ -268,15 +257,16 @@ AnalyzeResult AnalyzeStreamed(const AnalyzeCommand& command, const FlightLogRead
                               std::optional<SensorPair>* pair) {
   // Opened once for the triggers (a GPS-timed file needs the log's GPS fixes); that stream is
   // the analysis's first.
-  const LogStamps stamps(command);
-  FlightLogStream first = OpenFlightLogShowingProgress(command.log_path, read, "analyze");
+  const AnalyzedLogs logs(command);
+  FlightLogStream first =
+      OpenFlightLogShowingProgress(logs.first.Open(), command.log_path, read, "analyze");
   if (triggers) SetTriggers(*triggers, first.log, command.triggers_path, &options);
   const AnalyzeLogSource source =
-      StreamSource(command, read, triggers, std::move(first), stamps, pair);
+      StreamSource(command, read, triggers, std::move(first), logs, pair);
   Progress progress("analyze", 1000);
   options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
   AnalyzeResult result = AnalyzeStream(source, options);
-  stamps.CheckUnchanged();
+  logs.CheckUnchanged();
   return result;
 }
 
@@ -292,55 +282,23 @@ AnalyzeReportOptions ReportFromFlags(const AnalyzeCommand& command) {
   return report;
 }
 
-// The log, and with --second the pair fused into one trace on the first log's clock, weighed over
-// a still segment when the first sensor has one; the camera events stay the first log's.
-FlightLog ReadLog(const AnalyzeCommand& command, const FlightLogReadOptions& read,
-                  std::optional<SensorPair>* pair) {
-  FlightLog log = ReadFlightLog(command.log_path, read);
-  PrintLogWarnings(command.log_path, log.warnings);
-  if (command.second_path.empty()) return log;
-  const FlightLog second = ReadFlightLog(command.second_path, read);
-  PrintLogWarnings(command.second_path, second.warnings);
-  SensorPairOptions pair_options;
-  try {
-    pair_options.still = DetectStillSegment(log.gyro).segment;
-  } catch (const std::invalid_argument&) {
-  }
-  try {
-    *pair = FuseSensorPair(log.gyro, second.gyro, pair_options);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(command.log_path + " + " + command.second_path + ": " + e.what());
-  }
-  log.gyro = (*pair)->fused;
-  log.warnings.insert(log.warnings.end(), second.warnings.begin(), second.warnings.end());
-  return log;
-}
-
-// The photos placed and analysed on the LOG. Regular files are read as streams, in bounded memory
-// whatever their length; a log on a pipe (LOG or LOG2) is read whole.
+// The photos placed and analysed on the LOG, read as a stream in bounded memory whatever its
+// length.
 PhotoFlightResult PhotosOnLog(const AnalyzeCommand& command, const FlightLogReadOptions& read,
                               const PhotoSet& set, const std::optional<TriggerFile>& triggers,
                               const PhotoFlightOptions& options, std::optional<SensorPair>* pair) {
   const TriggerFile* trigger_file = triggers ? &*triggers : nullptr;
-  if (LogsReadableInPasses(command)) {
-    const LogStamps stamps(command);
-    FlightLogStream first = OpenFlightLogShowingProgress(command.log_path, read, "analyze");
-    const FlightLog metadata = first.log;  // the samples stay in the stream
-    const AnalyzeLogSource source =
-        StreamSource(command, read, triggers, std::move(first), stamps, pair);
-    try {
-      PhotoFlightResult result =
-          AnalyzePhotoFlightStream(set, metadata, source, trigger_file, options);
-      stamps.CheckUnchanged();
-      return result;
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(command.log_path + ": " + e.what());
-    }
-  }
-  FlightLog log = ReadLog(command, read, pair);
-  AddTriggerWarnings(triggers, command.triggers_path, &log);
+  const AnalyzedLogs logs(command);
+  FlightLogStream first =
+      OpenFlightLogShowingProgress(logs.first.Open(), command.log_path, read, "analyze");
+  const FlightLog metadata = first.log;  // the samples stay in the stream
+  const AnalyzeLogSource source =
+      StreamSource(command, read, triggers, std::move(first), logs, pair);
   try {
-    return AnalyzePhotoFlight(set, log, trigger_file, options);
+    PhotoFlightResult result =
+        AnalyzePhotoFlightStream(set, metadata, source, trigger_file, options);
+    logs.CheckUnchanged();
+    return result;
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(command.log_path + ": " + e.what());
   }
@@ -439,24 +397,10 @@ void Run(const AnalyzeCommand& command) {
   const AnalyzeReportOptions report = ReportFromFlags(command);
   std::optional<SensorPair> pair;
   AnalyzeResult result;
-  // The stream reads the log several times; a log on a pipe is read whole.
-  if (LogsReadableInPasses(command)) {
-    try {
-      result = AnalyzeStreamed(command, read, triggers, options, &pair);
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(command.log_path + ": " + e.what());
-    }
-  } else {
-    FlightLog log = ReadLog(command, read, &pair);
-    AddTriggerWarnings(triggers, command.triggers_path, &log);
-    if (triggers) SetTriggers(*triggers, log, command.triggers_path, &options);
-    Progress progress("analyze", 1000);
-    options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
-    try {
-      result = Analyze(log, options);
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(command.log_path + ": " + e.what());
-    }
+  try {
+    result = AnalyzeStreamed(command, read, triggers, options, &pair);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(command.log_path + ": " + e.what());
   }
   if (!command.out_dir.empty()) {
     WriteAnalyzeOutputs(command.out_dir, result);

@@ -11,6 +11,7 @@
 
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -41,62 +42,54 @@ void Run(const FlightCommand& command) {
   if (command.zero_bias) options.known_bias_rad_s = Eigen::Vector3d::Zero();
   std::vector<LogWarning> warnings;
   FlightResult result;
-  TracePair pair;
+  SensorPair pair;  // with --second
   const bool with_second = !command.trace.second_path.empty();
-  // --auto-bias and --second read the logs in passes; a log on a pipe is read whole.
-  const bool passes_possible = (!command.trace.auto_bias && !with_second) ||
-                               (ReadableInPasses(command.trace.path) &&
-                                (!with_second || ReadableInPasses(command.trace.second_path)));
-  if (!passes_possible) {
+  // Streamed: memory stays bounded whatever the log's length. The still segment may lie anywhere
+  // in the log: --auto-bias finds it in passes of its own before this one. With --second, the
+  // pair is fitted in passes too and its fused samples analysed as they are made. Only a reading
+  // in passes opens the log for them (a log on a pipe is then copied once to a temporary file);
+  // one pass reads it as it comes.
+  options.Check();
+  std::optional<ReopenableFile> first;
+  if (command.trace.auto_bias || with_second) first.emplace(command.trace.path);
+  options.bias =
+      first ? command.trace.StreamedSegment(*first) : ParseBiasSegment(command.trace.bias);
+  FlightStream flight(options);
+  const auto add = [&flight](const GyroChunk& chunk) { flight.Add(chunk.data, chunk.size); };
+  if (with_second) {
+    const ReopenableFile second(command.trace.second_path);
+    const FlightLogReadOptions read = command.trace.ReadOptions();
+    const PairInPasses fitted =
+        FitPairInPasses(*first, second, read, OpenFlightLog(*first, read), options.bias);
+    pair = fitted.pair;
+    warnings = fitted.warnings;
+    std::unique_ptr<GyroSource> fused = ReadAhead(fitted.OpenFused());
     Progress progress("flight", 1000);
-    options.progress = [&progress](double fraction) {
-      progress.Update(static_cast<size_t>(fraction * 1000));
-    };
-    result = AnalyzeTrace(command.trace, options, Flight, &warnings, &pair);
+    for (GyroChunk chunk = fused->Next(); !chunk.empty(); chunk = fused->Next()) {
+      add(chunk);
+      progress.Update(static_cast<size_t>(fused->Fraction() * 1000));
+    }
+    second.CheckUnchanged();
   } else {
-    // Streamed: memory stays bounded whatever the log's length. The still segment may lie anywhere
-    // in the log: --auto-bias finds it in passes of its own before this one. With --second, the
-    // pair is fitted in passes too and its fused samples analysed as they are made.
-    options.Check();
-    options.bias = command.trace.StreamedSegment();
-    FlightStream flight(options);
-    const auto add = [&flight](const GyroChunk& chunk) { flight.Add(chunk.data, chunk.size); };
-    if (with_second) {
-      const LogStamp first = LogStamp::Of(command.trace.path);
-      const LogStamp second = LogStamp::Of(command.trace.second_path);
-      const FlightLogReadOptions read = command.trace.ReadOptions();
-      const PairInPasses fitted =
-          FitPairInPasses(first, second, read, ReopenFlightLog(first, read), options.bias);
-      pair.pair = fitted.pair;
-      warnings = fitted.warnings;
-      std::unique_ptr<GyroSource> fused = ReadAhead(fitted.OpenFused());
-      Progress progress("flight", 1000);
-      for (GyroChunk chunk = fused->Next(); !chunk.empty(); chunk = fused->Next()) {
-        add(chunk);
-        progress.Update(static_cast<size_t>(fused->Fraction() * 1000));
-      }
-      first.CheckUnchanged();
-      second.CheckUnchanged();
-    } else {
-      warnings = command.trace.Stream("flight", add).warnings;
-    }
-    try {
-      result = flight.Finish();
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(command.trace.path + ": " + e.what());
-    }
+    warnings = command.trace.Stream("flight", add, first ? &*first : nullptr).warnings;
+  }
+  if (first) first->CheckUnchanged();
+  try {
+    result = flight.Finish();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(command.trace.path + ": " + e.what());
   }
   warnings.insert(warnings.end(), result.warnings.begin(), result.warnings.end());
   if (options.series) WriteFlightSeriesCsv(command.series_path, result.series);
   if (command.json) {
     nlohmann::json json = FlightToJson(result);
     if (!command.trace.second_path.empty())
-      json["pair"] = SensorPairToJson(pair.pair, command.trace.second_path);
+      json["pair"] = SensorPairToJson(pair, command.trace.second_path);
     json["warnings"] = WarningsToJson(warnings);
     std::cout << JsonText(json) << "\n";
   } else {
     if (!command.trace.second_path.empty()) {
-      std::cout << SensorPairText(pair.pair, command.trace.path, command.trace.second_path) << "\n";
+      std::cout << SensorPairText(pair, command.trace.path, command.trace.second_path) << "\n";
     }
     std::cout << FlightTable(result);  // its own line says which rows had too few samples
   }

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <filesystem>
 #include <functional>
 #include <memory>
 #include <utility>
@@ -114,20 +113,22 @@ FlightLog TraceOptions::Load() const {
   return log;
 }
 
-FlightLogStream OpenFlightLogShowingProgress(const std::string& path, FlightLogReadOptions read,
-                                             const std::string& label) {
+FlightLogStream OpenFlightLogShowingProgress(TextBlocks input, const std::string& path,
+                                             FlightLogReadOptions read, const std::string& label) {
   Progress progress(label + " (opening)", 1000);
   if (progress.enabled()) {
     read.opening_progress = [&progress](double fraction) {
       progress.Update(static_cast<size_t>(fraction * 1000));
     };
   }
-  return OpenFlightLog(path, read);
+  return OpenFlightLog(std::move(input), path, read);
 }
 
 StreamedLog TraceOptions::Stream(const std::string& label,
-                                 const std::function<void(const GyroChunk&)>& consume) const {
-  FlightLogStream stream = OpenFlightLogShowingProgress(path, ReadOptions(), label);
+                                 const std::function<void(const GyroChunk&)>& consume,
+                                 const ReopenableFile* file) const {
+  FlightLogStream stream = OpenFlightLogShowingProgress(
+      file ? file->Open() : TextBlocks::OfFile(path), path, ReadOptions(), label);
   stream.gyro = ReadAhead(std::move(stream.gyro));
   StreamedLog streamed;
   {
@@ -161,22 +162,17 @@ BiasSegment TraceOptions::Segment(const GyroTrace& trace) const {
   return NoteStillSegment(DetectStillSegment(trace));
 }
 
-bool ReadableInPasses(const std::string& path) { return std::filesystem::is_regular_file(path); }
-
 std::unique_ptr<GyroSource> PairInPasses::OpenFused() const {
-  return FusedPairSource(ReopenFlightLog(first, read).gyro, ReopenFlightLog(second, read).gyro,
-                         pair, second_interval_ns);
+  return FusedPairSource(OpenFlightLog(first, read).gyro, OpenFlightLog(second, read).gyro, pair,
+                         second_interval_ns);
 }
 
-PairInPasses FitPairInPasses(const LogStamp& first, const LogStamp& second,
+PairInPasses FitPairInPasses(const ReopenableFile& first, const ReopenableFile& second,
                              const FlightLogReadOptions& read, FlightLogStream first_stream,
                              const std::optional<BiasSegment>& still) {
-  PairInPasses out;
-  out.first = first;
-  out.second = second;
-  out.read = read;
-  const auto samples_of = [&read](const LogStamp& stamp) -> OpenGyroSource {
-    return [&read, stamp] { return ReopenFlightLog(stamp, read).gyro; };
+  PairInPasses out(first, second, read);
+  const auto samples_of = [&read](const ReopenableFile& file) -> OpenGyroSource {
+    return [&read, file] { return OpenFlightLog(file, read).gyro; };
   };
   // Progress over the passes: each log's, the still search's five and the fit's three (counted on
   // the first log).
@@ -194,10 +190,10 @@ PairInPasses FitPairInPasses(const LogStamp& first, const LogStamp& second,
   };
   const auto ignore = [](const GyroChunk&) {};
   const StreamedLog first_read = ConsumeFlightLog(&first_stream, ignore, next_pass());
-  PrintLogWarnings(first.path, first_read.warnings);
-  FlightLogStream second_stream = ReopenFlightLog(second, read);
+  PrintLogWarnings(first.path(), first_read.warnings);
+  FlightLogStream second_stream = OpenFlightLog(second, read);
   const StreamedLog second_read = ConsumeFlightLog(&second_stream, ignore, next_pass());
-  PrintLogWarnings(second.path, second_read.warnings);
+  PrintLogWarnings(second.path(), second_read.warnings);
   out.warnings = first_read.warnings;
   out.warnings.insert(out.warnings.end(), second_read.warnings.begin(), second_read.warnings.end());
   SensorPairOptions options;
@@ -214,26 +210,23 @@ PairInPasses FitPairInPasses(const LogStamp& first, const LogStamp& second,
   } catch (const std::invalid_argument& e) {
     // Named by both logs, as the whole read names them: an IoError, so that a caller's wrapping of
     // the analysis's errors in the first log's name does not name it twice.
-    throw IoError(first.path + " + " + second.path + ": " + WithoutCheckLocation(e.what()));
+    throw IoError(first.path() + " + " + second.path() + ": " + WithoutCheckLocation(e.what()));
   }
   return out;
 }
 
-BiasSegment TraceOptions::StreamedSegment() const {
+BiasSegment TraceOptions::StreamedSegment(const ReopenableFile& file) const {
   if (!auto_bias) return ParseBiasSegment(bias);
   constexpr size_t kPasses = 5;  // DetectStillSegment on a source reads it at most five times
   Progress progress("auto-bias", kPasses * 1000);
   size_t pass = 0;
-  const LogStamp stamp = LogStamp::Of(path);
   const auto open = [&]() -> std::unique_ptr<GyroSource> {
     const size_t done = std::min(pass++, kPasses - 1) * 1000;
     return std::make_unique<ReportingSource>(
-        ReopenFlightLog(stamp, ReadOptions()).gyro,
+        OpenFlightLog(file, ReadOptions()).gyro,
         [&progress, done](double f) { progress.Update(done + static_cast<size_t>(f * 1000)); });
   };
-  const BiasSegment segment = NoteStillSegment(DetectStillSegment(open));
-  stamp.CheckUnchanged();  // the analysis's pass reads it once more: it must be the same log
-  return segment;
+  return NoteStillSegment(DetectStillSegment(open));
 }
 
 }  // namespace shutterlab::app

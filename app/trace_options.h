@@ -57,31 +57,28 @@ struct TraceOptions {
   FlightLog Load() const;
   // Reads the log as a stream, a block at a time with the reader a chunk ahead on a second thread,
   // handing each chunk to consume; shows progress on a terminal (label), prints the warnings on
-  // stderr once the log is read, and returns them with the sampling.
-  StreamedLog Stream(const std::string& label,
-                     const std::function<void(const GyroChunk&)>& consume) const;
+  // stderr once the log is read, and returns them with the sampling. file: the log opened for a
+  // reading in passes (--auto-bias read it first), else the path is opened for this one read.
+  StreamedLog Stream(const std::string& label, const std::function<void(const GyroChunk&)>& consume,
+                     const ReopenableFile* file = nullptr) const;
   // The bias segment for this trace: with --auto-bias the detected still segment
   // (DetectStillSegment, default StillDetectOptions; one note "auto-bias: still segment A:B s" on
   // stderr), otherwise --bias A:B. Throws std::invalid_argument when neither gives a segment.
   BiasSegment Segment(const GyroTrace& trace) const;
-  // The same for a log too long to hold, read as a stream: the still search reads the log five
-  // times (DetectStillSegment on a source) in memory bounded by its 2 s stretch, with the same
-  // segment and note; shows progress on a terminal.
-  BiasSegment StreamedSegment() const;
+  // The same for a log too long to hold, read as a stream: the still search reads the log (file)
+  // five times (DetectStillSegment on a source) in memory bounded by its 2 s stretch, with the
+  // same segment and note; shows progress on a terminal.
+  BiasSegment StreamedSegment(const ReopenableFile& file) const;
 };
 
 // OpenFlightLog showing the progress of the opening's pass 1 (a flight-controller log's: tens of
 // seconds on 10^8 samples) on a terminal, as "LABEL (opening): 42%", cleared once opened.
-FlightLogStream OpenFlightLogShowingProgress(const std::string& path, FlightLogReadOptions read,
-                                             const std::string& label);
+FlightLogStream OpenFlightLogShowingProgress(TextBlocks input, const std::string& path,
+                                             FlightLogReadOptions read, const std::string& label);
 
 // What the reader could not read or trust, one "warning: PATH: LINE" on stderr each, so that no
 // command analyses less than the file holds without saying so.
 void PrintLogWarnings(const std::string& path, const std::vector<LogWarning>& warnings);
-
-// Whether the log at path can be read more than once (a streamed analysis's passes): a regular
-// file can; a pipe or a FIFO (/dev/stdin) is drained by the first read and must be read whole.
-bool ReadableInPasses(const std::string& path);
 
 // A source that reports the share it has read after each chunk: the progress of a pass of a read
 // in several (the still search's, the sensor pair's).
@@ -109,18 +106,20 @@ class ReportingSource : public GyroSource {
 // FitSensorPair). The same pair as FuseSensorPair on the logs read whole, and the same fused
 // samples from OpenFused.
 struct PairInPasses {
+  PairInPasses(ReopenableFile first_log, ReopenableFile second_log, FlightLogReadOptions options)
+      : first(std::move(first_log)), second(std::move(second_log)), read(std::move(options)) {}
+  ReopenableFile first, second;
+  FlightLogReadOptions read;
   SensorPair pair;                   // every field but fused
   std::vector<LogWarning> warnings;  // the first log's, then the second's
-  LogStamp first, second;
-  FlightLogReadOptions read;
-  int64_t second_interval_ns = 0;  // the second log's median sample interval
-  // The fused samples from the start (both logs opened again, after LogStamp::CheckUnchanged).
+  int64_t second_interval_ns = 0;    // the second log's median sample interval
+  // The fused samples from the start (both logs opened again).
   std::unique_ptr<GyroSource> OpenFused() const;
 };
 // first_stream: the first log, opened already (its metadata read). still: the segment that weighs
 // the fusion; nullopt: searched on the first log (equal weights when none is found). Shows progress
 // on a terminal. Throws IoError naming both logs when they do not pair.
-PairInPasses FitPairInPasses(const LogStamp& first, const LogStamp& second,
+PairInPasses FitPairInPasses(const ReopenableFile& first, const ReopenableFile& second,
                              const FlightLogReadOptions& read, FlightLogStream first_stream,
                              const std::optional<BiasSegment>& still);
 

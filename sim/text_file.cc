@@ -146,12 +146,12 @@ void MappedFile::Map(int fd, size_t size, Paging paging) {
   size_ = size;
 }
 
-void MappedFile::Copy(std::string_view head, int fd, Paging paging) {
+int CopyToTemporaryFile(std::string_view head, int fd, const std::string& path) {
   const std::string folder = TemporaryFolder();
   std::string name = folder + "/shutterlab-XXXXXX";
-  const Descriptor copy{::mkostemp(name.data(), O_CLOEXEC)};
+  Descriptor copy{::mkostemp(name.data(), O_CLOEXEC)};
   const auto failed = [&](const std::string& reason) {
-    return IoError(IoMessage(path_, 0,
+    return IoError(IoMessage(path, 0,
                              "cannot copy it to a temporary file in " + folder + ": " + reason +
                                  " (TMPDIR names another folder)"));
   };
@@ -167,20 +167,41 @@ void MappedFile::Copy(std::string_view head, int fd, Paging paging) {
       const ssize_t n = ::read(fd, buffer.get(), kCopyBytes);
       if (n < 0 && errno == EINTR) continue;
       if (n < 0)
-        throw IoError(IoMessage(path_, 0, std::string("read failed: ") + std::strerror(errno)));
+        throw IoError(IoMessage(path, 0, std::string("read failed: ") + std::strerror(errno)));
       if (n == 0) break;
       if (!WriteAll(copy.fd, buffer.get(), static_cast<size_t>(n)))
         throw failed(std::strerror(errno));
     }
   }
+  return std::exchange(copy.fd, -1);
+}
+
+void MappedFile::Copy(std::string_view head, int fd, Paging paging) {
+  const Descriptor copy{CopyToTemporaryFile(head, fd, path_)};
+  MapCopy(copy.fd, paging);
+}
+
+std::unique_ptr<MappedFile> MappedFile::OfCopy(int copy_fd, const std::string& path,
+                                               Paging paging) {
+  std::unique_ptr<MappedFile> copied(new MappedFile());
+  copied->path_ = path;
+  copied->MapCopy(copy_fd, paging);
+  return copied;
+}
+
+void MappedFile::MapCopy(int copy_fd, Paging paging) {
+  const auto failed = [&](const std::string& reason) {
+    return IoError(
+        IoMessage(path_, 0, "cannot map its copy in " + TemporaryFolder() + ": " + reason));
+  };
   struct stat info {};
-  if (::fstat(copy.fd, &info) != 0) throw failed(std::strerror(errno));
+  if (::fstat(copy_fd, &info) != 0) throw failed(std::strerror(errno));
   if (info.st_size == 0) {
     data_ = "";
     return;
   }
-  Map(copy.fd, static_cast<size_t>(info.st_size), paging);
-  if (!data_) throw failed(std::string("cannot map it: ") + std::strerror(errno));
+  Map(copy_fd, static_cast<size_t>(info.st_size), paging);
+  if (!data_) throw failed(std::strerror(errno));
 }
 
 MappedFile::~MappedFile() {
@@ -266,6 +287,41 @@ TextBlocks TextBlocks::OfFile(const std::string& path, size_t block_bytes) {
   }
   blocks.buffer_.reset(new char[blocks.capacity_]);
   return blocks;
+}
+
+TextBlocks TextBlocks::OfCopy(int copy_fd, const std::string& path) {
+  TextBlocks blocks;
+  blocks.path_ = path;
+  blocks.capacity_ = kBlockBytes;
+  blocks.mapped_ = MappedFile::OfCopy(copy_fd, path, MappedFile::Paging::kStreamed);
+  blocks.memory_ = blocks.mapped_->text();
+  blocks.size_ = blocks.memory_.size();
+  return blocks;
+}
+
+struct ReopenableFile::Copy {
+  int fd;
+  ~Copy() { ::close(fd); }
+};
+
+ReopenableFile::ReopenableFile(const std::string& path) {
+  const Descriptor file{::open(path.c_str(), O_RDONLY | O_CLOEXEC)};
+  if (file.fd < 0)
+    throw IoError(IoMessage(path, 0, std::string("cannot open: ") + std::strerror(errno)));
+  stamp_ = LogStamp::Of(file.fd, path);
+  struct stat info {};
+  if (::fstat(file.fd, &info) != 0 || !S_ISREG(info.st_mode))
+    copy_.reset(new Copy{CopyToTemporaryFile({}, file.fd, path)});
+}
+
+TextBlocks ReopenableFile::Open() const {
+  if (copy_) return TextBlocks::OfCopy(copy_->fd, stamp_.path);
+  stamp_.CheckUnchanged();
+  return TextBlocks::OfFile(stamp_.path);
+}
+
+void ReopenableFile::CheckUnchanged() const {
+  if (!copy_) stamp_.CheckUnchanged();
 }
 
 TextBlocks TextBlocks::InMemory(std::string_view text, size_t block_bytes) {

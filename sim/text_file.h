@@ -54,6 +54,9 @@ class MappedFile {
   // mapped. The descriptor stays the caller's.
   static std::unique_ptr<MappedFile> Copied(std::string_view head, int fd, const std::string& path,
                                             Paging paging);
+  // A copy that CopyToTemporaryFile made, mapped through its descriptor (which stays the
+  // caller's); path names the input it copied in messages.
+  static std::unique_ptr<MappedFile> OfCopy(int copy_fd, const std::string& path, Paging paging);
   ~MappedFile();
   MappedFile(const MappedFile&) = delete;
   MappedFile& operator=(const MappedFile&) = delete;
@@ -78,6 +81,8 @@ class MappedFile {
   void Map(int fd, size_t size, Paging paging);
   // Copies fd's bytes after head into an unlinked temporary file and maps it.
   void Copy(std::string_view head, int fd, Paging paging);
+  // Maps the copy that copy_fd reads (empty when it is).
+  void MapCopy(int copy_fd, Paging paging);
 
   std::string path_;
   const char* data_ = nullptr;
@@ -85,6 +90,12 @@ class MappedFile {
   size_t released_ = 0;            // bytes from the start already handed back
   std::optional<LogStamp> stamp_;  // of the named file mapped; none for a copy
 };
+
+// `head`, then the bytes of fd from where it stands to its end (none when fd is -1), copied into a
+// temporary file in $TMPDIR (else /tmp) that is unlinked as soon as it is made: it lives as long
+// as the descriptor returned (the caller's to close), never past the process. Throws IoError
+// naming path (and the folder, when the copy fails, as on a full disk).
+int CopyToTemporaryFile(std::string_view head, int fd, const std::string& path);
 
 // Asks the kernel for transparent huge pages on the page-aligned part of [data, data + bytes),
 // before it is first touched: one fault per 2 MiB instead of per 4 KiB for large sample arrays.
@@ -106,6 +117,9 @@ class TextBlocks {
   static constexpr size_t kBlockBytes = 256 << 10;
   // A file; throws IoError naming the path when it cannot be opened.
   static TextBlocks OfFile(const std::string& path, size_t block_bytes = kBlockBytes);
+  // A copy that CopyToTemporaryFile made, read through a descriptor of its own (copy_fd stays the
+  // caller's); path names the input it copied in messages.
+  static TextBlocks OfCopy(int copy_fd, const std::string& path);
   // A text in memory, which must outlive the blocks.
   static TextBlocks InMemory(std::string_view text, size_t block_bytes = kBlockBytes);
   ~TextBlocks();
@@ -142,6 +156,29 @@ class TextBlocks {
   size_t capacity_ = 0;                     // of buffer_
   size_t carry_begin_ = 0, carry_end_ = 0;  // a started last line, kept for the next block
   bool end_of_file_ = false;
+};
+
+// A file read in several passes (the still search, a sensor pair's fit, analyze's passes), each
+// from its start: a regular file opened again by its path for every pass, which must still be
+// the file the first pass read (LogStamp); anything else (a pipe, a FIFO, /dev/stdin, which the
+// first read drains) copied once, whole, to a temporary file (CopyToTemporaryFile) that every pass
+// reads, so that a log on a pipe is read in the same passes and bounded memory as a file. Copies
+// share the copy.
+class ReopenableFile {
+ public:
+  // Throws IoError naming the path when it cannot be opened, or the copy fails.
+  explicit ReopenableFile(const std::string& path);
+  const std::string& path() const { return stamp_.path; }
+  // The input from its start, for one pass; throws IoError (LogStamp::CheckUnchanged) when a
+  // regular file is no longer the one first opened.
+  TextBlocks Open() const;
+  // After the last pass: the file was the same throughout (IoError otherwise).
+  void CheckUnchanged() const;
+
+ private:
+  struct Copy;
+  LogStamp stamp_;
+  std::shared_ptr<const Copy> copy_;  // a pipe's bytes; null for a regular file
 };
 
 // The lines of a TextBlocks, one at a time, with 1-based line numbers and a trailing '\r'

@@ -205,8 +205,13 @@ FlightLogStream OpenBinary(TextBlocks input, const std::string& path, LogFormat 
 
 FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOptions& options) {
   options.Check();
-  // Opened once, and its start looked at through the same opening: a pipe can be read only once.
-  TextBlocks input = TextBlocks::OfFile(path);
+  return OpenFlightLog(TextBlocks::OfFile(path), path, options);
+}
+
+FlightLogStream OpenFlightLog(TextBlocks input, const std::string& path,
+                              const FlightLogReadOptions& options) {
+  options.Check();
+  // Its start is looked at through the same opening: a pipe can be read only once.
   LogFormat format = options.format;
   if (format == LogFormat::kAuto) format = DetectFlightLogFormat(input.Peek(kDetectBytes), path);
   if (format == LogFormat::kULog || format == LogFormat::kDataFlash ||
@@ -224,6 +229,11 @@ FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOption
   }
 }
 
+FlightLogStream OpenFlightLog(const ReopenableFile& file, const FlightLogReadOptions& options) {
+  options.Check();
+  return OpenFlightLog(file.Open(), file.path(), options);
+}
+
 FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& options) {
   FlightLogStream stream = OpenFlightLog(path, options);
   FlightLog log = std::move(stream.log);
@@ -232,11 +242,6 @@ FlightLog ReadFlightLog(const std::string& path, const FlightLogReadOptions& opt
   for (LogWarning& warning : AuditTrace(log.gyro, stream.audit))
     log.warnings.push_back(std::move(warning));
   return log;
-}
-
-FlightLogStream ReopenFlightLog(const LogStamp& stamp, const FlightLogReadOptions& read) {
-  stamp.CheckUnchanged();
-  return OpenFlightLog(stamp.path, read);
 }
 
 StreamedLog ConsumeFlightLog(FlightLogStream* stream,

@@ -63,10 +63,12 @@ struct FlightLogStream {
 // Detects the format and reads what comes before the samples (a text log's header, a whole binary
 // log); throws IoError as ReadFlightLog does.
 FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOptions& options = {});
-
-// Opens the log again for another pass of a reading in several, after LogStamp::CheckUnchanged
-// (sim/text_file.h).
-FlightLogStream ReopenFlightLog(const LogStamp& stamp, const FlightLogReadOptions& read = {});
+// The same from an input already opened (path names it in messages).
+FlightLogStream OpenFlightLog(TextBlocks input, const std::string& path,
+                              const FlightLogReadOptions& options = {});
+// One pass of a reading in several (sim/text_file.h ReopenableFile: a regular file opened again
+// and checked unchanged, a pipe's copy read again).
+FlightLogStream OpenFlightLog(const ReopenableFile& file, const FlightLogReadOptions& options = {});
 
 // What a streamed log lost (the reader's warnings, then the trace audit's, as ReadFlightLog gives
 // them) and how it was sampled.

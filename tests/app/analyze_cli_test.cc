@@ -127,17 +127,26 @@ TEST(AnalyzeCli, EveryTakesPrecedenceAndOneImageIsSingular) {
 }
 
 // `analyze LOG` reads a regular file as a stream, several times; a log on a pipe can be read once
-// only, so it is read whole: the same images, flight table and report either way.
-TEST(AnalyzeCli, ALogOnAPipeIsReadOnceWithTheSameResult) {
+// only, so it is copied once to a temporary file in $TMPDIR that the passes read (none is left
+// there): the same images, flight table and report either way.
+TEST(AnalyzeCli, ALogOnAPipeIsCopiedOnceWithTheSameResult) {
   test::TempDir dir;
   const std::string path = dir / "gyro.csv";
   test::WriteStillThenTurningGyroCsv(path);
   const std::string args = " --every 1s --size 320x240 --focal-px 280 --json --out ";
   const auto from_file = RunShutterlab("analyze " + path + args + (dir / "file"));
   ASSERT_EQ(from_file.exit_code, 0) << from_file.output;
-  const auto from_pipe =
-      RunShutterlab("analyze /dev/stdin" + args + (dir / "pipe"), path);  // format found
+  std::filesystem::create_directories(dir / "tmp");
+  const auto from_pipe = RunShutterlab("analyze /dev/stdin" + args + (dir / "pipe"), path,
+                                       "TMPDIR=" + (dir / "tmp"));  // format found
   ASSERT_EQ(from_pipe.exit_code, 0) << from_pipe.output;
+  EXPECT_TRUE(std::filesystem::is_empty(dir / "tmp"));
+  const auto missing = RunShutterlab("analyze - --json", path, "TMPDIR=" + (dir / "missing"));
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_NE(
+      missing.err.find("/dev/stdin: cannot copy it to a temporary file in " + (dir / "missing")),
+      std::string::npos)
+      << missing.err;
   for (const char* name : {"images.csv", "exclude.txt"})
     EXPECT_EQ(ReadFileToString(dir / ("pipe/" + std::string(name))),
               ReadFileToString(dir / ("file/" + std::string(name))))
@@ -232,26 +241,26 @@ TEST(AnalyzeCli, SyntheticULogWithItsOwnTriggersAndAltitude) {
   EXPECT_EQ(json["triggers"].get<std::string>().rfind("camera events", 0), 0u) << json["triggers"];
 }
 
-// `analyze A --second B` on regular files fuses the pair as streams, in bounded memory; with B on
-// a pipe both are read whole and fused there: the same JSON (pair, images, flight), and with
-// text the same table. Returns the streamed JSON.
-nlohmann::json ExpectPairStreamedAsWhole(const std::string& dir, const std::string& args,
-                                         bool text) {
-  const std::string streamed_args = "analyze " + dir + "/a.csv --second " + dir + "/b.csv" + args;
-  const std::string whole_args =
+// `analyze A --second B` fuses the pair as streams, in bounded memory, B from a file or from a
+// pipe (copied to a temporary file that the passes read): the same JSON (pair, images, flight),
+// and with text the same table. Returns the JSON from the files.
+nlohmann::json ExpectPairOnAPipeAsOnFiles(const std::string& dir, const std::string& args,
+                                          bool text) {
+  const std::string files_args = "analyze " + dir + "/a.csv --second " + dir + "/b.csv" + args;
+  const std::string pipe_args =
       "analyze " + dir + "/a.csv --second /dev/stdin --format gyro.csv" + args;
   if (text) {
-    const auto streamed = RunShutterlab(streamed_args);
-    const auto whole = RunShutterlab(whole_args, dir + "/b.csv");
-    EXPECT_EQ(streamed.exit_code, 0) << streamed.output;
-    EXPECT_EQ(streamed.out.substr(streamed.out.find('\n')), whole.out.substr(whole.out.find('\n')))
+    const auto files = RunShutterlab(files_args);
+    const auto piped = RunShutterlab(pipe_args, dir + "/b.csv");
+    EXPECT_EQ(files.exit_code, 0) << files.output;
+    EXPECT_EQ(files.out.substr(files.out.find('\n')), piped.out.substr(piped.out.find('\n')))
         << "all but the first line, which names the second log";
   }
-  const auto streamed = RunShutterlab(streamed_args + " --json");
-  EXPECT_EQ(streamed.exit_code, 0) << streamed.output;
-  const auto whole = RunShutterlab(whole_args + " --json", dir + "/b.csv");
-  EXPECT_EQ(whole.exit_code, 0) << whole.output;
-  nlohmann::json s = nlohmann::json::parse(streamed.out), w = nlohmann::json::parse(whole.out);
+  const auto files = RunShutterlab(files_args + " --json");
+  EXPECT_EQ(files.exit_code, 0) << files.output;
+  const auto piped = RunShutterlab(pipe_args + " --json", dir + "/b.csv");
+  EXPECT_EQ(piped.exit_code, 0) << piped.output;
+  nlohmann::json s = nlohmann::json::parse(files.out), w = nlohmann::json::parse(piped.out);
   EXPECT_EQ(s["pair"]["second_log"], dir + "/b.csv");
   nlohmann::json s_unnamed = s;
   s_unnamed["pair"].erase("second_log");  // named as given: /dev/stdin for the pipe
@@ -260,19 +269,19 @@ nlohmann::json ExpectPairStreamedAsWhole(const std::string& dir, const std::stri
   return s;
 }
 
-TEST(AnalyzeCli, ASensorPairStreamedGivesTheWholeReadsResult) {
+TEST(AnalyzeCli, ASensorPairWithTheSecondOnAPipeGivesTheFilesResult) {
   test::TempDir dir;
   const Eigen::Matrix3d b_from_a =
       Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, -1).normalized()).toRotationMatrix();
   WriteSensorPair(StillThenTurningTrace(), b_from_a, dir.path());
-  const nlohmann::json pair = ExpectPairStreamedAsWhole(dir.path(), " --every 1s", true)["pair"];
+  const nlohmann::json pair = ExpectPairOnAPipeAsOnFiles(dir.path(), " --every 1s", true)["pair"];
   EXPECT_TRUE(pair["mounting_fitted"].get<bool>());
   EXPECT_NEAR(pair["mounting_angle_deg"].get<double>(), 0.5 * 180 / M_PI, 0.1);
   EXPECT_TRUE(pair["weights_from_still"].get<bool>());
   EXPECT_EQ(pair["paired"], 12000)
       << "the second's nearest sample is within half its 2 ms interval";
 
-  // A second log on another clock is refused in one line naming both logs, as the whole read does.
+  // A second log on another clock is refused in one line naming both logs.
   std::vector<GyroSample> far;
   for (int k = 0; k < 100; ++k)
     far.push_back({100'000'000'000 + k * 2'000'000LL, Eigen::Vector3d::Zero()});
@@ -286,12 +295,12 @@ TEST(AnalyzeCli, ASensorPairStreamedGivesTheWholeReadsResult) {
 }
 
 // The same on real motion: a PX4 flight's gyro (its gaps included) and a second gyro made from it.
-TEST(AnalyzeCli, ASensorPairOnARealFlightStreamedGivesTheWholeReadsResult) {
+TEST(AnalyzeCli, ASensorPairOfARealFlightOnAPipeGivesTheFilesResult) {
   SHUTTERLAB_REAL_DATA(log, "gyro/px4_ulog/sample.ulg");
   test::TempDir dir;
   WriteSensorPair(ReadFlightLog(log).gyro,
                   Eigen::AngleAxisd(2.0, Eigen::Vector3d(0, 0, 1)).toRotationMatrix(), dir.path());
-  ExpectPairStreamedAsWhole(dir.path(), " --every 5s", false);
+  ExpectPairOnAPipeAsOnFiles(dir.path(), " --every 5s", false);
 }
 
 }  // namespace

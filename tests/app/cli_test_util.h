@@ -26,14 +26,17 @@ struct CommandResult {
 };
 
 // Runs the shutterlab executable with the given argument string (shell syntax); stdin_file, when
-// given, is piped to its standard input by `cat` (so /dev/stdin is a pipe, readable once only).
-inline CommandResult RunShutterlab(const std::string& args, const std::string& stdin_file = "") {
+// given, is piped to its standard input by `cat` (so /dev/stdin is a pipe, readable once only);
+// env, when given, is set for the command alone ("TMPDIR=/some/folder").
+inline CommandResult RunShutterlab(const std::string& args, const std::string& stdin_file = "",
+                                   const std::string& env = "") {
   CommandResult result{-1, "", "", ""};
   char err_path[] = "/tmp/shutterlab_stderr_XXXXXX";
   const int fd = ::mkstemp(err_path);
   if (fd < 0) return result;
   ::close(fd);
   const std::string command = (stdin_file.empty() ? "" : "cat '" + stdin_file + "' | ") +
+                              (env.empty() ? "" : "env '" + env + "' ") +
                               std::string(SHUTTERLAB_BINARY) + " " + args + " 2>" + err_path;
   FILE* pipe = ::popen(command.c_str(), "r");
   if (pipe) {

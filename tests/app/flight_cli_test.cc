@@ -79,22 +79,10 @@ TEST(FlightCli, ADashReadsALogOnThePipe) {
   const auto file = RunShutterlab("flight " + path + " --json");
   ASSERT_EQ(file.exit_code, 0) << file.output;
   // The copy goes to $TMPDIR: none is left there; a folder that is not there is named in one line.
-  const auto piped_with_tmpdir = [&path](const std::string& folder) {
-    const char* old = std::getenv("TMPDIR");
-    const std::string restore = old ? old : "";
-    ::setenv("TMPDIR", folder.c_str(), 1);  // the command's environment
-    const auto r = RunShutterlab("flight - --json", path);
-    if (old) {
-      ::setenv("TMPDIR", restore.c_str(), 1);
-    } else {
-      ::unsetenv("TMPDIR");
-    }
-    return r;
-  };
-  const auto piped = piped_with_tmpdir(dir / "tmp");
+  const auto piped = RunShutterlab("flight - --json", path, "TMPDIR=" + (dir / "tmp"));
   ASSERT_EQ(piped.exit_code, 0) << piped.output;
   EXPECT_EQ(piped.out, file.out);
-  const auto missing = piped_with_tmpdir(dir / "missing");
+  const auto missing = RunShutterlab("flight - --json", path, "TMPDIR=" + (dir / "missing"));
   EXPECT_EQ(missing.exit_code, 2) << missing.output;
   EXPECT_NE(
       missing.err.find("/dev/stdin: cannot copy it to a temporary file in " + (dir / "missing")),
@@ -194,18 +182,30 @@ TEST(FlightCli, AutoBiasStreamedEqualsTheWholeTrace) {
   nlohmann::json streamed = nlohmann::json::parse(r.out);
   streamed.erase("warnings");
   EXPECT_EQ(streamed, whole) << streamed.dump(1) << "\n" << whole.dump(1);
-  // A log on a pipe can be read once only: its format is found from its start, and it is read
-  // whole, with the same result.
-  const auto piped = RunShutterlab("flight /dev/stdin --auto-bias --json", path);
+  // A log on a pipe can be read once only: it is copied to a temporary file in $TMPDIR (none is
+  // left there), whose passes give the same result; a folder that is not there is named.
+  std::filesystem::create_directories(dir / "tmp");
+  const auto piped =
+      RunShutterlab("flight /dev/stdin --auto-bias --json", path, "TMPDIR=" + (dir / "tmp"));
   ASSERT_EQ(piped.exit_code, 0) << piped.output;
+  EXPECT_NE(piped.err.find("auto-bias: still segment 3.0"), std::string::npos) << piped.err;
   nlohmann::json from_pipe = nlohmann::json::parse(piped.out);
   from_pipe.erase("warnings");
   EXPECT_EQ(from_pipe, whole);
+  EXPECT_TRUE(std::filesystem::is_empty(dir / "tmp"));
+  const auto missing =
+      RunShutterlab("flight - --auto-bias --json", path, "TMPDIR=" + (dir / "missing"));
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_NE(
+      missing.err.find("/dev/stdin: cannot copy it to a temporary file in " + (dir / "missing")),
+      std::string::npos)
+      << missing.err;
 }
 
 // `flight A --second B` on regular files fits the pair in passes and analyses the fused samples as
 // they are made, in bounded memory: the same table as the pair fused whole (FuseSensorPair) and
-// analysed (Flight), with --bias and with --auto-bias; with B on a pipe, read whole, the same.
+// analysed (Flight), with --bias and with --auto-bias; with B on a pipe (copied to a temporary
+// file that the passes read), the same.
 TEST(FlightCli, ASensorPairStreamedEqualsTheWholeFusion) {
   TempDir dir;
   const Eigen::Matrix3d b_from_a =

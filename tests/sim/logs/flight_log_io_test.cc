@@ -299,6 +299,60 @@ TEST(ReadFlightLog, APipesCopyLeavesNoFileAndAFailedCopySaysWhere) {
   expect_refused(dir / "missing", std::strerror(ENOENT));
 }
 
+// A reading in passes (the still search, a sensor pair's fit, analyze) of a log on a pipe: the
+// pipe is copied once, when the log is opened for passes, to a file in $TMPDIR unlinked at once;
+// every pass then reads that copy, each the same log as the file gives, a text log and a binary one
+// alike, and nothing is left in $TMPDIR.
+TEST(OpenFlightLog, EveryPassOverALogOnAPipeReadsItsOneCopy) {
+  test::TempDir dir;
+  const std::string folder = dir / "tmp";
+  std::filesystem::create_directories(folder);
+  const ScopedEnv tmpdir("TMPDIR", folder);
+  std::vector<GyroSample> samples;
+  for (int i = 0; i < 6000; ++i) {
+    samples.push_back({static_cast<int64_t>(i + 1) * 500000,
+                       Eigen::Vector3d(0.001 * i, -0.25, 0.5 * std::sin(0.01 * i))});
+  }
+  const GyroTrace trace(std::move(samples));
+  WriteGyroCsv(dir / "gyro.csv", trace);
+  const std::string csv = ReadFileToString(dir / "gyro.csv");
+  for (const std::string& bytes : {csv, SerializeULog(trace, {})}) {
+    const std::string path = dir / "log";
+    WriteFileAtomically(path, bytes);
+    const FlightLog from_file = ReadFlightLog(path);
+    const std::vector<FlightLog> passes =
+        test::ReadThroughPipe(bytes, [&](const std::string& pipe) {
+          const ReopenableFile file(pipe);
+          EXPECT_EQ(file.path(), pipe);
+          std::vector<FlightLog> logs;
+          for (int pass = 0; pass < 3; ++pass) {
+            FlightLogStream stream = OpenFlightLog(file);
+            FlightLog log = std::move(stream.log);
+            log.gyro = ReadAllSamples(stream.gyro.get());
+            for (LogWarning& w : stream.gyro->Warnings()) log.warnings.push_back(std::move(w));
+            for (LogWarning& w : AuditTrace(log.gyro, stream.audit))
+              log.warnings.push_back(std::move(w));
+            logs.push_back(std::move(log));
+            EXPECT_TRUE(std::filesystem::is_empty(folder)) << "the copy left a name in " << folder;
+          }
+          EXPECT_NO_THROW(file.CheckUnchanged());
+          return logs;
+        });
+    ASSERT_EQ(passes.size(), 3u);
+    EXPECT_EQ(passes[0].gyro.size(), 6000u) << from_file.format;
+    for (const FlightLog& log : passes) test::ExpectSameLog(log, from_file, from_file.format);
+  }
+  EXPECT_TRUE(std::filesystem::is_empty(folder));
+  // A file that cannot be opened is named in one line, as OpenFlightLog names it.
+  try {
+    ReopenableFile missing(dir / "missing.csv");
+    FAIL() << "a missing file was opened";
+  } catch (const IoError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(dir / "missing.csv" + ": cannot open", 0), 0u)
+        << e.what();
+  }
+}
+
 // Every binary reader checks the file between its passes against the stamp taken when it was
 // mapped (MappedFile::CheckUnchanged): a log rewritten in place at the same size, whose second
 // pass would read other bytes than the first, is refused in one line naming it.
@@ -374,22 +428,21 @@ TEST(OpenFlightLog, TheOpeningPassTellsItsProgressUpToOne) {
 
 // A log still being recorded grows between the passes of a reading in several: the pass after the
 // change is refused in one line that names the file and says what to do, never read as another log.
-TEST(ReopenFlightLog, ALogThatGrowsBetweenPassesIsRefused) {
+TEST(OpenFlightLog, ALogThatGrowsBetweenPassesIsRefused) {
   test::TempDir dir;
   const std::string path = dir / "gyro.csv";
   std::string text = "t,gx,gy,gz\n";
   for (int i = 0; i < 4000; ++i) text += std::to_string(i * 0.002) + ",0.001,-0.002,0.003\n";
   WriteFileAtomically(path, text);
-  const LogStamp stamp = LogStamp::Of(path);
-  EXPECT_EQ(stamp.size_bytes, text.size());
-  EXPECT_NO_THROW(stamp.CheckUnchanged());
-  // The still search reads the log in passes through ReopenFlightLog; the recorder appends after
+  const ReopenableFile file(path);
+  EXPECT_NO_THROW(file.CheckUnchanged());
+  // The still search reads the log in passes, each opening it again; the recorder appends after
   // the first.
   const std::string appended = "8.0,0.001,-0.002,0.003\n";
   int passes = 0;
   const auto open = [&]() -> std::unique_ptr<GyroSource> {
     if (passes++ == 1) std::ofstream(path, std::ios::app) << appended;
-    return ReopenFlightLog(stamp).gyro;
+    return OpenFlightLog(file).gyro;
   };
   try {
     DetectStillSegment(open);
@@ -404,7 +457,7 @@ TEST(ReopenFlightLog, ALogThatGrowsBetweenPassesIsRefused) {
     EXPECT_EQ(message.find('\n'), std::string::npos) << message;
   }
   EXPECT_EQ(passes, 2);
-  EXPECT_THROW(stamp.CheckUnchanged(), IoError);
+  EXPECT_THROW(file.CheckUnchanged(), IoError);
 }
 
 TEST(ReadFlightLog, HonoursTheLogIndex) {
