@@ -210,8 +210,12 @@ MappedFile::~MappedFile() {
 
 void MappedFile::ReleaseBefore(size_t offset) {
   if (size_ == 0) return;
-  const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
-  const size_t end = std::min(offset, size_) / page * page;  // whole pages only
+  // Whole 2 MiB spans of the file (its end aside): the kernel may map a file's page cache in huge
+  // pages, and handing back part of one splits it, with a TLB flush. Handing back each 256 KiB
+  // block of a gyro.csv cost 15 % of `flight`'s CPU time on a 6.18 kernel (perf: madvise and
+  // pmdp_huge_clear_flush); whole spans split nothing, in an eighth of the calls.
+  constexpr size_t kReleaseBytes = 2 << 20;
+  const size_t end = offset >= size_ ? size_ : offset / kReleaseBytes * kReleaseBytes;
   // Behind what was handed back: a new pass from the start (a reader's second pass), whose pages
   // are resident again; hand them back as it goes, as in the first.
   if (end < released_) released_ = 0;

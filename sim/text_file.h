@@ -64,10 +64,10 @@ class MappedFile {
   const std::string& path() const { return path_; }
   // Whether the bytes are a copy (a pipe's), not the named file's own.
   bool copied() const { return !stamp_; }
-  // Hands the whole pages before byte `offset` back to the kernel (they leave the process's
-  // resident memory; touching them again reads them again from the file). An offset before the
-  // last one starts again from the file's start: a reader's next pass over the file hands its
-  // pages back the same way.
+  // Hands the pages before byte `offset` back to the kernel, in whole 2 MiB spans of the file (all
+  // of them at its end): they leave the process's resident memory; touching them again reads them
+  // again from the file. An offset before the last one starts again from the file's start: a
+  // reader's next pass over the file hands its pages back the same way.
   void ReleaseBefore(size_t offset);
   // Throws IoError, one line naming the file, when the file mapped has changed since (LogStamp):
   // a log still being recorded, or rewritten, whose pages would give other bytes than a pass

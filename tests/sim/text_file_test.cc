@@ -219,8 +219,9 @@ TEST(MappedFile, AStreamedFileReadsWholeAndItsReleasedPagesLeaveResidentMemory) 
     mapped.ReleaseBefore(at + (1 << 20) - 7);
   }
   mapped.ReleaseBefore(content.size());
-  // Never more than a few MiB of the 16 MiB resident at once, and none of it at the end.
-  EXPECT_LT(peak - before, size_t{4} << 20);
+  // Never more than a few MiB of the 16 MiB resident at once (what is handed back goes in whole
+  // 2 MiB spans; the kernel maps some pages ahead of a touch), and none of it at the end.
+  EXPECT_LT(peak - before, size_t{6} << 20);
   EXPECT_LT(ResidentBytes(), before + (size_t{1} << 20));
   // Released pages read again, the same bytes.
   EXPECT_EQ(mapped.text().substr(12345, 100), std::string_view(content).substr(12345, 100));
@@ -245,7 +246,7 @@ TEST(MappedFile, ASecondPassHandsItsPagesBackToo) {
       peak = std::max(peak, ResidentBytes());
       mapped.ReleaseBefore(at + (1 << 20));
     }
-    EXPECT_LT(peak - before, size_t{4} << 20) << "pass " << pass;
+    EXPECT_LT(peak - before, size_t{6} << 20) << "pass " << pass;
   }
 }
 
