@@ -226,6 +226,20 @@ void MappedFile::ReleaseBefore(size_t offset) {
   released_ = end;
 }
 
+bool MappedFile::Populate(size_t begin, size_t end) const {
+#ifdef MADV_POPULATE_READ
+  const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
+  begin = begin / page * page;
+  end = std::min(end, size_);
+  return end <= begin ||
+         ::madvise(const_cast<char*>(data_) + begin, end - begin, MADV_POPULATE_READ) == 0;
+#else
+  (void)begin;
+  (void)end;
+  return false;
+#endif
+}
+
 void MappedFile::CheckUnchanged() const {
   if (stamp_) stamp_->CheckUnchanged();
 }
@@ -343,6 +357,7 @@ TextBlocks::TextBlocks(TextBlocks&& other) noexcept
       handed_out_(other.handed_out_),
       memory_(other.memory_),
       mapped_(std::move(other.mapped_)),
+      populated_(other.populated_),
       buffer_(std::move(other.buffer_)),
       capacity_(other.capacity_),
       carry_begin_(other.carry_begin_),
@@ -382,6 +397,13 @@ std::string_view TextBlocks::Next() {
       }
     }
     handed_out_ = end;
+    // The pages up to a 2 MiB span past this block mapped ahead, a span at a time.
+    constexpr size_t kPopulateBytes = 2 << 20;
+    if (mapped_ && end + kPopulateBytes > populated_) {
+      const size_t to = (end + 2 * kPopulateBytes - 1) / kPopulateBytes * kPopulateBytes;
+      mapped_->Populate(populated_, to);
+      populated_ = to;
+    }
     return memory_.substr(begin, end - begin);
   }
   // The started line of the last block first, then as much of the file as fits.

@@ -228,6 +228,23 @@ TEST(MappedFile, AStreamedFileReadsWholeAndItsReleasedPagesLeaveResidentMemory) 
   EXPECT_EQ(mapped.text(), content);
 }
 
+// Populate maps the pages of a span ahead of the reading in one call: they are resident before
+// they are touched, and the bytes are the file's.
+TEST(MappedFile, APopulatedSpanIsResidentBeforeItIsRead) {
+  test::TempDir dir;
+  const std::string path = dir / "log.bin";
+  std::string content(16 << 20, '\0');
+  for (size_t i = 0; i < content.size(); ++i) content[i] = static_cast<char>(i * 2246822519u >> 24);
+  WriteFileAtomically(path, content);
+  MappedFile mapped(path, MappedFile::Paging::kStreamed);
+  const size_t before = ResidentBytes();
+  if (!mapped.Populate(0, 8 << 20)) GTEST_SKIP() << "the kernel cannot populate (Linux < 5.14)";
+  EXPECT_GE(ResidentBytes(), before + (size_t{7} << 20));
+  EXPECT_LT(ResidentBytes(), before + (size_t{12} << 20)) << "more than the span asked for";
+  EXPECT_EQ(mapped.text().substr(0, 8 << 20), std::string_view(content).substr(0, 8 << 20));
+  EXPECT_TRUE(mapped.Populate(20 << 20, 30 << 20)) << "past the end: nothing to do";
+}
+
 TEST(MappedFile, ASecondPassHandsItsPagesBackToo) {
   // A reader in two passes (DataFlash: pass 1 for the summaries, pass 2 for the samples) reads the
   // file twice front to back; the second pass stays as small as the first.
