@@ -52,8 +52,15 @@ void Run(const FlightCommand& command) {
   options.Check();
   std::optional<ReopenableFile> first;
   if (command.trace.auto_bias || with_second) first.emplace(command.trace.path);
-  options.bias =
-      first ? command.trace.StreamedSegment(*first) : ParseBiasSegment(command.trace.bias);
+  if (command.trace.auto_bias) {
+    try {
+      options.bias = command.trace.StreamedSegment(*first);
+    } catch (const std::invalid_argument& e) {  // no still segment: named by the log, as below
+      throw std::invalid_argument(command.trace.path + ": " + e.what());
+    }
+  } else {
+    options.bias = ParseBiasSegment(command.trace.bias);
+  }
   FlightStream flight(options);
   const auto add = [&flight](const GyroChunk& chunk) { flight.Add(chunk.data, chunk.size); };
   if (with_second) {

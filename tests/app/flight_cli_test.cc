@@ -202,6 +202,28 @@ TEST(FlightCli, AutoBiasStreamedEqualsTheWholeTrace) {
       << missing.err;
 }
 
+// A log with no still stretch: --auto-bias is refused in one line that names the log, from a file
+// and from a pipe alike.
+TEST(FlightCli, AutoBiasWithoutAStillStretchNamesTheLog) {
+  TempDir dir;
+  std::vector<GyroSample> samples;
+  for (int i = 0; i < 6000; ++i) {
+    const double t = i * 1e-3;
+    samples.push_back({static_cast<int64_t>(i) * 1000000,
+                       Eigen::Vector3d(0.3 * std::sin(4 * t), 0.2 * std::cos(3 * t), 0.05)});
+  }
+  const std::string path = dir / "moving.csv";
+  WriteGyroCsv(path, GyroTrace(std::move(samples)));
+  for (const bool piped : {false, true}) {
+    const auto r = piped ? RunShutterlab("flight - --auto-bias", path)
+                         : RunShutterlab("flight " + path + " --auto-bias");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    const std::string named = piped ? "/dev/stdin" : path;
+    EXPECT_EQ(r.err.rfind("error: " + named + ": no still segment found: ", 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+}
+
 // `flight A --second B` on regular files fits the pair in passes and analyses the fused samples as
 // they are made, in bounded memory: the same table as the pair fused whole (FuseSensorPair) and
 // analysed (Flight), with --bias and with --auto-bias; with B on a pipe (copied to a temporary

@@ -186,8 +186,9 @@ TEST(PhotosCli, PlacesPhotosOnASyntheticLogAndReportsTheResidual) {
 }
 
 // A gyro.csv, the log that grows long, with the photos named by a trigger file on its clock:
-// read as a stream from a file and whole from a pipe, the same JSON and text.
-TEST(PhotosCli, AGyroCsvWithTriggersStreamedGivesTheWholeReadsResult) {
+// read as a stream from a file and from a pipe (copied once to a temporary file), the same JSON
+// and text (estimate/paper analyze_stream_test: the stream against the log read whole).
+TEST(PhotosCli, AGyroCsvWithTriggersOnAPipeGivesTheFilesResult) {
   test::TempDir dir;
   test::WriteStillThenTurningGyroCsv(dir / "gyro.csv");
   std::filesystem::create_directories(dir / "photos");
@@ -223,9 +224,11 @@ TEST(PhotosCli, AGyroCsvWithTriggersStreamedGivesTheWholeReadsResult) {
 }
 
 // Real photos on a real log: the three DJI photos named by a trigger file on the PX4 log's clock
-// (they were not taken on that flight: this checks the streamed analysis against the whole read
-// on real bytes, not the photos' truth). The second photo's readout falls in a fast turn.
-TEST(PhotosCli, RealPhotosOnARealLogStreamedAsReadWhole) {
+// (they were not taken on that flight: this checks the command's reading of real bytes, from a
+// file and from a pipe, not the photos' truth;
+// AnalyzeStream.PhotoFlightOfRealPhotosOnARealLogEqualsTheWholeLog checks the stream against the
+// whole read). The second photo's readout falls in a fast turn.
+TEST(PhotosCli, RealPhotosOnARealLogFromAFileAndAPipe) {
   SHUTTERLAB_REAL_DATA(photos, "incoming/dji_fc8482_clusterodm");
   SHUTTERLAB_REAL_DATA(log, "gyro/px4_ulog/sample.ulg");
   test::TempDir dir;
@@ -235,11 +238,10 @@ TEST(PhotosCli, RealPhotosOnARealLogStreamedAsReadWhole) {
   const std::string args = " --triggers " + (dir / "t.csv") + " --json";
   const auto streamed = RunShutterlab("analyze --photos " + photos + " " + log + args);
   ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
-  // On a pipe the log is read whole, once.
-  const auto whole = RunShutterlab("analyze --photos " + photos + " /dev/stdin" + args, log);
-  ASSERT_EQ(whole.exit_code, 0) << whole.output;
+  const auto piped = RunShutterlab("analyze --photos " + photos + " /dev/stdin" + args, log);
+  ASSERT_EQ(piped.exit_code, 0) << piped.output;
   const nlohmann::json s = nlohmann::json::parse(streamed.out);
-  EXPECT_EQ(s, nlohmann::json::parse(whole.out));
+  EXPECT_EQ(s, nlohmann::json::parse(piped.out));
   ASSERT_EQ(s["images"].size(), 3u);
   EXPECT_GT(s["photos"]["photos"][1]["D_rotation_m"].get<double>(), 0.5) << streamed.out;
   EXPECT_EQ(s["warnings"].size(), 2u) << "the log's two gap warnings";

@@ -7,10 +7,12 @@
 #include "sim/civil_time.h"
 #include "sim/gyro_source.h"
 #include "sim/logs/flight_log_io.h"
+#include "sim/logs/trigger_file.h"
 #include "sim/trace_audit.h"
 #include "sim/units.h"
 #include "tests/estimate/paper/paper_fixtures.h"
 #include "tests/render/render_fixtures.h"
+#include "tests/test_util.h"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -357,6 +359,35 @@ TEST(AnalyzeStream, PhotoFlightEqualsTheWholeLogToTheBit) {
     EXPECT_EQ(s.d_paper_m, w.d_paper_m);
     EXPECT_EQ(s.flagged, w.flagged);
   }
+  EXPECT_EQ(PhotoAnalysisReport(set, streamed.photos), PhotoAnalysisReport(set, whole.photos));
+}
+
+// The same on real bytes: the three DJI photos named by a trigger file on the PX4 log's clock
+// (they were not taken on that flight: this checks the streamed analysis against the whole read,
+// not the photos' truth), the log's gaps included.
+TEST(AnalyzeStream, PhotoFlightOfRealPhotosOnARealLogEqualsTheWholeLog) {
+  SHUTTERLAB_REAL_DATA(photos, "incoming/dji_fc8482_clusterodm");
+  SHUTTERLAB_REAL_DATA(path, "gyro/px4_ulog/sample.ulg");
+  // The reader's own warnings; the trace audit's are added by each analysis.
+  FlightLogStream opened = OpenFlightLog(path);
+  FlightLog log = std::move(opened.log);
+  log.gyro = ReadAllSamples(opened.gyro.get());
+  for (LogWarning& w : opened.gyro->Warnings()) log.warnings.push_back(std::move(w));
+  const PhotoSet set = ReadPhotoSet(photos);
+  const TriggerFile triggers = ParseTriggerCsv(
+      "image,t\ntest-photo-1.jpg,112.7\ntest-photo-2.jpg,117.614\ntest-photo-3.jpg,160.3\n",
+      "t.csv");
+  PhotoFlightOptions options;
+  options.analyze = TurnedCameraOptions();
+  const PhotoFlightResult whole = AnalyzePhotoFlight(set, Audited(log), &triggers, options);
+  ASSERT_EQ(whole.log.images.size(), 3u);
+  ASSERT_GT(whole.log.gaps, 0u);
+  FlightLog metadata = log;
+  metadata.gyro = GyroTrace();
+  const PhotoFlightResult streamed =
+      AnalyzePhotoFlightStream(set, metadata, SourceOf(log, 509), &triggers, options);
+  ExpectSameResult(streamed.log, whole.log);
+  EXPECT_EQ(streamed.camera_source, whole.camera_source);
   EXPECT_EQ(PhotoAnalysisReport(set, streamed.photos), PhotoAnalysisReport(set, whole.photos));
 }
 
