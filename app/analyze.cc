@@ -251,7 +251,8 @@ AnalyzeLogSource StreamSource(const AnalyzeCommand& command, const FlightLogRead
 }
 
 // The log analysed as a stream (AnalyzeStream), in bounded memory whatever its length: what
-// `analyze LOG` does for regular files, with --out too (the report draws bounded plots).
+// `analyze LOG` does for every log, from a file or a pipe, with --out too (the report draws
+// bounded plots).
 AnalyzeResult AnalyzeStreamed(const AnalyzeCommand& command, const FlightLogReadOptions& read,
                               const std::optional<TriggerFile>& triggers, AnalyzeOptions options,
                               std::optional<SensorPair>* pair) {

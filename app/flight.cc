@@ -49,7 +49,10 @@ void Run(const FlightCommand& command) {
   // pair is fitted in passes too and its fused samples analysed as they are made. Only a reading
   // in passes opens the log for them (a log on a pipe is then copied once to a temporary file);
   // one pass reads it as it comes.
+  // The flags are checked before the log is opened (a pipe's copy can take a while).
   options.Check();
+  const FlightLogReadOptions read = command.trace.ReadOptions();
+  if (!command.trace.auto_bias) options.bias = ParseBiasSegment(command.trace.bias);
   std::optional<ReopenableFile> first;
   if (command.trace.auto_bias || with_second) first.emplace(command.trace.path);
   if (command.trace.auto_bias) {
@@ -58,14 +61,11 @@ void Run(const FlightCommand& command) {
     } catch (const std::invalid_argument& e) {  // no still segment: named by the log, as below
       throw std::invalid_argument(command.trace.path + ": " + e.what());
     }
-  } else {
-    options.bias = ParseBiasSegment(command.trace.bias);
   }
   FlightStream flight(options);
   const auto add = [&flight](const GyroChunk& chunk) { flight.Add(chunk.data, chunk.size); };
   if (with_second) {
     const ReopenableFile second(command.trace.second_path);
-    const FlightLogReadOptions read = command.trace.ReadOptions();
     const PairInPasses fitted =
         FitPairInPasses(*first, second, read, OpenFlightLog(*first, read), options.bias);
     pair = fitted.pair;

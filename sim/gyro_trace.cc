@@ -24,13 +24,23 @@ GyroTrace::GyroTrace(std::vector<GyroSample> samples) : samples_(std::move(sampl
   }
   if (n < 2) return;
   sampling_.median_interval_ns = intervals.Median();
-  const double gap_ns =
-      SamplingReport::kGapFactor * static_cast<double>(sampling_.median_interval_ns);
+  sampling_.nominal_interval_ns =
+      NominalIntervalNs(sampling_.median_interval_ns, n, t_end_ns() - t_begin_ns());
+  const double gap_ns = SamplingReport::kGapFactor *
+                        static_cast<double>(NominalIntervalNs(sampling_.median_interval_ns,
+                                                              n - sampling_.duplicate_timestamps,
+                                                              t_end_ns() - t_begin_ns()));
   for (size_t k = 0; k + 1 < n; ++k) {
     if (static_cast<double>(samples_[k + 1].t_ns - samples_[k].t_ns) > gap_ns) {
       sampling_.gap_indices.push_back(k);
     }
   }
+}
+
+int64_t NominalIntervalNs(int64_t median_interval_ns, size_t samples, int64_t span_ns) {
+  if (median_interval_ns > 0) return median_interval_ns;
+  if (samples < 2 || span_ns <= 0) return 0;
+  return span_ns / static_cast<int64_t>(samples - 1);
 }
 
 size_t GyroTrace::LowerBound(int64_t t_ns) const {

@@ -19,11 +19,23 @@ struct SamplingReport {
   // Median of t[k+1]-t[k] (sim/interval_histogram.h: exact while the intervals take at most 65,536
   // distinct values); 0 for fewer than 2 samples.
   int64_t median_interval_ns = 0;
-  std::vector<size_t> gap_indices;  // k such that t[k+1]-t[k] > kGapFactor * median interval
+  // The interval the rate and the gaps are judged by (NominalIntervalNs).
+  int64_t nominal_interval_ns = 0;
+  // k such that t[k+1]-t[k] > kGapFactor * the interval between distinct times
+  // (NominalIntervalNs of the samples less the duplicates: the median, or a burst-stamped
+  // trace's stamp period).
+  std::vector<size_t> gap_indices;
   size_t duplicate_timestamps = 0;  // count of k with t[k+1] == t[k]
-  double RateHz() const { return median_interval_ns > 0 ? 1e9 / median_interval_ns : 0.0; }
+  double RateHz() const { return nominal_interval_ns > 0 ? 1e9 / nominal_interval_ns : 0.0; }
   static constexpr double kGapFactor = 3.0;  // the paper's logger pauses while it writes a buffer
 };
+
+// The sample interval a trace of `samples` samples over span_ns is judged by (its rate, its gaps,
+// the still search's windows): its median interval; or, when that is 0 because most samples share
+// the time of the one before (a logger that stamps a burst of samples with one time), its span
+// over its intervals: 1/3 ms for threes stamped every 1 ms, not 0 ("0 Hz", every step a gap).
+// 0 for fewer than 2 samples or no span.
+int64_t NominalIntervalNs(int64_t median_interval_ns, size_t samples, int64_t span_ns);
 
 // Validates on construction (throws std::invalid_argument naming the sample index when a value is
 // non-finite or a timestamp decreases); immutable afterwards.

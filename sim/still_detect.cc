@@ -64,7 +64,8 @@ class WindowStats {
 struct TraceSummary {
   size_t n = 0;
   Eigen::Vector3d mean_rad_s = Eigen::Vector3d::Zero();  // summed in sample order, then / n
-  int64_t t_begin_ns = 0, t_end_ns = 0, median_interval_ns = 0;
+  int64_t t_begin_ns = 0, t_end_ns = 0;
+  int64_t interval_ns = 0;  // nominal (NominalIntervalNs): the windows' length in samples
   double DurationS() const { return (t_end_ns - t_begin_ns) * 1e-9; }
 };
 
@@ -75,7 +76,7 @@ struct StillSizes {
 
 StillSizes Sizes(const TraceSummary& trace, const StillDetectOptions& options) {
   SHUTTERLAB_CHECK(trace.n >= 2) << "still detection needs a trace of at least 2 samples";
-  const double dt_s = trace.median_interval_ns * 1e-9;
+  const double dt_s = trace.interval_ns * 1e-9;
   SHUTTERLAB_CHECK(dt_s > 0) << "still detection needs increasing timestamps";
   StillSizes sizes;
   sizes.window = std::max<size_t>(2, static_cast<size_t>(std::llround(options.window_s / dt_s)));
@@ -164,7 +165,7 @@ class RunFinder {
   }
   // After the last window: a run still open ends one interval past the last sample.
   void Finish() {
-    if (in_run_ && !done_) Close(trace_.n, trace_.t_end_ns + trace_.median_interval_ns);
+    if (in_run_ && !done_) Close(trace_.n, trace_.t_end_ns + trace_.interval_ns);
   }
   StillSegment Result(const Eigen::Vector3d& m_ref, const StillDetectOptions& options) const {
     SHUTTERLAB_CHECK(best_ns_ >= min_ns_)
@@ -301,7 +302,7 @@ StillSegment DetectStillSegment(const GyroTrace& trace, const StillDetectOptions
   summary.mean_rad_s /= static_cast<double>(summary.n);
   summary.t_begin_ns = trace.t_begin_ns();
   summary.t_end_ns = trace.t_end_ns();
-  summary.median_interval_ns = trace.sampling().median_interval_ns;
+  summary.interval_ns = trace.sampling().nominal_interval_ns;
   return Detect(summary, options, [&](size_t prefixes, const auto& f) {
     WindowStats stats(summary.mean_rad_s, prefixes);
     for (const GyroSample& s : trace.samples()) {
@@ -314,8 +315,8 @@ StillSegment DetectStillSegment(const GyroTrace& trace, const StillDetectOptions
 StillSegment DetectStillSegment(const std::function<std::unique_ptr<GyroSource>()>& open,
                                 const StillDetectOptions& options) {
   options.Check();
-  // The length, the mean (summed in sample order, as for a trace held whole) and the median
-  // interval (IntervalHistogram, as GyroTrace::sampling).
+  // The length, the mean (summed in sample order, as for a trace held whole) and the nominal
+  // interval (IntervalHistogram's median, as GyroTrace::sampling).
   TraceSummary summary;
   IntervalHistogram intervals;
   ForEachSample(open, [&](const GyroSample& s) {
@@ -331,7 +332,8 @@ StillSegment DetectStillSegment(const std::function<std::unique_ptr<GyroSource>(
   });
   SHUTTERLAB_CHECK(summary.n >= 2) << "still detection needs a trace of at least 2 samples";
   summary.mean_rad_s /= static_cast<double>(summary.n);
-  summary.median_interval_ns = intervals.Median();
+  summary.interval_ns =
+      NominalIntervalNs(intervals.Median(), summary.n, summary.t_end_ns - summary.t_begin_ns);
   return Detect(summary, options, [&](size_t prefixes, const auto& f) {
     WindowStats stats(summary.mean_rad_s, prefixes);
     ForEachSample(open, [&](const GyroSample& s) {

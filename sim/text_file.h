@@ -121,8 +121,8 @@ class TextBlocks {
   static constexpr size_t kBlockBytes = 256 << 10;
   // A file; throws IoError naming the path when it cannot be opened.
   static TextBlocks OfFile(const std::string& path, size_t block_bytes = kBlockBytes);
-  // A copy that CopyToTemporaryFile made, read through a descriptor of its own (copy_fd stays the
-  // caller's); path names the input it copied in messages.
+  // A copy that CopyToTemporaryFile made, mapped through copy_fd (which stays the caller's; the
+  // mapping outlives it); path names the input it copied in messages.
   static TextBlocks OfCopy(int copy_fd, const std::string& path);
   // A text in memory, which must outlive the blocks.
   static TextBlocks InMemory(std::string_view text, size_t block_bytes = kBlockBytes);
@@ -168,7 +168,7 @@ class TextBlocks {
 // the file the first pass read (LogStamp); anything else (a pipe, a FIFO, /dev/stdin, which the
 // first read drains) copied once, whole, to a temporary file (CopyToTemporaryFile) that every pass
 // reads, so that a log on a pipe is read in the same passes and bounded memory as a file. Copies
-// share the copy.
+// of a ReopenableFile share the copy; a moved-from one is not to be used.
 class ReopenableFile {
  public:
   // Throws IoError naming the path when it cannot be opened, or the copy fails.

@@ -178,11 +178,8 @@ void TraceAuditor::CloseBlock(bool at_end) {
     if (IsGap(longest_ns, median_ns)) {
       for (size_t i = 0; i < inside; ++i) Judge(interval(i), median_ns);
     }
-    // A block where most samples share the time of the one before (a logger that stamps a
-    // burst of samples with one time) has a median of 0: its rate is then its samples over its
-    // span, not "0 Hz".
-    NoteBlockRate(median_ns > 0 ? median_ns : (t.back() - t.front()) / static_cast<int64_t>(pushed),
-                  t.front());
+    // A block stamped in bursts (median 0) runs at its samples over its span, not "0 Hz".
+    NoteBlockRate(NominalIntervalNs(median_ns, t.size(), t.back() - t.front()), t.front());
     previous_median_ns_ = median_ns;
   }
   if (!at_end) into_block_ = interval(pushed - 1);
@@ -278,6 +275,19 @@ std::vector<LogWarning> TraceAuditor::Finish() {
   return warnings;
 }
 
+TraceSampling TraceSampling::Of(const GyroTrace& trace) {
+  TraceSampling sampling;
+  sampling.samples = trace.size();
+  if (trace.empty()) return sampling;
+  sampling.t_begin_ns = trace.t_begin_ns();
+  sampling.t_end_ns = trace.t_end_ns();
+  sampling.median_interval_ns = trace.sampling().median_interval_ns;
+  sampling.nominal_interval_ns = trace.sampling().nominal_interval_ns;
+  sampling.gaps = trace.sampling().gap_indices.size();
+  sampling.duplicate_timestamps = trace.sampling().duplicate_timestamps;
+  return sampling;
+}
+
 TraceSampling TraceAuditor::Sampling() const {
   TraceSampling sampling;
   sampling.samples = samples_;
@@ -287,8 +297,12 @@ TraceSampling TraceAuditor::Sampling() const {
   sampling.duplicate_timestamps = duplicates_;
   if (samples_ < 2) return sampling;
   sampling.median_interval_ns = intervals_.Median();
-  sampling.gaps = intervals_.CountAbove(SamplingReport::kGapFactor *
-                                        static_cast<double>(sampling.median_interval_ns));
+  sampling.nominal_interval_ns =
+      NominalIntervalNs(sampling.median_interval_ns, samples_, t_last_ns_ - t_begin_ns_);
+  sampling.gaps = intervals_.CountAbove(
+      SamplingReport::kGapFactor *
+      static_cast<double>(NominalIntervalNs(sampling.median_interval_ns, samples_ - duplicates_,
+                                            t_last_ns_ - t_begin_ns_)));
   return sampling;
 }
 

@@ -37,10 +37,13 @@ struct TraceSampling {
   size_t samples = 0;
   int64_t t_begin_ns = 0, t_end_ns = 0;  // first and last sample (0 when empty)
   int64_t median_interval_ns = 0;        // as SamplingReport
-  size_t gaps = 0;                       // intervals over SamplingReport::kGapFactor x the median
+  int64_t nominal_interval_ns = 0;       // as SamplingReport (NominalIntervalNs)
+  size_t gaps = 0;                       // as SamplingReport::gap_indices counts them
   size_t duplicate_timestamps = 0;
-  double RateHz() const { return median_interval_ns > 0 ? 1e9 / median_interval_ns : 0.0; }
+  double RateHz() const { return nominal_interval_ns > 0 ? 1e9 / nominal_interval_ns : 0.0; }
   double DurationS() const { return (t_end_ns - t_begin_ns) * 1e-9; }
+  // The same of a trace held whole (its GyroTrace::sampling).
+  static TraceSampling Of(const GyroTrace& trace);
 };
 
 // The audit of a trace fed chunk by chunk, in time order.

@@ -603,13 +603,7 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
 
   AnalyzeResult result;
   const TraceSpan span{gyro.t_begin_ns(), gyro.samples().back().t_ns};
-  TraceSampling sampling;
-  sampling.samples = gyro.size();
-  sampling.t_begin_ns = span.first_ns;
-  sampling.t_end_ns = span.last_ns;
-  sampling.median_interval_ns = gyro.sampling().median_interval_ns;
-  sampling.gaps = gyro.sampling().gap_indices.size();
-  DescribeSource(log, sampling, options, altitude_source, &result);
+  DescribeSource(log, TraceSampling::Of(gyro), options, altitude_source, &result);
   {
     // The bias is not known yet: the still search and the flight table take the rates as logged.
     const GyroTrace camera_rates =
@@ -631,7 +625,7 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
   const std::vector<ImageTrigger> triggers =
       ChooseTriggers(log, span, options, &result.trigger_source);
   const ImageContext context{&result.traces->angles, &result.traces->motion, options.rig,
-                             options.limits_m, sampling.median_interval_ns};
+                             options.limits_m, gyro.sampling().median_interval_ns};
   const int64_t latency_ns = SecondsToNs(options.trigger_latency_s);
   result.images.reserve(triggers.size());
   for (size_t i = 0; i < triggers.size(); ++i) {

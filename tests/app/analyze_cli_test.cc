@@ -107,6 +107,9 @@ TEST(AnalyzeCli, ReportOfSamplesStampedInBurstsSaysWhyItHasNoAllan) {
   const std::string html = ReadFileToString(dir / "out/report.html");
   EXPECT_NE(html.find("Allan deviation: not computed on"), std::string::npos);
   EXPECT_NE(html.find("the median sample interval is 0"), std::string::npos);
+  // The sampling line: the samples' rate, and no gap (it said "0.0 Hz, 19999 gaps": 59,999
+  // intervals over 19.999 s).
+  EXPECT_NE(r.out.find(" at 3000.1 Hz, 0 gaps"), std::string::npos) << r.out;
 }
 
 TEST(AnalyzeCli, SceneWithoutOutIsExitTwo) {

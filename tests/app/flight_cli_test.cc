@@ -222,6 +222,12 @@ TEST(FlightCli, AutoBiasWithoutAStillStretchNamesTheLog) {
     EXPECT_EQ(r.err.rfind("error: " + named + ": no still segment found: ", 0), 0u) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   }
+  // A bad flag is refused before a log on a pipe is copied (no folder to copy it to here), and is
+  // not named by the log.
+  const auto bad_flag =
+      RunShutterlab("flight - --auto-bias --format bogus", path, "TMPDIR=" + (dir / "missing"));
+  EXPECT_EQ(bad_flag.exit_code, 2) << bad_flag.output;
+  EXPECT_EQ(bad_flag.err.rfind("error: unknown log format 'bogus'", 0), 0u) << bad_flag.err;
 }
 
 // `flight A --second B` on regular files fits the pair in passes and analyses the fused samples as

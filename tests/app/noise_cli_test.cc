@@ -92,6 +92,8 @@ TEST(NoiseCli, SamplesStampedInBurstsHaveNoAllanAndSayWhy) {
   EXPECT_NE(j.at("allan_not_computed").get<std::string>().find("median sample interval is 0"),
             std::string::npos);
   EXPECT_FALSE(j["axes"]["x"].contains("arw_deg_sqrt_h"));
+  // The samples' rate, 23,999 intervals over 7.999 s (it said 0).
+  EXPECT_NEAR(j.at("rate_hz").get<double>(), 23999 / 7.999, 0.01);
   EXPECT_NE(json.err.find("duplicate_time"), std::string::npos) << json.err;
   EXPECT_EQ(json.err.find("rate_change"), std::string::npos) << json.err;
   const auto table = RunShutterlab("noise " + trace);

@@ -176,6 +176,28 @@ TEST(StillDetect, SegmentFeedsEstimateBias) {
 
 // A trace held whole and the same trace streamed in chunks of any size give the same segment, to
 // the bit, and the same refusals.
+// Samples stamped in threes with one time, every 1 ms (a median interval of 0): the windows are
+// sized by the samples' rate (3 kHz), and the still stretch is found, held whole and streamed
+// alike (it was refused: "still detection needs increasing timestamps").
+TEST(StillDetect, BurstStampedSamplesHaveTheirStillSegment) {
+  Synth o;
+  o.rate_hz = 3000.0;
+  o.duration_s = 10.0;
+  const GyroTrace regular = Make(o, MotionOutside(2.0, 6.0));
+  std::vector<GyroSample> samples = regular.samples();
+  for (size_t k = 0; k < samples.size(); ++k)
+    samples[k].t_ns = samples[k - k % 3].t_ns;  // the first of each three's time
+  const GyroTrace bursts(std::move(samples));
+  ASSERT_EQ(bursts.sampling().median_interval_ns, 0);
+  const StillSegment whole = DetectStillSegment(bursts);
+  ExpectSegment(whole, 2.0, 6.0);
+  const StillSegment streamed = DetectStillSegment([&bursts]() -> std::unique_ptr<GyroSource> {
+    return std::make_unique<TraceSource>(bursts, 1000);
+  });
+  EXPECT_EQ(streamed.segment.begin_s, whole.segment.begin_s);
+  EXPECT_EQ(streamed.segment.end_s, whole.segment.end_s);
+}
+
 TEST(StillDetectStreamed, EqualsTheWholeTraceAtAwkwardChunkSizes) {
   Synth o;
   o.duration_s = 16.0;

@@ -94,6 +94,27 @@ TEST(AuditTrace, BurstsStampedWithOneTimeHaveTheirRateAndChangeIt) {
   EXPECT_EQ(one_rate[0].kind, "duplicate_time");
 }
 
+// The streamed sampling of a burst-stamped trace (analyze's "N samples, D s at R Hz, G gaps"):
+// its rate is its samples over its span and its one gap the real pause, as GyroTrace::sampling
+// says of it held whole (it said 0 Hz and a gap at every 1 ms step).
+TEST(TraceAuditor, BurstStampedSamplingAsTheTraceHeldWhole) {
+  std::vector<GyroSample> samples;
+  for (int k = 0; k < 30000; ++k) {
+    const int64_t stamp_ms = k / 3 + (k >= 15000 ? 500 : 0);
+    samples.push_back({stamp_ms * 1'000'000, Eigen::Vector3d::Zero()});
+  }
+  TraceAuditor auditor;
+  for (size_t i = 0; i < samples.size(); i += 1000) auditor.Add(samples.data() + i, 1000);
+  const TraceSampling sampling = auditor.Sampling();
+  const SamplingReport whole = GyroTrace(samples).sampling();
+  EXPECT_EQ(sampling.median_interval_ns, 0);
+  EXPECT_EQ(sampling.nominal_interval_ns, whole.nominal_interval_ns);
+  EXPECT_EQ(sampling.RateHz(), whole.RateHz());
+  EXPECT_NEAR(sampling.RateHz(), 29999 / 10.499, 0.01);  // 29,999 intervals over 10.499 s
+  EXPECT_EQ(sampling.gaps, 1u);
+  EXPECT_EQ(sampling.gaps, whole.gap_indices.size());
+}
+
 TEST(AuditTrace, JitterIsNotARateChange) {
   std::vector<GyroSample> samples = Regular(8000, 1'000'000);
   for (size_t k = 0; k < samples.size(); ++k)

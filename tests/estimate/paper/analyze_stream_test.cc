@@ -369,10 +369,10 @@ TEST(AnalyzeStream, PhotoFlightOfRealPhotosOnARealLogEqualsTheWholeLog) {
   SHUTTERLAB_REAL_DATA(photos, "incoming/dji_fc8482_clusterodm");
   SHUTTERLAB_REAL_DATA(path, "gyro/px4_ulog/sample.ulg");
   // The reader's own warnings; the trace audit's are added by each analysis.
-  FlightLogStream opened = OpenFlightLog(path);
-  FlightLog log = std::move(opened.log);
-  log.gyro = ReadAllSamples(opened.gyro.get());
-  for (LogWarning& w : opened.gyro->Warnings()) log.warnings.push_back(std::move(w));
+  FlightLogStream read = OpenFlightLog(path);
+  FlightLog log = std::move(read.log);
+  log.gyro = ReadAllSamples(read.gyro.get());
+  for (LogWarning& w : read.gyro->Warnings()) log.warnings.push_back(std::move(w));
   const PhotoSet set = ReadPhotoSet(photos);
   const TriggerFile triggers = ParseTriggerCsv(
       "image,t\ntest-photo-1.jpg,112.7\ntest-photo-2.jpg,117.614\ntest-photo-3.jpg,160.3\n",
@@ -384,8 +384,16 @@ TEST(AnalyzeStream, PhotoFlightOfRealPhotosOnARealLogEqualsTheWholeLog) {
   ASSERT_GT(whole.log.gaps, 0u);
   FlightLog metadata = log;
   metadata.gyro = GyroTrace();
+  // Each pass opens the file again, as the command does: the reader's own two passes each time.
+  AnalyzeLogSource source;
+  int opened = 0;
+  source.open = [&path, &opened] {
+    ++opened;
+    return OpenFlightLog(path);
+  };
   const PhotoFlightResult streamed =
-      AnalyzePhotoFlightStream(set, metadata, SourceOf(log, 509), &triggers, options);
+      AnalyzePhotoFlightStream(set, metadata, source, &triggers, options);
+  EXPECT_GE(opened, 2);
   ExpectSameResult(streamed.log, whole.log);
   EXPECT_EQ(streamed.camera_source, whole.camera_source);
   EXPECT_EQ(PhotoAnalysisReport(set, streamed.photos), PhotoAnalysisReport(set, whole.photos));
