@@ -248,14 +248,22 @@ class ScopedEnv {
   std::optional<std::string> old_;
 };
 
+// A folder of its own for pipes' copies ($TMPDIR names it for as long as this lives), in a
+// temporary folder that the test may use too.
+struct CopyFolder {
+  test::TempDir dir;
+  std::string folder = dir / "tmp";
+  bool made = std::filesystem::create_directories(folder);
+  ScopedEnv tmpdir{"TMPDIR", folder};
+};
+
 // The copy lives in $TMPDIR unlinked from the start: nothing is left there while the log is read,
 // nor after. A copy that cannot be written (a full disk; here a file-size limit) is refused in one
 // line naming the input and the folder.
 TEST(ReadFlightLog, APipesCopyLeavesNoFileAndAFailedCopySaysWhere) {
-  test::TempDir dir;
-  const std::string folder = dir / "tmp";
-  std::filesystem::create_directories(folder);
-  const ScopedEnv tmpdir("TMPDIR", folder);
+  const CopyFolder copies;
+  const test::TempDir& dir = copies.dir;
+  const std::string& folder = copies.folder;
   std::vector<GyroSample> samples;
   for (int i = 0; i < 20000; ++i)
     samples.push_back({static_cast<int64_t>(i + 1) * 500000, Eigen::Vector3d(0.01 * i, -0.25, 0)});
@@ -304,10 +312,9 @@ TEST(ReadFlightLog, APipesCopyLeavesNoFileAndAFailedCopySaysWhere) {
 // every pass then reads that copy, each the same log as the file gives, a text log and a binary one
 // alike, and nothing is left in $TMPDIR.
 TEST(OpenFlightLog, EveryPassOverALogOnAPipeReadsItsOneCopy) {
-  test::TempDir dir;
-  const std::string folder = dir / "tmp";
-  std::filesystem::create_directories(folder);
-  const ScopedEnv tmpdir("TMPDIR", folder);
+  const CopyFolder copies;
+  const test::TempDir& dir = copies.dir;
+  const std::string& folder = copies.folder;
   std::vector<GyroSample> samples;
   for (int i = 0; i < 6000; ++i) {
     samples.push_back({static_cast<int64_t>(i + 1) * 500000,
