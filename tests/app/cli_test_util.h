@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
@@ -55,6 +56,15 @@ inline CommandResult RunShutterlab(const std::string& args, const std::string& s
   std::remove(err_path);
   result.output = result.out + result.err;
   return result;
+}
+
+// r is a command refused, in one line naming /dev/stdin and the folder, because the log on its
+// standard input could not be copied to `folder` ($TMPDIR): proof that the pipe is copied.
+inline void ExpectPipeCopyRefused(const CommandResult& r, const std::string& folder) {
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.err.find("/dev/stdin: cannot copy it to a temporary file in " + folder),
+            std::string::npos)
+      << r.err;
 }
 
 // A gyro.csv of 12 s at 1 kHz: still for 5 s (a small bias), then turning about x and y.

@@ -215,12 +215,20 @@ size_t ResidentBytes() {
               : 0;
 }
 
+// A 16 MiB file at path of bytes patterned by multiplier (different tests, different bytes);
+// returns its content.
+std::string WritePatternedFile(const std::string& path, uint32_t multiplier) {
+  std::string content(16 << 20, '\0');
+  for (size_t i = 0; i < content.size(); ++i)
+    content[i] = static_cast<char>(static_cast<uint32_t>(i) * multiplier >> 24);
+  WriteFileAtomically(path, content);
+  return content;
+}
+
 TEST(MappedFile, AStreamedFileReadsWholeAndItsReleasedPagesLeaveResidentMemory) {
   test::TempDir dir;
   const std::string path = dir / "log.bin";
-  std::string content(16 << 20, '\0');
-  for (size_t i = 0; i < content.size(); ++i) content[i] = static_cast<char>(i * 2654435761u >> 24);
-  WriteFileAtomically(path, content);
+  const std::string content = WritePatternedFile(path, 2654435761u);
   MappedFile mapped(path, MappedFile::Paging::kStreamed);
   ASSERT_EQ(mapped.text().size(), content.size());
   const size_t before = ResidentBytes();
@@ -250,9 +258,7 @@ TEST(MappedFile, AStreamedFileReadsWholeAndItsReleasedPagesLeaveResidentMemory) 
 TEST(MappedFile, APopulatedSpanIsResidentBeforeItIsRead) {
   test::TempDir dir;
   const std::string path = dir / "log.bin";
-  std::string content(16 << 20, '\0');
-  for (size_t i = 0; i < content.size(); ++i) content[i] = static_cast<char>(i * 2246822519u >> 24);
-  WriteFileAtomically(path, content);
+  const std::string content = WritePatternedFile(path, 2246822519u);
   MappedFile mapped(path, MappedFile::Paging::kStreamed);
   const size_t before = ResidentBytes();
   if (!mapped.Populate(0, 8 << 20)) GTEST_SKIP() << "the kernel cannot populate (Linux < 5.14)";
@@ -266,9 +272,7 @@ TEST(MappedFile, ASecondPassHandsItsPagesBackToo) {
   // file twice front to back; the second pass stays as small as the first.
   test::TempDir dir;
   const std::string path = dir / "log.bin";
-  std::string content(16 << 20, '\0');
-  for (size_t i = 0; i < content.size(); ++i) content[i] = static_cast<char>(i * 40503u >> 8);
-  WriteFileAtomically(path, content);
+  const std::string content = WritePatternedFile(path, 40503u);
   MappedFile mapped(path, MappedFile::Paging::kStreamed);
   const size_t before = ResidentBytes();
   for (int pass = 0; pass < 2; ++pass) {
