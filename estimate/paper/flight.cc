@@ -517,10 +517,18 @@ struct FlightStream::Impl {
       const size_t m = std::min(k1, std::max(k0, windows[wi])) - k0;
       const int64_t window = window_ns[wi];
       uint32_t* ends = chunk_end[wi].data();
-      size_t end = e[wi] - k0;  // window k0 - 1 ended there, at or after k0
+      size_t end = e[wi] - k0;     // window k0 - 1 ended there, at or after k0
+      const size_t last = n - k0;  // no sample from here on
       for (size_t i = 0; i < m; ++i) {
         const int64_t t_end = t[i] + window;
-        while (end < n - k0 && t[end] < t_end) ++end;
+        // At a steady rate each window ends one sample after the one before: one test of that
+        // guess, rather than a search that steps twice and leaves its loop once a window.
+        const size_t guess = end + 1;
+        if (guess < last && t[end] < t_end && t[guess] >= t_end) {
+          end = guess;
+        } else {
+          while (end < last && t[end] < t_end) ++end;
+        }
         ends[i] = static_cast<uint32_t>(end);
       }
       e[wi] = end + k0;

@@ -6,10 +6,14 @@
 #include <cmath>
 #include <limits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace shutterlab {
 namespace {
 
-// Window starts per chunk: the block buffers (4 doubles per sample) then stay in L2.
+// Window starts per chunk: the block buffers (4 doubles per sample and signal) then stay in L2.
 constexpr size_t kChunkWindows = 16384;
 
 // Running sums are rebuilt exactly at least this often (or once per window length if longer), so
@@ -113,50 +117,114 @@ std::vector<double> SlidingStdDevBruteForce(const std::vector<double>& x,
 // of exactly B samples inside one block is that block, where suffix[s] = prefix[e-1] = its maximum,
 // so the same formula holds. This is streaming code with predictable branches, against the
 // data-dependent branches of the monotonic-deque algorithm. kAxes signals share one pass (the
-// window bookkeeping is the same for all), with their buffers interleaved per sample.
-// The block extrema of kAxes signals over their samples [base, base + n), blocks of `block`.
+// window bookkeeping is the same for all).
+
+// The maxima and minima of kAxes signals over a span of samples, as the kernel keeps them (one per
+// sample in the prefix and suffix buffers, one per block): Of one sample, Merge of two spans, Load
+// and Store as kDoubles doubles, and the ranges stored to out[axis][j]. The axes side by side:
+// their running extrema are independent chains, so that a sample costs about one max/min latency
+// for all axes rather than one per axis.
+template <int kAxes>
+struct Extrema {
+  static constexpr size_t kDoubles = 2 * kAxes;
+  double hi[kAxes], lo[kAxes];
+
+  static Extrema Of(const double* const* xs, size_t i) {
+    Extrema e;
+    for (int a = 0; a < kAxes; ++a) e.hi[a] = e.lo[a] = xs[a][i];
+    return e;
+  }
+  static Extrema Merge(const Extrema& p, const Extrema& q) {
+    Extrema e;
+    for (int a = 0; a < kAxes; ++a) {
+      e.hi[a] = std::max(p.hi[a], q.hi[a]);
+      e.lo[a] = std::min(p.lo[a], q.lo[a]);
+    }
+    return e;
+  }
+  static Extrema Load(const double* p) {
+    Extrema e;
+    for (int a = 0; a < kAxes; ++a) {
+      e.hi[a] = p[a];
+      e.lo[a] = p[kAxes + a];
+    }
+    return e;
+  }
+  void Store(double* p) const {
+    for (int a = 0; a < kAxes; ++a) {
+      p[a] = hi[a];
+      p[kAxes + a] = lo[a];
+    }
+  }
+  void StoreRanges(double* const* out, size_t j) const {
+    for (int a = 0; a < kAxes; ++a) out[a][j] = hi[a] - lo[a];
+  }
+};
+
+#if defined(__SSE2__)
+// Three axes with SSE2: the six extrema in three lane pairs, (x, y), (-x, -y) and (z, -z). The
+// maximum of negated values is their negated minimum, exactly, so one maxpd keeps two extrema, and
+// a range is max + max(-x) = max - min, bit for bit (a - b is defined as a + (-b)). Half the
+// instructions of the scalar form, and every buffer access 16 bytes (`flight`: 5 % faster).
+template <>
+struct Extrema<3> {
+  static constexpr size_t kDoubles = 6;
+  __m128d xy, neg_xy, z_neg_z;
+
+  static Extrema Of(const double* const* xs, size_t i) {
+    const __m128d xy = _mm_loadh_pd(_mm_load_sd(xs[0] + i), xs[1] + i);
+    const __m128d z = _mm_load1_pd(xs[2] + i);
+    return {xy, _mm_xor_pd(xy, _mm_set1_pd(-0.0)), _mm_xor_pd(z, _mm_set_pd(-0.0, 0.0))};
+  }
+  static Extrema Merge(const Extrema& p, const Extrema& q) {
+    return {_mm_max_pd(p.xy, q.xy), _mm_max_pd(p.neg_xy, q.neg_xy),
+            _mm_max_pd(p.z_neg_z, q.z_neg_z)};
+  }
+  static Extrema Load(const double* p) {
+    return {_mm_loadu_pd(p), _mm_loadu_pd(p + 2), _mm_loadu_pd(p + 4)};
+  }
+  void Store(double* p) const {
+    _mm_storeu_pd(p, xy);
+    _mm_storeu_pd(p + 2, neg_xy);
+    _mm_storeu_pd(p + 4, z_neg_z);
+  }
+  void StoreRanges(double* const* out, size_t j) const {
+    const __m128d range_xy = _mm_add_pd(xy, neg_xy);
+    _mm_storel_pd(out[0] + j, range_xy);
+    _mm_storeh_pd(out[1] + j, range_xy);
+    _mm_store_sd(out[2] + j, _mm_add_sd(z_neg_z, _mm_unpackhi_pd(z_neg_z, z_neg_z)));
+  }
+};
+#endif
+
+// The block extrema of kAxes signals over their samples [base, base + n), blocks of `block`:
+// prefix extrema in buffers[0], suffix in buffers[1], per block in buffers[2].
 template <int kAxes>
 void BuildBlocks(const double* const* x, size_t base, size_t n, size_t block,
                  std::vector<double>* buffers) {
+  using E = Extrema<kAxes>;
   const size_t blocks = (n + block - 1) / block;
-  for (int i = 0; i < 4; ++i) buffers[i].resize(n * kAxes);
-  buffers[4].resize(blocks * kAxes);
-  buffers[5].resize(blocks * kAxes);
-  double* pmax = buffers[0].data();
-  double* pmin = buffers[1].data();
-  double* smax = buffers[2].data();
-  double* smin = buffers[3].data();
-  double* bmax = buffers[4].data();
-  double* bmin = buffers[5].data();
+  buffers[0].resize(n * E::kDoubles);
+  buffers[1].resize(n * E::kDoubles);
+  buffers[2].resize(blocks * E::kDoubles);
+  double* prefix = buffers[0].data();
+  double* suffix = buffers[1].data();
+  double* block_extrema = buffers[2].data();
   const double* xs[kAxes];
   for (int a = 0; a < kAxes; ++a) xs[a] = x[a] + base;
-  // The axes side by side in each loop: their running extrema are independent chains, so that a
-  // sample costs about one max/min latency for all axes rather than one per axis.
   for (size_t b = 0; b < blocks; ++b) {
     const size_t lo = b * block;
     const size_t hi = std::min(n, lo + block);
-    double run_max[kAxes], run_min[kAxes];
-    for (int a = 0; a < kAxes; ++a) run_max[a] = run_min[a] = xs[a][lo];
+    E run = E::Of(xs, lo);
     for (size_t i = lo; i < hi; ++i) {
-      for (int a = 0; a < kAxes; ++a) {
-        run_max[a] = std::max(run_max[a], xs[a][i]);
-        run_min[a] = std::min(run_min[a], xs[a][i]);
-        pmax[i * kAxes + a] = run_max[a];
-        pmin[i * kAxes + a] = run_min[a];
-      }
+      run = E::Merge(run, E::Of(xs, i));
+      run.Store(prefix + i * E::kDoubles);
     }
-    for (int a = 0; a < kAxes; ++a) {
-      bmax[b * kAxes + a] = run_max[a];
-      bmin[b * kAxes + a] = run_min[a];
-      run_max[a] = run_min[a] = xs[a][hi - 1];
-    }
+    run.Store(block_extrema + b * E::kDoubles);
+    run = E::Of(xs, hi - 1);
     for (size_t i = hi; i-- > lo;) {
-      for (int a = 0; a < kAxes; ++a) {
-        run_max[a] = std::max(run_max[a], xs[a][i]);
-        run_min[a] = std::min(run_min[a], xs[a][i]);
-        smax[i * kAxes + a] = run_max[a];
-        smin[i * kAxes + a] = run_min[a];
-      }
+      run = E::Merge(run, E::Of(xs, i));
+      run.Store(suffix + i * E::kDoubles);
     }
   }
 }
@@ -166,15 +234,17 @@ void BuildBlocks(const double* const* x, size_t base, size_t n, size_t block,
 template <int kAxes>
 void QueryWindows(const double* const* x, const uint32_t* chunk_end, size_t k_begin, size_t k_end,
                   size_t block, const std::vector<double>* buffers, double* const* out) {
+  using E = Extrema<kAxes>;
   const size_t base = k_begin;
-  const double* pmax = buffers[0].data();
-  const double* pmin = buffers[1].data();
-  const double* smax = buffers[2].data();
-  const double* smin = buffers[3].data();
-  const double* bmax = buffers[4].data();
-  const double* bmin = buffers[5].data();
+  const double* prefix = buffers[0].data();
+  const double* suffix = buffers[1].data();
+  const double* block_extrema = buffers[2].data();
+  const double* xs[kAxes];
   double* outs[kAxes];  // locals: a store through one cannot then change another
-  for (int a = 0; a < kAxes; ++a) outs[a] = out[a];
+  for (int a = 0; a < kAxes; ++a) {
+    xs[a] = x[a] + base;
+    outs[a] = out[a];
+  }
   // Block index of the window's first sample, advanced incrementally (s grows by one per window).
   size_t first_block = 0, first_block_end = block;
   for (size_t k = k_begin; k < k_end; ++k) {
@@ -184,32 +254,17 @@ void QueryWindows(const double* const* x, const uint32_t* chunk_end, size_t k_be
       ++first_block;
       first_block_end += block;
     }
-    if (e - s < block) {
-      // Shorter than a block (only near logging gaps): scan directly.
-      for (int a = 0; a < kAxes; ++a) {
-        const double* xs = x[a] + base;
-        double hi = xs[s], lo = xs[s];
-        for (size_t i = s + 1; i < e; ++i) {
-          hi = std::max(hi, xs[i]);
-          lo = std::min(lo, xs[i]);
-        }
-        outs[a][k - k_begin] = hi - lo;
-      }
-      continue;
+    E window;
+    if (e - s < block) {  // shorter than a block (only near logging gaps): scan directly
+      window = E::Of(xs, s);
+      for (size_t i = s + 1; i < e; ++i) window = E::Merge(window, E::Of(xs, i));
+    } else {
+      window = E::Merge(E::Load(suffix + s * E::kDoubles), E::Load(prefix + (e - 1) * E::kDoubles));
+      // Whole blocks strictly between the first and the last block, if any.
+      for (size_t b = first_block + 1; (b + 1) * block <= e - 1; ++b)
+        window = E::Merge(window, E::Load(block_extrema + b * E::kDoubles));
     }
-    double hi[kAxes], lo[kAxes];
-    for (int a = 0; a < kAxes; ++a) {
-      hi[a] = std::max(smax[s * kAxes + a], pmax[(e - 1) * kAxes + a]);
-      lo[a] = std::min(smin[s * kAxes + a], pmin[(e - 1) * kAxes + a]);
-    }
-    // Whole blocks strictly between the first and the last block, if any.
-    for (size_t b = first_block + 1; (b + 1) * block <= e - 1; ++b) {
-      for (int a = 0; a < kAxes; ++a) {
-        hi[a] = std::max(hi[a], bmax[b * kAxes + a]);
-        lo[a] = std::min(lo[a], bmin[b * kAxes + a]);
-      }
-    }
-    for (int a = 0; a < kAxes; ++a) outs[a][k - k_begin] = hi[a] - lo[a];
+    window.StoreRanges(outs, k - k_begin);
   }
 }
 

@@ -77,8 +77,8 @@ class SlidingRangeKernel {
                 const std::vector<WindowSet>& sets);
 
  private:
-  // prefix max/min, suffix max/min (per sample), block max/min (per block).
-  std::vector<double> buffers_[6];
+  // The extrema of each sample's prefix and suffix in its block, and of each block.
+  std::vector<double> buffers_[3];
 };
 
 }  // namespace shutterlab

@@ -285,6 +285,69 @@ TEST(Flight, PerAxisAloneMatchesBruteForceInChunksOfAnySize) {
   }
 }
 
+// The same twin on a clock that jitters by +-20 %, repeats a time now and then and pauses for 50 ms
+// (the paper's logger writing): window ends that move by 0 to 50 samples from one window to the
+// next, and windows across a pause shorter than the range kernel's block.
+TEST(Flight, PerAxisMatchesBruteForceOnAnIrregularClock) {
+  std::vector<GyroSample> samples = RandomMotionTrace(9000, 23).samples();
+  std::mt19937_64 rng(23);
+  std::uniform_int_distribution<int64_t> jitter(-kPeriodNs / 5, kPeriodNs / 5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const size_t still = 1000;  // kept regular: the bias segment, sample 1000 the first analysed
+  int64_t t_ns = samples[still].t_ns;
+  size_t repeats = 0, pauses = 0;
+  for (size_t i = still + 1; i < samples.size(); ++i) {
+    const double r = u(rng);
+    const int64_t step_ns = r < 0.005 ? 0 : r > 0.998 ? 50 * kPeriodNs : kPeriodNs + jitter(rng);
+    repeats += step_ns == 0;
+    pauses += step_ns == 50 * kPeriodNs;
+    samples[i].t_ns = t_ns += step_ns;
+  }
+  ASSERT_GT(repeats, 10u);
+  ASSERT_GT(pauses, 5u);
+  const GyroTrace trace(std::move(samples));
+  FlightOptions options = Options();
+  options.vector_criterion = false;
+  options.series = true;
+  FlightStream stream(options);
+  for (size_t i = 0; i < trace.size();) {
+    const size_t n = std::min<size_t>(trace.size() - i, 1 + rng() % 3000);
+    stream.Add(trace.samples().data() + i, n);
+    i += n;
+  }
+  const FlightResult r = stream.Finish();
+
+  const auto angles = IntegratePerAxis(trace, Eigen::Vector3d::Zero(), still);
+  for (size_t wi = 0; wi < options.windows_s.size(); ++wi) {
+    const auto ends = WindowEndsByDuration(angles.t_ns, SecondsToNs(options.windows_s[wi]));
+    std::array<std::vector<double>, 3> range;
+    for (int a = 0; a < 3; ++a) range[a] = SlidingRangeBruteForce(angles.angle_rad[a], ends);
+    for (size_t l = 0; l < options.limits_m.size(); ++l) {
+      const double th = ThresholdRad(options.limits_m[l]);
+      size_t any = 0;
+      std::array<size_t, 3> per_axis{};
+      for (size_t k = 0; k < ends.size(); ++k) {
+        any += std::max({range[0][k], range[1][k], range[2][k]}) > th;
+        for (int a = 0; a < 3; ++a) per_axis[a] += range[a][k] > th;
+      }
+      const size_t row = l * options.windows_s.size() + wi;
+      EXPECT_EQ(r.rows[row].windows, ends.size());
+      EXPECT_EQ(r.rows[row].flagged, any) << "limit " << l << " window " << wi;
+      EXPECT_EQ(r.rows[row].flagged_axis, per_axis) << "limit " << l << " window " << wi;
+      EXPECT_GT(any, 0u);
+      EXPECT_LT(any, ends.size());
+    }
+    if (wi == 0) {
+      ASSERT_EQ(r.series.t_ns,
+                std::vector<int64_t>(angles.t_ns.begin(), angles.t_ns.begin() + ends.size()));
+      for (int a = 0; a < 3; ++a) {
+        for (size_t k = 0; k < ends.size(); ++k)
+          ASSERT_EQ(r.series.range_arcsec[a][k], range[a][k] * kArcsecPerRad) << a << " " << k;
+      }
+    }
+  }
+}
+
 TEST(Flight, BadInputIsRejected) {
   const auto trace = MakeTrace(0.5, [](size_t) { return Eigen::Vector3d::Zero(); });
   FlightOptions options = Options();
