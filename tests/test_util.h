@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -23,6 +24,25 @@ inline void ExpectRotationNear(const Eigen::Quaterniond& a, const Eigen::Quatern
                                double tol_rad) {
   EXPECT_LE(AngularDistance(a, b), tol_rad)
       << "a = " << a.coeffs().transpose() << "  b = " << b.coeffs().transpose();
+}
+
+// n sample times at 1 kHz as the paper's logger writes them: +-20 % jitter, one time in 200
+// repeated, one interval in 500 a 50 ms pause (the logger writing); from 1 s on, ns.
+inline std::vector<int64_t> IrregularTimes(size_t n, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<int64_t> jitter(-200000, 200000);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<int64_t> t(n);
+  int64_t base = 1000000000;
+  for (size_t i = 0; i < n; ++i) {
+    const double r = u(rng);
+    if (r < 0.002) base += 50000000;       // 50 ms logging gap
+    int64_t step = 1000000 + jitter(rng);  // 1 kHz +- 20 %
+    if (r > 0.995) step = 0;               // duplicate timestamp
+    base += step;
+    t[i] = base;
+  }
+  return t;
 }
 
 // True when any warning's "kind: message" line contains text.

@@ -517,17 +517,21 @@ struct FlightStream::Impl {
       const size_t m = std::min(k1, std::max(k0, windows[wi])) - k0;
       const int64_t window = window_ns[wi];
       uint32_t* ends = chunk_end[wi].data();
-      size_t end = e[wi] - k0;     // window k0 - 1 ended there, at or after k0
-      const size_t last = n - k0;  // no sample from here on
+      size_t end = e[wi] - k0;  // window k0 - 1 ended there, at or after k0
+      // The search of WindowEndsByDuration, kept apart from it: that one is the tests' reference.
+      const size_t samples_end = n - k0;
       for (size_t i = 0; i < m; ++i) {
         const int64_t t_end = t[i] + window;
-        // At a steady rate each window ends one sample after the one before: one test of that
-        // guess, rather than a search that steps twice and leaves its loop once a window.
+        // At a steady rate each window ends one sample after the one before. Testing that guess
+        // is cheaper than the search, whose loop tests twice a window and mispredicts its exit:
+        // t[end] < t_end says the end moves at all (not at a repeated time, nor where windows
+        // before a pause share one end), t[guess] >= t_end that it moves by one; guess <
+        // samples_end only bounds the reads (a swept window ends before the last sample).
         const size_t guess = end + 1;
-        if (guess < last && t[end] < t_end && t[guess] >= t_end) {
+        if (guess < samples_end && t[end] < t_end && t[guess] >= t_end) {
           end = guess;
         } else {
-          while (end < last && t[end] < t_end) ++end;
+          while (end < samples_end && t[end] < t_end) ++end;
         }
         ends[i] = static_cast<uint32_t>(end);
       }

@@ -6,7 +6,10 @@
 #include <cmath>
 #include <limits>
 
-#if defined(__SSE2__)
+// The three-axis range kernel in SSE2 registers (Extrema<3> below); SHUTTERLAB_PORTABLE_EXTREMA
+// builds the portable form instead, what ARM runs, so that a test target checks it on x86 too.
+#if defined(__SSE2__) && !defined(SHUTTERLAB_PORTABLE_EXTREMA)
+#define SHUTTERLAB_SSE2_EXTREMA 1
 #include <emmintrin.h>
 #endif
 
@@ -109,16 +112,6 @@ std::vector<double> SlidingStdDevBruteForce(const std::vector<double>& x,
   return out;
 }
 
-// Van Herk (1992) / Gil & Werman (1993): split the samples into blocks of B; per block keep prefix
-// extrema (block start .. i) and suffix extrema (i .. block end). A window of at least B samples
-// starting in block bs and ending in block bl > bs is then
-//   max(suffix[s], block maxima bs+1 .. bl-1, prefix[e-1]),
-// and with B near the window length there are at most one or two whole blocks in between. A window
-// of exactly B samples inside one block is that block, where suffix[s] = prefix[e-1] = its maximum,
-// so the same formula holds. This is streaming code with predictable branches, against the
-// data-dependent branches of the monotonic-deque algorithm. kAxes signals share one pass (the
-// window bookkeeping is the same for all).
-
 // The maxima and minima of kAxes signals over a span of samples, as the kernel keeps them (one per
 // sample in the prefix and suffix buffers, one per block): Of one sample, Merge of two spans, Load
 // and Store as kDoubles doubles, and the ranges stored to out[axis][j]. The axes side by side:
@@ -161,20 +154,22 @@ struct Extrema {
   }
 };
 
-#if defined(__SSE2__)
+#if defined(SHUTTERLAB_SSE2_EXTREMA)
 // Three axes with SSE2: the six extrema in three lane pairs, (x, y), (-x, -y) and (z, -z). The
 // maximum of negated values is their negated minimum, exactly, so one maxpd keeps two extrema, and
 // a range is max + max(-x) = max - min, bit for bit (a - b is defined as a + (-b)). Half the
-// instructions of the scalar form, and every buffer access 16 bytes (`flight`: 5 % faster).
+// instructions of the scalar form, and every buffer access 16 bytes (`flight` on a 30 M-line
+// gyro.csv: docs/speed.md).
 template <>
 struct Extrema<3> {
   static constexpr size_t kDoubles = 6;
   __m128d xy, neg_xy, z_neg_z;
 
+  // Lanes are (low, high): _mm_setr_pd's order.
   static Extrema Of(const double* const* xs, size_t i) {
-    const __m128d xy = _mm_loadh_pd(_mm_load_sd(xs[0] + i), xs[1] + i);
+    const __m128d pair = _mm_loadh_pd(_mm_load_sd(xs[0] + i), xs[1] + i);
     const __m128d z = _mm_load1_pd(xs[2] + i);
-    return {xy, _mm_xor_pd(xy, _mm_set1_pd(-0.0)), _mm_xor_pd(z, _mm_set_pd(-0.0, 0.0))};
+    return {pair, _mm_xor_pd(pair, _mm_set1_pd(-0.0)), _mm_xor_pd(z, _mm_setr_pd(0.0, -0.0))};
   }
   static Extrema Merge(const Extrema& p, const Extrema& q) {
     return {_mm_max_pd(p.xy, q.xy), _mm_max_pd(p.neg_xy, q.neg_xy),
@@ -192,11 +187,21 @@ struct Extrema<3> {
     const __m128d range_xy = _mm_add_pd(xy, neg_xy);
     _mm_storel_pd(out[0] + j, range_xy);
     _mm_storeh_pd(out[1] + j, range_xy);
-    _mm_store_sd(out[2] + j, _mm_add_sd(z_neg_z, _mm_unpackhi_pd(z_neg_z, z_neg_z)));
+    _mm_storel_pd(out[2] + j, _mm_add_sd(z_neg_z, _mm_unpackhi_pd(z_neg_z, z_neg_z)));
   }
 };
 #endif
 
+// Van Herk (1992) / Gil & Werman (1993): split the samples into blocks of B; per block keep prefix
+// extrema (block start .. i) and suffix extrema (i .. block end). A window of at least B samples
+// starting in block bs and ending in block bl > bs is then
+//   max(suffix[s], block maxima bs+1 .. bl-1, prefix[e-1]),
+// and with B near the window length there are at most one or two whole blocks in between. A window
+// of exactly B samples inside one block is that block, where suffix[s] = prefix[e-1] = its maximum,
+// so the same formula holds. This is streaming code with predictable branches, against the
+// data-dependent branches of the monotonic-deque algorithm. kAxes signals share one pass (the
+// window bookkeeping is the same for all).
+//
 // The block extrema of kAxes signals over their samples [base, base + n), blocks of `block`:
 // prefix extrema in buffers[0], suffix in buffers[1], per block in buffers[2].
 template <int kAxes>
@@ -291,7 +296,7 @@ void SlidingRangeKernel::Run3(const std::array<const double*, 3>& x, const uint3
 void SlidingRangeKernel::Run3Sets(const std::array<const double*, 3>& x, size_t k_begin,
                                   const std::vector<WindowSet>& sets) {
   // One block for every set: the shortest windows' (a longer window spans more whole blocks,
-  // which costs one max and min each); the samples: as far as the farthest window reaches.
+  // which costs one Merge each); the samples: as far as the farthest window reaches.
   size_t n = 0, block = std::numeric_limits<size_t>::max();
   for (const WindowSet& set : sets) {
     if (set.count == 0) continue;

@@ -4,8 +4,7 @@
 // A window is given by its first sample k and its end e_k (one past its last sample):
 //  - fixed count N: e_k = k + N, windows k = 0 .. size-N (the paper's 120-sample windows);
 //  - fixed duration W: e_k = first index with t >= t_k + W (docs/FORMATS.md `flight`); windows
-//  whose
-//    span would run past the last sample are left out.
+//    whose span would run past the last sample are left out.
 //
 // Window ends must be non-decreasing with k < e_k <= size: that is what both constructions give,
 // and it is what lets every fast function here run in O(N) total.
@@ -18,9 +17,9 @@
 namespace shutterlab {
 
 // Window ends for windows of duration window_ns over sample times t_ns (non-decreasing): one entry
-// per window start k whose window [t_k, t_k + window_ns) fits inside the trace, i.e. t_k +
-// window_ns
-// <= t_last. Entry k is e_k (exclusive end index). Empty when window_ns exceeds the trace's span.
+// per window start k whose window [t_k, t_k + window_ns) fits inside the trace, i.e.
+// t_k + window_ns <= t_last. Entry k is e_k (exclusive end index). Empty when window_ns exceeds the
+// trace's span.
 std::vector<uint32_t> WindowEndsByDuration(const std::vector<int64_t>& t_ns, int64_t window_ns);
 
 // Window ends for windows of `count` consecutive samples over `size` samples: e_k = k + count for
@@ -33,9 +32,10 @@ std::vector<double> SlidingRangeBruteForce(const std::vector<double>& x,
 std::vector<double> SlidingStdDevBruteForce(const std::vector<double>& x,
                                             const std::vector<uint32_t>& window_end);
 
-// O(N) sliding range, bit-identical to SlidingRangeBruteForce (max and min are exact). Van Herk /
-// Gil-Werman block prefix/suffix extrema, processed in chunks so the work memory is
-// O(chunk + longest window). Throws std::invalid_argument on malformed window ends.
+// O(N) sliding range, equal (==) to SlidingRangeBruteForce: max and min are exact (only a window
+// of zeros alone may differ in the sign of its zero range). Van Herk / Gil-Werman block
+// prefix/suffix extrema, processed in chunks so the work memory is O(chunk + longest window).
+// Throws std::invalid_argument on malformed window ends.
 std::vector<double> SlidingRange(const std::vector<double>& x,
                                  const std::vector<uint32_t>& window_end);
 // O(N) sliding population standard deviation (divide by n), by running sums about a local anchor
@@ -61,7 +61,7 @@ class SlidingRangeKernel {
   // k < e_k, and x valid up to the last e_k.
   void Run(const double* x, const uint32_t* chunk_end, size_t k_begin, size_t k_end, double* out);
   // The same for three signals with the same windows (the three gyro axes) in one pass: the window
-  // bookkeeping is shared, ~1.5x faster than three Run calls.
+  // bookkeeping is shared, and on x86 the six extrema of a sample are kept in three SSE2 registers.
   void Run3(const std::array<const double*, 3>& x, const uint32_t* chunk_end, size_t k_begin,
             size_t k_end, const std::array<double*, 3>& out);
   // Windows of several durations starting at the same samples k_begin, k_begin + 1, ...: their

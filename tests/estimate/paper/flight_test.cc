@@ -180,23 +180,58 @@ GyroTrace RandomMotionTrace(size_t motion_samples, uint64_t seed) {
   return MakeTrace(motion_samples * kDtS, [&](size_t i) { return rates[i]; });
 }
 
-// Brute-force twin of everything on a random three-axis motion: per-axis counts against
-// SlidingRangeBruteForce of IntegratePerAxis; vector counts and series against all-pairs
-// AngularDistance of OrientationTrace.
+// The per-axis results of r (FlightResult of trace with options, the samples from first_analysed
+// on analysed, bias 0) against their brute-force twin, SlidingRangeBruteForce of
+// IntegratePerAxis over WindowEndsByDuration: each row's windows and counts, any axis and per
+// axis, and the series of windows_s[0], window by window.
+void ExpectPerAxisMatchesBruteForce(const FlightResult& r, const GyroTrace& trace,
+                                    const FlightOptions& options, size_t first_analysed) {
+  const auto angles = IntegratePerAxis(trace, Eigen::Vector3d::Zero(), first_analysed);
+  for (size_t wi = 0; wi < options.windows_s.size(); ++wi) {
+    const auto ends = WindowEndsByDuration(angles.t_ns, SecondsToNs(options.windows_s[wi]));
+    std::array<std::vector<double>, 3> range;
+    for (int a = 0; a < 3; ++a) range[a] = SlidingRangeBruteForce(angles.angle_rad[a], ends);
+    for (size_t l = 0; l < options.limits_m.size(); ++l) {
+      const double th = ThresholdRad(options.limits_m[l]);
+      size_t any = 0;
+      std::array<size_t, 3> per_axis{};
+      for (size_t k = 0; k < ends.size(); ++k) {
+        any += std::max({range[0][k], range[1][k], range[2][k]}) > th;
+        for (int a = 0; a < 3; ++a) per_axis[a] += range[a][k] > th;
+      }
+      const FlightRow& row = r.rows[l * options.windows_s.size() + wi];
+      EXPECT_EQ(row.windows, ends.size());
+      EXPECT_EQ(row.flagged, any) << "limit " << l << " window " << wi;
+      EXPECT_EQ(row.flagged_axis, per_axis) << "limit " << l << " window " << wi;
+      EXPECT_GT(any, 0u) << "the motion does not exercise the thresholds";
+      EXPECT_LT(any, ends.size()) << "the motion does not exercise the thresholds";
+    }
+    if (wi == 0 && options.series) {
+      ASSERT_EQ(r.series.t_ns,
+                std::vector<int64_t>(angles.t_ns.begin(), angles.t_ns.begin() + ends.size()));
+      for (int a = 0; a < 3; ++a) {
+        for (size_t k = 0; k < ends.size(); ++k)
+          ASSERT_EQ(r.series.range_arcsec[a][k], range[a][k] * kArcsecPerRad) << a << " " << k;
+      }
+    }
+  }
+}
+
+// Brute-force twin of everything on a random three-axis motion: per-axis counts and series as
+// above; vector counts and series against all-pairs AngularDistance of OrientationTrace.
 TEST(Flight, MatchesBruteForceOnRandomMotion) {
   const auto trace = RandomMotionTrace(2500, 42);
   FlightOptions options = Options();
   options.series = true;
   const FlightResult r = Flight(trace, options);
+  ExpectPerAxisMatchesBruteForce(r, trace, options, 1000);
 
-  const auto angles = IntegratePerAxis(trace, Eigen::Vector3d::Zero(), 1000);
+  const auto t_ns = IntegratePerAxis(trace, Eigen::Vector3d::Zero(), 1000).t_ns;
   std::vector<GyroSample> motion(trace.samples().begin() + 1000, trace.samples().end());
   const OrientationTrace orientation{GyroTrace(motion)};
   const auto& q = orientation.world_from_body();
   for (size_t wi = 0; wi < options.windows_s.size(); ++wi) {
-    const auto ends = WindowEndsByDuration(angles.t_ns, SecondsToNs(options.windows_s[wi]));
-    std::array<std::vector<double>, 3> range;
-    for (int a = 0; a < 3; ++a) range[a] = SlidingRangeBruteForce(angles.angle_rad[a], ends);
+    const auto ends = WindowEndsByDuration(t_ns, SecondsToNs(options.windows_s[wi]));
     std::vector<double> vector(ends.size(), 0.0);
     for (size_t k = 0; k < ends.size(); ++k) {
       for (size_t i = k; i < ends[k]; ++i) {
@@ -206,145 +241,76 @@ TEST(Flight, MatchesBruteForceOnRandomMotion) {
     }
     for (size_t l = 0; l < options.limits_m.size(); ++l) {
       const double th = ThresholdRad(options.limits_m[l]);
-      size_t axis = 0, vec = 0;
-      for (size_t k = 0; k < ends.size(); ++k) {
-        axis += std::max({range[0][k], range[1][k], range[2][k]}) > th;
-        vec += vector[k] > th;
-      }
+      size_t vec = 0;
+      for (size_t k = 0; k < ends.size(); ++k) vec += vector[k] > th;
       const FlightRow& row = r.rows[l * options.windows_s.size() + wi];
-      EXPECT_EQ(row.windows, ends.size());
-      EXPECT_EQ(row.flagged, axis) << "limit " << l << " window " << wi;
       EXPECT_EQ(row.flagged_vector, vec) << "limit " << l << " window " << wi;
       EXPECT_GT(vec, 0u);
       EXPECT_LT(vec, ends.size());
     }
     if (wi == 0) {
-      ASSERT_EQ(r.series.t_ns.size(), ends.size());
-      for (size_t k = 0; k < ends.size(); ++k) {
+      ASSERT_EQ(r.series.vector_arcsec.size(), ends.size());
+      for (size_t k = 0; k < ends.size(); ++k)
         ASSERT_NEAR(r.series.vector_arcsec[k], vector[k] * kArcsecPerRad, 1e-5) << k;
-        for (int a = 0; a < 3; ++a)
-          ASSERT_EQ(r.series.range_arcsec[a][k], range[a][k] * kArcsecPerRad);
-      }
     }
   }
 }
 
-// Brute-force twin of the per-axis criterion alone (no orientations: its own integration loop),
-// fed in chunks of random sizes (1 sample to several analysis chunks) so that every edge of the
-// integration, the window ends and the two-at-a-time counts is crossed: counts per axis and any
-// axis against SlidingRangeBruteForce of IntegratePerAxis, and equal to the vector run's per-axis
-// counts.
-TEST(Flight, PerAxisAloneMatchesBruteForceInChunksOfAnySize) {
-  const auto trace = RandomMotionTrace(9000, 11);
-  FlightOptions options = Options();
-  options.vector_criterion = false;
-  options.series = true;
-  std::mt19937_64 rng(11);
+// FlightStream fed trace in chunks of random sizes, 1 sample to several analysis chunks (half of
+// them under 10 samples), so that every edge of the integration, the window ends and the
+// two-at-a-time counts is crossed.
+FlightResult StreamInRandomChunks(const GyroTrace& trace, const FlightOptions& options,
+                                  uint64_t seed) {
+  std::mt19937_64 rng(seed);
   FlightStream stream(options);
   for (size_t i = 0; i < trace.size();) {
     const size_t n = std::min<size_t>(trace.size() - i, 1 + rng() % (rng() % 2 ? 9 : 5000));
     stream.Add(trace.samples().data() + i, n);
     i += n;
   }
-  const FlightResult r = stream.Finish();
+  return stream.Finish();
+}
+
+// Brute-force twin of the per-axis criterion alone (no orientations: its own integration loop),
+// streamed in chunks of any size; its counts equal the vector run's per-axis counts too.
+TEST(Flight, PerAxisAloneMatchesBruteForceInChunksOfAnySize) {
+  const auto trace = RandomMotionTrace(9000, 11);
+  FlightOptions options = Options();
+  options.vector_criterion = false;
+  options.series = true;
+  const FlightResult r = StreamInRandomChunks(trace, options, 11);
+  ExpectPerAxisMatchesBruteForce(r, trace, options, 1000);
   FlightOptions with_vector = options;
   with_vector.vector_criterion = true;
   with_vector.series = false;
   const FlightResult v = Flight(trace, with_vector);
-
-  const auto angles = IntegratePerAxis(trace, Eigen::Vector3d::Zero(), 1000);
-  for (size_t wi = 0; wi < options.windows_s.size(); ++wi) {
-    const auto ends = WindowEndsByDuration(angles.t_ns, SecondsToNs(options.windows_s[wi]));
-    std::array<std::vector<double>, 3> range;
-    for (int a = 0; a < 3; ++a) range[a] = SlidingRangeBruteForce(angles.angle_rad[a], ends);
-    for (size_t l = 0; l < options.limits_m.size(); ++l) {
-      const double th = ThresholdRad(options.limits_m[l]);
-      size_t any = 0;
-      std::array<size_t, 3> per_axis{};
-      for (size_t k = 0; k < ends.size(); ++k) {
-        any += std::max({range[0][k], range[1][k], range[2][k]}) > th;
-        for (int a = 0; a < 3; ++a) per_axis[a] += range[a][k] > th;
-      }
-      const size_t row = l * options.windows_s.size() + wi;
-      EXPECT_EQ(r.rows[row].windows, ends.size());
-      EXPECT_EQ(r.rows[row].flagged, any) << "limit " << l << " window " << wi;
-      EXPECT_EQ(r.rows[row].flagged_axis, per_axis) << "limit " << l << " window " << wi;
-      EXPECT_GT(any, 0u);
-      EXPECT_LT(any, ends.size());
-      EXPECT_EQ(v.rows[row].flagged, any);
-      EXPECT_EQ(v.rows[row].flagged_axis, per_axis);
-    }
-    if (wi == 0) {
-      ASSERT_EQ(r.series.t_ns,
-                std::vector<int64_t>(angles.t_ns.begin(), angles.t_ns.begin() + ends.size()));
-      for (int a = 0; a < 3; ++a) {
-        for (size_t k = 0; k < ends.size(); ++k)
-          ASSERT_EQ(r.series.range_arcsec[a][k], range[a][k] * kArcsecPerRad) << a << " " << k;
-      }
-    }
+  for (size_t row = 0; row < r.rows.size(); ++row) {
+    EXPECT_EQ(v.rows[row].flagged, r.rows[row].flagged) << "row " << row;
+    EXPECT_EQ(v.rows[row].flagged_axis, r.rows[row].flagged_axis) << "row " << row;
   }
 }
 
-// The same twin on a clock that jitters by +-20 %, repeats a time now and then and pauses for 50 ms
-// (the paper's logger writing): window ends that move by 0 to 50 samples from one window to the
-// next, and windows across a pause shorter than the range kernel's block.
+// The same twin on the clock of the paper's logger (test::IrregularTimes: +-20 % jitter, repeated
+// times, 50 ms pauses) from the end of the still second: window ends that move by 0 to 50 samples
+// from one window to the next, and windows across a pause shorter than the range kernel's block.
+// Run twice, so that the series (of windows_s[0]) checks both durations' ends window by window.
 TEST(Flight, PerAxisMatchesBruteForceOnAnIrregularClock) {
   std::vector<GyroSample> samples = RandomMotionTrace(9000, 23).samples();
-  std::mt19937_64 rng(23);
-  std::uniform_int_distribution<int64_t> jitter(-kPeriodNs / 5, kPeriodNs / 5);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
   const size_t still = 1000;  // kept regular: the bias segment, sample 1000 the first analysed
-  int64_t t_ns = samples[still].t_ns;
-  size_t repeats = 0, pauses = 0;
-  for (size_t i = still + 1; i < samples.size(); ++i) {
-    const double r = u(rng);
-    const int64_t step_ns = r < 0.005 ? 0 : r > 0.998 ? 50 * kPeriodNs : kPeriodNs + jitter(rng);
-    repeats += step_ns == 0;
-    pauses += step_ns == 50 * kPeriodNs;
-    samples[i].t_ns = t_ns += step_ns;
-  }
-  ASSERT_GT(repeats, 10u);
-  ASSERT_GT(pauses, 5u);
+  const std::vector<int64_t> times = test::IrregularTimes(samples.size() - still, 23);
+  for (size_t i = still; i < samples.size(); ++i)
+    samples[i].t_ns = samples[still].t_ns + (times[i - still] - times[0]);
   const GyroTrace trace(std::move(samples));
-  FlightOptions options = Options();
-  options.vector_criterion = false;
-  options.series = true;
-  FlightStream stream(options);
-  for (size_t i = 0; i < trace.size();) {
-    const size_t n = std::min<size_t>(trace.size() - i, 1 + rng() % 3000);
-    stream.Add(trace.samples().data() + i, n);
-    i += n;
-  }
-  const FlightResult r = stream.Finish();
-
-  const auto angles = IntegratePerAxis(trace, Eigen::Vector3d::Zero(), still);
-  for (size_t wi = 0; wi < options.windows_s.size(); ++wi) {
-    const auto ends = WindowEndsByDuration(angles.t_ns, SecondsToNs(options.windows_s[wi]));
-    std::array<std::vector<double>, 3> range;
-    for (int a = 0; a < 3; ++a) range[a] = SlidingRangeBruteForce(angles.angle_rad[a], ends);
-    for (size_t l = 0; l < options.limits_m.size(); ++l) {
-      const double th = ThresholdRad(options.limits_m[l]);
-      size_t any = 0;
-      std::array<size_t, 3> per_axis{};
-      for (size_t k = 0; k < ends.size(); ++k) {
-        any += std::max({range[0][k], range[1][k], range[2][k]}) > th;
-        for (int a = 0; a < 3; ++a) per_axis[a] += range[a][k] > th;
-      }
-      const size_t row = l * options.windows_s.size() + wi;
-      EXPECT_EQ(r.rows[row].windows, ends.size());
-      EXPECT_EQ(r.rows[row].flagged, any) << "limit " << l << " window " << wi;
-      EXPECT_EQ(r.rows[row].flagged_axis, per_axis) << "limit " << l << " window " << wi;
-      EXPECT_GT(any, 0u);
-      EXPECT_LT(any, ends.size());
-    }
-    if (wi == 0) {
-      ASSERT_EQ(r.series.t_ns,
-                std::vector<int64_t>(angles.t_ns.begin(), angles.t_ns.begin() + ends.size()));
-      for (int a = 0; a < 3; ++a) {
-        for (size_t k = 0; k < ends.size(); ++k)
-          ASSERT_EQ(r.series.range_arcsec[a][k], range[a][k] * kArcsecPerRad) << a << " " << k;
-      }
-    }
+  ASSERT_GT(trace.sampling().duplicate_timestamps, 10u);
+  ASSERT_GT(trace.sampling().gap_indices.size(), 5u);
+  for (const std::vector<double>& windows_s :
+       {std::vector<double>{0.010, 0.020}, std::vector<double>{0.020, 0.010}}) {
+    FlightOptions options = Options();
+    options.windows_s = windows_s;
+    options.vector_criterion = false;
+    options.series = true;
+    SCOPED_TRACE("windows " + std::to_string(windows_s[0]) + " s first");
+    ExpectPerAxisMatchesBruteForce(StreamInRandomChunks(trace, options, 23), trace, options, still);
   }
 }
 

@@ -1,5 +1,7 @@
 #include "estimate/paper/window_stats.h"
 
+#include "tests/test_util.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -26,24 +28,6 @@ std::vector<double> RandomSignal(size_t n, uint64_t seed, double scale = 1.0) {
   return x;
 }
 
-// Times at a nominal period with jitter, duplicates and logging gaps, like the paper's logger.
-std::vector<int64_t> IrregularTimes(size_t n, uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_int_distribution<int64_t> jitter(-200000, 200000);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<int64_t> t(n);
-  int64_t base = 1000000000;
-  for (size_t i = 0; i < n; ++i) {
-    const double r = u(rng);
-    if (r < 0.002) base += 50000000;       // 50 ms logging gap
-    int64_t step = 1000000 + jitter(rng);  // 1 kHz +- 20 %
-    if (r > 0.995) step = 0;               // duplicate timestamp
-    base += step;
-    t[i] = base;
-  }
-  return t;
-}
-
 void ExpectStdDevNear(const std::vector<double>& fast, const std::vector<double>& brute) {
   ASSERT_EQ(fast.size(), brute.size());
   for (size_t k = 0; k < fast.size(); ++k) {
@@ -63,7 +47,7 @@ TEST(WindowStats, RangeEqualsBruteForceOnRandomDataFixedCount) {
 
 TEST(WindowStats, RangeEqualsBruteForceWithJitterGapsAndDuplicates) {
   const size_t n = 60000;
-  const auto t = IrregularTimes(n, 2);
+  const auto t = test::IrregularTimes(n, 2);
   const auto x = RandomSignal(n, 3);
   for (int64_t window_ns : {500000, 1000000, 10000000, 20000000, 120000000}) {
     const auto ends = WindowEndsByDuration(t, window_ns);
@@ -135,7 +119,7 @@ TEST(WindowStats, StdDevMatchesBruteForceOnRandomData) {
     const auto ends = WindowEndsByCount(x.size(), count);
     ExpectStdDevNear(SlidingStdDev(x, ends), SlidingStdDevBruteForce(x, ends));
   }
-  const auto t = IrregularTimes(x.size(), 9);
+  const auto t = test::IrregularTimes(x.size(), 9);
   const auto ends = WindowEndsByDuration(t, 20000000);
   ExpectStdDevNear(SlidingStdDev(x, ends), SlidingStdDevBruteForce(x, ends));
 }
@@ -179,7 +163,7 @@ TEST(WindowStats, StdDevOfConstantIsZero) {
 TEST(WindowStats, KernelChunkedMatchesWholeRun) {
   // The streaming kernel with a local ends array (as estimate/flight uses it) equals SlidingRange.
   const auto x = RandomSignal(20000, 11);
-  const auto t = IrregularTimes(x.size(), 12);
+  const auto t = test::IrregularTimes(x.size(), 12);
   const auto ends = WindowEndsByDuration(t, 15000000);
   const auto whole = SlidingRange(x, ends);
   SlidingRangeKernel kernel;
@@ -211,7 +195,7 @@ TEST(WindowStats, KernelSetsOfSeveralDurationsMatchBruteForce) {
   // ranges equal its brute-force twin's, bit for bit, including the chunks where a longer set has
   // no window left.
   const auto x = RandomSignal(20000, 21), y = RandomSignal(20000, 22), z = RandomSignal(20000, 23);
-  const auto t = IrregularTimes(x.size(), 24);
+  const auto t = test::IrregularTimes(x.size(), 24);
   std::vector<std::vector<uint32_t>> ends;
   for (int64_t window_ns : {3000000, 15000000, 40000000})
     ends.push_back(WindowEndsByDuration(t, window_ns));
@@ -234,6 +218,35 @@ TEST(WindowStats, KernelSetsOfSeveralDurationsMatchBruteForce) {
     EXPECT_EQ(got[d][1], SlidingRangeBruteForce(y, ends[d])) << "set " << d;
     EXPECT_EQ(got[d][2], SlidingRangeBruteForce(z, ends[d])) << "set " << d;
   }
+}
+
+TEST(WindowStats, KernelOnTiesSignedZerosAndOverflowEqualsBrute) {
+  // Values drawn from a few, so that windows hold ties and +0 beside -0, and now and then +-1e308,
+  // whose range overflows to infinity: the three-axis kernel (SSE2 lane pairs on x86; the
+  // portable form in window_stats_portable_tests) gives the brute force's ranges.
+  const double values[] = {-2.0, -1.0, -0.0, 0.0, 1.0, 2.0};
+  std::mt19937_64 rng(31);
+  std::array<std::vector<double>, 3> x;
+  for (auto& axis : x) {
+    axis.resize(6000);
+    for (double& v : axis) v = rng() % 50 == 0 ? (rng() % 2 ? 1e308 : -1e308) : values[rng() % 6];
+  }
+  const auto ends = WindowEndsByDuration(test::IrregularTimes(x[0].size(), 32), 6000000);
+  std::array<std::vector<double>, 3> got;
+  for (auto& axis : got) axis.resize(ends.size());
+  SlidingRangeKernel kernel;
+  for (size_t k0 = 0; k0 < ends.size(); k0 += 1000) {
+    const size_t k1 = std::min(ends.size(), k0 + 1000);
+    kernel.Run3({x[0].data(), x[1].data(), x[2].data()}, ends.data() + k0, k0, k1,
+                {got[0].data() + k0, got[1].data() + k0, got[2].data() + k0});
+  }
+  size_t infinite = 0;
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_EQ(got[a], SlidingRangeBruteForce(x[a], ends)) << "axis " << a;
+    infinite += std::count_if(got[a].begin(), got[a].end(), [](double r) { return std::isinf(r); });
+  }
+  EXPECT_GT(infinite, 0u);
+  EXPECT_LT(infinite, 3 * ends.size());
 }
 
 }  // namespace
