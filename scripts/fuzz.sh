@@ -40,7 +40,8 @@ if [ ! -f "$build/CMakeCache.txt" ]; then
     -DSHUTTERLAB_FUZZ=ON -DSHUTTERLAB_BUILD_TESTS=OFF -DSHUTTERLAB_BUILD_BENCH=OFF \
     -DSHUTTERLAB_PCH=OFF >/dev/null  # no precompiled headers here: a missing #include still fails
 else
-  cmake -S . -B "$build" >/dev/null  # picks up fuzz targets added since it was configured
+  # picks up fuzz targets added since it was configured (and a build made before SHUTTERLAB_PCH)
+  cmake -S . -B "$build" -DSHUTTERLAB_PCH=OFF >/dev/null
 fi
 table="$build/${table:-fuzz.txt}"
 if [ ${#targets[@]} -eq 0 ]; then
