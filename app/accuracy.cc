@@ -33,7 +33,7 @@ void Run(const AccuracyCommand& command) {
   }
 }
 
-const CommandRegistration kRegistration(30, [](CLI::App& app) {
+const CommandRegistration kAccuracyRegistration(30, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "accuracy",
       "total-station test: detect each turn, measure it, compare with the reference angle");

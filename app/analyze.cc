@@ -418,7 +418,7 @@ void Run(const AnalyzeCommand& command) {
   }
 }
 
-const CommandRegistration kRegistration(80, [](CLI::App& app) {
+const CommandRegistration kAnalyzeRegistration(80, [](CLI::App& app) {
   auto* cmd = app.add_subcommand("analyze",
                                  "per-image rolling-shutter distortion from a flight log (ULog, "
                                  "DataFlash, blackbox, GoPro MP4, gyro.csv, any CSV by --columns)");

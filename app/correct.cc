@@ -127,7 +127,7 @@ void Run(CorrectCommand& command) {
   }
 }
 
-const CommandRegistration kRegistration(75, [](CLI::App& app) {
+const CommandRegistration kCorrectRegistration(75, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "correct",
       "correct the rolling shutter of a rig dataset's images (still or video) or of a folder of "

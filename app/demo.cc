@@ -272,7 +272,7 @@ void RunDemo(const DemoOptions& options) {
   }
 }
 
-const CommandRegistration kRegistration(5, [](CLI::App& app) {
+const CommandRegistration kDemoRegistration(5, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "demo",
       "run the main job on data it makes itself (a synthetic ULog flight, a procedural "

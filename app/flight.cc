@@ -102,7 +102,7 @@ void Run(const FlightCommand& command) {
   }
 }
 
-const CommandRegistration kRegistration(40, [](CLI::App& app) {
+const CommandRegistration kFlightRegistration(40, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "flight",
       "share of time windows whose rotation smears the image beyond a ground limit (Table 4)");

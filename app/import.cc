@@ -12,7 +12,7 @@
 namespace shutterlab::app {
 namespace {
 
-const CommandRegistration kRegistration(55, [](CLI::App& app) {
+const CommandRegistration kImportRegistration(55, [](CLI::App& app) {
   auto* cmd = app.add_subcommand("import",
                                  "real footage with its own gyro (GoPro MP4 with GPMF, phone clip "
                                  "folder) -> video rig dataset");

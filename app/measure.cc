@@ -77,7 +77,7 @@ void Run(const MeasureCommand& command) {
   }
 }
 
-const CommandRegistration kRegistration(60, [](CLI::App& app) {
+const CommandRegistration kMeasureRegistration(60, [](CLI::App& app) {
   auto* cmd =
       app.add_subcommand("measure",
                          "measure the displacement field between a global-shutter reference and a "

@@ -52,7 +52,7 @@ void Run(const NoiseCommand& command) {
   }
 }
 
-const CommandRegistration kRegistration(20, [](CLI::App& app) {
+const CommandRegistration kNoiseRegistration(20, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "noise",
       "static noise of a still gyro: sliding-window sigma and range of the angle, Allan deviation");

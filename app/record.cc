@@ -216,7 +216,7 @@ void Run(const RecordCommand& command) {
   if (options.trigger) std::cout << "wrote " << options.triggers_path << "\n";
 }
 
-const CommandRegistration kRegistration(15, [](CLI::App& app) {
+const CommandRegistration kRecordRegistration(15, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "record",
       "record gyro (MPU-9250 / MPU-6500 / ICM-42688-P over SPI, or an emulated one) and camera "

@@ -11,7 +11,7 @@
 namespace shutterlab::app {
 namespace {
 
-const CommandRegistration kRegistration(50, [](CLI::App& app) {
+const CommandRegistration kRenderRegistration(50, [](CLI::App& app) {
   auto* cmd =
       app.add_subcommand("render", "render rolling-shutter frames and their exact ground truth");
   auto options = std::make_shared<RenderOptions>();

@@ -17,7 +17,7 @@ struct SceneCliOptions {
   std::string out_path;
 };
 
-const CommandRegistration kRegistration(45, [](CLI::App& app) {
+const CommandRegistration kSceneRegistration(45, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "scene",
       "write a procedural nadir ground texture (fields, roads, roofs, trees) to render over");

@@ -87,7 +87,7 @@ void Run(SynthCliOptions& o) {
   }
 }
 
-const CommandRegistration kRegistration(10, [](CLI::App& app) {
+const CommandRegistration kSynthRegistration(10, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "synth", "write a deterministic synthetic gyro trace (still, steps, flight) with IMU errors");
   auto o = std::make_shared<SynthCliOptions>();

@@ -71,7 +71,7 @@ void Run(const ValidateCommand& command) {
   }
 }
 
-const CommandRegistration kRegistration(70, [](CLI::App& app) {
+const CommandRegistration kValidateRegistration(70, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "validate",
       "measure a rig dataset's distortion, test the paper's threshold model and the declared model "

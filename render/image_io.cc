@@ -1,5 +1,6 @@
 #include "render/image_io.h"
 
+#include "render/exiv2_setup.h"
 #include "sim/check.h"
 
 #include <OpenImageIO/imageio.h>
@@ -278,20 +279,11 @@ ImageFileInfo ReadImageFileInfo(const std::string& path) {
 
 namespace {
 
-// exiv2's XMP toolkit is not thread-safe, and its namespace registry is global: every exiv2 call
-// of this unit runs under this lock, after one initialisation. Its log goes nowhere: failures are
-// exceptions, turned into IoError or notes.
+// exiv2's metadata writing is not known to be thread-safe: every exiv2 call of this unit runs under
+// this lock, after the shared set-up (render/exiv2_setup.h).
 std::mutex& Exiv2Lock() {
   static std::mutex lock;
   return lock;
-}
-void InitialiseExiv2() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute);
-    Exiv2::XmpParser::initialize();
-    Exiv2::XmpProperties::registerNs("https://shutterlab.invalid/ns/1.0/", "shutterlab");
-  });
 }
 
 // Copies like's EXIF, IPTC and XMP into the file at `temp` and sets `xmp`; notes on `path`.
@@ -300,7 +292,7 @@ std::vector<std::string> CopyMetadata(const std::string& path, const std::string
                                       const std::vector<std::pair<std::string, std::string>>& xmp) {
   std::vector<std::string> notes;
   const std::lock_guard<std::mutex> guard(Exiv2Lock());
-  InitialiseExiv2();
+  internal::InitialiseExiv2();
   try {
     if (Exiv2::ImageFactory::getType(temp) == Exiv2::ImageType::none) {
       notes.push_back(path + ": this format holds no EXIF or XMP: metadata of " + like +
@@ -368,7 +360,7 @@ std::vector<std::pair<std::string, std::string>> ReadImageMetadata(const std::st
   if (!std::filesystem::exists(path)) throw IoError(IoMessage(path, 0, "no such file"));
   std::vector<std::pair<std::string, std::string>> out;
   const std::lock_guard<std::mutex> guard(Exiv2Lock());
-  InitialiseExiv2();
+  internal::InitialiseExiv2();
   try {
     if (Exiv2::ImageFactory::getType(path) == Exiv2::ImageType::none) return out;
     auto image = Exiv2::ImageFactory::open(path);

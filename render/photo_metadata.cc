@@ -1,5 +1,6 @@
 #include "render/photo_metadata.h"
 
+#include "render/exiv2_setup.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
 
@@ -12,34 +13,12 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <mutex>
 #include <vector>
 
 namespace shutterlab {
 namespace {
 
 constexpr char kDjiXmpNamespace[] = "http://www.dji.com/drone-dji/1.0/";
-
-// The XMP toolkit's lock, as exiv2's xmp_exiv2.hpp shows, so that photos may be read from several
-// threads.
-void LockXmp(void* mutex, bool lock) {
-  if (lock) {
-    static_cast<std::mutex*>(mutex)->lock();
-  } else {
-    static_cast<std::mutex*>(mutex)->unlock();
-  }
-}
-
-// exiv2 prints its warnings on stderr by default, and XMP parsing must be initialised once, with
-// its lock, before threads use it.
-void InitialiseExiv2() {
-  static std::once_flag once;
-  static std::mutex xmp_mutex;
-  std::call_once(once, [] {
-    Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute);
-    Exiv2::XmpParser::initialize(LockXmp, &xmp_mutex);
-  });
-}
 
 std::string TrimText(std::string s) {
   while (!s.empty() && (s.back() == ' ' || s.back() == '\0')) s.pop_back();
@@ -227,7 +206,7 @@ void ReadDjiXmp(const Exiv2::XmpData& xmp, PhotoMetadata* out) {
 }  // namespace
 
 PhotoMetadata ReadPhotoMetadata(const std::string& path) {
-  InitialiseExiv2();
+  internal::InitialiseExiv2();
   PhotoMetadata out;
   try {
     auto image = Exiv2::ImageFactory::open(path);

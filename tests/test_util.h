@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <random>
 #include <string>
 #include <vector>
@@ -50,6 +51,11 @@ inline bool AnyWarningContains(const std::vector<LogWarning>& warnings, const st
   return std::any_of(warnings.begin(), warnings.end(), [&](const LogWarning& w) {
     return WarningLine(w).find(text) != std::string::npos;
   });
+}
+// The same for anything that carries a warning list (a FlightLog, a clip).
+template <typename WithWarnings>
+bool AnyWarningContains(const WithWarnings& holder, const std::string& text) {
+  return AnyWarningContains(holder.warnings, text);
 }
 
 // Every warning's line, one a line, for failure messages.
@@ -89,6 +95,20 @@ void PutLittleEndian(std::string* out, T value) {
   out->append(raw, sizeof(T));
 }
 
+// True in the AddressSanitizer build, where the heaviest cases shrink or are skipped.
+#if defined(__SANITIZE_ADDRESS__)
+inline constexpr bool kAsan = true;
+#else
+inline constexpr bool kAsan = false;
+#endif
+
+// Writes text to dir/name and returns the path.
+inline std::string WriteText(const TempDir& dir, const std::string& name, const std::string& text) {
+  const std::string path = dir / name;
+  std::ofstream(path) << text;
+  return path;
+}
+
 inline std::string SourcePath(const std::string& relative) {
   return std::string(SHUTTERLAB_SOURCE_DIR) + "/" + relative;
 }
@@ -104,6 +124,8 @@ inline std::string RealDataDir() {
 inline std::string RealDataPath(const std::string& relative) {
   return RealDataDir() + "/" + relative;
 }
+// The GoPro HERO5 clip (karma.mp4) that the MP4, GPMF and import tests read.
+inline std::string KarmaClipPath() { return RealDataPath("rs/gopro_karma/karma.mp4"); }
 
 // Under CI (CI=true) missing real data is a failure; elsewhere the test is skipped.
 inline bool RealDataRequired() {

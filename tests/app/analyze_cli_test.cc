@@ -28,10 +28,6 @@ using test::WriteSensorPair;
 
 std::string Bbl() { return test::RealDataPath("gyro/betaflight_blackbox/btfl_001.bbl"); }
 
-size_t LineCount(const std::string& text) {
-  return static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
-}
-
 TEST(AnalyzeCli, BlackboxEveryTwoSecondsJsonAndOutputs) {
   SHUTTERLAB_NEED_REAL_DATA();
   test::TempDir dir;
@@ -51,7 +47,7 @@ TEST(AnalyzeCli, BlackboxEveryTwoSecondsJsonAndOutputs) {
     EXPECT_TRUE(image["flagged"]["0.05"].is_boolean());
   }
   const std::string csv = ReadFileToString(dir / "out/images.csv");
-  EXPECT_EQ(LineCount(csv), json["images"].size() + 1);
+  EXPECT_EQ(test::LineCount(csv), json["images"].size() + 1);
   EXPECT_TRUE(std::filesystem::exists(dir / "out/exclude.txt"));
 }
 
@@ -186,7 +182,7 @@ TEST(AnalyzeCli, BadTriggersCsvIsOneLineExitTwoAndNoOutput) {
   const auto r = RunShutterlab("analyze " + Bbl() + " --triggers " + (dir / "times.csv") +
                                " --out " + (dir / "out"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_EQ(LineCount(r.output), 1u) << r.output;
+  EXPECT_EQ(test::LineCount(r.output), 1u) << r.output;
   EXPECT_NE(r.output.find("times.csv:3:"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "out/images.csv"));
 }
@@ -216,7 +212,7 @@ TEST(AnalyzeCli, UnknownLogIsOneLineExitTwo) {
   std::ofstream(dir / "notes.txt") << "hello\n";
   const auto r = RunShutterlab("analyze " + (dir / "notes.txt"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_EQ(LineCount(r.output), 1u) << r.output;
+  EXPECT_EQ(test::LineCount(r.output), 1u) << r.output;
 }
 
 // A flight log the project writes itself (synth --format ulog): analyze takes its camera triggers

@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -25,6 +26,12 @@ struct CommandResult {
   std::string out;     // stdout alone (e.g. the --json document)
   std::string err;     // stderr alone (warnings, progress, errors)
 };
+
+// The number of lines in text, an unterminated last line included.
+inline size_t LineCount(const std::string& text) {
+  const size_t newlines = static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
+  return newlines + (!text.empty() && text.back() != '\n');
+}
 
 // Runs the shutterlab executable with the given argument string (shell syntax); stdin_file, when
 // given, is piped to its standard input by `cat` (so /dev/stdin is a pipe, readable once only);

@@ -22,12 +22,7 @@ namespace fs = std::filesystem;
 using test::RunShutterlab;
 using test::SourcePath;
 
-const std::string kKarma = test::RealDataPath("rs/gopro_karma/karma.mp4");
 const std::string kPhone = test::RealDataPath("rs/phone_gyro_video_20200109_145447");
-
-size_t LineCount(const std::string& text) {
-  return static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
-}
 
 nlohmann::json ReadJson(const std::string& path) {
   return nlohmann::json::parse(ReadFileToString(path));
@@ -44,7 +39,7 @@ TEST(ImportCli, GoproKarmaWholeClip) {
   SHUTTERLAB_NEED_REAL_DATA();
   test::TempDir dir;
   const std::string out = dir / "karma";
-  const auto r = RunShutterlab("import " + kKarma + " --out " + out);
+  const auto r = RunShutterlab("import " + test::KarmaClipPath() + " --out " + out);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("4795 samples, 397.18 Hz"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("failed 1 grab"), std::string::npos)
@@ -100,15 +95,16 @@ TEST(ImportCli, GoproSelectionAndReimport) {
   SHUTTERLAB_NEED_REAL_DATA();
   test::TempDir dir;
   const std::string out = dir / "karma";
-  const auto r =
-      RunShutterlab("import " + kKarma + " --out " + out + " --start-frame 100 --max-frames 3");
+  const auto r = RunShutterlab("import " + test::KarmaClipPath() + " --out " + out +
+                               " --start-frame 100 --max-frames 3");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::vector<FrameEntry> frames = ReadFramesCsv(out + "/frames.csv");
   ASSERT_EQ(frames.size(), 3u);
   EXPECT_EQ(frames[0].frame, 100);
   EXPECT_EQ(frames[2].t_first_row_ns, std::llround(102 * 3003 / 90000.0 * 1e9));
   // Importing again over an earlier import replaces it.
-  const auto again = RunShutterlab("import " + kKarma + " --out " + out + " --max-frames 2");
+  const auto again =
+      RunShutterlab("import " + test::KarmaClipPath() + " --out " + out + " --max-frames 2");
   ASSERT_EQ(again.exit_code, 0) << again.output;
   frames = ReadFramesCsv(out + "/frames.csv");
   ASSERT_EQ(frames.size(), 2u);
@@ -166,7 +162,7 @@ TEST(ImportCli, GoproMaxStatesItsOwnFacts) {
   // One line per imported frame: its IORI and CORI samples.
   const std::string orientation = ReadFileToString(out + "/image_orientation.csv");
   EXPECT_EQ(orientation.rfind("frame,t,iori_t,iori_w,iori_x,iori_y,iori_z,cori_t,", 0), 0u);
-  EXPECT_EQ(LineCount(orientation), 13u);
+  EXPECT_EQ(test::LineCount(orientation), 13u);
   EXPECT_EQ(record["image_orientation"]["frames_matched"], 12);
   EXPECT_EQ(record["image_orientation"]["iori_samples"], 316);
 }
@@ -180,7 +176,7 @@ TEST(ImportCli, GoproKarmaWithALensProfile) {
   SHUTTERLAB_NEED_REAL_DATA();
   test::TempDir dir;
   const std::string out = dir / "karma";
-  const auto r = RunShutterlab("import " + kKarma + " --out " + out +
+  const auto r = RunShutterlab("import " + test::KarmaClipPath() + " --out " + out +
                                " --max-frames 3 --lens-profile " + profile);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const RigModel rig = ReadRigModel(out + "/camera.json");
@@ -208,8 +204,8 @@ TEST(ImportCli, PhoneClip) {
   // What the source files hold, read here independently of the importer.
   const std::string gyro_text = ReadFileToString(kPhone + "/gyro.txt");
   const std::string stamps_text = ReadFileToString(kPhone + "/framestamp.txt");
-  ASSERT_EQ(LineCount(gyro_text), 29466u);
-  ASSERT_EQ(LineCount(stamps_text), 2146u);
+  ASSERT_EQ(test::LineCount(gyro_text), 29466u);
+  ASSERT_EQ(test::LineCount(stamps_text), 2146u);
   std::vector<double> sof_s;
   LineCursor stamps(stamps_text);
   while (auto line = stamps.Next()) sof_s.push_back(*ParseDouble(*line));
@@ -278,7 +274,7 @@ void ExpectOneLineError(const std::string& args, const std::string& needle,
                         const std::string& out_dir) {
   const auto r = RunShutterlab(args);
   EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
-  EXPECT_EQ(LineCount(r.output), 1u) << r.output;
+  EXPECT_EQ(test::LineCount(r.output), 1u) << r.output;
   EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
   if (!out_dir.empty()) {
     EXPECT_FALSE(fs::exists(out_dir)) << "output left by: " << args;
@@ -294,7 +290,7 @@ TEST(ImportCli, BadInputsAreOneLineExitTwoAndNoOutput) {
   std::ofstream(dir / "text.mp4") << "not a video\n";
   ExpectOneLineError("import " + (dir / "text.mp4") + " --out " + out, "text.mp4: offset ", out);
   // Truncated copies of karma.mp4: the index is at the end.
-  const std::string karma = ReadFileToString(kKarma);
+  const std::string karma = ReadFileToString(test::KarmaClipPath());
   std::ofstream(dir / "cut.mp4", std::ios::binary).write(karma.data(), 2000000);
   ExpectOneLineError("import " + (dir / "cut.mp4") + " --out " + out, "cut.mp4: offset ", out);
   // A payload offset past the end: the moov is whole, mdat's first gpmd payload is gone.

@@ -29,9 +29,9 @@ constexpr char kProfile[] = R"({
     "camera_matrix": [[190.0, 0.0, 159.5], [0.0, 190.0, 119.5], [0.0, 0.0, 1.0]],
     "distortion_coeffs": [0.06, 0.04, -0.04, 0.015]}})";
 
-struct Inputs {
+struct LensInputs {
   test::TempDir dir;
-  Inputs() {
+  LensInputs() {
     WriteRigModel(dir / "camera.json", test::NadirRig(160, 120, 120.0, 0.030, 50.0));
     WriteGyroCsv(dir / "gyro.csv",
                  test::ConstantRateTrace(Eigen::Vector3d(0.4, -0.6, 0.9), 0.0, 8.0));
@@ -47,7 +47,7 @@ struct Inputs {
 };
 
 TEST(LensProfileCli, RenderTakesTheProfilesLensAndReadoutAndInjectsInItsModel) {
-  Inputs in;
+  LensInputs in;
   const std::string out = in.dir / "ds";
   const auto r = RunShutterlab(in.Render(out, "--inject lens_distortion=0.09,0.02"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -76,7 +76,7 @@ TEST(LensProfileCli, RenderTakesTheProfilesLensAndReadoutAndInjectsInItsModel) {
 }
 
 TEST(LensProfileCli, ValidateAndAnalyzeSayWhatTheProfileGave) {
-  Inputs in;
+  LensInputs in;
   const std::string out = in.dir / "ds";
   ASSERT_EQ(RunShutterlab(in.Render(out, "")).exit_code, 0);
   // validate: the dataset's camera.json back to a pinhole; the profile puts its lens back.
@@ -109,7 +109,7 @@ TEST(LensProfileCli, ValidateAndAnalyzeSayWhatTheProfileGave) {
 }
 
 TEST(LensProfileCli, ABadProfileIsOneLineExitTwo) {
-  Inputs in;
+  LensInputs in;
   WriteFileAtomically(in.dir / "profile.json",
                       std::string(kProfile).replace(std::string(kProfile).find("\"use_opencv"), 0,
                                                     "\"distortion_model\": \"poly3\", "));

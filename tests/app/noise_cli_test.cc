@@ -22,12 +22,6 @@ using test::RunShutterlab;
 constexpr int64_t kPeriodNs = 1'000'000;  // 1 kHz keeps the files small
 constexpr double kSigmaRadS = 0.002;
 
-size_t LineCount(const std::string& text) {
-  size_t n = 0;
-  for (char c : text) n += c == '\n';
-  return n + (!text.empty() && text.back() != '\n');
-}
-
 // still_s of white noise, then turns of 1 deg about z (sin^2 rate pulses of 0.25 s), 1.5 s apart.
 void WriteSession(const std::string& path, double still_s, int turns) {
   std::mt19937_64 rng(9);
@@ -63,7 +57,7 @@ TEST(NoiseCli, PrintsJsonAndWritesTheAllanCsv) {
   EXPECT_LT(sigma_x, 1.3);
   const std::string csv = ReadFileToString(allan);
   EXPECT_EQ(csv.rfind("tau_s,adev_x,adev_y,adev_z\n0.001,", 0), 0u) << csv.substr(0, 80);
-  EXPECT_GT(LineCount(csv), 20u);
+  EXPECT_GT(test::LineCount(csv), 20u);
 }
 
 // A logger that stamps its samples in threes with one time, every 1 ms, for still_s of noise: a
@@ -120,7 +114,7 @@ TEST(NoiseCli, WindowLongerThanTheTraceIsOneLineExit2AndNoFile) {
   WriteSession(trace, 6.0, 0);
   const auto result = RunShutterlab("noise " + trace + " --window 5000 --allan " + allan);
   EXPECT_EQ(result.exit_code, 2);
-  EXPECT_EQ(LineCount(result.output), 1u) << result.output;
+  EXPECT_EQ(test::LineCount(result.output), 1u) << result.output;
   EXPECT_EQ(result.output.rfind("error: " + trace + ": window of 5000 samples", 0), 0u)
       << result.output;
   EXPECT_FALSE(std::filesystem::exists(allan));
@@ -132,7 +126,7 @@ TEST(NoiseCli, BadBiasSegmentIsExit2) {
   WriteSession(trace, 6.0, 0);
   const auto result = RunShutterlab("noise " + trace + " --bias 3:1");
   EXPECT_EQ(result.exit_code, 2);
-  EXPECT_EQ(LineCount(result.output), 1u) << result.output;
+  EXPECT_EQ(test::LineCount(result.output), 1u) << result.output;
 }
 
 TEST(AccuracyCli, FindsEachTurnAndPrintsJson) {
@@ -161,13 +155,13 @@ TEST(AccuracyCli, NoTurnOrNoReferenceIsExit2) {
   WriteSession(trace, 8.0, 0);
   const auto none = RunShutterlab("accuracy " + trace + " --reference-deg 1");
   EXPECT_EQ(none.exit_code, 2);
-  EXPECT_EQ(LineCount(none.output), 1u) << none.output;
+  EXPECT_EQ(test::LineCount(none.output), 1u) << none.output;
   EXPECT_NE(none.output.find("no rotation found"), std::string::npos) << none.output;
   const auto missing = RunShutterlab("accuracy " + trace);
   EXPECT_EQ(missing.exit_code, 2);
   const auto bad = RunShutterlab("accuracy " + trace + " --reference-deg -1");
   EXPECT_EQ(bad.exit_code, 2);
-  EXPECT_EQ(LineCount(bad.output), 1u) << bad.output;
+  EXPECT_EQ(test::LineCount(bad.output), 1u) << bad.output;
 }
 
 }  // namespace

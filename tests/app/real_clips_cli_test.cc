@@ -28,12 +28,6 @@
 namespace shutterlab {
 namespace {
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAsan = true;
-#else
-constexpr bool kAsan = false;
-#endif
-
 namespace fs = std::filesystem;
 using nlohmann::json;
 using test::RunShutterlab;
@@ -196,7 +190,7 @@ TEST(RealClips, GoproMaxStabilisedImageNamesNoEffect) {
   SHUTTERLAB_REAL_DATA(max, "incoming_rs/gopro_max_heromode/max-heromode.mp4");
   // The screening and the verdict run under ASan in ValidateVideo.*; 90 pairs of 848x480 there
   // would take minutes.
-  if (kAsan) GTEST_SKIP() << "reduced set under ASan";
+  if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const json report = ImportAndValidate(dir, max, "--max-frames 91");
   const json& iori = report["image_orientation"];

@@ -16,12 +16,6 @@ namespace {
 using test::RunShutterlab;
 
 // Counts lines of CLI output (a trailing newline ends the last line).
-size_t LineCount(const std::string& text) {
-  size_t n = 0;
-  for (char c : text) n += c == '\n';
-  return n + (!text.empty() && text.back() != '\n');
-}
-
 TEST(SynthCli, WritesATraceThatReadGyroReadsBack) {
   test::TempDir dir;
   const std::string out = dir / "still.csv";
@@ -87,7 +81,7 @@ TEST(SynthCli, BadArgumentsExitTwoWithOneLineAndNoFile) {
            "synth still --duration 1 --out " + (dir / "missing_folder/x.csv")}) {
     const auto result = RunShutterlab(args);
     EXPECT_EQ(result.exit_code, 2) << args << "\n" << result.output;
-    EXPECT_EQ(LineCount(result.output), 1u) << args << "\n" << result.output;
+    EXPECT_EQ(test::LineCount(result.output), 1u) << args << "\n" << result.output;
     EXPECT_EQ(result.output.rfind("error: ", 0), 0u) << args << "\n" << result.output;
     EXPECT_FALSE(std::filesystem::exists(out)) << args;
   }

@@ -25,7 +25,7 @@ namespace {
 namespace fs = std::filesystem;
 
 // Renders dir/ds: 3 frames of 320x240 (f 275 px, 30 ms, 50 m), 3 ms undeclared time offset.
-std::string SmallDataset(const test::TempDir& dir) {
+std::string SmallValidateDataset(const test::TempDir& dir) {
   WriteRigModel(dir / "camera.json", test::NadirRig(320, 240, 275.0));
   WriteGyroCsv(dir / "gyro.csv", test::FlightTrace(14.0, 5));
   WriteFileAtomically(dir / "times.csv", "frame,t_first_row\n0,8.5\n1,10.0\n2,12.0\n");
@@ -52,7 +52,7 @@ void ExpectOneLineError(const test::CommandResult& r, const std::string& where,
 
 TEST(ValidateCli, WritesReportAndPlots) {
   test::TempDir dir;
-  const std::string dataset = SmallDataset(dir);
+  const std::string dataset = SmallValidateDataset(dir);
   const std::string report = dir / "report.json";
   const std::string out = dir / "plots";
   const test::CommandResult r = test::RunShutterlab(
@@ -82,7 +82,7 @@ TEST(ValidateCli, WritesReportAndPlots) {
 
 TEST(ValidateCli, MissingCameraJson) {
   test::TempDir dir;
-  const std::string dataset = SmallDataset(dir);
+  const std::string dataset = SmallValidateDataset(dir);
   fs::remove(fs::path(dataset) / "camera.json");
   const std::string report = dir / "report.json";
   const test::CommandResult r =
@@ -94,7 +94,7 @@ TEST(ValidateCli, MissingCameraJson) {
 // Video datasets (ref empty on every line): one line with a ref, one frame, two frames at one time.
 TEST(ValidateCli, BadVideoDatasets) {
   test::TempDir dir;
-  const std::string dataset = SmallDataset(dir);
+  const std::string dataset = SmallValidateDataset(dir);
   const std::string report = dir / "report.json";
   const auto run = [&](const std::string& frames_csv) {
     WriteFileAtomically(fs::path(dataset) / "frames.csv", frames_csv);
@@ -128,7 +128,7 @@ TEST(ValidateCli, BadVideoDatasets) {
 // exactly no motion, so no measurement noise: the loop still runs against a floor of the noise.
 TEST(ValidateCli, VideoOfIdenticalFrames) {
   test::TempDir dir;
-  const std::string dataset = SmallDataset(dir);
+  const std::string dataset = SmallValidateDataset(dir);
   const std::string report = dir / "report.json";
   WriteFileAtomically(fs::path(dataset) / "frames.csv",
                       "frame,t_first_row,ref,image\n0,8.5,,images/0000_rs.png\n"
@@ -143,7 +143,7 @@ TEST(ValidateCli, VideoOfIdenticalFrames) {
 
 TEST(ValidateCli, WrongImageSize) {
   test::TempDir dir;
-  const std::string dataset = SmallDataset(dir);
+  const std::string dataset = SmallValidateDataset(dir);
   // camera.json now declares a size the images do not have.
   RigModel rig = ReadRigModel(fs::path(dataset) / "camera.json");
   rig.camera.width = 330;
@@ -159,7 +159,7 @@ TEST(ValidateCli, WrongImageSize) {
 
 TEST(ValidateCli, FrameOutsideGyroLog) {
   test::TempDir dir;
-  const std::string dataset = SmallDataset(dir);
+  const std::string dataset = SmallValidateDataset(dir);
   WriteFileAtomically(fs::path(dataset) / "frames.csv",
                       "frame,t_first_row,ref,image\n0,8.5,images/0000_ref.png,images/0000_rs.png\n"
                       "1,99.0,images/0001_ref.png,images/0001_rs.png\n");
@@ -169,7 +169,7 @@ TEST(ValidateCli, FrameOutsideGyroLog) {
 
 TEST(ValidateCli, BadLimitAndCandidate) {
   test::TempDir dir;
-  const std::string dataset = SmallDataset(dir);
+  const std::string dataset = SmallValidateDataset(dir);
   ExpectOneLineError(test::RunShutterlab("validate '" + dataset + "' --limit 5parsecs"), "",
                      "5parsecs");
   ExpectOneLineError(test::RunShutterlab("validate '" + dataset + "' --candidates warp_drive"), "",

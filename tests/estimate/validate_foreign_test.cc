@@ -37,8 +37,8 @@ std::string Format(const char* format, Args... args) {
   return buffer.data();
 }
 
-constexpr int kWidth = 480, kHeight = 360, kFrames = 8;
-constexpr double kFocalPx = 420.0, kReadoutS = 0.025;
+constexpr int kForeignWidth = 480, kForeignHeight = 360, kForeignFrames = 8;
+constexpr double kForeignFocalPx = 420.0, kForeignReadoutS = 0.025;
 constexpr double kDeclaredOffsetS = 0.010;  // camera.json's time_offset_s
 constexpr double kGyroStartS = 1000.0, kGyroEndS = 1008.0;
 
@@ -92,17 +92,17 @@ Eigen::Matrix3d CamFromGyro() {
 // docs/FORMATS.md (scene pixel = K_scene * ray / ray.z, principal point at the scene's centre).
 cv::Mat RenderGrey16(const cv::Mat& scene, const Orientation& orientation,
                      const std::vector<double>& row_time_s) {
-  const Eigen::Matrix3d k = (Eigen::Matrix3d() << kFocalPx, 0, 0.5 * (kWidth - 1), 0, kFocalPx,
-                             0.5 * (kHeight - 1), 0, 0, 1)
+  const Eigen::Matrix3d k = (Eigen::Matrix3d() << kForeignFocalPx, 0, 0.5 * (kForeignWidth - 1), 0,
+                             kForeignFocalPx, 0.5 * (kForeignHeight - 1), 0, 0, 1)
                                 .finished();
-  const Eigen::Matrix3d k_scene = (Eigen::Matrix3d() << kFocalPx, 0, 0.5 * (scene.cols - 1), 0,
-                                   kFocalPx, 0.5 * (scene.rows - 1), 0, 0, 1)
+  const Eigen::Matrix3d k_scene = (Eigen::Matrix3d() << kForeignFocalPx, 0, 0.5 * (scene.cols - 1),
+                                   0, kForeignFocalPx, 0.5 * (scene.rows - 1), 0, 0, 1)
                                       .finished();
   const Eigen::Matrix3d k_inv = k.inverse();
-  cv::Mat map(kHeight, kWidth, CV_32FC2);
-  for (int v = 0; v < kHeight; ++v) {
+  cv::Mat map(kForeignHeight, kForeignWidth, CV_32FC2);
+  for (int v = 0; v < kForeignHeight; ++v) {
     const Eigen::Matrix3d h = k_scene * orientation.At(row_time_s[v]) * k_inv;
-    for (int u = 0; u < kWidth; ++u) {
+    for (int u = 0; u < kForeignWidth; ++u) {
       const Eigen::Vector3d x = h * Eigen::Vector3d(u, v, 1.0);
       map.at<cv::Vec2f>(v, u) =
           cv::Vec2f(static_cast<float>(x.x() / x.z()), static_cast<float>(x.y() / x.z()));
@@ -134,8 +134,9 @@ std::string WriteForeignDataset(const test::TempDir& dir, double true_offset_s) 
   "scene": {"altitude_m": 80.0}
 }
 )",
-                             kWidth, kHeight, kFocalPx, kFocalPx, 0.5 * (kWidth - 1),
-                             0.5 * (kHeight - 1), kReadoutS, kDeclaredOffsetS));
+                             kForeignWidth, kForeignHeight, kForeignFocalPx, kForeignFocalPx,
+                             0.5 * (kForeignWidth - 1), 0.5 * (kForeignHeight - 1),
+                             kForeignReadoutS, kDeclaredOffsetS));
   std::mt19937 random(7);
   std::uniform_real_distribution<double> jitter(-20e-6, 20e-6);
   std::string gyro = "t,gx,gy,gz,temperature\n";
@@ -147,15 +148,17 @@ std::string WriteForeignDataset(const test::TempDir& dir, double true_offset_s) 
   WriteFileAtomically((root / "gyro.csv").string(), gyro);
 
   std::string frames = "frame,t_first_row,ref,image\n";
-  for (int k = 0; k < kFrames; ++k) {
+  for (int k = 0; k < kForeignFrames; ++k) {
     const int id = 10 * (k + 1);
     const double t_first_row = kGyroStartS - true_offset_s + 1.0 + 0.8 * k;  // camera clock
     // Bottom to top: row height-1 first. Gyro-clock time of every row.
-    std::vector<double> row_time(kHeight), ref_time(kHeight);
-    for (int v = 0; v < kHeight; ++v) {
-      row_time[v] = t_first_row + true_offset_s + (kHeight - 1 - v) * kReadoutS / kHeight;
+    std::vector<double> row_time(kForeignHeight), ref_time(kForeignHeight);
+    for (int v = 0; v < kForeignHeight; ++v) {
+      row_time[v] = t_first_row + true_offset_s +
+                    (kForeignHeight - 1 - v) * kForeignReadoutS / kForeignHeight;
     }
-    for (int v = 0; v < kHeight; ++v) ref_time[v] = row_time[0];  // the reference: row 0's time
+    for (int v = 0; v < kForeignHeight; ++v)
+      ref_time[v] = row_time[0];  // the reference: row 0's time
     const std::string ref = Format("cam0/ref_%d.tif", id);
     const std::string image = Format("cam0/rs_%d.tif", id);
     cv::imwrite((root / ref).string(), RenderGrey16(scene, orientation, ref_time));
@@ -166,7 +169,7 @@ std::string WriteForeignDataset(const test::TempDir& dir, double true_offset_s) 
   return root.string();
 }
 
-ValidationResult Validate(const std::string& dataset) {
+ValidationResult ValidateForeign(const std::string& dataset) {
   ValidateOptions options;
   options.keep_residuals = false;
   return ValidateDataset(dataset, options);
@@ -174,9 +177,10 @@ ValidationResult Validate(const std::string& dataset) {
 
 TEST(ValidateForeignDataset, FindsTheUndeclaredThreeMilliseconds) {
   test::TempDir dir;
-  const ValidationResult result = Validate(WriteForeignDataset(dir, kDeclaredOffsetS + 0.003));
+  const ValidationResult result =
+      ValidateForeign(WriteForeignDataset(dir, kDeclaredOffsetS + 0.003));
   const LoopResult& loop = result.loop;
-  ASSERT_EQ(result.frames.size(), static_cast<size_t>(kFrames));
+  ASSERT_EQ(result.frames.size(), static_cast<size_t>(kForeignFrames));
   ASSERT_FALSE(loop.effects.empty()) << ValidationReport(result);
   EXPECT_EQ(Spec(loop.effects.front().effect).name, "time_offset") << ValidationReport(result);
   EXPECT_NEAR(loop.model.rig.time_offset_s, kDeclaredOffsetS + 0.003, 0.3e-3)
@@ -188,7 +192,7 @@ TEST(ValidateForeignDataset, FindsTheUndeclaredThreeMilliseconds) {
 
 TEST(ValidateForeignDataset, RightCameraJsonAddsNothing) {
   test::TempDir dir;
-  const ValidationResult result = Validate(WriteForeignDataset(dir, kDeclaredOffsetS));
+  const ValidationResult result = ValidateForeign(WriteForeignDataset(dir, kDeclaredOffsetS));
   const LoopResult& loop = result.loop;
   EXPECT_TRUE(loop.effects.empty()) << ValidationReport(result);
   EXPECT_FALSE(loop.unexplained) << ValidationReport(result);

@@ -35,10 +35,8 @@ namespace shutterlab {
 namespace {
 
 #if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAsan = true;
 constexpr int kWidth = 640, kHeight = 480, kFrames = 6;
 #else
-constexpr bool kAsan = false;
 constexpr int kWidth = 1280, kHeight = 960, kFrames = 8;
 #endif
 constexpr double kFocalPx = 1100.0 * kWidth / 1280.0;  // same field of view at either size
@@ -122,7 +120,7 @@ void ExpectIdentified(const ValidationResult& result, const std::string& name) {
   EXPECT_GT(loop.before.rms_px, 2.0 * loop.after.rms_px) << Summary(result);
 }
 
-bool SkipUnderAsan() { return kAsan; }
+bool SkipUnderAsan() { return test::kAsan; }
 
 // time_offset_s = 4 ms undeclared -> recovered within 0.3 ms.
 TEST(ValidateEndToEnd, RecoversTimeOffset) {

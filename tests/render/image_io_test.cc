@@ -1,5 +1,6 @@
 #include "render/image_io.h"
 
+#include "render/photo_metadata.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
 #include "tests/render/render_fixtures.h"
@@ -7,8 +8,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace shutterlab {
 namespace {
@@ -151,6 +155,26 @@ TEST(ImageIo, MetadataIsCopiedWhereTheFormatHoldsIt) {
   ASSERT_EQ(notes.size(), 1u);
   EXPECT_NE(notes[0].find("holds no EXIF or XMP"), std::string::npos) << notes[0];
   EXPECT_EQ(ReadImage(dir / "copy.exr").type(), CV_32FC3) << "the pixels are written all the same";
+}
+
+// exiv2 is set up once a process, for reading photos (from several threads) and for writing
+// shutterlab's XMP keys, whichever comes first: in a fresh process (the death test runs the binary
+// again) a photo read first must leave the keys writable.
+TEST(ImageIo, XmpKeysAreWrittenAfterAPhotoWasReadFirst) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  test::TempDir dir;
+  const cv::Mat image = test::SmoothTexture(cv::Size(40, 30), CV_8UC3, 2, 1.0);
+  const std::string photo = dir / "photo.jpg", out = dir / "out.jpg";
+  WriteImage(photo, image);
+  const auto read_then_write = [&] {
+    ReadPhotoMetadata(photo);
+    const ImageLike like{photo, ReadImageFileInfo(photo)};
+    const std::vector<std::pair<std::string, std::string>> xmp = {
+        {"Xmp.shutterlab.Reference", "row0"}};
+    const bool written = WriteImageLike(out, image, like, xmp).empty();
+    return written && MetadataValue(ReadImageMetadata(out), "Xmp.shutterlab.Reference") == "row0";
+  };
+  EXPECT_EXIT(std::exit(read_then_write() ? 0 : 1), ::testing::ExitedWithCode(0), "");
 }
 
 TEST(ImageIo, RealDronePhotoKeepsItsExifAndDjiXmp) {

@@ -19,7 +19,7 @@ constexpr double kTwinTolPx = 1e-9;
 // edge of a 137 degree lens.
 constexpr double kUndistortTol = 1e-9;
 // Our own round trip (Newton to 1e-15 rad, times f).
-constexpr double kRoundTripTolPx = 1e-9;
+constexpr double kLensRoundTripTolPx = 1e-9;
 
 // The GoPro MAX's Gyroflow profile (Wide, HS EIS, 1920x1080; ../shared/data/incoming_rs/
 // gopro_max_heromode/reference): a 137 degree diagonal field of view.
@@ -122,7 +122,7 @@ TEST(Fisheye, A150DegreeLensRoundTripsToItsCornersWithoutWrapping) {
     EXPECT_GE(ray.head<2>().dot(from_centre), 0.0) << px.transpose();
     const std::optional<Eigen::Vector2d> back = camera.ImgFromCam(ray);
     ASSERT_TRUE(back.has_value()) << px.transpose();
-    ASSERT_NEAR((*back - px).norm(), 0.0, kRoundTripTolPx) << px.transpose();
+    ASSERT_NEAR((*back - px).norm(), 0.0, kLensRoundTripTolPx) << px.transpose();
   }
   // The corners lie 94 degrees off the axis: behind the image plane.
   const Eigen::Vector3d corner = camera.CamFromImg(Eigen::Vector2d(0, 0));

@@ -29,7 +29,7 @@ constexpr double kSolvedTolPx = 1e-5;
 // test turns at 3.5 rad/s with 0.22 ms rows (theta = 7.9e-4 rad): 7.8e-8 rad, 2.3e-5 px at 300 px.
 constexpr double kRowInterpolationTolPx = 5e-5;
 
-TrueModel Truth(const RigModel& rig, const std::vector<std::string>& injections = {}) {
+TrueModel TruthWith(const RigModel& rig, const std::vector<std::string>& injections = {}) {
   TrueModel model;
   model.rig = rig;
   for (const std::string& injection : injections) ApplyInjection(injection, &model);
@@ -48,7 +48,7 @@ const std::vector<std::string> kEveryEffect = {
 
 TEST(CorrectionGeometry, NoMotionMapsEveryPixelToItself) {
   const RigModel rig = SmallRig(96, 72);
-  const TrueModel truth = Truth(rig, {"lens_distortion=-0.2,0.05"});
+  const TrueModel truth = TruthWith(rig, {"lens_distortion=-0.2,0.05"});
   const FrameMotion motion = Motion(truth, ConstantRateTrace(Eigen::Vector3d::Zero()), 0.5);
   const CorrectionGeometry geometry(truth.rig.camera, motion, 0.0, rig.altitude_m);
   const CorrectionMap map(geometry, {});
@@ -64,7 +64,7 @@ TEST(CorrectionGeometry, NoMotionMapsEveryPixelToItself) {
 void ExpectInvertsTheRenderersTruth(const RigModel& rig, const GyroTrace& trace,
                                     const std::vector<std::vector<std::string>>& cases) {
   for (const auto& injections : cases) {
-    const TrueModel truth = Truth(rig, injections);
+    const TrueModel truth = TruthWith(rig, injections);
     const FrameMotion motion = Motion(truth, trace, 0.5);
     const FrameGeometry render(truth.rig.camera, truth.rig.altitude_m, motion, cv::Size(400, 300));
     const CorrectionGeometry geometry(truth.rig.camera, motion, 0.0, truth.rig.altitude_m);
@@ -107,7 +107,7 @@ TEST(CorrectionGeometry, RotationOnlyThroughALensWiderThan180Degrees) {
   // behind the image plane and must still be corrected, each rolling-shutter pixel's output
   // mapping back to it; outside the lens's image circle nothing has a source.
   const RigModel rig = test::FisheyeRig(160, 120, 110.0);
-  const TrueModel truth = Truth(rig);
+  const TrueModel truth = TruthWith(rig);
   const FrameMotion motion = Motion(truth, ConstantRateTrace(Eigen::Vector3d(1.2, -1.6, 2.0)), 0.5);
   const CorrectionGeometry geometry(rig.camera, motion, 0.0, std::nullopt);
   int behind = 0, compared = 0;
@@ -159,7 +159,7 @@ std::optional<Eigen::Vector2d> BruteForceSource(const PinholeCamera& camera,
 
 TEST(CorrectionGeometry, FixedPointMatchesABruteForceRowSearch) {
   const RigModel rig = SmallRig(120, 90);
-  const TrueModel truth = Truth(rig, {"velocity=5,-3,0.5", "lens_distortion=-0.25,0.06"});
+  const TrueModel truth = TruthWith(rig, {"velocity=5,-3,0.5", "lens_distortion=-0.25,0.06"});
   const FrameMotion motion = Motion(truth, ConstantRateTrace(Eigen::Vector3d(1.5, -2.0, 2.5)), 0.5);
   const CorrectionGeometry geometry(truth.rig.camera, motion, 0.0, rig.altitude_m);
   int compared = 0;
@@ -198,7 +198,7 @@ constexpr double kFloatNodesPx = 2e-4;
 TEST(CorrectionMap, InterpolationStaysWithinItsToleranceEverywhere) {
   // Strong motion, a lens and translation: the map curves.
   const RigModel rig = SmallRig(200, 150);
-  const TrueModel truth = Truth(rig, kEveryEffect);
+  const TrueModel truth = TruthWith(rig, kEveryEffect);
   const FrameMotion motion = Motion(truth, ConstantRateTrace(Eigen::Vector3d(2.5, -3.0, 4.0)), 0.5);
   const CorrectionGeometry geometry(truth.rig.camera, motion, 0.0, rig.altitude_m);
   for (const double tolerance_px : {0.05, 0.002}) {
@@ -226,7 +226,7 @@ TEST(CorrectionMap, RowsCrowdWhereTheRateJumps) {
     const double sign = (k / 2) % 2 == 0 ? 1.0 : -1.0;
     samples.push_back({k * 1'000'000LL, Eigen::Vector3d(0.4 + 3.0 * sign, -0.3, 0.5)});
   }
-  const TrueModel truth = Truth(rig);
+  const TrueModel truth = TruthWith(rig);
   const FrameMotion motion = Motion(truth, GyroTrace(std::move(samples)), 0.5);
   const CorrectionGeometry geometry(truth.rig.camera, motion, 0.0, std::nullopt);
   const CorrectionMap map(geometry, {});
@@ -239,7 +239,7 @@ TEST(CorrectionMap, RowsCrowdWhereTheRateJumps) {
 // frame must equal the reference to bilinear interpolation error where it has a source, and the
 // mask must mark exactly the pixels whose source lies outside the frame.
 void ExpectCorrectionGivesTheReference(const RigModel& rig) {
-  const TrueModel truth = Truth(rig, {"velocity=4,2,0"});
+  const TrueModel truth = TruthWith(rig, {"velocity=4,2,0"});
   const FrameMotion motion = Motion(truth, ConstantRateTrace(Eigen::Vector3d(0.8, -1.1, 1.4)), 0.5);
   const cv::Size scene_size(500, 400);
   const cv::Mat scene = SmoothTexture(scene_size, CV_32FC1, 3, 4.0);
@@ -287,7 +287,7 @@ TEST(CorrectFrame, MidReadoutIsRowZerosViewTurnedToTheMiddleRow) {
   // Rotation only: the corrected image at mid-readout is the row-0 one seen through the rotation
   // between the two poses, one homography.
   const RigModel rig = SmallRig(120, 90);
-  const TrueModel truth = Truth(rig);
+  const TrueModel truth = TruthWith(rig);
   const FrameMotion motion = Motion(truth, ConstantRateTrace(Eigen::Vector3d(1.0, -1.4, 2.0)), 0.5);
   const double mid = ReferenceRow(CorrectionReference::kMidReadout, rig.shutter, rig.camera.height);
   EXPECT_EQ(mid, 45.0);
@@ -310,7 +310,7 @@ TEST(CorrectFrame, MidReadoutIsRowZerosViewTurnedToTheMiddleRow) {
 
 TEST(CorrectFrame, OutputDoesNotDependOnThreadCount) {
   const RigModel rig = SmallRig(256, 192);
-  const TrueModel truth = Truth(rig, {"lens_distortion=-0.2,0.05"});
+  const TrueModel truth = TruthWith(rig, {"lens_distortion=-0.2,0.05"});
   const FrameMotion motion = Motion(truth, ConstantRateTrace(Eigen::Vector3d(0.6, -0.8, 1.2)), 0.5);
   const CorrectionGeometry geometry(truth.rig.camera, motion, 0.0, rig.altitude_m);
   const CorrectionMap map(geometry, {});

@@ -20,7 +20,7 @@ using nlohmann::json;
 // Rotations of a constant-rate trace: trapezoid integration of a constant is exact up to rounding.
 constexpr double kRotationTolRad = 1e-12;
 
-TrueModel Base() {
+TrueModel BareModel() {
   TrueModel model;
   model.rig = test::SmallRig(64, 48);
   return model;
@@ -41,7 +41,7 @@ TEST(ApplyInjection, EveryEffectOfTheTableIsKnown) {
   };
   std::set<std::string> names;
   for (const auto& [text, recorded] : cases) {
-    TrueModel model = Base();
+    TrueModel model = BareModel();
     EXPECT_EQ(EffectValueToJson(ApplyInjection(text, &model).value), recorded) << text;
     names.insert(text.substr(0, text.find('=')));
   }
@@ -49,7 +49,7 @@ TEST(ApplyInjection, EveryEffectOfTheTableIsKnown) {
 }
 
 TEST(ApplyInjection, ChangesOnlyItsOwnField) {
-  TrueModel model = Base();
+  TrueModel model = BareModel();
   ApplyInjection("time_offset=0.005", &model);
   EXPECT_EQ(model.rig.time_offset_s, 0.005);
   ApplyInjection("readout_direction=bottom_to_top", &model);
@@ -59,7 +59,7 @@ TEST(ApplyInjection, ChangesOnlyItsOwnField) {
   ApplyInjection("lens_distortion=-0.1,0.02", &model);
   EXPECT_TRUE(model.rig.camera.distortion == LensDistortion(BrownConrady{{-0.1, 0.02, 0, 0, 0}}));
   EXPECT_EQ(model.rig.time_offset_s, 0.005);
-  EXPECT_EQ(model.rig.shutter.readout_s, Base().rig.shutter.readout_s);
+  EXPECT_EQ(model.rig.shutter.readout_s, BareModel().rig.shutter.readout_s);
   EXPECT_EQ(model.gyro_scale, Eigen::Vector3d::Ones());
 }
 
@@ -68,13 +68,13 @@ TEST(ApplyInjection, RejectsBadNamesAndValues) {
                           "gyro_scale=1,1", "gyro_scale=0,1,1", "gyro_to_camera=1,0,0,0,1,0,0,0,2",
                           "gyro_to_camera=1,0,0,0,1,0,0,0,-1", "readout_direction=sideways",
                           "lens_distortion={\"k9\":1}", "velocity=1,2,nan", "clock_rate=[1,2]"}) {
-    TrueModel model = Base();
+    TrueModel model = BareModel();
     EXPECT_THROW(ApplyInjection(bad, &model), std::invalid_argument) << bad;
   }
 }
 
 TEST(TrueModel, CamRateAppliesBiasThenScaleThenAxes) {
-  TrueModel model = Base();
+  TrueModel model = BareModel();
   model.gyro_bias_rad_s = Eigen::Vector3d(0.1, 0.2, 0.3);
   model.gyro_scale = Eigen::Vector3d(2, 3, 4);
   model.rig.cam_from_gyro << 0, -1, 0, 1, 0, 0, 0, 0, 1;
@@ -86,7 +86,7 @@ TEST(TrueModel, CamRateAppliesBiasThenScaleThenAxes) {
 }
 
 TEST(TrueModel, RowGyroTimeFollowsClockRateAndOffset) {
-  TrueModel model = Base();  // 48 rows, 20 ms readout
+  TrueModel model = BareModel();  // 48 rows, 20 ms readout
   model.rig.time_offset_s = 0.003;
   model.clock_rate_ppm = 100;
   const int64_t t_first_ns = 10'000'000'000;  // 10 s
@@ -98,7 +98,7 @@ TEST(TrueModel, RowGyroTimeFollowsClockRateAndOffset) {
 TEST(CameraMotion, FramesAreAnchoredAtRowZero) {
   // Constant rate w: world_from_cam(row v) = Exp(w (t_v - t_0)), identity at row 0, whatever the
   // frame's time in the flight.
-  TrueModel model = Base();
+  TrueModel model = BareModel();
   const Eigen::Vector3d w(0.3, -0.2, 0.5);
   const CameraMotion motion(test::ConstantRateTrace(w, 0.0, 3.0), model);
   for (double t_s : {0.1, 1.7, 2.5}) {
@@ -114,7 +114,7 @@ TEST(CameraMotion, FramesAreAnchoredAtRowZero) {
 }
 
 TEST(CameraMotion, BottomToTopAnchorsAtTheTopRowToo) {
-  TrueModel model = Base();
+  TrueModel model = BareModel();
   model.rig.shutter.direction = ReadoutDirection::kBottomToTop;
   const Eigen::Vector3d w(0.3, -0.2, 0.5);
   const CameraMotion motion(test::ConstantRateTrace(w, 0.0, 3.0), model);
@@ -128,7 +128,8 @@ TEST(CameraMotion, BottomToTopAnchorsAtTheTopRowToo) {
 }
 
 TEST(CameraMotion, FramesOutsideTheGyroTraceThrow) {
-  const CameraMotion motion(test::ConstantRateTrace(Eigen::Vector3d::Zero(), 1.0, 1.0), Base());
+  const CameraMotion motion(test::ConstantRateTrace(Eigen::Vector3d::Zero(), 1.0, 1.0),
+                            BareModel());
   EXPECT_THROW(motion.Frame(SecondsToNs(0.5)), std::out_of_range);
   EXPECT_THROW(motion.Frame(SecondsToNs(1.99)), std::out_of_range);  // readout runs past the end
   EXPECT_NO_THROW(motion.Frame(SecondsToNs(1.5)));

@@ -25,7 +25,7 @@ namespace {
 
 // Integration of a constant rate is exact to rounding; the fixed point stops at 1e-7 px.
 constexpr double kExactPx = 1e-6;
-constexpr double kRotationTolRad = 1e-12;
+constexpr double kVideoRotationTolRad = 1e-12;
 
 TrueModel Model(int width = 96, int height = 72) {
   TrueModel model;
@@ -61,10 +61,11 @@ TEST(CameraMotionAnchor, LaterFrameContinuesTheAnchorsWorld) {
   for (int v : {0, 17, 71}) {
     const double since_s = 0.3 + v * row_s;
     test::ExpectRotationNear(Eigen::Quaterniond(f.world_from_cam[v]), ExpSO3(w * since_s),
-                             kRotationTolRad);
+                             kVideoRotationTolRad);
     EXPECT_LT((f.cam_center_m[v] - model.rig.velocity_mps * since_s).norm(), 1e-12);
   }
-  test::ExpectRotationNear(Eigen::Quaterniond(f.world_from_ref), ExpSO3(w * 0.3), kRotationTolRad);
+  test::ExpectRotationNear(Eigen::Quaterniond(f.world_from_ref), ExpSO3(w * 0.3),
+                           kVideoRotationTolRad);
 }
 
 TEST(FrameMotionRows, FractionalRowsInterpolateBetweenRows) {

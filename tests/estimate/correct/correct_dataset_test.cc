@@ -38,11 +38,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAsan = true;  // 3-10x slower: every other effect of the table
-#else
-constexpr bool kAsan = false;
-#endif
 constexpr int kWidth = 320, kHeight = 240;
 constexpr double kFocalPx = 400.0, kAltitudeM = 50.0;
 // The bar for "interpolation only": the corrected frame against the exact truth.
@@ -146,7 +141,7 @@ TEST(CorrectEndToEnd, TrueModelLeavesOnlyInterpolationForEveryEffect) {
       "clock_rate=300",
       "gyro_to_camera=0.99756405,-0.06975647,0,0.06975647,0.99756405,0,0,0,1"};
   test::TempDir dir;
-  for (size_t k = 0; k < effects.size(); k += kAsan ? 2 : 1) {
+  for (size_t k = 0; k < effects.size(); k += test::kAsan ? 2 : 1) {
     const std::string& effect = effects[k];
     const std::string name = effect.substr(0, effect.find('='));
     const Rendered rendered = Render(dir, name, {effect}, {12.0, 20.0});

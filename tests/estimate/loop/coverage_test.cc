@@ -31,6 +31,7 @@
 #include "sim/units.h"
 #include "tests/estimate/loop/effect_fixtures.h"
 #include "tests/render/render_fixtures.h"
+#include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -42,12 +43,6 @@
 
 namespace shutterlab {
 namespace {
-
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAsan = true;
-#else
-constexpr bool kAsan = false;
-#endif
 
 struct Clip {
   GyroTrace gyro;
@@ -153,7 +148,7 @@ TEST(Coverage, JackknifeCoversTheTruthWithPairCoherentErrors) {
 
 // Rendered and measured: the flow's own errors (see the top).
 TEST(Coverage, JackknifeCoversTheTruthOnRenderedClips) {
-  if (kAsan) GTEST_SKIP() << "50 rendered clips: not under ASan (the fit-only test runs)";
+  if (test::kAsan) GTEST_SKIP() << "50 rendered clips: not under ASan (the fit-only test runs)";
   constexpr int kClips = 50, kFrames = 8, kWidth = 240;
   MeasureOptions measure;  // as validate measures a video pair (MeasureOnePair)
   measure.frame_distortion = false;

@@ -18,8 +18,8 @@
 namespace shutterlab {
 namespace {
 
-constexpr int kStepPx = 16, kPairs = 8;
-constexpr double kNoisePx = 0.05;
+constexpr int kOrientationStepPx = 16, kPairs = 8;
+constexpr double kOrientationNoisePx = 0.05;
 double FrameS(int k) { return 12.6 + k / 30.0; }
 
 struct Stabilised {
@@ -47,7 +47,8 @@ Stabilised MakeStabilised(const TrueModel& model, const GyroTrace& gyro) {
     const Eigen::Matrix3d a = out.truth_reading.axes;
     out.iori[k] = Eigen::Quaterniond(Eigen::Matrix3d(a.transpose() * s[k] * a).transpose());
   }
-  out.pairs = test::MeasuredVideoPairs(model, gyro, kPairs, kStepPx, kNoisePx, 3, FrameS(0), s);
+  out.pairs = test::MeasuredVideoPairs(model, gyro, kPairs, kOrientationStepPx, kOrientationNoisePx,
+                                       3, FrameS(0), s);
   return out;
 }
 
@@ -56,8 +57,8 @@ TEST(ImageOrientation, FindsTheReadingAndTheImageThenFollowsTheGyro) {
   TrueModel model;
   model.rig = test::VideoRig();
   Stabilised clip = MakeStabilised(model, gyro);
-  const std::vector<double> noise(kPairs, kNoisePx);
-  const PointScreen before = ScreenPoints(model, gyro, clip.pairs, noise, kStepPx, {});
+  const std::vector<double> noise(kPairs, kOrientationNoisePx);
+  const PointScreen before = ScreenPoints(model, gyro, clip.pairs, noise, kOrientationStepPx, {});
   ASSERT_TRUE(before.gyro_follow.determined) << before.gyro_follow.verdict;
   EXPECT_FALSE(before.gyro_follow.follows) << before.gyro_follow.verdict;
 
@@ -70,15 +71,15 @@ TEST(ImageOrientation, FindsTheReadingAndTheImageThenFollowsTheGyro) {
   EXPECT_NEAR(check.gain, 1.0, 0.05) << check.verdict;
 
   EXPECT_TRUE(ApplyImageOrientation(check, clip.iori, &clip.pairs).empty());
-  const PointScreen after = ScreenPoints(model, gyro, clip.pairs, noise, kStepPx, {});
+  const PointScreen after = ScreenPoints(model, gyro, clip.pairs, noise, kOrientationStepPx, {});
   // The stabilised camera turns too little for the screening's test: the rotations decide.
   EXPECT_FALSE(after.gyro_follow.determined) << after.gyro_follow.verdict;
   JudgeImageOrientation(before.gyro_follow, after.gyro_follow, &check);
   EXPECT_TRUE(check.holds) << check.verdict;
   EXPECT_LT(check.raw_gain, 0.7) << check.verdict;
   // Applied, the declared model explains the points to the noise.
-  const LoopResult fit = FitEffects(model, gyro, clip.pairs, kNoisePx, {});
-  EXPECT_LT(fit.after.rms_px, 1.3 * kNoisePx);
+  const LoopResult fit = FitEffects(model, gyro, clip.pairs, kOrientationNoisePx, {});
+  EXPECT_LT(fit.after.rms_px, 1.3 * kOrientationNoisePx);
 }
 
 // A written rotation that has nothing to do with the images does not hold.
@@ -93,12 +94,12 @@ TEST(ImageOrientation, AnUnrelatedRotationDoesNotHold) {
     q = Eigen::Quaterniond(Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitX()) *
                            Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitY()));
   }
-  const std::vector<double> noise(kPairs, kNoisePx);
-  const PointScreen before = ScreenPoints(model, gyro, clip.pairs, noise, kStepPx, {});
+  const std::vector<double> noise(kPairs, kOrientationNoisePx);
+  const PointScreen before = ScreenPoints(model, gyro, clip.pairs, noise, kOrientationStepPx, {});
   ImageOrientationCheck check =
       TestImageOrientation(model, gyro, clip.pairs, before.rotation, clip.iori);
   ApplyImageOrientation(check, clip.iori, &clip.pairs);
-  const PointScreen after = ScreenPoints(model, gyro, clip.pairs, noise, kStepPx, {});
+  const PointScreen after = ScreenPoints(model, gyro, clip.pairs, noise, kOrientationStepPx, {});
   JudgeImageOrientation(before.gyro_follow, after.gyro_follow, &check);
   EXPECT_FALSE(check.holds) << check.verdict;
 }

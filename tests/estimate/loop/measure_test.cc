@@ -22,12 +22,6 @@
 namespace shutterlab {
 namespace {
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-
 // The accuracy measure must reach: RMS of |field - truth| over measured pixels, px.
 constexpr double kMaxRmsPx = 0.08;
 // noise_px / RMS(point - truth): an estimate of a noise level from a few thousand points, allowing
@@ -42,7 +36,7 @@ struct RenderedPair {
 
 // 1280x960, fx 1100, 30 ms readout, 50 m (half size under sanitizers: 4x fewer pixels).
 RigModel AerialRig() {
-  const double s = kSanitized ? 0.5 : 1.0;
+  const double s = test::kAsan ? 0.5 : 1.0;
   RigModel rig;
   rig.camera.width = static_cast<int>(1280 * s);
   rig.camera.height = static_cast<int>(960 * s);
@@ -75,7 +69,7 @@ const std::vector<RenderedPair>& Pairs(const std::string& scene_name) {
   auto it = cache.find(scene_name);
   if (it != cache.end()) return it->second;
   cv::Mat scene = ReadImage(scene_name);
-  if (kSanitized) cv::resize(scene, scene, {}, 0.5, 0.5, cv::INTER_AREA);
+  if (test::kAsan) cv::resize(scene, scene, {}, 0.5, 0.5, cv::INTER_AREA);
   SynthOptions synth;
   synth.profile = MotionProfile::kFlight;
   synth.rate_hz = 1000.0;
@@ -88,8 +82,8 @@ const std::vector<RenderedPair>& Pairs(const std::string& scene_name) {
   const CameraMotion motion(trace, truth);
   std::vector<RenderedPair> pairs;
   // Capture times picked from this trace for D of about 2, 6, 10, 15 and 24 px (full size).
-  const std::vector<double> times_s = kSanitized ? std::vector<double>{10.1, 17.0}
-                                                 : std::vector<double>{8.7, 7.9, 10.1, 17.0, 23.7};
+  const std::vector<double> times_s = test::kAsan ? std::vector<double>{10.1, 17.0}
+                                                  : std::vector<double>{8.7, 7.9, 10.1, 17.0, 23.7};
   for (double t_s : times_s) pairs.push_back(RenderPair(scene, truth, motion, t_s));
   return cache[scene_name] = pairs;
 }
@@ -158,7 +152,7 @@ TEST(Measure, AccurateOnRenderedGroundTexture) { ExpectAccurateOnScene(test::Gro
 TEST(Measure, AccurateOnAFisheyeRender) {
   const cv::Mat scene = ReadImage(test::GroundScenePath(1));
   TrueModel truth;
-  truth.rig = kSanitized ? test::FisheyeRig(320, 240) : test::FisheyeRig(640, 480);
+  truth.rig = test::kAsan ? test::FisheyeRig(320, 240) : test::FisheyeRig(640, 480);
   truth.rig.altitude_m = 20.0;  // the scene's 4 cm pixels seen about as fine as the camera's
   SynthOptions synth;
   synth.profile = MotionProfile::kFlight;

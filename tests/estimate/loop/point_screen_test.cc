@@ -15,14 +15,14 @@
 namespace shutterlab {
 namespace {
 
-constexpr int kStepPx = 16;
-constexpr double kNoisePx = 0.05;  // rms length
+constexpr int kScreenStepPx = 16;
+constexpr double kScreenNoisePx = 0.05;  // rms length
 
 // Video pairs of the video rig at 30 fps from 12.6 s of the flight (its liveliest stretch), points
-// on a 16 px grid, measured as `truth` moves them plus Gaussian noise (kNoisePx rms length).
+// on a 16 px grid, measured as `truth` moves them plus Gaussian noise (kScreenNoisePx rms length).
 std::vector<FramePoints> Pairs(const TrueModel& truth, const GyroTrace& gyro, int pairs,
                                uint64_t seed = 1) {
-  return test::MeasuredVideoPairs(truth, gyro, pairs, kStepPx, kNoisePx, seed);
+  return test::MeasuredVideoPairs(truth, gyro, pairs, kScreenStepPx, kScreenNoisePx, seed);
 }
 
 std::vector<Eigen::Vector2d> Predicted(const TrueModel& model, const GyroTrace& gyro,
@@ -48,23 +48,23 @@ TEST(DetectCameraFixed, FindsTheRowsThatStayAndNothingElse) {
   // The bottom quarter moves with the camera: measured 0 (plus noise) wherever the scene moves.
   const int fixed_from = model.rig.camera.height * 3 / 4;
   std::mt19937_64 rng(5);
-  std::normal_distribution<double> noise(0.0, kNoisePx / std::sqrt(2.0));
+  std::normal_distribution<double> noise(0.0, kScreenNoisePx / std::sqrt(2.0));
   for (FramePoints& f : pairs) {
     for (MeasuredPoint& p : f.points) {
       if (p.v >= fixed_from) p.dx = noise(rng), p.dy = noise(rng);
     }
   }
-  const std::vector<double> noise_px(pairs.size(), kNoisePx);
+  const std::vector<double> noise_px(pairs.size(), kScreenNoisePx);
   const CameraFixedRegion region =
       DetectCameraFixed(pairs, Predicted(model, gyro, pairs), noise_px, model.rig.camera.width,
-                        model.rig.camera.height, kStepPx);
+                        model.rig.camera.height, kScreenStepPx);
   ASSERT_FALSE(region.whole_image);
   int wrong = 0, found = 0, fixed_cells = 0;
   for (int r = 0; r < region.rows; ++r) {
     for (int c = 0; c < region.cols; ++c) {
       const size_t k = static_cast<size_t>(r) * region.cols + c;
       if (region.testable[k] == 0) continue;
-      const bool fixed = (r * kStepPx + kStepPx / 2) >= fixed_from;
+      const bool fixed = (r * kScreenStepPx + kScreenStepPx / 2) >= fixed_from;
       fixed_cells += fixed;
       found += fixed && region.fixed[k];
       wrong += !fixed && region.fixed[k];
@@ -85,12 +85,14 @@ TEST(DetectCameraFixed, CellsThatMeasureNothingJoinTheRegionBelowIt) {
   const TrueModel model = Declared();
   std::vector<FramePoints> pairs = Pairs(model, gyro, 6);
   const int height = model.rig.camera.height, width = model.rig.camera.width;
-  const int fixed_from = height * 3 / 4, flat_from = fixed_from + 3 * kStepPx;
+  const int fixed_from = height * 3 / 4, flat_from = fixed_from + 3 * kScreenStepPx;
   const auto in_hole = [&](const MeasuredPoint& p) {  // a flat patch in the scene
-    return p.u >= 4 * kStepPx && p.u < 8 * kStepPx && p.v >= 4 * kStepPx && p.v < 8 * kStepPx;
+    return p.u >= 4 * kScreenStepPx && p.u < 8 * kScreenStepPx && p.v >= 4 * kScreenStepPx &&
+           p.v < 8 * kScreenStepPx;
   };
   const auto in_small = [&](const MeasuredPoint& p) {  // three cells beside the hole that stay
-    return p.u >= 8 * kStepPx && p.u < 11 * kStepPx && p.v >= 4 * kStepPx && p.v < 5 * kStepPx;
+    return p.u >= 8 * kScreenStepPx && p.u < 11 * kScreenStepPx && p.v >= 4 * kScreenStepPx &&
+           p.v < 5 * kScreenStepPx;
   };
   for (FramePoints& f : pairs) {
     std::vector<MeasuredPoint> kept;
@@ -101,19 +103,20 @@ TEST(DetectCameraFixed, CellsThatMeasureNothingJoinTheRegionBelowIt) {
     }
     f.points = std::move(kept);
   }
-  const CameraFixedRegion region =
-      DetectCameraFixed(pairs, Predicted(model, gyro, pairs),
-                        std::vector<double>(pairs.size(), kNoisePx), width, height, kStepPx);
+  const CameraFixedRegion region = DetectCameraFixed(
+      pairs, Predicted(model, gyro, pairs), std::vector<double>(pairs.size(), kScreenNoisePx),
+      width, height, kScreenStepPx);
   ASSERT_FALSE(region.whole_image);
-  for (int v = flat_from + kStepPx / 2; v < height; v += kStepPx) {
-    for (int u = kStepPx / 2; u < width; u += kStepPx) {
+  for (int v = flat_from + kScreenStepPx / 2; v < height; v += kScreenStepPx) {
+    for (int u = kScreenStepPx / 2; u < width; u += kScreenStepPx) {
       EXPECT_TRUE(region.Contains(u, v)) << u << ", " << v;
     }
   }
   EXPECT_GT(region.cells_joined, 0u);
-  EXPECT_FALSE(region.Contains(6 * kStepPx, 6 * kStepPx));         // the hole
-  EXPECT_TRUE(region.Contains(9 * kStepPx + 8, 4 * kStepPx + 8));  // the 3 cells themselves
-  EXPECT_FALSE(region.Contains(width / 2, fixed_from - kStepPx));  // the scene above
+  EXPECT_FALSE(region.Contains(6 * kScreenStepPx, 6 * kScreenStepPx));  // the hole
+  EXPECT_TRUE(
+      region.Contains(9 * kScreenStepPx + 8, 4 * kScreenStepPx + 8));    // the 3 cells themselves
+  EXPECT_FALSE(region.Contains(width / 2, fixed_from - kScreenStepPx));  // the scene above
 }
 
 TEST(DetectCameraFixed, AWholeImageThatStaysIsNoRegion) {
@@ -124,8 +127,8 @@ TEST(DetectCameraFixed, AWholeImageThatStaysIsNoRegion) {
     for (MeasuredPoint& p : f.points) p.dx = p.dy = 0.0;
   }
   const CameraFixedRegion region = DetectCameraFixed(
-      pairs, Predicted(model, gyro, pairs), std::vector<double>(pairs.size(), kNoisePx),
-      model.rig.camera.width, model.rig.camera.height, kStepPx);
+      pairs, Predicted(model, gyro, pairs), std::vector<double>(pairs.size(), kScreenNoisePx),
+      model.rig.camera.width, model.rig.camera.height, kScreenStepPx);
   EXPECT_TRUE(region.whole_image);
 }
 
@@ -157,7 +160,7 @@ TEST(RotationConsensus, LeavesOutWhatMovesOnItsOwnNotWhatTheLoopWillFit) {
   std::vector<PointStatus> status(total, PointStatus::kKept);
   const std::vector<FrameConsensus> consensus =
       RotationConsensus(declared, pairs, Predicted(declared, gyro, pairs),
-                        std::vector<double>(pairs.size(), kNoisePx), &status);
+                        std::vector<double>(pairs.size(), kScreenNoisePx), &status);
   size_t k = 0, car_left_out = 0, scene_left_out = 0;
   for (const FramePoints& f : pairs) {
     for (const MeasuredPoint& p : f.points) {
@@ -177,14 +180,14 @@ TEST(CheckImageFollowsGyro, AStabilisedImageDoesNotFollow) {
   const TrueModel declared = Declared();
   TrueModel stabilised = declared;
   stabilised.gyro_scale = Eigen::Vector3d::Constant(0.2);
-  const std::vector<double> noise(8, kNoisePx);
+  const std::vector<double> noise(8, kScreenNoisePx);
   const PointScreen follows =
-      ScreenPoints(declared, gyro, Pairs(declared, gyro, 8), noise, kStepPx, ScreenOptions{});
+      ScreenPoints(declared, gyro, Pairs(declared, gyro, 8), noise, kScreenStepPx, ScreenOptions{});
   ASSERT_TRUE(follows.gyro_follow.determined) << follows.gyro_follow.verdict;
   EXPECT_TRUE(follows.gyro_follow.follows);
   EXPECT_NEAR(follows.gyro_follow.gain, 1.0, 0.05);
-  const PointScreen screen =
-      ScreenPoints(declared, gyro, Pairs(stabilised, gyro, 8), noise, kStepPx, ScreenOptions{});
+  const PointScreen screen = ScreenPoints(declared, gyro, Pairs(stabilised, gyro, 8), noise,
+                                          kScreenStepPx, ScreenOptions{});
   ASSERT_TRUE(screen.gyro_follow.determined) << screen.gyro_follow.verdict;
   EXPECT_FALSE(screen.gyro_follow.follows) << screen.gyro_follow.verdict;
   EXPECT_NEAR(screen.gyro_follow.gain, 0.2, 0.05);

@@ -173,8 +173,8 @@ LoopResult Loop(const TrueModel& declared, const GyroTrace& gyro,
   return CloseTheLoop(declared.rig, gyro, pairs, noise_px, options);
 }
 
-constexpr double kNoisePx = 0.03;  // per component
-constexpr double kNoiseRmsPx = kNoisePx * 1.41421356;
+constexpr double kVideoNoisePx = 0.03;  // per component
+constexpr double kNoiseRmsPx = kVideoNoisePx * 1.41421356;
 
 TEST(CloseTheLoopVideo, FindsAWronglyLabelledGyro) {
   // The sensor's axes are a quarter turn about z and a flip from what camera.json says: far
@@ -183,7 +183,7 @@ TEST(CloseTheLoopVideo, FindsAWronglyLabelledGyro) {
   TrueModel truth, declared;
   truth.rig = declared.rig = test::VideoRig();
   ApplyInjection("gyro_to_camera=0,1,0,1,0,0,0,0,-1", &truth);
-  const std::vector<FramePoints> pairs = RenderedPairs(truth, gyro, 8, 32, kNoisePx);
+  const std::vector<FramePoints> pairs = RenderedPairs(truth, gyro, 8, 32, kVideoNoisePx);
   const LoopResult loop = Loop(declared, gyro, pairs, false, kNoiseRmsPx);
   ASSERT_FALSE(loop.effects.empty());
   EXPECT_EQ(Spec(loop.effects.front().effect).name, "gyro_to_camera");
@@ -201,7 +201,7 @@ TEST(CloseTheLoopVideo, RecoversTimeOffsetNotAClockRateOverAShortClip) {
   TrueModel truth, declared;
   truth.rig = declared.rig = test::VideoRig();
   truth.rig.time_offset_s = 0.004;
-  const std::vector<FramePoints> pairs = RenderedPairs(truth, gyro, 15, 32, kNoisePx);
+  const std::vector<FramePoints> pairs = RenderedPairs(truth, gyro, 15, 32, kVideoNoisePx);
   for (bool translation : {false, true}) {
     const LoopResult loop = Loop(declared, gyro, pairs, translation, kNoiseRmsPx);
     ASSERT_EQ(loop.effects.size(), 1u) << translation;
@@ -216,7 +216,7 @@ TEST(CloseTheLoopVideo, TranslationExplainsAMovingCameraThatRotationCannot) {
   TrueModel truth, declared;
   truth.rig = declared.rig = test::VideoRig();
   truth.rig.velocity_mps = {2.0, 1.0, 3.0};
-  const std::vector<FramePoints> pairs = RenderedPairs(truth, gyro, 8, 32, kNoisePx);
+  const std::vector<FramePoints> pairs = RenderedPairs(truth, gyro, 8, 32, kVideoNoisePx);
   const LoopResult rotation = Loop(declared, gyro, pairs, false, kNoiseRmsPx);
   const LoopResult translation = Loop(declared, gyro, pairs, true, kNoiseRmsPx);
   EXPECT_TRUE(rotation.unexplained) << rotation.after.rms_px;
@@ -224,7 +224,7 @@ TEST(CloseTheLoopVideo, TranslationExplainsAMovingCameraThatRotationCannot) {
   EXPECT_TRUE(translation.effects.empty()) << Spec(translation.effects.front().effect).name;
   EXPECT_EQ(translation.pair_translation_dirs.size(), pairs.size());
   // Across the line the noise alone is left: one component of sigma.
-  EXPECT_LT(translation.after.rms_px, 1.3 * kNoisePx);
+  EXPECT_LT(translation.after.rms_px, 1.3 * kVideoNoisePx);
 }
 
 TEST(CloseTheLoopVideo, RecoversPerAxisGyroScale) {
@@ -232,7 +232,7 @@ TEST(CloseTheLoopVideo, RecoversPerAxisGyroScale) {
   TrueModel truth, declared;
   truth.rig = declared.rig = test::VideoRig();
   ApplyInjection("gyro_scale=1.05,0.95,1.04", &truth);
-  const std::vector<FramePoints> pairs = RenderedPairs(truth, gyro, 15, 32, kNoisePx);
+  const std::vector<FramePoints> pairs = RenderedPairs(truth, gyro, 15, 32, kVideoNoisePx);
   const LoopResult loop = Loop(declared, gyro, pairs, false, kNoiseRmsPx);
   ASSERT_EQ(loop.effects.size(), 1u);
   EXPECT_EQ(Spec(loop.effects[0].effect).name, "gyro_scale");
@@ -245,7 +245,7 @@ TEST(FitEffects, FitsTheGivenEffectsWithoutSelection) {
   TrueModel truth, declared;
   truth.rig = declared.rig = test::VideoRig();
   truth.rig.shutter.readout_s = 0.036;
-  const std::vector<FramePoints> pairs = RenderedPairs(truth, gyro, 8, 32, kNoisePx);
+  const std::vector<FramePoints> pairs = RenderedPairs(truth, gyro, 8, 32, kVideoNoisePx);
   LoopOptions options;
   const LoopResult fit = FitEffects(declared.rig, gyro, pairs, kNoiseRmsPx,
                                     {Effect::kReadoutTime, Effect::kTimeOffset}, options);

@@ -19,7 +19,7 @@
 namespace shutterlab {
 namespace {
 
-constexpr int64_t kPeriodNs = 1000000;  // 1 kHz, the paper's logging rate
+constexpr int64_t kFlightPeriodNs = 1000000;  // 1 kHz, the paper's logging rate
 constexpr double kDtS = 1e-3;
 // Bias segment: the first second, still (zero rates, so the bias is exactly zero).
 constexpr double kStillS = 1.0;
@@ -34,14 +34,14 @@ GyroTrace MakeTrace(double motion_s, const std::function<Eigen::Vector3d(size_t)
   const size_t motion = static_cast<size_t>(std::llround(motion_s / kDtS));
   for (size_t i = 0; i < still + motion; ++i) {
     GyroSample s;
-    s.t_ns = 2000000000 + static_cast<int64_t>(i) * kPeriodNs;
+    s.t_ns = 2000000000 + static_cast<int64_t>(i) * kFlightPeriodNs;
     s.omega_rad_s = i < still ? Eigen::Vector3d::Zero() : rate_of_index(i - still);
     samples.push_back(s);
   }
   return GyroTrace(std::move(samples));
 }
 
-FlightOptions Options() {
+FlightOptions FlightDefaults() {
   FlightOptions options;
   options.bias = {0.0, kStillS};
   return options;
@@ -54,7 +54,7 @@ double ThresholdRad(double limit_m, double altitude_m = 50.0, double allowance_a
 TEST(Flight, ThresholdMatchesPaper) {
   // 5 cm at 50 m is atan(0.001) = 206.26", plus the 20" allowance.
   const auto trace = MakeTrace(1.0, [](size_t) { return Eigen::Vector3d::Zero(); });
-  const FlightResult r = Flight(trace, Options());
+  const FlightResult r = Flight(trace, FlightDefaults());
   ASSERT_EQ(r.rows.size(), 4u);
   EXPECT_NEAR(r.rows[0].threshold_arcsec, 226.2648, 1e-4);
   EXPECT_NEAR(r.rows[2].threshold_arcsec, 432.5291, 1e-4);  // atan(0.002) + 20"
@@ -69,7 +69,7 @@ TEST(Flight, ConstantRateFlagsAllOrNothing) {
   for (const double factor : {1.0001, 0.9999}) {
     const double rate = threshold / (9 * kDtS) * factor;
     const auto trace = MakeTrace(2.0, [&](size_t) { return Eigen::Vector3d(0, rate, 0); });
-    FlightOptions options = Options();
+    FlightOptions options = FlightDefaults();
     options.limits_m = {0.05};
     options.windows_s = {0.010};
     options.series = true;
@@ -104,7 +104,7 @@ TEST(Flight, SpikesFlagAKnownShare) {
     const bool spike = i % spacing == 25 && i / spacing < spikes;
     return Eigen::Vector3d(spike ? step / kDtS : 0.0, 0, 0);
   });
-  const FlightResult r = Flight(trace, Options());
+  const FlightResult r = Flight(trace, FlightDefaults());
   const size_t total10 = 2000 - 10, total20 = 2000 - 20;
   ASSERT_EQ(r.rows.size(), 4u);  // 5cm x {10, 20} ms, 10cm x {10, 20} ms
   EXPECT_EQ(r.rows[0].windows, total10);
@@ -127,7 +127,7 @@ TEST(Flight, DiagonalRotationVectorIsSqrt3TimesPerAxis) {
   const double rate = 1.2 * threshold / (9 * kDtS);  // vector 1.2x over, per axis 0.69x
   const Eigen::Vector3d axis = Eigen::Vector3d::Ones().normalized();
   const auto trace = MakeTrace(1.0, [&](size_t) -> Eigen::Vector3d { return rate * axis; });
-  FlightOptions options = Options();
+  FlightOptions options = FlightDefaults();
   options.limits_m = {0.05};
   options.windows_s = {0.010};
   options.series = true;
@@ -149,7 +149,7 @@ TEST(Flight, SingleAxisMotionCriteriaAgree) {
   const auto trace = MakeTrace(3.0, [&](size_t i) {
     return Eigen::Vector3d(0, 0, amplitude * std::sin(2 * kPi * 1.3 * i * kDtS));
   });
-  FlightOptions options = Options();
+  FlightOptions options = FlightDefaults();
   options.series = true;
   const FlightResult r = Flight(trace, options);
   bool some_flagged = false, some_clear = false;
@@ -221,7 +221,7 @@ void ExpectPerAxisMatchesBruteForce(const FlightResult& r, const GyroTrace& trac
 // above; vector counts and series against all-pairs AngularDistance of OrientationTrace.
 TEST(Flight, MatchesBruteForceOnRandomMotion) {
   const auto trace = RandomMotionTrace(2500, 42);
-  FlightOptions options = Options();
+  FlightOptions options = FlightDefaults();
   options.series = true;
   const FlightResult r = Flight(trace, options);
   ExpectPerAxisMatchesBruteForce(r, trace, options, 1000);
@@ -275,7 +275,7 @@ FlightResult StreamInRandomChunks(const GyroTrace& trace, const FlightOptions& o
 // streamed in chunks of any size; its counts equal the vector run's per-axis counts too.
 TEST(Flight, PerAxisAloneMatchesBruteForceInChunksOfAnySize) {
   const auto trace = RandomMotionTrace(9000, 11);
-  FlightOptions options = Options();
+  FlightOptions options = FlightDefaults();
   options.vector_criterion = false;
   options.series = true;
   const FlightResult r = StreamInRandomChunks(trace, options, 11);
@@ -305,7 +305,7 @@ TEST(Flight, PerAxisMatchesBruteForceOnAnIrregularClock) {
   ASSERT_GT(trace.sampling().gap_indices.size(), 5u);
   for (const std::vector<double>& windows_s :
        {std::vector<double>{0.010, 0.020}, std::vector<double>{0.020, 0.010}}) {
-    FlightOptions options = Options();
+    FlightOptions options = FlightDefaults();
     options.windows_s = windows_s;
     options.vector_criterion = false;
     options.series = true;
@@ -316,19 +316,19 @@ TEST(Flight, PerAxisMatchesBruteForceOnAnIrregularClock) {
 
 TEST(Flight, BadInputIsRejected) {
   const auto trace = MakeTrace(0.5, [](size_t) { return Eigen::Vector3d::Zero(); });
-  FlightOptions options = Options();
+  FlightOptions options = FlightDefaults();
   options.windows_s = {0.6};  // longer than the 0.5 s after the bias segment
   EXPECT_THROW(Flight(trace, options), std::invalid_argument);
-  options = Options();
+  options = FlightDefaults();
   options.bias = {0.0, 0.005};  // 5 samples: too few for a bias
   EXPECT_THROW(Flight(trace, options), std::invalid_argument);
-  options = Options();
+  options = FlightDefaults();
   options.bias = {0.0, 10.0};  // past the end of the trace: no samples after it
   EXPECT_THROW(Flight(trace, options), std::invalid_argument);
-  options = Options();
+  options = FlightDefaults();
   options.altitude_m = 0;
   EXPECT_THROW(options.Check(), std::invalid_argument);
-  options = Options();
+  options = FlightDefaults();
   options.limits_m.clear();
   EXPECT_THROW(options.Check(), std::invalid_argument);
 }
@@ -337,7 +337,7 @@ TEST(Flight, TableSaysWhichCriterionFlagsMore) {
   const double rate = 1.2 * ThresholdRad(0.05) / (9 * kDtS);
   const Eigen::Vector3d axis = Eigen::Vector3d::Ones().normalized();
   const auto trace = MakeTrace(1.0, [&](size_t) -> Eigen::Vector3d { return rate * axis; });
-  const FlightResult r = Flight(trace, Options());
+  const FlightResult r = Flight(trace, FlightDefaults());
   const std::string table = FlightTable(r);
   EXPECT_NE(table.find("NOT on the safe side"), std::string::npos) << table;
 }
@@ -453,7 +453,7 @@ TEST(Flight, StreamedOnOneThreadOrTwoGivesTheWholeTracesResult) {
   test::TempDir dir;
   const std::string path = dir / "gyro.csv";
   WriteGyroCsv(path, trace);
-  FlightOptions options = Options();
+  FlightOptions options = FlightDefaults();
   options.series = true;
   const FlightResult whole = Flight(ReadGyroCsv(path), options);
   for (bool two_threads : {false, true}) {

@@ -16,9 +16,9 @@ namespace shutterlab {
 namespace {
 
 constexpr double kRateHz = 3000.0;
-constexpr int64_t kPeriodNs = 333'333;  // 3 kHz, an integer period as a logger would stamp it
+constexpr int64_t kNoisePeriodNs = 333'333;  // 3 kHz, an integer period as a logger would stamp it
 // Per-sample rate noise of an MPU-9250 at 3 kHz that gives the paper's ~1.1" window sigma.
-constexpr double kSigmaRadS = 0.0036;
+constexpr double kNoiseSigmaRadS = 0.0036;
 
 // Still trace: white noise of per-sample std sigma on each axis plus a constant bias, uniform
 // times.
@@ -29,7 +29,7 @@ GyroTrace StillTrace(double duration_s, double sigma_rad_s, const Eigen::Vector3
   const size_t n = static_cast<size_t>(std::llround(duration_s * kRateHz));
   std::vector<GyroSample> samples(n);
   for (size_t k = 0; k < n; ++k) {
-    samples[k].t_ns = static_cast<int64_t>(k) * kPeriodNs;
+    samples[k].t_ns = static_cast<int64_t>(k) * kNoisePeriodNs;
     for (int a = 0; a < 3; ++a) samples[k].omega_rad_s[a] = bias_rad_s[a] + sigma_rad_s * unit(rng);
   }
   return GyroTrace(std::move(samples));
@@ -42,7 +42,7 @@ TEST(AnalyzeNoise, ConstantRateGivesExactWindowStatistics) {
   constexpr double kW = 1e-3;
   std::vector<GyroSample> samples;
   for (int64_t k = 0; k < 6000; ++k) {
-    const int64_t t_ns = k * kPeriodNs;
+    const int64_t t_ns = k * kNoisePeriodNs;
     samples.push_back({t_ns, Eigen::Vector3d(t_ns < 1'000'000'000 ? 0.0 : kW, 0.0, 0.0)});
   }
   NoiseOptions options;
@@ -52,7 +52,7 @@ TEST(AnalyzeNoise, ConstantRateGivesExactWindowStatistics) {
   // 1 s at 333333 ns holds samples 0..3000 (t = 0.999999 s), so 2999 remain after it.
   EXPECT_EQ(r.samples_analysed, 2999u);
   EXPECT_EQ(r.windows, 2999u - 120u + 1u);
-  const double step = kW * kPeriodNs * 1e-9 * kArcsecPerRad;
+  const double step = kW * kNoisePeriodNs * 1e-9 * kArcsecPerRad;
   constexpr double kTol = 1e-9;  // arcsec: rounding of the running angle only
   EXPECT_NEAR(r.axes[0].range_mean_arcsec, step * 119, kTol);
   EXPECT_NEAR(r.axes[0].range_max_arcsec, step * 119, kTol);
@@ -72,12 +72,12 @@ TEST(AnalyzeNoise, WhiteNoiseWindowSigmaAndRangeMatchTheory) {
   // 2005).
   constexpr int kN = 120;
   const Eigen::Vector3d true_bias(0.01, -0.02, 0.005);
-  const GyroTrace trace = StillTrace(65.0, kSigmaRadS, true_bias, 42);
+  const GyroTrace trace = StillTrace(65.0, kNoiseSigmaRadS, true_bias, 42);
   NoiseOptions options;
   options.window_samples = kN;
   const NoiseResult r = AnalyzeNoise(trace, options);
-  const double dt = kPeriodNs * 1e-9;
-  const double s = kSigmaRadS * dt * kArcsecPerRad;
+  const double dt = kNoisePeriodNs * 1e-9;
+  const double s = kNoiseSigmaRadS * dt * kArcsecPerRad;
   for (int a = 0; a < 3; ++a) {
     const double db = (r.bias.bias_rad_s[a] - true_bias[a]) * dt * kArcsecPerRad;
     const double var = s * s * (kN * kN - 1.0) / (6.0 * kN) + db * db * (kN * kN - 1.0) / 12.0;
@@ -100,12 +100,13 @@ TEST(AnalyzeNoise, WhiteNoiseWindowSigmaAndRangeMatchTheory) {
     EXPECT_LT(r.axes[a].range_mean_arcsec, 4.7);
     // Allan deviation read on the same samples: N = sigma sqrt(dt).
     constexpr double kArwTol = 0.05;
-    EXPECT_NEAR(r.allan.axes[a].arw_rad_s_sqrt_hz / (kSigmaRadS * std::sqrt(dt)), 1.0, kArwTol);
+    EXPECT_NEAR(r.allan.axes[a].arw_rad_s_sqrt_hz / (kNoiseSigmaRadS * std::sqrt(dt)), 1.0,
+                kArwTol);
   }
 }
 
 TEST(AnalyzeNoise, AgreesWithTheBruteForceWindowTwins) {
-  const GyroTrace trace = StillTrace(6.0, kSigmaRadS, Eigen::Vector3d(0.2, 0.0, -0.1), 8);
+  const GyroTrace trace = StillTrace(6.0, kNoiseSigmaRadS, Eigen::Vector3d(0.2, 0.0, -0.1), 8);
   NoiseOptions options;
   options.window_samples = 37;
   const NoiseResult r = AnalyzeNoise(trace, options);
@@ -131,17 +132,17 @@ TEST(AnalyzeNoise, AgreesWithTheBruteForceWindowTwins) {
 
 TEST(AnalyzeNoise, InjectedBiasIsRecoveredAndRemoved) {
   const Eigen::Vector3d true_bias(0.05, -0.3, 0.8);  // rad/s: large, as an uncalibrated MEMS gyro
-  const GyroTrace biased = StillTrace(8.0, kSigmaRadS, true_bias, 5);
-  const GyroTrace unbiased = StillTrace(8.0, kSigmaRadS, Eigen::Vector3d::Zero(), 5);
+  const GyroTrace biased = StillTrace(8.0, kNoiseSigmaRadS, true_bias, 5);
+  const GyroTrace unbiased = StillTrace(8.0, kNoiseSigmaRadS, Eigen::Vector3d::Zero(), 5);
   NoiseOptions options;
   const NoiseResult rb = AnalyzeNoise(biased, options);
   const NoiseResult ru = AnalyzeNoise(unbiased, options);
   ASSERT_EQ(rb.bias.samples, 15001u);  // 0:5 s at 333333 ns: samples 0..15000 (t = 4.999995 s)
   for (int a = 0; a < 3; ++a) {
     // The mean of 15000 samples has standard error sigma / sqrt(15000); 4 standard errors.
-    EXPECT_NEAR(rb.bias.bias_rad_s[a], true_bias[a], 4.0 * kSigmaRadS / std::sqrt(15000.0));
-    EXPECT_NEAR(rb.bias.stderr_rad_s[a], kSigmaRadS / std::sqrt(15001.0),
-                0.05 * kSigmaRadS / 122.0);
+    EXPECT_NEAR(rb.bias.bias_rad_s[a], true_bias[a], 4.0 * kNoiseSigmaRadS / std::sqrt(15000.0));
+    EXPECT_NEAR(rb.bias.stderr_rad_s[a], kNoiseSigmaRadS / std::sqrt(15001.0),
+                0.05 * kNoiseSigmaRadS / 122.0);
     // Same noise, bias removed: the statistics agree to rounding.
     constexpr double kTol = 1e-9;  // arcsec
     EXPECT_NEAR(rb.axes[a].sigma_mean_arcsec, ru.axes[a].sigma_mean_arcsec, kTol);
@@ -151,7 +152,8 @@ TEST(AnalyzeNoise, InjectedBiasIsRecoveredAndRemoved) {
 
 TEST(AnalyzeNoise, WindowLongerThanTheRestOfTheTraceIsAnError) {
   // 15061 samples: 15001 in 0:5 s, 60 after.
-  const GyroTrace trace = StillTrace(15061.0 / kRateHz, kSigmaRadS, Eigen::Vector3d::Zero(), 1);
+  const GyroTrace trace =
+      StillTrace(15061.0 / kRateHz, kNoiseSigmaRadS, Eigen::Vector3d::Zero(), 1);
   ASSERT_EQ(trace.size(), 15061u);
   NoiseOptions options;
   options.window_samples = 61;
@@ -172,7 +174,8 @@ TEST(AnalyzeNoise, WindowLongerThanTheRestOfTheTraceIsAnError) {
 }
 
 TEST(NoiseTable, HasTheWindowStatisticsAndTheAllanCoefficients) {
-  const NoiseResult r = AnalyzeNoise(StillTrace(6.0, kSigmaRadS, Eigen::Vector3d::Zero(), 2), {});
+  const NoiseResult r =
+      AnalyzeNoise(StillTrace(6.0, kNoiseSigmaRadS, Eigen::Vector3d::Zero(), 2), {});
   ASSERT_FALSE(r.allan.empty());
   const std::string table = NoiseTable(r);
   EXPECT_NE(table.find("sigma mean"), std::string::npos);

@@ -39,8 +39,8 @@ std::vector<int64_t> EventTimes() {
 }
 
 // A photo whose camera clock shows UTC + zone + error at the exposure, to the ms.
-PhotoRecord Photo(const std::string& name, int64_t utc_ns, int64_t zone_ns, int64_t error_ns,
-                  bool write_zone = false) {
+PhotoRecord StampedPhoto(const std::string& name, int64_t utc_ns, int64_t zone_ns, int64_t error_ns,
+                         bool write_zone = false) {
   PhotoMetadata m;
   m.width = 100;
   m.height = 100;
@@ -64,8 +64,8 @@ TEST(PlacePhotos, PairsByCaptureTimeWithTheLogsEventsAndReportsTheResidual) {
   PhotoSet set;
   // Photos 1..9 (the first exposure has no photo), numbered unlike the log's sequence.
   for (size_t k = 1; k < t.size(); ++k) {
-    set.photos.push_back(Photo("DJI_0" + std::to_string(100 + k) + ".JPG", kUtcAtLogZeroNs + t[k],
-                               8 * kHourNs, kErrorsMs[k] * kMs));
+    set.photos.push_back(StampedPhoto("DJI_0" + std::to_string(100 + k) + ".JPG",
+                                      kUtcAtLogZeroNs + t[k], 8 * kHourNs, kErrorsMs[k] * kMs));
   }
   const PhotoClock clock = PlacePhotos(set, log, nullptr, {});
   ASSERT_EQ(clock.paired, 9u) << clock.method;
@@ -97,7 +97,7 @@ TEST(PlacePhotos, WholeSecondCaptureTimesStillPickTheRightEvents) {
   PhotoSet set;
   for (size_t k = 0; k < t.size(); ++k) {
     PhotoRecord r =
-        Photo("P" + std::to_string(k) + ".jpg", kUtcAtLogZeroNs + t[k], -5 * kHourNs, 0);
+        StampedPhoto("P" + std::to_string(k) + ".jpg", kUtcAtLogZeroNs + t[k], -5 * kHourNs, 0);
     ClockFace& face = *r.metadata.capture_time;
     face.face_ns -= face.face_ns % kNsPerSecond;  // EXIF without SubSecTimeOriginal
     face.resolution_s = 1.0;
@@ -127,7 +127,7 @@ TEST(PlacePhotos, WithoutGpsTimeCaptureTimesAreMatchedOnTheLogsClock) {
   PhotoSet set;
   for (size_t k = 1; k < t.size(); ++k)
     set.photos.push_back(
-        Photo("P" + std::to_string(k) + ".jpg", t[k], kCameraAheadNs, kErrorsMs[k] * kMs));
+        StampedPhoto("P" + std::to_string(k) + ".jpg", t[k], kCameraAheadNs, kErrorsMs[k] * kMs));
   const PhotoClock clock = PlacePhotos(set, log, nullptr, {});
   ASSERT_EQ(clock.paired, 8u) << clock.method;
   ASSERT_EQ(clock.placed, 9u) << clock.method;
@@ -217,9 +217,9 @@ TEST(PlacePhotos, MrkPairsByPhotoNumberAndGpsTime) {
     mrk.events.push_back(e);
   }
   PhotoSet set;
-  set.photos.push_back(Photo("DJI_0003.JPG", kUtcAtLogZeroNs + t[2], 0, 40 * kMs));
-  set.photos.push_back(Photo("DJI_0007.JPG", kUtcAtLogZeroNs + t[6], 0, 20 * kMs));
-  set.photos.push_back(Photo("DJI_0099.JPG", kUtcAtLogZeroNs + 150 * kNsPerSecond, 0, 0));
+  set.photos.push_back(StampedPhoto("DJI_0003.JPG", kUtcAtLogZeroNs + t[2], 0, 40 * kMs));
+  set.photos.push_back(StampedPhoto("DJI_0007.JPG", kUtcAtLogZeroNs + t[6], 0, 20 * kMs));
+  set.photos.push_back(StampedPhoto("DJI_0099.JPG", kUtcAtLogZeroNs + 150 * kNsPerSecond, 0, 0));
   const PhotoClock clock = PlacePhotos(set, log, &mrk, {});
   EXPECT_EQ(clock.paired, 2u);
   EXPECT_EQ(*clock.placements[0].t_ns, t[2]);
@@ -237,7 +237,7 @@ TEST(PlacePhotos, WithoutEventsByCaptureTimeAndTheZone) {
   const FlightLog log = LogWithGps();
   PhotoSet written;  // OffsetTimeOriginal +02:00 in the file
   written.photos.push_back(
-      Photo("a.jpg", kUtcAtLogZeroNs + 30 * kNsPerSecond, 2 * kHourNs, 0, true));
+      StampedPhoto("a.jpg", kUtcAtLogZeroNs + 30 * kNsPerSecond, 2 * kHourNs, 0, true));
   PhotoClock clock = PlacePhotos(written, log, nullptr, {});
   ASSERT_TRUE(clock.placements[0].t_ns) << clock.placements[0].problem;
   EXPECT_NEAR(static_cast<double>(*clock.placements[0].t_ns - 30 * kNsPerSecond), 0.0, 2.0);
@@ -246,8 +246,8 @@ TEST(PlacePhotos, WithoutEventsByCaptureTimeAndTheZone) {
   // No zone anywhere: the one quarter hour (+05:30) that puts both photos inside the 200 s log.
   PhotoSet unzoned;
   const int64_t zone = 5 * kHourNs + kHourNs / 2;
-  unzoned.photos.push_back(Photo("b.jpg", kUtcAtLogZeroNs + 30 * kNsPerSecond, zone, 0));
-  unzoned.photos.push_back(Photo("c.jpg", kUtcAtLogZeroNs + 90 * kNsPerSecond, zone, 0));
+  unzoned.photos.push_back(StampedPhoto("b.jpg", kUtcAtLogZeroNs + 30 * kNsPerSecond, zone, 0));
+  unzoned.photos.push_back(StampedPhoto("c.jpg", kUtcAtLogZeroNs + 90 * kNsPerSecond, zone, 0));
   clock = PlacePhotos(unzoned, log, nullptr, {});
   ASSERT_EQ(clock.placed, 2u) << clock.placements[0].problem;
   EXPECT_NEAR(static_cast<double>(*clock.placements[1].t_ns - 90 * kNsPerSecond), 0.0, 2.0);

@@ -153,10 +153,6 @@ class DataFlashBuilder {
   std::string bytes_;
 };
 
-bool AnyWarningContains(const FlightLog& log, const std::string& text) {
-  return test::AnyWarningContains(log.warnings, text);
-}
-
 // A 1 kHz GYR stream (instance 0 and a 500 Hz instance 1), a 400 Hz IMU stream, parameters and
 // camera events. Values are exact in float32, so they must come back exactly.
 DataFlashBuilder FlightFile(int gyr_samples) {
@@ -302,9 +298,10 @@ TEST(DataFlash, SaysWhenABatchEndsShortOfItsDeclaredSamples) {
   for (uint16_t seq = 0; seq < 18; ++seq) b.Isbd(7, seq, std::vector<int16_t>(32, 5), {}, {});
   const FlightLog log = ParseDataFlash(b.bytes(), "short_batch.bin");
   EXPECT_EQ(log.gyro.size(), 576u);
-  EXPECT_TRUE(AnyWarningContains(log, "gyro batch 7 (ISBH at 140.184 s): 576 of the 1024 samples"))
+  EXPECT_TRUE(
+      test::AnyWarningContains(log, "gyro batch 7 (ISBH at 140.184 s): 576 of the 1024 samples"))
       << test::JoinedWarnings(log.warnings);
-  EXPECT_TRUE(AnyWarningContains(log, "448 declared samples never logged"));
+  EXPECT_TRUE(test::AnyWarningContains(log, "448 declared samples never logged"));
 }
 
 TEST(DataFlash, AppliesTheUnitsTableToGyroFields) {
@@ -329,7 +326,7 @@ TEST(DataFlash, CameraEventsWithoutBootTimeAreCountedNotPlaced) {
   for (int k = 0; k < 10; ++k) b.Imu(1000 + k * 1000, 0, 0, 0, 0);
   const FlightLog log = ParseDataFlash(b.bytes(), "oldcam.bin");
   EXPECT_TRUE(log.camera_events.empty());
-  EXPECT_TRUE(AnyWarningContains(log, "1 camera event(s) without a boot-time stamp"));
+  EXPECT_TRUE(test::AnyWarningContains(log, "1 camera event(s) without a boot-time stamp"));
 }
 
 // GPS (TimeUS, I, Status, GMS, GWk): the boot clock against UTC from 3-D fixes of instance 0.
@@ -362,7 +359,7 @@ TEST(DataFlash, TruncatedCopyKeepsWhatCameBefore) {
   const std::string& bytes = b.bytes();
   const std::string cut = bytes.substr(0, bytes.size() / 2 + 7);
   const FlightLog log = ParseDataFlash(cut, "cut.bin");
-  EXPECT_TRUE(AnyWarningContains(log, "truncated")) << log.warnings.size();
+  EXPECT_TRUE(test::AnyWarningContains(log, "truncated")) << log.warnings.size();
   EXPECT_GT(log.gyro.size(), 400u);
   EXPECT_LT(log.gyro.size(), 1000u);
   for (size_t k = 0; k < log.gyro.size(); ++k) {
@@ -384,7 +381,7 @@ TEST(DataFlash, CorruptedCopySkipsDamageAndReadsOn) {
   const FlightLog log = ParseDataFlash(bytes, "corrupt.bin");
   EXPECT_EQ(log.gyro_source, "GYR");
   EXPECT_EQ(log.records_skipped, 2u);
-  EXPECT_TRUE(AnyWarningContains(log, "corrupt bytes skipped in total"));
+  EXPECT_TRUE(test::AnyWarningContains(log, "corrupt bytes skipped in total"));
   // The two damaged GYR messages are lost (of instance 0 or 1), nothing else.
   EXPECT_GE(log.gyro.size(), 998u);
   EXPECT_EQ(log.camera_events.size(), 10u);  // the CAM ones (TRIG not used)
@@ -420,9 +417,9 @@ TEST(DataFlash, SkipsInconsistentFmt) {
   for (int k = 0; k < 10; ++k) b.Gyr(1000 + k * 1000, 0, 1000 + k * 1000, 0, 0, 0);
   const FlightLog log = ParseDataFlash(b.bytes(), "fmt.bin");
   EXPECT_EQ(log.records_skipped, 3u);
-  EXPECT_TRUE(AnyWarningContains(log, "declares length 50 but its format 'QBQfff' needs 32"));
-  EXPECT_TRUE(AnyWarningContains(log, "unknown format character 'X'"));
-  EXPECT_TRUE(AnyWarningContains(log, "2 labels"));
+  EXPECT_TRUE(test::AnyWarningContains(log, "declares length 50 but its format 'QBQfff' needs 32"));
+  EXPECT_TRUE(test::AnyWarningContains(log, "unknown format character 'X'"));
+  EXPECT_TRUE(test::AnyWarningContains(log, "2 labels"));
   EXPECT_EQ(log.gyro.size(), 10u);
 }
 
@@ -578,7 +575,8 @@ TEST(DataFlashStream, ChunksAndLimitsDoNotChangeWhatIsRead) {
   const FlightLog log = ParseDataFlash(DisorderedFile(), "disordered.bin");
   EXPECT_EQ(log.gyro.size(), 1200u);
   // (Counted where the times step back: after the late run, and at the run stamped early.)
-  EXPECT_TRUE(AnyWarningContains(log, "GYR: 2 samples were out of time order and were sorted"))
+  EXPECT_TRUE(
+      test::AnyWarningContains(log, "GYR: 2 samples were out of time order and were sorted"))
       << test::JoinedWarnings(log.warnings);
 }
 

@@ -36,12 +36,6 @@ const char kHeader[] =
     "gscale,0.00122173\n"
     "ascale,0.00059875488\n";
 
-std::string WriteText(const test::TempDir& dir, const std::string& name, const std::string& text) {
-  const std::string path = dir / name;
-  std::ofstream(path) << text;
-  return path;
-}
-
 std::string Replace(std::string text, const std::string& from, const std::string& to) {
   const size_t at = text.find(from);
   EXPECT_NE(at, std::string::npos) << from;
@@ -64,12 +58,12 @@ void ExpectIoError(const std::string& path, long line, const std::string& proble
 
 TEST(Gcsv, ReadsTheDocumentedExample) {
   test::TempDir dir;
-  const std::string path = WriteText(dir, "a.gcsv",
-                                     std::string(kHeader) +
-                                         "t,gx,gy,gz,ax,ay,az\n"
-                                         "0,39,86,183,-1137,-15689,-2986\n"
-                                         "1,56,100,202,-1179,-15694,-2887\n"
-                                         "2,63,108,218,-1247,-15702,-2794\n");
+  const std::string path = test::WriteText(dir, "a.gcsv",
+                                           std::string(kHeader) +
+                                               "t,gx,gy,gz,ax,ay,az\n"
+                                               "0,39,86,183,-1137,-15689,-2986\n"
+                                               "1,56,100,202,-1179,-15694,-2887\n"
+                                               "2,63,108,218,-1247,-15702,-2794\n");
   const GcsvLog log = ReadGcsv(path);
   ASSERT_EQ(log.trace.size(), 3u);
   EXPECT_EQ(log.trace[1].t_ns, 1000000);  // 1 * tscale 0.001 s, exact
@@ -100,7 +94,7 @@ TEST(Gcsv, OrientationFollowsTelemetryParser) {
   test::TempDir dir;
   const std::string text =
       Replace(kHeader, "orientation,XYZ", "orientation,YxZ") + "t,gx,gy,gz\n0,1,2,3\n";
-  const GcsvLog log = ReadGcsv(WriteText(dir, "o.gcsv", text));
+  const GcsvLog log = ReadGcsv(test::WriteText(dir, "o.gcsv", text));
   const Eigen::Vector3d expected = Eigen::Vector3d(2, -1, 3) * 0.00122173;
   EXPECT_NEAR((log.trace[0].omega_rad_s - expected).norm(), 0.0, 1e-15);
 }
@@ -108,7 +102,7 @@ TEST(Gcsv, OrientationFollowsTelemetryParser) {
 TEST(Gcsv, MissingOrientationDefaultsLikeGyroflow) {
   test::TempDir dir;
   const std::string text = Replace(kHeader, "orientation,XYZ\n", "") + "t,gx,gy,gz\n0,1,2,3\n";
-  const GcsvLog log = ReadGcsv(WriteText(dir, "o.gcsv", text));
+  const GcsvLog log = ReadGcsv(test::WriteText(dir, "o.gcsv", text));
   EXPECT_EQ(log.orientation, "xzY");
   EXPECT_EQ(log.warnings.size(), 1u);
   EXPECT_NEAR(log.trace[0].omega_rad_s.y(), -3 * 0.00122173, 1e-15);
@@ -125,29 +119,29 @@ TEST(Gcsv, ReadoutDirectionCodes) {
     const std::string text = Replace(kHeader, "frame_readout_direction,0",
                                      std::string("frame_readout_direction,") + c.code) +
                              "t,gx,gy,gz\n0,1,2,3\n";
-    EXPECT_STREQ(
-        ReadoutDirectionName(ReadGcsv(WriteText(dir, "d.gcsv", text)).frame_readout_direction),
-        c.word)
+    EXPECT_STREQ(ReadoutDirectionName(
+                     ReadGcsv(test::WriteText(dir, "d.gcsv", text)).frame_readout_direction),
+                 c.word)
         << c.code;
   }
   // Legacy sign encoding: a negative time means the other direction.
   const std::string negative =
       Replace(kHeader, "frame_readout_time,15.23", "frame_readout_time,-15.23") +
       "t,gx,gy,gz\n0,1,2,3\n";
-  const GcsvLog log = ReadGcsv(WriteText(dir, "n.gcsv", negative));
+  const GcsvLog log = ReadGcsv(test::WriteText(dir, "n.gcsv", negative));
   EXPECT_EQ(log.frame_readout_direction, ReadoutDirection::kBottomToTop);
   EXPECT_DOUBLE_EQ(*log.frame_readout_s, 0.01523);
   // No readout line: none.
   const std::string none =
       Replace(kHeader, "frame_readout_time,15.23\n", "") + "t,gx,gy,gz\n0,1,2,3\n";
-  EXPECT_FALSE(ReadGcsv(WriteText(dir, "x.gcsv", none)).frame_readout_s.has_value());
+  EXPECT_FALSE(ReadGcsv(test::WriteText(dir, "x.gcsv", none)).frame_readout_s.has_value());
 }
 
 TEST(Gcsv, NonDecimalTscaleGoesThroughDouble) {
   test::TempDir dir;
   const std::string text =
       Replace(kHeader, "tscale,0.001", "tscale,0.00025") + "t,gx,gy,gz\n4,0,0,0\n8.5,0,0,0\n";
-  const GcsvLog log = ReadGcsv(WriteText(dir, "t.gcsv", text));
+  const GcsvLog log = ReadGcsv(test::WriteText(dir, "t.gcsv", text));
   EXPECT_EQ(log.trace[0].t_ns, 1000000);
   EXPECT_EQ(log.trace[1].t_ns, 2125000);
 }
@@ -214,49 +208,54 @@ TEST(Gcsv, WriterRejectsBadOptions) {
 TEST(Gcsv, RejectsBadInputNamingTheLine) {
   test::TempDir dir;
   const std::string rows = "t,gx,gy,gz\n0,1,2,3\n1,1,2,3\n";
-  ExpectIoError(WriteText(dir, "a", "version,1.3\n" + rows), 1,
+  ExpectIoError(test::WriteText(dir, "a", "version,1.3\n" + rows), 1,
                 "missing first line 'GYROFLOW IMU LOG'");
   // Truncated inside the header block.
-  ExpectIoError(WriteText(dir, "b", "GYROFLOW IMU LOG\nversion,1.3\nid,x\n"), 3,
+  ExpectIoError(test::WriteText(dir, "b", "GYROFLOW IMU LOG\nversion,1.3\nid,x\n"), 3,
                 "header ends before the column line");
-  ExpectIoError(WriteText(dir, "c", Replace(kHeader, "tscale,0.001\n", "") + rows), 16,
+  ExpectIoError(test::WriteText(dir, "c", Replace(kHeader, "tscale,0.001\n", "") + rows), 16,
                 "no tscale");
-  ExpectIoError(WriteText(dir, "d", Replace(kHeader, "gscale,0.00122173\n", "") + rows), 16,
+  ExpectIoError(test::WriteText(dir, "d", Replace(kHeader, "gscale,0.00122173\n", "") + rows), 16,
                 "no gscale");
-  ExpectIoError(WriteText(dir, "e", Replace(kHeader, "gscale,0.00122173", "gscale,-1") + rows), 15,
-                "gscale must be a positive number");
-  ExpectIoError(WriteText(dir, "f", Replace(kHeader, "orientation,XYZ", "orientation,XYQ") + rows),
-                4, "orientation 'XYQ'");
   ExpectIoError(
-      WriteText(dir, "g",
-                Replace(kHeader, "frame_readout_direction,0", "frame_readout_direction,7") + rows),
+      test::WriteText(dir, "e", Replace(kHeader, "gscale,0.00122173", "gscale,-1") + rows), 15,
+      "gscale must be a positive number");
+  ExpectIoError(
+      test::WriteText(dir, "f", Replace(kHeader, "orientation,XYZ", "orientation,XYQ") + rows), 4,
+      "orientation 'XYQ'");
+  ExpectIoError(
+      test::WriteText(
+          dir, "g",
+          Replace(kHeader, "frame_readout_direction,0", "frame_readout_direction,7") + rows),
       13, "unknown frame_readout_direction '7'");
-  ExpectIoError(WriteText(dir, "h", std::string(kHeader) + "t,gy,gx,gz\n0,1,2,3\n"), 17,
+  ExpectIoError(test::WriteText(dir, "h", std::string(kHeader) + "t,gy,gx,gz\n0,1,2,3\n"), 17,
                 "column line must start");
   ExpectIoError(
-      WriteText(dir, "i", std::string(kHeader) + "t,gx,gy,gz,ax,ay,az\n0,1,2,3,4,5,6\n1,1,2,3\n"),
+      test::WriteText(dir, "i",
+                      std::string(kHeader) + "t,gx,gy,gz,ax,ay,az\n0,1,2,3,4,5,6\n1,1,2,3\n"),
       19, "expected 7 columns as on line 17, found 4");
-  ExpectIoError(WriteText(dir, "j", std::string(kHeader) + rows + "2,1,abc,3\n"), 20,
+  ExpectIoError(test::WriteText(dir, "j", std::string(kHeader) + rows + "2,1,abc,3\n"), 20,
                 "gy is not a finite number: 'abc'");
-  ExpectIoError(WriteText(dir, "k", std::string(kHeader) + rows + "2,1,nan,3\n"), 20,
+  ExpectIoError(test::WriteText(dir, "k", std::string(kHeader) + rows + "2,1,nan,3\n"), 20,
                 "gy is not a finite number");
-  ExpectIoError(WriteText(dir, "l", std::string(kHeader) + rows + "0.5,1,2,3\n"), 20,
+  ExpectIoError(test::WriteText(dir, "l", std::string(kHeader) + rows + "0.5,1,2,3\n"), 20,
                 "timestamp decreases");
-  ExpectIoError(WriteText(dir, "m", std::string(kHeader) + rows + "inf,1,2,3\n"), 20,
+  ExpectIoError(test::WriteText(dir, "m", std::string(kHeader) + rows + "inf,1,2,3\n"), 20,
                 "t is not a finite number");
-  ExpectIoError(WriteText(dir, "n", std::string(kHeader) + "t,gx,gy,gz\n"), 0, "no samples");
-  ExpectIoError(WriteText(dir, "o", Replace(kHeader, "version,1.3", "version") + rows), 2,
+  ExpectIoError(test::WriteText(dir, "n", std::string(kHeader) + "t,gx,gy,gz\n"), 0, "no samples");
+  ExpectIoError(test::WriteText(dir, "o", Replace(kHeader, "version,1.3", "version") + rows), 2,
                 "not 'key,value'");
 }
 
 TEST(Gcsv, GapLinesOfTheHeaderAreGapWarnings) {
   test::TempDir dir;
-  const std::string path = WriteText(dir, "rec.gcsv",
-                                     "GYROFLOW IMU LOG\nversion,1.3\norientation,XYZ\n"
-                                     "gap,1.010612500,315,fifo_overflow\n"
-                                     "gap,2.5,7\n"
-                                     "gap,soon,7,bad_data\n"
-                                     "tscale,0.001\ngscale,1\nt,gx,gy,gz\n0,1,2,3\n1,1,2,3\n");
+  const std::string path =
+      test::WriteText(dir, "rec.gcsv",
+                      "GYROFLOW IMU LOG\nversion,1.3\norientation,XYZ\n"
+                      "gap,1.010612500,315,fifo_overflow\n"
+                      "gap,2.5,7\n"
+                      "gap,soon,7,bad_data\n"
+                      "tscale,0.001\ngscale,1\nt,gx,gy,gz\n0,1,2,3\n1,1,2,3\n");
   const GcsvLog log = ReadGcsv(path);
   ASSERT_EQ(log.warnings.size(), 3u) << test::JoinedWarnings(log.warnings);
   EXPECT_EQ(log.warnings[0].kind, "gap");

@@ -10,8 +10,6 @@
 namespace shutterlab {
 namespace {
 
-const std::string kKarma = test::RealDataPath("rs/gopro_karma/karma.mp4");
-
 // Big-endian KLV builders.
 template <typename T>
 std::string BigEndianBytes(T value) {
@@ -195,7 +193,7 @@ TEST(Gpmf, EveryTruncationAndByteValueIsAnErrorOrAResult) {
 
 TEST(Gpmf, KarmaGyroAndShutter) {
   SHUTTERLAB_NEED_REAL_DATA();
-  Mp4File mp4(kKarma);
+  Mp4File mp4(test::KarmaClipPath());
   const Mp4Track* track = mp4.FindTrack("meta", "gpmd");
   ASSERT_NE(track, nullptr);
   const GpmfTrackStream gyro = ReadGpmfTrackStream(mp4, *track, "GYRO");
@@ -218,7 +216,7 @@ TEST(Gpmf, KarmaGyroAndShutter) {
     peak = std::max(peak,
                     std::hypot(gyro.values[3 * i], gyro.values[3 * i + 1], gyro.values[3 * i + 2]));
   EXPECT_NEAR(peak, 0.83, 0.01);
-  const AxisOrder order = GpmfAxisOrder(gyro.first, kKarma);
+  const AxisOrder order = GpmfAxisOrder(gyro.first, test::KarmaClipPath());
   EXPECT_EQ(order.column, (std::array<int, 3>{1, 2, 0}));
 
   const GpmfTrackStream shut = ReadGpmfTrackStream(mp4, *track, "SHUT");
@@ -230,7 +228,7 @@ TEST(Gpmf, KarmaGyroAndShutter) {
 
 TEST(Gpmf, KarmaPayloadByteFlipsNeverCrash) {
   SHUTTERLAB_NEED_REAL_DATA();
-  Mp4File mp4(kKarma);
+  Mp4File mp4(test::KarmaClipPath());
   const Mp4Track* track = mp4.FindTrack("meta", "gpmd");
   ASSERT_NE(track, nullptr);
   std::mt19937 rng(6);
@@ -242,14 +240,16 @@ TEST(Gpmf, KarmaPayloadByteFlipsNeverCrash) {
       std::string flipped = payload;
       flipped[where(rng)] = static_cast<char>(rng());
       try {
-        FindGpmfStreams(ParseGpmf(flipped, track->offsets[k], kKarma), "GYRO", kKarma);
+        FindGpmfStreams(ParseGpmf(flipped, track->offsets[k], test::KarmaClipPath()), "GYRO",
+                        test::KarmaClipPath());
       } catch (const IoError& e) {
         EXPECT_NE(std::string(e.what()).find("offset "), std::string::npos);
         ++errors;
       }
     }
     // A truncated payload: an error, never a read past the end.
-    EXPECT_THROW(ParseGpmf(payload.substr(0, payload.size() / 2 + 1), 0, kKarma), IoError);
+    EXPECT_THROW(ParseGpmf(payload.substr(0, payload.size() / 2 + 1), 0, test::KarmaClipPath()),
+                 IoError);
   }
   EXPECT_GT(errors, 0);
 }

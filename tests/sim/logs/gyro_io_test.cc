@@ -22,12 +22,6 @@
 namespace shutterlab {
 namespace {
 
-std::string WriteText(const test::TempDir& dir, const std::string& name, const std::string& text) {
-  const std::string path = dir / name;
-  std::ofstream(path) << text;
-  return path;
-}
-
 LogFormat Detect(const std::string& text) { return DetectGyroFormat(text, "mem.csv"); }
 
 // Expects DetectGyroFormat to throw IoError naming mem.csv:line and containing problem.
@@ -86,7 +80,7 @@ TEST(GyroIo, DetectionRejectsNeitherFormat) {
 TEST(GyroIo, ReadGyroDispatchesOnDetectionAndOverride) {
   test::TempDir dir;
   const std::string raw =
-      WriteText(dir, "raw.csv", "t,gx_counts,gy_counts,gz_counts\n0,131,0,0\n0.01,0,262,0\n");
+      test::WriteText(dir, "raw.csv", "t,gx_counts,gy_counts,gz_counts\n0,131,0,0\n0.01,0,262,0\n");
   // Auto: raw counts at the default +-250 deg/s: 131 counts = 1 deg/s.
   const GyroTrace as_raw = ReadGyro(raw);
   EXPECT_NEAR(as_raw[0].omega_rad_s.x(), kRadPerDeg, 1e-15);
@@ -96,7 +90,7 @@ TEST(GyroIo, ReadGyroDispatchesOnDetectionAndOverride) {
   EXPECT_THROW(ReadGyro(raw, csv), IoError);
   // --raw reads docs/FORMATS.md's header as counts when told to.
   const std::string counts_with_csv_header =
-      WriteText(dir, "counts.csv", "t,gx,gy,gz\n0,131,0,0\n0.01,0,262,0\n");
+      test::WriteText(dir, "counts.csv", "t,gx,gy,gz\n0,131,0,0\n0.01,0,262,0\n");
   GyroReadOptions raw_forced;
   raw_forced.format = LogFormat::kRaw;
   EXPECT_NEAR(ReadGyro(counts_with_csv_header, raw_forced)[0].omega_rad_s.x(), kRadPerDeg, 1e-15);
@@ -144,7 +138,7 @@ TEST(GyroIo, GyroCsvTimesAreExactAtLargeEpochs) {
 TEST(GyroIo, GyroCsvRejectsBadInputNamingTheLine) {
   test::TempDir dir;
   const auto expect = [&](const std::string& text, long line, const std::string& problem) {
-    const std::string path = WriteText(dir, "bad.csv", text);
+    const std::string path = test::WriteText(dir, "bad.csv", text);
     try {
       ReadGyroCsv(path);
       ADD_FAILURE() << text;

@@ -10,8 +10,6 @@
 namespace shutterlab {
 namespace {
 
-const std::string kKarma = test::RealDataPath("rs/gopro_karma/karma.mp4");
-
 // Big-endian box builders for hand-made files.
 std::string U32(uint32_t v) {
   return {static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8),
@@ -122,7 +120,7 @@ TEST(Mp4, HandBuiltEveryTruncationAndByteFlipIsAnErrorOrATable) {
 
 TEST(Mp4, KarmaTracks) {
   SHUTTERLAB_NEED_REAL_DATA();
-  Mp4File mp4(kKarma);
+  Mp4File mp4(test::KarmaClipPath());
   EXPECT_EQ(mp4.file_size(), 4134647u);
   ASSERT_EQ(mp4.tracks().size(), 5u);
   const Mp4Track* gpmd = mp4.FindTrack("meta", "gpmd");
@@ -150,7 +148,7 @@ TEST(Mp4, KarmaTracks) {
 
 TEST(Mp4, KarmaTruncatedCopiesGiveAnErrorNamingTheOffset) {
   SHUTTERLAB_NEED_REAL_DATA();
-  const std::string bytes = ReadFileToString(kKarma);
+  const std::string bytes = ReadFileToString(test::KarmaClipPath());
   test::TempDir dir;
   // The index ('moov') is at the end: any cut loses it, or cuts a box header.
   for (size_t cut : {size_t{0}, size_t{5}, size_t{20}, size_t{1000}, size_t{4115984},
@@ -167,7 +165,7 @@ TEST(Mp4, KarmaTruncatedCopiesGiveAnErrorNamingTheOffset) {
 
 TEST(Mp4, KarmaMoovByteFlipsNeverCrash) {
   SHUTTERLAB_NEED_REAL_DATA();
-  const std::string bytes = ReadFileToString(kKarma);
+  const std::string bytes = ReadFileToString(test::KarmaClipPath());
   const size_t moov_at = 4115984;
   const std::string body = bytes.substr(moov_at + 8);
   std::mt19937 rng(6);

@@ -19,12 +19,6 @@ namespace {
 // Counts are exact integers and the conversion is one multiply: only double rounding remains.
 constexpr double kConversionTolRadS = 1e-15;
 
-std::string WriteText(const test::TempDir& dir, const std::string& name, const std::string& text) {
-  const std::string path = dir / name;
-  std::ofstream(path) << text;
-  return path;
-}
-
 // Expects IoError whose message names path:line and contains `problem`.
 void ExpectIoError(const std::string& path, int range_dps, TimeUnit unit, long line,
                    const std::string& problem) {
@@ -52,7 +46,7 @@ TEST(RawCsv, ConvertsCountsToRadPerSecond) {
   test::TempDir dir;
   // 131 counts at +-250 deg/s is exactly 1 deg/s; -32768 is the most negative register value.
   const std::string path =
-      WriteText(dir, "a.csv", "t,gx,gy,gz\n0.0,131,-262,0\n0.001,0,-32768,32767\n");
+      test::WriteText(dir, "a.csv", "t,gx,gy,gz\n0.0,131,-262,0\n0.001,0,-32768,32767\n");
   const GyroTrace trace = ReadRawCsv(path, 250, TimeUnit::kSeconds);
   ASSERT_EQ(trace.size(), 2u);
   EXPECT_EQ(trace[0].t_ns, 0);
@@ -67,7 +61,7 @@ TEST(RawCsv, ConvertsCountsToRadPerSecond) {
 
 TEST(RawCsv, RangeScalesTheCounts) {
   test::TempDir dir;
-  const std::string path = WriteText(dir, "a.csv", "0,164,328,-164\n1,0,0,0\n");
+  const std::string path = test::WriteText(dir, "a.csv", "0,164,328,-164\n1,0,0,0\n");
   const GyroTrace trace = ReadRawCsv(path, 2000, TimeUnit::kSeconds);
   const double deg = kRadPerDeg;
   EXPECT_NEAR(trace[0].omega_rad_s.x(), 10.0 * deg, kConversionTolRadS);
@@ -78,11 +72,11 @@ TEST(RawCsv, RangeScalesTheCounts) {
 TEST(RawCsv, TimeUnitsAreExactForIntegers) {
   test::TempDir dir;
   const std::string text = "t,gx,gy,gz\n1578551687123456789,0,0,0\n1578551687123457790,1,1,1\n";
-  const std::string path = WriteText(dir, "ns.csv", text);
+  const std::string path = test::WriteText(dir, "ns.csv", text);
   const GyroTrace ns = ReadRawCsv(path, 250, TimeUnit::kNanoseconds);
   EXPECT_EQ(ns[0].t_ns, 1578551687123456789LL);  // beyond 2^53: a double would lose the last digits
   EXPECT_EQ(ns[1].t_ns - ns[0].t_ns, 1001);
-  const std::string us_path = WriteText(dir, "us.csv", "1000,0,0,0\n2000.5,0,0,0\n");
+  const std::string us_path = test::WriteText(dir, "us.csv", "1000,0,0,0\n2000.5,0,0,0\n");
   const GyroTrace us = ReadRawCsv(us_path, 250, TimeUnit::kMicroseconds);
   EXPECT_EQ(us[0].t_ns, 1000000);
   EXPECT_EQ(us[1].t_ns, 2000500);
@@ -90,9 +84,9 @@ TEST(RawCsv, TimeUnitsAreExactForIntegers) {
   EXPECT_EQ(ms[1].t_ns, 2000500000);
   // Fractions finer than a nanosecond and exponents fall back to double and round to the ns.
   const std::string odd_path =
-      WriteText(dir, "odd.csv", "1e-3,0,0,0\n0.0020000004,0,0,0\n-0,0,0,0\n");
+      test::WriteText(dir, "odd.csv", "1e-3,0,0,0\n0.0020000004,0,0,0\n-0,0,0,0\n");
   EXPECT_THROW(ReadRawCsv(odd_path, 250, TimeUnit::kSeconds), IoError);  // -0 < 0.002: decreasing
-  const std::string odd2 = WriteText(dir, "odd2.csv", "1e-3,0,0,0\n0.0020000004,0,0,0\n");
+  const std::string odd2 = test::WriteText(dir, "odd2.csv", "1e-3,0,0,0\n0.0020000004,0,0,0\n");
   const GyroTrace s = ReadRawCsv(odd2, 250, TimeUnit::kSeconds);
   EXPECT_EQ(s[0].t_ns, 1000000);
   EXPECT_EQ(s[1].t_ns, 2000000);
@@ -100,7 +94,7 @@ TEST(RawCsv, TimeUnitsAreExactForIntegers) {
 
 TEST(RawCsv, IgnoresExtraColumnsAndBlankLines) {
   test::TempDir dir;
-  const std::string path = WriteText(
+  const std::string path = test::WriteText(
       dir, "a.csv", "t,gx,gy,gz,ax,ay,az\r\n0,1,2,3,16384,0,0\r\n\r\n0.01,4,5,6,0,0,0\r\n");
   const GyroTrace trace = ReadRawCsv(path, 250, TimeUnit::kSeconds);
   ASSERT_EQ(trace.size(), 2u);
@@ -143,27 +137,28 @@ TEST(RawCsv, WriterQuantisesAndSaturates) {
 
 TEST(RawCsv, RejectsBadInputNamingTheLine) {
   test::TempDir dir;
-  ExpectIoError(WriteText(dir, "a", "t,gx,gy,gz\n0,1,2,3\n1,1,2\n"), 250, TimeUnit::kSeconds, 3,
-                "expected 4 columns");
-  ExpectIoError(WriteText(dir, "b", "0,1,2,3\n1,1.5,2,3\n"), 250, TimeUnit::kSeconds, 2,
+  ExpectIoError(test::WriteText(dir, "a", "t,gx,gy,gz\n0,1,2,3\n1,1,2\n"), 250, TimeUnit::kSeconds,
+                3, "expected 4 columns");
+  ExpectIoError(test::WriteText(dir, "b", "0,1,2,3\n1,1.5,2,3\n"), 250, TimeUnit::kSeconds, 2,
                 "gx is not an integer count");
-  ExpectIoError(WriteText(dir, "c", "0,1,2,3\n1,1,2,32768\n"), 250, TimeUnit::kSeconds, 2,
+  ExpectIoError(test::WriteText(dir, "c", "0,1,2,3\n1,1,2,32768\n"), 250, TimeUnit::kSeconds, 2,
                 "gz = 32768 is outside the int16 range");
-  ExpectIoError(WriteText(dir, "d", "0,1,2,3\n1,1,-32769,3\n"), 250, TimeUnit::kSeconds, 2,
+  ExpectIoError(test::WriteText(dir, "d", "0,1,2,3\n1,1,-32769,3\n"), 250, TimeUnit::kSeconds, 2,
                 "gy = -32769 is outside");
-  ExpectIoError(WriteText(dir, "e", "0,1,2,3\nnan,1,2,3\n"), 250, TimeUnit::kSeconds, 2,
+  ExpectIoError(test::WriteText(dir, "e", "0,1,2,3\nnan,1,2,3\n"), 250, TimeUnit::kSeconds, 2,
                 "t is not a finite number");
-  ExpectIoError(WriteText(dir, "f", "0,1,2,3\ninf,1,2,3\n"), 250, TimeUnit::kSeconds, 2,
+  ExpectIoError(test::WriteText(dir, "f", "0,1,2,3\ninf,1,2,3\n"), 250, TimeUnit::kSeconds, 2,
                 "t is not a finite number");
-  ExpectIoError(WriteText(dir, "g", "5,1,2,3\n4,1,2,3\n"), 250, TimeUnit::kSeconds, 2,
+  ExpectIoError(test::WriteText(dir, "g", "5,1,2,3\n4,1,2,3\n"), 250, TimeUnit::kSeconds, 2,
                 "timestamp decreases");
-  ExpectIoError(WriteText(dir, "h", "0,1,2,3\n1,x,2,3\n"), 250, TimeUnit::kSeconds, 2,
+  ExpectIoError(test::WriteText(dir, "h", "0,1,2,3\n1,x,2,3\n"), 250, TimeUnit::kSeconds, 2,
                 "gx is not an integer count: 'x'");
   // A time that overflows int64 ns.
-  ExpectIoError(WriteText(dir, "i", "0,1,2,3\n99999999999999999,1,2,3\n"), 250,
+  ExpectIoError(test::WriteText(dir, "i", "0,1,2,3\n99999999999999999,1,2,3\n"), 250,
                 TimeUnit::kMilliseconds, 2, "t is not a finite number in range");
-  EXPECT_THROW(ReadRawCsv(WriteText(dir, "j", "t,gx,gy,gz\n"), 250, TimeUnit::kSeconds), IoError);
-  EXPECT_THROW(ReadRawCsv(WriteText(dir, "k", "0,1,2,3\n"), 300, TimeUnit::kSeconds),
+  EXPECT_THROW(ReadRawCsv(test::WriteText(dir, "j", "t,gx,gy,gz\n"), 250, TimeUnit::kSeconds),
+               IoError);
+  EXPECT_THROW(ReadRawCsv(test::WriteText(dir, "k", "0,1,2,3\n"), 300, TimeUnit::kSeconds),
                std::invalid_argument);
 }
 

@@ -104,10 +104,6 @@ std::string CombinedRecord(uint64_t t_us, float gx, float gy, float gz) {
   return r;
 }
 
-bool AnyWarningContains(const FlightLog& log, const std::string& text) {
-  return test::AnyWarningContains(log.warnings, text);
-}
-
 std::string SamplePath(const std::string& name) {
   return test::RealDataPath("gyro/px4_ulog/" + name);
 }
@@ -137,7 +133,7 @@ TEST(ULog, SampleV0MatchesItsDocumentedContents) {
   EXPECT_EQ(log.gyro.sampling().median_interval_ns, 4'000'000) << "median dt 4.0 ms";
   constexpr double kPeakTol = 0.005;  // SOURCES.md gives 3.29 rad/s to two decimals
   EXPECT_NEAR(PeakRate(log.gyro), 3.29, kPeakTol);
-  EXPECT_TRUE(AnyWarningContains(log, "4 logging dropouts totalling 119 ms"))
+  EXPECT_TRUE(test::AnyWarningContains(log, "4 logging dropouts totalling 119 ms"))
       << log.warnings.size();
   EXPECT_FALSE(log.gyro.sampling().gap_indices.empty()) << "the 62 ms dropout must show as a gap";
   EXPECT_TRUE(log.camera_events.empty());
@@ -158,7 +154,7 @@ TEST(ULog, SampleSmallV1MatchesItsDocumentedContents) {
   EXPECT_NEAR(mean_rate_hz, 280.0, kRateTolHz);
   // Publications alternate ~2.4 ms and ~4.9 ms apart; the median interval is the short one.
   EXPECT_EQ(log.gyro.sampling().median_interval_ns, 2'445'000);
-  EXPECT_TRUE(AnyWarningContains(log, "1 logging dropouts totalling 30 ms"));
+  EXPECT_TRUE(test::AnyWarningContains(log, "1 logging dropouts totalling 30 ms"));
   ASSERT_GE(log.gyro_sources_available.size(), 3u);
   EXPECT_EQ(log.gyro_sources_available[0].rfind("vehicle_angular_velocity.xyz (", 0), 0u);
   EXPECT_TRUE(std::any_of(
@@ -291,10 +287,10 @@ TEST(ULog, SurvivesHostileFormats) {
   for (int k = 0; k < 10; ++k) b.Data(0, CombinedRecord(1'000'000 + k * 4000, 0, 0, 0));
   const FlightLog log = ParseULog(b.bytes(), "hostile.ulg");
   EXPECT_EQ(log.gyro_source, "sensor_combined.gyro_rad");
-  EXPECT_TRUE(AnyWarningContains(log, "nested type 'empty' has no bytes"));
-  EXPECT_TRUE(AnyWarningContains(log, "nesting deeper than"));
-  EXPECT_TRUE(AnyWarningContains(log, "larger than a ULog message can be"));
-  EXPECT_TRUE(AnyWarningContains(log, "malformed format definition"));
+  EXPECT_TRUE(test::AnyWarningContains(log, "nested type 'empty' has no bytes"));
+  EXPECT_TRUE(test::AnyWarningContains(log, "nesting deeper than"));
+  EXPECT_TRUE(test::AnyWarningContains(log, "larger than a ULog message can be"));
+  EXPECT_TRUE(test::AnyWarningContains(log, "malformed format definition"));
 }
 
 TEST(ULog, ReadsAppendedDataAfterACutMessage) {
@@ -340,7 +336,8 @@ TEST(ULog, ReportsDropoutsAsGapsAndWarnings) {
     b.Data(0, CombinedRecord(t_us, 0, 0, 0));
   }
   const FlightLog log = ParseULog(b.bytes(), "dropout.ulg");
-  EXPECT_TRUE(AnyWarningContains(log, "1 logging dropouts totalling 40 ms (40 ms at 1.196 s)"));
+  EXPECT_TRUE(
+      test::AnyWarningContains(log, "1 logging dropouts totalling 40 ms (40 ms at 1.196 s)"));
   ASSERT_EQ(log.gyro.sampling().gap_indices.size(), 1u);
   EXPECT_EQ(log.gyro.sampling().gap_indices[0], 49u);
 }
@@ -489,7 +486,7 @@ TEST(ULog, SkipsCorruptStretchAndReadsOn) {
   const FlightLog log = ParseULog(b.bytes(), "corrupt.ulg");
   EXPECT_EQ(log.gyro.size(), 100u);
   EXPECT_EQ(log.records_skipped, 1u);
-  EXPECT_TRUE(AnyWarningContains(log, "15 corrupt bytes skipped in total"));
+  EXPECT_TRUE(test::AnyWarningContains(log, "15 corrupt bytes skipped in total"));
 }
 
 TEST(ULog, RejectsWhatIsNotULog) {
@@ -540,7 +537,7 @@ TEST(ULog, TruncatedCopiesGiveErrorOrPartialResult) {
     ExpectGracefulOn(bytes.substr(0, at), full.gyro.size(), full.gyro.size(), name);
     if (at > bytes.size() / 2) {
       const FlightLog log = ParseULog(bytes.substr(0, at), name);
-      EXPECT_TRUE(AnyWarningContains(log, "truncated") || log.gyro.size() == full.gyro.size())
+      EXPECT_TRUE(test::AnyWarningContains(log, "truncated") || log.gyro.size() == full.gyro.size())
           << name;
     }
   }
@@ -766,7 +763,7 @@ TEST(ULogStream, InterleavedSubscriptionsOfOneInstanceAreCleanedOneAfterTheOther
     EXPECT_EQ(log.gyro[k].t_ns, expected_t_ns[k]) << k;
     EXPECT_EQ(log.gyro[k].omega_rad_s.x(), static_cast<double>(k)) << k;
   }
-  EXPECT_TRUE(AnyWarningContains(log, "sensor_gyro.x,y,z: 1 samples were out of time order"));
+  EXPECT_TRUE(test::AnyWarningContains(log, "sensor_gyro.x,y,z: 1 samples were out of time order"));
 }
 
 TEST(ULogStream, AFileThatChangesBetweenThePassesIsRefusedInOneLine) {
