@@ -279,8 +279,9 @@ ImageFileInfo ReadImageFileInfo(const std::string& path) {
 
 namespace {
 
-// exiv2's metadata writing is not known to be thread-safe: every exiv2 call of this unit runs under
-// this lock, after the shared set-up (render/exiv2_setup.h).
+// Every exiv2 call of this unit runs under this lock, after the shared set-up
+// (render/exiv2_setup.h): copying metadata is rare next to reading it, and is kept to one thread
+// at a time as a precaution. Reading photos (photo_metadata) needs only the set-up's XMP lock.
 std::mutex& Exiv2Lock() {
   static std::mutex lock;
   return lock;

@@ -95,9 +95,16 @@ void PutLittleEndian(std::string* out, T value) {
   out->append(raw, sizeof(T));
 }
 
-// True in the AddressSanitizer build, where the heaviest cases shrink or are skipped.
+// True in an AddressSanitizer build (gcc defines __SANITIZE_ADDRESS__, clang has the feature),
+// where the heaviest cases shrink or are skipped: they run 3 to 10 times slower there.
 #if defined(__SANITIZE_ADDRESS__)
 inline constexpr bool kAsan = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+inline constexpr bool kAsan = true;
+#else
+inline constexpr bool kAsan = false;
+#endif
 #else
 inline constexpr bool kAsan = false;
 #endif

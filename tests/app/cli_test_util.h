@@ -27,10 +27,9 @@ struct CommandResult {
   std::string err;     // stderr alone (warnings, progress, errors)
 };
 
-// The number of lines in text, an unterminated last line included.
+// The number of newline-ended lines in text: an output's last line must end with one too.
 inline size_t LineCount(const std::string& text) {
-  const size_t newlines = static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
-  return newlines + (!text.empty() && text.back() != '\n');
+  return static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
 }
 
 // Runs the shutterlab executable with the given argument string (shell syntax); stdin_file, when

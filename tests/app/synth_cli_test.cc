@@ -15,7 +15,6 @@ namespace {
 
 using test::RunShutterlab;
 
-// Counts lines of CLI output (a trailing newline ends the last line).
 TEST(SynthCli, WritesATraceThatReadGyroReadsBack) {
   test::TempDir dir;
   const std::string out = dir / "still.csv";

@@ -86,7 +86,7 @@ ValidationResult ValidateClip(const std::string& dataset) {
 // (the stability check's fits): the halves agree with the truth, whatever their standard errors
 // say (they assume the measurement's errors are noise only and are optimistic when it is biased).
 template <typename Close>
-void ExpectIdentified(const ValidationResult& result, const std::string& name, Close close) {
+void ExpectClipIdentified(const ValidationResult& result, const std::string& name, Close close) {
   const std::string report = ValidationReport(result);
   ASSERT_TRUE(result.video) << report;
   EXPECT_EQ(result.preferred, "rotation_only") << report;
@@ -115,17 +115,18 @@ std::string InjectMatrix(const Eigen::Matrix3d& r) {
 TEST(ValidateVideo, RecoversTimeOffset) {
   test::TempDir dir;
   const ValidationResult result = ValidateClip(MakeClip(dir, {{"time_offset=0.004"}}));
-  ExpectIdentified(result, "time_offset", [](const TrueModel& m) {
+  ExpectClipIdentified(result, "time_offset", [](const TrueModel& m) {
     return std::abs(m.rig.time_offset_s - 0.004) <= 0.3e-3;
   });
 }
 
 TEST(ValidateVideo, RecoversReadoutTime) {
-  // Under ASan: the same path as RecoversTimeOffset, at 139 s of the sanitizer suite's time.
+  // Under ASan: the same path as RecoversTimeOffset, for 139 s of the sanitizer suite (ctest's
+  // time for it in `.ci/run`'s sanitizer pass, 2026-11-27).
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const ValidationResult result = ValidateClip(MakeClip(dir, {{"readout_time=0.036"}}));
-  ExpectIdentified(result, "readout_time", [](const TrueModel& m) {
+  ExpectClipIdentified(result, "readout_time", [](const TrueModel& m) {
     return std::abs(m.rig.shutter.readout_s - 0.036) <= 0.02 * 0.036;
   });
 }
@@ -136,7 +137,7 @@ TEST(ValidateVideo, RecoversGyroToCameraMisalignment) {
       ExpSO3(Eigen::Vector3d(1, 2, -1.5).normalized() * (4.0 * M_PI / 180)).toRotationMatrix();
   test::TempDir dir;
   const ValidationResult result = ValidateClip(MakeClip(dir, {{InjectMatrix(r_cg)}}));
-  ExpectIdentified(result, "gyro_to_camera", [&](const TrueModel& m) {
+  ExpectClipIdentified(result, "gyro_to_camera", [&](const TrueModel& m) {
     return DegreesBetween(m.rig.cam_from_gyro, r_cg) <= 0.5;
   });
 }
@@ -148,7 +149,7 @@ TEST(ValidateVideo, RecoversGyroBias) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const ValidationResult result = ValidateClip(MakeClip(dir, {{"gyro_bias=0.01,0,0"}}));
-  ExpectIdentified(result, "gyro_bias", [](const TrueModel& m) {
+  ExpectClipIdentified(result, "gyro_bias", [](const TrueModel& m) {
     const Eigen::Vector3d& b = m.gyro_bias_rad_s;
     return std::abs(b.x() - 0.01) <= 0.001 && std::abs(b.y()) <= 0.0015 &&
            std::abs(b.z()) <= 0.0015;
@@ -159,7 +160,7 @@ TEST(ValidateVideo, RecoversLensDistortion) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const ValidationResult result = ValidateClip(MakeClip(dir, {{"lens_distortion=-0.05,0.01"}}));
-  ExpectIdentified(result, "lens_distortion", [](const TrueModel& m) {
+  ExpectClipIdentified(result, "lens_distortion", [](const TrueModel& m) {
     return std::abs(std::get<BrownConrady>(m.rig.camera.distortion).coeffs[0] + 0.05) <= 0.005;
   });
 }
@@ -180,7 +181,7 @@ TEST(ValidateVideo, RecoversAFisheyesLensDistortion) {
                      FormatNumber("%.17g", truth[1]) + "," + FormatNumber("%.17g", truth[2]) + "," +
                      FormatNumber("%.17g", truth[3])};
   const ValidationResult result = ValidateClip(MakeClip(dir, spec));
-  ExpectIdentified(result, "lens_distortion", [&](const TrueModel& m) {
+  ExpectClipIdentified(result, "lens_distortion", [&](const TrueModel& m) {
     const Fisheye* lens = std::get_if<Fisheye>(&m.rig.camera.distortion);
     return lens && std::abs(lens->coeffs()[0] - truth[0]) <= 0.01 &&
            std::abs(lens->coeffs()[1] - truth[1]) <= 0.01;
@@ -192,7 +193,7 @@ TEST(ValidateVideo, RecoversReadoutDirection) {
   test::TempDir dir;
   const ValidationResult result =
       ValidateClip(MakeClip(dir, {{"readout_direction=bottom_to_top"}}));
-  ExpectIdentified(result, "readout_direction", [](const TrueModel& m) {
+  ExpectClipIdentified(result, "readout_direction", [](const TrueModel& m) {
     return m.rig.shutter.direction == ReadoutDirection::kBottomToTop;
   });
 }
@@ -205,7 +206,7 @@ TEST(ValidateVideo, RecoversAWronglyLabelledGyro) {
       ValidateClip(MakeClip(dir, {{"gyro_to_camera=0,1,0,1,0,0,0,0,-1"}}));
   Eigen::Matrix3d truth;
   truth << 0, 1, 0, 1, 0, 0, 0, 0, -1;
-  ExpectIdentified(result, "gyro_to_camera", [&](const TrueModel& m) {
+  ExpectClipIdentified(result, "gyro_to_camera", [&](const TrueModel& m) {
     return DegreesBetween(m.rig.cam_from_gyro, truth) <= 0.5;
   });
   // The translation model cannot tell the mounting from translation: it takes the rotation-only
@@ -225,7 +226,7 @@ TEST(ValidateVideo, RecoversGyroScale) {
   spec.injections = {"gyro_scale=1.05,0.95,1.04"};
   spec.first_s = 11.4;
   const ValidationResult result = ValidateClip(MakeClip(dir, spec));
-  ExpectIdentified(result, "gyro_scale", [](const TrueModel& m) {
+  ExpectClipIdentified(result, "gyro_scale", [](const TrueModel& m) {
     return (m.gyro_scale - Eigen::Vector3d(1.05, 0.95, 1.04)).cwiseAbs().maxCoeff() <= 0.01;
   });
 }
@@ -240,8 +241,9 @@ TEST(ValidateVideo, RecoversClockRateOverALongClip) {
   spec.first_s = 8.0;
   spec.fps = 5.0;
   const ValidationResult result = ValidateClip(MakeClip(dir, spec));
-  ExpectIdentified(result, "clock_rate",
-                   [](const TrueModel& m) { return std::abs(m.clock_rate_ppm - 300.0) <= 60.0; });
+  ExpectClipIdentified(result, "clock_rate", [](const TrueModel& m) {
+    return std::abs(m.clock_rate_ppm - 300.0) <= 60.0;
+  });
 }
 
 // The screening of a clip with Clutter(): the fixed quarter left out as a region (about a quarter
@@ -267,7 +269,7 @@ TEST(ValidateVideo, RecoversTimeOffsetWithClutter) {
   spec.clutter = Clutter();
   const ValidationResult result = ValidateClip(MakeClip(dir, spec));
   ExpectClutterLeftOut(result);
-  ExpectIdentified(result, "time_offset", [](const TrueModel& m) {
+  ExpectClipIdentified(result, "time_offset", [](const TrueModel& m) {
     return std::abs(m.rig.time_offset_s - 0.004) <= 0.3e-3;
   });
 }

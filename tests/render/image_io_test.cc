@@ -157,16 +157,16 @@ TEST(ImageIo, MetadataIsCopiedWhereTheFormatHoldsIt) {
   EXPECT_EQ(ReadImage(dir / "copy.exr").type(), CV_32FC3) << "the pixels are written all the same";
 }
 
-// exiv2 is set up once a process, for reading photos (from several threads) and for writing
-// shutterlab's XMP keys, whichever comes first: in a fresh process (the death test runs the binary
-// again) a photo read first must leave the keys writable.
+// exiv2 is set up once a process, in one place (render/exiv2_setup.h), whichever of reading a photo
+// and writing shutterlab's XMP keys comes first: in a fresh process (the death test runs the binary
+// again) a photo read first must leave the keys writable. (The set-up's XMP lock has no getter.)
 TEST(ImageIo, XmpKeysAreWrittenAfterAPhotoWasReadFirst) {
   GTEST_FLAG_SET(death_test_style, "threadsafe");
-  test::TempDir dir;
-  const cv::Mat image = test::SmoothTexture(cv::Size(40, 30), CV_8UC3, 2, 1.0);
-  const std::string photo = dir / "photo.jpg", out = dir / "out.jpg";
-  WriteImage(photo, image);
-  const auto read_then_write = [&] {
+  const auto read_then_write = [] {
+    const test::TempDir dir;  // removed before the child exits
+    const cv::Mat image = test::SmoothTexture(cv::Size(40, 30), CV_8UC3, 2, 1.0);
+    const std::string photo = dir / "photo.jpg", out = dir / "out.jpg";
+    WriteImage(photo, image);
     ReadPhotoMetadata(photo);
     const ImageLike like{photo, ReadImageFileInfo(photo)};
     const std::vector<std::pair<std::string, std::string>> xmp = {

@@ -194,18 +194,6 @@ TEST(FormatNumber, KeepsTextLongerThanItsStackBuffer) {
 // Under AddressSanitizer every byte read also reads its shadow (an eighth of its size), which
 // stays resident after the mapping's pages are handed back: the bounds on resident memory hold
 // for the plain build only (scripts/test.sh).
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAddressSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kAddressSanitizer = true;
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
-
 size_t ResidentBytes() {
   std::FILE* f = std::fopen("/proc/self/statm", "r");
   long pages_total = 0, pages_resident = 0;
@@ -244,7 +232,7 @@ TEST(MappedFile, AStreamedFileReadsWholeAndItsReleasedPagesLeaveResidentMemory) 
   mapped.ReleaseBefore(content.size());
   // Never more than a few MiB of the 16 MiB resident at once (what is handed back goes in whole
   // 2 MiB spans; the kernel maps some pages ahead of a touch), and none of it at the end.
-  if (!kAddressSanitizer) {
+  if (!test::kAsan) {
     EXPECT_LT(peak - before, size_t{6} << 20);
     EXPECT_LT(ResidentBytes(), before + (size_t{1} << 20));
   }
@@ -283,7 +271,7 @@ TEST(MappedFile, ASecondPassHandsItsPagesBackToo) {
       peak = std::max(peak, ResidentBytes());
       mapped.ReleaseBefore(at + (1 << 20));
     }
-    if (!kAddressSanitizer) {
+    if (!test::kAsan) {
       EXPECT_LT(peak - before, size_t{6} << 20) << "pass " << pass;
     }
   }

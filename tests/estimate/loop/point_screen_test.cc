@@ -20,8 +20,8 @@ constexpr double kScreenNoisePx = 0.05;  // rms length
 
 // Video pairs of the video rig at 30 fps from 12.6 s of the flight (its liveliest stretch), points
 // on a 16 px grid, measured as `truth` moves them plus Gaussian noise (kScreenNoisePx rms length).
-std::vector<FramePoints> Pairs(const TrueModel& truth, const GyroTrace& gyro, int pairs,
-                               uint64_t seed = 1) {
+std::vector<FramePoints> ScreenPairs(const TrueModel& truth, const GyroTrace& gyro, int pairs,
+                                     uint64_t seed = 1) {
   return test::MeasuredVideoPairs(truth, gyro, pairs, kScreenStepPx, kScreenNoisePx, seed);
 }
 
@@ -44,7 +44,7 @@ TrueModel Declared() {
 TEST(DetectCameraFixed, FindsTheRowsThatStayAndNothingElse) {
   const GyroTrace gyro = test::FlightTrace(14.0, 3);
   const TrueModel model = Declared();
-  std::vector<FramePoints> pairs = Pairs(model, gyro, 6);
+  std::vector<FramePoints> pairs = ScreenPairs(model, gyro, 6);
   // The bottom quarter moves with the camera: measured 0 (plus noise) wherever the scene moves.
   const int fixed_from = model.rig.camera.height * 3 / 4;
   std::mt19937_64 rng(5);
@@ -83,7 +83,7 @@ TEST(DetectCameraFixed, FindsTheRowsThatStayAndNothingElse) {
 TEST(DetectCameraFixed, CellsThatMeasureNothingJoinTheRegionBelowIt) {
   const GyroTrace gyro = test::FlightTrace(14.0, 3);
   const TrueModel model = Declared();
-  std::vector<FramePoints> pairs = Pairs(model, gyro, 6);
+  std::vector<FramePoints> pairs = ScreenPairs(model, gyro, 6);
   const int height = model.rig.camera.height, width = model.rig.camera.width;
   const int fixed_from = height * 3 / 4, flat_from = fixed_from + 3 * kScreenStepPx;
   const auto in_hole = [&](const MeasuredPoint& p) {  // a flat patch in the scene
@@ -122,7 +122,7 @@ TEST(DetectCameraFixed, CellsThatMeasureNothingJoinTheRegionBelowIt) {
 TEST(DetectCameraFixed, AWholeImageThatStaysIsNoRegion) {
   const GyroTrace gyro = test::FlightTrace(14.0, 3);
   const TrueModel model = Declared();
-  std::vector<FramePoints> pairs = Pairs(model, gyro, 6);
+  std::vector<FramePoints> pairs = ScreenPairs(model, gyro, 6);
   for (FramePoints& f : pairs) {
     for (MeasuredPoint& p : f.points) p.dx = p.dy = 0.0;
   }
@@ -140,7 +140,7 @@ TEST(RotationConsensus, LeavesOutWhatMovesOnItsOwnNotWhatTheLoopWillFit) {
   TrueModel truth = Declared();
   truth.rig.time_offset_s = 0.003;
   truth.rig.shutter.readout_s *= 1.2;
-  std::vector<FramePoints> pairs = Pairs(truth, gyro, 6);
+  std::vector<FramePoints> pairs = ScreenPairs(truth, gyro, 6);
   const auto in_car = [](const MeasuredPoint& p) {
     return p.u > 200 && p.u < 300 && p.v > 100 && p.v < 180;
   };
@@ -181,12 +181,12 @@ TEST(CheckImageFollowsGyro, AStabilisedImageDoesNotFollow) {
   TrueModel stabilised = declared;
   stabilised.gyro_scale = Eigen::Vector3d::Constant(0.2);
   const std::vector<double> noise(8, kScreenNoisePx);
-  const PointScreen follows =
-      ScreenPoints(declared, gyro, Pairs(declared, gyro, 8), noise, kScreenStepPx, ScreenOptions{});
+  const PointScreen follows = ScreenPoints(declared, gyro, ScreenPairs(declared, gyro, 8), noise,
+                                           kScreenStepPx, ScreenOptions{});
   ASSERT_TRUE(follows.gyro_follow.determined) << follows.gyro_follow.verdict;
   EXPECT_TRUE(follows.gyro_follow.follows);
   EXPECT_NEAR(follows.gyro_follow.gain, 1.0, 0.05);
-  const PointScreen screen = ScreenPoints(declared, gyro, Pairs(stabilised, gyro, 8), noise,
+  const PointScreen screen = ScreenPoints(declared, gyro, ScreenPairs(stabilised, gyro, 8), noise,
                                           kScreenStepPx, ScreenOptions{});
   ASSERT_TRUE(screen.gyro_follow.determined) << screen.gyro_follow.verdict;
   EXPECT_FALSE(screen.gyro_follow.follows) << screen.gyro_follow.verdict;

@@ -13,11 +13,6 @@
 namespace shutterlab {
 namespace {
 
-std::string Write(const test::TempDir& dir, const std::string& name, const std::string& text) {
-  WriteFileAtomically(dir / name, text);
-  return dir / name;
-}
-
 // Two photos in DJI's layout (tabs), the second with an odd editor's spaces instead.
 constexpr char kMrk[] =
     "1\t396015.412566\t[2110]\t   -17,N\t    11,E\t   196,V\t22.56859393,Lat\t113.94289563,Lon\t"
@@ -27,7 +22,7 @@ constexpr char kMrk[] =
 
 TEST(TriggerFile, ReadsAHandWrittenMrk) {
   test::TempDir dir;
-  const TriggerFile f = ReadTriggerFile(Write(dir, "a_Timestamp.MRK", kMrk));
+  const TriggerFile f = ReadTriggerFile(test::WriteText(dir, "a_Timestamp.MRK", kMrk));
   EXPECT_EQ(f.format, "mrk");
   EXPECT_EQ(f.clock, TriggerClock::kGps);
   ASSERT_EQ(f.events.size(), 2u);
@@ -111,13 +106,14 @@ TEST(TriggerFileReal, AutelEvoIIMrk) {
 
 TEST(TriggerFile, ReadsPlainAndNamedCsvOnTheLogClockOrUtc) {
   test::TempDir dir;
-  const TriggerFile bare = ReadTriggerFile(Write(dir, "bare.csv", "1.5\n3.25\n"));
+  const TriggerFile bare = ReadTriggerFile(test::WriteText(dir, "bare.csv", "1.5\n3.25\n"));
   EXPECT_EQ(bare.clock, TriggerClock::kLog);
   ASSERT_EQ(bare.events.size(), 2u);
   EXPECT_EQ(bare.events[1].t_ns, 3'250'000'000);
   EXPECT_TRUE(bare.events[0].name.empty());
 
-  const TriggerFile named = ReadTriggerFile(Write(dir, "named.csv", "# c\nimage,t\nA.JPG,2\n"));
+  const TriggerFile named =
+      ReadTriggerFile(test::WriteText(dir, "named.csv", "# c\nimage,t\nA.JPG,2\n"));
   EXPECT_EQ(named.events[0].name, "A.JPG");
   EXPECT_EQ(named.events[0].t_ns, 2'000'000'000);
 
@@ -125,13 +121,13 @@ TEST(TriggerFile, ReadsPlainAndNamedCsvOnTheLogClockOrUtc) {
   const std::string siyi =
       "utc,timestamp,utc_usec,lat,lon,alt_msl,image\n"
       "2026-01-13 03:04:17.875381+00:00,182092193,1768273457875381,14.5,121.3,386.7,IMG_0001.jpg\n";
-  const TriggerFile px4 = ReadTriggerFile(Write(dir, "siyi.csv", siyi));
+  const TriggerFile px4 = ReadTriggerFile(test::WriteText(dir, "siyi.csv", siyi));
   EXPECT_EQ(px4.clock, TriggerClock::kLog);
   EXPECT_EQ(px4.events[0].t_ns, 182'092'193'000);
   EXPECT_EQ(px4.events[0].name, "IMG_0001.jpg");
 
-  const TriggerFile utc =
-      ReadTriggerFile(Write(dir, "utc.csv", "name,utc\nB.jpg,2026-01-13T03:04:17.875381+01:00\n"));
+  const TriggerFile utc = ReadTriggerFile(
+      test::WriteText(dir, "utc.csv", "name,utc\nB.jpg,2026-01-13T03:04:17.875381+01:00\n"));
   EXPECT_EQ(utc.clock, TriggerClock::kUtc);
   EXPECT_EQ(UtcText(utc.events[0].t_ns), "2026-01-13 02:04:17.875");
 }
@@ -140,7 +136,7 @@ TEST(TriggerFile, CsvErrorsNameTheLine) {
   test::TempDir dir;
   const auto message = [&](const std::string& text) {
     try {
-      ReadTriggerFile(Write(dir, "bad.csv", text));
+      ReadTriggerFile(test::WriteText(dir, "bad.csv", text));
     } catch (const IoError& e) {
       return std::string(e.what());
     }
