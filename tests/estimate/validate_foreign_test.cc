@@ -11,6 +11,7 @@
 #include "estimate/loop/validate.h"
 #include "estimate/report/validate_report.h"
 #include "sim/text_file.h"
+#include "tests/estimate/validate_fixtures.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
@@ -169,16 +170,10 @@ std::string WriteForeignDataset(const test::TempDir& dir, double true_offset_s) 
   return root.string();
 }
 
-ValidationResult ValidateForeign(const std::string& dataset) {
-  ValidateOptions options;
-  options.keep_residuals = false;
-  return ValidateDataset(dataset, options);
-}
-
 TEST(ValidateForeignDataset, FindsTheUndeclaredThreeMilliseconds) {
   test::TempDir dir;
   const ValidationResult result =
-      ValidateForeign(WriteForeignDataset(dir, kDeclaredOffsetS + 0.003));
+      test::ValidateWithoutResiduals(WriteForeignDataset(dir, kDeclaredOffsetS + 0.003));
   const LoopResult& loop = result.loop;
   ASSERT_EQ(result.frames.size(), static_cast<size_t>(kForeignFrames));
   ASSERT_FALSE(loop.effects.empty()) << ValidationReport(result);
@@ -192,7 +187,8 @@ TEST(ValidateForeignDataset, FindsTheUndeclaredThreeMilliseconds) {
 
 TEST(ValidateForeignDataset, RightCameraJsonAddsNothing) {
   test::TempDir dir;
-  const ValidationResult result = ValidateForeign(WriteForeignDataset(dir, kDeclaredOffsetS));
+  const ValidationResult result =
+      test::ValidateWithoutResiduals(WriteForeignDataset(dir, kDeclaredOffsetS));
   const LoopResult& loop = result.loop;
   EXPECT_TRUE(loop.effects.empty()) << ValidationReport(result);
   EXPECT_FALSE(loop.unexplained) << ValidationReport(result);

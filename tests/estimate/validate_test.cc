@@ -18,6 +18,7 @@
 #include "sim/so3.h"
 #include "sim/synth/synth.h"
 #include "sim/text_file.h"
+#include "tests/estimate/validate_fixtures.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
@@ -42,8 +43,6 @@ constexpr int kWidth = 1280, kHeight = 960, kFrames = 8;
 constexpr double kFocalPx = 1100.0 * kWidth / 1280.0;  // same field of view at either size
 constexpr double kReadoutS = 0.030;
 constexpr double kAltitudeM = 50.0;
-// Acceptance: in identified cases the residual after the loop is at the noise level.
-constexpr double kAfterOverNoise = 1.5;
 
 struct DatasetSpec {
   std::vector<std::string> injections;  // render --inject NAME=VALUE ("" none)
@@ -102,12 +101,6 @@ std::string MakeDataset(const test::TempDir& dir, const DatasetSpec& spec) {
   return dir / "ds";
 }
 
-ValidationResult Validate(const std::string& dataset) {
-  ValidateOptions options;
-  options.keep_residuals = false;
-  return ValidateDataset(dataset, options);
-}
-
 std::string Summary(const ValidationResult& result) { return ValidationReport(result); }
 
 // The one effect the loop must have added first, with the after/noise acceptance above.
@@ -116,7 +109,7 @@ void ExpectIdentified(const ValidationResult& result, const std::string& name) {
   ASSERT_FALSE(loop.effects.empty()) << Summary(result);
   EXPECT_EQ(Spec(loop.effects.front().effect).name, name) << Summary(result);
   EXPECT_FALSE(loop.unexplained) << Summary(result);
-  EXPECT_LE(loop.after.rms_px, kAfterOverNoise * loop.noise_px) << Summary(result);
+  EXPECT_LE(loop.after.rms_px, test::kAfterOverNoise * loop.noise_px) << Summary(result);
   EXPECT_GT(loop.before.rms_px, 2.0 * loop.after.rms_px) << Summary(result);
 }
 
@@ -125,7 +118,8 @@ bool SkipUnderAsan() { return test::kAsan; }
 // time_offset_s = 4 ms undeclared -> recovered within 0.3 ms.
 TEST(ValidateEndToEnd, RecoversTimeOffset) {
   test::TempDir dir;
-  const ValidationResult result = Validate(MakeDataset(dir, {{"time_offset=0.004"}}));
+  const ValidationResult result =
+      test::ValidateWithoutResiduals(MakeDataset(dir, {{"time_offset=0.004"}}));
   ExpectIdentified(result, "time_offset");
   EXPECT_NEAR(result.loop.model.rig.time_offset_s, 0.004, 0.3e-3) << Summary(result);
 }
@@ -139,7 +133,7 @@ TEST(ValidateEndToEnd, RecoversTimeOffsetWithClutter) {
   spec.injections = {"time_offset=0.004"};
   spec.clutter.camera_fixed_share = 0.25;
   spec.clutter.moving_patch_mps = 15.0;
-  const ValidationResult result = Validate(MakeDataset(dir, spec));
+  const ValidationResult result = test::ValidateWithoutResiduals(MakeDataset(dir, spec));
   ExpectIdentified(result, "time_offset");
   EXPECT_NEAR(result.loop.model.rig.time_offset_s, 0.004, 0.3e-3) << Summary(result);
   EXPECT_GT(result.screen.camera_fixed_share, 0.15) << Summary(result);
@@ -150,7 +144,8 @@ TEST(ValidateEndToEnd, RecoversTimeOffsetWithClutter) {
 TEST(ValidateEndToEnd, RecoversReadoutTime) {
   if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
-  const ValidationResult result = Validate(MakeDataset(dir, {{"readout_time=0.036"}}));
+  const ValidationResult result =
+      test::ValidateWithoutResiduals(MakeDataset(dir, {{"readout_time=0.036"}}));
   ExpectIdentified(result, "readout_time");
   EXPECT_NEAR(result.loop.model.rig.shutter.readout_s, 0.036, 0.02 * 0.036) << Summary(result);
 }
@@ -168,7 +163,7 @@ TEST(ValidateEndToEnd, RecoversGyroToCameraMisalignment) {
     value += number;
   }
   test::TempDir dir;
-  const ValidationResult result = Validate(MakeDataset(dir, {{value}}));
+  const ValidationResult result = test::ValidateWithoutResiduals(MakeDataset(dir, {{value}}));
   ExpectIdentified(result, "gyro_to_camera");
   const Eigen::Quaterniond found(result.loop.model.rig.cam_from_gyro);
   EXPECT_LE(AngularDistance(found, Eigen::Quaterniond(r_cg)) * 180.0 / M_PI, 0.5)
@@ -179,7 +174,8 @@ TEST(ValidateEndToEnd, RecoversGyroToCameraMisalignment) {
 TEST(ValidateEndToEnd, RecoversGyroScale) {
   if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
-  const ValidationResult result = Validate(MakeDataset(dir, {{"gyro_scale=1.05,0.95,1.04"}}));
+  const ValidationResult result =
+      test::ValidateWithoutResiduals(MakeDataset(dir, {{"gyro_scale=1.05,0.95,1.04"}}));
   ExpectIdentified(result, "gyro_scale");
   const Eigen::Vector3d truth(1.05, 0.95, 1.04);
   for (int axis = 0; axis < 3; ++axis) {
@@ -198,7 +194,7 @@ TEST(ValidateEndToEnd, RecoversClockRate) {
   spec.log_s = 120.0;
   spec.first_frame_s = 10.0;
   spec.last_frame_s = 110.0;
-  const ValidationResult result = Validate(MakeDataset(dir, spec));
+  const ValidationResult result = test::ValidateWithoutResiduals(MakeDataset(dir, spec));
   ExpectIdentified(result, "clock_rate");
   EXPECT_NEAR(result.loop.model.clock_rate_ppm, 300.0, 60.0) << Summary(result);
 }
@@ -208,7 +204,8 @@ TEST(ValidateEndToEnd, RecoversClockRate) {
 TEST(ValidateEndToEnd, RecoversVelocityOrFlagsAmbiguity) {
   if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
-  const ValidationResult result = Validate(MakeDataset(dir, {{"velocity=4,0,0"}}));
+  const ValidationResult result =
+      test::ValidateWithoutResiduals(MakeDataset(dir, {{"velocity=4,0,0"}}));
   const LoopResult& loop = result.loop;
   ASSERT_FALSE(loop.effects.empty()) << Summary(result);
   const IdentifiedEffect& first = loop.effects.front();
@@ -217,7 +214,7 @@ TEST(ValidateEndToEnd, RecoversVelocityOrFlagsAmbiguity) {
            first.ambiguous_with.end();
   };
   EXPECT_FALSE(loop.unexplained) << Summary(result);
-  EXPECT_LE(loop.after.rms_px, kAfterOverNoise * loop.noise_px) << Summary(result);
+  EXPECT_LE(loop.after.rms_px, test::kAfterOverNoise * loop.noise_px) << Summary(result);
   if (first.effect == Effect::kVelocity) {
     const Eigen::Vector3d truth(4, 0, 0);
     const double error = (loop.model.rig.velocity_mps - truth).norm() / truth.norm();
@@ -233,10 +230,11 @@ TEST(ValidateEndToEnd, RecoversVelocityOrFlagsAmbiguity) {
 // Nothing undeclared -> no effect added, nothing unexplained.
 TEST(ValidateEndToEnd, CleanDatasetAddsNothing) {
   test::TempDir dir;
-  const ValidationResult result = Validate(MakeDataset(dir, {}));
+  const ValidationResult result = test::ValidateWithoutResiduals(MakeDataset(dir, {}));
   EXPECT_TRUE(result.loop.effects.empty()) << Summary(result);
   EXPECT_FALSE(result.loop.unexplained) << Summary(result);
-  EXPECT_LE(result.loop.before.rms_px, kAfterOverNoise * result.loop.noise_px) << Summary(result);
+  EXPECT_LE(result.loop.before.rms_px, test::kAfterOverNoise * result.loop.noise_px)
+      << Summary(result);
   // The declared full model then predicts the measured D (the measurement's own D is noisier).
   for (const FrameValidation& f : result.frames) {
     EXPECT_NEAR(f.d_full_px, f.d_meas_px, 0.1 * f.d_meas_px + 0.3) << "frame " << f.frame;
@@ -260,7 +258,7 @@ TEST(ValidateEndToEnd, EffectOutsideTheListIsUnexplained) {
     cv::warpAffine(image, shifted, affine, image.size(), cv::INTER_NEAREST);
     WriteImage(path, shifted);
   }
-  const ValidationResult result = Validate(dataset);
+  const ValidationResult result = test::ValidateWithoutResiduals(dataset);
   EXPECT_TRUE(result.loop.unexplained) << Summary(result);
 }
 
@@ -269,7 +267,8 @@ TEST(ValidateEndToEnd, EffectOutsideTheListIsUnexplained) {
 TEST(ValidateEndToEnd, TableAndReportAreConsistent) {
   if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
-  const ValidationResult result = Validate(MakeDataset(dir, {{"time_offset=0.004"}}));
+  const ValidationResult result =
+      test::ValidateWithoutResiduals(MakeDataset(dir, {{"time_offset=0.004"}}));
   ASSERT_EQ(result.frames.size(), static_cast<size_t>(kFrames));
   for (size_t l = 0; l < result.limits_m.size(); ++l) {
     const Confusion& c = result.confusion_paper[l];
@@ -299,7 +298,7 @@ TEST(ValidateDataset, RefusesAVideoDatasetWithARef) {
   WriteFileAtomically(dir / "frames.csv",
                       "frame,t_first_row,ref,image\n0,8.0,,a.png\n1,8.1,a.png,a.png\n");
   try {
-    Validate(dir.path().string());
+    test::ValidateWithoutResiduals(dir.path().string());
     FAIL() << "no error";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("a ref image in a video dataset"), std::string::npos)

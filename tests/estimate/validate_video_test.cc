@@ -17,6 +17,7 @@
 #include "sim/so3.h"
 #include "sim/text_file.h"
 #include "tests/estimate/loop/effect_fixtures.h"
+#include "tests/estimate/validate_fixtures.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
@@ -30,9 +31,6 @@
 
 namespace shutterlab {
 namespace {
-
-// Acceptance: in identified cases the residual after the loop is at the noise level.
-constexpr double kVideoAfterOverNoise = 1.5;
 
 struct ClipSpec {
   std::vector<std::string> injections;
@@ -74,12 +72,6 @@ std::string MakeClip(const test::TempDir& dir, const ClipSpec& spec) {
   return dir / "clip";
 }
 
-ValidationResult ValidateClip(const std::string& dataset) {
-  ValidateOptions options;
-  options.keep_residuals = false;
-  return ValidateDataset(dataset, options);
-}
-
 // The rotation-only loop (a rendered clip over flat ground with no velocity has no parallax) must
 // have identified `name` alone and left the noise. `close` says whether a model recovers the
 // truth within the still tests' tolerance; it must hold for the whole clip and for each half of it
@@ -94,7 +86,7 @@ void ExpectClipIdentified(const ValidationResult& result, const std::string& nam
   ASSERT_EQ(loop.effects.size(), 1u) << report;
   EXPECT_EQ(Spec(loop.effects.front().effect).name, name) << report;
   EXPECT_FALSE(loop.unexplained) << report;
-  EXPECT_LE(loop.after.rms_px, kVideoAfterOverNoise * loop.noise_px) << report;
+  EXPECT_LE(loop.after.rms_px, test::kAfterOverNoise * loop.noise_px) << report;
   EXPECT_GT(loop.before.rms_px, 2.0 * loop.after.rms_px) << report;
   EXPECT_TRUE(close(loop.model)) << report;
   ASSERT_EQ(result.halves.size(), 1u) << report;
@@ -114,7 +106,8 @@ std::string InjectMatrix(const Eigen::Matrix3d& r) {
 
 TEST(ValidateVideo, RecoversTimeOffset) {
   test::TempDir dir;
-  const ValidationResult result = ValidateClip(MakeClip(dir, {{"time_offset=0.004"}}));
+  const ValidationResult result =
+      test::ValidateWithoutResiduals(MakeClip(dir, {{"time_offset=0.004"}}));
   ExpectClipIdentified(result, "time_offset", [](const TrueModel& m) {
     return std::abs(m.rig.time_offset_s - 0.004) <= 0.3e-3;
   });
@@ -125,7 +118,8 @@ TEST(ValidateVideo, RecoversReadoutTime) {
   // time for it in `.ci/run`'s sanitizer pass, 2026-11-27).
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
-  const ValidationResult result = ValidateClip(MakeClip(dir, {{"readout_time=0.036"}}));
+  const ValidationResult result =
+      test::ValidateWithoutResiduals(MakeClip(dir, {{"readout_time=0.036"}}));
   ExpectClipIdentified(result, "readout_time", [](const TrueModel& m) {
     return std::abs(m.rig.shutter.readout_s - 0.036) <= 0.02 * 0.036;
   });
@@ -136,7 +130,8 @@ TEST(ValidateVideo, RecoversGyroToCameraMisalignment) {
   const Eigen::Matrix3d r_cg =
       ExpSO3(Eigen::Vector3d(1, 2, -1.5).normalized() * (4.0 * M_PI / 180)).toRotationMatrix();
   test::TempDir dir;
-  const ValidationResult result = ValidateClip(MakeClip(dir, {{InjectMatrix(r_cg)}}));
+  const ValidationResult result =
+      test::ValidateWithoutResiduals(MakeClip(dir, {{InjectMatrix(r_cg)}}));
   ExpectClipIdentified(result, "gyro_to_camera", [&](const TrueModel& m) {
     return DegreesBetween(m.rig.cam_from_gyro, r_cg) <= 0.5;
   });
@@ -148,7 +143,8 @@ TEST(ValidateVideo, RecoversGyroToCameraMisalignment) {
 TEST(ValidateVideo, RecoversGyroBias) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
-  const ValidationResult result = ValidateClip(MakeClip(dir, {{"gyro_bias=0.01,0,0"}}));
+  const ValidationResult result =
+      test::ValidateWithoutResiduals(MakeClip(dir, {{"gyro_bias=0.01,0,0"}}));
   ExpectClipIdentified(result, "gyro_bias", [](const TrueModel& m) {
     const Eigen::Vector3d& b = m.gyro_bias_rad_s;
     return std::abs(b.x() - 0.01) <= 0.001 && std::abs(b.y()) <= 0.0015 &&
@@ -159,7 +155,8 @@ TEST(ValidateVideo, RecoversGyroBias) {
 TEST(ValidateVideo, RecoversLensDistortion) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
-  const ValidationResult result = ValidateClip(MakeClip(dir, {{"lens_distortion=-0.05,0.01"}}));
+  const ValidationResult result =
+      test::ValidateWithoutResiduals(MakeClip(dir, {{"lens_distortion=-0.05,0.01"}}));
   ExpectClipIdentified(result, "lens_distortion", [](const TrueModel& m) {
     return std::abs(std::get<BrownConrady>(m.rig.camera.distortion).coeffs[0] + 0.05) <= 0.005;
   });
@@ -180,7 +177,7 @@ TEST(ValidateVideo, RecoversAFisheyesLensDistortion) {
   spec.injections = {"lens_distortion=" + FormatNumber("%.17g", truth[0]) + "," +
                      FormatNumber("%.17g", truth[1]) + "," + FormatNumber("%.17g", truth[2]) + "," +
                      FormatNumber("%.17g", truth[3])};
-  const ValidationResult result = ValidateClip(MakeClip(dir, spec));
+  const ValidationResult result = test::ValidateWithoutResiduals(MakeClip(dir, spec));
   ExpectClipIdentified(result, "lens_distortion", [&](const TrueModel& m) {
     const Fisheye* lens = std::get_if<Fisheye>(&m.rig.camera.distortion);
     return lens && std::abs(lens->coeffs()[0] - truth[0]) <= 0.01 &&
@@ -192,7 +189,7 @@ TEST(ValidateVideo, RecoversReadoutDirection) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const ValidationResult result =
-      ValidateClip(MakeClip(dir, {{"readout_direction=bottom_to_top"}}));
+      test::ValidateWithoutResiduals(MakeClip(dir, {{"readout_direction=bottom_to_top"}}));
   ExpectClipIdentified(result, "readout_direction", [](const TrueModel& m) {
     return m.rig.shutter.direction == ReadoutDirection::kBottomToTop;
   });
@@ -203,7 +200,7 @@ TEST(ValidateVideo, RecoversReadoutDirection) {
 TEST(ValidateVideo, RecoversAWronglyLabelledGyro) {
   test::TempDir dir;
   const ValidationResult result =
-      ValidateClip(MakeClip(dir, {{"gyro_to_camera=0,1,0,1,0,0,0,0,-1"}}));
+      test::ValidateWithoutResiduals(MakeClip(dir, {{"gyro_to_camera=0,1,0,1,0,0,0,0,-1"}}));
   Eigen::Matrix3d truth;
   truth << 0, 1, 0, 1, 0, 0, 0, 0, -1;
   ExpectClipIdentified(result, "gyro_to_camera", [&](const TrueModel& m) {
@@ -225,7 +222,7 @@ TEST(ValidateVideo, RecoversGyroScale) {
   ClipSpec spec;
   spec.injections = {"gyro_scale=1.05,0.95,1.04"};
   spec.first_s = 11.4;
-  const ValidationResult result = ValidateClip(MakeClip(dir, spec));
+  const ValidationResult result = test::ValidateWithoutResiduals(MakeClip(dir, spec));
   ExpectClipIdentified(result, "gyro_scale", [](const TrueModel& m) {
     return (m.gyro_scale - Eigen::Vector3d(1.05, 0.95, 1.04)).cwiseAbs().maxCoeff() <= 0.01;
   });
@@ -240,7 +237,7 @@ TEST(ValidateVideo, RecoversClockRateOverALongClip) {
   spec.frames = 50;
   spec.first_s = 8.0;
   spec.fps = 5.0;
-  const ValidationResult result = ValidateClip(MakeClip(dir, spec));
+  const ValidationResult result = test::ValidateWithoutResiduals(MakeClip(dir, spec));
   ExpectClipIdentified(result, "clock_rate", [](const TrueModel& m) {
     return std::abs(m.clock_rate_ppm - 300.0) <= 60.0;
   });
@@ -267,7 +264,7 @@ TEST(ValidateVideo, RecoversTimeOffsetWithClutter) {
   ClipSpec spec;
   spec.injections = {"time_offset=0.004"};
   spec.clutter = Clutter();
-  const ValidationResult result = ValidateClip(MakeClip(dir, spec));
+  const ValidationResult result = test::ValidateWithoutResiduals(MakeClip(dir, spec));
   ExpectClutterLeftOut(result);
   ExpectClipIdentified(result, "time_offset", [](const TrueModel& m) {
     return std::abs(m.rig.time_offset_s - 0.004) <= 0.3e-3;
@@ -280,7 +277,7 @@ TEST(ValidateVideo, CleanClipWithClutterAddsNothing) {
   test::TempDir dir;
   ClipSpec spec;
   spec.clutter = Clutter();
-  const ValidationResult result = ValidateClip(MakeClip(dir, spec));
+  const ValidationResult result = test::ValidateWithoutResiduals(MakeClip(dir, spec));
   ExpectClutterLeftOut(result);
   const std::string report = ValidationReport(result);
   EXPECT_TRUE(result.loop.effects.empty()) << report;
@@ -299,7 +296,7 @@ TEST(ValidateVideo, AStabilisedImageNamesNoEffect) {
   std::vector<GyroSample> logged = ReadGyroCsv(clip + "/gyro.csv").samples();
   for (GyroSample& s : logged) s.omega_rad_s *= 5.0;
   WriteGyroCsv(clip + "/gyro.csv", GyroTrace(std::move(logged)));
-  const ValidationResult result = ValidateClip(clip);
+  const ValidationResult result = test::ValidateWithoutResiduals(clip);
   const std::string report = ValidationReport(result);
   ASSERT_TRUE(result.screen.gyro_follow.determined) << report;
   EXPECT_FALSE(result.screen.gyro_follow.follows) << report;
@@ -315,13 +312,13 @@ TEST(ValidateVideo, AStabilisedImageNamesNoEffect) {
 
 TEST(ValidateVideo, CleanClipAddsNothing) {
   test::TempDir dir;
-  const ValidationResult result = ValidateClip(MakeClip(dir, {}));
+  const ValidationResult result = test::ValidateWithoutResiduals(MakeClip(dir, {}));
   const std::string report = ValidationReport(result);
   EXPECT_TRUE(result.loop.effects.empty()) << report;
   EXPECT_TRUE(result.translation_loop.effects.empty()) << report;
   EXPECT_FALSE(result.loop.unexplained) << report;
   EXPECT_EQ(result.preferred, "rotation_only") << report;
-  EXPECT_LE(result.loop.before.rms_px, kVideoAfterOverNoise * result.loop.noise_px) << report;
+  EXPECT_LE(result.loop.before.rms_px, test::kAfterOverNoise * result.loop.noise_px) << report;
 }
 
 // A camera that climbs and drifts (velocity 2, 1, 3 m/s at 50 m): the divergence of the image is
@@ -330,7 +327,8 @@ TEST(ValidateVideo, CleanClipAddsNothing) {
 TEST(ValidateVideo, TranslationExplainsAMovingCamera) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
-  const ValidationResult result = ValidateClip(MakeClip(dir, {{"velocity=2,1,3"}}));
+  const ValidationResult result =
+      test::ValidateWithoutResiduals(MakeClip(dir, {{"velocity=2,1,3"}}));
   const std::string report = ValidationReport(result);
   EXPECT_TRUE(result.loop.unexplained) << report;
   EXPECT_FALSE(result.translation_loop.unexplained) << report;
@@ -361,7 +359,7 @@ TEST(ValidateVideo, EffectOutsideTheListIsNeverAConfidentWrongEffect) {
                               a * (truth.samples()[i].omega_rad_s - filtered[i - 1].omega_rad_s);
   }
   WriteGyroCsv(clip + "/gyro.csv", GyroTrace(std::move(filtered)));
-  const ValidationResult result = ValidateClip(clip);
+  const ValidationResult result = test::ValidateWithoutResiduals(clip);
   const std::string report = ValidationReport(result);
   for (const LoopResult* loop : {&result.loop, &result.translation_loop}) {
     if (loop->unexplained) continue;
@@ -377,7 +375,7 @@ TEST(ValidateVideo, ReportAndJsonCarryBothModels) {
   ClipSpec spec;
   spec.injections = {"time_offset=0.004"};
   spec.frames = 6;
-  const ValidationResult result = ValidateClip(MakeClip(dir, spec));
+  const ValidationResult result = test::ValidateWithoutResiduals(MakeClip(dir, spec));
   const nlohmann::json json = ValidationToJson(result);
   for (const char* key : {"format", "frames", "before", "effects", "after", "noise_px",
                           "unexplained", "model", "rotation_only", "translation", "pairs"}) {
