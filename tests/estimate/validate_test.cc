@@ -109,11 +109,9 @@ void ExpectIdentified(const ValidationResult& result, const std::string& name) {
   ASSERT_FALSE(loop.effects.empty()) << Summary(result);
   EXPECT_EQ(Spec(loop.effects.front().effect).name, name) << Summary(result);
   EXPECT_FALSE(loop.unexplained) << Summary(result);
-  EXPECT_LE(loop.after.rms_px, test::kAfterOverNoise * loop.noise_px) << Summary(result);
+  EXPECT_LE(loop.after.rms_px, test::kAtNoiseRatio * loop.noise_px) << Summary(result);
   EXPECT_GT(loop.before.rms_px, 2.0 * loop.after.rms_px) << Summary(result);
 }
-
-bool SkipUnderAsan() { return test::kAsan; }
 
 // time_offset_s = 4 ms undeclared -> recovered within 0.3 ms.
 TEST(ValidateEndToEnd, RecoversTimeOffset) {
@@ -127,7 +125,7 @@ TEST(ValidateEndToEnd, RecoversTimeOffset) {
 // The same with the bottom quarter of every frame fixed to the camera (landing gear, a dashboard)
 // and a car driving across the ground at 15 m/s: the same tolerance, the region left out.
 TEST(ValidateEndToEnd, RecoversTimeOffsetWithClutter) {
-  if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
+  if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   DatasetSpec spec;
   spec.injections = {"time_offset=0.004"};
@@ -142,7 +140,7 @@ TEST(ValidateEndToEnd, RecoversTimeOffsetWithClutter) {
 
 // A readout 20 % longer than declared (36 ms vs 30 ms) -> within 2 %.
 TEST(ValidateEndToEnd, RecoversReadoutTime) {
-  if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
+  if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const ValidationResult result =
       test::ValidateWithoutResiduals(MakeDataset(dir, {{"readout_time=0.036"}}));
@@ -152,7 +150,7 @@ TEST(ValidateEndToEnd, RecoversReadoutTime) {
 
 // The gyro is mounted 4 degrees off about a tilted axis -> R_CG within 0.5 degrees.
 TEST(ValidateEndToEnd, RecoversGyroToCameraMisalignment) {
-  if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
+  if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   const Eigen::Vector3d axis = Eigen::Vector3d(0.5, -0.3, 0.81).normalized();
   const Eigen::Matrix3d r_cg = ExpSO3(axis * (4.0 * M_PI / 180.0)).toRotationMatrix();
   std::string value = "gyro_to_camera=";
@@ -172,7 +170,7 @@ TEST(ValidateEndToEnd, RecoversGyroToCameraMisalignment) {
 
 // Per-axis gyro scale about 5 % off -> each axis within 1 %.
 TEST(ValidateEndToEnd, RecoversGyroScale) {
-  if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
+  if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const ValidationResult result =
       test::ValidateWithoutResiduals(MakeDataset(dir, {{"gyro_scale=1.05,0.95,1.04"}}));
@@ -187,7 +185,7 @@ TEST(ValidateEndToEnd, RecoversGyroScale) {
 // The gyro clock runs 300 ppm fast over a 2-minute log (frames from 10 s to 110 s: the offset
 // grows from 3 to 33 ms) -> within 20 % of 300 ppm.
 TEST(ValidateEndToEnd, RecoversClockRate) {
-  if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
+  if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   DatasetSpec spec;
   spec.injections = {"clock_rate=300"};
@@ -202,7 +200,7 @@ TEST(ValidateEndToEnd, RecoversClockRate) {
 // 4 m/s along camera x at 50 m -> within 10 %, or reported ambiguous with gyro_bias (on flat ground
 // a constant rate about y leaves almost the same signature as a velocity along x).
 TEST(ValidateEndToEnd, RecoversVelocityOrFlagsAmbiguity) {
-  if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
+  if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const ValidationResult result =
       test::ValidateWithoutResiduals(MakeDataset(dir, {{"velocity=4,0,0"}}));
@@ -214,7 +212,7 @@ TEST(ValidateEndToEnd, RecoversVelocityOrFlagsAmbiguity) {
            first.ambiguous_with.end();
   };
   EXPECT_FALSE(loop.unexplained) << Summary(result);
-  EXPECT_LE(loop.after.rms_px, test::kAfterOverNoise * loop.noise_px) << Summary(result);
+  EXPECT_LE(loop.after.rms_px, test::kAtNoiseRatio * loop.noise_px) << Summary(result);
   if (first.effect == Effect::kVelocity) {
     const Eigen::Vector3d truth(4, 0, 0);
     const double error = (loop.model.rig.velocity_mps - truth).norm() / truth.norm();
@@ -233,7 +231,7 @@ TEST(ValidateEndToEnd, CleanDatasetAddsNothing) {
   const ValidationResult result = test::ValidateWithoutResiduals(MakeDataset(dir, {}));
   EXPECT_TRUE(result.loop.effects.empty()) << Summary(result);
   EXPECT_FALSE(result.loop.unexplained) << Summary(result);
-  EXPECT_LE(result.loop.before.rms_px, test::kAfterOverNoise * result.loop.noise_px)
+  EXPECT_LE(result.loop.before.rms_px, test::kAtNoiseRatio * result.loop.noise_px)
       << Summary(result);
   // The declared full model then predicts the measured D (the measurement's own D is noisier).
   for (const FrameValidation& f : result.frames) {
@@ -265,7 +263,7 @@ TEST(ValidateEndToEnd, EffectOutsideTheListIsUnexplained) {
 // The table's bookkeeping on one dataset: flags follow D against each limit, the confusion matrix
 // counts every frame once per limit, and the JSON has docs/FORMATS.md's keys.
 TEST(ValidateEndToEnd, TableAndReportAreConsistent) {
-  if (SkipUnderAsan()) GTEST_SKIP() << "reduced set under ASan";
+  if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const ValidationResult result =
       test::ValidateWithoutResiduals(MakeDataset(dir, {{"time_offset=0.004"}}));

@@ -86,7 +86,7 @@ void ExpectClipIdentified(const ValidationResult& result, const std::string& nam
   ASSERT_EQ(loop.effects.size(), 1u) << report;
   EXPECT_EQ(Spec(loop.effects.front().effect).name, name) << report;
   EXPECT_FALSE(loop.unexplained) << report;
-  EXPECT_LE(loop.after.rms_px, test::kAfterOverNoise * loop.noise_px) << report;
+  EXPECT_LE(loop.after.rms_px, test::kAtNoiseRatio * loop.noise_px) << report;
   EXPECT_GT(loop.before.rms_px, 2.0 * loop.after.rms_px) << report;
   EXPECT_TRUE(close(loop.model)) << report;
   ASSERT_EQ(result.halves.size(), 1u) << report;
@@ -318,7 +318,7 @@ TEST(ValidateVideo, CleanClipAddsNothing) {
   EXPECT_TRUE(result.translation_loop.effects.empty()) << report;
   EXPECT_FALSE(result.loop.unexplained) << report;
   EXPECT_EQ(result.preferred, "rotation_only") << report;
-  EXPECT_LE(result.loop.before.rms_px, test::kAfterOverNoise * result.loop.noise_px) << report;
+  EXPECT_LE(result.loop.before.rms_px, test::kAtNoiseRatio * result.loop.noise_px) << report;
 }
 
 // A camera that climbs and drifts (velocity 2, 1, 3 m/s at 50 m): the divergence of the image is
