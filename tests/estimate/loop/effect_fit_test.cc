@@ -9,6 +9,7 @@
 #include "sim/so3.h"
 #include "sim/synth/synth.h"
 #include "tests/estimate/loop/effect_fixtures.h"
+#include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -24,11 +25,8 @@ using test::EverySecond;
 using test::FlightTrace;
 using test::MappingRig;
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr int kGridStepPx = 80;  // ~190 points a frame keeps the ASan run short
-#else
-constexpr int kGridStepPx = 40;  // 768 points a frame
-#endif
+// 768 points a frame; ~190 under ASan keeps that run short.
+constexpr int kGridStepPx = test::kAsan ? 80 : 40;
 // Measurement noise: 0.1 px per component (noise_px is the RMS length: 0.1 * sqrt(2)).
 constexpr double kSigmaPx = 0.1;
 const double kNoisePx = kSigmaPx * std::sqrt(2.0);
