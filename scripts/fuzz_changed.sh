@@ -25,6 +25,8 @@ for t in "$@"; do
   [ -x "$binary" ] || { echo "fuzz_changed.sh: $binary not built (scripts/fuzz.sh builds it)" >&2; exit 2; }
   mapfile -t files < <(readelf --debug-dump=rawline "$binary" 2>/dev/null |
     grep -o -E '(sim|render|estimate|fuzz)/[A-Za-z0-9_/]+\.(cc|h)$' | sort -u)
+  # No files would make the git diff below list every changed file of the tree.
+  [ ${#files[@]} -gt 0 ] || { echo "fuzz_changed.sh: $binary has no line tables (build it with -g)" >&2; exit 2; }
   changed=$(git diff --name-only "$commit" HEAD -- "${files[@]}" | tr '\n' ' ')
   echo "$t: ${changed:-unchanged since $commit}"
 done
