@@ -48,10 +48,11 @@ for t in "$@"; do
   root=
   for p in "${paths[@]}"; do
     [ "$p" != "!old" ] || die "$binary has line tables older than DWARF 5 (build it with -gdwarf-5)"
-    [ "${p%/fuzz/${t}_fuzz.cc}" = "$p" ] && continue
-    [ -z "$root" ] || [ "$root" = "${p%/fuzz/${t}_fuzz.cc}" ] ||
-      die "$binary was built from two trees, $root and ${p%/fuzz/${t}_fuzz.cc}"
-    root="${p%/fuzz/${t}_fuzz.cc}"
+    tree="${p%/fuzz/${t}_fuzz.cc}"
+    [ "$tree" != "$p" ] || continue
+    [ -z "$root" ] || [ "$root" = "$tree" ] ||
+      die "$binary was built from two trees, $root and $tree"
+    root="$tree"
   done
   [ -n "$root" ] || die "$binary names no fuzz/${t}_fuzz.cc in its line tables"
   # Files outside the tree (system and library headers) come out absolute and are left out.
