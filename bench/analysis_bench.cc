@@ -17,8 +17,8 @@
 // A/B, and what `perf record` should look at); --pandas runs scripts/pandas_flight_bench.py on the
 // same file after each of those runs (interleaved, so that both see the same load) and prints the
 // ratio of the medians, CPU time against CPU time, and whether the percentages agree;
-// --two-threads also times each run as the command runs it (two threads, wall time) and gives that
-// ratio too.
+// --two-threads (with --flight-only or --pandas) also times each run as the command runs it (two
+// threads, wall time), checks its counts against the one thread's, and gives that ratio too.
 // A table, not Google Benchmark: one run of each step is long enough (seconds) to need no repeats.
 
 #include "estimate/paper/flight.h"
@@ -292,12 +292,16 @@ int FlightAgainstPandas(const std::string& path, int repeat, bool pandas, bool t
       const double w0 = WallNow();
       const FlightResult two = StreamedFlight(path, options, /*read_ahead=*/true, &warnings);
       ours_wall_s.push_back(WallNow() - w0);
-      same &= two.rows.size() == result.rows.size() &&
-              std::equal(two.rows.begin(), two.rows.end(), result.rows.begin(),
-                         [](const FlightRow& a, const FlightRow& b) {
-                           return a.windows == b.windows && a.flagged == b.flagged;
-                         });
-      std::printf("; two threads %.3f s wall", ours_wall_s.back());
+      const bool same_counts = two.rows.size() == result.rows.size() &&
+                               std::equal(two.rows.begin(), two.rows.end(), result.rows.begin(),
+                                          [](const FlightRow& a, const FlightRow& b) {
+                                            return a.windows == b.windows &&
+                                                   a.flagged == b.flagged &&
+                                                   a.flagged_axis == b.flagged_axis;
+                                          });
+      same &= same_counts;
+      std::printf("; two threads %.3f s wall%s", ours_wall_s.back(),
+                  same_counts ? "" : " (counts DIFFER from one thread's)");
     }
     if (pandas) {
       const PandasRun run = RunPandas(path, result);
