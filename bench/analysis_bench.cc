@@ -17,8 +17,8 @@
 // A/B, and what `perf record` should look at); --pandas runs scripts/pandas_flight_bench.py on the
 // same file after each of those runs (interleaved, so that both see the same load) and prints the
 // ratio of the medians, CPU time against CPU time, and whether the percentages agree;
-// --two-threads (with --flight-only or --pandas) also times each run as the command runs it (two
-// threads, wall time), checks its counts against the one thread's, and gives that ratio too.
+// --two-threads (implies --flight-only) also times each run as the command runs it (two threads,
+// wall time), checks its counts against the one thread's, and gives that ratio too.
 // A table, not Google Benchmark: one run of each step is long enough (seconds) to need no repeats.
 
 #include "estimate/paper/flight.h"
@@ -367,7 +367,9 @@ int Main(int argc, char** argv) {
     std::printf("  generated in %.1f s\n", Now() - t0);
   }
   if (generate_only) return 0;
-  if (flight_only || pandas) return FlightAgainstPandas(path, repeat, pandas, two_threads);
+  if (flight_only || pandas || two_threads) {
+    return FlightAgainstPandas(path, repeat, pandas, two_threads);
+  }
   const double file_mb = std::filesystem::file_size(path) / 1e6;
   std::printf("file: %s, %.1f MB\n\n", path.c_str(), file_mb);
 
