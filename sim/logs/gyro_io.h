@@ -51,9 +51,13 @@ LogFormat DetectGyroFormat(std::string_view text, const std::string& path);
 GyroTrace ReadGyroCsv(const std::string& path);
 // The same as a stream: the header is checked at once, the rows are parsed a block at a time as
 // the chunks are taken (IoError naming the line on the first bad one). path names the file in
-// messages; chunk_samples bounds each chunk.
+// messages; chunk_samples bounds each chunk. Rows of a shape seen before are read by it
+// (sim/logs/gyro_row_shapes.h); kByteLoop reads every row byte by byte, the twin that the tests
+// and the fuzz target compare it with, bit for bit.
+enum class GyroCsvRows { kByShape, kByteLoop };
 std::unique_ptr<GyroSource> OpenGyroCsv(TextBlocks blocks, const std::string& path,
-                                        size_t chunk_samples = FillingSource::kDefaultChunkSamples);
+                                        size_t chunk_samples = FillingSource::kDefaultChunkSamples,
+                                        GyroCsvRows rows = GyroCsvRows::kByShape);
 // Writes gyro.csv whole or not at all; times exact to the nanosecond, rates round-trip exact.
 void WriteGyroCsv(const std::string& path, const GyroTrace& trace);
 
