@@ -21,6 +21,10 @@
 
 namespace shutterlab::test {
 
+// True when a and b are the same double bit for bit (a readers' twins must agree exactly, NaN
+// payloads and the sign of zero included).
+inline bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof(a)) == 0; }
+
 inline void ExpectRotationNear(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b,
                                double tol_rad) {
   EXPECT_LE(AngularDistance(a, b), tol_rad)

@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <charconv>
 #include <cstdio>
-#include <cstring>
 #include <random>
 #include <string>
 #include <unistd.h>
@@ -76,12 +75,11 @@ TEST(FromCharsDouble, IsStdFromCharsOnEveryKindOfNumber) {
       continue;
     }
     ASSERT_EQ(got_end, expected_end) << "'" << text << "'";
-    EXPECT_EQ(std::memcmp(&got, &expected, sizeof(double)), 0)
-        << "'" << text << "': " << got << " vs " << expected;
+    EXPECT_TRUE(test::SameBits(got, expected)) << "'" << text << "': " << got << " vs " << expected;
     if (fast_end) {
       ++plain;
       ASSERT_EQ(fast_end - line.data(), expected_end - text.data()) << "'" << text << "'";
-      EXPECT_EQ(std::memcmp(&fast, &expected, sizeof(double)), 0)
+      EXPECT_TRUE(test::SameBits(fast, expected))
           << "'" << text << "': " << fast << " vs " << expected;
     } else {
       // Only what is not a plain decimal of at most 19 digits is left to the caller.

@@ -11,7 +11,6 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -280,8 +279,7 @@ TEST(GyroCsv, FastRowsReadAsTheGeneralFieldByFieldPath) {
     for (size_t i = 0; i < got.size(); ++i) {
       ASSERT_EQ(got[i].t_ns, expected[i].t_ns) << trial << " row " << i;
       for (int a = 0; a < 3; ++a) {
-        ASSERT_EQ(std::memcmp(&got[i].omega_rad_s[a], &expected[i].omega_rad_s[a], sizeof(double)),
-                  0)
+        ASSERT_TRUE(test::SameBits(got[i].omega_rad_s[a], expected[i].omega_rad_s[a]))
             << trial << " row " << i << " axis " << a;
       }
     }

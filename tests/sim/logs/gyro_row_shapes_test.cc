@@ -3,6 +3,7 @@
 #include "sim/check.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
+#include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -22,8 +23,6 @@ std::string Padded(const std::string& row) {
   return row + std::string(GyroRowShapes::kReadBytes, '7');
 }
 
-bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof(a)) == 0; }
-
 TEST(GyroRowShapes, ReadsARowOfALearnedShapeExactly) {
   GyroRowShapes shapes;
   if (!shapes.enabled()) GTEST_SKIP() << "no AVX2 on this CPU: rows are read byte by byte";
@@ -36,9 +35,9 @@ TEST(GyroRowShapes, ReadsARowOfALearnedShapeExactly) {
   const char* end = shapes.Read(second.data(), &s);
   ASSERT_EQ(end, second.data() + second.find('\n') + 1);
   EXPECT_EQ(s.t_ns, 98'761'000'000);
-  EXPECT_TRUE(SameBits(s.omega_rad_s[0], -9.876543));
-  EXPECT_TRUE(SameBits(s.omega_rad_s[1], 1.000001));
-  EXPECT_TRUE(SameBits(s.omega_rad_s[2], 7.99));
+  EXPECT_TRUE(test::SameBits(s.omega_rad_s[0], -9.876543));
+  EXPECT_TRUE(test::SameBits(s.omega_rad_s[1], 1.000001));
+  EXPECT_TRUE(test::SameBits(s.omega_rad_s[2], 7.99));
   // Non-digits in the same places but not the same bytes: not this shape.
   EXPECT_EQ(shapes.Read(Padded("98.761,-9.876543,1.000001.7,99\n").data(), &s), nullptr);
   EXPECT_EQ(shapes.Read(Padded("98.761,-9.876543,1.000001,7.9x\n").data(), &s), nullptr);
@@ -56,9 +55,9 @@ TEST(GyroRowShapes, EpochTimesAndLongNumbersAreExact) {
   GyroSample s{};
   ASSERT_NE(shapes.Read(other.data(), &s), nullptr);
   EXPECT_EQ(s.t_ns, 8'999'999'999'999'999'999);
-  EXPECT_TRUE(SameBits(s.omega_rad_s[0], 99999.9999999999));
-  EXPECT_TRUE(SameBits(s.omega_rad_s[1], 0.99999999999999));
-  EXPECT_TRUE(SameBits(s.omega_rad_s[2], 0.0));
+  EXPECT_TRUE(test::SameBits(s.omega_rad_s[0], 99999.9999999999));
+  EXPECT_TRUE(test::SameBits(s.omega_rad_s[1], 0.99999999999999));
+  EXPECT_TRUE(test::SameBits(s.omega_rad_s[2], 0.0));
   // At most 9e9 whole seconds, as the byte loop takes them (t_ns then fits in 63 bits).
   ASSERT_NE(
       shapes.Read(Padded("9000000000.999999999,99999.9999999999,0.99999999999999,0\n").data(), &s),
@@ -184,9 +183,9 @@ TEST(GyroRowShapes, ReaderGivesTheByteLoopsSamples) {
       ASSERT_EQ(by_shape[i].t_ns, expected[i].t_ns) << trial << " row " << i;
       ASSERT_EQ(byte_loop[i].t_ns, expected[i].t_ns) << trial << " row " << i;
       for (int a = 0; a < 3; ++a) {
-        ASSERT_TRUE(SameBits(by_shape[i].omega_rad_s[a], expected[i].omega_rad_s[a]))
+        ASSERT_TRUE(test::SameBits(by_shape[i].omega_rad_s[a], expected[i].omega_rad_s[a]))
             << trial << " row " << i << " axis " << a;
-        ASSERT_TRUE(SameBits(byte_loop[i].omega_rad_s[a], expected[i].omega_rad_s[a]))
+        ASSERT_TRUE(test::SameBits(byte_loop[i].omega_rad_s[a], expected[i].omega_rad_s[a]))
             << trial << " row " << i << " axis " << a;
       }
     }
