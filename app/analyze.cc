@@ -268,6 +268,8 @@ AnalyzeResult AnalyzeStreamed(const AnalyzeCommand& command, const FlightLogRead
   options.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
   AnalyzeResult result = AnalyzeStream(source, options);
   logs.CheckUnchanged();
+  // The flight table's own warnings join the log's on stderr, as they do in the --json's list.
+  if (result.flight) PrintLogWarnings(command.log_path, result.flight->warnings);
   return result;
 }
 
@@ -299,6 +301,7 @@ PhotoFlightResult PhotosOnLog(const AnalyzeCommand& command, const FlightLogRead
     PhotoFlightResult result =
         AnalyzePhotoFlightStream(set, metadata, source, trigger_file, options);
     logs.CheckUnchanged();
+    if (result.log.flight) PrintLogWarnings(command.log_path, result.log.flight->warnings);
     return result;
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(command.log_path + ": " + e.what());

@@ -86,6 +86,9 @@ void Run(const FlightCommand& command) {
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(command.trace.path + ": " + e.what());
   }
+  // The analysis's own warnings (windows refused as too short) go on stderr as the reader's did:
+  // the list there is the --json's.
+  PrintLogWarnings(command.trace.path, result.warnings);
   warnings.insert(warnings.end(), result.warnings.begin(), result.warnings.end());
   if (options.series) WriteFlightSeriesCsv(command.series_path, result.series);
   if (command.json) {

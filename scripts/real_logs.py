@@ -17,7 +17,8 @@ import subprocess
 import sys
 import tempfile
 
-# (path under the data folder, extra flags every command needs to read it)
+# (path under the data folder, extra flags every command needs to read it); the same list as
+# tests/app/real_logs_cli_test.cc's kRealLogs, which checks what these commands say about each
 LOGS = [
     ("gyro/betaflight_blackbox/btfl_001.bbl", []),
     ("gyro/betaflight_blackbox/btfl_002.bbl", []),

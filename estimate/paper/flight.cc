@@ -363,6 +363,30 @@ void FlightOptions::Check() const {
 
 namespace {
 
+// Why windows were refused and what would do: flight's --window of the shortest 1-2-5 step of
+// milliseconds (1, 2, 5, 10, 20, 50 ...) longer than two sample intervals (50 ms for a 50 Hz log),
+// or a log fast enough for the shortest window refused (above 200 Hz for 10 ms). `analyze`
+// refuses its readout with the same words: flight measures the same log at the longer window.
+std::string TooFewSamplesReason(const FlightResult& result) {
+  const double shortest_ms = kMinWindowSampleIntervals * result.sample_interval_s * 1e3;
+  double step_ms = 1.0;
+  for (double decade = 1.0; step_ms <= shortest_ms; decade *= 10.0) {
+    for (const double factor : {1.0, 2.0, 5.0}) {
+      step_ms = factor * decade;
+      if (step_ms > shortest_ms) break;
+    }
+  }
+  double refused_ms = std::numeric_limits<double>::infinity();
+  for (const FlightRow& row : result.rows)
+    if (row.too_few_samples) refused_ms = std::min(refused_ms, row.window_s * 1e3);
+  return "at " + FormatNumber("%.4g", 1.0 / result.sample_interval_s) +
+         " Hz a window must be longer than " + FormatNumber("%.4g", shortest_ms) +
+         " ms (2 sample intervals) to measure a range: give flight --window " +
+         FormatNumber("%g", step_ms) + "ms or longer, or log above " +
+         FormatNumber("%.4g", kMinWindowSampleIntervals / refused_ms * 1e3) + " Hz for " +
+         FormatNumber("%g", refused_ms) + " ms windows";
+}
+
 std::vector<LogWarning> TooFewSamplesWarnings(const FlightResult& result) {
   std::string windows;
   size_t count = 0;
@@ -374,13 +398,9 @@ std::vector<LogWarning> TooFewSamplesWarnings(const FlightResult& result) {
     ++count;
   }
   if (count == 0) return {};
-  const double dt_s = result.sample_interval_s;
   return {{"too_few_samples",
-           "windows of " + windows + " not analysed: at " + FormatNumber("%.4g", 1.0 / dt_s) +
-               " Hz a window must be longer than " +
-               FormatNumber("%.4g", kMinWindowSampleIntervals * dt_s * 1e3) +
-               " ms (2 sample intervals) to measure a range",
-           std::nullopt, count}};
+           "windows of " + windows + " not analysed: " + TooFewSamplesReason(result), std::nullopt,
+           count}};
 }
 
 }  // namespace
@@ -640,7 +660,7 @@ FlightResult FlightStream::Impl::Finish() {
       throw std::invalid_argument(
           "window " + FormatNumber("%g", options.windows_s[wi]) + " s is longer than the " +
           FormatNumber("%.3f", (t_last_analysed_ns - t_first_analysed_ns) * 1e-9) +
-          " s of trace after the bias segment: give shorter --windows or an earlier --bias A:B");
+          " s of trace after the bias segment: give a shorter --window or an earlier --bias A:B");
     }
     windows[wi] = buffer->LowerBound(next_k0, t_last_analysed_ns - window_ns[wi] + 1);
     windows_max = std::max(windows_max, windows[wi]);
@@ -743,11 +763,7 @@ std::string FlightTable(const FlightResult& result) {
     out << "\n";
   }
   if (too_few > 0) {
-    const double dt_s = result.sample_interval_s;
-    out << "too few samples: at " << FormatNumber("%.4g", 1.0 / dt_s)
-        << " Hz a window must be longer than "
-        << FormatNumber("%.4g", kMinWindowSampleIntervals * dt_s * 1000.0)
-        << " ms (2 sample intervals) to measure a range; those rows were not analysed\n";
+    out << "too few samples, those rows were not analysed: " << TooFewSamplesReason(result) << "\n";
   }
   if (result.vector_criterion && too_few < result.rows.size()) {
     const size_t analysed = result.rows.size() - too_few;  // refused rows are no comparison

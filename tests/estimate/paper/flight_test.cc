@@ -14,6 +14,8 @@
 #include <functional>
 #include <random>
 #include <stdexcept>
+#include <string>
+#include <tuple>
 #include <vector>
 
 namespace shutterlab {
@@ -398,7 +400,9 @@ TEST(Flight, WindowsNotLongerThanTwoSampleIntervalsAreRefused) {
   }
   EXPECT_EQ(r.windows_total, 0u) << "the first window was refused";
   const std::string table = FlightTable(r);
-  EXPECT_NE(table.find("too few samples: at 50 Hz a window must be longer than 40 ms"),
+  EXPECT_NE(table.find("too few samples, those rows were not analysed: at 50 Hz a window must be "
+                       "longer than 40 ms (2 sample intervals) to measure a range: give flight "
+                       "--window 50ms or longer, or log above 200 Hz for 10 ms windows"),
             std::string::npos)
       << table;
   const std::vector<LogWarning>& warnings = r.warnings;
@@ -410,6 +414,37 @@ TEST(Flight, WindowsNotLongerThanTwoSampleIntervalsAreRefused) {
   FlightOptions long_window = options;
   long_window.windows_s = {0.1};
   EXPECT_TRUE(Flight(GyroTrace(samples), long_window).warnings.empty());
+}
+
+// The refusal names a window that works, the shortest 1-2-5 step of milliseconds longer than two
+// sample intervals (100 Hz: 20 ms is refused, 50 ms named; 30 Hz: 66.7 ms, 100 ms; 1 kHz: 2 ms,
+// 5 ms), and the rate that the refused window needs (above 2 / window); that window is then
+// analysed.
+TEST(Flight, TooFewSamplesNamesAWindowThatIsAnalysedAndTheRateNeeded) {
+  for (const auto& [rate_hz, refused_s, named, needed] :
+       {std::tuple{100.0, 0.020, std::string("50ms"), std::string("above 100 Hz for 20 ms")},
+        std::tuple{30.0, 0.060, std::string("100ms"), std::string("above 33.33 Hz for 60 ms")},
+        std::tuple{1000.0, 0.001, std::string("5ms"), std::string("above 2000 Hz for 1 ms")},
+        std::tuple{8.0, 0.1, std::string("500ms"), std::string("above 20 Hz for 100 ms")}}) {
+    std::vector<GyroSample> samples;
+    for (int k = 0; k < 20 * rate_hz; ++k)  // 20 s
+      samples.push_back(
+          {static_cast<int64_t>(std::llround(k * 1e9 / rate_hz)), Eigen::Vector3d(0, 0.5, 0)});
+    FlightOptions options;
+    options.windows_s = {refused_s, 1.0};  // 1 s is analysed and names no rate
+    options.known_bias_rad_s = Eigen::Vector3d::Zero();
+    const FlightResult r = Flight(GyroTrace(samples), options);
+    ASSERT_EQ(r.warnings.size(), 1u) << rate_hz;
+    const std::string& message = r.warnings[0].message;
+    EXPECT_NE(
+        message.find("give flight --window " + named + " or longer, or log " + needed + " windows"),
+        std::string::npos)
+        << rate_hz << " Hz: " << message;
+    options.windows_s = {std::stod(named) / 1e3};
+    const FlightResult named_window = Flight(GyroTrace(samples), options);
+    EXPECT_TRUE(named_window.warnings.empty()) << rate_hz << " Hz, " << named;
+    EXPECT_FALSE(named_window.rows[0].too_few_samples) << rate_hz << " Hz, " << named;
+  }
 }
 
 // A bias segment that leaves nothing to analyse says what to change, without an internal tag.
