@@ -247,5 +247,29 @@ TEST(PhotosCli, RealPhotosOnARealLogFromAFileAndAPipe) {
   EXPECT_EQ(s["warnings"].size(), 2u) << "the log's two gap warnings";
 }
 
+// The photos on a 50 Hz log (log171): their 16 ms readout holds too few samples to judge, and the
+// analysis says so on stderr as in the --json, beside the reader's warnings.
+TEST(PhotosCli, PhotosOnALowRateLogSayTooFewSamplesOnStderrAsInTheJson) {
+  SHUTTERLAB_REAL_DATA(photos, "incoming/dji_fc8482_clusterodm");
+  SHUTTERLAB_REAL_DATA(log, "incoming/ardupilot_log171/log171.bin");
+  test::TempDir dir;
+  WriteFileAtomically(dir / "t.csv",
+                      "image,t\ntest-photo-1.jpg,112.7\ntest-photo-2.jpg,117.614\n"
+                      "test-photo-3.jpg,160.3\n");
+  const auto r = RunShutterlab("analyze --photos " + photos + " " + log + " --triggers " +
+                               (dir / "t.csv") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  std::vector<std::string> kinds;
+  for (const nlohmann::json& w : j.at("warnings")) {
+    kinds.push_back(w.at("kind").get<std::string>());
+    EXPECT_NE(r.err.find("warning: " + log + ": " + kinds.back() + ": " +
+                         w.at("message").get<std::string>() + "\n"),
+              std::string::npos)
+        << r.err;
+  }
+  EXPECT_EQ(kinds, (std::vector<std::string>{"gap", "saturated", "too_few_samples"}));
+}
+
 }  // namespace
 }  // namespace shutterlab

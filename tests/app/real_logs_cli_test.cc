@@ -23,10 +23,10 @@ namespace shutterlab {
 namespace {
 
 struct RealLog {
-  const char* name;       // the test's name
-  const char* relative;   // under the data folder
-  const char* flags;      // what every command needs to read it
-  bool truncated_whole;   // the file as shared ends inside a message
+  const char* name;      // the test's name
+  const char* relative;  // under the data folder
+  const char* flags;     // what every command needs to read it
+  bool truncated_whole;  // the file as shared ends inside a message
 };
 
 // scripts/real_logs.py's list: keep the two the same.
@@ -45,8 +45,8 @@ const RealLog kRealLogs[] = {
     {"PhoneGyroDump", "rs/phone_gyro_video_20200109_145447/gyro_dump.txt", "", false},
 };
 
-const char* const kCommands[] = {"flight --json", "noise --json", "accuracy --json --reference-deg 1",
-                                 "analyze --json --every 2s"};
+const char* const kCommands[] = {"flight --json", "noise --json",
+                                 "accuracy --json --reference-deg 1", "analyze --json --every 2s"};
 
 std::vector<std::string> Lines(const std::string& text) {
   std::vector<std::string> lines;
