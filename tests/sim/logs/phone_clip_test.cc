@@ -8,7 +8,6 @@
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <string>
 
 namespace shutterlab {
@@ -28,22 +27,18 @@ const char kGyroDumpTxt[] =
     "frameid:2 gyro:0 x 0.1 y 0.2 z 0.3 ts 1000312600\n"
     "SOF  1000375010,  frameNum :3 exp time 0.0061\n";
 
-void Write(const fs::path& path, const std::string& text) {
-  std::ofstream(path, std::ios::binary) << text;
-}
-
 // A clip folder with the three text files and images for frames 1 and 3, plus files the reader
 // must pass over.
 fs::path MakeClip(const test::TempDir& dir) {
   const fs::path clip = dir.path() / "clip";
   fs::create_directories(clip / "frames");
-  Write(clip / "gyro.txt", kGyroTxt);
-  Write(clip / "framestamp.txt", kFramestampTxt);
-  Write(clip / "gyro_dump.txt", kGyroDumpTxt);
-  Write(clip / "frames/RE_frame-1.jpg", "not decoded here");
-  Write(clip / "frames/RE_frame-3.PNG", "not decoded here");
-  Write(clip / "frames/RE_frame-2.gif", "not an image extension the layout uses");
-  Write(clip / "frames/notes.txt", "");
+  WriteFileAtomically(clip / "gyro.txt", kGyroTxt);
+  WriteFileAtomically(clip / "framestamp.txt", kFramestampTxt);
+  WriteFileAtomically(clip / "gyro_dump.txt", kGyroDumpTxt);
+  WriteFileAtomically(clip / "frames/RE_frame-1.jpg", "not decoded here");
+  WriteFileAtomically(clip / "frames/RE_frame-3.PNG", "not decoded here");
+  WriteFileAtomically(clip / "frames/RE_frame-2.gif", "not an image extension the layout uses");
+  WriteFileAtomically(clip / "frames/notes.txt", "");
   return clip;
 }
 
@@ -105,9 +100,9 @@ TEST(PhoneClip, MalformedFilesNameTheFileAndLine) {
   const auto with = [&](const std::string& name, const std::string& text,
                         const std::string& needle) {
     const std::string original = ReadFileToString((clip / name).string());
-    Write(clip / name, text);
+    WriteFileAtomically(clip / name, text);
     ExpectIoError(clip, needle);
-    Write(clip / name, original);
+    WriteFileAtomically(clip / name, original);
   };
   with("gyro.txt", "0.1,0.2,0.3,1000.5\n0.1,0.2,1000.6\n",
        "gyro.txt:2: column 4 (time) missing: the line has 3 fields");
@@ -138,7 +133,7 @@ TEST(PhoneClip, GyroCutInsideItsLastLineIsReadAndSaid) {
   // Cut 1 to 3 bytes before the end, the last line still reads (1001.0, "1001." or "1001");
   // from 4 on it is short of a field or a time before the line above it ("100"): left out.
   for (size_t cut = 4; cut < 19; ++cut) {
-    Write(clip / "gyro.txt", whole.substr(0, whole.size() - cut));
+    WriteFileAtomically(clip / "gyro.txt", whole.substr(0, whole.size() - cut));
     const PhoneClip read = ReadPhoneClip(clip.string());
     ASSERT_EQ(read.gyro.size(), 2u) << "cut " << cut;
     EXPECT_EQ(read.gyro.samples()[1].t_ns, 750'000'000) << "cut " << cut;
@@ -148,9 +143,9 @@ TEST(PhoneClip, GyroCutInsideItsLastLineIsReadAndSaid) {
     EXPECT_NE(read.warnings[0].message.find("line 3"), std::string::npos)
         << read.warnings[0].message;
   }
-  Write(clip / "gyro.txt", whole);
+  WriteFileAtomically(clip / "gyro.txt", whole);
   EXPECT_TRUE(ReadPhoneClip(clip.string()).warnings.empty());
-  Write(clip / "gyro.txt", whole.substr(0, whole.size() - 5) + "\n");
+  WriteFileAtomically(clip / "gyro.txt", whole.substr(0, whole.size() - 5) + "\n");
   ExpectIoError(clip, "gyro.txt:3:");
 }
 
