@@ -363,28 +363,37 @@ void FlightOptions::Check() const {
 
 namespace {
 
-// Why windows were refused and what would do: flight's --window of the shortest 1-2-5 step of
-// milliseconds (1, 2, 5, 10, 20, 50 ...) longer than two sample intervals (50 ms for a 50 Hz log),
-// or a log fast enough for the shortest window refused (above 200 Hz for 10 ms). `analyze`
-// refuses its readout with the same words: flight measures the same log at the longer window.
+// A rate or a duration as a person reads it, without an exponent: 4 significant digits, whole
+// numbers from 10,000 up.
+std::string PlainNumber(double value) {
+  return FormatNumber(std::fabs(value) < 1e4 ? "%.4g" : "%.0f", value);
+}
+
+// Why windows were refused and what would do: flight's --window of the shortest 1-2-5 step (...,
+// 0.5, 1, 2, 5, 10, 20, 50 ms ...) longer than two sample intervals (50 ms for a 50 Hz log), or a
+// log fast enough for the shortest window refused (above 200 Hz for 10 ms). The warning `analyze`
+// gives for a readout refused says the same: flight measures that log at the longer window.
 std::string TooFewSamplesReason(const FlightResult& result) {
   const double shortest_ms = kMinWindowSampleIntervals * result.sample_interval_s * 1e3;
-  double step_ms = 1.0;
-  for (double decade = 1.0; step_ms <= shortest_ms; decade *= 10.0) {
+  // From a decade below, so that log10's rounding cannot skip the step wanted.
+  double decade_ms = std::pow(10.0, std::floor(std::log10(shortest_ms)) - 1.0);
+  double step_ms = decade_ms;
+  for (int decades = 0; step_ms <= shortest_ms && decades < 4; ++decades, decade_ms *= 10.0) {
     for (const double factor : {1.0, 2.0, 5.0}) {
-      step_ms = factor * decade;
+      step_ms = factor * decade_ms;
       if (step_ms > shortest_ms) break;
     }
   }
   double refused_ms = std::numeric_limits<double>::infinity();
   for (const FlightRow& row : result.rows)
     if (row.too_few_samples) refused_ms = std::min(refused_ms, row.window_s * 1e3);
-  return "at " + FormatNumber("%.4g", 1.0 / result.sample_interval_s) +
-         " Hz a window must be longer than " + FormatNumber("%.4g", shortest_ms) +
-         " ms (2 sample intervals) to measure a range: give flight --window " +
-         FormatNumber("%g", step_ms) + "ms or longer, or log above " +
-         FormatNumber("%.4g", kMinWindowSampleIntervals / refused_ms * 1e3) + " Hz for " +
-         FormatNumber("%g", refused_ms) + " ms windows";
+  const std::string step =
+      step_ms >= 1000.0 ? PlainNumber(step_ms / 1e3) + "s" : PlainNumber(step_ms) + "ms";
+  return "at " + PlainNumber(1.0 / result.sample_interval_s) + " Hz a window must be longer than " +
+         PlainNumber(shortest_ms) +
+         " ms (2 sample intervals) to measure a range: give flight --window " + step +
+         " or longer, or log above " + PlainNumber(kMinWindowSampleIntervals / refused_ms * 1e3) +
+         " Hz for " + PlainNumber(refused_ms) + " ms windows";
 }
 
 std::vector<LogWarning> TooFewSamplesWarnings(const FlightResult& result) {

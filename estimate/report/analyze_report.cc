@@ -231,11 +231,11 @@ void AddFlightTable(HtmlPage* page, const AnalyzeResult& result) {
     rows.push_back(std::move(cells));
   }
   page->Table(header, rows);
-  // The table's closing line (which criterion flags more) as the text version prints it.
+  // The table's closing lines (rows refused, which criterion flags more) as the text prints them.
   std::istringstream text(FlightTable(flight));
   for (std::string line; std::getline(text, line);) {
     if (line.rfind("criteria:", 0) == 0 || line.rfind("flight:", 0) == 0 ||
-        line.rfind("too few samples:", 0) == 0)
+        line.rfind("too few samples", 0) == 0)
       page->Paragraph(line);
   }
 }

@@ -10,12 +10,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <random>
 #include <stdexcept>
 #include <string>
-#include <tuple>
 #include <vector>
 
 namespace shutterlab {
@@ -416,34 +416,40 @@ TEST(Flight, WindowsNotLongerThanTwoSampleIntervalsAreRefused) {
   EXPECT_TRUE(Flight(GyroTrace(samples), long_window).warnings.empty());
 }
 
-// The refusal names a window that works, the shortest 1-2-5 step of milliseconds longer than two
-// sample intervals (100 Hz: 20 ms is refused, 50 ms named; 30 Hz: 66.7 ms, 100 ms; 1 kHz: 2 ms,
-// 5 ms), and the rate that the refused window needs (above 2 / window); that window is then
-// analysed.
+// The refusal names a window that works, the shortest 1-2-5 step longer than two sample intervals
+// (100 Hz: 20 ms is refused, 50 ms named; 30 Hz: 66.7 ms, 100 ms; 8 kHz: 0.25 ms, 0.5 ms; 0.5 Hz:
+// 4 s, 5 s), and the rate that the refused window needs (above 2 / window), in plain numbers;
+// that window is then analysed.
 TEST(Flight, TooFewSamplesNamesAWindowThatIsAnalysedAndTheRateNeeded) {
-  for (const auto& [rate_hz, refused_s, named, needed] :
-       {std::tuple{100.0, 0.020, std::string("50ms"), std::string("above 100 Hz for 20 ms")},
-        std::tuple{30.0, 0.060, std::string("100ms"), std::string("above 33.33 Hz for 60 ms")},
-        std::tuple{1000.0, 0.001, std::string("5ms"), std::string("above 2000 Hz for 1 ms")},
-        std::tuple{8.0, 0.1, std::string("500ms"), std::string("above 20 Hz for 100 ms")}}) {
+  struct Case {
+    double rate_hz, refused_s, named_s;
+    std::string named, needed;
+  };
+  for (const Case& c : {Case{100.0, 0.020, 0.050, "50ms", "above 100 Hz for 20 ms"},
+                        Case{30.0, 0.060, 0.100, "100ms", "above 33.33 Hz for 60 ms"},
+                        Case{1000.0, 0.001, 0.005, "5ms", "above 2000 Hz for 1 ms"},
+                        Case{8000.0, 0.0002, 0.0005, "0.5ms", "above 10000 Hz for 0.2 ms"},
+                        Case{0.5, 1.0, 5.0, "5s", "above 2 Hz for 1000 ms"}}) {
     std::vector<GyroSample> samples;
-    for (int k = 0; k < 20 * rate_hz; ++k)  // 20 s
+    const int n = std::max(200, static_cast<int>(20 * c.rate_hz));  // 20 s, 200 samples at least
+    for (int k = 0; k < n; ++k)
       samples.push_back(
-          {static_cast<int64_t>(std::llround(k * 1e9 / rate_hz)), Eigen::Vector3d(0, 0.5, 0)});
+          {static_cast<int64_t>(std::llround(k * 1e9 / c.rate_hz)), Eigen::Vector3d(0, 0.5, 0)});
     FlightOptions options;
-    options.windows_s = {refused_s, 1.0};  // 1 s is analysed and names no rate
+    options.windows_s = {c.refused_s};
     options.known_bias_rad_s = Eigen::Vector3d::Zero();
     const FlightResult r = Flight(GyroTrace(samples), options);
-    ASSERT_EQ(r.warnings.size(), 1u) << rate_hz;
+    ASSERT_EQ(r.warnings.size(), 1u) << c.rate_hz;
     const std::string& message = r.warnings[0].message;
-    EXPECT_NE(
-        message.find("give flight --window " + named + " or longer, or log " + needed + " windows"),
-        std::string::npos)
-        << rate_hz << " Hz: " << message;
-    options.windows_s = {std::stod(named) / 1e3};
+    EXPECT_NE(message.find("give flight --window " + c.named + " or longer, or log " + c.needed +
+                           " windows"),
+              std::string::npos)
+        << c.rate_hz << " Hz: " << message;
+    EXPECT_EQ(message.find("e+"), std::string::npos) << message;
+    options.windows_s = {c.named_s};
     const FlightResult named_window = Flight(GyroTrace(samples), options);
-    EXPECT_TRUE(named_window.warnings.empty()) << rate_hz << " Hz, " << named;
-    EXPECT_FALSE(named_window.rows[0].too_few_samples) << rate_hz << " Hz, " << named;
+    EXPECT_TRUE(named_window.warnings.empty()) << c.rate_hz << " Hz, " << c.named;
+    EXPECT_FALSE(named_window.rows[0].too_few_samples) << c.rate_hz << " Hz, " << c.named;
   }
 }
 

@@ -129,6 +129,21 @@ TEST(AnalyzeReport, SceneIsRenderedUnderTheHeatmap) {
   EXPECT_NE(plain, blended);  // the picture differs
 }
 
+// A readout of one sample interval is refused, and the page says so under its flight table as the
+// text does, with what would do.
+TEST(AnalyzeReport, AFlightTableOfRefusedRowsSaysWhyUnderIt) {
+  const FlightLog log = StepLog(10.0, RateForGroundSmear(0.02), RateForGroundSmear(0.07));
+  AnalyzeOptions options = SmallCamera();
+  options.rig.shutter.readout_s = 0.001;  // the log's 1 ms interval
+  options.every_s = 2.0;
+  const AnalyzeResult result = Analyze(log, options);
+  ASSERT_TRUE(result.flight.has_value());
+  const std::string html = AnalyzeReportPage(options, result, AnalyzeReportOptions{}).Html();
+  EXPECT_NE(html.find("too few samples, those rows were not analysed: at 1000 Hz a window must be "
+                      "longer than 2 ms"),
+            std::string::npos);
+}
+
 TEST(AnalyzeReport, LongTracesAreEnveloped) {
   const FlightLog log = StepLog(30.0, RateForGroundSmear(0.02), RateForGroundSmear(0.07));
   AnalyzeOptions options = SmallCamera();
