@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <ostream>
 #include <set>
 #include <sstream>
 #include <string>
@@ -28,6 +29,9 @@ struct RealLog {
   const char* flags;     // what every command needs to read it
   bool truncated_whole;  // the file as shared ends inside a message
 };
+
+// Names the parameter in gtest's and ctest's output (instead of its bytes).
+void PrintTo(const RealLog& log, std::ostream* out) { *out << log.relative; }
 
 // scripts/real_logs.py's list: keep the two the same.
 const RealLog kRealLogs[] = {
