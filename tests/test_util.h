@@ -25,6 +25,16 @@ namespace shutterlab::test {
 // payloads and the sign of zero included).
 inline bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof(a)) == 0; }
 
+// Where a copy of a log cut at `fraction` of its bytes ends: off a record boundary, as a cut at
+// random almost always is (a cut there cannot be told from the end of a log). Odd, so never on a
+// two-byte boundary, and moved past any DataFlash record start (0xA3 0x95); the other formats'
+// cuts of the shared logs fall inside a record.
+inline size_t CutInsideARecord(const std::string& bytes, double fraction) {
+  size_t size = static_cast<size_t>(fraction * bytes.size()) | 1;
+  while (bytes.compare(size, 2, "\xA3\x95") == 0) size += 2;
+  return size;
+}
+
 inline void ExpectRotationNear(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b,
                                double tol_rad) {
   EXPECT_LE(AngularDistance(a, b), tol_rad)

@@ -223,6 +223,11 @@ TEST(PhotosCli, AGyroCsvWithTriggersOnAPipeGivesTheFilesResult) {
   }
 }
 
+// The three real DJI photos named by a trigger file on a log's clock (seconds after its first
+// sample).
+const char kRealPhotoTriggers[] =
+    "image,t\ntest-photo-1.jpg,112.7\ntest-photo-2.jpg,117.614\ntest-photo-3.jpg,160.3\n";
+
 // Real photos on a real log: the three DJI photos named by a trigger file on the PX4 log's clock
 // (they were not taken on that flight: this checks the command's reading of real bytes, from a
 // file and from a pipe, not the photos' truth;
@@ -232,9 +237,7 @@ TEST(PhotosCli, RealPhotosOnARealLogFromAFileAndAPipe) {
   SHUTTERLAB_REAL_DATA(photos, "incoming/dji_fc8482_clusterodm");
   SHUTTERLAB_REAL_DATA(log, "gyro/px4_ulog/sample.ulg");
   test::TempDir dir;
-  WriteFileAtomically(dir / "t.csv",
-                      "image,t\ntest-photo-1.jpg,112.7\ntest-photo-2.jpg,117.614\n"
-                      "test-photo-3.jpg,160.3\n");
+  WriteFileAtomically(dir / "t.csv", kRealPhotoTriggers);
   const std::string args = " --triggers " + (dir / "t.csv") + " --json";
   const auto streamed = RunShutterlab("analyze --photos " + photos + " " + log + args);
   ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
@@ -253,9 +256,7 @@ TEST(PhotosCli, PhotosOnALowRateLogSayTooFewSamplesOnStderrAsInTheJson) {
   SHUTTERLAB_REAL_DATA(photos, "incoming/dji_fc8482_clusterodm");
   SHUTTERLAB_REAL_DATA(log, "incoming/ardupilot_log171/log171.bin");
   test::TempDir dir;
-  WriteFileAtomically(dir / "t.csv",
-                      "image,t\ntest-photo-1.jpg,112.7\ntest-photo-2.jpg,117.614\n"
-                      "test-photo-3.jpg,160.3\n");
+  WriteFileAtomically(dir / "t.csv", kRealPhotoTriggers);
   const auto r = RunShutterlab("analyze --photos " + photos + " " + log + " --triggers " +
                                (dir / "t.csv") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;

@@ -12,8 +12,9 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <cmath>
+#include <cctype>
 #include <filesystem>
+#include <iterator>
 #include <ostream>
 #include <set>
 #include <sstream>
@@ -132,15 +133,14 @@ TEST_P(RealLogsCli, EveryCommandAnswersOrRefusesAndSaysWhatWasLost) {
   }
 }
 
-// Cut at 60 % of its bytes (off a DataFlash record start, as a cut at random would be): every
+// Cut at 60 % of its bytes, inside a record as a cut at random would be: every
 // command still says the file was cut, whether it answers (up to the last whole record) or refuses
 // (a GoPro clip keeps its sample tables at the end).
 TEST_P(RealLogsCli, EveryCommandSaysACopyCutAt60PercentIsTruncated) {
   const RealLog& log = GetParam();
   SHUTTERLAB_REAL_DATA(path, log.relative);
   const std::string bytes = ReadFileToString(path);
-  size_t size = static_cast<size_t>(0.6 * bytes.size()) | 1;
-  while (bytes.compare(size, 2, "\xA3\x95") == 0) size += 2;
+  const size_t size = test::CutInsideARecord(bytes, 0.6);
   test::TempDir dir;
   const std::string cut = dir / ("cut_" + std::filesystem::path(path).filename().string());
   WriteFileAtomically(cut, bytes.substr(0, size));

@@ -124,10 +124,7 @@ TEST(ReadFlightLog, TruncatedCopiesOfEveryRealLogSaySo) {
   for (const std::string& name : logs) {
     const std::string bytes = ReadFileToString(test::RealDataPath(name));
     for (const double fraction : {0.35, 0.5, 0.65, 0.8, 0.95}) {
-      // A cut that falls on a record boundary cannot be told from the end of a log: move off
-      // one (DataFlash records start 0xA3 0x95; the other formats' cuts here fall inside one).
-      size_t size = static_cast<size_t>(fraction * bytes.size()) | 1;
-      while (bytes.compare(size, 2, "\xA3\x95") == 0) size += 2;
+      const size_t size = test::CutInsideARecord(bytes, fraction);
       const std::string path = dir / ("cut_" + std::to_string(size) + "_" +
                                       std::filesystem::path(name).filename().string());
       WriteFileAtomically(path, bytes.substr(0, size));
