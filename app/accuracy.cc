@@ -21,12 +21,12 @@ struct AccuracyCommand {
 };
 
 void Run(const AccuracyCommand& command) {
-  std::vector<LogWarning> warnings;
+  LoadedTrace loaded;
   const AccuracyResult result =
-      AnalyzeTrace(command.trace, command.accuracy, AnalyzeAccuracy, &warnings);
+      AnalyzeTrace(command.trace, command.accuracy, AnalyzeAccuracy, &loaded);
   if (command.json) {
     auto json = AccuracyToJson(result);
-    json["warnings"] = WarningsToJson(warnings);
+    json["warnings"] = WarningsToJson(loaded.warnings);
     std::cout << JsonText(json) << "\n";
   } else {
     std::cout << AccuracyTable(result);

@@ -73,6 +73,8 @@ class StagedProgress {
     }
     bar_->Update(done);
   }
+  // Clears the bar (before a line is printed under it); the next call starts a new one.
+  void Clear() { bar_.reset(); }
 
  private:
   std::string stage_;

@@ -6,7 +6,7 @@
 #include "app/trace_options.h"
 #include "estimate/correct/correct_dataset.h"
 #include "estimate/correct/correct_io.h"
-#include "render/lens_profile.h"
+#include "io/lens_profile.h"
 #include "sim/check.h"
 #include "sim/civil_time.h"
 #include "sim/logs/log_format.h"

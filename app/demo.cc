@@ -26,9 +26,9 @@
 #include "estimate/paper/noise.h"
 #include "estimate/report/analyze_report.h"
 #include "estimate/report/validate_report.h"
-#include "render/camera.h"
-#include "render/ground_texture.h"
-#include "render/image_io.h"
+#include "io/frames_csv.h"
+#include "io/image_io.h"
+#include "model/camera.h"
 #include "render/pictures.h"
 #include "render/render_dataset.h"
 #include "sim/check.h"
@@ -52,23 +52,6 @@ struct DemoOptions {
 
 void Section(const std::string& title) { std::cout << "\n== " << title << " ==\n"; }
 
-// The demo camera: a 1280x720 mapping camera, 30 ms readout, 50 m above ground, looking down with
-// the image top towards the nose. The flight log's gyro is about the body's roll, pitch, yaw axes
-// (x forward, y right, z down, as PX4 logs it), so camera x (right) = body y, camera y (down the
-// image) = -body x.
-RigModel DemoCamera() {
-  RigModel rig;
-  rig.camera.width = 1280;
-  rig.camera.height = 720;
-  rig.camera.fx = rig.camera.fy = 1400.0;
-  rig.camera.cx = (rig.camera.width - 1) / 2.0;
-  rig.camera.cy = (rig.camera.height - 1) / 2.0;
-  rig.shutter.readout_s = 0.030;
-  rig.cam_from_gyro << 0, 1, 0, -1, 0, 0, 0, 0, 1;
-  rig.altitude_m = 50.0;
-  return rig;
-}
-
 struct DemoContext {
   DemoOptions options;
   std::filesystem::path out;
@@ -77,41 +60,17 @@ struct DemoContext {
   FlightLog log;
 };
 
-// The demo's altitude above ground, m, and its survey flight: a multirotor with an MPU-9250-like
-// gyro at 1 kHz, a still lead for the bias, a camera trigger every 2 s.
-constexpr double kDemoAltitudeM = 50.0;
-constexpr double kTriggerEveryS = 2.0;
-
 void StepInputs(DemoContext& context) {
-  SynthOptions flight;
-  flight.profile = MotionProfile::kFlight;
-  flight.rate_hz = 1000.0;
-  flight.duration_s = 60.0;
-  flight.t0_s = 1.0;  // ULog times start after 0
-  flight.seed = 7;
-  SynthOutputOptions output;
-  output.out_path = context.log_path;
-  output.ulog = true;
-  output.trigger_every_s = kTriggerEveryS;
-  output.altitude_m = kDemoAltitudeM;
-  WriteSynthetic(flight, output);
-  context.log = ReadFlightLog(context.log_path);
+  const DemoInputs inputs = WriteDemoInputs(context.log_path, context.scene_path);
+  context.log = inputs.log;
   PrintLogWarnings(context.log_path, context.log.warnings);
   std::cout << "flight log " << context.log_path << ": " << context.log.gyro.size()
             << " gyro samples over " << FormatNumber("%.1f", context.log.gyro.DurationS()) << " s, "
             << context.log.camera_events.size() << " camera triggers, altitude "
             << FormatNumber("%.0f", context.log.altitude_above_ground_m.value_or(0.0)) << " m\n";
-  // The scene at the render camera's ground sample distance (docs/FORMATS.md "The scene image":
-  // seen by a pinhole with the rig's focal length from the world origin), twice the frame's size.
-  const RigModel rig = DemoCamera();
-  GroundTextureOptions scene;
-  scene.width_px = 2 * rig.camera.width;
-  scene.height_px = 2 * rig.camera.height;
-  scene.ground_sample_distance_m = kDemoAltitudeM / rig.camera.fx;
-  WriteImage(context.scene_path, MakeGroundTexture(scene));
-  std::cout << "scene " << context.scene_path << ": " << scene.width_px << "x" << scene.height_px
-            << " px at " << FormatNumber("%.1f", 100 * scene.ground_sample_distance_m)
-            << " cm/px\n";
+  std::cout << "scene " << context.scene_path << ": " << inputs.scene_width_px << "x"
+            << inputs.scene_height_px << " px at "
+            << FormatNumber("%.1f", 100 * inputs.scene_m_per_px) << " cm/px\n";
 }
 
 void StepStaticNoise(DemoContext&) {
@@ -140,19 +99,9 @@ void StepFlightTable(DemoContext& context) {
   std::cout << FlightTable(Flight(log.gyro, flight));
 }
 
-// The analyze camera: a typical mapping camera (1280x960, f = 1100 px, 30 ms readout, 50 m),
-// mounted as DemoCamera.
-RigModel AnalyzeCamera() {
-  RigModel rig = DemoCamera();
-  rig.camera.height = 960;
-  rig.camera.fx = rig.camera.fy = 1100.0;
-  rig.camera.cy = (rig.camera.height - 1) / 2.0;
-  return rig;
-}
-
 void StepAnalyze(DemoContext& context) {
   AnalyzeOptions options;
-  options.rig = AnalyzeCamera();
+  options.rig = DemoAnalyzeCamera();
   options.plots = AnalyzePlotOptions{};  // the report's charts; triggers: the log's own
   options.allan = true;                  // the report's noise plot
   AnalyzeResult result;
@@ -186,19 +135,13 @@ void StepAnalyze(DemoContext& context) {
 void StepRender(DemoContext& context) {
   const FlightLog& log = context.log;
   const std::filesystem::path& out = context.out;
-  const RigModel rig = DemoCamera();
+  const RigModel rig = DemoRenderCamera();
   WriteRigModel((out / "inputs/camera.json").string(), rig);
   WriteGyroCsv((out / "inputs/gyro.csv").string(), log.gyro);
-  std::string frames = "frame,t_first_row\n";
-  int frame_count = 0;
-  const int64_t first_ns = log.gyro.t_begin_ns() + SecondsToNs(2.0);
-  for (int64_t t = first_ns; t + SecondsToNs(rig.shutter.readout_s + 0.1) < log.gyro.t_end_ns();
-       t += SecondsToNs(context.options.frame_every_s)) {
-    frames += std::to_string(frame_count++) + ",";
-    AppendSecondsFromNs(t, &frames);
-    frames += "\n";
-  }
-  WriteFileAtomically((out / "inputs/frames.csv").string(), frames);
+  const std::vector<int64_t> frame_times_ns =
+      DemoFrameTimesNs(log.gyro, rig.shutter.readout_s, context.options.frame_every_s);
+  WriteFrameTimes((out / "inputs/frames.csv").string(), frame_times_ns);
+  const size_t frame_count = frame_times_ns.size();
   RenderOptions render;
   render.scene_path = context.scene_path;
   render.camera_path = (out / "inputs/camera.json").string();
@@ -208,7 +151,7 @@ void StepRender(DemoContext& context) {
   render.Check();
   RenderSummary summary;
   {
-    Progress progress("rendering frames", static_cast<size_t>(frame_count));
+    Progress progress("rendering frames", frame_count);
     summary = RenderDataset(render, [&progress](size_t done, size_t) { progress.Update(done); });
   }
   std::printf("%6s %10s %10s %8s\n", "frame", "D [px]", "D [cm]", "> 5 cm");

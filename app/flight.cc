@@ -5,14 +5,12 @@
 
 #include "app/command.h"
 #include "app/trace_options.h"
+#include "estimate/paper/log_pipeline.h"
 #include "estimate/report/analysis_json.h"
-#include "sim/check.h"
 #include "sim/units.h"
 
 #include <iostream>
 #include <memory>
-#include <optional>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -40,68 +38,23 @@ void Run(const FlightCommand& command) {
   options.series = !command.series_path.empty();
   // A known (zero) bias takes precedence over the segment in Flight().
   if (command.zero_bias) options.known_bias_rad_s = Eigen::Vector3d::Zero();
-  std::vector<LogWarning> warnings;
-  FlightResult result;
-  SensorPair pair;  // with --second
-  const bool with_second = !command.trace.second_path.empty();
-  // Streamed: memory stays bounded whatever the log's length. The still segment may lie anywhere
-  // in the log: --auto-bias finds it in passes of its own before this one. With --second, the
-  // pair is fitted in passes too and its fused samples analysed as they are made. Only a reading
-  // in passes opens the log for them (a log on a pipe is then copied once to a temporary file);
-  // one pass reads it as it comes.
   // The flags are checked before the log is opened (a pipe's copy can take a while).
   options.Check();
-  const FlightLogReadOptions read = command.trace.ReadOptions();
-  if (!command.trace.auto_bias) options.bias = ParseBiasSegment(command.trace.bias);
-  std::optional<ReopenableFile> first;
-  if (command.trace.auto_bias || with_second) first.emplace(command.trace.path);
-  if (command.trace.auto_bias) {
-    try {
-      options.bias = command.trace.StreamedSegment(*first);
-    } catch (const std::invalid_argument& e) {  // no still segment: named by the log, as below
-      throw std::invalid_argument(command.trace.path + ": " + e.what());
-    }
-  }
-  FlightStream flight(options);
-  const auto add = [&flight](const GyroChunk& chunk) { flight.Add(chunk.data, chunk.size); };
-  if (with_second) {
-    const ReopenableFile second(command.trace.second_path);
-    const PairInPasses fitted =
-        FitPairInPasses(*first, second, read, OpenFlightLog(*first, read), options.bias);
-    pair = fitted.pair;
-    warnings = fitted.warnings;
-    std::unique_ptr<GyroSource> fused = ReadAhead(fitted.OpenFused());
-    Progress progress("flight", 1000);
-    for (GyroChunk chunk = fused->Next(); !chunk.empty(); chunk = fused->Next()) {
-      add(chunk);
-      progress.Update(static_cast<size_t>(fused->Fraction() * 1000));
-    }
-    second.CheckUnchanged();
-  } else {
-    warnings = command.trace.Stream("flight", add, first ? &*first : nullptr).warnings;
-  }
-  if (first) first->CheckUnchanged();
-  try {
-    result = flight.Finish();
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(command.trace.path + ": " + e.what());
-  }
-  // The analysis's own warnings (windows refused as too short) go on stderr as the reader's did:
-  // the list there is the --json's.
-  PrintLogWarnings(command.trace.path, result.warnings);
-  warnings.insert(warnings.end(), result.warnings.begin(), result.warnings.end());
-  if (options.series) WriteFlightSeriesCsv(command.series_path, result.series);
+  const LogInput input = command.trace.Input();
+  if (!command.trace.auto_bias) options.bias = command.trace.Segment();
+  PipelinePrinter printer;
+  const FlightRun run = RunFlight(input, options, printer.Events());
+  if (options.series) WriteFlightSeriesCsv(command.series_path, run.result.series);
   if (command.json) {
-    nlohmann::json json = FlightToJson(result);
-    if (!command.trace.second_path.empty())
-      json["pair"] = SensorPairToJson(pair, command.trace.second_path);
-    json["warnings"] = WarningsToJson(warnings);
+    nlohmann::json json = FlightToJson(run.result);
+    if (run.pair) json["pair"] = SensorPairToJson(*run.pair, command.trace.second_path);
+    json["warnings"] = WarningsToJson(run.warnings);
     std::cout << JsonText(json) << "\n";
   } else {
-    if (!command.trace.second_path.empty()) {
-      std::cout << SensorPairText(pair, command.trace.path, command.trace.second_path) << "\n";
+    if (run.pair) {
+      std::cout << SensorPairText(*run.pair, command.trace.path, command.trace.second_path) << "\n";
     }
-    std::cout << FlightTable(result);  // its own line says which rows had too few samples
+    std::cout << FlightTable(run.result);  // its own line says which rows had too few samples
   }
 }
 

@@ -1,9 +1,9 @@
 // `shutterlab import SOURCE --out DATASET`: a GoPro MP4 with GPMF telemetry or a phone clip folder
-// into a video rig dataset (render/video_import.h).
+// into a video rig dataset (io/video_import.h).
 
 #include "app/command.h"
 #include "app/trace_options.h"  // PrintLogWarnings
-#include "render/video_import.h"
+#include "io/video_import.h"
 
 #include <cstdio>
 #include <memory>

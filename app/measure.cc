@@ -1,13 +1,13 @@
 // `shutterlab measure REF IMG`: the displacement field between a global-shutter reference and a
 // rolling-shutter image, D, the measurement noise and, with --truth, the error against a render's
-// exact field (estimate/measure.h).
+// exact field (estimate/loop/measure.h).
 
 #include "estimate/loop/measure.h"
 
 #include "app/command.h"
 #include "estimate/report/loop_json.h"
-#include "render/camera.h"
-#include "render/image_io.h"
+#include "io/image_io.h"
+#include "model/camera.h"
 #include "sim/check.h"
 
 #include <iostream>

@@ -25,28 +25,28 @@ struct NoiseCommand {
 };
 
 void Run(const NoiseCommand& command) {
-  std::vector<LogWarning> warnings;
-  TracePair pair;
-  const NoiseResult result =
-      AnalyzeTrace(command.trace, command.noise, AnalyzeNoise, &warnings, &pair);
+  LoadedTrace loaded;
+  const NoiseResult result = AnalyzeTrace(command.trace, command.noise, AnalyzeNoise, &loaded);
   if (!command.allan_path.empty()) WriteFileAtomically(command.allan_path, AllanCsv(result.allan));
   // With --second, the table is the fused trace's; each sensor alone is analysed for the gain.
   std::optional<NoiseResult> first, second;
-  if (!command.trace.second_path.empty()) {
+  if (loaded.pair) {
     NoiseOptions options = command.noise;
-    options.bias = pair.segment;
-    first = AnalyzeNoise(pair.first, options);
-    second = AnalyzeNoise(pair.second, options);
+    options.bias = loaded.segment;
+    first = AnalyzeNoise(loaded.pair->first, options);
+    second = AnalyzeNoise(loaded.pair->second, options);
   }
   if (command.json) {
     auto json = NoiseToJson(result);
     if (first)
-      json["pair"] = NoisePairToJson(pair.pair, command.trace.second_path, *first, *second, result);
-    json["warnings"] = WarningsToJson(warnings);
+      json["pair"] =
+          NoisePairToJson(loaded.pair->pair, command.trace.second_path, *first, *second, result);
+    json["warnings"] = WarningsToJson(loaded.warnings);
     std::cout << JsonText(json) << "\n";
   } else {
     if (first)
-      std::cout << SensorPairText(pair.pair, command.trace.path, command.trace.second_path) << "\n";
+      std::cout << SensorPairText(loaded.pair->pair, command.trace.path, command.trace.second_path)
+                << "\n";
     std::cout << NoiseTable(result);
     if (first) std::cout << NoisePairTable(*first, *second, result);
   }

@@ -1,15 +1,13 @@
 // `shutterlab record`: gyro from one or two sensors' FIFOs (a real MPU-9250 / MPU-6500 /
 // ICM-42688-P on spidev, or an emulated one playing a trace) and camera triggers from a GPIO line,
-// on one clock, into Gyroflow .gcsv files and a triggers file (sim/record/recorder.h).
+// on one clock, into Gyroflow .gcsv files and a triggers file (record/recorder.h).
 
 #include "app/command.h"
 #include "estimate/paper/analyze.h"
 #include "estimate/report/analysis_json.h"
+#include "record/device_spec.h"
+#include "record/recorder.h"
 #include "sim/check.h"
-#include "sim/logs/trigger_file.h"
-#include "sim/record/device_spec.h"
-#include "sim/record/gpio_trigger.h"
-#include "sim/record/recorder.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
 
@@ -68,55 +66,6 @@ std::pair<std::string, std::string> SplitAt(const std::string& text, const char*
 std::string SecondOut(const std::string& out) {
   std::filesystem::path path(out);
   return (path.parent_path() / (path.stem().string() + ".2" + path.extension().string())).string();
-}
-
-// --trigger: CHIP:LINE (a GPIO line), emulate:every=2s[,bounce=N][,width=5ms] or emulate:FILE (a
-// trigger file's times, as analyze --triggers reads it).
-std::unique_ptr<TriggerSource> OpenTrigger(const RecordCommand& command, Clock* clock,
-                                           SensorEmulator* emulator, double duration_s) {
-  const std::string& spec = command.trigger;
-  if (spec.rfind("emulate:", 0) != 0) {
-    const size_t colon = spec.rfind(':');
-    SHUTTERLAB_CHECK(colon != std::string::npos && colon > 0)
-        << "--trigger takes CHIP:LINE (e.g. gpiochip0:17) or emulate:..., got '" << spec << "'";
-    const auto line = ParseInt(spec.substr(colon + 1));
-    SHUTTERLAB_CHECK(line && *line >= 0) << "--trigger: bad line number in '" << spec << "'";
-    return OpenGpioTrigger(spec.substr(0, colon), static_cast<unsigned>(*line), command.gpio_bias);
-  }
-  std::vector<std::string_view> fields;
-  const std::string rest = spec.substr(8);
-  SplitFields(rest, ',', &fields);
-  std::vector<int64_t> pulses;
-  int64_t width_ns = 5000000;
-  int bounce = 0;
-  for (const std::string_view field : fields) {
-    const std::string text(field);
-    if (text.rfind("every=", 0) == 0) {
-      SHUTTERLAB_CHECK(duration_s > 0) << "--trigger emulate:every= needs --duration";
-      pulses = PulsesEvery(ParseDurationS(text.substr(6)), duration_s);
-    } else if (text.rfind("bounce=", 0) == 0) {
-      const auto n = ParseInt(text.substr(7));
-      SHUTTERLAB_CHECK(n && *n >= 0 && *n < 100) << "--trigger: bad bounce in '" << spec << "'";
-      bounce = static_cast<int>(*n);
-    } else if (text.rfind("width=", 0) == 0) {
-      width_ns = SecondsToNs(ParseDurationS(text.substr(6)));
-    } else {
-      const TriggerFile file = ReadTriggerFile(text);
-      SHUTTERLAB_CHECK(file.clock == TriggerClock::kLog)
-          << "--trigger emulate:" << text << ": the times must be on the trace's clock (they are "
-          << TriggerClockName(file.clock) << ")";
-      for (const TriggerEvent& event : file.events) pulses.push_back(event.t_ns);
-    }
-  }
-  // Pulse times count from the emulated sensor's first sample (the trace's start), so that they
-  // sit where the trace's camera triggers were; with a real sensor, from the start.
-  const int64_t start_ns = clock->NowNs();
-  std::function<std::optional<int64_t>()> origin = [emulator,
-                                                    start_ns]() -> std::optional<int64_t> {
-    if (!emulator) return start_ns;
-    return emulator->PlayOriginNs();
-  };
-  return std::make_unique<EmulatedTriggerLine>(std::move(pulses), width_ns, bounce, origin, clock);
 }
 
 RecorderOptions Options(const RecordCommand& command, bool tty) {
@@ -187,7 +136,8 @@ void Run(const RecordCommand& command) {
   }
   std::unique_ptr<TriggerSource> trigger;
   if (!command.trigger.empty()) {
-    trigger = OpenTrigger(command, clock.get(), opened[0].emulator, options.duration_s);
+    trigger = OpenTriggerSpec(command.trigger, command.gpio_bias, clock.get(), opened[0].emulator,
+                              options.duration_s);
     options.trigger = trigger.get();
     std::filesystem::path out(command.out_path);
     options.triggers_path =

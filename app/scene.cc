@@ -2,8 +2,8 @@
 // for users without a nadir photo of their own.
 
 #include "app/command.h"
+#include "io/image_io.h"
 #include "render/ground_texture.h"
-#include "render/image_io.h"
 
 #include <cstdio>
 #include <memory>

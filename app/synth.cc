@@ -87,6 +87,50 @@ void Run(SynthCliOptions& o) {
   }
 }
 
+// The sensor error options beyond --ideal: each, when given, overrides its field of the IMU error
+// model. p: a raw pointer in the callbacks, no shared_ptr cycle.
+void AddSensorErrorOptions(CLI::App* cmd, SynthCliOptions* p) {
+  const auto model_option = [cmd, p](const std::string& name, double ImuErrorModel::*field,
+                                     const std::string& help) {
+    auto* option = cmd->add_option(name, p->given.*field, help)->capture_default_str();
+    p->model_overrides.emplace_back(option,
+                                    [p, field](ImuErrorModel& m) { m.*field = p->given.*field; });
+  };
+  model_option("--noise-density", &ImuErrorModel::noise_density_rad_s_sqrt_hz,
+               "white rate noise (angle random walk), rad/s/sqrt(Hz)");
+  model_option("--bias-instability", &ImuErrorModel::bias_instability_rad_s,
+               "Gauss-Markov bias std, rad/s");
+  model_option("--bias-tau", &ImuErrorModel::bias_correlation_s,
+               "Gauss-Markov bias correlation time, s");
+  model_option("--rate-random-walk", &ImuErrorModel::rate_random_walk_rad_s2_sqrt_hz,
+               "rate random walk, rad/s^2/sqrt(Hz)");
+  model_option("--jitter", &ImuErrorModel::timestamp_jitter_s, "timestamp jitter std, s");
+  model_option("--gap-period", &ImuErrorModel::gap_period_s,
+               "a logging gap every this many s (0: none)");
+  model_option("--gap-duration", &ImuErrorModel::gap_duration_s, "length of each logging gap, s");
+  auto* option = TripleOption(cmd, "--const-bias", &p->const_bias,
+                              "constant bias X,Y,Z, rad/s (default ~0.6,-0.4,0.25 deg/s)");
+  p->model_overrides.emplace_back(option,
+                                  [p](ImuErrorModel& m) { m.bias_rad_s = Triple(p->const_bias); });
+  option = TripleOption(cmd, "--scale-error", &p->scale_error,
+                        "scale error X,Y,Z, dimensionless: measured = (1 + e) * true");
+  p->model_overrides.emplace_back(
+      option, [p](ImuErrorModel& m) { m.scale_error = Triple(p->scale_error); });
+  option = cmd->add_option("--misalignment", p->misalignment,
+                           "cross-axis sensitivity XY,XZ,YX,YZ,ZX,ZY, rad (entry ij: sensor axis i "
+                           "sees this much of the rate about body axis j)")
+               ->expected(6)
+               ->delimiter(',');
+  p->model_overrides.emplace_back(option, [p](ImuErrorModel& m) {
+    const auto& v = p->misalignment;
+    m.misalignment_rad << 0.0, v[0], v[1], v[2], 0.0, v[3], v[4], v[5], 0.0;
+  });
+  option = cmd->add_flag("--no-quantize", p->no_quantize, "do not round rates to the range's LSB");
+  p->model_overrides.emplace_back(option, [](ImuErrorModel& m) { m.quantize = false; });
+  option = cmd->add_flag("--no-saturate", p->no_saturate, "do not clip rates at the range");
+  p->model_overrides.emplace_back(option, [](ImuErrorModel& m) { m.saturate = false; });
+}
+
 const CommandRegistration kSynthRegistration(10, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "synth", "write a deterministic synthetic gyro trace (still, steps, flight) with IMU errors");
@@ -130,53 +174,14 @@ const CommandRegistration kSynthRegistration(10, [](CLI::App& app) {
   cmd->add_flag("--ideal", o->ideal,
                 "perfect sensor: no noise, bias, scale, misalignment, quantisation, saturation, "
                 "jitter or gaps (the error options below still apply)");
-  SynthCliOptions* p = o.get();  // raw pointer in the callbacks: no shared_ptr cycle
-  const auto model_option = [cmd, p](const std::string& name, double ImuErrorModel::*field,
-                                     const std::string& help) {
-    auto* option = cmd->add_option(name, p->given.*field, help)->capture_default_str();
-    p->model_overrides.emplace_back(option,
-                                    [p, field](ImuErrorModel& m) { m.*field = p->given.*field; });
-  };
-  model_option("--noise-density", &ImuErrorModel::noise_density_rad_s_sqrt_hz,
-               "white rate noise (angle random walk), rad/s/sqrt(Hz)");
-  model_option("--bias-instability", &ImuErrorModel::bias_instability_rad_s,
-               "Gauss-Markov bias std, rad/s");
-  model_option("--bias-tau", &ImuErrorModel::bias_correlation_s,
-               "Gauss-Markov bias correlation time, s");
-  model_option("--rate-random-walk", &ImuErrorModel::rate_random_walk_rad_s2_sqrt_hz,
-               "rate random walk, rad/s^2/sqrt(Hz)");
-  model_option("--jitter", &ImuErrorModel::timestamp_jitter_s, "timestamp jitter std, s");
-  model_option("--gap-period", &ImuErrorModel::gap_period_s,
-               "a logging gap every this many s (0: none)");
-  model_option("--gap-duration", &ImuErrorModel::gap_duration_s, "length of each logging gap, s");
-  auto* option = TripleOption(cmd, "--const-bias", &p->const_bias,
-                              "constant bias X,Y,Z, rad/s (default ~0.6,-0.4,0.25 deg/s)");
-  p->model_overrides.emplace_back(option,
-                                  [p](ImuErrorModel& m) { m.bias_rad_s = Triple(p->const_bias); });
-  option = TripleOption(cmd, "--scale-error", &p->scale_error,
-                        "scale error X,Y,Z, dimensionless: measured = (1 + e) * true");
-  p->model_overrides.emplace_back(
-      option, [p](ImuErrorModel& m) { m.scale_error = Triple(p->scale_error); });
-  option = cmd->add_option("--misalignment", p->misalignment,
-                           "cross-axis sensitivity XY,XZ,YX,YZ,ZX,ZY, rad (entry ij: sensor axis i "
-                           "sees this much of the rate about body axis j)")
-               ->expected(6)
-               ->delimiter(',');
-  p->model_overrides.emplace_back(option, [p](ImuErrorModel& m) {
-    const auto& v = p->misalignment;
-    m.misalignment_rad << 0.0, v[0], v[1], v[2], 0.0, v[3], v[4], v[5], 0.0;
-  });
-  option = cmd->add_flag("--no-quantize", p->no_quantize, "do not round rates to the range's LSB");
-  p->model_overrides.emplace_back(option, [](ImuErrorModel& m) { m.quantize = false; });
-  option = cmd->add_flag("--no-saturate", p->no_saturate, "do not clip rates at the range");
-  p->model_overrides.emplace_back(option, [](ImuErrorModel& m) { m.saturate = false; });
+  AddSensorErrorOptions(cmd, o.get());
   // Motion.
   o->lead_option = cmd->add_option("--lead", o->lead_s,
                                    "steps / flight: still time before the motion, s (default 6)");
   cmd->add_option("--turns", s.steps.turns, "steps: number of turns")->capture_default_str();
   cmd->add_option("--angle", s.steps.angle_deg, "steps: angle of each turn, deg")
       ->capture_default_str();
-  TripleOption(cmd, "--axis", &p->axis, "steps: turn axis X,Y,Z in sensor axes (normalised)");
+  TripleOption(cmd, "--axis", &o->axis, "steps: turn axis X,Y,Z in sensor axes (normalised)");
   cmd->add_option("--turn-time", o->turn_time, "steps: each turn lasts MIN,MAX s (uniform)")
       ->expected(2)
       ->delimiter(',');

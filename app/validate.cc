@@ -1,12 +1,12 @@
 // `shutterlab validate DATASET`: the paper's threshold model and the declared full model against
-// the measured displacement, then the loop over undeclared effects (estimate/validate.h).
+// the measured displacement, then the loop over undeclared effects (estimate/loop/validate.h).
 
 #include "estimate/loop/validate.h"
 
 #include "app/command.h"
 #include "app/trace_options.h"
 #include "estimate/report/validate_report.h"
-#include "render/effects.h"
+#include "model/effects.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
 #include "sim/units.h"

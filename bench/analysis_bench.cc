@@ -6,7 +6,7 @@
 //  2. the same streamed reader with the parsing a chunk ahead on a second thread (wall time);
 //  3. the flight analysis (estimate/flight, two limits x two windows) -> samples/s, per-axis and
 //     vector criteria separately, against a monotonic-deque sliding range (std::deque);
-//  4. `flight` end to end as the command runs it (open, stream, audit, FlightStream), on one
+//  4. `flight` end to end as the command runs it (estimate/paper/log_pipeline.h RunFlight), on one
 //     thread (CPU time) and on two (wall time), to compare with scripts/pandas_flight_bench.py.
 //
 // Usage: analysis_bench [--lines N] [--file PATH] [--generate-only] [--streaming-only]
@@ -21,7 +21,9 @@
 // wall time), checks its counts against the one thread's, and gives that ratio too.
 // A table, not Google Benchmark: one run of each step is long enough (seconds) to need no repeats.
 
+#include "bench/bench_util.h"
 #include "estimate/paper/flight.h"
+#include "estimate/paper/log_pipeline.h"
 #include "estimate/paper/window_stats.h"
 #include "sim/bias.h"
 #include "sim/integrate.h"
@@ -30,7 +32,6 @@
 #include "sim/text_file.h"
 #include "sim/units.h"
 
-#include "bench/bench_util.h"
 #include <algorithm>
 #include <charconv>
 #include <chrono>
@@ -43,6 +44,7 @@
 #include <random>
 #include <string>
 #include <time.h>
+#include <utility>
 #include <vector>
 
 namespace shutterlab {
@@ -166,17 +168,17 @@ size_t StreamGyroCsv(const std::string& path, bool read_ahead, double* checksum)
   return n;
 }
 
-// `flight` as the command runs it without --auto-bias: open, stream (the reader a chunk ahead on a
-// second thread when read_ahead), audit, FlightStream.
+// `flight` as the command runs it without --auto-bias (estimate/paper/log_pipeline.h RunFlight:
+// open, stream with the reader a chunk ahead on a second thread when read_ahead, audit,
+// FlightStream).
 FlightResult StreamedFlight(const std::string& path, const FlightOptions& options, bool read_ahead,
                             size_t* warnings) {
-  FlightLogStream stream = OpenFlightLog(path);
-  if (read_ahead) stream.gyro = ReadAhead(std::move(stream.gyro));
-  FlightStream flight(options);
-  *warnings = ConsumeFlightLog(&stream, [&flight](const GyroChunk& chunk) {
-                flight.Add(chunk.data, chunk.size);
-              }).warnings.size();
-  return flight.Finish();
+  LogInput input;
+  input.path = path;
+  input.read_ahead = read_ahead;
+  FlightRun run = RunFlight(input, options);
+  *warnings = run.warnings.size() - run.result.warnings.size();  // the log's, as before
+  return std::move(run.result);
 }
 
 // Sections 2 and 4: the streamed reader and `flight` end to end, one thread and two.
@@ -327,53 +329,49 @@ int FlightAgainstPandas(const std::string& path, int repeat, bool pandas, bool t
   return same ? 0 : 1;
 }
 
-int Main(int argc, char** argv) {
+// The command line: what to run and on which file.
+struct BenchArgs {
   size_t lines = 30000000;
   std::string path = "/tmp/shutterlab_bench_gyro.csv";
   bool generate_only = false, streaming_only = false, flight_only = false, pandas = false,
        two_threads = false;
   int repeat = 1;
+};
+
+// Parses argv into *args; false (with the usage printed) on an unknown argument.
+bool ParseBenchArgs(int argc, char** argv, BenchArgs* args) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--lines" && i + 1 < argc)
-      lines = std::stoull(argv[++i]);
+      args->lines = std::stoull(argv[++i]);
     else if (arg == "--file" && i + 1 < argc)
-      path = argv[++i];
+      args->path = argv[++i];
     else if (arg == "--generate-only")
-      generate_only = true;
+      args->generate_only = true;
     else if (arg == "--streaming-only")
-      streaming_only = true;
+      args->streaming_only = true;
     else if (arg == "--flight-only")
-      flight_only = true;
+      args->flight_only = true;
     else if (arg == "--pandas")
-      pandas = true;
+      args->pandas = true;
     else if (arg == "--two-threads")
-      two_threads = true;
+      args->two_threads = true;
     else if (arg == "--repeat" && i + 1 < argc)
-      repeat = std::max(1, std::stoi(argv[++i]));
+      args->repeat = std::max(1, std::stoi(argv[++i]));
     else {
       std::fprintf(stderr,
                    "usage: %s [--lines N] [--file PATH] [--generate-only] [--streaming-only] "
                    "[--flight-only] [--two-threads] [--repeat N] [--pandas]\n",
                    argv[0]);
-      return 2;
+      return false;
     }
   }
-  if (!std::filesystem::exists(path)) {
-    std::printf("generating %s (%zu lines) ...\n", path.c_str(), lines);
-    std::fflush(stdout);
-    const double t0 = Now();
-    GenerateCsv(path, lines);
-    std::printf("  generated in %.1f s\n", Now() - t0);
-  }
-  if (generate_only) return 0;
-  if (flight_only || pandas || two_threads) {
-    return FlightAgainstPandas(path, repeat, pandas, two_threads);
-  }
-  const double file_mb = std::filesystem::file_size(path) / 1e6;
-  std::printf("file: %s, %.1f MB\n\n", path.c_str(), file_mb);
+  return true;
+}
 
-  // --- 1. Reading -------------------------------------------------------------------------------
+// Section 1: the read steps one by one, each with its MB/s. Returns the trace read whole and
+// *t_parse, std::from_chars' time over the whole buffer (the others' reference).
+GyroTrace ReadingSection(const std::string& path, double file_mb, double* t_parse_out) {
   std::printf("%-58s %10s %10s\n", "read step (one thread, CPU time)", "seconds", "MB/s");
   double t0 = Now();
   const std::string text = ReadFileToString(path);
@@ -441,10 +439,13 @@ int Main(int argc, char** argv) {
   std::printf("%-58s %10.3f %10.0f   (first %zu lines)\n", "reference: std::ifstream >> double",
               t_ref, ref_bytes / 1e6 / t_ref, ref_lines);
   std::printf("(checksum %.3g, %zu fields)\n\n", checksum, fields_seen);
-  StreamingSections(path, file_mb, t_parse);
-  if (streaming_only) return 0;
+  *t_parse_out = t_parse;
+  return trace;
+}
 
-  // --- 2. Flight analysis -----------------------------------------------------------------------
+// Section 3: the flight analysis on the trace, per-axis and with the vector criterion, against
+// the std::deque sliding range. Returns whether the counts agree.
+bool FlightSection(const GyroTrace& trace) {
   FlightOptions options;  // 50 m, 5 cm and 10 cm, 10 ms and 20 ms, 20", bias 0:5
   const size_t n = trace.size();
   std::printf("%-58s %10s %10s\n", "flight step (2 limits x 2 windows, CPU time)", "seconds",
@@ -493,7 +494,31 @@ int Main(int argc, char** argv) {
   std::printf("%-58s %10.3f %10.1f\n", "Flight per-axis + vector (SO(3) integration + pruning)",
               t_both, n / t_both / 1e6);
   std::printf("\n%s", FlightTable(both).c_str());
-  return counts_match ? 0 : 1;
+  return counts_match;
+}
+
+int Main(int argc, char** argv) {
+  BenchArgs args;
+  if (!ParseBenchArgs(argc, argv, &args)) return 2;
+  const std::string& path = args.path;
+  if (!std::filesystem::exists(path)) {
+    std::printf("generating %s (%zu lines) ...\n", path.c_str(), args.lines);
+    std::fflush(stdout);
+    const double t0 = Now();
+    GenerateCsv(path, args.lines);
+    std::printf("  generated in %.1f s\n", Now() - t0);
+  }
+  if (args.generate_only) return 0;
+  if (args.flight_only || args.pandas || args.two_threads) {
+    return FlightAgainstPandas(path, args.repeat, args.pandas, args.two_threads);
+  }
+  const double file_mb = std::filesystem::file_size(path) / 1e6;
+  std::printf("file: %s, %.1f MB\n\n", path.c_str(), file_mb);
+  double t_parse = 0.0;
+  const GyroTrace trace = ReadingSection(path, file_mb, &t_parse);
+  StreamingSections(path, file_mb, t_parse);
+  if (args.streaming_only) return 0;
+  return FlightSection(trace) ? 0 : 1;
 }
 
 }  // namespace

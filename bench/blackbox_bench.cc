@@ -10,12 +10,12 @@
 // every 32; about 5 bytes a frame, so 10^8 samples are 0.5 GB) and exits. Other arguments go to
 // Google Benchmark.
 
+#include "bench/bench_util.h"
 #include "sim/logs/blackbox.h"
 #include "sim/text_file.h"
 
 #include <benchmark/benchmark.h>
 
-#include "bench/bench_util.h"
 #include <cmath>
 #include <cstdint>
 #include <cstdio>

@@ -11,9 +11,10 @@
 // Run: build/bin/correct_bench [--benchmark_repetitions=3]
 // The frame is the real asset upscaled to 20 MP.
 
-#include "render/image_io.h"
+#include "bench/bench_util.h"
+#include "io/image_io.h"
+#include "model/truth_model.h"
 #include "render/rs_correct.h"
-#include "render/truth_model.h"
 #include "sim/so3.h"
 #include "sim/units.h"
 
@@ -21,7 +22,6 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "bench/bench_util.h"
 #include <cstdio>
 #include <optional>
 #include <vector>

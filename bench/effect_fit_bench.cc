@@ -1,5 +1,5 @@
-// Speed of the effect fit (estimate/effect_fit.h) on a mapping camera's case: 12 frames of 1280x960
-// (f = 1100 px, 30 ms readout, 50 m), ~1500 measured points a frame (grid step 28 px), a
+// Speed of the effect fit (estimate/loop/effect_fit.h) on a mapping camera's case: 12 frames of
+// 1280x960 (f = 1100 px, 30 ms readout, 50 m), ~1500 measured points a frame (grid step 28 px), a
 // multirotor-like 1 kHz trace, 0.1 px noise per component. One thread, thread CPU time.
 //   - Prediction:        one PredictDisplacements pass over all 12 frames' points (what the solver
 //                        evaluates ~2p+1 times per iteration);
@@ -15,15 +15,15 @@
 // level test on clean data (white and spatially correlated noise, 200 data sets each).
 // Run: build/bin/effect_fit_bench
 
+#include "bench/bench_util.h"
 #include "estimate/loop/effect_fit.h"
+#include "model/truth_model.h"
 #include "render/rs_warp.h"
-#include "render/truth_model.h"
 #include "tests/estimate/loop/effect_fixtures.h"
 
 #include <benchmark/benchmark.h>
 #include <opencv2/core.hpp>
 
-#include "bench/bench_util.h"
 #include <cstdio>
 #include <random>
 #include <string>

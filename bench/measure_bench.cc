@@ -1,6 +1,7 @@
-// Speed of `measure` (estimate/measure.h) on a rendered 1280 x 960 RGB pair of a real scene (fx
-// 1100, 30 ms readout, a multirotor-like trace, D about 10 px), one thread (cv::setNumThreads(1)),
-// thread CPU time, after a warm-up, against references measured in the same run:
+// Speed of `measure` (estimate/loop/measure.h) on a rendered 1280 x 960 RGB pair of a real scene
+// (fx 1100, 30 ms readout, a multirotor-like trace, D about 10 px), one thread
+// (cv::setNumThreads(1)), thread CPU time, after a warm-up, against references measured in the same
+// run:
 //   - Measure:            MeasureDisplacement, everything (both flow directions, masks, row model,
 //                         points);
 //   - DisUltrafastFull:   cv::DISOpticalFlow ULTRAFAST at finest scale 0, one direction, on the
@@ -10,10 +11,11 @@
 // The budget is about 1.5 s per frame on one core (validate: 12 frames and the fit in 60 s on 2).
 // Run: build/bin/measure_bench [--benchmark_repetitions=3]
 
+#include "bench/bench_util.h"
 #include "estimate/loop/measure.h"
-#include "render/image_io.h"
+#include "io/image_io.h"
+#include "model/truth_model.h"
 #include "render/rs_warp.h"
-#include "render/truth_model.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
 #include "tests/estimate/loop/effect_fixtures.h"
@@ -22,7 +24,6 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
-#include "bench/bench_util.h"
 #include <algorithm>
 #include <cstdio>
 #include <string>

@@ -6,10 +6,10 @@
 //
 //   build/bin/validate_bench [--frames N] [--keep DIR]     (run from the repository root)
 
+#include "bench/bench_util.h"
 #include "estimate/demo_dataset.h"
 #include "estimate/loop/validate.h"
 
-#include "bench/bench_util.h"
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>

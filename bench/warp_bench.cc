@@ -8,9 +8,10 @@
 // Run: build/bin/warp_bench [--benchmark_repetitions=3]
 // The scene is the real asset upscaled to 6000 x 4000 (margin around the frame for the rotation).
 
-#include "render/image_io.h"
+#include "bench/bench_util.h"
+#include "io/image_io.h"
+#include "model/truth_model.h"
 #include "render/rs_warp.h"
-#include "render/truth_model.h"
 #include "sim/so3.h"
 #include "sim/units.h"
 
@@ -18,7 +19,6 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "bench/bench_util.h"
 #include <algorithm>
 #include <cstdio>
 #include <string>

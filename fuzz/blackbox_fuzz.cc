@@ -2,9 +2,9 @@
 // OpenBlackboxBuffer), read twice: in one chunk, and streamed in chunks of 1 to 17 samples, so that
 // the decoder pauses and resumes everywhere. Both must give the same samples bit for bit, the same
 // warnings and the same error; a difference traps.
+#include "fuzz/fuzz_util.h"
 #include "sim/logs/blackbox.h"
 
-#include "fuzz/fuzz_util.h"
 #include <limits>
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

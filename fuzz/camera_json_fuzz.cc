@@ -1,7 +1,6 @@
-// libFuzzer target: camera.json (render/camera.h ReadRigModel).
-#include "render/camera.h"
-
+// libFuzzer target: camera.json (model/camera.h ReadRigModel).
 #include "fuzz/fuzz_util.h"
+#include "model/camera.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static shutterlab::fuzz::InputFile file("camera.json");

@@ -2,9 +2,8 @@
 // time. The first input byte picks the column choice, delimiter and units, the second the block
 // size (1 to 256 bytes) and the samples per chunk (fuzz::ChunkSamples); the rest is the file's
 // text. Every chunk goes through the trace audit.
-#include "sim/logs/column_csv.h"
-
 #include "fuzz/fuzz_util.h"
+#include "sim/logs/column_csv.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace shutterlab;

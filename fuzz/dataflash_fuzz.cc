@@ -2,9 +2,9 @@
 // (ParseDataFlash) and streamed in chunks of 1 to 17 samples with pass-1 limits small enough to be
 // exceeded (OpenDataFlash); they must agree in every sample, warning and count (the streamed way
 // may add its "memory" warning), or refuse alike.
+#include "fuzz/fuzz_util.h"
 #include "sim/logs/dataflash.h"
 
-#include "fuzz/fuzz_util.h"
 #include <string>
 #include <vector>
 

@@ -3,10 +3,9 @@
 // blackbox CSV export or a binary log, then the trace audit. A blackbox log (streamed from the
 // file's mapping) must also equal the same bytes read from memory in chunks of 1 to 17 samples;
 // a difference traps.
+#include "fuzz/fuzz_util.h"
 #include "sim/logs/blackbox.h"
 #include "sim/logs/flight_log_io.h"
-
-#include "fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static shutterlab::fuzz::InputFile file("log");

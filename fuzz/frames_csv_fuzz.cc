@@ -1,7 +1,6 @@
-// libFuzzer target: frames.csv (render/frames_csv.h ReadFramesCsv, ReadFrameTimes).
-#include "render/frames_csv.h"
-
+// libFuzzer target: frames.csv (io/frames_csv.h ReadFramesCsv, ReadFrameTimes).
 #include "fuzz/fuzz_util.h"
+#include "io/frames_csv.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static shutterlab::fuzz::InputFile file("frames.csv");

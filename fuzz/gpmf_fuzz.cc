@@ -1,8 +1,7 @@
 // libFuzzer target: one GoPro GPMF payload (sim/logs/gpmf.h): the KLV tree, its values and the
 // GYRO streams with their axis order, as the GoPro reader walks them.
-#include "sim/logs/gpmf.h"
-
 #include "fuzz/fuzz_util.h"
+#include "sim/logs/gpmf.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace shutterlab;

@@ -4,10 +4,9 @@
 // text. Every chunk goes through the trace audit. Then the text read in one block, by row shapes
 // (sim/logs/gyro_row_shapes.h) and byte by byte: the two must give the same samples bit for bit,
 // or the same error.
+#include "fuzz/fuzz_util.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/trace_audit.h"
-
-#include "fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace shutterlab;

@@ -1,10 +1,9 @@
 // libFuzzer target: a phone capture app's gyro dump (sim/logs/gyro_dump.h OpenGyroDump), a block at
 // a time. The first input byte picks the block size (1 to 64 bytes) and the samples per chunk
 // (fuzz::ChunkSamples); the rest is the file's text. Every chunk goes through the trace audit.
+#include "fuzz/fuzz_util.h"
 #include "sim/logs/gyro_dump.h"
 #include "sim/trace_audit.h"
-
-#include "fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace shutterlab;

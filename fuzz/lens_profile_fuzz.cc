@@ -1,8 +1,7 @@
-// libFuzzer target: a Gyroflow lens profile (render/lens_profile.h ReadLensProfile), scaled to an
+// libFuzzer target: a Gyroflow lens profile (io/lens_profile.h ReadLensProfile), scaled to an
 // image of another aspect as the commands do.
-#include "render/lens_profile.h"
-
 #include "fuzz/fuzz_util.h"
+#include "io/lens_profile.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static shutterlab::fuzz::InputFile file("profile.json");

@@ -2,11 +2,10 @@
 // a time. The first input byte picks the block size (1 to 64 bytes), the range, the time unit and
 // the samples per chunk (fuzz::ChunkSamples); the rest is the file's text. Every chunk goes through
 // the trace audit at the stated full scale.
+#include "fuzz/fuzz_util.h"
 #include "sim/logs/raw_csv.h"
 #include "sim/trace_audit.h"
 #include "sim/units.h"
-
-#include "fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace shutterlab;

@@ -3,9 +3,9 @@
 // size), with the default candidate limits or, for every other size, limits so small that the
 // fallback (a topic instance's times held whole) runs. Both must give the same log, but for the
 // fallback's one "memory" warning, or the same error; anything else traps.
+#include "fuzz/fuzz_util.h"
 #include "sim/logs/ulog.h"
 
-#include "fuzz/fuzz_util.h"
 #include <cstring>
 #include <optional>
 #include <stdexcept>

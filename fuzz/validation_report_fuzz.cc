@@ -1,7 +1,6 @@
 // libFuzzer target: a validation report as `correct --report` reads it
 // (estimate/report/loop_json.h ReadValidationReport).
 #include "estimate/report/loop_json.h"
-
 #include "fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

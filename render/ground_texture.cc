@@ -390,6 +390,70 @@ bool ClearOfBuildings(const Scene& scene, int x, int y, int radius_px) {
   return true;
 }
 
+// One parcel of the partition, [u0, u1) x [v0, v1) in layout units: its ground, tone, rows and
+// swaths, drawn from rng (a garden in the hamlet, a field elsewhere). u_long: its long side runs
+// along U.
+Parcel MakeParcel(Rng& rng, const Scale& scale, const Frame& layout, int64_t u0, int64_t u1,
+                  int64_t v0, int64_t v1, bool garden, bool u_long) {
+  Parcel p;
+  p.u0 = u0, p.u1 = u1, p.v0 = v0, p.v1 = v1;
+  const int pick = rng.Int(0, 99);
+  if (garden) {
+    p.ground = pick < 55 ? Ground::kLawn : pick < 72 ? Ground::kPaving : Ground::kRowCrop;
+  } else {
+    p.ground = pick < 20   ? Ground::kPloughed
+               : pick < 48 ? Ground::kCereal
+               : pick < 66 ? Ground::kRowCrop
+               : pick < 88 ? Ground::kMeadow
+                           : Ground::kStubble;
+  }
+  // Rows mostly run with the parcel's long side, sometimes across it or at an angle.
+  const Dir long_side = u_long ? layout.axis : Perp(layout.axis);
+  const int row_pick = rng.Int(0, 99);
+  p.across_rows = row_pick < 55   ? Perp(long_side)
+                  : row_pick < 80 ? long_side
+                                  : Near(rng, layout.axis, 1000);
+  const uint32_t phase = rng.Next(), phase2 = rng.Next();
+  p.margin_sub = garden ? 0 : rng.Percent(45) ? scale.Sub(Metres(rng, 30, 80)) : 0;
+  switch (p.ground) {
+    case Ground::kPloughed:
+      p.tone = Jitter(rng, rng.Percent(50) ? Rgb(118, 92, 70) : Rgb(96, 78, 62), 8);
+      p.rows = Periodic(scale.PxF(Metres(rng, 35, 55)), phase);
+      break;
+    case Ground::kCereal:
+      p.tone = Jitter(rng, rng.Percent(50) ? Rgb(168, 160, 92) : Rgb(112, 138, 62), 6);
+      p.rows = Periodic(scale.PxF(Metres(rng, 12, 17)), phase);
+      p.swaths = Periodic(scale.PxF(rng.Int(18, 24)), phase2);
+      p.line_half_gap_sub = scale.Sub(0.9);
+      p.line_half_width_sub = scale.Sub(0.22);
+      break;
+    case Ground::kRowCrop:
+      p.tone = Jitter(rng, garden ? Rgb(70, 118, 48) : Rgb(62, 110, 42), 8);
+      p.rows = Periodic(scale.PxF(garden ? 0.35 : Metres(rng, 45, 75)), phase);
+      break;
+    case Ground::kMeadow:
+      p.tone = Jitter(rng, Rgb(100, 112, 62), 8);
+      p.swaths = Periodic(scale.PxF(Metres(rng, 200, 300)), phase2);
+      break;
+    case Ground::kStubble:
+      p.tone = Jitter(rng, Rgb(188, 170, 118), 6);
+      p.rows = Periodic(scale.PxF(0.15), phase);
+      p.swaths = Periodic(scale.PxF(Metres(rng, 450, 600)), phase2);
+      break;
+    case Ground::kLawn:
+      p.tone = Jitter(rng, Rgb(88, 114, 58), 6);
+      p.swaths = Periodic(scale.PxF(Metres(rng, 80, 120)), phase2);
+      break;
+    case Ground::kPaving:
+      p.tone = Jitter(rng, Rgb(158, 150, 138), 8);
+      p.across_rows = layout.axis;
+      p.rows = Periodic(scale.PxF(0.2), phase);
+      p.swaths = Periodic(scale.PxF(0.3), phase2);
+      break;
+  }
+  return p;
+}
+
 // Fields: the extended image split into rectangular strips along one farm axis (small garden
 // plots within the hamlet), each with a crop and its own row direction.
 void PlanParcels(Rng& rng, const Scale& scale, const cv::Size& size, Scene* scene) {
@@ -440,63 +504,8 @@ void PlanParcels(Rng& rng, const Scale& scale, const cv::Size& size, Scene* scen
       continue;
     }
 
-    Parcel p;
-    p.u0 = box.u0, p.u1 = box.u1, p.v0 = box.v0, p.v1 = box.v1;
-    const int pick = rng.Int(0, 99);
-    if (garden) {
-      p.ground = pick < 55 ? Ground::kLawn : pick < 72 ? Ground::kPaving : Ground::kRowCrop;
-    } else {
-      p.ground = pick < 20   ? Ground::kPloughed
-                 : pick < 48 ? Ground::kCereal
-                 : pick < 66 ? Ground::kRowCrop
-                 : pick < 88 ? Ground::kMeadow
-                             : Ground::kStubble;
-    }
-    // Rows mostly run with the parcel's long side, sometimes across it or at an angle.
-    const Dir long_side = u_long ? layout.axis : Perp(layout.axis);
-    const int row_pick = rng.Int(0, 99);
-    p.across_rows = row_pick < 55   ? Perp(long_side)
-                    : row_pick < 80 ? long_side
-                                    : Near(rng, layout.axis, 1000);
-    const uint32_t phase = rng.Next(), phase2 = rng.Next();
-    p.margin_sub = garden ? 0 : rng.Percent(45) ? scale.Sub(Metres(rng, 30, 80)) : 0;
-    switch (p.ground) {
-      case Ground::kPloughed:
-        p.tone = Jitter(rng, rng.Percent(50) ? Rgb(118, 92, 70) : Rgb(96, 78, 62), 8);
-        p.rows = Periodic(scale.PxF(Metres(rng, 35, 55)), phase);
-        break;
-      case Ground::kCereal:
-        p.tone = Jitter(rng, rng.Percent(50) ? Rgb(168, 160, 92) : Rgb(112, 138, 62), 6);
-        p.rows = Periodic(scale.PxF(Metres(rng, 12, 17)), phase);
-        p.swaths = Periodic(scale.PxF(rng.Int(18, 24)), phase2);
-        p.line_half_gap_sub = scale.Sub(0.9);
-        p.line_half_width_sub = scale.Sub(0.22);
-        break;
-      case Ground::kRowCrop:
-        p.tone = Jitter(rng, garden ? Rgb(70, 118, 48) : Rgb(62, 110, 42), 8);
-        p.rows = Periodic(scale.PxF(garden ? 0.35 : Metres(rng, 45, 75)), phase);
-        break;
-      case Ground::kMeadow:
-        p.tone = Jitter(rng, Rgb(100, 112, 62), 8);
-        p.swaths = Periodic(scale.PxF(Metres(rng, 200, 300)), phase2);
-        break;
-      case Ground::kStubble:
-        p.tone = Jitter(rng, Rgb(188, 170, 118), 6);
-        p.rows = Periodic(scale.PxF(0.15), phase);
-        p.swaths = Periodic(scale.PxF(Metres(rng, 450, 600)), phase2);
-        break;
-      case Ground::kLawn:
-        p.tone = Jitter(rng, Rgb(88, 114, 58), 6);
-        p.swaths = Periodic(scale.PxF(Metres(rng, 80, 120)), phase2);
-        break;
-      case Ground::kPaving:
-        p.tone = Jitter(rng, Rgb(158, 150, 138), 8);
-        p.across_rows = layout.axis;
-        p.rows = Periodic(scale.PxF(0.2), phase);
-        p.swaths = Periodic(scale.PxF(0.3), phase2);
-        break;
-    }
-    scene->parcels.push_back(p);
+    scene->parcels.push_back(
+        MakeParcel(rng, scale, layout, box.u0, box.u1, box.v0, box.v1, garden, u_long));
   }
 }
 
@@ -1205,7 +1214,7 @@ cv::Mat MakeGroundTexture(const GroundTextureOptions& options) {
   PaintCanopies(scene, scale, noises, image);
   SoftenLikeALens(image);
   AddGrain(stream + 5, image);
-  // Painted in OpenCV's B, G, R order; handed over in the project's R, G, B (render/image_io.h).
+  // Painted in OpenCV's B, G, R order; handed over in the project's R, G, B (io/image_io.h).
   cv::Mat rgb;
   cv::cvtColor(image, rgb, cv::COLOR_BGR2RGB);
   return rgb;

@@ -26,7 +26,7 @@ struct GroundTextureOptions {
   void Check() const;
 };
 
-// The texture as CV_8UC3 in R, G, B channel order (as render/image_io.h reads and writes images),
+// The texture as CV_8UC3 in R, G, B channel order (as io/image_io.h reads and writes images),
 // height_px rows of width_px.
 cv::Mat MakeGroundTexture(const GroundTextureOptions& options);
 

@@ -1,7 +1,7 @@
 #pragma once
 // Pictures for people: a heatmap of the displacement magnitude with a scale bar, a side-by-side
 // panel per frame, and a tiled overview of a flight. All return 8-bit RGB (R, G, B channel order,
-// as render/image_io.h writes it).
+// as io/image_io.h writes it).
 
 #include <opencv2/core.hpp>
 

@@ -10,7 +10,7 @@
 //   truth/NNNN_disp.exr            d(p) = p_ref - p, float32 channels dx, dy, pixels
 //   truth.json                     {"injected": {...}, "frames": [{"frame", "D_px", "D_m"}, ...]}
 //   truth/NNNN_heat.png, truth/NNNN_side.png, overview.png   pictures (unless pictures = false)
-// The truth differs from camera.json by the --inject effects only (render/truth_model.h).
+// The truth differs from camera.json by the --inject effects only (model/truth_model.h).
 //
 // With `video`, DIR is a video rig dataset (docs/FORMATS.md "Video datasets"): consecutive
 // rolling-shutter frames of one continuing flight, all in the world of the first frame's row 0
@@ -24,9 +24,9 @@
 // row 0 does), and it crosses the scene point above the scene's centre (15 % of the frame height)
 // in the middle of the clip (video) or at each frame's row 0 (stills).
 
+#include "io/lens_profile.h"
+#include "model/effects.h"
 #include "render/clutter.h"
-#include "render/effects.h"
-#include "render/lens_profile.h"
 #include "render/rs_warp.h"
 #include "sim/log_warning.h"
 
@@ -41,7 +41,7 @@ namespace shutterlab {
 struct RenderOptions {
   std::string scene_path;   // scene image (docs/FORMATS.md "The scene image")
   std::string camera_path;  // declared camera.json
-  // A Gyroflow lens profile (render/lens_profile.h): its lens, scaled to camera.json's image size,
+  // A Gyroflow lens profile (io/lens_profile.h): its lens, scaled to camera.json's image size,
   // and its readout where it states one, replace camera.json's (the written camera.json holds
   // them).
   std::string lens_profile_path;

@@ -23,8 +23,8 @@
 // row shows. The tests check the map against the exact solution at every pixel. The sampler is
 // the renderer's (render/warp_kernel.h).
 
-#include "render/camera.h"
-#include "render/truth_model.h"
+#include "model/camera.h"
+#include "model/truth_model.h"
 #include "render/warp_kernel.h"
 
 #include <Eigen/Core>

@@ -20,8 +20,8 @@
 // Work is split over rows (cv::parallel_for_); every row is computed the same way whatever the
 // thread count, so the output is bit-identical for any number of threads.
 
-#include "render/camera.h"
-#include "render/truth_model.h"
+#include "model/camera.h"
+#include "model/truth_model.h"
 #include "render/warp_kernel.h"
 
 #include <Eigen/Core>

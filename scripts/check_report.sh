@@ -2,7 +2,7 @@
 # Opens a shutterlab report in headless Chromium (Debian's /usr/bin/chromium; `apt-get install -y
 # chromium`), fails on any script error or when the charts did not all draw, and saves a
 # screenshot. The page sets body data-status="ok" once every chart is drawn and collects script
-# errors and unhandled rejections in body data-errors (estimate/html_report.h).
+# errors and unhandled rejections in body data-errors (estimate/report/html_report.h).
 #   scripts/check_report.sh REPORT.html [SCREENSHOT.png]
 set -euo pipefail
 report=${1:?usage: scripts/check_report.sh REPORT.html [SCREENSHOT.png]}

@@ -7,7 +7,7 @@
 
 namespace shutterlab {
 
-// The rig model (render/camera.h) reads rows: top to bottom or bottom to top. Logs that record a
+// The rig model (model/camera.h) reads rows: top to bottom or bottom to top. Logs that record a
 // direction (Gyroflow's .gcsv frame_readout_direction) may also name the two column orders.
 enum class ReadoutDirection { kTopToBottom, kBottomToTop, kLeftToRight, kRightToLeft };
 

@@ -1,8 +1,8 @@
 #include "estimate/correct/correct_io.h"
 
 #include "estimate/report/analysis_json.h"
-#include "render/effect_io.h"
-#include "render/frames_csv.h"
+#include "io/frames_csv.h"
+#include "model/effect_io.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
 

@@ -2,7 +2,7 @@
 // `correct`'s results at the edge: correct.json (docs/FORMATS.md "Correction output") and the
 // table a person reads.
 
-#include "estimate/correct/correct_dataset.h"
+#include "estimate/correct/correct_summary.h"
 
 #include <nlohmann/json.hpp>
 

@@ -1,6 +1,6 @@
 #include "estimate/correct/correction_model.h"
 
-#include "render/effect_io.h"
+#include "model/effect_io.h"
 #include "sim/check.h"
 #include "sim/still_detect.h"
 #include "sim/text_file.h"

@@ -1,13 +1,13 @@
 #pragma once
 // The model `correct` corrects with: the declared camera.json, plus the effects a validation report
-// identified (render/effects.h), their uncertainty (each effect's parameter covariance), and the
+// identified (model/effects.h), their uncertainty (each effect's parameter covariance), and the
 // gyro's white-noise density. The uncertainty is what the residual prediction draws from
 // (estimate/correct/residual_prediction.h).
 
 #include "estimate/report/loop_json.h"
-#include "render/camera.h"
-#include "render/effects.h"
-#include "render/truth_model.h"
+#include "model/camera.h"
+#include "model/effects.h"
+#include "model/truth_model.h"
 #include "sim/gyro_trace.h"
 
 #include <Eigen/Core>

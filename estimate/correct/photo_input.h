@@ -2,7 +2,7 @@
 // `correct --photos DIR LOG`: a folder of photos and the flight log that recorded the camera's
 // motion (the per-image input of `analyze --photos`), turned into the frames `correct` corrects.
 //
-// The photos are read as one set (render/photo_set.h) and placed on the log's clock by its camera
+// The photos are read as one set (io/photo_set.h) and placed on the log's clock by its camera
 // events or a trigger file (estimate/paper/photo_clock.h: by name, by MRK number, by capture time,
 // in order); each placed photo's row 0 is exposed at its event + the trigger latency, on the log's
 // gyro clock. The camera is camera.json's when given, else the photos' own (the most common size,
@@ -13,10 +13,10 @@
 // median height above take-off, else camera.json's default (50 m), each said.
 
 #include "estimate/paper/photo_clock.h"
-#include "render/camera.h"
-#include "render/lens_profile.h"
-#include "render/photo_set.h"
-#include "render/rig_dataset.h"
+#include "io/lens_profile.h"
+#include "io/photo_set.h"
+#include "io/rig_dataset.h"
+#include "model/camera.h"
 #include "sim/logs/flight_log_io.h"
 
 #include <Eigen/Core>

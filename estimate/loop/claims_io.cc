@@ -1,6 +1,6 @@
 #include "estimate/loop/claims_io.h"
 
-#include "render/effect_io.h"
+#include "model/effect_io.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
 

@@ -2,7 +2,7 @@
 // The claims of import.json (`shutterlab import`, docs/FORMATS.md "Video datasets") that validate
 // can test, read at the edge into typed effect values.
 
-#include "render/effects.h"
+#include "model/effects.h"
 
 #include <optional>
 #include <string>
@@ -24,7 +24,7 @@ std::optional<Effect> EffectForClaim(const std::string& what);
 // The testable claims of import_json_path, in the file's order, read and checked before any work is
 // done (a broken file is named at once, not after minutes of measuring); none when the file does
 // not exist or has no "claims". Each claim is an object with a string "what", "status" a string
-// when present, and a "value" of the effect's docs/FORMATS.md shape (render/effect_io.h
+// when present, and a "value" of the effect's docs/FORMATS.md shape (model/effect_io.h
 // EffectValueFromJson: gyro_to_camera a 3x3 array of numbers, readout_s and time_offset_s numbers,
 // direction a row-order word). Claims no effect tests (intrinsics, say) are left out. Throws
 // IoError naming the path, the claim's number and the problem.

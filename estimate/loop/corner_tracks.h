@@ -17,7 +17,7 @@
 //  - forward-backward: the match tracked back must return within kMaxRoundTripPx.
 // A point where any of these fails is not measured (left out, not taken as scene).
 
-#include "estimate/loop/measure.h"
+#include "estimate/loop/measured_point.h"
 
 #include <opencv2/core.hpp>
 

@@ -5,7 +5,8 @@
 // Residual r_i = measured - predicted at every point (2 components). noise_px is the RMS length of
 // the measurement error, so each component has variance sigma^2 = noise_px^2 / 2.
 //
-// 0. Robustness. The fits minimise the Huber loss (delta = 3 noise_px, estimate/least_squares.h):
+// 0. Robustness. The fits minimise the Huber loss (delta = 3 noise_px,
+// estimate/loop/least_squares.h):
 //    a bad match pulls with a bounded force. The statistics below are taken over the points less
 //    gross outliers: points more than 5 noise_px off (probability e^-25 for a Gaussian error),
 //    at most the 5 % largest (beyond that share a large residual is the model's, not a few bad

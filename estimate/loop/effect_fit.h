@@ -8,9 +8,9 @@
 
 #include "estimate/loop/frame_points.h"
 #include "estimate/loop/measure.h"
-#include "render/camera.h"
-#include "render/effects.h"
-#include "render/truth_model.h"
+#include "model/camera.h"
+#include "model/effects.h"
+#include "model/truth_model.h"
 #include "sim/gyro_trace.h"
 
 #include <Eigen/Core>

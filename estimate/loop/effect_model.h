@@ -1,6 +1,6 @@
 #pragma once
 // The axis rotations that gyro_to_camera fits start from (the effects themselves are the table of
-// render/effects.h), and a fast predictor of the displacement d(p) = p_ref - p of many measured
+// model/effects.h), and a fast predictor of the displacement d(p) = p_ref - p of many measured
 // points under any TrueModel.
 //
 // The predictor computes exactly what the renderer's truth computes (CameraMotion::Frame +
@@ -12,9 +12,9 @@
 // That keeps one evaluation proportional to the points and the readout span, not the log length.
 
 #include "estimate/loop/frame_points.h"
-#include "render/camera.h"
-#include "render/effects.h"
-#include "render/truth_model.h"
+#include "model/camera.h"
+#include "model/effects.h"
+#include "model/truth_model.h"
 #include "sim/gyro_trace.h"
 
 #include <Eigen/Core>

@@ -26,7 +26,7 @@
 
 #include "estimate/loop/frame_points.h"
 #include "estimate/loop/point_screen.h"
-#include "render/truth_model.h"
+#include "model/truth_model.h"
 #include "sim/gyro_trace.h"
 
 #include <Eigen/Geometry>

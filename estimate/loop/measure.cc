@@ -22,8 +22,8 @@
 //     corrected for the model's degrees of freedom.
 //
 // Accuracy, RMS of |flow - truth| over the measured pixels, px, on rendered 1280x960 pairs of both
-// real scenes (tests/estimate/measure_test.cc, fx 1100, 30 ms readout, D = 1.8 .. 24.4 px), one
-// core; raw flow alone unless "+ model":
+// real scenes (tests/estimate/loop/measure_test.cc, fx 1100, 30 ms readout, D = 1.8 .. 24.4 px),
+// one core; raw flow alone unless "+ model":
 //   DIS ULTRAFAST finest scale 0 + row model (chosen)       0.0012 .. 0.0055   0.85 s / frame (both
 //                                                                               directions + model)
 //   DIS MEDIUM finest 0 (variational refinement) + model    0.0019 .. 0.0042   2.75 s
@@ -42,7 +42,7 @@
 #include "estimate/loop/measure.h"
 
 #include "estimate/loop/corner_tracks.h"
-#include "render/image_io.h"
+#include "io/image_io.h"
 #include "render/pictures.h"
 #include "render/rs_warp.h"
 #include "sim/check.h"

@@ -5,6 +5,8 @@
 // (Interface fixed first so that validate can be written against it; the method is documented in
 // measure.cc with the accuracy it was chosen by.)
 
+#include "estimate/loop/measured_point.h"
+
 #include <opencv2/core.hpp>
 
 #include <optional>
@@ -12,13 +14,6 @@
 #include <vector>
 
 namespace shutterlab {
-
-// One measured displacement at a rolling-shutter pixel (u, v): d = (dx, dy) = p_ref - p, pixels.
-struct MeasuredPoint {
-  double u = 0.0, v = 0.0;    // rolling-shutter pixel (column, row)
-  double dx = 0.0, dy = 0.0;  // measured displacement, px
-  double weight = 1.0;        // confidence, 0..1 (1: well textured, consistent)
-};
 
 struct MeasureOptions {
   // Spacing of the sparse measured points handed to the model fit, px.

@@ -55,7 +55,7 @@
 //     0.56 (111 pairs; 10-90 %: 0.41-0.81).
 
 #include "estimate/loop/frame_points.h"
-#include "render/truth_model.h"
+#include "model/truth_model.h"
 #include "sim/gyro_trace.h"
 
 #include <Eigen/Core>

@@ -9,7 +9,7 @@
 //  - full model: docs/FORMATS.md's D of the declared model's d(p) (rotation, velocity, lens),
 //  evaluated
 //    on a grid (kGridStepPx, first and last rows and columns included);
-//  - paper's model: estimate/analyze.h Analyze() with a trigger at the frame's gyro time
+//  - paper's model: estimate/paper/analyze.h Analyze() with a trigger at the frame's gyro time
 //    t_first_row + time_offset_s (no bias estimate: gyro.csv is taken as calibrated), which gives
 //    D_paper_m = altitude * tan(largest per-axis range in the readout), the per-axis ranges and the
 //    dominant axis; D_vector_m = altitude * tan(largest rotation angle between row 0 and any row),

@@ -3,7 +3,7 @@
 #include "estimate/loop/claims_io.h"
 #include "estimate/loop/effect_model.h"
 #include "estimate/loop/frame_residuals.h"
-#include "render/image_io.h"
+#include "io/image_io.h"
 #include "sim/check.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"

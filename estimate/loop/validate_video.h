@@ -1,10 +1,11 @@
 #pragma once
-// The video branch of `validate` (estimate/validate.h describes it); called by ValidateDataset.
+// The video branch of `validate` (estimate/loop/validate.h describes it); called by
+// ValidateDataset.
 
 #include "estimate/loop/validation_result.h"
-#include "render/effects.h"
-#include "render/frames_csv.h"
-#include "render/rig_dataset.h"
+#include "io/frames_csv.h"
+#include "io/rig_dataset.h"
+#include "model/effects.h"
 #include "sim/gyro_trace.h"
 
 #include <string>

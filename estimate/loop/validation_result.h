@@ -6,8 +6,8 @@
 #include "estimate/loop/image_orientation.h"
 #include "estimate/loop/measure.h"
 #include "estimate/loop/point_screen.h"
-#include "render/effects.h"
-#include "render/lens_profile.h"
+#include "io/lens_profile.h"
+#include "model/effects.h"
 #include "sim/log_warning.h"
 
 #include <Eigen/Core>
@@ -27,13 +27,13 @@ inline constexpr double kMinRatioDPx = 1.0;
 
 struct ValidateOptions {
   std::vector<double> limits_m{0.05, 0.10};  // acceptable smear on the ground, m
-  // A Gyroflow lens profile (render/lens_profile.h) whose lens, scaled to the dataset's image size,
+  // A Gyroflow lens profile (io/lens_profile.h) whose lens, scaled to the dataset's image size,
   // and readout (where it states one) replace camera.json's before anything is predicted.
   std::string lens_profile_path;
   MeasureOptions measure;  // its mask is the dataset's (camera.json) and mask_path's together
   LoopOptions loop;
   ScreenOptions screen;  // points left out before the loop (estimate/loop/point_screen.h)
-  // validate --mask: a mask image (render/rig_dataset.h ReadMask, non-zero = use) beside
+  // validate --mask: a mask image (io/rig_dataset.h ReadMask, non-zero = use) beside
   // camera.json's own; a pixel is measured only where both allow it. Empty: none.
   std::string mask_path;
   // Keep the per-point residuals before and after the loop (for plots).

@@ -1,7 +1,7 @@
 #include "estimate/paper/analyze.h"
 
+#include "model/truth_model.h"
 #include "render/rs_warp.h"
-#include "render/truth_model.h"
 #include "sim/bias.h"
 #include "sim/check.h"
 #include "sim/civil_time.h"
@@ -858,6 +858,90 @@ class LogPasses {
 
 }  // namespace
 
+namespace {
+
+// AnalyzeStream's second pass: the sampling, the warnings and the bias (the mean over the still
+// segment's samples, [begin_s, end_s) after the first sample as sim/bias.h SamplesInSegment takes
+// them, summed in order), and with options.allan what the Allan deviation needs of the whole log
+// and of the segment.
+struct BiasPass {
+  std::optional<StillSegment> still;
+  Eigen::Vector3d bias_sum = Eigen::Vector3d::Zero();
+  size_t bias_samples = 0;
+  std::optional<int64_t> t0_ns;
+  int64_t still_begin_ns = 0, still_end_ns = 0;
+  AllanSegment allan_whole, allan_still;
+
+  bool InStill(int64_t t_ns) const { return t_ns >= still_begin_ns && t_ns < still_end_ns; }
+  void Add(const GyroChunk& chunk, const Eigen::Matrix3d& cam_from_gyro, bool allan) {
+    if (!t0_ns) {
+      t0_ns = chunk.data[0].t_ns;
+      if (still) {
+        still_begin_ns = *t0_ns + SecondsToNs(still->segment.begin_s);
+        still_end_ns = *t0_ns + SecondsToNs(still->segment.end_s);
+      }
+    }
+    if (allan) {
+      for (const GyroSample& s : chunk)
+        allan_whole.Add(InCameraAxes(s, cam_from_gyro, Eigen::Vector3d::Zero()));
+    }
+    if (!still) return;
+    for (const GyroSample& s : chunk) {
+      if (!InStill(s.t_ns)) continue;
+      const GyroSample as_logged = InCameraAxes(s, cam_from_gyro, Eigen::Vector3d::Zero());
+      bias_sum += as_logged.omega_rad_s;
+      ++bias_samples;
+      if (allan) allan_still.Add(as_logged);
+    }
+  }
+};
+
+// The images, timed once the trace's span is known, under the camera analysed (contexts[0]) and,
+// with options.what_if and an image to judge, the what-if ones (a fast readout, half the altitude).
+struct TimedImages {
+  std::vector<ImageContext> contexts;
+  std::vector<std::vector<ImageResult>> images;  // one list per context
+};
+TimedImages TimeImages(const std::vector<ImageTrigger>& triggers, const AnalyzeOptions& options,
+                       const TraceSpan& span, int64_t median_interval_ns,
+                       const AnalyzeResult& result) {
+  TimedImages timed{{{nullptr, nullptr, options.rig, options.limits_m, median_interval_ns}}, {}};
+  const int64_t latency_ns = SecondsToNs(options.trigger_latency_s);
+  const auto time_all = [&](const ImageContext& context) {
+    std::vector<ImageResult> images;
+    for (const ImageTrigger& trigger : triggers)
+      images.push_back(ImageTiming(context, trigger, latency_ns, span));
+    return images;
+  };
+  timed.images.push_back(time_all(timed.contexts[0]));
+  const bool any_judged = std::any_of(timed.images[0].begin(), timed.images[0].end(),
+                                      [](const ImageResult& image) { return image.judged(); });
+  if (options.what_if && any_judged) {
+    timed.contexts.push_back(FastReadoutContext(timed.contexts[0], result.verdict.fast_readout_s));
+    timed.contexts.push_back(HalfAltitudeContext(timed.contexts[0]));
+    timed.images.push_back(time_all(timed.contexts[1]));
+    timed.images.push_back(time_all(timed.contexts[2]));
+  }
+  return timed;
+}
+
+// The still segment, searched on the rates in camera axes as logged (the bias is not known yet);
+// nullopt when the log has no still stretch (zero bias, said so in the output).
+std::optional<StillSegment> StillSegmentOfLog(LogPasses* passes,
+                                              const Eigen::Matrix3d& cam_from_gyro) {
+  try {
+    return DetectStillSegment([&]() -> std::unique_ptr<GyroSource> {
+      FlightLogStream stream = passes->Next();
+      return std::make_unique<CameraAxesSource>(std::move(stream.gyro), cam_from_gyro,
+                                                [passes](double f) { passes->Report(f); });
+    });
+  } catch (const std::invalid_argument&) {
+    return std::nullopt;
+  }
+}
+
+}  // namespace
+
 AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions& given_options) {
   constexpr size_t kStillPasses = 5;  // DetectStillSegment on a source reads it at most five times
   LogPasses passes(source, given_options, (given_options.estimate_bias ? kStillPasses : 0) + 2);
@@ -868,50 +952,10 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
     FlightLogStream stream = passes.Next();
     return ConsumeFlightLog(&stream, take, [&](double f) { passes.Report(f); });
   };
-
-  // The still segment, on the rates in camera axes as logged (the bias is not known yet).
-  std::optional<StillSegment> still;
-  if (options.estimate_bias) {
-    try {
-      still = DetectStillSegment([&]() -> std::unique_ptr<GyroSource> {
-        FlightLogStream stream = passes.Next();
-        return std::make_unique<CameraAxesSource>(std::move(stream.gyro), cam_from_gyro,
-                                                  [&](double f) { passes.Report(f); });
-      });
-    } catch (const std::invalid_argument&) {
-      // no still stretch: zero bias, said so in the output
-    }
-  }
-
-  // The sampling, the warnings and the bias: the mean over the still segment's samples,
-  // [begin_s, end_s) after the first sample (bias.h SamplesInSegment), summed in order.
-  // With options.allan, what the Allan deviation needs of the whole log and of the segment.
-  Eigen::Vector3d bias_sum = Eigen::Vector3d::Zero();
-  size_t bias_samples = 0;
-  std::optional<int64_t> t0_ns;
-  int64_t still_begin_ns = 0, still_end_ns = 0;
-  AllanSegment allan_whole, allan_still;
-  const StreamedLog read = consume([&](const GyroChunk& chunk) {
-    if (!t0_ns) {
-      t0_ns = chunk.data[0].t_ns;
-      if (still) {
-        still_begin_ns = *t0_ns + SecondsToNs(still->segment.begin_s);
-        still_end_ns = *t0_ns + SecondsToNs(still->segment.end_s);
-      }
-    }
-    if (options.allan) {
-      for (const GyroSample& s : chunk)
-        allan_whole.Add(InCameraAxes(s, cam_from_gyro, Eigen::Vector3d::Zero()));
-    }
-    if (!still) return;
-    for (const GyroSample& s : chunk) {
-      if (s.t_ns < still_begin_ns || s.t_ns >= still_end_ns) continue;
-      const GyroSample as_logged = InCameraAxes(s, cam_from_gyro, Eigen::Vector3d::Zero());
-      bias_sum += as_logged.omega_rad_s;
-      ++bias_samples;
-      if (options.allan) allan_still.Add(as_logged);
-    }
-  });
+  BiasPass bias;
+  if (options.estimate_bias) bias.still = StillSegmentOfLog(&passes, cam_from_gyro);
+  const StreamedLog read =
+      consume([&](const GyroChunk& chunk) { bias.Add(chunk, cam_from_gyro, options.allan); });
   FlightLog log = passes.log();
   log.warnings = read.warnings;
   log.warnings.insert(log.warnings.end(), source.more_warnings.begin(), source.more_warnings.end());
@@ -921,42 +965,21 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
   AnalyzeResult result;
   DescribeSource(log, read.sampling, options, altitude_source, &result);
   result.bias_estimated = options.estimate_bias;
-  if (still) {
-    result.still_segment = still->segment;
-    result.bias_from_still = bias_samples >= kMinBiasSamples;  // EstimateBias's refusal
-    if (result.bias_from_still) result.bias_rad_s = bias_sum / static_cast<double>(bias_samples);
+  if (bias.still) {
+    result.still_segment = bias.still->segment;
+    result.bias_from_still = bias.bias_samples >= kMinBiasSamples;  // EstimateBias's refusal
+    if (result.bias_from_still)
+      result.bias_rad_s = bias.bias_sum / static_cast<double>(bias.bias_samples);
   }
-
   // The Allan deviation, on the still segment or the whole log, in the last pass.
   std::optional<AllanStream> allan;
   if (options.allan) {
-    result.allan_on_still = AllanOnStill(result, allan_still);
-    allan = (result.allan_on_still ? allan_still : allan_whole).Open(result.bias_rad_s);
+    result.allan_on_still = AllanOnStill(result, bias.allan_still);
+    allan = (result.allan_on_still ? bias.allan_still : bias.allan_whole).Open(result.bias_rad_s);
   }
-
-  // The images, timed now that the trace's span is known, under the camera analysed and the
-  // what-if ones.
   const TraceSpan span{read.sampling.t_begin_ns, read.sampling.t_end_ns};
-  const std::vector<ImageTrigger> triggers =
-      ChooseTriggers(log, span, options, &result.trigger_source);
-  std::vector<ImageContext> contexts{
-      {nullptr, nullptr, options.rig, options.limits_m, read.sampling.median_interval_ns}};
-  const int64_t latency_ns = SecondsToNs(options.trigger_latency_s);
-  const auto timed = [&](const ImageContext& context) {
-    std::vector<ImageResult> images;
-    for (const ImageTrigger& trigger : triggers)
-      images.push_back(ImageTiming(context, trigger, latency_ns, span));
-    return images;
-  };
-  std::vector<std::vector<ImageResult>> images{timed(contexts[0])};
-  const bool any_judged = std::any_of(images[0].begin(), images[0].end(),
-                                      [](const ImageResult& image) { return image.judged(); });
-  if (options.what_if && any_judged) {
-    contexts.push_back(FastReadoutContext(contexts[0], result.verdict.fast_readout_s));
-    contexts.push_back(HalfAltitudeContext(contexts[0]));
-    images.push_back(timed(contexts[1]));
-    images.push_back(timed(contexts[2]));
-  }
+  TimedImages timed = TimeImages(ChooseTriggers(log, span, options, &result.trigger_source),
+                                 options, span, read.sampling.median_interval_ns, result);
 
   // The flight table and the images' readouts, in one pass.
   std::unique_ptr<FlightStream> flight;
@@ -968,14 +991,14 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
   }
   std::optional<PlotBuilder> plots;
   if (options.plots) plots.emplace(*options.plots, read.sampling.samples, span);
-  StreamedReadouts readouts(contexts, std::move(images),
+  StreamedReadouts readouts(timed.contexts, std::move(timed.images),
                             AnalyzeTrueModel(options.rig, result.bias_rad_s), result.bias_rad_s,
                             plots ? &*plots : nullptr);
   std::vector<GyroSample> rotated;
   consume([&](const GyroChunk& chunk) {
     if (allan) {
       for (const GyroSample& s : chunk) {
-        if (result.allan_on_still && (s.t_ns < still_begin_ns || s.t_ns >= still_end_ns)) continue;
+        if (result.allan_on_still && !bias.InStill(s.t_ns)) continue;
         allan->Add(InCameraAxes(s, cam_from_gyro, result.bias_rad_s));
       }
     }

@@ -10,7 +10,7 @@
 //    samples, so the window's end points are interpolated: a constant rate w gives exactly w *
 //    readout_s.
 //  - D_full_m = docs/FORMATS.md's frame distortion D under the renderer's model of the declared rig
-//    (render/truth_model.h CameraMotion, render/rs_warp.h FrameGeometry::RefPixel): lens distortion
+//    (model/truth_model.h CameraMotion, render/rs_warp.h FrameGeometry::RefPixel): lens distortion
 //    and camera.json's velocity count; the bias-corrected rates are the truth (TrueModel with
 //    gyro_bias = the bias, time_offset_s 0 since the triggers are on the log clock). D is evaluated
 //    on a coarse grid, every kGridStepPx-th column and row plus the last ones, and converted to the
@@ -28,8 +28,8 @@
 
 #include "estimate/paper/allan.h"
 #include "estimate/paper/flight.h"
-#include "render/camera.h"
-#include "render/truth_model.h"
+#include "model/camera.h"
+#include "model/truth_model.h"
 #include "sim/gyro_trace.h"
 #include "sim/integrate.h"
 #include "sim/logs/flight_log.h"
@@ -147,7 +147,7 @@ struct AnalyzePlots {
   // (AnalyzeTraces::camera_rates and angles times kDegPerRad), the same numbers.
   std::vector<double> t_s;
   std::array<std::vector<double>, 3> rate_deg_s, angle_deg;
-  // The full model's frame (render/truth_model.h CameraMotion::Frame at the image's t_ns) of the
+  // The full model's frame (model/truth_model.h CameraMotion::Frame at the image's t_ns) of the
   // judged images with the largest D_full, largest first (ties: the earlier image), at most
   // worst_images of them.
   struct WorstImage {

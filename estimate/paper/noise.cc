@@ -47,7 +47,7 @@ NoiseResult AnalyzeNoise(const GyroTrace& trace, const NoiseOptions& options) {
   result.windows = result.samples_analysed - n_window + 1;
 
   for (int a = 0; a < 3; ++a) {
-    // O(N) sliding statistics (estimate/window_stats.h); their brute-force twins are the
+    // O(N) sliding statistics (estimate/paper/window_stats.h); their brute-force twins are the
     // definition.
     const std::vector<double> sigma = SlidingStdDevByCount(angles.angle_rad[a], n_window);
     const std::vector<double> range = SlidingRangeByCount(angles.angle_rad[a], n_window);

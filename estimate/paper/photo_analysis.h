@@ -1,6 +1,6 @@
 #pragma once
 // `analyze --photos DIR [LOG]`: the predicted rolling-shutter distortion of every photo of a
-// folder (render/photo_set.h).
+// folder (io/photo_set.h).
 //
 // Without a log, the translation part only, from the flight speed the photo records, as
 // photogrammetry tools model it (OpenDroneMap / OpenSfM's rolling-shutter correction moves each
@@ -25,7 +25,7 @@
 // Motion blur during the exposure, v * exposure * f / h, is given beside it.
 
 #include "estimate/paper/analyze.h"
-#include "render/photo_set.h"
+#include "io/photo_set.h"
 
 #include <Eigen/Core>
 

@@ -28,7 +28,7 @@
 // residual: its uncertainty is the capture time's resolution.
 
 #include "estimate/paper/photo_analysis.h"
-#include "render/photo_set.h"
+#include "io/photo_set.h"
 #include "sim/logs/flight_log.h"
 #include "sim/logs/trigger_file.h"
 

@@ -13,8 +13,8 @@
 #include "estimate/paper/analyze.h"
 #include "estimate/paper/photo_analysis.h"
 #include "estimate/paper/photo_clock.h"
-#include "render/lens_profile.h"
-#include "render/photo_set.h"
+#include "io/lens_profile.h"
+#include "io/photo_set.h"
 #include "sim/logs/flight_log.h"
 #include "sim/logs/trigger_file.h"
 

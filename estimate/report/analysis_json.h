@@ -6,9 +6,9 @@
 #include "estimate/paper/analyze.h"
 #include "estimate/paper/flight.h"
 #include "estimate/paper/noise.h"
-#include "render/warnings_io.h"  // WarningsToJson
+#include "io/warnings_io.h"  // WarningsToJson
+#include "record/recording.h"
 #include "sim/log_warning.h"
-#include "sim/record/recorder.h"
 #include "sim/sensor_pair.h"
 
 #include <nlohmann/json.hpp>

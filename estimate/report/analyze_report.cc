@@ -2,9 +2,9 @@
 
 #include "estimate/paper/allan.h"
 #include "estimate/paper/flight.h"
+#include "model/truth_model.h"
 #include "render/pictures.h"
 #include "render/rs_warp.h"
-#include "render/truth_model.h"
 #include "sim/check.h"
 #include "sim/units.h"
 

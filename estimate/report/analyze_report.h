@@ -5,7 +5,7 @@
 // per-axis ranges, the Allan deviation (of the still segment when one was found, else of the whole
 // log), the flight and per-image tables, and for the worst images (by D_full) a heatmap of the
 // expected displacement |d| (render/rs_warp.h DisplacementField), blended over the nadir scene
-// rendered through the same frame when a scene is given. Built with estimate/html_report.h.
+// rendered through the same frame when a scene is given. Built with estimate/report/html_report.h.
 // The page draws what the analysis kept for it (AnalyzeResult::plots: the rates and angles cut to
 // min/max envelopes, the worst images' frames; FlightResult::summary: the flagged windows and a
 // histogram of their ranges; AnalyzeResult::allan); it integrates and analyses nothing again, and

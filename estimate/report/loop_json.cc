@@ -1,6 +1,6 @@
 #include "estimate/report/loop_json.h"
 
-#include "render/effect_io.h"
+#include "model/effect_io.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
 
@@ -158,6 +158,14 @@ json MeasureToJson(const MeasureReport& report) {
                   {"pixels", report.truth->pixels}};
   }
   return j;
+}
+
+nlohmann::json Rounded(const nlohmann::json& value) {
+  if (value.is_number_float()) return std::stod(FormatNumber("%.4g", value.get<double>()));
+  if (!value.is_structured()) return value;
+  nlohmann::json out = value;
+  for (auto& item : out.items()) item.value() = Rounded(item.value());
+  return out;
 }
 
 }  // namespace shutterlab

@@ -17,7 +17,7 @@ namespace shutterlab {
 
 // docs/FORMATS.md "Validation report" keys (format, frames, before, effects, after, noise_px,
 // unexplained) for a loop result, and its log; beyond them each effect's fitted "parameters" and
-// their "covariance", and "fitted_model" (render/effect_io.h TrueModelToJson): what `correct`
+// their "covariance", and "fitted_model" (model/effect_io.h TrueModelToJson): what `correct`
 // corrects with.
 nlohmann::json LoopToJson(const LoopResult& result, size_t frame_count);
 
@@ -45,5 +45,8 @@ ReportedModel ReadValidationReport(const std::string& path);
 // `shutterlab measure --json`: {"format": "measure/1", "width", "height", "D_px", ["D_m"],
 // "noise_px", "measured_fraction", "points", ["truth": {"rms_px", "max_px", "pixels"}]}.
 nlohmann::json MeasureToJson(const MeasureReport& report);
+
+// The value with every number at 4 significant digits, for tables (the JSON keeps them all).
+nlohmann::json Rounded(const nlohmann::json& value);
 
 }  // namespace shutterlab

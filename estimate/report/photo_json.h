@@ -3,7 +3,7 @@
 // docs/FORMATS.md's `photos` JSON, at the edge.
 
 #include "estimate/paper/photo_analysis.h"
-#include "render/photo_set.h"
+#include "io/photo_set.h"
 
 #include <nlohmann/json.hpp>
 

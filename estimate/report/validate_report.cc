@@ -5,9 +5,9 @@
 #include "estimate/report/html_report.h"
 #include "estimate/report/loop_json.h"
 #include "estimate/report/validate_verdict.h"
-#include "render/effect_io.h"
-#include "render/frames_csv.h"
-#include "render/image_io.h"
+#include "io/frames_csv.h"
+#include "io/image_io.h"
+#include "model/effect_io.h"
 #include "render/pictures.h"
 #include "render/rs_warp.h"
 #include "sim/check.h"
@@ -30,14 +30,6 @@ namespace fs = std::filesystem;
 constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 
 }  // namespace
-
-nlohmann::json Rounded(const nlohmann::json& value) {
-  if (value.is_number_float()) return std::stod(FormatNumber("%.4g", value.get<double>()));
-  if (!value.is_structured()) return value;
-  nlohmann::json out = value;
-  for (auto& item : out.items()) item.value() = Rounded(item.value());
-  return out;
-}
 
 void WriteLoopSummary(const LoopResult& loop, std::ostream& out) {
   out << "  before: rms " << FormatNumber("%.3f", loop.before.rms_px) << " px, max "

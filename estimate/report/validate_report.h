@@ -36,9 +36,6 @@ std::string LensProfileLines(const ValidationResult& result);
 // The tables and summary of a video validation; ValidationReport calls it for video datasets.
 std::string VideoValidationReport(const ValidationResult& result);
 
-// The value with every number at 4 significant digits, for tables (the JSON keeps them all).
-nlohmann::json Rounded(const nlohmann::json& value);
-
 // What the screening left out before the loop (estimate/loop/point_screen.h), the mask, and (video)
 // whether the image follows the gyro: the report's "screening" JSON and its lines for a person.
 nlohmann::json ScreeningToJson(const ValidationResult& result);

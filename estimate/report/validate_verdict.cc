@@ -1,7 +1,7 @@
 #include "estimate/report/validate_verdict.h"
 
-#include "estimate/report/validate_report.h"
-#include "render/effect_io.h"
+#include "estimate/report/loop_json.h"
+#include "model/effect_io.h"
 #include "sim/text_file.h"
 
 #include <nlohmann/json.hpp>

@@ -1,7 +1,7 @@
 #include "estimate/loop/validate_video.h"
 #include "estimate/report/loop_json.h"
 #include "estimate/report/validate_report.h"
-#include "render/effect_io.h"
+#include "model/effect_io.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
 

@@ -7,6 +7,8 @@
 #include "sim/logs/gopro_telemetry.h"
 #include "sim/logs/gyro_dump.h"
 #include "sim/logs/gyro_io.h"
+#include "sim/logs/mp4.h"
+#include "sim/logs/raw_csv.h"
 #include "sim/logs/ulog.h"
 #include "sim/text_file.h"
 #include "sim/trace_audit.h"
@@ -14,6 +16,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <optional>
 #include <utility>
 
 namespace shutterlab {
@@ -31,19 +34,42 @@ void FlightLogReadOptions::Check() const {
   if (format == LogFormat::kColumns) columns.Check();
 }
 
+namespace {
+
+// The formats' names for a person, joined: "ULog, DataFlash, blackbox or GoPro MP4".
+std::string JoinedDisplayNames(bool (*include)(const LogReader&)) {
+  std::vector<const char*> names;
+  for (const LogReader& reader : LogReaders()) {
+    if (include(reader)) names.push_back(reader.display_name);
+  }
+  std::string out;
+  for (size_t i = 0; i < names.size(); ++i)
+    out += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + std::string(names[i]);
+  return out;
+}
+
+bool Detected(const LogReader& reader) { return reader.detection != LogDetection::kNever; }
+bool DetectedByBytes(const LogReader& reader) { return reader.detection == LogDetection::kBytes; }
+
+// A detected plain gyro log's errors say what detection concluded, so that a file of an unknown
+// kind is recognisable as such; they may come while the rows are streamed.
+std::string DetectedAs(LogFormat format) {
+  return std::string(" (read as ") + LogFormatName(format) + ": not " +
+         JoinedDisplayNames(DetectedByBytes) + "; --format chooses)";
+}
+
+}  // namespace
+
 LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string& path) {
-  if (LooksLikeULog(first_bytes)) return LogFormat::kULog;
-  if (LooksLikeDataFlash(first_bytes)) return LogFormat::kDataFlash;
-  if (LooksLikeBlackbox(first_bytes)) return LogFormat::kBlackbox;
-  if (LooksLikeMp4(first_bytes)) return LogFormat::kGoproMp4;
+  for (const LogReader& reader : LogReaders()) {
+    if (reader.detection == LogDetection::kBytes && reader.recognise(first_bytes))
+      return reader.format;
+  }
+  const std::string unknown = "unknown log format: not " + JoinedDisplayNames(Detected);
   // A binary file is none of the text formats; say so instead of quoting line 1 of garbage.
   const size_t probe = std::min<size_t>(first_bytes.size(), 512);
   for (size_t i = 0; i < probe; ++i) {
-    if (first_bytes[i] == '\0') {
-      throw IoError(IoMessage(path, 0,
-                              "unknown log format: not ULog, DataFlash, blackbox, GoPro MP4, "
-                              "gyro.csv, .gcsv, raw counts or a gyro dump (binary content)"));
-    }
+    if (first_bytes[i] == '\0') throw IoError(IoMessage(path, 0, unknown + " (binary content)"));
   }
   // The prefix may end mid-line; drop the partial last line so that it cannot mislead detection.
   std::string_view text = first_bytes;
@@ -51,25 +77,17 @@ LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string&
     const size_t last_newline = text.rfind('\n');
     if (last_newline != std::string_view::npos) text = text.substr(0, last_newline + 1);
   }
-  if (LooksLikeGyroDump(text)) return LogFormat::kGyroDump;
+  for (const LogReader& reader : LogReaders()) {
+    if (reader.detection == LogDetection::kText && reader.recognise(text)) return reader.format;
+  }
   try {
-    return DetectGyroFormat(text, path);  // kGyroCsv, kGcsv or kRaw
+    return DetectGyroFormat(text, path);  // the LogDetection::kPlainGyro formats
   } catch (const IoError& e) {
-    throw IoError(
-        std::string(e.what()) +
-        " (unknown log format: not ULog, DataFlash, blackbox, GoPro MP4, gyro.csv, .gcsv, "
-        "raw counts or a gyro dump; --columns reads any delimited file)");
+    throw IoError(std::string(e.what()) + " (" + unknown + "; --columns reads any delimited file)");
   }
 }
 
 namespace {
-
-// A detected plain gyro log's errors say what detection concluded, so that a file of an unknown
-// kind is recognisable as such; they may come while the rows are streamed.
-std::string DetectedAs(LogFormat format) {
-  return std::string(" (read as ") + LogFormatName(format) +
-         ": not ULog, DataFlash, blackbox or GoPro MP4; --format chooses)";
-}
 
 class DetectedSource : public GyroSource {
  public:
@@ -97,52 +115,60 @@ class DetectedSource : public GyroSource {
   LogFormat format_;
 };
 
-// The plain gyro logs and the column reader, streamed a block at a time from input (path's).
-FlightLogStream OpenText(TextBlocks input, const std::string& path, LogFormat format,
-                         const FlightLogReadOptions& options) {
+// The openers of the reader table, one per format. The text logs are streamed a block at a time
+// from input (path's). The binary logs are read in two passes over the mapped input: a file's own
+// mapping; a pipe's bytes copied to a temporary file first (TextBlocks::TakeMapped, the one place
+// a pipe is taken whole), so that a log on a pipe is read in the same bounded memory as a file.
+// progress: pass 1's (may be empty).
+
+// A stream of a text log: no metadata but its format and source.
+FlightLogStream TextStream(LogFormat format, std::string gyro_source,
+                           std::unique_ptr<GyroSource> samples) {
   FlightLogStream stream;
-  FlightLog& log = stream.log;
-  log.format = LogFormatName(format);
-  if (format == LogFormat::kColumns) {
-    ColumnCsvStream columns = OpenColumnCsv(std::move(input), path, options.columns);
-    log.gyro_source = std::move(columns.log.source);
-    stream.gyro = std::move(columns.samples);
-  } else if (format == LogFormat::kGcsv) {
-    GcsvStream gcsv = OpenGcsv(std::move(input), path);  // its header's assumptions: warnings
-    log.warnings = std::move(gcsv.log.warnings);
-    log.gyro_source = "gcsv";
-    stream.gyro = std::move(gcsv.samples);
-  } else if (format == LogFormat::kGyroDump) {
-    log.gyro_source = "frameid/gyro lines (x,y,z rad/s, ts us)";
-    stream.gyro = OpenGyroDump(std::move(input), path);
-  } else if (format == LogFormat::kRaw) {
-    options.raw.Check();
-    log.gyro_source = "raw counts";
-    stream.gyro = OpenRawCsv(std::move(input), path, options.raw.range_dps, options.raw.time_unit);
-    stream.audit.full_scale_rad_s = options.raw.range_dps * kRadPerDeg;
-  } else {
-    log.gyro_source = "t,gx,gy,gz";
-    stream.gyro = OpenGyroCsv(std::move(input), path);
-  }
-  log.gyro_sources_available = {log.gyro_source};
+  stream.log.format = LogFormatName(format);
+  stream.log.gyro_source = std::move(gyro_source);
+  stream.log.gyro_sources_available = {stream.log.gyro_source};
+  stream.gyro = std::move(samples);
   return stream;
 }
 
-// A binary log decoded whole (the best gyro stream is chosen once every one is known), handed on
-// in slices.
-FlightLogStream WholeLogStream(FlightLog log) {
-  FlightLogStream stream;
-  stream.log = std::move(log);
-  stream.gyro = std::make_unique<TraceSource>(std::move(stream.log.gyro));
-  stream.log.gyro = GyroTrace();
+FlightLogStream OpenGyroCsvLog(TextBlocks input, const std::string& path,
+                               const FlightLogReadOptions&, const OpeningProgress&) {
+  return TextStream(LogFormat::kGyroCsv, "t,gx,gy,gz", OpenGyroCsv(std::move(input), path));
+}
+
+FlightLogStream OpenGcsvLog(TextBlocks input, const std::string& path, const FlightLogReadOptions&,
+                            const OpeningProgress&) {
+  GcsvStream gcsv = OpenGcsv(std::move(input), path);  // its header's assumptions: warnings
+  FlightLogStream stream = TextStream(LogFormat::kGcsv, "gcsv", std::move(gcsv.samples));
+  stream.log.warnings = std::move(gcsv.log.warnings);
   return stream;
 }
 
-// One open function per binary format, each returning its own stream, read in two passes over
-// the mapped input: a file's own mapping; a pipe's bytes copied to a temporary file first
-// (TextBlocks::TakeMapped, the one place a pipe is taken whole), so that a log on a pipe is read
-// in the same bounded memory as a file. progress: pass 1's (may be empty).
-FlightLogStream OpenULogLog(TextBlocks input, const OpeningProgress& progress) {
+FlightLogStream OpenRawLog(TextBlocks input, const std::string& path,
+                           const FlightLogReadOptions& options, const OpeningProgress&) {
+  options.raw.Check();
+  FlightLogStream stream =
+      TextStream(LogFormat::kRaw, "raw counts",
+                 OpenRawCsv(std::move(input), path, options.raw.range_dps, options.raw.time_unit));
+  stream.audit.full_scale_rad_s = options.raw.range_dps * kRadPerDeg;
+  return stream;
+}
+
+FlightLogStream OpenGyroDumpLog(TextBlocks input, const std::string& path,
+                                const FlightLogReadOptions&, const OpeningProgress&) {
+  return TextStream(LogFormat::kGyroDump, "frameid/gyro lines (x,y,z rad/s, ts us)",
+                    OpenGyroDump(std::move(input), path));
+}
+
+FlightLogStream OpenColumnsLog(TextBlocks input, const std::string& path,
+                               const FlightLogReadOptions& options, const OpeningProgress&) {
+  ColumnCsvStream columns = OpenColumnCsv(std::move(input), path, options.columns);
+  return TextStream(LogFormat::kColumns, std::move(columns.log.source), std::move(columns.samples));
+}
+
+FlightLogStream OpenULogLog(TextBlocks input, const std::string&, const FlightLogReadOptions&,
+                            const OpeningProgress& progress) {
   ULogStream ulog = OpenULog(input.TakeMapped(), FillingSource::kDefaultChunkSamples, progress);
   FlightLogStream stream;
   stream.log = std::move(ulog.log);
@@ -150,7 +176,8 @@ FlightLogStream OpenULogLog(TextBlocks input, const OpeningProgress& progress) {
   return stream;
 }
 
-FlightLogStream OpenDataFlashLog(TextBlocks input, const OpeningProgress& progress) {
+FlightLogStream OpenDataFlashLog(TextBlocks input, const std::string&, const FlightLogReadOptions&,
+                                 const OpeningProgress& progress) {
   DataFlashStream dataflash =
       OpenDataFlash(input.TakeMapped(), FillingSource::kDefaultChunkSamples, progress);
   FlightLogStream stream;
@@ -159,9 +186,11 @@ FlightLogStream OpenDataFlashLog(TextBlocks input, const OpeningProgress& progre
   return stream;
 }
 
-FlightLogStream OpenBlackboxLog(TextBlocks input, int log_index, const OpeningProgress& progress) {
-  BlackboxStream blackbox =
-      OpenBlackbox(input.TakeMapped(), log_index, FillingSource::kDefaultChunkSamples, progress);
+FlightLogStream OpenBlackboxLog(TextBlocks input, const std::string&,
+                                const FlightLogReadOptions& options,
+                                const OpeningProgress& progress) {
+  BlackboxStream blackbox = OpenBlackbox(input.TakeMapped(), options.log_index,
+                                         FillingSource::kDefaultChunkSamples, progress);
   FlightLogStream stream;
   stream.log = std::move(blackbox.log);
   stream.gyro = std::move(blackbox.samples);
@@ -169,39 +198,160 @@ FlightLogStream OpenBlackboxLog(TextBlocks input, int log_index, const OpeningPr
 }
 
 // Decoded whole: its gyro is ~200 Hz (an hour is 720,000 samples), and its sample tables may
-// follow its samples (moov after mdat), so it needs a file to seek.
-FlightLogStream OpenGoproLog(const std::string& path) {
+// follow its samples (moov after mdat), so it needs a file to seek; handed on in slices.
+FlightLogStream OpenGoproLog(TextBlocks, const std::string& path, const FlightLogReadOptions&,
+                             const OpeningProgress&) {
   if (!std::filesystem::is_regular_file(path))
     throw IoError(IoMessage(path, 0, "a GoPro MP4 cannot be read from a pipe: save it to a file"));
-  return WholeLogStream(ReadGoproFlightLog(path));
-}
-
-FlightLogStream OpenBinary(TextBlocks input, const std::string& path, LogFormat format,
-                           const FlightLogReadOptions& options) {
-  if (format == LogFormat::kGoproMp4) return OpenGoproLog(path);
-  // Never less than before: a reader may read some bytes twice (DataFlash's pass 1 again without
-  // its limits).
-  OpeningProgress progress;
-  double shown = 0.0;
-  if (options.opening_progress) {
-    progress = [&options, &shown](double fraction) {
-      shown = std::max(shown, std::min(fraction, 1.0));
-      options.opening_progress(shown);
-    };
-  }
   FlightLogStream stream;
-  if (format == LogFormat::kULog) {
-    stream = OpenULogLog(std::move(input), progress);
-  } else if (format == LogFormat::kDataFlash) {
-    stream = OpenDataFlashLog(std::move(input), progress);
-  } else {
-    stream = OpenBlackboxLog(std::move(input), options.log_index, progress);
-  }
-  if (progress) progress(1.0);
+  stream.log = ReadGoproFlightLog(path);
+  stream.gyro = std::make_unique<TraceSource>(std::move(stream.log.gyro));
+  stream.log.gyro = GyroTrace();
   return stream;
 }
 
+bool NeverRecognised(std::string_view) { return false; }
+
 }  // namespace
+
+const std::vector<LogReader>& LogReaders() {
+  // Detection tries the kBytes readers in this order, then the kText ones, then the plain gyro
+  // logs' rules (DetectGyroFormat); messages list the formats in this order.
+  static const std::vector<LogReader> readers = {
+      {LogFormat::kULog,
+       {"ulog", "ulg", "px4"},
+       "ULog",
+       LogDetection::kBytes,
+       LooksLikeULog,
+       OpenULogLog,
+       true,
+       "ulog",
+       "sim/logs/ulog.h"},
+      {LogFormat::kDataFlash,
+       {"dataflash", "bin", "ardupilot"},
+       "DataFlash",
+       LogDetection::kBytes,
+       LooksLikeDataFlash,
+       OpenDataFlashLog,
+       true,
+       "dataflash",
+       "sim/logs/dataflash.h"},
+      {LogFormat::kBlackbox,
+       {"blackbox", "betaflight", "bbl"},
+       "blackbox",
+       LogDetection::kBytes,
+       LooksLikeBlackbox,
+       OpenBlackboxLog,
+       false,
+       "blackbox",
+       "sim/logs/blackbox.h"},
+      {LogFormat::kGoproMp4,
+       {"gopro", "mp4"},
+       "GoPro MP4",
+       LogDetection::kBytes,
+       LooksLikeMp4,
+       OpenGoproLog,
+       false,
+       "mp4",
+       "sim/logs/gopro_telemetry.h"},
+      {LogFormat::kGyroCsv,
+       {"gyro.csv", "csv"},
+       "gyro.csv",
+       LogDetection::kPlainGyro,
+       NeverRecognised,
+       OpenGyroCsvLog,
+       false,
+       "gyro_csv",
+       "sim/logs/gyro_io.h"},
+      {LogFormat::kGcsv,
+       {"gcsv"},
+       ".gcsv",
+       LogDetection::kPlainGyro,
+       NeverRecognised,
+       OpenGcsvLog,
+       false,
+       "gcsv",
+       "sim/logs/gcsv.h"},
+      {LogFormat::kRaw,
+       {"raw"},
+       "raw counts",
+       LogDetection::kPlainGyro,
+       NeverRecognised,
+       OpenRawLog,
+       false,
+       "raw_csv",
+       "sim/logs/raw_csv.h"},
+      {LogFormat::kGyroDump,
+       {"gyro_dump", "dump"},
+       "a gyro dump",
+       LogDetection::kText,
+       LooksLikeGyroDump,
+       OpenGyroDumpLog,
+       false,
+       "gyro_dump",
+       "sim/logs/gyro_dump.h"},
+      {LogFormat::kColumns,
+       {"columns"},
+       "columns",
+       LogDetection::kNever,
+       NeverRecognised,
+       OpenColumnsLog,
+       false,
+       "column_csv",
+       "sim/logs/column_csv.h"},
+  };
+  return readers;
+}
+
+const LogReader& ReaderOf(LogFormat format) {
+  for (const LogReader& reader : LogReaders()) {
+    if (reader.format == format) return reader;
+  }
+  SHUTTERLAB_CHECK(false) << "no reader for format " << static_cast<int>(format);
+  return LogReaders().front();
+}
+
+const char* LogFormatName(LogFormat format) {
+  return format == LogFormat::kAuto ? "auto" : ReaderOf(format).names[0];
+}
+
+std::vector<std::string> LogFormatNames() {
+  std::vector<std::string> names = {"auto"};
+  for (const LogReader& reader : LogReaders()) names.push_back(reader.names[0]);
+  return names;
+}
+
+namespace {
+
+// The format one of whose names is `lower`; nullopt when none is.
+std::optional<LogFormat> FindFormat(const std::string& lower) {
+  if (lower == "auto") return LogFormat::kAuto;
+  for (const LogReader& reader : LogReaders()) {
+    for (const char* name : reader.names) {
+      if (name != nullptr && lower == name) return reader.format;
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+LogFormat ParseLogFormat(const std::string& name) {
+  const std::optional<LogFormat> format = FindFormat(ToLower(name));
+  if (!format) {
+    std::string names;
+    for (const std::string& n : LogFormatNames()) names += (names.empty() ? "" : ", ") + n;
+    SHUTTERLAB_CHECK(false) << "unknown log format '" << name << "' (" << names << ")";
+  }
+  return *format;
+}
+
+LogFormat ParseGyroFormat(const std::string& name) {
+  const std::optional<LogFormat> format = FindFormat(ToLower(name));
+  SHUTTERLAB_CHECK(format && (*format == LogFormat::kAuto || IsPlainGyroFormat(*format)))
+      << "unknown gyro format '" << name << "' (auto, csv, gcsv, raw)";
+  return *format;
+}
 
 FlightLogStream OpenFlightLog(const std::string& path, const FlightLogReadOptions& options) {
   options.Check();
@@ -214,12 +364,24 @@ FlightLogStream OpenFlightLog(TextBlocks input, const std::string& path,
   // Its start is looked at through the same opening: a pipe can be read only once.
   LogFormat format = options.format;
   if (format == LogFormat::kAuto) format = DetectFlightLogFormat(input.Peek(kDetectBytes), path);
-  if (format == LogFormat::kULog || format == LogFormat::kDataFlash ||
-      format == LogFormat::kBlackbox || format == LogFormat::kGoproMp4) {
-    return OpenBinary(std::move(input), path, format, options);
+  const LogReader& reader = ReaderOf(format);
+  if (reader.detection == LogDetection::kBytes) {
+    // Never less than before: a reader may read some bytes twice (DataFlash's pass 1 again without
+    // its limits).
+    OpeningProgress progress;
+    double shown = 0.0;
+    if (options.opening_progress) {
+      progress = [&options, &shown](double fraction) {
+        shown = std::max(shown, std::min(fraction, 1.0));
+        options.opening_progress(shown);
+      };
+    }
+    FlightLogStream stream = reader.open(std::move(input), path, options, progress);
+    if (progress) progress(1.0);
+    return stream;
   }
   try {
-    FlightLogStream stream = OpenText(std::move(input), path, format, options);
+    FlightLogStream stream = reader.open(std::move(input), path, options, {});
     if (options.format == LogFormat::kAuto)
       stream.gyro = std::make_unique<DetectedSource>(std::move(stream.gyro), format);
     return stream;

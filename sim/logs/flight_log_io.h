@@ -17,6 +17,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace shutterlab {
 
@@ -33,9 +34,54 @@ struct FlightLogReadOptions {
   void Check() const;
 };
 
+struct FlightLogStream;
+
+// How a format is recognised when no --format is given.
+enum class LogDetection {
+  kBytes,      // by its first bytes (a magic, a header), before anything else
+  kText,       // by its first lines, once the file is known to be text
+  kPlainGyro,  // by the plain gyro logs' rules (sim/logs/gyro_io.h DetectGyroFormat), last
+  kNever,      // never detected: chosen by --columns / --format
+};
+
+// One entry of the reader table: every format the project reads, with what dispatch, the
+// --format list, the messages, the fuzz targets and the docs are made from or checked against
+// (tests/sim/logs/flight_log_io_test.cc). Adding a log format: docs/model.md.
+struct LogReader {
+  LogFormat format;
+  const char* names[3];      // --format names, case-insensitive; the first is the canonical one
+  const char* display_name;  // for a person: "ULog", "GoPro MP4", "raw counts"
+  LogDetection detection;
+  // Recognises the format (kBytes: the file's first 16 KiB; kText: its whole first lines).
+  bool (*recognise)(std::string_view first_bytes);
+  // Opens input (path's, for messages) as a stream: a text log's header, or a binary log's first
+  // pass (telling progress, may be empty); throws IoError naming path on unreadable input.
+  FlightLogStream (*open)(TextBlocks input, const std::string& path,
+                          const FlightLogReadOptions& options, const OpeningProgress& progress);
+  bool camera_events;         // may carry camera events and GPS time (FlightLog::camera_events)
+  const char* fuzz_target;    // fuzz/NAME_fuzz.cc: the fuzz target of its reader
+  const char* reader_header;  // the reader's header, as docs/FORMATS.md's table names it
+};
+// In detection order (and the order messages list the formats in).
+const std::vector<LogReader>& LogReaders();
+// The reader of a format (not kAuto).
+const LogReader& ReaderOf(LogFormat format);
+
+// "auto" or the format's canonical name ("gyro.csv", "ulog", "gopro", ...).
+const char* LogFormatName(LogFormat format);
+// "auto", then every format's canonical name in the table's order.
+std::vector<std::string> LogFormatNames();
+// Any name of the table, case-insensitive ("auto", "ulog" / "ulg" / "px4", "csv", ...); throws
+// std::invalid_argument naming the text and listing LogFormatNames otherwise.
+LogFormat ParseLogFormat(const std::string& name);
+// "auto" or a plain gyro format ("gyro.csv" / "csv", "gcsv", "raw"), case-insensitive; throws
+// std::invalid_argument naming the text otherwise (a flight-log format too).
+LogFormat ParseGyroFormat(const std::string& name);
+
 // Detects the format from the first bytes of a file (a few KiB): ULog magic, DataFlash FMT
 // header, blackbox marker, an MP4's first box or CSV header, in that order; otherwise the plain
-// gyro formats by sim/gyro_io.h DetectGyroFormat. Throws IoError naming path when none matches.
+// gyro formats by sim/logs/gyro_io.h DetectGyroFormat. Throws IoError naming path when none
+// matches.
 LogFormat DetectFlightLogFormat(std::string_view first_bytes, const std::string& path);
 
 // Reads any supported log. Plain gyro logs give format "gyro.csv" / "gcsv" / "raw", gyro_source

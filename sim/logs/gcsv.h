@@ -1,6 +1,6 @@
 #pragma once
 // Gyroflow's text IMU log, `.gcsv` (https://docs.gyroflow.xyz, "gcsv format";
-// gyroflow/gyroflow-docs docs/logging/gcsv.md):
+// https://github.com/gyroflow/gyroflow-docs/blob/main/docs/logging/gcsv.md):
 //
 //   GYROFLOW IMU LOG            (or CAMERA IMU LOG)
 //   version,1.3

@@ -199,7 +199,8 @@ class GyroCsvSource : public FillingSource {
 
 void GyroReadOptions::Check() const {
   SHUTTERLAB_CHECK(format == LogFormat::kAuto || IsPlainGyroFormat(format))
-      << "ReadGyro reads gyro.csv, gcsv or raw counts, not " << LogFormatName(format);
+      << "ReadGyro reads gyro.csv, gcsv or raw counts only: a flight log is read by "
+         "sim/logs/flight_log_io.h ReadFlightLog";
   raw.Check();
 }
 

@@ -27,7 +27,7 @@ struct GyroReadOptions {
 };
 
 // Reads a gyro log of any supported format; the result is in seconds / rad/s, sensor axes (for a
-// .gcsv: after its orientation string, see sim/gcsv.h). kAuto detects the format with
+// .gcsv: after its orientation string, see sim/logs/gcsv.h). kAuto detects the format with
 // DetectGyroFormat. Throws IoError naming path and line on bad input.
 GyroTrace ReadGyro(const std::string& path, const GyroReadOptions& options = {});
 

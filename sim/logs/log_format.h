@@ -1,6 +1,7 @@
 #pragma once
-// The log formats the readers know, with one name table for --format and for messages, and the
-// options of the source paper's raw-count logs shared by every reader that may meet one.
+// The log formats the readers know (their names, recognisers and openers: the reader table,
+// sim/logs/flight_log_io.h LogReaders), and the options of the source paper's raw-count logs
+// shared by every reader that may meet one.
 
 #include "sim/logs/raw_csv.h"  // TimeUnit
 
@@ -26,20 +27,6 @@ enum class LogFormat {
 
 // kGyroCsv, kGcsv and kRaw: the plain gyro logs that ReadGyro reads.
 bool IsPlainGyroFormat(LogFormat format);
-
-// "auto", "gyro.csv", "gcsv", "raw", "ulog", "blackbox", "dataflash", "gopro", "gyro_dump",
-// "columns".
-const char* LogFormatName(LogFormat format);
-
-// Any name of the table, case-insensitive: "auto", "ulog" / "ulg" / "px4", "dataflash" / "bin" /
-// "ardupilot", "blackbox" / "betaflight" / "bbl", "gopro" / "mp4", "gyro.csv" / "csv", "gcsv",
-// "raw", "gyro_dump" / "dump", "columns";
-// throws std::invalid_argument naming the text otherwise.
-LogFormat ParseLogFormat(const std::string& name);
-
-// "auto" or a plain gyro format ("gyro.csv" / "csv", "gcsv", "raw"), case-insensitive; throws
-// std::invalid_argument naming the text otherwise (a flight-log format too).
-LogFormat ParseGyroFormat(const std::string& name);
 
 // Raw-count logs only: full-scale range in deg/s (250, 500, 1000 or 2000 -> 131, 65.5, 32.8,
 // 16.4 LSB per deg/s, the MPU-9250 sensitivities) and the unit of the time column.

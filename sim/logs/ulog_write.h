@@ -1,7 +1,7 @@
 #pragma once
 // PX4 ULog writer (file version 1): a gyro trace, camera events and optionally the height above
-// ground, as the topics sim/ulog.h reads back. Lets the project ship synthetic flights in a real
-// log format instead of other people's logs.
+// ground, as the topics sim/logs/ulog.h reads back. Lets the project ship synthetic flights in a
+// real log format instead of other people's logs.
 //
 // Spec: PX4 "ULog File Format" (docs.px4.io, dev_log/ulog_file_format). Layout written:
 //   header (magic, version 1, timestamp = first data time), flag bits 'B' (all zero), info 'I'
@@ -30,8 +30,8 @@ namespace shutterlab {
 
 struct ULogWriteOptions {
   // Written as vehicle_local_position.dist_bottom (float32, m) with dist_bottom_valid, at 10 Hz
-  // over the trace. Must be finite and above kAirborneAltitudeM (sim/ulog.h): readers take lower
-  // heights for the vehicle on the ground and would not report it.
+  // over the trace. Must be finite and above kAirborneAltitudeM (sim/logs/ulog.h): readers take
+  // lower heights for the vehicle on the ground and would not report it.
   std::optional<double> altitude_above_ground_m;
   // GPS time messages (log time, UTC), for readers that place photos on the log's clock.
   std::vector<UtcFix> utc_fixes;

@@ -12,7 +12,7 @@
 namespace shutterlab {
 namespace {
 
-// Random-stream ids (NoiseSource) of the motion; sensors use others (sim/synth.cc).
+// Random-stream ids (NoiseSource) of the motion; sensors use others (sim/synth/synth.cc).
 constexpr uint64_t kStepsStream = 1;
 constexpr uint64_t kFlightStream = 2;
 

@@ -3,7 +3,7 @@
 // tests have exact ground truth.
 //
 // Time t_s is in seconds since the first sample of the trace. Rates are rad/s about the body axes,
-// which are the ideal sensor axes (the sensor's own errors are in sim/imu_model.h).
+// which are the ideal sensor axes (the sensor's own errors are in sim/synth/imu_model.h).
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -44,7 +44,7 @@ struct StepsOptions {
 
 // A multirotor in hover / slow flight. All rate amplitudes are deg/s, frequencies Hz.
 // The defaults give flagged shares near the source paper's flight (50 m altitude, 20" allowance):
-// see sim/synth.h.
+// see sim/synth/synth.h.
 struct FlightMotionOptions {
   double lead_still_s = 6.0;  // on the ground, motors off, s (covers the default 5 s bias segment)
   double spin_up_s = 1.0;  // all motion ramps smoothly from zero over this time after the lead, s

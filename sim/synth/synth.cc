@@ -1,6 +1,7 @@
 #include "sim/synth/synth.h"
 
 #include "sim/check.h"
+#include "sim/logs/flight_log_io.h"
 #include "sim/logs/raw_csv.h"
 #include "sim/logs/ulog_write.h"
 
@@ -11,7 +12,7 @@
 namespace shutterlab {
 namespace {
 
-// Random-stream ids of the sensors (the motion uses 1 and 2, sim/motion.cc).
+// Random-stream ids of the sensors (the motion uses 1 and 2, sim/synth/motion.cc).
 uint64_t NoiseStream(int sensor) { return 100 + 2 * static_cast<uint64_t>(sensor); }
 uint64_t TimingStream(int sensor) { return 101 + 2 * static_cast<uint64_t>(sensor); }
 

@@ -1,6 +1,6 @@
 #pragma once
-// Deterministic synthetic gyro traces: an analytic motion (sim/motion.h) seen through an IMU error
-// model (sim/imu_model.h) and a logger (timestamp jitter, periodic gaps).
+// Deterministic synthetic gyro traces: an analytic motion (sim/synth/motion.h) seen through an IMU
+// error model (sim/synth/imu_model.h) and a logger (timestamp jitter, periodic gaps).
 //
 // Sample k is taken at the nominal instant t0_ns + round(k * 1e9 / rate_hz) (computed from k, never
 // accumulated), where the true rate is evaluated; its logged timestamp adds the jitter. Everything
@@ -8,7 +8,7 @@
 // noise and one for each sensor's timing, so that changing a logger setting does not change the
 // noise, and a second sensor sees the same motion with independent errors.
 //
-// What the defaults give (3000 Hz, +-250 deg/s, seed-dependent, see tests/sim/synth_test.cc):
+// What the defaults give (3000 Hz, +-250 deg/s, seed-dependent, see tests/sim/synth/synth_test.cc):
 //  - still: the paper's Table 1 statistic (120-sample windows of the per-axis integrated angle,
 //    bias from the first 5 s) has mean sigma ~1.1" and mean range ~4.3" per axis (noise
 //    density 7.0e-5 rad/s/sqrt(Hz)).

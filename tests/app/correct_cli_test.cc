@@ -1,5 +1,5 @@
-#include "render/frames_csv.h"
-#include "render/image_io.h"
+#include "io/frames_csv.h"
+#include "io/image_io.h"
 #include "render/render_dataset.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"

@@ -1,5 +1,5 @@
-#include "render/camera.h"
-#include "render/frames_csv.h"
+#include "io/frames_csv.h"
+#include "model/camera.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"

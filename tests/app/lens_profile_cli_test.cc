@@ -2,7 +2,7 @@
 // images, and its readout (unless the user typed one) replace the declared ones, and every output
 // says so. A small fisheye calibrated at twice the images' size.
 
-#include "render/camera.h"
+#include "model/camera.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"

@@ -2,9 +2,9 @@
 // gives one line and exit code 2 with nothing written.
 
 #include "estimate/loop/measure.h"
-#include "render/image_io.h"
+#include "io/image_io.h"
+#include "model/truth_model.h"
 #include "render/rs_warp.h"
-#include "render/truth_model.h"
 #include "tests/app/cli_test_util.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"

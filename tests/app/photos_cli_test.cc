@@ -5,7 +5,7 @@
 #include "sim/logs/ulog_write.h"
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
-#include "tests/photo_fixtures.h"
+#include "tests/io/photo_fixtures.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>

@@ -10,9 +10,9 @@
 //  - the GoPro MAX with HyperSmooth on: the image does not follow the body's gyro, and no effect
 //    is named.
 
-#include "render/camera.h"
-#include "render/frames_csv.h"
-#include "render/image_io.h"
+#include "io/frames_csv.h"
+#include "io/image_io.h"
+#include "model/camera.h"
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
 #include "tests/test_util.h"

@@ -3,7 +3,7 @@
 // and no output. The dataset is small (3 frames of 320x240) so the whole file stays fast under
 // ASan.
 
-#include "render/camera.h"
+#include "model/camera.h"
 #include "render/render_dataset.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"

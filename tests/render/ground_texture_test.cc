@@ -1,5 +1,8 @@
 #include "render/ground_texture.h"
 
+#include "io/image_io.h"
+#include "tests/render/render_fixtures.h"
+
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
@@ -170,6 +173,15 @@ std::string CheckMessage(void (*change)(GroundTextureOptions&)) {
     return error.what();
   }
   return "";
+}
+
+// The scene file the tests above render take (render_fixtures.h) reads back as written, never
+// reoriented: 2560x1440, 8-bit colour.
+TEST(GroundTexture, TheTestsSceneFileReadsBackAtItsSize) {
+  const cv::Mat scene = ReadImage(test::GroundScenePath(2));
+  EXPECT_EQ(scene.cols, 2560);
+  EXPECT_EQ(scene.rows, 1440);
+  EXPECT_EQ(scene.type(), CV_8UC3);
 }
 
 TEST(GroundTexture, CheckRefusesBadOptions) {

@@ -1,24 +1,18 @@
 #pragma once
-// Small fixtures shared by the render tests and the tests above them: rigs, constant-rate gyro
-// traces, synthetic textures, the ground scene.
+// Fixtures shared by the render tests and the tests above them: the model's rigs and traces
+// (tests/model/model_fixtures.h), the io tests' textures (tests/io/io_fixtures.h) and the ground
+// scene.
 
-#include "render/camera.h"
+#include "io/image_io.h"
 #include "render/ground_texture.h"
-#include "render/image_io.h"
-#include "sim/gyro_trace.h"
+#include "tests/io/io_fixtures.h"
+#include "tests/model/model_fixtures.h"
 
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
-
-#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <map>
-#include <random>
 #include <string>
 #include <unistd.h>
-#include <vector>
 
 namespace shutterlab::test {
 
@@ -48,76 +42,6 @@ inline std::string GroundScenePath(uint64_t seed = 1) {
           .string();
   WriteImage(path, MakeGroundTexture(options));
   return written.paths[seed] = path;
-}
-
-// A nadir rig over flat ground: width x height, fx = fy = f_px, the principal point at the centre,
-// no lens distortion, top-to-bottom readout, camera axes = gyro axes.
-inline RigModel NadirRig(int width, int height, double f_px, double readout_s = 0.030,
-                         double altitude_m = 50.0) {
-  RigModel rig;
-  rig.camera.width = width;
-  rig.camera.height = height;
-  rig.camera.fx = rig.camera.fy = f_px;
-  rig.camera.cx = (width - 1) / 2.0;
-  rig.camera.cy = (height - 1) / 2.0;
-  rig.shutter.readout_s = readout_s;
-  rig.altitude_m = altitude_m;
-  return rig;
-}
-
-// A mapping camera's rig: 1280x960, f = 1100 px, 30 ms readout, 50 m over flat ground.
-inline RigModel MappingRig() { return NadirRig(1280, 960, 1100.0); }
-
-// A small nadir rig: width x height, f = 300 px (fy 310: the axes kept apart), 20 ms, 40 m.
-inline RigModel SmallRig(int width = 96, int height = 72) {
-  RigModel rig = NadirRig(width, height, 300.0, 0.020, 40.0);
-  rig.camera.fy = 310.0;
-  return rig;
-}
-
-// A nadir action camera with a fisheye lens: width x height, the GoPro MAX's Gyroflow coefficients
-// (../shared/data/incoming_rs/gopro_max_heromode/reference), f such that the left and right edges
-// are half_fov_deg off the axis, 30 ms readout, 50 m.
-inline RigModel FisheyeRig(int width, int height, double half_fov_deg = 60.0) {
-  const Fisheye lens(
-      {0.0646075465207674, 0.039139647556618896, -0.041373671856156674, 0.014898789517094136});
-  RigModel rig = NadirRig(width, height, 1.0);
-  rig.camera.fx = rig.camera.fy = rig.camera.cx / lens.ThetaD(half_fov_deg * M_PI / 180.0);
-  rig.camera.distortion = lens;
-  return rig;
-}
-
-// Constant logged rate (gyro axes) from t0_s for duration_s at rate_hz; times are exact integers.
-inline GyroTrace ConstantRateTrace(const Eigen::Vector3d& omega_rad_s, double t0_s = 0.0,
-                                   double duration_s = 2.0, double rate_hz = 1000.0) {
-  std::vector<GyroSample> samples;
-  const int64_t period_ns = static_cast<int64_t>(std::llround(1e9 / rate_hz));
-  const int64_t t0_ns = SecondsToNs(t0_s);
-  const int64_t n = static_cast<int64_t>(std::llround(duration_s * rate_hz));
-  for (int64_t k = 0; k <= n; ++k) samples.push_back({t0_ns + k * period_ns, omega_rad_s});
-  return GyroTrace(std::move(samples));
-}
-
-// A smooth random texture (blurred noise, fixed seed): band-limited, so bilinear sampling is
-// accurate.
-inline cv::Mat SmoothTexture(cv::Size size, int type, uint64_t seed = 7,
-                             double blur_sigma_px = 2.0) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
-  const int cn = CV_MAT_CN(type);
-  cv::Mat noise(size, CV_32FC(cn));
-  for (int v = 0; v < size.height; ++v) {
-    float* row = noise.ptr<float>(v);
-    for (int i = 0; i < size.width * cn; ++i) row[i] = uniform(rng);
-  }
-  cv::GaussianBlur(noise, noise, cv::Size(0, 0), blur_sigma_px);
-  cv::normalize(noise, noise, 0.0, 1.0, cv::NORM_MINMAX);
-  const double scale = CV_MAT_DEPTH(type) == CV_8U    ? 255.0
-                       : CV_MAT_DEPTH(type) == CV_16U ? 65535.0
-                                                      : 1.0;
-  cv::Mat out;
-  noise.convertTo(out, type, scale);
-  return out;
 }
 
 }  // namespace shutterlab::test

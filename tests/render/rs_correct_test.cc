@@ -1,8 +1,8 @@
 #include "render/rs_correct.h"
 
-#include "render/effect_io.h"
+#include "model/effect_io.h"
+#include "model/truth_model.h"
 #include "render/rs_warp.h"
-#include "render/truth_model.h"
 #include "tests/render/render_fixtures.h"
 
 #include <Eigen/Geometry>

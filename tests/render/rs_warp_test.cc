@@ -1,9 +1,9 @@
 #include "render/rs_warp.h"
 
-#include "render/effect_io.h"
-#include "render/effects.h"
-#include "render/image_io.h"
-#include "render/truth_model.h"
+#include "io/image_io.h"
+#include "model/effect_io.h"
+#include "model/effects.h"
+#include "model/truth_model.h"
 #include "sim/units.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"

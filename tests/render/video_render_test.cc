@@ -2,11 +2,11 @@
 // anchor), the match of a pixel in the previous rolling-shutter frame (VideoMatch), and
 // `render --video` datasets.
 
-#include "render/frames_csv.h"
-#include "render/image_io.h"
+#include "io/frames_csv.h"
+#include "io/image_io.h"
+#include "model/truth_model.h"
 #include "render/render_dataset.h"
 #include "render/rs_warp.h"
-#include "render/truth_model.h"
 #include "sim/check.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/so3.h"

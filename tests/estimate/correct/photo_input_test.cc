@@ -4,12 +4,12 @@
 
 #include "estimate/correct/photo_input.h"
 
-#include "render/photo_set.h"
+#include "io/photo_set.h"
 #include "sim/check.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
-#include "tests/photo_fixtures.h"
+#include "tests/io/photo_fixtures.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 

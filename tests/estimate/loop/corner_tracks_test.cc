@@ -4,6 +4,7 @@
 
 #include "estimate/loop/corner_tracks.h"
 
+#include "estimate/loop/measure.h"
 #include "tests/render/render_fixtures.h"
 
 #include <gtest/gtest.h>

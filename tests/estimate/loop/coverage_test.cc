@@ -26,8 +26,8 @@
 
 #include "estimate/loop/effect_fit.h"
 #include "estimate/loop/measure.h"
+#include "model/truth_model.h"
 #include "render/rs_warp.h"
-#include "render/truth_model.h"
 #include "sim/units.h"
 #include "tests/estimate/loop/effect_fixtures.h"
 #include "tests/render/render_fixtures.h"

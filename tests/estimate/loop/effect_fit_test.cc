@@ -2,10 +2,10 @@
 
 #include "estimate/loop/effect_model.h"
 #include "estimate/loop/least_squares.h"
-#include "render/effect_io.h"
-#include "render/effects.h"
+#include "model/effect_io.h"
+#include "model/effects.h"
+#include "model/truth_model.h"
 #include "render/rs_warp.h"
-#include "render/truth_model.h"
 #include "sim/so3.h"
 #include "sim/synth/synth.h"
 #include "tests/estimate/loop/effect_fixtures.h"

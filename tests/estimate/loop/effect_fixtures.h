@@ -4,8 +4,8 @@
 // noise. The rigs they start from (MappingRig, NadirRig) are tests/render/render_fixtures.h's.
 
 #include "estimate/loop/effect_fit.h"
-#include "render/camera.h"
-#include "render/truth_model.h"
+#include "model/camera.h"
+#include "model/truth_model.h"
 #include "sim/gyro_trace.h"
 #include "sim/synth/synth.h"
 #include "tests/render/render_fixtures.h"
@@ -24,8 +24,8 @@ namespace shutterlab::test {
 // view at 640x480 (f = 550 px), 30 ms readout, 50 m.
 inline RigModel VideoRig() { return NadirRig(640, 480, 550.0); }
 
-// A multirotor-like logged trace (sim/motion.h flight profile, ideal sensor: the fit only sees the
-// logged rates, and the truth is defined on them), 1 kHz.
+// A multirotor-like logged trace (sim/synth/motion.h flight profile, ideal sensor: the fit only
+// sees the logged rates, and the truth is defined on them), 1 kHz.
 inline GyroTrace FlightTrace(double duration_s, uint64_t seed) {
   SynthOptions options;
   options.profile = MotionProfile::kFlight;

@@ -3,9 +3,9 @@
 
 #include "estimate/loop/measure.h"
 
-#include "render/image_io.h"
+#include "io/image_io.h"
+#include "model/truth_model.h"
 #include "render/rs_warp.h"
-#include "render/truth_model.h"
 #include "sim/synth/synth.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"

@@ -3,7 +3,7 @@
 
 #include "estimate/paper/analyze.h"
 #include "estimate/paper/photo_flight.h"
-#include "render/photo_set.h"
+#include "io/photo_set.h"
 #include "sim/civil_time.h"
 #include "sim/gyro_source.h"
 #include "sim/logs/flight_log_io.h"

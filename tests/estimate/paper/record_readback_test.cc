@@ -5,9 +5,9 @@
 
 #include "estimate/paper/flight.h"
 #include "estimate/paper/noise.h"
+#include "record/recorder.h"
+#include "record/sensor_emulator.h"
 #include "sim/logs/flight_log_io.h"
-#include "sim/record/recorder.h"
-#include "sim/record/sensor_emulator.h"
 #include "sim/synth/synth.h"
 #include "sim/units.h"
 #include "tests/test_util.h"

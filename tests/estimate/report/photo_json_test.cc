@@ -3,7 +3,7 @@
 
 #include "estimate/report/photo_json.h"
 
-#include "tests/photo_fixtures.h"
+#include "tests/io/photo_fixtures.h"
 
 #include <gtest/gtest.h>
 

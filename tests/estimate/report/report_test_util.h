@@ -1,5 +1,5 @@
 #pragma once
-// Reads back what estimate/html_report.h embeds in a page, for the report tests.
+// Reads back what estimate/report/html_report.h embeds in a page, for the report tests.
 
 #include <nlohmann/json.hpp>
 

@@ -22,6 +22,7 @@
 #include <fstream>
 #include <memory>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <sys/resource.h>
@@ -501,6 +502,103 @@ TEST(ReadFlightLog, FormatOverrideAndNames) {
   EXPECT_EQ(ParseLogFormat("Blackbox"), LogFormat::kBlackbox);
   EXPECT_STREQ(LogFormatName(LogFormat::kDataFlash), "dataflash");
   EXPECT_THROW(ParseLogFormat("jpeg"), std::invalid_argument);
+}
+
+TEST(ReaderTable, NamesRoundTripThroughBothParsers) {
+  for (LogFormat f : {LogFormat::kAuto, LogFormat::kGyroCsv, LogFormat::kGcsv, LogFormat::kRaw,
+                      LogFormat::kULog, LogFormat::kBlackbox, LogFormat::kDataFlash,
+                      LogFormat::kGoproMp4, LogFormat::kGyroDump, LogFormat::kColumns}) {
+    EXPECT_EQ(ParseLogFormat(LogFormatName(f)), f) << LogFormatName(f);
+    if (f == LogFormat::kAuto || IsPlainGyroFormat(f)) {
+      EXPECT_EQ(ParseGyroFormat(LogFormatName(f)), f) << LogFormatName(f);
+    } else {
+      EXPECT_THROW(ParseGyroFormat(LogFormatName(f)), std::invalid_argument) << LogFormatName(f);
+    }
+  }
+  EXPECT_EQ(ParseLogFormat("CSV"), LogFormat::kGyroCsv);
+  EXPECT_EQ(ParseLogFormat("px4"), LogFormat::kULog);
+  EXPECT_EQ(ParseLogFormat("bin"), LogFormat::kDataFlash);
+  EXPECT_EQ(ParseLogFormat("MP4"), LogFormat::kGoproMp4);
+  EXPECT_EQ(ParseLogFormat("dump"), LogFormat::kGyroDump);
+}
+
+TEST(ReaderTable, UnknownNamesAreNamedWithTheChoices) {
+  try {
+    ParseLogFormat("jpeg");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("unknown log format 'jpeg' (auto, ulog, dataflash, "
+                                          "blackbox, gopro, gyro.csv, gcsv, raw, gyro_dump, "
+                                          "columns)",
+                                          0),
+              0u)
+        << e.what();
+  }
+  try {
+    ParseGyroFormat("ulog");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("unknown gyro format 'ulog' (auto, csv, gcsv, raw)", 0),
+              0u)
+        << e.what();
+  }
+}
+
+// The reader table is the one list of formats: every format but kAuto has one reader, with names
+// of its own; what dispatch, --format and the messages say comes from it.
+TEST(ReaderTable, EveryFormatHasOneReaderWithNamesOfItsOwn) {
+  std::set<std::string> names;
+  for (LogFormat f : {LogFormat::kGyroCsv, LogFormat::kGcsv, LogFormat::kRaw, LogFormat::kULog,
+                      LogFormat::kBlackbox, LogFormat::kDataFlash, LogFormat::kGoproMp4,
+                      LogFormat::kGyroDump, LogFormat::kColumns}) {
+    const auto count = std::count_if(LogReaders().begin(), LogReaders().end(),
+                                     [f](const LogReader& r) { return r.format == f; });
+    EXPECT_EQ(count, 1) << LogFormatName(f);
+  }
+  EXPECT_EQ(LogReaders().size(), 9u);
+  for (const LogReader& reader : LogReaders()) {
+    for (const char* name : reader.names) {
+      if (name != nullptr) EXPECT_TRUE(names.insert(name).second) << name;
+    }
+    EXPECT_EQ(&ReaderOf(reader.format), &reader);
+  }
+  std::vector<std::string> listed = LogFormatNames();
+  ASSERT_EQ(listed.size(), LogReaders().size() + 1);
+  EXPECT_EQ(listed.front(), "auto");
+}
+
+// Each reader is fuzzed by its own target, and docs/FORMATS.md names its reader's header; a format
+// that may carry camera events says which, one that may not says so or says nothing of them.
+TEST(ReaderTable, FuzzTargetsAndDocsFollowTheTable) {
+  const std::string root = SHUTTERLAB_SOURCE_DIR;
+  const std::string docs = ReadFileToString(root + "/docs/FORMATS.md");
+  for (const LogReader& reader : LogReaders()) {
+    const std::string target = root + "/fuzz/" + reader.fuzz_target + "_fuzz.cc";
+    EXPECT_TRUE(std::filesystem::exists(target)) << target;
+    const std::string header = std::string("`") + reader.reader_header + "`";
+    const size_t at = docs.find(header);
+    ASSERT_NE(at, std::string::npos) << reader.display_name << ": " << header;
+    const size_t row_begin = docs.rfind('\n', at) + 1;
+    const std::string row = docs.substr(row_begin, docs.find('\n', at) - row_begin);
+    if (row.rfind("|", 0) != 0) continue;  // named in prose, not in the table
+    const bool says_events = row.find("camera events") != std::string::npos &&
+                             row.find("no camera events") == std::string::npos;
+    EXPECT_EQ(says_events, reader.camera_events) << reader.display_name << ": " << row;
+  }
+}
+
+// Detection and its refusal name the formats in the table's order.
+TEST(ReaderTable, DetectionRefusesUnknownBytesNamingEveryDetectedFormat) {
+  try {
+    DetectFlightLogFormat(std::string("\x01\x02\0binary", 9), "x.bin");
+    FAIL();
+  } catch (const IoError& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("not ULog, DataFlash, blackbox, GoPro MP4, gyro.csv, .gcsv, "
+                                   "raw counts or a gyro dump (binary content)"),
+        std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

@@ -1,0 +1,234 @@
+#include "app/analyze_flags.h"
+
+#include "app/trace_options.h"
+#include "io/image_io.h"
+#include "render/pictures.h"
+#include "sim/check.h"
+#include "sim/civil_time.h"
+#include "sim/logs/flight_log_io.h"
+#include "sim/logs/trigger_file.h"
+#include "sim/units.h"
+
+#include <filesystem>
+#include <iostream>
+
+namespace shutterlab::app {
+namespace {
+
+RigModel RigFromFlags(const AnalyzeFlags& flags) {
+  RigModel rig;
+  const size_t x = flags.size.find_first_of("xX");
+  int width = 0, height = 0;
+  try {
+    SHUTTERLAB_CHECK(x != std::string::npos) << "";
+    width = std::stoi(flags.size.substr(0, x));
+    height = std::stoi(flags.size.substr(x + 1));
+  } catch (const std::exception&) {
+    throw std::invalid_argument("--size must be WxH, e.g. 1280x960 (got '" + flags.size + "')");
+  }
+  rig.camera.width = width;
+  rig.camera.height = height;
+  rig.camera.fx = rig.camera.fy = flags.focal_px;
+  rig.camera.cx = 0.5 * (width - 1);
+  rig.camera.cy = 0.5 * (height - 1);
+  rig.shutter.readout_s = ParseDurationS(flags.readout);
+  rig.altitude_m = flags.altitude_m;
+  return rig;
+}
+
+// What the user gave that wins over the photos' own values: --camera's focal length and readout,
+// --readout, --focal-px and --altitude (the flags over the camera file).
+PhotoSetOptions PhotoOptionsFromFlags(const AnalyzeFlags& flags) {
+  PhotoSetOptions options;
+  if (!flags.camera_path.empty()) {
+    const RigModel rig = ReadRigModel(flags.camera_path);
+    options.readout_s = rig.shutter.readout_s;
+    options.readout_origin = ReadoutOrigin::kCameraFile;
+    options.readout_text = "camera.json " + flags.camera_path;
+    options.focal_px = 0.5 * (rig.camera.fx + rig.camera.fy);
+    options.focal_text = "camera.json " + flags.camera_path;
+  }
+  if (flags.readout_given) {
+    options.readout_s = ParseDurationS(flags.readout);
+    options.readout_origin = ReadoutOrigin::kUser;
+    options.readout_text = "--readout " + flags.readout;
+  }
+  if (flags.focal_given) {
+    options.focal_px = flags.focal_px;
+    options.focal_text = "--focal-px";
+  }
+  if (flags.altitude_given) options.altitude_m = flags.altitude_m;
+  if (!flags.lens_profile_path.empty())
+    options.lens_profile = ReadLensProfile(flags.lens_profile_path);
+  return options;
+}
+
+FlightLogReadOptions ReadOptionsFromFlags(const AnalyzeFlags& flags) {
+  FlightLogReadOptions read;
+  read.format = ParseLogFormat(flags.format);
+  read.log_index = flags.log_index;
+  read.raw.range_dps = flags.range_dps;
+  flags.column_flags.Apply(&read);
+  read.Check();
+  return read;
+}
+
+}  // namespace
+
+// analyze's options from the flags; the triggers come later (they need the log). *lens: the lens
+// profile's use, when --lens-profile is given (its lens, and its readout unless --readout was
+// typed).
+AnalyzeOptions AnalyzeOptionsFromFlags(const AnalyzeFlags& flags,
+                                       std::optional<LensProfileUse>* lens) {
+  AnalyzeOptions options;
+  if (!flags.camera_path.empty()) {
+    options.rig = ReadRigModel(flags.camera_path);
+    if (flags.altitude_given) options.rig.altitude_m = flags.altitude_m;
+  } else {
+    options.rig = RigFromFlags(flags);
+  }
+  if (lens && !flags.lens_profile_path.empty()) {
+    *lens = ScaleLensProfile(ReadLensProfile(flags.lens_profile_path), options.rig.camera.width,
+                             options.rig.camera.height);
+    ApplyLensProfile(&**lens, &options.rig, flags.readout_given);
+    for (const std::string& note : (*lens)->notes) std::cerr << "note: " << note << "\n";
+  }
+  options.limits_m.clear();
+  for (const std::string& text : flags.limits) options.limits_m.push_back(ParseLengthM(text));
+  options.noise_allowance_arcsec = flags.noise_allowance_arcsec;
+  // --altitude wins, then camera.json; without either the log's height above ground beats 50 m.
+  options.use_log_altitude = !flags.altitude_given && flags.camera_path.empty();
+  if (!flags.every.empty()) options.every_s = ParseDurationS(flags.every);
+  options.trigger_latency_s = ParseDurationS(flags.latency);
+  // The report's charts, shading, histograms and pictures, and its Allan deviation.
+  if (!flags.out_dir.empty()) options.plots = AnalyzePlotOptions{};
+  options.allan = !flags.out_dir.empty();
+  return options;
+}
+
+// The trigger file, read (its warnings printed first, under its name).
+std::optional<TriggerInput> TriggersFromFlags(const AnalyzeFlags& flags) {
+  if (flags.triggers_path.empty()) return std::nullopt;
+  TriggerInput triggers{ReadTriggerFile(flags.triggers_path), flags.triggers_path};
+  PrintLogWarnings(flags.triggers_path, triggers.file.warnings);
+  return triggers;
+}
+
+// LOG (with --second) as the log pipeline reads it.
+LogInput InputFromFlags(const AnalyzeFlags& flags) {
+  LogInput input;
+  input.path = flags.log_path;
+  input.read = ReadOptionsFromFlags(flags);
+  input.second_path = flags.second_path;
+  return input;
+}
+
+AnalyzeReportOptions ReportFromFlags(const AnalyzeFlags& flags) {
+  SHUTTERLAB_CHECK(flags.scene_path.empty() || !flags.out_dir.empty())
+      << "--scene is for the report: give --out DIR too";
+  AnalyzeReportOptions report;
+  report.log_name = std::filesystem::path(flags.log_path).filename().string();
+  if (!flags.scene_path.empty()) {
+    report.scene = ToRgb8(ReadImage(flags.scene_path));
+    report.scene_name = std::filesystem::path(flags.scene_path).filename().string();
+  }
+  return report;
+}
+
+PhotoFlightOptions PhotoFlightOptionsFromFlags(const AnalyzeFlags& flags, PhotoSetOptions* read) {
+  *read = PhotoOptionsFromFlags(flags);
+  read->Check();
+  PhotoFlightOptions options;
+  options.analyze = AnalyzeOptionsFromFlags(flags, nullptr);
+  options.lens_profile = read->lens_profile;
+  options.photos.limits_m = options.analyze.limits_m;
+  options.rig_given = !flags.camera_path.empty();
+  options.altitude_given = flags.altitude_given;
+  options.readout_given = flags.readout_given;
+  if (!flags.photo_utc_offset.empty()) {
+    options.clock.camera_utc_offset_s = ParseUtcOffset(flags.photo_utc_offset);
+    SHUTTERLAB_CHECK(options.clock.camera_utc_offset_s)
+        << "--photo-utc-offset must be +HH:MM or -HH:MM (got '" << flags.photo_utc_offset << "')";
+  }
+  SHUTTERLAB_CHECK(flags.every.empty())
+      << "--every is for a log alone: the photos are the triggers";
+  options.Check();
+  return options;
+}
+
+std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
+  CheckLogPath(command->add_option("LOG", flags->log_path,
+                               "flight or gyro log (optional with --photos; - = stdin)"));
+  command->add_option("--photos", flags->photos_dir,
+                  "a folder of photos (or one photo): per-photo distortion from their metadata; "
+                  "without LOG the translation part from the recorded flight speed, with LOG "
+                  "each photo placed on the log's clock (--triggers, the log's camera events, or "
+                  "the capture times through the log's GPS time)");
+  command->add_option("--photo-utc-offset", flags->photo_utc_offset,
+                  "the photos' camera clock zone, e.g. +08:00 (else EXIF OffsetTimeOriginal, the "
+                  "offset fitted to the log's events, or the one zone that fits the log)");
+  AddFormatOption(command, &flags->format);
+  command->add_option("--log-index", flags->log_index,
+                  "blackbox: which log of the file (-1 = longest)")
+      ->capture_default_str();
+  command->add_option("--range", flags->range_dps, "raw counts: full-scale range, deg/s")
+      ->capture_default_str();
+  flags->column_flags.Add(command);
+  command->add_option("--camera", flags->camera_path, "camera.json (docs/FORMATS.md rig/1)")
+      ->check(CLI::ExistingFile);
+  command->add_option("--lens-profile", flags->lens_profile_path,
+                  "Gyroflow lens profile (JSON): its lens, scaled to the image size, and its "
+                  "readout where it states one (unless --readout is given); with --photos also "
+                  "each photo's focal length and readout")
+      ->check(CLI::ExistingFile);
+  auto* readout = command->add_option("--readout", flags->readout,
+                                  "rolling-shutter readout without --camera (s, ms, us); with "
+                                  "--photos it overrides the readout table")
+                      ->capture_default_str();
+  auto* altitude =
+      command->add_option("--altitude", flags->altitude_m,
+                      "height above flat ground, m (overrides camera.json; default: the log's "
+                      "altitude above ground when it has one, else 50)")
+          ->capture_default_str();
+  auto* focal = command->add_option("--focal-px", flags->focal_px,
+                                "focal length without --camera, pixels (with --photos: overrides "
+                                "the photos' own)")
+                    ->capture_default_str();
+  command->add_option("--size", flags->size, "image size WxH without --camera")
+      ->capture_default_str();
+  command->add_option("--triggers", flags->triggers_path,
+                  "when the photos were taken, by content: DJI/Autel .MRK (GPS time, placed "
+                  "through the log's GPS fixes), a log's camera events (ULog, DataFlash CAM/TRIG), "
+                  "or CSV 'image,t' / 't' (s on the log clock; a header may name t_ms, t_us, "
+                  "timestamp, utc_usec or utc instead)")
+      ->check(CLI::ExistingFile);
+  command->add_option("--second", flags->second_path,
+                  "a second sensor's log on the same clock (record --device twice): fused with the "
+                  "first, the mounting fitted from the motion")
+      ->check(CLI::ExistingFile);
+  command->add_option("--every", flags->every,
+                  "simulated triggers at this cadence (e.g. 2s); with --triggers or --every the "
+                  "log's camera events are not used");
+  command->add_option("--latency", flags->latency, "trigger-to-exposure latency (s, ms, us)")
+      ->capture_default_str();
+  command->add_option("--limit", flags->limits, "ground limits, e.g. 5cm,10cm")
+      ->delimiter(',')
+      ->capture_default_str();
+  command->add_option("--noise-allowance", flags->noise_allowance_arcsec,
+                  "flight table: added to each threshold for the gyro's own noise, arcsec")
+      ->capture_default_str();
+  command->add_option("--out", flags->out_dir,
+                  "write DIR/images.csv, DIR/exclude.txt and DIR/report.html (with --photos: "
+                  "DIR/photos.csv, exclude.txt, image_list.txt, colmap_image_list.txt)");
+  command->add_option("--scene", flags->scene_path,
+                  "nadir image for the report's worst-image pictures (with --out)")
+      ->check(CLI::ExistingFile);
+  command->add_flag("--json", flags->json, "print JSON (docs/FORMATS.md `analyze`)");
+  return [flags, altitude, readout, focal] {
+    flags->altitude_given = altitude->count() > 0;
+    flags->readout_given = readout->count() > 0;
+    flags->focal_given = focal->count() > 0;
+  };
+}
+
+}  // namespace shutterlab::app

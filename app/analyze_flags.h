@@ -1,0 +1,69 @@
+#pragma once
+// `shutterlab analyze`'s flags and what they make: the library's options (the rig, the analysis,
+// the photos, the log pipeline's input, the trigger file, the report).
+
+#include "app/trace_options.h"
+#include "estimate/paper/analyze.h"
+#include "estimate/paper/log_pipeline.h"
+#include "estimate/paper/photo_flight.h"
+#include "estimate/report/analyze_report.h"
+#include "io/lens_profile.h"
+#include "io/photo_set.h"
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace shutterlab::app {
+
+// Set by CLI11 (AddAnalyzeFlags), read by the converters below.
+struct AnalyzeFlags {
+  std::string log_path;
+  std::string format = "auto";
+  int log_index = -1;
+  int range_dps = 250;
+  ColumnFlags column_flags;  // --time-unit, --columns, --delimiter, --rate-unit
+  std::string camera_path;
+  std::string lens_profile_path;
+  std::string readout = "30ms";
+  double altitude_m = 50.0;
+  double focal_px = 1100.0;
+  std::string size = "1280x960";
+  std::string triggers_path;
+  std::string second_path;
+  std::string every;
+  std::string latency = "0";
+  std::vector<std::string> limits{"5cm", "10cm"};
+  double noise_allowance_arcsec = 20.0;
+  std::string out_dir;
+  std::string scene_path;
+  std::string photos_dir;
+  std::string photo_utc_offset;
+  bool json = false;
+  bool altitude_given = false;
+  bool readout_given = false;
+  bool focal_given = false;
+};
+
+// Adds every flag to the subcommand; the function returned, called once parsing succeeded, notes
+// which of --altitude, --readout and --focal-px were typed.
+std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags);
+
+// analyze's options from the flags (the triggers come with the log). *lens: the lens profile's
+// use, when --lens-profile is given (its lens, and its readout unless --readout was typed); its
+// notes are printed.
+AnalyzeOptions AnalyzeOptionsFromFlags(const AnalyzeFlags& flags,
+                                       std::optional<LensProfileUse>* lens);
+// --photos: the photo folder's reading (*read, checked) and the analysis of the photos, checked.
+PhotoFlightOptions PhotoFlightOptionsFromFlags(const AnalyzeFlags& flags, PhotoSetOptions* read);
+// LOG (with --second) as the log pipeline reads it.
+LogInput InputFromFlags(const AnalyzeFlags& flags);
+// The trigger file, read (its warnings printed first, under its name); nullopt without one.
+std::optional<TriggerInput> TriggersFromFlags(const AnalyzeFlags& flags);
+// The report's options: the log's name and --scene.
+AnalyzeReportOptions ReportFromFlags(const AnalyzeFlags& flags);
+
+}  // namespace shutterlab::app

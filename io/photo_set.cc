@@ -1,0 +1,218 @@
+#include "io/photo_set.h"
+
+#include "model/readout_table.h"
+#include "sim/check.h"
+#include "sim/text_file.h"
+#include "sim/units.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+
+namespace shutterlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::optional<int64_t> TrailingNumber(const std::string& name) {
+  const std::string stem = fs::path(name).stem().string();
+  size_t end = stem.size();
+  while (end > 0 && !std::isdigit(static_cast<unsigned char>(stem[end - 1]))) --end;
+  size_t start = end;
+  while (start > 0 && std::isdigit(static_cast<unsigned char>(stem[start - 1]))) --start;
+  if (start == end || end - start > 15) return std::nullopt;
+  return ParseInt(std::string_view(stem).substr(start, end - start));
+}
+
+// The camera's own image width when the file was downscaled: pixel values written for the camera's
+// image (calibrated focal, focal-plane resolution) are scaled by width / exif_width.
+double FileScale(const PhotoMetadata& m) {
+  return (m.exif_width > 0 && m.width > 0) ? static_cast<double>(std::max(m.width, m.height)) /
+                                                 std::max(m.exif_width, m.exif_height)
+                                           : 1.0;
+}
+
+// The lens profile scaled to the photo, when one is given and the photo has a size.
+std::optional<LensProfileUse> ProfileFor(const PhotoSetOptions& options, const PhotoMetadata& m) {
+  if (!options.lens_profile || m.width <= 0 || m.height <= 0) return std::nullopt;
+  return ScaleLensProfile(*options.lens_profile, m.width, m.height);
+}
+
+void ChooseFocal(const PhotoSetOptions& options, PhotoRecord* r) {
+  const PhotoMetadata& m = r->metadata;
+  if (options.focal_px) {
+    r->focal_px = options.focal_px;
+    r->focal_source = options.focal_text.empty() ? "--focal-px" : options.focal_text;
+  } else if (const auto use = ProfileFor(options, m)) {
+    r->focal_px = 0.5 * (use->camera.fx + use->camera.fy);
+    r->focal_source = "lens profile " + use->name;
+  } else if (m.calibrated_focal_px) {
+    r->focal_px = *m.calibrated_focal_px * FileScale(m);
+    r->focal_source = "XMP drone-dji:CalibratedFocalLength";
+  } else if (m.focal_length_35mm && m.width > 0 && m.height > 0) {
+    r->focal_px = FocalPxFrom35mm(*m.focal_length_35mm, m.width, m.height);
+    r->focal_source =
+        FormatNumber("EXIF FocalLengthIn35mmFilm %g mm on the diagonal", *m.focal_length_35mm);
+  } else if (m.focal_length_mm && m.focal_plane_px_per_mm) {
+    r->focal_px = *m.focal_length_mm * *m.focal_plane_px_per_mm * FileScale(m);
+    r->focal_source = "EXIF FocalLength x FocalPlaneXResolution";
+  }
+}
+
+void ChooseReadout(const PhotoSetOptions& options, PhotoRecord* r) {
+  if (options.readout_s) {
+    r->readout_s = options.readout_s;
+    r->readout_origin = options.readout_origin;
+    r->readout_source = options.readout_text.empty() ? "--readout" : options.readout_text;
+    return;
+  }
+  const PhotoMetadata& m = r->metadata;
+  if (const auto use = ProfileFor(options, m); use && use->readout && use->readout->readout_s) {
+    r->readout_s = use->readout->readout_s;
+    r->readout_origin = ReadoutOrigin::kLensProfile;
+    r->readout_source = "lens profile " + use->name;
+  } else if (const auto hit = LookUpReadout(m.make, m.model, r->CaptureMegapixels())) {
+    r->readout_s = hit->readout_s;
+    r->readout_origin = ReadoutOrigin::kTable;
+    r->readout_source = hit->Citation();
+  } else {
+    r->readout_origin = ReadoutOrigin::kNone;
+    r->readout_source = "'" + ReadoutTableKey(m.make, m.model) + "' is not in the readout table";
+  }
+}
+
+void ChooseFlightState(const PhotoSetOptions& options, PhotoRecord* r) {
+  const PhotoMetadata& m = r->metadata;
+  if (options.altitude_m) {
+    r->altitude_m = options.altitude_m;
+    r->altitude_source = "--altitude";
+  } else if (m.relative_altitude_m && *m.relative_altitude_m > 0) {
+    r->altitude_m = m.relative_altitude_m;
+    r->altitude_source = "XMP drone-dji:RelativeAltitude (above take-off)";
+  }
+  if (m.speed_m_s) {
+    r->ground_speed_m_s = std::hypot(m.speed_m_s->x(), m.speed_m_s->y());
+    if (*r->ground_speed_m_s > 0) {
+      double course = std::atan2(m.speed_m_s->y(), m.speed_m_s->x()) * kDegPerRad;
+      r->course_deg = course < 0 ? course + 360.0 : course;
+    }
+    r->speed_source = m.flight_state_source == "DJI maker note"
+                          ? "DJI maker note SpeedX/SpeedY"
+                          : "XMP drone-dji:FlightXSpeed/FlightYSpeed";
+  }
+}
+
+}  // namespace
+
+double FocalPxFrom35mm(double focal_35mm, int width, int height) {
+  SHUTTERLAB_CHECK(focal_35mm > 0 && width > 0 && height > 0)
+      << "35 mm-equivalent focal length and image size must be positive";
+  return focal_35mm / kFullFrameDiagonalMm * std::hypot(width, height);
+}
+
+const char* ReadoutOriginName(ReadoutOrigin origin) {
+  switch (origin) {
+    case ReadoutOrigin::kUser:
+      return "user";
+    case ReadoutOrigin::kCameraFile:
+      return "camera.json";
+    case ReadoutOrigin::kLensProfile:
+      return "lens profile";
+    case ReadoutOrigin::kPhoto:
+      return "photo";
+    case ReadoutOrigin::kTable:
+      return "table";
+    case ReadoutOrigin::kNone:
+      return "none";
+  }
+  return "none";
+}
+
+void PhotoSetOptions::Check() const {
+  SHUTTERLAB_CHECK(!readout_s || (std::isfinite(*readout_s) && *readout_s >= 0))
+      << "readout must be finite and not negative";
+  SHUTTERLAB_CHECK(!focal_px || (std::isfinite(*focal_px) && *focal_px > 0))
+      << "focal length must be positive";
+  SHUTTERLAB_CHECK(!altitude_m || (std::isfinite(*altitude_m) && *altitude_m > 0))
+      << "altitude must be positive";
+  SHUTTERLAB_CHECK(readout_origin == ReadoutOrigin::kUser ||
+                   readout_origin == ReadoutOrigin::kCameraFile ||
+                   readout_origin == ReadoutOrigin::kLensProfile)
+      << "a given readout comes from the user, a camera file or a lens profile";
+}
+
+double PhotoRecord::CaptureMegapixels() const {
+  const PhotoMetadata& m = metadata;
+  const bool exif = m.exif_width > 0 && m.exif_height > 0;
+  return exif ? m.exif_width * 1e-6 * m.exif_height : m.width * 1e-6 * m.height;
+}
+
+bool IsPhotoFileName(const std::string& name) {
+  const std::string ext = ToLower(fs::path(name).extension().string());
+  return ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff" || ext == ".dng";
+}
+
+PhotoRecord MakePhotoRecord(const std::string& path, const PhotoMetadata& metadata,
+                            const PhotoSetOptions& options) {
+  PhotoRecord r;
+  r.path = path;
+  r.name = fs::path(path).filename().string();
+  r.number = TrailingNumber(r.name);
+  r.metadata = metadata;
+  ChooseFocal(options, &r);
+  ChooseReadout(options, &r);
+  ChooseFlightState(options, &r);
+  if (metadata.width <= 0 || metadata.height <= 0) r.missing.push_back("image size");
+  if (!r.focal_px) r.missing.push_back("focal length");
+  if (!r.readout_s) r.missing.push_back("readout");
+  if (!r.altitude_m) r.missing.push_back("altitude");
+  if (!r.ground_speed_m_s) r.missing.push_back("flight speed");
+  if (!metadata.capture_time) r.missing.push_back("capture time");
+  return r;
+}
+
+PhotoSet ReadPhotoSet(const std::string& dir, const PhotoSetOptions& options) {
+  options.Check();
+  PhotoSet set;
+  set.source = dir;
+  std::vector<std::string> paths;
+  std::error_code ec;
+  if (fs::is_regular_file(dir, ec)) {
+    paths.push_back(dir);
+  } else {
+    if (!fs::is_directory(dir, ec)) throw IoError(IoMessage(dir, 0, "no such folder"));
+    for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+      if (entry.is_regular_file() && IsPhotoFileName(entry.path().filename().string()))
+        paths.push_back(entry.path().string());
+    }
+    if (ec) throw IoError(IoMessage(dir, 0, "cannot list the folder: " + ec.message()));
+    std::sort(paths.begin(), paths.end());
+  }
+  if (paths.empty())
+    throw IoError(IoMessage(dir, 0, "no photo files (.jpg, .jpeg, .tif, .tiff, .dng)"));
+  for (size_t i = 0; i < paths.size(); ++i) {
+    try {
+      set.photos.push_back(MakePhotoRecord(paths[i], ReadPhotoMetadata(paths[i]), options));
+    } catch (const IoError& e) {
+      PhotoRecord bad;
+      bad.path = paths[i];
+      bad.name = fs::path(paths[i]).filename().string();
+      bad.number = TrailingNumber(bad.name);
+      bad.error = e.what();
+      set.photos.push_back(std::move(bad));
+    }
+    if (options.progress) options.progress(static_cast<double>(i + 1) / paths.size());
+  }
+  return set;
+}
+
+std::vector<std::string> LensProfileNotes(const PhotoSet& set, const LensProfile& profile) {
+  for (const PhotoRecord& r : set.photos) {
+    if (!r.ok() || r.metadata.width <= 0 || r.metadata.height <= 0) continue;
+    return ScaleLensProfile(profile, r.metadata.width, r.metadata.height).notes;
+  }
+  return {};
+}
+
+}  // namespace shutterlab

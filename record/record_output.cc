@@ -1,0 +1,195 @@
+#include "record/record_output.h"
+
+#include "sim/check.h"
+#include "sim/logs/gcsv.h"
+#include "sim/text_file.h"
+#include "sim/units.h"
+
+#include <cerrno>
+#include <charconv>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <fcntl.h>
+#include <filesystem>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace shutterlab {
+namespace {
+
+std::string ErrnoText() { return std::strerror(errno); }
+
+// "DIR/.NAME.SUFFIX-XXXXXX" created with mkstemp; the fd returned, the path in *path.
+int MakeTempBeside(const std::string& final_path, const std::string& suffix, std::string* path) {
+  const std::filesystem::path target(final_path);
+  const std::filesystem::path dir = target.has_parent_path() ? target.parent_path() : ".";
+  std::string pattern =
+      (dir / ("." + target.filename().string() + "." + suffix + "-XXXXXX")).string();
+  const int fd = ::mkstemp(pattern.data());
+  if (fd < 0)
+    throw IoError(IoMessage(final_path, 0, "cannot create a file beside it: " + ErrnoText()));
+  *path = pattern;
+  return fd;
+}
+
+void WriteAll(int fd, const char* data, size_t n, const std::string& name) {
+  while (n > 0) {
+    const ssize_t written = ::write(fd, data, n);
+    if (written < 0) {
+      if (errno == EINTR) continue;
+      throw IoError(IoMessage(name, 0, "write failed: " + ErrnoText()));
+    }
+    data += written;
+    n -= static_cast<size_t>(written);
+  }
+}
+
+// Copies the whole of from_fd (from its start) to the end of to_fd, in the kernel where it can.
+void CopyRows(int from_fd, int to_fd, const std::string& name) {
+  if (::lseek(from_fd, 0, SEEK_SET) < 0)
+    throw IoError(IoMessage(name, 0, "seek failed: " + ErrnoText()));
+  while (true) {
+    const ssize_t n = ::copy_file_range(from_fd, nullptr, to_fd, nullptr, size_t{1} << 30, 0);
+    if (n == 0) return;
+    if (n > 0) continue;
+    if (errno == EINTR) continue;
+    if (errno != EXDEV && errno != ENOSYS && errno != EINVAL && errno != EOPNOTSUPP) {
+      throw IoError(IoMessage(name, 0, "copy failed: " + ErrnoText()));
+    }
+    break;  // fall back to read and write
+  }
+  std::vector<char> buffer(size_t{1} << 20);
+  while (true) {
+    const ssize_t n = ::read(from_fd, buffer.data(), buffer.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw IoError(IoMessage(name, 0, "read failed: " + ErrnoText()));
+    if (n == 0) return;
+    WriteAll(to_fd, buffer.data(), static_cast<size_t>(n), name);
+  }
+}
+
+std::string Vector3Text(const Eigen::Vector3d& v) {
+  std::string text;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (axis) text += ';';
+    AppendDouble(v[axis], &text);
+  }
+  return text;
+}
+
+std::string Number(double value) { return FormatNumber("%.9g", value); }
+
+}  // namespace
+
+RowFile::RowFile(const std::string& final_path) : final_path_(final_path) {
+  fd_ = MakeTempBeside(final_path, "rows", &rows_path_);
+}
+
+RowFile::~RowFile() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!rows_path_.empty()) std::remove(rows_path_.c_str());
+}
+
+void RowFile::Append(const std::string& text) {
+  WriteAll(fd_, text.data(), text.size(), final_path_);
+}
+
+void RowFile::Finish(const std::string& header) {
+  std::string temp_path;
+  const int out_fd = MakeTempBeside(final_path_, "tmp", &temp_path);
+  try {
+    WriteAll(out_fd, header.data(), header.size(), final_path_);
+    CopyRows(fd_, out_fd, final_path_);
+    if (::fchmod(out_fd, 0644) < 0 || ::fsync(out_fd) < 0) {
+      throw IoError(IoMessage(final_path_, 0, "cannot sync: " + ErrnoText()));
+    }
+    ::close(out_fd);
+    if (::rename(temp_path.c_str(), final_path_.c_str()) < 0) {
+      throw IoError(IoMessage(final_path_, 0, "cannot rename into place: " + ErrnoText()));
+    }
+  } catch (...) {
+    ::close(out_fd);
+    std::remove(temp_path.c_str());
+    throw;
+  }
+}
+
+void AppendRecordedRow(const RecordedSample& sample, int64_t t0_ns, std::string* out) {
+  char buffer[64];
+  char* p = buffer;
+  char* end = buffer + sizeof(buffer);
+  p = std::to_chars(p, end, sample.t_ns - t0_ns).ptr;
+  for (int axis = 0; axis < 3; ++axis) {
+    *p++ = ',';
+    p = std::to_chars(p, end, sample.counts[axis]).ptr;
+  }
+  *p++ = '\n';
+  out->append(buffer, p);
+}
+
+std::string RecordedGcsvHeader(const RecordSummary& summary, int index,
+                               const RecorderOptions& options) {
+  const SensorSummary& s = summary.sensors.at(index);
+  const PartInfo& part = GetPartInfo(s.setting.part);
+  GcsvWriteOptions gcsv;
+  gcsv.id = "shutterlab record";
+  gcsv.orientation = options.orientation;
+  gcsv.time_unit = TimeUnit::kNanoseconds;
+  gcsv.gscale = kPi / 180.0 / s.setting.lsb_per_dps;  // rad/s per count
+  auto& h = gcsv.extra_header;
+  if (!options.note.empty()) h.emplace_back("note", options.note);
+  h.emplace_back("vendor", "shutterlab");
+  h.emplace_back("fwversion", "shutterlab record 0.1");
+  h.emplace_back("timestamp", std::to_string(static_cast<long long>(std::time(nullptr))));
+  h.emplace_back("part", part.name);
+  h.emplace_back("who_am_i", HexByte(part.who_am_i));
+  h.emplace_back("device", s.device);
+  h.emplace_back("sensor",
+                 std::to_string(index + 1) + " of " + std::to_string(summary.sensors.size()));
+  h.emplace_back("odr_hz", Number(s.setting.odr_hz));
+  h.emplace_back("range_dps", std::to_string(s.setting.range_dps));
+  h.emplace_back("lsb_per_dps", Number(s.setting.lsb_per_dps));
+  h.emplace_back("filter", s.setting.Describe());
+  h.emplace_back("clock", "CLOCK_MONOTONIC; t = clock - t0_clock_ns");
+  h.emplace_back("t0_clock_ns", std::to_string(summary.t0_clock_ns));
+  h.emplace_back("samples", std::to_string(s.samples));
+  h.emplace_back("rate_hz", Number(s.rate_hz));
+  h.emplace_back("drift_ppm", FormatNumber("%.3f", s.drift_ppm));
+  h.emplace_back("timestamp_rms_us", FormatNumber("%.3f", s.timestamp_rms_us));
+  h.emplace_back("gaps", std::to_string(s.gaps));
+  h.emplace_back("samples_lost", std::to_string(s.lost));
+  h.emplace_back("ring_high_water",
+                 std::to_string(s.ring_high_water) + " of " + std::to_string(s.ring_capacity));
+  h.emplace_back("max_read_interval_ms", FormatNumber("%.3f", s.max_read_interval_s * 1e3));
+  h.emplace_back("max_writer_stall_ms", FormatNumber("%.3f", summary.max_writer_stall_s * 1e3));
+  h.emplace_back("still_s", Number(s.still_span_s));
+  h.emplace_back("still_bias_rad_s", Vector3Text(s.still_bias_rad_s));
+  h.emplace_back("still_std_rad_s", Vector3Text(s.still_std_rad_s));
+  for (const RecordGap& gap : summary.gaps) {
+    if (gap.sensor != index) continue;
+    h.emplace_back("gap",
+                   FormatNumber("%.9f", gap.t_s) + "," + std::to_string(gap.lost) + "," + gap.kind);
+  }
+  return GcsvHeaderText(gcsv);
+}
+
+void WriteTriggersFile(const std::string& path, const RecordSummary& summary,
+                       const RecorderOptions& options) {
+  std::string text =
+      "# shutterlab record: camera triggers; t in s on the clock of the .gcsv rows\n";
+  text += "# source: " + (options.trigger ? options.trigger->Name() : std::string("none")) + "\n";
+  text += "# edges: " + std::string(TriggerPolarityName(options.polarity)) + ", debounce " +
+          Number(options.debounce_s) + " s; " + std::to_string(summary.trigger_edges) +
+          " edge(s) seen, " + std::to_string(summary.trigger_bounces) + " bounce(s) ignored, " +
+          std::to_string(summary.trigger_other_polarity) + " of the other direction\n";
+  text += "# t0_clock_ns: " + std::to_string(summary.t0_clock_ns) + "\n";
+  text += "image,t\n";
+  for (size_t i = 0; i < summary.trigger_t_s.size(); ++i) {
+    text += FormatNumber("IMG_%04.0f,", static_cast<double>(i + 1));
+    text += FormatNumber("%.9f", summary.trigger_t_s[i]) + "\n";
+  }
+  WriteFileAtomically(path, text);
+}
+
+}  // namespace shutterlab

@@ -1,0 +1,105 @@
+// The validation report (docs/FORMATS.md "Validation report") of rendered datasets with one
+// undeclared effect (tests/estimate/loop/validate_fixtures.h): the JSON's keys and the table's
+// bookkeeping, the verdict's words, both video models in the report.
+
+#include "estimate/report/validate_report.h"
+
+#include "estimate/loop/validate.h"
+#include "sim/logs/gyro_io.h"
+#include "tests/estimate/loop/validate_fixtures.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+// The table's bookkeeping on one dataset: flags follow D against each limit, the confusion matrix
+// counts every frame once per limit, and the JSON has docs/FORMATS.md's keys.
+TEST(ValidateReport, TableAndReportAreConsistent) {
+  if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
+  test::TempDir dir;
+  const ValidationResult result =
+      test::ValidateWithoutResiduals(test::MakeDataset(dir, {{"time_offset=0.004"}}));
+  ASSERT_EQ(result.frames.size(), static_cast<size_t>(test::kStillFrames));
+  for (size_t l = 0; l < result.limits_m.size(); ++l) {
+    const Confusion& c = result.confusion_paper[l];
+    EXPECT_EQ(c.true_positive + c.false_positive + c.false_negative + c.true_negative, test::kStillFrames);
+    for (const FrameValidation& f : result.frames) {
+      EXPECT_EQ(f.flag_meas[l], f.d_meas_m > result.limits_m[l]);
+      EXPECT_EQ(f.flag_paper[l], f.d_paper_m > result.limits_m[l]);
+    }
+  }
+  const nlohmann::json json = ValidationToJson(result);
+  for (const char* key :
+       {"format", "frames", "before", "effects", "after", "noise_px", "unexplained"}) {
+    EXPECT_TRUE(json.contains(key)) << key;
+  }
+  EXPECT_EQ(json["format"], "validation/1");
+  EXPECT_EQ(json["frames"], test::kStillFrames);
+  EXPECT_EQ(json["frames_detail"].size(), static_cast<size_t>(test::kStillFrames));
+}
+
+// A gyro log five times the image's rotation, as a stabiliser leaves it (the camera kept a fifth of
+// its turning in the picture): the image does not follow the gyro, and the report names no effect.
+TEST(ValidateReport, AStabilisedImageNamesNoEffect) {
+  if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
+  test::TempDir dir;
+  test::ClipSpec spec;
+  spec.frames = 10;
+  const std::string clip = test::MakeClip(dir, spec);
+  std::vector<GyroSample> logged = ReadGyroCsv(clip + "/gyro.csv").samples();
+  for (GyroSample& s : logged) s.omega_rad_s *= 5.0;
+  WriteGyroCsv(clip + "/gyro.csv", GyroTrace(std::move(logged)));
+  const ValidationResult result = test::ValidateWithoutResiduals(clip);
+  const std::string report = ValidationReport(result);
+  ASSERT_TRUE(result.screen.gyro_follow.determined) << report;
+  EXPECT_FALSE(result.screen.gyro_follow.follows) << report;
+  EXPECT_NEAR(result.screen.gyro_follow.gain, 0.2, 0.05) << report;
+  EXPECT_TRUE(result.screen.region.whole_image) << report;
+  const nlohmann::json json = ValidationToJson(result);
+  EXPECT_TRUE(json["effects"].empty()) << report;
+  EXPECT_EQ(json["unexplained"], true);
+  EXPECT_EQ(json["verdict"]["level"], "problem");
+  EXPECT_NE(json["verdict"]["headline"].get<std::string>().find("does not follow the gyro"),
+            std::string::npos);
+}
+
+TEST(ValidateReport, ReportAndJsonCarryBothModels) {
+  if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
+  test::TempDir dir;
+  test::ClipSpec spec;
+  spec.injections = {"time_offset=0.004"};
+  spec.frames = 6;
+  const ValidationResult result = test::ValidateWithoutResiduals(test::MakeClip(dir, spec));
+  const nlohmann::json json = ValidationToJson(result);
+  for (const char* key : {"format", "frames", "before", "effects", "after", "noise_px",
+                          "unexplained", "model", "rotation_only", "translation", "pairs"}) {
+    EXPECT_TRUE(json.contains(key)) << key;
+  }
+  EXPECT_EQ(json["format"], "validation/1");
+  EXPECT_EQ(json["frames"], 5);  // pairs
+  EXPECT_EQ(json["pairs"].size(), 5u);
+  EXPECT_EQ(json["pairs"][0]["previous"], 0);
+  EXPECT_EQ(json["pairs"][0]["frame"], 1);
+  // The top level is the preferred model's loop, docs/FORMATS.md's keys with their types.
+  const LoopResult& preferred =
+      result.preferred == "translation" ? result.translation_loop : result.loop;
+  EXPECT_EQ(json["after"]["rms_px"].get<double>(), preferred.after.rms_px);
+  EXPECT_TRUE(json["log"].is_array());
+  const std::string report = ValidationReport(result);
+  EXPECT_NE(report.find("rotation only"), std::string::npos) << report;
+  EXPECT_NE(report.find("with each pair's translation"), std::string::npos) << report;
+  // Whether translation had anything to explain, said in words either way.
+  EXPECT_TRUE(report.find("translation explains") != std::string::npos ||
+              report.find("nothing for translation to explain") != std::string::npos)
+      << report;
+}
+
+}  // namespace
+}  // namespace shutterlab

@@ -1,0 +1,221 @@
+#include "io/image_io.h"
+
+#include "io/photo_metadata.h"
+#include "sim/check.h"
+#include "sim/text_file.h"
+#include "tests/io/io_fixtures.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+TEST(ImageIo, LosslessFormatsRoundTripExactly) {
+  test::TempDir dir;
+  for (const char* extension : {".png", ".tif"}) {
+    for (int type : {CV_8UC1, CV_8UC3, CV_16UC1, CV_16UC3}) {
+      const cv::Mat image = test::SmoothTexture(cv::Size(37, 23), type, 9, 0.5);
+      const std::string path = dir / ("image_" + std::to_string(type) + extension);
+      WriteImage(path, image);
+      const cv::Mat back = ReadImage(path);
+      ASSERT_EQ(back.type(), type) << path;
+      EXPECT_EQ(cv::norm(back, image, cv::NORM_INF), 0.0) << path;
+    }
+  }
+}
+
+TEST(ImageIo, ChannelOrderIsTheFilesRgb) {
+  // A pure red pixel written as channel 0 comes back as channel 0 (no BGR swap anywhere).
+  test::TempDir dir;
+  cv::Mat image(2, 2, CV_8UC3, cv::Scalar(255, 0, 0));
+  WriteImage(dir / "red.png", image);
+  const cv::Mat back = ReadImage(dir / "red.png");
+  EXPECT_EQ(back.at<cv::Vec3b>(1, 1), cv::Vec3b(255, 0, 0));
+}
+
+TEST(ImageIo, JpegRoundTripsClosely) {
+  test::TempDir dir;
+  const cv::Mat image = test::SmoothTexture(cv::Size(64, 48), CV_8UC3, 9, 3.0);
+  WriteImage(dir / "image.jpg", image);
+  const cv::Mat back = ReadImage(dir / "image.jpg");
+  ASSERT_EQ(back.type(), CV_8UC3);
+  // Quality 95 on a smooth texture: a few levels at most.
+  EXPECT_LT(cv::norm(back, image, cv::NORM_L1) / image.total() / 3, 3.0);
+}
+
+TEST(ImageIo, ExrKeepsFloatsAndChannelNames) {
+  test::TempDir dir;
+  cv::Mat field(5, 7, CV_32FC2);
+  for (int v = 0; v < 5; ++v) {
+    for (int u = 0; u < 7; ++u)
+      field.at<cv::Vec2f>(v, u) = cv::Vec2f(0.1f * u - 1e-3f * v, -3.25f * v + 1e-7f);
+  }
+  field.at<cv::Vec2f>(2, 3) = cv::Vec2f(NAN, NAN);
+  WriteImage(dir / "disp.exr", field, {"dx", "dy"});
+  std::vector<std::string> names;
+  const cv::Mat back = ReadFloatImage(dir / "disp.exr", &names);
+  ASSERT_EQ(back.type(), CV_32FC2);
+  EXPECT_EQ(names, (std::vector<std::string>{"dx", "dy"}));
+  for (int v = 0; v < 5; ++v) {
+    for (int u = 0; u < 7; ++u) {
+      const cv::Vec2f a = field.at<cv::Vec2f>(v, u), b = back.at<cv::Vec2f>(v, u);
+      if (v == 2 && u == 3) {
+        EXPECT_TRUE(std::isnan(b[0]) && std::isnan(b[1]));
+      } else {
+        EXPECT_EQ(a, b);  // float32 stays float32 bit for bit
+      }
+    }
+  }
+}
+
+// The value of key in metadata, "" when absent.
+std::string MetadataValue(const std::vector<std::pair<std::string, std::string>>& metadata,
+                          const std::string& key) {
+  for (const auto& [k, v] : metadata) {
+    if (k == key) return v;
+  }
+  return "";
+}
+
+TEST(ImageIo, JpegQualityIsReadFromTheQuantisationTables) {
+  test::TempDir dir;
+  const cv::Mat image = test::SmoothTexture(cv::Size(64, 48), CV_8UC3, 9, 3.0);
+  WriteImage(dir / "default.jpg", image);
+  EXPECT_EQ(ReadImageFileInfo(dir / "default.jpg").jpeg_quality, 95);
+  for (const int quality : {30, 75, 92}) {
+    ImageLike like;
+    like.info.format = "jpeg";
+    like.info.jpeg_quality = quality;
+    like.info.jpeg_subsampling = "4:4:4";
+    const std::string path = dir / ("q" + std::to_string(quality) + ".jpg");
+    WriteImageLike(path, image, like);
+    const ImageFileInfo info = ReadImageFileInfo(path);
+    EXPECT_EQ(info.format, "jpeg");
+    EXPECT_EQ(info.jpeg_quality, quality);
+    EXPECT_EQ(info.jpeg_subsampling, "4:4:4");
+  }
+  WriteImage(dir / "lossless.png", image);
+  EXPECT_FALSE(ReadImageFileInfo(dir / "lossless.png").jpeg_quality) << "a PNG has none";
+}
+
+TEST(ImageIo, WritingLikeKeepsTheBitDepth) {
+  test::TempDir dir;
+  struct Case {
+    const char* name;
+    int type;
+    bool half;
+  };
+  for (const Case& c : {Case{"a.png", CV_8UC3, false}, Case{"b.png", CV_16UC1, false},
+                        Case{"c.tif", CV_16UC3, false}, Case{"d.tif", CV_8UC1, false},
+                        Case{"e.exr", CV_32FC3, true}, Case{"f.exr", CV_32FC3, false}}) {
+    const cv::Mat image = test::SmoothTexture(cv::Size(33, 21), c.type, 4, 1.0);
+    ImageLike like;
+    like.info.floating = CV_MAT_DEPTH(c.type) == CV_32F;
+    like.info.bits_per_channel = c.half ? 16 : static_cast<int>(CV_ELEM_SIZE1(c.type)) * 8;
+    const std::string path = dir / c.name;
+    WriteImageLike(path, image, like);
+    const ImageFileInfo info = ReadImageFileInfo(path);
+    EXPECT_EQ(info.bits_per_channel, like.info.bits_per_channel) << c.name;
+    EXPECT_EQ(info.floating, like.info.floating) << c.name;
+    const cv::Mat back = ReadImage(path);
+    EXPECT_EQ(back.type(), c.type) << c.name;
+    // Lossless, but half floats keep 11 significant bits.
+    EXPECT_LE(cv::norm(back, image, cv::NORM_INF), c.half ? 1e-3 : 0.0) << c.name;
+  }
+}
+
+TEST(ImageIo, MetadataIsCopiedWhereTheFormatHoldsIt) {
+  test::TempDir dir;
+  const cv::Mat image = test::SmoothTexture(cv::Size(40, 30), CV_8UC3, 2, 1.0);
+  ImageLike plain;
+  plain.info.format = "jpeg";
+  EXPECT_TRUE(WriteImageLike(dir / "source.jpg", image, plain,
+                             {{"Xmp.shutterlab.Test", "abc"}, {"Xmp.dc.source", "unit test"}})
+                  .empty());
+  ImageLike like{dir / "source.jpg", ReadImageFileInfo(dir / "source.jpg")};
+  for (const char* name : {"copy.jpg", "copy.png", "copy.tif"}) {
+    EXPECT_TRUE(
+        WriteImageLike(dir / name, image, like, {{"Xmp.shutterlab.Reference", "row0"}}).empty())
+        << name;
+    const auto metadata = ReadImageMetadata(dir / name);
+    EXPECT_EQ(MetadataValue(metadata, "Xmp.shutterlab.Test"), "abc") << name;
+    EXPECT_EQ(MetadataValue(metadata, "Xmp.dc.source"), "unit test") << name;
+    EXPECT_EQ(MetadataValue(metadata, "Xmp.shutterlab.Reference"), "row0") << name;
+  }
+  cv::Mat floats;
+  image.convertTo(floats, CV_32FC3, 1.0 / 255);
+  const std::vector<std::string> notes = WriteImageLike(dir / "copy.exr", floats, like);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("holds no EXIF or XMP"), std::string::npos) << notes[0];
+  EXPECT_EQ(ReadImage(dir / "copy.exr").type(), CV_32FC3) << "the pixels are written all the same";
+}
+
+// exiv2 is set up once a process, in one place (io/exiv2_setup.h), whichever of reading a photo
+// and writing shutterlab's XMP keys comes first: in a fresh process (the death test runs the binary
+// again) a photo read first must leave the keys writable. (The set-up's XMP lock has no getter.)
+TEST(ImageIo, XmpKeysAreWrittenAfterAPhotoWasReadFirst) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  const auto read_then_write = [] {
+    const test::TempDir dir;  // removed before the child exits
+    const cv::Mat image = test::SmoothTexture(cv::Size(40, 30), CV_8UC3, 2, 1.0);
+    const std::string photo = dir / "photo.jpg", out = dir / "out.jpg";
+    WriteImage(photo, image);
+    ReadPhotoMetadata(photo);
+    const ImageLike like{photo, ReadImageFileInfo(photo)};
+    const std::vector<std::pair<std::string, std::string>> xmp = {
+        {"Xmp.shutterlab.Reference", "row0"}};
+    const bool written = WriteImageLike(out, image, like, xmp).empty();
+    return written && MetadataValue(ReadImageMetadata(out), "Xmp.shutterlab.Reference") == "row0";
+  };
+  EXPECT_EXIT(std::exit(read_then_write() ? 0 : 1), ::testing::ExitedWithCode(0), "");
+}
+
+TEST(ImageIo, RealDronePhotoKeepsItsExifAndDjiXmp) {
+  SHUTTERLAB_REAL_DATA(photo, "incoming/dji_fc8482_clusterodm/test-photo-1.jpg");
+  test::TempDir dir;
+  const ImageLike like{photo, ReadImageFileInfo(photo)};
+  // Re-compressed to 118 KB for 9 MP (its PROVENANCE.md): every luminance entry is 255, what IJG
+  // quality 1 gives.
+  EXPECT_EQ(like.info.jpeg_quality, 1);
+  const cv::Mat image = ReadImage(photo);
+  EXPECT_TRUE(WriteImageLike(dir / "corrected.jpg", image, like).empty());
+  const auto original = ReadImageMetadata(photo), copied = ReadImageMetadata(dir / "corrected.jpg");
+  for (const char* key : {"Exif.Image.Make", "Exif.Image.Model", "Exif.Photo.DateTimeOriginal",
+                          "Exif.GPSInfo.GPSLatitude", "Xmp.drone-dji.RelativeAltitude",
+                          "Xmp.drone-dji.GimbalPitchDegree", "Xmp.drone-dji.FlightYSpeed"}) {
+    ASSERT_NE(MetadataValue(original, key), "") << key;
+    EXPECT_EQ(MetadataValue(copied, key), MetadataValue(original, key)) << key;
+  }
+  EXPECT_EQ(ReadImageFileInfo(dir / "corrected.jpg").jpeg_quality, like.info.jpeg_quality);
+}
+
+TEST(ImageIo, BadFilesThrowIoErrorNamingThePath) {
+  test::TempDir dir;
+  WriteFileAtomically(dir / "garbage.png", "this is not a png");
+  for (const std::string& path : {dir / "missing.png", dir / "garbage.png"}) {
+    try {
+      ReadImage(path);
+      ADD_FAILURE() << "read " << path;
+    } catch (const IoError& e) {
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    }
+  }
+  // Writing into a missing folder fails cleanly and leaves nothing behind.
+  EXPECT_THROW(WriteImage(dir / "no/such/folder/out.png", cv::Mat(2, 2, CV_8UC1, cv::Scalar(1))),
+               IoError);
+  EXPECT_THROW(WriteImage(dir / "out.unknownext", cv::Mat(2, 2, CV_8UC1, cv::Scalar(1))), IoError);
+  size_t files = 0;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    ++files;
+  EXPECT_EQ(files, 1u) << "only garbage.png may remain";
+}
+
+}  // namespace
+}  // namespace shutterlab

@@ -1,0 +1,225 @@
+#include "io/photo_set.h"
+
+#include "model/readout_table.h"
+#include "sim/check.h"
+#include "sim/text_file.h"
+#include "tests/io/photo_fixtures.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+using test::DjiXmp;
+using test::FixturePhoto;
+using test::JpegWithMetadata;
+
+constexpr double kExact = 1e-9;  // closed-form values computed the same way
+
+TEST(FocalPxFrom35mm, IsDefinedOnTheDiagonal) {
+  // A 35 mm-equivalent equal to the full-frame diagonal images the diagonal at 45 deg half-angle:
+  // f_px equals the image diagonal, whatever the aspect.
+  EXPECT_NEAR(FocalPxFrom35mm(kFullFrameDiagonalMm, 4000, 3000), 5000.0, kExact);
+  // A 36 x 24 mm sensor of 6000 x 4000 px (6 um pixels) with a 50 mm lens: 50 mm / 6 um.
+  EXPECT_NEAR(FocalPxFrom35mm(50.0, 6000, 4000), 50.0 / 0.006, 1e-6);
+  // The DJI Mini 4 Pro's 24 mm on its 16:9 photo (python: 24 / hypot(36, 24) * hypot(4032, 2268)).
+  EXPECT_NEAR(FocalPxFrom35mm(24.0, 4032, 2268), 2566.101382972291, 1e-9);
+  EXPECT_THROW(FocalPxFrom35mm(0.0, 10, 10), std::invalid_argument);
+}
+
+TEST(ReadoutTable, KeysOnMakeModelAndPhotoMode) {
+  EXPECT_EQ(ReadoutTableKey("  DJI ", "FC8482\0"), "dji fc8482");
+  // The Mini 4 Pro's four photo modes: < 12, 12-20, 20-45, >= 45 MP.
+  EXPECT_DOUBLE_EQ(LookUpReadout("DJI", "FC8482", 9.14)->readout_s, 0.016);
+  EXPECT_DOUBLE_EQ(LookUpReadout("DJI", "FC8482", 12.0)->readout_s, 0.021);
+  EXPECT_DOUBLE_EQ(LookUpReadout("DJI", "FC8482", 36.6)->readout_s, 0.043);
+  EXPECT_DOUBLE_EQ(LookUpReadout("DJI", "FC8482", 48.8)->readout_s, 0.058);
+  EXPECT_DOUBLE_EQ(LookUpReadout("Hasselblad", "L1D-20c", 19.96)->readout_s, 0.056);
+  EXPECT_DOUBLE_EQ(LookUpReadout("dji", "fc300x", 1.0)->readout_s, 0.033);
+  EXPECT_FALSE(LookUpReadout("SIYIKEJI", "ZR10", 3.7));
+  const std::string citation = LookUpReadout("DJI", "FC8482", 9.14)->Citation();
+  EXPECT_NE(citation.find("16 ms for < 12 MP"), std::string::npos) << citation;
+  EXPECT_NE(citation.find("OpenDroneMap"), std::string::npos) << citation;
+}
+
+// The table holds the facts of the cited snapshot: every row of the facts file (not in the
+// repository: the shared data folder) gives its value at a megapixel count inside its condition.
+TEST(ReadoutTableReal, MatchesTheCitedFacts) {
+  SHUTTERLAB_REAL_DATA(path, "incoming/odm_rs_readout/readout_db.csv");
+  const std::string text = ReadFileToString(path);  // the cursor views it
+  LineCursor cursor(text);
+  std::vector<std::string_view> fields;
+  size_t rows = 0;
+  cursor.Next();  // header
+  while (const auto line = cursor.Next()) {
+    if (line->empty()) continue;
+    SplitFields(*line, ',', &fields);
+    ASSERT_GE(fields.size(), 3u) << *line;
+    const std::string key(fields[0]);
+    const double readout_ms = *ParseDouble(fields[1]);
+    const std::string condition(fields[2]);
+    // A megapixel count inside the row's condition: the number after '<' or '>=' in its text.
+    double mp = 10.0;
+    if (condition.find(">=") != std::string::npos && condition.find("<") == std::string::npos) {
+      mp = 1.0 + std::stod(condition.substr(condition.find(">=") + 2));
+    } else if (condition.find("<=") != std::string::npos) {  // "12 <= capture_megapixels < 20"
+      mp = std::stod(condition) + 0.5;
+    } else if (condition.find('<') != std::string::npos) {
+      mp = std::stod(condition.substr(condition.find('<') + 1)) - 0.5;
+    }
+    const size_t space = key.rfind(' ');
+    const auto hit = LookUpReadout(key.substr(0, space), key.substr(space + 1), mp);
+    ASSERT_TRUE(hit) << key << " at " << mp << " MP";
+    EXPECT_DOUBLE_EQ(hit->readout_s, readout_ms * 1e-3) << key << " at " << mp << " MP";
+    ++rows;
+  }
+  EXPECT_EQ(rows, ReadoutTableRows());
+}
+
+PhotoMetadata DjiMetadata() {
+  return test::DjiMini3Metadata(117.9, Eigen::Vector3d(3.0, -4.0, 0.0));
+}
+
+TEST(PhotoRecord, DerivesCameraAndFlightStateWithSources) {
+  const PhotoRecord r = MakePhotoRecord("/x/DJI_0123.JPG", DjiMetadata(), {});
+  EXPECT_EQ(r.name, "DJI_0123.JPG");
+  EXPECT_EQ(r.number.value_or(-1), 123);
+  EXPECT_NEAR(*r.focal_px, 2566.101382972291, 1e-9);
+  EXPECT_NE(r.focal_source.find("on the diagonal"), std::string::npos);
+  EXPECT_DOUBLE_EQ(*r.readout_s, 0.016);
+  EXPECT_EQ(r.readout_origin, ReadoutOrigin::kTable);
+  EXPECT_NE(r.readout_source.find("table"), std::string::npos);
+  EXPECT_DOUBLE_EQ(*r.altitude_m, 117.9);
+  EXPECT_DOUBLE_EQ(*r.ground_speed_m_s, 5.0);
+  EXPECT_NEAR(*r.course_deg, 360.0 - std::atan2(4.0, 3.0) * 180.0 / M_PI, 1e-9);
+  EXPECT_EQ(r.missing, std::vector<std::string>{"capture time"});
+}
+
+TEST(PhotoRecord, GivenValuesWinAndMissingOnesAreListed) {
+  PhotoSetOptions options;
+  options.readout_s = 0.020;
+  options.readout_text = "--readout 20ms";
+  options.focal_px = 3000.0;
+  options.altitude_m = 80.0;
+  const PhotoRecord r = MakePhotoRecord("/x/a.jpg", DjiMetadata(), options);
+  EXPECT_DOUBLE_EQ(*r.readout_s, 0.020);
+  EXPECT_EQ(r.readout_origin, ReadoutOrigin::kUser);
+  EXPECT_EQ(r.readout_source, "--readout 20ms");
+  EXPECT_DOUBLE_EQ(*r.focal_px, 3000.0);
+  EXPECT_DOUBLE_EQ(*r.altitude_m, 80.0);
+
+  PhotoMetadata bare;
+  bare.make = "SIYIKEJI";
+  bare.model = "ZR10";
+  bare.width = 2560;
+  bare.height = 1440;
+  const PhotoRecord none = MakePhotoRecord("/x/b.jpg", bare, {});
+  EXPECT_EQ(none.readout_origin, ReadoutOrigin::kNone);
+  EXPECT_NE(none.readout_source.find("siyikeji zr10"), std::string::npos) << none.readout_source;
+  EXPECT_EQ(none.missing, (std::vector<std::string>{"focal length", "readout", "altitude",
+                                                    "flight speed", "capture time"}));
+}
+
+// A lens profile calibrated at half the photo's size, its mode's readout 12 ms: scaled to the
+// photo it gives the focal length and the readout, each said, after what the user typed.
+TEST(PhotoRecord, ALensProfileGivesFocalAndReadoutAfterTheUsers) {
+  LensProfile profile;
+  profile.name = "Mini 4 Pro 16:9";
+  profile.camera.width = 2016;
+  profile.camera.height = 1134;
+  profile.camera.fx = profile.camera.fy = 1300.0;
+  profile.camera.cx = 1007.5;
+  profile.camera.cy = 566.5;
+  profile.mode = {2016, 1134, 30.0, 0.012, ReadoutDirection::kTopToBottom};
+  PhotoSetOptions options;
+  options.lens_profile = profile;
+  PhotoMetadata m = DjiMetadata();
+  m.width = 4032;
+  m.height = 2268;
+  const PhotoRecord r = MakePhotoRecord("/x/a.jpg", m, options);
+  EXPECT_DOUBLE_EQ(*r.focal_px, 2600.0);
+  EXPECT_EQ(r.focal_source, "lens profile Mini 4 Pro 16:9");
+  EXPECT_DOUBLE_EQ(*r.readout_s, 0.012);
+  EXPECT_EQ(r.readout_origin, ReadoutOrigin::kLensProfile);
+  EXPECT_EQ(r.readout_source, "lens profile Mini 4 Pro 16:9");
+
+  options.readout_s = 0.020;
+  options.readout_text = "--readout 20ms";
+  options.focal_px = 3000.0;
+  const PhotoRecord given = MakePhotoRecord("/x/a.jpg", m, options);
+  EXPECT_EQ(given.readout_origin, ReadoutOrigin::kUser);
+  EXPECT_DOUBLE_EQ(*given.readout_s, 0.020);
+  EXPECT_DOUBLE_EQ(*given.focal_px, 3000.0);
+
+  // A profile without a readout leaves the table's.
+  options = {};
+  profile.mode.readout_s.reset();
+  options.lens_profile = profile;
+  const PhotoRecord table = MakePhotoRecord("/x/a.jpg", m, options);
+  EXPECT_EQ(table.readout_origin, ReadoutOrigin::kTable);
+  EXPECT_DOUBLE_EQ(*table.focal_px, 2600.0);
+}
+
+TEST(PhotoSet, ReadsPhotoFilesByNameAndReportsBadOnes) {
+  test::TempDir dir;
+  FixturePhoto good;
+  good.focal_length_35mm = 24;
+  good.xmp = DjiXmp({{"RelativeAltitude", "+50.0"}}, false);
+  WriteFileAtomically(dir / "B_0002.JPG", JpegWithMetadata(good));
+  WriteFileAtomically(dir / "a_0001.jpg", JpegWithMetadata(FixturePhoto{}));
+  WriteFileAtomically(dir / "C_0003.jpeg", "broken");
+  WriteFileAtomically(dir / "flight.MRK", "not a photo");
+  const PhotoSet set = ReadPhotoSet(dir.path().string());
+  ASSERT_EQ(set.photos.size(), 3u);
+  EXPECT_EQ(set.photos[0].name, "B_0002.JPG");  // byte order: upper case first
+  EXPECT_EQ(set.photos[1].name, "C_0003.jpeg");
+  EXPECT_EQ(set.photos[2].name, "a_0001.jpg");
+  EXPECT_TRUE(set.photos[0].ok());
+  EXPECT_DOUBLE_EQ(*set.photos[0].altitude_m, 50.0);
+  EXPECT_FALSE(set.photos[1].ok());
+  EXPECT_NE(set.photos[1].error.find("C_0003.jpeg"), std::string::npos) << set.photos[1].error;
+  EXPECT_EQ(set.photos[1].number.value_or(-1), 3);
+  EXPECT_FALSE(set.photos[2].focal_px);
+
+  test::TempDir empty;
+  WriteFileAtomically(empty / "notes.txt", "x");
+  EXPECT_THROW(ReadPhotoSet(empty.path().string()), IoError);
+  EXPECT_THROW(ReadPhotoSet(empty / "missing"), IoError);
+}
+
+TEST(PhotoSetReal, DjiMini4ProFolder) {
+  SHUTTERLAB_REAL_DATA(dir, "incoming/dji_fc8482_clusterodm");
+  const PhotoSet set = ReadPhotoSet(dir);
+  ASSERT_EQ(set.photos.size(), 3u);
+  const double speeds[3] = {6.9, 7.0, std::hypot(0.3, 4.6)};  // PROVENANCE.md's table
+  for (size_t i = 0; i < 3; ++i) {
+    const PhotoRecord& r = set.photos[i];
+    SCOPED_TRACE(r.name);
+    ASSERT_TRUE(r.ok()) << r.error;
+    EXPECT_DOUBLE_EQ(r.readout_s.value_or(0), 0.016) << "9.1 MP 16:9 mode";
+    EXPECT_EQ(r.readout_origin, ReadoutOrigin::kTable);
+    EXPECT_NEAR(r.focal_px.value_or(0), 2566.1, 0.1);
+    EXPECT_DOUBLE_EQ(r.altitude_m.value_or(0), 117.9);
+    EXPECT_NEAR(r.ground_speed_m_s.value_or(0), speeds[i], 1e-12);
+    EXPECT_TRUE(r.missing.empty()) << r.missing.front();
+  }
+}
+
+TEST(PhotoSetReal, HasselbladReadoutFromTheCameraModeNotTheDownscaledPixels) {
+  SHUTTERLAB_REAL_DATA(path, "incoming/dji_l1d20c_exifr/issue-exifr-13.jpg");
+  const PhotoSet set = ReadPhotoSet(path);
+  ASSERT_EQ(set.photos.size(), 1u);
+  const PhotoRecord& r = set.photos[0];
+  EXPECT_DOUBLE_EQ(r.readout_s.value_or(0), 0.056) << "5472 x 3648 = 19.96 MP, not 100 x 67";
+  // 28 mm on the diagonal of the 100 x 67 pixels in the file.
+  EXPECT_NEAR(r.focal_px.value_or(0), 28.0 / kFullFrameDiagonalMm * std::hypot(100, 67), 1e-9);
+  EXPECT_EQ(r.missing, std::vector<std::string>{"flight speed"});
+}
+
+}  // namespace
+}  // namespace shutterlab
