@@ -158,70 +158,84 @@ PhotoFlightOptions PhotoFlightOptionsFromFlags(const AnalyzeFlags& flags, PhotoS
 
 std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
   CheckLogPath(command->add_option("LOG", flags->log_path,
-                               "flight or gyro log (optional with --photos; - = stdin)"));
-  command->add_option("--photos", flags->photos_dir,
-                  "a folder of photos (or one photo): per-photo distortion from their metadata; "
-                  "without LOG the translation part from the recorded flight speed, with LOG "
-                  "each photo placed on the log's clock (--triggers, the log's camera events, or "
-                  "the capture times through the log's GPS time)");
-  command->add_option("--photo-utc-offset", flags->photo_utc_offset,
-                  "the photos' camera clock zone, e.g. +08:00 (else EXIF OffsetTimeOriginal, the "
-                  "offset fitted to the log's events, or the one zone that fits the log)");
+                                   "flight or gyro log (optional with --photos; - = stdin)"));
+  command->add_option(
+      "--photos", flags->photos_dir,
+      "a folder of photos (or one photo): per-photo distortion from their metadata; "
+      "without LOG the translation part from the recorded flight speed, with LOG "
+      "each photo placed on the log's clock (--triggers, the log's camera events, or "
+      "the capture times through the log's GPS time)");
+  command->add_option(
+      "--photo-utc-offset", flags->photo_utc_offset,
+      "the photos' camera clock zone, e.g. +08:00 (else EXIF OffsetTimeOriginal, the "
+      "offset fitted to the log's events, or the one zone that fits the log)");
   AddFormatOption(command, &flags->format);
-  command->add_option("--log-index", flags->log_index,
-                  "blackbox: which log of the file (-1 = longest)")
+  command
+      ->add_option("--log-index", flags->log_index,
+                   "blackbox: which log of the file (-1 = longest)")
       ->capture_default_str();
   command->add_option("--range", flags->range_dps, "raw counts: full-scale range, deg/s")
       ->capture_default_str();
   flags->column_flags.Add(command);
   command->add_option("--camera", flags->camera_path, "camera.json (docs/FORMATS.md rig/1)")
       ->check(CLI::ExistingFile);
-  command->add_option("--lens-profile", flags->lens_profile_path,
-                  "Gyroflow lens profile (JSON): its lens, scaled to the image size, and its "
-                  "readout where it states one (unless --readout is given); with --photos also "
-                  "each photo's focal length and readout")
+  command
+      ->add_option("--lens-profile", flags->lens_profile_path,
+                   "Gyroflow lens profile (JSON): its lens, scaled to the image size, and its "
+                   "readout where it states one (unless --readout is given); with --photos also "
+                   "each photo's focal length and readout")
       ->check(CLI::ExistingFile);
-  auto* readout = command->add_option("--readout", flags->readout,
-                                  "rolling-shutter readout without --camera (s, ms, us); with "
-                                  "--photos it overrides the readout table")
+  auto* readout = command
+                      ->add_option("--readout", flags->readout,
+                                   "rolling-shutter readout without --camera (s, ms, us); with "
+                                   "--photos it overrides the readout table")
                       ->capture_default_str();
   auto* altitude =
-      command->add_option("--altitude", flags->altitude_m,
-                      "height above flat ground, m (overrides camera.json; default: the log's "
-                      "altitude above ground when it has one, else 50)")
+      command
+          ->add_option("--altitude", flags->altitude_m,
+                       "height above flat ground, m (overrides camera.json; default: the log's "
+                       "altitude above ground when it has one, else 50)")
           ->capture_default_str();
-  auto* focal = command->add_option("--focal-px", flags->focal_px,
-                                "focal length without --camera, pixels (with --photos: overrides "
-                                "the photos' own)")
+  auto* focal = command
+                    ->add_option("--focal-px", flags->focal_px,
+                                 "focal length without --camera, pixels (with --photos: overrides "
+                                 "the photos' own)")
                     ->capture_default_str();
   command->add_option("--size", flags->size, "image size WxH without --camera")
       ->capture_default_str();
-  command->add_option("--triggers", flags->triggers_path,
-                  "when the photos were taken, by content: DJI/Autel .MRK (GPS time, placed "
-                  "through the log's GPS fixes), a log's camera events (ULog, DataFlash CAM/TRIG), "
-                  "or CSV 'image,t' / 't' (s on the log clock; a header may name t_ms, t_us, "
-                  "timestamp, utc_usec or utc instead)")
+  command
+      ->add_option(
+          "--triggers", flags->triggers_path,
+          "when the photos were taken, by content: DJI/Autel .MRK (GPS time, placed "
+          "through the log's GPS fixes), a log's camera events (ULog, DataFlash CAM/TRIG), "
+          "or CSV 'image,t' / 't' (s on the log clock; a header may name t_ms, t_us, "
+          "timestamp, utc_usec or utc instead)")
       ->check(CLI::ExistingFile);
-  command->add_option("--second", flags->second_path,
-                  "a second sensor's log on the same clock (record --device twice): fused with the "
-                  "first, the mounting fitted from the motion")
+  command
+      ->add_option(
+          "--second", flags->second_path,
+          "a second sensor's log on the same clock (record --device twice): fused with the "
+          "first, the mounting fitted from the motion")
       ->check(CLI::ExistingFile);
-  command->add_option("--every", flags->every,
-                  "simulated triggers at this cadence (e.g. 2s); with --triggers or --every the "
-                  "log's camera events are not used");
+  command->add_option(
+      "--every", flags->every,
+      "simulated triggers at this cadence (e.g. 2s); with --triggers or --every the "
+      "log's camera events are not used");
   command->add_option("--latency", flags->latency, "trigger-to-exposure latency (s, ms, us)")
       ->capture_default_str();
   command->add_option("--limit", flags->limits, "ground limits, e.g. 5cm,10cm")
       ->delimiter(',')
       ->capture_default_str();
-  command->add_option("--noise-allowance", flags->noise_allowance_arcsec,
-                  "flight table: added to each threshold for the gyro's own noise, arcsec")
+  command
+      ->add_option("--noise-allowance", flags->noise_allowance_arcsec,
+                   "flight table: added to each threshold for the gyro's own noise, arcsec")
       ->capture_default_str();
   command->add_option("--out", flags->out_dir,
-                  "write DIR/images.csv, DIR/exclude.txt and DIR/report.html (with --photos: "
-                  "DIR/photos.csv, exclude.txt, image_list.txt, colmap_image_list.txt)");
-  command->add_option("--scene", flags->scene_path,
-                  "nadir image for the report's worst-image pictures (with --out)")
+                      "write DIR/images.csv, DIR/exclude.txt and DIR/report.html (with --photos: "
+                      "DIR/photos.csv, exclude.txt, image_list.txt, colmap_image_list.txt)");
+  command
+      ->add_option("--scene", flags->scene_path,
+                   "nadir image for the report's worst-image pictures (with --out)")
       ->check(CLI::ExistingFile);
   command->add_flag("--json", flags->json, "print JSON (docs/FORMATS.md `analyze`)");
   return [flags, altitude, readout, focal] {

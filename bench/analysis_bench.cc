@@ -446,6 +446,7 @@ GyroTrace ReadingSection(const std::string& path, double file_mb, double* t_pars
 // Section 3: the flight analysis on the trace, per-axis and with the vector criterion, against
 // the std::deque sliding range. Returns whether the counts agree.
 bool FlightSection(const GyroTrace& trace) {
+  double t0 = 0.0;
   FlightOptions options;  // 50 m, 5 cm and 10 cm, 10 ms and 20 ms, 20", bias 0:5
   const size_t n = trace.size();
   std::printf("%-58s %10s %10s\n", "flight step (2 limits x 2 windows, CPU time)", "seconds",

@@ -104,14 +104,16 @@ void RowFile::Finish(const std::string& header) {
     if (::fchmod(out_fd, 0644) < 0 || ::fsync(out_fd) < 0) {
       throw IoError(IoMessage(final_path_, 0, "cannot sync: " + ErrnoText()));
     }
-    ::close(out_fd);
-    if (::rename(temp_path.c_str(), final_path_.c_str()) < 0) {
-      throw IoError(IoMessage(final_path_, 0, "cannot rename into place: " + ErrnoText()));
-    }
   } catch (...) {
     ::close(out_fd);
     std::remove(temp_path.c_str());
     throw;
+  }
+  ::close(out_fd);  // once: closing it again could close a descriptor another thread just opened
+  if (::rename(temp_path.c_str(), final_path_.c_str()) < 0) {
+    const std::string why = ErrnoText();
+    std::remove(temp_path.c_str());
+    throw IoError(IoMessage(final_path_, 0, "cannot rename into place: " + why));
   }
 }
 

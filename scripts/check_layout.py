@@ -13,6 +13,8 @@
   tests       each test file sits in the mirror of the library it tests: tests/FOLDER/ for a
               FOLDER that is a library (or app/, scripts/), and a file named after a unit
               (UNIT_test.cc) beside that unit's own folder
+  readme      the README's "Layout" block names every folder that holds code, each library with
+              its target, and no folder that does not exist
 
 Usage: scripts/check_layout.py CHECK [--build DIR]      (stdlib only; run from anywhere)
 Exit 0 when the check holds, 1 with one line per finding (FILE:LINE: problem) when it does not,
@@ -378,6 +380,41 @@ def check_tests():
     return report(findings)
 
 
+def check_readme(build):
+    findings = []
+    lines = read_lines(os.path.join(ROOT, "README.md"))
+    try:
+        start = lines.index("## Layout")
+        begin = lines.index("```", start) + 1
+        end = lines.index("```", begin)
+    except ValueError:
+        print("README.md: no \"## Layout\" section with a ``` block")
+        return 1
+    named = {}
+    for number, line in enumerate(lines[begin:end], begin + 1):
+        m = re.match(r"^(\S+)/\s+(\S+)", line)
+        if m:
+            named[m.group(1)] = (number, m.group(2).rstrip(":"))
+    for folder, (number, _) in named.items():
+        if not os.path.isdir(os.path.join(ROOT, folder)):
+            findings.append(f"README.md:{number}: names {folder}/, which does not exist")
+    code_folders = {os.path.dirname(f) for f in code_files()}
+    for folder in sorted(code_folders):
+        if folder not in named:
+            findings.append(f"README.md: the Layout block does not name {folder}/")
+    layout_path = os.path.join(build, "layout.txt")
+    if os.path.isfile(layout_path):
+        layout = Layout(layout_path)
+        for folder, target in sorted(layout.folder_target.items()):
+            if target.startswith("shutterlab_") and folder in named and named[folder][1] != target:
+                findings.append(f"README.md:{named[folder][0]}: {folder}/ is {target}, not "
+                                f"{named[folder][1]}")
+    for top in ("tests", "scripts", "docs", "fuzz", "bench", "third_party"):
+        if os.path.isdir(os.path.join(ROOT, top)) and top not in named:
+            findings.append(f"README.md: the Layout block does not name {top}/")
+    return report(findings)
+
+
 def report(findings):
     for line in findings:
         print(line)
@@ -386,12 +423,14 @@ def report(findings):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("check", choices=["links", "unit-loops", "functions", "paths", "tests"])
+    parser.add_argument("check",
+                        choices=["links", "unit-loops", "functions", "paths", "tests", "readme"])
     parser.add_argument("--build", default=os.path.join(ROOT, "build"),
                         help="the build folder whose layout.txt the links check reads")
     args = parser.parse_args()
     checks = {"links": lambda: check_links(args.build), "unit-loops": check_unit_loops,
-              "functions": check_functions, "paths": check_paths, "tests": check_tests}
+              "functions": check_functions, "paths": check_paths, "tests": check_tests,
+              "readme": lambda: check_readme(args.build)}
     sys.exit(checks[args.check]())
 
 

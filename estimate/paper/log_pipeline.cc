@@ -79,8 +79,8 @@ FlightLogStream OpenTellingProgress(TextBlocks input, const std::string& path,
 StreamedLog StreamLog(const LogInput& input, const std::string& label,
                       const std::function<void(const GyroChunk&)>& consume,
                       const ReopenableFile* file, const PipelineEvents& events) {
-  FlightLogStream stream = OpenTellingProgress(
-      file ? file->Open() : TextBlocks::OfFile(input.path), input.path, input.read, label, events);
+  FlightLogStream stream = OpenTellingProgress(file ? file->Open() : TextBlocks::OfFile(input.path),
+                                               input.path, input.read, label, events);
   if (input.read_ahead) stream.gyro = ReadAhead(std::move(stream.gyro));
   const StreamedLog streamed = ConsumeFlightLog(
       &stream, consume, [&](double fraction) { Progress(events, label, fraction); });
@@ -97,9 +97,8 @@ BiasSegment StillSegmentInPasses(const ReopenableFile& file, const FlightLogRead
   const auto open = [&]() -> std::unique_ptr<GyroSource> {
     const int done = std::min(pass++, kPasses - 1);
     return std::make_unique<ReportingSource>(
-        OpenFlightLog(file, read).gyro, [&events, done](double f) {
-          Progress(events, "auto-bias", (done + f) / kPasses);
-        });
+        OpenFlightLog(file, read).gyro,
+        [&events, done](double f) { Progress(events, "auto-bias", (done + f) / kPasses); });
   };
   return NoteStillSegment(DetectStillSegment(open), events);
 }
@@ -205,7 +204,8 @@ std::vector<LogWarning> TriggerWarnings(const std::optional<TriggerInput>& trigg
 // With a second log, the pair as AnalyzeStream reads it, fused on the first log's clock
 // (FitPairInPasses; the still segment that weighs the fusion searched on the first log), fused
 // chunk by chunk each time the analysis opens it.
-AnalyzeLogSource PairStreamSource(const LogInput& input, const std::optional<TriggerInput>& triggers,
+AnalyzeLogSource PairStreamSource(const LogInput& input,
+                                  const std::optional<TriggerInput>& triggers,
                                   FlightLogStream first, const AnalyzedLogs& logs,
                                   std::optional<SensorPair>* pair, const PipelineEvents& events) {
   FlightLog first_log = first.log;
@@ -257,12 +257,11 @@ LoadedTrace LoadTrace(const LogInput& input, const BiasSegment& segment,
   Warn(events, input.path, log.warnings);
   LoadedTrace loaded;
   loaded.warnings = log.warnings;
-  loaded.segment = input.find_still_segment
-                       ? NamedByLog(input.path,
-                                    [&] {
-                                      return NoteStillSegment(DetectStillSegment(log.gyro), events);
-                                    })
-                       : segment;
+  loaded.segment =
+      input.find_still_segment
+          ? NamedByLog(input.path,
+                       [&] { return NoteStillSegment(DetectStillSegment(log.gyro), events); })
+          : segment;
   if (input.second_path.empty()) {
     loaded.trace = std::move(log.gyro);
     return loaded;
@@ -293,9 +292,8 @@ FlightRun RunFlight(const LogInput& input, FlightOptions options, const Pipeline
   FlightRun run;
   if (!input.second_path.empty()) {
     const ReopenableFile second(input.second_path);
-    const PairInPasses fitted = FitPairInPasses(*first, second, input.read,
-                                                OpenFlightLog(*first, input.read), options.bias,
-                                                events);
+    const PairInPasses fitted = FitPairInPasses(
+        *first, second, input.read, OpenFlightLog(*first, input.read), options.bias, events);
     run.pair = fitted.pair;
     run.warnings = fitted.warnings;
     std::unique_ptr<GyroSource> fused = fitted.OpenFused();

@@ -25,7 +25,8 @@ TEST(DemoDataset, RenderAndValidateFindsTheInjectedOffset) {
   options.height = 240;
   const ValidationResult result = RenderAndValidate(options);
   ASSERT_FALSE(result.loop.effects.empty()) << test::LoopSummary(result);
-  EXPECT_EQ(Spec(result.loop.effects.front().effect).name, "time_offset") << test::LoopSummary(result);
+  EXPECT_EQ(Spec(result.loop.effects.front().effect).name, "time_offset")
+      << test::LoopSummary(result);
   EXPECT_NEAR(result.loop.model.rig.time_offset_s, 0.004, 0.3e-3) << test::LoopSummary(result);
   for (const char* file : {"report.json", "plots/validate.html", "dataset/truth.json"}) {
     EXPECT_TRUE(std::filesystem::exists(dir.path() / "demo" / file)) << file;

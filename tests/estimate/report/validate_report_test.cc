@@ -29,7 +29,8 @@ TEST(ValidateReport, TableAndReportAreConsistent) {
   ASSERT_EQ(result.frames.size(), static_cast<size_t>(test::kStillFrames));
   for (size_t l = 0; l < result.limits_m.size(); ++l) {
     const Confusion& c = result.confusion_paper[l];
-    EXPECT_EQ(c.true_positive + c.false_positive + c.false_negative + c.true_negative, test::kStillFrames);
+    EXPECT_EQ(c.true_positive + c.false_positive + c.false_negative + c.true_negative,
+              test::kStillFrames);
     for (const FrameValidation& f : result.frames) {
       EXPECT_EQ(f.flag_meas[l], f.d_meas_m > result.limits_m[l]);
       EXPECT_EQ(f.flag_paper[l], f.d_paper_m > result.limits_m[l]);
