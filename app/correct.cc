@@ -143,10 +143,7 @@ const CommandRegistration kCorrectRegistration(75, [](CLI::App& app) {
   cmd->add_option("--photos", command->photos_dir,
                   "a folder of photos (JPEG, TIFF, DNG) taken during the flight DATASET logged")
       ->check(CLI::ExistingPath);
-  cmd->add_option("--format", command->format,
-                  "--photos: the log's format (auto, ulog, dataflash, blackbox, gyro.csv, gcsv, "
-                  "raw)")
-      ->capture_default_str();
+  AddFormatOption(cmd, &command->format, "--photos: the log's format");
   command->column_flags.Add(cmd);
   cmd->add_option("--triggers", command->triggers_path,
                   "--photos: trigger file (.MRK, CSV image,t or t, a log's camera events); "

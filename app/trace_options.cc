@@ -1,6 +1,7 @@
 #include "app/trace_options.h"
 
 #include "sim/check.h"
+#include "sim/logs/flight_log_io.h"
 #include "sim/logs/log_format.h"
 
 #include <algorithm>
@@ -94,13 +95,13 @@ LogInput TraceOptions::Input() const {
   return input;
 }
 
-CLI::Option* AddFormatOption(CLI::App* command, std::string* format) {
-  std::string names;
-  for (const std::string& name : LogFormatNames()) {
-    if (name != "columns") names += (names.empty() ? "" : ", ") + name;
+CLI::Option* AddFormatOption(CLI::App* command, std::string* format, const std::string& what) {
+  std::string names = "auto";
+  for (const LogReader& reader : LogReaders()) {
+    if (reader.detection != LogDetection::kNever) names += std::string(", ") + reader.names[0];
   }
   return command
-      ->add_option("--format", *format, "log format: " + names + " (columns: set by --columns)")
+      ->add_option("--format", *format, what + ": " + names + " (columns: set by --columns)")
       ->capture_default_str();
 }
 

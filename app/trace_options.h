@@ -55,8 +55,9 @@ struct TraceOptions {
 };
 
 // The --format option of a command that reads logs: every format of the reader table
-// (sim/logs/flight_log_io.h LogReaders) in its help.
-CLI::Option* AddFormatOption(CLI::App* command, std::string* format);
+// (sim/logs/flight_log_io.h LogReaders) in its help, after `what`.
+CLI::Option* AddFormatOption(CLI::App* command, std::string* format,
+                             const std::string& what = "log format");
 
 // What the reader could not read or trust, one "warning: PATH: LINE" on stderr each, so that no
 // command analyses less than the file holds without saying so.

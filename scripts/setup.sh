@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs the Debian packages shutterlab needs (safe to run again), then configures and builds
-# Release into build/. Usage: scripts/setup.sh [extra cmake args...]
+# Installs the Debian packages shutterlab needs (safe to run again), then configures Release into
+# build/ and builds the `shutterlab` command (the libraries it links and nothing else: the tests and
+# benchmarks are built by scripts/test.sh). Usage: scripts/setup.sh [extra cmake args...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -23,5 +24,5 @@ fi
 
 build_dir="${SHUTTERLAB_BUILD_DIR:-build}"
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
-cmake --build "$build_dir" -j"$(nproc)"
+cmake --build "$build_dir" -j"$(nproc)" --target shutterlab
 echo "setup: built $build_dir/bin/shutterlab"

@@ -1,6 +1,7 @@
 // The trace commands read every supported log, not only gyro.csv: real flight logs go through the
 // same dispatcher as `analyze`.
 
+#include "sim/logs/flight_log_io.h"
 #include "tests/app/cli_test_util.h"
 #include "tests/test_util.h"
 
@@ -41,6 +42,23 @@ TEST(TraceFormatsCli, FlightReadsARealBlackboxLog) {
   for (const auto& row : j["rows"]) {
     EXPECT_GT(row["flagged_percent"].get<double>(), 0.0);
     EXPECT_LE(row["flagged_percent"].get<double>(), 100.0);
+  }
+}
+
+// Every command that reads a log lists every format of the reader table in its --format help
+// (the list is made from the table, not typed: correct's once lacked gopro and gyro_dump).
+TEST(TraceFormatsCli, EveryFormatOptionListsTheReaderTable) {
+  for (const char* command : {"flight", "noise", "accuracy", "analyze", "correct"}) {
+    const auto r = test::RunShutterlab(std::string(command) + " --help");
+    ASSERT_EQ(r.exit_code, 0) << command << ": " << r.err;
+    const size_t at = r.out.find("--format");
+    ASSERT_NE(at, std::string::npos) << command;
+    const std::string help = r.out.substr(at, r.out.find("\n  -", at) - at);  // its own lines
+    for (const LogReader& reader : LogReaders()) {
+      if (reader.detection == LogDetection::kNever) continue;  // chosen by --columns
+      EXPECT_NE(help.find(reader.names[0]), std::string::npos)
+          << command << " --format lacks " << reader.names[0] << ": " << help;
+    }
   }
 }
 

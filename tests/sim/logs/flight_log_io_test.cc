@@ -558,7 +558,9 @@ TEST(ReaderTable, EveryFormatHasOneReaderWithNamesOfItsOwn) {
   EXPECT_EQ(LogReaders().size(), 9u);
   for (const LogReader& reader : LogReaders()) {
     for (const char* name : reader.names) {
-      if (name != nullptr) EXPECT_TRUE(names.insert(name).second) << name;
+      if (name != nullptr) {
+        EXPECT_TRUE(names.insert(name).second) << name;
+      }
     }
     EXPECT_EQ(&ReaderOf(reader.format), &reader);
   }
