@@ -6,6 +6,7 @@
 #include "sim/logs/gyro_io.h"
 #include "sim/so3.h"
 #include "sim/units.h"
+#include "tests/estimate/paper/paper_fixtures.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -504,13 +505,7 @@ TEST(Flight, StreamedOnOneThreadOrTwoGivesTheWholeTracesResult) {
       FlightStream stream(options);
       for (GyroChunk c = source->Next(); !c.empty(); c = source->Next()) stream.Add(c.data, c.size);
       const FlightResult got = stream.Finish();
-      ASSERT_EQ(got.rows.size(), whole.rows.size());
-      for (size_t i = 0; i < got.rows.size(); ++i) {
-        EXPECT_EQ(got.rows[i].windows, whole.rows[i].windows) << i;
-        EXPECT_EQ(got.rows[i].flagged, whole.rows[i].flagged) << i;
-        EXPECT_EQ(got.rows[i].flagged_axis, whole.rows[i].flagged_axis) << i;
-        EXPECT_EQ(got.rows[i].flagged_vector, whole.rows[i].flagged_vector) << i;
-      }
+      test::ExpectSameFlightRows(got, whole);
       EXPECT_GT(whole.rows[0].flagged, 0u);
       for (int a = 0; a < 3; ++a)
         EXPECT_EQ(got.series.range_arcsec[a], whole.series.range_arcsec[a]);

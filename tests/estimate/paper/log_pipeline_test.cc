@@ -60,16 +60,6 @@ struct Told {
   }
 };
 
-void ExpectSameRows(const FlightResult& a, const FlightResult& b) {
-  ASSERT_EQ(a.rows.size(), b.rows.size());
-  for (size_t i = 0; i < a.rows.size(); ++i) {
-    EXPECT_EQ(a.rows[i].windows, b.rows[i].windows) << i;
-    EXPECT_EQ(a.rows[i].flagged, b.rows[i].flagged) << i;
-    EXPECT_EQ(a.rows[i].flagged_vector, b.rows[i].flagged_vector) << i;
-    EXPECT_EQ(a.rows[i].flagged_axis, b.rows[i].flagged_axis) << i;
-  }
-}
-
 TEST(LogPipeline, RunFlightEqualsTheFlightOfTheLogReadWholeOnOneThreadOrTwo) {
   test::TempDir dir;
   const std::string path = dir / "gyro.csv";
@@ -86,7 +76,7 @@ TEST(LogPipeline, RunFlightEqualsTheFlightOfTheLogReadWholeOnOneThreadOrTwo) {
     input.read_ahead = read_ahead;
     Told told;
     const FlightRun run = RunFlight(input, options, told.Events());
-    ExpectSameRows(run.result, expected);
+    test::ExpectSameFlightRows(run.result, expected);
     EXPECT_FALSE(run.pair);
     // The log's warnings (its gap), told under its path and listed first.
     ASSERT_FALSE(whole.warnings.empty());
@@ -113,7 +103,7 @@ TEST(LogPipeline, RunFlightFindsTheStillSegmentWhenAskedAndSaysWhichInANote) {
   Told told;
   const FlightRun run = RunFlight(input, options, told.Events());
   options.bias = still;
-  ExpectSameRows(run.result, Flight(whole.gyro, options));
+  test::ExpectSameFlightRows(run.result, Flight(whole.gyro, options));
   ASSERT_FALSE(told.lines.empty());
   EXPECT_EQ(told.lines.front(), "note auto-bias: still segment " +
                                     FormatNumber("%.3f:", still.begin_s) +
@@ -187,7 +177,7 @@ TEST(LogPipeline, RunFlightOfAPairIsTheFlightOfTheFusedTrace) {
   const FlightRun run = RunFlight(input, options);
   ASSERT_TRUE(run.pair);
   const LoadedTrace whole = LoadTrace(input, options.bias);
-  ExpectSameRows(run.result, Flight(whole.trace, options));
+  test::ExpectSameFlightRows(run.result, Flight(whole.trace, options));
   EXPECT_TRUE(run.pair->a_from_b.isApprox(whole.pair->pair.a_from_b, 1e-12));
 }
 
@@ -210,7 +200,7 @@ TEST(LogPipeline, RunAnalyzeEqualsAnalyzeOfTheLogReadWhole) {
     EXPECT_EQ(run.result.images[i].d_full_m, whole.images[i].d_full_m) << i;
   }
   ASSERT_TRUE(run.result.flight && whole.flight);
-  ExpectSameRows(*run.result.flight, *whole.flight);
+  test::ExpectSameFlightRows(*run.result.flight, *whole.flight);
   EXPECT_EQ(told.lines.front(), "warning " + path + " gap");
   EXPECT_EQ(told.stages.back(), "analyze");
 }

@@ -1,11 +1,14 @@
 #pragma once
 // Small fixtures shared by the paper's tests and the report tests above them: flight logs that
-// rest, then turn, at 1 kHz, and the rate that smears a given length on the ground.
+// rest, then turn, at 1 kHz, the rate that smears a given length on the ground, and a comparison
+// of two flight tables.
 
+#include "estimate/paper/flight.h"
 #include "sim/gyro_trace.h"
 #include "sim/logs/flight_log.h"
 
 #include <Eigen/Core>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdint>
@@ -48,6 +51,17 @@ inline FlightLog ConstantRateLog(const Eigen::Vector3d& rate_rad_s, double total
 // of readout_s at altitude_m turns by atan(d_m / altitude_m).
 inline double RateForGroundSmear(double d_m, double altitude_m = 50.0, double readout_s = 0.030) {
   return std::atan(d_m / altitude_m) / readout_s;
+}
+
+// Two flight tables count the same windows and flags, row by row (per axis, any axis, vector).
+inline void ExpectSameFlightRows(const FlightResult& got, const FlightResult& expected) {
+  ASSERT_EQ(got.rows.size(), expected.rows.size());
+  for (size_t i = 0; i < got.rows.size(); ++i) {
+    EXPECT_EQ(got.rows[i].windows, expected.rows[i].windows) << i;
+    EXPECT_EQ(got.rows[i].flagged, expected.rows[i].flagged) << i;
+    EXPECT_EQ(got.rows[i].flagged_axis, expected.rows[i].flagged_axis) << i;
+    EXPECT_EQ(got.rows[i].flagged_vector, expected.rows[i].flagged_vector) << i;
+  }
 }
 
 }  // namespace shutterlab::test
