@@ -56,6 +56,7 @@ void RunPhotos(const AnalyzeFlags& flags) {
   }
   PipelinePrinter printer;
   const PhotosOnLogRun run = RunPhotosOnLog(*log, set, options, triggers, printer.Events());
+  printer.Done();
   const PhotoFlightResult& result = run.result;
   const std::optional<SensorPair>& pair = run.pair;
   if (result.lens) {
@@ -93,6 +94,7 @@ void Run(const AnalyzeFlags& flags) {
   const AnalyzeReportOptions report = ReportFromFlags(flags);
   PipelinePrinter printer;
   const AnalyzeRun run = RunAnalyze(input, options, triggers, printer.Events());
+  printer.Done();
   const AnalyzeResult& result = run.result;
   if (!flags.out_dir.empty()) {
     WriteAnalyzeOutputs(flags.out_dir, result);

@@ -44,6 +44,7 @@ void Run(const FlightCommand& command) {
   if (!command.trace.auto_bias) options.bias = command.trace.Segment();
   PipelinePrinter printer;
   const FlightRun run = RunFlight(input, options, printer.Events());
+  printer.Done();
   if (options.series) WriteFlightSeriesCsv(command.series_path, run.result.series);
   if (command.json) {
     nlohmann::json json = FlightToJson(run.result);

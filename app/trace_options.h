@@ -69,6 +69,8 @@ void PrintLogWarnings(const std::string& path, const std::vector<LogWarning>& wa
 class PipelinePrinter {
  public:
   PipelineEvents Events();
+  // Clears the progress bar: call when the run is done, before its results are printed.
+  void Done() { progress_.Clear(); }
 
  private:
   StagedProgress progress_;
@@ -85,6 +87,7 @@ auto AnalyzeTrace(const TraceOptions& trace_options, Options options, const Anal
   options.Check();
   PipelinePrinter printer;
   LoadedTrace loaded = LoadTrace(trace_options.Input(), options.bias, printer.Events());
+  printer.Done();
   options.bias = loaded.segment;
   try {
     auto result = analysis(loaded.trace, options);

@@ -4,7 +4,8 @@
 //     (sim/logs/gyro_io OpenGyroCsv, a block at a time, what `flight` uses) and ReadGyroCsv into a
 //     whole trace, against std::from_chars alone over the same buffer and istream >> double;
 //  2. the same streamed reader with the parsing a chunk ahead on a second thread (wall time);
-//  3. the flight analysis (estimate/flight, two limits x two windows) -> samples/s, per-axis and
+//  3. the flight analysis (estimate/paper/flight, two limits x two windows) -> samples/s, per-axis
+//  and
 //     vector criteria separately, against a monotonic-deque sliding range (std::deque);
 //  4. `flight` end to end as the command runs it (estimate/paper/log_pipeline.h RunFlight), on one
 //     thread (CPU time) and on two (wall time), to compare with scripts/pandas_flight_bench.py.
@@ -110,7 +111,7 @@ size_t ReadWithIstream(const std::string& path, size_t max_bytes, size_t* bytes_
 }
 
 // Reference sliding range: the monotonic-deque algorithm with std::deque, per axis, counting the
-// windows over each threshold exactly as estimate/flight does.
+// windows over each threshold exactly as estimate/paper/flight does.
 std::vector<size_t> DequeFlagged(const PerAxisAngles& angles, int64_t window_ns,
                                  const std::vector<double>& threshold_rad, size_t* windows) {
   const auto& t = angles.t_ns;

@@ -57,10 +57,9 @@ EmulatedTriggerLine::EmulatedTriggerLine(std::vector<int64_t> pulse_times_ns, in
       // Bounce: the contact opens and closes again within 200 us of the edge, each opening 20 us
       // before it closes, or halfway from the last edge where bounces are closer (so that every
       // bounce follows its edge, up to the 99 `record --trigger` allows).
-      const int64_t step_ns = 200000 / (bounce + 1);
-      const int64_t open_ns = std::min<int64_t>(20000, step_ns / 2);
+      const int64_t open_ns = std::min<int64_t>(20000, 200000 / (bounce + 1) / 2);
       for (int b = 1; b <= bounce; ++b) {
-        const int64_t at = edge_ns + b * step_ns;
+        const int64_t at = edge_ns + b * 200000 / (bounce + 1);
         relative_edges_.push_back({at - open_ns, !rising});
         relative_edges_.push_back({at, rising});
       }

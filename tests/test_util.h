@@ -148,7 +148,8 @@ inline std::string RealDataPath(const std::string& relative) {
 // The GoPro HERO5 clip (karma.mp4) that the MP4, GPMF and import tests read.
 inline std::string KarmaClipPath() { return RealDataPath("rs/gopro_karma/karma.mp4"); }
 
-// Under CI (CI=true) missing real data is a failure; elsewhere the test is skipped.
+// Under CI (CI=true) missing real data, or a missing outside tool a test runs (colmap,
+// python3-yaml: scripts/test.sh installs them), is a failure; elsewhere the test is skipped.
 inline bool RealDataRequired() {
   const char* ci = std::getenv("CI");
   return ci != nullptr && std::string(ci) == "true";

@@ -332,7 +332,9 @@ AnalyzeRun RunAnalyze(const LogInput& input, AnalyzeOptions options,
     AnalyzeRun run;
     const AnalyzeLogSource source =
         StreamSource(input, triggers, std::move(first), logs, &run.pair, events);
-    if (events.progress) options.progress = [&events](double f) { events.progress("analyze", f); };
+    if (events.progress) {
+      options.progress = [progress = events.progress](double f) { progress("analyze", f); };
+    }
     run.result = AnalyzeStream(source, options);
     logs.CheckUnchanged();
     // The flight table's own warnings join the log's, as they do in the --json's list.
@@ -353,11 +355,12 @@ PhotosOnLogRun RunPhotosOnLog(const LogInput& input, const PhotoSet& set,
   const AnalyzeLogSource source =
       StreamSource(input, triggers, std::move(first), logs, &run.pair, events);
   if (events.progress) {
-    options.analyze.progress = [&events](double f) { events.progress("analyze", f); };
+    options.analyze.progress = [progress = events.progress](double f) { progress("analyze", f); };
   }
   return NamedByLog(input.path, [&] {
     run.result = AnalyzePhotoFlightStream(set, metadata, source,
                                           triggers ? &triggers->file : nullptr, options);
+    run.result.analyzed.progress = {};  // the caller's events end with the run
     logs.CheckUnchanged();
     if (run.result.log.flight) Warn(events, input.path, run.result.log.flight->warnings);
     return run;

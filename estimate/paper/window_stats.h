@@ -51,8 +51,8 @@ std::vector<double> SlidingRangeByCount(const std::vector<double>& x, size_t cou
 std::vector<double> SlidingStdDevByCount(const std::vector<double>& x, size_t count);
 
 // The streaming kernel behind SlidingRange, for callers that process a long signal chunk by chunk
-// without materialising all window ends (estimate/flight). Reuse one object across calls: it owns
-// the block buffers.
+// without materialising all window ends (estimate/paper/flight). Reuse one object across calls: it
+// owns the block buffers.
 class SlidingRangeKernel {
  public:
   // Ranges of the windows k in [k_begin, k_end): window k holds x[k .. e_k) with

@@ -216,7 +216,9 @@ bool NeverRecognised(std::string_view) { return false; }
 
 const std::vector<LogReader>& LogReaders() {
   // Detection tries the kBytes readers in this order, then the kText ones, then the plain gyro
-  // logs' rules (DetectGyroFormat); messages list the formats in this order.
+  // logs' rules (DetectGyroFormat); messages list the formats in this order. Each entry: format,
+  // names, display name, detection, recogniser, opener, opening pass, camera events, fuzz target,
+  // reader's header (LogReader).
   static const std::vector<LogReader> readers = {
       {LogFormat::kULog,
        {"ulog", "ulg", "px4"},
@@ -224,6 +226,7 @@ const std::vector<LogReader>& LogReaders() {
        LogDetection::kBytes,
        LooksLikeULog,
        OpenULogLog,
+       true,
        true,
        "ulog",
        "sim/logs/ulog.h"},
@@ -234,6 +237,7 @@ const std::vector<LogReader>& LogReaders() {
        LooksLikeDataFlash,
        OpenDataFlashLog,
        true,
+       true,
        "dataflash",
        "sim/logs/dataflash.h"},
       {LogFormat::kBlackbox,
@@ -242,6 +246,7 @@ const std::vector<LogReader>& LogReaders() {
        LogDetection::kBytes,
        LooksLikeBlackbox,
        OpenBlackboxLog,
+       true,
        false,
        "blackbox",
        "sim/logs/blackbox.h"},
@@ -252,6 +257,7 @@ const std::vector<LogReader>& LogReaders() {
        LooksLikeMp4,
        OpenGoproLog,
        false,
+       false,
        "mp4",
        "sim/logs/gopro_telemetry.h"},
       {LogFormat::kGyroCsv,
@@ -260,6 +266,7 @@ const std::vector<LogReader>& LogReaders() {
        LogDetection::kPlainGyro,
        NeverRecognised,
        OpenGyroCsvLog,
+       false,
        false,
        "gyro_csv",
        "sim/logs/gyro_io.h"},
@@ -270,6 +277,7 @@ const std::vector<LogReader>& LogReaders() {
        NeverRecognised,
        OpenGcsvLog,
        false,
+       false,
        "gcsv",
        "sim/logs/gcsv.h"},
       {LogFormat::kRaw,
@@ -278,6 +286,7 @@ const std::vector<LogReader>& LogReaders() {
        LogDetection::kPlainGyro,
        NeverRecognised,
        OpenRawLog,
+       false,
        false,
        "raw_csv",
        "sim/logs/raw_csv.h"},
@@ -288,6 +297,7 @@ const std::vector<LogReader>& LogReaders() {
        LooksLikeGyroDump,
        OpenGyroDumpLog,
        false,
+       false,
        "gyro_dump",
        "sim/logs/gyro_dump.h"},
       {LogFormat::kColumns,
@@ -296,6 +306,7 @@ const std::vector<LogReader>& LogReaders() {
        LogDetection::kNever,
        NeverRecognised,
        OpenColumnsLog,
+       false,
        false,
        "column_csv",
        "sim/logs/column_csv.h"},
@@ -365,7 +376,7 @@ FlightLogStream OpenFlightLog(TextBlocks input, const std::string& path,
   LogFormat format = options.format;
   if (format == LogFormat::kAuto) format = DetectFlightLogFormat(input.Peek(kDetectBytes), path);
   const LogReader& reader = ReaderOf(format);
-  if (reader.detection == LogDetection::kBytes) {
+  if (reader.opening_pass) {
     // Never less than before: a reader may read some bytes twice (DataFlash's pass 1 again without
     // its limits).
     OpeningProgress progress;

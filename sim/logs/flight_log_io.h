@@ -58,6 +58,9 @@ struct LogReader {
   // pass (telling progress, may be empty); throws IoError naming path on unreadable input.
   FlightLogStream (*open)(TextBlocks input, const std::string& path,
                           const FlightLogReadOptions& options, const OpeningProgress& progress);
+  // Opened in a first pass over the whole file that tells its progress (the flight-controller
+  // logs); a GoPro MP4 is decoded whole instead, and text logs open by their header.
+  bool opening_pass;
   bool camera_events;         // may carry camera events and GPS time (FlightLog::camera_events)
   const char* fuzz_target;    // fuzz/NAME_fuzz.cc: the fuzz target of its reader
   const char* reader_header;  // the reader's header, as docs/FORMATS.md's table names it

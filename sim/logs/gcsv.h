@@ -87,7 +87,7 @@ struct GcsvWriteOptions {
 };
 
 // The header of a .gcsv up to and including its column line "t,gx,gy,gz", as WriteGcsv writes it:
-// for writers that stream the rows themselves (sim/record). Checks the options.
+// for writers that stream the rows themselves (record/). Checks the options.
 std::string GcsvHeaderText(const GcsvWriteOptions& options);
 
 // Writes a .gcsv whole or not at all (IoError on failure).

@@ -195,7 +195,8 @@ TEST(FlightCli, AutoBiasStreamedEqualsTheWholeTrace) {
 }
 
 // A log with no still stretch: --auto-bias is refused in one line that names the log, from a file
-// and from a pipe alike.
+// and from a pipe alike, by flight, noise and accuracy (which before the log pipeline said it
+// without the log's name).
 TEST(FlightCli, AutoBiasWithoutAStillStretchNamesTheLog) {
   TempDir dir;
   std::vector<GyroSample> samples;
@@ -212,6 +213,13 @@ TEST(FlightCli, AutoBiasWithoutAStillStretchNamesTheLog) {
     EXPECT_EQ(r.exit_code, 2) << r.output;
     const std::string named = piped ? "/dev/stdin" : path;
     EXPECT_EQ(r.err.rfind("error: " + named + ": no still segment found: ", 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  // noise and accuracy read the log whole, and name it the same way.
+  for (const std::string command : {"noise", "accuracy --reference-deg 1"}) {
+    const auto r = RunShutterlab(command + " " + path + " --auto-bias");
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.output;
+    EXPECT_EQ(r.err.rfind("error: " + path + ": no still segment found: ", 0), 0u) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   }
   // A bad flag is refused before a log on a pipe is copied (no folder to copy it to here), and is

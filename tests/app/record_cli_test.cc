@@ -111,7 +111,7 @@ TEST(RecordCli, BadDevicesAreOneLineWithExitCodeTwo) {
   const std::string trace = dir / "still.csv";
   WriteTrace(trace, MotionProfile::kStill, 1000, 1.0, 5);
   // A trace that is not there (IoError) and a part that has no such range (std::invalid_argument);
-  // the device spec's other refusals are tested in tests/sim/record.
+  // the device spec's other refusals are tested in tests/record.
   for (const std::string& device :
        {"emulate:" + dir / "missing.csv", "emulate:" + trace + ",range=300"}) {
     const auto result = RunShutterlab("record --device " + device +

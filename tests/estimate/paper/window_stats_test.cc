@@ -161,7 +161,8 @@ TEST(WindowStats, StdDevOfConstantIsZero) {
 }
 
 TEST(WindowStats, KernelChunkedMatchesWholeRun) {
-  // The streaming kernel with a local ends array (as estimate/flight uses it) equals SlidingRange.
+  // The streaming kernel with a local ends array (as estimate/paper/flight uses it) equals
+  // SlidingRange.
   const auto x = RandomSignal(20000, 11);
   const auto t = test::IrregularTimes(x.size(), 12);
   const auto ends = WindowEndsByDuration(t, 15000000);
@@ -191,9 +192,9 @@ TEST(WindowStats, KernelChunkedMatchesWholeRun) {
 
 TEST(WindowStats, KernelSetsOfSeveralDurationsMatchBruteForce) {
   // Windows of 3, 15 and 40 ms over the same irregular samples (gaps make some windows shorter
-  // than the shared block), swept a chunk of starts at a time as estimate/flight does: each set's
-  // ranges equal its brute-force twin's, bit for bit, including the chunks where a longer set has
-  // no window left.
+  // than the shared block), swept a chunk of starts at a time as estimate/paper/flight does: each
+  // set's ranges equal its brute-force twin's, bit for bit, including the chunks where a longer set
+  // has no window left.
   const auto x = RandomSignal(20000, 21), y = RandomSignal(20000, 22), z = RandomSignal(20000, 23);
   const auto t = test::IrregularTimes(x.size(), 24);
   std::vector<std::vector<uint32_t>> ends;

@@ -563,6 +563,11 @@ TEST(ReaderTable, EveryFormatHasOneReaderWithNamesOfItsOwn) {
       }
     }
     EXPECT_EQ(&ReaderOf(reader.format), &reader);
+    // A first pass that tells its progress: the flight-controller logs, read in two passes.
+    const bool flight_controller = reader.format == LogFormat::kULog ||
+                                   reader.format == LogFormat::kDataFlash ||
+                                   reader.format == LogFormat::kBlackbox;
+    EXPECT_EQ(reader.opening_pass, flight_controller) << reader.display_name;
   }
   std::vector<std::string> listed = LogFormatNames();
   ASSERT_EQ(listed.size(), LogReaders().size() + 1);

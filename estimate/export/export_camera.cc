@@ -1,0 +1,136 @@
+#include "estimate/export/export_camera.h"
+
+#include "estimate/report/loop_json.h"
+#include "model/camera.h"
+#include "model/effects.h"
+#include "sim/check.h"
+#include "sim/text_file.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <utility>
+#include <variant>
+
+namespace shutterlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A scalar effect's standard error from the report's covariance; nullopt without one.
+std::optional<double> ScalarStderr(const ReportedEffect& effect, const TrueModel& model) {
+  if (effect.covariance.size() == 0) return std::nullopt;
+  const EffectValue se = EffectStderr(effect.effect, model, effect.covariance);
+  if (const double* value = std::get_if<double>(&se)) return *value;
+  return std::nullopt;
+}
+
+ExportCamera FromReport(const std::string& path) {
+  const ReportedModel report = ReadValidationReport(path);
+  if (!report.fitted) {
+    throw IoError(IoMessage(path, 0,
+                            "the report has no \"fitted_model\" (a report of another tool or an "
+                            "older version): export the dataset's camera.json instead"));
+  }
+  ExportCamera camera;
+  camera.source = "validation report " + path;
+  camera.truth = *report.fitted;
+  for (const ReportedEffect& effect : report.effects) {
+    const std::optional<double> se = ScalarStderr(effect, camera.truth);
+    if (effect.effect == Effect::kTimeOffset) camera.time_offset_stderr_s = se;
+    if (effect.effect == Effect::kReadoutTime) camera.readout_stderr_s = se;
+    if (effect.effect == Effect::kClockRate) camera.clock_rate_stderr_ppm = se;
+  }
+  return camera;
+}
+
+ExportCamera FromCameraJson(const std::string& path) {
+  ExportCamera camera;
+  camera.source = "camera.json " + path;
+  camera.truth.rig = ReadRigModel(path);
+  return camera;
+}
+
+// The photos of an `analyze --photos --json` result: the camera of the first photo with a size
+// and a focal length (principal point at the centre, no lens distortion: the photos' metadata
+// give none), its readout; every readable photo listed.
+ExportCamera FromPhotos(const std::string& path, const nlohmann::json& photos) {
+  ExportCamera camera;
+  camera.source = "analyze --photos result " + path;
+  bool have_camera = false;
+  for (const nlohmann::json& p : photos) {
+    if (!p.is_object() || p.contains("error")) continue;
+    ExportPhoto photo;
+    photo.name = p.value("name", "");
+    photo.path = p.value("path", "");
+    photo.width = p.value("width", 0);
+    photo.height = p.value("height", 0);
+    if (p.contains("readout_s") && p["readout_s"].is_number())
+      photo.readout_s = p["readout_s"].get<double>();
+    if (p.contains("speed_m_s") && p["speed_m_s"].is_number())
+      photo.speed_m_s = p["speed_m_s"].get<double>();
+    if (p.contains("flagged") && p["flagged"].is_object()) {
+      for (const auto& [limit, flag] : p["flagged"].items())
+        photo.flagged = photo.flagged || (flag.is_boolean() && flag.get<bool>());
+    }
+    const bool has_focal = p.contains("focal_px") && p["focal_px"].is_number();
+    if (!have_camera && photo.width > 0 && photo.height > 0 && has_focal) {
+      PinholeCamera& c = camera.truth.rig.camera;
+      c.width = photo.width;
+      c.height = photo.height;
+      c.fx = c.fy = p["focal_px"].get<double>();
+      c.cx = 0.5 * (photo.width - 1);
+      c.cy = 0.5 * (photo.height - 1);
+      camera.make = p.value("make", "");
+      camera.model = p.value("model", "");
+      camera.readout_known = photo.readout_s.has_value();
+      camera.truth.rig.shutter.readout_s = photo.readout_s.value_or(0.0);
+      have_camera = true;
+    }
+    camera.photos.push_back(std::move(photo));
+  }
+  if (!have_camera) {
+    throw IoError(IoMessage(path, 0,
+                            "no photo with a size and a focal length: nothing to export (give "
+                            "analyze --photos --focal-px, or a camera.json)"));
+  }
+  return camera;
+}
+
+}  // namespace
+
+ExportCamera ReadExportSource(const std::string& path) {
+  if (fs::is_directory(path)) {
+    const std::string camera_json = (fs::path(path) / "camera.json").string();
+    if (!fs::is_regular_file(camera_json)) {
+      throw IoError(IoMessage(path, 0,
+                              "a folder without camera.json: give a rig dataset, a correction's "
+                              "output, a validation report or an analyze --photos --json result"));
+    }
+    return FromCameraJson(camera_json);
+  }
+  const std::string text = ReadFileToString(path);
+  nlohmann::json json;
+  try {
+    json = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw IoError(IoMessage(path, 0, std::string("not JSON: ") + e.what()));
+  }
+  const std::string format = json.is_object() ? json.value("format", "") : "";
+  if (format.rfind("validation/", 0) == 0) return FromReport(path);
+  if (format.rfind("rig/", 0) == 0) return FromCameraJson(path);
+  if (json.is_object() && json.contains("photos")) {
+    const nlohmann::json& photos = json["photos"];
+    if (photos.is_array()) return FromPhotos(path, photos);
+    // With a LOG, the photos' result sits under "photos" beside analyze's own.
+    if (photos.is_object() && photos.contains("photos") && photos["photos"].is_array())
+      return FromPhotos(path, photos["photos"]);
+  }
+  throw IoError(IoMessage(path, 0,
+                          "not a validation report (validation/1), a camera.json (rig/1) or an "
+                          "analyze --photos --json result"));
+}
+
+}  // namespace shutterlab

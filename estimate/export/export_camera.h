@@ -1,0 +1,49 @@
+#pragma once
+// What `shutterlab export` carries into another tool, read from any of shutterlab's results: a
+// validation report (the fitted model, each effect's standard error), a camera.json (a rig
+// dataset's, a correction's) or a folder that holds one, or an `analyze --photos --json` result
+// (the photos' own camera: size, focal length, readout, speed).
+//
+// Every quantity is in shutterlab's conventions (docs/FORMATS.md): OpenCV intrinsics with the
+// centre of the top-left pixel at (0, 0); a frame's time is its first row read's, and row v is
+// read v * readout_s / height later; gyro clock = camera clock + time_offset_s; w_C = R_CG w_G.
+// Each exporter converts to its tool's conventions and says how (estimate/export/exports.h).
+
+#include "model/truth_model.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace shutterlab {
+
+// A photo of an `analyze --photos` result, as the tools list their images.
+struct ExportPhoto {
+  std::string name;  // file name, relative to the photo folder
+  std::string path;  // as the result gives it
+  int width = 0, height = 0;
+  std::optional<double> readout_s;  // the photo's readout, when known
+  std::optional<double> speed_m_s;  // its recorded ground speed, when known
+  bool flagged = false;             // over a limit in the analysis (the exclude list)
+};
+
+struct ExportCamera {
+  std::string source;       // what it was read from, for the side notes: "validation report X"
+  std::string make, model;  // the camera's, when the source names them; "" otherwise
+  // The rig (intrinsics, lens, readout and direction, mounting R_CG, time offset) and the gyro's
+  // scale, bias and clock rate.
+  TrueModel truth;
+  bool readout_known = true;  // false: no readout anywhere in the source (a photo of no table row)
+  // The standard errors the source gives, where the exported value has one: time_offset and
+  // readout_time (s), clock_rate (ppm); NaN where the data did not determine it.
+  std::optional<double> time_offset_stderr_s, readout_stderr_s, clock_rate_stderr_ppm;
+  std::vector<ExportPhoto> photos;  // an `analyze --photos` result's, in its order
+};
+
+// Reads path by its content: a JSON file with "format": "validation/1" (a report, whose
+// "fitted_model" it needs), "format": "rig/1" (camera.json), or a "photos" list (analyze
+// --photos --json, with or without a LOG); a folder holding camera.json (a rig dataset, a
+// correction's output). Throws IoError("PATH: problem") naming what it could not use.
+ExportCamera ReadExportSource(const std::string& path);
+
+}  // namespace shutterlab

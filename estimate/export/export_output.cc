@@ -1,0 +1,103 @@
+#include "estimate/export/export_output.h"
+
+#include "model/camera.h"
+#include "model/lens_distortion.h"
+#include "sim/check.h"
+#include "sim/readout_direction.h"
+#include "sim/text_file.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+namespace shutterlab {
+
+std::string ExportNumber(double value) {
+  char text[40];
+  for (int digits = 15; digits <= 17; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, value);
+    if (std::strtod(text, nullptr) == value) break;
+  }
+  return text;
+}
+
+void RequireDetermined(const char* name, const std::optional<double>& stderr_value,
+                       const ExportOptions& options, std::vector<std::string>* notes) {
+  if (!stderr_value || std::isfinite(*stderr_value)) return;
+  const std::string what = std::string(name) + " was not determined by the data (its standard "
+                                               "error is not a number)";
+  if (!options.force) throw std::invalid_argument(what + ": not exported (--force writes it)");
+  notes->push_back(what + "; written anyway (--force)");
+}
+
+void RequireCarried(bool carried, const std::string& what, const ExportOptions& options,
+                    std::vector<std::string>* notes) {
+  if (carried) return;
+  if (!options.force) throw std::invalid_argument(what + " (--force leaves it out)");
+  notes->push_back(what + "; left out (--force)");
+}
+
+namespace {
+
+std::string LensText(const LensDistortion& lens) {
+  std::string text = LensModelName(lens);
+  if (const auto* brown = std::get_if<BrownConrady>(&lens)) {
+    const char* names[] = {"k1", "k2", "p1", "p2", "k3"};
+    for (int i = 0; i < 5; ++i) text += std::string(" ") + names[i] + " " + ExportNumber(brown->coeffs[i]);
+  } else {
+    const auto& k = std::get<Fisheye>(lens).coeffs();
+    for (int i = 0; i < 4; ++i) text += " k" + std::to_string(i + 1) + " " + ExportNumber(k[i]);
+  }
+  return text;
+}
+
+}  // namespace
+
+void AddSideNote(const char* format, const ExportCamera& camera, ExportOutput* output) {
+  const RigModel& rig = camera.truth.rig;
+  const PinholeCamera& c = rig.camera;
+  std::string text = std::string("shutterlab export --to ") + format + "\n";
+  text += "source: " + camera.source + "\n";
+  if (!camera.make.empty() || !camera.model.empty())
+    text += "camera: " + camera.make + " " + camera.model + "\n";
+  text += "as shutterlab holds it (docs/FORMATS.md: OpenCV pixel centres, the top-left pixel's at "
+          "(0, 0); a frame's time is its first row read's; gyro clock = camera clock + "
+          "time_offset_s):\n";
+  text += "  image " + std::to_string(c.width) + " x " + std::to_string(c.height) + " px, fx " +
+          ExportNumber(c.fx) + ", fy " + ExportNumber(c.fy) + ", cx " + ExportNumber(c.cx) +
+          ", cy " + ExportNumber(c.cy) + " px\n";
+  text += "  lens " + LensText(c.distortion) + "\n";
+  text += camera.readout_known ? "  readout " + ExportNumber(rig.shutter.readout_s) + " s, " +
+                                     ReadoutDirectionName(rig.shutter.direction) + "\n"
+                               : std::string("  readout unknown\n");
+  text += "  time_offset " + ExportNumber(rig.time_offset_s) + " s, clock_rate " +
+          ExportNumber(camera.truth.clock_rate_ppm) + " ppm\n";
+  const Eigen::Matrix3d& r = rig.cam_from_gyro;
+  text += "  gyro_to_camera (R_CG, rows)";
+  for (int i = 0; i < 3; ++i) {
+    text += " [" + ExportNumber(r(i, 0)) + ", " + ExportNumber(r(i, 1)) + ", " +
+            ExportNumber(r(i, 2)) + "]";
+  }
+  text += "\n";
+  if (!camera.photos.empty()) text += "  photos " + std::to_string(camera.photos.size()) + "\n";
+  text += "notes:\n";
+  for (const std::string& note : output->notes) text += "  - " + note + "\n";
+  output->files.push_back({"shutterlab_export.txt", text, "what was exported, from what, and how"});
+}
+
+std::vector<std::string> WriteExport(const ExportOutput& output, const std::string& out_dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) throw IoError(IoMessage(out_dir, 0, "cannot create the folder: " + ec.message()));
+  std::vector<std::string> written;
+  for (const ExportFile& file : output.files) {
+    const std::filesystem::path path = std::filesystem::path(out_dir) / file.name;
+    std::filesystem::create_directories(path.parent_path(), ec);
+    WriteFileAtomically(path.string(), file.text);
+    written.push_back(path.string());
+  }
+  return written;
+}
+
+}  // namespace shutterlab

@@ -1,0 +1,38 @@
+#include "estimate/export/exports.h"
+
+#include "estimate/export/colmap_export.h"
+#include "estimate/export/gyroflow_export.h"
+#include "estimate/export/kalibr_export.h"
+#include "estimate/export/metashape_export.h"
+#include "estimate/export/odm_export.h"
+#include "sim/text_file.h"
+
+#include <stdexcept>
+
+namespace shutterlab {
+
+const std::vector<ExportFormat>& ExportFormats() {
+  static const std::vector<ExportFormat> formats = {
+      {"colmap", "COLMAP text model (cameras.txt), feature_extractor options, image list",
+       ColmapExport},
+      {"odm", "OpenDroneMap / OpenSfM: camera_models_overrides.json, the rolling-shutter options",
+       OdmExport},
+      {"kalibr", "Kalibr camchain-imucam.yaml (time shift, line delay, T_cam_imu)", KalibrExport},
+      {"gyroflow", "Gyroflow lens profile and project settings (readout, sync offset)",
+       GyroflowExport},
+      {"metashape", "Agisoft Metashape calibration XML", MetashapeExport},
+  };
+  return formats;
+}
+
+const ExportFormat& FindExportFormat(const std::string& name) {
+  const std::string lower = ToLower(name);
+  std::string names;
+  for (const ExportFormat& format : ExportFormats()) {
+    if (lower == format.name) return format;
+    names += (names.empty() ? "" : ", ") + std::string(format.name);
+  }
+  throw std::invalid_argument("unknown export format '" + name + "' (" + names + ")");
+}
+
+}  // namespace shutterlab

@@ -1,0 +1,96 @@
+#include "estimate/export/gyroflow_export.h"
+
+#include "model/lens_distortion.h"
+#include "sim/readout_direction.h"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+nlohmann::json LensProfileJson(const ExportCamera& camera) {
+  const RigModel& rig = camera.truth.rig;
+  const PinholeCamera& c = rig.camera;
+  const nlohmann::json matrix = {{c.fx, 0.0, c.cx}, {0.0, c.fy, c.cy}, {0.0, 0.0, 1.0}};
+  nlohmann::json profile = {
+      {"name", "shutterlab export"},
+      {"camera_brand", camera.make},
+      {"camera_model", camera.model},
+      {"calibrated_by", "shutterlab"},
+      {"calibrator_version", "shutterlab export"},
+      {"calib_dimension", {{"w", c.width}, {"h", c.height}}},
+      {"orig_dimension", {{"w", c.width}, {"h", c.height}}},
+      {"asymmetrical", true},
+      {"note", "exported from " + camera.source}};
+  if (const auto* brown = std::get_if<BrownConrady>(&c.distortion)) {
+    const auto& k = brown->coeffs;  // OpenCV's order, as Gyroflow's opencv_standard takes it
+    profile["distortion_model"] = "opencv_standard";
+    profile["use_opencv_standard"] = true;
+    profile["calib_params"] = {{"camera_matrix", matrix},
+                               {"distortion_coeffs", {k[0], k[1], k[2], k[3], k[4]}},
+                               {"RMS_error", 0.0}};
+  } else {
+    const auto& k = std::get<Fisheye>(c.distortion).coeffs();
+    profile["distortion_model"] = "opencv_fisheye";
+    profile["fisheye_params"] = {{"camera_matrix", matrix},
+                                 {"distortion_coeffs", {k[0], k[1], k[2], k[3]}},
+                                 {"RMS_error", 0.0}};
+  }
+  if (camera.readout_known) {
+    const bool bottom_up = rig.shutter.direction == ReadoutDirection::kBottomToTop;
+    profile["frame_readout_time"] = (bottom_up ? -1e3 : 1e3) * rig.shutter.readout_s;
+  }
+  return profile;
+}
+
+}  // namespace
+
+ExportOutput GyroflowExport(const ExportCamera& camera, const ExportOptions& options) {
+  const RigModel& rig = camera.truth.rig;
+  ExportOutput out;
+  RequireCarried(IsRowReadout(rig.shutter.direction),
+                 "Gyroflow corrects row readouts only; the camera reads " +
+                     std::string(ReadoutDirectionName(rig.shutter.direction)),
+                 options, &out.notes);
+  RequireDetermined("time_offset", camera.time_offset_stderr_s, options, &out.notes);
+  if (camera.readout_known)
+    RequireDetermined("readout_time", camera.readout_stderr_s, options, &out.notes);
+  RequireCarried(camera.truth.clock_rate_ppm == 0.0,
+                 "a Gyroflow project's sync offset is constant here; the gyro clock runs " +
+                     ExportNumber(camera.truth.clock_rate_ppm) + " ppm fast",
+                 options, &out.notes);
+  const nlohmann::json profile = LensProfileJson(camera);
+  out.files.push_back({"lens_profile.json", profile.dump(2) + "\n", "Gyroflow's lens profile"});
+  const double readout_ms = camera.readout_known ? 1e3 * rig.shutter.readout_s : 0.0;
+  const double offset_ms = -1e3 * rig.time_offset_s - 0.5 * readout_ms;
+  const nlohmann::json project = {
+      {"title", "Gyroflow data file"},
+      {"version", 4},
+      {"calibration_data", profile},
+      {"stabilization",
+       {{"frame_readout_time", readout_ms},
+        {"frame_readout_direction", ReadoutDirectionName(rig.shutter.direction)}}},
+      {"offsets", {{"0", offset_ms}}},
+      {"note", "shutterlab export: the lens, the readout and the sync offset; load the video and "
+               "its gyro in Gyroflow, then these settings"}};
+  out.files.push_back({"project.gyroflow", project.dump(2) + "\n",
+                       "a Gyroflow project's lens, readout and sync offset"});
+  out.notes.push_back("frame_readout_time " + ExportNumber(readout_ms) +
+                      " ms (the lens profile's is negative for a bottom-to-top readout)");
+  out.notes.push_back("sync offset " + ExportNumber(offset_ms) +
+                      " ms = -1000 (time_offset_s + readout_s / 2): Gyroflow reads the gyro at "
+                      "video time - offset and times a frame from its middle row, shutterlab from "
+                      "its first");
+  out.notes.push_back("asymmetrical: true keeps the principal point (Gyroflow puts it at the image "
+                      "centre otherwise)");
+  out.notes.push_back("the gyro's mounting (R_CG) is not written: set Gyroflow's IMU orientation "
+                      "by hand (the side note gives R_CG)");
+  AddSideNote("gyroflow", camera, &out);
+  return out;
+}
+
+}  // namespace shutterlab

@@ -1,0 +1,413 @@
+// The exports against the tools' own models: each exported camera, read back as its tool reads it
+// (COLMAP's text model through the colmap program where installed, Kalibr's YAML through Python's
+// YAML parser, the rest by their documented fields), projects 3D points to the pixels shutterlab's
+// camera gives, in the tool's pixel convention, by the tool's equations written out here from its
+// documentation (a second implementation: none of shutterlab's projection code). And the
+// conventions that are not projections: readout, row reference, offset sign, refusals.
+
+#include "estimate/export/colmap_export.h"
+#include "estimate/export/export_camera.h"
+#include "estimate/export/exports.h"
+#include "estimate/export/gyroflow_export.h"
+#include "estimate/export/kalibr_export.h"
+#include "estimate/export/metashape_export.h"
+#include "estimate/export/odm_export.h"
+#include "io/lens_profile.h"
+#include "model/camera.h"
+#include "model/effect_io.h"
+#include "sim/check.h"
+#include "sim/so3.h"
+#include "sim/text_file.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <random>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+// Sub-nanopixel: the exports write every number to the precision that reads back exactly.
+constexpr double kProjectionTolPx = 1e-7;
+
+// A camera with nothing at its default: fx != fy, an off-centre principal point, every
+// Brown-Conrady coefficient (a fisheye where asked), a 27.1 ms bottom-to-top readout, a 4.3 ms
+// time offset, a mounting off the axes.
+ExportCamera TestCamera(bool fisheye = false) {
+  ExportCamera camera;
+  camera.source = "a test camera";
+  camera.make = "DJI";
+  camera.model = "FC6310";
+  PinholeCamera& c = camera.truth.rig.camera;
+  c.width = 1280, c.height = 960;
+  c.fx = 1101.25, c.fy = 1098.5, c.cx = 651.3, c.cy = 470.8;
+  if (fisheye) {
+    c.fx = c.fy = 600.0;
+    c.distortion = Fisheye({0.06, 0.04, -0.04, 0.015});
+  } else {
+    c.distortion = BrownConrady{{-0.12, 0.045, 0.0011, -0.0007, -0.008}};
+  }
+  camera.truth.rig.shutter.readout_s = 0.0271;
+  camera.truth.rig.shutter.direction = ReadoutDirection::kBottomToTop;
+  camera.truth.rig.time_offset_s = 0.0043;
+  camera.truth.rig.cam_from_gyro = ExpSO3(Eigen::Vector3d(0.02, -0.01, 0.03)).toRotationMatrix();
+  camera.time_offset_stderr_s = 1e-5;
+  camera.readout_stderr_s = 2e-4;
+  return camera;
+}
+
+// Points in front of the camera spread over its whole image (up to 60 degrees off the axis).
+std::vector<Eigen::Vector3d> PointsInView(int count = 200) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> xy(-0.7, 0.7), depth(2.0, 80.0);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < count; ++i) {
+    const double z = depth(rng);
+    points.push_back({xy(rng) * z, xy(rng) * z, z});
+  }
+  return points;
+}
+
+const ExportFile& FileNamed(const ExportOutput& out, const std::string& name) {
+  for (const ExportFile& file : out.files) {
+    if (file.name == name) return file;
+  }
+  throw std::runtime_error("no " + name);
+}
+
+std::vector<double> Numbers(const std::string& text) {
+  std::vector<double> values;
+  std::istringstream in(text);
+  for (double v; in >> v;) values.push_back(v);
+  return values;
+}
+
+// OpenCV's Brown-Conrady distortion of a normalised point, and its fisheye model, written out
+// (OpenCV calib3d and fisheye docs; COLMAP's FULL_OPENCV and OPENCV_FISHEYE, OpenSfM's brown and
+// fisheye_opencv, Kalibr's radtan and equidistant are these).
+Eigen::Vector2d BrownDistorted(double x, double y, double k1, double k2, double p1, double p2,
+                               double k3) {
+  const double r2 = x * x + y * y;
+  const double radial = 1 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
+  return {x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x),
+          y * radial + 2 * p2 * x * y + p1 * (r2 + 2 * y * y)};
+}
+Eigen::Vector2d FisheyeDistorted(double x, double y, double k1, double k2, double k3, double k4) {
+  const double r = std::hypot(x, y), theta = std::atan(r);
+  const double t2 = theta * theta;
+  const double theta_d = theta * (1 + k1 * t2 + k2 * t2 * t2 + k3 * t2 * t2 * t2 +
+                                  k4 * t2 * t2 * t2 * t2);
+  return r > 0 ? Eigen::Vector2d(x * theta_d / r, y * theta_d / r) : Eigen::Vector2d(0, 0);
+}
+
+TEST(ColmapExport, CamerasTxtProjectsAsColmapsModelWithItsHalfPixel) {
+  for (bool fisheye : {false, true}) {
+    const ExportCamera camera = TestCamera(fisheye);
+    const ExportOutput out = ColmapExport(camera, {});
+    // The camera line: the last line of cameras.txt that is not a comment.
+    std::string line;
+    std::istringstream lines(FileNamed(out, "cameras.txt").text);
+    for (std::string l; std::getline(lines, l);) {
+      if (!l.empty() && l[0] != '#') line = l;
+    }
+    std::istringstream fields(line);
+    std::string id, model;
+    int width = 0, height = 0;
+    fields >> id >> model >> width >> height;
+    std::string rest;
+    std::getline(fields, rest);
+    const std::vector<double> p = Numbers(rest);
+    EXPECT_EQ(model, fisheye ? "OPENCV_FISHEYE" : "FULL_OPENCV");
+    ASSERT_EQ(p.size(), fisheye ? 8u : 12u);
+    EXPECT_EQ(width, 1280);
+    EXPECT_EQ(height, 960);
+    for (const Eigen::Vector3d& point : PointsInView()) {
+      const double x = point.x() / point.z(), y = point.y() / point.z();
+      const Eigen::Vector2d d = fisheye ? FisheyeDistorted(x, y, p[4], p[5], p[6], p[7])
+                                        : BrownDistorted(x, y, p[4], p[5], p[6], p[7], p[8]);
+      // COLMAP: the top-left pixel's centre is (0.5, 0.5); shutterlab (OpenCV): (0, 0).
+      const Eigen::Vector2d colmap(p[0] * d.x() + p[2], p[1] * d.y() + p[3]);
+      const Eigen::Vector2d ours = *camera.truth.rig.camera.ImgFromCam(point);
+      EXPECT_NEAR(colmap.x(), ours.x() + 0.5, kProjectionTolPx);
+      EXPECT_NEAR(colmap.y(), ours.y() + 0.5, kProjectionTolPx);
+    }
+  }
+  // Without k3 the 8-parameter OPENCV model serves.
+  ExportCamera plain = TestCamera();
+  std::get<BrownConrady>(plain.truth.rig.camera.distortion).coeffs[4] = 0.0;
+  EXPECT_NE(FileNamed(ColmapExport(plain, {}), "cameras.txt").text.find("\n1 OPENCV 1280 960 "),
+            std::string::npos);
+}
+
+// COLMAP's own reader takes the text model: converted to its binary model and back, the camera
+// line holds the same numbers.
+TEST(ColmapExport, ColmapsModelConverterReadsTheModel) {
+  if (std::system("colmap help >/dev/null 2>&1") != 0) {
+    if (test::RealDataRequired()) FAIL() << "colmap is not installed (scripts/test.sh installs it)";
+    GTEST_SKIP() << "colmap is not installed (apt-get install colmap)";
+  }
+  test::TempDir dir;
+  const ExportOutput out = ColmapExport(TestCamera(), {});
+  WriteExport(out, dir / "model");
+  const std::string bin = dir / "bin", txt = dir / "txt";
+  std::filesystem::create_directories(bin);
+  std::filesystem::create_directories(txt);
+  ASSERT_EQ(std::system(("colmap model_converter --input_path '" + (dir / "model") +
+                         "' --output_path '" + bin + "' --output_type BIN >/dev/null 2>&1")
+                            .c_str()),
+            0);
+  ASSERT_EQ(std::system(("colmap model_converter --input_path '" + bin + "' --output_path '" +
+                         txt + "' --output_type TXT >/dev/null 2>&1")
+                            .c_str()),
+            0);
+  const auto camera_numbers = [](const std::string& text) {
+    std::istringstream lines(text);
+    std::string line;
+    for (std::string l; std::getline(lines, l);) {
+      if (!l.empty() && l[0] != '#') line = l;
+    }
+    return Numbers(line.substr(line.find(' ', line.find(' ') + 1)));  // after "1 MODEL"
+  };
+  const std::vector<double> ours = camera_numbers(FileNamed(out, "cameras.txt").text);
+  const std::vector<double> colmaps = camera_numbers(ReadFileToString(txt + "/cameras.txt"));
+  ASSERT_EQ(colmaps.size(), ours.size());
+  for (size_t i = 0; i < ours.size(); ++i) EXPECT_EQ(colmaps[i], ours[i]) << i;
+}
+
+// OpenSfM: normalised by the larger side from the image centre, with its half-pixel: pixel =
+// S * n + (W - 1) / 2 (OpenSfM doc/source/geometry.rst) for n = focal * distorted + c.
+TEST(OdmExport, CameraOverridesProjectAsOpenSfmsNormalisedModel) {
+  for (bool fisheye : {false, true}) {
+    ExportCamera camera = TestCamera(fisheye);
+    camera.truth.rig.shutter.direction = ReadoutDirection::kTopToBottom;
+    const ExportOutput out = OdmExport(camera, {});
+    const nlohmann::json all =
+        nlohmann::json::parse(FileNamed(out, "camera_models_overrides.json").text).at("all");
+    EXPECT_EQ(all.at("projection_type"), fisheye ? "fisheye_opencv" : "brown");
+    const double s = 1280.0;
+    for (const Eigen::Vector3d& point : PointsInView()) {
+      const double x = point.x() / point.z(), y = point.y() / point.z();
+      const Eigen::Vector2d d =
+          fisheye ? FisheyeDistorted(x, y, all["k1"], all["k2"], all["k3"], all["k4"])
+                  : BrownDistorted(x, y, all["k1"], all["k2"], all["p1"], all["p2"], all["k3"]);
+      const double nx = all["focal_x"].get<double>() * d.x() + all["c_x"].get<double>();
+      const double ny = all["focal_y"].get<double>() * d.y() + all["c_y"].get<double>();
+      const Eigen::Vector2d ours = *camera.truth.rig.camera.ImgFromCam(point);
+      EXPECT_NEAR(s * nx + (1280 - 1) / 2.0, ours.x(), kProjectionTolPx);
+      EXPECT_NEAR(s * ny + (960 - 1) / 2.0, ours.y(), kProjectionTolPx);
+    }
+  }
+}
+
+TEST(OdmExport, ReadoutInWholeMillisecondsTopToBottomOnly) {
+  ExportCamera camera = TestCamera();
+  camera.truth.rig.shutter.direction = ReadoutDirection::kTopToBottom;
+  const ExportOutput out = OdmExport(camera, {});
+  EXPECT_EQ(FileNamed(out, "odm_args.txt").text,
+            "--rolling-shutter --rolling-shutter-readout 27\n");
+  camera.truth.rig.shutter.direction = ReadoutDirection::kBottomToTop;
+  EXPECT_THROW(OdmExport(camera, {}), std::invalid_argument);
+  ExportOptions force;
+  force.force = true;
+  const ExportOutput forced = OdmExport(camera, force);  // the camera, without the readout
+  EXPECT_NO_THROW(FileNamed(forced, "camera_models_overrides.json"));
+  EXPECT_THROW(FileNamed(forced, "odm_args.txt"), std::runtime_error);
+}
+
+// Kalibr's file read by a YAML parser (Python's), the camera projected by radtan's equations, the
+// rotation, time shift and line delay as Kalibr defines them.
+TEST(KalibrExport, PythonsYamlReadsTheChainAsKalibrDefinesIt) {
+  ExportCamera camera = TestCamera();
+  std::get<BrownConrady>(camera.truth.rig.camera.distortion).coeffs[4] = 0.0;  // radtan: no k3
+  camera.truth.rig.shutter.direction = ReadoutDirection::kTopToBottom;
+  test::TempDir dir;
+  WriteExport(KalibrExport(camera, {}), dir.path().string());
+  const std::string script =
+      "import json, sys, yaml\n"
+      "c = yaml.safe_load(open(sys.argv[1]))['cam0']\n"
+      "print(json.dumps(c))\n";
+  WriteFileAtomically(dir / "read.py", script);
+  const std::string command = "/usr/bin/python3 '" + (dir / "read.py") + "' '" +
+                              (dir / "camchain-imucam.yaml") + "' > '" +
+                              (dir / "cam0.json") + "'";
+  if (std::system(command.c_str()) != 0) {
+    if (test::RealDataRequired()) FAIL() << "python3-yaml is missing (scripts/test.sh installs it)";
+    GTEST_SKIP() << "/usr/bin/python3 with python3-yaml is missing";
+  }
+  const nlohmann::json cam0 = nlohmann::json::parse(ReadFileToString(dir / "cam0.json"));
+  EXPECT_EQ(cam0.at("camera_model"), "pinhole");
+  EXPECT_EQ(cam0.at("distortion_model"), "radtan");
+  EXPECT_EQ(cam0.at("resolution"), nlohmann::json::array({1280, 960}));
+  const std::vector<double> in = cam0.at("intrinsics"), k = cam0.at("distortion_coeffs");
+  for (const Eigen::Vector3d& point : PointsInView()) {
+    const Eigen::Vector2d d =
+        BrownDistorted(point.x() / point.z(), point.y() / point.z(), k[0], k[1], k[2], k[3], 0.0);
+    const Eigen::Vector2d ours = *camera.truth.rig.camera.ImgFromCam(point);
+    EXPECT_NEAR(in[0] * d.x() + in[2], ours.x(), kProjectionTolPx);
+    EXPECT_NEAR(in[1] * d.y() + in[3], ours.y(), kProjectionTolPx);
+  }
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j)
+      EXPECT_EQ(cam0["T_cam_imu"][i][j].get<double>(), camera.truth.rig.cam_from_gyro(i, j));
+  }
+  // t_imu = t_cam + shift; row v at v * line delay after the frame's (first row's) time.
+  EXPECT_EQ(cam0.at("timeshift_cam_imu").get<double>(), 0.0043);
+  EXPECT_NEAR(cam0.at("line_delay_nanoseconds").get<double>() * 960 * 1e-9, 0.0271, 1e-15);
+}
+
+TEST(KalibrExport, RefusesWhatTheChainCannotHoldUnlessForced) {
+  ExportCamera camera = TestCamera();  // k3 != 0 and bottom to top
+  try {
+    KalibrExport(camera, {});
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("no k3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--force"), std::string::npos) << e.what();
+  }
+  ExportOptions force;
+  force.force = true;
+  const ExportOutput out = KalibrExport(camera, force);
+  EXPECT_NE(FileNamed(out, "shutterlab_export.txt").text.find("left out (--force)"),
+            std::string::npos);
+  // A time offset the data did not determine is refused too.
+  camera = TestCamera();
+  std::get<BrownConrady>(camera.truth.rig.camera.distortion).coeffs[4] = 0.0;
+  camera.truth.rig.shutter.direction = ReadoutDirection::kTopToBottom;
+  camera.time_offset_stderr_s = std::nan("");
+  EXPECT_THROW(KalibrExport(camera, {}), std::invalid_argument);
+}
+
+// Gyroflow's lens profile, as shutterlab's reader of Gyroflow's profiles reads it, and the sync
+// offset from the middle row: -1000 (time_offset_s + readout_s / 2) ms.
+TEST(GyroflowExport, TheProfileReadsBackAndTheOffsetCountsFromTheMiddleRow) {
+  for (bool fisheye : {false, true}) {
+    const ExportCamera camera = TestCamera(fisheye);
+    test::TempDir dir;
+    const ExportOutput out = GyroflowExport(camera, {});
+    WriteExport(out, dir.path().string());
+    const LensProfile profile = ReadLensProfile(dir / "lens_profile.json");
+    const PinholeCamera& c = camera.truth.rig.camera;
+    EXPECT_EQ(profile.camera.fx, c.fx);
+    EXPECT_EQ(profile.camera.fy, c.fy);
+    EXPECT_EQ(profile.camera.cx, c.cx);
+    EXPECT_EQ(profile.camera.cy, c.cy);
+    EXPECT_EQ(profile.camera.distortion, c.distortion);
+    ASSERT_TRUE(profile.mode.readout_s);
+    EXPECT_NEAR(*profile.mode.readout_s, 0.0271, 1e-15);
+    EXPECT_EQ(profile.mode.direction, ReadoutDirection::kBottomToTop);
+    const nlohmann::json project = nlohmann::json::parse(FileNamed(out, "project.gyroflow").text);
+    EXPECT_NEAR(project["offsets"]["0"].get<double>(), -1e3 * (0.0043 + 0.0271 / 2), 1e-12);
+    EXPECT_EQ(project["calibration_data"]["asymmetrical"], true);
+  }
+}
+
+// Metashape's frame model (its manual's appendix, "Frame cameras"): u = w/2 + cx + x'(f + b1) +
+// y' b2, v = h/2 + cy + y' f, its P1 and P2 on the terms where OpenCV has p2 and p1; pixel
+// coordinates from the image's top-left corner.
+TEST(MetashapeExport, CalibrationProjectsAsMetashapesFrameModel) {
+  const ExportCamera camera = TestCamera();
+  const std::string xml = FileNamed(MetashapeExport(camera, {}), "calibration.xml").text;
+  std::map<std::string, double> v;
+  const std::regex element("<(\\w+)>([^<]*)</\\w+>");
+  for (auto it = std::sregex_iterator(xml.begin(), xml.end(), element);
+       it != std::sregex_iterator(); ++it) {
+    if ((*it)[1] != "projection") v[(*it)[1]] = std::stod((*it)[2]);
+  }
+  EXPECT_NE(xml.find("<projection>frame</projection>"), std::string::npos);
+  for (const Eigen::Vector3d& point : PointsInView()) {
+    const double x = point.x() / point.z(), y = point.y() / point.z(), r2 = x * x + y * y;
+    const double radial = 1 + v["k1"] * r2 + v["k2"] * r2 * r2 + v["k3"] * r2 * r2 * r2;
+    const double xd = x * radial + v["p1"] * (r2 + 2 * x * x) + 2 * v["p2"] * x * y;
+    const double yd = y * radial + v["p2"] * (r2 + 2 * y * y) + 2 * v["p1"] * x * y;
+    const double u = 0.5 * v["width"] + v["cx"] + xd * (v["f"] + v["b1"]) + yd * v["b2"];
+    const double w = 0.5 * v["height"] + v["cy"] + yd * v["f"];
+    const Eigen::Vector2d ours = *camera.truth.rig.camera.ImgFromCam(point);
+    EXPECT_NEAR(u, ours.x() + 0.5, kProjectionTolPx);
+    EXPECT_NEAR(w, ours.y() + 0.5, kProjectionTolPx);
+  }
+  EXPECT_THROW(MetashapeExport(TestCamera(/*fisheye=*/true), {}), std::invalid_argument);
+}
+
+// The sources: a validation report's fitted model with its effects' standard errors, a
+// camera.json, a folder holding one, the photos of an analyze --photos result.
+TEST(ExportSource, ReadsAReportACameraJsonAFolderAndPhotos) {
+  test::TempDir dir;
+  const ExportCamera camera = TestCamera();
+  const nlohmann::json report = {
+      {"format", "validation/1"},
+      {"effects",
+       {{{"name", "time_offset"},
+         {"value", 0.0043},
+         {"parameters", {0.0043}},
+         {"covariance", {{1e-10}}}}}},
+      {"fitted_model", TrueModelToJson(camera.truth)}};
+  WriteFileAtomically(dir / "report.json", report.dump());
+  const ExportCamera from_report = ReadExportSource(dir / "report.json");
+  EXPECT_EQ(from_report.truth.rig.camera.fx, 1101.25);
+  EXPECT_EQ(from_report.truth.rig.time_offset_s, 0.0043);
+  ASSERT_TRUE(from_report.time_offset_stderr_s);
+  EXPECT_NEAR(*from_report.time_offset_stderr_s, 1e-5, 1e-12);
+
+  std::filesystem::create_directories(dir / "dataset");
+  WriteRigModel(dir / "dataset/camera.json", camera.truth.rig);
+  for (const std::string& path : {dir / "dataset/camera.json", dir / "dataset"}) {
+    const ExportCamera from_json = ReadExportSource(path);
+    EXPECT_EQ(from_json.truth.rig.camera.cy, 470.8) << path;
+    EXPECT_EQ(from_json.truth.rig.shutter.readout_s, 0.0271) << path;
+  }
+
+  const nlohmann::json photos = {
+      {"source", "DIR"},
+      {"photos",
+       {{{"name", "a.jpg"}, {"path", "/p/a.jpg"}, {"make", "DJI"}, {"model", "FC8482"},
+         {"width", 4032}, {"height", 2268}, {"focal_px", 2566.1}, {"readout_s", 0.016},
+         {"speed_m_s", 6.9}, {"flagged", {{"0.05", true}, {"0.1", false}}}},
+        {{"name", "b.jpg"}, {"path", "/p/b.jpg"}, {"error", "unreadable"}},
+        {{"name", "c.jpg"}, {"path", "/p/c.jpg"}, {"width", 4032}, {"height", 2268},
+         {"focal_px", 2566.1}, {"readout_s", 0.016}, {"flagged", {{"0.05", false}}}}}}};
+  WriteFileAtomically(dir / "photos.json", photos.dump());
+  const ExportCamera from_photos = ReadExportSource(dir / "photos.json");
+  EXPECT_EQ(from_photos.truth.rig.camera.width, 4032);
+  EXPECT_EQ(from_photos.truth.rig.camera.cx, 2015.5);
+  EXPECT_EQ(from_photos.truth.rig.shutter.readout_s, 0.016);
+  EXPECT_EQ(from_photos.make, "DJI");
+  ASSERT_EQ(from_photos.photos.size(), 2u);  // the unreadable one left out
+  EXPECT_TRUE(from_photos.photos[0].flagged);
+  EXPECT_EQ(FileNamed(ColmapExport(from_photos, {}), "image_list.txt").text, "c.jpg\n");
+  EXPECT_EQ(FileNamed(OdmExport(from_photos, {}), "image_list.txt").text, "/p/c.jpg\n");
+
+  WriteFileAtomically(dir / "other.json", "{\"format\": \"measure/1\"}");
+  EXPECT_THROW(ReadExportSource(dir / "other.json"), IoError);
+}
+
+TEST(ExportFormats, EveryFormatWritesItsSideNoteLastAndUnknownNamesAreListed) {
+  ExportOptions force;
+  force.force = true;
+  for (const ExportFormat& format : ExportFormats()) {
+    const ExportOutput out = format.write(TestCamera(), force);
+    ASSERT_FALSE(out.files.empty()) << format.name;
+    EXPECT_EQ(out.files.back().name, "shutterlab_export.txt") << format.name;
+    EXPECT_NE(out.files.back().text.find(std::string("--to ") + format.name), std::string::npos);
+    EXPECT_EQ(&FindExportFormat(format.name), &format);
+  }
+  try {
+    FindExportFormat("pix4dmapper");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("colmap, odm, kalibr, gyroflow, metashape"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace shutterlab
