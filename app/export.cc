@@ -49,8 +49,7 @@ void Run(const ExportCommand& command) {
 
 const CommandRegistration kExportRegistration(95, [](CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "export",
-      "write the camera, readout, time offset and lens found into another tool's files");
+      "export", "write the camera, readout, time offset and lens found into another tool's files");
   auto command = std::make_shared<ExportCommand>();
   cmd->add_option("SOURCE", command->source,
                   "a validation report (validate --report), a camera.json or a folder holding one "

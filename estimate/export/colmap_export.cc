@@ -40,22 +40,24 @@ ExportOutput ColmapExport(const ExportCamera& camera, const ExportOptions&) {
     line += " " + ExportNumber(params[i]);
     csv += (i ? "," : "") + ExportNumber(params[i]);
   }
-  std::string readout = camera.readout_known
-                            ? ExportNumber(rig.shutter.readout_s) + " s " +
-                                  ReadoutDirectionName(rig.shutter.direction)
-                            : std::string("unknown");
+  std::string readout = camera.readout_known ? ExportNumber(rig.shutter.readout_s) + " s " +
+                                                   ReadoutDirectionName(rig.shutter.direction)
+                                             : std::string("unknown");
   const std::string cameras =
       "# Camera list with one line of data per camera:\n"
       "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
       "# Number of cameras: 1\n"
-      "# shutterlab export from " + camera.source + "\n"
-      "# rolling-shutter readout " + readout + " (COLMAP does not model it)\n" + line + "\n";
+      "# shutterlab export from " +
+      camera.source +
+      "\n"
+      "# rolling-shutter readout " +
+      readout + " (COLMAP does not model it)\n" + line + "\n";
   out.files.push_back({"cameras.txt", cameras, "COLMAP's camera, as a text model"});
   out.files.push_back({"images.txt", "# Image list with two lines of data per image:\n", "empty"});
-  out.files.push_back({"points3D.txt", "# 3D point list with one line of data per point:\n",
-                       "empty"});
-  std::string args = "--ImageReader.camera_model " + model + " --ImageReader.camera_params " +
-                     csv + " --ImageReader.single_camera 1";
+  out.files.push_back(
+      {"points3D.txt", "# 3D point list with one line of data per point:\n", "empty"});
+  std::string args = "--ImageReader.camera_model " + model + " --ImageReader.camera_params " + csv +
+                     " --ImageReader.single_camera 1";
   if (!camera.photos.empty()) {
     std::string list;
     size_t excluded = 0;
@@ -66,15 +68,16 @@ ExportOutput ColmapExport(const ExportCamera& camera, const ExportOptions&) {
       }
       list += photo.name + "\n";
     }
-    out.files.push_back({"image_list.txt", list, "the photos not flagged (--image_list_path)"});
+    out.files.push_back({"image_list.txt", list, "the photos not flagged, for --image_list_path"});
     args += " --image_list_path image_list.txt";
     out.notes.push_back("image_list.txt leaves out the " + std::to_string(excluded) +
                         " photo(s) flagged over a limit");
   }
   out.files.push_back({"colmap_args.txt", args + "\n", "feature_extractor's options"});
   out.notes.push_back("cx, cy + 0.5 px: COLMAP puts the top-left pixel's centre at (0.5, 0.5)");
-  out.notes.push_back("COLMAP has no rolling-shutter model: the readout is not carried (correct "
-                      "the images first with shutterlab correct, or leave the flagged ones out)");
+  out.notes.push_back(
+      "COLMAP has no rolling-shutter model: the readout is not carried (correct "
+      "the images first with shutterlab correct, or leave the flagged ones out)");
   AddSideNote("colmap", camera, &out);
   return out;
 }

@@ -59,6 +59,7 @@ ExportCamera FromCameraJson(const std::string& path) {
 ExportCamera FromPhotos(const std::string& path, const nlohmann::json& photos) {
   ExportCamera camera;
   camera.source = "analyze --photos result " + path;
+  camera.gyro_known = false;
   bool have_camera = false;
   for (const nlohmann::json& p : photos) {
     if (!p.is_object() || p.contains("error")) continue;

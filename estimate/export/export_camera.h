@@ -34,6 +34,9 @@ struct ExportCamera {
   // scale, bias and clock rate.
   TrueModel truth;
   bool readout_known = true;  // false: no readout anywhere in the source (a photo of no table row)
+  // false: the source relates no gyro to the camera (photos alone): the mounting and the time
+  // offset are not known, whatever truth.rig holds.
+  bool gyro_known = true;
   // The standard errors the source gives, where the exported value has one: time_offset and
   // readout_time (s), clock_rate (ppm); NaN where the data did not determine it.
   std::optional<double> time_offset_stderr_s, readout_stderr_s, clock_rate_stderr_ppm;

@@ -25,8 +25,9 @@ std::string ExportNumber(double value) {
 void RequireDetermined(const char* name, const std::optional<double>& stderr_value,
                        const ExportOptions& options, std::vector<std::string>* notes) {
   if (!stderr_value || std::isfinite(*stderr_value)) return;
-  const std::string what = std::string(name) + " was not determined by the data (its standard "
-                                               "error is not a number)";
+  const std::string what = std::string(name) +
+                           " was not determined by the data (its standard "
+                           "error is not a number)";
   if (!options.force) throw std::invalid_argument(what + ": not exported (--force writes it)");
   notes->push_back(what + "; written anyway (--force)");
 }
@@ -34,8 +35,8 @@ void RequireDetermined(const char* name, const std::optional<double>& stderr_val
 void RequireCarried(bool carried, const std::string& what, const ExportOptions& options,
                     std::vector<std::string>* notes) {
   if (carried) return;
-  if (!options.force) throw std::invalid_argument(what + " (--force leaves it out)");
-  notes->push_back(what + "; left out (--force)");
+  if (!options.force) throw std::invalid_argument(what + " (--force writes the rest)");
+  notes->push_back(what + "; the rest written (--force)");
 }
 
 namespace {
@@ -44,7 +45,8 @@ std::string LensText(const LensDistortion& lens) {
   std::string text = LensModelName(lens);
   if (const auto* brown = std::get_if<BrownConrady>(&lens)) {
     const char* names[] = {"k1", "k2", "p1", "p2", "k3"};
-    for (int i = 0; i < 5; ++i) text += std::string(" ") + names[i] + " " + ExportNumber(brown->coeffs[i]);
+    for (int i = 0; i < 5; ++i)
+      text += std::string(" ") + names[i] + " " + ExportNumber(brown->coeffs[i]);
   } else {
     const auto& k = std::get<Fisheye>(lens).coeffs();
     for (int i = 0; i < 4; ++i) text += " k" + std::to_string(i + 1) + " " + ExportNumber(k[i]);
@@ -61,9 +63,10 @@ void AddSideNote(const char* format, const ExportCamera& camera, ExportOutput* o
   text += "source: " + camera.source + "\n";
   if (!camera.make.empty() || !camera.model.empty())
     text += "camera: " + camera.make + " " + camera.model + "\n";
-  text += "as shutterlab holds it (docs/FORMATS.md: OpenCV pixel centres, the top-left pixel's at "
-          "(0, 0); a frame's time is its first row read's; gyro clock = camera clock + "
-          "time_offset_s):\n";
+  text +=
+      "as shutterlab holds it (docs/FORMATS.md: OpenCV pixel centres, the top-left pixel's at "
+      "(0, 0); a frame's time is its first row read's; gyro clock = camera clock + "
+      "time_offset_s):\n";
   text += "  image " + std::to_string(c.width) + " x " + std::to_string(c.height) + " px, fx " +
           ExportNumber(c.fx) + ", fy " + ExportNumber(c.fy) + ", cx " + ExportNumber(c.cx) +
           ", cy " + ExportNumber(c.cy) + " px\n";

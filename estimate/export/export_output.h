@@ -37,8 +37,8 @@ std::string ExportNumber(double value);
 void RequireDetermined(const char* name, const std::optional<double>& stderr_value,
                        const ExportOptions& options, std::vector<std::string>* notes);
 
-// Refuses (std::invalid_argument) what the format cannot carry, unless options.force; then
-// notes what was left out.
+// Refuses (std::invalid_argument, "... (--force writes the rest)") what the format cannot carry,
+// unless options.force; then notes it.
 void RequireCarried(bool carried, const std::string& what, const ExportOptions& options,
                     std::vector<std::string>* notes);
 

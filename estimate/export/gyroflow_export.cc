@@ -2,6 +2,7 @@
 
 #include "model/lens_distortion.h"
 #include "sim/readout_direction.h"
+#include "sim/text_file.h"
 
 #include <nlohmann/json.hpp>
 
@@ -16,16 +17,15 @@ nlohmann::json LensProfileJson(const ExportCamera& camera) {
   const RigModel& rig = camera.truth.rig;
   const PinholeCamera& c = rig.camera;
   const nlohmann::json matrix = {{c.fx, 0.0, c.cx}, {0.0, c.fy, c.cy}, {0.0, 0.0, 1.0}};
-  nlohmann::json profile = {
-      {"name", "shutterlab export"},
-      {"camera_brand", camera.make},
-      {"camera_model", camera.model},
-      {"calibrated_by", "shutterlab"},
-      {"calibrator_version", "shutterlab export"},
-      {"calib_dimension", {{"w", c.width}, {"h", c.height}}},
-      {"orig_dimension", {{"w", c.width}, {"h", c.height}}},
-      {"asymmetrical", true},
-      {"note", "exported from " + camera.source}};
+  nlohmann::json profile = {{"name", "shutterlab export"},
+                            {"camera_brand", camera.make},
+                            {"camera_model", camera.model},
+                            {"calibrated_by", "shutterlab"},
+                            {"calibrator_version", "shutterlab export"},
+                            {"calib_dimension", {{"w", c.width}, {"h", c.height}}},
+                            {"orig_dimension", {{"w", c.width}, {"h", c.height}}},
+                            {"asymmetrical", true},
+                            {"note", "exported from " + camera.source}};
   if (const auto* brown = std::get_if<BrownConrady>(&c.distortion)) {
     const auto& k = brown->coeffs;  // OpenCV's order, as Gyroflow's opencv_standard takes it
     profile["distortion_model"] = "opencv_standard";
@@ -67,28 +67,38 @@ ExportOutput GyroflowExport(const ExportCamera& camera, const ExportOptions& opt
   out.files.push_back({"lens_profile.json", profile.dump(2) + "\n", "Gyroflow's lens profile"});
   const double readout_ms = camera.readout_known ? 1e3 * rig.shutter.readout_s : 0.0;
   const double offset_ms = -1e3 * rig.time_offset_s - 0.5 * readout_ms;
-  const nlohmann::json project = {
+  nlohmann::json project = {
       {"title", "Gyroflow data file"},
       {"version", 4},
       {"calibration_data", profile},
       {"stabilization",
        {{"frame_readout_time", readout_ms},
         {"frame_readout_direction", ReadoutDirectionName(rig.shutter.direction)}}},
-      {"offsets", {{"0", offset_ms}}},
-      {"note", "shutterlab export: the lens, the readout and the sync offset; load the video and "
-               "its gyro in Gyroflow, then these settings"}};
+
+      {"note",
+       "shutterlab export: the lens, the readout and the sync offset; load the video and "
+       "its gyro in Gyroflow, then these settings"}};
+  if (camera.gyro_known) project["offsets"] = {{"0", offset_ms}};
   out.files.push_back({"project.gyroflow", project.dump(2) + "\n",
                        "a Gyroflow project's lens, readout and sync offset"});
-  out.notes.push_back("frame_readout_time " + ExportNumber(readout_ms) +
+  out.notes.push_back("frame_readout_time " + FormatNumber("%.6g", readout_ms) +
                       " ms (the lens profile's is negative for a bottom-to-top readout)");
-  out.notes.push_back("sync offset " + ExportNumber(offset_ms) +
-                      " ms = -1000 (time_offset_s + readout_s / 2): Gyroflow reads the gyro at "
-                      "video time - offset and times a frame from its middle row, shutterlab from "
-                      "its first");
-  out.notes.push_back("asymmetrical: true keeps the principal point (Gyroflow puts it at the image "
-                      "centre otherwise)");
-  out.notes.push_back("the gyro's mounting (R_CG) is not written: set Gyroflow's IMU orientation "
-                      "by hand (the side note gives R_CG)");
+  if (camera.gyro_known) {
+    out.notes.push_back("sync offset " + FormatNumber("%.6g", offset_ms) +
+                        " ms = -1000 (time_offset_s + readout_s / 2): Gyroflow reads the gyro at "
+                        "video time - offset and times a frame from its middle row, shutterlab "
+                        "from its first");
+  } else {
+    out.notes.push_back(
+        "no sync offset: the source relates no gyro to the camera (Gyroflow "
+        "syncs it itself)");
+  }
+  out.notes.push_back(
+      "asymmetrical: true keeps the principal point (Gyroflow puts it at the image "
+      "centre otherwise)");
+  out.notes.push_back(
+      "the gyro's mounting (R_CG) is not written: set Gyroflow's IMU orientation "
+      "by hand (the side note gives R_CG)");
   AddSideNote("gyroflow", camera, &out);
   return out;
 }

@@ -2,6 +2,7 @@
 
 #include "model/lens_distortion.h"
 #include "sim/readout_direction.h"
+#include "sim/text_file.h"
 
 #include <string>
 #include <variant>
@@ -26,8 +27,8 @@ ExportOutput KalibrExport(const ExportCamera& camera, const ExportOptions& optio
   std::vector<double> coeffs;
   if (const auto* brown = std::get_if<BrownConrady>(&c.distortion)) {
     const auto& k = brown->coeffs;
-    RequireCarried(k[4] == 0.0, "Kalibr's radtan model has no k3 (the lens has k3 = " +
-                                    ExportNumber(k[4]) + ")",
+    RequireCarried(k[4] == 0.0,
+                   "Kalibr's radtan model has no k3 (the lens has k3 = " + ExportNumber(k[4]) + ")",
                    options, &out.notes);
     distortion_model = "radtan";
     coeffs = {k[0], k[1], k[2], k[3]};
@@ -36,6 +37,11 @@ ExportOutput KalibrExport(const ExportCamera& camera, const ExportOptions& optio
     distortion_model = "equidistant";
     coeffs = {k[0], k[1], k[2], k[3]};
   }
+  RequireCarried(camera.gyro_known,
+                 "the source relates no gyro to the camera (photos alone): Kalibr's chain needs "
+                 "the mounting and the time shift, from a validation report (--force: identity "
+                 "and 0)",
+                 options, &out.notes);
   RequireDetermined("time_offset", camera.time_offset_stderr_s, options, &out.notes);
   RequireCarried(camera.truth.clock_rate_ppm == 0.0,
                  "Kalibr's time shift is constant; the gyro clock runs " +
@@ -65,19 +71,23 @@ ExportOutput KalibrExport(const ExportCamera& camera, const ExportOptions& optio
       rig.shutter.direction == ReadoutDirection::kTopToBottom) {
     const double line_delay_ns = rig.shutter.readout_s / c.height * 1e9;
     yaml += "  line_delay_nanoseconds: " + ExportNumber(line_delay_ns) + "\n";
-    out.notes.push_back("line_delay_nanoseconds = readout / height = " +
-                        ExportNumber(line_delay_ns) + " ns; row v at v * line delay after the "
-                        "frame's time, the first row's, as in shutterlab");
+    out.notes.push_back(
+        "line_delay_nanoseconds = readout / height = " + FormatNumber("%.6g", line_delay_ns) +
+        " ns; row v at v * line delay after the "
+        "frame's time, the first row's, as in shutterlab");
   }
   yaml += "  rostopic: /cam0/image_raw\n";
   out.files.push_back({"camchain-imucam.yaml", yaml, "Kalibr's camera-IMU chain"});
-  out.notes.push_back("timeshift_cam_imu = time_offset_s (t_imu = t_cam + shift, shutterlab's "
-                      "gyro clock = camera clock + time_offset_s)");
-  out.notes.push_back("T_cam_imu: R_CG (w_C = R_CG w_G) with no translation (shutterlab fits none)");
+  out.notes.push_back(
+      "timeshift_cam_imu = time_offset_s (t_imu = t_cam + shift, shutterlab's "
+      "gyro clock = camera clock + time_offset_s)");
+  out.notes.push_back(
+      "T_cam_imu: R_CG (w_C = R_CG w_G) with no translation (shutterlab fits none)");
   if (camera.truth.gyro_scale != Eigen::Vector3d::Ones() ||
       camera.truth.gyro_bias_rad_s != Eigen::Vector3d::Zero()) {
-    out.notes.push_back("the gyro's scale and bias are not part of camchain-imucam.yaml: see the "
-                        "side note's model");
+    out.notes.push_back(
+        "the gyro's scale and bias are not part of camchain-imucam.yaml: see the "
+        "side note's model");
   }
   AddSideNote("kalibr", camera, &out);
   return out;

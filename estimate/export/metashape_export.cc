@@ -38,11 +38,13 @@ ExportOutput MetashapeExport(const ExportCamera& camera, const ExportOptions&) {
   xml += element("p2", ExportNumber(k[2]));
   xml += "</calibration>\n";
   out.files.push_back({"calibration.xml", xml, "Metashape's camera calibration"});
-  out.notes.push_back("f = fy, b1 = fx - fy; cx, cy from the image centre with the top-left "
-                      "corner as origin (cx_OpenCV + 0.5 - width/2)");
+  out.notes.push_back(
+      "f = fy, b1 = fx - fy; cx, cy from the image centre with the top-left "
+      "corner as origin (cx_OpenCV + 0.5 - width/2)");
   out.notes.push_back("p1, p2 swapped: Metashape's P1 is OpenCV's p2");
-  out.notes.push_back("Metashape fits rolling-shutter compensation per photo: the readout is not "
-                      "part of its calibration file");
+  out.notes.push_back(
+      "Metashape fits rolling-shutter compensation per photo: the readout is not "
+      "part of its calibration file");
   AddSideNote("metashape", camera, &out);
   return out;
 }

@@ -26,8 +26,8 @@ RigModel ExportCliRig() {
 TEST(ExportCli, WritesColmapsFilesAndSaysWhatItWrote) {
   test::TempDir dir;
   WriteRigModel(dir / "camera.json", ExportCliRig());
-  const auto r = test::RunShutterlab("export " + (dir / "camera.json") +
-                                     " --to colmap --out " + (dir / "out") + " --json");
+  const auto r = test::RunShutterlab("export " + (dir / "camera.json") + " --to colmap --out " +
+                                     (dir / "out") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json json = nlohmann::json::parse(r.out);
   EXPECT_EQ(json["to"], "colmap");
@@ -40,9 +40,8 @@ TEST(ExportCli, WritesColmapsFilesAndSaysWhatItWrote) {
 TEST(ExportCli, RefusesInOneLine) {
   test::TempDir dir;
   WriteRigModel(dir / "camera.json", ExportCliRig());
-  for (const std::string& args :
-       {"--to pix4dmapper --out " + (dir / "a"),       // no such format
-        "--to kalibr --out " + (dir / "b") + " --x"}) {  // no such option
+  for (const std::string& args : {"--to pix4dmapper --out " + (dir / "a"),         // no such format
+                                  "--to kalibr --out " + (dir / "b") + " --x"}) {  // no such option
     const auto r = test::RunShutterlab("export " + (dir / "camera.json") + " " + args);
     EXPECT_EQ(r.exit_code, 2) << args << ": " << r.output;
     EXPECT_FALSE(std::filesystem::exists(dir / "a")) << args;

@@ -104,8 +104,8 @@ Eigen::Vector2d BrownDistorted(double x, double y, double k1, double k2, double 
 Eigen::Vector2d FisheyeDistorted(double x, double y, double k1, double k2, double k3, double k4) {
   const double r = std::hypot(x, y), theta = std::atan(r);
   const double t2 = theta * theta;
-  const double theta_d = theta * (1 + k1 * t2 + k2 * t2 * t2 + k3 * t2 * t2 * t2 +
-                                  k4 * t2 * t2 * t2 * t2);
+  const double theta_d =
+      theta * (1 + k1 * t2 + k2 * t2 * t2 + k3 * t2 * t2 * t2 + k4 * t2 * t2 * t2 * t2);
   return r > 0 ? Eigen::Vector2d(x * theta_d / r, y * theta_d / r) : Eigen::Vector2d(0, 0);
 }
 
@@ -165,8 +165,8 @@ TEST(ColmapExport, ColmapsModelConverterReadsTheModel) {
                          "' --output_path '" + bin + "' --output_type BIN >/dev/null 2>&1")
                             .c_str()),
             0);
-  ASSERT_EQ(std::system(("colmap model_converter --input_path '" + bin + "' --output_path '" +
-                         txt + "' --output_type TXT >/dev/null 2>&1")
+  ASSERT_EQ(std::system(("colmap model_converter --input_path '" + bin + "' --output_path '" + txt +
+                         "' --output_type TXT >/dev/null 2>&1")
                             .c_str()),
             0);
   const auto camera_numbers = [](const std::string& text) {
@@ -237,8 +237,7 @@ TEST(KalibrExport, PythonsYamlReadsTheChainAsKalibrDefinesIt) {
       "print(json.dumps(c))\n";
   WriteFileAtomically(dir / "read.py", script);
   const std::string command = "/usr/bin/python3 '" + (dir / "read.py") + "' '" +
-                              (dir / "camchain-imucam.yaml") + "' > '" +
-                              (dir / "cam0.json") + "'";
+                              (dir / "camchain-imucam.yaml") + "' > '" + (dir / "cam0.json") + "'";
   if (std::system(command.c_str()) != 0) {
     if (test::RealDataRequired()) FAIL() << "python3-yaml is missing (scripts/test.sh installs it)";
     GTEST_SKIP() << "/usr/bin/python3 with python3-yaml is missing";
@@ -276,7 +275,7 @@ TEST(KalibrExport, RefusesWhatTheChainCannotHoldUnlessForced) {
   ExportOptions force;
   force.force = true;
   const ExportOutput out = KalibrExport(camera, force);
-  EXPECT_NE(FileNamed(out, "shutterlab_export.txt").text.find("left out (--force)"),
+  EXPECT_NE(FileNamed(out, "shutterlab_export.txt").text.find("the rest written (--force)"),
             std::string::npos);
   // A time offset the data did not determine is refused too.
   camera = TestCamera();
@@ -342,14 +341,13 @@ TEST(MetashapeExport, CalibrationProjectsAsMetashapesFrameModel) {
 TEST(ExportSource, ReadsAReportACameraJsonAFolderAndPhotos) {
   test::TempDir dir;
   const ExportCamera camera = TestCamera();
-  const nlohmann::json report = {
-      {"format", "validation/1"},
-      {"effects",
-       {{{"name", "time_offset"},
-         {"value", 0.0043},
-         {"parameters", {0.0043}},
-         {"covariance", {{1e-10}}}}}},
-      {"fitted_model", TrueModelToJson(camera.truth)}};
+  const nlohmann::json report = {{"format", "validation/1"},
+                                 {"effects",
+                                  {{{"name", "time_offset"},
+                                    {"value", 0.0043},
+                                    {"parameters", {0.0043}},
+                                    {"covariance", {{1e-10}}}}}},
+                                 {"fitted_model", TrueModelToJson(camera.truth)}};
   WriteFileAtomically(dir / "report.json", report.dump());
   const ExportCamera from_report = ReadExportSource(dir / "report.json");
   EXPECT_EQ(from_report.truth.rig.camera.fx, 1101.25);
@@ -368,12 +366,24 @@ TEST(ExportSource, ReadsAReportACameraJsonAFolderAndPhotos) {
   const nlohmann::json photos = {
       {"source", "DIR"},
       {"photos",
-       {{{"name", "a.jpg"}, {"path", "/p/a.jpg"}, {"make", "DJI"}, {"model", "FC8482"},
-         {"width", 4032}, {"height", 2268}, {"focal_px", 2566.1}, {"readout_s", 0.016},
-         {"speed_m_s", 6.9}, {"flagged", {{"0.05", true}, {"0.1", false}}}},
+       {{{"name", "a.jpg"},
+         {"path", "/p/a.jpg"},
+         {"make", "DJI"},
+         {"model", "FC8482"},
+         {"width", 4032},
+         {"height", 2268},
+         {"focal_px", 2566.1},
+         {"readout_s", 0.016},
+         {"speed_m_s", 6.9},
+         {"flagged", {{"0.05", true}, {"0.1", false}}}},
         {{"name", "b.jpg"}, {"path", "/p/b.jpg"}, {"error", "unreadable"}},
-        {{"name", "c.jpg"}, {"path", "/p/c.jpg"}, {"width", 4032}, {"height", 2268},
-         {"focal_px", 2566.1}, {"readout_s", 0.016}, {"flagged", {{"0.05", false}}}}}}};
+        {{"name", "c.jpg"},
+         {"path", "/p/c.jpg"},
+         {"width", 4032},
+         {"height", 2268},
+         {"focal_px", 2566.1},
+         {"readout_s", 0.016},
+         {"flagged", {{"0.05", false}}}}}}};
   WriteFileAtomically(dir / "photos.json", photos.dump());
   const ExportCamera from_photos = ReadExportSource(dir / "photos.json");
   EXPECT_EQ(from_photos.truth.rig.camera.width, 4032);
@@ -384,6 +394,14 @@ TEST(ExportSource, ReadsAReportACameraJsonAFolderAndPhotos) {
   EXPECT_TRUE(from_photos.photos[0].flagged);
   EXPECT_EQ(FileNamed(ColmapExport(from_photos, {}), "image_list.txt").text, "c.jpg\n");
   EXPECT_EQ(FileNamed(OdmExport(from_photos, {}), "image_list.txt").text, "/p/c.jpg\n");
+  // Photos alone relate no gyro to the camera: no mounting or time shift for Kalibr, no sync offset
+  // for Gyroflow.
+  EXPECT_FALSE(from_photos.gyro_known);
+  EXPECT_THROW(KalibrExport(from_photos, {}), std::invalid_argument);
+  EXPECT_FALSE(
+      nlohmann::json::parse(FileNamed(GyroflowExport(from_photos, {}), "project.gyroflow").text)
+          .contains("offsets"));
+  EXPECT_TRUE(from_report.gyro_known);
 
   WriteFileAtomically(dir / "other.json", "{\"format\": \"measure/1\"}");
   EXPECT_THROW(ReadExportSource(dir / "other.json"), IoError);
