@@ -75,9 +75,6 @@ FlightLogReadOptions ReadOptionsFromFlags(const AnalyzeFlags& flags) {
 
 }  // namespace
 
-// analyze's options from the flags; the triggers come later (they need the log). *lens: the lens
-// profile's use, when --lens-profile is given (its lens, and its readout unless --readout was
-// typed).
 AnalyzeOptions AnalyzeOptionsFromFlags(const AnalyzeFlags& flags,
                                        std::optional<LensProfileUse>* lens) {
   AnalyzeOptions options;
@@ -106,7 +103,6 @@ AnalyzeOptions AnalyzeOptionsFromFlags(const AnalyzeFlags& flags,
   return options;
 }
 
-// The trigger file, read (its warnings printed first, under its name).
 std::optional<TriggerInput> TriggersFromFlags(const AnalyzeFlags& flags) {
   if (flags.triggers_path.empty()) return std::nullopt;
   TriggerInput triggers{ReadTriggerFile(flags.triggers_path), flags.triggers_path};
@@ -114,7 +110,6 @@ std::optional<TriggerInput> TriggersFromFlags(const AnalyzeFlags& flags) {
   return triggers;
 }
 
-// LOG (with --second) as the log pipeline reads it.
 LogInput InputFromFlags(const AnalyzeFlags& flags) {
   LogInput input;
   input.path = flags.log_path;
