@@ -44,12 +44,10 @@ const CommandRegistration kAccuracyRegistration(30, [](CLI::App& app) {
   cmd->add_option("--average", command->accuracy.average_samples,
                   "samples averaged just before and just after each turn")
       ->capture_default_str();
-  cmd->add_option("--guard", command->accuracy.guard_s,
-                  "still time between a turn and its averaging windows, s")
-      ->capture_default_str();
-  cmd->add_option("--min-still", command->accuracy.min_still_s,
-                  "motions closer than this are one turn, s")
-      ->capture_default_str();
+  AddQuantityOption(cmd, "--guard", &command->accuracy.guard_s, "s", "s",
+                    "still time between a turn and its averaging windows");
+  AddQuantityOption(cmd, "--min-still", &command->accuracy.min_still_s, "s", "s",
+                    "motions closer than this are one turn");
   cmd->add_flag("--json", command->json,
                 "print JSON (docs/FORMATS.md `accuracy`) instead of a table");
   return std::function<void()>([command] { Run(*command); });

@@ -7,8 +7,10 @@
 #include "sim/civil_time.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/logs/trigger_file.h"
+#include "sim/text_file.h"
 #include "sim/units.h"
 
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 
@@ -31,7 +33,7 @@ RigModel RigFromFlags(const AnalyzeFlags& flags) {
   rig.camera.fx = rig.camera.fy = flags.focal_px;
   rig.camera.cx = 0.5 * (width - 1);
   rig.camera.cy = 0.5 * (height - 1);
-  rig.shutter.readout_s = ParseDurationS(flags.readout);
+  rig.shutter.readout_s = flags.readout_ms * 1e-3;
   rig.altitude_m = flags.altitude_m;
   return rig;
 }
@@ -49,9 +51,9 @@ PhotoSetOptions PhotoOptionsFromFlags(const AnalyzeFlags& flags) {
     options.focal_text = "camera.json " + flags.camera_path;
   }
   if (flags.readout_given) {
-    options.readout_s = ParseDurationS(flags.readout);
+    options.readout_s = flags.readout_ms * 1e-3;
     options.readout_origin = ReadoutOrigin::kUser;
-    options.readout_text = "--readout " + flags.readout;
+    options.readout_text = "--readout " + QuantityText(flags.readout_ms, "ms");
   }
   if (flags.focal_given) {
     options.focal_px = flags.focal_px;
@@ -61,6 +63,26 @@ PhotoSetOptions PhotoOptionsFromFlags(const AnalyzeFlags& flags) {
   if (!flags.lens_profile_path.empty())
     options.lens_profile = ReadLensProfile(flags.lens_profile_path);
   return options;
+}
+
+// Without --camera: what was taken for the camera, its readout and its lens, and how to give them.
+void AddCameraAssumptions(const AnalyzeFlags& flags, const RigModel& rig, bool readout_from_profile,
+                          std::vector<Assumption>* assumptions) {
+  const PinholeCamera& camera = rig.camera;
+  if (!flags.size_given || !flags.focal_given) {
+    assumptions->push_back({"camera",
+                            std::to_string(camera.width) + " x " + std::to_string(camera.height) +
+                                " px, f " + FormatNumber("%g", camera.fx) + " px",
+                            "", "--camera camera.json, or --size and --focal-px"});
+  }
+  if (!flags.readout_given && !readout_from_profile) {
+    assumptions->push_back({"readout", FormatNumber("%g ms", flags.readout_ms), "",
+                            "--readout, --camera or --lens-profile"});
+  }
+  if (flags.lens_profile_path.empty()) {
+    assumptions->push_back(
+        {"lens", "no distortion", "", "--lens-profile (a Gyroflow profile) or --camera"});
+  }
 }
 
 FlightLogReadOptions ReadOptionsFromFlags(const AnalyzeFlags& flags) {
@@ -84,19 +106,27 @@ AnalyzeOptions AnalyzeOptionsFromFlags(const AnalyzeFlags& flags,
   } else {
     options.rig = RigFromFlags(flags);
   }
+  bool readout_from_profile = false;
   if (lens && !flags.lens_profile_path.empty()) {
     *lens = ScaleLensProfile(ReadLensProfile(flags.lens_profile_path), options.rig.camera.width,
                              options.rig.camera.height);
     ApplyLensProfile(&**lens, &options.rig, flags.readout_given);
+    readout_from_profile = (*lens)->readout && (*lens)->readout->readout_s;
     for (const std::string& note : (*lens)->notes) std::cerr << "note: " << note << "\n";
   }
-  options.limits_m.clear();
-  for (const std::string& text : flags.limits) options.limits_m.push_back(ParseLengthM(text));
+  if (flags.camera_path.empty())
+    AddCameraAssumptions(flags, options.rig, readout_from_profile, &options.assumptions);
+  options.limits_m = flags.limits_m;
   options.noise_allowance_arcsec = flags.noise_allowance_arcsec;
   // --altitude wins, then camera.json; without either the log's height above ground beats 50 m.
   options.use_log_altitude = !flags.altitude_given && flags.camera_path.empty();
-  if (!flags.every.empty()) options.every_s = ParseDurationS(flags.every);
-  options.trigger_latency_s = ParseDurationS(flags.latency);
+  if (!std::isnan(flags.every_s)) {
+    SHUTTERLAB_CHECK(flags.every_s > 0)
+        << "--every " << QuantityText(flags.every_s, "s")
+        << " would judge no image: give a cadence above 0 s, e.g. 2s";
+    options.every_s = flags.every_s;
+  }
+  options.trigger_latency_s = flags.latency_s;
   // The report's charts, shading, histograms and pictures, and its Allan deviation.
   if (!flags.out_dir.empty()) options.plots = AnalyzePlotOptions{};
   options.allan = !flags.out_dir.empty();
@@ -135,6 +165,7 @@ PhotoFlightOptions PhotoFlightOptionsFromFlags(const AnalyzeFlags& flags, PhotoS
   read->Check();
   PhotoFlightOptions options;
   options.analyze = AnalyzeOptionsFromFlags(flags, nullptr);
+  options.analyze.assumptions.clear();  // the photos say their camera (PhotoFlightResult)
   options.lens_profile = read->lens_profile;
   options.photos.limits_m = options.analyze.limits_m;
   options.rig_given = !flags.camera_path.empty();
@@ -145,7 +176,7 @@ PhotoFlightOptions PhotoFlightOptionsFromFlags(const AnalyzeFlags& flags, PhotoS
     SHUTTERLAB_CHECK(options.clock.camera_utc_offset_s)
         << "--photo-utc-offset must be +HH:MM or -HH:MM (got '" << flags.photo_utc_offset << "')";
   }
-  SHUTTERLAB_CHECK(flags.every.empty())
+  SHUTTERLAB_CHECK(std::isnan(flags.every_s))
       << "--every is for a log alone: the photos are the triggers";
   options.Check();
   return options;
@@ -169,8 +200,7 @@ std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
       ->add_option("--log-index", flags->log_index,
                    "blackbox: which log of the file (-1 = longest)")
       ->capture_default_str();
-  command->add_option("--range", flags->range_dps, "raw counts: full-scale range, deg/s")
-      ->capture_default_str();
+  AddRangeOption(command, &flags->range_dps);
   flags->column_flags.Add(command);
   command->add_option("--camera", flags->camera_path, "camera.json (docs/FORMATS.md rig/1)")
       ->check(CLI::ExistingFile);
@@ -180,24 +210,19 @@ std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
                    "readout where it states one (unless --readout is given); with --photos also "
                    "each photo's focal length and readout")
       ->check(CLI::ExistingFile);
-  auto* readout = command
-                      ->add_option("--readout", flags->readout,
-                                   "rolling-shutter readout without --camera (s, ms, us); with "
-                                   "--photos it overrides the readout table")
-                      ->capture_default_str();
-  auto* altitude =
-      command
-          ->add_option("--altitude", flags->altitude_m,
-                       "height above flat ground, m (overrides camera.json; default: the log's "
-                       "altitude above ground when it has one, else 50)")
-          ->capture_default_str();
+  auto* readout = AddQuantityOption(command, "--readout", &flags->readout_ms, "ms", "ms",
+                                    "rolling-shutter readout without --camera; with --photos it "
+                                    "overrides the readout table");
+  auto* altitude = AddQuantityOption(command, "--altitude", &flags->altitude_m, "m", "m",
+                                     "height above flat ground (overrides camera.json; default: "
+                                     "the log's altitude above ground when it has one, else 50m)");
   auto* focal = command
                     ->add_option("--focal-px", flags->focal_px,
                                  "focal length without --camera, pixels (with --photos: overrides "
                                  "the photos' own)")
                     ->capture_default_str();
-  command->add_option("--size", flags->size, "image size WxH without --camera")
-      ->capture_default_str();
+  auto* size = command->add_option("--size", flags->size, "image size WxH without --camera")
+                   ->capture_default_str();
   command
       ->add_option(
           "--triggers", flags->triggers_path,
@@ -212,19 +237,15 @@ std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
           "a second sensor's log on the same clock (record --device twice): fused with the "
           "first, the mounting fitted from the motion")
       ->check(CLI::ExistingFile);
-  command->add_option(
-      "--every", flags->every,
-      "simulated triggers at this cadence (e.g. 2s); with --triggers or --every the "
-      "log's camera events are not used");
-  command->add_option("--latency", flags->latency, "trigger-to-exposure latency (s, ms, us)")
-      ->capture_default_str();
-  command->add_option("--limit", flags->limits, "ground limits, e.g. 5cm,10cm")
-      ->delimiter(',')
-      ->capture_default_str();
-  command
-      ->add_option("--noise-allowance", flags->noise_allowance_arcsec,
-                   "flight table: added to each threshold for the gyro's own noise, arcsec")
-      ->capture_default_str();
+  AddQuantityOption(command, "--every", &flags->every_s, "s", "s",
+                    "simulated triggers at this cadence, e.g. 2s; with --triggers or --every "
+                    "the log's camera events are not used");
+  AddQuantityOption(command, "--latency", &flags->latency_s, "s", "ms",
+                    "trigger-to-exposure latency");
+  AddQuantityListOption(command, "--limit", &flags->limits_m, "m", "cm",
+                        "ground limits, e.g. 5cm,10cm");
+  AddQuantityOption(command, "--noise-allowance", &flags->noise_allowance_arcsec, "arcsec",
+                    "arcsec", "flight table: added to each threshold for the gyro's own noise");
   command->add_option("--out", flags->out_dir,
                       "write DIR/images.csv, DIR/exclude.txt and DIR/report.html (with --photos: "
                       "DIR/photos.csv, exclude.txt, image_list.txt, colmap_image_list.txt)");
@@ -233,10 +254,11 @@ std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
                    "nadir image for the report's worst-image pictures (with --out)")
       ->check(CLI::ExistingFile);
   command->add_flag("--json", flags->json, "print JSON (docs/FORMATS.md `analyze`)");
-  return [flags, altitude, readout, focal] {
+  return [flags, altitude, readout, focal, size] {
     flags->altitude_given = altitude->count() > 0;
     flags->readout_given = readout->count() > 0;
     flags->focal_given = focal->count() > 0;
+    flags->size_given = size->count() > 0;
   };
 }
 

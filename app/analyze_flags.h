@@ -13,6 +13,7 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -28,15 +29,15 @@ struct AnalyzeFlags {
   ColumnFlags column_flags;  // --time-unit, --columns, --delimiter, --rate-unit
   std::string camera_path;
   std::string lens_profile_path;
-  std::string readout = "30ms";
+  double readout_ms = 30.0;
   double altitude_m = 50.0;
   double focal_px = 1100.0;
   std::string size = "1280x960";
   std::string triggers_path;
   std::string second_path;
-  std::string every;
-  std::string latency = "0";
-  std::vector<std::string> limits{"5cm", "10cm"};
+  double every_s = std::numeric_limits<double>::quiet_NaN();  // NaN: not given
+  double latency_s = 0.0;
+  std::vector<double> limits_m{0.05, 0.10};
   double noise_allowance_arcsec = 20.0;
   std::string out_dir;
   std::string scene_path;
@@ -46,10 +47,11 @@ struct AnalyzeFlags {
   bool altitude_given = false;
   bool readout_given = false;
   bool focal_given = false;
+  bool size_given = false;
 };
 
 // Adds every flag to the subcommand; the function returned, called once parsing succeeded, notes
-// which of --altitude, --readout and --focal-px were typed.
+// which of --altitude, --readout, --focal-px and --size were typed.
 std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags);
 
 // analyze's options from the flags (the triggers come with the log). *lens: the lens profile's

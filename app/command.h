@@ -44,6 +44,22 @@ inline CLI::Option* CheckLogPath(CLI::Option* option) {
       ->check(CLI::ExistingFile);
 }
 
+// ParseQuantity (sim/units.h) in an option's callback: a refusal is thrown as CLI11's, so it is
+// printed like every other bad option.
+double ParseQuantityOption(const std::string& text, const char* unit, const std::string& name,
+                           const char* bare_means);
+// An option that takes a quantity with its unit (sim/units.h ParseQuantity): "--altitude 50m".
+// *value is in `unit`; bare_means is the unit a bare number most likely meant, named in the
+// suggestion. The text is parsed with the command line, so a bare number or a wrong unit is refused
+// in one line before anything runs; *value's current value is shown as the default.
+CLI::Option* AddQuantityOption(CLI::App* command, const std::string& name, double* value,
+                               const char* unit, const char* bare_means, const std::string& help);
+// The same for a comma-separated list ("--limit 5cm,10cm"); *values' current values are the
+// default.
+CLI::Option* AddQuantityListOption(CLI::App* command, const std::string& name,
+                                   std::vector<double>* values, const char* unit,
+                                   const char* bare_means, const std::string& help);
+
 // Prints progress "label: 42%" on a terminal (stderr), overwriting the line; silent when stderr
 // is not a terminal, so logs and CI stay clean.
 class Progress {

@@ -12,8 +12,10 @@
 #include "sim/logs/log_format.h"
 #include "sim/units.h"
 
+#include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -39,7 +41,7 @@ struct CorrectCommand {
   std::string reference = "row0";
   std::string interpolation = "bilinear";
   double depth_m = 0.0;
-  double gyro_noise = -1.0;
+  double gyro_noise = std::numeric_limits<double>::quiet_NaN();  // NaN: from gyro.csv
   bool json = false;
 };
 
@@ -50,14 +52,16 @@ PhotoInputOptions PhotoOptionsFromFlags(const CorrectCommand& command) {
   photos.read.format = ParseLogFormat(command.format);
   command.column_flags.Apply(&photos.read);
   photos.triggers_path = command.triggers_path;
-  photos.trigger_latency_s = ParseDurationS(command.latency);
+  photos.trigger_latency_s = ParseQuantity(command.latency, "s", "--latency", "ms");
   if (!command.camera_path.empty()) {
     photos.camera = ReadRigModel(command.camera_path);
     photos.camera_path = command.camera_path;
   }
   if (!command.lens_profile_path.empty())
     photos.lens_profile = ReadLensProfile(command.lens_profile_path);
-  if (!command.readout.empty()) photos.readout_s = ParseDurationS(command.readout);
+  if (!command.readout.empty()) {
+    photos.readout_s = ParseQuantity(command.readout, "s", "--readout", "ms");
+  }
   if (command.focal_px != 0.0) photos.focal_px = command.focal_px;
   if (command.altitude_m != 0.0) photos.altitude_m = command.altitude_m;
   if (!command.photo_utc_offset.empty()) {
@@ -103,7 +107,7 @@ void Run(CorrectCommand& command) {
   options.interpolation =
       command.interpolation == "bicubic" ? Interpolation::kBicubic : Interpolation::kBilinear;
   if (command.depth_m != 0.0) options.depth_m = command.depth_m;
-  if (command.gyro_noise >= 0.0) options.gyro_noise_rad_s_sqrt_hz = command.gyro_noise;
+  if (!std::isnan(command.gyro_noise)) options.gyro_noise_rad_s_sqrt_hz = command.gyro_noise;
   options.Check();
   std::unique_ptr<Progress> bar;
   const CorrectSummary summary = CorrectDataset(options, [&](size_t done, size_t total) {
@@ -150,7 +154,7 @@ const CommandRegistration kCorrectRegistration(75, [](CLI::App& app) {
                   "default: the log's camera events")
       ->check(CLI::ExistingFile);
   cmd->add_option("--latency", command->latency,
-                  "--photos: trigger to the exposure of row 0 (s, ms, us; may be negative)")
+                  "--photos: trigger to the exposure of row 0, e.g. 40ms (may be negative)")
       ->capture_default_str();
   cmd->add_option("--camera", command->camera_path,
                   "--photos: camera.json (default: the photos' own size, focal length and readout)")
@@ -159,11 +163,12 @@ const CommandRegistration kCorrectRegistration(75, [](CLI::App& app) {
                   "--photos: Gyroflow lens profile (JSON), scaled to the photos")
       ->check(CLI::ExistingFile);
   cmd->add_option("--readout", command->readout,
-                  "--photos: the readout (s, ms, us), over camera.json and the readout table");
+                  "--photos: the readout, e.g. 30ms, over camera.json and the readout table");
   cmd->add_option("--focal-px", command->focal_px, "--photos: focal length, pixels");
-  cmd->add_option("--altitude", command->altitude_m,
-                  "--photos: height of the ground plane below the camera, m (default: camera.json, "
-                  "the log's height above ground, the photos' height above take-off)");
+  AddQuantityOption(cmd, "--altitude", &command->altitude_m, "m", "m",
+                    "--photos: height of the ground plane below the camera (default: camera.json, "
+                    "the log's height above ground, the photos' height above take-off)")
+      ->default_str("");
   cmd->add_option("--photo-utc-offset", command->photo_utc_offset,
                   "--photos: the camera clock's zone, +HH:MM (placing photos by capture time)");
   cmd->add_option("--out", o.out_dir, "output dataset folder (images already there are kept)")
@@ -173,23 +178,24 @@ const CommandRegistration kCorrectRegistration(75, [](CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--effect", o.effects,
                   "NAME=VALUE: set an effect on top of camera.json and the report (as render "
-                  "--inject: readout_time=0.0235, gyro_to_camera=..., ...); repeatable");
+                  "--inject: readout_time=23.5ms, gyro_to_camera=..., ...); repeatable");
   cmd->add_option("--reference", command->reference,
                   "the instant the corrected image shows: row0 (the first row, as render's "
                   "reference) or mid (mid-readout)")
       ->capture_default_str();
-  cmd->add_option("--depth", command->depth_m,
-                  "video: the scene's depth, m, to correct translation too (camera.json velocity); "
-                  "without it video is rotation only");
+  AddQuantityOption(cmd, "--depth", &command->depth_m, "m", "m",
+                    "video: the scene's depth, to correct translation too (camera.json velocity); "
+                    "without it video is rotation only")
+      ->default_str("");
   cmd->add_option("--interpolation", command->interpolation, "bilinear or bicubic")
       ->check(CLI::IsMember({"bilinear", "bicubic"}))
       ->capture_default_str();
   cmd->add_option("--tolerance", o.map.tolerance_px,
                   "largest interpolation error of the correction map, px")
       ->capture_default_str();
-  cmd->add_option("--gyro-noise", command->gyro_noise,
-                  "the gyro's white noise, rad/s/sqrt(Hz), for the predicted residual (default: "
-                  "estimated from gyro.csv)");
+  AddQuantityOption(cmd, "--gyro-noise", &command->gyro_noise, "rad/s/rtHz", "rad/s/rtHz",
+                    "the gyro's white noise, for the predicted residual (default: estimated from "
+                    "gyro.csv)");
   cmd->add_option("--draws", o.prediction.draws, "draws of the truth for the predicted residual")
       ->capture_default_str();
   cmd->add_option("--jobs", o.jobs, "frames corrected at once (0: the cores, at most 4)")

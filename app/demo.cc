@@ -170,7 +170,7 @@ void StepCloseTheLoop(DemoContext& context) {
   InjectedDemoOptions options;
   options.scene_path = context.scene_path;
   options.out_dir = (context.out / "validate").string();
-  options.injection = "time_offset=0.004";
+  options.injection = "time_offset=4ms";
   ValidationResult result;
   {
     StagedProgress progress;
@@ -222,8 +222,8 @@ const CommandRegistration kDemoRegistration(5, [](CLI::App& app) {
       "nadir ground texture)");
   auto options = std::make_shared<DemoOptions>();
   cmd->add_option("--out", options->out_dir, "output folder")->capture_default_str();
-  cmd->add_option("--every", options->frame_every_s, "seconds between rendered frames")
-      ->capture_default_str();
+  AddQuantityOption(cmd, "--every", &options->frame_every_s, "s", "s",
+                    "time between rendered frames");
   return std::function<void()>([options] {
     options->Check();
     RunDemo(*options);

@@ -7,7 +7,6 @@
 #include "app/trace_options.h"
 #include "estimate/paper/log_pipeline.h"
 #include "estimate/report/analysis_json.h"
-#include "sim/units.h"
 
 #include <iostream>
 #include <memory>
@@ -20,8 +19,6 @@ namespace {
 struct FlightCommand {
   TraceOptions trace;
   FlightOptions flight;
-  std::vector<std::string> limits{"5cm", "10cm"};
-  std::vector<std::string> windows{"10ms", "20ms"};
   bool no_vector = false;
   bool zero_bias = false;
   bool json = false;
@@ -30,10 +27,6 @@ struct FlightCommand {
 
 void Run(const FlightCommand& command) {
   FlightOptions options = command.flight;
-  options.limits_m.clear();
-  for (const std::string& text : command.limits) options.limits_m.push_back(ParseLengthM(text));
-  options.windows_s.clear();
-  for (const std::string& text : command.windows) options.windows_s.push_back(ParseDurationS(text));
   options.vector_criterion = !command.no_vector;
   options.series = !command.series_path.empty();
   // A known (zero) bias takes precedence over the segment in Flight().
@@ -66,19 +59,14 @@ const CommandRegistration kFlightRegistration(40, [](CLI::App& app) {
   auto command = std::make_shared<FlightCommand>();
   command->trace.Add(cmd, /*with_bias=*/true);
   command->trace.AddSecond(cmd);
-  cmd->add_option("--altitude", command->flight.altitude_m, "height above flat ground, m")
-      ->capture_default_str();
-  cmd->add_option("--limit", command->limits, "ground limits, e.g. 5cm,10cm (m, cm, mm; bare = m)")
-      ->delimiter(',')
-      ->capture_default_str();
-  cmd->add_option(
-         "--window", command->windows,
-         "window durations (the rolling-shutter readout), e.g. 10ms,20ms (s, ms, us; bare = s)")
-      ->delimiter(',')
-      ->capture_default_str();
-  cmd->add_option("--noise-allowance", command->flight.noise_allowance_arcsec,
-                  "added to each threshold for the gyro's own noise, arcsec")
-      ->capture_default_str();
+  AddQuantityOption(cmd, "--altitude", &command->flight.altitude_m, "m", "m",
+                    "height above flat ground");
+  AddQuantityListOption(cmd, "--limit", &command->flight.limits_m, "m", "cm",
+                        "ground limits, e.g. 5cm,10cm");
+  AddQuantityListOption(cmd, "--window", &command->flight.windows_s, "s", "ms",
+                        "window durations (the rolling-shutter readout), e.g. 10ms,20ms");
+  AddQuantityOption(cmd, "--noise-allowance", &command->flight.noise_allowance_arcsec, "arcsec",
+                    "arcsec", "added to each threshold for the gyro's own noise");
   cmd->add_flag("--no-vector", command->no_vector,
                 "skip the vector (SO(3) rotation angle) criterion, about halving the run time");
   cmd->add_flag(

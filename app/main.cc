@@ -2,8 +2,11 @@
 
 #include "app/command.h"
 #include "sim/check.h"
+#include "sim/units.h"
 
 #include <algorithm>
+#include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <stdexcept>
@@ -18,6 +21,69 @@ std::vector<RegisteredCommand>& Registry() {
 
 CommandRegistration::CommandRegistration(int order, CommandSetup setup) {
   Registry().push_back({order, std::move(setup)});
+}
+
+double ParseQuantityOption(const std::string& text, const char* unit, const std::string& name,
+                           const char* bare_means) {
+  try {
+    return ParseQuantity(text, unit, name, bare_means);
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError(shutterlab::WithoutCheckLocation(e.what()));
+  }
+}
+
+namespace {
+
+// "LENGTH", "ANGULAR RATE": what --help shows after the option.
+std::string TypeName(const char* unit) {
+  std::string name = DimensionOf(unit);
+  for (char& c : name) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return name;
+}
+
+// A default as a person would type it, in the unit a bare number would have meant: "5cm,10cm".
+std::string DefaultText(const std::vector<double>& values, const char* unit,
+                        const char* bare_means) {
+  std::string text;
+  for (const double value : values) {
+    if (std::isnan(value)) return "";
+    text +=
+        (text.empty() ? "" : ",") + QuantityText(ConvertUnit(value, unit, bare_means), bare_means);
+  }
+  return text;
+}
+
+}  // namespace
+
+CLI::Option* AddQuantityOption(CLI::App* command, const std::string& name, double* value,
+                               const char* unit, const char* bare_means, const std::string& help) {
+  return command
+      ->add_option_function<std::string>(
+          name,
+          [=](const std::string& text) {
+            *value = ParseQuantityOption(text, unit, name, bare_means);
+          },
+          help + " (" + UnitsOf(unit) + ")")
+      ->type_name(TypeName(unit))
+      ->default_str(DefaultText({*value}, unit, bare_means));
+}
+
+CLI::Option* AddQuantityListOption(CLI::App* command, const std::string& name,
+                                   std::vector<double>* values, const char* unit,
+                                   const char* bare_means, const std::string& help) {
+  return command
+      ->add_option_function<std::vector<std::string>>(
+          name,
+          [=](const std::vector<std::string>& texts) {
+            values->clear();
+            for (const std::string& text : texts) {
+              values->push_back(ParseQuantityOption(text, unit, name, bare_means));
+            }
+          },
+          help + " (" + UnitsOf(unit) + ")")
+      ->delimiter(',')
+      ->type_name(TypeName(unit))
+      ->default_str(DefaultText(*values, unit, bare_means));
 }
 
 Progress::Progress(std::string label, size_t total)
@@ -36,6 +102,52 @@ Progress::~Progress() {
   if (enabled_ && last_percent_ >= 0) std::fprintf(stderr, "\r\033[K");
 }
 
+namespace {
+
+// The number of single-character edits that turn a into b (Levenshtein), for "did you mean".
+size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1] ? 1 : 0)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+// "anlyze": the closest command (within 3 edits) and the list, in one line; "" for a command
+// that exists or an option.
+std::string UnknownCommandLine(const CLI::App& app, const std::string& word) {
+  if (word.empty() || word[0] == '-') return "";
+  std::string closest, names;
+  size_t best = 4;
+  for (const CLI::App* sub : app.get_subcommands({})) {
+    if (sub->get_name() == word) return "";
+    names += (names.empty() ? "" : ", ") + sub->get_name();
+    const size_t distance = EditDistance(word, sub->get_name());
+    if (distance < best) best = distance, closest = sub->get_name();
+  }
+  return "error: unknown command '" + word + "'" +
+         (closest.empty() ? "" : ": did you mean '" + closest + "'?") + " (commands: " + names +
+         ")";
+}
+
+// CLI11's refusal in one line, with where to read more.
+std::string OneLineFailure(const CLI::App* app, const CLI::Error& e) {
+  std::string message = e.what();
+  std::replace(message.begin(), message.end(), '\n', ' ');
+  std::string help = "shutterlab --help";
+  for (const CLI::App* sub : app->get_subcommands())
+    help = "shutterlab " + sub->get_name() + " --help";
+  return "error: " + message + " (" + help + ")\n";
+}
+
+}  // namespace
 }  // namespace shutterlab::app
 
 int main(int argc, char** argv) {
@@ -53,11 +165,22 @@ int main(int argc, char** argv) {
     std::function<void()> run = command.setup(app);
     runners.emplace_back(app.get_subcommands({})[before], std::move(run));
   }
+  if (argc > 1) {
+    const std::string unknown = UnknownCommandLine(app, argv[1]);
+    if (!unknown.empty()) {
+      std::cerr << unknown << "\n";
+      return 2;
+    }
+  }
+  app.failure_message(OneLineFailure);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
     return code == 0 ? 0 : 2;
+  } catch (const std::invalid_argument& e) {  // an option's own check
+    std::cerr << "error: " << shutterlab::WithoutCheckLocation(e.what()) << "\n";
+    return 2;
   }
   try {
     for (auto& [sub, run] : runners) {

@@ -3,6 +3,7 @@
 // on one clock, into Gyroflow .gcsv files and a triggers file (record/recorder.h).
 
 #include "app/command.h"
+#include "app/trace_options.h"
 #include "estimate/paper/analyze.h"
 #include "estimate/report/analysis_json.h"
 #include "record/device_spec.h"
@@ -68,20 +69,25 @@ std::string SecondOut(const std::string& out) {
   return (path.parent_path() / (path.stem().string() + ".2" + path.extension().string())).string();
 }
 
+double Seconds(const std::string& text, const char* option) {
+  return ParseQuantity(text, "s", option, "s");
+}
+
 RecorderOptions Options(const RecordCommand& command, bool tty) {
   RecorderOptions options;
-  if (!command.duration.empty()) options.duration_s = ParseDurationS(command.duration);
-  options.still_s = ParseDurationS(command.still);
-  options.ring_s = ParseDurationS(command.ring);
+  if (!command.duration.empty()) options.duration_s = Seconds(command.duration, "--duration");
+  options.still_s = Seconds(command.still, "--still");
+  options.ring_s = Seconds(command.ring, "--ring");
   options.polarity = ParseTriggerPolarity(command.edge);
-  options.debounce_s = ParseDurationS(command.debounce);
+  options.debounce_s = Seconds(command.debounce, "--debounce");
   options.orientation = command.orientation;
   options.note = command.note;
   options.reader_priority = command.priority;
   options.stop = &g_stop;
   if (!command.stall_writer.empty()) {
     const auto [for_text, every_text] = SplitAt(command.stall_writer, "--stall-writer");
-    options.writer_stall = {ParseDurationS(every_text), ParseDurationS(for_text)};
+    options.writer_stall = {Seconds(every_text, "--stall-writer"),
+                            Seconds(for_text, "--stall-writer")};
   }
   if (!command.pause_while_writing.empty()) {
     const auto [count_text, write_text] =
@@ -89,10 +95,12 @@ RecorderOptions Options(const RecordCommand& command, bool tty) {
     const auto count = ParseInt(count_text);
     SHUTTERLAB_CHECK(count && *count > 0)
         << "--pause-while-writing N@T: N samples, got '" << count_text << "'";
-    options.paper_pause = {static_cast<size_t>(*count), ParseDurationS(write_text)};
+    options.paper_pause = {static_cast<size_t>(*count),
+                           Seconds(write_text, "--pause-while-writing")};
   }
-  options.status_interval_s =
-      command.status_every.empty() ? (tty ? 1.0 : 60.0) : ParseDurationS(command.status_every);
+  options.status_interval_s = command.status_every.empty()
+                                  ? (tty ? 1.0 : 60.0)
+                                  : Seconds(command.status_every, "--status-every");
   options.on_status = [tty](const RecordStatus& status) {
     const std::string line = RecordStatusLine(status);
     std::fprintf(stderr, tty ? "\r\033[K%s" : "%s\n", line.c_str());
@@ -172,19 +180,18 @@ const CommandRegistration kRecordRegistration(15, [](CLI::App& app) {
       "record gyro (MPU-9250 / MPU-6500 / ICM-42688-P over SPI, or an emulated one) and camera "
       "triggers on one clock, never pausing the reads");
   auto command = std::make_shared<RecordCommand>();
-  cmd->add_option("--device", command->devices,
-                  "a sensor: /dev/spidev0.0[,part=...,rate=...,range=...] or "
-                  "emulate:TRACE[,part=mpu9250,rate=8000,range=250,ppm=40]; twice for two sensors")
+  cmd->add_option(
+         "--device", command->devices,
+         "a sensor: /dev/spidev0.0[,part=...,rate=...,range=...] or "
+         "emulate:TRACE[,part=mpu9250,rate=8kHz,range=250deg/s,ppm=40]; twice for two sensors")
       ->required();
   cmd->add_option("--out", command->out_path, "the first sensor's Gyroflow .gcsv")->required();
   cmd->add_option("--out2", command->out2_path, "the second sensor's .gcsv (default: OUT.2.gcsv)");
   cmd->add_option("--duration", command->duration,
                   "stop after this long (default: at SIGINT/SIGTERM)");
-  cmd->add_option("--rate", command->rate_hz,
-                  "output data rate, Hz (the part's nearest at or above)")
-      ->capture_default_str();
-  cmd->add_option("--range", command->range_dps, "full scale, deg/s: 250, 500, 1000, 2000")
-      ->capture_default_str();
+  AddQuantityOption(cmd, "--rate", &command->rate_hz, "Hz", "Hz",
+                    "output data rate (the part's nearest at or above)");
+  AddRangeOption(cmd, &command->range_dps, "full scale");
   cmd->add_option("--part", command->part, "mpu9250, mpu6500, icm42688p (per device: part=)")
       ->capture_default_str();
   cmd->add_option(
@@ -202,7 +209,7 @@ const CommandRegistration kRecordRegistration(15, [](CLI::App& app) {
   cmd->add_option("--still", command->still, "the still bias at start: the mean over this long")
       ->capture_default_str();
   cmd->add_option("--ring", command->ring,
-                  "buffer per sensor between reader and writer, seconds of samples")
+                  "buffer per sensor between reader and writer, a duration of samples")
       ->capture_default_str();
   cmd->add_option("--orientation", command->orientation, "the .gcsv orientation line (Gyroflow's)")
       ->capture_default_str();

@@ -46,10 +46,10 @@ const CommandRegistration kRenderRegistration(50, [](CLI::App& app) {
                   "SHARE: the bottom SHARE of every frame's rows show a textured patch that moves "
                   "with the camera (a dashboard, landing gear); truth 0 there")
       ->check(CLI::Range(0.0, 0.9));
-  cmd->add_option("--moving-patch", options->clutter.moving_patch_mps,
-                  "M/S: a textured square drives over the ground at this speed (along x), seen at "
-                  "each row's own time; truth NaN where it is seen")
-      ->check(CLI::Range(0.0, 1000.0));
+  AddQuantityOption(cmd, "--moving-patch", &options->clutter.moving_patch_mps, "m/s", "m/s",
+                    "a textured square drives over the ground at this speed (along x), seen at "
+                    "each row's own time; truth NaN where it is seen")
+      ->default_str("");
   cmd->add_flag("--video", options->video,
                 "a video dataset: consecutive rolling-shutter frames of one flight, no reference "
                 "images; the truth of each frame is its match in the previous one");

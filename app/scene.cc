@@ -26,9 +26,8 @@ const CommandRegistration kSceneRegistration(45, [](CLI::App& app) {
       ->required();
   cmd->add_option("--width", o->texture.width_px, "width, px")->capture_default_str();
   cmd->add_option("--height", o->texture.height_px, "height, px")->capture_default_str();
-  cmd->add_option("--gsd", o->texture.ground_sample_distance_m,
-                  "ground sample distance, m per px (altitude / focal length in px)")
-      ->capture_default_str();
+  AddQuantityOption(cmd, "--gsd", &o->texture.ground_sample_distance_m, "m", "cm",
+                    "ground sample distance, per pixel (altitude / focal length in px)");
   cmd->add_option("--seed", o->texture.seed, "random seed (same seed, same bytes)")
       ->capture_default_str();
   return std::function<void()>([o] {

@@ -29,6 +29,7 @@ struct SynthCliOptions {
   std::vector<double> const_bias, scale_error, misalignment, axis, turn_time;
   double lead_s = 6.0;
   CLI::Option* lead_option = nullptr;  // given: sets both profiles' lead
+  CLI::Option* t0_option = nullptr;    // not given with ulog: 1 s
   ImuErrorModel given;  // values of the error options as parsed (defaults when not given)
   // The error-model options, to tell given from defaulted when --ideal resets the model.
   std::vector<std::pair<CLI::Option*, std::function<void(ImuErrorModel&)>>> model_overrides;
@@ -50,6 +51,8 @@ void Run(SynthCliOptions& o) {
                     : o.output.ulog ? LogFormat::kGyroCsv
                                     : ParseGyroFormat(o.format);
   if (o.altitude_m > 0.0) o.output.altitude_m = o.altitude_m;
+  // A ULog's clock counts from boot and never reads 0 (docs/FORMATS.md): start it a second in.
+  if (o.output.ulog && o.t0_option->count() == 0) s.t0_s = 1.0;
   o.output.time_unit = ParseTimeUnit(o.time_unit);
   // The sensor: the MPU-9250-like default, or a perfect one with --ideal; options given on the
   // command line override either.
@@ -61,7 +64,7 @@ void Run(SynthCliOptions& o) {
   }
   s.imu = model;
   if (!o.turn_time.empty()) {
-    SHUTTERLAB_CHECK(o.turn_time.size() == 2) << "--turn-time takes MIN,MAX seconds";
+    SHUTTERLAB_CHECK(o.turn_time.size() == 2) << "--turn-time takes MIN,MAX, e.g. 1s,2s";
     s.steps.turn_min_s = o.turn_time[0];
     s.steps.turn_max_s = o.turn_time[1];
   }
@@ -91,36 +94,38 @@ void Run(SynthCliOptions& o) {
 // model. p: a raw pointer in the callbacks, no shared_ptr cycle.
 void AddSensorErrorOptions(CLI::App* cmd, SynthCliOptions* p) {
   const auto model_option = [cmd, p](const std::string& name, double ImuErrorModel::*field,
+                                     const char* unit, const char* bare_means,
                                      const std::string& help) {
-    auto* option = cmd->add_option(name, p->given.*field, help)->capture_default_str();
+    auto* option = AddQuantityOption(cmd, name, &(p->given.*field), unit, bare_means, help);
     p->model_overrides.emplace_back(option,
                                     [p, field](ImuErrorModel& m) { m.*field = p->given.*field; });
   };
-  model_option("--noise-density", &ImuErrorModel::noise_density_rad_s_sqrt_hz,
-               "white rate noise (angle random walk), rad/s/sqrt(Hz)");
-  model_option("--bias-instability", &ImuErrorModel::bias_instability_rad_s,
-               "Gauss-Markov bias std, rad/s");
-  model_option("--bias-tau", &ImuErrorModel::bias_correlation_s,
-               "Gauss-Markov bias correlation time, s");
+  model_option("--noise-density", &ImuErrorModel::noise_density_rad_s_sqrt_hz, "rad/s/rtHz",
+               "rad/s/rtHz", "white rate noise (angle random walk)");
+  model_option("--bias-instability", &ImuErrorModel::bias_instability_rad_s, "rad/s", "rad/s",
+               "Gauss-Markov bias std");
+  model_option("--bias-tau", &ImuErrorModel::bias_correlation_s, "s", "s",
+               "Gauss-Markov bias correlation time");
   model_option("--rate-random-walk", &ImuErrorModel::rate_random_walk_rad_s2_sqrt_hz,
-               "rate random walk, rad/s^2/sqrt(Hz)");
-  model_option("--jitter", &ImuErrorModel::timestamp_jitter_s, "timestamp jitter std, s");
-  model_option("--gap-period", &ImuErrorModel::gap_period_s,
-               "a logging gap every this many s (0: none)");
-  model_option("--gap-duration", &ImuErrorModel::gap_duration_s, "length of each logging gap, s");
-  auto* option = TripleOption(cmd, "--const-bias", &p->const_bias,
-                              "constant bias X,Y,Z, rad/s (default ~0.6,-0.4,0.25 deg/s)");
+               "rad/s^2/rtHz", "rad/s^2/rtHz", "rate random walk");
+  model_option("--jitter", &ImuErrorModel::timestamp_jitter_s, "s", "us", "timestamp jitter std");
+  model_option("--gap-period", &ImuErrorModel::gap_period_s, "s", "s",
+               "a logging gap every this long (0: none)");
+  model_option("--gap-duration", &ImuErrorModel::gap_duration_s, "s", "ms",
+               "length of each logging gap");
+  auto* option = AddQuantityListOption(cmd, "--const-bias", &p->const_bias, "rad/s", "deg/s",
+                                       "constant bias X,Y,Z (default ~0.6,-0.4,0.25deg/s)")
+                     ->expected(3);
   p->model_overrides.emplace_back(option,
                                   [p](ImuErrorModel& m) { m.bias_rad_s = Triple(p->const_bias); });
   option = TripleOption(cmd, "--scale-error", &p->scale_error,
                         "scale error X,Y,Z, dimensionless: measured = (1 + e) * true");
   p->model_overrides.emplace_back(
       option, [p](ImuErrorModel& m) { m.scale_error = Triple(p->scale_error); });
-  option = cmd->add_option("--misalignment", p->misalignment,
-                           "cross-axis sensitivity XY,XZ,YX,YZ,ZX,ZY, rad (entry ij: sensor axis i "
-                           "sees this much of the rate about body axis j)")
-               ->expected(6)
-               ->delimiter(',');
+  option = AddQuantityListOption(cmd, "--misalignment", &p->misalignment, "rad", "mrad",
+                                 "cross-axis sensitivity XY,XZ,YX,YZ,ZX,ZY (entry ij: sensor "
+                                 "axis i sees this much of the rate about body axis j)")
+               ->expected(6);
   p->model_overrides.emplace_back(option, [p](ImuErrorModel& m) {
     const auto& v = p->misalignment;
     m.misalignment_rad << 0.0, v[0], v[1], v[2], 0.0, v[3], v[4], v[5], 0.0;
@@ -146,11 +151,10 @@ const CommandRegistration kSynthRegistration(10, [](CLI::App& app) {
                   "output file (required): gyro.csv, or raw counts with --raw");
   cmd->add_option("--out2", o->output.out2_path,
                   "second sensor's file: same motion, independent noise (the two-gyro idea)");
-  cmd->add_option("--trigger-every", o->output.trigger_every_s,
-                  "ulog: a camera_capture event every this many seconds (0: none)")
-      ->capture_default_str();
-  cmd->add_option("--altitude", o->altitude_m,
-                  "ulog: altitude above ground, m, written as vehicle_local_position.dist_bottom");
+  AddQuantityOption(cmd, "--trigger-every", &o->output.trigger_every_s, "s", "s",
+                    "ulog: a camera_capture event every this long (0: none)");
+  AddQuantityOption(cmd, "--altitude", &o->altitude_m, "m", "m",
+                    "ulog: altitude above ground, written as vehicle_local_position.dist_bottom");
   cmd->add_option("--format", o->format,
                   "csv (gyro.csv: s, rad/s), raw (int16 counts) or ulog (a PX4 flight log that "
                   "every command reads)")
@@ -160,43 +164,42 @@ const CommandRegistration kSynthRegistration(10, [](CLI::App& app) {
                   "raw format: unit of the time column (s, ms, us, ns)")
       ->capture_default_str();
   // Sampling.
-  cmd->add_option("--rate", s.rate_hz, "sampling rate, Hz")->capture_default_str();
-  cmd->add_option("--duration", s.duration_s,
-                  "length, s (0: still 60, flight 120, steps as many as the turns need)")
-      ->capture_default_str();
+  AddQuantityOption(cmd, "--rate", &s.rate_hz, "Hz", "Hz", "sampling rate");
+  AddQuantityOption(cmd, "--duration", &s.duration_s, "s", "s",
+                    "length (0: still 60s, flight 120s, steps as many as the turns need)");
   cmd->add_option("--seed", s.seed, "random seed (same seed, same bytes)")->capture_default_str();
-  cmd->add_option("--t0", s.t0_s, "time of the first sample, s")->capture_default_str();
-  cmd->add_option("--range", s.imu.range_dps,
-                  "gyro full-scale range, deg/s (250, 500, 1000, 2000 = 131, 65.5, 32.8, 16.4 LSB "
-                  "per deg/s): sets quantisation and saturation")
-      ->capture_default_str();
+  o->t0_option = AddQuantityOption(cmd, "--t0", &s.t0_s, "s", "s",
+                                   "time of the first sample (ulog: 1s unless given, a ULog's "
+                                   "clock starts at boot and never reads 0)");
+  AddRangeOption(cmd, &s.imu.range_dps,
+                 "gyro full-scale range (250, 500, 1000, 2000deg/s = 131, 65.5, 32.8, 16.4 LSB "
+                 "per deg/s): sets quantisation and saturation");
   // Sensor errors.
   cmd->add_flag("--ideal", o->ideal,
                 "perfect sensor: no noise, bias, scale, misalignment, quantisation, saturation, "
                 "jitter or gaps (the error options below still apply)");
   AddSensorErrorOptions(cmd, o.get());
   // Motion.
-  o->lead_option = cmd->add_option("--lead", o->lead_s,
-                                   "steps / flight: still time before the motion, s (default 6)");
+  o->lead_option = AddQuantityOption(cmd, "--lead", &o->lead_s, "s", "s",
+                                     "steps / flight: still time before the motion");
   cmd->add_option("--turns", s.steps.turns, "steps: number of turns")->capture_default_str();
-  cmd->add_option("--angle", s.steps.angle_deg, "steps: angle of each turn, deg")
-      ->capture_default_str();
+  AddQuantityOption(cmd, "--angle", &s.steps.angle_deg, "deg", "deg", "steps: angle of each turn");
   TripleOption(cmd, "--axis", &o->axis, "steps: turn axis X,Y,Z in sensor axes (normalised)");
-  cmd->add_option("--turn-time", o->turn_time, "steps: each turn lasts MIN,MAX s (uniform)")
-      ->expected(2)
-      ->delimiter(',');
-  cmd->add_option("--still", s.steps.still_s, "steps: still time after each turn, s")
-      ->capture_default_str();
-  cmd->add_option("--wobble", s.flight.wobble_rms_dps, "flight: attitude wobble RMS rate, deg/s")
-      ->capture_default_str();
-  cmd->add_option("--gusts", s.flight.gusts_per_s, "flight: wind gusts per second")
-      ->capture_default_str();
-  cmd->add_option("--gust-max", s.flight.gust_max_dps, "flight: largest gust peak rate, deg/s")
-      ->capture_default_str();
-  cmd->add_option("--vibration", s.flight.vibration_dps, "flight: motor harmonic amplitude, deg/s")
-      ->capture_default_str();
-  cmd->add_option("--resonance", s.flight.resonance_dps, "flight: frame resonance amplitude, deg/s")
-      ->capture_default_str();
+  AddQuantityListOption(cmd, "--turn-time", &o->turn_time, "s", "s",
+                        "steps: each turn lasts MIN,MAX (uniform)")
+      ->expected(2);
+  AddQuantityOption(cmd, "--still", &s.steps.still_s, "s", "s",
+                    "steps: still time after each turn");
+  AddQuantityOption(cmd, "--wobble", &s.flight.wobble_rms_dps, "deg/s", "deg/s",
+                    "flight: attitude wobble RMS rate");
+  AddQuantityOption(cmd, "--gusts", &s.flight.gusts_per_s, "Hz", "Hz",
+                    "flight: wind gusts per second");
+  AddQuantityOption(cmd, "--gust-max", &s.flight.gust_max_dps, "deg/s", "deg/s",
+                    "flight: largest gust peak rate");
+  AddQuantityOption(cmd, "--vibration", &s.flight.vibration_dps, "deg/s", "deg/s",
+                    "flight: motor harmonic amplitude");
+  AddQuantityOption(cmd, "--resonance", &s.flight.resonance_dps, "deg/s", "deg/s",
+                    "flight: frame resonance amplitude");
   return std::function<void()>([o] { Run(*o); });
 });
 

@@ -3,8 +3,10 @@
 #include "sim/check.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/logs/log_format.h"
+#include "sim/units.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <unistd.h>
 
@@ -51,15 +53,12 @@ void TraceOptions::Add(CLI::App* command, bool with_bias) {
                    ->required());
   AddFormatOption(command, &format);
   command->add_flag("--raw", raw, "the log holds raw int16 counts (the source paper's logger)");
-  command
-      ->add_option("--range", range_dps,
-                   "raw counts: gyro full-scale range, deg/s (250, 500, 1000, 2000)")
-      ->capture_default_str();
+  AddRangeOption(command, &range_dps);
   column_flags.Add(command);
   if (with_bias) {
     command
         ->add_option("--bias", bias,
-                     "still segment for the bias, A:B seconds after the first sample")
+                     "still segment for the bias, A:B after the first sample (0:5s, 2s:7s)")
         ->capture_default_str();
     command->add_flag(
         "--auto-bias", auto_bias,
@@ -103,6 +102,24 @@ CLI::Option* AddFormatOption(CLI::App* command, std::string* format, const std::
   return command
       ->add_option("--format", *format, what + ": " + names + " (columns: set by --columns)")
       ->capture_default_str();
+}
+
+CLI::Option* AddRangeOption(CLI::App* command, int* range_dps, const std::string& what) {
+  return command
+      ->add_option_function<std::string>(
+          "--range",
+          [range_dps](const std::string& text) {
+            const double dps = ParseQuantityOption(text, "deg/s", "--range", "deg/s");
+            if (dps != std::round(dps) || dps <= 0 || dps > 1e6) {
+              throw CLI::ValidationError("--range '" + text +
+                                         "': a full scale is a whole number of deg/s, e.g. "
+                                         "2000deg/s");
+            }
+            *range_dps = static_cast<int>(dps);
+          },
+          what + " (250, 500, 1000, 2000deg/s)")
+      ->type_name("ANGULAR RATE")
+      ->default_str(QuantityText(*range_dps, "deg/s"));
 }
 
 void PrintLogWarnings(const std::string& path, const std::vector<LogWarning>& warnings) {

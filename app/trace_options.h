@@ -38,7 +38,7 @@ struct TraceOptions {
   bool raw = false;             // shorthand for --format raw
   int range_dps = 250;          // raw counts: full-scale range
   ColumnFlags column_flags;     // --time-unit, --columns, --delimiter, --rate-unit
-  std::string bias = "0:5";     // bias segment A:B, seconds after the first sample
+  std::string bias = "0:5s";    // bias segment A:B after the first sample
   bool auto_bias = false;       // find the still segment automatically instead of --bias
   std::string second_path;      // --second: a second sensor's log on the same clock
 
@@ -58,6 +58,10 @@ struct TraceOptions {
 // (sim/logs/flight_log_io.h LogReaders) in its help, after `what`.
 CLI::Option* AddFormatOption(CLI::App* command, std::string* format,
                              const std::string& what = "log format");
+
+// --range: a raw-count gyro's full scale, an angular rate in whole deg/s ("2000dps").
+CLI::Option* AddRangeOption(CLI::App* command, int* range_dps,
+                            const std::string& what = "raw counts: gyro full-scale range");
 
 // What the reader could not read or trust, one "warning: PATH: LINE" on stderr each, so that no
 // command analyses less than the file holds without saying so.

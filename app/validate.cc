@@ -24,7 +24,7 @@ struct ValidateCommand {
   std::string dataset;
   std::string lens_profile_path;
   std::string report_path;
-  std::vector<std::string> limits{"5cm", "10cm"};
+  std::vector<double> limits_m{0.05, 0.10};
   std::string out_dir;
   std::vector<std::string> candidates;
   int grid_step_px = MeasureOptions{}.grid_step_px;
@@ -35,8 +35,7 @@ struct ValidateCommand {
 
 void Run(const ValidateCommand& command) {
   ValidateOptions options;
-  options.limits_m.clear();
-  for (const std::string& text : command.limits) options.limits_m.push_back(ParseLengthM(text));
+  options.limits_m = command.limits_m;
   for (const std::string& name : command.candidates) {
     options.loop.candidates.push_back(RequireEffect(name, "candidates"));
   }
@@ -87,9 +86,8 @@ const CommandRegistration kValidateRegistration(70, [](CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--report", command->report_path,
                   "write the validation report JSON (docs/FORMATS.md validation/1) here");
-  cmd->add_option("--limit", command->limits, "ground limits, e.g. 5cm,10cm")
-      ->delimiter(',')
-      ->capture_default_str();
+  AddQuantityListOption(cmd, "--limit", &command->limits_m, "m", "cm",
+                        "ground limits, e.g. 5cm,10cm");
   cmd->add_option("--out", command->out_dir,
                   "write residual pictures before/after (per frame, per row) to DIR");
   cmd->add_option(

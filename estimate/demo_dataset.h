@@ -44,9 +44,9 @@ std::vector<int64_t> DemoFrameTimesNs(const GyroTrace& gyro, double readout_s, d
 // 1280 wide scaled to `width`), validates it and writes out_dir/dataset (the rig dataset and its
 // truth), out_dir/report.json and out_dir/plots (WriteValidationPlots, validate.html).
 struct InjectedDemoOptions {
-  std::string scene_path;                       // nadir scene image
-  std::string out_dir;                          // created if missing
-  std::string injection = "time_offset=0.004";  // render --inject NAME=VALUE
+  std::string scene_path;                     // nadir scene image
+  std::string out_dir;                        // created if missing
+  std::string injection = "time_offset=4ms";  // render --inject NAME=VALUE
   int frames = 6;
   int width = 640, height = 480;
   uint64_t seed = 3;  // the flight motion

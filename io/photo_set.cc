@@ -1,5 +1,6 @@
 #include "io/photo_set.h"
 
+#include "io/image_check.h"
 #include "model/readout_table.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
@@ -193,7 +194,15 @@ PhotoSet ReadPhotoSet(const std::string& dir, const PhotoSetOptions& options) {
     throw IoError(IoMessage(dir, 0, "no photo files (.jpg, .jpeg, .tif, .tiff, .dng)"));
   for (size_t i = 0; i < paths.size(); ++i) {
     try {
-      set.photos.push_back(MakePhotoRecord(paths[i], ReadPhotoMetadata(paths[i]), options));
+      PhotoRecord record = MakePhotoRecord(paths[i], ReadPhotoMetadata(paths[i]), options);
+      // Metadata survives a cut: the pixels are what a photogrammetry tool will use.
+      const std::string problem = ImageDataProblem(paths[i]);
+      if (!problem.empty()) {
+        record.error = IoMessage(paths[i], 0,
+                                 "its image data does not decode (" + problem +
+                                     "): a cut or damaged file; copy it from the card again");
+      }
+      set.photos.push_back(std::move(record));
     } catch (const IoError& e) {
       PhotoRecord bad;
       bad.path = paths[i];

@@ -59,7 +59,9 @@ struct PhotoRecord {
   std::string path;
   std::string name;               // the file name, e.g. "DJI_0123.JPG"
   std::optional<int64_t> number;  // the stem's last digits (DJI_0123 -> 123), for trigger indexes
-  std::string error;              // the file could not be read: nothing below is set
+  // The file could not be read (nothing below is set), or its image data does not decode
+  // (io/image_check.h: the metadata below is kept, the photo is not used).
+  std::string error;
   PhotoMetadata metadata;
   // What the analyses use, each with its source for a person ("EXIF FocalLengthIn35mmFilm 24 mm
   // on the diagonal", "XMP drone-dji:RelativeAltitude", ...).

@@ -1,6 +1,7 @@
 #include "model/effect_io.h"
 
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <array>
 #include <cmath>
@@ -27,6 +28,19 @@ json ParseValueText(const std::string& text) {
     if (!x) return json(text);
     numbers.push_back(*x);
   }
+  return numbers.size() == 1 ? numbers[0] : numbers;
+}
+
+// An effect with a unit takes quantities: "5ms", "0.5deg/s,0,-0.2deg/s" (0 needs no unit), in
+// the effect's docs/FORMATS.md unit; a bare number is refused with what it probably meant.
+json QuantityListText(const std::string& text, Effect effect, const std::string& where) {
+  const std::string& unit = Spec(effect).unit;
+  // The unit a person most likely typed a bare number in.
+  const char* bare_means = unit == "s" ? "ms" : unit == "rad/s" ? "deg/s" : unit.c_str();
+  std::vector<std::string_view> fields;
+  SplitFields(text, ',', &fields);
+  json numbers = json::array();
+  for (std::string_view f : fields) numbers.push_back(ParseQuantity(f, unit, where, bare_means));
   return numbers.size() == 1 ? numbers[0] : numbers;
 }
 
@@ -190,8 +204,11 @@ Injection ParseInjection(const std::string& name_equals_value) {
   }
   const Effect effect =
       RequireEffect(std::string_view(name_equals_value).substr(0, eq), "--inject");
-  const json value = ParseValueText(name_equals_value.substr(eq + 1));
-  return Injection{effect, InjectionValue(effect, value, "--inject " + Spec(effect).name)};
+  const std::string where = "--inject " + Spec(effect).name;
+  const std::string text = name_equals_value.substr(eq + 1);
+  const json value =
+      Spec(effect).unit.empty() ? ParseValueText(text) : QuantityListText(text, effect, where);
+  return Injection{effect, InjectionValue(effect, value, where)};
 }
 
 json TrueModelToJson(const TrueModel& model) {

@@ -26,12 +26,14 @@ nlohmann::json EffectValueToJson(const EffectValue& value);
 EffectValue EffectValueFromJson(Effect effect, const nlohmann::json& json,
                                 const std::string& where);
 
-// `render --inject NAME=VALUE`: NAME a docs/FORMATS.md effect name, VALUE JSON ("[1.01,1,1]",
-// "{\"k1\":-0.1}") or comma-separated numbers ("1.01,1,1"; gyro_to_camera: 9 numbers, row-major;
-// lens_distortion: k1[,k2[,p1,p2[,k3]]], a lens object as camera.json's "distortion") or, for
-// readout_direction, a bare word. Numbers may be
-// nested one level (gyro_to_camera as JSON rows or flat) and must be finite. Throws
-// std::invalid_argument "--inject ..." for a missing '=', an unknown name or a bad value.
+// `render --inject NAME=VALUE`: NAME a docs/FORMATS.md effect name. An effect with a unit takes
+// quantities, comma-separated ("time_offset=5ms", "gyro_bias=0.5deg/s,0,0", "clock_rate=30ppm";
+// 0 needs no unit, a bare number is refused with what it probably meant). The others take JSON
+// ("[1.01,1,1]", "{\"k1\":-0.1}") or comma-separated numbers ("1.01,1,1"; gyro_to_camera: 9
+// numbers, row-major; lens_distortion: k1[,k2[,p1,p2[,k3]]], a lens object as camera.json's
+// "distortion") or, for readout_direction, a bare word. Numbers may be nested one level
+// (gyro_to_camera as JSON rows or flat) and must be finite. Throws std::invalid_argument
+// "--inject ..." for a missing '=', an unknown name or a bad value.
 Injection ParseInjection(const std::string& name_equals_value);
 
 // A whole true model: {"camera": camera.json's object, "gyro_scale": [3], "gyro_bias_rad_s": [3],

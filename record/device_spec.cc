@@ -37,16 +37,18 @@ DeviceSpec ParseDeviceSpec(const std::string& text) {
     if (key == "part") {
       spec.part = ParseGyroPart(value);
     } else if (key == "rate") {
-      need(number && *number > 0);
-      spec.rate_hz = *number;
+      spec.rate_hz = ParseQuantity(value, "Hz", "device '" + text + "': rate=", "Hz");
+      need(spec.rate_hz > 0);
     } else if (key == "range") {
-      need(number && *number == static_cast<int>(*number));
-      spec.range_dps = static_cast<int>(*number);
+      const double range_dps =
+          ParseQuantity(value, "deg/s", "device '" + text + "': range=", "deg/s");
+      need(range_dps > 0 && range_dps == static_cast<int>(range_dps));
+      spec.range_dps = static_cast<int>(range_dps);
     } else if (key == "mode" && !spec.emulate) {
       need(number && (*number == 0 || *number == 3));
       spec.spi_mode = static_cast<int>(*number);
     } else if (key == "ppm" && spec.emulate) {
-      need(number.has_value());
+      need(number.has_value());  // the key names the unit
       spec.ppm = *number;
     } else {
       throw std::invalid_argument("device '" + text + "': unknown key '" + key +
@@ -97,13 +99,14 @@ std::unique_ptr<TriggerSource> OpenTriggerSpec(const std::string& spec,
     const std::string text(field);
     if (text.rfind("every=", 0) == 0) {
       SHUTTERLAB_CHECK(duration_s > 0) << "--trigger emulate:every= needs --duration";
-      pulses = PulsesEvery(ParseDurationS(text.substr(6)), duration_s);
+      pulses = PulsesEvery(ParseQuantity(text.substr(6), "s", "--trigger emulate:every=", "s"),
+                           duration_s);
     } else if (text.rfind("bounce=", 0) == 0) {
       const auto n = ParseInt(text.substr(7));
       SHUTTERLAB_CHECK(n && *n >= 0 && *n < 100) << "--trigger: bad bounce in '" << spec << "'";
       bounce = static_cast<int>(*n);
     } else if (text.rfind("width=", 0) == 0) {
-      width_ns = SecondsToNs(ParseDurationS(text.substr(6)));
+      width_ns = SecondsToNs(ParseQuantity(text.substr(6), "s", "--trigger emulate:width=", "ms"));
     } else {
       const TriggerFile file = ReadTriggerFile(text);
       SHUTTERLAB_CHECK(file.clock == TriggerClock::kLog)

@@ -45,6 +45,7 @@ THIRD_PARTY = [
     ("OpenImageIO/", "OpenImageIO::OpenImageIO"),
     ("exiv2/", "exiv2lib"),
     ("gpiod.h", "PkgConfig::GPIOD"),
+    ("jpeglib.h", "JPEG::JPEG"),
     ("CLI/", "CLI11::CLI11"),
     ("benchmark/", "benchmark::benchmark"),
     ("gtest/", "GTest::gtest"),

@@ -24,8 +24,8 @@ cat >"$out/camera.json" <<'JSON'
  "rolling_shutter": {"readout_s": 0.030, "direction": "top_to_bottom"},
  "scene": {"altitude_m": 50.0}}
 JSON
-"$shutterlab" synth flight --ideal --rate 1000 --duration 30 --seed 3 --out "$out/gyro.csv" >/dev/null
-"$shutterlab" synth flight --ideal --rate 1000 --duration 120 --seed 3 --out "$out/gyro_long.csv" >/dev/null
+"$shutterlab" synth flight --ideal --rate 1000Hz --duration 30s --seed 3 --out "$out/gyro.csv" >/dev/null
+"$shutterlab" synth flight --ideal --rate 1000Hz --duration 120s --seed 3 --out "$out/gyro_long.csv" >/dev/null
 printf 'frame,t_first_row\n0,8\n1,12\n2,16\n3,20\n4,24\n5,28\n' >"$out/frames.csv"
 printf 'frame,t_first_row\n0,10\n1,30\n2,50\n3,70\n4,90\n5,110\n' >"$out/frames_long.csv"
 
@@ -34,10 +34,10 @@ median() { jq "[.frames[] | $2] | sort | .[length / 2 | floor]" "$1"; }
 
 printf '| effect (in the truth, not in camera.json) | D before px | camera.json alone: D / rms px | true model: D / rms px | validate found | fitted: D / rms px | predicted D px (90 %%) |\n'
 printf '| --- | --- | --- | --- | --- | --- | --- |\n'
-for injection in "time_offset=0.004" "readout_time=0.036" \
+for injection in "time_offset=4ms" "readout_time=36ms" \
     "gyro_to_camera=0.99756405,-0.06975647,0,0.06975647,0.99756405,0,0,0,1" \
-    "gyro_scale=1.05,0.95,1.04" "gyro_bias=0.01,0,0" "velocity=4,0,0" \
-    "lens_distortion=-0.05,0.01" "readout_direction=bottom_to_top" "clock_rate=300"; do
+    "gyro_scale=1.05,0.95,1.04" "gyro_bias=0.01rad/s,0,0" "velocity=4m/s,0,0" \
+    "lens_distortion=-0.05,0.01" "readout_direction=bottom_to_top" "clock_rate=300ppm"; do
   name=${injection%%=*}
   gyro="$out/gyro.csv" times="$out/frames.csv"
   if [ "$name" = clock_rate ]; then gyro="$out/gyro_long.csv" times="$out/frames_long.csv"; fi

@@ -14,8 +14,8 @@ s() { "$shutterlab" "$@"; }
 head_rows() { head -n $(($2 + 1)) "$1"; }
 rows() { awk '/^t,gx,gy,gz/ { f = 1; next } f { n++ } END { print n }' "$1"; }
 
-s synth flight --rate 8000 --duration 12 --seed 4 --out "$out/flight.csv" >/dev/null
-s synth still --rate 8000 --duration 12 --seed 5 --out "$out/still.csv" --out2 "$out/still_b.csv" >/dev/null
+s synth flight --rate 8000Hz --duration 12s --seed 4 --out "$out/flight.csv" >/dev/null
+s synth still --rate 8000Hz --duration 12s --seed 5 --out "$out/still.csv" --out2 "$out/still_b.csv" >/dev/null
 printf 'image,t\nIMG_0001,2\nIMG_0002,4\nIMG_0003,6\nIMG_0004,8\n' >"$out/triggers_truth.csv"
 
 echo "== 1. real time, 10 s at 8 kHz, ppm 40, the writer stalled 300 ms every 2 s, triggers with bounce"
@@ -62,7 +62,7 @@ s record --device "emulate:$out/still.csv" --device "emulate:$out/still_b.csv,pp
 s noise "$out/pair.gcsv" --second "$out/pair.2.gcsv" | sed -n '/Fused gain/,$p'
 
 echo "== 6. two emulated sensors on a synthetic flight: the mounting fitted, the fused flight table"
-s synth flight --rate 8000 --duration 12 --seed 7 --out "$out/fa.csv" --out2 "$out/fb.csv" >/dev/null
+s synth flight --rate 8000Hz --duration 12s --seed 7 --out "$out/fa.csv" --out2 "$out/fb.csv" >/dev/null
 s record --device "emulate:$out/fa.csv" --device "emulate:$out/fb.csv,ppm=20" --duration 11s --clock virtual \
   --out "$out/fp.gcsv" >/dev/null
 s flight "$out/fp.gcsv" --second "$out/fp.2.gcsv" | head -3

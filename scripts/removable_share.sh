@@ -25,21 +25,21 @@ scene=${SCENE:-$data/images/siyi_zr10/IMG_0150.jpg}
 [ -f "$scene" ] || { echo "$0: scene $scene not found (set SHUTTERLAB_DATA_DIR or SCENE)" >&2; exit 2; }
 
 m_per_px=$(awk 'BEGIN { printf "%.6f", 50.0 / 1100.0 }')
-"$shutterlab" synth flight --ideal --rate 8000 --duration 30 --seed 5 --out "$out/truth.csv" >/dev/null
+"$shutterlab" synth flight --ideal --rate 8000Hz --duration 30s --seed 5 --out "$out/truth.csv" >/dev/null
 awk 'BEGIN { print "frame,t_first_row"; for (i = 0; i < 10; i++) printf "%d,%d\n", i, 8 + 2 * i }' \
   >"$out/times.csv"
 # gyro NAME ARGS...: the flight logged by the gyro ARGS describe (calibrated: no constant errors).
 gyro() {
   local name=$1
   shift
-  [ -f "$out/$name.csv" ] || "$shutterlab" synth flight --duration 30 --seed 5 \
+  [ -f "$out/$name.csv" ] || "$shutterlab" synth flight --duration 30s --seed 5 \
     --const-bias 0 0 0 --scale-error 0 0 0 --misalignment 0 0 0 0 0 0 "$@" \
     --out "$out/$name.csv" >/dev/null
 }
-gyro perfect_1k --ideal --rate 1000
+gyro perfect_1k --ideal --rate 1000Hz
 for rate in 200 1000 4000; do
-  gyro "mpu9250_$rate" --rate "$rate" --noise-density 7e-5
-  gyro "mpu9250x10_$rate" --rate "$rate" --noise-density 7e-4
+  gyro "mpu9250_$rate" --rate "$rate" --noise-density 7e-5rad/s/rtHz
+  gyro "mpu9250x10_$rate" --rate "$rate" --noise-density 7e-4rad/s/rtHz
 done
 
 # median FILE JQ_PATH: the median over frames of a per-frame number of correct.json.

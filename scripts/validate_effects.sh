@@ -26,8 +26,8 @@ EOF
 frames() {
   awk -v a="$2" -v b="$3" 'BEGIN { print "frame,t_first_row"; for (i = 0; i < 8; i++) printf "%d,%.6f\n", i, a + (b - a) * i / 7 }' >"$1"
 }
-"$shutterlab" synth flight --ideal --rate 1000 --duration 30 --seed 3 --out "$out/gyro.csv" >/dev/null
-"$shutterlab" synth flight --ideal --rate 1000 --duration 120 --seed 3 --out "$out/gyro_long.csv" >/dev/null
+"$shutterlab" synth flight --ideal --rate 1000Hz --duration 30s --seed 3 --out "$out/gyro.csv" >/dev/null
+"$shutterlab" synth flight --ideal --rate 1000Hz --duration 120s --seed 3 --out "$out/gyro_long.csv" >/dev/null
 frames "$out/frames.csv" 8 28
 frames "$out/frames_long.csv" 10 110
 
@@ -39,9 +39,9 @@ misaligned=$(awk 'BEGIN {
     t*x*x + c, t*x*y - s*z, t*x*z + s*y, t*x*y + s*z, t*y*y + c, t*y*z - s*x,
     t*x*z - s*y, t*y*z + s*x, t*z*z + c }')
 
-cases=("none" "time_offset=0.004" "readout_time=0.036" "gyro_to_camera=$misaligned"
-       "gyro_scale=1.05,0.95,1.04" "gyro_bias=0.01,0,0" "velocity=4,0,0" "lens_distortion=-0.05,0.01"
-       "readout_direction=bottom_to_top" "clock_rate=300")
+cases=("none" "time_offset=4ms" "readout_time=36ms" "gyro_to_camera=$misaligned"
+       "gyro_scale=1.05,0.95,1.04" "gyro_bias=0.01rad/s,0,0" "velocity=4m/s,0,0" "lens_distortion=-0.05,0.01"
+       "readout_direction=bottom_to_top" "clock_rate=300ppm")
 for injection in "${cases[@]}"; do
   name=${injection%%=*}
   gyro="$out/gyro.csv" times="$out/frames.csv"

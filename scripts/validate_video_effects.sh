@@ -4,7 +4,7 @@
 # real aerial scene, f 550 px, 30 ms readout, 50 m, a perfect multirotor-like gyro; no reference
 # images) with the effect in the truth but not in camera.json, runs `shutterlab validate` on it and
 # prints what the rotation-only and the pair-translation loops found, and the halves.
-# With CLUTTER="--camera-fixed-patch 0.25 --moving-patch 10" every clip also shows a dashboard over
+# With CLUTTER="--camera-fixed-patch 0.25 --moving-patch 10m/s" every clip also shows a dashboard over
 # its bottom quarter and a car driving across the ground (render/clutter.h): the same effects must
 # come out within the same tolerances.
 #   scripts/validate_video_effects.sh [OUT_DIR]   (default /tmp/shutterlab_video_effects; ~4 min)
@@ -31,7 +31,7 @@ frames() {
   awk -v n="$2" -v a="$3" -v fps="$4" \
     'BEGIN { print "frame,t_first_row"; for (i = 0; i < n; i++) printf "%d,%.9f\n", i, a + i / fps }' >"$1"
 }
-"$shutterlab" synth flight --ideal --rate 1000 --duration 20 --seed 3 --out "$out/gyro.csv" >/dev/null
+"$shutterlab" synth flight --ideal --rate 1000Hz --duration 20s --seed 3 --out "$out/gyro.csv" >/dev/null
 frames "$out/frames.csv" 16 12.6 30        # the flight's liveliest half second (up to 0.8 rad/s)
 frames "$out/frames_yaw.csv" 16 11.4 30    # twice the yaw of 12.6 s: for the per-axis scale
 frames "$out/frames_long.csv" 50 8 5       # 10 s at 5 fps: the clock's drift grows by 3 ms
@@ -44,10 +44,10 @@ misaligned=$(awk 'BEGIN {
     t*x*x + c, t*x*y - s*z, t*x*z + s*y, t*x*y + s*z, t*y*y + c, t*y*z - s*x,
     t*x*z - s*y, t*y*z + s*x, t*z*z + c }')
 
-cases=("none" "time_offset=0.004" "readout_time=0.036" "gyro_to_camera=$misaligned"
-       "gyro_to_camera=0,1,0,1,0,0,0,0,-1" "gyro_scale=1.05,0.95,1.04" "gyro_bias=0.01,0,0"
-       "lens_distortion=-0.05,0.01" "readout_direction=bottom_to_top" "clock_rate=300"
-       "velocity=2,1,3")
+cases=("none" "time_offset=4ms" "readout_time=36ms" "gyro_to_camera=$misaligned"
+       "gyro_to_camera=0,1,0,1,0,0,0,0,-1" "gyro_scale=1.05,0.95,1.04" "gyro_bias=0.01rad/s,0,0"
+       "lens_distortion=-0.05,0.01" "readout_direction=bottom_to_top" "clock_rate=300ppm"
+       "velocity=2m/s,1m/s,3m/s")
 for injection in "${cases[@]}"; do
   name=${injection%%=*}
   [ "$injection" = "gyro_to_camera=0,1,0,1,0,0,0,0,-1" ] && name=gyro_axes

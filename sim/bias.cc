@@ -1,8 +1,9 @@
 #include "sim/bias.h"
 
 #include "sim/check.h"
-#include "sim/text_file.h"
+#include "sim/units.h"
 
+#include <cctype>
 #include <cmath>
 #include <string>
 
@@ -49,13 +50,25 @@ BiasEstimate BiasOverSegment(const GyroSample* begin, const GyroSample* end,
 BiasSegment ParseBiasSegment(const std::string& text) {
   const size_t colon = text.find(':');
   SHUTTERLAB_CHECK(colon != std::string::npos)
-      << "bias segment '" << text << "' is not A:B (seconds)";
-  const auto a = ParseDouble(std::string_view(text).substr(0, colon));
-  const auto b = ParseDouble(std::string_view(text).substr(colon + 1));
-  SHUTTERLAB_CHECK(a && b) << "bias segment '" << text << "' is not A:B (seconds)";
-  BiasSegment s{*a, *b};
+      << "--bias '" << text << "': expected A:B, the still segment's start and end after the "
+      << "first sample, e.g. 0:5s";
+  // The shared contract (FORMATS.md) defines A:B in seconds: a bare side is seconds, or takes the
+  // other side's unit ("2:7s"); a unit may be given ("500ms:3s").
+  std::string begin = text.substr(0, colon);
+  std::string end = text.substr(colon + 1);
+  const auto unit_of = [](const std::string& side) {
+    size_t split = side.size();
+    while (split > 0 && std::isalpha(static_cast<unsigned char>(side[split - 1]))) --split;
+    return side.substr(split);
+  };
+  const std::string default_unit = !unit_of(end).empty()     ? unit_of(end)
+                                   : !unit_of(begin).empty() ? unit_of(begin)
+                                                             : "s";
+  if (unit_of(begin).empty()) begin += default_unit;
+  if (unit_of(end).empty()) end += default_unit;
+  BiasSegment s{ParseQuantity(begin, "s", "--bias", "s"), ParseQuantity(end, "s", "--bias", "s")};
   SHUTTERLAB_CHECK(s.begin_s >= 0 && s.end_s > s.begin_s)
-      << "bias segment '" << text << "' must satisfy 0 <= A < B";
+      << "--bias '" << text << "' must satisfy 0 <= A < B";
   return s;
 }
 

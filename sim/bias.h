@@ -42,7 +42,9 @@ BiasEstimate BiasOverSegment(const GyroSample* begin, const GyroSample* end,
                              const BiasSegment& segment, size_t first_after,
                              double trace_duration_s);
 
-// Parses "A:B" (seconds). Throws std::invalid_argument on anything else.
+// Parses `--bias A:B`, the still segment's start and end after the first sample: seconds, as the
+// shared contract defines it ("0:5"), or with a unit ("500ms:3s"; "2:7s" puts both in seconds).
+// Throws std::invalid_argument on anything else.
 BiasSegment ParseBiasSegment(const std::string& text);
 
 }  // namespace shutterlab

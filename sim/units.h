@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace shutterlab {
@@ -27,12 +28,27 @@ inline double SecondsSince(std::chrono::steady_clock::time_point start) {
 // An instant on a log's clock for a message: "140.184 s" (ms resolution).
 std::string SecondsText(int64_t t_ns);
 
-// "5cm", "50mm", "0.05m", "0.05" (metres) -> metres. Throws std::invalid_argument
-// naming the text otherwise.
-double ParseLengthM(const std::string& text);
-// "10ms", "0.01s", "10000us", "0.01" (seconds) -> seconds. Throws std::invalid_argument
-// naming the text otherwise.
-double ParseDurationS(const std::string& text);
+// A quantity a person typed: "5cm", "30 ms", "400Hz", "2000dps", "-0.5deg/s". Returns it in `unit`,
+// any unit of kUnits (m, s, Hz, deg, deg/s, m/s, ppm, ...); the text may carry any unit of the same
+// dimension (case does not matter). A bare number is refused, 0 excepted (the same in every unit):
+// `bare_means` is the unit a person most likely meant, so "--limit 5" is answered "did you mean
+// 5cm?". `what` names the option. Throws std::invalid_argument, one line naming `what` and the
+// text:
+//   --limit '5': a length needs a unit: did you mean 5cm? (m, cm, mm, km)
+double ParseQuantity(std::string_view text, std::string_view unit, std::string_view what,
+                     std::string_view bare_means);
+
+// The dimension of a unit: "length", "duration", "frequency", "angle", "angular rate", "speed",
+// "ratio".
+std::string DimensionOf(std::string_view unit);
+// The dimension and the units it may be typed in ("length: m, cm, mm, km"), for help texts.
+std::string UnitsOf(std::string_view unit);
+
+// value in `from` converted to `to`, a unit of the same dimension (exact when they are one unit).
+double ConvertUnit(double value, std::string_view from, std::string_view to);
+
+// A value in `unit` as a person types it: "50m", "0.03s", "400Hz" (shortest round trip).
+std::string QuantityText(double value, std::string_view unit);
 
 // Median of values (a copy, reordered): the middle value for an odd count, the mean of the two
 // middle values for an even count; NaN when empty.

@@ -447,6 +447,20 @@ std::vector<ImageResult> AnalyzeImages(const ImageContext& context,
   return images;
 }
 
+// What was taken as a default: the caller's (AnalyzeOptions::assumptions), the altitude when the
+// log had none to give, a zero bias when no still stretch was found to measure it on.
+void NoteAssumptions(const AnalyzeOptions& options, AnalyzeResult* result) {
+  result->assumptions = options.assumptions;
+  if (options.use_log_altitude && result->altitude_source != "log") {
+    result->assumptions.push_back({"altitude", FormatNumber("%g m", result->altitude_m),
+                                   "the log has no height above ground", "--altitude"});
+  }
+  if (result->bias_estimated && !result->bias_from_still) {
+    result->assumptions.push_back({"bias", "zero", "the log has no still stretch to measure it on",
+                                   "a log that starts with the camera still for a few seconds"});
+  }
+}
+
 // The verdict on result->images (with the what-if shares from the images under the what-if
 // cameras, when asked for and an image is judged: what_if() gives {fast, low}).
 using WhatIfImages = std::pair<std::vector<ImageResult>, std::vector<ImageResult>>;
@@ -634,6 +648,7 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
   }
   if (options.plots) result.plots = WholeTracePlots(*options.plots, *result.traces, result.images);
   // The verdict, with the what-if shares recomputed (not scaled) under the changed camera.
+  NoteAssumptions(options, &result);
   JudgeImages(
       options,
       [&] {
@@ -1020,6 +1035,7 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
   result.images = std::move(measured[0]);
   if (plots) result.plots = plots->Finish();
   if (allan) result.allan = allan->Finish();
+  NoteAssumptions(options, &result);
   JudgeImages(
       options,
       [&] {
@@ -1070,6 +1086,11 @@ std::string AltitudeText(const AnalyzeResult& result) {
   return "log: " + result.altitude_method;
 }
 
+std::string AssumptionLine(const Assumption& a) {
+  return "assumed: " + a.what + " " + a.taken + (a.why.empty() ? "" : " (" + a.why + ")") +
+         "; give " + a.give;
+}
+
 std::string AnalyzeReport(const AnalyzeResult& result) {
   std::ostringstream out;
   out << "source: " << result.format << ", gyro " << result.gyro_source << ", " << result.samples
@@ -1086,7 +1107,9 @@ std::string AnalyzeReport(const AnalyzeResult& result) {
   }
   out << "camera: readout " << FormatNumber("%g", result.readout_s * 1e3) << " ms, altitude "
       << FormatNumber("%g", result.altitude_m) << " m (" << AltitudeText(result)
-      << "); triggers: " << result.trigger_source << "\n\n";
+      << "); triggers: " << result.trigger_source << "\n";
+  for (const Assumption& a : result.assumptions) out << AssumptionLine(a) << "\n";
+  out << "\n";
   if (result.flight) {
     out << FlightTable(*result.flight) << "\n";
   } else {

@@ -66,6 +66,15 @@ struct AnalyzePlotOptions {
   void Check() const;       // throws std::invalid_argument naming the first bad field
 };
 
+// An input that neither the user nor the file gave, taken as a default: what was taken and how to
+// give it, said in the terminal, the JSON and the page.
+struct Assumption {
+  std::string what;   // "camera", "readout", "lens", "altitude", "bias"
+  std::string taken;  // "1280 x 960 px, f 1100 px", "30 ms", ...
+  std::string why;    // why it was not read from the file, "" when there is no file to read
+  std::string give;   // how to give it: "--readout, --camera or --lens-profile"
+};
+
 struct AnalyzeOptions {
   RigModel rig;                              // camera, readout, altitude_m, cam_from_gyro
   std::vector<double> limits_m{0.05, 0.10};  // acceptable smear on the ground
@@ -90,6 +99,9 @@ struct AnalyzeOptions {
   // Compute the Allan deviation of the camera-axis rates (AnalyzeResult::allan) for the report.
   bool allan = false;
   std::function<void(double)> progress;  // fraction done (0..1); may be empty
+  // The caller's defaults (the camera, its readout, its lens); the analysis adds its own (the
+  // altitude when the log has none, a zero bias when no still segment is found).
+  std::vector<Assumption> assumptions;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };
@@ -177,6 +189,7 @@ struct AnalyzeResult {
   double altitude_m = 0.0, readout_s = 0.0;
   std::string altitude_source;  // "camera" (the options) or "log"
   std::string altitude_method;  // how the log's altitude was formed (FlightLog::altitude_source)
+  std::vector<Assumption> assumptions;  // AnalyzeOptions::assumptions and the analysis's own
   std::vector<ImageResult> images;
   AnalyzeVerdict verdict;
   // With AnalyzeOptions::allan, the Allan deviation of the camera-axis rates (bias removed): on the
@@ -234,7 +247,12 @@ std::vector<ImageTrigger> TriggersOnLogClock(const TriggerFile& file, const Flig
 // Where the altitude came from, for a person: "camera", or "log: median CAM.RelAlt ...".
 std::string AltitudeText(const AnalyzeResult& result);
 
-// Report for a person: source, bias, flight table, per-image table, verdict.
+// "assumed: readout 30 ms; give --readout, --camera or --lens-profile", with the reason when
+// there is one.
+std::string AssumptionLine(const Assumption& a);
+
+// Report for a person: source, bias, camera and what was assumed, flight table, per-image table,
+// verdict.
 std::string AnalyzeReport(const AnalyzeResult& result);
 // DIR/images.csv (name,t,D_paper_m,D_full_m,flag_<limit>...,dominant_axis; images outside the
 // trace have empty values and dominant_axis "outside") and DIR/exclude.txt (flagged names at any

@@ -215,6 +215,12 @@ PhotoAnalysis AnalyzePhotosWithLog(const PhotoSet& set, const PhotoAnalysisOptio
     if (it != by_name.end() && it->second->in_trace) {
       p.d_rotation_m = it->second->d_full_m;
       p.d_rotation_px = it->second->d_full_px;
+      // The same image angle covers ground in proportion to the height: a folder flown at 41 m
+      // and 118 m is not one altitude.
+      const std::optional<double>& altitude_m = set.photos[i].altitude_m;
+      if (options.rotation_at_each_photo_altitude && altitude_m && log_result.altitude_m > 0) {
+        *p.d_rotation_m *= *altitude_m / log_result.altitude_m;
+      }
       p.d_paper_m = it->second->d_paper_m;
     } else if (p.placement.t_ns) {
       p.notes.push_back("its readout is outside the log's gyro trace");

@@ -39,6 +39,10 @@ struct PhotoAnalysisOptions {
   std::vector<double> limits_m{0.05, 0.10};  // acceptable displacement on the ground
   // An optical axis further than this from straight down is "oblique" (no along/across split).
   double nadir_tolerance_deg = 10.0;
+  // With a log: the rotation part in metres at each photo's own height above the ground (its
+  // metadata's), not at the one altitude the log's analysis used for all of them. Off when the
+  // user's altitude or camera.json's should win.
+  bool rotation_at_each_photo_altitude = false;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };

@@ -102,6 +102,7 @@ PhotoFlightResult PhotoFlight(const PhotoSet& set, const FlightLog& log,
 
   PhotoAnalysisOptions photo_options = options.photos;
   photo_options.limits_m = out.analyzed.limits_m;
+  photo_options.rotation_at_each_photo_altitude = !options.altitude_given && !options.rig_given;
   out.photos = AnalyzePhotosWithLog(set, photo_options, out.clock.placements, out.log);
   out.photos.placement_method = out.clock.method;
   out.photos.clock_offset_s = out.clock.clock_offset_s;

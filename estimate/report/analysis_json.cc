@@ -201,6 +201,11 @@ nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
                     {"altitude_method", result.altitude_method},
                     {"readout_s", result.readout_s}};
   json["triggers"] = result.trigger_source;
+  nlohmann::json assumptions = nlohmann::json::array();
+  for (const Assumption& a : result.assumptions) {
+    assumptions.push_back({{"what", a.what}, {"taken", a.taken}, {"why", a.why}, {"give", a.give}});
+  }
+  json["assumptions"] = assumptions;
   nlohmann::json images = nlohmann::json::array();
   for (const ImageResult& image : result.images) {
     nlohmann::json entry;

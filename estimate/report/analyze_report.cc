@@ -203,6 +203,16 @@ void AddAllan(HtmlPage* page, const AnalyzeResult& result) {
               rows);
 }
 
+// What neither the user nor the log gave (AnalyzeResult::assumptions), and how to give it.
+void AddAssumptions(HtmlPage* page, const AnalyzeResult& result) {
+  if (result.assumptions.empty()) return;
+  page->Heading("What was assumed");
+  page->Paragraph("Neither you nor the log gave these; the results on this page use them:");
+  std::vector<std::vector<std::string>> lines;
+  for (const Assumption& a : result.assumptions) lines.push_back({a.what, a.taken, a.why, a.give});
+  page->Table({"", "taken", "because", "to give your own"}, lines);
+}
+
 void AddFlightTable(HtmlPage* page, const AnalyzeResult& result) {
   if (!result.flight) {
     page->Paragraph("Flight table not computed: " + result.flight_problem);
@@ -371,6 +381,8 @@ HtmlPage AnalyzeReportPage(const AnalyzeOptions& options, const AnalyzeResult& r
   if (!report.camera_source.empty())
     rows.insert(rows.begin() + 11, {"camera from", report.camera_source});
   page.Table({"", ""}, rows);
+
+  AddAssumptions(&page, result);
 
   if (!result.log_warnings.empty()) {
     page.Heading("What the log lost");

@@ -32,7 +32,7 @@ TEST(AnalyzeCli, BlackboxEveryTwoSecondsJsonAndOutputs) {
   SHUTTERLAB_NEED_REAL_DATA();
   test::TempDir dir;
   const auto r =
-      RunShutterlab("analyze " + Bbl() + " --every 2s --readout 20ms --altitude 40 --json --out " +
+      RunShutterlab("analyze " + Bbl() + " --every 2s --readout 20ms --altitude 40m --json --out " +
                     (dir / "out"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json json = nlohmann::json::parse(r.out);
@@ -221,8 +221,8 @@ TEST(AnalyzeCli, SyntheticULogWithItsOwnTriggersAndAltitude) {
   test::TempDir dir;
   const std::string log = dir / "flight.ulg";
   const auto synth = RunShutterlab(
-      "synth flight --rate 500 --duration 30 --t0 1 --format ulog "
-      "--trigger-every 2 --altitude 40 --out " +
+      "synth flight --rate 500Hz --duration 30s --t0 1s --format ulog "
+      "--trigger-every 2s --altitude 40m --out " +
       log);
   ASSERT_EQ(synth.exit_code, 0) << synth.output;
   const auto r = RunShutterlab("analyze " + log + " --json");
@@ -296,6 +296,48 @@ TEST(AnalyzeCli, ASensorPairOfARealFlightOnAPipeGivesTheFilesResult) {
   WriteSensorPair(ReadFlightLog(log).gyro,
                   Eigen::AngleAxisd(2.0, Eigen::Vector3d(0, 0, 1)).toRotationMatrix(), dir.path());
   ExpectPairOnAPipeAsOnFiles(dir.path(), " --every 5s", false);
+}
+
+// What neither the user nor the log gave is said as assumed, with how to give it: in the table,
+// the JSON and the page; what was given is not.
+TEST(AnalyzeCli, SaysWhatItAssumedAndHowToGiveIt) {
+  test::TempDir dir;
+  const std::string gyro = dir / "gyro.csv";
+  test::WriteStillThenTurningGyroCsv(gyro);
+  const auto bare = RunShutterlab("analyze " + gyro + " --every 2s --out " + (dir / "out"));
+  ASSERT_EQ(bare.exit_code, 0) << bare.output;
+  for (const std::string line :
+       {"assumed: camera 1280 x 960 px, f 1100 px; give --camera camera.json, or --size and "
+        "--focal-px\n",
+        "assumed: readout 30 ms; give --readout, --camera or --lens-profile\n",
+        "assumed: lens no distortion; give --lens-profile (a Gyroflow profile) or --camera\n",
+        "assumed: altitude 50 m (the log has no height above ground); give --altitude\n"}) {
+    EXPECT_NE(bare.out.find(line), std::string::npos) << line << bare.out;
+  }
+  const std::string page = ReadFileToString(dir / "out/report.html");
+  EXPECT_NE(page.find("What was assumed"), std::string::npos);
+  EXPECT_NE(page.find("the log has no height above ground"), std::string::npos);
+
+  const auto given = RunShutterlab("analyze " + gyro +
+                                   " --every 2s --readout 20ms --altitude 80m --size 4000x3000 "
+                                   "--focal-px 3000 --json");
+  ASSERT_EQ(given.exit_code, 0) << given.output;
+  const nlohmann::json json = nlohmann::json::parse(given.out);
+  ASSERT_EQ(json["assumptions"].size(), 1u) << json["assumptions"].dump();
+  EXPECT_EQ(json["assumptions"][0]["what"], "lens");
+  EXPECT_EQ(json["assumptions"][0]["give"], "--lens-profile (a Gyroflow profile) or --camera");
+  // The still gyro.csv starts with 5 s still: the bias is measured, not assumed.
+  EXPECT_TRUE(json["bias"]["from_still_segment"].get<bool>());
+
+  // A flight that never stands still: the bias is taken as zero, and said so.
+  const std::string moving = dir / "moving.csv";
+  ASSERT_EQ(RunShutterlab("synth flight --lead 0 --duration 20s --out " + moving).exit_code, 0);
+  const auto no_still = RunShutterlab("analyze " + moving + " --every 2s --json");
+  ASSERT_EQ(no_still.exit_code, 0) << no_still.output;
+  const nlohmann::json assumed = nlohmann::json::parse(no_still.out)["assumptions"];
+  ASSERT_FALSE(assumed.empty());
+  EXPECT_EQ(assumed.back()["what"], "bias") << assumed.dump();
+  EXPECT_EQ(assumed.back()["taken"], "zero");
 }
 
 }  // namespace

@@ -73,7 +73,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"csv_decreasing", "t,gx,gy,gz\n0.002,1.5,2,3\n0.001,1.5,2,3\n", "", 3,
                 "timestamp decreases"},
         // raw counts
-        BadCase{"raw_range", "0,1,2,3\n1,1,2,3\n", "--raw --range 300", -1,
+        BadCase{"raw_range", "0,1,2,3\n1,1,2,3\n", "--raw --range 300deg/s", -1,
                 "unknown gyro range 300"},
         BadCase{"raw_int16", "t,gx,gy,gz\n0,1,2,3\n1,40000,2,3\n", "--format raw", 3,
                 "gx = 40000 is outside the int16 range"},
@@ -103,14 +103,14 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"detect_other_header", "time,x,y,z\n0,1,2,3.5\n", "", 2, "unrecognised header"},
         BadCase{"detect_empty", "", "", 0, "empty file"},
         // options that fail once the trace is read
-        BadCase{"bias_too_few_samples", StillTrace(), "--bias 0:0.005", 0,
+        BadCase{"bias_too_few_samples", StillTrace(), "--bias 0:0.005s", 0,
                 "holds 5 samples (need at least 10; the trace lasts 2.999 s): give a --bias A:B "
                 "over a still part of the log, --auto-bias, or a longer log"},
-        BadCase{"window_longer_than_trace", StillTrace(), "--bias 0:1 --window 100000", 0,
+        BadCase{"window_longer_than_trace", StillTrace(), "--bias 0:1s --window 100000", 0,
                 "100000 samples is longer than the 2000 samples after the bias segment (0:1 s; the "
                 "trace lasts 2.999 s): give an earlier --bias A:B, a shorter --window, or a longer "
                 "log"},
-        BadCase{"bias_reversed", StillTrace(), "--bias 5:2", -1, "bias segment"}),
+        BadCase{"bias_reversed", StillTrace(), "--bias 5:2s", -1, "must satisfy 0 <= A < B"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });
 
 }  // namespace

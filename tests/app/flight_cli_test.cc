@@ -48,7 +48,7 @@ TEST(FlightCli, JsonFollowsFormats) {
   TempDir dir;
   const std::string trace = WriteTrace(dir);
   const auto r = RunShutterlab("flight " + trace +
-                               " --altitude 50 --limit 5cm,0.10m --window 10ms,0.02 --json");
+                               " --altitude 50m --limit 5cm,0.10m --window 10ms,0.02s --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j.at("altitude_m"), 50.0);
@@ -240,7 +240,7 @@ TEST(FlightCli, ASensorPairStreamedEqualsTheWholeFusion) {
       Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, -1).normalized()).toRotationMatrix();
   WriteSensorPair(StillThenTurningTrace(), b_from_a, dir.path());
   const GyroTrace a = ReadGyroCsv(dir / "a.csv"), b = ReadGyroCsv(dir / "b.csv");
-  for (const std::string bias : {"--bias 0:4", "--auto-bias"}) {
+  for (const std::string bias : {"--bias 0:4s", "--auto-bias"}) {
     SensorPairOptions pair_options;
     pair_options.still =
         bias == "--auto-bias" ? DetectStillSegment(a).segment : BiasSegment{0.0, 4.0};
@@ -285,7 +285,7 @@ TEST(FlightCli, BadInputExitsTwoWithOneLine) {
   const std::string trace = WriteTrace(dir);
   const std::string series = dir / "series.csv";
   for (const std::string args :
-       {"--window 3s", "--limit 5in", "--bias 0:0.005", "--altitude -1", "--bias 0:100"}) {
+       {"--window 3s", "--limit 5in", "--bias 0:0.005s", "--altitude -1m", "--bias 0:100s"}) {
     const auto r = RunShutterlab("flight " + trace + " " + args + " --series " + series);
     EXPECT_EQ(r.exit_code, 2) << args << ": " << r.output;
     EXPECT_EQ(CountLines(r.output), 1u) << args << ": " << r.output;

@@ -124,7 +124,7 @@ TEST(NoiseCli, BadBiasSegmentIsExit2) {
   test::TempDir dir;
   const std::string trace = dir / "still.csv";
   WriteSession(trace, 6.0, 0);
-  const auto result = RunShutterlab("noise " + trace + " --bias 3:1");
+  const auto result = RunShutterlab("noise " + trace + " --bias 3:1s");
   EXPECT_EQ(result.exit_code, 2);
   EXPECT_EQ(test::LineCount(result.output), 1u) << result.output;
 }

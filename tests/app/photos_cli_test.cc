@@ -70,13 +70,33 @@ TEST(PhotosCli, BadPhotosAreReportedAndAFolderWithoutPhotosIsAnError) {
   std::filesystem::create_directories(dir / "empty");
   WriteFileAtomically(dir / "photos/DJI_0001.JPG", test::JpegWithMetadata(p));
   WriteFileAtomically(dir / "photos/DJI_0002.JPG", "cut off");
+  // A photo cut inside its image data, its metadata whole (a card pulled while writing), slow
+  // enough to pass on its metadata alone.
+  test::FixturePhoto slow = p;
+  slow.width = 640;
+  slow.height = 480;
+  slow.xmp = test::DjiXmp({{"RelativeAltitude", "+60"},
+                           {"FlightXSpeed", "0.5"},
+                           {"FlightYSpeed", "0"},
+                           {"FlightZSpeed", "0"}},
+                          false);
+  const std::string whole = test::JpegWithMetadata(slow);
+  const size_t scan = whole.find("\xff\xda");
+  WriteFileAtomically(dir / "photos/DJI_0003.JPG", whole.substr(0, (scan + whole.size()) / 2));
+  WriteFileAtomically(dir / "photos/DJI_0004.JPG", whole);
   const auto r = RunShutterlab("analyze --photos " + (dir / "photos") + " --readout 20ms --out " +
                                (dir / "out"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.out.find("DJI_0002.JPG: unreadable"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("DJI_0003.JPG: unreadable"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("DJI_0001.JPG: no capture time"), std::string::npos) << r.out;
-  EXPECT_EQ(ReadFileToString(dir / "out/exclude.txt"), "DJI_0001.JPG\nDJI_0002.JPG\n")
-      << "5 m/s x 20 ms = 10 cm is over 5 cm; the unreadable photo is excluded too";
+  EXPECT_EQ(ReadFileToString(dir / "out/exclude.txt"), "DJI_0001.JPG\nDJI_0002.JPG\nDJI_0003.JPG\n")
+      << "5 m/s x 20 ms = 10 cm is over 5 cm; the unreadable and the cut photo are excluded too";
+  EXPECT_EQ(ReadFileToString(dir / "out/colmap_image_list.txt"), "DJI_0004.JPG\n");
+  EXPECT_NE(r.out.find("DJI_0003.JPG: its image data does not decode (Premature end of JPEG "
+                       "file): a cut or damaged file; copy it from the card again"),
+            std::string::npos)
+      << r.out;
 
   WriteFileAtomically(dir / "empty/notes.txt", "x");
   const auto none = RunShutterlab("analyze --photos " + (dir / "empty"));
@@ -205,7 +225,7 @@ TEST(PhotosCli, AGyroCsvWithTriggersOnAPipeGivesTheFilesResult) {
   triggers += "IMG_0009.JPG,11.99\n";  // no such photo
   WriteFileAtomically(dir / "triggers.csv", triggers);
   for (const std::string json : {" --json", ""}) {
-    const std::string args = " --photos " + (dir / "photos") + " --readout 20ms --altitude 80" +
+    const std::string args = " --photos " + (dir / "photos") + " --readout 20ms --altitude 80m" +
                              " --triggers " + (dir / "triggers.csv") + json;
     const auto streamed = RunShutterlab("analyze " + (dir / "gyro.csv") + args);
     ASSERT_EQ(streamed.exit_code, 0) << streamed.output;

@@ -36,7 +36,8 @@ TEST(RecordCli, EmulatedRecordingGoesThroughFlightAndAnalyzeWithItsTriggers) {
   test::TempDir dir;
   const std::string trace = dir / "flight.csv", rec = dir / "rec.gcsv";
   ASSERT_EQ(
-      RunShutterlab("synth flight --rate 8000 --duration 4 --seed 2 --out " + trace).exit_code, 0);
+      RunShutterlab("synth flight --rate 8000Hz --duration 4s --seed 2 --out " + trace).exit_code,
+      0);
   const auto record = RunShutterlab(
       "record --device emulate:" + trace + ",ppm=40 --duration 3.5s --clock virtual " +
       "--stall-writer 300ms@1s --trigger emulate:every=1s,bounce=2 --out " + rec);
@@ -59,7 +60,7 @@ TEST(RecordCli, TwoSensorsAreFusedByNoiseWithTheGainShown) {
   test::TempDir dir;
   const std::string a = dir / "a.csv", b = dir / "b.csv", rec = dir / "pair.gcsv";
   ASSERT_EQ(
-      RunShutterlab("synth still --rate 8000 --duration 7 --seed 3 --out " + a + " --out2 " + b)
+      RunShutterlab("synth still --rate 8000Hz --duration 7s --seed 3 --out " + a + " --out2 " + b)
           .exit_code,
       0);
   const auto record = RunShutterlab("record --device emulate:" + a + " --device emulate:" + b +
@@ -91,7 +92,7 @@ TEST(RecordCli, SigintStopsTheRecordingWithTheFileWhole) {
   // machine, so there are samples to write.
   const std::string command = "bash -c '" + std::string(SHUTTERLAB_BINARY) +
                               " record --device emulate:" + trace +
-                              ",rate=1000 --clock virtual --out " + rec +
+                              ",rate=1000Hz --clock virtual --out " + rec +
                               " >/dev/null 2>&1 & pid=$!; for i in $(seq 200); do "
                               "ls -a " +
                               dir.path().string() +
@@ -113,7 +114,7 @@ TEST(RecordCli, BadDevicesAreOneLineWithExitCodeTwo) {
   // A trace that is not there (IoError) and a part that has no such range (std::invalid_argument);
   // the device spec's other refusals are tested in tests/record.
   for (const std::string& device :
-       {"emulate:" + dir / "missing.csv", "emulate:" + trace + ",range=300"}) {
+       {"emulate:" + dir / "missing.csv", "emulate:" + trace + ",range=300deg/s"}) {
     const auto result = RunShutterlab("record --device " + device +
                                       " --duration 1s --clock virtual --out " + (dir / "x.gcsv"));
     EXPECT_EQ(result.exit_code, 2) << device << "\n" << result.output;

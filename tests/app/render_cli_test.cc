@@ -45,7 +45,7 @@ TEST(RenderCommand, WritesACompleteDatasetWithTruth) {
   Inputs in;
   const std::string out = in.dir / "out";
   const test::CommandResult result =
-      test::RunShutterlab(in.Args(out, "--inject time_offset=0.004 --inject gyro_scale=1.01,1,1"));
+      test::RunShutterlab(in.Args(out, "--inject time_offset=4ms --inject gyro_scale=1.01,1,1"));
   ASSERT_EQ(result.exit_code, 0) << result.output;
 
   // The declared camera and the logged gyro, unchanged.
@@ -60,7 +60,7 @@ TEST(RenderCommand, WritesACompleteDatasetWithTruth) {
   // The truth the test computes itself from the library, with the injected effects.
   TrueModel truth;
   truth.rig = in.declared;
-  ApplyInjection("time_offset=0.004", &truth);
+  ApplyInjection("time_offset=4ms", &truth);
   ApplyInjection("gyro_scale=1.01,1,1", &truth);
   const CameraMotion motion(in.gyro, truth);
 

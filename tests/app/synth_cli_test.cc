@@ -18,7 +18,7 @@ using test::RunShutterlab;
 TEST(SynthCli, WritesATraceThatReadGyroReadsBack) {
   test::TempDir dir;
   const std::string out = dir / "still.csv";
-  const auto result = RunShutterlab("synth still --out " + out + " --duration 2 --rate 2000");
+  const auto result = RunShutterlab("synth still --out " + out + " --duration 2s --rate 2000Hz");
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const GyroTrace trace = ReadGyro(out);
   EXPECT_EQ(trace.size(), 4001u);
@@ -29,8 +29,8 @@ TEST(SynthCli, WritesATraceThatReadGyroReadsBack) {
 TEST(SynthCli, StepsToRawCountsWithASecondSensor) {
   test::TempDir dir;
   const std::string out = dir / "a.csv", out2 = dir / "b.csv";
-  const auto result = RunShutterlab("synth steps --turns 2 --angle 1 --out " + out + " --out2 " +
-                                    out2 + " --format raw --range 500 --time-unit ms");
+  const auto result = RunShutterlab("synth steps --turns 2 --angle 1deg --out " + out + " --out2 " +
+                                    out2 + " --format raw --range 500deg/s --time-unit ms");
   ASSERT_EQ(result.exit_code, 0) << result.output;
   EXPECT_NE(result.output.find("turn 2:"), std::string::npos) << result.output;
   const GyroTrace a = ReadRawCsv(out, 500, TimeUnit::kMilliseconds);
@@ -44,7 +44,7 @@ TEST(SynthCli, StepsToRawCountsWithASecondSensor) {
 TEST(SynthCli, SameSeedSameBytes) {
   test::TempDir dir;
   const std::string common =
-      " flight --duration 7 --jitter 1e-6 --gap-period 2 --gap-duration 0.01 --out ";
+      " flight --duration 7s --jitter 1e-6s --gap-period 2s --gap-duration 0.01s --out ";
   ASSERT_EQ(RunShutterlab("synth --seed 5" + common + (dir / "a.csv")).exit_code, 0);
   ASSERT_EQ(RunShutterlab("synth --seed 5" + common + (dir / "b.csv")).exit_code, 0);
   ASSERT_EQ(RunShutterlab("synth --seed 6" + common + (dir / "c.csv")).exit_code, 0);
@@ -55,7 +55,7 @@ TEST(SynthCli, SameSeedSameBytes) {
 TEST(SynthCli, IdealSensorWritesTheExactMotion) {
   test::TempDir dir;
   const std::string out = dir / "ideal.csv";
-  ASSERT_EQ(RunShutterlab("synth still --ideal --duration 1 --out " + out).exit_code, 0);
+  ASSERT_EQ(RunShutterlab("synth still --ideal --duration 1s --out " + out).exit_code, 0);
   // ReadGyroCsv, not ReadGyro: format detection takes a file whose rates are all integers (here
   // every rate is "0") for raw counts.
   const GyroTrace ideal =
@@ -64,7 +64,8 @@ TEST(SynthCli, IdealSensorWritesTheExactMotion) {
   for (const GyroSample& s : ideal.samples()) ASSERT_EQ(s.omega_rad_s, Eigen::Vector3d::Zero());
   // An error option given with --ideal still applies.
   ASSERT_EQ(
-      RunShutterlab("synth still --ideal --const-bias 0.5,0,0 --duration 1 --out " + out).exit_code,
+      RunShutterlab("synth still --ideal --const-bias 0.5rad/s,0,0 --duration 1s --out " + out)
+          .exit_code,
       0);
   const GyroTrace biased = ReadGyroCsv(out);
   for (const GyroSample& s : biased.samples()) ASSERT_EQ(s.omega_rad_s.x(), 0.5);
@@ -74,10 +75,10 @@ TEST(SynthCli, BadArgumentsExitTwoWithOneLineAndNoFile) {
   test::TempDir dir;
   const std::string out = dir / "bad.csv";
   for (const std::string& args : std::vector<std::string>{
-           "synth wobble --out " + out, "synth still --rate -5 --out " + out,
-           "synth still --range 300 --out " + out, "synth still --time-unit h --raw --out " + out,
-           std::string("synth still --duration 1"),
-           "synth still --duration 1 --out " + (dir / "missing_folder/x.csv")}) {
+           "synth wobble --out " + out, "synth still --rate -5Hz --out " + out,
+           "synth still --range 300deg/s --out " + out,
+           "synth still --time-unit h --raw --out " + out, std::string("synth still --duration 1s"),
+           "synth still --duration 1s --out " + (dir / "missing_folder/x.csv")}) {
     const auto result = RunShutterlab(args);
     EXPECT_EQ(result.exit_code, 2) << args << "\n" << result.output;
     EXPECT_EQ(test::LineCount(result.output), 1u) << args << "\n" << result.output;

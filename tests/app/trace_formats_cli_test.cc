@@ -22,7 +22,7 @@ nlohmann::json RunJson(const std::string& args) {
 TEST(TraceFormatsCli, NoiseReadsARealULog) {
   // sample_log_small.ulg: a stationary PX4 board, vehicle_angular_velocity at ~280 Hz over ~6.5 s.
   SHUTTERLAB_REAL_DATA(log, "gyro/px4_ulog/sample_log_small.ulg");
-  const nlohmann::json j = RunJson("noise " + log + " --bias 0:2 --json");
+  const nlohmann::json j = RunJson("noise " + log + " --bias 0:2s --json");
   ASSERT_TRUE(j.is_object());
   EXPECT_EQ(j["window_samples"], 120);
   for (const char* axis : {"x", "y", "z"}) {

@@ -35,7 +35,7 @@ std::string SmallValidateDataset(const test::TempDir& dir) {
   render.gyro_path = dir / "gyro.csv";
   render.frames_path = dir / "times.csv";
   render.out_dir = dir / "ds";
-  render.injections = {"time_offset=0.003"};
+  render.injections = {"time_offset=3ms"};
   render.pictures = false;
   RenderDataset(render);
   return dir / "ds";

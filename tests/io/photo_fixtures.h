@@ -1,13 +1,15 @@
 #pragma once
-// Photos written byte by byte for the metadata tests: a JPEG with an EXIF APP1 segment (a little-
-// endian TIFF structure: IFD0 and the EXIF IFD), optionally an XMP APP1 segment, and a frame header
-// (SOF0) that gives the size; no image data (metadata readers stop at the frame header). Written
-// here, not by the library under test, so that the reader is checked against the EXIF 2.32 and
-// XMP layouts themselves.
+// Photos for the metadata tests: a JPEG whose EXIF APP1 segment (a little-endian TIFF structure:
+// IFD0 and the EXIF IFD) and optional XMP APP1 segment are written byte by byte here, not by the
+// library under test, so that the reader is checked against the EXIF 2.32 and XMP layouts
+// themselves; the image data after them (tables, frame header, a grey scan) is OpenCV's encoder's,
+// so that the photo decodes as a real one does (io/image_check.h).
 
 #include "io/photo_metadata.h"
 
 #include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <cstdint>
@@ -130,15 +132,16 @@ inline std::string JpegWithMetadata(const FixturePhoto& p) {
   jpeg += Segment(0xE1, std::string("Exif\0\0", 6) + tiff);
   if (!p.xmp.empty())
     jpeg += Segment(0xE1, std::string("http://ns.adobe.com/xap/1.0/\0", 29) + p.xmp);
-  std::string sof = {8,
-                     static_cast<char>(p.height >> 8),
-                     static_cast<char>(p.height & 0xff),
-                     static_cast<char>(p.width >> 8),
-                     static_cast<char>(p.width & 0xff),
-                     3};
-  for (char id = 1; id <= 3; ++id) sof += std::string{id, 0x11, 0};
-  jpeg += Segment(0xC0, sof);
-  jpeg += "\xff\xd9";
+  // The encoder's own file from its first segment that is not APPn (JFIF): tables, SOF0 with the
+  // size, the scan and EOI.
+  std::vector<uchar> encoded;
+  cv::imencode(".jpg", cv::Mat(p.height, p.width, CV_8UC3, cv::Scalar(90, 128, 160)), encoded);
+  size_t at = 2;  // after SOI
+  while (at + 4 <= encoded.size() && encoded[at] == 0xFF && encoded[at + 1] >= 0xE0 &&
+         encoded[at + 1] <= 0xEF) {
+    at += 2 + (static_cast<size_t>(encoded[at + 2]) << 8 | encoded[at + 3]);
+  }
+  jpeg.append(reinterpret_cast<const char*>(encoded.data()) + at, encoded.size() - at);
   return jpeg;
 }
 

@@ -19,15 +19,15 @@ using nlohmann::json;
 // One `--inject` text per spelling, every effect of the table at least once.
 const std::vector<std::string>& InjectionTexts() {
   static const std::vector<std::string> texts = {
-      "time_offset=0.004",
-      "time_offset=-1e-05",
-      "readout_time=0.021",
+      "time_offset=4ms",
+      "time_offset=-0.01ms",
+      "readout_time=21ms",
       "gyro_to_camera=0,-1,0,1,0,0,0,0,1",
       "gyro_to_camera=[[0,0,1],[0,1,0],[-1,0,0]]",
       "gyro_scale=1.01,0.99,1.02",
       "gyro_scale=[1.01,0.99,1.0]",
-      "gyro_bias=0.001,-0.002,0.003",
-      "velocity=5,1,0",
+      "gyro_bias=0.001rad/s,-0.002rad/s,0.003rad/s",
+      "velocity=5m/s,1m/s,0",
       "lens_distortion=-0.1,0.02",
       "lens_distortion=-0.1,0.02,0.001,-0.0005,0.03",
       "lens_distortion={\"k1\":-0.1,\"p2\":0.001}",
@@ -35,7 +35,7 @@ const std::vector<std::string>& InjectionTexts() {
       "lens_distortion={\"model\":\"fisheye\",\"k1\":0.06,\"k2\":0.04,\"k3\":-0.04}",
       "readout_direction=bottom_to_top",
       "readout_direction=\"top_to_bottom\"",
-      "clock_rate=-35",
+      "clock_rate=-35ppm",
   };
   return texts;
 }
@@ -69,7 +69,7 @@ TEST(EffectIo, SpellingsOfOneValueAgree) {
               value("readout_direction=\"bottom_to_top\""));
   EXPECT_TRUE(value("readout_direction=bottom_to_top") ==
               EffectValue(ReadoutDirection::kBottomToTop));
-  EXPECT_TRUE(value("clock_rate=30") == EffectValue(30.0));
+  EXPECT_TRUE(value("clock_rate=30ppm") == EffectValue(30.0));
 }
 
 // docs/FORMATS.md's JSON of each shape.
@@ -158,7 +158,13 @@ TEST(EffectIo, InjectionTextNamesTheProblem) {
       {"time_offset", "expected NAME=VALUE"},
       {"warp_speed=9", "'warp_speed'"},
       {"gyro_scale=1,1", "--inject gyro_scale: expected 3 numbers"},
-      {"time_offset=soon", "--inject time_offset: expected a number"},
+      {"time_offset=soon", "--inject time_offset 'soon': expected a duration"},
+      {"time_offset=0.004",
+       "--inject time_offset '0.004': a duration needs a unit: did you mean "
+       "0.004ms?"},
+      {"gyro_bias=0.5,0,0", "did you mean 0.5deg/s?"},
+      {"clock_rate=30", "did you mean 30ppm?"},
+      {"velocity=4km,0,0", "km is a unit of length, --inject velocity takes a speed"},
       {"readout_direction=sideways", "'sideways' is not top_to_bottom or bottom_to_top"},
   };
   for (const auto& [text, message] : bad) {

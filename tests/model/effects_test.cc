@@ -19,13 +19,13 @@ namespace {
 TrueModel Base() {
   TrueModel model;
   model.rig = test::SmallRig(64, 48);
-  ApplyInjection("time_offset=0.004", &model);
+  ApplyInjection("time_offset=4ms", &model);
   ApplyInjection("gyro_to_camera=0,-1,0,1,0,0,0,0,1", &model);
   ApplyInjection("gyro_scale=1.01,0.99,1.02", &model);
-  ApplyInjection("gyro_bias=0.001,-0.002,0.003", &model);
-  ApplyInjection("velocity=5,1,0", &model);
+  ApplyInjection("gyro_bias=0.001rad/s,-0.002rad/s,0.003rad/s", &model);
+  ApplyInjection("velocity=5m/s,1m/s,0", &model);
   ApplyInjection("lens_distortion=-0.1,0.02", &model);
-  ApplyInjection("clock_rate=30", &model);
+  ApplyInjection("clock_rate=30ppm", &model);
   return model;
 }
 
@@ -117,15 +117,15 @@ TEST(Effects, AnUnknownNameFailsNamingIt) {
 
 // ApplyInjection sets what the effect's value reads back, in the shape its standard error has.
 TEST(Effects, InjectedValueReadsBackInTheStderrShape) {
-  const std::vector<std::string> injections = {"time_offset=0.005",
-                                               "readout_time=0.021",
+  const std::vector<std::string> injections = {"time_offset=5ms",
+                                               "readout_time=21ms",
                                                "gyro_to_camera=0,0,1,0,1,0,-1,0,0",
                                                "gyro_scale=1.01,0.99,1.0",
-                                               "gyro_bias=0.001,-0.002,0.003",
-                                               "velocity=5,0,0",
+                                               "gyro_bias=0.001rad/s,-0.002rad/s,0.003rad/s",
+                                               "velocity=5m/s,0,0",
                                                "lens_distortion=-0.1,0.02",
                                                "readout_direction=bottom_to_top",
-                                               "clock_rate=-35"};
+                                               "clock_rate=-35ppm"};
   ASSERT_EQ(injections.size(), AllEffects().size());
   for (const std::string& text : injections) {
     const Effect effect = *ParseEffect(text.substr(0, text.find('=')));

@@ -28,16 +28,16 @@ TrueModel BareModel() {
 
 TEST(ApplyInjection, EveryEffectOfTheTableIsKnown) {
   const std::vector<std::pair<std::string, json>> cases = {
-      {"time_offset=0.005", 0.005},
-      {"readout_time=0.021", 0.021},
+      {"time_offset=5ms", 0.005},
+      {"readout_time=21ms", 0.021},
       {"gyro_to_camera=0,-1,0,1,0,0,0,0,1", json::parse("[[0,-1,0],[1,0,0],[0,0,1]]")},
       {"gyro_scale=[1.01,0.99,1.0]", json::parse("[1.01,0.99,1.0]")},
-      {"gyro_bias=0.001,-0.002,0.003", json::parse("[0.001,-0.002,0.003]")},
-      {"velocity=5,0,0", json::parse("[5.0,0.0,0.0]")},
+      {"gyro_bias=0.001rad/s,-0.002rad/s,0.003rad/s", json::parse("[0.001,-0.002,0.003]")},
+      {"velocity=5m/s,0,0", json::parse("[5.0,0.0,0.0]")},
       {"lens_distortion=-0.1,0.02", json::parse(R"({"k1":-0.1,"k2":0.02})")},
       {"lens_distortion={\"k1\":-0.1}", json::parse(R"({"k1":-0.1,"k2":0.0})")},
       {"readout_direction=bottom_to_top", "bottom_to_top"},
-      {"clock_rate=-35", -35.0},
+      {"clock_rate=-35ppm", -35.0},
   };
   std::set<std::string> names;
   for (const auto& [text, recorded] : cases) {
@@ -50,11 +50,11 @@ TEST(ApplyInjection, EveryEffectOfTheTableIsKnown) {
 
 TEST(ApplyInjection, ChangesOnlyItsOwnField) {
   TrueModel model = BareModel();
-  ApplyInjection("time_offset=0.005", &model);
+  ApplyInjection("time_offset=5ms", &model);
   EXPECT_EQ(model.rig.time_offset_s, 0.005);
   ApplyInjection("readout_direction=bottom_to_top", &model);
   EXPECT_EQ(model.rig.shutter.direction, ReadoutDirection::kBottomToTop);
-  ApplyInjection("gyro_bias=0.001,-0.002,0.003", &model);
+  ApplyInjection("gyro_bias=0.001rad/s,-0.002rad/s,0.003rad/s", &model);
   EXPECT_EQ(model.gyro_bias_rad_s, Eigen::Vector3d(0.001, -0.002, 0.003));
   ApplyInjection("lens_distortion=-0.1,0.02", &model);
   EXPECT_TRUE(model.rig.camera.distortion == LensDistortion(BrownConrady{{-0.1, 0.02, 0, 0, 0}}));
@@ -64,10 +64,11 @@ TEST(ApplyInjection, ChangesOnlyItsOwnField) {
 }
 
 TEST(ApplyInjection, RejectsBadNamesAndValues) {
-  for (const char* bad : {"time_offset", "warp_speed=9", "time_offset=soon", "readout_time=-0.01",
-                          "gyro_scale=1,1", "gyro_scale=0,1,1", "gyro_to_camera=1,0,0,0,1,0,0,0,2",
-                          "gyro_to_camera=1,0,0,0,1,0,0,0,-1", "readout_direction=sideways",
-                          "lens_distortion={\"k9\":1}", "velocity=1,2,nan", "clock_rate=[1,2]"}) {
+  for (const char* bad :
+       {"time_offset", "warp_speed=9", "time_offset=soon", "readout_time=-10ms", "gyro_scale=1,1",
+        "gyro_scale=0,1,1", "gyro_to_camera=1,0,0,0,1,0,0,0,2", "gyro_to_camera=1,0,0,0,1,0,0,0,-1",
+        "readout_direction=sideways", "lens_distortion={\"k9\":1}", "velocity=1m/s,2m/s,nan",
+        "clock_rate=[1,2]"}) {
     TrueModel model = BareModel();
     EXPECT_THROW(ApplyInjection(bad, &model), std::invalid_argument) << bad;
   }

@@ -12,13 +12,13 @@ namespace {
 
 TEST(DeviceSpec, ParsesEmulatedAndSpidevDevices) {
   const DeviceSpec emulated =
-      ParseDeviceSpec("emulate:trace.csv,part=icm42688p,rate=32000,ppm=-12.5");
+      ParseDeviceSpec("emulate:trace.csv,part=icm42688p,rate=32kHz,ppm=-12.5");
   EXPECT_TRUE(emulated.emulate);
   EXPECT_EQ(emulated.path, "trace.csv");
   EXPECT_EQ(emulated.part, GyroPart::kIcm42688p);
   EXPECT_EQ(emulated.rate_hz, 32000.0);
   EXPECT_EQ(emulated.ppm, -12.5);
-  const DeviceSpec spi = ParseDeviceSpec("/dev/spidev1.0,range=500,mode=3");
+  const DeviceSpec spi = ParseDeviceSpec("/dev/spidev1.0,range=500deg/s,mode=3");
   EXPECT_FALSE(spi.emulate);
   EXPECT_EQ(spi.path, "/dev/spidev1.0");
   EXPECT_EQ(spi.range_dps, 500);
@@ -29,7 +29,8 @@ TEST(DeviceSpec, ParsesEmulatedAndSpidevDevices) {
 TEST(DeviceSpec, RefusesWhatItDoesNotKnow) {
   for (const char* bad :
        {"emulate:", "emulate:t.csv,colour=red", "/dev/spidev0.0,ppm=40", "emulate:t.csv,mode=3",
-        "emulate:t.csv,rate=fast", "emulate:t.csv,part=bmi088", "/dev/spidev0.0,mode=1"}) {
+        "emulate:t.csv,rate=fast", "emulate:t.csv,rate=8000", "emulate:t.csv,range=250",
+        "emulate:t.csv,part=bmi088", "/dev/spidev0.0,mode=1"}) {
     EXPECT_THROW(ParseDeviceSpec(bad), std::invalid_argument) << bad;
   }
 }

@@ -42,9 +42,10 @@ FrameMotion Motion(const TrueModel& model, const GyroTrace& trace, double t_firs
 
 // Every effect of docs/FORMATS.md's table at once, on a fast-turning camera: a hard case.
 const std::vector<std::string> kEveryEffect = {
-    "gyro_scale=1.02,0.97,1.01", "gyro_bias=0.01,-0.02,0.005", "velocity=3,-2,0.5",
-    "clock_rate=-150",           "lens_distortion=-0.2,0.05",  "readout_direction=bottom_to_top",
-    "time_offset=-0.003",        "readout_time=0.025"};
+    "gyro_scale=1.02,0.97,1.01",  "gyro_bias=0.01rad/s,-0.02rad/s,0.005rad/s",
+    "velocity=3m/s,-2m/s,0.5m/s", "clock_rate=-150ppm",
+    "lens_distortion=-0.2,0.05",  "readout_direction=bottom_to_top",
+    "time_offset=-3ms",           "readout_time=25ms"};
 
 TEST(CorrectionGeometry, NoMotionMapsEveryPixelToItself) {
   const RigModel rig = SmallRig(96, 72);
@@ -87,8 +88,8 @@ void ExpectInvertsTheRenderersTruth(const RigModel& rig, const GyroTrace& trace,
 
 TEST(CorrectionGeometry, InvertsTheRenderersTruthForEveryEffect) {
   std::vector<std::vector<std::string>> cases = {{}, kEveryEffect};
-  for (const char* one : {"velocity=6,-4,1", "lens_distortion=-0.3,0.1", "clock_rate=300",
-                          "readout_direction=bottom_to_top"}) {
+  for (const char* one : {"velocity=6m/s,-4m/s,1m/s", "lens_distortion=-0.3,0.1",
+                          "clock_rate=300ppm", "readout_direction=bottom_to_top"}) {
     cases.push_back({one});
   }
   ExpectInvertsTheRenderersTruth(SmallRig(120, 90),
@@ -99,7 +100,7 @@ TEST(CorrectionGeometry, InvertsTheRenderersTruthThroughAFisheye) {
   // A 120-degree fisheye (the GoPro MAX's coefficients); the lens effect adds to its k1, k2.
   ExpectInvertsTheRenderersTruth(
       test::FisheyeRig(120, 90, 60.0), ConstantRateTrace(Eigen::Vector3d(0.9, -1.2, 1.6)),
-      {{}, {"lens_distortion=-0.02,0.01", "velocity=6,-4,1", "time_offset=-0.003"}});
+      {{}, {"lens_distortion=-0.02,0.01", "velocity=6m/s,-4m/s,1m/s", "time_offset=-3ms"}});
 }
 
 TEST(CorrectionGeometry, RotationOnlyThroughALensWiderThan180Degrees) {
@@ -159,7 +160,8 @@ std::optional<Eigen::Vector2d> BruteForceSource(const PinholeCamera& camera,
 
 TEST(CorrectionGeometry, FixedPointMatchesABruteForceRowSearch) {
   const RigModel rig = SmallRig(120, 90);
-  const TrueModel truth = TruthWith(rig, {"velocity=5,-3,0.5", "lens_distortion=-0.25,0.06"});
+  const TrueModel truth =
+      TruthWith(rig, {"velocity=5m/s,-3m/s,0.5m/s", "lens_distortion=-0.25,0.06"});
   const FrameMotion motion = Motion(truth, ConstantRateTrace(Eigen::Vector3d(1.5, -2.0, 2.5)), 0.5);
   const CorrectionGeometry geometry(truth.rig.camera, motion, 0.0, rig.altitude_m);
   int compared = 0;
@@ -239,7 +241,7 @@ TEST(CorrectionMap, RowsCrowdWhereTheRateJumps) {
 // frame must equal the reference to bilinear interpolation error where it has a source, and the
 // mask must mark exactly the pixels whose source lies outside the frame.
 void ExpectCorrectionGivesTheReference(const RigModel& rig) {
-  const TrueModel truth = TruthWith(rig, {"velocity=4,2,0"});
+  const TrueModel truth = TruthWith(rig, {"velocity=4m/s,2m/s,0"});
   const FrameMotion motion = Motion(truth, ConstantRateTrace(Eigen::Vector3d(0.8, -1.1, 1.4)), 0.5);
   const cv::Size scene_size(500, 400);
   const cv::Mat scene = SmoothTexture(scene_size, CV_32FC1, 3, 4.0);

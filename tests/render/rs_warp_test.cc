@@ -205,24 +205,26 @@ TEST(RsWarp, TruthMatchesIndependentModelForEveryEffect) {
   base.readout_s = declared.shutter.readout_s;
   const std::vector<OracleCase> cases = {
       {{}, [](OracleParams*) {}},
-      {{"time_offset=0.0042"}, [](OracleParams* o) { o->time_offset_s = 0.0042; }},
-      {{"readout_time=0.033"}, [](OracleParams* o) { o->readout_s = 0.033; }},
+      {{"time_offset=4.2ms"}, [](OracleParams* o) { o->time_offset_s = 0.0042; }},
+      {{"readout_time=33ms"}, [](OracleParams* o) { o->readout_s = 0.033; }},
       {{"gyro_to_camera=[[0,-1,0],[1,0,0],[0,0,1]]"},
        [](OracleParams* o) { o->cam_from_gyro << 0, -1, 0, 1, 0, 0, 0, 0, 1; }},
       {{"gyro_scale=1.02,0.97,1.01"},
        [](OracleParams* o) { o->scale = Eigen::Vector3d(1.02, 0.97, 1.01); }},
-      {{"gyro_bias=0.01,-0.02,0.005"},
+      {{"gyro_bias=0.01rad/s,-0.02rad/s,0.005rad/s"},
        [](OracleParams* o) { o->bias = Eigen::Vector3d(0.01, -0.02, 0.005); }},
-      {{"velocity=3,-2,0.5"}, [](OracleParams* o) { o->velocity = Eigen::Vector3d(3, -2, 0.5); }},
+      {{"velocity=3m/s,-2m/s,0.5m/s"},
+       [](OracleParams* o) { o->velocity = Eigen::Vector3d(3, -2, 0.5); }},
       {{"lens_distortion={\"k1\":-0.3,\"k2\":0.1}"},
        [](OracleParams* o) {
          o->dist = {-0.3, 0.1, 0, 0, 0};
        }},
       {{"readout_direction=bottom_to_top"}, [](OracleParams* o) { o->bottom_to_top = true; }},
-      {{"clock_rate=200"}, [](OracleParams* o) { o->ppm = 200; }},
-      {{"gyro_scale=1.02,0.97,1.01", "gyro_bias=0.01,-0.02,0.005", "velocity=3,-2,0.5",
-        "clock_rate=-150", "lens_distortion=-0.2,0.05,0.001,-0.002,0.01",
-        "readout_direction=bottom_to_top", "time_offset=-0.003"},
+      {{"clock_rate=200ppm"}, [](OracleParams* o) { o->ppm = 200; }},
+      {{"gyro_scale=1.02,0.97,1.01", "gyro_bias=0.01rad/s,-0.02rad/s,0.005rad/s",
+        "velocity=3m/s,-2m/s,0.5m/s", "clock_rate=-150ppm",
+        "lens_distortion=-0.2,0.05,0.001,-0.002,0.01", "readout_direction=bottom_to_top",
+        "time_offset=-3ms"},
        [](OracleParams* o) {
          o->scale = Eigen::Vector3d(1.02, 0.97, 1.01);
          o->bias = Eigen::Vector3d(0.01, -0.02, 0.005);
@@ -253,7 +255,7 @@ TEST(RsWarp, FisheyeTruthMatchesIndependentModel) {
        [](OracleParams* o) {
          o->dist = {0.06, 0.04, -0.04, 0.015, 0.0};
        }},
-      {{"velocity=3,-2,0.5", "readout_time=0.03", "gyro_scale=1.02,0.97,1.01"},
+      {{"velocity=3m/s,-2m/s,0.5m/s", "readout_time=30ms", "gyro_scale=1.02,0.97,1.01"},
        [](OracleParams* o) {
          o->velocity = Eigen::Vector3d(3, -2, 0.5);
          o->readout_s = 0.03;

@@ -199,7 +199,7 @@ class RenderVideo : public ::testing::Test {
 
 TEST_F(RenderVideo, WritesAVideoDatasetWithPairTruth) {
   WriteFileAtomically(dir_ / "times.csv", "frame,t_first_row\n7,0.5\n8,0.54\n9,0.58\n");
-  options_.injections = {"time_offset=0.003"};
+  options_.injections = {"time_offset=3ms"};
   const RenderSummary summary = RenderDataset(options_);
   ASSERT_EQ(summary.frames.size(), 3u);
   const std::vector<FrameEntry> frames = ReadFramesCsv(dir_ / "out/frames.csv");

@@ -45,34 +45,67 @@ TEST(Units, UpperMedianIsTheElementAtHalfTheCount) {
   EXPECT_THROW(UpperMedian(std::vector<int64_t>{}), std::invalid_argument);
 }
 
-TEST(Units, ParsesLengthsAndDurations) {
-  EXPECT_DOUBLE_EQ(ParseLengthM("5cm"), 0.05);
-  EXPECT_DOUBLE_EQ(ParseLengthM("0.05m"), 0.05);
-  EXPECT_DOUBLE_EQ(ParseLengthM("0.05"), 0.05);
-  EXPECT_DOUBLE_EQ(ParseLengthM("50mm"), 0.05);
-  EXPECT_DOUBLE_EQ(ParseLengthM("5CM"), 0.05);
-  EXPECT_DOUBLE_EQ(ParseDurationS("10ms"), 0.010);
-  EXPECT_DOUBLE_EQ(ParseDurationS("0.01s"), 0.010);
-  EXPECT_DOUBLE_EQ(ParseDurationS("0.01"), 0.010);
-  EXPECT_DOUBLE_EQ(ParseDurationS("10000us"), 0.010);
-  EXPECT_DOUBLE_EQ(ParseDurationS("2s"), 2.0);
+TEST(Units, QuantitiesConvertToTheUnitAsked) {
+  const auto length_m = [](const char* text) { return ParseQuantity(text, "m", "--x", "cm"); };
+  EXPECT_DOUBLE_EQ(length_m("5cm"), 0.05);
+  EXPECT_DOUBLE_EQ(length_m("0.05m"), 0.05);
+  EXPECT_DOUBLE_EQ(length_m("50mm"), 0.05);
+  EXPECT_DOUBLE_EQ(length_m("5CM"), 0.05);
+  EXPECT_DOUBLE_EQ(length_m(" 5 cm "), 0.05);
+  EXPECT_DOUBLE_EQ(length_m("0.2km"), 200.0);
+  const auto duration_s = [](const char* text) { return ParseQuantity(text, "s", "--x", "ms"); };
+  EXPECT_DOUBLE_EQ(duration_s("10ms"), 0.010);
+  EXPECT_DOUBLE_EQ(duration_s("0.01s"), 0.010);
+  EXPECT_DOUBLE_EQ(duration_s("10000us"), 0.010);
+  EXPECT_DOUBLE_EQ(duration_s("10000\xC2\xB5s"), 0.010);
+  EXPECT_DOUBLE_EQ(duration_s("2min"), 120.0);
+  EXPECT_DOUBLE_EQ(duration_s("1e-3s"), 0.001);
+  EXPECT_DOUBLE_EQ(duration_s("-2.5ms"), -0.0025);
+  EXPECT_DOUBLE_EQ(ParseQuantity("30ms", "ms", "--x", "ms"), 30.0);
+  EXPECT_DOUBLE_EQ(ParseQuantity("2kHz", "Hz", "--x", "Hz"), 2000.0);
+  EXPECT_DOUBLE_EQ(ParseQuantity("36km/h", "m/s", "--x", "m/s"), 10.0);
+  EXPECT_DOUBLE_EQ(ParseQuantity("3600arcsec", "deg", "--x", "deg"), 1.0);
+  EXPECT_DOUBLE_EQ(ParseQuantity("180deg", "rad", "--x", "deg"), kPi);
+  EXPECT_DOUBLE_EQ(ParseQuantity("300ppm", "ppm", "--x", "ppm"), 300.0);
+  // The unit asked converts exactly: a gyro's full scale stays a whole number of deg/s.
+  EXPECT_EQ(ParseQuantity("2000deg/s", "deg/s", "--x", "deg/s"), 2000.0);
+  EXPECT_EQ(ParseQuantity("2000dps", "deg/s", "--x", "deg/s"), 2000.0);
+  EXPECT_DOUBLE_EQ(ParseQuantity("1rad/s", "deg/s", "--x", "deg/s"), kDegPerRad);
 }
 
-TEST(Units, BadLengthsAndDurationsNameTheText) {
-  EXPECT_EQ(ErrorOf([] {
-              ParseLengthM("5in");
-            }).rfind("unknown length unit 'in' in '5in' (m, cm, mm)", 0),
-            0u);
-  EXPECT_EQ(ErrorOf([] { ParseLengthM("cm"); }).rfind("length 'cm' is not a number with a unit", 0),
-            0u);
-  EXPECT_EQ(ErrorOf([] {
-              ParseDurationS("10min");
-            }).rfind("unknown duration unit 'min' in '10min' (s, ms, us)", 0),
-            0u);
-  EXPECT_EQ(ErrorOf([] {
-              ParseDurationS("ten ms");
-            }).rfind("duration 'ten ms' is not a number with a unit", 0),
-            0u);
+TEST(Units, ZeroNeedsNoUnit) {
+  EXPECT_EQ(ParseQuantity("0", "s", "--x", "ms"), 0.0);
+  EXPECT_EQ(ParseQuantity("0.0", "m", "--x", "cm"), 0.0);
+}
+
+TEST(Units, ABareNumberIsRefusedWithWhatItProbablyMeant) {
+  EXPECT_EQ(ErrorOf([] { ParseQuantity("5", "m", "--limit", "cm"); }),
+            "--limit '5': a length needs a unit: did you mean 5cm? (m, cm, mm, km)");
+  EXPECT_EQ(ErrorOf([] { ParseQuantity("30", "s", "--readout", "ms"); }),
+            "--readout '30': a duration needs a unit: did you mean 30ms? (s, ms, us, ns, min, h)");
+  EXPECT_EQ(ErrorOf([] { ParseQuantity("400", "Hz", "--rate", "Hz"); }),
+            "--rate '400': a frequency needs a unit: did you mean 400Hz? (Hz, kHz)");
+}
+
+TEST(Units, AWrongOrUnknownUnitIsNamed) {
+  EXPECT_EQ(ErrorOf([] { ParseQuantity("5in", "m", "--limit", "cm"); }),
+            "--limit '5in': unknown unit 'in' for a length (m, cm, mm, km)");
+  EXPECT_EQ(ErrorOf([] { ParseQuantity("5ms", "m", "--limit", "cm"); }),
+            "--limit '5ms': ms is a unit of duration, --limit takes a length (m, cm, mm, km)");
+  EXPECT_EQ(ErrorOf([] { ParseQuantity("cm", "m", "--limit", "cm"); }),
+            "--limit 'cm': expected a length, a number and a unit, e.g. 5cm (m, cm, mm, km)");
+  EXPECT_EQ(ErrorOf([] { ParseQuantity("ten ms", "s", "--every", "s"); }),
+            "--every 'ten ms': expected a duration, a number and a unit, e.g. 5s (s, ms, us, ns, "
+            "min, h)");
+  EXPECT_THROW(ParseQuantity("inf s", "s", "--x", "s"), std::invalid_argument);
+  EXPECT_THROW(ParseQuantity("", "s", "--x", "s"), std::invalid_argument);
+}
+
+TEST(Units, QuantityTextIsWhatParsesBack) {
+  EXPECT_EQ(QuantityText(50.0, "m"), "50m");
+  EXPECT_EQ(QuantityText(0.03, "s"), "0.03s");
+  EXPECT_EQ(ParseQuantity(QuantityText(0.1 + 0.2, "s"), "s", "--x", "s"), 0.1 + 0.2);
+  EXPECT_EQ(UnitsOf("ms"), "duration: s, ms, us, ns, min, h");
 }
 
 }  // namespace

@@ -131,14 +131,14 @@ TEST(CorrectEndToEnd, TrueModelLeavesOnlyInterpolationForEveryEffect) {
   // true model (a report holding it), the frames match the renderer's references to interpolation
   // error; corrected with camera.json alone, they do not.
   const std::vector<std::string> effects = {
-      "time_offset=0.004",
-      "readout_time=0.036",
+      "time_offset=4ms",
+      "readout_time=36ms",
       "gyro_scale=1.05,0.95,1.04",
-      "gyro_bias=0.02,-0.015,0.01",
-      "velocity=6,-3,0",
+      "gyro_bias=0.02rad/s,-0.015rad/s,0.01rad/s",
+      "velocity=6m/s,-3m/s,0",
       "lens_distortion=-0.12,0.02",
       "readout_direction=bottom_to_top",
-      "clock_rate=300",
+      "clock_rate=300ppm",
       "gyro_to_camera=0.99756405,-0.06975647,0,0.06975647,0.99756405,0,0,0,1"};
   test::TempDir dir;
   // Under ASan (3 to 10 times slower) every other effect of the table.
@@ -174,9 +174,9 @@ TEST(CorrectEndToEnd, FisheyeTrueModelLeavesOnlyInterpolation) {
   test::TempDir dir;
   RigModel fisheye = test::FisheyeRig(kWidth, kHeight, 45.0);
   fisheye.altitude_m = kAltitudeM;
-  const Rendered rendered =
-      Render(dir, "fisheye", {"lens_distortion=-0.03,0.01", "velocity=6,-3,0", "time_offset=0.004"},
-             {12.0, 20.0}, /*video=*/false, fisheye);
+  const Rendered rendered = Render(
+      dir, "fisheye", {"lens_distortion=-0.03,0.01", "velocity=6m/s,-3m/s,0", "time_offset=4ms"},
+      {12.0, 20.0}, /*video=*/false, fisheye);
   ASSERT_TRUE(std::holds_alternative<Fisheye>(rendered.truth.rig.camera.distortion));
   const CorrectSummary fixed =
       Correct(rendered.dataset, dir / "fixed", Report(dir, "fisheye.json", rendered.truth));
@@ -201,7 +201,7 @@ TEST(CorrectEndToEnd, FisheyeTrueModelLeavesOnlyInterpolation) {
 TEST(CorrectEndToEnd, OutputIsARigDatasetThatValidateFindsGlobal) {
   test::TempDir dir;
   const Rendered rendered =
-      Render(dir, "ds", {"velocity=6,-3,0", "time_offset=0.004"}, {12.0, 16.0, 20.0});
+      Render(dir, "ds", {"velocity=6m/s,-3m/s,0", "time_offset=4ms"}, {12.0, 16.0, 20.0});
   const std::string out = dir / "out";
   Correct(rendered.dataset, out, Report(dir, "report.json", rendered.truth));
   const RigModel written = ReadRigModel((fs::path(out) / "camera.json").string());
@@ -239,7 +239,7 @@ TEST(CorrectEndToEnd, PredictsTheResidualOfAReportedModelError) {
   // standard error. The draws spread |error| as a half-normal (median 0.67, 90 % 1.64 standard
   // errors), so one standard error lies between the prediction's median and 90th percentile.
   test::TempDir dir;
-  const Rendered rendered = Render(dir, "ds", {"time_offset=0.006"}, {14.0, 18.0, 22.0, 26.0});
+  const Rendered rendered = Render(dir, "ds", {"time_offset=6ms"}, {14.0, 18.0, 22.0, 26.0});
   TrueModel reported = rendered.truth;
   reported.rig.time_offset_s = 0.0035;
   IdentifiedEffect effect;
@@ -345,7 +345,7 @@ TEST(CorrectPhotos, RenderedStillsPlacedByTheirTriggersMatchTheTruth) {
   test::TempDir dir;
   const std::vector<double> times_s = {12.0, 16.0, 20.0};
   const std::vector<std::string> names = {"DJI_0001.JPG", "DJI_0002.JPG", "DJI_0003.JPG"};
-  const Rendered rendered = Render(dir, "ds", {"velocity=6,-3,0"}, times_s);
+  const Rendered rendered = Render(dir, "ds", {"velocity=6m/s,-3m/s,0"}, times_s);
   const fs::path photos = PhotoFolder(dir, rendered, names);
   fs::copy_file(photos / "DJI_0001.JPG", photos / "DJI_0099.JPG");
   std::string triggers = "image,t\n";
@@ -373,7 +373,7 @@ TEST(CorrectPhotos, PlacedInOrderOnAPx4LogsOwnCameraEvents) {
   test::TempDir dir;
   const std::vector<double> times_s = {14.0, 18.0};
   const std::vector<std::string> names = {"a.jpg", "b.jpg"};
-  const Rendered rendered = Render(dir, "ds", {"time_offset=0.004"}, times_s);
+  const Rendered rendered = Render(dir, "ds", {"time_offset=4ms"}, times_s);
   const fs::path photos = PhotoFolder(dir, rendered, names);
   std::vector<GyroSample> samples = FlightGyro().samples();
   samples.erase(samples.begin());  // PX4 times are unsigned and 0 means unset: start at 1 ms

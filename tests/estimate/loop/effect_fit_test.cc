@@ -219,7 +219,7 @@ TEST(CloseTheLoop, TakesADeclaredWideLensThatFoldsBeyondTheCorners) {
 TEST(FitEffects, OnlyTheRedundantParametersLoseTheirStandardErrors) {
   // clock_rate carries its own offset, which time_offset repeats exactly: that combination is
   // undetermined (both offsets' standard errors null), while the rate keeps its own.
-  const Case c = RunCase("time_offset=0.004");
+  const Case c = RunCase("time_offset=4ms");
   const LoopResult r =
       FitEffects(c.declared, c.gyro, c.frames, kNoisePx, {Effect::kTimeOffset, Effect::kClockRate});
   ASSERT_EQ(r.effects.size(), 2u);
@@ -240,7 +240,7 @@ TEST(FitEffects, OnlyTheRedundantParametersLoseTheirStandardErrors) {
 
 TEST(CloseTheLoop, RecoversTimeOffset) {
   // 4 ms; must be within 0.3 ms.
-  const Case c = RunCase("time_offset=0.004");
+  const Case c = RunCase("time_offset=4ms");
   const IdentifiedEffect& e = ExpectIdentified(c.result, "time_offset");
   if (e.effect != Effect::kTimeOffset) return;
   EXPECT_NEAR(std::get<double>(e.value), 0.004, 0.0003);
@@ -283,7 +283,7 @@ TEST(CloseTheLoop, RecoversAFisheyesLensDistortion) {
 
 TEST(CloseTheLoop, RecoversReadoutTime) {
   // 30 ms declared, 36 ms true (20 % off); must be within 2 %.
-  const Case c = RunCase("readout_time=0.036");
+  const Case c = RunCase("readout_time=36ms");
   const IdentifiedEffect& e = ExpectIdentified(c.result, "readout_time");
   if (e.effect != Effect::kReadoutTime) return;
   EXPECT_NEAR(std::get<double>(e.value), 0.036, 0.02 * 0.036);
@@ -321,7 +321,7 @@ TEST(CloseTheLoop, RecoversClockRate) {
   // 400 ppm over a 300 s log (the last frame is 0.12 s late); must be within 20 %.
   std::vector<double> t;
   for (int k = 0; k < 10; ++k) t.push_back(10.0 + k * 32.0);
-  const Case c = RunCase("clock_rate=400", 4, 310.0, t);
+  const Case c = RunCase("clock_rate=400ppm", 4, 310.0, t);
   const IdentifiedEffect& e = ExpectIdentified(c.result, "clock_rate");
   if (e.effect != Effect::kClockRate) return;
   EXPECT_NEAR(std::get<double>(e.value), 400.0, 80.0);
@@ -331,7 +331,7 @@ TEST(CloseTheLoop, RecoversClockRate) {
 
 TEST(CloseTheLoop, RecoversVelocityOrNamesTheAmbiguity) {
   // 6 m/s at 50 m; must be within 10 %, or flagged ambiguous with gyro_bias.
-  const Case c = RunCase("velocity=4,-4.5,0");
+  const Case c = RunCase("velocity=4m/s,-4.5m/s,0");
   const IdentifiedEffect& e = ExpectIdentified(c.result, "velocity");
   if (e.effect != Effect::kVelocity) return;
   const bool ambiguous = std::find(e.ambiguous_with.begin(), e.ambiguous_with.end(),
@@ -524,7 +524,7 @@ TEST(CloseTheLoop, GyroBiasAboutXIsRecoveredOrAmbiguousWithVelocity) {
   // The classic: a constant bias about the camera's x axis tilts the view along y at a constant
   // rate, as a velocity along y translates it. Either the bias is found, or the report names the
   // ambiguity.
-  const Case c = RunCase("gyro_bias=0.03,0,0");
+  const Case c = RunCase("gyro_bias=0.03rad/s,0,0");
   const IdentifiedEffect& e = ExpectIdentified(
       c.result, c.result.effects.empty() ? "gyro_bias" : Spec(c.result.effects[0].effect).name);
   if (e.effect == Effect::kGyroBias) {
@@ -543,8 +543,8 @@ TEST(CloseTheLoop, TwoEffectsAreBothFound) {
   // both values.
   Case both;
   both.truth.rig = both.declared;
-  ApplyInjection("time_offset=0.006", &both.truth);
-  ApplyInjection("readout_time=0.025", &both.truth);
+  ApplyInjection("time_offset=6ms", &both.truth);
+  ApplyInjection("readout_time=25ms", &both.truth);
   both.gyro = FlightTrace(22.0, 12);
   both.frames = GridFrames(both.declared, EverySecond(10));
   Measure(both.truth, both.gyro, &both.frames, 112);

@@ -47,7 +47,7 @@ void ExpectIdentified(const ValidationResult& result, const std::string& name) {
 TEST(ValidateEndToEnd, RecoversTimeOffset) {
   test::TempDir dir;
   const ValidationResult result =
-      test::ValidateWithoutResiduals(test::MakeDataset(dir, {{"time_offset=0.004"}}));
+      test::ValidateWithoutResiduals(test::MakeDataset(dir, {{"time_offset=4ms"}}));
   ExpectIdentified(result, "time_offset");
   EXPECT_NEAR(result.loop.model.rig.time_offset_s, 0.004, 0.3e-3) << test::LoopSummary(result);
 }
@@ -58,7 +58,7 @@ TEST(ValidateEndToEnd, RecoversTimeOffsetWithClutter) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   test::DatasetSpec spec;
-  spec.injections = {"time_offset=0.004"};
+  spec.injections = {"time_offset=4ms"};
   spec.clutter.camera_fixed_share = 0.25;
   spec.clutter.moving_patch_mps = 15.0;
   const ValidationResult result = test::ValidateWithoutResiduals(test::MakeDataset(dir, spec));
@@ -73,7 +73,7 @@ TEST(ValidateEndToEnd, RecoversReadoutTime) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const ValidationResult result =
-      test::ValidateWithoutResiduals(test::MakeDataset(dir, {{"readout_time=0.036"}}));
+      test::ValidateWithoutResiduals(test::MakeDataset(dir, {{"readout_time=36ms"}}));
   ExpectIdentified(result, "readout_time");
   EXPECT_NEAR(result.loop.model.rig.shutter.readout_s, 0.036, 0.02 * 0.036)
       << test::LoopSummary(result);
@@ -119,7 +119,7 @@ TEST(ValidateEndToEnd, RecoversClockRate) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   test::DatasetSpec spec;
-  spec.injections = {"clock_rate=300"};
+  spec.injections = {"clock_rate=300ppm"};
   spec.log_s = 120.0;
   spec.first_frame_s = 10.0;
   spec.last_frame_s = 110.0;
@@ -134,7 +134,7 @@ TEST(ValidateEndToEnd, RecoversVelocityOrFlagsAmbiguity) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const ValidationResult result =
-      test::ValidateWithoutResiduals(test::MakeDataset(dir, {{"velocity=4,0,0"}}));
+      test::ValidateWithoutResiduals(test::MakeDataset(dir, {{"velocity=4m/s,0,0"}}));
   const LoopResult& loop = result.loop;
   ASSERT_FALSE(loop.effects.empty()) << test::LoopSummary(result);
   const IdentifiedEffect& first = loop.effects.front();

@@ -66,7 +66,7 @@ std::string InjectMatrix(const Eigen::Matrix3d& r) {
 TEST(ValidateVideo, RecoversTimeOffset) {
   test::TempDir dir;
   const ValidationResult result =
-      test::ValidateWithoutResiduals(test::MakeClip(dir, {{"time_offset=0.004"}}));
+      test::ValidateWithoutResiduals(test::MakeClip(dir, {{"time_offset=4ms"}}));
   ExpectClipIdentified(result, "time_offset", [](const TrueModel& m) {
     return std::abs(m.rig.time_offset_s - 0.004) <= 0.3e-3;
   });
@@ -78,7 +78,7 @@ TEST(ValidateVideo, RecoversReadoutTime) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const ValidationResult result =
-      test::ValidateWithoutResiduals(test::MakeClip(dir, {{"readout_time=0.036"}}));
+      test::ValidateWithoutResiduals(test::MakeClip(dir, {{"readout_time=36ms"}}));
   ExpectClipIdentified(result, "readout_time", [](const TrueModel& m) {
     return std::abs(m.rig.shutter.readout_s - 0.036) <= 0.02 * 0.036;
   });
@@ -103,7 +103,7 @@ TEST(ValidateVideo, RecoversGyroBias) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const ValidationResult result =
-      test::ValidateWithoutResiduals(test::MakeClip(dir, {{"gyro_bias=0.01,0,0"}}));
+      test::ValidateWithoutResiduals(test::MakeClip(dir, {{"gyro_bias=0.01rad/s,0,0"}}));
   ExpectClipIdentified(result, "gyro_bias", [](const TrueModel& m) {
     const Eigen::Vector3d& b = m.gyro_bias_rad_s;
     return std::abs(b.x() - 0.01) <= 0.001 && std::abs(b.y()) <= 0.0015 &&
@@ -192,7 +192,7 @@ TEST(ValidateVideo, RecoversClockRateOverALongClip) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   test::ClipSpec spec;
-  spec.injections = {"clock_rate=300"};
+  spec.injections = {"clock_rate=300ppm"};
   spec.frames = 50;
   spec.first_s = 8.0;
   spec.fps = 5.0;
@@ -221,7 +221,7 @@ TEST(ValidateVideo, RecoversTimeOffsetWithClutter) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   test::ClipSpec spec;
-  spec.injections = {"time_offset=0.004"};
+  spec.injections = {"time_offset=4ms"};
   spec.clutter = test::Clutter();
   const ValidationResult result = test::ValidateWithoutResiduals(test::MakeClip(dir, spec));
   ExpectClutterLeftOut(result);
@@ -262,7 +262,7 @@ TEST(ValidateVideo, TranslationExplainsAMovingCamera) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const ValidationResult result =
-      test::ValidateWithoutResiduals(test::MakeClip(dir, {{"velocity=2,1,3"}}));
+      test::ValidateWithoutResiduals(test::MakeClip(dir, {{"velocity=2m/s,1m/s,3m/s"}}));
   const std::string report = test::LoopSummary(result);
   EXPECT_TRUE(result.loop.unexplained) << report;
   EXPECT_FALSE(result.translation_loop.unexplained) << report;

@@ -69,14 +69,14 @@ std::vector<FramePoints> RenderedPairs(const TrueModel& truth, const GyroTrace& 
 // video model holds (velocity is the pair translation's).
 std::vector<std::pair<std::string, TrueModel>> TrueModels() {
   std::vector<std::pair<std::string, TrueModel>> out;
-  const std::vector<std::string> injections = {"time_offset=0.004",
-                                               "readout_time=0.036",
+  const std::vector<std::string> injections = {"time_offset=4ms",
+                                               "readout_time=36ms",
                                                "gyro_to_camera=0,-1,0,-1,0,0,0,0,-1",
                                                "gyro_scale=1.05,0.95,1.04",
-                                               "gyro_bias=0.01,-0.02,0.005",
+                                               "gyro_bias=0.01rad/s,-0.02rad/s,0.005rad/s",
                                                "lens_distortion=-0.1,0.02",
                                                "readout_direction=bottom_to_top",
-                                               "clock_rate=300"};
+                                               "clock_rate=300ppm"};
   TrueModel declared;
   declared.rig = test::VideoRig();
   out.emplace_back("declared", declared);

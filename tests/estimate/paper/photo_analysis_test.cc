@@ -135,6 +135,36 @@ TEST(AnalyzePhotos, WithALogFlagsOnRotationPlusTranslation) {
   EXPECT_EQ(a.placed, 1u);
 }
 
+// The log's analysis used one altitude (50 m) for every photo; the ground shift of the same image
+// rotation is at each photo's own height (100 m and 41 m here), unless the user's altitude wins.
+TEST(AnalyzePhotos, TheRotationPartIsAtEachPhotosOwnAltitude) {
+  PhotoRecord low = Photo("low.jpg", 0.0, 0.0, 0.0);
+  low.altitude_m = 41.0;
+  const PhotoSet set = Set({Photo("high.jpg", 0.0, 0.0, 0.0), low});
+  AnalyzeResult log;
+  log.altitude_m = 50.0;
+  for (const char* name : {"high.jpg", "low.jpg"}) {
+    ImageResult image;
+    image.name = name;
+    image.in_trace = true;
+    image.d_full_px = 2.0;
+    image.d_full_m = 2.0 * 50.0 / 2000.0;  // 5 cm at 50 m and f 2000 px
+    log.images.push_back(image);
+  }
+  std::vector<PhotoPlacement> placements(2);
+  placements[0].t_ns = 1'000'000'000;
+  placements[1].t_ns = 2'000'000'000;
+  PhotoAnalysisOptions each;
+  each.rotation_at_each_photo_altitude = true;
+  const PhotoAnalysis a = AnalyzePhotosWithLog(set, each, placements, log);
+  EXPECT_DOUBLE_EQ(*a.photos[0].d_rotation_m, 2.0 * 100.0 / 2000.0);
+  EXPECT_DOUBLE_EQ(*a.photos[1].d_rotation_m, 2.0 * 41.0 / 2000.0);
+  EXPECT_DOUBLE_EQ(*a.photos[1].d_rotation_px, 2.0);
+  const PhotoAnalysis one = AnalyzePhotosWithLog(set, {}, placements, log);
+  EXPECT_DOUBLE_EQ(*one.photos[0].d_rotation_m, 0.05);
+  EXPECT_DOUBLE_EQ(*one.photos[1].d_rotation_m, 0.05);
+}
+
 TEST(WritePhotoOutputs, ExcludesFlaggedAndUnreadableAndListsTheRest) {
   test::TempDir dir;
   PhotoRecord broken;

@@ -25,7 +25,7 @@ TEST(ValidateReport, TableAndReportAreConsistent) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   const ValidationResult result =
-      test::ValidateWithoutResiduals(test::MakeDataset(dir, {{"time_offset=0.004"}}));
+      test::ValidateWithoutResiduals(test::MakeDataset(dir, {{"time_offset=4ms"}}));
   ASSERT_EQ(result.frames.size(), static_cast<size_t>(test::kStillFrames));
   for (size_t l = 0; l < result.limits_m.size(); ++l) {
     const Confusion& c = result.confusion_paper[l];
@@ -75,7 +75,7 @@ TEST(ValidateReport, ReportAndJsonCarryBothModels) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
   test::ClipSpec spec;
-  spec.injections = {"time_offset=0.004"};
+  spec.injections = {"time_offset=4ms"};
   spec.frames = 6;
   const ValidationResult result = test::ValidateWithoutResiduals(test::MakeClip(dir, spec));
   const nlohmann::json json = ValidationToJson(result);

@@ -94,7 +94,7 @@ TEST(GyroIo, ReadGyroDispatchesOnDetectionAndOverride) {
   raw_forced.format = LogFormat::kRaw;
   EXPECT_NEAR(ReadGyro(counts_with_csv_header, raw_forced)[0].omega_rad_s.x(), kRadPerDeg, 1e-15);
   EXPECT_EQ(ReadGyro(counts_with_csv_header)[0].omega_rad_s.x(), 131.0);
-  // --range 2000 --time-unit ms.
+  // --range 2000deg/s --time-unit ms.
   GyroReadOptions wide;
   wide.raw.range_dps = 2000;
   wide.raw.time_unit = TimeUnit::kMilliseconds;

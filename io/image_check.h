@@ -1,0 +1,18 @@
+#pragma once
+// Whether an image file's pixels decode, not only its header and metadata: a JPEG cut short
+// inside its image data keeps all its EXIF and XMP, so a photo is checked here before any tool
+// is told to use it.
+
+#include <string>
+
+namespace shutterlab {
+
+// Decodes the whole of the image data and returns the decoder's first complaint, "" when it
+// decodes cleanly. A JPEG is decoded by libjpeg at 1/8 size (its DCT scaling: every coded bit is
+// read, little is transformed, about a tenth of a full decode), and any warning counts ("Premature
+// end of JPEG file", "Corrupt JPEG data: 198 extraneous bytes before marker 0xd9"); another format
+// is decoded whole through OpenImageIO. Never throws for a bad file: a file that cannot be opened
+// is a complaint too.
+std::string ImageDataProblem(const std::string& path);
+
+}  // namespace shutterlab

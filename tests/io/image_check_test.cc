@@ -1,0 +1,102 @@
+// io/image_check.h: a photo whose metadata is whole but whose pixels are cut or damaged is found
+// by decoding it (a JPEG at 1/8 size through libjpeg, anything else whole through OpenImageIO).
+
+#include "io/image_check.h"
+
+#include "io/image_io.h"
+#include "sim/text_file.h"
+#include "tests/io/photo_fixtures.h"
+#include "tests/test_util.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <random>
+#include <string>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+// A JPEG with DJI-like metadata and a noisy 640 x 480 picture (a scan of some kilobytes).
+std::string NoisyPhoto() {
+  test::FixturePhoto p;
+  p.width = 640;
+  p.height = 480;
+  p.focal_length_35mm = 24;
+  p.xmp = test::DjiXmp({{"RelativeAltitude", "+60"}}, false);
+  const std::string header_only = test::JpegWithMetadata(p);
+  // The fixture's grey scan replaced by a noisy one: the same metadata before the tables.
+  cv::Mat noise(p.height, p.width, CV_8UC3);
+  cv::randu(noise, 0, 255);
+  std::vector<uchar> encoded;
+  cv::imencode(".jpg", noise, encoded);
+  const std::string tables = "\xff\xdb";  // DQT: where the encoder's part starts in both
+  const std::string noisy(encoded.begin(), encoded.end());
+  return header_only.substr(0, header_only.find(tables)) + noisy.substr(noisy.find(tables));
+}
+
+// Where the entropy-coded scan starts (after the SOS segment) and ends (before EOI).
+std::pair<size_t, size_t> ScanOf(const std::string& jpeg) {
+  const size_t sos = jpeg.find("\xff\xda");
+  const size_t length = static_cast<unsigned char>(jpeg[sos + 2]) << 8 |
+                        static_cast<unsigned char>(jpeg[sos + 3]);
+  return {sos + 2 + length, jpeg.size() - 2};
+}
+
+TEST(ImageDataProblem, AWholePhotoDecodes) {
+  test::TempDir dir;
+  WriteFileAtomically(dir / "whole.jpg", NoisyPhoto());
+  EXPECT_EQ(ImageDataProblem(dir / "whole.jpg"), "");
+  // The photo's metadata reads as before: the check is about the pixels.
+  EXPECT_EQ(ReadPhotoMetadata(dir / "whole.jpg").width, 640);
+}
+
+TEST(ImageDataProblem, APhotoCutInsideItsImageDataIsFound) {
+  test::TempDir dir;
+  const std::string whole = NoisyPhoto();
+  const auto [begin, end] = ScanOf(whole);
+  ASSERT_GT(end - begin, 10000u);
+  for (const double share : {0.05, 0.5, 0.99}) {
+    const std::string path = dir / "cut.jpg";
+    WriteFileAtomically(path, whole.substr(0, begin + static_cast<size_t>(share * (end - begin))));
+    EXPECT_NE(ImageDataProblem(path).find("Premature end of JPEG file"), std::string::npos)
+        << share;
+    // The metadata is all still there: only decoding tells.
+    EXPECT_EQ(ReadPhotoMetadata(path).width, 640) << share;
+  }
+  // Cut before the scan: libjpeg refuses it outright.
+  WriteFileAtomically(dir / "tables.jpg", whole.substr(0, begin - 20));
+  EXPECT_NE(ImageDataProblem(dir / "tables.jpg"), "");
+}
+
+TEST(ImageDataProblem, DamagedImageDataIsFound) {
+  test::TempDir dir;
+  std::string damaged = NoisyPhoto();
+  const auto [begin, end] = ScanOf(damaged);
+  // A run of 0xFF 0xD0.. bytes in the scan: restart markers where none were declared.
+  for (size_t at = begin + (end - begin) / 2; at < begin + (end - begin) / 2 + 40; at += 2) {
+    damaged[at] = '\xff';
+    damaged[at + 1] = '\xd3';
+  }
+  WriteFileAtomically(dir / "damaged.jpg", damaged);
+  EXPECT_NE(ImageDataProblem(dir / "damaged.jpg"), "");
+}
+
+TEST(ImageDataProblem, OtherFormatsAreDecodedWhole) {
+  test::TempDir dir;
+  cv::Mat noise(120, 160, CV_8UC3);
+  cv::randu(noise, 0, 255);
+  WriteImage(dir / "whole.png", noise);
+  EXPECT_EQ(ImageDataProblem(dir / "whole.png"), "");
+  const std::string png = ReadFileToString(dir / "whole.png");
+  WriteFileAtomically(dir / "cut.png", png.substr(0, png.size() / 2));
+  EXPECT_NE(ImageDataProblem(dir / "cut.png"), "");
+  EXPECT_EQ(ImageDataProblem(dir / "missing.jpg"), "cannot be opened");
+  WriteFileAtomically(dir / "text.jpg", "cut off");
+  EXPECT_NE(ImageDataProblem(dir / "text.jpg"), "");
+}
+
+}  // namespace
+}  // namespace shutterlab
