@@ -39,6 +39,10 @@ void RunPhotos(const AnalyzeFlags& flags) {
     read.progress = [&progress](double f) { progress.Update(static_cast<size_t>(f * 1000)); };
     set = ReadPhotoSet(flags.photos_dir, read);
   }
+  if (set.in_subfolders > 0) {
+    std::cerr << "note: " << flags.photos_dir << ": " << set.in_subfolders
+              << " photos in its subfolders were not read (give --recursive to read them)\n";
+  }
   // What the profile gave the photos; with a LOG the analysed camera's notes are printed instead.
   if (read.lens_profile && !log) {
     for (const std::string& note : LensProfileNotes(set, *read.lens_profile))

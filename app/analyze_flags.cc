@@ -33,7 +33,7 @@ RigModel RigFromFlags(const AnalyzeFlags& flags) {
   rig.camera.fx = rig.camera.fy = flags.focal_px;
   rig.camera.cx = 0.5 * (width - 1);
   rig.camera.cy = 0.5 * (height - 1);
-  rig.shutter.readout_s = flags.readout_ms * 1e-3;
+  rig.shutter.readout_s = ConvertUnit(flags.readout_ms, "ms", "s");
   rig.altitude_m = flags.altitude_m;
   return rig;
 }
@@ -51,7 +51,7 @@ PhotoSetOptions PhotoOptionsFromFlags(const AnalyzeFlags& flags) {
     options.focal_text = "camera.json " + flags.camera_path;
   }
   if (flags.readout_given) {
-    options.readout_s = flags.readout_ms * 1e-3;
+    options.readout_s = ConvertUnit(flags.readout_ms, "ms", "s");
     options.readout_origin = ReadoutOrigin::kUser;
     options.readout_text = "--readout " + QuantityText(flags.readout_ms, "ms");
   }
@@ -60,6 +60,8 @@ PhotoSetOptions PhotoOptionsFromFlags(const AnalyzeFlags& flags) {
     options.focal_text = "--focal-px";
   }
   if (flags.altitude_given) options.altitude_m = flags.altitude_m;
+  if (!std::isnan(flags.speed_m_s)) options.speed_m_s = flags.speed_m_s;
+  options.recursive = flags.recursive;
   if (!flags.lens_profile_path.empty())
     options.lens_profile = ReadLensProfile(flags.lens_profile_path);
   return options;
@@ -69,17 +71,20 @@ PhotoSetOptions PhotoOptionsFromFlags(const AnalyzeFlags& flags) {
 void AddCameraAssumptions(const AnalyzeFlags& flags, const RigModel& rig, bool readout_from_profile,
                           std::vector<Assumption>* assumptions) {
   const PinholeCamera& camera = rig.camera;
-  if (!flags.size_given || !flags.focal_given) {
+  const bool profile = !flags.lens_profile_path.empty();  // its focal length, at the image size
+  if (!flags.size_given || (!flags.focal_given && !profile)) {
     assumptions->push_back({"camera",
                             std::to_string(camera.width) + " x " + std::to_string(camera.height) +
                                 " px, f " + FormatNumber("%g", camera.fx) + " px",
                             "", "--camera camera.json, or --size and --focal-px"});
   }
   if (!flags.readout_given && !readout_from_profile) {
-    assumptions->push_back({"readout", FormatNumber("%g ms", flags.readout_ms), "",
-                            "--readout, --camera or --lens-profile"});
+    assumptions->push_back(
+        {"readout", FormatNumber("%g ms", flags.readout_ms),
+         profile ? "the lens profile states none" : "",
+         profile ? "--readout or --camera" : "--readout, --camera or --lens-profile"});
   }
-  if (flags.lens_profile_path.empty()) {
+  if (!profile) {
     assumptions->push_back(
         {"lens", "no distortion", "", "--lens-profile (a Gyroflow profile) or --camera"});
   }
@@ -191,6 +196,11 @@ std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
       "without LOG the translation part from the recorded flight speed, with LOG "
       "each photo placed on the log's clock (--triggers, the log's camera events, or "
       "the capture times through the log's GPS time)");
+  AddQuantityOption(command, "--speed", &flags->speed_m_s, "m/s", "m/s",
+                    "--photos: the ground speed of every photo, over their metadata's (for "
+                    "photos that do not record it)");
+  command->add_flag("--recursive", flags->recursive,
+                    "--photos: read the folder's subfolders too (a card's DCIM/100MEDIA, ...)");
   command->add_option(
       "--photo-utc-offset", flags->photo_utc_offset,
       "the photos' camera clock zone, e.g. +08:00 (else EXIF OffsetTimeOriginal, the "

@@ -43,6 +43,8 @@ struct AnalyzeFlags {
   std::string scene_path;
   std::string photos_dir;
   std::string photo_utc_offset;
+  double speed_m_s = std::numeric_limits<double>::quiet_NaN();  // NaN: the photos' own
+  bool recursive = false;
   bool json = false;
   bool altitude_given = false;
   bool readout_given = false;

@@ -5,43 +5,60 @@
 #include <csetjmp>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
 #include <vector>
 
 // jpeglib.h needs FILE and size_t declared before it.
 #include <jpeglib.h>
+// After jpeglib.h: the message codes of its warnings.
+#include <jerror.h>
 
 namespace shutterlab {
 namespace {
 
-// libjpeg reports through these: a fatal error jumps back to the decode, a warning (a corrupt or
-// cut stream that libjpeg would fill in grey) is kept as the first complaint.
+// libjpeg reports through these: a fatal error jumps back to the decode; a warning that means
+// the coded data is cut or damaged is kept as the first complaint. Other warnings (an unknown JFIF
+// revision, padding before the end marker that some encoders write) leave the pixels whole.
 struct JpegErrors {
   jpeg_error_mgr manager;  // first: libjpeg casts the pointer it is given
   std::jmp_buf fatal;
   std::string first;
 };
 
+bool MeansDamage(const jpeg_error_mgr& err) {
+  switch (err.msg_code) {
+    case JWRN_JPEG_EOF:        // Premature end of JPEG file
+    case JWRN_HIT_MARKER:      // Corrupt JPEG data: premature end of data segment
+    case JWRN_MUST_RESYNC:     // Corrupt JPEG data: found marker instead of RST
+    case JWRN_HUFF_BAD_CODE:   // Corrupt JPEG data: bad Huffman code
+    case JWRN_ARITH_BAD_CODE:  // Corrupt JPEG data: bad arithmetic code
+      return true;
+    case JWRN_EXTRANEOUS_DATA:  // N extraneous bytes before marker M: harmless before EOI only
+      return err.msg_parm.i[1] != 0xD9;
+    default:
+      return false;
+  }
+}
+
 void KeepFirstMessage(j_common_ptr info, int level) {
   auto* errors = reinterpret_cast<JpegErrors*>(info->err);
-  if (level >= 0 || !errors->first.empty()) return;  // trace messages, or a later warning
+  if (level >= 0 || !errors->first.empty() || !MeansDamage(*info->err)) return;
   char text[JMSG_LENGTH_MAX];
   info->err->format_message(info, text);
   errors->first = text;
 }
 
 void JumpOnError(j_common_ptr info) {
-  auto* errors = reinterpret_cast<JpegErrors*>(info->err);
-  if (errors->first.empty()) {
-    char text[JMSG_LENGTH_MAX];
-    info->err->format_message(info, text);
-    errors->first = text;
-  }
-  std::longjmp(errors->fatal, 1);
+  std::longjmp(reinterpret_cast<JpegErrors*>(info->err)->fatal, 1);
 }
 
-// The JPEG decode itself. No C++ object with a destructor lives between setjmp and longjmp here.
-std::string JpegProblem(std::FILE* file) {
+std::string OiioProblem(const std::string& path);
+
+// The JPEG decode itself. No C++ object with a destructor is made between setjmp and longjmp
+// here. A fatal error (a file libjpeg cannot decode at all, or a kind it does not decode: 12-bit,
+// lossless) is left to OpenImageIO's verdict.
+std::string JpegProblem(std::FILE* file, const std::string& path) {
   jpeg_decompress_struct info;
   JpegErrors errors;
   info.err = jpeg_std_error(&errors.manager);
@@ -52,7 +69,7 @@ std::string JpegProblem(std::FILE* file) {
   if (setjmp(errors.fatal) != 0) {
     std::free(row);
     jpeg_destroy_decompress(&info);
-    return errors.first;
+    return OiioProblem(path);
   }
   jpeg_create_decompress(&info);
   jpeg_stdio_src(&info, file);
@@ -64,11 +81,11 @@ std::string JpegProblem(std::FILE* file) {
   jpeg_start_decompress(&info);
   row = static_cast<JSAMPLE*>(
       std::malloc(static_cast<size_t>(info.output_width) * info.output_components));
-  while (info.output_scanline < info.output_height) {
+  while (row != nullptr && info.output_scanline < info.output_height) {
     JSAMPLE* line = row;
     jpeg_read_scanlines(&info, &line, 1);
   }
-  jpeg_finish_decompress(&info);
+  if (row != nullptr) jpeg_finish_decompress(&info);
   std::free(row);
   jpeg_destroy_decompress(&info);
   return errors.first;
@@ -86,10 +103,11 @@ std::string OiioProblem(const std::string& path) {
   auto input = OIIO::ImageInput::open(path);
   if (!input) return OIIO::geterror();
   const OIIO::ImageSpec& spec = input->spec();
-  std::vector<unsigned char> pixels(static_cast<size_t>(spec.width) * spec.height *
-                                    spec.nchannels);
-  const bool read = input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8,
-                                      pixels.data());
+  // A frame too large to hold is not checked (its metadata said so much already).
+  if (static_cast<double>(spec.width) * spec.height * spec.nchannels > 2e9) return "";
+  std::vector<unsigned char> pixels(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
+  const bool read =
+      input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8, pixels.data());
   const std::string error = input->geterror();
   if (!error.empty()) return error;
   return read ? "" : "the image data cannot be decoded";
@@ -98,17 +116,16 @@ std::string OiioProblem(const std::string& path) {
 }  // namespace
 
 std::string ImageDataProblem(const std::string& path) {
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) return "cannot be opened";
-  std::string problem;
-  if (StartsLikeJpeg(file)) {
-    problem = JpegProblem(file);
-    std::fclose(file);
-  } else {
-    std::fclose(file);
-    problem = OiioProblem(path);
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
+                                                       &std::fclose);
+  if (!file) return "cannot be opened";
+  try {
+    if (StartsLikeJpeg(file.get())) return JpegProblem(file.get(), path);
+    file.reset();
+    return OiioProblem(path);
+  } catch (const std::exception&) {
+    return "";  // a decoder that could not run (memory) says nothing of the file
   }
-  return problem;
 }
 
 }  // namespace shutterlab

@@ -102,6 +102,11 @@ void ChooseFlightState(const PhotoSetOptions& options, PhotoRecord* r) {
                           ? "DJI maker note SpeedX/SpeedY"
                           : "XMP drone-dji:FlightXSpeed/FlightYSpeed";
   }
+  if (options.speed_m_s) {
+    r->ground_speed_m_s = options.speed_m_s;
+    if (*options.speed_m_s == 0) r->course_deg.reset();
+    r->speed_source = "--speed";
+  }
 }
 
 }  // namespace
@@ -137,6 +142,8 @@ void PhotoSetOptions::Check() const {
       << "focal length must be positive";
   SHUTTERLAB_CHECK(!altitude_m || (std::isfinite(*altitude_m) && *altitude_m > 0))
       << "altitude must be positive";
+  SHUTTERLAB_CHECK(!speed_m_s || (std::isfinite(*speed_m_s) && *speed_m_s >= 0 && *speed_m_s < 200))
+      << "--speed must be 0 to 200 m/s";
   SHUTTERLAB_CHECK(readout_origin == ReadoutOrigin::kUser ||
                    readout_origin == ReadoutOrigin::kCameraFile ||
                    readout_origin == ReadoutOrigin::kLensProfile)
@@ -183,12 +190,24 @@ PhotoSet ReadPhotoSet(const std::string& dir, const PhotoSetOptions& options) {
     paths.push_back(dir);
   } else {
     if (!fs::is_directory(dir, ec)) throw IoError(IoMessage(dir, 0, "no such folder"));
-    for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
-      if (entry.is_regular_file() && IsPhotoFileName(entry.path().filename().string()))
-        paths.push_back(entry.path().string());
+    // Subfolders are always walked: unread, their photos are counted, so that a card's DCIM
+    // folder is not "no photo files".
+    for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+      if (!it->is_regular_file() || !IsPhotoFileName(it->path().filename().string())) continue;
+      if (it.depth() == 0 || options.recursive) {
+        paths.push_back(it->path().string());
+      } else {
+        ++set.in_subfolders;
+      }
     }
     if (ec) throw IoError(IoMessage(dir, 0, "cannot list the folder: " + ec.message()));
     std::sort(paths.begin(), paths.end());
+  }
+  if (paths.empty() && set.in_subfolders > 0) {
+    throw IoError(IoMessage(dir, 0,
+                            "no photo files here, but its subfolders hold " +
+                                std::to_string(set.in_subfolders) +
+                                " (a card's DCIM/100MEDIA?): give --recursive to read them"));
   }
   if (paths.empty())
     throw IoError(IoMessage(dir, 0, "no photo files (.jpg, .jpeg, .tif, .tiff, .dng)"));
@@ -202,6 +221,7 @@ PhotoSet ReadPhotoSet(const std::string& dir, const PhotoSetOptions& options) {
                                  "its image data does not decode (" + problem +
                                      "): a cut or damaged file; copy it from the card again");
       }
+      if (options.recursive) record.name = fs::relative(paths[i], dir).generic_string();
       set.photos.push_back(std::move(record));
     } catch (const IoError& e) {
       PhotoRecord bad;

@@ -50,6 +50,12 @@ struct PhotoSetOptions {
   // given one, its readout (ReadoutOrigin::kLensProfile) after the given one.
   std::optional<LensProfile> lens_profile;
   std::optional<double> altitude_m;
+  // --speed: the ground speed of every photo, over their metadata's (the direction, when the
+  // metadata has one, is kept).
+  std::optional<double> speed_m_s;
+  // Read the folder's subfolders too (a card's DCIM/100MEDIA, 101MEDIA, ...); a photo's name is
+  // then its path under the folder ("101MEDIA/DJI_0001.JPG").
+  bool recursive = false;
   std::function<void(double)> progress;  // fraction read (0..1); may be empty
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
@@ -57,7 +63,8 @@ struct PhotoSetOptions {
 
 struct PhotoRecord {
   std::string path;
-  std::string name;               // the file name, e.g. "DJI_0123.JPG"
+  std::string
+      name;  // the file name, e.g. "DJI_0123.JPG" (read recursively: its path under the folder)
   std::optional<int64_t> number;  // the stem's last digits (DJI_0123 -> 123), for trigger indexes
   // The file could not be read (nothing below is set), or its image data does not decode
   // (io/image_check.h: the metadata below is kept, the photo is not used).
@@ -86,13 +93,15 @@ struct PhotoRecord {
 struct PhotoSet {
   std::string source;               // the folder (or the one file) read
   std::vector<PhotoRecord> photos;  // by file name
+  size_t in_subfolders = 0;         // photo files in subfolders, not read (not recursive)
 };
 
 // Photo files are .jpg, .jpeg, .tif, .tiff and .dng, any case.
 bool IsPhotoFileName(const std::string& name);
 
-// Reads every photo file in dir (not its subfolders), sorted by name; a path to one photo file
-// reads that one. Throws IoError("DIR: problem") when dir does not exist or holds no photo file.
+// Reads every photo file in dir (its subfolders too with options.recursive, else only counted),
+// sorted by name; a path to one photo file reads that one. Throws IoError("DIR: problem") when dir
+// does not exist or holds no photo file (saying so when its subfolders hold some).
 PhotoSet ReadPhotoSet(const std::string& dir, const PhotoSetOptions& options = {});
 
 // The record of one photo's metadata, as ReadPhotoSet makes it (for callers that have the

@@ -7,6 +7,8 @@
 #include "sim/text_file.h"
 #include "sim/units.h"
 
+#include <cmath>
+
 namespace shutterlab {
 
 DeviceSpec ParseDeviceSpec(const std::string& text) {
@@ -42,7 +44,7 @@ DeviceSpec ParseDeviceSpec(const std::string& text) {
     } else if (key == "range") {
       const double range_dps =
           ParseQuantity(value, "deg/s", "device '" + text + "': range=", "deg/s");
-      need(range_dps > 0 && range_dps == static_cast<int>(range_dps));
+      need(range_dps > 0 && range_dps <= 1e6 && range_dps == std::round(range_dps));
       spec.range_dps = static_cast<int>(range_dps);
     } else if (key == "mode" && !spec.emulate) {
       need(number && (*number == 0 || *number == 3));

@@ -38,8 +38,8 @@ gyro() {
 }
 gyro perfect_1k --ideal --rate 1000Hz
 for rate in 200 1000 4000; do
-  gyro "mpu9250_$rate" --rate "$rate" --noise-density 7e-5rad/s/rtHz
-  gyro "mpu9250x10_$rate" --rate "$rate" --noise-density 7e-4rad/s/rtHz
+  gyro "mpu9250_$rate" --rate "${rate}Hz" --noise-density 7e-5rad/s/rtHz
+  gyro "mpu9250x10_$rate" --rate "${rate}Hz" --noise-density 7e-4rad/s/rtHz
 done
 
 # median FILE JQ_PATH: the median over frames of a per-frame number of correct.json.

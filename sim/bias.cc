@@ -52,8 +52,8 @@ BiasSegment ParseBiasSegment(const std::string& text) {
   SHUTTERLAB_CHECK(colon != std::string::npos)
       << "--bias '" << text << "': expected A:B, the still segment's start and end after the "
       << "first sample, e.g. 0:5s";
-  // The shared contract (FORMATS.md) defines A:B in seconds: a bare side is seconds, or takes the
-  // other side's unit ("2:7s"); a unit may be given ("500ms:3s").
+  // The shared contract (FORMATS.md) defines A:B in seconds: a bare side is seconds; a unit may be
+  // given ("500ms:3s").
   std::string begin = text.substr(0, colon);
   std::string end = text.substr(colon + 1);
   const auto unit_of = [](const std::string& side) {
@@ -61,11 +61,8 @@ BiasSegment ParseBiasSegment(const std::string& text) {
     while (split > 0 && std::isalpha(static_cast<unsigned char>(side[split - 1]))) --split;
     return side.substr(split);
   };
-  const std::string default_unit = !unit_of(end).empty()     ? unit_of(end)
-                                   : !unit_of(begin).empty() ? unit_of(begin)
-                                                             : "s";
-  if (unit_of(begin).empty()) begin += default_unit;
-  if (unit_of(end).empty()) end += default_unit;
+  if (unit_of(begin).empty()) begin += "s";
+  if (unit_of(end).empty()) end += "s";
   BiasSegment s{ParseQuantity(begin, "s", "--bias", "s"), ParseQuantity(end, "s", "--bias", "s")};
   SHUTTERLAB_CHECK(s.begin_s >= 0 && s.end_s > s.begin_s)
       << "--bias '" << text << "' must satisfy 0 <= A < B";

@@ -43,7 +43,7 @@ BiasEstimate BiasOverSegment(const GyroSample* begin, const GyroSample* end,
                              double trace_duration_s);
 
 // Parses `--bias A:B`, the still segment's start and end after the first sample: seconds, as the
-// shared contract defines it ("0:5"), or with a unit ("500ms:3s"; "2:7s" puts both in seconds).
+// shared contract defines it ("0:5"), or with a unit ("500ms:3s"; a bare side is seconds).
 // Throws std::invalid_argument on anything else.
 BiasSegment ParseBiasSegment(const std::string& text);
 

@@ -170,8 +170,15 @@ double ParseQuantity(std::string_view text, std::string_view unit, std::string_v
   const std::string_view typed_unit = Trimmed(trimmed.substr(number_length));
   if (typed_unit.empty()) {
     if (*number == 0.0) return 0.0;
-    throw std::invalid_argument(said + "a " + noun + " needs a unit: did you mean " +
-                                std::string(trimmed) + std::string(bare_means) + "? " + units);
+    // A bare length or duration used to be read in metres or seconds: an old script's number is
+    // offered that reading too, so that following the hint never scales it by 100 or 1000.
+    const char* si = to.dimension == Dimension::kLength     ? "m"
+                     : to.dimension == Dimension::kDuration ? "s"
+                                                            : "";
+    std::string meant = std::string(trimmed) + std::string(bare_means);
+    if (*si != '\0' && bare_means != si) meant += " or " + std::string(trimmed) + si;
+    throw std::invalid_argument(said + "a " + noun + " needs a unit: did you mean " + meant + "? " +
+                                units);
   }
   const Unit* from = FindUnit(typed_unit);
   if (from == nullptr) {

@@ -451,7 +451,7 @@ std::vector<ImageResult> AnalyzeImages(const ImageContext& context,
 // log had none to give, a zero bias when no still stretch was found to measure it on.
 void NoteAssumptions(const AnalyzeOptions& options, AnalyzeResult* result) {
   result->assumptions = options.assumptions;
-  if (options.use_log_altitude && result->altitude_source != "log") {
+  if (options.use_log_altitude && options.altitude_is_default && result->altitude_source != "log") {
     result->assumptions.push_back({"altitude", FormatNumber("%g m", result->altitude_m),
                                    "the log has no height above ground", "--altitude"});
   }

@@ -89,6 +89,9 @@ struct AnalyzeOptions {
   // Use the log's altitude above ground (FlightLog::altitude_above_ground_m) instead of
   // rig.altitude_m when the log has one.
   bool use_log_altitude = false;
+  // rig.altitude_m is a default, not a height anything gave (the photos' median is not): when
+  // the log has none either, it is said as assumed.
+  bool altitude_is_default = true;
   bool what_if = true;  // compute the verdict's faster-readout / half-altitude shares
   // false: zero bias and no still-segment search (calibrated flight-controller rates, or a
   // caller that removed the bias itself, e.g. `validate` on synthetic truth).

@@ -63,6 +63,40 @@ void Flag(const std::vector<double>& limits_m, std::optional<double> d_m, PhotoR
   for (size_t l = 0; l < limits_m.size(); ++l) out->flagged[l] = *d_m > limits_m[l];
 }
 
+// When exclude.txt would drop more than half of the photos: how large the shifts are in pixels at
+// their ground sampling, so that a person sees whether a limit of a pixel or so is what they want,
+// and what the photogrammetry tool can do instead.
+std::string ExcludedMostText(const PhotoSet& set, PhotoAnalysis* a) {
+  std::vector<double> d_px, gsd_m;
+  for (size_t i = 0; i < a->photos.size(); ++i) {
+    const PhotoRecord& r = set.photos[i];
+    const PhotoResult& p = a->photos[i];
+    if (!r.ok() || !p.AnyFlagged()) {
+      a->excluded += !r.ok();
+      continue;
+    }
+    ++a->excluded;
+    if (!r.altitude_m || !r.focal_px) continue;
+    const double gsd = *r.altitude_m / *r.focal_px;
+    gsd_m.push_back(gsd);
+    d_px.push_back((p.d_rotation_m.value_or(0.0) + p.d_translation_m.value_or(0.0)) / gsd);
+  }
+  if (2 * a->excluded <= a->photos.size() || a->limits_m.empty()) return "";
+  std::string text = "; exclude.txt drops " + std::to_string(a->excluded) + " of " +
+                     std::to_string(a->photos.size()) + " photos";
+  if (!d_px.empty()) {
+    const double gsd = Median(gsd_m);
+    text += ": their shifts are " +
+            FormatNumber("%.2g", *std::min_element(d_px.begin(), d_px.end())) + "-" +
+            FormatNumber("%.2g", *std::max_element(d_px.begin(), d_px.end())) + " px at " +
+            FormatNumber("%.2g", gsd * 100.0) + " cm/px, where " + LengthText(a->limits_m[0]) +
+            " is " + FormatNumber("%.2g", a->limits_m[0] / gsd) + " px";
+  }
+  return text +
+         "; a larger --limit keeps more, and a photogrammetry tool's own rolling-shutter "
+         "option (ODM --rolling-shutter) removes the translation part";
+}
+
 void Summarise(const PhotoSet& set, PhotoAnalysis* a) {
   a->flagged_count.assign(a->limits_m.size(), 0);
   size_t predicted_count = 0;
@@ -116,6 +150,7 @@ void Summarise(const PhotoSet& set, PhotoAnalysis* a) {
     line += "; readout from OpenDroneMap's table for " + std::to_string(a->readout_from_table) +
             " photo(s): give --readout if you know yours";
   }
+  line += ExcludedMostText(set, a);
   a->verdict = line;
 }
 
@@ -217,9 +252,13 @@ PhotoAnalysis AnalyzePhotosWithLog(const PhotoSet& set, const PhotoAnalysisOptio
       p.d_rotation_px = it->second->d_full_px;
       // The same image angle covers ground in proportion to the height: a folder flown at 41 m
       // and 118 m is not one altitude.
+      // A log's own height above ground stands (a photo's is above take-off).
       const std::optional<double>& altitude_m = set.photos[i].altitude_m;
-      if (options.rotation_at_each_photo_altitude && altitude_m && log_result.altitude_m > 0) {
-        *p.d_rotation_m *= *altitude_m / log_result.altitude_m;
+      if (options.rotation_at_each_photo_altitude && altitude_m && log_result.altitude_m > 0 &&
+          log_result.altitude_source != "log") {
+        const double scale = *altitude_m / log_result.altitude_m;
+        *p.d_rotation_m *= scale;
+        *p.d_paper_m *= scale;
       }
       p.d_paper_m = it->second->d_paper_m;
     } else if (p.placement.t_ns) {

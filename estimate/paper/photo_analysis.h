@@ -91,6 +91,7 @@ struct PhotoAnalysis {
   // Counts: photos read, with a translation D, flagged per limit, readouts from the table.
   size_t read = 0, predicted = 0, readout_from_table = 0;
   std::vector<size_t> flagged_count;
+  size_t excluded = 0;  // what exclude.txt lists: unreadable or flagged at any limit
   std::string verdict;  // one line for a person
 };
 

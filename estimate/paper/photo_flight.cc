@@ -87,7 +87,10 @@ PhotoFlightResult PhotoFlight(const PhotoSet& set, const FlightLog& log,
     for (const PhotoRecord& r : set.photos) {
       if (r.ok() && r.altitude_m) heights.push_back(*r.altitude_m);
     }
-    if (!heights.empty()) a.rig.altitude_m = Median(std::move(heights));
+    if (!heights.empty()) {
+      a.rig.altitude_m = Median(std::move(heights));
+      a.altitude_is_default = false;
+    }
   }
   a.triggers.clear();
   for (size_t i = 0; i < set.photos.size(); ++i) {

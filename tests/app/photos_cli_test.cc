@@ -174,6 +174,8 @@ TEST(PhotosCli, PlacesPhotosOnASyntheticLogAndReportsTheResidual) {
     EXPECT_NEAR(p["D_translation_m"].get<double>(), 5.0 * 0.016, 1e-12);  // table: 16 ms
   }
   EXPECT_NEAR(photos["placement"]["residual_rms_s"].get<double>(), std::sqrt(sum_sq / 5), 1e-9);
+  // The altitude is the photos' own (the log has none), the camera theirs: nothing assumed.
+  EXPECT_TRUE(j["assumptions"].empty()) << j["assumptions"].dump();
   EXPECT_NE(j["triggers"].get<std::string>().find("by capture time"), std::string::npos)
       << j["triggers"];
   // The page shows the camera analysed, the photos' own, and says the readout is the table's.

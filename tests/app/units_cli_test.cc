@@ -56,32 +56,35 @@ TEST_P(BareNumberCli, IsRefusedWithTheUnitItProbablyMeant) {
 INSTANTIATE_TEST_SUITE_P(
     EveryCommand, BareNumberCli,
     ::testing::Values(
-        BareCase{"demo --out OUT", "--every 4", "--every '4': a duration needs a unit: did you "
-                                                "mean 4s? (s, ms, us, ns, min, h)"},
+        BareCase{"demo --out OUT", "--every 4",
+                 "--every '4': a duration needs a unit: did you "
+                 "mean 4s? (s, ms, us, ns, min, h)"},
         BareCase{"synth still --out OUT", "--rate 400", "did you mean 400Hz?"},
         BareCase{"synth flight --out OUT", "--wobble 2", "did you mean 2deg/s?"},
-        BareCase{"synth still --out OUT", "--noise-density 7e-5",
-                 "did you mean 7e-5rad/s/rtHz?"},
+        BareCase{"synth still --out OUT", "--noise-density 7e-5", "did you mean 7e-5rad/s/rtHz?"},
         BareCase{"record --device emulate:FILE --out OUT", "--rate 8000", "did you mean 8000Hz?"},
         BareCase{"record --device emulate:FILE,rate=8000 --out OUT", "",
                  "rate= '8000': a frequency needs a unit: did you mean 8000Hz?"},
         BareCase{"noise FILE", "--range 2000", "did you mean 2000deg/s?"},
         BareCase{"accuracy FILE --reference-deg 1", "--guard 0.5", "did you mean 0.5s?"},
         BareCase{"flight FILE", "--altitude 50", "did you mean 50m?"},
-        BareCase{"flight FILE", "--window 10,20", "did you mean 10ms?"},
-        BareCase{"scene --out OUT/s.png", "--gsd 5", "did you mean 5cm?"},
+        BareCase{"flight FILE", "--window 10,20", "did you mean 10ms or 10s?"},
+        BareCase{"scene --out OUT/s.png", "--gsd 5", "did you mean 5cm or 5m?"},
         BareCase{"render --scene FILE --camera FILE --gyro FILE --frames FILE --out OUT",
                  "--moving-patch 10", "did you mean 10m/s?"},
-        BareCase{"validate DIR", "--limit 5", "--limit '5': a length needs a unit: did you mean "
-                                              "5cm? (m, cm, mm, km)"},
+        BareCase{"validate DIR", "--limit 5",
+                 "--limit '5': a length needs a unit: did you mean "
+                 "5cm or 5m? (m, cm, mm, km)"},
         BareCase{"correct DIR --out OUT", "--depth 40", "did you mean 40m?"},
-        BareCase{"analyze FILE", "--limit 5", "did you mean 5cm?"},
-        BareCase{"analyze FILE", "--readout 30", "--readout '30': a duration needs a unit: did "
-                                                 "you mean 30ms?"},
-        BareCase{"analyze FILE", "--latency 40", "did you mean 40ms?"},
+        BareCase{"analyze FILE", "--limit 5", "did you mean 5cm or 5m?"},
+        BareCase{"analyze FILE", "--readout 30",
+                 "--readout '30': a duration needs a unit: did "
+                 "you mean 30ms or 30s?"},
+        BareCase{"analyze FILE", "--latency 40", "did you mean 40ms or 40s?"},
         BareCase{"analyze FILE", "--limit 5in", "unknown unit 'in' for a length"},
-        BareCase{"analyze FILE", "--readout 30m", "m is a unit of length, --readout takes a "
-                                                  "duration"}),
+        BareCase{"analyze FILE", "--readout 30m",
+                 "m is a unit of length, --readout takes a "
+                 "duration"}),
     [](const ::testing::TestParamInfo<BareCase>& info) {
       std::string name = info.param.command.substr(0, info.param.command.find(' ')) + "_" +
                          std::to_string(info.index);
@@ -92,7 +95,8 @@ TEST(UnitsCli, QuantitiesWithUnitsAreAccepted) {
   test::TempDir dir;
   const std::string gyro = dir / "gyro.csv";
   test::WriteStillThenTurningGyroCsv(gyro);
-  const auto cm = RunShutterlab("flight " + gyro + " --altitude 5000cm --limit 50mm,0.1m "
+  const auto cm = RunShutterlab("flight " + gyro +
+                                " --altitude 5000cm --limit 50mm,0.1m "
                                 "--window 10000us,0.02s --bias 0:5000ms --json");
   ASSERT_EQ(cm.exit_code, 0) << cm.output;
   const auto m = RunShutterlab("flight " + gyro + " --json");
@@ -102,11 +106,11 @@ TEST(UnitsCli, QuantitiesWithUnitsAreAccepted) {
 
 TEST(UnitsCli, AMistypedCommandGetsTheClosestOneAndTheList) {
   const auto r = RunShutterlab("anlyze log.ulg");
-  ExpectOneLineRefusal(r, "error: unknown command 'anlyze': did you mean 'analyze'? (commands: ",
-                       "anlyze");
+  ExpectOneLineRefusal(
+      r, "error: unknown command 'anlyze': did you mean 'analyze'? (commands: ", "anlyze");
   EXPECT_NE(r.err.find("flight"), std::string::npos) << r.err;
-  ExpectOneLineRefusal(RunShutterlab("zzzzzzzzzz"), "unknown command 'zzzzzzzzzz' (commands: ",
-                       "zzzzzzzzzz");
+  ExpectOneLineRefusal(RunShutterlab("zzzzzzzzzz"),
+                       "unknown command 'zzzzzzzzzz' (commands: ", "zzzzzzzzzz");
 }
 
 TEST(UnitsCli, ParserErrorsAreOneLineNamingTheHelp) {

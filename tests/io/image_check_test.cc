@@ -40,8 +40,8 @@ std::string NoisyPhoto() {
 // Where the entropy-coded scan starts (after the SOS segment) and ends (before EOI).
 std::pair<size_t, size_t> ScanOf(const std::string& jpeg) {
   const size_t sos = jpeg.find("\xff\xda");
-  const size_t length = static_cast<unsigned char>(jpeg[sos + 2]) << 8 |
-                        static_cast<unsigned char>(jpeg[sos + 3]);
+  const size_t length =
+      static_cast<unsigned char>(jpeg[sos + 2]) << 8 | static_cast<unsigned char>(jpeg[sos + 3]);
   return {sos + 2 + length, jpeg.size() - 2};
 }
 

@@ -8,7 +8,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -190,6 +192,59 @@ TEST(PhotoSet, ReadsPhotoFilesByNameAndReportsBadOnes) {
   WriteFileAtomically(empty / "notes.txt", "x");
   EXPECT_THROW(ReadPhotoSet(empty.path().string()), IoError);
   EXPECT_THROW(ReadPhotoSet(empty / "missing"), IoError);
+}
+
+// A card's DCIM folder: the photos sit in 100MEDIA and 101MEDIA. Not read without `recursive`
+// (and said so, counted), read with it and named by their path under the folder.
+TEST(PhotoSet, SubfoldersAreCountedAndReadWhenAsked) {
+  test::TempDir dir;
+  std::filesystem::create_directories(dir / "DCIM/100MEDIA");
+  std::filesystem::create_directories(dir / "DCIM/101MEDIA");
+  WriteFileAtomically(dir / "DCIM/100MEDIA/DJI_0001.JPG", JpegWithMetadata(FixturePhoto{}));
+  WriteFileAtomically(dir / "DCIM/101MEDIA/DJI_0002.JPG", JpegWithMetadata(FixturePhoto{}));
+  try {
+    ReadPhotoSet(dir / "DCIM");
+    ADD_FAILURE() << "a folder with photos in its subfolders only";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("no photo files here, but its subfolders hold 2 (a "
+                                         "card's DCIM/100MEDIA?): give --recursive"),
+              std::string::npos)
+        << e.what();
+  }
+  PhotoSetOptions recursive;
+  recursive.recursive = true;
+  const PhotoSet all = ReadPhotoSet(dir / "DCIM", recursive);
+  ASSERT_EQ(all.photos.size(), 2u);
+  EXPECT_EQ(all.photos[0].name, "100MEDIA/DJI_0001.JPG");
+  EXPECT_EQ(all.photos[1].name, "101MEDIA/DJI_0002.JPG");
+  EXPECT_EQ(all.photos[1].number.value_or(-1), 2);
+  EXPECT_TRUE(all.photos[0].ok()) << all.photos[0].error;
+  EXPECT_EQ(all.in_subfolders, 0u);
+
+  WriteFileAtomically(dir / "DCIM/DJI_0003.JPG", JpegWithMetadata(FixturePhoto{}));
+  const PhotoSet top = ReadPhotoSet(dir / "DCIM");
+  ASSERT_EQ(top.photos.size(), 1u);
+  EXPECT_EQ(top.photos[0].name, "DJI_0003.JPG");
+  EXPECT_EQ(top.in_subfolders, 2u);
+}
+
+// --speed: for photos that do not record their speed, and over those that do (the direction kept).
+TEST(PhotoRecord, AGivenSpeedWinsAndKeepsTheRecordedDirection) {
+  PhotoSetOptions options;
+  options.speed_m_s = 8.0;
+  const PhotoRecord r = MakePhotoRecord("/x/DJI_0123.JPG", DjiMetadata(), options);
+  EXPECT_DOUBLE_EQ(*r.ground_speed_m_s, 8.0);
+  EXPECT_EQ(r.speed_source, "--speed");
+  EXPECT_NEAR(*r.course_deg, 360.0 - std::atan2(4.0, 3.0) * 180.0 / M_PI, 1e-9);
+  PhotoMetadata bare;
+  bare.width = 2560;
+  bare.height = 1440;
+  const PhotoRecord given = MakePhotoRecord("/x/b.jpg", bare, options);
+  EXPECT_DOUBLE_EQ(*given.ground_speed_m_s, 8.0);
+  EXPECT_FALSE(given.course_deg);
+  EXPECT_EQ(std::count(given.missing.begin(), given.missing.end(), "flight speed"), 0);
+  options.speed_m_s = -1.0;
+  EXPECT_THROW(options.Check(), std::invalid_argument);
 }
 
 TEST(PhotoSetReal, DjiMini4ProFolder) {

@@ -161,7 +161,7 @@ TEST(EffectIo, InjectionTextNamesTheProblem) {
       {"time_offset=soon", "--inject time_offset 'soon': expected a duration"},
       {"time_offset=0.004",
        "--inject time_offset '0.004': a duration needs a unit: did you mean "
-       "0.004ms?"},
+       "0.004ms or 0.004s?"},
       {"gyro_bias=0.5,0,0", "did you mean 0.5deg/s?"},
       {"clock_rate=30", "did you mean 30ppm?"},
       {"velocity=4km,0,0", "km is a unit of length, --inject velocity takes a speed"},

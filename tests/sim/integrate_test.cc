@@ -100,6 +100,12 @@ TEST(EstimateBias, SegmentIsHalfOpen) {
 TEST(EstimateBias, RejectsSegmentWithTooFewSamples) {
   const GyroTrace trace = ConstantRate(Eigen::Vector3d::Zero(), 100.0, 1.0);
   EXPECT_THROW(EstimateBias(trace, {2.0, 5.0}), std::invalid_argument);
+  // Seconds as the contract has it, or any duration; a bare side is seconds.
+  EXPECT_DOUBLE_EQ(ParseBiasSegment("500ms:3s").begin_s, 0.5);
+  EXPECT_DOUBLE_EQ(ParseBiasSegment("1:1500ms").begin_s, 1.0);
+  EXPECT_DOUBLE_EQ(ParseBiasSegment("1:1500ms").end_s, 1.5);
+  EXPECT_DOUBLE_EQ(ParseBiasSegment("0:5").end_s, 5.0);
+  EXPECT_THROW(ParseBiasSegment("0:5m"), std::invalid_argument);  // a length
   EXPECT_THROW(ParseBiasSegment("5"), std::invalid_argument);
   EXPECT_THROW(ParseBiasSegment("3:1"), std::invalid_argument);
   const BiasSegment s = ParseBiasSegment("0.5:4");

@@ -80,9 +80,10 @@ TEST(Units, ZeroNeedsNoUnit) {
 
 TEST(Units, ABareNumberIsRefusedWithWhatItProbablyMeant) {
   EXPECT_EQ(ErrorOf([] { ParseQuantity("5", "m", "--limit", "cm"); }),
-            "--limit '5': a length needs a unit: did you mean 5cm? (m, cm, mm, km)");
-  EXPECT_EQ(ErrorOf([] { ParseQuantity("30", "s", "--readout", "ms"); }),
-            "--readout '30': a duration needs a unit: did you mean 30ms? (s, ms, us, ns, min, h)");
+            "--limit '5': a length needs a unit: did you mean 5cm or 5m? (m, cm, mm, km)");
+  EXPECT_EQ(
+      ErrorOf([] { ParseQuantity("30", "s", "--readout", "ms"); }),
+      "--readout '30': a duration needs a unit: did you mean 30ms or 30s? (s, ms, us, ns, min, h)");
   EXPECT_EQ(ErrorOf([] { ParseQuantity("400", "Hz", "--rate", "Hz"); }),
             "--rate '400': a frequency needs a unit: did you mean 400Hz? (Hz, kHz)");
 }

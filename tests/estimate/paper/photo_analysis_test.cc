@@ -135,6 +135,27 @@ TEST(AnalyzePhotos, WithALogFlagsOnRotationPlusTranslation) {
   EXPECT_EQ(a.placed, 1u);
 }
 
+// Three photos at 10 m/s and a 20 ms readout: all shifted 20 cm, all over 5 cm. When exclude.txt
+// would drop more than half of them, the verdict says how large the shifts are in pixels at their
+// ground sampling and what else would do.
+TEST(AnalyzePhotos, AnExclusionOfMostPhotosSaysWhyInPixels) {
+  const PhotoSet set = Set({Photo("a.jpg", 10.0, 0.0, 0.0), Photo("b.jpg", 10.0, 0.0, 0.0),
+                            Photo("c.jpg", 1.0, 0.0, 0.0)});
+  const PhotoAnalysis a = AnalyzePhotos(set, {});
+  EXPECT_EQ(a.excluded, 2u);
+  // 100 m / 2000 px = 5 cm/px: 20 cm is 4 px, 5 cm is 1 px.
+  EXPECT_NE(a.verdict.find("; exclude.txt drops 2 of 3 photos: their shifts are 4-4 px at 5 cm/px, "
+                           "where 5 cm is 1 px; a larger --limit keeps more, and a "
+                           "photogrammetry tool's own rolling-shutter option (ODM "
+                           "--rolling-shutter) removes the translation part"),
+            std::string::npos)
+      << a.verdict;
+  const PhotoAnalysis few =
+      AnalyzePhotos(Set({Photo("a.jpg", 10.0, 0.0, 0.0), Photo("b.jpg", 1.0, 0.0, 0.0)}), {});
+  EXPECT_EQ(few.excluded, 1u);
+  EXPECT_EQ(few.verdict.find("exclude.txt drops"), std::string::npos) << few.verdict;
+}
+
 // The log's analysis used one altitude (50 m) for every photo; the ground shift of the same image
 // rotation is at each photo's own height (100 m and 41 m here), unless the user's altitude wins.
 TEST(AnalyzePhotos, TheRotationPartIsAtEachPhotosOwnAltitude) {
@@ -163,6 +184,10 @@ TEST(AnalyzePhotos, TheRotationPartIsAtEachPhotosOwnAltitude) {
   const PhotoAnalysis one = AnalyzePhotosWithLog(set, {}, placements, log);
   EXPECT_DOUBLE_EQ(*one.photos[0].d_rotation_m, 0.05);
   EXPECT_DOUBLE_EQ(*one.photos[1].d_rotation_m, 0.05);
+  // A log's own height above ground stands: the photos' heights are above take-off.
+  log.altitude_source = "log";
+  const PhotoAnalysis from_log = AnalyzePhotosWithLog(set, each, placements, log);
+  EXPECT_DOUBLE_EQ(*from_log.photos[1].d_rotation_m, 0.05);
 }
 
 TEST(WritePhotoOutputs, ExcludesFlaggedAndUnreadableAndListsTheRest) {
