@@ -9,10 +9,11 @@ namespace shutterlab {
 
 // Decodes the whole of the image data and returns the decoder's first complaint, "" when it
 // decodes cleanly. A JPEG is decoded by libjpeg at 1/8 size (its DCT scaling: every coded bit is
-// read, little is transformed, about a tenth of a full decode), and a warning that the coded data
-// is cut or damaged counts ("Premature end of JPEG file", "Corrupt JPEG data: bad Huffman code");
-// one libjpeg cannot decode at all, and another format, is decoded whole through OpenImageIO.
-// Never throws: a file that cannot be opened is a complaint, a decoder that cannot run is none.
+// read, little is transformed; 6 and 18 ms for the shared data's 2560 x 1440 SIYI and 2400 x 1800
+// DJI photos, 0.37 and 0.59 of OpenImageIO's full decode), and a warning that the coded data is cut
+// or damaged counts ("Premature end of JPEG file", "Corrupt JPEG data: bad Huffman code"); one
+// libjpeg cannot decode at all, and another format, is decoded whole through OpenImageIO. Never
+// throws: a file that cannot be opened is a complaint, a decoder that cannot run is none.
 std::string ImageDataProblem(const std::string& path);
 
 }  // namespace shutterlab
