@@ -37,9 +37,14 @@
 #include "sim/synth/synth.h"
 #include "sim/text_file.h"
 
+#include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace shutterlab::app {
 namespace {
@@ -51,6 +56,43 @@ struct DemoOptions {
 };
 
 void Section(const std::string& title) { std::cout << "\n== " << title << " ==\n"; }
+
+std::string SizeText(uintmax_t bytes) {
+  return bytes < 1000000 ? FormatNumber("%.1f kB", bytes / 1e3)
+                         : FormatNumber("%.1f MB", bytes / 1e6);
+}
+
+// Where the demo wrote what, and how much: each folder of `out` with its size and file count.
+void PrintWritten(const std::filesystem::path& out) {
+  namespace fs = std::filesystem;
+  std::vector<std::pair<std::string, std::pair<uintmax_t, size_t>>> folders;
+  uintmax_t total_bytes = 0;
+  size_t total_files = 0;
+  for (const fs::directory_entry& top : fs::directory_iterator(out)) {
+    uintmax_t bytes = 0;
+    size_t files = 0;
+    const auto add = [&](const fs::directory_entry& entry) {
+      if (!entry.is_regular_file()) return;
+      bytes += entry.file_size();
+      ++files;
+    };
+    add(top);
+    if (top.is_directory()) {
+      for (const fs::directory_entry& entry : fs::recursive_directory_iterator(top)) add(entry);
+    }
+    folders.push_back(
+        {top.path().filename().string() + (top.is_directory() ? "/" : ""), {bytes, files}});
+    total_bytes += bytes;
+    total_files += files;
+  }
+  std::sort(folders.begin(), folders.end());
+  Section("Written to " + out.string() + ": " + SizeText(total_bytes) + " in " +
+          std::to_string(total_files) + " files");
+  for (const auto& [name, size] : folders) {
+    std::printf("%-24s %10s %6zu files\n", name.c_str(), SizeText(size.first).c_str(), size.second);
+  }
+  std::fflush(stdout);
+}
 
 struct DemoContext {
   DemoOptions options;
@@ -213,6 +255,7 @@ void RunDemo(const DemoOptions& options) {
     Section(std::to_string(number++) + ". " + step.title);
     step.run(context);
   }
+  PrintWritten(context.out);
 }
 
 const CommandRegistration kDemoRegistration(5, [](CLI::App& app) {

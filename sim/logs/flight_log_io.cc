@@ -398,13 +398,16 @@ FlightLogStream OpenFlightLog(TextBlocks input, const std::string& path,
     if (progress) progress(1.0);
     return stream;
   }
+  // A format told by its magic bytes is what it says; one read from text content may be a file
+  // of another kind, so its errors say what detection concluded.
+  const bool detected_from_text = options.format == LogFormat::kAuto && !DetectedByBytes(reader);
   try {
     FlightLogStream stream = reader.open(std::move(input), path, options, {});
-    if (options.format == LogFormat::kAuto)
+    if (detected_from_text)
       stream.gyro = std::make_unique<DetectedSource>(std::move(stream.gyro), format);
     return stream;
   } catch (const IoError& e) {
-    if (options.format != LogFormat::kAuto) throw;
+    if (!detected_from_text) throw;
     throw IoError(std::string(e.what()) + DetectedAs(format));
   }
 }

@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -28,6 +30,20 @@ TEST(DemoCli, RunsEveryStepAndFindsTheHiddenOffset) {
         "render/frames.csv", "validate/report.json", "validate/plots/validate.html"}) {
     EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(out) / file)) << file;
   }
+  // It says where it wrote what and how much: the total it prints is what is on disk.
+  uintmax_t bytes = 0;
+  size_t files = 0;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(out)) {
+    if (!entry.is_regular_file()) continue;
+    bytes += entry.file_size();
+    ++files;
+  }
+  char total[64];
+  std::snprintf(total, sizeof total, ": %.1f MB in %zu files ==", bytes / 1e6, files);
+  EXPECT_NE(result.out.find("== Written to " + out + total), std::string::npos)
+      << total << "\n"
+      << result.out.substr(result.out.rfind("=="));
+  EXPECT_NE(result.out.find("\ninputs/ "), std::string::npos);
   std::ifstream report_file(std::filesystem::path(out) / "validate/report.json");
   const nlohmann::json report = nlohmann::json::parse(report_file);
   ASSERT_EQ(report["effects"].size(), 1u) << report.dump(2);

@@ -67,6 +67,12 @@ TEST(Units, QuantitiesConvertToTheUnitAsked) {
   EXPECT_DOUBLE_EQ(ParseQuantity("3600arcsec", "deg", "--x", "deg"), 1.0);
   EXPECT_DOUBLE_EQ(ParseQuantity("180deg", "rad", "--x", "deg"), kPi);
   EXPECT_DOUBLE_EQ(ParseQuantity("300ppm", "ppm", "--x", "ppm"), 300.0);
+  // A whole number of a decimal prefix divides: the same double as the literal in SI, so a
+  // script's `time_offset=4ms` injects what `time_offset=0.004` did.
+  EXPECT_EQ(duration_s("4ms"), 0.004);
+  EXPECT_EQ(duration_s("36ms"), 0.036);
+  EXPECT_EQ(duration_s("23.5ms"), 0.0235);
+  EXPECT_EQ(length_m("5cm"), 0.05);
   // The unit asked converts exactly: a gyro's full scale stays a whole number of deg/s.
   EXPECT_EQ(ParseQuantity("2000deg/s", "deg/s", "--x", "deg/s"), 2000.0);
   EXPECT_EQ(ParseQuantity("2000dps", "deg/s", "--x", "deg/s"), 2000.0);

@@ -475,6 +475,32 @@ TEST(ReadFlightLog, HonoursTheLogIndex) {
             ReadFlightLog(bbl, second).gyro.samples().size());
 }
 
+// A format told by its magic bytes is what it says: a cut GoPro MP4's error is the reader's alone.
+// A text detected from its content may be another kind of file, and its error says how it was
+// read and that --format chooses.
+TEST(ReadFlightLog, OnlyATextLogsErrorSaysWhatDetectionConcluded) {
+  SHUTTERLAB_NEED_REAL_DATA();
+  test::TempDir dir;
+  const std::string mp4 = ReadFileToString(test::RealDataPath("rs/gopro_karma/karma.mp4"));
+  WriteFileAtomically(dir / "cut.mp4", mp4.substr(0, mp4.size() * 6 / 10));
+  try {
+    ReadFlightLog(dir / "cut.mp4");
+    FAIL() << "a GoPro MP4 cut before its sample tables";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("runs past the end of the file"), std::string::npos);
+    EXPECT_EQ(std::string(e.what()).find("read as"), std::string::npos) << e.what();
+  }
+  WriteFileAtomically(dir / "gyro.csv", "t,gx,gy,gz\n0,1,2,3\n1,1,2\n");
+  try {
+    ReadFlightLog(dir / "gyro.csv");
+    FAIL() << "a row of three fields";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("(read as gyro.csv: not ULog, DataFlash"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(ReadFlightLog, UnknownFileIsAClearIoError) {
   test::TempDir dir;
   std::ofstream(dir / "photo.jpg", std::ios::binary)
