@@ -10,17 +10,7 @@ packages=(cmake g++ make pkg-config libeigen3-dev libopencv-dev libopenimageio-d
           openimageio-tools libjpeg-dev libexiv2-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev
           libbenchmark-dev clang-format libgpiod-dev universal-ctags
           clang libclang-rt-14-dev)  # clang + its libFuzzer: scripts/fuzz.sh
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  sudo=""
-  [ "$(id -u)" -ne 0 ] && sudo="sudo"
-  echo "setup: installing ${missing[*]}"
-  $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
-fi
+scripts/install_packages.sh setup "${packages[@]}"
 
 build_dir="${SHUTTERLAB_BUILD_DIR:-build}"
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
