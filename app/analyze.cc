@@ -11,6 +11,7 @@
 #include "estimate/report/analysis_json.h"
 #include "estimate/report/analyze_report.h"
 #include "estimate/report/photo_json.h"
+#include "estimate/report/photo_report.h"
 #include "io/photo_set.h"
 #include "sim/check.h"
 
@@ -50,7 +51,14 @@ void RunPhotos(const AnalyzeFlags& flags) {
   }
   if (!log) {
     const PhotoAnalysis analysis = AnalyzePhotos(set, options.photos);
-    if (!flags.out_dir.empty()) WritePhotoOutputs(flags.out_dir, set, analysis);
+    if (!flags.out_dir.empty()) {
+      WritePhotoOutputs(flags.out_dir, set, analysis);
+      PhotoReportPage(set, analysis).Write(flags.out_dir + "/report.html");
+      // Said on stderr: stdout may be the --json document.
+      std::cerr << "wrote " << flags.out_dir
+                << "/: report.html, photos.csv, exclude.txt, image_list.txt, "
+                   "colmap_image_list.txt\n";
+    }
     if (flags.json) {
       std::cout << JsonText(PhotoAnalysisToJson(set, analysis)) << "\n";
     } else {

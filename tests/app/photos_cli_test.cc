@@ -93,6 +93,20 @@ TEST(PhotosCli, BadPhotosAreReportedAndAFolderWithoutPhotosIsAnError) {
   EXPECT_EQ(ReadFileToString(dir / "out/exclude.txt"), "DJI_0001.JPG\nDJI_0002.JPG\nDJI_0003.JPG\n")
       << "5 m/s x 20 ms = 10 cm is over 5 cm; the unreadable and the cut photo are excluded too";
   EXPECT_EQ(ReadFileToString(dir / "out/colmap_image_list.txt"), "DJI_0004.JPG\n");
+  // The page for a person, announced: the verdict, each D beside the ground a pixel covers, the
+  // excluded photos with their reasons, and what the photogrammetry tool's option removes.
+  EXPECT_NE(r.err.find("wrote " + (dir / "out") + "/: report.html, photos.csv, exclude.txt"),
+            std::string::npos)
+      << r.err;
+  const std::string page = ReadFileToString(dir / "out/report.html");
+  for (const std::string text :
+       {std::string("2 of 4 photos predicted"), std::string("ground cm/px"),
+        std::string("excluded: " + (dir / "photos/DJI_0003.JPG") +
+                    ": its image data does not decode"),
+        std::string("What your photogrammetry tool already removes"),
+        std::string("--rolling-shutter-readout")}) {
+    EXPECT_NE(page.find(text), std::string::npos) << text;
+  }
   EXPECT_NE(r.out.find("DJI_0003.JPG: its image data does not decode (Premature end of JPEG "
                        "file): a cut or damaged file; copy it from the card again"),
             std::string::npos)
