@@ -132,6 +132,7 @@ AnalyzeOptions AnalyzeOptionsFromFlags(const AnalyzeFlags& flags,
     options.every_s = flags.every_s;
   }
   options.trigger_latency_s = flags.latency_s;
+  options.estimate_bias = !flags.zero_bias;
   // The report's charts, shading, histograms and pictures, and its Allan deviation.
   if (!flags.out_dir.empty()) options.plots = AnalyzePlotOptions{};
   options.allan = !flags.out_dir.empty();
@@ -263,6 +264,10 @@ std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
       ->add_option("--scene", flags->scene_path,
                    "nadir image for the report's worst-image pictures (with --out)")
       ->check(CLI::ExistingFile);
+  command->add_flag(
+      "--zero-bias", flags->zero_bias,
+      "take the logged rates as bias-free, as flight --zero-bias does (flight-controller logs, "
+      "calibrated at arming); default: the bias of the log's longest still stretch");
   command->add_flag("--json", flags->json, "print JSON (docs/FORMATS.md `analyze`)");
   return [flags, altitude, readout, focal, size] {
     flags->altitude_given = altitude->count() > 0;

@@ -45,6 +45,7 @@ struct AnalyzeFlags {
   std::string photo_utc_offset;
   double speed_m_s = std::numeric_limits<double>::quiet_NaN();  // NaN: the photos' own
   bool recursive = false;
+  bool zero_bias = false;
   bool json = false;
   bool altitude_given = false;
   bool readout_given = false;

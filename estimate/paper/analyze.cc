@@ -456,8 +456,10 @@ void NoteAssumptions(const AnalyzeOptions& options, AnalyzeResult* result) {
                                    "the log has no height above ground", "--altitude"});
   }
   if (result->bias_estimated && !result->bias_from_still) {
-    result->assumptions.push_back({"bias", "zero", "the log has no still stretch to measure it on",
-                                   "a log that starts with the camera still for a few seconds"});
+    result->assumptions.push_back(
+        {"bias", "zero", "the log has no still stretch to measure it on",
+         "a log that starts with the camera still for a few seconds, or --zero-bias for rates "
+         "calibrated at arming"});
   }
 }
 

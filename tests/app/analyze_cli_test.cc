@@ -338,6 +338,12 @@ TEST(AnalyzeCli, SaysWhatItAssumedAndHowToGiveIt) {
   ASSERT_FALSE(assumed.empty());
   EXPECT_EQ(assumed.back()["what"], "bias") << assumed.dump();
   EXPECT_EQ(assumed.back()["taken"], "zero");
+  // --zero-bias, as flight has it: given, so not assumed.
+  const auto zero = RunShutterlab("analyze " + moving + " --every 2s --zero-bias --json");
+  ASSERT_EQ(zero.exit_code, 0) << zero.output;
+  const nlohmann::json zero_json = nlohmann::json::parse(zero.out);
+  EXPECT_FALSE(zero_json["bias"]["estimated"].get<bool>());
+  for (const auto& a : zero_json["assumptions"]) EXPECT_NE(a["what"], "bias") << a.dump();
 }
 
 }  // namespace
