@@ -1,9 +1,9 @@
 #include "sim/bias.h"
 
 #include "sim/check.h"
+#include "sim/text_file.h"
 #include "sim/units.h"
 
-#include <cctype>
 #include <cmath>
 #include <string>
 
@@ -54,16 +54,10 @@ BiasSegment ParseBiasSegment(const std::string& text) {
       << "first sample, e.g. 0:5s";
   // The shared contract (FORMATS.md) defines A:B in seconds: a bare side is seconds; a unit may be
   // given ("500ms:3s").
-  std::string begin = text.substr(0, colon);
-  std::string end = text.substr(colon + 1);
-  const auto unit_of = [](const std::string& side) {
-    size_t split = side.size();
-    while (split > 0 && std::isalpha(static_cast<unsigned char>(side[split - 1]))) --split;
-    return side.substr(split);
+  const auto seconds = [](const std::string& side) {
+    return ParseQuantity(ParseDouble(side) ? side + "s" : side, "s", "--bias", "s");
   };
-  if (unit_of(begin).empty()) begin += "s";
-  if (unit_of(end).empty()) end += "s";
-  BiasSegment s{ParseQuantity(begin, "s", "--bias", "s"), ParseQuantity(end, "s", "--bias", "s")};
+  BiasSegment s{seconds(text.substr(0, colon)), seconds(text.substr(colon + 1))};
   SHUTTERLAB_CHECK(s.begin_s >= 0 && s.end_s > s.begin_s)
       << "--bias '" << text << "' must satisfy 0 <= A < B";
   return s;
