@@ -21,9 +21,17 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace shutterlab::app {
 namespace {
+
+// The paths of files named in a folder, for SayWritten.
+std::vector<std::string> InDir(const std::string& dir, const std::vector<std::string>& names) {
+  std::vector<std::string> paths;
+  for (const std::string& name : names) paths.push_back(dir + "/" + name);
+  return paths;
+}
 
 // --photos DIR [LOG]: the photos alone (translation from their speed), or placed on the log.
 void RunPhotos(const AnalyzeFlags& flags) {
@@ -54,10 +62,8 @@ void RunPhotos(const AnalyzeFlags& flags) {
     if (!flags.out_dir.empty()) {
       WritePhotoOutputs(flags.out_dir, set, analysis);
       PhotoReportPage(set, analysis).Write(flags.out_dir + "/report.html");
-      // Said on stderr: stdout may be the --json document.
-      std::cerr << "wrote " << flags.out_dir
-                << "/: report.html, photos.csv, exclude.txt, image_list.txt, "
-                   "colmap_image_list.txt\n";
+      SayWritten(flags.out_dir, InDir(flags.out_dir, {"report.html", "photos.csv", "exclude.txt",
+                                                      "image_list.txt", "colmap_image_list.txt"}));
     }
     if (flags.json) {
       std::cout << JsonText(PhotoAnalysisToJson(set, analysis)) << "\n";
@@ -79,6 +85,9 @@ void RunPhotos(const AnalyzeFlags& flags) {
     report.camera_source = result.camera_source;
     AnalyzeReportPage(result.analyzed, result.log, report).Write(flags.out_dir + "/report.html");
     WritePhotoOutputs(flags.out_dir, set, result.photos);  // its exclude.txt replaces analyze's
+    SayWritten(flags.out_dir,
+               InDir(flags.out_dir, {"report.html", "images.csv", "photos.csv", "exclude.txt",
+                                     "image_list.txt", "colmap_image_list.txt"}));
   }
   if (flags.json) {
     nlohmann::json json = AnalyzeToJson(result.log);
@@ -111,6 +120,7 @@ void Run(const AnalyzeFlags& flags) {
   if (!flags.out_dir.empty()) {
     WriteAnalyzeOutputs(flags.out_dir, result);
     AnalyzeReportPage(options, result, report).Write(flags.out_dir + "/report.html");
+    SayWritten(flags.out_dir, InDir(flags.out_dir, {"report.html", "images.csv", "exclude.txt"}));
   }
   if (flags.json) {
     auto json = AnalyzeToJson(result);

@@ -60,6 +60,10 @@ CLI::Option* AddQuantityListOption(CLI::App* command, const std::string& name,
                                    std::vector<double>* values, const char* unit,
                                    const char* bare_means, const std::string& help);
 
+// Says on stderr (stdout may be a --json document) what a command's --out folder received:
+// "wrote DIR/: a, b, c" with the names relative to DIR, the first 8 and how many more.
+void SayWritten(const std::string& dir, const std::vector<std::string>& files);
+
 // Prints progress "label: 42%" on a terminal (stderr), overwriting the line; silent when stderr
 // is not a terminal, so logs and CI stay clean.
 class Progress {

@@ -8,6 +8,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <stdexcept>
 #include <unistd.h>
@@ -84,6 +85,16 @@ CLI::Option* AddQuantityListOption(CLI::App* command, const std::string& name,
       ->delimiter(',')
       ->type_name(TypeName(unit))
       ->default_str(DefaultText(*values, unit, bare_means));
+}
+
+void SayWritten(const std::string& dir, const std::vector<std::string>& files) {
+  std::string line = "wrote " + dir + (dir.empty() || dir.back() == '/' ? "" : "/") + ":";
+  constexpr size_t kNamed = 8;
+  for (size_t i = 0; i < files.size() && i < kNamed; ++i) {
+    line += (i ? ", " : " ") + std::filesystem::path(files[i]).lexically_relative(dir).string();
+  }
+  if (files.size() > kNamed) line += " and " + std::to_string(files.size() - kNamed) + " more";
+  std::cerr << line << "\n";
 }
 
 Progress::Progress(std::string label, size_t total)

@@ -59,8 +59,26 @@ const CommandRegistration kNoiseRegistration(20, [](CLI::App& app) {
   auto command = std::make_shared<NoiseCommand>();
   command->trace.Add(cmd, /*with_bias=*/true);
   command->trace.AddSecond(cmd);
-  cmd->add_option("--window", command->noise.window_samples, "window length, samples")
-      ->capture_default_str();
+  // The paper counts its windows in samples (120 at ~3 kHz); flight's --window is a duration, so
+  // --window here is one too, and the count has its own option, the unit in its name.
+  auto* samples = cmd->add_option("--window-samples", command->noise.window_samples,
+                                  "window length in samples (the paper: 120)")
+                      ->capture_default_str();
+  auto* duration =
+      cmd->add_option_function<std::string>(
+             "--window",
+             [command](const std::string& text) {
+               if (text.find_first_not_of("0123456789") == std::string::npos) {
+                 throw CLI::ValidationError("--window '" + text +
+                                            "': a duration needs a unit: did you mean " + text +
+                                            "ms, or --window-samples " + text + "?");
+               }
+               command->noise.window_s = ParseQuantityOption(text, "s", "--window", "ms");
+             },
+             "window length as a duration, e.g. 40ms (s, ms, us, ns); instead of "
+             "--window-samples")
+          ->type_name("DURATION");
+  duration->excludes(samples);
   cmd->add_flag("--json", command->json, "print JSON (docs/FORMATS.md `noise`) instead of a table");
   cmd->add_option("--allan", command->allan_path,
                   "write the Allan deviation to this CSV (tau_s,adev_x,adev_y,adev_z; rad/s)");

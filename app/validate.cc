@@ -11,6 +11,7 @@
 #include "sim/text_file.h"
 #include "sim/units.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -61,8 +62,15 @@ void Run(const ValidateCommand& command) {
   }
   PrintLogWarnings((std::filesystem::path(command.dataset) / "gyro.csv").string(), result.warnings);
   const nlohmann::json json = ValidationToJson(result);
-  if (!command.out_dir.empty()) WriteValidationPlots(command.out_dir, result);
-  if (!command.report_path.empty()) WriteFileAtomically(command.report_path, JsonText(json) + "\n");
+  if (!command.out_dir.empty()) {
+    std::vector<std::string> written = WriteValidationPlots(command.out_dir, result);
+    std::rotate(written.rbegin(), written.rbegin() + 1, written.rend());  // the page first
+    SayWritten(command.out_dir, written);
+  }
+  if (!command.report_path.empty()) {
+    WriteFileAtomically(command.report_path, JsonText(json) + "\n");
+    std::cerr << "wrote " << command.report_path << "\n";
+  }
   if (command.json) {
     std::cout << JsonText(json) << "\n";
   } else {

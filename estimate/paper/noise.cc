@@ -21,6 +21,8 @@ constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 void NoiseOptions::Check() const {
   SHUTTERLAB_CHECK(window_samples >= 2)
       << "window must hold at least 2 samples (got " << window_samples << ")";
+  SHUTTERLAB_CHECK(window_s >= 0.0 && window_s < 1e6)
+      << "window of " << window_s << " s must be 0 (counted in samples) or positive";
   SHUTTERLAB_CHECK(bias.begin_s >= 0.0 && bias.end_s > bias.begin_s)
       << "bias segment " << bias.begin_s << ":" << bias.end_s << " must satisfy 0 <= A < B";
   SHUTTERLAB_CHECK(allan_points_per_decade >= 1 && allan_points_per_decade <= 100)
@@ -30,12 +32,21 @@ void NoiseOptions::Check() const {
 NoiseResult AnalyzeNoise(const GyroTrace& trace, const NoiseOptions& options) {
   options.Check();
   NoiseResult result;
-  result.window_samples = options.window_samples;
   result.bias = EstimateBias(trace, options.bias);
   result.rate_hz = trace.sampling().RateHz();
+  result.window_samples = options.window_samples;
+  if (options.window_s > 0.0) {
+    const double n = std::round(options.window_s * result.rate_hz);
+    SHUTTERLAB_CHECK(n >= 2) << "a window of " << QuantityText(options.window_s * 1e3, "ms")
+                             << " holds " << n << " sample(s) at " << result.rate_hz
+                             << " Hz: give a window of at least 2 sample intervals";
+    SHUTTERLAB_CHECK(n < 1e9) << "a window of " << QuantityText(options.window_s * 1e3, "ms")
+                              << " is longer than any trace";
+    result.window_samples = static_cast<int>(n);
+  }
   const size_t first = result.bias.first_after;
   result.samples_analysed = trace.size() - first;
-  const size_t n_window = static_cast<size_t>(options.window_samples);
+  const size_t n_window = static_cast<size_t>(result.window_samples);
   SHUTTERLAB_CHECK(result.samples_analysed >= n_window)
       << "window of " << n_window << " samples is longer than the " << result.samples_analysed
       << " samples after the bias segment (" << options.bias.begin_s << ":" << options.bias.end_s

@@ -86,9 +86,9 @@ std::string ExcludedMostText(const PhotoSet& set, PhotoAnalysis* a) {
                      std::to_string(a->photos.size()) + " photos";
   if (!d_px.empty()) {
     const double gsd = Median(gsd_m);
-    text += ": their shifts are " +
-            FormatNumber("%.2g", *std::min_element(d_px.begin(), d_px.end())) + "-" +
-            FormatNumber("%.2g", *std::max_element(d_px.begin(), d_px.end())) + " px at " +
+    const std::string lo = FormatNumber("%.2g", *std::min_element(d_px.begin(), d_px.end()));
+    const std::string hi = FormatNumber("%.2g", *std::max_element(d_px.begin(), d_px.end()));
+    text += ": their shifts are " + (lo == hi ? lo : lo + "-" + hi) + " px at " +
             FormatNumber("%.2g", gsd * 100.0) + " cm/px, where " + LengthText(a->limits_m[0]) +
             " is " + FormatNumber("%.2g", a->limits_m[0] / gsd) + " px";
   }

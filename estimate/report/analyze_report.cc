@@ -111,12 +111,12 @@ void AddDistortionChart(HtmlPage* page, const AnalyzeResult& result) {
 void AddWindowHistograms(HtmlPage* page, const FlightResult& flight,
                          const AnalyzeReportOptions& report) {
   const FlightWindowSummary& summary = *flight.summary;
-  // Upper edge: past the largest threshold and the bulk (99.5 %) of the windows; the rest go in
-  // the last bin. The summary's histogram places the 99.5th percentile within 0.1 %.
+  // Upper edge: past the largest threshold and the bulk (report.histogram_quantile) of the
+  // windows; the rest go in the last bin. The summary's histogram places a quantile within 0.1 %.
   LogBinHistogram all;
   for (int a = 0; a < 3; ++a) all.Merge(summary.range_arcsec[a]);
-  const uint64_t p =
-      std::min<uint64_t>(all.total() - 1, static_cast<uint64_t>(0.995 * all.total()));
+  const uint64_t p = std::min<uint64_t>(
+      all.total() - 1, static_cast<uint64_t>(report.histogram_quantile * all.total()));
   double upper = all.Quantile(p);
   for (const FlightRow& row : flight.rows) upper = std::max(upper, 1.15 * row.threshold_arcsec);
   const int bins = report.histogram_bins;
@@ -125,7 +125,10 @@ void AddWindowHistograms(HtmlPage* page, const FlightResult& flight,
   chart.title = "Readout windows (" + Fmt("%g", summary.window_s * 1e3) +
                 " ms) by the range of each axis's angle";
   chart.kind = ChartKind::kHistogram;
-  chart.x_label = "range within the window (arcsec); the last bin holds everything above";
+  const double share_above =
+      100.0 * (1.0 - all.CountBelow(upper) / static_cast<double>(all.total()));
+  chart.x_label = "range within the window (arcsec); the last bin also holds the " +
+                  Fmt("%.1f", share_above) + " % of windows above " + Fmt("%.0f", upper) + "\"";
   chart.y_label = "windows (%)";
   for (int b = 0; b <= bins; ++b) chart.x.push_back(b * width);
   const double n = static_cast<double>(summary.windows);
@@ -151,6 +154,26 @@ void AddWindowHistograms(HtmlPage* page, const FlightResult& flight,
          {{row.threshold_arcsec, upper}}});
   }
   page->AddChart(chart);
+}
+
+// A sketch of the camera's axes, which the verdict ("stabilise camera axis y") and every chart
+// name: OpenCV's camera frame, the image's rows read top to bottom.
+std::string CameraAxesFigure() {
+  return R"svg(<figure class="axes"><svg width="320" height="170" viewBox="0 0 320 170" role="img" aria-label="camera axes">
+<defs><marker id="arrow" viewBox="0 0 10 10" refX="9" refY="5" markerWidth="7" markerHeight="7" orient="auto"><path d="M0,0 L10,5 L0,10 z" fill="#1d2430"/></marker></defs>
+<rect x="20" y="20" width="160" height="120" fill="#eef2f7" stroke="#8a94a3"/>
+<g stroke="#c5ccd6">
+<line x1="26" y1="36" x2="174" y2="36"/><line x1="26" y1="52" x2="174" y2="52"/><line x1="26" y1="68" x2="174" y2="68"/>
+<line x1="26" y1="84" x2="174" y2="84"/><line x1="26" y1="100" x2="174" y2="100"/><line x1="26" y1="116" x2="174" y2="116"/></g>
+<text x="100" y="15" font-size="11" text-anchor="middle" fill="#4a5462">the image, read row by row, top first</text>
+<line x1="20" y1="20" x2="215" y2="20" stroke="#d62728" stroke-width="2.5" marker-end="url(#arrow)"/>
+<text x="222" y="24" font-size="13" fill="#d62728">x (right)</text>
+<line x1="20" y1="20" x2="20" y2="162" stroke="#2ca02c" stroke-width="2.5" marker-end="url(#arrow)"/>
+<text x="27" y="160" font-size="13" fill="#2ca02c">y (down)</text>
+<circle cx="100" cy="80" r="9" fill="none" stroke="#1f77b4" stroke-width="2.5"/><circle cx="100" cy="80" r="2.5" fill="#1f77b4"/>
+<text x="114" y="84" font-size="13" fill="#1f77b4">z (optical axis, to the ground)</text>
+</svg><figcaption>The camera axes: a turn about y moves the ground along the rows (the image skews), about x along the columns (it stretches or squashes), about z turns it (a fan-shaped shear).</figcaption></figure>
+)svg";
 }
 
 void AddAllan(HtmlPage* page, const AnalyzeResult& result) {
@@ -191,16 +214,25 @@ void AddAllan(HtmlPage* page, const AnalyzeResult& result) {
     chart.series.push_back(std::move(s));
   }
   page->AddChart(chart);
+  // Off a still segment the curve is the flight's motion, not the gyro's noise: its coefficients
+  // are no property of the sensor, only an upper bound on it, and the table says so in each cell.
+  const std::string not_meaningful = result.allan_on_still ? "" : "not meaningful, at most ";
   std::vector<std::vector<std::string>> rows;
   for (int a = 0; a < 3; ++a) {
     const AllanCoefficients& c = allan.axes[a];
-    rows.push_back(
-        {kAxisLabels[a], Fmt("%.3g", c.arw_deg_sqrt_h),
-         (c.bias_instability_upper_bound ? "< " : "") + Fmt("%.3g", c.bias_instability_deg_h),
-         Fmt("%.3g", c.bias_instability_tau_s)});
+    rows.push_back({kAxisLabels[a], not_meaningful + Fmt("%.3g", c.arw_deg_sqrt_h),
+                    not_meaningful + (c.bias_instability_upper_bound ? "< " : "") +
+                        Fmt("%.3g", c.bias_instability_deg_h),
+                    Fmt("%.3g", c.bias_instability_tau_s)});
   }
   page->Table({"axis", "angle random walk (deg/sqrt(h))", "bias instability (deg/h)", "at tau (s)"},
               rows);
+  if (!result.allan_on_still) {
+    page->Paragraph(
+        "Not meaningful: with no still time the Allan deviation measures the motion; "
+        "record a few seconds with the camera still before take-off to measure the "
+        "gyro's noise (shutterlab noise on a still recording gives paper Tables 1-2).");
+  }
 }
 
 // What neither the user nor the log gave (AnalyzeResult::assumptions), and how to give it.
@@ -381,6 +413,7 @@ HtmlPage AnalyzeReportPage(const AnalyzeOptions& options, const AnalyzeResult& r
   if (!report.camera_source.empty())
     rows.insert(rows.begin() + 11, {"camera from", report.camera_source});
   page.Table({"", ""}, rows);
+  page.RawHtml(CameraAxesFigure());
 
   AddAssumptions(&page, result);
 

@@ -28,6 +28,10 @@ struct AnalyzeReportOptions {
   // analyze --photos: "the photos' DJI FC8482 ..., readout 16 ms (table: ...)"); shown beside it.
   std::string camera_source;
   int histogram_bins = 60;
+  // The window histogram's x axis ends at this quantile of the windows' ranges (or past the
+  // largest threshold): a long tail of a few violent windows would otherwise push the bulk into
+  // the first bin. Those above are counted in the last bin, and its label says their share.
+  double histogram_quantile = 0.95;
   int picture_width_px = 380;  // pictures are scaled to this width (scale bar included): 3 a row
   void Check() const;
 };

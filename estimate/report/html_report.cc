@@ -74,6 +74,9 @@ constexpr const char* kChartScript = R"js(
     });
     var plugins = [];
     spec.shadings.forEach(function (s) { plugins.push(shade(s.intervals, s.color)); });
+    var x_axis = { label: spec.x_label };
+    // Whole-number steps only: a frame has no frame 2.5.
+    if (spec.integer_x) x_axis.incrs = [1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 1e4, 2e4, 5e4, 1e5];
     var options = {
       title: spec.title,
       width: Math.max(480, holder.clientWidth),
@@ -83,7 +86,7 @@ constexpr const char* kChartScript = R"js(
         x: { time: false, distr: spec.log_x ? 3 : 1, log: 10 },
         y: { distr: spec.log_y ? 3 : 1, log: 10 }
       },
-      axes: [{ label: spec.x_label }, { label: spec.y_label }],
+      axes: [x_axis, { label: spec.y_label }],
       legend: { live: true },
       cursor: { drag: { x: true, y: false } },
       plugins: plugins
@@ -248,6 +251,58 @@ Chart DownsampleMinMax(const Chart& chart, size_t buckets) {
   return out;
 }
 
+Chart ClipOutliers(const Chart& chart, std::string* note) {
+  note->clear();
+  if (chart.kind != ChartKind::kPoints || !chart.clip_outliers) return chart;
+  std::vector<double> values;
+  for (const ChartSeries& s : chart.series) {
+    if (s.line) continue;
+    for (double v : s.y) {
+      if (std::isfinite(v)) values.push_back(v);
+    }
+  }
+  if (values.size() < 8) return chart;
+  const auto quartile = [&](double q) {  // nearest rank: no value the data does not hold
+    const size_t k = static_cast<size_t>(q * static_cast<double>(values.size() - 1));
+    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+    return values[k];
+  };
+  const double q1 = quartile(0.25), q3 = quartile(0.75);
+  const double top = q3 + 3.0 * (q3 - q1);
+  // Only where the far points would squeeze the rest into less than half the height: a large value
+  // among a few (one shaken frame of six) is data to show at its place, not an outlier.
+  const double largest = *std::max_element(values.begin(), values.end());
+  if (!(top > 0.0 && largest > 2.0 * top)) return chart;
+  Chart drawn = chart;
+  ChartSeries off("off the scale (drawn at " + FormatNumber("%.4g", top) + ")",
+                  std::vector<double>(chart.x.size(), std::numeric_limits<double>::quiet_NaN()),
+                  "#000000");
+  std::vector<std::string> listed;
+  size_t clipped = 0;
+  for (ChartSeries& s : drawn.series) {
+    if (s.line) continue;
+    for (size_t i = 0; i < s.y.size(); ++i) {
+      if (!(std::isfinite(s.y[i]) && s.y[i] > top)) continue;
+      if (++clipped <= 6) {
+        listed.push_back(s.label + " " + FormatNumber("%.4g", s.y[i]) + " at " +
+                         FormatNumber("%.6g", chart.x[i]));
+      }
+      s.y[i] = std::numeric_limits<double>::quiet_NaN();
+      off.y[i] = top;
+    }
+  }
+  if (clipped == 0) return chart;
+  drawn.series.push_back(std::move(off));
+  *note = std::to_string(clipped) + " point(s) above " + FormatNumber("%.4g", top) + " " +
+          chart.y_label + " (3 interquartile ranges over the upper quartile) drawn in black at " +
+          "that height, so they do not flatten the rest: ";
+  for (size_t i = 0; i < listed.size(); ++i) *note += (i ? "; " : "") + listed[i];
+  if (clipped > listed.size())
+    *note += "; and " + std::to_string(clipped - listed.size()) + " more";
+  *note += " (" + chart.x_label + ")";
+  return drawn;
+}
+
 std::string ChartJson(const Chart& chart) {
   nlohmann::json json;
   json["title"] = chart.title;
@@ -257,6 +312,7 @@ std::string ChartJson(const Chart& chart) {
   json["log_x"] = chart.log_x;
   json["log_y"] = chart.log_y;
   json["height"] = chart.height_px;
+  json["integer_x"] = chart.integer_x;
   nlohmann::json data = nlohmann::json::array();
   data.push_back(Values(chart.x, chart.log_x));
   nlohmann::json series = nlohmann::json::array();
@@ -341,12 +397,14 @@ void HtmlPage::Details(const std::string& summary, const std::string& preformatt
            EscapeHtml(preformatted) + "</pre></details>\n";
 }
 
-void HtmlPage::AddChart(const Chart& chart) {
-  for (const ChartSeries& s : chart.series) {
-    SHUTTERLAB_CHECK(s.y.size() == chart.x.size())
-        << "chart '" << chart.title << "': series '" << s.label << "' has " << s.y.size()
-        << " values for " << chart.x.size() << " x values";
+void HtmlPage::AddChart(const Chart& given) {
+  for (const ChartSeries& s : given.series) {
+    SHUTTERLAB_CHECK(s.y.size() == given.x.size())
+        << "chart '" << given.title << "': series '" << s.label << "' has " << s.y.size()
+        << " values for " << given.x.size() << " x values";
   }
+  std::string clipped_note;
+  const Chart chart = ClipOutliers(given, &clipped_note);
   const std::string id = "chart-" + std::to_string(charts_++);
   body_ += "<div class=\"chart\" id=\"" + id + "\"></div>\n";
   for (const ChartShading& shading : chart.shadings) {
@@ -355,6 +413,8 @@ void HtmlPage::AddChart(const Chart& chart) {
   }
   body_ += "<script type=\"application/json\" class=\"chart-data\" data-target=\"" + id + "\">" +
            ChartJson(chart) + "</script>\n";
+  if (!clipped_note.empty())
+    body_ += "<p class=\"chart-note\">" + EscapeHtml(clipped_note) + "</p>\n";
 }
 
 void HtmlPage::Image(const cv::Mat& rgb8, const std::string& caption) {

@@ -69,6 +69,12 @@ struct Chart {
   // Sets of [x0, x1] intervals shaded behind the data (e.g. flagged time windows), drawn in order.
   std::vector<ChartShading> shadings;
   int height_px = 260;
+  // Ticks on whole numbers only (frame numbers, counts).
+  bool integer_x = false;
+  // A points chart's outliers (above Q3 + 3 IQR of its points, where the largest is over twice
+  // that) would flatten the rest: they are drawn at that height in a series of their own and
+  // listed, with their values, under the chart (ClipOutliers).
+  bool clip_outliers = true;
 };
 
 class HtmlPage {
@@ -113,6 +119,12 @@ class HtmlPage {
 // and last x (a line through them draws the trace's exact envelope). Charts with at most
 // 2 * buckets points are returned unchanged. NaNs are skipped; a span with none left gives NaN.
 Chart DownsampleMinMax(const Chart& chart, size_t buckets = 4000);
+
+// The chart as AddChart draws it: with clip_outliers, when the largest of a kPoints chart's points
+// (at least 8 of them, its line series aside) lies over twice the fence Q3 + 3 IQR of them all,
+// each point above the fence is taken out of its series and drawn at the fence in a series of its
+// own ("off the scale"); `note` says which and their values (empty when nothing was clipped).
+Chart ClipOutliers(const Chart& chart, std::string* note);
 
 // The JSON of one chart as the page embeds it (exposed for tests).
 std::string ChartJson(const Chart& chart);

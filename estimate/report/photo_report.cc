@@ -52,8 +52,7 @@ std::vector<std::string> PhotoRow(const PhotoRecord& r, const PhotoResult& p,
 }  // namespace
 
 HtmlPage PhotoReportPage(const PhotoSet& set, const PhotoAnalysis& a) {
-  HtmlPage page("shutterlab analyze --photos " + a.source);
-  page.Heading("Photos of " + a.source, 1);
+  HtmlPage page("Photos of " + a.source);
   page.BeginBox(a.excluded == 0                    ? "ok"
                 : 2 * a.excluded > a.photos.size() ? "problem"
                                                    : "attention");

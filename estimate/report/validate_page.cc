@@ -331,6 +331,7 @@ void AddFrameCharts(const ValidationResult& result, HtmlPage* page) {
   frames_chart.title = "RMS residual per frame";
   frames_chart.kind = d_chart.kind = ChartKind::kPoints;
   frames_chart.x_label = d_chart.x_label = "frame";
+  frames_chart.integer_x = d_chart.integer_x = true;
   frames_chart.y_label = "px";
   d_chart.title = "frame distortion D on the ground";
   d_chart.y_label = "cm";
@@ -505,7 +506,12 @@ void AddScreening(const ValidationResult& result, HtmlPage* page) {
     rows.push_back({"the image against the gyro", s.gyro_follow.verdict});
   }
   page->Table({"what", "left out"}, rows, /*text=*/true);
-  const cv::Mat picture = ScreeningPicture(result);
+  // The overlay of what was left out only where something was: an empty one says nothing. The
+  // camera-fixed check's evidence is shown either way (it says why nothing was left out).
+  const bool left_out_any = !result.mask.empty() ||
+                            (!s.region.whole_image && s.region.cells_fixed > 0) ||
+                            s.moving_share > 0 || s.off_epipolar_share > 0;
+  const cv::Mat picture = left_out_any ? ScreeningPicture(result) : cv::Mat();
   if (!picture.empty()) {
     page->Image(picture, "frame " + FrameName(result.frames.front().frame) +
                              ": red, a region that moves with the camera; blue, masked; magenta, "
@@ -606,7 +612,7 @@ void AddFramesTable(const ValidationResult& result, HtmlPage* page) {
     header.push_back("D measured, cm");
     header.push_back("D paper's model, cm");
   }
-  page->Heading(result.video ? "Per pair" : "Per frame", 3);
+  page->Heading(result.video ? "Every pair's numbers" : "Every frame's numbers", 3);
   page->Table(header, rows);
 }
 
@@ -621,7 +627,7 @@ std::string WriteValidationPage(const std::string& dir, const ValidationResult& 
   AddEffectsTable(result, &page);
   page.Heading("Residual per image row (all frames)");
   page.AddChart(RowsChart(result.video, profile));
-  page.Heading("Per frame");
+  page.Heading(result.video ? "Per pair" : "Per frame");
   AddFrameCharts(result, &page);
   AddFramesTable(result, &page);
   page.Heading("Residual pictures");

@@ -49,6 +49,10 @@ TEST(AnalyzeCli, BlackboxEveryTwoSecondsJsonAndOutputs) {
   const std::string csv = ReadFileToString(dir / "out/images.csv");
   EXPECT_EQ(test::LineCount(csv), json["images"].size() + 1);
   EXPECT_TRUE(std::filesystem::exists(dir / "out/exclude.txt"));
+  // Said on stderr (stdout is the JSON document).
+  EXPECT_NE(r.err.find("wrote " + (dir / "out") + "/: report.html, images.csv, exclude.txt\n"),
+            std::string::npos)
+      << r.err;
 }
 
 TEST(AnalyzeCli, ReportWithSceneIsSelfContainedAndMatchesTheTable) {
@@ -83,6 +87,9 @@ TEST(AnalyzeCli, ReportWithSceneIsSelfContainedAndMatchesTheTable) {
             std::string::npos);
   EXPECT_LE(charts[0]["data"][0].size(), 8000u);
   EXPECT_LT(html.size(), 6u << 20);
+  // The log has no still time: its Allan coefficients are marked, not offered as the gyro's noise.
+  EXPECT_NE(html.find("<td>not meaningful, at most "), std::string::npos);
+  test::ExpectDrawsInChromium(dir / "out/report.html", charts.size(), "report_btfl");
 }
 
 TEST(AnalyzeCli, ReportOfSamplesStampedInBurstsSaysWhyItHasNoAllan) {

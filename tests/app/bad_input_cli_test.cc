@@ -106,7 +106,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"bias_too_few_samples", StillTrace(), "--bias 0:0.005s", 0,
                 "holds 5 samples (need at least 10; the trace lasts 2.999 s): give a --bias A:B "
                 "over a still part of the log, --auto-bias, or a longer log"},
-        BadCase{"window_longer_than_trace", StillTrace(), "--bias 0:1s --window 100000", 0,
+        BadCase{"window_longer_than_trace", StillTrace(), "--bias 0:1s --window-samples 100000", 0,
                 "100000 samples is longer than the 2000 samples after the bias segment (0:1 s; the "
                 "trace lasts 2.999 s): give an earlier --bias A:B, a shorter --window, or a longer "
                 "log"},

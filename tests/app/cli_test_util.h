@@ -3,6 +3,7 @@
 
 #include "sim/gyro_trace.h"
 #include "sim/logs/gyro_io.h"
+#include "tests/test_util.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <iostream>
 #include <random>
 #include <string>
 #include <sys/wait.h>
@@ -62,6 +64,40 @@ inline CommandResult RunShutterlab(const std::string& args, const std::string& s
   std::remove(err_path);
   result.output = result.out + result.err;
   return result;
+}
+
+// Opens a page the tool wrote in headless Chromium (scripts/check_report.sh): it must draw every
+// chart it holds (`charts`, counted from its data blocks) with no script error. The screenshot goes
+// to $SHUTTERLAB_SCREENSHOT_DIR/NAME.png when that is set (how docs/*.png are made), else beside
+// the page. Without /usr/bin/chromium (scripts/test.sh installs it) the page is not opened, and
+// the test says so in one line, or fails under CI=true.
+inline void ExpectDrawsInChromium(const std::string& page, size_t charts, const std::string& name) {
+  if (::access("/usr/bin/chromium", X_OK) != 0) {
+    if (RealDataRequired()) {
+      ADD_FAILURE() << "chromium is missing (CI=true needs it: scripts/test.sh installs it)";
+    } else {
+      std::cout << "note: " << page << " not opened: /usr/bin/chromium is missing "
+                << "(apt-get install chromium, or run scripts/test.sh)\n";
+    }
+    return;
+  }
+  const char* dir = std::getenv("SHUTTERLAB_SCREENSHOT_DIR");
+  const std::string shot = dir != nullptr && *dir != '\0'
+                               ? std::string(dir) + "/" + name + ".png"
+                               : page.substr(0, page.rfind('.')) + ".png";
+  const std::string command =
+      SourcePath("scripts/check_report.sh") + " '" + page + "' '" + shot + "' 2>&1";
+  std::string output;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  char buffer[4096];
+  size_t n;
+  while ((n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) output.append(buffer, n);
+  const int status = ::pclose(pipe);
+  EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 0) << output;
+  EXPECT_NE(output.find("check_report: ok (" + std::to_string(charts) + " charts drawn"),
+            std::string::npos)
+      << output;
 }
 
 // r is a command refused, in one line naming /dev/stdin and the folder, because the log on its

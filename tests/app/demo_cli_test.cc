@@ -1,7 +1,9 @@
 // `shutterlab demo`, the README's main command, end to end on the bundled assets: every step runs,
 // writes what it says, and the closing-the-loop step finds the clock offset it hid.
 
+#include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
+#include "tests/estimate/report/report_test_util.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -12,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 
 namespace shutterlab {
 namespace {
@@ -51,6 +54,12 @@ TEST(DemoCli, RunsEveryStepAndFindsTheHiddenOffset) {
   EXPECT_NEAR(report["effects"][0]["value"].get<double>(), 0.004, 0.3e-3);
   EXPECT_FALSE(report["unexplained"].get<bool>());
   EXPECT_LT(report["after"]["rms_px"].get<double>(), report["before"]["rms_px"].get<double>());
+  // Its two pages draw in a browser (docs/report.png and docs/validate.png are their screenshots).
+  for (const auto& [page, name] : {std::pair<std::string, std::string>{"report.html", "report"},
+                                   {"validate/plots/validate.html", "validate"}}) {
+    const std::string path = out + "/" + page;
+    test::ExpectDrawsInChromium(path, test::ChartBlocks(ReadFileToString(path)).size(), name);
+  }
 }
 
 }  // namespace

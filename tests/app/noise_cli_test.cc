@@ -45,7 +45,8 @@ TEST(NoiseCli, PrintsJsonAndWritesTheAllanCsv) {
   test::TempDir dir;
   const std::string trace = dir / "still.csv", allan = dir / "allan.csv";
   WriteSession(trace, 8.0, 0);
-  const auto result = RunShutterlab("noise " + trace + " --window 40 --json --allan " + allan);
+  const auto result =
+      RunShutterlab("noise " + trace + " --window-samples 40 --json --allan " + allan);
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const nlohmann::json j = nlohmann::json::parse(result.out);
   EXPECT_EQ(j.at("window_samples").get<int>(), 40);
@@ -112,12 +113,41 @@ TEST(NoiseCli, WindowLongerThanTheTraceIsOneLineExit2AndNoFile) {
   test::TempDir dir;
   const std::string trace = dir / "still.csv", allan = dir / "allan.csv";
   WriteSession(trace, 6.0, 0);
-  const auto result = RunShutterlab("noise " + trace + " --window 5000 --allan " + allan);
+  const auto result = RunShutterlab("noise " + trace + " --window-samples 5000 --allan " + allan);
   EXPECT_EQ(result.exit_code, 2);
   EXPECT_EQ(test::LineCount(result.output), 1u) << result.output;
   EXPECT_EQ(result.output.rfind("error: " + trace + ": window of 5000 samples", 0), 0u)
       << result.output;
   EXPECT_FALSE(std::filesystem::exists(allan));
+}
+
+// --window is a duration, as in flight: 40 ms at 1 kHz is the 40-sample window; a bare number is
+// refused with both readings (a duration in ms, or the count --window-samples takes); the two
+// together are refused.
+TEST(NoiseCli, WindowIsADurationAndTheCountHasItsOwnOption) {
+  test::TempDir dir;
+  const std::string trace = dir / "still.csv";
+  WriteSession(trace, 8.0, 0);
+  const auto by_duration = RunShutterlab("noise " + trace + " --window 40ms --json");
+  ASSERT_EQ(by_duration.exit_code, 0) << by_duration.output;
+  const auto by_count = RunShutterlab("noise " + trace + " --window-samples 40 --json");
+  ASSERT_EQ(by_count.exit_code, 0) << by_count.output;
+  EXPECT_EQ(nlohmann::json::parse(by_duration.out)["window_samples"], 40);
+  EXPECT_EQ(by_duration.out, by_count.out);
+  const auto bare = RunShutterlab("noise " + trace + " --window 120");
+  EXPECT_EQ(bare.exit_code, 2);
+  EXPECT_EQ(test::LineCount(bare.output), 1u) << bare.output;
+  EXPECT_NE(bare.err.find("--window '120': a duration needs a unit: did you mean 120ms, or "
+                          "--window-samples 120?"),
+            std::string::npos)
+      << bare.err;
+  const auto both = RunShutterlab("noise " + trace + " --window 40ms --window-samples 40");
+  EXPECT_EQ(both.exit_code, 2);
+  EXPECT_NE(both.err.find("excludes"), std::string::npos) << both.err;
+  const auto too_short = RunShutterlab("noise " + trace + " --window 1ms");
+  EXPECT_EQ(too_short.exit_code, 2);
+  EXPECT_NE(too_short.err.find("a window of 1ms holds 1 sample(s) at 1000 Hz"), std::string::npos)
+      << too_short.err;
 }
 
 TEST(NoiseCli, BadBiasSegmentIsExit2) {

@@ -107,6 +107,7 @@ TEST(PhotosCli, BadPhotosAreReportedAndAFolderWithoutPhotosIsAnError) {
         std::string("--rolling-shutter-readout")}) {
     EXPECT_NE(page.find(text), std::string::npos) << text;
   }
+  test::ExpectDrawsInChromium(dir / "out/report.html", 0, "photos_report");
   EXPECT_NE(r.out.find("DJI_0003.JPG: its image data does not decode (Premature end of JPEG "
                        "file): a cut or damaged file; copy it from the card again"),
             std::string::npos)

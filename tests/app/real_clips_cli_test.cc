@@ -15,6 +15,7 @@
 #include "model/camera.h"
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
+#include "tests/estimate/report/report_test_util.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -128,6 +129,8 @@ TEST(RealClips, PhoneClipTimeOffsetAndReadoutDoNotDependOnTheDashboard) {
   const std::string page = ReadFileToString(dir / "plots/validate.html");
   EXPECT_LT(page.find("Verdict"), page.find("What was left out")) << page.substr(0, 2000);
   EXPECT_TRUE(fs::exists(dir / "plots/residual_rows.png"));
+  test::ExpectDrawsInChromium(dir / "plots/validate.html", test::ChartBlocks(page).size(),
+                              "validate_phone");
   EXPECT_TRUE(fs::exists(dir / "plots/0119_residual.png"));
 
   // Cut to the 390 rows above the dashboard: the same offset and (scaled) readout.

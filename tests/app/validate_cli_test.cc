@@ -78,6 +78,20 @@ TEST(ValidateCli, WritesReportAndPlots) {
                            "residual_rows.png", "residual_rows.csv", "validate.html"}) {
     EXPECT_TRUE(fs::exists(fs::path(out) / file)) << file;
   }
+  // What was written is said, the page first.
+  EXPECT_NE(r.output.find("wrote " + out + "/: validate.html, "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("wrote " + report + "\n"), std::string::npos) << r.output;
+  // The page: one "Per frame" section, whole-number frame ticks, and the overlay of what was left
+  // out only when something was.
+  const std::string page = ReadFileToString(fs::path(out) / "validate.html");
+  EXPECT_EQ(page.find("<h2>Per frame</h2>"), page.rfind("<h2>Per frame</h2>"));
+  EXPECT_NE(page.find("<h2>Per frame</h2>"), std::string::npos);
+  EXPECT_NE(page.find("\"integer_x\":true"), std::string::npos);
+  const nlohmann::json& screening = json["screening"];
+  const bool left_out = !screening["mask"].is_null() ||
+                        screening["camera_fixed"]["share_of_points"].get<double>() > 0 ||
+                        screening["moving_share"].get<double>() > 0;
+  EXPECT_EQ(page.find("points moving on their own</figcaption>") != std::string::npos, left_out);
 }
 
 TEST(ValidateCli, MissingCameraJson) {

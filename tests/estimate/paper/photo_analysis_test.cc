@@ -144,7 +144,7 @@ TEST(AnalyzePhotos, AnExclusionOfMostPhotosSaysWhyInPixels) {
   const PhotoAnalysis a = AnalyzePhotos(set, {});
   EXPECT_EQ(a.excluded, 2u);
   // 100 m / 2000 px = 5 cm/px: 20 cm is 4 px, 5 cm is 1 px.
-  EXPECT_NE(a.verdict.find("; exclude.txt drops 2 of 3 photos: their shifts are 4-4 px at 5 cm/px, "
+  EXPECT_NE(a.verdict.find("; exclude.txt drops 2 of 3 photos: their shifts are 4 px at 5 cm/px, "
                            "where 5 cm is 1 px; a larger --limit keeps more, and a "
                            "photogrammetry tool's own rolling-shutter option (ODM "
                            "--rolling-shutter) removes the translation part"),

@@ -105,13 +105,36 @@ TEST(AnalyzeReport, ChartsHoldTheAnalysedValues) {
     for (size_t b = 0; b + 1 < y.size(); ++b) sum += y[b].get<double>();
     EXPECT_NEAR(sum, 100.0, 1e-9) << axis;
   }
-  // The Allan plot is log-log on the still segment.
+  // The Allan plot is log-log on the still segment, whose coefficients are the gyro's.
   EXPECT_TRUE(charts[4]["log_x"].get<bool>());
   EXPECT_NE(html.find("still segment"), std::string::npos);
+  EXPECT_EQ(html.find("not meaningful"), std::string::npos);
+  // The camera axes the verdict names are drawn.
+  EXPECT_NE(html.find("aria-label=\"camera axes\""), std::string::npos);
+  EXPECT_NE(html.find(">z (optical axis, to the ground)<"), std::string::npos);
   // One worst image, the shaken one, as an inline PNG.
   EXPECT_EQ(html.find("data:image/png;base64,", html.find("data:image/png;base64,") + 1),
             std::string::npos);
   EXPECT_NE(html.find("<figcaption>shaken at 6.50 s"), std::string::npos);
+}
+
+// Without still time the Allan deviation measures the flight's motion: every coefficient in the
+// table is marked not meaningful, and the page says how to measure the gyro's noise.
+TEST(AnalyzeReport, AllanWithoutStillTimeIsMarkedNotMeaningful) {
+  const FlightLog log = StepLog(10.0, RateForGroundSmear(0.02), RateForGroundSmear(0.07));
+  AnalyzeOptions options = SmallCamera();
+  options.estimate_bias = false;  // no still segment searched: the whole log
+  options.triggers = {{"quiet", SecondsToNs(5.0)}};
+  const AnalyzeResult result = Analyze(log, options);
+  ASSERT_FALSE(result.allan_on_still);
+  ASSERT_TRUE(result.allan && !result.allan->empty());
+  const std::string html = AnalyzeReportPage(options, result, AnalyzeReportOptions()).Html();
+  size_t marked = 0;
+  for (size_t at = html.find("<td>not meaningful, at most "); at != std::string::npos;
+       at = html.find("<td>not meaningful, at most ", at + 1))
+    ++marked;
+  EXPECT_EQ(marked, 6u);  // ARW and bias instability of three axes
+  EXPECT_NE(html.find("record a few seconds with the camera still"), std::string::npos);
 }
 
 TEST(AnalyzeReport, SceneIsRenderedUnderTheHeatmap) {
@@ -203,7 +226,8 @@ TEST(AnalyzeReport, DrawsTheResultsPlotsAndIntegratesNothingAgain) {
 
 // The shading and the window histograms drawn from the flight's bounded summary, against what the
 // whole per-window series gives: the same flagged intervals; the histogram's upper edge within
-// 0.1 % of the exact 99.5th percentile and each bin's share within 0.05 percentage points.
+// 0.1 % of the exact quantile (AnalyzeReportOptions::histogram_quantile) and each bin's share
+// within 0.05 percentage points.
 TEST(AnalyzeReport, ShadingAndHistogramsMatchTheWholeSeries) {
   std::mt19937 rng(3);
   std::normal_distribution<double> noise(0.0, 0.01);
@@ -240,11 +264,12 @@ TEST(AnalyzeReport, ShadingAndHistogramsMatchTheWholeSeries) {
     }
   }
   ASSERT_GT(rate["shadings"][0]["intervals"].size(), 3u);
-  // The exact histogram: the 99.5th percentile of every range, the counts by bin.
+  // The exact histogram: the quantile of every range, the counts by bin.
   std::vector<double> all;
   for (int a = 0; a < 3; ++a)
     all.insert(all.end(), series.range_arcsec[a].begin(), series.range_arcsec[a].end());
-  const size_t p = std::min(all.size() - 1, static_cast<size_t>(0.995 * all.size()));
+  const size_t p =
+      std::min(all.size() - 1, static_cast<size_t>(report.histogram_quantile * all.size()));
   std::nth_element(all.begin(), all.begin() + p, all.end());
   double upper = all[p];
   const double percentile = upper;
@@ -269,6 +294,14 @@ TEST(AnalyzeReport, ShadingAndHistogramsMatchTheWholeSeries) {
       EXPECT_NEAR(drawn, exact, 0.05) << a << " " << b;
     }
   }
+  // The last bin's label says the share of windows above the edge.
+  const std::string label = histogram["x_label"];
+  const size_t at = label.find("holds the ");
+  ASSERT_NE(at, std::string::npos) << label;
+  const double said_percent = std::stod(label.substr(at + 10));
+  const double above = static_cast<double>(
+      std::count_if(all.begin(), all.end(), [&](double r) { return r >= drawn_upper; }));
+  EXPECT_NEAR(said_percent, 100.0 * above / all.size(), 0.1) << label;
   std::cout << "window histogram: edge " << drawn_upper << " vs " << upper
             << " arcsec, largest bin difference " << worst << " percentage points\n";
 }

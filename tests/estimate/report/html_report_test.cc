@@ -110,6 +110,72 @@ TEST(HtmlPage, ChartRejectsMismatchedSeries) {
   EXPECT_THROW(page.AddChart(chart), std::invalid_argument);
 }
 
+// One outlier among 20 points (a 406 cm image among 5-25 cm ones) is drawn at the fence
+// Q3 + 3 IQR in its own black series and listed with its value; the limit line is left alone; a
+// chart with nothing far out is drawn as given.
+TEST(ClipOutliers, DrawsFarPointsAtTheFenceAndSaysTheirValues) {
+  Chart chart;
+  chart.kind = ChartKind::kPoints;
+  chart.x_label = "t (s)";
+  chart.y_label = "cm";
+  ChartSeries d("D");
+  for (int i = 0; i < 20; ++i) {
+    chart.x.push_back(i);
+    d.y.push_back(5.0 + i);  // 5..24 cm
+  }
+  d.y[7] = 406.0;
+  ChartSeries limit("limit 5 cm", std::vector<double>(20, 5.0));
+  limit.line = true;
+  chart.series = {d, limit};
+  std::string note;
+  const Chart drawn = ClipOutliers(chart, &note);
+  // Nearest-rank quartiles (ranks 4 and 14 of 0..19) of the 20 values sorted (5..11, 13..24, 406):
+  // Q1 = 9, Q3 = 20.
+  const double fence = 20.0 + 3.0 * (20.0 - 9.0);
+  ASSERT_EQ(drawn.series.size(), 3u);
+  EXPECT_TRUE(std::isnan(drawn.series[0].y[7]));
+  EXPECT_EQ(drawn.series[0].y[6], 11.0);
+  EXPECT_EQ(drawn.series[1].y, limit.y);
+  EXPECT_EQ(drawn.series[2].y[7], fence);
+  EXPECT_TRUE(std::isnan(drawn.series[2].y[6]));
+  EXPECT_EQ(drawn.series[2].color, "#000000");
+  EXPECT_NE(note.find("1 point(s) above 53 cm"), std::string::npos) << note;
+  EXPECT_NE(note.find("D 406 at 7"), std::string::npos) << note;
+  // On the page: the note under the chart, the clipped series in the data.
+  HtmlPage page("t");
+  page.AddChart(chart);
+  const std::string html = page.Html();
+  EXPECT_NE(html.find("<p class=\"chart-note\">1 point(s) above 53 cm"), std::string::npos);
+  EXPECT_EQ(ChartBlocks(html).at(0)["series"].size(), 3u);
+  // Nothing far out, a point above the fence but under twice it (a value to show in place), a lines
+  // chart, or clipping turned off: unchanged, no note.
+  chart.series[0].y[7] = 12.0;
+  EXPECT_EQ(ClipOutliers(chart, &note).series.size(), 2u);
+  EXPECT_TRUE(note.empty());
+  chart.series[0].y[7] = 2.0 * fence - 1.0;
+  EXPECT_EQ(ClipOutliers(chart, &note).series.size(), 2u);
+  EXPECT_TRUE(note.empty());
+  chart.series[0].y[7] = 406.0;
+  chart.clip_outliers = false;
+  EXPECT_EQ(ClipOutliers(chart, &note).series.size(), 2u);
+  chart.clip_outliers = true;
+  chart.kind = ChartKind::kLines;
+  EXPECT_EQ(ClipOutliers(chart, &note).series.size(), 2u);
+}
+
+// Frame numbers: the chart says so, and the page's script gives uPlot whole-number steps only.
+TEST(HtmlPage, IntegerAxisHasWholeNumberSteps) {
+  Chart chart;
+  chart.x = {0, 1, 2};
+  chart.series = {ChartSeries("a", {1, 2, 3})};
+  chart.integer_x = true;
+  HtmlPage page("t");
+  page.AddChart(chart);
+  const std::string html = page.Html();
+  EXPECT_TRUE(ChartBlocks(html).at(0)["integer_x"].get<bool>());
+  EXPECT_NE(html.find("if (spec.integer_x) x_axis.incrs = [1, 2, 5"), std::string::npos);
+}
+
 TEST(HtmlPage, WriteIsAtomicAndWhole) {
   test::TempDir dir;
   HtmlPage page("t");
