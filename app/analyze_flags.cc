@@ -3,6 +3,7 @@
 #include "app/trace_options.h"
 #include "io/image_io.h"
 #include "render/pictures.h"
+#include "sim/bias.h"
 #include "sim/check.h"
 #include "sim/civil_time.h"
 #include "sim/logs/flight_log_io.h"
@@ -133,6 +134,7 @@ AnalyzeOptions AnalyzeOptionsFromFlags(const AnalyzeFlags& flags,
   }
   options.trigger_latency_s = flags.latency_s;
   options.estimate_bias = !flags.zero_bias;
+  if (!flags.bias.empty()) options.bias_segment = ParseBiasSegment(flags.bias);
   // The report's charts, shading, histograms and pictures, and its Allan deviation.
   if (!flags.out_dir.empty()) options.plots = AnalyzePlotOptions{};
   options.allan = !flags.out_dir.empty();
@@ -264,10 +266,22 @@ std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
       ->add_option("--scene", flags->scene_path,
                    "nadir image for the report's worst-image pictures (with --out)")
       ->check(CLI::ExistingFile);
-  command->add_flag(
+  // The bias options of flight, noise and accuracy; the default differs, said in the help: a
+  // flight log seldom starts with 5 s of stillness, so analyze searches for its still stretch.
+  auto* zero = command->add_flag(
       "--zero-bias", flags->zero_bias,
       "take the logged rates as bias-free, as flight --zero-bias does (flight-controller logs, "
-      "calibrated at arming); default: the bias of the log's longest still stretch");
+      "calibrated at arming); default: --auto-bias");
+  auto* given = command->add_option(
+      "--bias", flags->bias,
+      "still segment for the bias, A:B after the first sample (0:5s, 2s:7s), instead of the "
+      "search (--auto-bias)");
+  auto* automatic = command->add_flag(
+      "--auto-bias", flags->auto_bias,
+      "the bias of the log's longest still stretch (the default for analyze; zero, and said, "
+      "when it has none)");
+  zero->excludes(given)->excludes(automatic);
+  given->excludes(automatic);
   command->add_flag("--json", flags->json, "print JSON (docs/FORMATS.md `analyze`)");
   return [flags, altitude, readout, focal, size] {
     flags->altitude_given = altitude->count() > 0;

@@ -46,6 +46,8 @@ struct AnalyzeFlags {
   double speed_m_s = std::numeric_limits<double>::quiet_NaN();  // NaN: the photos' own
   bool recursive = false;
   bool zero_bias = false;
+  std::string bias;  // --bias A:B; empty: the log's longest still stretch (--auto-bias)
+  bool auto_bias = false;
   bool json = false;
   bool altitude_given = false;
   bool readout_given = false;

@@ -20,7 +20,6 @@ struct FlightCommand {
   TraceOptions trace;
   FlightOptions flight;
   bool no_vector = false;
-  bool zero_bias = false;
   bool json = false;
   std::string series_path;
 };
@@ -30,7 +29,7 @@ void Run(const FlightCommand& command) {
   options.vector_criterion = !command.no_vector;
   options.series = !command.series_path.empty();
   // A known (zero) bias takes precedence over the segment in Flight().
-  if (command.zero_bias) options.known_bias_rad_s = Eigen::Vector3d::Zero();
+  if (command.trace.zero_bias) options.known_bias_rad_s = Eigen::Vector3d::Zero();
   // The flags are checked before the log is opened (a pipe's copy can take a while).
   options.Check();
   const LogInput input = command.trace.Input();
@@ -69,10 +68,6 @@ const CommandRegistration kFlightRegistration(40, [](CLI::App& app) {
                     "arcsec", "added to each threshold for the gyro's own noise");
   cmd->add_flag("--no-vector", command->no_vector,
                 "skip the vector (SO(3) rotation angle) criterion, about halving the run time");
-  cmd->add_flag(
-      "--zero-bias", command->zero_bias,
-      "take the logged rates as bias-free and analyse every sample (flight-controller logs, "
-      "calibrated at arming)");
   cmd->add_flag("--json", command->json,
                 "print JSON (docs/FORMATS.md `flight`) instead of a table");
   cmd->add_option("--series", command->series_path,

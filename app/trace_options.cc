@@ -60,10 +60,15 @@ void TraceOptions::Add(CLI::App* command, bool with_bias) {
         ->add_option("--bias", bias,
                      "still segment for the bias, A:B after the first sample (0:5s, 2s:7s)")
         ->capture_default_str();
-    command->add_flag(
+    auto* automatic = command->add_flag(
         "--auto-bias", auto_bias,
         "detect the still segment automatically (longest stretch >= 2 s whose 0.1 s mean "
         "and variance stay at the quiet level); overrides --bias");
+    command
+        ->add_flag("--zero-bias", zero_bias,
+                   "take the logged rates as bias-free and analyse every sample "
+                   "(flight-controller logs, calibrated at arming)")
+        ->excludes(automatic);
   }
 }
 

@@ -40,6 +40,7 @@ struct TraceOptions {
   ColumnFlags column_flags;     // --time-unit, --columns, --delimiter, --rate-unit
   std::string bias = "0:5s";    // bias segment A:B after the first sample
   bool auto_bias = false;       // find the still segment automatically instead of --bias
+  bool zero_bias = false;       // the rates are bias-free: no segment, every sample analysed
   std::string second_path;      // --second: a second sensor's log on the same clock
 
   // Adds TRACE (positional) and the options above to a subcommand. with_bias: add --bias too.
@@ -88,6 +89,7 @@ template <typename Options, typename Analysis>
 auto AnalyzeTrace(const TraceOptions& trace_options, Options options, const Analysis& analysis,
                   LoadedTrace* loaded_out = nullptr) {
   if (!trace_options.auto_bias) options.bias = trace_options.Segment();
+  options.zero_bias = trace_options.zero_bias;
   options.Check();
   PipelinePrinter printer;
   LoadedTrace loaded = LoadTrace(trace_options.Input(), options.bias, printer.Events());

@@ -192,7 +192,7 @@ AccuracyResult AnalyzeAccuracy(const GyroTrace& trace, const AccuracyOptions& op
   AccuracyResult result;
   result.reference_deg = options.reference_deg;
   result.average_samples = options.average_samples;
-  const BiasEstimate bias = EstimateBias(trace, options.bias);
+  const BiasEstimate bias = options.zero_bias ? BiasEstimate() : EstimateBias(trace, options.bias);
   const size_t n = trace.size();
   const size_t first = bias.first_after;
   SHUTTERLAB_CHECK(first < n) << "no samples after the bias segment " << options.bias.begin_s << ":"

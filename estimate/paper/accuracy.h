@@ -24,6 +24,7 @@ struct AccuracyOptions {
   double reference_deg = 1.0;  // the turn angle set on the total station, degrees
   int average_samples = 100;   // samples averaged just before and just after each turn
   BiasSegment bias;            // still segment for the bias, seconds after the first sample
+  bool zero_bias = false;      // the rates are bias-free (calibrated): no segment, every sample
   double smooth_s = 0.010;     // moving-average length for detection, s
   double enter_factor = 8.0;   // a turn starts above enter_factor * still noise level
   double exit_factor = 3.0;    // ... and extends while above exit_factor * still noise level

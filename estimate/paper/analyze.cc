@@ -266,9 +266,16 @@ void DescribeSource(const FlightLog& log, const TraceSampling& sampling,
 
 // The bias (camera axes) from the log's still stretch when asked; zero, and said so in the output,
 // when there is none.
-void EstimateStillBias(const GyroTrace& camera_rates, bool estimate_bias, AnalyzeResult* result) {
+void EstimateStillBias(const GyroTrace& camera_rates, bool estimate_bias,
+                       const std::optional<BiasSegment>& given, AnalyzeResult* result) {
   result->bias_estimated = estimate_bias;
   if (!estimate_bias) return;
+  if (given) {  // the caller's segment: too few samples in it is an error, not a zero bias
+    result->still_segment = *given;
+    result->bias_rad_s = EstimateBias(camera_rates, *given).bias_rad_s;
+    result->bias_from_still = result->bias_segment_given = true;
+    return;
+  }
   try {
     const StillSegment still = DetectStillSegment(camera_rates);
     result->still_segment = still.segment;
@@ -536,6 +543,10 @@ void AnalyzePlotOptions::Check() const {
 void AnalyzeOptions::Check() const {
   rig.Check();
   if (plots) plots->Check();
+  SHUTTERLAB_CHECK(!bias_segment ||
+                   (bias_segment->begin_s >= 0.0 && bias_segment->end_s > bias_segment->begin_s))
+      << "bias segment " << bias_segment->begin_s << ":" << bias_segment->end_s
+      << " must satisfy 0 <= A < B";
   SHUTTERLAB_CHECK(rig.shutter.readout_s > 0 && rig.shutter.readout_s < 10.0)
       << "readout must be in (0, 10) s (got " << rig.shutter.readout_s << " s)";
   SHUTTERLAB_CHECK(std::isfinite(rig.altitude_m) && rig.altitude_m > 0)
@@ -624,7 +635,7 @@ AnalyzeResult Analyze(const FlightLog& log, const AnalyzeOptions& given_options)
     // The bias is not known yet: the still search and the flight table take the rates as logged.
     const GyroTrace camera_rates =
         RotateTrace(gyro, options.rig.cam_from_gyro, Eigen::Vector3d::Zero());
-    EstimateStillBias(camera_rates, options.estimate_bias, &result);
+    EstimateStillBias(camera_rates, options.estimate_bias, options.bias_segment, &result);
     FlightOptions flight_options = FlightOptionsForReadout(options, result);
     flight_options.progress = [&options](double f) { ReportProgress(options, 0.7 * f); };
     KeepFlightTable([&] { return Flight(camera_rates, flight_options); }, &result);
@@ -961,7 +972,8 @@ std::optional<StillSegment> StillSegmentOfLog(LogPasses* passes,
 
 AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions& given_options) {
   constexpr size_t kStillPasses = 5;  // DetectStillSegment on a source reads it at most five times
-  LogPasses passes(source, given_options, (given_options.estimate_bias ? kStillPasses : 0) + 2);
+  const bool search_still = given_options.estimate_bias && !given_options.bias_segment;
+  LogPasses passes(source, given_options, (search_still ? kStillPasses : 0) + 2);
   std::string altitude_source;
   const AnalyzeOptions options = WithLogAltitude(passes.log(), given_options, &altitude_source);
   const Eigen::Matrix3d& cam_from_gyro = options.rig.cam_from_gyro;
@@ -970,7 +982,11 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
     return ConsumeFlightLog(&stream, take, [&](double f) { passes.Report(f); });
   };
   BiasPass bias;
-  if (options.estimate_bias) bias.still = StillSegmentOfLog(&passes, cam_from_gyro);
+  if (search_still) {
+    bias.still = StillSegmentOfLog(&passes, cam_from_gyro);
+  } else if (options.estimate_bias && options.bias_segment) {
+    bias.still = StillSegment{*options.bias_segment};
+  }
   const StreamedLog read =
       consume([&](const GyroChunk& chunk) { bias.Add(chunk, cam_from_gyro, options.allan); });
   FlightLog log = passes.log();
@@ -985,6 +1001,13 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
   if (bias.still) {
     result.still_segment = bias.still->segment;
     result.bias_from_still = bias.bias_samples >= kMinBiasSamples;  // EstimateBias's refusal
+    result.bias_segment_given = !search_still;
+    // The caller's segment must hold the samples a bias needs, as EstimateBias says of a trace.
+    SHUTTERLAB_CHECK(!result.bias_segment_given || result.bias_from_still)
+        << "bias segment " << FormatNumber("%g", result.still_segment.begin_s) << ":"
+        << FormatNumber("%g", result.still_segment.end_s) << " s holds " << bias.bias_samples
+        << " samples (need at least " << kMinBiasSamples
+        << "): give a --bias A:B over a still part of the log, --auto-bias, or --zero-bias";
     if (result.bias_from_still)
       result.bias_rad_s = bias.bias_sum / static_cast<double>(bias.bias_samples);
   }
@@ -1100,7 +1123,8 @@ std::string AnalyzeReport(const AnalyzeResult& result) {
       << FormatNumber("%.1f", result.rate_hz) << " Hz, " << result.gaps << " gaps\n";
   for (const LogWarning& w : result.log_warnings) out << "log warning: " << WarningLine(w) << "\n";
   if (result.bias_from_still) {
-    out << "bias: still segment " << FormatNumber("%.2f", result.still_segment.begin_s) << ":"
+    out << "bias: " << (result.bias_segment_given ? "the segment given, " : "still segment ")
+        << FormatNumber("%.2f", result.still_segment.begin_s) << ":"
         << FormatNumber("%.2f", result.still_segment.end_s) << " s\n";
   } else if (!result.bias_estimated) {
     out << "bias: zero (not estimated)\n";

@@ -96,6 +96,9 @@ struct AnalyzeOptions {
   // false: zero bias and no still-segment search (calibrated flight-controller rates, or a
   // caller that removed the bias itself, e.g. `validate` on synthetic truth).
   bool estimate_bias = true;
+  // The still segment to take the bias from (seconds after the first sample, `--bias A:B`),
+  // instead of searching for one; ignored when estimate_bias is false.
+  std::optional<BiasSegment> bias_segment;
   // Keep what a report draws (AnalyzeResult::plots and the flight table's window summary,
   // FlightResult::summary), in memory that does not grow with the log.
   std::optional<AnalyzePlotOptions> plots;
@@ -184,6 +187,7 @@ struct AnalyzeResult {
   std::string flight_problem;          // why flight is empty
   bool bias_estimated = true;          // AnalyzeOptions::estimate_bias
   bool bias_from_still = false;
+  bool bias_segment_given = false;  // still_segment is AnalyzeOptions::bias_segment, not found
   BiasSegment still_segment;
   Eigen::Vector3d bias_rad_s = Eigen::Vector3d::Zero();  // camera axes
   // "none", "camera events (KIND)", AnalyzeOptions::triggers_source ("triggers"), "every N s"

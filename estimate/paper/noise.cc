@@ -32,7 +32,7 @@ void NoiseOptions::Check() const {
 NoiseResult AnalyzeNoise(const GyroTrace& trace, const NoiseOptions& options) {
   options.Check();
   NoiseResult result;
-  result.bias = EstimateBias(trace, options.bias);
+  result.bias = options.zero_bias ? BiasEstimate() : EstimateBias(trace, options.bias);
   result.rate_hz = trace.sampling().RateHz();
   result.window_samples = options.window_samples;
   if (options.window_s > 0.0) {

@@ -17,7 +17,8 @@ struct NoiseOptions {
   int window_samples = 120;  // N: consecutive samples per window (the paper: 120 at ~3 kHz = 40 ms)
   // When above 0, the window is this long instead: N = round(window_s x the trace's rate).
   double window_s = 0.0;
-  BiasSegment bias;  // seconds after the first sample; default 0:5 (docs/FORMATS.md)
+  BiasSegment bias;        // seconds after the first sample; default 0:5 (docs/FORMATS.md)
+  bool zero_bias = false;  // the rates are bias-free (calibrated): no segment, every sample
   int allan_points_per_decade = 10;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;

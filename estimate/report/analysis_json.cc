@@ -195,6 +195,7 @@ nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
                   {"rad_s", {result.bias_rad_s.x(), result.bias_rad_s.y(), result.bias_rad_s.z()}}};
   if (result.bias_from_still) {
     json["bias"]["segment_s"] = {result.still_segment.begin_s, result.still_segment.end_s};
+    json["bias"]["segment_given"] = result.bias_segment_given;
   }
   json["camera"] = {{"altitude_m", result.altitude_m},
                     {"altitude_source", result.altitude_source},

@@ -378,7 +378,8 @@ HtmlPage AnalyzeReportPage(const AnalyzeOptions& options, const AnalyzeResult& r
   const PinholeCamera& cam = rig.camera;
   std::string bias;
   if (result.bias_from_still) {
-    bias = "still segment " + Fmt("%.2f", result.still_segment.begin_s) + "-" +
+    bias = (result.bias_segment_given ? "the segment given, " : "still segment ") +
+           Fmt("%.2f", result.still_segment.begin_s) + "-" +
            Fmt("%.2f", result.still_segment.end_s) + " s after the first sample";
   } else {
     bias = result.bias_estimated ? "none found: zero bias assumed" : "zero (not estimated)";

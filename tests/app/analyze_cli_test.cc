@@ -353,5 +353,60 @@ TEST(AnalyzeCli, SaysWhatItAssumedAndHowToGiveIt) {
   for (const auto& a : zero_json["assumptions"]) EXPECT_NE(a["what"], "bias") << a.dump();
 }
 
+// The bias options of flight, noise and accuracy: --bias A:B takes the bias from that segment
+// instead of the search (the same bias as the search's on a log still for its first 5 s, within
+// the noise of a shorter mean), --auto-bias is the default said aloud, and a segment too short
+// for a bias, or two of the options together, are refused in one line.
+TEST(AnalyzeCli, TheBiasOptionsOfEveryCommandThatReadsALog) {
+  test::TempDir dir;
+  const std::string gyro = dir / "gyro.csv";
+  test::WriteStillThenTurningGyroCsv(gyro);
+  const auto searched = RunShutterlab("analyze " + gyro + " --every 2s --json");
+  const auto automatic = RunShutterlab("analyze " + gyro + " --every 2s --auto-bias --json");
+  const auto given = RunShutterlab("analyze " + gyro + " --every 2s --bias 0:2s --json");
+  ASSERT_EQ(searched.exit_code, 0) << searched.output;
+  ASSERT_EQ(given.exit_code, 0) << given.output;
+  EXPECT_EQ(automatic.out, searched.out);
+  const nlohmann::json found = nlohmann::json::parse(searched.out)["bias"];
+  const nlohmann::json segment = nlohmann::json::parse(given.out)["bias"];
+  EXPECT_FALSE(found["segment_given"].get<bool>());
+  EXPECT_TRUE(segment["segment_given"].get<bool>());
+  EXPECT_EQ(segment["segment_s"], nlohmann::json::array({0.0, 2.0}));
+  // The log's still part: 0.01 rad/s on x, 0 on y, 0.002 cos(50 t) on z (a mean near 0).
+  EXPECT_NEAR(segment["rad_s"][0].get<double>(), 0.01, 1e-9);
+  EXPECT_NEAR(segment["rad_s"][1].get<double>(), 0.0, 1e-9);
+  EXPECT_NEAR(segment["rad_s"][2].get<double>(), found["rad_s"][2].get<double>(), 1e-4);
+  EXPECT_NE(RunShutterlab("analyze " + gyro + " --every 2s --bias 0:2s")
+                .out.find("bias: the segment given, 0.00:2.00 s\n"),
+            std::string::npos);
+  const auto short_segment = RunShutterlab("analyze " + gyro + " --every 2s --bias 0:5ms");
+  EXPECT_EQ(short_segment.exit_code, 2);
+  EXPECT_EQ(test::LineCount(short_segment.output), 1u) << short_segment.output;
+  EXPECT_NE(short_segment.err.find("bias segment 0:0.005 s holds 5 samples (need at least 10)"),
+            std::string::npos)
+      << short_segment.err;
+  for (const char* both :
+       {"--bias 0:2s --zero-bias", "--bias 0:2s --auto-bias", "--zero-bias --auto-bias"}) {
+    const auto r = RunShutterlab("analyze " + gyro + " --every 2s " + both);
+    EXPECT_EQ(r.exit_code, 2) << both;
+    EXPECT_NE(r.err.find("excludes"), std::string::npos) << both << ": " << r.err;
+  }
+  // noise and accuracy take --zero-bias as flight does: no segment, every sample analysed.
+  const nlohmann::json noise =
+      nlohmann::json::parse(RunShutterlab("noise " + gyro + " --zero-bias --json").out);
+  EXPECT_EQ(noise["samples"], 12000);
+  EXPECT_EQ(noise["axes"]["x"]["bias_rad_s"], 0.0);
+  // An ideal sensor's steps: no bias to remove, so the zero bias finds the turns the segment does.
+  const std::string steps = dir / "steps.csv";
+  ASSERT_EQ(RunShutterlab("synth steps --ideal --out " + steps).exit_code, 0);
+  const auto by_segment = RunShutterlab("accuracy " + steps + " --reference-deg 1 --json");
+  const auto by_zero = RunShutterlab("accuracy " + steps + " --reference-deg 1 --zero-bias --json");
+  ASSERT_EQ(by_zero.exit_code, 0) << by_zero.output;
+  EXPECT_EQ(nlohmann::json::parse(by_zero.out)["rotations"].size(),
+            nlohmann::json::parse(by_segment.out)["rotations"].size());
+  EXPECT_GE(nlohmann::json::parse(by_zero.out)["rotations"].size(), 1u) << by_zero.out;
+  EXPECT_EQ(RunShutterlab("noise " + gyro + " --zero-bias --auto-bias").exit_code, 2);
+}
+
 }  // namespace
 }  // namespace shutterlab
