@@ -27,9 +27,11 @@ void Run(const AccuracyCommand& command) {
   if (command.json) {
     auto json = AccuracyToJson(result);
     json["warnings"] = WarningsToJson(loaded.warnings);
+    json["assumptions"] = AssumptionsToJson(command.trace.BiasAssumptions());
     std::cout << JsonText(json) << "\n";
   } else {
     std::cout << AccuracyTable(result);
+    PrintAssumptions(command.trace.BiasAssumptions());
   }
 }
 

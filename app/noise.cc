@@ -42,6 +42,7 @@ void Run(const NoiseCommand& command) {
       json["pair"] =
           NoisePairToJson(loaded.pair->pair, command.trace.second_path, *first, *second, result);
     json["warnings"] = WarningsToJson(loaded.warnings);
+    json["assumptions"] = AssumptionsToJson(command.trace.BiasAssumptions());
     std::cout << JsonText(json) << "\n";
   } else {
     if (first)
@@ -49,6 +50,7 @@ void Run(const NoiseCommand& command) {
                 << "\n";
     std::cout << NoiseTable(result);
     if (first) std::cout << NoisePairTable(*first, *second, result);
+    PrintAssumptions(command.trace.BiasAssumptions());
   }
 }
 

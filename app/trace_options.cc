@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iostream>
 #include <unistd.h>
 
 namespace shutterlab::app {
@@ -56,10 +57,11 @@ void TraceOptions::Add(CLI::App* command, bool with_bias) {
   AddRangeOption(command, &range_dps);
   column_flags.Add(command);
   if (with_bias) {
-    command
-        ->add_option("--bias", bias,
-                     "still segment for the bias, A:B after the first sample (0:5s, 2s:7s)")
-        ->capture_default_str();
+    bias_option =
+        command
+            ->add_option("--bias", bias,
+                         "still segment for the bias, A:B after the first sample (0:5s, 2s:7s)")
+            ->capture_default_str();
     auto* automatic = command->add_flag(
         "--auto-bias", auto_bias,
         "detect the still segment automatically (longest stretch >= 2 s whose 0.1 s mean "
@@ -70,6 +72,17 @@ void TraceOptions::Add(CLI::App* command, bool with_bias) {
                    "(flight-controller logs, calibrated at arming)")
         ->excludes(automatic);
   }
+}
+
+std::vector<Assumption> TraceOptions::BiasAssumptions() const {
+  if (bias_option == nullptr || bias_option->count() > 0 || auto_bias || zero_bias) return {};
+  return {{"bias", "the mean over " + bias + " after the first sample",
+           "the camera taken as still then",
+           "--bias A:B over a still part, --auto-bias, or --zero-bias"}};
+}
+
+void PrintAssumptions(const std::vector<Assumption>& assumptions) {
+  for (const Assumption& a : assumptions) std::cout << AssumptionLine(a) << "\n";
 }
 
 void TraceOptions::AddSecond(CLI::App* command) {

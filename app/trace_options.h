@@ -3,6 +3,7 @@
 // a second sensor), and the printing of what the log pipeline says.
 
 #include "app/command.h"
+#include "estimate/paper/analyze.h"
 #include "estimate/paper/log_pipeline.h"
 #include "sim/bias.h"
 #include "sim/log_warning.h"
@@ -42,6 +43,7 @@ struct TraceOptions {
   bool auto_bias = false;       // find the still segment automatically instead of --bias
   bool zero_bias = false;       // the rates are bias-free: no segment, every sample analysed
   std::string second_path;      // --second: a second sensor's log on the same clock
+  CLI::Option* bias_option = nullptr;  // --bias, to tell a given segment from the default
 
   // Adds TRACE (positional) and the options above to a subcommand. with_bias: add --bias too.
   void Add(CLI::App* command, bool with_bias);
@@ -53,7 +55,12 @@ struct TraceOptions {
   LogInput Input() const;
   // --bias A:B (throws std::invalid_argument for a bad one).
   BiasSegment Segment() const { return ParseBiasSegment(bias); }
+  // The bias segment when none of --bias, --auto-bias, --zero-bias was given: said as assumed.
+  std::vector<Assumption> BiasAssumptions() const;
 };
+
+// Prints each assumption's line ("assumed: ...; give ...") on stdout after a command's table.
+void PrintAssumptions(const std::vector<Assumption>& assumptions);
 
 // The --format option of a command that reads logs: every format of the reader table
 // (sim/logs/flight_log_io.h LogReaders) in its help, after `what`.

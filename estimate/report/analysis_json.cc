@@ -182,6 +182,14 @@ nlohmann::json FlightToJson(const FlightResult& result) {
           {"rows", rows}};
 }
 
+nlohmann::json AssumptionsToJson(const std::vector<Assumption>& assumptions) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const Assumption& a : assumptions) {
+    out.push_back({{"what", a.what}, {"taken", a.taken}, {"why", a.why}, {"give", a.give}});
+  }
+  return out;
+}
+
 nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
   nlohmann::json json;
   json["source"] = {{"format", result.format},   {"gyro", result.gyro_source},
@@ -202,11 +210,7 @@ nlohmann::json AnalyzeToJson(const AnalyzeResult& result) {
                     {"altitude_method", result.altitude_method},
                     {"readout_s", result.readout_s}};
   json["triggers"] = result.trigger_source;
-  nlohmann::json assumptions = nlohmann::json::array();
-  for (const Assumption& a : result.assumptions) {
-    assumptions.push_back({{"what", a.what}, {"taken", a.taken}, {"why", a.why}, {"give", a.give}});
-  }
-  json["assumptions"] = assumptions;
+  json["assumptions"] = AssumptionsToJson(result.assumptions);
   nlohmann::json images = nlohmann::json::array();
   for (const ImageResult& image : result.images) {
     nlohmann::json entry;

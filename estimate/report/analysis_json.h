@@ -49,4 +49,8 @@ nlohmann::ordered_json RecordSummaryToJson(const RecordSummary& summary,
 // docs/FORMATS.md `analyze` JSON (plus bias, verdict and per-image detail).
 nlohmann::json AnalyzeToJson(const AnalyzeResult& result);
 
+// What neither the user nor the file gave (analyze's, flight's, noise's and accuracy's
+// `assumptions`): [{"what", "taken", "why", "give"}, ...].
+nlohmann::json AssumptionsToJson(const std::vector<Assumption>& assumptions);
+
 }  // namespace shutterlab

@@ -151,6 +151,39 @@ TEST(FlightCli, TableAndSeries) {
   EXPECT_EQ(CountLines(csv), 1u + 2000u - 10u);
 }
 
+// What flight, noise and accuracy took as defaults is said, with how to give it, in the table and
+// the JSON; what was given is not.
+TEST(FlightCli, SaysWhatItAssumedAndHowToGiveIt) {
+  TempDir dir;
+  const std::string trace = WriteTrace(dir);
+  const auto bare = RunShutterlab("flight " + trace);
+  ASSERT_EQ(bare.exit_code, 0) << bare.output;
+  for (const std::string line :
+       {"\nassumed: altitude 50 m; give --altitude\n",
+        "\nassumed: readout 10 ms, 20 ms (the paper's windows); give --window with your camera's "
+        "readout\n",
+        "\nassumed: bias the mean over 0:5s after the first sample (the camera taken as still "
+        "then); give --bias A:B over a still part, --auto-bias, or --zero-bias\n"}) {
+    EXPECT_NE(bare.out.find(line), std::string::npos) << line << bare.out;
+  }
+  const auto json = RunShutterlab("flight " + trace + " --json");
+  ASSERT_EQ(json.exit_code, 0) << json.output;
+  const nlohmann::json assumed = nlohmann::json::parse(json.out)["assumptions"];
+  ASSERT_EQ(assumed.size(), 3u) << assumed.dump();
+  EXPECT_EQ(assumed[0]["what"], "altitude");
+  EXPECT_EQ(assumed[2]["give"], "--bias A:B over a still part, --auto-bias, or --zero-bias");
+  const auto given =
+      RunShutterlab("flight " + trace + " --altitude 40m --window 30ms --bias 0:1s --json");
+  ASSERT_EQ(given.exit_code, 0) << given.output;
+  EXPECT_TRUE(nlohmann::json::parse(given.out)["assumptions"].empty()) << given.out;
+  const auto noise = RunShutterlab("noise " + trace + " --json");
+  ASSERT_EQ(noise.exit_code, 0) << noise.output;
+  ASSERT_EQ(nlohmann::json::parse(noise.out)["assumptions"].size(), 1u) << noise.out;
+  EXPECT_TRUE(nlohmann::json::parse(
+                  RunShutterlab("noise " + trace + " --zero-bias --json").out)["assumptions"]
+                  .empty());
+}
+
 // --auto-bias streams the log (the still search reads it in passes of its own, in bounded memory)
 // and must give what the analysis of the whole trace gives: the same segment, bias and counts.
 TEST(FlightCli, AutoBiasStreamedEqualsTheWholeTrace) {
@@ -177,6 +210,7 @@ TEST(FlightCli, AutoBiasStreamedEqualsTheWholeTrace) {
   const nlohmann::json whole = FlightToJson(Flight(ReadGyroCsv(path), options));
   nlohmann::json streamed = nlohmann::json::parse(r.out);
   streamed.erase("warnings");
+  streamed.erase("assumptions");  // the command's, not the analysis's
   EXPECT_EQ(streamed, whole) << streamed.dump(1) << "\n" << whole.dump(1);
   // A log on a pipe can be read once only: it is copied to a temporary file in $TMPDIR (none is
   // left there), whose passes give the same result; a folder that is not there is named.
@@ -187,6 +221,7 @@ TEST(FlightCli, AutoBiasStreamedEqualsTheWholeTrace) {
   EXPECT_NE(piped.err.find("auto-bias: still segment 3.0"), std::string::npos) << piped.err;
   nlohmann::json from_pipe = nlohmann::json::parse(piped.out);
   from_pipe.erase("warnings");
+  from_pipe.erase("assumptions");
   EXPECT_EQ(from_pipe, whole);
   EXPECT_TRUE(std::filesystem::is_empty(dir / "tmp"));
   const auto missing =
@@ -254,6 +289,7 @@ TEST(FlightCli, ASensorPairStreamedEqualsTheWholeFusion) {
     ASSERT_EQ(r.exit_code, 0) << r.output;
     nlohmann::json streamed = nlohmann::json::parse(r.out);
     streamed.erase("warnings");
+    streamed.erase("assumptions");  // the command's, not the analysis's
     EXPECT_EQ(streamed, whole) << bias << "\n" << streamed.dump(1) << "\n" << whole.dump(1);
     EXPECT_TRUE(streamed["pair"]["mounting_fitted"].get<bool>()) << bias;
     const auto piped = RunShutterlab(
@@ -262,6 +298,7 @@ TEST(FlightCli, ASensorPairStreamedEqualsTheWholeFusion) {
     ASSERT_EQ(piped.exit_code, 0) << piped.output;
     nlohmann::json from_pipe = nlohmann::json::parse(piped.out);
     from_pipe.erase("warnings");
+    from_pipe.erase("assumptions");
     from_pipe["pair"]["second_log"] = dir / "b.csv";  // named as given: /dev/stdin
     EXPECT_EQ(from_pipe, whole) << bias;
   }
