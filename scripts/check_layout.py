@@ -13,8 +13,8 @@
   tests       each test file sits in the mirror of the library it tests: tests/FOLDER/ for a
               FOLDER that is a library (or app/, scripts/), and a file named after a unit
               (UNIT_test.cc) beside that unit's own folder
-  readme      the README's "Layout" block names every folder that holds code, each library with
-              its target, and no folder that does not exist
+  readme      the "Layout" block of docs/development.md (the README links it) names every folder
+              that holds code, each library with its target, and no folder that does not exist
 
 Usage: scripts/check_layout.py CHECK [--build DIR]      (stdlib only; run from anywhere)
 Exit 0 when the check holds, 1 with one line per finding (FILE:LINE: problem) when it does not,
@@ -392,15 +392,20 @@ def check_tests():
     return report(findings)
 
 
+# The layout block the readme check compares with the tree.
+LAYOUT_DOC = "docs/development.md"
+
+
 def check_readme(build):
     findings = []
-    lines = read_lines(os.path.join(ROOT, "README.md"))
+    doc = LAYOUT_DOC
+    lines = read_lines(os.path.join(ROOT, doc))
     try:
         start = lines.index("## Layout")
         begin = lines.index("```", start) + 1
         end = lines.index("```", begin)
     except ValueError:
-        print("README.md: no \"## Layout\" section with a ``` block")
+        print(f"{doc}: no \"## Layout\" section with a ``` block")
         return 1
     named = {}
     for number, line in enumerate(lines[begin:end], begin + 1):
@@ -409,11 +414,11 @@ def check_readme(build):
             named[m.group(1)] = (number, m.group(2).rstrip(":"))
     for folder, (number, _) in named.items():
         if not os.path.isdir(os.path.join(ROOT, folder)):
-            findings.append(f"README.md:{number}: names {folder}/, which does not exist")
+            findings.append(f"{doc}:{number}: names {folder}/, which does not exist")
     code_folders = {os.path.dirname(f) for f in code_files()}
     for folder in sorted(code_folders):
         if folder not in named:
-            findings.append(f"README.md: the Layout block does not name {folder}/")
+            findings.append(f"{doc}: the Layout block does not name {folder}/")
     layout_path = os.path.join(build, "layout.txt")
     if not os.path.isfile(layout_path):
         findings.append(f"{layout_path}: not found: configure the build first (scripts/setup.sh)")
@@ -421,11 +426,11 @@ def check_readme(build):
         layout = Layout(layout_path)
         for folder, target in sorted(layout.folder_target.items()):
             if target.startswith("shutterlab_") and folder in named and named[folder][1] != target:
-                findings.append(f"README.md:{named[folder][0]}: {folder}/ is {target}, not "
+                findings.append(f"{doc}:{named[folder][0]}: {folder}/ is {target}, not "
                                 f"{named[folder][1]}")
     for top in ("tests", "scripts", "docs", "fuzz", "bench", "third_party"):
         if os.path.isdir(os.path.join(ROOT, top)) and top not in named:
-            findings.append(f"README.md: the Layout block does not name {top}/")
+            findings.append(f"{doc}: the Layout block does not name {top}/")
     return report(findings)
 
 

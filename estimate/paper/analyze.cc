@@ -982,11 +982,9 @@ AnalyzeResult AnalyzeStream(const AnalyzeLogSource& source, const AnalyzeOptions
     return ConsumeFlightLog(&stream, take, [&](double f) { passes.Report(f); });
   };
   BiasPass bias;
-  if (search_still) {
-    bias.still = StillSegmentOfLog(&passes, cam_from_gyro);
-  } else if (options.estimate_bias && options.bias_segment) {
+  if (search_still) bias.still = StillSegmentOfLog(&passes, cam_from_gyro);
+  if (options.estimate_bias && options.bias_segment)
     bias.still = StillSegment{*options.bias_segment};
-  }
   const StreamedLog read =
       consume([&](const GyroChunk& chunk) { bias.Add(chunk, cam_from_gyro, options.allan); });
   FlightLog log = passes.log();

@@ -1,0 +1,155 @@
+#!/usr/bin/env bash
+# scripts/doc_commands.py on a throwaway repository: a README and a docs page whose blocks pass,
+# fail, expect an exit code, share a file through /tmp/ within a page, are marked long, template or
+# file, and an inline command with an unknown option; build/bin/shutterlab is a stand-in with a
+# CLI11-like --help. Each failure must come back as one FILE:LINE line.
+set -euo pipefail
+fail() { echo "FAIL: $*" >&2; exit 1; }
+script="$(cd "$(dirname "$0")/../.." && pwd)/scripts/doc_commands.py"
+work=$(mktemp -d "${TMPDIR:-/tmp}/doc_commands_test.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+repo="$work/repo"
+mkdir -p "$repo/docs" "$repo/scripts" "$repo/build/bin" "$work/data"
+echo 'the data' >"$work/data/in.txt"
+printf '#!/bin/sh\necho ok\n' >"$repo/scripts/ok.sh"
+cat >"$repo/build/bin/shutterlab" <<'EOF'
+#!/usr/bin/env bash
+# a stand-in: shutterlab greet [--name X] [--fail] [--code N] [--out F]
+if [ "${1:-}" = --help ]; then
+  printf 'Usage: shutterlab [OPTIONS] SUBCOMMAND\n\nOptions:\n  -h,--help  help\n\n'
+  printf 'Subcommands:\n  greet      say hello\n'
+  exit 0
+fi
+[ "${1:-}" = greet ] || { echo "no such subcommand" >&2; exit 109; }
+shift
+out=/dev/stdout
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --help) printf 'Usage: shutterlab greet [OPTIONS]\n\nOptions:\n  -h,--help  help\n'
+            printf '  --name TEXT  who\n  --fail{false}  fail\n  --code INT  exit\n'
+            printf '  --out TEXT  file\n'
+            exit 0 ;;
+    --name) name=$2; shift ;;
+    --fail) echo "first line" >&2; echo "boom: it failed" >&2; exit 3 ;;
+    --code) exit "$2" ;;
+    --out) out=$2; shift ;;
+    *) echo "unknown $1" >&2; exit 109 ;;
+  esac
+  shift
+done
+echo "hello ${name:-you}" >"$out"
+EOF
+chmod +x "$repo/scripts/ok.sh" "$repo/build/bin/shutterlab"
+marker="/tmp/doc_commands_test_$$"
+
+cat >"$repo/README.md" <<EOF
+# a README
+
+\`\`\`sh
+mkdir -p $marker
+build/bin/shutterlab greet --name you --out $marker/hello.txt
+grep -q 'hello you' $marker/hello.txt
+grep -q 'the data' \$data/in.txt && grep -q 'the data' "\$SHUTTERLAB_DATA_DIR/in.txt"
+# hello you
+scripts/ok.sh
+build/bin/shutterlab greet --code 2    # exit code 2
+\`\`\`
+
+Inline: \`build/bin/shutterlab greet --name x\` and \`scripts/ok.sh\`.
+EOF
+cat >"$repo/docs/page.md" <<EOF
+# a page
+
+\`\`\`sh
+mkdir -p /tmp/shared && cp \$data/in.txt /tmp/shared/copy.txt
+build/bin/shutterlab greet \\
+    --name me
+\`\`\`
+
+\`\`\`bash
+grep -q 'the data' /tmp/shared/copy.txt   # the block before wrote it
+test -f camera.json && test -f /tmp/sub/rig.json
+build/bin/shutterlab greet --fail
+echo never reached
+\`\`\`
+
+\`\`\`sh
+build/bin/shutterlab greet --code 0    # exit code 2
+\`\`\`
+
+<!-- doc-test: long -->
+\`\`\`sh
+false
+\`\`\`
+
+<!-- doc-test: template -->
+\`\`\`sh
+build/bin/shutterlab greet DATASET --bogus
+build/bin/missing_tool --x
+\`\`\`
+
+<!-- doc-test: file camera.json -->
+\`\`\`json
+{"format": "rig/1"}
+\`\`\`
+
+<!-- doc-test: file /tmp/sub/rig.json -->
+\`\`\`json
+{}
+\`\`\`
+
+| command | what |
+| --- | --- |
+| \`build/bin/shutterlab greet --nope \\| cat\` | an unknown option |
+| \`build/bin/shutterlab wave\` | an unknown subcommand |
+| \`shutterlab greet [--name X \\| --nope2] [--code 0\\|2]\` | a synopsis |
+
+\`\`\`
+scripts/ok.sh --no-language
+\`\`\`
+EOF
+
+# run ARGS...: the script's output in $got, its exit status in $status
+run() { status=0; got=$(/usr/bin/python3 "$script" --root "$repo" "$@" 2>&1) || status=$?; }
+has() { grep -qF -- "$1" <<<"$got" || fail "no '$1' in the output:
+$got"; }
+
+export SHUTTERLAB_DATA_DIR="$work/data"
+unset CI
+run --verbose
+[ "$status" = 1 ] || fail "exit $status, not 1:
+$got"
+has "docs/page.md:12: build/bin/shutterlab greet --fail: exit code 3: first line | boom: it failed"
+has "docs/page.md:17: build/bin/shutterlab greet --code 0: exit code 0 (expected 2): (no stderr)"
+has "docs/page.md:27: shutterlab greet has no option --bogus"
+has "docs/page.md:28: build/bin/missing_tool is not in the build folder"
+has "docs/page.md:43: shutterlab greet has no option --nope"
+has "docs/page.md:44: shutterlab has no subcommand 'wave'"
+has "docs/page.md:45: shutterlab greet has no option --nope2"
+has "docs/page.md:47: a command in a fence with no language"
+has "docs/page.md:21: not run (marked long)"
+has "docs/page.md:26: not run (marked template)"
+# README.md passes: its one line is its block's time; page.md: 5 blocks' lines and 8 findings.
+[ "$(grep -c '^README.md:' <<<"$got")" = 1 ] && ! grep -q '^README.md:.*FAILED' <<<"$got" ||
+  fail "README.md must pass:
+$got"
+[ "$(grep -c '^docs/page.md:[0-9]*: ' <<<"$got")" = 13 ] || fail "not one line per finding:
+$got"
+[ ! -e "$marker" ] || { rm -rf "$marker"; fail "a block wrote to the real /tmp"; }
+[ ! -e "$repo/camera.json" ] || fail "a file block was written into the repository"
+
+# The long block runs with --long (and fails: false).
+run --long docs/page.md
+has "docs/page.md:22: false: exit code 1"
+
+# Without the shared data: only checked; a skip (77), a failure under CI=true.
+rm "$repo/docs/page.md"
+export SHUTTERLAB_DATA_DIR="$work/no data"
+run
+[ "$status" = 77 ] || fail "exit $status without the data, not 77:
+$got"
+has "is absent"
+CI=true run
+[ "$status" = 1 ] || fail "exit $status without the data under CI=true, not 1:
+$got"
+echo "doc_commands_test: ok"
