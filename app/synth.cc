@@ -19,7 +19,7 @@ struct SynthCliOptions {
   std::string profile = "still";
   SynthOptions synth;
   SynthOutputOptions output;
-  std::string format = "csv";
+  std::string format = "gyro.csv";  // the readers' name (sim/logs/log_format.h); "csv" too
   bool raw = false;
   std::string time_unit = "s";
   double altitude_m = 0.0;
@@ -156,8 +156,8 @@ const CommandRegistration kSynthRegistration(10, [](CLI::App& app) {
   AddQuantityOption(cmd, "--altitude", &o->altitude_m, "m", "m",
                     "ulog: altitude above ground, written as vehicle_local_position.dist_bottom");
   cmd->add_option("--format", o->format,
-                  "csv (gyro.csv: s, rad/s), raw (int16 counts) or ulog (a PX4 flight log that "
-                  "every command reads)")
+                  "gyro.csv (s, rad/s; csv too), raw (int16 counts) or ulog (a PX4 flight log "
+                  "that every command reads): the names every command's --format reads")
       ->capture_default_str();
   cmd->add_flag("--raw", o->raw, "shorthand for --format raw");
   cmd->add_option("--time-unit", o->time_unit,

@@ -52,6 +52,25 @@ TEST(SynthCli, SameSeedSameBytes) {
   EXPECT_NE(ReadFileToString(dir / "a.csv"), ReadFileToString(dir / "c.csv"));
 }
 
+// synth's --format names are the readers' (flight --format gyro.csv reads what synth --format
+// gyro.csv writes); "csv", its old name, writes the same bytes; a format synth cannot write is
+// refused in one line.
+TEST(SynthCli, FormatNamesAreTheReadersNames) {
+  test::TempDir dir;
+  const std::string common = "synth still --duration 1s --out ";
+  ASSERT_EQ(RunShutterlab(common + (dir / "a.csv") + " --format gyro.csv").exit_code, 0);
+  ASSERT_EQ(RunShutterlab(common + (dir / "b.csv") + " --format csv").exit_code, 0);
+  ASSERT_EQ(RunShutterlab(common + (dir / "c.csv")).exit_code, 0);
+  EXPECT_EQ(ReadFileToString(dir / "a.csv"), ReadFileToString(dir / "b.csv"));
+  EXPECT_EQ(ReadFileToString(dir / "a.csv"), ReadFileToString(dir / "c.csv"));
+  EXPECT_EQ(
+      RunShutterlab("noise " + (dir / "a.csv") + " --format gyro.csv --bias 0:0.5s").exit_code, 0);
+  const auto gcsv = RunShutterlab(common + (dir / "d.gcsv") + " --format gcsv");
+  EXPECT_EQ(gcsv.exit_code, 2);
+  EXPECT_NE(gcsv.err.find("synth writes gyro.csv or raw counts, not gcsv"), std::string::npos)
+      << gcsv.err;
+}
+
 TEST(SynthCli, IdealSensorWritesTheExactMotion) {
   test::TempDir dir;
   const std::string out = dir / "ideal.csv";
