@@ -93,6 +93,10 @@ struct EffectSpec {
   bool identifiable_with_pair_translation = true;
   // The import.json claim ("what") that a fit of this effect tests; "" when none does.
   std::string claim;
+  // What a real device can have (docs/FORMATS.md "Physical bounds"): for a value outside, why no
+  // device has it; "" inside. nullptr: every value of the shape is plausible (a mounting, a lens,
+  // a readout direction). A fitted value outside is never named as a fix (OutOfBounds).
+  std::string (*out_of_bounds)(const EffectValue& value) = nullptr;
 };
 
 // Every effect, in docs/FORMATS.md's order.
@@ -111,6 +115,9 @@ Effect RequireEffect(std::string_view name, const std::string& where);
 // model that fails TrueModel::Check), and then leaves *model unchanged. From `NAME=VALUE` text:
 // model/effect_io.h.
 EffectValue ApplyInjection(const Injection& injection, TrueModel* model);
+
+// Spec(effect).out_of_bounds's answer for the value: "" when a real device can have it.
+std::string OutOfBounds(Effect effect, const EffectValue& value);
 
 // Standard errors in the shape of the effect's value, from the covariance of its parameters
 // (gyro_to_camera: per matrix entry, first order in the rotation vector). std::monostate for

@@ -30,6 +30,12 @@ CorrectionModel BuildCorrectionModel(const RigModel& declared,
                         "declared model plus each effect's value");
   }
   for (const ReportedEffect& e : report->effects) {
+    // A value no device has explains a residual but corrects nothing (validate's verdict says
+    // what it points to); from a report of any tool, so checked here, not read from a key.
+    const std::string outside = OutOfBounds(e.effect, e.value);
+    SHUTTERLAB_CHECK(outside.empty())
+        << report_path << ": " << Spec(e.effect).name << " " << outside
+        << ": it is no correction; give the values to use with --effect NAME=VALUE instead";
     out.effects.push_back(e.effect);
     if (!report->fitted) {
       ApplyInjection(Injection{e.effect, e.value}, &out.model);

@@ -43,6 +43,9 @@ struct IdentifiedEffect {
   Effect effect = Effect::kTimeOffset;  // its name and unit: Spec(effect)
   EffectValue value;         // docs/FORMATS.md value (number, [3], 3x3, {k1, k2}, direction)
   EffectValue stderr_value;  // same shape as value (std::monostate for readout_direction)
+  // Why no real device has the value (OutOfBounds, model/effects.h); "" when one can. Such a fit
+  // explains the residual but is never named as a fix.
+  std::string out_of_bounds;
   std::vector<Effect> ambiguous_with;  // effects that explain the data as well
   ResidualStats after;                 // residual once this effect is added
   // The fitted parameters (EffectSpec::parameter_count of them, deltas from the declared model as

@@ -28,6 +28,10 @@ json LoopToJson(const LoopResult& result, size_t frame_count) {
       for (Effect a : e.ambiguous_with) names.push_back(Spec(a).name);
       j["ambiguous_with"] = names;
     }
+    // Beyond docs/FORMATS.md: whether a real device can have the value (model/effects.h
+    // OutOfBounds).
+    j["within_bounds"] = e.out_of_bounds.empty();
+    if (!e.out_of_bounds.empty()) j["out_of_bounds"] = e.out_of_bounds;
     j["after"] = stats(e.after);
     // Beyond docs/FORMATS.md: the fitted parameters and their covariance, which the value's
     // standard errors leave out (clock_rate's companion offset, correlations): `correct` draws

@@ -120,9 +120,43 @@ const char* VerdictLevelName(ValidationVerdict::Level level) {
   return "?";
 }
 
+namespace {
+
+// The fitted effects no real device can have, each "NAME = VALUE: why" (empty when none).
+std::vector<std::string> OutOfBoundsLines(const LoopResult& loop) {
+  std::vector<std::string> lines;
+  for (const IdentifiedEffect& e : loop.effects) {
+    if (e.out_of_bounds.empty()) continue;
+    lines.push_back(Spec(e.effect).name + " " + e.out_of_bounds);
+  }
+  return lines;
+}
+
+// What to trust less: many points left out, halves of a clip that disagree.
+void AddCautions(const ValidationResult& result, ValidationVerdict* v) {
+  const PointScreen& s = result.screen;
+  if (s.camera_fixed_share + s.moving_share > kManyLeftOut) {
+    v->actions.push_back(Percent(s.camera_fixed_share + s.moving_share) +
+                         " of the points were left out before the fit: check the region drawn "
+                         "below, and give --mask where it is wrong.");
+  }
+  for (const HalfCheck& h : result.halves) {
+    for (const HalfAgreement& a : h.effects) {
+      if (a.determined && !a.agree) {
+        v->actions.push_back("The halves disagree on " + Spec(a.effect).name +
+                             ": the value may change during the clip; trust it less than its "
+                             "standard error says.");
+      }
+    }
+  }
+}
+
+}  // namespace
+
 ValidationVerdict MakeVerdict(const ValidationResult& result) {
   ValidationVerdict v;
   const LoopResult& loop = PreferredLoop(result);
+  const std::vector<std::string> impossible = OutOfBoundsLines(loop);
   const std::vector<std::string> effects = EffectLines(result, loop);
   const GyroFollowCheck& follow = result.screen.gyro_follow;
   const std::string noise = FormatNumber("%.2f", NoiseRatio(loop)) + "x the measurement noise";
@@ -149,6 +183,18 @@ ValidationVerdict MakeVerdict(const ValidationResult& result) {
     v.actions.push_back(
         "Record with the stabiliser off (GoPro: HyperSmooth / EIS off; phones: video "
         "stabilisation off), or validate the camera's unstabilised footage.");
+  } else if (!impossible.empty()) {
+    // The fit explains the residual only with a value no sensor has: naming it as the fix would
+    // hide what really moves the image.
+    v.level = ValidationVerdict::Level::kProblem;
+    v.headline = "No effect of the sensor explains this: the fit needs " +
+                 Joined(impossible, "; and ") +
+                 ". That points elsewhere: a stabiliser or re-rendering that turns the image on "
+                 "its own, a wrong axis mapping (gyro_to_camera), or the wrong camera in "
+                 "camera.json.";
+    v.actions.push_back(
+        "Check camera.json's gyro_to_camera and intrinsics against the camera, record with any "
+        "stabiliser off, and validate again; do not put these values into camera.json.");
   } else if (loop.unexplained) {
     v.level = ValidationVerdict::Level::kProblem;
     v.headline = "Something the model lacks moves the image: " +
@@ -196,21 +242,7 @@ ValidationVerdict MakeVerdict(const ValidationResult& result) {
     v.actions.push_back("Where the source's claim is contradicted, use the fitted value instead.");
   }
   v.certainty = Certainty(result, loop);
-  const PointScreen& s = result.screen;
-  if (s.camera_fixed_share + s.moving_share > kManyLeftOut) {
-    v.actions.push_back(Percent(s.camera_fixed_share + s.moving_share) +
-                        " of the points were left out before the fit: check the region drawn "
-                        "below, and give --mask where it is wrong.");
-  }
-  for (const HalfCheck& h : result.halves) {
-    for (const HalfAgreement& a : h.effects) {
-      if (a.determined && !a.agree) {
-        v.actions.push_back("The halves disagree on " + Spec(a.effect).name +
-                            ": the value may change during the clip; trust it less than its "
-                            "standard error says.");
-      }
-    }
-  }
+  AddCautions(result, &v);
   return v;
 }
 

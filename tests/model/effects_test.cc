@@ -91,6 +91,33 @@ TEST(Effects, EachRoundTripsItsName) {
   EXPECT_EQ(Spec(Effect::kClockRate).name, "clock_rate");
 }
 
+// The physical bounds, known answers on each side: what a real MEMS gyro, camera clock and sensor
+// can have is inside; a gyro 90 % off in scale or biased 100 deg/s, a 0.5 s readout, a clock
+// 5 % fast are outside, with the axis, the value and the reason. A mounting, a lens and a
+// readout direction have no bound.
+TEST(Effects, PhysicalBoundsKnownAnswers) {
+  const double deg = M_PI / 180.0;
+  EXPECT_EQ(OutOfBounds(Effect::kGyroScale, Eigen::Vector3d(1.03, 0.97, 1.0)), "");
+  EXPECT_EQ(OutOfBounds(Effect::kGyroScale, Eigen::Vector3d(1.0, 1.0, 0.1)),
+            "axis z at 0.1, outside 0.9 ... 1.1: a MEMS gyro's sensitivity is within 3 % of "
+            "nominal (MPU-9250 datasheet, sensitivity scale factor tolerance), 10 % allowed");
+  EXPECT_EQ(OutOfBounds(Effect::kGyroBias, Eigen::Vector3d(0.5 * deg, -3 * deg, 9 * deg)), "");
+  const std::string bias = OutOfBounds(Effect::kGyroBias, Eigen::Vector3d(0, 100 * deg, 0));
+  EXPECT_EQ(bias.rfind("axis y at 100 deg/s, outside -10 ... 10 deg/s: ", 0), 0u) << bias;
+  EXPECT_EQ(OutOfBounds(Effect::kReadoutTime, 0.0335), "");
+  EXPECT_EQ(OutOfBounds(Effect::kReadoutTime, 0.5).rfind("500 ms, outside 0.1 ... 100 ms", 0), 0u);
+  EXPECT_EQ(OutOfBounds(Effect::kTimeOffset, -0.0073), "");
+  EXPECT_NE(OutOfBounds(Effect::kTimeOffset, 2.5), "");
+  EXPECT_EQ(OutOfBounds(Effect::kClockRate, 40.0), "");
+  EXPECT_EQ(
+      OutOfBounds(Effect::kClockRate, 5e4).rfind("50000 ppm, outside -20000 ... 20000 ppm", 0), 0u);
+  EXPECT_EQ(OutOfBounds(Effect::kVelocity, Eigen::Vector3d(12, -3, 0)), "");
+  EXPECT_NE(OutOfBounds(Effect::kVelocity, Eigen::Vector3d(0, 0, 250)), "");
+  EXPECT_EQ(OutOfBounds(Effect::kGyroToCamera, Eigen::Matrix3d(-Eigen::Matrix3d::Identity())), "");
+  EXPECT_EQ(Spec(Effect::kLensDistortion).out_of_bounds, nullptr);
+  EXPECT_EQ(Spec(Effect::kReadoutDirection).out_of_bounds, nullptr);
+}
+
 TEST(Effects, AnUnknownNameFailsNamingIt) {
   EXPECT_FALSE(ParseEffect("warp_speed").has_value());
   EXPECT_FALSE(ParseEffect("").has_value());

@@ -65,6 +65,29 @@ TEST(BuildCorrectionModel, TakesTheFittedModelAndRefusesAnotherCamera) {
   EXPECT_FALSE(applied.notes.empty());
 }
 
+// A report whose effect no device has (a gyro 90 % off in scale about z) corrects nothing: it is
+// refused in one line naming the report, the effect and the bound, whatever tool wrote it.
+TEST(BuildCorrectionModel, RefusesAnEffectNoDeviceHas) {
+  const RigModel declared = test::SmallRig(96, 72);
+  ReportedModel report;
+  ReportedEffect scale;
+  scale.effect = Effect::kGyroScale;
+  scale.value = Eigen::Vector3d(1.0, 1.0, 0.1);
+  report.effects.push_back(scale);
+  try {
+    BuildCorrectionModel(declared, report, "r.json");
+    ADD_FAILURE() << "an impossible gyro scale was taken";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("r.json: gyro_scale axis z at 0.1, outside 0.9 ... 1.1"), std::string::npos)
+        << what;
+    EXPECT_NE(what.find("give the values to use with --effect NAME=VALUE"), std::string::npos)
+        << what;
+  }
+  report.effects[0].value = Eigen::Vector3d(1.0, 1.0, 1.02);  // 2 %: a real part's
+  EXPECT_NO_THROW(BuildCorrectionModel(declared, report, "r.json"));
+}
+
 TEST(PredictResidual, ACertainModelLeavesNothingAndDBeforeIsTheFramesDistortion) {
   const RigModel rig = test::SmallRig(160, 120);
   const GyroTrace gyro = test::ConstantRateTrace(Eigen::Vector3d(0.4, -0.6, 0.9));

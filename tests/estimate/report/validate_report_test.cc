@@ -5,6 +5,7 @@
 #include "estimate/report/validate_report.h"
 
 #include "estimate/loop/validate.h"
+#include "estimate/report/validate_verdict.h"
 #include "sim/logs/gyro_io.h"
 #include "tests/estimate/loop/validate_fixtures.h"
 #include "tests/test_util.h"
@@ -18,6 +19,45 @@
 
 namespace shutterlab {
 namespace {
+
+// A fit that explains the residual only with a value no device has (a roll-only stabiliser's
+// image: gyro_scale 0.1 about the optical axis with a 100 deg/s bias) is no fix: the verdict says
+// which values are impossible and what they point to, and offers nothing for camera.json; the
+// same loop with a real part's values is named as the fix.
+TEST(ValidateVerdict, AnEffectNoDeviceHasIsNeverNamedAsTheFix) {
+  ValidationResult result;
+  IdentifiedEffect scale, bias;
+  scale.effect = Effect::kGyroScale;
+  scale.value = Eigen::Vector3d(1.0, 1.0, 0.1);
+  scale.out_of_bounds = OutOfBounds(scale.effect, scale.value);
+  bias.effect = Effect::kGyroBias;
+  bias.value = Eigen::Vector3d(0.0, 0.0, 100.0 * M_PI / 180.0);
+  bias.out_of_bounds = OutOfBounds(bias.effect, bias.value);
+  result.loop.effects = {scale, bias};
+  result.loop.noise_px = 0.05;
+  result.loop.after.rms_px = 0.05;
+  const ValidationVerdict impossible = MakeVerdict(result);
+  EXPECT_EQ(impossible.level, ValidationVerdict::Level::kProblem);
+  EXPECT_EQ(impossible.headline.rfind("No effect of the sensor explains this: the fit needs "
+                                      "gyro_scale axis z at 0.1, outside 0.9 ... 1.1",
+                                      0),
+            0u)
+      << impossible.headline;
+  EXPECT_NE(impossible.headline.find("gyro_bias axis z at 100 deg/s"), std::string::npos);
+  EXPECT_NE(impossible.headline.find("a stabiliser or re-rendering"), std::string::npos);
+  for (const std::string& action : impossible.actions) {
+    EXPECT_EQ(action.find("Put "), std::string::npos) << action;
+  }
+  // Within a real part's range: the fix to put into camera.json.
+  result.loop.effects[0].value = Eigen::Vector3d(1.0, 1.0, 1.02);
+  result.loop.effects[0].out_of_bounds.clear();
+  result.loop.effects[1].value = Eigen::Vector3d(0.0, 0.0, 0.01);
+  result.loop.effects[1].out_of_bounds.clear();
+  const ValidationVerdict fix = MakeVerdict(result);
+  EXPECT_EQ(fix.level, ValidationVerdict::Level::kAttention);
+  ASSERT_FALSE(fix.actions.empty());
+  EXPECT_EQ(fix.actions[0].rfind("Put gyro_scale = ", 0), 0u) << fix.actions[0];
+}
 
 // The table's bookkeeping on one dataset: flags follow D against each limit, the confusion matrix
 // counts every frame once per limit, and the JSON has docs/FORMATS.md's keys.
