@@ -394,6 +394,24 @@ void AdaptModelToPhotos(const PhotoInput& input, bool bias_given, CorrectionMode
   }
 }
 
+// A model less certain than the rolling shutter is large (a gimbal clip with little to correct, a
+// fit from few frames) moves the image by more than it removes: said, so the originals are kept.
+void NoteWhenPredictedWorse(CorrectSummary* summary) {
+  std::vector<double> before, after;
+  for (const CorrectedFrame& f : summary->frames) {
+    before.push_back(f.residual.d_before_px);
+    after.push_back(f.predicted_d_after_px);
+  }
+  const double median_before = UpperMedian(before), median_after = UpperMedian(after);
+  if (!(median_after > median_before)) return;
+  summary->notes.push_back(
+      "the correction is predicted to leave more distortion than it removes: median D " +
+      FormatNumber("%.3f", median_after) + " px after against " +
+      FormatNumber("%.3f", median_before) +
+      " px before (the model's uncertainty outweighs the rolling shutter here): keep the "
+      "originals, or narrow the model first (more frames or pairs for validate)");
+}
+
 CorrectSummary CorrectInput(const CorrectOptions& options, const RigDataset& dataset,
                             const PhotoInput* photos, const CorrectProgress& progress) {
   SHUTTERLAB_CHECK(!options.check_truth || !dataset.video)
@@ -457,6 +475,7 @@ CorrectSummary CorrectInput(const CorrectOptions& options, const RigDataset& dat
     throw IoError(
         IoMessage(dataset.frames_path, 0, "no frame's readout lies inside " + dataset.gyro_path));
   }
+  NoteWhenPredictedWorse(&summary);
   WriteDatasetFiles(context, summary);
   WritePipelineLists(summary);
   if (options.pictures) WriteOverview(summary);

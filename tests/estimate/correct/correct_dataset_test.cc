@@ -258,6 +258,26 @@ TEST(CorrectEndToEnd, PredictsTheResidualOfAReportedModelError) {
                 static_cast<long long>(f.frame), f.predicted_d_after_px, f.predicted_d_after_p90_px,
                 measured);
   }
+  const auto worse_noted = [](const CorrectSummary& s) {
+    return std::any_of(s.notes.begin(), s.notes.end(), [](const std::string& n) {
+      return n.rfind("the correction is predicted to leave more distortion than it removes", 0) ==
+             0;
+    });
+  };
+  EXPECT_FALSE(worse_noted(summary));
+  // The same offset known only within a second: the correction would move the image by more than
+  // the rolling shutter did, and it says so (and the notes reach correct.json).
+  effect.covariance = Eigen::MatrixXd::Constant(1, 1, 1.0);
+  const CorrectSummary unsure =
+      Correct(rendered.dataset, dir / "out2", Report(dir, "report2.json", reported, {effect}));
+  for (const CorrectedFrame& f : unsure.frames) {
+    std::printf("  unsure frame %lld: D before %.3f px, predicted after %.3f px\n",
+                static_cast<long long>(f.frame), f.residual.d_before_px, f.predicted_d_after_px);
+  }
+  EXPECT_TRUE(worse_noted(unsure));
+  EXPECT_NE(ReadFileToString(dir / "out2/correct.json")
+                .find("the correction is predicted to leave more distortion"),
+            std::string::npos);
 }
 
 TEST(CorrectEndToEnd, PredictsTheResidualOfGyroNoise) {
