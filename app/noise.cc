@@ -8,6 +8,7 @@
 #include "estimate/report/analysis_json.h"
 #include "sim/text_file.h"
 
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -70,7 +71,9 @@ const CommandRegistration kNoiseRegistration(20, [](CLI::App& app) {
       cmd->add_option_function<std::string>(
              "--window",
              [command](const std::string& text) {
-               if (text.find_first_not_of("0123456789") == std::string::npos) {
+               char* end = nullptr;
+               std::strtod(text.c_str(), &end);
+               if (!text.empty() && *end == '\0') {  // a bare number: a duration or a count?
                  throw CLI::ValidationError("--window '" + text +
                                             "': a duration needs a unit: did you mean " + text +
                                             "ms, or --window-samples " + text + "?");

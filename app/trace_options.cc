@@ -70,7 +70,8 @@ void TraceOptions::Add(CLI::App* command, bool with_bias) {
         ->add_flag("--zero-bias", zero_bias,
                    "take the logged rates as bias-free and analyse every sample "
                    "(flight-controller logs, calibrated at arming)")
-        ->excludes(automatic);
+        ->excludes(automatic)
+        ->excludes(bias_option);
   }
 }
 

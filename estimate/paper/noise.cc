@@ -47,11 +47,14 @@ NoiseResult AnalyzeNoise(const GyroTrace& trace, const NoiseOptions& options) {
   const size_t first = result.bias.first_after;
   result.samples_analysed = trace.size() - first;
   const size_t n_window = static_cast<size_t>(result.window_samples);
-  SHUTTERLAB_CHECK(result.samples_analysed >= n_window)
+  SHUTTERLAB_CHECK(result.samples_analysed >= n_window || options.zero_bias)
       << "window of " << n_window << " samples is longer than the " << result.samples_analysed
       << " samples after the bias segment (" << options.bias.begin_s << ":" << options.bias.end_s
       << " s; the trace lasts " << trace.DurationS()
       << " s): give an earlier --bias A:B, a shorter --window, or a longer log";
+  SHUTTERLAB_CHECK(result.samples_analysed >= n_window)
+      << "window of " << n_window << " samples is longer than the trace's "
+      << result.samples_analysed << " samples: give a shorter --window or a longer log";
   SHUTTERLAB_CHECK(result.samples_analysed < (1ull << 32)) << "trace too long for 32-bit windows";
 
   const PerAxisAngles angles = IntegratePerAxis(trace, result.bias.bias_rad_s, first);

@@ -216,22 +216,26 @@ void AddAllan(HtmlPage* page, const AnalyzeResult& result) {
   page->AddChart(chart);
   // Off a still segment the curve is the flight's motion, not the gyro's noise: its coefficients
   // are no property of the sensor, only an upper bound on it, and the table says so in each cell.
-  const std::string not_meaningful = result.allan_on_still ? "" : "not meaningful, at most ";
+  const bool meaningful = result.allan_on_still;
   std::vector<std::vector<std::string>> rows;
   for (int a = 0; a < 3; ++a) {
     const AllanCoefficients& c = allan.axes[a];
-    rows.push_back({kAxisLabels[a], not_meaningful + Fmt("%.3g", c.arw_deg_sqrt_h),
-                    not_meaningful + (c.bias_instability_upper_bound ? "< " : "") +
+    const bool below = c.bias_instability_upper_bound;
+    rows.push_back({kAxisLabels[a],
+                    (meaningful ? "" : "not meaningful, at most ") + Fmt("%.3g", c.arw_deg_sqrt_h),
+                    (meaningful ? (below ? "< " : "")
+                                : (below ? "not meaningful, below " : "not meaningful, at most ")) +
                         Fmt("%.3g", c.bias_instability_deg_h),
                     Fmt("%.3g", c.bias_instability_tau_s)});
   }
   page->Table({"axis", "angle random walk (deg/sqrt(h))", "bias instability (deg/h)", "at tau (s)"},
               rows);
-  if (!result.allan_on_still) {
-    page->Paragraph(
-        "Not meaningful: with no still time the Allan deviation measures the motion; "
-        "record a few seconds with the camera still before take-off to measure the "
-        "gyro's noise (shutterlab noise on a still recording gives paper Tables 1-2).");
+  if (!meaningful) {
+    page->Paragraph("Not meaningful: computed on " + on +
+                    ", it measures the motion, not the gyro. To measure the gyro's noise, record a "
+                    "few seconds with the camera still before take-off (and analyze without "
+                    "--zero-bias, which searches no still time), or run shutterlab noise on a "
+                    "still recording (paper Tables 1-2).");
   }
 }
 
@@ -359,6 +363,8 @@ void AnalyzeReportOptions::Check() const {
   SHUTTERLAB_CHECK(scene.empty() || (scene.depth() == CV_8U && scene.channels() == 3))
       << "the report's scene must be an 8-bit RGB image";
   SHUTTERLAB_CHECK(histogram_bins >= 2) << "histogram_bins must be >= 2";
+  SHUTTERLAB_CHECK(histogram_quantile > 0.0 && histogram_quantile <= 1.0)
+      << "histogram_quantile must be in (0, 1] (got " << histogram_quantile << ")";
   SHUTTERLAB_CHECK(picture_width_px >= 64) << "picture_width_px must be >= 64";
 }
 

@@ -405,7 +405,13 @@ TEST(AnalyzeCli, TheBiasOptionsOfEveryCommandThatReadsALog) {
   EXPECT_EQ(nlohmann::json::parse(by_zero.out)["rotations"].size(),
             nlohmann::json::parse(by_segment.out)["rotations"].size());
   EXPECT_GE(nlohmann::json::parse(by_zero.out)["rotations"].size(), 1u) << by_zero.out;
-  EXPECT_EQ(RunShutterlab("noise " + gyro + " --zero-bias --auto-bias").exit_code, 2);
+  for (const char* both : {"--zero-bias --auto-bias", "--zero-bias --bias 0:2s"}) {
+    for (const char* command : {"noise ", "flight ", "accuracy "}) {
+      const auto r = RunShutterlab(command + gyro + " " + both);
+      EXPECT_EQ(r.exit_code, 2) << command << both;
+      EXPECT_NE(r.err.find("excludes"), std::string::npos) << command << both << ": " << r.err;
+    }
+  }
 }
 
 }  // namespace

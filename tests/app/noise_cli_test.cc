@@ -141,6 +141,9 @@ TEST(NoiseCli, WindowIsADurationAndTheCountHasItsOwnOption) {
                           "--window-samples 120?"),
             std::string::npos)
       << bare.err;
+  const auto decimal = RunShutterlab("noise " + trace + " --window 40.0");
+  EXPECT_NE(decimal.err.find("did you mean 40.0ms, or --window-samples 40.0?"), std::string::npos)
+      << decimal.err;
   const auto both = RunShutterlab("noise " + trace + " --window 40ms --window-samples 40");
   EXPECT_EQ(both.exit_code, 2);
   EXPECT_NE(both.err.find("excludes"), std::string::npos) << both.err;

@@ -130,10 +130,14 @@ TEST(AnalyzeReport, AllanWithoutStillTimeIsMarkedNotMeaningful) {
   ASSERT_TRUE(result.allan && !result.allan->empty());
   const std::string html = AnalyzeReportPage(options, result, AnalyzeReportOptions()).Html();
   size_t marked = 0;
-  for (size_t at = html.find("<td>not meaningful, at most "); at != std::string::npos;
-       at = html.find("<td>not meaningful, at most ", at + 1))
+  for (size_t at = html.find("<td>not meaningful, "); at != std::string::npos;
+       at = html.find("<td>not meaningful, ", at + 1))
     ++marked;
   EXPECT_EQ(marked, 6u);  // ARW and bias instability of three axes
+  EXPECT_EQ(html.find("at most &lt;"), std::string::npos);  // a bound is said once
+  // Why: the bias was not searched (no still time looked for), and what to do.
+  EXPECT_NE(html.find("Not meaningful: computed on the whole log (bias not estimated"),
+            std::string::npos);
   EXPECT_NE(html.find("record a few seconds with the camera still"), std::string::npos);
 }
 
