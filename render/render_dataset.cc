@@ -8,6 +8,7 @@
 #include "render/pictures.h"
 #include "sim/check.h"
 #include "sim/logs/gyro_io.h"
+#include "sim/so3.h"
 #include "sim/text_file.h"
 #include "sim/trace_audit.h"
 
@@ -28,6 +29,9 @@ void RenderOptions::Check() const {
   SHUTTERLAB_CHECK(!frames_path.empty()) << "--frames is required";
   SHUTTERLAB_CHECK(!out_dir.empty()) << "--out is required";
   clutter.Check();
+  stabiliser.Check();
+  SHUTTERLAB_CHECK(video || stabiliser.mode == StabiliserMode::kOff)
+      << "--stabiliser needs --video: a stabiliser re-renders a clip";
 }
 
 double OutsideSceneFraction(const FrameGeometry& geometry, cv::Size scene_size) {
@@ -104,6 +108,27 @@ std::vector<FrameMotion> FrameMotions(const RenderOptions& options, const GyroTr
     }
   }
   return motions;
+}
+
+// Turns each frame by the stabiliser's S_k (none when it is off); returns truth.json's
+// "stabiliser" (null when off).
+nlohmann::json Stabilise(const RenderOptions& options, const std::vector<FrameEntry>& times,
+                         std::vector<FrameMotion>* motions) {
+  if (options.stabiliser.mode == StabiliserMode::kOff) return nullptr;
+  std::vector<double> t_s;
+  for (const FrameEntry& f : times)
+    t_s.push_back((f.t_first_row_ns - times.front().t_first_row_ns) * 1e-9);
+  const std::vector<Eigen::Matrix3d> turns = StabiliserRotations(options.stabiliser, *motions, t_s);
+  nlohmann::json rotations = nlohmann::json::array();
+  for (size_t k = 0; k < turns.size(); ++k) {
+    TurnFrame(turns[k], &(*motions)[k]);
+    const Eigen::Vector3d deg = LogSO3(Eigen::Quaterniond(turns[k]).normalized()) * 180.0 / M_PI;
+    rotations.push_back(
+        {{"frame", times[k].frame}, {"cam_from_image_deg", {deg.x(), deg.y(), deg.z()}}});
+  }
+  return {{"mode", StabiliserModeName(options.stabiliser.mode)},
+          {"window_s", options.stabiliser.window_s},
+          {"frames", rotations}};
 }
 
 // What every frame of a render shares.
@@ -262,7 +287,8 @@ RenderSummary RenderDataset(const RenderOptions& options,
   const std::vector<FrameEntry> times = ReadFrameTimes(options.frames_path);
   if (options.video) CheckVideoTimes(options, times);
   const cv::Mat scene = ReadImage(options.scene_path);
-  const std::vector<FrameMotion> motions = FrameMotions(options, logged, truth, times);
+  std::vector<FrameMotion> motions = FrameMotions(options, logged, truth, times);
+  const nlohmann::json stabiliser_json = Stabilise(options, times, &motions);
 
   // --- write
   const std::filesystem::path out(options.out_dir);
@@ -310,6 +336,7 @@ RenderSummary RenderDataset(const RenderOptions& options,
   nlohmann::json truth_json = {{"injected", InjectedJson(summary.injected)},
                                {"frames", state.frames_json}};
   if (options.video) truth_json["video"] = true;
+  if (!stabiliser_json.is_null()) truth_json["stabiliser"] = stabiliser_json;
   if (camera_fixed) truth_json["camera_fixed_rows_from"] = camera_fixed->rows_from;
   if (moving) {
     truth_json["moving_patch"] = {{"speed_mps", clutter.moving_patch_mps},

@@ -23,11 +23,15 @@
 // frame's first row (video) or from each frame's row 0 (stills, so that the reference sees it where
 // row 0 does), and it crosses the scene point above the scene's centre (15 % of the frame height)
 // in the middle of the clip (video) or at each frame's row 0 (stills).
+// With a stabiliser (video only), every row of frame k is seen turned by the frame's S_k
+// (render/stabiliser.h); truth.json's "stabiliser" holds the mode, the window and each frame's
+// S_k as a rotation vector in degrees (camera axes), and the truth fields are of the turned frames.
 
 #include "io/lens_profile.h"
 #include "model/effects.h"
 #include "render/clutter.h"
 #include "render/rs_warp.h"
+#include "render/stabiliser.h"
 #include "sim/log_warning.h"
 
 #include <cstdint>
@@ -56,6 +60,9 @@ struct RenderOptions {
   // frame and reference (truth 0 there), a patch driving over the ground (truth NaN where seen).
   // truth.json records both.
   ClutterOptions clutter;
+  // A video re-rendered by a stabiliser (render/stabiliser.h); truth.json records its mode, window
+  // and each frame's rotation.
+  StabiliserOptions stabiliser;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };

@@ -4,6 +4,7 @@
 #include "sim/check.h"
 #include "sim/integrate.h"
 #include "sim/so3.h"
+#include "sim/text_file.h"
 #include "sim/units.h"
 
 #include <Eigen/Cholesky>
@@ -13,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <memory>
 #include <optional>
 #include <random>
@@ -358,6 +360,109 @@ std::vector<FrameConsensus> RotationConsensus(const TrueModel& declared,
   return out;
 }
 
+namespace {
+
+// Each vector less its running mean over kSlowPairs neighbours (centred, shorter at the ends).
+std::vector<Eigen::Vector3d> FastPart(const std::vector<Eigen::Vector3d>& rates) {
+  std::vector<Eigen::Vector3d> out;
+  const int n = static_cast<int>(rates.size()), half = kSlowPairs / 2;
+  for (int k = 0; k < n; ++k) {
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    const int a = std::max(0, k - half), b = std::min(n - 1, k + half);
+    for (int j = a; j <= b; ++j) mean += rates[j];
+    out.push_back(rates[k] - mean / (b - a + 1));
+  }
+  return out;
+}
+
+// Row a of M (w_img = M w_gyro, least squares) for each axis: *norm = |M_a|, *stderr its standard
+// error (from the residual's scatter), *gain = M_aa. False when the gyro's rates do not span the
+// three axes well enough to solve for M, or too few pairs.
+bool FitRateMap(const std::vector<Eigen::Vector3d>& gyro, const std::vector<Eigen::Vector3d>& image,
+                std::array<double, 3>* norm, std::array<double, 3>* stderr_norm,
+                std::array<double, 3>* gain) {
+  const size_t n = gyro.size();
+  if (n < 6) return false;
+  Eigen::Matrix3d gtg = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& g : gyro) gtg += g * g.transpose();
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(gtg);
+  if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-9)) return false;
+  const Eigen::Matrix3d inv = ldlt.solve(Eigen::Matrix3d::Identity());
+  for (int a = 0; a < 3; ++a) {
+    Eigen::Vector3d gti = Eigen::Vector3d::Zero();
+    for (size_t k = 0; k < n; ++k) gti += gyro[k] * image[k](a);
+    const Eigen::Vector3d row = inv * gti;
+    double sq = 0.0;
+    for (size_t k = 0; k < n; ++k) sq += std::pow(image[k](a) - row.dot(gyro[k]), 2);
+    const double var = sq / static_cast<double>(n - 3);
+    (*norm)[a] = row.norm();
+    (*gain)[a] = row(a);
+    // Along the row's own direction (or any, for a row of zeros: the largest variance).
+    const Eigen::Matrix3d cov = var * inv;
+    (*stderr_norm)[a] = row.norm() > 0 ? std::sqrt(row.dot(cov * row)) / row.norm()
+                                       : std::sqrt(cov.diagonal().maxCoeff());
+  }
+  return true;
+}
+
+void CheckAxes(GyroFollowCheck* check) {
+  std::array<double, 3> norm{}, se{}, gain{};
+  if (FitRateMap(check->gyro_rate_cam_rad_s, check->image_rate_cam_rad_s, &norm, &se, &gain)) {
+    for (int a = 0; a < 3; ++a) {
+      AxisFollow& axis = check->axes[a];
+      axis.gain = gain[a];
+      axis.row_norm = norm[a];
+      axis.row_norm_stderr = se[a];
+      axis.determined = se[a] <= kMaxFollowStderr;
+    }
+  }
+  const std::vector<Eigen::Vector3d> fast_gyro = FastPart(check->gyro_rate_cam_rad_s);
+  const std::vector<Eigen::Vector3d> fast_image = FastPart(check->image_rate_cam_rad_s);
+  if (FitRateMap(fast_gyro, fast_image, &norm, &se, &gain)) {
+    for (int a = 0; a < 3; ++a) {
+      AxisFollow& axis = check->axes[a];
+      axis.fast_row_norm = norm[a];
+      axis.fast_row_norm_stderr = se[a];
+      axis.fast_determined = se[a] <= kMaxFollowStderr;
+    }
+  }
+  // Below kMinGain by kFollowSigmas standard errors: a fast part that is small and noisy (a
+  // consensus biased by a large correction) is no stabiliser.
+  for (AxisFollow& axis : check->axes) {
+    const double k = kFollowSigmas;
+    const bool below =
+        (axis.determined && axis.row_norm + k * axis.row_norm_stderr < kMinGain) ||
+        (axis.fast_determined && axis.fast_row_norm + k * axis.fast_row_norm_stderr < kMinGain);
+    // Clearly following about its own axis: the declared mapping holds there too (a wrong one
+    // turns the rows, and then a large correction biases the consensus about the other axes).
+    const bool above =
+        axis.determined && axis.gain - k * axis.row_norm_stderr >= kMinGain &&
+        axis.row_norm - k * axis.row_norm_stderr >= kMinGain &&
+        (!axis.fast_determined || axis.fast_row_norm - k * axis.fast_row_norm_stderr >= kMinGain);
+    axis.follows = !below;
+    axis.clearly_follows = above && !below;
+  }
+}
+
+}  // namespace
+
+bool GyroFollowCheck::OnSomeAxes() const {
+  int follow = 0, not_follow = 0;
+  for (const AxisFollow& a : axes) {
+    not_follow += a.follows ? 0 : 1;
+    follow += a.clearly_follows ? 1 : 0;
+  }
+  return follow > 0 && not_follow > 0;
+}
+
+std::vector<int> GyroFollowCheck::AxesNotFollowing() const {
+  std::vector<int> out;
+  for (int a = 0; a < 3; ++a) {
+    if (!axes[a].follows) out.push_back(a);
+  }
+  return out;
+}
+
 GyroFollowCheck CheckImageFollowsGyro(const TrueModel& declared, const GyroTrace& gyro,
                                       const std::vector<FramePoints>& pairs,
                                       const std::vector<Eigen::Vector2d>& predicted,
@@ -375,10 +480,11 @@ GyroFollowCheck CheckImageFollowsGyro(const TrueModel& declared, const GyroTrace
     for (size_t i = ranges[k].begin; i < ranges[k].end; ++i) {
       if (predicted[i].allFinite()) lengths.push_back(predicted[i].norm());
     }
-    if (lengths.empty() ||
-        Median(lengths) < std::max(kMinGyroTestPx, kMinTestableNoise * frame_noise_px[k])) {
-      continue;
-    }
+    // Every pair with a consensus enters the per-axis fit (a slow pair weighs little there);
+    // only those that move enough enter the gain.
+    const bool testable =
+        !lengths.empty() &&
+        Median(lengths) >= std::max(kMinGyroTestPx, kMinTestableNoise * frame_noise_px[k]);
     const int64_t t_e = pair.earlier->t_first_row_ns, t_l = pair.t_first_row_ns;
     const double off_e = declared.RowGyroOffsetS(t_e, mid_row);
     const double off_l = declared.RowGyroOffsetS(t_l, mid_row);
@@ -394,7 +500,11 @@ GyroFollowCheck CheckImageFollowsGyro(const TrueModel& declared, const GyroTrace
       continue;
     }
     if (!(w_gyro.norm() > 0)) continue;
-    const double image_rate = (w_gyro + consensus[k].delta_omega_rad_s).norm();
+    const Eigen::Vector3d w_image = w_gyro + consensus[k].delta_omega_rad_s;
+    check.gyro_rate_cam_rad_s.push_back(w_gyro);
+    check.image_rate_cam_rad_s.push_back(w_image);
+    if (!testable) continue;
+    const double image_rate = w_image.norm();
     gains.push_back(image_rate / w_gyro.norm());
     check.frames.push_back(pair.frame);
     check.gyro_rate_rad_s.push_back(w_gyro.norm());
@@ -408,17 +518,77 @@ GyroFollowCheck CheckImageFollowsGyro(const TrueModel& declared, const GyroTrace
   }
   check.determined = true;
   check.gain = Median(gains);
-  check.follows = check.gain >= kMinGain;
+  CheckAxes(&check);
+  // No axis that follows: the whole image is re-rendered, whatever its median gain.
+  const bool none_follows = std::none_of(check.axes.begin(), check.axes.end(),
+                                         [](const AxisFollow& a) { return a.follows; });
+  check.follows = check.OnSomeAxes() || (check.gain >= kMinGain && !none_follows);
   char text[256];
   std::snprintf(text, sizeof(text),
                 "the image turns %.2fx as fast as the gyro says (median over %d pairs)", check.gain,
                 check.pairs_tested);
-  check.verdict = check.follows ? std::string("the image follows the gyro: ") + text
-                                : std::string(
-                                      "the image does not follow the gyro (a stabiliser "
-                                      "re-rendered it, in the camera or afterwards): ") +
-                                      text;
+  std::string axes;
+  for (int a = 0; a < 3; ++a) {
+    const AxisFollow& f = check.axes[a];
+    const auto value = [](bool determined, double v, double se) {
+      return determined ? FormatNumber("%.2f", v) + FormatNumber(" +- %.2f", se)
+                        : std::string("not determined");
+    };
+    axes += std::string(a ? ", " : "; per camera axis ") + kCameraAxisNames[a] + " " +
+            value(f.determined, f.row_norm, f.row_norm_stderr) + " (fast part " +
+            value(f.fast_determined, f.fast_row_norm, f.fast_row_norm_stderr) + ")";
+  }
+  if (check.OnSomeAxes()) {
+    std::string names;
+    for (int a : check.AxesNotFollowing()) {
+      names += std::string(names.empty() ? "" : " and ") + kCameraAxisNames[a];
+    }
+    check.verdict =
+        "the image does not follow the gyro about camera axis " + names +
+        " (a stabiliser re-renders that rotation; about the others it follows): " + text + axes;
+  } else {
+    check.verdict = check.follows ? std::string("the image follows the gyro: ") + text + axes
+                                  : std::string(
+                                        "the image does not follow the gyro (a stabiliser "
+                                        "re-rendered it, in the camera or afterwards): ") +
+                                        text + axes;
+  }
   return check;
+}
+
+std::vector<size_t> FollowImageAbout(const TrueModel& declared, const GyroFollowCheck& check,
+                                     const std::vector<FrameConsensus>& consensus,
+                                     std::vector<FramePoints>* pairs) {
+  const std::vector<int> axes = check.AxesNotFollowing();
+  const double mid_row = 0.5 * (declared.rig.camera.height - 1);
+  // Each frame's turn, accumulated along the chain of pairs: the stabiliser turned the earlier
+  // frame too, and the gyro's rotation about the axes that follow shows turned by it. A frame
+  // first met as an earlier one starts a chain (unturned).
+  std::map<int64_t, Eigen::Matrix3d> turned;
+  std::vector<FramePoints> kept;
+  std::vector<size_t> removed;
+  for (size_t k = 0; k < pairs->size(); ++k) {
+    FramePoints& pair = (*pairs)[k];
+    if (!pair.earlier || !consensus[k].determined) {
+      removed.push_back(k);
+      continue;
+    }
+    const int64_t t_e = pair.earlier->t_first_row_ns, t_l = pair.t_first_row_ns;
+    const double dt_s = (t_l - t_e) * 1e-9 + declared.RowGyroOffsetS(t_l, mid_row) -
+                        declared.RowGyroOffsetS(t_e, mid_row);
+    Eigen::Vector3d turn = Eigen::Vector3d::Zero();
+    for (int a : axes) turn(a) = consensus[k].delta_omega_rad_s(a) * dt_s;
+    const auto earlier = turned.find(pair.earlier->frame);
+    const Eigen::Matrix3d s_e =
+        earlier == turned.end() ? Eigen::Matrix3d::Identity() : earlier->second;
+    const Eigen::Matrix3d s_l = s_e * ExpSO3(turn).toRotationMatrix();
+    turned[pair.frame] = s_l;
+    pair.earlier->cam_from_image = pair.earlier->cam_from_image * s_e;
+    pair.cam_from_image = pair.cam_from_image * s_l;
+    kept.push_back(std::move(pair));
+  }
+  *pairs = std::move(kept);
+  return removed;
 }
 
 namespace {

@@ -53,6 +53,21 @@
 //     region (they are kept). Measured: the phone clip 1.07 (15 pairs; 10-90 % of the pairs
 //     0.88-1.13), the Karma drone's gimbal camera 0.85 (13 pairs), the GoPro MAX with HyperSmooth
 //     0.56 (111 pairs; 10-90 %: 0.41-0.81).
+//     Per camera axis (AxisFollow): a stabiliser may re-render one axis only (horizon levelling
+//     re-renders the roll about the optical axis, z); the whole image's gain cannot see it. Over
+//     every pair with a determined consensus (a slow one weighs little), the image's rate is fitted
+//     as a linear map of the gyro's, w_img = M w_gyro (least squares, 9 numbers): row a of M says
+//     how much of the gyro's rotation, about any axis, shows in the image's rotation about camera
+//     axis a. A wrong axis mapping turns the rows (|M_a| stays 1: the loop fits gyro_to_camera); a
+//     stabiliser on axis a shrinks row a. The same on the fast part of the rates (each less its
+//     running mean over kSlowPairs pairs): a stabiliser that smooths removes the fast part and
+//     keeps the slow. Axis a does not follow when |M_a| (or its fast part's) lies kFollowSigmas (3)
+//     standard errors below kMinGain, the standard error at most kMaxFollowStderr; it clearly
+//     follows when both, and M_aa, lie as far above (M_aa: the declared mapping holds about it; a
+//     wrong mapping's large correction biases the consensus about every axis). No axis that
+//     follows: the whole image does not. When some axes clearly follow and others do not,
+//     FollowImageAbout gives each pair the image's own rotation about those that do not (its
+//     cam_from_image), and the loop runs on the gyro about the axes that follow.
 
 #include "estimate/loop/frame_points.h"
 #include "model/truth_model.h"
@@ -60,7 +75,9 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -114,6 +131,24 @@ struct FrameConsensus {
   bool determined = false;  // enough points to judge (otherwise every point is kept)
 };
 
+inline constexpr int kSlowPairs = 5;
+inline constexpr const char* kCameraAxisNames[3] = {"x", "y", "z"};
+inline constexpr double kMaxFollowStderr = 0.1;
+inline constexpr double kFollowSigmas = 3.0;
+
+// Check 3 about one camera axis.
+struct AxisFollow {
+  double gain = 0.0;      // M_aa: the image's rate about a per gyro rate about a
+  double row_norm = 0.0;  // |M_a|: the share of the gyro's rotation that shows about a
+  double row_norm_stderr = std::numeric_limits<double>::quiet_NaN();
+  double fast_row_norm = 0.0;  // the same on the fast part
+  double fast_row_norm_stderr = std::numeric_limits<double>::quiet_NaN();
+  bool determined = false, fast_determined = false;
+  bool follows = true;  // false only when determined and clearly below kMinGain
+  // Determined and clearly at or above it, M_aa and the fast part too.
+  bool clearly_follows = false;
+};
+
 // Check 3.
 struct GyroFollowCheck {
   int pairs_tested = 0;  // pairs whose predicted motion is testable
@@ -124,6 +159,13 @@ struct GyroFollowCheck {
   bool determined = false;
   bool follows = true;
   std::string verdict;  // for a person
+  // Per camera axis x, y, z (AxisFollow), and the per-pair rates in camera axes they come from
+  // (every pair with a determined consensus, not only the tested ones).
+  std::array<AxisFollow, 3> axes;
+  std::vector<Eigen::Vector3d> gyro_rate_cam_rad_s, image_rate_cam_rad_s;
+  // Some axes determined to follow and others determined not to: a stabiliser on those.
+  bool OnSomeAxes() const;
+  std::vector<int> AxesNotFollowing() const;
 };
 
 // Everything the screening found, per point in the frames' order.
@@ -169,5 +211,14 @@ PointScreen ScreenPoints(const TrueModel& declared, const GyroTrace& gyro,
 // The frames with the points `status` leaves out at weight 0.
 std::vector<FramePoints> WithoutScreened(const std::vector<FramePoints>& frames,
                                          const std::vector<PointStatus>& status);
+
+// Gives each pair the image's own rotation about the camera axes that do not follow the gyro
+// (check.AxesNotFollowing()): the later frame's cam_from_image turns by dw_a dt about each such
+// axis a (dw: the pair's rotation consensus, dt: the time between the frames' middle rows), the
+// earlier's stays. Pairs whose consensus is not determined are removed, their indices into the
+// given pairs returned (ascending).
+std::vector<size_t> FollowImageAbout(const TrueModel& declared, const GyroFollowCheck& check,
+                                     const std::vector<FrameConsensus>& consensus,
+                                     std::vector<FramePoints>* pairs);
 
 }  // namespace shutterlab

@@ -654,7 +654,10 @@ void PreferModel(const std::vector<FramePoints>& pairs, double noise_px, Validat
   result->translation_mean_sq_px2 = compared.b;
   // Nothing for translation to explain when rotation alone leaves the noise.
   result->translation_explains = rot.unexplained ? ExplainedShare(compared, noise_px) : 0.0;
-  result->preferred = rot.unexplained && result->translation_explains >= kPreferTranslationShare
+  // A stabiliser's rendering turns the image on its own: what the pair translations absorb of it
+  // is no motion of the camera.
+  result->preferred = rot.unexplained && result->translation_explains >= kPreferTranslationShare &&
+                              !ReRenderedByStabiliser(*result)
                           ? "translation"
                           : "rotation_only";
 }
@@ -705,7 +708,28 @@ void ScreenVideo(const RigDataset& dataset, const TrueModel& declared,
     return ScreenPoints(declared, dataset.gyro, on, noise_px, options.measure.grid_step_px,
                         options.screen);
   };
+  // The pairs at the indices in `removed` (ascending) left out of the frames, said why.
+  const auto drop = [&](const std::vector<size_t>& removed, const std::string& why) {
+    for (auto it = removed.rbegin(); it != removed.rend(); ++it) {
+      const FrameValidation& f = result->frames[*it];
+      result->skipped.push_back("pair " + std::to_string(f.previous.value_or(-1)) + " -> " +
+                                std::to_string(f.frame) + ": " + why);
+      result->frames.erase(result->frames.begin() + static_cast<long>(*it));
+    }
+  };
   result->screen = screen(*pairs, {});
+  // A stabiliser on some axes only: the image's own rotation about those, the gyro's about the
+  // others (point_screen.h FollowImageAbout), and the pairs screened again so.
+  if (dataset.image_orientation.empty() && result->screen.gyro_follow.OnSomeAxes()) {
+    result->axes_not_following = result->screen.gyro_follow;
+    const std::vector<size_t> removed =
+        FollowImageAbout(declared, result->screen.gyro_follow, result->screen.rotation, pairs);
+    result->screen = screen(*pairs, removed);
+    drop(removed,
+         "its rotation consensus is not determined (needed for the axes that do not "
+         "follow the gyro)");
+    return;
+  }
   if (dataset.image_orientation.empty() || !options.screen.consensus) return;
   ImageOrientationCheck& check = result->image_orientation;
   check = TestImageOrientation(declared, dataset.gyro, *pairs, result->screen.rotation,
@@ -719,13 +743,7 @@ void ScreenVideo(const RigDataset& dataset, const TrueModel& declared,
   if (!check.holds) return;
   *pairs = std::move(applied);
   result->screen = std::move(applied_screen);
-  for (auto it = removed.rbegin(); it != removed.rend(); ++it) {
-    const FrameValidation& f = result->frames[*it];
-    result->skipped.push_back("pair " + std::to_string(f.previous.value_or(-1)) + " -> " +
-                              std::to_string(f.frame) +
-                              ": a frame without the stabiliser's rotation (IORI)");
-    result->frames.erase(result->frames.begin() + static_cast<long>(*it));
-  }
+  drop(removed, "a frame without the stabiliser's rotation (IORI)");
 }
 
 }  // namespace

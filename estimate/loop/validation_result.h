@@ -171,6 +171,11 @@ struct ValidationResult {
   // Video of a stabilised camera that wrote its per-frame rotation (image_orientation.csv): the
   // claim tested, and applied where it holds (estimate/loop/image_orientation.h).
   ImageOrientationCheck image_orientation;
+  // Video whose image does not follow the gyro about some camera axes but does about the others
+  // (a stabiliser on those axes: GyroFollowCheck::OnSomeAxes): the first screening's check, with
+  // its per-axis numbers. The pairs then carry the image's own rotation about those axes
+  // (FollowImageAbout) and `screen` is theirs.
+  std::optional<GyroFollowCheck> axes_not_following;
   cv::Mat mask;                  // CV_8U 0 / 255 the measurement used (empty: none)
   std::string mask_description;  // where it came from, for a person
   // Wall time per stage, s.

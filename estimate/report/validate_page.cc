@@ -503,6 +503,12 @@ void AddScreening(const ValidationResult& result, HtmlPage* page) {
   if (result.video) {
     rows.push_back(
         {"off their pair's epipolar geometry (translation model)", percent(s.off_epipolar_share)});
+    if (result.axes_not_following) {
+      rows.push_back(
+          {"the image against the gyro, per camera axis (before the image's own "
+           "rotation was taken for the axes that do not follow)",
+           result.axes_not_following->verdict});
+    }
     rows.push_back({"the image against the gyro", s.gyro_follow.verdict});
   }
   page->Table({"what", "left out"}, rows, /*text=*/true);

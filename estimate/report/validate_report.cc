@@ -57,6 +57,40 @@ void WriteLoopSummary(const LoopResult& loop, std::ostream& out) {
       << "x noise); " << (loop.unexplained ? "UNEXPLAINED residual remains" : "explained") << "\n";
 }
 
+namespace {
+
+nlohmann::json GyroFollowToJson(const GyroFollowCheck& g) {
+  nlohmann::json axes = nlohmann::json::object();
+  for (int a = 0; a < 3; ++a) {
+    const AxisFollow& f = g.axes[a];
+    // NaN (not determined) is null in JSON.
+    const auto number = [](bool determined, double v) {
+      return determined && std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
+    };
+    axes[kAxisNames[a]] = {
+        {"determined", f.determined},
+        {"gain", number(f.determined, f.gain)},
+        {"row_norm", number(f.determined, f.row_norm)},
+        {"row_norm_stderr", number(f.determined, f.row_norm_stderr)},
+        {"fast_determined", f.fast_determined},
+        {"fast_row_norm", number(f.fast_determined, f.fast_row_norm)},
+        {"fast_row_norm_stderr", number(f.fast_determined, f.fast_row_norm_stderr)},
+        {"follows", f.follows},
+        {"clearly_follows", f.clearly_follows}};
+  }
+  return {{"determined", g.determined},
+          {"follows", g.follows},
+          {"gain", g.gain},
+          {"pairs_tested", g.pairs_tested},
+          {"verdict", g.verdict},
+          {"frames", g.frames},
+          {"gyro_rate_rad_s", g.gyro_rate_rad_s},
+          {"image_rate_rad_s", g.image_rate_rad_s},
+          {"axes", axes}};
+}
+
+}  // namespace
+
 nlohmann::json ScreeningToJson(const ValidationResult& result) {
   const PointScreen& screen = result.screen;
   const CameraFixedRegion& region = screen.region;
@@ -70,15 +104,16 @@ nlohmann::json ScreeningToJson(const ValidationResult& result) {
   out["moving_share"] = screen.moving_share;
   if (result.video) {
     out["off_epipolar_share"] = screen.off_epipolar_share;
-    const GyroFollowCheck& g = screen.gyro_follow;
-    out["gyro_follow"] = {{"determined", g.determined},
-                          {"follows", g.follows},
-                          {"gain", g.gain},
-                          {"pairs_tested", g.pairs_tested},
-                          {"verdict", g.verdict},
-                          {"frames", g.frames},
-                          {"gyro_rate_rad_s", g.gyro_rate_rad_s},
-                          {"image_rate_rad_s", g.image_rate_rad_s}};
+    out["gyro_follow"] = GyroFollowToJson(screen.gyro_follow);
+    // A stabiliser on some axes: the first screening's check, before the image's own rotation
+    // about them was given to the pairs.
+    if (result.axes_not_following) {
+      nlohmann::json& j = out["axes_not_following"] = GyroFollowToJson(*result.axes_not_following);
+      j["not_following"] = nlohmann::json::array();
+      for (int a : result.axes_not_following->AxesNotFollowing()) {
+        j["not_following"].push_back(kAxisNames[a]);
+      }
+    }
   }
   return out;
 }
@@ -100,6 +135,9 @@ void WriteScreeningSummary(const ValidationResult& result, std::ostream& out) {
         << " off their pair's epipolar geometry";
   }
   out << "\n";
+  if (result.axes_not_following) {
+    out << "image against gyro, per axis: " << result.axes_not_following->verdict << "\n";
+  }
   if (result.video) out << "image against gyro: " << screen.gyro_follow.verdict << "\n";
 }
 

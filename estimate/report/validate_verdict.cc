@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cctype>
 #include <cmath>
 #include <sstream>
 
@@ -151,6 +152,49 @@ void AddCautions(const ValidationResult& result, ValidationVerdict* v) {
   }
 }
 
+// A stabiliser on some camera axes only (ValidationResult::axes_not_following): which axes, how
+// fast the image turns about them against the gyro, and that the loop ran on the others. The
+// headline when the loop found the declared model right on those; a finding otherwise.
+void AddAxesNotFollowing(const ValidationResult& result, ValidationVerdict* v) {
+  if (!result.axes_not_following) return;
+  const GyroFollowCheck& check = *result.axes_not_following;
+  std::vector<std::string> off, off_gains, on, on_gains;
+  bool roll = false, fast_only = false;
+  for (int a = 0; a < 3; ++a) {
+    const AxisFollow& f = check.axes[a];
+    if (!f.follows) {
+      const bool whole = f.determined && f.row_norm < kMinGain;
+      fast_only = fast_only || !whole;
+      roll = roll || a == 2;
+      off.push_back(kCameraAxisNames[a]);
+      off_gains.push_back(FormatNumber("%.2fx", whole ? f.row_norm : f.fast_row_norm));
+    } else if (f.clearly_follows) {
+      on.push_back(kCameraAxisNames[a]);
+      on_gains.push_back(FormatNumber("%.2fx", f.row_norm));
+    }
+  }
+  const std::string off_axes = Joined(off, " and "), on_axes = Joined(on, " and ");
+  const std::string sentence =
+      "A stabiliser re-renders the image about camera axis " + off_axes +
+      (roll && off.size() == 1 ? ", the optical axis (roll, as horizon levelling does)" : "") +
+      ": about it the image turns " + Joined(off_gains, " and ") + " as fast as the gyro says" +
+      (fast_only ? " (in the fast part of the motion)" : "") + ", while about " + on_axes +
+      " it follows (" + Joined(on_gains, ", ") +
+      "). The loop took the image's own rotation about " + off_axes + " and the gyro's about " +
+      on_axes + ".";
+  if (v->level == ValidationVerdict::Level::kOk) {
+    v->level = ValidationVerdict::Level::kAttention;
+    std::string rest = v->headline;
+    if (!rest.empty())
+      rest[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(rest[0])));
+    v->headline = sentence + " About those, " + rest;
+    v->actions.push_back(
+        "To test the sensor about every axis, record with the stabiliser (horizon levelling) off.");
+  } else {
+    v->findings.insert(v->findings.begin(), sentence);
+  }
+}
+
 }  // namespace
 
 ValidationVerdict MakeVerdict(const ValidationResult& result) {
@@ -220,7 +264,7 @@ ValidationVerdict MakeVerdict(const ValidationResult& result) {
     v.findings.push_back(
         "The stabiliser's own rotation (IORI): " + result.image_orientation.verdict + ".");
   }
-  if (result.video && result.preferred == "translation") {
+  if (result.video && result.preferred == "translation" && !ReRenderedByStabiliser(result)) {
     v.findings.push_back("The camera moved between frames: each pair's translation explains " +
                          Percent(result.translation_explains) +
                          " of what rotation alone leaves (parallax), so the fit uses it.");
@@ -243,6 +287,7 @@ ValidationVerdict MakeVerdict(const ValidationResult& result) {
   }
   v.certainty = Certainty(result, loop);
   AddCautions(result, &v);
+  AddAxesNotFollowing(result, &v);
   return v;
 }
 

@@ -99,7 +99,7 @@ TEST(PhotosCli, BadPhotosAreReportedAndAFolderWithoutPhotosIsAnError) {
             std::string::npos)
       << r.err;
   const std::string page = ReadFileToString(dir / "out/report.html");
-  for (const std::string text :
+  for (const std::string& text :
        {std::string("2 of 4 photos predicted"), std::string("ground cm/px"),
         std::string("excluded: " + (dir / "photos/DJI_0003.JPG") +
                     ": its image data does not decode"),

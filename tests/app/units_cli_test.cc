@@ -73,6 +73,9 @@ INSTANTIATE_TEST_SUITE_P(
         BareCase{"scene --out OUT/s.png", "--gsd 5", "did you mean 5cm or 5m?"},
         BareCase{"render --scene FILE --camera FILE --gyro FILE --frames FILE --out OUT",
                  "--moving-patch 10", "did you mean 10m/s?"},
+        BareCase{"render --scene FILE --camera FILE --gyro FILE --frames FILE --out OUT --video "
+                 "--stabiliser roll",
+                 "--stabiliser-window 2", "did you mean 2s?"},
         BareCase{"validate DIR", "--limit 5",
                  "--limit '5': a length needs a unit: did you mean "
                  "5cm or 5m? (m, cm, mm, km)"},
@@ -91,6 +94,18 @@ INSTANTIATE_TEST_SUITE_P(
                          std::to_string(info.index);
       return name;
     });
+
+// A stabiliser re-renders a clip: asked for on stills, refused in one line before anything runs.
+TEST(UnitsCli, AStabiliserNeedsAVideo) {
+  test::TempDir dir;
+  const std::string gyro = dir / "gyro.csv";
+  test::WriteStillThenTurningGyroCsv(gyro);
+  const std::string args = "render --scene " + gyro + " --camera " + gyro + " --gyro " + gyro +
+                           " --frames " + gyro + " --out " + (dir / "out") +
+                           " --stabiliser roll-lock";
+  ExpectOneLineRefusal(RunShutterlab(args), "--stabiliser needs --video", args);
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+}
 
 TEST(UnitsCli, QuantitiesWithUnitsAreAccepted) {
   test::TempDir dir;

@@ -126,7 +126,8 @@ struct ClipSpec {
   int frames = 16;
   double first_s = 12.6, fps = 30.0;
   double log_s = 20.0;
-  ClutterOptions clutter = {};  // render --camera-fixed-patch, --moving-patch
+  ClutterOptions clutter = {};        // render --camera-fixed-patch, --moving-patch
+  StabiliserOptions stabiliser = {};  // render --stabiliser, --stabiliser-window
 };
 
 // The clutter of the known-answer tests with it: the bottom quarter of every frame fixed to the
@@ -156,6 +157,7 @@ inline std::string MakeClip(const test::TempDir& dir, const ClipSpec& spec) {
   render.pictures = false;
   render.video = true;
   render.clutter = spec.clutter;
+  render.stabiliser = spec.stabiliser;
   RenderDataset(render);
   return dir / "clip";
 }

@@ -111,6 +111,49 @@ TEST(ValidateReport, AStabilisedImageNamesNoEffect) {
             std::string::npos);
 }
 
+// Horizon levelling held to the first frame (render --stabiliser roll-lock): the verdict says which
+// axis does not follow, names no effect of the sensor and asks for nothing in camera.json; the
+// JSON carries each axis's numbers.
+TEST(ValidateReport, ARollLockedClipSaysWhichAxisAndNamesNoEffect) {
+  test::TempDir dir;
+  test::ClipSpec spec;
+  spec.frames = test::kAsan ? 10 : 16;
+  spec.stabiliser.mode = StabiliserMode::kRollLock;
+  const ValidationResult result = test::ValidateWithoutResiduals(test::MakeClip(dir, spec));
+  const std::string report = ValidationReport(result);
+  const nlohmann::json json = ValidationToJson(result);
+  EXPECT_TRUE(json["effects"].empty()) << report;
+  EXPECT_EQ(json["verdict"]["level"], "attention") << report;
+  const std::string headline = json["verdict"]["headline"];
+  EXPECT_EQ(headline.find("A stabiliser re-renders the image about camera axis z"), 0u) << report;
+  EXPECT_NE(headline.find("there is nothing to correct"), std::string::npos) << report;
+  EXPECT_EQ(json["verdict"].dump().find("camera.json"), std::string::npos) << report;
+  const nlohmann::json& axes = json["screening"]["axes_not_following"];
+  EXPECT_EQ(axes["not_following"], nlohmann::json::array({"z"})) << report;
+  EXPECT_EQ(axes["axes"]["z"]["follows"], false) << report;
+  EXPECT_EQ(axes["axes"]["x"]["clearly_follows"], true) << report;
+  EXPECT_NE(report.find("image against gyro, per axis: the image does not follow the gyro about "
+                        "camera axis z"),
+            std::string::npos)
+      << report;
+}
+
+// A whole-image stabiliser with no translation at all: the sentence "the camera moved between
+// frames" is not said (the pair-translation model absorbs the stabiliser's turning, no motion).
+TEST(ValidateReport, AStabiliserIsNoTranslation) {
+  if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
+  test::TempDir dir;
+  test::ClipSpec spec;
+  spec.stabiliser.mode = StabiliserMode::kWhole;
+  const ValidationResult result = test::ValidateWithoutResiduals(test::MakeClip(dir, spec));
+  const nlohmann::json json = ValidationToJson(result);
+  const std::string verdict = json["verdict"].dump();
+  EXPECT_EQ(json["verdict"]["level"], "problem") << verdict;
+  EXPECT_EQ(verdict.find("moved between frames"), std::string::npos) << verdict;
+  EXPECT_EQ(verdict.find("translation explains"), std::string::npos) << verdict;
+  EXPECT_EQ(json["model"], "rotation_only") << verdict;
+}
+
 TEST(ValidateReport, ReportAndJsonCarryBothModels) {
   if (test::kAsan) GTEST_SKIP() << "reduced set under ASan";
   test::TempDir dir;
