@@ -1,5 +1,6 @@
 #include "model/camera.h"
 
+#include "model/effects.h"
 #include "sim/check.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
@@ -154,6 +155,26 @@ json DistortionJson(const LensDistortion& lens) {
   return out;
 }
 
+// camera.json's "bounds": {"NAME": [lo, hi], ...} for effects that have physical bounds.
+std::map<std::string, std::array<double, 2>> BoundsFromJson(const json& j) {
+  if (!j.is_object()) throw std::invalid_argument("bounds is not an object of NAME: [lo, hi]");
+  std::map<std::string, std::array<double, 2>> out;
+  for (const auto& [name, range] : j.items()) {
+    const std::optional<Effect> effect = ParseEffect(name);
+    if (!effect || !Spec(*effect).bounds) {
+      throw std::invalid_argument("bounds: '" + name + "' is no effect with bounds (" +
+                                  BoundedEffectNames() + ")");
+    }
+    if (!range.is_array() || range.size() != 2 || !range[0].is_number() || !range[1].is_number() ||
+        !(range[0].get<double>() < range[1].get<double>())) {
+      throw std::invalid_argument("bounds: " + name +
+                                  " is not [lo, hi] with lo below hi (in the effect's unit)");
+    }
+    out[name] = {range[0].get<double>(), range[1].get<double>()};
+  }
+  return out;
+}
+
 RigModel RigModelFromJson(const json& j) {
   RigModel rig;
   if (!j.is_object()) throw std::invalid_argument("top level is not an object");
@@ -210,6 +231,7 @@ RigModel RigModelFromJson(const json& j) {
       }
       rig.mask = j["mask"].get<std::string>();
     }
+    if (j.contains("bounds")) rig.bounds = BoundsFromJson(j["bounds"]);
   } catch (const json::exception& e) {
     throw std::invalid_argument(std::string("malformed camera: ") + e.what());
   }
@@ -253,6 +275,7 @@ json RigModelToJson(const RigModel& rig) {
   j["scene"] = {{"altitude_m", rig.altitude_m}};
   j["velocity_mps"] = {rig.velocity_mps.x(), rig.velocity_mps.y(), rig.velocity_mps.z()};
   if (!rig.mask.empty()) j["mask"] = rig.mask;
+  for (const auto& [name, range] : rig.bounds) j["bounds"][name] = {range[0], range[1]};
   return j;
 }
 

@@ -10,6 +10,8 @@
 #include <Eigen/Core>
 #include <nlohmann/json_fwd.hpp>
 
+#include <array>
+#include <map>
 #include <optional>
 #include <string>
 
@@ -59,6 +61,10 @@ struct RigModel {
   // dataset folder; non-zero = may be used. Empty: every pixel may be used. (Read by
   // io/rig_dataset.h ReadRigDataset.)
   std::string mask;
+  // camera.json `bounds` (shutterlab extension): per effect name, the [lo, hi] its fitted value
+  // may take, in the effect's unit, in place of the physical bounds (model/effects.h
+  // PhysicalBounds) for a device known to differ. Only effects that have bounds.
+  std::map<std::string, std::array<double, 2>> bounds;
 
   // Throws std::invalid_argument naming the first nonsensical field.
   void Check() const;

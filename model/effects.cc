@@ -37,27 +37,11 @@ EffectValue ThreeSd(const TrueModel&, const Eigen::MatrixXd&, const Eigen::Vecto
 // "V UNIT, outside LO ... HI UNIT: why" for v outside [lo, hi] (in the value's unit; `scale`
 // turns it into the message's unit), else "".
 std::string Outside(double v, double lo, double hi, double scale, const std::string& unit,
-                    const char* why) {
+                    const std::string& why) {
   if (v >= lo && v <= hi) return "";
   const std::string u = unit.empty() ? "" : " " + unit;
   return FormatNumber("%.5g", v * scale) + u + ", outside " + FormatNumber("%g", lo * scale) +
          " ... " + FormatNumber("%g", hi * scale) + u + ": " + why;
-}
-
-std::string NumberOutside(const EffectValue& value, double lo, double hi, double scale,
-                          const char* unit, const char* why) {
-  return Outside(std::get<double>(value), lo, hi, scale, unit, why);
-}
-
-// The first axis of a vector outside [lo, hi], named.
-std::string AxesOutside(const EffectValue& value, double lo, double hi, double scale,
-                        const char* unit, const char* why) {
-  const Eigen::Vector3d& v = std::get<Eigen::Vector3d>(value);
-  for (int a = 0; a < 3; ++a) {
-    const std::string outside = Outside(v[a], lo, hi, scale, unit, why);
-    if (!outside.empty()) return std::string("axis ") + "xyz"[a] + " at " + outside;
-  }
-  return "";
 }
 
 // --- the table, one function per effect in docs/FORMATS.md's order
@@ -81,11 +65,9 @@ EffectSpec TimeOffsetSpec() {
   s.value = [](const TrueModel& m) -> EffectValue { return m.rig.time_offset_s; };
   s.stderr_value = FirstSd;
   s.claim = "time_offset_s";
-  s.out_of_bounds = [](const EffectValue& v) {
-    return NumberOutside(v, -1.0, 1.0, 1e3, "ms",
-                         "a camera and a gyro on clocks that were set together at all differ by "
-                         "milliseconds; over a second the log is not of these frames' time");
-  };
+  s.bounds = PhysicalBounds{-1.0, 1.0, 1e3, "ms",
+                            "a camera and a gyro on clocks that were set together at all differ by "
+                            "milliseconds; over a second the log is not of these frames' time"};
   return s;
 }
 
@@ -106,11 +88,9 @@ EffectSpec ReadoutTimeSpec() {
   s.value = [](const TrueModel& m) -> EffectValue { return m.rig.shutter.readout_s; };
   s.stderr_value = FirstSd;
   s.claim = "readout_s";
-  s.out_of_bounds = [](const EffectValue& v) {
-    return NumberOutside(v, 1e-4, 0.1, 1e3, "ms",
-                         "sensors read a frame in 1 to 60 ms (the readout table's cameras, "
-                         "model/readout_table.h)");
-  };
+  s.bounds = PhysicalBounds{1e-4, 0.1, 1e3, "ms",
+                            "sensors read a frame in 1 to 60 ms (the readout table's cameras, "
+                            "model/readout_table.h)"};
   return s;
 }
 
@@ -168,11 +148,10 @@ EffectSpec GyroScaleSpec() {
   s.value = [](const TrueModel& m) -> EffectValue { return m.gyro_scale; };
   s.stderr_value = ThreeSd;
   s.identifiable_with_pair_translation = false;
-  s.out_of_bounds = [](const EffectValue& v) {
-    return AxesOutside(v, 0.9, 1.1, 1.0, "",
-                       "a MEMS gyro's sensitivity is within 3 % of nominal (MPU-9250 datasheet, "
-                       "sensitivity scale factor tolerance), 10 % allowed");
-  };
+  s.bounds =
+      PhysicalBounds{0.9, 1.1, 1.0, "",
+                     "a MEMS gyro's sensitivity is within 3 % of nominal (MPU-9250 datasheet, "
+                     "sensitivity scale factor tolerance), 10 % allowed"};
   return s;
 }
 
@@ -194,12 +173,9 @@ EffectSpec GyroBiasSpec() {
   s.value = [](const TrueModel& m) -> EffectValue { return m.gyro_bias_rad_s; };
   s.stderr_value = ThreeSd;
   s.identifiable_with_pair_translation = false;
-  s.out_of_bounds = [](const EffectValue& v) {
-    constexpr double kTenDegPerS = 10.0 * M_PI / 180.0;
-    return AxesOutside(v, -kTenDegPerS, kTenDegPerS, 180.0 / M_PI, "deg/s",
-                       "a MEMS gyro's zero-rate output is within 5 deg/s at turn-on (MPU-9250 "
-                       "datasheet, initial ZRO tolerance), 10 deg/s allowed");
-  };
+  s.bounds = PhysicalBounds{-10.0 * M_PI / 180.0, 10.0 * M_PI / 180.0, 180.0 / M_PI, "deg/s",
+                            "a MEMS gyro's zero-rate output is within 5 deg/s at turn-on (MPU-9250 "
+                            "datasheet, initial ZRO tolerance), 10 deg/s allowed"};
   return s;
 }
 
@@ -220,10 +196,8 @@ EffectSpec VelocitySpec() {
   };
   s.value = [](const TrueModel& m) -> EffectValue { return m.rig.velocity_mps; };
   s.stderr_value = ThreeSd;
-  s.out_of_bounds = [](const EffectValue& v) {
-    return AxesOutside(v, -100.0, 100.0, 1.0, "m/s",
-                       "no mapping drone, FPV quad or car films at over 100 m/s");
-  };
+  s.bounds = PhysicalBounds{-100.0, 100.0, 1.0, "m/s",
+                            "no mapping drone, FPV quad or car films at over 100 m/s"};
   // The pair translation replaces it (and video's rotation-only model has none).
   s.identifiable_with_pair_translation = false;
   return s;
@@ -322,11 +296,10 @@ EffectSpec ClockRateSpec() {
   };
   s.value = [](const TrueModel& m) -> EffectValue { return m.clock_rate_ppm; };
   s.stderr_value = FirstSd;  // the rate's, not the offset's
-  s.out_of_bounds = [](const EffectValue& v) {
-    return NumberOutside(v, -2e4, 2e4, 1.0, "ppm",
-                         "a crystal keeps within 100 ppm and a MEMS part's own oscillator within "
-                         "about 1 %, 2 % allowed");
-  };
+  s.bounds =
+      PhysicalBounds{-2e4, 2e4, 1.0, "ppm",
+                     "a crystal keeps within 100 ppm and a MEMS part's own oscillator within "
+                     "about 1 %, 2 % allowed"};
   return s;
 }
 
@@ -384,9 +357,36 @@ const std::vector<EffectSpec>& AllEffects() {
 
 const EffectSpec& Spec(Effect effect) { return AllEffects().at(static_cast<size_t>(effect)); }
 
-std::string OutOfBounds(Effect effect, const EffectValue& value) {
+std::string BoundedEffectNames() {
+  std::string names;
+  for (const EffectSpec& spec : AllEffects()) {
+    if (spec.bounds) names += (names.empty() ? "" : ", ") + spec.name;
+  }
+  return names;
+}
+
+std::string OutOfBounds(Effect effect, const EffectValue& value, const RigModel* rig) {
   const EffectSpec& spec = Spec(effect);
-  return spec.out_of_bounds ? spec.out_of_bounds(value) : "";
+  if (!spec.bounds) return "";
+  PhysicalBounds b = *spec.bounds;
+  std::string why = b.why;
+  if (rig != nullptr) {
+    const auto given = rig->bounds.find(spec.name);
+    if (given != rig->bounds.end()) {
+      b.lo = given->second[0];
+      b.hi = given->second[1];
+      why = "camera.json's bounds for " + spec.name;
+    }
+  }
+  if (const double* v = std::get_if<double>(&value)) {
+    return Outside(*v, b.lo, b.hi, b.scale, b.unit, why);
+  }
+  const Eigen::Vector3d& v = std::get<Eigen::Vector3d>(value);
+  for (int a = 0; a < 3; ++a) {
+    const std::string outside = Outside(v[a], b.lo, b.hi, b.scale, b.unit, why);
+    if (!outside.empty()) return std::string("axis ") + "xyz"[a] + " at " + outside;
+  }
+  return "";
 }
 
 std::optional<Effect> ParseEffect(std::string_view name) {

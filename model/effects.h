@@ -60,6 +60,16 @@ struct Injection {
   EffectValue value;
 };
 
+// The range of an effect's value (each axis of a vector) that a real device can have, in the
+// effect's own unit (docs/FORMATS.md), and how a value outside is said: times `scale` in `unit`,
+// with why no device has it.
+struct PhysicalBounds {
+  double lo = 0.0, hi = 0.0;
+  double scale = 1.0;
+  const char* unit = "";
+  const char* why = "";
+};
+
 // One effect. The fitted parameters (parameter_count of them, each a delta from the model's current
 // value) are: time_offset 1 (s), readout_time 1 (s), gyro_to_camera 3 (rotation vector, rad,
 // applied on the camera side: R_CG = Exp(x) * R_CG_declared), gyro_scale 3, gyro_bias 3 (rad/s),
@@ -93,10 +103,10 @@ struct EffectSpec {
   bool identifiable_with_pair_translation = true;
   // The import.json claim ("what") that a fit of this effect tests; "" when none does.
   std::string claim;
-  // What a real device can have (docs/FORMATS.md "Physical bounds"): for a value outside, why no
-  // device has it; "" inside. nullptr: every value of the shape is plausible (a mounting, a lens,
-  // a readout direction). A fitted value outside is never named as a fix (OutOfBounds).
-  std::string (*out_of_bounds)(const EffectValue& value) = nullptr;
+  // What a real device can have (docs/FORMATS.md "Physical bounds"); nullopt: every value of the
+  // shape is plausible (a mounting, a lens, a readout direction). A fitted value outside is never
+  // named as a fix (OutOfBounds).
+  std::optional<PhysicalBounds> bounds;
 };
 
 // Every effect, in docs/FORMATS.md's order.
@@ -116,8 +126,12 @@ Effect RequireEffect(std::string_view name, const std::string& where);
 // model/effect_io.h.
 EffectValue ApplyInjection(const Injection& injection, TrueModel* model);
 
-// Spec(effect).out_of_bounds's answer for the value: "" when a real device can have it.
-std::string OutOfBounds(Effect effect, const EffectValue& value);
+// "time_offset, readout_time, ...": the effects that have bounds.
+std::string BoundedEffectNames();
+
+// Why no real device has the value (Spec(effect).bounds, or camera.json's own for the effect
+// where rig gives one: RigModel::bounds); "" when one can.
+std::string OutOfBounds(Effect effect, const EffectValue& value, const RigModel* rig = nullptr);
 
 // Standard errors in the shape of the effect's value, from the covariance of its parameters
 // (gyro_to_camera: per matrix entry, first order in the rotation vector). std::monostate for

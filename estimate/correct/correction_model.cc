@@ -32,7 +32,7 @@ CorrectionModel BuildCorrectionModel(const RigModel& declared,
   for (const ReportedEffect& e : report->effects) {
     // A value no device has explains a residual but corrects nothing (validate's verdict says
     // what it points to); from a report of any tool, so checked here, not read from a key.
-    const std::string outside = OutOfBounds(e.effect, e.value);
+    const std::string outside = OutOfBounds(e.effect, e.value, &declared);
     SHUTTERLAB_CHECK(outside.empty())
         << report_path << ": " << Spec(e.effect).name << " " << outside
         << ": it is no correction; give the values to use with --effect NAME=VALUE instead";

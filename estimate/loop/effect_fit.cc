@@ -763,7 +763,7 @@ std::vector<IdentifiedEffect> IdentifiedEffects(const Context& ctx, const Fit& f
     IdentifiedEffect effect;
     effect.effect = e;
     effect.value = Spec(e).value(fit.model);
-    effect.out_of_bounds = OutOfBounds(e, effect.value);
+    effect.out_of_bounds = OutOfBounds(e, effect.value, &fit.model.rig);
     effect.covariance = cov.block(offset, offset, n, n);
     effect.stderr_value = EffectStderr(e, fit.model, effect.covariance);
     effect.parameters = fit.hypothesis.x.segment(offset, n);

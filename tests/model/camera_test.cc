@@ -33,6 +33,7 @@ RigModel FullRig() {
   rig.time_offset_s = -0.0041;
   rig.altitude_m = 73.5;
   rig.velocity_mps = Eigen::Vector3d(1.5, -2.25, 0.125);
+  rig.bounds["gyro_scale"] = {0.5, 1.5};
   return rig;
 }
 
@@ -60,6 +61,7 @@ TEST(RigModel, RoundTripsThroughCameraJson) {
   EXPECT_EQ(back.time_offset_s, rig.time_offset_s);
   EXPECT_EQ(back.altitude_m, rig.altitude_m);
   EXPECT_EQ(back.velocity_mps, rig.velocity_mps);
+  EXPECT_EQ(back.bounds, rig.bounds);
 }
 
 TEST(RigModel, OptionalFieldsDefault) {
@@ -118,6 +120,20 @@ TEST(RigModel, RejectsNonsenseWithAClearError) {
                  "\"format\": \"rig/1\", \"gyro_to_camera\": [[1,0,0],[0,1,0],[0,0,-1]],",
                  "gyro_to_camera");  // a reflection is orthonormal but not a rotation
   ExpectRejected("\"intrinsics\"", "\"intrinsic\"", "camera.json");
+  // Bounds only for effects that have them, as [lo, hi] with lo below hi.
+  ExpectRejected("\"format\": \"rig/1\",", "\"format\": \"rig/1\", \"bounds\": [0, 1],",
+                 "bounds is not an object");
+  ExpectRejected("\"format\": \"rig/1\",",
+                 "\"format\": \"rig/1\", \"bounds\": {\"lens_distortion\": [0, 1]},",
+                 "bounds: 'lens_distortion' is no effect with bounds (time_offset, readout_time");
+  ExpectRejected("\"format\": \"rig/1\",", "\"format\": \"rig/1\", \"bounds\": {\"warp\": [0, 1]},",
+                 "bounds: 'warp' is no effect with bounds");
+  ExpectRejected("\"format\": \"rig/1\",",
+                 "\"format\": \"rig/1\", \"bounds\": {\"gyro_scale\": [1.2, 0.8]},",
+                 "bounds: gyro_scale is not [lo, hi] with lo below hi");
+  ExpectRejected("\"format\": \"rig/1\",",
+                 "\"format\": \"rig/1\", \"bounds\": {\"gyro_scale\": [0.8]},",
+                 "bounds: gyro_scale is not [lo, hi]");
 }
 
 TEST(RigModel, AFisheyeRoundTripsThroughCameraJson) {

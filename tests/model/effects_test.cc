@@ -114,8 +114,24 @@ TEST(Effects, PhysicalBoundsKnownAnswers) {
   EXPECT_EQ(OutOfBounds(Effect::kVelocity, Eigen::Vector3d(12, -3, 0)), "");
   EXPECT_NE(OutOfBounds(Effect::kVelocity, Eigen::Vector3d(0, 0, 250)), "");
   EXPECT_EQ(OutOfBounds(Effect::kGyroToCamera, Eigen::Matrix3d(-Eigen::Matrix3d::Identity())), "");
-  EXPECT_EQ(Spec(Effect::kLensDistortion).out_of_bounds, nullptr);
-  EXPECT_EQ(Spec(Effect::kReadoutDirection).out_of_bounds, nullptr);
+  EXPECT_FALSE(Spec(Effect::kLensDistortion).bounds.has_value());
+  EXPECT_FALSE(Spec(Effect::kReadoutDirection).bounds.has_value());
+}
+
+// camera.json's bounds replace an effect's physical ones (a device known to differ), and say so;
+// the other effects keep theirs.
+TEST(Effects, CameraJsonBoundsReplaceThePhysicalOnes) {
+  RigModel rig;
+  rig.bounds["gyro_scale"] = {0.05, 2.0};
+  EXPECT_EQ(OutOfBounds(Effect::kGyroScale, Eigen::Vector3d(1.0, 1.0, 0.1), &rig), "");
+  EXPECT_EQ(OutOfBounds(Effect::kGyroScale, Eigen::Vector3d(1.0, 2.5, 1.0), &rig),
+            "axis y at 2.5, outside 0.05 ... 2: camera.json's bounds for gyro_scale");
+  rig.bounds["time_offset"] = {-0.002, 0.002};
+  EXPECT_EQ(OutOfBounds(Effect::kTimeOffset, 0.004, &rig),
+            "4 ms, outside -2 ... 2 ms: camera.json's bounds for time_offset");
+  EXPECT_NE(OutOfBounds(Effect::kClockRate, 5e4, &rig), "");
+  EXPECT_EQ(BoundedEffectNames(),
+            "time_offset, readout_time, gyro_scale, gyro_bias, velocity, clock_rate");
 }
 
 TEST(Effects, AnUnknownNameFailsNamingIt) {

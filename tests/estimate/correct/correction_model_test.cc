@@ -86,6 +86,11 @@ TEST(BuildCorrectionModel, RefusesAnEffectNoDeviceHas) {
   }
   report.effects[0].value = Eigen::Vector3d(1.0, 1.0, 1.02);  // 2 %: a real part's
   EXPECT_NO_THROW(BuildCorrectionModel(declared, report, "r.json"));
+  // A device camera.json says differs: its own bounds hold instead.
+  RigModel wide = declared;
+  wide.bounds["gyro_scale"] = {0.05, 1.5};
+  report.effects[0].value = Eigen::Vector3d(1.0, 1.0, 0.1);
+  EXPECT_NO_THROW(BuildCorrectionModel(wide, report, "r.json"));
 }
 
 TEST(PredictResidual, ACertainModelLeavesNothingAndDBeforeIsTheFramesDistortion) {

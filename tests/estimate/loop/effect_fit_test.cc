@@ -248,6 +248,23 @@ TEST(CloseTheLoop, RecoversTimeOffset) {
   EXPECT_EQ(Spec(e.effect).unit, "s");
 }
 
+// The fit judges its values against camera.json's bounds where it gives them: the same 4 ms is
+// within a real clock's but outside a declared 2 ms.
+TEST(FitEffects, JudgesAgainstCameraJsonsBounds) {
+  const Case c = RunCase("time_offset=4ms");
+  const LoopResult plain =
+      FitEffects(c.declared, c.gyro, c.frames, kNoisePx, {Effect::kTimeOffset});
+  ASSERT_EQ(plain.effects.size(), 1u);
+  EXPECT_EQ(plain.effects[0].out_of_bounds, "");
+  RigModel narrow = c.declared;
+  narrow.bounds["time_offset"] = {-0.002, 0.002};
+  const LoopResult judged = FitEffects(narrow, c.gyro, c.frames, kNoisePx, {Effect::kTimeOffset});
+  ASSERT_EQ(judged.effects.size(), 1u);
+  EXPECT_NE(judged.effects[0].out_of_bounds.find("camera.json's bounds for time_offset"),
+            std::string::npos)
+      << judged.effects[0].out_of_bounds;
+}
+
 TEST(CloseTheLoop, RecoversAFisheyesLensDistortion) {
   // A 120 degree fisheye declared with the GoPro MAX's coefficients; the true k1, k2 differ by
   // +0.05, -0.03. A still frame's displacement is the rolling shutter's alone (a few px at this
