@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -57,6 +58,192 @@ TEST(ValidateVerdict, AnEffectNoDeviceHasIsNeverNamedAsTheFix) {
   EXPECT_EQ(fix.level, ValidationVerdict::Level::kAttention);
   ASSERT_FALSE(fix.actions.empty());
   EXPECT_EQ(fix.actions[0].rfind("Put gyro_scale = ", 0), 0u) << fix.actions[0];
+}
+
+// Every sentence the verdict can say, each with the condition that makes it true and a change that
+// makes it false (estimate/report/validate_verdict.cc). A sentence with no case here fails
+// nothing: add one with the sentence.
+struct SentenceCase {
+  std::string fragment;                         // a part of the sentence only it says
+  std::function<void(ValidationResult*)> make;  // from the base: the sentence is said
+  std::function<void(ValidationResult*)> undo;  // from make's: it is not
+};
+
+ValidationResult VerdictBase() {
+  ValidationResult r;
+  r.loop.noise_px = 0.05;
+  r.loop.after.rms_px = 0.05;
+  r.loop.after.points = 1000;
+  r.loop.residual_components = 2;
+  return r;
+}
+
+IdentifiedEffect TimeOffset(double value_s) {
+  IdentifiedEffect e;
+  e.effect = Effect::kTimeOffset;
+  e.value = value_s;
+  e.stderr_value = 0.0002;
+  e.out_of_bounds = OutOfBounds(e.effect, e.value);
+  return e;
+}
+
+GyroFollowCheck NotFollowingAboutZ() {
+  GyroFollowCheck check;
+  check.determined = true;
+  for (int a = 0; a < 3; ++a) {
+    AxisFollow& f = check.axes[a];
+    f.determined = true;
+    f.row_norm = f.gain = a == 2 ? 0.01 : 1.0;
+    f.row_norm_stderr = 0.01;
+    f.follows = f.clearly_follows = a != 2;
+  }
+  return check;
+}
+
+std::string AllText(const ValidationVerdict& v) {
+  std::string text = v.headline + "\n" + v.certainty + "\n";
+  for (const std::string& f : v.findings) text += f + "\n";
+  for (const std::string& a : v.actions) text += a + "\n";
+  return text;
+}
+
+TEST(ValidateVerdict, EverySentenceHasItsConditionAndATestThatMakesItFalse) {
+  using R = ValidationResult*;
+  const std::vector<SentenceCase> cases = {
+      {"A stabiliser re-rendered the image: it follows the gyro only turned",
+       [](R r) { r->video = r->image_orientation.present = r->image_orientation.holds = true; },
+       [](R r) { r->image_orientation.holds = false; }},
+      {"The stabiliser's own rotation (IORI)",
+       [](R r) { r->video = r->image_orientation.present = true; },
+       [](R r) { r->image_orientation.present = false; }},
+      {"The image does not follow the gyro: it turns",
+       [](R r) {
+         r->video = r->screen.gyro_follow.determined = true;
+         r->screen.gyro_follow.follows = false;
+       },
+       [](R r) { r->screen.gyro_follow.follows = true; }},
+      {"Record with the stabiliser off",
+       [](R r) {
+         r->video = r->screen.gyro_follow.determined = true;
+         r->screen.gyro_follow.follows = false;
+       },
+       [](R r) { r->screen.gyro_follow.determined = false; }},
+      {"No effect of the sensor explains this", [](R r) { r->loop.effects = {TimeOffset(2.5)}; },
+       [](R r) { r->loop.effects = {TimeOffset(0.004)}; }},
+      {"Check camera.json's gyro_to_camera and intrinsics",
+       [](R r) { r->loop.effects = {TimeOffset(2.5)}; }, [](R r) { r->loop.effects.clear(); }},
+      {"Something the model lacks moves the image", [](R r) { r->loop.unexplained = true; },
+       [](R r) { r->loop.unexplained = false; }},
+      {"Look at the residual pictures", [](R r) { r->loop.unexplained = true; },
+       [](R r) { r->loop.unexplained = false; }},
+      {"The declared camera model is off", [](R r) { r->loop.effects = {TimeOffset(0.004)}; },
+       [](R r) { r->loop.effects.clear(); }},
+      {"Put time_offset = ", [](R r) { r->loop.effects = {TimeOffset(0.004)}; },
+       [](R r) { r->loop.unexplained = true; }},
+      {"time_offset = 4.000 ± 0.200 ms (declared 0.000 ms)",
+       [](R r) { r->loop.effects = {TimeOffset(0.004)}; }, [](R r) { r->loop.effects.clear(); }},
+      {"The declared camera model explains the measured motion", [](R) {},
+       [](R r) { r->loop.unexplained = true; }},
+      {"A stabiliser re-renders the image about camera axis z",
+       [](R r) {
+         r->video = true;
+         r->axes_not_following = NotFollowingAboutZ();
+       },
+       [](R r) { r->axes_not_following.reset(); }},
+      {"To test the sensor about every axis",
+       [](R r) {
+         r->video = true;
+         r->axes_not_following = NotFollowingAboutZ();
+       },
+       [](R r) { r->loop.unexplained = true; }},
+      // Translation is said only where the motion allows it: not on a stabiliser's rendering.
+      {"The camera moved between frames",
+       [](R r) {
+         r->video = true;
+         r->preferred = "translation";
+         r->translation_loop = r->loop;
+       },
+       [](R r) {
+         r->screen.gyro_follow.determined = true;
+         r->screen.gyro_follow.follows = false;
+       }},
+      {"The camera moved between frames",
+       [](R r) {
+         r->video = true;
+         r->preferred = "translation";
+         r->translation_loop = r->loop;
+       },
+       [](R r) { r->preferred = "rotation_only"; }},
+      {"The paper's per-axis threshold model gives",
+       [](R r) {
+         RatioGroup all;
+         all.frames = 8;
+         all.paper_median = 0.8;
+         r->ratios = {all};
+       },
+       [](R r) { r->video = true; }},
+      {"The source's readout_s (source claim): claim holds",
+       [](R r) {
+         ClaimCheck c;
+         c.claim = "readout_s";
+         c.status = "source claim";
+         c.verdict = "claim holds";
+         r->claims = {c};
+       },
+       [](R r) { r->claims.clear(); }},
+      {"Where the source's claim is contradicted",
+       [](R r) {
+         ClaimCheck c;
+         c.claim = "readout_s";
+         c.verdict = "claim contradicted: 30 ms against 33 ms";
+         r->claims = {c};
+       },
+       [](R r) { r->claims[0].verdict = "claim holds"; }},
+      {"of the points were left out before the fit",
+       [](R r) { r->screen.camera_fixed_share = r->screen.moving_share = 0.2; },
+       [](R r) { r->screen.camera_fixed_share = r->screen.moving_share = 0.1; }},
+      {"The halves disagree on time_offset",
+       [](R r) {
+         HalfCheck h;
+         HalfAgreement a;
+         a.agree = false;
+         h.effects = {a};
+         r->halves = {h};
+       },
+       [](R r) { r->halves[0].effects[0].agree = true; }},
+      // How sure.
+      {"Standard errors: model over 0 frames", [](R r) { r->loop.effects = {TimeOffset(0.004)}; },
+       [](R r) { r->loop.effects.clear(); }},
+      {"The two halves of the clip agree within their standard errors",
+       [](R r) {
+         r->halves = {HalfCheck{"rotation_only", 4, 4, {HalfAgreement{}}, {}, {}, {}, {}}};
+       },
+       [](R r) { r->halves.clear(); }},
+      {"The two halves of the clip DISAGREE",
+       [](R r) {
+         r->halves = {HalfCheck{"rotation_only", 4, 4, {HalfAgreement{}}, {}, {}, {}, {}}};
+         r->halves[0].effects[0].agree = false;
+       },
+       [](R r) { r->halves[0].effects[0].agree = true; }},
+      {"do not both determine the effects",
+       [](R r) {
+         r->halves = {HalfCheck{"rotation_only", 4, 4, {HalfAgreement{}}, {}, {}, {}, {}}};
+         r->halves[0].effects[0].determined = false;
+       },
+       [](R r) { r->halves[0].effects[0].determined = true; }},
+      {"off their epipolar lines", [](R r) { r->video = true; }, [](R r) { r->video = false; }},
+      {", and the masked pixels", [](R r) { r->mask = cv::Mat(4, 4, CV_8U, cv::Scalar(255)); },
+       [](R r) { r->mask = cv::Mat(); }},
+  };
+  for (const SentenceCase& c : cases) {
+    ValidationResult result = VerdictBase();
+    c.make(&result);
+    const std::string said = AllText(MakeVerdict(result));
+    EXPECT_NE(said.find(c.fragment), std::string::npos) << c.fragment << "\nnot in\n" << said;
+    c.undo(&result);
+    const std::string unsaid = AllText(MakeVerdict(result));
+    EXPECT_EQ(unsaid.find(c.fragment), std::string::npos) << c.fragment << "\nstill in\n" << unsaid;
+  }
 }
 
 // The table's bookkeeping on one dataset: flags follow D against each limit, the confusion matrix
