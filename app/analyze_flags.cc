@@ -62,6 +62,7 @@ PhotoSetOptions PhotoOptionsFromFlags(const AnalyzeFlags& flags) {
   }
   if (flags.altitude_given) options.altitude_m = flags.altitude_m;
   if (!std::isnan(flags.speed_m_s)) options.speed_m_s = flags.speed_m_s;
+  if (!std::isnan(flags.ground_elevation_m)) options.ground_elevation_m = flags.ground_elevation_m;
   options.recursive = flags.recursive;
   if (!flags.lens_profile_path.empty())
     options.lens_profile = ReadLensProfile(flags.lens_profile_path);
@@ -202,6 +203,11 @@ std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
   AddQuantityOption(command, "--speed", &flags->speed_m_s, "m/s", "m/s",
                     "--photos: the ground speed of every photo, over their metadata's (for "
                     "photos that do not record it)");
+  AddQuantityOption(command, "--ground-elevation", &flags->ground_elevation_m, "m", "m",
+                    "--photos: the ground's elevation (the take-off point's) in the photos' "
+                    "absolute altitude's datum: a photo with no height above take-off is then "
+                    "flown at its absolute (or GPS) altitude minus this")
+      ->default_str("");
   command->add_flag("--recursive", flags->recursive,
                     "--photos: read the folder's subfolders too (a card's DCIM/100MEDIA, ...)");
   command->add_option(

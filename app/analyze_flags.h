@@ -43,7 +43,8 @@ struct AnalyzeFlags {
   std::string scene_path;
   std::string photos_dir;
   std::string photo_utc_offset;
-  double speed_m_s = std::numeric_limits<double>::quiet_NaN();  // NaN: the photos' own
+  double speed_m_s = std::numeric_limits<double>::quiet_NaN();           // NaN: the photos' own
+  double ground_elevation_m = std::numeric_limits<double>::quiet_NaN();  // NaN: not given
   bool recursive = false;
   bool zero_bias = false;
   std::string bias;  // --bias A:B; empty: the log's longest still stretch (--auto-bias)

@@ -37,6 +37,7 @@ struct CorrectCommand {
   std::string readout;
   double focal_px = 0.0;
   double altitude_m = 0.0;
+  double ground_elevation_m = std::numeric_limits<double>::quiet_NaN();  // NaN: not given
   std::string photo_utc_offset;
   std::string reference = "row0";
   std::string interpolation = "bilinear";
@@ -64,6 +65,8 @@ PhotoInputOptions PhotoOptionsFromFlags(const CorrectCommand& command) {
   }
   if (command.focal_px != 0.0) photos.focal_px = command.focal_px;
   if (command.altitude_m != 0.0) photos.altitude_m = command.altitude_m;
+  if (!std::isnan(command.ground_elevation_m))
+    photos.ground_elevation_m = command.ground_elevation_m;
   if (!command.photo_utc_offset.empty()) {
     photos.clock.camera_utc_offset_s = ParseUtcOffset(command.photo_utc_offset);
     SHUTTERLAB_CHECK(photos.clock.camera_utc_offset_s)
@@ -75,14 +78,17 @@ PhotoInputOptions PhotoOptionsFromFlags(const CorrectCommand& command) {
 
 void Run(CorrectCommand& command) {
   CorrectOptions& options = command.options;
-  const bool photo_flags =
-      !command.triggers_path.empty() || command.latency != "0" || !command.camera_path.empty() ||
-      !command.lens_profile_path.empty() || !command.readout.empty() || command.focal_px != 0.0 ||
-      command.altitude_m != 0.0 || !command.photo_utc_offset.empty() || command.format != "auto";
+  const bool photo_flags = !command.triggers_path.empty() || command.latency != "0" ||
+                           !command.camera_path.empty() || !command.lens_profile_path.empty() ||
+                           !command.readout.empty() || command.focal_px != 0.0 ||
+                           command.altitude_m != 0.0 || !std::isnan(command.ground_elevation_m) ||
+                           !command.photo_utc_offset.empty() || command.format != "auto";
   if (command.photos_dir.empty()) {
-    SHUTTERLAB_CHECK(!photo_flags) << "--triggers, --latency, --camera, --lens-profile, --readout, "
-                                      "--focal-px, --altitude, --photo-utc-offset and --format "
-                                      "are for --photos DIR LOG (a rig dataset has camera.json)";
+    SHUTTERLAB_CHECK(!photo_flags)
+        << "--triggers, --latency, --camera, --lens-profile, --readout, "
+           "--focal-px, --altitude, --ground-elevation, --photo-utc-offset "
+           "and --format "
+           "are for --photos DIR LOG (a rig dataset has camera.json)";
     SHUTTERLAB_CHECK(std::filesystem::is_directory(command.input))
         << command.input << ": not a folder (a rig dataset; for photos: --photos DIR LOG)";
     options.dataset_dir = command.input;
@@ -168,6 +174,10 @@ const CommandRegistration kCorrectRegistration(75, [](CLI::App& app) {
   AddQuantityOption(cmd, "--altitude", &command->altitude_m, "m", "m",
                     "--photos: height of the ground plane below the camera (default: camera.json, "
                     "the log's height above ground, the photos' height above take-off)")
+      ->default_str("");
+  AddQuantityOption(cmd, "--ground-elevation", &command->ground_elevation_m, "m", "m",
+                    "--photos: the ground's elevation (the take-off point's) in the photos' "
+                    "absolute altitude's datum, for photos with no height above take-off")
       ->default_str("");
   cmd->add_option("--photo-utc-offset", command->photo_utc_offset,
                   "--photos: the camera clock's zone, +HH:MM (placing photos by capture time)");

@@ -109,6 +109,9 @@ void ReadExif(const Exiv2::ExifData& exif, PhotoMetadata* out) {
   if (lat && lon && (std::abs(*lat) > 1e-2 || std::abs(*lon) > 1e-2)) {
     out->latitude_deg = lat;
     out->longitude_deg = lon;
+    const auto altitude = ExifNumber(exif, "Exif.GPSInfo.GPSAltitude");
+    const auto below = ExifNumber(exif, "Exif.GPSInfo.GPSAltitudeRef");
+    if (altitude) out->gps_altitude_m = below && *below == 1 ? -*altitude : *altitude;
   }
 }
 

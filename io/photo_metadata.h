@@ -58,6 +58,8 @@ struct PhotoMetadata {
   std::optional<Eigen::Vector3d> speed_m_s;
   std::string flight_state_source;                    // "XMP drone-dji", "DJI maker note", or empty
   std::optional<double> latitude_deg, longitude_deg;  // EXIF GPS, when written and not 0,0
+  // EXIF GPSAltitude, m above sea level (GPSAltitudeRef 1: below), when written with a position.
+  std::optional<double> gps_altitude_m;
 };
 
 // Reads the metadata of a JPEG, TIFF, DNG, ... (any format exiv2 reads). Throws IoError("PATH:

@@ -91,6 +91,21 @@ void ChooseFlightState(const PhotoSetOptions& options, PhotoRecord* r) {
   } else if (m.relative_altitude_m && *m.relative_altitude_m > 0) {
     r->altitude_m = m.relative_altitude_m;
     r->altitude_source = "XMP drone-dji:RelativeAltitude (above take-off)";
+  } else if (options.ground_elevation_m && (m.absolute_altitude_m || m.gps_altitude_m)) {
+    const bool xmp = m.absolute_altitude_m.has_value();
+    const double absolute = xmp ? *m.absolute_altitude_m : *m.gps_altitude_m;
+    const double above = absolute - *options.ground_elevation_m;
+    const std::string how =
+        FormatNumber("derived: %.1f m, ", above) +
+        (xmp ? "XMP drone-dji:AbsoluteAltitude" : "EXIF GPSAltitude") +
+        FormatNumber(" %.1f m", absolute) +
+        FormatNumber(" minus --ground-elevation %.1f m", *options.ground_elevation_m);
+    if (above > 0) {
+      r->altitude_m = above;
+      r->altitude_source = how;
+    } else {
+      r->altitude_source = how + ": not above the ground (check --ground-elevation's datum)";
+    }
   }
   if (m.speed_m_s) {
     r->ground_speed_m_s = std::hypot(m.speed_m_s->x(), m.speed_m_s->y());
@@ -142,6 +157,8 @@ void PhotoSetOptions::Check() const {
       << "focal length must be positive";
   SHUTTERLAB_CHECK(!altitude_m || (std::isfinite(*altitude_m) && *altitude_m > 0))
       << "altitude must be positive";
+  SHUTTERLAB_CHECK(!ground_elevation_m || std::isfinite(*ground_elevation_m))
+      << "--ground-elevation must be a finite height";
   SHUTTERLAB_CHECK(!speed_m_s || (std::isfinite(*speed_m_s) && *speed_m_s >= 0 && *speed_m_s < 200))
       << "--speed must be 0 to 200 m/s";
   SHUTTERLAB_CHECK(readout_origin == ReadoutOrigin::kUser ||

@@ -50,6 +50,10 @@ struct PhotoSetOptions {
   // given one, its readout (ReadoutOrigin::kLensProfile) after the given one.
   std::optional<LensProfile> lens_profile;
   std::optional<double> altitude_m;
+  // --ground-elevation: the ground's elevation (the take-off point's, flat ground) in the datum of
+  // the photos' absolute altitude (XMP drone-dji:AbsoluteAltitude, else EXIF GPSAltitude: above
+  // sea level). A photo without a height above take-off gets absolute minus this, said as derived.
+  std::optional<double> ground_elevation_m;
   // --speed: the ground speed of every photo, over their metadata's (the direction, when the
   // metadata has one, is kept).
   std::optional<double> speed_m_s;

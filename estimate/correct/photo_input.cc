@@ -40,6 +40,7 @@ PhotoSetOptions PhotoSetOptionsFrom(const PhotoInputOptions& options) {
     set.focal_text = "--focal-px";
   }
   set.altitude_m = options.altitude_m;
+  set.ground_elevation_m = options.ground_elevation_m;
   set.lens_profile = options.lens_profile;
   set.progress = options.progress;
   return set;

@@ -39,6 +39,8 @@ struct PhotoInputOptions {
   std::string camera_path;         // for words
   // What wins over camera.json and the photos' own values: --readout, --focal-px, --altitude.
   std::optional<double> readout_s, focal_px, altitude_m;
+  // --ground-elevation (io/photo_set.h PhotoSetOptions::ground_elevation_m).
+  std::optional<double> ground_elevation_m;
   std::optional<LensProfile> lens_profile;  // --lens-profile, scaled to the photos
   PhotoClockOptions clock;
   std::function<void(double)> progress;  // fraction of the photos read (0..1); may be empty

@@ -135,7 +135,9 @@ void Summarise(const PhotoSet& set, PhotoAnalysis* a) {
   for (size_t i = 0; i < a->photos.size(); ++i) {
     if (!set.photos[i].ok() || a->photos[i].d_translation_m) continue;
     for (const std::string& what : set.photos[i].missing) {
-      const char* hint = what == "altitude"       ? "--altitude M (height above the ground)"
+      const char* hint = what == "altitude"
+                             ? "--altitude M (height above the ground), or --ground-elevation M "
+                               "(with the photos' GPS altitude)"
                          : what == "readout"      ? "--readout T (your camera's readout)"
                          : what == "focal length" ? "--focal-px F"
                                                   : nullptr;

@@ -57,6 +57,32 @@ TEST(PhotosCli, DjiMini4ProTranslationOnly) {
   EXPECT_EQ(j["summary"]["readout_from_table"], 0);
 }
 
+// Phantom 3 photos (2015) hold no height above take-off, only EXIF GPSAltitude (122.3 and
+// 119.7 m): no altitude, and the hint names both options; --ground-elevation derives one per photo
+// and says so; an elevation above the photos is refused for each, said why.
+TEST(PhotosCli, AltitudeDerivedFromTheGpsAltitudeAndTheGroundElevation) {
+  SHUTTERLAB_REAL_DATA(dir, "images/odm_toledo");
+  const auto plain = RunShutterlab("analyze --photos " + dir);
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  EXPECT_NE(plain.out.find("--ground-elevation M (with the photos' GPS altitude)"),
+            std::string::npos)
+      << plain.out;
+  const auto derived = RunShutterlab("analyze --photos " + dir + " --ground-elevation 80m --json");
+  ASSERT_EQ(derived.exit_code, 0) << derived.output;
+  const nlohmann::json j = nlohmann::json::parse(derived.out);
+  ASSERT_EQ(j["photos"].size(), 2u);
+  EXPECT_NEAR(j["photos"][0]["altitude_m"].get<double>(), 42.3, 1e-9);
+  EXPECT_NEAR(j["photos"][1]["altitude_m"].get<double>(), 39.7, 1e-9);
+  EXPECT_EQ(j["photos"][0]["altitude_source"],
+            "derived: 42.3 m, EXIF GPSAltitude 122.3 m minus --ground-elevation 80.0 m");
+  const auto above = RunShutterlab("analyze --photos " + dir + " --ground-elevation 180m --json");
+  ASSERT_EQ(above.exit_code, 0) << above.output;
+  const nlohmann::json a = nlohmann::json::parse(above.out);
+  EXPECT_TRUE(a["photos"][0]["altitude_m"].is_null());
+  EXPECT_NE(a["photos"][0]["altitude_source"].get<std::string>().find("not above the ground"),
+            std::string::npos);
+}
+
 TEST(PhotosCli, BadPhotosAreReportedAndAFolderWithoutPhotosIsAnError) {
   test::TempDir dir;
   test::FixturePhoto p;

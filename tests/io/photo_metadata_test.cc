@@ -201,12 +201,16 @@ TEST(PhotoMetadataReal, PhantomMakerNoteAndSiyiWithoutFlightState) {
   EXPECT_NEAR(m.gimbal->pitch_deg, -89.9, 1e-5);
   EXPECT_NEAR(m.gimbal->yaw_deg, 3.8, kFloat32Tol);
   EXPECT_FALSE(m.relative_altitude_m);
+  // EXIF GPSAltitude 122.3 m (exiv2 -pa: 1223/10 m, reference above sea level); with no height
+  // above take-off it is what --ground-elevation derives a height from.
+  EXPECT_NEAR(m.gps_altitude_m.value_or(0), 122.3, 1e-9);
 
   SHUTTERLAB_REAL_DATA(siyi, "images/siyi_zr10/IMG_0150.jpg");
   const PhotoMetadata s = ReadPhotoMetadata(siyi);
   EXPECT_EQ(s.make, "SIYIKEJI");
   EXPECT_EQ(s.width, 2560);
   EXPECT_FALSE(s.latitude_deg) << "GPS 0,0 is no fix";
+  EXPECT_FALSE(s.gps_altitude_m) << "no fix, no altitude";
   EXPECT_FALSE(s.speed_m_s);
   EXPECT_TRUE(s.flight_state_source.empty());
 }

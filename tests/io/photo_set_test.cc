@@ -127,6 +127,38 @@ TEST(PhotoRecord, GivenValuesWinAndMissingOnesAreListed) {
                                                     "flight speed", "capture time"}));
 }
 
+// A photo with an absolute altitude but no height above take-off (a non-DJI camera's EXIF
+// GPSAltitude, or DJI's AbsoluteAltitude alone): flown at it minus --ground-elevation, said as
+// derived; without the elevation it is missing; at or below the ground it is refused, said why.
+TEST(PhotoRecord, AltitudeFromTheAbsoluteOneAndTheGroundElevation) {
+  PhotoMetadata gps;
+  gps.make = "SIYIKEJI";
+  gps.model = "ZR10";
+  gps.width = 2560;
+  gps.height = 1440;
+  gps.gps_altitude_m = 412.5;
+  EXPECT_FALSE(MakePhotoRecord("/x/a.jpg", gps, {}).altitude_m.has_value());
+  PhotoSetOptions options;
+  options.ground_elevation_m = 371.0;
+  const PhotoRecord r = MakePhotoRecord("/x/a.jpg", gps, options);
+  ASSERT_TRUE(r.altitude_m.has_value());
+  EXPECT_DOUBLE_EQ(*r.altitude_m, 41.5);
+  EXPECT_EQ(r.altitude_source,
+            "derived: 41.5 m, EXIF GPSAltitude 412.5 m minus --ground-elevation 371.0 m");
+  // DJI's own absolute altitude wins over EXIF's; the height above take-off over both.
+  gps.absolute_altitude_m = 489.0;
+  EXPECT_DOUBLE_EQ(*MakePhotoRecord("/x/a.jpg", gps, options).altitude_m, 118.0);
+  gps.relative_altitude_m = 117.9;
+  EXPECT_DOUBLE_EQ(*MakePhotoRecord("/x/a.jpg", gps, options).altitude_m, 117.9);
+  gps.relative_altitude_m.reset();
+  options.ground_elevation_m = 500.0;
+  const PhotoRecord below = MakePhotoRecord("/x/a.jpg", gps, options);
+  EXPECT_FALSE(below.altitude_m.has_value());
+  EXPECT_NE(below.altitude_source.find("not above the ground"), std::string::npos)
+      << below.altitude_source;
+  EXPECT_NE(std::find(below.missing.begin(), below.missing.end(), "altitude"), below.missing.end());
+}
+
 // A lens profile calibrated at half the photo's size, its mode's readout 12 ms: scaled to the
 // photo it gives the focal length and the readout, each said, after what the user typed.
 TEST(PhotoRecord, ALensProfileGivesFocalAndReadoutAfterTheUsers) {

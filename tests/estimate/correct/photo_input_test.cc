@@ -44,7 +44,8 @@ TEST(ReadPhotoInput, TheirOwnCameraAndWhatCannotBeCorrected) {
   write("A.JPG", 640, 24,
         test::DjiXmp({{"GimbalPitchDegree", "-90.0"},
                       {"GimbalYawDegree", "10.0"},
-                      {"GimbalRollDegree", "0.0"}},
+                      {"GimbalRollDegree", "0.0"},
+                      {"AbsoluteAltitude", "142.0"}},
                      false));
   write("B.JPG", 640, 24);
   write("C.JPG", 640, 48);
@@ -89,6 +90,13 @@ TEST(ReadPhotoInput, TheirOwnCameraAndWhatCannotBeCorrected) {
   const PhotoInput given = ReadPhotoInput(photos, options);
   EXPECT_EQ(given.dataset.declared.camera.fx, 500.0);
   EXPECT_EQ(given.dataset.frames.size(), 3u);
+  // A's absolute altitude, with no height above take-off, gives no ground plane; with the
+  // ground's elevation it does (the photos' median: A's alone).
+  EXPECT_NE(given.altitude_source.find("assumed 50 m"), std::string::npos) << given.altitude_source;
+  options.ground_elevation_m = 100.0;
+  const PhotoInput derived = ReadPhotoInput(photos, options);
+  EXPECT_DOUBLE_EQ(derived.dataset.declared.altitude_m, 42.0) << derived.altitude_source;
+  options.ground_elevation_m.reset();
   // No photo placed: one line naming the folder.
   options.triggers_path.clear();
   EXPECT_THROW(ReadPhotoInput(photos, options), IoError) << "the log has no camera events";
