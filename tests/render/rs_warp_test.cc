@@ -105,7 +105,32 @@ struct OracleParams {
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
   std::array<double, 5> dist{};
   bool fisheye = false;  // dist[0..3] are cv::fisheye's k1..k4
+  // A fisheye pixel's ray from docs/FORMATS.md's polynomial inverted by bisection (theta in
+  // [0, 90) degrees, where it increases) instead of cv::fisheye::undistortPoints, which stops
+  // converging near 80 degrees off the axis (below).
+  bool bisect = false;
 };
+
+// theta_d = theta (1 + k1 theta^2 + k2 theta^4 + k3 theta^6 + k4 theta^8), docs/FORMATS.md.
+double ThetaDistorted(const std::array<double, 5>& k, double theta) {
+  const double t2 = theta * theta;
+  return theta * (1 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3]))));
+}
+
+// The normalised point (x/z, y/z) of a fisheye pixel, by bisection on theta.
+cv::Point2d BisectedUndistort(const PinholeCamera& cam, const std::array<double, 5>& k, double u,
+                              double v) {
+  const double mx = (u - cam.cx) / cam.fx, my = (v - cam.cy) / cam.fy;
+  const double theta_d = std::hypot(mx, my);
+  if (theta_d == 0) return {0, 0};
+  double lo = 0, hi = 0.5 * M_PI - 1e-9;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (ThetaDistorted(k, mid) < theta_d ? lo : hi) = mid;
+  }
+  const double scale = std::tan(0.5 * (lo + hi)) / theta_d;
+  return {mx * scale, my * scale};
+}
 
 Eigen::Vector2d OracleRefPixel(const RigModel& declared, const OracleParams& o,
                                const Eigen::Vector3d& logged_w, double t_first_row_s, double u,
@@ -127,7 +152,9 @@ Eigen::Vector2d OracleRefPixel(const RigModel& declared, const OracleParams& o,
   const std::vector<double> dist(o.dist.begin(), o.dist.end());
   const cv::Vec4d fisheye_d(o.dist[0], o.dist[1], o.dist[2], o.dist[3]);
   std::vector<cv::Point2d> in = {{u, static_cast<double>(v)}}, undistorted;
-  if (o.fisheye) {
+  if (o.fisheye && o.bisect) {
+    undistorted = {BisectedUndistort(cam, o.dist, u, v)};
+  } else if (o.fisheye) {
     cv::fisheye::undistortPoints(
         in, undistorted, k, fisheye_d, cv::noArray(), cv::noArray(),
         cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-14));
@@ -266,6 +293,87 @@ TEST(RsWarp, FisheyeTruthMatchesIndependentModel) {
   ASSERT_FALSE(Geometry(Truth(declared), ConstantRateTrace(logged_w), 0.5, cv::Size(400, 400))
                    .RotationOnly());
   ExpectTruthMatchesOracle(declared, base, logged_w, cases, 43);
+}
+
+// Wide lenses to their edge (issue 44): the fisheye truth against cv::fisheye's undistortPoints
+// and projectPoints at 100, 140 and 180 degrees across the diagonal (the GoPro MAX's
+// coefficients), at every pixel of a 96 x 72 frame whose ray is less than 89 degrees off the axis
+// (cv::fisheye's normalised coordinates end at 90) and meets the ground inside the scene; rotation,
+// translation and a 30 ms readout together. The pixel's ray is the polynomial's inverse by
+// bisection (OracleParams::bisect), the projection cv::fisheye::projectPoints. At 180 degrees the
+// corners look at the horizon: no truth there, and none is made up.
+TEST(RsWarp, FisheyeTruthMatchesOpenCvToTheEdgeOfWideLenses) {
+  const std::array<double, 4> max_lens = {0.0646075465207674, 0.039139647556618896,
+                                          -0.041373671856156674, 0.014898789517094136};
+  const Eigen::Vector3d logged_w(0.3, -0.5, 0.7);
+  for (const double diagonal_deg : {100.0, 140.0, 180.0}) {
+    RigModel declared = SmallRig(96, 72);
+    const Fisheye lens(max_lens);
+    const double corner_px = std::hypot(declared.camera.cx, declared.camera.cy);
+    declared.camera.fx = declared.camera.fy =
+        corner_px / lens.ThetaD(0.5 * diagonal_deg * kRadPerDeg);
+    declared.camera.distortion = lens;
+    declared.shutter.readout_s = 0.030;
+    TrueModel truth = Truth(declared);
+    truth.rig.velocity_mps = Eigen::Vector3d(3, -2, 0.5);
+    OracleParams oracle;
+    oracle.readout_s = 0.030;
+    oracle.fisheye = oracle.bisect = true;
+    oracle.velocity = truth.rig.velocity_mps;
+    std::copy(max_lens.begin(), max_lens.end(), oracle.dist.begin());
+    const GyroTrace trace = ConstantRateTrace(logged_w);
+    const FrameGeometry geometry = Geometry(truth, trace, 0.5, cv::Size(4000, 4000));
+    int compared = 0, no_truth = 0;
+    double largest_theta_deg = 0.0;
+    for (int v = 0; v < declared.camera.height; ++v) {
+      for (int u = 0; u < declared.camera.width; ++u) {
+        const Eigen::Vector3d ray = declared.camera.CamFromImg(Eigen::Vector2d(u, v));
+        const double theta_deg = std::atan2(ray.head<2>().norm(), ray.z()) / kRadPerDeg;
+        const std::optional<Eigen::Vector2d> got = geometry.RefPixel(u, v);
+        if (!got) {
+          ++no_truth;
+          // Only where the ray looks near or above the horizon (the scene is 4000 px wide).
+          EXPECT_GT(theta_deg, 60.0) << diagonal_deg << " deg at (" << u << ", " << v << ")";
+          continue;
+        }
+        if (theta_deg >= 89.0) continue;
+        const Eigen::Vector2d expected = OracleRefPixel(declared, oracle, logged_w, 0.5, u, v);
+        ASSERT_NEAR(got->x(), expected.x(), 1e-6)
+            << diagonal_deg << " deg at (" << u << ", " << v << "), " << theta_deg << " deg";
+        ASSERT_NEAR(got->y(), expected.y(), 1e-6)
+            << diagonal_deg << " deg at (" << u << ", " << v << "), " << theta_deg << " deg";
+        largest_theta_deg = std::max(largest_theta_deg, theta_deg);
+        ++compared;
+      }
+    }
+    std::printf(
+        "%.0f deg diagonal: %d pixels compared (to %.1f deg off the axis), %d without truth\n",
+        diagonal_deg, compared, largest_theta_deg, no_truth);
+    EXPECT_GT(compared, 96 * 72 * 3 / 4) << diagonal_deg;
+    EXPECT_GT(largest_theta_deg, std::min(0.5 * diagonal_deg, 89.0) - 5.0) << diagonal_deg;
+  }
+  // Where cv::fisheye::undistortPoints itself parts ways with the polynomial (what a second
+  // implementation built on it would get wrong): the first angle, in 0.1 degree steps, at which
+  // its point is more than 1e-3 px (at f = 1000 px) from the bisection's.
+  const PinholeCamera unit_camera{2001, 2001, 1000.0, 1000.0, 1000.0, 1000.0, Fisheye(max_lens)};
+  std::array<double, 5> k{};
+  std::copy(max_lens.begin(), max_lens.end(), k.begin());
+  double parts_deg = 90.0;
+  for (double theta_deg = 0.1; theta_deg < 90.0; theta_deg += 0.1) {
+    const double r_px = 1000.0 * ThetaDistorted(k, theta_deg * kRadPerDeg);
+    std::vector<cv::Point2d> in = {{1000.0 + r_px, 1000.0}}, out;
+    cv::fisheye::undistortPoints(
+        in, out, cv::Matx33d(1000, 0, 1000, 0, 1000, 1000, 0, 0, 1),
+        cv::Vec4d(k[0], k[1], k[2], k[3]), cv::noArray(), cv::noArray(),
+        cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-14));
+    const cv::Point2d exact = BisectedUndistort(unit_camera, k, in[0].x, in[0].y);
+    const double angle_error_rad = std::abs(std::atan(out[0].x) - std::atan(exact.x));
+    if (!(angle_error_rad * 1000.0 < 1e-3)) {
+      parts_deg = theta_deg;
+      break;
+    }
+  }
+  std::printf("cv::fisheye::undistortPoints parts from the polynomial at %.1f deg\n", parts_deg);
 }
 
 // A 150 degree fisheye (4:3, its corners 94 degrees off the axis) looking straight down: the
