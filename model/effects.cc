@@ -242,6 +242,7 @@ EffectSpec LensDistortionSpec() {
     constexpr double kHeld = std::numeric_limits<double>::quiet_NaN();  // k3, k4: not fitted
     return LensDistortion(Fisheye({sd[0], sd[1], kHeld, kHeld}));
   };
+  s.stderr_holds_with_pair_translation = false;  // 2 of 4 covered, |z| up to 13
   return s;
 }
 
@@ -300,6 +301,7 @@ EffectSpec ClockRateSpec() {
       PhysicalBounds{-2e4, 2e4, 1.0, "ppm",
                      "a crystal keeps within 100 ppm and a MEMS part's own oscillator within "
                      "about 1 %, 2 % allowed"};
+  s.stderr_holds_with_pair_translation = false;  // 1 of 4 covered, |z| up to 29
   return s;
 }
 

@@ -60,6 +60,9 @@ struct IdentifiedEffect {
   // Where the standard error came from: LoopOptions::covariance, or the model's with fewer than 3
   // clusters.
   CovarianceKind stderr_from = CovarianceKind::kModel;
+  // Why stderr_value is not reported (NaN: null in JSON), "" when it is: a model whose standard
+  // error for the effect does not hold (EffectSpec::stderr_holds_with_pair_translation).
+  std::string stderr_withheld;
 };
 
 struct LoopOptions {

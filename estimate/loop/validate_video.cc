@@ -748,6 +748,19 @@ void ScreenVideo(const RigDataset& dataset, const TrueModel& declared,
 
 }  // namespace
 
+void WithholdUncalibratedStderr(LoopResult* translation) {
+  for (IdentifiedEffect& e : translation->effects) {
+    const EffectSpec& spec = Spec(e.effect);
+    if (spec.stderr_holds_with_pair_translation || spec.parameter_count == 0) continue;
+    const int n = spec.parameter_count;
+    e.stderr_value =
+        EffectStderr(e.effect, translation->model,
+                     Eigen::MatrixXd::Constant(n, n, std::numeric_limits<double>::quiet_NaN()));
+    e.stderr_withheld = "the pair-translation model's standard error of " + spec.name +
+                        " does not hold (docs/validation.md, coverage)";
+  }
+}
+
 std::vector<Effect> VideoCandidates() {
   std::vector<Effect> effects;
   for (const EffectSpec& spec : AllEffects()) {
@@ -823,6 +836,7 @@ void ValidateVideoDataset(const RigDataset& dataset, const ValidateOptions& opti
     // The source's claims, when the dataset came from `shutterlab import`.
     result->claims = CheckClaims(claims, claim_inputs);
   }
+  WithholdUncalibratedStderr(&result->translation_loop);
   result->loop_s = SecondsSince(start);
 }
 

@@ -56,6 +56,7 @@ json LoopToJson(const LoopResult& result, size_t frame_count) {
                              {"cluster_jackknife", numbers(e.parameter_stderr_jackknife)},
                              {"clusters", e.clusters}};
     j["stderr_from"] = CovarianceKindName(e.stderr_from);
+    if (!e.stderr_withheld.empty()) j["stderr_withheld"] = e.stderr_withheld;
     effects.push_back(std::move(j));
   }
   json out{{"format", "validation/1"},

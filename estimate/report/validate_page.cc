@@ -547,7 +547,9 @@ void AddEffectsTable(const ValidationResult& result, HtmlPage* page) {
       const EffectSpec& spec = Spec(e.effect);
       rows.push_back(
           {name, spec.name, Rounded(EffectValueToJson(e.value)).dump(),
-           Rounded(EffectValueToJson(e.stderr_value)).dump(), spec.unit,
+           e.stderr_withheld.empty() ? Rounded(EffectValueToJson(e.stderr_value)).dump()
+                                     : "withheld: " + e.stderr_withheld,
+           spec.unit,
            std::string(CovarianceKindName(e.stderr_from)) + " over " + std::to_string(e.clusters),
            FormatNumber("%.3f", e.after.rms_px)});
     }

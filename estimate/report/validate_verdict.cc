@@ -49,8 +49,11 @@ std::vector<std::string> EffectLines(const ValidationResult& result, const LoopR
   std::vector<std::string> lines;
   for (const IdentifiedEffect& e : loop.effects) {
     const EffectSpec& spec = Spec(e.effect);
-    lines.push_back(spec.name + " = " + ValueText(spec, e.value, e.stderr_value) + " (declared " +
-                    ValueText(spec, spec.value(declared), std::monostate{}) + ")");
+    const EffectValue se = e.stderr_withheld.empty() ? e.stderr_value : EffectValue{};
+    lines.push_back(
+        spec.name + " = " + ValueText(spec, e.value, se) +
+        (e.stderr_withheld.empty() ? "" : " (no standard error: " + e.stderr_withheld + ")") +
+        " (declared " + ValueText(spec, spec.value(declared), std::monostate{}) + ")");
   }
   return lines;
 }

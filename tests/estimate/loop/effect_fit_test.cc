@@ -189,7 +189,9 @@ TEST(EffectModel, PredictionEqualsRendererTruthToTheEdgeOfWideLenses) {
                   truth, test::GridFrames(declared, {8.3, 11.7}, 20), gyro, &without_truth),
               0.1)
         << diagonal_deg << " deg: the frames should move";
-    if (diagonal_deg < 180.0) EXPECT_EQ(without_truth, 0) << diagonal_deg;
+    if (diagonal_deg < 180.0) {
+      EXPECT_EQ(without_truth, 0) << diagonal_deg;
+    }
   }
 }
 

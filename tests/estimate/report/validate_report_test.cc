@@ -5,6 +5,7 @@
 #include "estimate/report/validate_report.h"
 
 #include "estimate/loop/validate.h"
+#include "estimate/loop/validate_video.h"
 #include "estimate/report/validate_verdict.h"
 #include "sim/logs/gyro_io.h"
 #include "tests/estimate/loop/validate_fixtures.h"
@@ -244,6 +245,42 @@ TEST(ValidateVerdict, EverySentenceHasItsConditionAndATestThatMakesItFalse) {
     const std::string unsaid = AllText(MakeVerdict(result));
     EXPECT_EQ(unsaid.find(c.fragment), std::string::npos) << c.fragment << "\nstill in\n" << unsaid;
   }
+}
+
+// The pair-translation model's standard errors that the coverage study found do not hold
+// (clock_rate, lens_distortion) are withheld in the JSON, the table and the verdict, said why; the
+// others are kept.
+TEST(ValidateReport, StandardErrorsThatDoNotHoldAreWithheld) {
+  ValidationResult result = VerdictBase();
+  result.video = true;
+  result.preferred = "translation";
+  IdentifiedEffect rate;
+  rate.effect = Effect::kClockRate;
+  rate.value = 250.0;
+  rate.stderr_value = 3.0;
+  rate.parameters = Eigen::VectorXd::Zero(2);
+  rate.covariance = Eigen::MatrixXd::Identity(2, 2);
+  result.translation_loop = result.loop;
+  result.translation_loop.effects = {TimeOffset(0.004), rate};
+  WithholdUncalibratedStderr(&result.translation_loop);
+  const IdentifiedEffect& offset = result.translation_loop.effects[0];
+  const IdentifiedEffect& withheld = result.translation_loop.effects[1];
+  EXPECT_TRUE(offset.stderr_withheld.empty());
+  EXPECT_EQ(std::get<double>(offset.stderr_value), 0.0002);
+  EXPECT_NE(withheld.stderr_withheld.find("does not hold"), std::string::npos);
+  EXPECT_TRUE(std::isnan(std::get<double>(withheld.stderr_value)));
+  // As written: NaN is null in the file.
+  const nlohmann::json json = nlohmann::json::parse(ValidationToJson(result).dump());
+  const nlohmann::json& effects = json["translation"]["effects"];
+  ASSERT_EQ(effects.size(), 2u) << json.dump(2);
+  EXPECT_TRUE(effects[1]["stderr"].is_null()) << effects[1].dump();
+  EXPECT_EQ(effects[1]["stderr_withheld"], withheld.stderr_withheld);
+  EXPECT_FALSE(effects[0].contains("stderr_withheld"));
+  const std::string verdict = AllText(MakeVerdict(result));
+  EXPECT_NE(verdict.find("clock_rate = 250.0 ppm (no standard error: the pair-translation model's"),
+            std::string::npos)
+      << verdict;
+  EXPECT_NE(ValidationReport(result).find("(no standard error: "), std::string::npos);
 }
 
 // The table's bookkeeping on one dataset: flags follow D against each limit, the confusion matrix
