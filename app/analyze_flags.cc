@@ -191,9 +191,10 @@ PhotoFlightOptions PhotoFlightOptionsFromFlags(const AnalyzeFlags& flags, PhotoS
   return options;
 }
 
-std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
-  CheckLogPath(command->add_option("LOG", flags->log_path,
-                                   "flight or gyro log (optional with --photos; - = stdin)"));
+namespace {
+
+// --photos and the options only it reads.
+void AddPhotoFlags(CLI::App* command, AnalyzeFlags* flags) {
   command->add_option(
       "--photos", flags->photos_dir,
       "a folder of photos (or one photo): per-photo distortion from their metadata; "
@@ -214,6 +215,14 @@ std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
       "--photo-utc-offset", flags->photo_utc_offset,
       "the photos' camera clock zone, e.g. +08:00 (else EXIF OffsetTimeOriginal, the "
       "offset fitted to the log's events, or the one zone that fits the log)");
+}
+
+}  // namespace
+
+std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
+  CheckLogPath(command->add_option("LOG", flags->log_path,
+                                   "flight or gyro log (optional with --photos; - = stdin)"));
+  AddPhotoFlags(command, flags);
   AddFormatOption(command, &flags->format);
   command
       ->add_option("--log-index", flags->log_index,
