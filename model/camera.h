@@ -14,6 +14,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace shutterlab {
 
@@ -69,6 +70,11 @@ struct RigModel {
   // Throws std::invalid_argument naming the first nonsensical field.
   void Check() const;
 };
+
+// The effect names camera.json's "bounds" may hold: those with physical bounds
+// (model/effects.h PhysicalBounds; Effects.CameraJsonBoundsReplaceThePhysicalOnes holds the two
+// lists equal: effects.h includes this header, so this one cannot ask it).
+const std::vector<std::string>& CameraJsonBoundNames();
 
 // Reads camera.json; throws IoError("PATH: field: problem") for anything malformed.
 RigModel ReadRigModel(const std::string& path);

@@ -77,6 +77,10 @@ std::vector<Eigen::Matrix3d> StabiliserRotations(const StabiliserOptions& option
     std::vector<Eigen::Vector3d> phi;
     for (size_t k = 0; k < n; ++k) {
       phi.push_back(LogSO3(Eigen::Quaterniond(r[0].transpose() * r[k]).normalized()));
+      // Averaging rotation vectors past pi would average across the wrap.
+      SHUTTERLAB_CHECK(phi.back().norm() < 170.0 * M_PI / 180.0)
+          << "--stabiliser whole: the clip turns more than 170 degrees from its first frame "
+             "(render a shorter clip)";
     }
     const std::vector<Eigen::Vector3d> smooth = GaussianAverage(phi, t_s, options.window_s);
     for (size_t k = 0; k < n; ++k) {

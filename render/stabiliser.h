@@ -8,7 +8,9 @@
 // with rolling-shutter correction does; the loop's model with cam_from_image is exact for it).
 // R_k is the camera's orientation at frame k's middle row; the modes:
 //  - whole: the orientation is smoothed on all three axes. phi_k = Log(R_0^T R_k), its Gaussian
-//    average over the frames' times (sigma = window_s) phi-bar_k, S_k = R_k^T R_0 Exp(phi-bar_k).
+//    average over the frames' times (sigma = window_s) phi-bar_k, S_k = R_k^T R_0 Exp(phi-bar_k);
+//    a clip that turns more than 170 degrees from its first frame is refused (the average would
+//    cross Log's wrap at 180).
 //  - roll (horizon levelling): only the roll about the optical axis (camera z) is smoothed. r_k is
 //    the accumulated z part of Log(R_(k-1)^T R_k), r-bar_k its Gaussian average, S_k = Rz(r-bar_k -
 //    r_k): the image keeps the slow roll and loses the fast one.

@@ -18,8 +18,9 @@ Usage: scripts/coverage_study.py [--clips N] [--first-seed S] [--out DIR] [--siz
   --out DIR       work folder (default /tmp/shutterlab_coverage; each dataset removed after use)
   --size WxH      frame size (default 320x240; f scales with it, 550 px at 640)
   --csv F         also write one row per (dataset, model) to F
-  --fail-above Z  exit 1 when a reported standard error misses the truth by more than Z of them
-                  (the suite's seeded subset: a gross miscalibration, not the 90-98 % coverage)
+  --fail-above Z  exit 1 when a reported standard error misses the truth by more than Z of them,
+                  or a dataset failed (the suite's seeded subset: a gross miscalibration, not
+                  the 90-98 % coverage)
   --quiet         no progress
 (stdlib only.) Exit 0 when it ran (and nothing is above --fail-above); 2 on bad usage. A
 dataset whose commands fail is said on stderr and left out.
@@ -197,16 +198,20 @@ def main():
         detail = e.stderr.decode().strip() if isinstance(e, subprocess.CalledProcessError) else e
         print(f"{sys.argv[0]}: cannot make the inputs: {detail}", file=sys.stderr)
         sys.exit(2)
-    rows = []
+    rows, failed = [], 0
     for k in range(a.clips):
         try:
             rows += one_dataset(k, a.first_seed + k, a.out, width, height, scene, gyros)
         except subprocess.CalledProcessError as e:
+            failed += 1
             print(f"dataset {k}: {' '.join(e.cmd[:2])}: {e.stderr.decode().strip()}", file=sys.stderr)
         if not a.quiet:
             print(f"\r{k + 1}/{a.clips}", end="", file=sys.stderr, flush=True)
     if not a.quiet:
         print(file=sys.stderr)
+    if not rows:
+        print(f"{sys.argv[0]}: no dataset could be rendered and validated", file=sys.stderr)
+        sys.exit(1)
     if a.csv:
         with open(a.csv, "w", newline="") as f:
             w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
@@ -237,6 +242,10 @@ def main():
         worst = max([worst] + all_z)
         print(f"| {effect} | {model} | {len(group)} | {len(found)} | {withheld} | {params} | "
               f"{whole} | {zs_text} |")
+    if a.fail_above is not None and failed:
+        print(f"{sys.argv[0]}: {failed} dataset(s) could not be rendered and validated",
+              file=sys.stderr)
+        sys.exit(1)
     if a.fail_above is not None and worst > a.fail_above:
         print(f"{sys.argv[0]}: a reported standard error missed the truth by {worst:.1f} of them "
               f"(above --fail-above {a.fail_above:g})", file=sys.stderr)

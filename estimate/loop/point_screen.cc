@@ -563,8 +563,10 @@ std::vector<size_t> FollowImageAbout(const TrueModel& declared, const GyroFollow
   const double mid_row = 0.5 * (declared.rig.camera.height - 1);
   // Each frame's turn, accumulated along the chain of pairs: the stabiliser turned the earlier
   // frame too, and the gyro's rotation about the axes that follow shows turned by it. A frame
-  // first met as an earlier one starts a chain (unturned).
+  // first met as an earlier one (after a pair left out) takes the last turn known (no step
+  // across the gap), the first frame none.
   std::map<int64_t, Eigen::Matrix3d> turned;
+  Eigen::Matrix3d last = Eigen::Matrix3d::Identity();
   std::vector<FramePoints> kept;
   std::vector<size_t> removed;
   for (size_t k = 0; k < pairs->size(); ++k) {
@@ -579,10 +581,9 @@ std::vector<size_t> FollowImageAbout(const TrueModel& declared, const GyroFollow
     Eigen::Vector3d turn = Eigen::Vector3d::Zero();
     for (int a : axes) turn(a) = consensus[k].delta_omega_rad_s(a) * dt_s;
     const auto earlier = turned.find(pair.earlier->frame);
-    const Eigen::Matrix3d s_e =
-        earlier == turned.end() ? Eigen::Matrix3d::Identity() : earlier->second;
+    const Eigen::Matrix3d s_e = earlier == turned.end() ? last : earlier->second;
     const Eigen::Matrix3d s_l = s_e * ExpSO3(turn).toRotationMatrix();
-    turned[pair.frame] = s_l;
+    turned[pair.frame] = last = s_l;
     pair.earlier->cam_from_image = pair.earlier->cam_from_image * s_e;
     pair.cam_from_image = pair.cam_from_image * s_l;
     kept.push_back(std::move(pair));

@@ -214,9 +214,9 @@ std::vector<FramePoints> WithoutScreened(const std::vector<FramePoints>& frames,
 
 // Gives each pair the image's own rotation about the camera axes that do not follow the gyro
 // (check.AxesNotFollowing()): the later frame's cam_from_image turns by dw_a dt about each such
-// axis a (dw: the pair's rotation consensus, dt: the time between the frames' middle rows), the
-// earlier's stays. Pairs whose consensus is not determined are removed, their indices into the
-// given pairs returned (ascending).
+// axis a (dw: the pair's rotation consensus, dt: the time between the frames' middle rows) from
+// the earlier's, which carries the turns accumulated along the pairs before it. Pairs whose
+// consensus is not determined are removed, their indices into the given pairs returned (ascending).
 std::vector<size_t> FollowImageAbout(const TrueModel& declared, const GyroFollowCheck& check,
                                      const std::vector<FrameConsensus>& consensus,
                                      std::vector<FramePoints>* pairs);

@@ -753,11 +753,17 @@ void WithholdUncalibratedStderr(LoopResult* translation) {
     const EffectSpec& spec = Spec(e.effect);
     if (spec.stderr_holds_with_pair_translation || spec.parameter_count == 0) continue;
     const int n = spec.parameter_count;
-    e.stderr_value =
-        EffectStderr(e.effect, translation->model,
-                     Eigen::MatrixXd::Constant(n, n, std::numeric_limits<double>::quiet_NaN()));
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    // Everything a standard error could be drawn from (correct draws its uncertainty from the
+    // covariance), not only the value's.
+    e.covariance = Eigen::MatrixXd::Constant(n, n, nan);
+    e.stderr_value = EffectStderr(e.effect, translation->model, e.covariance);
+    for (Eigen::VectorXd* v :
+         {&e.parameter_stderr_model, &e.parameter_stderr_sandwich, &e.parameter_stderr_jackknife}) {
+      v->setConstant(nan);
+    }
     e.stderr_withheld = "the pair-translation model's standard error of " + spec.name +
-                        " does not hold (docs/validation.md, coverage)";
+                        " does not hold: docs/validation.md, Every effect, every model";
   }
 }
 

@@ -134,10 +134,14 @@ void Summarise(const PhotoSet& set, PhotoAnalysis* a) {
   std::vector<std::string> hints;
   for (size_t i = 0; i < a->photos.size(); ++i) {
     if (!set.photos[i].ok() || a->photos[i].d_translation_m) continue;
+    // --ground-elevation only helps a photo that records an absolute altitude.
+    const PhotoMetadata& m = set.photos[i].metadata;
+    const bool absolute = m.absolute_altitude_m || m.gps_altitude_m;
     for (const std::string& what : set.photos[i].missing) {
-      const char* hint = what == "altitude"
+      const char* hint = what == "altitude" && absolute
                              ? "--altitude M (height above the ground), or --ground-elevation M "
                                "(with the photos' GPS altitude)"
+                         : what == "altitude"     ? "--altitude M (height above the ground)"
                          : what == "readout"      ? "--readout T (your camera's readout)"
                          : what == "focal length" ? "--focal-px F"
                                                   : nullptr;

@@ -36,10 +36,12 @@ void WriteLoopSummary(const LoopResult& loop, std::ostream& out) {
       << FormatNumber("%.3f", loop.before.max_px) << " px\n";
   for (const IdentifiedEffect& e : loop.effects) {
     out << "  + " << Spec(e.effect).name << " = " << Rounded(EffectValueToJson(e.value)).dump()
-        << (e.stderr_withheld.empty() ? " +- " + Rounded(EffectValueToJson(e.stderr_value)).dump()
-                                      : " (no standard error: " + e.stderr_withheld + ")")
-        << " " << Spec(e.effect).unit << " -> rms " << FormatNumber("%.3f", e.after.rms_px)
-        << " px, max " << FormatNumber("%.3f", e.after.max_px) << " px";
+        << (e.stderr_withheld.empty() ? " +- " + Rounded(EffectValueToJson(e.stderr_value)).dump() +
+                                            " " + Spec(e.effect).unit
+                                      : " " + Spec(e.effect).unit + ", with no standard error (" +
+                                            e.stderr_withheld + ")")
+        << " -> rms " << FormatNumber("%.3f", e.after.rms_px) << " px, max "
+        << FormatNumber("%.3f", e.after.max_px) << " px";
     if (!e.ambiguous_with.empty()) {
       out << " (ambiguous with";
       for (Effect other : e.ambiguous_with) out << " " << Spec(other).name;

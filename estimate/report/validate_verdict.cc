@@ -50,10 +50,11 @@ std::vector<std::string> EffectLines(const ValidationResult& result, const LoopR
   for (const IdentifiedEffect& e : loop.effects) {
     const EffectSpec& spec = Spec(e.effect);
     const EffectValue se = e.stderr_withheld.empty() ? e.stderr_value : EffectValue{};
-    lines.push_back(
-        spec.name + " = " + ValueText(spec, e.value, se) +
-        (e.stderr_withheld.empty() ? "" : " (no standard error: " + e.stderr_withheld + ")") +
-        " (declared " + ValueText(spec, spec.value(declared), std::monostate{}) + ")");
+    const std::string declared_text = ValueText(spec, spec.value(declared), std::monostate{});
+    lines.push_back(spec.name + " = " + ValueText(spec, e.value, se) +
+                    (e.stderr_withheld.empty() ? " (declared " + declared_text + ")"
+                                               : ", with no standard error (" + e.stderr_withheld +
+                                                     "; declared " + declared_text + ")"));
   }
   return lines;
 }
@@ -162,35 +163,36 @@ void AddAxesNotFollowing(const ValidationResult& result, ValidationVerdict* v) {
   if (!result.axes_not_following) return;
   const GyroFollowCheck& check = *result.axes_not_following;
   std::vector<std::string> off, off_gains, on, on_gains;
-  bool roll = false, fast_only = false;
+  bool roll = false;
   for (int a = 0; a < 3; ++a) {
     const AxisFollow& f = check.axes[a];
     if (!f.follows) {
       const bool whole = f.determined && f.row_norm < kMinGain;
-      fast_only = fast_only || !whole;
       roll = roll || a == 2;
       off.push_back(kCameraAxisNames[a]);
-      off_gains.push_back(FormatNumber("%.2fx", whole ? f.row_norm : f.fast_row_norm));
-    } else if (f.clearly_follows) {
+      off_gains.push_back(FormatNumber("%.2fx", whole ? f.row_norm : f.fast_row_norm) +
+                          (whole ? "" : " in the fast part of the motion") + " about " +
+                          kCameraAxisNames[a]);
+    } else {
       on.push_back(kCameraAxisNames[a]);
-      on_gains.push_back(FormatNumber("%.2fx", f.row_norm));
+      on_gains.push_back(f.determined ? FormatNumber("%.2fx", f.row_norm) : "not determined");
     }
   }
+  const bool one = off.size() == 1;
   const std::string off_axes = Joined(off, " and "), on_axes = Joined(on, " and ");
   const std::string sentence =
-      "A stabiliser re-renders the image about camera axis " + off_axes +
-      (roll && off.size() == 1 ? ", the optical axis (roll, as horizon levelling does)" : "") +
-      ": about it the image turns " + Joined(off_gains, " and ") + " as fast as the gyro says" +
-      (fast_only ? " (in the fast part of the motion)" : "") + ", while about " + on_axes +
-      " it follows (" + Joined(on_gains, ", ") +
-      "). The loop took the image's own rotation about " + off_axes + " and the gyro's about " +
-      on_axes + ".";
+      "A stabiliser re-renders the image about camera " + std::string(one ? "axis " : "axes ") +
+      off_axes + (roll && one ? ", the optical axis (roll, as horizon levelling does)" : "") +
+      ": the image turns " + Joined(off_gains, " and ") +
+      " as fast as the gyro says, while about " + on_axes + " it follows (" +
+      Joined(on_gains, ", ") + "). The loop took the image's own rotation about " + off_axes +
+      " and the gyro's about " + on_axes + ".";
   if (v->level == ValidationVerdict::Level::kOk) {
     v->level = ValidationVerdict::Level::kAttention;
     std::string rest = v->headline;
     if (!rest.empty())
       rest[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(rest[0])));
-    v->headline = sentence + " About those, " + rest;
+    v->headline = sentence + " About " + on_axes + ", " + rest;
     v->actions.push_back(
         "To test the sensor about every axis, record with the stabiliser (horizon levelling) off.");
   } else {

@@ -132,6 +132,11 @@ TEST(Effects, CameraJsonBoundsReplaceThePhysicalOnes) {
   EXPECT_NE(OutOfBounds(Effect::kClockRate, 5e4, &rig), "");
   EXPECT_EQ(BoundedEffectNames(),
             "time_offset, readout_time, gyro_scale, gyro_bias, velocity, clock_rate");
+  std::string camera_json_names;
+  for (const std::string& name : CameraJsonBoundNames()) {
+    camera_json_names += (camera_json_names.empty() ? "" : ", ") + name;
+  }
+  EXPECT_EQ(camera_json_names, BoundedEffectNames());
 }
 
 TEST(Effects, AnUnknownNameFailsNamingIt) {

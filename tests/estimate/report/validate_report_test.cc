@@ -269,6 +269,7 @@ TEST(ValidateReport, StandardErrorsThatDoNotHoldAreWithheld) {
   EXPECT_EQ(std::get<double>(offset.stderr_value), 0.0002);
   EXPECT_NE(withheld.stderr_withheld.find("does not hold"), std::string::npos);
   EXPECT_TRUE(std::isnan(std::get<double>(withheld.stderr_value)));
+  EXPECT_FALSE(withheld.covariance.allFinite()) << "correct draws its uncertainty from it";
   // As written: NaN is null in the file.
   const nlohmann::json json = nlohmann::json::parse(ValidationToJson(result).dump());
   const nlohmann::json& effects = json["translation"]["effects"];
@@ -277,10 +278,13 @@ TEST(ValidateReport, StandardErrorsThatDoNotHoldAreWithheld) {
   EXPECT_EQ(effects[1]["stderr_withheld"], withheld.stderr_withheld);
   EXPECT_FALSE(effects[0].contains("stderr_withheld"));
   const std::string verdict = AllText(MakeVerdict(result));
-  EXPECT_NE(verdict.find("clock_rate = 250.0 ppm (no standard error: the pair-translation model's"),
-            std::string::npos)
+  EXPECT_NE(
+      verdict.find("clock_rate = 250.0 ppm, with no standard error (the pair-translation model's"),
+      std::string::npos)
       << verdict;
-  EXPECT_NE(ValidationReport(result).find("(no standard error: "), std::string::npos);
+  EXPECT_NE(ValidationReport(result).find("ppm, with no standard error (the pair-translation"),
+            std::string::npos)
+      << ValidationReport(result);
 }
 
 // The table's bookkeeping on one dataset: flags follow D against each limit, the confusion matrix

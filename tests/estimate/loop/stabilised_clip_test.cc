@@ -2,9 +2,8 @@
 // a stabiliser re-rendered (render/stabiliser.h), with exact truth: render --video's three modes
 // over the video tests' flight (tests/estimate/loop/validate_fixtures.h MakeClip).
 
-#include "render/stabiliser.h"
-
 #include "estimate/loop/validate.h"
+#include "render/stabiliser.h"
 #include "tests/estimate/loop/validate_fixtures.h"
 #include "tests/test_util.h"
 
