@@ -12,7 +12,7 @@ model reported the effect), withheld, the share of parameters within 2 standard 
 share of datasets with every parameter within 2, and the median and largest |z|.
 
 Usage: scripts/coverage_study.py [--clips N] [--first-seed S] [--out DIR] [--size WxH] [--csv F]
-                                [--fail-above Z] [--quiet]
+                                [--fail-above Z] [--effects A,B] [--quiet]
   --clips N       datasets (default 200)
   --first-seed S  the first dataset's seed (default 1); dataset k uses seed S + k
   --out DIR       work folder (default /tmp/shutterlab_coverage; each dataset removed after use)
@@ -21,6 +21,7 @@ Usage: scripts/coverage_study.py [--clips N] [--first-seed S] [--out DIR] [--siz
   --fail-above Z  exit 1 when a reported standard error misses the truth by more than Z of them,
                   or a dataset failed (the suite's seeded subset: a gross miscalibration, not
                   the 90-98 % coverage)
+  --effects A,B   only these effects (stills and video in turn where both can show them)
   --quiet         no progress
 (stdlib only.) Exit 0 when it ran (and nothing is above --fail-above); 2 on bad usage. A
 dataset whose commands fail is said on stderr and left out.
@@ -113,10 +114,14 @@ def frames_csv(path, times):
             f.write(f"{i},{t:.9f}\n")
 
 
-def one_dataset(k, seed, out, width, height, scene, gyros):
+def one_dataset(k, seed, out, width, height, scene, gyros, only=None):
     rng = random.Random(seed)
     video = k % 2 == 1
-    effects = VIDEO_EFFECTS if video else STILL_EFFECTS
+    kind_effects = lambda v: [e for e in (VIDEO_EFFECTS if v else STILL_EFFECTS)  # noqa: E731
+                              if not only or e in only]
+    if not kind_effects(video):
+        video = not video
+    effects = kind_effects(video)
     effect = effects[(k // 2) % len(effects)]
     inject, truth = draw(effect, rng)
     clutter = k % 3 == 2
@@ -179,6 +184,7 @@ def main():
     p.add_argument("--csv")
     p.add_argument("--fail-above", type=float)
     p.add_argument("--quiet", action="store_true")
+    p.add_argument("--effects")
     a = p.parse_args()
     width, height = (int(x) for x in a.size.split("x"))
     os.makedirs(a.out, exist_ok=True)
@@ -201,7 +207,8 @@ def main():
     rows, failed = [], 0
     for k in range(a.clips):
         try:
-            rows += one_dataset(k, a.first_seed + k, a.out, width, height, scene, gyros)
+            rows += one_dataset(k, a.first_seed + k, a.out, width, height, scene, gyros,
+                                a.effects.split(",") if a.effects else None)
         except subprocess.CalledProcessError as e:
             failed += 1
             print(f"dataset {k}: {' '.join(e.cmd[:2])}: {e.stderr.decode().strip()}", file=sys.stderr)
