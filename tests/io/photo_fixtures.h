@@ -192,6 +192,17 @@ inline std::string DjiMakerNote(const std::vector<std::pair<uint16_t, float>>& f
   return note;
 }
 
+// What the metadata reader gives for a SIYI ZR10 photo (2560x1440): a camera the readout table does
+// not know, no focal length, no flight state.
+inline PhotoMetadata SiyiZr10Metadata() {
+  PhotoMetadata m;
+  m.make = "SIYIKEJI";
+  m.model = "ZR10";
+  m.width = 2560;
+  m.height = 1440;
+  return m;
+}
+
 // What the metadata reader gives for a DJI Mini 3 photo (FC8482, 4032x2268, 24 mm equivalent):
 // the camera the readout table knows, with the flight state DJI writes in its XMP.
 inline PhotoMetadata DjiMini3Metadata(double relative_altitude_m,

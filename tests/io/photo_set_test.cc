@@ -115,11 +115,7 @@ TEST(PhotoRecord, GivenValuesWinAndMissingOnesAreListed) {
   EXPECT_DOUBLE_EQ(*r.focal_px, 3000.0);
   EXPECT_DOUBLE_EQ(*r.altitude_m, 80.0);
 
-  PhotoMetadata bare;
-  bare.make = "SIYIKEJI";
-  bare.model = "ZR10";
-  bare.width = 2560;
-  bare.height = 1440;
+  const PhotoMetadata bare = test::SiyiZr10Metadata();
   const PhotoRecord none = MakePhotoRecord("/x/b.jpg", bare, {});
   EXPECT_EQ(none.readout_origin, ReadoutOrigin::kNone);
   EXPECT_NE(none.readout_source.find("siyikeji zr10"), std::string::npos) << none.readout_source;
@@ -131,11 +127,7 @@ TEST(PhotoRecord, GivenValuesWinAndMissingOnesAreListed) {
 // GPSAltitude, or DJI's AbsoluteAltitude alone): flown at it minus --ground-elevation, said as
 // derived; without the elevation it is missing; at or below the ground it is refused, said why.
 TEST(PhotoRecord, AltitudeFromTheAbsoluteOneAndTheGroundElevation) {
-  PhotoMetadata gps;
-  gps.make = "SIYIKEJI";
-  gps.model = "ZR10";
-  gps.width = 2560;
-  gps.height = 1440;
+  PhotoMetadata gps = test::SiyiZr10Metadata();
   gps.gps_altitude_m = 412.5;
   EXPECT_FALSE(MakePhotoRecord("/x/a.jpg", gps, {}).altitude_m.has_value());
   PhotoSetOptions options;
