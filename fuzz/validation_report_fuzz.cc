@@ -1,7 +1,7 @@
 // libFuzzer target: a validation report as `correct --report` reads it
-// (estimate/report/loop_json.h ReadValidationReport).
-#include "estimate/report/loop_json.h"
+// (model/reported_model.h ReadValidationReport).
 #include "fuzz/fuzz_util.h"
+#include "model/reported_model.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static shutterlab::fuzz::InputFile file("report.json");

@@ -5,6 +5,7 @@
 #include "io/image_io.h"
 #include "io/rig_dataset.h"
 #include "model/effect_io.h"
+#include "model/reported_model.h"
 #include "render/pictures.h"
 #include "render/rs_warp.h"
 #include "sim/check.h"

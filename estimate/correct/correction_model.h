@@ -4,9 +4,9 @@
 // gyro's white-noise density. The uncertainty is what the residual prediction draws from
 // (estimate/correct/residual_prediction.h).
 
-#include "estimate/report/loop_json.h"
 #include "model/camera.h"
 #include "model/effects.h"
+#include "model/reported_model.h"
 #include "model/truth_model.h"
 #include "sim/gyro_trace.h"
 

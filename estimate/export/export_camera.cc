@@ -1,8 +1,8 @@
 #include "estimate/export/export_camera.h"
 
-#include "estimate/report/loop_json.h"
 #include "model/camera.h"
 #include "model/effects.h"
+#include "model/reported_model.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
 
@@ -11,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <set>
 #include <utility>
 #include <variant>
 
@@ -27,6 +28,31 @@ std::optional<double> ScalarStderr(const ReportedEffect& effect, const TrueModel
   return std::nullopt;
 }
 
+// A value the report's model carries unfitted is the declared one. A claim of the report
+// (validate's "claims") that the data contradicted, or a guess or an inference of the importer's
+// (import.json's status) that they could not test, marks its effect as not determined; the
+// source's own statement that they could not test is exported as stated, and the side note says
+// so.
+void MarkUntestedClaims(const ReportedModel& report, const std::set<std::string>& fitted,
+                        ExportCamera* camera) {
+  for (const ReportedClaim& claim : report.claims) {
+    if (claim.effect.empty() || fitted.count(claim.effect) ||
+        claim.verdict.rfind("claim holds", 0) == 0)
+      continue;
+    const std::string status = claim.status.empty() ? "claim" : claim.status;
+    const std::string what = (claim.claim.empty() ? claim.effect : claim.claim) + " (" + status +
+                             "), which the report's check found " +
+                             (claim.verdict.empty() ? "no verdict for" : claim.verdict);
+    const bool contradicted = claim.verdict.rfind("claim contradicted", 0) == 0;
+    if (!contradicted && claim.status.rfind("source claim", 0) == 0) {
+      camera->notes.push_back(claim.effect + " is the source's own " + what +
+                              ": exported as stated");
+    } else {
+      camera->undetermined[claim.effect] = "the declared " + what;
+    }
+  }
+}
+
 ExportCamera FromReport(const std::string& path) {
   const ReportedModel report = ReadValidationReport(path);
   if (!report.fitted) {
@@ -37,12 +63,18 @@ ExportCamera FromReport(const std::string& path) {
   ExportCamera camera;
   camera.source = "validation report " + path;
   camera.truth = *report.fitted;
+  std::set<std::string> fitted;
   for (const ReportedEffect& effect : report.effects) {
+    const std::string name = Spec(effect.effect).name;
+    fitted.insert(name);
     const std::optional<double> se = ScalarStderr(effect, camera.truth);
+    if (se && !std::isfinite(*se))
+      camera.undetermined[name] = "fitted, with a standard error that is not a number";
     if (effect.effect == Effect::kTimeOffset) camera.time_offset_stderr_s = se;
     if (effect.effect == Effect::kReadoutTime) camera.readout_stderr_s = se;
     if (effect.effect == Effect::kClockRate) camera.clock_rate_stderr_ppm = se;
   }
+  MarkUntestedClaims(report, fitted, &camera);
   return camera;
 }
 

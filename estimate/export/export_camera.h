@@ -11,6 +11,7 @@
 
 #include "model/truth_model.h"
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -40,6 +41,15 @@ struct ExportCamera {
   // The standard errors the source gives, where the exported value has one: time_offset and
   // readout_time (s), clock_rate (ppm); NaN where the data did not determine it.
   std::optional<double> time_offset_stderr_s, readout_stderr_s, clock_rate_stderr_ppm;
+  // The values the data did not determine, by effect name (time_offset, readout_time,
+  // readout_direction, gyro_to_camera), with why: a fitted value whose standard error is not a
+  // number, a declared value (import.json's claim) the report's claims contradict, or a guess or
+  // an inference of the importer's that they could not test. An export refuses them unless
+  // --force.
+  std::map<std::string, std::string> undetermined;
+  // What every export's side note says besides its own conversions: the source's own statements
+  // (import.json's "source claim") that the report could not test, exported as stated.
+  std::vector<std::string> notes;
   std::vector<ExportPhoto> photos;  // an `analyze --photos` result's, in its order
 };
 

@@ -22,12 +22,11 @@ std::string ExportNumber(double value) {
   return text;
 }
 
-void RequireDetermined(const char* name, const std::optional<double>& stderr_value,
+void RequireDetermined(const ExportCamera& camera, const std::string& name,
                        const ExportOptions& options, std::vector<std::string>* notes) {
-  if (!stderr_value || std::isfinite(*stderr_value)) return;
-  const std::string what = std::string(name) +
-                           " was not determined by the data (its standard "
-                           "error is not a number)";
+  const auto why = camera.undetermined.find(name);
+  if (why == camera.undetermined.end()) return;
+  const std::string what = name + " was not determined by the data (" + why->second + ")";
   if (!options.force) throw std::invalid_argument(what + ": not exported (--force writes it)");
   notes->push_back(what + "; written anyway (--force)");
 }
@@ -37,6 +36,15 @@ void RequireCarried(bool carried, const std::string& what, const ExportOptions& 
   if (carried) return;
   if (!options.force) throw std::invalid_argument(what + " (--force writes the rest)");
   notes->push_back(what + "; the rest written (--force)");
+}
+
+void NoteGyroCalibrationNotCarried(const ExportCamera& camera, const std::string& file,
+                                   std::vector<std::string>* notes) {
+  if (camera.truth.gyro_scale == Eigen::Vector3d::Ones() &&
+      camera.truth.gyro_bias_rad_s == Eigen::Vector3d::Zero())
+    return;
+  notes->push_back("the gyro's scale and bias are not part of " + file +
+                   ": see the side note's model");
 }
 
 namespace {
@@ -85,6 +93,7 @@ void AddSideNote(const char* format, const ExportCamera& camera, ExportOutput* o
   text += "\n";
   if (!camera.photos.empty()) text += "  photos " + std::to_string(camera.photos.size()) + "\n";
   text += "notes:\n";
+  for (const std::string& note : camera.notes) text += "  - " + note + "\n";
   for (const std::string& note : output->notes) text += "  - " + note + "\n";
   output->files.push_back({"shutterlab_export.txt", text, "what was exported, from what, and how"});
 }

@@ -32,15 +32,20 @@ struct ExportOptions {
 // A number as every export writes it: the shortest text that reads back to the same double.
 std::string ExportNumber(double value);
 
-// Refuses (std::invalid_argument, one line naming the value and --force) a value whose standard
-// error the source gives as not a number, unless options.force; says so in *notes when forced.
-void RequireDetermined(const char* name, const std::optional<double>& stderr_value,
+// Refuses (std::invalid_argument, one line naming the value, why, and --force) a value the data
+// did not determine (ExportCamera::undetermined, by effect name), unless options.force; says so
+// in *notes when forced.
+void RequireDetermined(const ExportCamera& camera, const std::string& name,
                        const ExportOptions& options, std::vector<std::string>* notes);
 
 // Refuses (std::invalid_argument, "... (--force writes the rest)") what the format cannot carry,
 // unless options.force; then notes it.
 void RequireCarried(bool carried, const std::string& what, const ExportOptions& options,
                     std::vector<std::string>* notes);
+
+// Notes that the gyro's fitted scale and bias, when not the identity, are not part of `file`.
+void NoteGyroCalibrationNotCarried(const ExportCamera& camera, const std::string& file,
+                                   std::vector<std::string>* notes);
 
 // Appends shutterlab_export.txt: the format, the source, the camera as shutterlab holds it, and
 // every note. Call last.

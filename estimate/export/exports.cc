@@ -5,6 +5,7 @@
 #include "estimate/export/kalibr_export.h"
 #include "estimate/export/metashape_export.h"
 #include "estimate/export/odm_export.h"
+#include "estimate/export/vins_export.h"
 #include "sim/text_file.h"
 
 #include <stdexcept>
@@ -21,6 +22,8 @@ const std::vector<ExportFormat>& ExportFormats() {
       {"gyroflow", "Gyroflow lens profile and project settings (readout, sync offset)",
        GyroflowExport},
       {"metashape", "Agisoft Metashape calibration XML", MetashapeExport},
+      {"vins", "VINS-Mono / VINS-Fusion camera and config (td, rolling_shutter_tr, extrinsics)",
+       VinsExport},
   };
   return formats;
 }

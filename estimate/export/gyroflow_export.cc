@@ -56,9 +56,11 @@ ExportOutput GyroflowExport(const ExportCamera& camera, const ExportOptions& opt
                  "Gyroflow corrects row readouts only; the camera reads " +
                      std::string(ReadoutDirectionName(rig.shutter.direction)),
                  options, &out.notes);
-  RequireDetermined("time_offset", camera.time_offset_stderr_s, options, &out.notes);
-  if (camera.readout_known)
-    RequireDetermined("readout_time", camera.readout_stderr_s, options, &out.notes);
+  RequireDetermined(camera, "time_offset", options, &out.notes);
+  if (camera.readout_known) {
+    RequireDetermined(camera, "readout_time", options, &out.notes);
+    RequireDetermined(camera, "readout_direction", options, &out.notes);
+  }
   RequireCarried(camera.truth.clock_rate_ppm == 0.0,
                  "a Gyroflow project's sync offset is constant here; the gyro clock runs " +
                      ExportNumber(camera.truth.clock_rate_ppm) + " ppm fast",

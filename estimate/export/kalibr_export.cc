@@ -42,7 +42,8 @@ ExportOutput KalibrExport(const ExportCamera& camera, const ExportOptions& optio
                  "the mounting and the time shift, from a validation report (--force: identity "
                  "and 0)",
                  options, &out.notes);
-  RequireDetermined("time_offset", camera.time_offset_stderr_s, options, &out.notes);
+  RequireDetermined(camera, "time_offset", options, &out.notes);
+  RequireDetermined(camera, "gyro_to_camera", options, &out.notes);
   RequireCarried(camera.truth.clock_rate_ppm == 0.0,
                  "Kalibr's time shift is constant; the gyro clock runs " +
                      ExportNumber(camera.truth.clock_rate_ppm) + " ppm fast",
@@ -59,7 +60,8 @@ ExportOutput KalibrExport(const ExportCamera& camera, const ExportOptions& optio
   yaml += "  - [0.0, 0.0, 0.0, 1.0]\n";
   yaml += "  timeshift_cam_imu: " + ExportNumber(rig.time_offset_s) + "\n";
   if (camera.readout_known && rig.shutter.readout_s > 0.0) {
-    RequireDetermined("readout_time", camera.readout_stderr_s, options, &out.notes);
+    RequireDetermined(camera, "readout_time", options, &out.notes);
+    RequireDetermined(camera, "readout_direction", options, &out.notes);
     const bool top_down = rig.shutter.direction == ReadoutDirection::kTopToBottom;
     RequireCarried(top_down,
                    "Kalibr's rolling shutter reads top to bottom; the camera reads " +
@@ -83,12 +85,7 @@ ExportOutput KalibrExport(const ExportCamera& camera, const ExportOptions& optio
       "gyro clock = camera clock + time_offset_s)");
   out.notes.push_back(
       "T_cam_imu: R_CG (w_C = R_CG w_G) with no translation (shutterlab fits none)");
-  if (camera.truth.gyro_scale != Eigen::Vector3d::Ones() ||
-      camera.truth.gyro_bias_rad_s != Eigen::Vector3d::Zero()) {
-    out.notes.push_back(
-        "the gyro's scale and bias are not part of camchain-imucam.yaml: see the "
-        "side note's model");
-  }
+  NoteGyroCalibrationNotCarried(camera, "camchain-imucam.yaml", &out.notes);
   AddSideNote("kalibr", camera, &out);
   return out;
 }

@@ -45,7 +45,8 @@ ExportOutput OdmExport(const ExportCamera& camera, const ExportOptions& options)
                       " px, from the image centre, with OpenSfM's half-pixel "
                       "shift (c_x = (cx + 0.5 - W/2) / S)");
   if (camera.readout_known) {
-    RequireDetermined("readout_time", camera.readout_stderr_s, options, &out.notes);
+    RequireDetermined(camera, "readout_time", options, &out.notes);
+    RequireDetermined(camera, "readout_direction", options, &out.notes);
     const bool top_down = rig.shutter.direction == ReadoutDirection::kTopToBottom;
     RequireCarried(top_down,
                    "ODM's rolling-shutter correction reads top to bottom; the camera reads " +

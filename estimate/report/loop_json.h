@@ -21,27 +21,6 @@ namespace shutterlab {
 // corrects with.
 nlohmann::json LoopToJson(const LoopResult& result, size_t frame_count);
 
-// What `correct --report` takes from a validation report.
-struct ReportedEffect {
-  Effect effect = Effect::kTimeOffset;
-  EffectValue value;  // docs/FORMATS.md value
-  // EffectSpec's parameters (deltas from the declared model) and their covariance; empty in a
-  // report that does not carry them.
-  Eigen::VectorXd parameters;
-  Eigen::MatrixXd covariance;
-};
-struct ReportedModel {
-  std::vector<ReportedEffect> effects;  // in the report's order
-  // The declared model plus every effect, as the loop fitted it ("fitted_model"); absent from
-  // reports of other tools or older versions.
-  std::optional<TrueModel> fitted;
-  double noise_px = 0.0;
-  bool unexplained = false;
-  ResidualStats after;
-};
-// Reads a validation report (docs/FORMATS.md validation/1); throws IoError("PATH: problem").
-ReportedModel ReadValidationReport(const std::string& path);
-
 // `shutterlab measure --json`: {"format": "measure/1", "width", "height", "D_px", ["D_m"],
 // "noise_px", "measured_fraction", "points", ["truth": {"rms_px", "max_px", "pixels"}]}.
 nlohmann::json MeasureToJson(const MeasureReport& report);

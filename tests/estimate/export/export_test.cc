@@ -12,6 +12,7 @@
 #include "estimate/export/kalibr_export.h"
 #include "estimate/export/metashape_export.h"
 #include "estimate/export/odm_export.h"
+#include "estimate/export/vins_export.h"
 #include "io/lens_profile.h"
 #include "model/camera.h"
 #include "model/effect_io.h"
@@ -22,6 +23,7 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <opencv2/core/persistence.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -281,8 +283,129 @@ TEST(KalibrExport, RefusesWhatTheChainCannotHoldUnlessForced) {
   camera = TestCamera();
   std::get<BrownConrady>(camera.truth.rig.camera.distortion).coeffs[4] = 0.0;
   camera.truth.rig.shutter.direction = ReadoutDirection::kTopToBottom;
-  camera.time_offset_stderr_s = std::nan("");
+  camera.undetermined["time_offset"] = "fitted, with a standard error that is not a number";
   EXPECT_THROW(KalibrExport(camera, {}), std::invalid_argument);
+}
+
+// VINS reads its files through OpenCV's cv::FileStorage and camodocal's cameras: read back so, the
+// camera projects as camodocal's PINHOLE (OpenCV's terms without k3) and KANNALA_BRANDT (theta +
+// k2 theta^3 + ... + k5 theta^9, then mu, mv, u0, v0) do; td counts from the middle row
+// (projection_td_factor.cpp: td + tr / ROW * (row - ROW / 2)), so a row v read at camera time
+// t + readout * v / H is at IMU time t + td + tr * (v - H / 2) / H, the same.
+TEST(VinsExport, OpenCvsFileStorageReadsItAndItProjectsAsCamodocalsModels) {
+  for (bool fisheye : {false, true}) {
+    ExportCamera camera = TestCamera(fisheye);
+    if (!fisheye) std::get<BrownConrady>(camera.truth.rig.camera.distortion).coeffs[4] = 0.0;
+    camera.truth.rig.shutter.direction = ReadoutDirection::kTopToBottom;
+    test::TempDir dir;
+    WriteExport(VinsExport(camera, {}), dir.path().string());
+    cv::FileStorage cam(dir / "camera.yaml", cv::FileStorage::READ);
+    ASSERT_TRUE(cam.isOpened());
+    EXPECT_EQ(static_cast<int>(cam["image_width"]), 1280);
+    EXPECT_EQ(static_cast<int>(cam["image_height"]), 960);
+    const cv::FileNode p = cam["projection_parameters"], d = cam["distortion_parameters"];
+    for (const Eigen::Vector3d& point : PointsInView()) {
+      const Eigen::Vector2d ours = *camera.truth.rig.camera.ImgFromCam(point);
+      Eigen::Vector2d theirs;
+      if (fisheye) {
+        EXPECT_EQ(static_cast<std::string>(cam["model_type"]), "KANNALA_BRANDT");
+        const double theta = std::acos(point.z() / point.norm());
+        const double phi = std::atan2(point.y(), point.x()), t2 = theta * theta;
+        const double r = theta + double(p["k2"]) * theta * t2 + double(p["k3"]) * theta * t2 * t2 +
+                         double(p["k4"]) * theta * t2 * t2 * t2 +
+                         double(p["k5"]) * theta * t2 * t2 * t2 * t2;
+        theirs = {double(p["mu"]) * r * std::cos(phi) + double(p["u0"]),
+                  double(p["mv"]) * r * std::sin(phi) + double(p["v0"])};
+      } else {
+        EXPECT_EQ(static_cast<std::string>(cam["model_type"]), "PINHOLE");
+        const Eigen::Vector2d x = BrownDistorted(point.x() / point.z(), point.y() / point.z(),
+                                                 d["k1"], d["k2"], d["p1"], d["p2"], 0.0);
+        theirs = {double(p["fx"]) * x.x() + double(p["cx"]),
+                  double(p["fy"]) * x.y() + double(p["cy"])};
+      }
+      EXPECT_NEAR(theirs.x(), ours.x(), kProjectionTolPx) << fisheye;
+      EXPECT_NEAR(theirs.y(), ours.y(), kProjectionTolPx) << fisheye;
+    }
+    cv::FileStorage config(dir / "vins_config.yaml", cv::FileStorage::READ);
+    ASSERT_TRUE(config.isOpened());
+    cv::Mat imu_r_cam;
+    config["extrinsicRotation"] >> imu_r_cam;
+    ASSERT_EQ(imu_r_cam.rows, 3);
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j)
+        EXPECT_EQ(imu_r_cam.at<double>(i, j), camera.truth.rig.cam_from_gyro(j, i));
+    }
+    EXPECT_EQ(static_cast<int>(config["rolling_shutter"]), 1);
+    const double tr = config["rolling_shutter_tr"], td = config["td"];
+    EXPECT_EQ(tr, 0.0271);
+    for (const double row : {0.0, 100.0, 959.0}) {
+      const double ours = 0.0043 + 0.0271 * row / 960;  // IMU time of the row, frame time 0
+      EXPECT_NEAR(td + tr / 960 * (row - 960 / 2), ours, 1e-15) << row;
+    }
+  }
+  // A bottom-to-top readout, which VINS cannot hold, is refused; a clock rate too.
+  EXPECT_THROW(VinsExport(TestCamera(/*fisheye=*/true), {}), std::invalid_argument);
+}
+
+// A report whose model carries a declared value that its claims did not confirm (import.json's
+// guess of a readout, on a clip whose images do not follow the gyro: every claim "not
+// determined") exports it only with --force; a claim that holds, the source's own statement that
+// the data could not test, or a fitted effect, exports.
+TEST(ExportSource, AClaimTheReportCouldNotTestIsRefusedUnlessForced) {
+  test::TempDir dir;
+  ExportCamera camera = TestCamera(/*fisheye=*/true);
+  camera.truth.rig.shutter.direction = ReadoutDirection::kTopToBottom;
+  const auto claim = [](const std::string& effect, const std::string& verdict) {
+    return nlohmann::json{{"claim", effect == "readout_time" ? "readout_s" : "time_offset_s"},
+                          {"effect", effect},
+                          {"status", "guess"},
+                          {"verdict", verdict}};
+  };
+  nlohmann::json report = {{"format", "validation/1"},
+                           {"effects", nlohmann::json::array()},
+                           {"unexplained", true},
+                           {"fitted_model", TrueModelToJson(camera.truth)},
+                           {"claims",
+                            {claim("readout_time", "not determined: found 17.7 +- 0.1 ms"),
+                             claim("time_offset", "claim holds: found 4.3 +- 0.1 ms")}}};
+  WriteFileAtomically(dir / "report.json", report.dump());
+  const ExportCamera from_report = ReadExportSource(dir / "report.json");
+  ASSERT_EQ(from_report.undetermined.count("readout_time"), 1u);
+  EXPECT_EQ(from_report.undetermined.count("time_offset"), 0u);
+  for (const ExportFormat* format :
+       {&FindExportFormat("gyroflow"), &FindExportFormat("odm"), &FindExportFormat("vins")}) {
+    try {
+      format->write(from_report, {});
+      FAIL() << format->name;
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("readout_time was not determined"), std::string::npos) << what;
+      EXPECT_NE(what.find("declared readout_s (guess)"), std::string::npos) << what;
+      EXPECT_NE(what.find("17.7"), std::string::npos) << what;
+      EXPECT_NE(what.find("--force"), std::string::npos) << what;
+    }
+  }
+  ExportOptions force;
+  force.force = true;
+  EXPECT_NE(FileNamed(GyroflowExport(from_report, force), "shutterlab_export.txt")
+                .text.find("readout_time was not determined"),
+            std::string::npos);
+  // The source's own statement that the data could not test is exported as stated, and said;
+  // contradicted, it is refused whoever stated it.
+  report["claims"][0]["status"] = "source claim";
+  WriteFileAtomically(dir / "report.json", report.dump());
+  const ExportCamera stated = ReadExportSource(dir / "report.json");
+  EXPECT_EQ(stated.undetermined.count("readout_time"), 0u);
+  EXPECT_NE(FileNamed(GyroflowExport(stated, {}), "shutterlab_export.txt")
+                .text.find("readout_time is the source's own readout_s (source claim)"),
+            std::string::npos);
+  report["claims"][0]["verdict"] = "claim contradicted: 17.7 +- 0.1 ms against 27.1 ms";
+  WriteFileAtomically(dir / "report.json", report.dump());
+  EXPECT_EQ(ReadExportSource(dir / "report.json").undetermined.count("readout_time"), 1u);
+  // Fitted, the readout is the data's: the claim about the declared one no longer matters.
+  report["effects"] = {{{"name", "readout_time"}, {"value", 0.0271}}};
+  WriteFileAtomically(dir / "report.json", report.dump());
+  EXPECT_EQ(ReadExportSource(dir / "report.json").undetermined.count("readout_time"), 0u);
 }
 
 // Gyroflow's lens profile, as shutterlab's reader of Gyroflow's profiles reads it, and the sync
@@ -421,7 +544,7 @@ TEST(ExportFormats, EveryFormatWritesItsSideNoteLastAndUnknownNamesAreListed) {
     FindExportFormat("pix4dmapper");
     FAIL();
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("colmap, odm, kalibr, gyroflow, metashape"),
+    EXPECT_NE(std::string(e.what()).find("colmap, odm, kalibr, gyroflow, metashape, vins"),
               std::string::npos)
         << e.what();
   }

@@ -2,6 +2,7 @@
 // the typed results hold.
 #include "estimate/report/loop_json.h"
 
+#include "model/reported_model.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
 #include "tests/render/render_fixtures.h"
@@ -94,7 +95,7 @@ TEST(ReadValidationReport, ReadsBackTheFittedModelAndTheCovariances) {
   EXPECT_EQ(back.effects[0].parameters, e.parameters);
   EXPECT_EQ(back.effects[0].covariance, e.covariance);
   EXPECT_DOUBLE_EQ(back.noise_px, 0.025);
-  EXPECT_DOUBLE_EQ(back.after.rms_px, 0.03);
+  EXPECT_DOUBLE_EQ(back.after_rms_px, 0.03);
   // What is not a report is refused, naming the file.
   WriteFileAtomically(dir / "other.json", R"({"format": "measure/1"})");
   try {
