@@ -6,6 +6,9 @@
 #include "app/analyze_flags.h"
 #include "app/command.h"
 #include "app/trace_options.h"
+#include "estimate/export/export_camera.h"
+#include "estimate/export/export_output.h"
+#include "estimate/export/exports.h"
 #include "estimate/paper/log_pipeline.h"
 #include "estimate/paper/photo_analysis.h"
 #include "estimate/report/analysis_json.h"
@@ -20,7 +23,9 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace shutterlab::app {
@@ -31,6 +36,37 @@ std::vector<std::string> InDir(const std::string& dir, const std::vector<std::st
   std::vector<std::string> paths;
   for (const std::string& name : names) paths.push_back(dir + "/" + name);
   return paths;
+}
+
+// --export: the photos' camera in each tool's files, all made in memory first, so that a format
+// that refuses (kalibr: photos relate no gyro to the camera) stops the command before anything
+// is written.
+std::vector<std::pair<std::string, ExportOutput>> PhotoExports(const AnalyzeFlags& flags,
+                                                               const nlohmann::json& photos) {
+  std::vector<std::pair<std::string, ExportOutput>> exports;
+  if (flags.export_formats.empty()) return exports;
+  SHUTTERLAB_CHECK(!flags.out_dir.empty()) << "--export writes into --out DIR: give --out";
+  const ExportCamera camera =
+      ExportCameraFromPhotos(photos, "analyze --photos " + flags.photos_dir);
+  for (const std::string& name : flags.export_formats) {
+    const ExportFormat& format = FindExportFormat(name);
+    try {
+      exports.emplace_back(format.name, format.write(camera, {}));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("--export ") + format.name + ": " + e.what() +
+                                  " (nothing written; shutterlab export takes --force)");
+    }
+  }
+  return exports;
+}
+
+// Writes each export into DIR/export_FORMAT/ and says what it wrote, a line a folder.
+void WritePhotoExports(const std::string& dir,
+                       const std::vector<std::pair<std::string, ExportOutput>>& exports) {
+  for (const auto& [name, output] : exports) {
+    const std::string folder = dir + "/export_" + name;
+    SayWritten(folder, WriteExport(output, folder));
+  }
 }
 
 // --photos DIR [LOG]: the photos alone (translation from their speed), or placed on the log.
@@ -59,11 +95,13 @@ void RunPhotos(const AnalyzeFlags& flags) {
   }
   if (!log) {
     const PhotoAnalysis analysis = AnalyzePhotos(set, options.photos);
+    const auto exports = PhotoExports(flags, PhotoAnalysisToJson(set, analysis)["photos"]);
     if (!flags.out_dir.empty()) {
       WritePhotoOutputs(flags.out_dir, set, analysis);
       PhotoReportPage(set, analysis).Write(flags.out_dir + "/report.html");
       SayWritten(flags.out_dir, InDir(flags.out_dir, {"report.html", "photos.csv", "exclude.txt",
                                                       "image_list.txt", "colmap_image_list.txt"}));
+      WritePhotoExports(flags.out_dir, exports);
     }
     if (flags.json) {
       std::cout << JsonText(PhotoAnalysisToJson(set, analysis)) << "\n";
@@ -77,6 +115,7 @@ void RunPhotos(const AnalyzeFlags& flags) {
   printer.Done();
   const PhotoFlightResult& result = run.result;
   const std::optional<SensorPair>& pair = run.pair;
+  const auto exports = PhotoExports(flags, PhotoAnalysisToJson(set, result.photos)["photos"]);
   if (result.lens) {
     for (const std::string& note : result.lens->notes) std::cerr << "note: " << note << "\n";
   }
@@ -88,6 +127,7 @@ void RunPhotos(const AnalyzeFlags& flags) {
     SayWritten(flags.out_dir,
                InDir(flags.out_dir, {"report.html", "images.csv", "photos.csv", "exclude.txt",
                                      "image_list.txt", "colmap_image_list.txt"}));
+    WritePhotoExports(flags.out_dir, exports);
   }
   if (flags.json) {
     nlohmann::json json = AnalyzeToJson(result.log);

@@ -278,6 +278,12 @@ std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
                       "write DIR/images.csv, DIR/exclude.txt and DIR/report.html (with --photos: "
                       "DIR/photos.csv, exclude.txt, image_list.txt, colmap_image_list.txt)");
   command
+      ->add_option("--export", flags->export_formats,
+                   "with --photos and --out: also the photos' camera for these tools, each in "
+                   "DIR/export_FORMAT/ (colmap, odm, kalibr, gyroflow, metashape, pix4d, vins; as "
+                   "shutterlab export)")
+      ->delimiter(',');
+  command
       ->add_option("--scene", flags->scene_path,
                    "nadir image for the report's worst-image pictures (with --out)")
       ->check(CLI::ExistingFile);

@@ -40,6 +40,7 @@ struct AnalyzeFlags {
   std::vector<double> limits_m{0.05, 0.10};
   double noise_allowance_arcsec = 20.0;
   std::string out_dir;
+  std::vector<std::string> export_formats;  // --export: with --photos and --out
   std::string scene_path;
   std::string photos_dir;
   std::string photo_utc_offset;

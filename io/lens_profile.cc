@@ -1,5 +1,6 @@
 #include "io/lens_profile.h"
 
+#include "io/opensfm_camera.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
 
@@ -156,12 +157,7 @@ std::string ModeText(const ProfileReadout& mode) {
          (mode.fps > 0 ? " at " + FormatNumber("%.3g", mode.fps) + " fps" : "");
 }
 
-}  // namespace
-
-LensProfile ReadLensProfile(const std::string& path) {
-  const std::string text = ReadFileToString(path);
-  json j = json::parse(text, nullptr, /*allow_exceptions=*/false);
-  if (j.is_discarded() || !j.is_object()) Fail(path, "not a Gyroflow lens profile (JSON object)");
+LensProfile FromGyroflowProfile(const json& j, const std::string& path) {
   LensProfile p;
   p.path = path;
   try {
@@ -193,6 +189,65 @@ LensProfile ReadLensProfile(const std::string& path) {
     Fail(path, std::string("malformed lens profile: ") + e.what());
   }
   return p;
+}
+
+// A Gyroflow project (.gyroflow, Gyroflow's src/core/lib.rs): its lens in "calibration_data" (a
+// lens profile) and the readout set for the clip in "stabilization": frame_readout_time (ms) and
+// frame_readout_direction (Gyroflow's name or number), which win over the profile's.
+LensProfile FromGyroflowProject(const json& j, const std::string& path) {
+  if (!j["calibration_data"].is_object())
+    Fail(path, "a Gyroflow project whose calibration_data is not a lens profile");
+  LensProfile p = FromGyroflowProfile(j["calibration_data"], path);
+  p.name = "Gyroflow project's " + p.name;
+  const json& s = j.contains("stabilization") ? j["stabilization"] : json::object();
+  if (!s.is_object()) Fail(path, "stabilization is not an object");
+  ProfileReadout readout = p.mode;
+  readout.readout_s.reset();
+  ReadReadout(s, "frame_readout_time", &readout, path);
+  if (!readout.readout_s) return p;
+  readout.direction = ReadoutDirection::kTopToBottom;
+  if (s.contains("frame_readout_direction")) {
+    const json& d = s["frame_readout_direction"];
+    bool known = false;
+    for (ReadoutDirection candidate :
+         {ReadoutDirection::kTopToBottom, ReadoutDirection::kBottomToTop,
+          ReadoutDirection::kLeftToRight, ReadoutDirection::kRightToLeft}) {
+      if ((d.is_string() && d.get<std::string>() == GyroflowReadoutDirectionName(candidate)) ||
+          (d.is_number_integer() && d.get<int>() == static_cast<int>(candidate))) {
+        readout.direction = candidate;
+        known = true;
+      }
+    }
+    if (!known)
+      Fail(path, "stabilization.frame_readout_direction " + d.dump() + " is not one of Gyroflow's");
+  }
+  p.mode = readout;
+  return p;
+}
+
+}  // namespace
+
+LensProfile ReadLensProfile(const std::string& path) {
+  const std::string text = ReadFileToString(path);
+  json j = json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (j.is_discarded() || !j.is_object())
+    Fail(path, "not a lens profile, a Gyroflow project or OpenSfM cameras (a JSON object)");
+  try {
+    if (IsOpenSfmCameras(j)) {
+      const OpenSfmCamera opensfm = ReadOpenSfmCamera(j, path);
+      LensProfile p;
+      p.path = path;
+      p.name = "OpenSfM camera " + opensfm.key;
+      p.camera = opensfm.camera;
+      p.mode.width = p.camera.width;
+      p.mode.height = p.camera.height;
+      return p;
+    }
+    if (j.contains("calibration_data")) return FromGyroflowProject(j, path);
+  } catch (const json::exception& e) {
+    Fail(path, std::string("malformed camera: ") + e.what());
+  }
+  return FromGyroflowProfile(j, path);
 }
 
 LensProfileUse ScaleLensProfile(const LensProfile& profile, int width, int height,

@@ -3,7 +3,10 @@
 // official calibrations, the JSON that Gyroflow's lens calibrator writes): one camera mode's
 // intrinsics, OpenCV fisheye distortion (or, rarely, OpenCV's standard model), calibration size,
 // frame rate and often the frame readout time. `--lens-profile FILE` of render, analyze, import and
-// validate reads one and scales it to the images at hand (docs/FORMATS.md "Lens profile").
+// validate reads one and scales it to the images at hand (docs/FORMATS.md "Lens profile"). The same
+// option reads a Gyroflow project (.gyroflow: its "calibration_data" is a profile, and its
+// "stabilization" frame_readout_time and frame_readout_direction win over the profile's) and
+// OpenSfM's cameras (io/opensfm_camera.h), each as a profile.
 //
 // Fields read (Gyroflow src/core/lens_profile.rs names them; missing ones take Gyroflow's
 // defaults): name, camera_brand, camera_model, lens_model, calibrated_by, official, fps,

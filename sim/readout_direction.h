@@ -35,6 +35,22 @@ inline std::optional<ReadoutDirection> ParseReadoutDirection(std::string_view wo
   return std::nullopt;
 }
 
+// Gyroflow's names of the same directions (its core's ReadoutDirection, which a .gyroflow project
+// writes by name and reads as a name or as its number, 0..3 in this order).
+inline const char* GyroflowReadoutDirectionName(ReadoutDirection direction) {
+  switch (direction) {
+    case ReadoutDirection::kTopToBottom:
+      return "TopToBottom";
+    case ReadoutDirection::kBottomToTop:
+      return "BottomToTop";
+    case ReadoutDirection::kLeftToRight:
+      return "LeftToRight";
+    case ReadoutDirection::kRightToLeft:
+      return "RightToLeft";
+  }
+  return "TopToBottom";
+}
+
 // True for the two row orders, the ones a rig model can hold.
 inline bool IsRowReadout(ReadoutDirection direction) {
   return direction == ReadoutDirection::kTopToBottom || direction == ReadoutDirection::kBottomToTop;

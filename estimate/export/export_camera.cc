@@ -85,12 +85,13 @@ ExportCamera FromCameraJson(const std::string& path) {
   return camera;
 }
 
-// The photos of an `analyze --photos --json` result: the camera of the first photo with a size
-// and a focal length (principal point at the centre, no lens distortion: the photos' metadata
-// give none), its readout; every readable photo listed.
-ExportCamera FromPhotos(const std::string& path, const nlohmann::json& photos) {
+}  // namespace
+
+// The camera of the first photo with a size and a focal length (principal point at the centre,
+// no lens distortion: the photos' metadata give none), its readout.
+ExportCamera ExportCameraFromPhotos(const nlohmann::json& photos, const std::string& source) {
   ExportCamera camera;
-  camera.source = "analyze --photos result " + path;
+  camera.source = source;
   camera.gyro_known = false;
   bool have_camera = false;
   for (const nlohmann::json& p : photos) {
@@ -125,14 +126,12 @@ ExportCamera FromPhotos(const std::string& path, const nlohmann::json& photos) {
     camera.photos.push_back(std::move(photo));
   }
   if (!have_camera) {
-    throw IoError(IoMessage(path, 0,
+    throw IoError(IoMessage(source, 0,
                             "no photo with a size and a focal length: nothing to export (give "
                             "analyze --photos --focal-px, or a camera.json)"));
   }
   return camera;
 }
-
-}  // namespace
 
 ExportCamera ReadExportSource(const std::string& path) {
   if (fs::is_directory(path)) {
@@ -156,10 +155,11 @@ ExportCamera ReadExportSource(const std::string& path) {
   if (format.rfind("rig/", 0) == 0) return FromCameraJson(path);
   if (json.is_object() && json.contains("photos")) {
     const nlohmann::json& photos = json["photos"];
-    if (photos.is_array()) return FromPhotos(path, photos);
+    const std::string source = "analyze --photos result " + path;
+    if (photos.is_array()) return ExportCameraFromPhotos(photos, source);
     // With a LOG, the photos' result sits under "photos" beside analyze's own.
     if (photos.is_object() && photos.contains("photos") && photos["photos"].is_array())
-      return FromPhotos(path, photos["photos"]);
+      return ExportCameraFromPhotos(photos["photos"], source);
   }
   throw IoError(IoMessage(path, 0,
                           "not a validation report (validation/1), a camera.json (rig/1) or an "

@@ -11,6 +11,8 @@
 
 #include "model/truth_model.h"
 
+#include <nlohmann/json_fwd.hpp>
+
 #include <map>
 #include <optional>
 #include <string>
@@ -58,5 +60,10 @@ struct ExportCamera {
 // --photos --json, with or without a LOG); a folder holding camera.json (a rig dataset, a
 // correction's output). Throws IoError("PATH: problem") naming what it could not use.
 ExportCamera ReadExportSource(const std::string& path);
+
+// The camera of an `analyze --photos --json` result's "photos" list (analyze --photos --export
+// hands it over in memory): the first photo with a size and a focal length, every readable photo
+// listed. source names it in the side notes and errors; throws IoError when no photo has both.
+ExportCamera ExportCameraFromPhotos(const nlohmann::json& photos, const std::string& source);
 
 }  // namespace shutterlab

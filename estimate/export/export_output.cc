@@ -79,11 +79,19 @@ void AddSideNote(const char* format, const ExportCamera& camera, ExportOutput* o
           ExportNumber(c.fx) + ", fy " + ExportNumber(c.fy) + ", cx " + ExportNumber(c.cx) +
           ", cy " + ExportNumber(c.cy) + " px\n";
   text += "  lens " + LensText(c.distortion) + "\n";
-  text += camera.readout_known ? "  readout " + ExportNumber(rig.shutter.readout_s) + " s, " +
+  // A standard error where the source gives one (a validation report's covariance): the files of
+  // most tools have no place for it.
+  const auto stderr_text = [](const std::optional<double>& se) {
+    return se && std::isfinite(*se) ? " +- " + ExportNumber(*se) : std::string();
+  };
+  text += camera.readout_known ? "  readout " + ExportNumber(rig.shutter.readout_s) +
+                                     stderr_text(camera.readout_stderr_s) + " s, " +
                                      ReadoutDirectionName(rig.shutter.direction) + "\n"
                                : std::string("  readout unknown\n");
-  text += "  time_offset " + ExportNumber(rig.time_offset_s) + " s, clock_rate " +
-          ExportNumber(camera.truth.clock_rate_ppm) + " ppm\n";
+  text += "  time_offset " + ExportNumber(rig.time_offset_s) +
+          stderr_text(camera.time_offset_stderr_s) + " s, clock_rate " +
+          ExportNumber(camera.truth.clock_rate_ppm) + stderr_text(camera.clock_rate_stderr_ppm) +
+          " ppm (+- one standard error, where the source gives it)\n";
   const Eigen::Matrix3d& r = rig.cam_from_gyro;
   text += "  gyro_to_camera (R_CG, rows)";
   for (int i = 0; i < 3; ++i) {

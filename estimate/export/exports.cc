@@ -5,6 +5,7 @@
 #include "estimate/export/kalibr_export.h"
 #include "estimate/export/metashape_export.h"
 #include "estimate/export/odm_export.h"
+#include "estimate/export/pix4d_export.h"
 #include "estimate/export/vins_export.h"
 #include "sim/text_file.h"
 
@@ -22,6 +23,7 @@ const std::vector<ExportFormat>& ExportFormats() {
       {"gyroflow", "Gyroflow lens profile and project settings (readout, sync offset)",
        GyroflowExport},
       {"metashape", "Agisoft Metashape calibration XML", MetashapeExport},
+      {"pix4d", "Pix4D's OPF calibrated camera (the readout in an extension)", Pix4dExport},
       {"vins", "VINS-Mono / VINS-Fusion camera and config (td, rolling_shutter_tr, extrinsics)",
        VinsExport},
   };

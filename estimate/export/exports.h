@@ -18,7 +18,7 @@ struct ExportFormat {
   const char* what;  // for --help
   ExportOutput (*write)(const ExportCamera& camera, const ExportOptions& options);
 };
-// colmap, odm, kalibr, gyroflow, metashape, vins.
+// colmap, odm, kalibr, gyroflow, metashape, pix4d, vins.
 const std::vector<ExportFormat>& ExportFormats();
 // The format named (case-insensitive); throws std::invalid_argument naming the text and the
 // formats.

@@ -75,7 +75,7 @@ ExportOutput GyroflowExport(const ExportCamera& camera, const ExportOptions& opt
       {"calibration_data", profile},
       {"stabilization",
        {{"frame_readout_time", readout_ms},
-        {"frame_readout_direction", ReadoutDirectionName(rig.shutter.direction)}}},
+        {"frame_readout_direction", GyroflowReadoutDirectionName(rig.shutter.direction)}}},
 
       {"note",
        "shutterlab export: the lens, the readout and the sync offset; load the video and "

@@ -153,6 +153,49 @@ TEST(PhotosCli, BadPhotosAreReportedAndAFolderWithoutPhotosIsAnError) {
 // DJI photos whose camera clock is UTC+08:00 off by a few ms. Each photo must land on its event,
 // with the camera clock's offset and the residuals reported, and carry analyze's rotation beside
 // its own translation.
+// --export: the photos' camera in each tool's files beside the lists, as `shutterlab export` writes
+// it from the same result's JSON; a format that refuses (photos relate no gyro to the camera: no
+// Kalibr chain) stops the command before anything is written.
+TEST(PhotosCli, ExportsThePhotosCameraBesideTheListsOrWritesNothing) {
+  test::TempDir dir;
+  std::filesystem::create_directories(dir / "photos");
+  for (int k = 0; k < 2; ++k) {
+    test::FixturePhoto p;
+    p.width = 400;
+    p.height = 300;
+    p.focal_length_35mm = 24;
+    p.xmp = test::DjiXmp({{"RelativeAltitude", "+80.0"}, {"FlightXSpeed", "4.0"}}, false);
+    WriteFileAtomically(dir / ("photos/P" + std::to_string(k) + ".JPG"), test::JpegWithMetadata(p));
+  }
+  const std::string photos = "analyze --photos " + (dir / "photos") + " --readout 20ms";
+  const auto r = RunShutterlab(photos + " --out " + (dir / "out") + " --export odm,pix4d");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out/image_list.txt"));
+  EXPECT_EQ(ReadFileToString(dir / "out/export_odm/odm_args.txt"),
+            "--rolling-shutter --rolling-shutter-readout 20\n");
+  const nlohmann::json opf =
+      nlohmann::json::parse(ReadFileToString(dir / "out/export_pix4d/calibrated_cameras.json"));
+  EXPECT_EQ(opf["sensors"][0]["internals"]["principal_point_px"], nlohmann::json({200.0, 150.0}));
+  EXPECT_NE(r.err.find("export_pix4d/: calibrated_cameras.json"), std::string::npos) << r.err;
+  // The same files as `shutterlab export` makes from the --json result.
+  const auto json = RunShutterlab(photos + " --json");
+  ASSERT_EQ(json.exit_code, 0) << json.output;
+  WriteFileAtomically(dir / "photos.json", json.out);
+  ASSERT_EQ(RunShutterlab("export " + (dir / "photos.json") + " --to odm --out " + (dir / "odm"))
+                .exit_code,
+            0);
+  EXPECT_EQ(ReadFileToString(dir / "odm/camera_models_overrides.json"),
+            ReadFileToString(dir / "out/export_odm/camera_models_overrides.json"));
+
+  const auto refused =
+      RunShutterlab(photos + " --out " + (dir / "refused") + " --export odm,kalibr");
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_EQ(test::LineCount(refused.err), 1u) << refused.err;
+  EXPECT_NE(refused.err.find("--export kalibr"), std::string::npos) << refused.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "refused")) << refused.output;
+  EXPECT_EQ(RunShutterlab(photos + " --export odm").exit_code, 2);  // no --out
+}
+
 TEST(PhotosCli, PlacesPhotosOnASyntheticLogAndReportsTheResidual) {
   test::TempDir dir;
   constexpr int64_t kUtcAtLogZeroNs = 1'721'091'600'000'000'000;  // 2024-07-16 01:00:00 UTC

@@ -141,6 +141,35 @@ TEST(LensProfile, ReadsOpenCvsStandardModel) {
   EXPECT_EQ(p.camera.fx, 1000);
 }
 
+// A Gyroflow project (.gyroflow, as Gyroflow writes it: the lens profile in calibration_data, the
+// clip's readout under stabilization with the direction by name or by number) reads as its lens
+// with the project's readout, which wins over the profile's.
+TEST(LensProfile, ReadsAGyroflowProjectsLensAndItsReadout) {
+  test::TempDir dir;
+  json project = {{"title", "Gyroflow data file"},
+                  {"version", 4},
+                  {"calibration_data", ProfileJson()},
+                  {"stabilization",
+                   {{"frame_readout_time", 31.5}, {"frame_readout_direction", "BottomToTop"}}}};
+  LensProfile p = Read(dir, project);
+  EXPECT_EQ(p.camera.fx, 1394.85);
+  EXPECT_EQ(p.camera.width, 2704);
+  ASSERT_TRUE(p.mode.readout_s);
+  EXPECT_DOUBLE_EQ(*p.mode.readout_s, 0.0315);
+  EXPECT_EQ(p.mode.direction, ReadoutDirection::kBottomToTop);
+  EXPECT_NE(p.name.find("Gyroflow project"), std::string::npos) << p.name;
+  project["stabilization"]["frame_readout_direction"] = 0;  // Gyroflow's number for TopToBottom
+  EXPECT_EQ(Read(dir, project).mode.direction, ReadoutDirection::kTopToBottom);
+  // No readout set for the clip: the profile's own.
+  project["stabilization"]["frame_readout_time"] = 0.0;
+  EXPECT_DOUBLE_EQ(*Read(dir, project).mode.readout_s, 0.02669333);
+  project["stabilization"] = {{"frame_readout_time", 20.0},
+                              {"frame_readout_direction", "Sideways"}};
+  EXPECT_THROW(Read(dir, project), IoError);
+  project["calibration_data"] = "lens.json";
+  EXPECT_THROW(Read(dir, project), IoError);
+}
+
 TEST(LensProfile, RefusesWhatItDoesNotModelWithAClearError) {
   const std::vector<std::pair<std::function<void(json*)>, std::string>> cases = {
       {[](json* j) { (*j)["distortion_model"] = "poly5"; },

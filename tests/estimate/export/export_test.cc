@@ -12,6 +12,7 @@
 #include "estimate/export/kalibr_export.h"
 #include "estimate/export/metashape_export.h"
 #include "estimate/export/odm_export.h"
+#include "estimate/export/pix4d_export.h"
 #include "estimate/export/vins_export.h"
 #include "io/lens_profile.h"
 #include "model/camera.h"
@@ -207,6 +208,24 @@ TEST(OdmExport, CameraOverridesProjectAsOpenSfmsNormalisedModel) {
       EXPECT_NEAR(s * nx + (1280 - 1) / 2.0, ours.x(), kProjectionTolPx);
       EXPECT_NEAR(s * ny + (960 - 1) / 2.0, ours.y(), kProjectionTolPx);
     }
+  }
+}
+
+// Read back as `--lens-profile` reads OpenSfM's cameras: the same camera.
+TEST(OdmExport, CameraOverridesReadBackAsTheSameCamera) {
+  for (bool fisheye : {false, true}) {
+    const ExportCamera camera = TestCamera(fisheye);
+    test::TempDir dir;
+    ExportOptions force;
+    force.force = true;  // bottom to top: the readout is not written, the camera is
+    WriteExport(OdmExport(camera, force), dir.path().string());
+    const LensProfile back = ReadLensProfile(dir / "camera_models_overrides.json");
+    const PinholeCamera& c = camera.truth.rig.camera;
+    EXPECT_NEAR(back.camera.fx, c.fx, 1e-9);
+    EXPECT_NEAR(back.camera.fy, c.fy, 1e-9);
+    EXPECT_NEAR(back.camera.cx, c.cx, 1e-9);
+    EXPECT_NEAR(back.camera.cy, c.cy, 1e-9);
+    EXPECT_EQ(back.camera.distortion, c.distortion);
   }
 }
 
@@ -429,6 +448,13 @@ TEST(GyroflowExport, TheProfileReadsBackAndTheOffsetCountsFromTheMiddleRow) {
     const nlohmann::json project = nlohmann::json::parse(FileNamed(out, "project.gyroflow").text);
     EXPECT_NEAR(project["offsets"]["0"].get<double>(), -1e3 * (0.0043 + 0.0271 / 2), 1e-12);
     EXPECT_EQ(project["calibration_data"]["asymmetrical"], true);
+    // The project reads back too, its readout and direction by Gyroflow's names.
+    EXPECT_EQ(project["stabilization"]["frame_readout_direction"], "BottomToTop");
+    const LensProfile from_project = ReadLensProfile(dir / "project.gyroflow");
+    EXPECT_EQ(from_project.camera.distortion, c.distortion);
+    ASSERT_TRUE(from_project.mode.readout_s);
+    EXPECT_NEAR(*from_project.mode.readout_s, 0.0271, 1e-15);
+    EXPECT_EQ(from_project.mode.direction, ReadoutDirection::kBottomToTop);
   }
 }
 
@@ -459,6 +485,63 @@ TEST(MetashapeExport, CalibrationProjectsAsMetashapesFrameModel) {
   EXPECT_THROW(MetashapeExport(TestCamera(/*fisheye=*/true), {}), std::invalid_argument);
 }
 
+// Pix4D's OPF calibrated camera: the fields its specification requires (calibrated_cameras and
+// sensor_internals, written out here), an extension named as OPF names them, and the camera
+// projecting as Pix4D's own converter to COLMAP (pyopf opf2colmap) reads it: FULL_OPENCV with fx =
+// fy = focal_length_px, the principal point as written (COLMAP's and OPF's (0, 0) are the top-left
+// pixel's corner), k1..k3 the radial and p1, p2 the tangential terms as they are.
+TEST(Pix4dExport, CalibratedCameraHasOpfsFieldsAndProjectsAsPix4dsConverterReadsIt) {
+  ExportCamera camera = TestCamera();
+  camera.truth.rig.camera.fy = camera.truth.rig.camera.fx;
+  const nlohmann::json opf =
+      nlohmann::json::parse(FileNamed(Pix4dExport(camera, {}), "calibrated_cameras.json").text);
+  EXPECT_EQ(opf.at("format"), "application/opf-calibrated-cameras+json");
+  EXPECT_EQ(opf.at("version"), "1.0");
+  EXPECT_TRUE(opf.at("cameras").is_array());
+  ASSERT_EQ(opf.at("sensors").size(), 1u);
+  const nlohmann::json& sensor = opf["sensors"][0];
+  EXPECT_TRUE(sensor.at("id").is_number_unsigned());
+  const nlohmann::json& in = sensor.at("internals");
+  EXPECT_EQ(in.at("type"), "perspective");
+  const std::vector<double> pp = in.at("principal_point_px"), radial = in.at("radial_distortion"),
+                            tangential = in.at("tangential_distortion");
+  ASSERT_EQ(pp.size(), 2u);
+  ASSERT_EQ(radial.size(), 3u);
+  ASSERT_EQ(tangential.size(), 2u);
+  const double f = in.at("focal_length_px");
+  for (const Eigen::Vector3d& point : PointsInView()) {
+    const Eigen::Vector2d d =
+        BrownDistorted(point.x() / point.z(), point.y() / point.z(), radial[0], radial[1],
+                       tangential[0], tangential[1], radial[2]);
+    const Eigen::Vector2d ours = *camera.truth.rig.camera.ImgFromCam(point);
+    EXPECT_NEAR(f * d.x() + pp[0], ours.x() + 0.5, kProjectionTolPx);
+    EXPECT_NEAR(f * d.y() + pp[1], ours.y() + 0.5, kProjectionTolPx);
+  }
+  const std::regex extension_name("^([A-Z]+[A-Z0-9]*)_[a-z][a-z0-9_]+$");
+  ASSERT_EQ(sensor.at("extensions").size(), 1u);
+  for (const auto& [name, value] : sensor["extensions"].items()) {
+    EXPECT_TRUE(std::regex_match(name, extension_name)) << name;
+    EXPECT_EQ(value.at("readout_time_s"), 0.0271);
+    EXPECT_EQ(value.at("readout_direction"), "bottom_to_top");
+    EXPECT_EQ(value.at("shutter_type"), "rolling");
+  }
+  // One focal length: fx != fy is refused (with what their mean costs) unless forced; a fisheye
+  // (Pix4D's polynomial model) always.
+  try {
+    Pix4dExport(TestCamera(), {});
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("one focal length"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--force"), std::string::npos) << e.what();
+  }
+  ExportOptions force;
+  force.force = true;
+  const nlohmann::json forced = nlohmann::json::parse(
+      FileNamed(Pix4dExport(TestCamera(), force), "calibrated_cameras.json").text);
+  EXPECT_EQ(forced["sensors"][0]["internals"]["focal_length_px"], 0.5 * (1101.25 + 1098.5));
+  EXPECT_THROW(Pix4dExport(TestCamera(/*fisheye=*/true), force), std::invalid_argument);
+}
+
 // The sources: a validation report's fitted model with its effects' standard errors, a
 // camera.json, a folder holding one, the photos of an analyze --photos result.
 TEST(ExportSource, ReadsAReportACameraJsonAFolderAndPhotos) {
@@ -477,6 +560,9 @@ TEST(ExportSource, ReadsAReportACameraJsonAFolderAndPhotos) {
   EXPECT_EQ(from_report.truth.rig.time_offset_s, 0.0043);
   ASSERT_TRUE(from_report.time_offset_stderr_s);
   EXPECT_NEAR(*from_report.time_offset_stderr_s, 1e-5, 1e-12);
+  // The side note carries it (most tools' files have no place for it).
+  const std::string note = FileNamed(ColmapExport(from_report, {}), "shutterlab_export.txt").text;
+  EXPECT_NE(note.find("time_offset 0.0043 +- 1"), std::string::npos) << note;
 
   std::filesystem::create_directories(dir / "dataset");
   WriteRigModel(dir / "dataset/camera.json", camera.truth.rig);
@@ -544,7 +630,7 @@ TEST(ExportFormats, EveryFormatWritesItsSideNoteLastAndUnknownNamesAreListed) {
     FindExportFormat("pix4dmapper");
     FAIL();
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("colmap, odm, kalibr, gyroflow, metashape, vins"),
+    EXPECT_NE(std::string(e.what()).find("colmap, odm, kalibr, gyroflow, metashape, pix4d, vins"),
               std::string::npos)
         << e.what();
   }
