@@ -73,6 +73,12 @@ ExportOutput ColmapExport(const ExportCamera& camera, const ExportOptions&) {
     out.notes.push_back("image_list.txt leaves out the " + std::to_string(excluded) +
                         " photo(s) flagged over a limit");
   }
+  if (!camera.masks_dir.empty()) {
+    args += " --ImageReader.mask_path " + camera.masks_dir;
+    out.notes.push_back("--ImageReader.mask_path: the correction's masks (" + camera.masks_dir +
+                        "), 0 where a corrected pixel has no source: COLMAP extracts no feature "
+                        "there");
+  }
   out.files.push_back({"colmap_args.txt", args + "\n", "feature_extractor's options"});
   out.notes.push_back("cx, cy + 0.5 px: COLMAP puts the top-left pixel's centre at (0.5, 0.5)");
   out.notes.push_back(

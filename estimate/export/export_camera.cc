@@ -141,7 +141,10 @@ ExportCamera ReadExportSource(const std::string& path) {
                               "a folder without camera.json: give a rig dataset, a correction's "
                               "output, a validation report or an analyze --photos --json result"));
     }
-    return FromCameraJson(camera_json);
+    ExportCamera camera = FromCameraJson(camera_json);
+    if (fs::is_directory(fs::path(path) / "masks"))
+      camera.masks_dir = fs::absolute(fs::path(path) / "masks").lexically_normal().string();
+    return camera;
   }
   const std::string text = ReadFileToString(path);
   nlohmann::json json;

@@ -53,6 +53,9 @@ struct ExportCamera {
   // (import.json's "source claim") that the report could not test, exported as stated.
   std::vector<std::string> notes;
   std::vector<ExportPhoto> photos;  // an `analyze --photos` result's, in its order
+  // A correction's per-image masks (its output folder's masks/: IMAGE.png, 0 where a pixel has no
+  // source, COLMAP's mask_path naming), as the source folder gives them; "" when none.
+  std::string masks_dir;
 };
 
 // Reads path by its content: a JSON file with "format": "validation/1" (a report, whose

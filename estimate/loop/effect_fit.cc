@@ -1282,4 +1282,25 @@ std::vector<Effect> EffectsOf(const LoopResult& loop) {
   return effects;
 }
 
+void WithholdUncalibratedStderr(FitModel model, LoopResult* loop) {
+  for (IdentifiedEffect& e : loop->effects) {
+    const EffectSpec& spec = Spec(e.effect);
+    const std::vector<FitModel>& fails = spec.stderr_fails_in;
+    if (spec.parameter_count == 0 || std::find(fails.begin(), fails.end(), model) == fails.end())
+      continue;
+    const int n = spec.parameter_count;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    // Everything a standard error could be drawn from (correct draws its uncertainty from the
+    // covariance), not only the value's.
+    e.covariance = Eigen::MatrixXd::Constant(n, n, nan);
+    e.stderr_value = EffectStderr(e.effect, loop->model, e.covariance);
+    for (Eigen::VectorXd* v :
+         {&e.parameter_stderr_model, &e.parameter_stderr_sandwich, &e.parameter_stderr_jackknife}) {
+      v->setConstant(nan);
+    }
+    e.stderr_withheld = std::string("the ") + FitModelName(model) + " model's standard error of " +
+                        spec.name + " does not hold: docs/validation.md, Every effect, every model";
+  }
+}
+
 }  // namespace shutterlab

@@ -61,7 +61,7 @@ struct IdentifiedEffect {
   // clusters.
   CovarianceKind stderr_from = CovarianceKind::kModel;
   // Why stderr_value is not reported (NaN: null in JSON), "" when it is: a model whose standard
-  // error for the effect does not hold (EffectSpec::stderr_holds_with_pair_translation).
+  // error for the effect does not hold (EffectSpec::stderr_fails_in).
   std::string stderr_withheld;
 };
 
@@ -117,6 +117,11 @@ struct LoopResult {
   // For a person: each round's candidates with their fitted residual and criterion.
   std::vector<std::string> log;
 };
+
+// The standard errors of `loop`, fitted as `model`, that do not hold (EffectSpec::
+// stderr_fails_in) withheld: NaN (the covariance and every parameter's too), and
+// IdentifiedEffect::stderr_withheld says why. Run once the halves and claims have used them.
+void WithholdUncalibratedStderr(FitModel model, LoopResult* loop);
 
 // Predicted displacement at each point of `frame` under `model`, with the logged gyro trace: d(p) =
 // p_ref - p (docs/FORMATS.md "The model"), or for a video pair the rotation-only match q - p; NaN

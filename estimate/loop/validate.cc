@@ -392,6 +392,7 @@ ValidationResult ValidateDataset(const std::string& dataset_dir,
                    PooledNoisePx(result.frames), options.loop);
   FillFrameResiduals(frame_points, result.loop, nullptr, result.screen, options.keep_residuals,
                      &result.frames);
+  WithholdUncalibratedStderr(FitModel::kStill, &result.loop);
   result.loop_s = SecondsSince(start);
   return result;
 }

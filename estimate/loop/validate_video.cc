@@ -748,25 +748,6 @@ void ScreenVideo(const RigDataset& dataset, const TrueModel& declared,
 
 }  // namespace
 
-void WithholdUncalibratedStderr(LoopResult* translation) {
-  for (IdentifiedEffect& e : translation->effects) {
-    const EffectSpec& spec = Spec(e.effect);
-    if (spec.stderr_holds_with_pair_translation || spec.parameter_count == 0) continue;
-    const int n = spec.parameter_count;
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    // Everything a standard error could be drawn from (correct draws its uncertainty from the
-    // covariance), not only the value's.
-    e.covariance = Eigen::MatrixXd::Constant(n, n, nan);
-    e.stderr_value = EffectStderr(e.effect, translation->model, e.covariance);
-    for (Eigen::VectorXd* v :
-         {&e.parameter_stderr_model, &e.parameter_stderr_sandwich, &e.parameter_stderr_jackknife}) {
-      v->setConstant(nan);
-    }
-    e.stderr_withheld = "the pair-translation model's standard error of " + spec.name +
-                        " does not hold: docs/validation.md, Every effect, every model";
-  }
-}
-
 std::vector<Effect> VideoCandidates() {
   std::vector<Effect> effects;
   for (const EffectSpec& spec : AllEffects()) {
@@ -842,7 +823,8 @@ void ValidateVideoDataset(const RigDataset& dataset, const ValidateOptions& opti
     // The source's claims, when the dataset came from `shutterlab import`.
     result->claims = CheckClaims(claims, claim_inputs);
   }
-  WithholdUncalibratedStderr(&result->translation_loop);
+  WithholdUncalibratedStderr(FitModel::kPairTranslation, &result->translation_loop);
+  WithholdUncalibratedStderr(FitModel::kRotationOnly, &result->loop);
   result->loop_s = SecondsSince(start);
 }
 

@@ -27,9 +27,4 @@ void ValidateVideoDataset(const RigDataset& dataset, const ValidateOptions& opti
 // tell from translation are fitted rotation-only (EffectSpec::identifiable_with_pair_translation).
 std::vector<Effect> VideoCandidates();
 
-// The pair-translation loop's standard errors that do not hold (EffectSpec::
-// stderr_holds_with_pair_translation) withheld: NaN, and IdentifiedEffect::stderr_withheld says
-// why. Run once the halves and claims have used them.
-void WithholdUncalibratedStderr(LoopResult* translation);
-
 }  // namespace shutterlab

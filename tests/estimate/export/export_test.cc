@@ -570,7 +570,15 @@ TEST(ExportSource, ReadsAReportACameraJsonAFolderAndPhotos) {
     const ExportCamera from_json = ReadExportSource(path);
     EXPECT_EQ(from_json.truth.rig.camera.cy, 470.8) << path;
     EXPECT_EQ(from_json.truth.rig.shutter.readout_s, 0.0271) << path;
+    EXPECT_TRUE(from_json.masks_dir.empty()) << path;
   }
+  // A correction's output folder: its masks go to COLMAP's feature extractor.
+  std::filesystem::create_directories(dir / "dataset/masks");
+  const ExportCamera corrected = ReadExportSource(dir / "dataset");
+  EXPECT_EQ(corrected.masks_dir, std::filesystem::absolute(dir / "dataset/masks").string());
+  EXPECT_NE(FileNamed(ColmapExport(corrected, {}), "colmap_args.txt")
+                .text.find("--ImageReader.mask_path " + corrected.masks_dir),
+            std::string::npos);
 
   const nlohmann::json photos = {
       {"source", "DIR"},

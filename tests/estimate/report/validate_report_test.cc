@@ -247,9 +247,9 @@ TEST(ValidateVerdict, EverySentenceHasItsConditionAndATestThatMakesItFalse) {
   }
 }
 
-// The pair-translation model's standard errors that the coverage study found do not hold
-// (clock_rate, lens_distortion) are withheld in the JSON, the table and the verdict, said why; the
-// others are kept.
+// The standard errors that the coverage study found do not hold, per model (here the
+// pair-translation model's clock_rate) are withheld in the JSON, the table and the verdict, said
+// why; the others, and the same effect's in a model where it holds, are kept.
 TEST(ValidateReport, StandardErrorsThatDoNotHoldAreWithheld) {
   ValidationResult result = VerdictBase();
   result.video = true;
@@ -262,7 +262,13 @@ TEST(ValidateReport, StandardErrorsThatDoNotHoldAreWithheld) {
   rate.covariance = Eigen::MatrixXd::Identity(2, 2);
   result.translation_loop = result.loop;
   result.translation_loop.effects = {TimeOffset(0.004), rate};
-  WithholdUncalibratedStderr(&result.translation_loop);
+  // In a model where its standard error holds (the rotation-only clock rate) it is kept.
+  LoopResult rotation_only;
+  rotation_only.effects = {rate};
+  WithholdUncalibratedStderr(FitModel::kRotationOnly, &rotation_only);
+  EXPECT_TRUE(rotation_only.effects[0].stderr_withheld.empty());
+  EXPECT_EQ(std::get<double>(rotation_only.effects[0].stderr_value), 3.0);
+  WithholdUncalibratedStderr(FitModel::kPairTranslation, &result.translation_loop);
   const IdentifiedEffect& offset = result.translation_loop.effects[0];
   const IdentifiedEffect& withheld = result.translation_loop.effects[1];
   EXPECT_TRUE(offset.stderr_withheld.empty());
