@@ -193,9 +193,10 @@ PhotoFlightOptions PhotoFlightOptionsFromFlags(const AnalyzeFlags& flags, PhotoS
 
 namespace {
 
-// --photos and the options only it reads.
+// --photos and the options only it reads (each refused without it: silently ignored, a given
+// value would look used).
 void AddPhotoFlags(CLI::App* command, AnalyzeFlags* flags) {
-  command->add_option(
+  CLI::Option* photos = command->add_option(
       "--photos", flags->photos_dir,
       "a folder of photos (or one photo): per-photo distortion from their metadata; "
       "without LOG the translation part from the recorded flight speed, with LOG "
@@ -203,18 +204,30 @@ void AddPhotoFlags(CLI::App* command, AnalyzeFlags* flags) {
       "the capture times through the log's GPS time)");
   AddQuantityOption(command, "--speed", &flags->speed_m_s, "m/s", "m/s",
                     "--photos: the ground speed of every photo, over their metadata's (for "
-                    "photos that do not record it)");
+                    "photos that do not record it)")
+      ->needs(photos);
   AddQuantityOption(command, "--ground-elevation", &flags->ground_elevation_m, "m", "m",
                     "--photos: the ground's elevation (the take-off point's) in the photos' "
                     "absolute altitude's datum: a photo with no height above take-off is then "
                     "flown at its absolute (or GPS) altitude minus this")
-      ->default_str("");
-  command->add_flag("--recursive", flags->recursive,
-                    "--photos: read the folder's subfolders too (a card's DCIM/100MEDIA, ...)");
-  command->add_option(
-      "--photo-utc-offset", flags->photo_utc_offset,
-      "the photos' camera clock zone, e.g. +08:00 (else EXIF OffsetTimeOriginal, the "
-      "offset fitted to the log's events, or the one zone that fits the log)");
+      ->default_str("")
+      ->needs(photos);
+  command
+      ->add_flag("--recursive", flags->recursive,
+                 "--photos: read the folder's subfolders too (a card's DCIM/100MEDIA, ...)")
+      ->needs(photos);
+  command
+      ->add_option("--photo-utc-offset", flags->photo_utc_offset,
+                   "the photos' camera clock zone, e.g. +08:00 (else EXIF OffsetTimeOriginal, the "
+                   "offset fitted to the log's events, or the one zone that fits the log)")
+      ->needs(photos);
+  command
+      ->add_option("--export", flags->export_formats,
+                   "with --photos and --out: also the photos' camera for these tools, each in "
+                   "DIR/export_FORMAT/ (colmap, odm, kalibr, gyroflow, metashape, pix4d, vins; as "
+                   "shutterlab export)")
+      ->delimiter(',')
+      ->needs(photos);
 }
 
 }  // namespace
@@ -277,12 +290,6 @@ std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
   command->add_option("--out", flags->out_dir,
                       "write DIR/images.csv, DIR/exclude.txt and DIR/report.html (with --photos: "
                       "DIR/photos.csv, exclude.txt, image_list.txt, colmap_image_list.txt)");
-  command
-      ->add_option("--export", flags->export_formats,
-                   "with --photos and --out: also the photos' camera for these tools, each in "
-                   "DIR/export_FORMAT/ (colmap, odm, kalibr, gyroflow, metashape, pix4d, vins; as "
-                   "shutterlab export)")
-      ->delimiter(',');
   command
       ->add_option("--scene", flags->scene_path,
                    "nadir image for the report's worst-image pictures (with --out)")

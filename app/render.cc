@@ -54,13 +54,16 @@ const CommandRegistration kRenderRegistration(50, [](CLI::App& app) {
                 "a video dataset: consecutive rolling-shutter frames of one flight, no reference "
                 "images; the truth of each frame is its match in the previous one");
   auto stabiliser = std::make_shared<std::string>("off");
-  cmd->add_option("--stabiliser", *stabiliser,
-                  "with --video, a stabiliser re-renders the clip: whole (all axes smoothed), roll "
-                  "(horizon levelling: only the roll about the optical axis smoothed), roll-lock "
-                  "(the roll held at the first frame's), off")
-      ->check(CLI::IsMember({"off", "whole", "roll", "roll-lock"}));
+  CLI::Option* stabiliser_option =
+      cmd->add_option(
+             "--stabiliser", *stabiliser,
+             "with --video, a stabiliser re-renders the clip: whole (all axes smoothed), roll "
+             "(horizon levelling: only the roll about the optical axis smoothed), roll-lock "
+             "(the roll held at the first frame's), off")
+          ->check(CLI::IsMember({"off", "whole", "roll", "roll-lock"}));
   AddQuantityOption(cmd, "--stabiliser-window", &options->stabiliser.window_s, "s", "s",
-                    "the stabiliser's smoothing (the sigma of its Gaussian over time)");
+                    "the stabiliser's smoothing (the sigma of its Gaussian over time)")
+      ->needs(stabiliser_option);
   return std::function<void()>([options, interpolation, stabiliser] {
     options->stabiliser.mode = *ParseStabiliserMode(*stabiliser);
     options->interpolation =

@@ -107,6 +107,27 @@ TEST(UnitsCli, AStabiliserNeedsAVideo) {
   EXPECT_FALSE(std::filesystem::exists(dir / "out"));
 }
 
+// An option read only beside another is refused without it, in one line naming both, not silently
+// ignored (a given value would look used).
+TEST(UnitsCli, AnOptionWithoutTheOneItBelongsToIsRefused) {
+  test::TempDir dir;
+  const std::string gyro = dir / "gyro.csv";
+  test::WriteStillThenTurningGyroCsv(gyro);
+  const std::string render = "render --scene " + gyro + " --camera " + gyro + " --gyro " + gyro +
+                             " --frames " + gyro + " --out " + (dir / "out") + " --video";
+  const std::pair<std::string, std::string> cases[] = {
+      {render + " --stabiliser-window 1s", "--stabiliser"},
+      {"analyze " + gyro + " --speed 5m/s", "--photos"},
+      {"analyze " + gyro + " --ground-elevation 12m", "--photos"},
+      {"analyze " + gyro + " --photo-utc-offset +08:00", "--photos"},
+      {"analyze " + gyro + " --recursive", "--photos"},
+      {"analyze " + gyro + " --out " + (dir / "out") + " --export odm", "--photos"}};
+  for (const auto& [args, needed] : cases) {
+    ExpectOneLineRefusal(RunShutterlab(args), needed, args);
+    EXPECT_FALSE(std::filesystem::exists(dir / "out")) << args;
+  }
+}
+
 TEST(UnitsCli, QuantitiesWithUnitsAreAccepted) {
   test::TempDir dir;
   const std::string gyro = dir / "gyro.csv";
