@@ -2,6 +2,7 @@
 
 #include "sim/check.h"
 #include "sim/logs/flight_log_io.h"
+#include "sim/logs/gyro_io.h"
 #include "sim/logs/log_format.h"
 #include "sim/units.h"
 

@@ -88,15 +88,6 @@ Eigen::Vector3d WeightsOfA(const Eigen::Vector3d& var_a, const Eigen::Vector3d& 
   return weight_a;
 }
 
-// The rotation R minimising sum |da - R db|^2 from h = sum db da^T (Kabsch, the determinant
-// forced to +1).
-Eigen::Matrix3d KabschRotation(const Eigen::Matrix3d& h) {
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
-  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
-  return svd.matrixV() * d * svd.matrixU().transpose();
-}
-
 // The fit's signal-to-residual measure: the second-largest variance of a's rates (cov_a / n) over
 // the per-axis residual variance.
 double MountingSignalRatio(const Eigen::Matrix3d& cov_a, double n, double residual_var) {
@@ -126,6 +117,13 @@ Eigen::Matrix3d FitMounting(const Pairs& pairs, double* ratio, double* residual_
 }
 
 }  // namespace
+
+Eigen::Matrix3d KabschRotation(const Eigen::Matrix3d& h) {
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  return svd.matrixV() * d * svd.matrixU().transpose();
+}
 
 SensorPair FuseSensorPair(const GyroTrace& a, const GyroTrace& b,
                           const SensorPairOptions& options) {

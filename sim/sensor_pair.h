@@ -58,6 +58,10 @@ struct SensorPair {
   double residual_rms_rad_s = 0.0;
 };
 
+// The rotation R minimising sum |da - R db|^2 over pairs of centred rates, from h = sum db da^T
+// (Kabsch; the determinant forced to +1).
+Eigen::Matrix3d KabschRotation(const Eigen::Matrix3d& h);
+
 // Throws std::invalid_argument when fewer than 10 samples pair up.
 SensorPair FuseSensorPair(const GyroTrace& a, const GyroTrace& b, const SensorPairOptions& options);
 
