@@ -9,6 +9,10 @@
 
 namespace shutterlab {
 
+// The names of the three axes, of a gyro and of a camera alike, as every table and JSON spells
+// them.
+inline constexpr const char* kAxisNames[3] = {"x", "y", "z"};
+
 struct GyroSample {
   int64_t t_ns;                 // sensor (gyro) clock, nanoseconds; non-decreasing within a trace
   Eigen::Vector3d omega_rad_s;  // angular rate about the sensor's own axes, rad/s

@@ -1,6 +1,7 @@
 #include "sim/trace_audit.h"
 
 #include "sim/check.h"
+#include "sim/gyro_trace.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
 
@@ -10,7 +11,6 @@
 namespace shutterlab {
 namespace {
 
-constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 // The trace is cut into blocks of this length, each with its median sample interval: the local
 // rate, against which a gap is judged (a log that changes rate is not full of gaps) and rate
 // changes are found. A block of fewer than kMinBlockIntervals intervals says little about the

@@ -2,6 +2,7 @@
 
 #include "estimate/loop/effect_model.h"
 #include "sim/check.h"
+#include "sim/gyro_trace.h"
 #include "sim/integrate.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
@@ -534,14 +535,14 @@ GyroFollowCheck CheckImageFollowsGyro(const TrueModel& declared, const GyroTrace
       return determined ? FormatNumber("%.2f", v) + FormatNumber(" +- %.2f", se)
                         : std::string("not determined");
     };
-    axes += std::string(a ? ", " : "; per camera axis ") + kCameraAxisNames[a] + " " +
+    axes += std::string(a ? ", " : "; per camera axis ") + kAxisNames[a] + " " +
             value(f.determined, f.row_norm, f.row_norm_stderr) + " (fast part " +
             value(f.fast_determined, f.fast_row_norm, f.fast_row_norm_stderr) + ")";
   }
   if (check.OnSomeAxes()) {
     std::string names;
     for (int a : check.AxesNotFollowing()) {
-      names += std::string(names.empty() ? "" : " and ") + kCameraAxisNames[a];
+      names += std::string(names.empty() ? "" : " and ") + kAxisNames[a];
     }
     check.verdict =
         "the image does not follow the gyro about camera axis " + names +

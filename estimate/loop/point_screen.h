@@ -132,7 +132,6 @@ struct FrameConsensus {
 };
 
 inline constexpr int kSlowPairs = 5;
-inline constexpr const char* kCameraAxisNames[3] = {"x", "y", "z"};
 inline constexpr double kMaxFollowStderr = 0.1;
 inline constexpr double kFollowSigmas = 3.0;
 

@@ -5,6 +5,7 @@
 #include "sim/bias.h"
 #include "sim/check.h"
 #include "sim/civil_time.h"
+#include "sim/gyro_trace.h"
 #include "sim/integrate.h"
 #include "sim/interval_histogram.h"
 #include "sim/logs/flight_log_io.h"
@@ -28,8 +29,6 @@
 
 namespace shutterlab {
 namespace {
-
-constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 
 // A sample's rate in camera axes less a bias (camera axes).
 GyroSample InCameraAxes(const GyroSample& s, const Eigen::Matrix3d& cam_from_gyro,

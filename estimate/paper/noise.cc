@@ -2,6 +2,7 @@
 
 #include "estimate/paper/window_stats.h"
 #include "sim/check.h"
+#include "sim/gyro_trace.h"
 #include "sim/integrate.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
@@ -12,11 +13,7 @@
 #include <vector>
 
 namespace shutterlab {
-namespace {
-
-constexpr const char* kAxisNames[3] = {"x", "y", "z"};
-
-}  // namespace
+namespace {}  // namespace
 
 void NoiseOptions::Check() const {
   SHUTTERLAB_CHECK(window_samples >= 2)

@@ -1,11 +1,9 @@
 #include "estimate/report/analysis_json.h"
 
+#include "sim/gyro_trace.h"
+
 namespace shutterlab {
-namespace {
-
-constexpr const char* kAxisNames[3] = {"x", "y", "z"};
-
-}  // namespace
+namespace {}  // namespace
 
 nlohmann::ordered_json NoiseToJson(const NoiseResult& result) {
   nlohmann::ordered_json j;

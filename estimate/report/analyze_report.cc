@@ -6,6 +6,7 @@
 #include "render/pictures.h"
 #include "render/rs_warp.h"
 #include "sim/check.h"
+#include "sim/gyro_trace.h"
 #include "sim/units.h"
 
 #include <opencv2/imgproc.hpp>
@@ -21,7 +22,6 @@ namespace shutterlab {
 namespace {
 
 constexpr const char* kAxisLabels[3] = {"x (right)", "y (down)", "z (optical axis)"};
-constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 // One shade per limit, the strictest (smallest) limit lightest: stricter flags cover looser ones.
 constexpr const char* kShades[] = {"rgba(255, 170, 0, 0.22)", "rgba(230, 60, 30, 0.30)",
                                    "rgba(150, 0, 90, 0.35)"};

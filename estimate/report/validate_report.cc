@@ -11,6 +11,7 @@
 #include "render/pictures.h"
 #include "render/rs_warp.h"
 #include "sim/check.h"
+#include "sim/gyro_trace.h"
 #include "sim/text_file.h"
 
 #include <opencv2/imgproc.hpp>
@@ -27,7 +28,6 @@ namespace shutterlab {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 
 }  // namespace
 

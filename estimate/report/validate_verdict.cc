@@ -2,6 +2,7 @@
 
 #include "estimate/report/loop_json.h"
 #include "model/effect_io.h"
+#include "sim/gyro_trace.h"
 #include "sim/text_file.h"
 
 #include <nlohmann/json.hpp>
@@ -169,12 +170,12 @@ void AddAxesNotFollowing(const ValidationResult& result, ValidationVerdict* v) {
     if (!f.follows) {
       const bool whole = f.determined && f.row_norm < kMinGain;
       roll = roll || a == 2;
-      off.push_back(kCameraAxisNames[a]);
+      off.push_back(kAxisNames[a]);
       off_gains.push_back(FormatNumber("%.2fx", whole ? f.row_norm : f.fast_row_norm) +
                           (whole ? "" : " in the fast part of the motion") + " about " +
-                          kCameraAxisNames[a]);
+                          kAxisNames[a]);
     } else {
-      on.push_back(kCameraAxisNames[a]);
+      on.push_back(kAxisNames[a]);
       on_gains.push_back(f.determined ? FormatNumber("%.2fx", f.row_norm) : "not determined");
     }
   }
