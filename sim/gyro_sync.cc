@@ -197,7 +197,7 @@ struct FineProblem {
 
 // One Gauss-Newton step for the first p of x = (offset, rate), with the bias difference
 // eliminated (the residuals and the Jacobian's columns less their means); the derivatives are
-// central differences over (h_offset, h_rate).
+// central differences over (h_offset_s, h_rate).
 struct FineStep {
   Eigen::VectorXd step;
   Eigen::MatrixXd normal;
@@ -205,14 +205,14 @@ struct FineStep {
   size_t n = 0;
 };
 FineStep GaussNewtonStep(const FineProblem& problem, const Eigen::Vector2d& x, int p,
-                         double h_offset, double h_rate) {
+                         double h_offset_s, double h_rate) {
   // The residuals at x and at a step each way of each unknown, on the samples that have a
   // partner at all of them.
   std::vector<char> used, ok;
   const std::vector<Eigen::Vector3d> r0 = problem.Residuals(x[0], x[1], &used);
   std::vector<std::vector<Eigen::Vector3d>> d(p);
   for (int k = 0; k < p; ++k) {
-    const double h = k == 0 ? h_offset : h_rate;
+    const double h = k == 0 ? h_offset_s : h_rate;
     Eigen::Vector2d up = x, down = x;
     up[k] += h, down[k] -= h;
     const std::vector<Eigen::Vector3d> ru = problem.Residuals(up[0], up[1], &ok);
@@ -295,8 +295,8 @@ GyroSync SyncGyros(const GyroTrace& a, const GyroTrace& b, const GyroSyncOptions
   // noise gives a biased step and a standard error far too small.
   const int p = fit_rate ? 2 : 1;
   Eigen::Vector2d x(lag.offset_s, 0.0);
-  const double h_offset = std::max(kDerivativeStepS, 2 * sync.faster_interval_s);
-  const double h_rate = h_offset / std::max(0.5 * sync.overlap_s, 1.0);
+  const double h_offset_s = std::max(kDerivativeStepS, 2 * sync.faster_interval_s);
+  const double h_rate = h_offset_s / std::max(0.5 * sync.overlap_s, 1.0);
   FineStep last;
   for (int iteration = 0; iteration < kIterations; ++iteration) {
     // The mounting again at the offset found (the coarse offset's pairs bias it), once the offset
@@ -306,7 +306,7 @@ GyroSync SyncGyros(const GyroTrace& a, const GyroTrace& b, const GyroSyncOptions
       sync.a_from_b = problem.r_ab;
       sync.mounting_angle_deg = Eigen::AngleAxisd(problem.r_ab).angle() * 180.0 / M_PI;
     }
-    last = GaussNewtonStep(problem, x, p, h_offset, h_rate);
+    last = GaussNewtonStep(problem, x, p, h_offset_s, h_rate);
     x.head(p) += last.step;
   }
   const Eigen::MatrixXd covariance = last.sigma2 * last.normal.inverse();

@@ -38,6 +38,22 @@ void RequireCarried(bool carried, const std::string& what, const ExportOptions& 
   notes->push_back(what + "; the rest written (--force)");
 }
 
+void RequireGyroRelation(const ExportCamera& camera, const std::string& tool,
+                         const std::string& offset_name, const ExportOptions& options,
+                         std::vector<std::string>* notes) {
+  RequireCarried(camera.gyro_known,
+                 "the source relates no gyro to the camera (photos alone): " + tool +
+                     " needs the mounting and the " + offset_name +
+                     ", from a validation report (--force: identity and 0)",
+                 options, notes);
+  RequireDetermined(camera, "time_offset", options, notes);
+  RequireDetermined(camera, "gyro_to_camera", options, notes);
+  RequireCarried(camera.truth.clock_rate_ppm == 0.0,
+                 tool + "'s " + offset_name + " is constant; the gyro clock runs " +
+                     ExportNumber(camera.truth.clock_rate_ppm) + " ppm fast",
+                 options, notes);
+}
+
 void NoteGyroCalibrationNotCarried(const ExportCamera& camera, const std::string& file,
                                    std::vector<std::string>* notes) {
   if (camera.truth.gyro_scale == Eigen::Vector3d::Ones() &&

@@ -43,6 +43,14 @@ void RequireDetermined(const ExportCamera& camera, const std::string& name,
 void RequireCarried(bool carried, const std::string& what, const ExportOptions& options,
                     std::vector<std::string>* notes);
 
+// What a camera-IMU file needs of the gyro (Kalibr's chain, VINS's config): a source that relates
+// a gyro to the camera, a time offset and a mounting the data determined, and no clock rate (the
+// file's offset, `offset_name`, is constant); each refused as RequireCarried and RequireDetermined
+// do. tool names the file's reader in the messages.
+void RequireGyroRelation(const ExportCamera& camera, const std::string& tool,
+                         const std::string& offset_name, const ExportOptions& options,
+                         std::vector<std::string>* notes);
+
 // Notes that the gyro's fitted scale and bias, when not the identity, are not part of `file`.
 void NoteGyroCalibrationNotCarried(const ExportCamera& camera, const std::string& file,
                                    std::vector<std::string>* notes);

@@ -37,17 +37,7 @@ ExportOutput KalibrExport(const ExportCamera& camera, const ExportOptions& optio
     distortion_model = "equidistant";
     coeffs = {k[0], k[1], k[2], k[3]};
   }
-  RequireCarried(camera.gyro_known,
-                 "the source relates no gyro to the camera (photos alone): Kalibr's chain needs "
-                 "the mounting and the time shift, from a validation report (--force: identity "
-                 "and 0)",
-                 options, &out.notes);
-  RequireDetermined(camera, "time_offset", options, &out.notes);
-  RequireDetermined(camera, "gyro_to_camera", options, &out.notes);
-  RequireCarried(camera.truth.clock_rate_ppm == 0.0,
-                 "Kalibr's time shift is constant; the gyro clock runs " +
-                     ExportNumber(camera.truth.clock_rate_ppm) + " ppm fast",
-                 options, &out.notes);
+  RequireGyroRelation(camera, "Kalibr", "time shift", options, &out.notes);
   std::string yaml = "# shutterlab export from " + camera.source + "\ncam0:\n";
   yaml += "  camera_model: pinhole\n";
   yaml += "  intrinsics: " + YamlList({c.fx, c.fy, c.cx, c.cy}) + "\n";

@@ -49,16 +49,7 @@ std::string CameraYaml(const ExportCamera& camera, const ExportOptions& options,
 ExportOutput VinsExport(const ExportCamera& camera, const ExportOptions& options) {
   const RigModel& rig = camera.truth.rig;
   ExportOutput out;
-  RequireCarried(camera.gyro_known,
-                 "the source relates no gyro to the camera (photos alone): VINS needs the "
-                 "mounting and the time offset, from a validation report (--force: identity and 0)",
-                 options, &out.notes);
-  RequireDetermined(camera, "time_offset", options, &out.notes);
-  RequireDetermined(camera, "gyro_to_camera", options, &out.notes);
-  RequireCarried(camera.truth.clock_rate_ppm == 0.0,
-                 "VINS's td is constant; the gyro clock runs " +
-                     ExportNumber(camera.truth.clock_rate_ppm) + " ppm fast",
-                 options, &out.notes);
+  RequireGyroRelation(camera, "VINS", "td", options, &out.notes);
   const bool rolling = camera.readout_known && rig.shutter.readout_s > 0.0;
   if (rolling) {
     RequireDetermined(camera, "readout_time", options, &out.notes);
