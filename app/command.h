@@ -15,6 +15,9 @@
 
 namespace shutterlab::app {
 
+// What --version prints, and what a batch item records as the tool that made it.
+inline constexpr char kShutterlabVersion[] = "shutterlab 0.1";
+
 // Adds the subcommand to app and returns the function to run once parsing succeeded.
 using CommandSetup = std::function<std::function<void()>(CLI::App& app)>;
 

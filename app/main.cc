@@ -165,7 +165,7 @@ int main(int argc, char** argv) {
   using namespace shutterlab::app;
   CLI::App app{"shutterlab: how much did the rolling shutter distort these images?"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "shutterlab 0.1");
+  app.set_version_flag("--version", kShutterlabVersion);
   auto& registry = Registry();
   std::sort(
       registry.begin(), registry.end(),

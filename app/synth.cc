@@ -4,7 +4,9 @@
 #include "sim/synth/synth.h"
 
 #include "app/command.h"
+#include "app/trace_options.h"
 #include "sim/check.h"
+#include "sim/logs/flight_log_io.h"
 #include "sim/units.h"
 
 #include <cstdio>

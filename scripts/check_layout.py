@@ -45,6 +45,8 @@ THIRD_PARTY = [
     ("OpenImageIO/", "OpenImageIO::OpenImageIO"),
     ("exiv2/", "exiv2lib"),
     ("gpiod.h", "PkgConfig::GPIOD"),
+    ("toml++/", "PkgConfig::TOMLPP"),
+    ("xxhash.h", "PkgConfig::XXHASH"),
     ("jpeglib.h", "JPEG::JPEG"),
     ("CLI/", "CLI11::CLI11"),
     ("benchmark/", "benchmark::benchmark"),

@@ -22,6 +22,7 @@ enum class Dimension {
   kRatio,
   kRateNoiseDensity,  // white rate noise (angle random walk)
   kRateRandomWalk,
+  kDataSize,  // memory and files, in bytes
 };
 
 const char* DimensionNoun(Dimension dimension) {
@@ -44,6 +45,8 @@ const char* DimensionNoun(Dimension dimension) {
       return "rate noise density";
     case Dimension::kRateRandomWalk:
       return "rate random walk";
+    case Dimension::kDataSize:
+      return "data size";
   }
   return "quantity";
 }
@@ -94,6 +97,11 @@ constexpr Unit kUnits[] = {
     {"rad/s^2/rtHz", Dimension::kRateRandomWalk, 1, 1, true},
     {"deg/s^2/rtHz", Dimension::kRateRandomWalk, kPi, 180, true},
     {"rad/s^2/sqrt(Hz)", Dimension::kRateRandomWalk, 1, 1, false},
+    // Binary prefixes, as free(1) and Slurm's --mem (whose M and G are MiB and GiB) count memory.
+    {"B", Dimension::kDataSize, 1, 1, true},
+    {"KiB", Dimension::kDataSize, 1024, 1, true},
+    {"MiB", Dimension::kDataSize, 1024.0 * 1024, 1, true},
+    {"GiB", Dimension::kDataSize, 1024.0 * 1024 * 1024, 1, true},
 };
 
 const Unit* FindUnit(std::string_view name) {
