@@ -165,9 +165,11 @@ TEST_F(BatchCli, FleetOfFiftyWithDamagedItemsThenARerunMakesOnlyTheFailed) {
   EXPECT_EQ(log0["inputs"][0]["path"], *fleet_ / "logs/f0.ulg");
   EXPECT_EQ(log0["inputs"][0]["xxh3"].get<std::string>().size(), 16u);
   EXPECT_GT(log0["jobs"][0]["peak_memory_mib"].get<double>(), 1.0);
-  EXPECT_LT(log0["jobs"][0]["peak_memory_mib"].get<double>(),
-            log0["estimated_memory_mib"].get<double>())
-      << "the estimate the memory cap and Slurm's --mem use is above what the item took";
+  if (!test::kAsan) {  // the sanitizers' shadow memory doubles a command's peak (525 MiB)
+    EXPECT_LT(log0["jobs"][0]["peak_memory_mib"].get<double>(),
+              log0["estimated_memory_mib"].get<double>())
+        << "the estimate the memory cap and Slurm's --mem use is above what the item took";
+  }
   EXPECT_TRUE(nlohmann::json::parse(ReadFileToString(out + "/items/log0/analyze/analyze.json"))
                   .contains("verdict"));
   EXPECT_EQ(Record(out, "garbage")["status"], "failed");
