@@ -6,6 +6,7 @@
 #include "estimate/batch/batch_run.h"
 #include "estimate/batch/fleet.h"
 #include "estimate/batch/manifest.h"
+#include "estimate/batch/manifest_scan.h"
 #include "estimate/batch/slurm_script.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
@@ -26,7 +27,7 @@ namespace shutterlab::app {
 namespace {
 
 struct BatchCommand {
-  std::string manifest_path, out_dir;
+  std::string manifest_path, out_dir, scan_dir;
   int parallel = 0;
   double memory_cap_bytes = 0;
   bool force = false, json = false;
@@ -149,7 +150,24 @@ void WriteSummary(const BatchManifest& manifest, const BatchCommand& command) {
   SayWritten(command.out_dir, written);
 }
 
+// --scan: the manifest on stdout, what was found on stderr.
+void Scan(const BatchCommand& command) {
+  const ManifestScan scan = ScanForManifest(command.scan_dir);
+  std::cout << scan.toml;
+  std::cerr << "scan: " << scan.logs << " logs, " << scan.photo_folders << " photo folders ("
+            << scan.paired << " with their log), " << scan.clips << " clips, " << scan.datasets
+            << " datasets; save it in " << command.scan_dir
+            << ", review it, then: shutterlab batch MANIFEST --out OUT\n";
+}
+
 int Run(const BatchCommand& command) {
+  if (!command.scan_dir.empty()) {
+    Scan(command);
+    return 0;
+  }
+  if (command.manifest_path.empty() || command.out_dir.empty())
+    throw std::invalid_argument(
+        "batch needs MANIFEST and --out DIR (or --scan DIR to write a manifest)");
   const BatchManifest manifest = ReadBatchManifest(command.manifest_path);
   if (command.slurm) {
     RunOnSlurm(manifest, command);
@@ -214,13 +232,17 @@ const CommandRegistration kBatchRegistration(97, [](CLI::App& app) {
       "run a manifest's flights, clips and datasets (docs/FORMATS.md \"Batch manifest\") through "
       "their jobs, resumably, and write one page for the fleet (DIR/fleet.html, fleet.csv)");
   auto command = std::make_shared<BatchCommand>();
-  cmd->add_option("MANIFEST", command->manifest_path, "the manifest (TOML)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--out", command->out_dir,
-                  "the batch's folder: items/ID per item, fleet.html, fleet.csv (a rerun makes "
-                  "only what is new, changed or failed)")
-      ->required();
+  auto* manifest = cmd->add_option("MANIFEST", command->manifest_path, "the manifest (TOML)")
+                       ->check(CLI::ExistingFile);
+  auto* out = cmd->add_option("--out", command->out_dir,
+                              "the batch's folder: items/ID per item, fleet.html, fleet.csv (a "
+                              "rerun makes only what is new, changed or failed)");
+  cmd->add_option("--scan", command->scan_dir,
+                  "print a manifest of what this folder tree holds (logs, photo folders with "
+                  "their log, clips, datasets, found by content) to review before running it")
+      ->check(CLI::ExistingDirectory)
+      ->excludes(manifest)
+      ->excludes(out);
   cmd->add_option("--parallel", command->parallel, "items at once (0: the cores)")
       ->check(CLI::NonNegativeNumber);
   AddQuantityOption(cmd, "--memory-cap", &command->memory_cap_bytes, "B", "GiB",

@@ -215,6 +215,21 @@ TEST_F(BatchCli, FleetOfFiftyWithDamagedItemsThenARerunMakesOnlyTheFailed) {
             std::string::npos)
       << changed.err;
   fs::remove(*fleet_ / "photos/p3/DJI_0009.JPG");
+
+  // --scan finds the fleet by content (the garbage log is no log; the batch's own output is
+  // skipped), and its manifest reads as it is.
+  const auto scan = RunShutterlab("batch --scan " + fleet_->path().string());
+  ASSERT_EQ(scan.exit_code, 0) << scan.output;
+  EXPECT_NE(scan.err.find("scan: " + std::to_string(kLogs + 1) + " logs, " +
+                          std::to_string(kPhotoFolders + 1) + " photo folders (0 with their log)"),
+            std::string::npos)
+      << scan.err;
+  const std::string scanned = test::WriteText(*fleet_, "scanned.toml", scan.out);
+  const auto planned = RunShutterlab("batch " + scanned + " --out " + (*fleet_ / "scanned_out") +
+                                     " --slurm --dry-run");
+  EXPECT_NE(planned.out.find("slurm: " + std::to_string(kLogs + kPhotoFolders + 2) + " tasks"),
+            std::string::npos)
+      << planned.output;
 }
 
 // SIGKILL midway: the items in flight are lost, none half-made, no command outlives the batch,
