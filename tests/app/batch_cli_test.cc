@@ -1,6 +1,8 @@
-// `shutterlab batch`: a synthetic fleet of 50 items (synth logs with camera triggers, DJI photo
+// `shutterlab batch`: a synthetic fleet of 51 items (synth logs with camera triggers, DJI photo
 // folders, damaged items among them) run, run again, and killed with SIGKILL midway and resumed.
 
+#include "sim/civil_time.h"
+#include "sim/logs/ulog_write.h"
 #include "sim/synth/synth.h"
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
@@ -26,11 +28,11 @@ namespace {
 namespace fs = std::filesystem;
 using test::RunShutterlab;
 
-// 50 items: 30 logs, 16 photo folders and 4 damaged (fewer under the sanitizers, where every
-// command runs 3 to 10 times slower). The kill and Slurm tests run the first kKillLogs logs and the
-// two items that fail.
+// 51 items: 30 logs, 16 photo folders, a photo folder with its log, and 4 damaged (fewer under the
+// sanitizers, where every command runs 3 to 10 times slower). The kill and Slurm tests run the
+// first kKillLogs logs and the two items that fail.
 constexpr int kLogs = test::kAsan ? 6 : 30, kPhotoFolders = test::kAsan ? 4 : 16;
-constexpr int kItems = kLogs + kPhotoFolders + 4;
+constexpr int kItems = kLogs + kPhotoFolders + 5;
 constexpr int kKillLogs = kLogs < 4 ? kLogs : 4, kKillItems = kKillLogs + 2;
 
 // A DJI photo flying `speed_m_s` north at 60 m.
@@ -43,6 +45,46 @@ std::string FleetPhoto(double speed_m_s) {
                         {"FlightZSpeed", "0"}},
                        false);
   return test::JpegWithMetadata(p);
+}
+
+// A photo folder with its flight's log (analyze --photos's own case,
+// tests/app/photos_cli_test.cc): 5 DJI photos at 5 m/s and 100 m, their capture times (UTC+8) 8 h
+// off the log's GPS time, on a ULog whose camera events they match.
+void MakePlacedFlight(const test::TempDir& dir) {
+  constexpr int64_t kUtcAtLogZeroNs = 1'721'091'600'000'000'000;  // 2024-07-16 01:00:00 UTC
+  std::vector<GyroSample> samples;
+  for (int i = 0; i < 40 * 200; ++i) {
+    const double t_s = i / 200.0;
+    const double wx = t_s < 5.0 ? 0.0 : 0.2 * std::sin(2.0 * M_PI * 0.7 * t_s);
+    samples.push_back({5'000'000 + i * 5'000'000LL, Eigen::Vector3d(wx, 0.0, 0.0)});
+  }
+  std::vector<CameraEvent> events;
+  for (int k = 0; k < 5; ++k) events.push_back({10'000'000'000 + k * 2'000'000'000LL, k, ""});
+  ULogWriteOptions options;
+  for (int k = 1; k < 40; ++k)
+    options.utc_fixes.push_back({k * 1'000'000'000LL, kUtcAtLogZeroNs + k * 1'000'000'000LL});
+  fs::create_directories(dir / "placed/photos");
+  WriteULog(dir / "placed/flight.ulg", GyroTrace(samples), events, options);
+  for (int k = 0; k < 5; ++k) {
+    const int64_t face_ns = kUtcAtLogZeroNs + events[k].t_ns + 8 * 3'600'000'000'000LL;
+    test::FixturePhoto p;
+    p.width = 400;
+    p.height = 300;
+    p.focal_length_35mm = 24;
+    p.date_time_original = UtcText(face_ns / 1'000'000'000 * 1'000'000'000).substr(0, 19);
+    p.date_time_original[4] = p.date_time_original[7] = ':';  // EXIF's "2024:07:16"
+    p.sub_sec_time_original = "000";
+    p.xmp = test::DjiXmp({{"RelativeAltitude", "+100.0"},
+                          {"GimbalPitchDegree", "-90.0"},
+                          {"GimbalRollDegree", "0.0"},
+                          {"GimbalYawDegree", "0.0"},
+                          {"FlightXSpeed", "5.0"},
+                          {"FlightYSpeed", "0.0"},
+                          {"FlightZSpeed", "0.0"}},
+                         false);
+    WriteFileAtomically(dir / ("placed/photos/DJI_000" + std::to_string(k + 1) + ".JPG"),
+                        test::JpegWithMetadata(p));
+  }
 }
 
 // The fleet: kLogs logs, kPhotoFolders photo folders and 4 damaged items (a log that is not one, a
@@ -79,6 +121,10 @@ std::string MakeFleet(const test::TempDir& dir) {
     manifest += "[[item]]\nid = \"photos" + std::to_string(k) +
                 "\"\ngroup = \"mini\"\nreadout = \"20ms\"\nphotos = \"" + folder + "\"\n\n";
   }
+  MakePlacedFlight(dir);
+  manifest +=
+      "[[item]]\nid = \"placed\"\nlog = \"placed/flight.ulg\"\nphotos = \"placed/photos\"\n"
+      "jobs = [\"photos\", \"correct\", \"export\"]\nexport = [\"odm\"]\n\n";
   fs::create_directories(dir / "damaged/empty");
   test::WriteText(dir, "damaged/empty/notes.txt", "no photos here");
   fs::create_directories(dir / "damaged/cut");
@@ -183,6 +229,12 @@ TEST_F(BatchCli, FleetOfFiftyWithDamagedItemsThenARerunMakesOnlyTheFailed) {
   EXPECT_NE(csv.find("\ncut,,photos,done,1,"), std::string::npos) << csv;
   EXPECT_NE(csv.find("1 photos could not be read"), std::string::npos);
   EXPECT_NE(csv.find("\nhalf,,log,done,"), std::string::npos) << csv;
+  // The photos with their log: placed on it, corrected, exported.
+  EXPECT_NE(csv.find("\nplaced,,photos + log,done,5,"), std::string::npos) << csv;
+  const nlohmann::json placed = Record(out, "placed");
+  EXPECT_EQ(placed["jobs"].size(), 3u);
+  EXPECT_TRUE(fs::exists(out + "/items/placed/correct/correct.json"));
+  EXPECT_TRUE(fs::exists(out + "/items/placed/export_odm"));
   // The last folder flies 9.5 to 9.9 m/s x 20 ms = 19-20 cm: all over 10 cm; the first 0.5-0.9
   // m/s: none.
   EXPECT_NE(
@@ -220,14 +272,14 @@ TEST_F(BatchCli, FleetOfFiftyWithDamagedItemsThenARerunMakesOnlyTheFailed) {
   // skipped), and its manifest reads as it is.
   const auto scan = RunShutterlab("batch --scan " + fleet_->path().string());
   ASSERT_EQ(scan.exit_code, 0) << scan.output;
-  EXPECT_NE(scan.err.find("scan: " + std::to_string(kLogs + 1) + " logs, " +
-                          std::to_string(kPhotoFolders + 1) + " photo folders (0 with their log)"),
+  EXPECT_NE(scan.err.find("scan: " + std::to_string(kLogs + 2) + " logs, " +
+                          std::to_string(kPhotoFolders + 2) + " photo folders (0 with their log)"),
             std::string::npos)
       << scan.err;
   const std::string scanned = test::WriteText(*fleet_, "scanned.toml", scan.out);
   const auto planned = RunShutterlab("batch " + scanned + " --out " + (*fleet_ / "scanned_out") +
                                      " --slurm --dry-run");
-  EXPECT_NE(planned.out.find("slurm: " + std::to_string(kLogs + kPhotoFolders + 2) + " tasks"),
+  EXPECT_NE(planned.out.find("slurm: " + std::to_string(kLogs + kPhotoFolders + 4) + " tasks"),
             std::string::npos)
       << planned.output;
 }
