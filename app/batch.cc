@@ -106,8 +106,8 @@ std::string RunSlurmTool(const std::string& command) {
   return output;
 }
 
-// Writes OUT/slurm/batch.sbatch and merge.sbatch and, unless --dry-run, submits them: the array,
-// then the merge after it.
+// Writes OUT/slurm/batch.sbatch (one array per memory class: batch_768M.sbatch, ...) and
+// merge.sbatch and, unless --dry-run, submits them: the arrays, then the merge after them all.
 void RunOnSlurm(const BatchManifest& manifest, const BatchCommand& command) {
   namespace fs = std::filesystem;
   SlurmBatchOptions options;
@@ -119,24 +119,35 @@ void RunOnSlurm(const BatchManifest& manifest, const BatchCommand& command) {
   const SlurmBatchScripts scripts = MakeSlurmBatchScripts(manifest, options);
   const std::string folder = options.out_dir + "/slurm";
   fs::create_directories(folder);
-  const std::string array_path = folder + "/batch.sbatch", merge_path = folder + "/merge.sbatch";
-  WriteFileAtomically(array_path, scripts.array_script);
+  std::vector<std::string> written;
+  for (const SlurmArray& array : scripts.arrays) {
+    written.push_back(folder + "/" + array.name);
+    WriteFileAtomically(written.back(), array.script);
+    std::cout << "slurm: " << array.name << ": " << array.items.size() << " tasks, each "
+              << MiB(array.memory_bytes) << " and " << FormatNumber("%.0f", array.seconds / 60)
+              << " min at most\n";
+  }
+  const std::string merge_path = folder + "/merge.sbatch";
   WriteFileAtomically(merge_path, scripts.merge_script);
-  std::cout << "slurm: " << scripts.tasks << " tasks, each " << MiB(scripts.memory_per_task_bytes)
-            << " and " << FormatNumber("%.0f", scripts.seconds_per_task / 60) << " min at most\n";
-  SayWritten(folder, {array_path, merge_path});
+  written.push_back(merge_path);
+  SayWritten(folder, written);
   if (command.dry_run) {
-    std::cout << "not submitted (--dry-run): sbatch --parsable " << array_path
-              << ", then sbatch --dependency=afterany:ARRAY_JOB_ID " << merge_path << "\n";
+    std::cout << "not submitted (--dry-run): sbatch --parsable each array, then sbatch "
+                 "--dependency=afterany:ARRAY_JOB_IDS "
+              << merge_path << "\n";
     return;
   }
-  const std::string array_job = RunSlurmTool("sbatch --parsable '" + array_path + "'");
-  const std::string array_id = array_job.substr(0, array_job.find(';'));
+  std::string array_ids;
+  for (size_t i = 0; i + 1 < written.size(); ++i) {
+    const std::string job = RunSlurmTool("sbatch --parsable '" + written[i] + "'");
+    array_ids += ":" + job.substr(0, job.find(';'));
+  }
   const std::string merge_job =
-      RunSlurmTool("sbatch --parsable --dependency=afterany:" + array_id + " '" + merge_path + "'");
-  std::cout << "submitted: array job " << array_id << " (" << scripts.tasks << " tasks), merge job "
+      RunSlurmTool("sbatch --parsable --dependency=afterany" + array_ids + " '" + merge_path + "'");
+  std::cout << "submitted: array job" << (scripts.arrays.size() > 1 ? "s " : " ")
+            << array_ids.substr(1) << " (" << scripts.tasks << " tasks), merge job "
             << merge_job.substr(0, merge_job.find(';')) << " writes " << options.out_dir
-            << "/fleet.html after it\n";
+            << "/fleet.html after " << (scripts.arrays.size() > 1 ? "them" : "it") << "\n";
 }
 
 // The fleet's page from the items' folders as they are (the merge job's, or any time).

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
 
 namespace shutterlab {
 namespace {
@@ -45,38 +46,60 @@ double SlurmTaskSeconds(const BatchItem& item) {
   return std::ceil(3 * (120 + 60 * bytes / 200e6) / 60) * 60;
 }
 
+std::string SlurmArrayIndices(const std::vector<size_t>& indices) {
+  std::string list;
+  for (size_t i = 0; i < indices.size();) {
+    size_t j = i;
+    while (j + 1 < indices.size() && indices[j + 1] == indices[j] + 1) ++j;
+    list += (list.empty() ? "" : ",") + std::to_string(indices[i]);
+    if (j > i) list += "-" + std::to_string(indices[j]);
+    i = j + 1;
+  }
+  return list;
+}
+
 SlurmBatchScripts MakeSlurmBatchScripts(const BatchManifest& manifest,
                                         const SlurmBatchOptions& options) {
+  constexpr double kClassBytes = 256.0 * 1024 * 1024;
+  std::map<long, SlurmArray> classes;  // by memory class
+  for (size_t i = 0; i < manifest.items.size(); ++i) {
+    const BatchItem& item = manifest.items[i];
+    const long memory_class =
+        static_cast<long>(std::ceil(EstimateBatchItemMemoryBytes(item) / kClassBytes));
+    SlurmArray& array = classes[memory_class];
+    array.items.push_back(i);
+    array.memory_bytes = static_cast<double>(memory_class) * kClassBytes;
+    array.seconds = std::max(array.seconds, SlurmTaskSeconds(item));
+  }
   SlurmBatchScripts scripts;
   scripts.tasks = manifest.items.size();
-  for (const BatchItem& item : manifest.items) {
-    scripts.memory_per_task_bytes =
-        std::max(scripts.memory_per_task_bytes, EstimateBatchItemMemoryBytes(item));
-    scripts.seconds_per_task = std::max(scripts.seconds_per_task, SlurmTaskSeconds(item));
-  }
-  if (options.time_per_task_s > 0) scripts.seconds_per_task = options.time_per_task_s;
   const std::string logs = options.out_dir + "/slurm";
   const std::string batch = ShellWord(options.executable) + " batch " +
                             ShellWord(options.manifest_path) + " --out " +
                             ShellWord(options.out_dir);
-  const long memory_mib = static_cast<long>(std::ceil(scripts.memory_per_task_bytes / 1048576.0));
-  scripts.array_script =
-      Header("shutterlab-batch", options, logs + "/item_%a.out") + "#SBATCH --array=0-" +
-      std::to_string(scripts.tasks - 1) + "\n" + "#SBATCH --ntasks=1\n#SBATCH --cpus-per-task=1\n" +
-      "#SBATCH --mem=" + std::to_string(memory_mib) + "M\n" +
-      "#SBATCH --time=" + SlurmTime(scripts.seconds_per_task) + "\n" +
-      "#SBATCH --requeue\n"
-      "# One task per item of " +
-      options.manifest_path +
-      ": the item's folder is made whole or\n"
-      "# not at all, so a task killed or requeued makes it again (shutterlab batch --item-index).\n"
-      "exec " +
-      batch + " --item-index \"$SLURM_ARRAY_TASK_ID\"\n";
+  for (auto& [memory_class, array] : classes) {
+    if (options.time_per_task_s > 0) array.seconds = options.time_per_task_s;
+    const std::string memory = std::to_string(memory_class * 256) + "M";
+    array.name = classes.size() == 1 ? "batch.sbatch" : "batch_" + memory + ".sbatch";
+    array.script = Header("shutterlab-batch", options, logs + "/item_%a.out") +
+                   "#SBATCH --array=" + SlurmArrayIndices(array.items) + "\n" +
+                   "#SBATCH --ntasks=1\n#SBATCH --cpus-per-task=1\n" + "#SBATCH --mem=" + memory +
+                   "\n" + "#SBATCH --time=" + SlurmTime(array.seconds) + "\n" +
+                   "#SBATCH --requeue\n"
+                   "# One task per item of " +
+                   options.manifest_path +
+                   " (its place in it):\n"
+                   "# the item's folder is made whole or not at all, so a task killed or requeued\n"
+                   "# makes it again (shutterlab batch --item-index).\n"
+                   "exec " +
+                   batch + " --item-index \"$SLURM_ARRAY_TASK_ID\"\n";
+    scripts.arrays.push_back(std::move(array));
+  }
   scripts.merge_script =
       Header("shutterlab-batch-merge", options, logs + "/merge.out") +
       "#SBATCH --ntasks=1\n#SBATCH --cpus-per-task=1\n#SBATCH --mem=1024M\n"
       "#SBATCH --time=0-00:30:00\n"
-      "# After every task of the array (afterany): the fleet's page from the items' folders.\n"
+      "# After every task of the arrays (afterany): the fleet's page from the items' folders.\n"
       "exec " +
       batch + " --summary-only\n";
   return scripts;

@@ -9,6 +9,7 @@
 #include "estimate/batch/manifest.h"
 
 #include <string>
+#include <vector>
 
 namespace shutterlab {
 
@@ -20,18 +21,30 @@ struct SlurmBatchOptions {
   double time_per_task_s = 0;  // 0: from the largest item (SlurmTaskSeconds)
 };
 
+// One job array: the items of one memory class (their estimates rounded up to 256 MiB), each
+// task asking for that class's memory and the longest of its items' times.
+struct SlurmArray {
+  std::string name;           // the script's file name: batch.sbatch, or batch_768M.sbatch when the
+                              // manifest's items fall in several classes
+  std::string script;         // sbatch --array=INDICES
+  std::vector<size_t> items;  // manifest indices, ascending
+  double memory_bytes = 0;
+  double seconds = 0;
+};
+
 struct SlurmBatchScripts {
-  std::string array_script;  // sbatch --array
-  std::string merge_script;  // sbatch --dependency=afterany:ARRAY
-  double memory_per_task_bytes = 0;
-  double seconds_per_task = 0;
+  std::vector<SlurmArray> arrays;  // by memory, ascending
+  std::string merge_script;        // sbatch --dependency=afterany:EVERY_ARRAY
   size_t tasks = 0;
 };
 
-// The two scripts. Every task asks for the largest item's memory estimate
-// (EstimateBatchItemMemoryBytes) and time: one array holds one request.
+// The scripts: one array per memory class (EstimateBatchItemMemoryBytes), so that a large
+// item's request does not hold back a small one's, and the merge.
 SlurmBatchScripts MakeSlurmBatchScripts(const BatchManifest& manifest,
                                         const SlurmBatchOptions& options);
+
+// Slurm's --array list of indices: "0-3,7,9-11".
+std::string SlurmArrayIndices(const std::vector<size_t>& indices);
 
 // A task's time limit from its item's inputs: 2 min, and 1 min per 200 MB read, times 3 for a
 // slow node; a whole number of minutes.

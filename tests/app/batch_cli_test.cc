@@ -279,7 +279,8 @@ TEST_F(BatchCli, FleetOfFiftyWithDamagedItemsThenARerunMakesOnlyTheFailed) {
   const std::string scanned = test::WriteText(*fleet_, "scanned.toml", scan.out);
   const auto planned = RunShutterlab("batch " + scanned + " --out " + (*fleet_ / "scanned_out") +
                                      " --slurm --dry-run");
-  EXPECT_NE(planned.out.find("slurm: " + std::to_string(kLogs + kPhotoFolders + 4) + " tasks"),
+  EXPECT_NE(planned.out.find("slurm: batch.sbatch: " + std::to_string(kLogs + kPhotoFolders + 4) +
+                             " tasks, each 256 MiB"),
             std::string::npos)
       << planned.output;
 }
