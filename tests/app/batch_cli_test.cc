@@ -1,11 +1,10 @@
 // `shutterlab batch`: a synthetic fleet of 51 items (synth logs with camera triggers, DJI photo
 // folders, damaged items among them) run, run again, and killed with SIGKILL midway and resumed.
 
-#include "sim/civil_time.h"
-#include "sim/logs/ulog_write.h"
 #include "sim/synth/synth.h"
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
+#include "tests/app/placed_flight.h"
 #include "tests/io/photo_fixtures.h"
 #include "tests/test_util.h"
 
@@ -47,46 +46,6 @@ std::string FleetPhoto(double speed_m_s) {
   return test::JpegWithMetadata(p);
 }
 
-// A photo folder with its flight's log (analyze --photos's own case,
-// tests/app/photos_cli_test.cc): 5 DJI photos at 5 m/s and 100 m, their capture times (UTC+8) 8 h
-// off the log's GPS time, on a ULog whose camera events they match.
-void MakePlacedFlight(const test::TempDir& dir) {
-  constexpr int64_t kUtcAtLogZeroNs = 1'721'091'600'000'000'000;  // 2024-07-16 01:00:00 UTC
-  std::vector<GyroSample> samples;
-  for (int i = 0; i < 40 * 200; ++i) {
-    const double t_s = i / 200.0;
-    const double wx = t_s < 5.0 ? 0.0 : 0.2 * std::sin(2.0 * M_PI * 0.7 * t_s);
-    samples.push_back({5'000'000 + i * 5'000'000LL, Eigen::Vector3d(wx, 0.0, 0.0)});
-  }
-  std::vector<CameraEvent> events;
-  for (int k = 0; k < 5; ++k) events.push_back({10'000'000'000 + k * 2'000'000'000LL, k, ""});
-  ULogWriteOptions options;
-  for (int k = 1; k < 40; ++k)
-    options.utc_fixes.push_back({k * 1'000'000'000LL, kUtcAtLogZeroNs + k * 1'000'000'000LL});
-  fs::create_directories(dir / "placed/photos");
-  WriteULog(dir / "placed/flight.ulg", GyroTrace(samples), events, options);
-  for (int k = 0; k < 5; ++k) {
-    const int64_t face_ns = kUtcAtLogZeroNs + events[k].t_ns + 8 * 3'600'000'000'000LL;
-    test::FixturePhoto p;
-    p.width = 400;
-    p.height = 300;
-    p.focal_length_35mm = 24;
-    p.date_time_original = UtcText(face_ns / 1'000'000'000 * 1'000'000'000).substr(0, 19);
-    p.date_time_original[4] = p.date_time_original[7] = ':';  // EXIF's "2024:07:16"
-    p.sub_sec_time_original = "000";
-    p.xmp = test::DjiXmp({{"RelativeAltitude", "+100.0"},
-                          {"GimbalPitchDegree", "-90.0"},
-                          {"GimbalRollDegree", "0.0"},
-                          {"GimbalYawDegree", "0.0"},
-                          {"FlightXSpeed", "5.0"},
-                          {"FlightYSpeed", "0.0"},
-                          {"FlightZSpeed", "0.0"}},
-                         false);
-    WriteFileAtomically(dir / ("placed/photos/DJI_000" + std::to_string(k + 1) + ".JPG"),
-                        test::JpegWithMetadata(p));
-  }
-}
-
 // The fleet: kLogs logs, kPhotoFolders photo folders and 4 damaged items (a log that is not one, a
 // folder with no photos, a folder with a cut photo among whole ones, a ULog cut in half); returns
 // the manifest's path.
@@ -121,7 +80,8 @@ std::string MakeFleet(const test::TempDir& dir) {
     manifest += "[[item]]\nid = \"photos" + std::to_string(k) +
                 "\"\ngroup = \"mini\"\nreadout = \"20ms\"\nphotos = \"" + folder + "\"\n\n";
   }
-  MakePlacedFlight(dir);
+  const int on_time_ms[5] = {0, 0, 0, 0, 0};
+  test::WritePlacedFlight(dir / "placed", on_time_ms);
   manifest +=
       "[[item]]\nid = \"placed\"\nlog = \"placed/flight.ulg\"\nphotos = \"placed/photos\"\n"
       "jobs = [\"photos\", \"correct\", \"export\"]\nexport = [\"odm\"]\n\n";

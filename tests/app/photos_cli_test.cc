@@ -5,6 +5,7 @@
 #include "sim/logs/ulog_write.h"
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
+#include "tests/app/placed_flight.h"
 #include "tests/io/photo_fixtures.h"
 #include "tests/test_util.h"
 
@@ -198,45 +199,8 @@ TEST(PhotosCli, ExportsThePhotosCameraBesideTheListsOrWritesNothing) {
 
 TEST(PhotosCli, PlacesPhotosOnASyntheticLogAndReportsTheResidual) {
   test::TempDir dir;
-  constexpr int64_t kUtcAtLogZeroNs = 1'721'091'600'000'000'000;  // 2024-07-16 01:00:00 UTC
-  std::vector<GyroSample> samples;
-  for (int i = 0; i < 40 * 200; ++i) {
-    const double t_s = i / 200.0;
-    const double wx = t_s < 5.0 ? 0.0 : 0.2 * std::sin(2.0 * M_PI * 0.7 * t_s);
-    samples.push_back({5'000'000 + i * 5'000'000LL, Eigen::Vector3d(wx, 0.0, 0.0)});
-  }
-  std::vector<CameraEvent> events;
-  for (int k = 0; k < 5; ++k) events.push_back({10'000'000'000 + k * 2'000'000'000LL, k, ""});
-  ULogWriteOptions options;
-  for (int k = 1; k < 40; ++k)
-    options.utc_fixes.push_back({k * 1'000'000'000LL, kUtcAtLogZeroNs + k * 1'000'000'000LL});
-  WriteULog(dir / "flight.ulg", GyroTrace(samples), events, options);
-
-  std::filesystem::create_directories(dir / "photos");
   const int error_ms[5] = {4, -3, 0, 2, -1};  // median 0
-  for (int k = 0; k < 5; ++k) {
-    const int64_t face_ns =
-        kUtcAtLogZeroNs + events[k].t_ns + 8 * 3'600'000'000'000LL + error_ms[k] * 1'000'000LL;
-    test::FixturePhoto p;
-    p.width = 400;
-    p.height = 300;
-    p.focal_length_35mm = 24;
-    const int64_t s = face_ns / 1'000'000'000;
-    const int ms = static_cast<int>(face_ns / 1'000'000 % 1000);
-    p.date_time_original = UtcText(s * 1'000'000'000).substr(0, 19);  // "2024-07-16 09:00:10"
-    p.date_time_original[4] = p.date_time_original[7] = ':';          // EXIF's "2024:07:16"
-    p.sub_sec_time_original = FormatNumber("%03.0f", ms);
-    p.xmp = test::DjiXmp({{"RelativeAltitude", "+100.0"},
-                          {"GimbalPitchDegree", "-90.0"},
-                          {"GimbalRollDegree", "0.0"},
-                          {"GimbalYawDegree", "0.0"},
-                          {"FlightXSpeed", "5.0"},
-                          {"FlightYSpeed", "0.0"},
-                          {"FlightZSpeed", "0.0"}},
-                         false);
-    WriteFileAtomically(dir / ("photos/DJI_000" + std::to_string(k + 1) + ".JPG"),
-                        test::JpegWithMetadata(p));
-  }
+  const std::vector<CameraEvent> events = test::WritePlacedFlight(dir.path().string(), error_ms);
   const auto r = RunShutterlab("analyze --photos " + (dir / "photos") + " " + (dir / "flight.ulg") +
                                " --json --out " + (dir / "out"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
