@@ -1,6 +1,6 @@
 #include "io/image_check.h"
 
-#include <OpenImageIO/imageio.h>
+#include "io/codecs.h"
 
 #include <csetjmp>
 #include <cstdio>
@@ -100,17 +100,16 @@ bool StartsLikeJpeg(std::FILE* file) {
 }
 
 std::string OiioProblem(const std::string& path) {
-  auto input = OIIO::ImageInput::open(path);
-  if (!input) return OIIO::geterror();
-  const OIIO::ImageSpec& spec = input->spec();
-  // A frame too large to hold is not checked (its metadata said so much already).
-  if (static_cast<double>(spec.width) * spec.height * spec.nchannels > 2e9) return "";
-  std::vector<unsigned char> pixels(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
-  const bool read =
-      input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8, pixels.data());
-  const std::string error = input->geterror();
+  codecs::ImageHeader header;
+  const std::string error = Codecs().read_header(path, &header);
   if (!error.empty()) return error;
-  return read ? "" : "the image data cannot be decoded";
+  // A frame too large to hold is not checked (its metadata said so much already).
+  if (static_cast<double>(header.width) * header.height * header.channels > 2e9) return "";
+  cv::Mat pixels;
+  std::string complaint;
+  const std::string failure =
+      Codecs().read_image(path, codecs::SampleType::kUint8, &pixels, &header, &complaint);
+  return failure.empty() ? complaint : failure;
 }
 
 }  // namespace

@@ -1,9 +1,8 @@
 #include "io/image_io.h"
 
+#include "io/codecs.h"
 #include "io/exiv2_setup.h"
 #include "sim/check.h"
-
-#include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <array>
@@ -20,71 +19,57 @@
 namespace shutterlab {
 namespace {
 
-// OIIO keeps a per-thread error string; read it whole (clearing it) after every failed call.
-std::string OiioError(const std::string& fallback) {
-  std::string message = OIIO::geterror();
-  while (!message.empty() && (message.back() == '\n' || message.back() == ' ')) message.pop_back();
-  for (char& c : message) {
-    if (c == '\n') c = ' ';
-  }
-  return message.empty() ? fallback : message;
-}
+using codecs::SampleType;
 
-int CvDepth(OIIO::TypeDesc::BASETYPE base) {
-  switch (base) {
-    case OIIO::TypeDesc::UINT8:
-      return CV_8U;
-    case OIIO::TypeDesc::HALF:
-    case OIIO::TypeDesc::FLOAT:
-    case OIIO::TypeDesc::DOUBLE:
-      return CV_32F;
-    default:
-      return CV_16U;
-  }
-}
-
-OIIO::TypeDesc OiioType(int depth) {
+SampleType SampleTypeOfDepth(int depth) {
   switch (depth) {
     case CV_8U:
-      return OIIO::TypeDesc::UINT8;
+      return SampleType::kUint8;
     case CV_16U:
-      return OIIO::TypeDesc::UINT16;
+      return SampleType::kUint16;
     case CV_32F:
-      return OIIO::TypeDesc::FLOAT;
+      return SampleType::kFloat;
     default:
-      return OIIO::TypeDesc::UNKNOWN;
+      return SampleType::kOther;
   }
 }
 
-// Reads all channels of the first subimage as `depth`.
-cv::Mat ReadRaw(const std::string& path, int forced_depth, int* file_channels,
-                std::vector<std::string>* channel_names) {
-  OIIO::ImageSpec config;
-  config.attribute("oiio:reorient", 0);  // no EXIF auto-rotation: rows stay sensor rows
-  auto input = OIIO::ImageInput::open(path, &config);
-  if (!input) throw IoError(IoMessage(path, 0, "cannot read image: " + OiioError("unknown error")));
-  const OIIO::ImageSpec& spec = input->spec();
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth != 1) {
+// The depth an image is read as: 8 and 16 bits as they are, other integers as 16 bits, floats
+// (half, single, double) as single.
+SampleType ReadAs(SampleType in_file) {
+  switch (in_file) {
+    case SampleType::kUint8:
+      return SampleType::kUint8;
+    case SampleType::kHalf:
+    case SampleType::kFloat:
+    case SampleType::kDouble:
+      return SampleType::kFloat;
+    default:
+      return SampleType::kUint16;
+  }
+}
+
+// Reads all channels of the first subimage, as `as` (kOther: ReadAs the file's type).
+cv::Mat ReadRaw(const std::string& path, SampleType as, codecs::ImageHeader* header) {
+  std::string error = Codecs().read_header(path, header);
+  if (!error.empty()) throw IoError(IoMessage(path, 0, "cannot read image: " + error));
+  if (header->width <= 0 || header->height <= 0 || header->channels <= 0 || header->depth != 1) {
     throw IoError(IoMessage(path, 0, "not a 2-D image"));
   }
-  const int depth = forced_depth >= 0
-                        ? forced_depth
-                        : CvDepth(static_cast<OIIO::TypeDesc::BASETYPE>(spec.format.basetype));
-  cv::Mat image(spec.height, spec.width, CV_MAKETYPE(depth, spec.nchannels));
-  if (!input->read_image(0, 0, 0, spec.nchannels, OiioType(depth), image.data)) {
-    throw IoError(IoMessage(path, 0, "cannot decode image: " + OiioError(input->geterror())));
-  }
-  *file_channels = spec.nchannels;
-  if (channel_names) *channel_names = spec.channelnames;
-  input->close();
+  cv::Mat image;
+  std::string complaint;
+  error = Codecs().read_image(path, as == SampleType::kOther ? ReadAs(header->sample_type) : as,
+                              &image, header, &complaint);
+  if (!error.empty()) throw IoError(IoMessage(path, 0, "cannot decode image: " + error));
   return image;
 }
 
 }  // namespace
 
 cv::Mat ReadImage(const std::string& path) {
-  int channels = 0;
-  cv::Mat raw = ReadRaw(path, -1, &channels, nullptr);
+  codecs::ImageHeader header;
+  cv::Mat raw = ReadRaw(path, SampleType::kOther, &header);
+  const int channels = header.channels;
   if (channels == 1 || channels == 3) return raw;
   if (channels == 4) {
     cv::Mat rgb;
@@ -98,42 +83,35 @@ cv::Mat ReadImage(const std::string& path) {
 }
 
 cv::Mat ReadFloatImage(const std::string& path, std::vector<std::string>* channel_names) {
-  int channels = 0;
-  return ReadRaw(path, CV_32F, &channels, channel_names);
+  codecs::ImageHeader header;
+  cv::Mat image = ReadRaw(path, SampleType::kFloat, &header);
+  if (channel_names) *channel_names = header.channel_names;
+  return image;
 }
 
 namespace {
 
-// Writes image (in-memory type from its depth) as `file_type` to a temporary file beside path (the
-// extension kept: OpenImageIO chooses the format by it), lets configure set the spec and finish add
-// to the written file, then renames it to path. Nothing is left behind on failure.
-void WriteThroughTemp(const std::string& path, const cv::Mat& image, OIIO::TypeDesc file_type,
-                      const std::function<void(OIIO::ImageSpec*)>& configure,
+// Writes image as settings say to a temporary file beside path (the extension kept: OpenImageIO
+// chooses the format by it), lets finish add to the written file, then renames it to path.
+// Nothing is left behind on failure.
+void WriteThroughTemp(const std::string& path, const cv::Mat& image,
+                      const codecs::ImageWriteSettings& settings,
                       const std::function<void(const std::string&)>& finish) {
   SHUTTERLAB_CHECK(!image.empty()) << "cannot write an empty image to " << path;
-  const OIIO::TypeDesc type = OiioType(image.depth());
-  SHUTTERLAB_CHECK(type != OIIO::TypeDesc::UNKNOWN) << "unsupported pixel depth writing " << path;
+  SHUTTERLAB_CHECK(SampleTypeOfDepth(image.depth()) != SampleType::kOther)
+      << "unsupported pixel depth writing " << path;
   const std::filesystem::path target(path);
   const std::filesystem::path temp = target.parent_path() / (".tmp" + std::to_string(::getpid()) +
                                                              "_" + target.filename().string());
-  OIIO::ImageSpec spec(image.cols, image.rows, image.channels(), file_type);
-  if (configure) configure(&spec);
   const auto remove_temp = [&temp] {
     std::error_code ec;
     std::filesystem::remove(temp, ec);
   };
-  {
-    auto output = OIIO::ImageOutput::create(temp.string());
-    if (!output)
-      throw IoError(IoMessage(path, 0, "cannot write image: " + OiioError("unknown format")));
-    cv::Mat contiguous = image.isContinuous() ? image : image.clone();
-    const bool ok = output->open(temp.string(), spec) &&
-                    output->write_image(type, contiguous.data) && output->close();
-    if (!ok) {
-      const std::string message = OiioError(output->geterror());
-      remove_temp();
-      throw IoError(IoMessage(path, 0, "cannot write image: " + message));
-    }
+  const cv::Mat contiguous = image.isContinuous() ? image : image.clone();
+  const std::string error = Codecs().write_image(temp.string(), contiguous, settings);
+  if (!error.empty()) {
+    remove_temp();
+    throw IoError(IoMessage(path, 0, "cannot write image: " + error));
   }
   try {
     if (finish) finish(temp.string());
@@ -163,17 +141,14 @@ void WriteImage(const std::string& path, const cv::Mat& image,
                    static_cast<int>(channel_names.size()) == image.channels())
       << "channel names do not match the channel count writing " << path;
   const std::string extension = std::filesystem::path(path).extension().string();
-  WriteThroughTemp(path, image, OiioType(image.depth()),
-                   [&](OIIO::ImageSpec* spec) {
-                     if (!channel_names.empty()) spec->channelnames = channel_names;
-                     if (image.channels() == 4 && channel_names.empty()) spec->alpha_channel = 3;
-                     // zlib level 1: photographic textures barely compress further, and level 6
-                     // costs ~5x.
-                     if (extension == ".png" || extension == ".PNG")
-                       spec->attribute("png:compressionLevel", 1);
-                     if (IsJpegPath(path)) spec->attribute("Compression", "jpeg:95");
-                   },
-                   {});
+  codecs::ImageWriteSettings settings;
+  settings.file_type = SampleTypeOfDepth(image.depth());
+  settings.channel_names = channel_names;
+  if (image.channels() == 4 && channel_names.empty()) settings.alpha_channel = 3;
+  // zlib level 1: photographic textures barely compress further, and level 6 costs ~5x.
+  if (extension == ".png" || extension == ".PNG") settings.png_compression_level = 1;
+  if (IsJpegPath(path)) settings.compression = "jpeg:95";
+  WriteThroughTemp(path, image, settings, {});
 }
 
 namespace {
@@ -252,26 +227,23 @@ int NearestIjgQuality(const std::array<int, 64>& table) {
 }  // namespace
 
 ImageFileInfo ReadImageFileInfo(const std::string& path) {
-  OIIO::ImageSpec config;
-  config.attribute("oiio:reorient", 0);
-  auto input = OIIO::ImageInput::open(path, &config);
-  if (!input) throw IoError(IoMessage(path, 0, "cannot read image: " + OiioError("unknown error")));
-  const OIIO::ImageSpec& spec = input->spec();
+  codecs::ImageHeader header;
+  const std::string error = Codecs().read_header(path, &header);
+  if (!error.empty()) throw IoError(IoMessage(path, 0, "cannot read image: " + error));
   ImageFileInfo info;
-  info.format = input->format_name();
-  info.width = spec.width;
-  info.height = spec.height;
-  info.channels = spec.nchannels;
-  const OIIO::TypeDesc::BASETYPE base = static_cast<OIIO::TypeDesc::BASETYPE>(spec.format.basetype);
-  info.floating = base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::FLOAT ||
-                  base == OIIO::TypeDesc::DOUBLE;
-  info.bits_per_channel = static_cast<int>(spec.format.size()) * 8;
+  info.format = header.format;
+  info.width = header.width;
+  info.height = header.height;
+  info.channels = header.channels;
+  const SampleType type = header.sample_type;
+  info.floating =
+      type == SampleType::kHalf || type == SampleType::kFloat || type == SampleType::kDouble;
+  info.bits_per_channel = header.bytes_per_sample * 8;
   if (!info.floating && info.bits_per_channel > 16) info.bits_per_channel = 16;  // as ReadImage
-  if (base == OIIO::TypeDesc::DOUBLE) info.bits_per_channel = 32;
-  info.compression = spec.get_string_attribute("Compression");
-  input->close();
+  if (type == SampleType::kDouble) info.bits_per_channel = 32;
+  info.compression = header.compression;
   if (info.format == "jpeg") {
-    info.jpeg_subsampling = spec.get_string_attribute("jpeg:subsampling");
+    info.jpeg_subsampling = header.jpeg_subsampling;
     if (const auto table = JpegLuminanceTable(path)) info.jpeg_quality = NearestIjgQuality(*table);
   }
   return info;
@@ -336,24 +308,20 @@ std::vector<std::string> WriteImageLike(
     const std::string& path, const cv::Mat& image, const ImageLike& like,
     const std::vector<std::pair<std::string, std::string>>& xmp) {
   const ImageFileInfo& info = like.info;
-  OIIO::TypeDesc file_type = OiioType(image.depth());
-  if (info.floating && info.bits_per_channel == 16 && image.depth() == CV_32F) {
-    file_type = OIIO::TypeDesc::HALF;
+  codecs::ImageWriteSettings settings;
+  settings.file_type = SampleTypeOfDepth(image.depth());
+  if (info.floating && info.bits_per_channel == 16 && image.depth() == CV_32F)
+    settings.file_type = SampleType::kHalf;
+  if (IsJpegPath(path)) {
+    settings.compression = "jpeg:" + std::to_string(info.jpeg_quality.value_or(95));
+    settings.jpeg_subsampling = info.jpeg_subsampling;
+  } else if (!info.compression.empty() && info.format != "jpeg") {
+    settings.compression = info.compression;
   }
   std::vector<std::string> notes;
-  WriteThroughTemp(
-      path, image, file_type,
-      [&](OIIO::ImageSpec* spec) {
-        if (IsJpegPath(path)) {
-          spec->attribute("Compression", "jpeg:" + std::to_string(info.jpeg_quality.value_or(95)));
-          if (!info.jpeg_subsampling.empty()) {
-            spec->attribute("jpeg:subsampling", info.jpeg_subsampling);
-          }
-        } else if (!info.compression.empty() && info.format != "jpeg") {
-          spec->attribute("Compression", info.compression);
-        }
-      },
-      [&](const std::string& temp) { notes = CopyMetadata(path, temp, like.path, xmp); });
+  WriteThroughTemp(path, image, settings, [&](const std::string& temp) {
+    notes = CopyMetadata(path, temp, like.path, xmp);
+  });
   return notes;
 }
 

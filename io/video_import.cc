@@ -1,5 +1,6 @@
 #include "io/video_import.h"
 
+#include "io/codecs.h"
 #include "io/frames_csv.h"
 #include "io/image_io.h"
 #include "io/lens_profile.h"
@@ -15,7 +16,6 @@
 
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -182,8 +182,7 @@ DecodedFrames DecodeSelectedFrames(const std::string& path, const fs::path& dir,
                                    const std::vector<double>& frame_times_s,
                                    const std::vector<int64_t>& selected,
                                    const std::function<void(size_t, size_t)>& progress) {
-  cv::VideoCapture capture(path);
-  if (!capture.isOpened()) throw IoError(IoMessage(path, -1, "OpenCV cannot open the video"));
+  VideoFrames video(path);
   DecodedFrames out;
   cv::Mat frame;
   // Frames are written in batches of kWriteBatch, in parallel.
@@ -198,7 +197,8 @@ DecodedFrames DecodeSelectedFrames(const std::string& path, const fs::path& dir,
           ? (frame_times_s.back() - frame_times_s.front()) / (frame_times_s.size() - 1)
           : 0.0;
   while (out.decoded <= selected.back() && consecutive < kMaxConsecutiveGrabFailures) {
-    if (!capture.read(frame) || frame.empty()) {
+    double reader_ms = 0;
+    if (!video.Read(&frame, &reader_ms)) {
       ++out.failures;
       ++consecutive;
       continue;
@@ -207,7 +207,7 @@ DecodedFrames DecodeSelectedFrames(const std::string& path, const fs::path& dir,
     const int64_t index = out.decoded++;
     // After a read OpenCV reports the time of the frame it returned (not for the first or last);
     // a disagreement with the sample table would mean a frame was dropped.
-    const double reader_s = capture.get(cv::CAP_PROP_POS_MSEC) * 1e-3;
+    const double reader_s = reader_ms * 1e-3;
     if (index > 0 && index + 1 < static_cast<int64_t>(frame_times_s.size()) && period_s > 0 &&
         std::abs(reader_s - frame_times_s[index]) > 0.5 * period_s)
       ++out.time_mismatches;

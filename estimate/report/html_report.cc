@@ -1,10 +1,10 @@
 #include "estimate/report/html_report.h"
 
+#include "io/codecs.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
 
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -429,9 +429,7 @@ void HtmlPage::Image(const cv::Mat& rgb8, const std::string& caption) {
   } else {
     bgr = rgb8;
   }
-  std::vector<uchar> png;
-  SHUTTERLAB_CHECK(cv::imencode(".png", bgr, png))
-      << "image '" << caption << "': PNG encoding failed";
+  const std::vector<uchar> png = EncodeImage(".png", bgr);
   // The figure as wide as its image, so a long caption wraps instead of widening it, but no wider
   // than the page: a wide picture (three residual panels side by side) shrinks to fit.
   body_ += "<figure style=\"width:" + std::to_string(rgb8.cols) +

@@ -3,6 +3,7 @@
 
 #include "io/image_check.h"
 
+#include "io/codecs.h"
 #include "io/image_io.h"
 #include "sim/text_file.h"
 #include "tests/io/photo_fixtures.h"
@@ -10,7 +11,6 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include <random>
 #include <string>
@@ -30,8 +30,7 @@ std::string NoisyPhoto() {
   // The fixture's grey scan replaced by a noisy one: the same metadata before the tables.
   cv::Mat noise(p.height, p.width, CV_8UC3);
   cv::randu(noise, 0, 255);
-  std::vector<uchar> encoded;
-  cv::imencode(".jpg", noise, encoded);
+  const std::vector<uchar> encoded = EncodeImage(".jpg", noise);
   const std::string tables = "\xff\xdb";  // DQT: where the encoder's part starts in both
   const std::string noisy(encoded.begin(), encoded.end());
   return header_only.substr(0, header_only.find(tables)) + noisy.substr(noisy.find(tables));

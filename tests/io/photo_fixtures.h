@@ -5,11 +5,11 @@
 // themselves; the image data after them (tables, frame header, a grey scan) is OpenCV's encoder's,
 // so that the photo decodes as a real one does (io/image_check.h).
 
+#include "io/codecs.h"
 #include "io/photo_metadata.h"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <cstdint>
@@ -134,8 +134,8 @@ inline std::string JpegWithMetadata(const FixturePhoto& p) {
     jpeg += Segment(0xE1, std::string("http://ns.adobe.com/xap/1.0/\0", 29) + p.xmp);
   // The encoder's own file from its first segment that is not APPn (JFIF): tables, SOF0 with the
   // size, the scan and EOI.
-  std::vector<uchar> encoded;
-  cv::imencode(".jpg", cv::Mat(p.height, p.width, CV_8UC3, cv::Scalar(90, 128, 160)), encoded);
+  const std::vector<uchar> encoded =
+      EncodeImage(".jpg", cv::Mat(p.height, p.width, CV_8UC3, cv::Scalar(90, 128, 160)));
   size_t at = 2;  // after SOI
   while (at + 4 <= encoded.size() && encoded[at] == 0xFF && encoded[at + 1] >= 0xE0 &&
          encoded[at + 1] <= 0xEF) {

@@ -9,6 +9,8 @@
 // and nothing on the twin whose camera.json is right.
 
 #include "estimate/loop/validate.h"
+#include "io/codecs.h"
+#include "io/image_io.h"
 #include "sim/text_file.h"
 #include "tests/estimate/loop/validate_fixtures.h"
 #include "tests/render/render_fixtures.h"
@@ -16,7 +18,6 @@
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
@@ -118,7 +119,8 @@ std::string WriteForeignDataset(const test::TempDir& dir, double true_offset_s) 
   namespace fs = std::filesystem;
   const fs::path root = dir.path() / "foreign";
   fs::create_directories(root / "cam0");
-  cv::Mat scene8 = cv::imread(test::GroundScenePath(2), cv::IMREAD_GRAYSCALE);
+  cv::Mat scene8 = ReadImage(test::GroundScenePath(2));
+  if (scene8.channels() == 3) cv::cvtColor(scene8, scene8, cv::COLOR_RGB2GRAY);
   cv::Mat scene;
   scene8.convertTo(scene, CV_16U, 257.0);
   const Orientation orientation;
@@ -161,8 +163,11 @@ std::string WriteForeignDataset(const test::TempDir& dir, double true_offset_s) 
       ref_time[v] = row_time[0];  // the reference: row 0's time
     const std::string ref = Format("cam0/ref_%d.tif", id);
     const std::string image = Format("cam0/rs_%d.tif", id);
-    cv::imwrite((root / ref).string(), RenderGrey16(scene, orientation, ref_time));
-    cv::imwrite((root / image).string(), RenderGrey16(scene, orientation, row_time));
+    // Written by OpenCV's own TIFF encoder, not shutterlab's writer.
+    for (const auto& [name, times] : {std::pair{ref, &ref_time}, std::pair{image, &row_time}}) {
+      const std::vector<uchar> tiff = EncodeImage(".tif", RenderGrey16(scene, orientation, *times));
+      WriteFileAtomically((root / name).string(), std::string(tiff.begin(), tiff.end()));
+    }
     frames += Format("%d,%.6f,%s,%s\n", id, t_first_row, ref.c_str(), image.c_str());
   }
   WriteFileAtomically((root / "frames.csv").string(), frames);
