@@ -6,6 +6,8 @@
 #   scripts/slurm_cluster.sh start DIR   starts it; `export SLURM_CONF=DIR/slurm.conf` then
 #                                        points sbatch, squeue and scancel at it
 #   scripts/slurm_cluster.sh stop DIR    stops it
+# The daemons' Unix sockets (slurmd's spool, munge's) live in a short folder of their own under
+# /tmp, named in DIR/sockets: a socket's path is limited to 108 bytes, and a test's folder is long.
 set -euo pipefail
 action=$1
 dir=$(realpath -m "$2")
@@ -19,6 +21,10 @@ stop() {
     [ -f "$dir/$daemon.pid" ] && kill -9 "$(cat "$dir/$daemon.pid")" 2>/dev/null || true
     rm -f "$dir/$daemon.pid"
   done
+  if [ -f "$dir/sockets" ]; then
+    rm -rf "$(cat "$dir/sockets")"
+    rm -f "$dir/sockets"
+  fi
 }
 
 if [ "$action" = stop ]; then
@@ -30,8 +36,11 @@ for tool in slurmctld slurmd munged sbatch; do
   command -v "$tool" >/dev/null || { echo "slurm_cluster: $tool is missing (apt-get install slurm-wlm munge)" >&2; exit 77; }
 done
 [ "$(id -u)" -eq 0 ] || { echo "slurm_cluster: slurmd needs root" >&2; exit 77; }
-mkdir -p "$dir/state" "$dir/spool" "$dir/log" "$dir/munge"
+mkdir -p "$dir/state" "$dir/log" "$dir/munge"
 chmod 700 "$dir/munge"
+sockets=$(mktemp -d /tmp/slurm.XXXXXX)
+echo "$sockets" > "$dir/sockets"
+mkdir -p "$sockets/spool"
 dd if=/dev/urandom of="$dir/munge/munge.key" bs=1024 count=1 status=none
 chmod 400 "$dir/munge/munge.key"
 # Ports above the usual 6817/6818, chosen from the folder's name so that two runs do not meet.
@@ -46,10 +55,10 @@ SlurmdPort=$(( base + 1 ))
 SlurmUser=root
 SlurmdUser=root
 AuthType=auth/munge
-AuthInfo=socket=$dir/munge/munge.socket
+AuthInfo=socket=$sockets/munge.socket
 CredType=cred/munge
 StateSaveLocation=$dir/state
-SlurmdSpoolDir=$dir/spool
+SlurmdSpoolDir=$sockets/spool
 SlurmctldPidFile=$dir/slurmctld.pid
 SlurmdPidFile=$dir/slurmd.pid
 SlurmctldLogFile=$dir/log/slurmctld.log
@@ -71,7 +80,7 @@ KillWait=5
 NodeName=localhost NodeAddr=127.0.0.1 CPUs=$cpus RealMemory=$memory_mib State=UNKNOWN
 PartitionName=debug Nodes=localhost Default=YES MaxTime=INFINITE State=UP
 CONF
-munged --socket="$dir/munge/munge.socket" --key-file="$dir/munge/munge.key" \
+munged --socket="$sockets/munge.socket" --key-file="$dir/munge/munge.key" \
   --pid-file="$dir/munged.pid" --log-file="$dir/log/munged.log" --seed-file="$dir/munge/seed" \
   --force
 export SLURM_CONF=$dir/slurm.conf

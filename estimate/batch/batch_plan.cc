@@ -54,6 +54,10 @@ std::vector<PlannedCommand> PlanBatchItem(const BatchItem& item) {
       case BatchJob::kImport:
         args = {"import", item.clip, "--out", "dataset"};
         AddIf(&args, "--lens-profile", item.lens_profile);
+        if (item.start_frame >= 0)
+          args.insert(args.end(), {"--start-frame", std::to_string(item.start_frame)});
+        if (item.max_frames >= 0)
+          args.insert(args.end(), {"--max-frames", std::to_string(item.max_frames)});
         plan.push_back(Command(job, "import", args));
         break;
       case BatchJob::kAnalyze:

@@ -60,7 +60,8 @@ const PathKey kPathKeys[] = {
     {"camera", &BatchItem::camera, PathKind::kFile, false},
     {"lens_profile", &BatchItem::lens_profile, PathKind::kFile, false},
 };
-const char* const kOtherKeys[] = {"id", "group", "readout", "altitude", "limit", "jobs", "export"};
+const char* const kOtherKeys[] = {"id",   "group",  "readout",     "altitude",  "limit",
+                                  "jobs", "export", "start_frame", "max_frames"};
 
 class ManifestReader {
  public:
@@ -88,6 +89,15 @@ class ManifestReader {
     std::vector<std::string> values;
     for (const toml::node& element : *array) values.push_back(String(element, key));
     return values;
+  }
+
+  // A whole number of at least `least`.
+  long Count(const toml::node& node, const std::string& key, long least) const {
+    const auto value = node.value_exact<int64_t>();
+    if (!value || *value < least)
+      Fail(node, "'" + key + "' must be a whole number of at least " + std::to_string(least) +
+                     " (no quotes)");
+    return static_cast<long>(*value);
   }
 
   double Quantity(const toml::node& node, const std::string& key, const char* unit,
@@ -149,6 +159,11 @@ class ManifestReader {
       }
       for (const double limit : item->limits_m)
         if (!(limit > 0)) Fail(node, "every 'limit' must be above 0 m");
+    } else if (key == "start_frame" || key == "max_frames") {
+      if (in_defaults)
+        Fail(node, "'" + key + "' chooses one clip's frames: give it in its [[item]]");
+      (key == "start_frame" ? item->start_frame : item->max_frames) =
+          Count(node, key, key == "start_frame" ? 0 : 1);
     } else if (key == "jobs") {
       item->jobs = Jobs(node);
       *jobs_given = true;
@@ -192,6 +207,10 @@ class ManifestReader {
       else
         Fail(item->line, "item '" + item->id + "' has no input: give log, photos, clip or dataset");
     }
+    if (item->clip.empty() && (item->start_frame >= 0 || item->max_frames >= 0))
+      Fail(item->line,
+           "item '" + item->id +
+               "': start_frame and max_frames choose a clip's frames, and it has no clip");
     if (!item->clip.empty() && item->jobs.front() != BatchJob::kImport)
       item->jobs.insert(item->jobs.begin(), BatchJob::kImport);
     const auto has = [&](BatchJob job) {

@@ -29,6 +29,8 @@ struct BatchItem {
   double readout_s;
   double altitude_m;
   std::vector<double> limits_m;
+  // A clip's frames to import (import's --start-frame, --max-frames); -1 when not given.
+  long start_frame = -1, max_frames = -1;
   std::vector<BatchJob> jobs;        // in BatchJob order, no repeats
   std::vector<std::string> exports;  // formats for kExport (shutterlab export --to)
   long line = 0;                     // where its [[item]] starts in the manifest

@@ -402,5 +402,84 @@ TEST_F(BatchCli, SlurmArrayWithATaskKilledMidwayThenRerun) {
     EXPECT_NE(entry.path().extension(), ".partial") << entry.path();
 }
 
+// A mixed manifest, locally and through the one-node cluster: a real clip (30 frames of the GoPro
+// Karma's, chosen in the manifest) imported and validated in its item, a log, photos alone and
+// photos with their log; the fleet's row of the clip is its validation's.
+TEST(BatchMixed, AClipALogAndPhotosLocallyAndThroughSlurm) {
+  if (test::kAsan)  // the clip's commands run under the sanitizers in RealClips and ImportCli
+    GTEST_SKIP() << "the clip twice through import and validate: 2 min under the sanitizers";
+  SHUTTERLAB_REAL_DATA(karma, "rs/gopro_karma/karma.mp4");
+  test::TempDir dir;
+  SynthOptions synth;
+  synth.profile = MotionProfile::kFlight;
+  synth.rate_hz = 500;
+  synth.duration_s = 24;
+  synth.t0_s = 1;
+  SynthOutputOptions output;
+  output.out_path = dir / "flight.ulg";
+  output.ulog = true;
+  output.trigger_every_s = 2;
+  output.altitude_m = 50;
+  WriteSynthetic(synth, output);
+  fs::create_directories(dir / "photos");
+  for (int j = 0; j < 3; ++j)
+    WriteFileAtomically(dir / ("photos/DJI_000" + std::to_string(j) + ".JPG"), FleetPhoto(4 + j));
+  test::WritePlacedFlight(dir / "placed", {0, 0, 0, 0, 0});
+  const std::string manifest = test::WriteText(
+      dir, "mixed.toml",
+      "[[item]]\nid = \"karma\"\ngroup = \"gopro\"\nclip = \"" + karma +
+          "\"\nstart_frame = 100\nmax_frames = 31\n\n[[item]]\nid = \"log\"\nlog = "
+          "\"flight.ulg\"\n\n[[item]]\nid = \"photos\"\nphotos = \"photos\"\n\n[[item]]\nid = "
+          "\"placed\"\nlog = \"placed/flight.ulg\"\nphotos = \"placed/photos\"\n");
+
+  const std::string out = dir / "local";
+  const auto r = RunShutterlab("batch " + manifest + " --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.out.find("4 items: 4 made, 0 failed, 0 up to date"), std::string::npos) << r.out;
+  const nlohmann::json record = Record(out, "karma");
+  ASSERT_EQ(record["jobs"].size(), 2u) << record.dump(2);
+  EXPECT_EQ(record["jobs"][0]["name"], "import");
+  EXPECT_EQ(record["jobs"][1]["name"], "validate");
+  const std::string recipe = record["recipe"].dump();
+  EXPECT_NE(recipe.find("\"--start-frame\",\"100\",\"--max-frames\",\"31\""), std::string::npos)
+      << recipe;
+  EXPECT_TRUE(fs::exists(out + "/items/karma/dataset/frames.csv"));
+  const nlohmann::json report =
+      nlohmann::json::parse(ReadFileToString(out + "/items/karma/validate/report.json"));
+  EXPECT_EQ(report["frames"], 30);
+  const std::string csv = ReadFileToString(out + "/fleet.csv");
+  EXPECT_NE(csv.find("\nkarma,gopro,clip,done,30,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(report["verdict"]["headline"].get<std::string>()), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\nlog,,log,done,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\nphotos,,photos,done,3,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\nplaced,,photos + log,done,5,"), std::string::npos) << csv;
+  EXPECT_NE(ReadFileToString(out + "/fleet.html").find("items/karma/validate/validate.html"),
+            std::string::npos);
+  test::ExpectDrawsInChromium(out + "/fleet.html", 1, "batch_mixed");
+  const auto again = RunShutterlab("batch " + manifest + " --out " + out);
+  EXPECT_NE(again.out.find("4 items: 0 made, 0 failed, 4 up to date"), std::string::npos)
+      << again.output;
+
+  // The same manifest as a Slurm job array: the clip's task asks for its own memory class.
+  SlurmCluster cluster(dir / "cluster");
+  if (!cluster.up()) {
+    if (cluster.code() == 77 && !test::RealDataRequired())
+      GTEST_SKIP() << "no Slurm here (scripts/test.sh installs slurm-wlm and munge): "
+                   << cluster.said();
+    FAIL() << "the cluster did not start: " << cluster.said();
+  }
+  const std::string env = "SLURM_CONF=" + cluster.conf();
+  const std::string slurm_out = dir / "slurm";
+  const auto submitted =
+      RunShutterlab("batch " + manifest + " --out " + slurm_out + " --slurm", "", env);
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.output;
+  WaitForSlurm(cluster.conf());
+  EXPECT_EQ(ItemsWithRecords(slurm_out), 4u);
+  const std::string slurm_csv = ReadFileToString(slurm_out + "/fleet.csv");
+  EXPECT_NE(slurm_csv.find("\nkarma,gopro,clip,done,30,"), std::string::npos) << slurm_csv;
+  EXPECT_NE(slurm_csv.find("\nplaced,,photos + log,done,5,"), std::string::npos) << slurm_csv;
+  EXPECT_EQ(Record(slurm_out, "karma")["recipe"], record["recipe"]);
+}
+
 }  // namespace
 }  // namespace shutterlab

@@ -62,6 +62,8 @@ export = ["odm", "colmap"]
 [[item]]
 id = "clip_1"
 clip = "clip.mp4"
+start_frame = 100
+max_frames = 31
 )"));
   ASSERT_EQ(m.items.size(), 3u);
   const BatchItem& a = m.items[0];
@@ -89,6 +91,10 @@ clip = "clip.mp4"
   ASSERT_EQ(c.jobs.size(), 2u);
   EXPECT_EQ(c.jobs[0], BatchJob::kImport);
   EXPECT_EQ(c.jobs[1], BatchJob::kValidate);
+  EXPECT_EQ(c.start_frame, 100);
+  EXPECT_EQ(c.max_frames, 31);
+  EXPECT_EQ(a.start_frame, -1);
+  EXPECT_EQ(a.max_frames, -1);
 
   // Every file under an input, sorted: the folder whole.
   const std::vector<std::string> files = BatchItemInputFiles(b);
@@ -109,7 +115,17 @@ TEST_F(ManifestTest, RefusesEachMistakeNamingTheLine) {
             m + ":4: 'readout' must be a string (in quotes)");
   EXPECT_EQ(Refusal("[[item]]\nid = \"a\"\nlog = \"f1.ulg\"\nspeed = \"5m/s\"\n"),
             m + ":4: unknown key 'speed' (log, photos, clip, dataset, triggers, camera, "
-                "lens_profile, id, group, readout, altitude, limit, jobs, export)");
+                "lens_profile, id, group, readout, altitude, limit, jobs, export, start_frame, "
+                "max_frames)");
+  EXPECT_EQ(Refusal("[[item]]\nid = \"a\"\nclip = \"clip.mp4\"\nmax_frames = 0\n"),
+            m + ":4: 'max_frames' must be a whole number of at least 1 (no quotes)");
+  EXPECT_EQ(Refusal("[[item]]\nid = \"a\"\nclip = \"clip.mp4\"\nstart_frame = \"100\"\n"),
+            m + ":4: 'start_frame' must be a whole number of at least 0 (no quotes)");
+  EXPECT_EQ(Refusal("[defaults]\nmax_frames = 10\n[[item]]\nid = \"a\"\nclip = \"clip.mp4\"\n"),
+            m + ":2: 'max_frames' chooses one clip's frames: give it in its [[item]]");
+  EXPECT_EQ(Refusal("[[item]]\nid = \"a\"\nlog = \"f1.ulg\"\nstart_frame = 10\n"),
+            m + ":1: item 'a': start_frame and max_frames choose a clip's frames, and it has no "
+                "clip");
   EXPECT_EQ(
       Refusal("[[item]]\nid = \"a\"\nlog = \"f1.ulg\"\n[[item]]\nid = \"a\"\nlog = \"f1.ulg\"\n"),
       m + ":4: id 'a' is given twice (line 1 too)");
