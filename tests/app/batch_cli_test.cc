@@ -327,6 +327,15 @@ class SlurmCluster {
   int code_ = -1;
 };
 
+// Goes on only with the cluster up: without Slurm the test is skipped (failed under CI=true).
+#define SHUTTERLAB_NEED_CLUSTER(cluster)                                               \
+  if (!(cluster).up()) {                                                               \
+    if ((cluster).code() == 77 && !test::RealDataRequired())                           \
+      GTEST_SKIP() << "no Slurm here (scripts/test.sh installs slurm-wlm and munge): " \
+                   << (cluster).said();                                                \
+    FAIL() << "the cluster did not start: " << (cluster).said();                       \
+  }
+
 // Waits until none of the cluster's jobs is pending or running (at most 3 min).
 void WaitForSlurm(const std::string& conf) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(3);
@@ -340,12 +349,7 @@ void WaitForSlurm(const std::string& conf) {
 // task killed midway; the rerun makes what it lost.
 TEST_F(BatchCli, SlurmArrayWithATaskKilledMidwayThenRerun) {
   SlurmCluster cluster(*fleet_ / "cluster");
-  if (!cluster.up()) {
-    if (cluster.code() == 77 && !test::RealDataRequired())
-      GTEST_SKIP() << "no Slurm here (scripts/test.sh installs slurm-wlm and munge): "
-                   << cluster.said();
-    FAIL() << "the cluster did not start: " << cluster.said();
-  }
+  SHUTTERLAB_NEED_CLUSTER(cluster);
   const std::string env = "SLURM_CONF=" + cluster.conf();
   const std::string out = *fleet_ / "slurm_out";
   const std::string first_items = *fleet_ / "first_items.toml";
@@ -462,12 +466,7 @@ TEST(BatchMixed, AClipALogAndPhotosLocallyAndThroughSlurm) {
 
   // The same manifest as a Slurm job array: the clip's task asks for its own memory class.
   SlurmCluster cluster(dir / "cluster");
-  if (!cluster.up()) {
-    if (cluster.code() == 77 && !test::RealDataRequired())
-      GTEST_SKIP() << "no Slurm here (scripts/test.sh installs slurm-wlm and munge): "
-                   << cluster.said();
-    FAIL() << "the cluster did not start: " << cluster.said();
-  }
+  SHUTTERLAB_NEED_CLUSTER(cluster);
   const std::string env = "SLURM_CONF=" + cluster.conf();
   const std::string slurm_out = dir / "slurm";
   const auto submitted =
