@@ -48,6 +48,7 @@ THIRD_PARTY = [
     ("toml++/", "PkgConfig::TOMLPP"),
     ("xxhash.h", "PkgConfig::XXHASH"),
     ("jpeglib.h", "JPEG::JPEG"),
+    ("png.h", "PNG::PNG"),
     ("CLI/", "CLI11::CLI11"),
     ("benchmark/", "benchmark::benchmark"),
     ("gtest/", "GTest::gtest"),

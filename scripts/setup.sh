@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 
 # openimageio-tools: Debian's OpenImageIOConfig.cmake refers to /usr/bin/iconvert and fails without it.
 packages=(cmake g++ make pkg-config libeigen3-dev libopencv-dev libopenimageio-dev
-          openimageio-tools libjpeg-dev libexiv2-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev
+          openimageio-tools libjpeg-dev libpng-dev libexiv2-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev
           libbenchmark-dev clang-format libgpiod-dev libtomlplusplus-dev libxxhash-dev universal-ctags
           clang libclang-rt-14-dev)  # clang + its libFuzzer: scripts/fuzz.sh
 scripts/install_packages.sh setup "${packages[@]}"

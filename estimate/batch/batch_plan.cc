@@ -110,10 +110,11 @@ double EstimateBatchItemMemoryBytes(const BatchItem& item) {
     const auto bytes = std::filesystem::file_size(file, error);
     if (!error) largest_file_bytes = std::max(largest_file_bytes, static_cast<double>(bytes));
   }
-  // A command's fixed part (the libraries, OpenCV's pools: analyze's peak is 174 MiB on a 3 MB log
-  // and 176 MiB on a 64 MB one, docs/batch.md), what the logs' readers map, and a decoded photo or
-  // frame for every compressed byte of the largest file (a JPEG compresses about 8:1; correct and
-  // validate hold several frames at once).
+  // A command's fixed part (its libraries, OpenCV's pools, and the codecs module's 130 MB where it
+  // reads images: analyze's peak is 55 MiB on a 3 MB log and 57 MiB on a 64 MB one, docs/batch.md),
+  // what the logs' readers map, and a decoded photo or frame for every compressed byte of the
+  // largest file (a JPEG compresses about 8:1; correct and validate hold several frames at once).
+  // Slurm's requests round it up to 256 MiB anyway.
   constexpr double kFixedBytes = 200.0 * 1024 * 1024;
   const bool decodes_images = std::any_of(item.jobs.begin(), item.jobs.end(), [](BatchJob job) {
     return job == BatchJob::kCorrect || job == BatchJob::kValidate || job == BatchJob::kImport;

@@ -5,6 +5,7 @@
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
 #include "tests/app/placed_flight.h"
+#include "tests/estimate/loop/validate_fixtures.h"
 #include "tests/io/photo_fixtures.h"
 #include "tests/test_util.h"
 
@@ -407,8 +408,8 @@ TEST_F(BatchCli, SlurmArrayWithATaskKilledMidwayThenRerun) {
 }
 
 // A mixed manifest, locally and through the one-node cluster: a real clip (30 frames of the GoPro
-// Karma's, chosen in the manifest) imported and validated in its item, a log, photos alone and
-// photos with their log; the fleet's row of the clip is its validation's.
+// Karma's, chosen in the manifest) imported and validated in its item, a log, photos alone, photos
+// with their log and a rendered rig dataset; the fleet's row of the clip is its validation's.
 TEST(BatchMixed, AClipALogAndPhotosLocallyAndThroughSlurm) {
   if (test::kAsan)  // the clip's commands run under the sanitizers in RealClips and ImportCli
     GTEST_SKIP() << "the clip twice through import and validate: 2 min under the sanitizers";
@@ -429,17 +430,21 @@ TEST(BatchMixed, AClipALogAndPhotosLocallyAndThroughSlurm) {
   for (int j = 0; j < 3; ++j)
     WriteFileAtomically(dir / ("photos/DJI_000" + std::to_string(j) + ".JPG"), FleetPhoto(4 + j));
   test::WritePlacedFlight(dir / "placed", {0, 0, 0, 0, 0});
+  fs::create_directories(dir / "rig");
+  test::TempDir rig_dir;
+  fs::rename(test::MakeDataset(rig_dir, {}), dir / "rig/ds");  // a rendered rig dataset
   const std::string manifest = test::WriteText(
       dir, "mixed.toml",
       "[[item]]\nid = \"karma\"\ngroup = \"gopro\"\nclip = \"" + karma +
           "\"\nstart_frame = 100\nmax_frames = 31\n\n[[item]]\nid = \"log\"\nlog = "
           "\"flight.ulg\"\n\n[[item]]\nid = \"photos\"\nphotos = \"photos\"\n\n[[item]]\nid = "
-          "\"placed\"\nlog = \"placed/flight.ulg\"\nphotos = \"placed/photos\"\n");
+          "\"placed\"\nlog = \"placed/flight.ulg\"\nphotos = \"placed/photos\"\n\n"
+          "[[item]]\nid = \"rig\"\ndataset = \"rig/ds\"\n");
 
   const std::string out = dir / "local";
   const auto r = RunShutterlab("batch " + manifest + " --out " + out);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.out.find("4 items: 4 made, 0 failed, 0 up to date"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("5 items: 5 made, 0 failed, 0 up to date"), std::string::npos) << r.out;
   const nlohmann::json record = Record(out, "karma");
   ASSERT_EQ(record["jobs"].size(), 2u) << record.dump(2);
   EXPECT_EQ(record["jobs"][0]["name"], "import");
@@ -457,11 +462,14 @@ TEST(BatchMixed, AClipALogAndPhotosLocallyAndThroughSlurm) {
   EXPECT_NE(csv.find("\nlog,,log,done,"), std::string::npos) << csv;
   EXPECT_NE(csv.find("\nphotos,,photos,done,3,"), std::string::npos) << csv;
   EXPECT_NE(csv.find("\nplaced,,photos + log,done,5,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\nrig,,dataset,done," + std::to_string(test::kStillFrames) + ","),
+            std::string::npos)
+      << csv;
   EXPECT_NE(ReadFileToString(out + "/fleet.html").find("items/karma/validate/validate.html"),
             std::string::npos);
   test::ExpectDrawsInChromium(out + "/fleet.html", 1, "batch_mixed");
   const auto again = RunShutterlab("batch " + manifest + " --out " + out);
-  EXPECT_NE(again.out.find("4 items: 0 made, 0 failed, 4 up to date"), std::string::npos)
+  EXPECT_NE(again.out.find("5 items: 0 made, 0 failed, 5 up to date"), std::string::npos)
       << again.output;
 
   // The same manifest as a Slurm job array: the clip's task asks for its own memory class.
@@ -473,7 +481,7 @@ TEST(BatchMixed, AClipALogAndPhotosLocallyAndThroughSlurm) {
       RunShutterlab("batch " + manifest + " --out " + slurm_out + " --slurm", "", env);
   ASSERT_EQ(submitted.exit_code, 0) << submitted.output;
   WaitForSlurm(cluster.conf());
-  EXPECT_EQ(ItemsWithRecords(slurm_out), 4u);
+  EXPECT_EQ(ItemsWithRecords(slurm_out), 5u);
   const std::string slurm_csv = ReadFileToString(slurm_out + "/fleet.csv");
   EXPECT_NE(slurm_csv.find("\nkarma,gopro,clip,done,30,"), std::string::npos) << slurm_csv;
   EXPECT_NE(slurm_csv.find("\nplaced,,photos + log,done,5,"), std::string::npos) << slurm_csv;

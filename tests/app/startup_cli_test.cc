@@ -1,7 +1,7 @@
 // io/codecs.h: OpenImageIO and OpenCV's video reader and encoders (0.37 s of start-up, with the
-// hundreds of libraries they bring) are loaded by the command that reads or writes an image, at
-// that moment, and by no other. The dynamic loader's own log (LD_DEBUG=libs) says what a process
-// loaded.
+// hundreds of libraries they bring) are loaded by the command that reads or writes an image file,
+// at that moment, and by no other (a page's pictures are PNGs through libpng). The dynamic loader's
+// own log (LD_DEBUG=libs) says what a process loaded.
 
 #include "sim/text_file.h"
 #include "tests/app/cli_test_util.h"
@@ -25,7 +25,21 @@ TEST(Startup, ACommandThatTouchesNoImageLoadsNoCodec) {
   EXPECT_EQ(version.err.find("libopencv_imgcodecs"), std::string::npos);
   EXPECT_EQ(version.err.find("libshutterlab_codecs"), std::string::npos);
 
+  // A flight's page holds pictures (PNG through libpng) and still needs no codec.
   test::TempDir dir;
+  ASSERT_EQ(test::RunShutterlab("synth flight --rate 500Hz --duration 20s --t0 1s --format ulog "
+                                "--trigger-every 2s --altitude 50m --out " +
+                                dir / "flight.ulg")
+                .exit_code,
+            0);
+  const test::CommandResult analyze = test::RunShutterlab(
+      "analyze " + dir / "flight.ulg" + " --out " + dir / "analyze", "", "LD_DEBUG=libs");
+  ASSERT_EQ(analyze.exit_code, 0) << analyze.out;
+  EXPECT_NE(ReadFileToString(dir / "analyze/report.html").find("data:image/png;base64,"),
+            std::string::npos);
+  EXPECT_EQ(analyze.err.find("libOpenImageIO"), std::string::npos);
+  EXPECT_EQ(analyze.err.find("libshutterlab_codecs"), std::string::npos);
+
   const test::CommandResult scene = test::RunShutterlab(
       "scene --out " + dir / "ground.png" + " --width 64 --height 48", "", "LD_DEBUG=libs");
   ASSERT_EQ(scene.exit_code, 0) << scene.output;

@@ -1,6 +1,7 @@
 #include "estimate/report/html_report.h"
 
 #include "estimate/paper/plot_summary.h"
+#include "io/image_io.h"
 #include "sim/text_file.h"
 #include "tests/estimate/report/report_test_util.h"
 #include "tests/test_util.h"
@@ -189,6 +190,51 @@ TEST(HtmlPage, WriteIsAtomicAndWhole) {
   for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path()))
     ++files;
   EXPECT_EQ(files, 1u);  // no temporary left beside the report
+}
+
+// The bytes of a base64 text (RFC 4648, with padding), decoded here rather than by the code under
+// test.
+std::string FromBase64(const std::string& text) {
+  const std::string alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string bytes;
+  uint32_t bits = 0;
+  int count = 0;
+  for (const char c : text) {
+    if (c == '=') break;
+    bits = bits << 6 | static_cast<uint32_t>(alphabet.find(c));
+    if ((count += 6) >= 8) bytes += static_cast<char>(bits >> (count -= 8) & 0xFF);
+  }
+  return bytes;
+}
+
+// A page's pictures are lossless PNGs of what it was given: each read back through OpenImageIO
+// equals its image, grey and RGB, and a view into a larger image (rows not contiguous) too.
+TEST(HtmlPage, PicturesAreTheImagesGivenAsLosslessPngs) {
+  std::mt19937 random(3);
+  cv::Mat grey(37, 53, CV_8UC1), rgb(41, 29, CV_8UC3), wide(60, 90, CV_8UC3);
+  for (cv::Mat* image : {&grey, &rgb, &wide}) cv::randu(*image, 0, 256);
+  const cv::Mat view = wide(cv::Rect(7, 5, 31, 23));
+  ASSERT_FALSE(view.isContinuous());
+  HtmlPage page("pictures");
+  page.Image(grey, "grey");
+  page.Image(rgb, "rgb");
+  page.Image(view, "view");
+  const std::string html = page.Html();
+  test::TempDir dir;
+  size_t at = 0;
+  for (const cv::Mat& given : {grey, rgb, view}) {
+    const std::string key = "data:image/png;base64,";
+    at = html.find(key, at);
+    ASSERT_NE(at, std::string::npos);
+    at += key.size();
+    const std::string png = FromBase64(html.substr(at, html.find('"', at) - at));
+    ASSERT_EQ(png.substr(1, 3), "PNG");
+    WriteFileAtomically(dir / "picture.png", png);
+    const cv::Mat read = ReadImage(dir / "picture.png");
+    ASSERT_EQ(read.size(), given.size());
+    ASSERT_EQ(read.type(), given.type());
+    EXPECT_EQ(cv::norm(read, given, cv::NORM_INF), 0) << "a picture changed in its PNG";
+  }
 }
 
 TEST(DownsampleMinMax, KeepsEachBucketsExtremesInOrder) {
