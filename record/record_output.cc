@@ -45,9 +45,9 @@ void WriteAll(int fd, const char* data, size_t n, const std::string& name) {
   }
 }
 
-// Copies the whole of from_fd (from its start) to the end of to_fd, in the kernel where it can.
-void CopyRows(int from_fd, int to_fd, const std::string& name) {
-  if (::lseek(from_fd, 0, SEEK_SET) < 0)
+// Copies from_fd from byte `from` to its end onto the end of to_fd, in the kernel where it can.
+void CopyRows(int from_fd, off_t from, int to_fd, const std::string& name) {
+  if (::lseek(from_fd, from, SEEK_SET) < 0)
     throw IoError(IoMessage(name, 0, "seek failed: " + ErrnoText()));
   while (true) {
     const ssize_t n = ::copy_file_range(from_fd, nullptr, to_fd, nullptr, size_t{1} << 30, 0);
@@ -82,17 +82,48 @@ std::string Number(double value) { return FormatNumber("%.9g", value); }
 
 }  // namespace
 
-RowFile::RowFile(const std::string& final_path) : final_path_(final_path) {
-  fd_ = MakeTempBeside(final_path, "rows", &rows_path_);
+RowFile::RowFile(const std::string& final_path, const std::string& partial_header,
+                 double sync_interval_s)
+    : final_path_(final_path),
+      partial_path_(final_path + ".partial"),
+      sync_interval_(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+          std::chrono::duration<double>(sync_interval_s))) {
+  // Read and write: Finish copies the rows from it.
+  fd_ = ::open(partial_path_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd_ < 0 && errno == EEXIST) {
+    throw IoError(IoMessage(partial_path_, 0,
+                            "exists: a recording before this one was cut (killed or power lost); "
+                            "it is kept as it is: read it (shutterlab analyze " +
+                                partial_path_ + ") or move it away, then record again"));
+  }
+  if (fd_ < 0) throw IoError(IoMessage(final_path_, 0, "cannot create: " + ErrnoText()));
+  try {
+    WriteAll(fd_, partial_header.data(), partial_header.size(), partial_path_);
+    if (::fdatasync(fd_) < 0)
+      throw IoError(IoMessage(partial_path_, 0, "cannot sync: " + ErrnoText()));
+  } catch (...) {
+    ::close(fd_);
+    std::remove(partial_path_.c_str());
+    throw;
+  }
+  header_bytes_ = partial_header.size();
+  last_sync_ = std::chrono::steady_clock::now();
 }
 
 RowFile::~RowFile() {
   if (fd_ >= 0) ::close(fd_);
-  if (!rows_path_.empty()) std::remove(rows_path_.c_str());
+  if (!finished_ && !has_rows_) std::remove(partial_path_.c_str());
 }
 
 void RowFile::Append(const std::string& text) {
-  WriteAll(fd_, text.data(), text.size(), final_path_);
+  WriteAll(fd_, text.data(), text.size(), partial_path_);
+  has_rows_ = has_rows_ || !text.empty();
+  const auto now = std::chrono::steady_clock::now();
+  if (now - last_sync_ >= sync_interval_) {
+    if (::fdatasync(fd_) < 0)
+      throw IoError(IoMessage(partial_path_, 0, "cannot sync: " + ErrnoText()));
+    last_sync_ = now;
+  }
 }
 
 void RowFile::Finish(const std::string& header) {
@@ -100,7 +131,7 @@ void RowFile::Finish(const std::string& header) {
   const int out_fd = MakeTempBeside(final_path_, "tmp", &temp_path);
   try {
     WriteAll(out_fd, header.data(), header.size(), final_path_);
-    CopyRows(fd_, out_fd, final_path_);
+    CopyRows(fd_, static_cast<off_t>(header_bytes_), out_fd, final_path_);
     if (::fchmod(out_fd, 0644) < 0 || ::fsync(out_fd) < 0) {
       throw IoError(IoMessage(final_path_, 0, "cannot sync: " + ErrnoText()));
     }
@@ -115,6 +146,8 @@ void RowFile::Finish(const std::string& header) {
     std::remove(temp_path.c_str());
     throw IoError(IoMessage(final_path_, 0, "cannot rename into place: " + why));
   }
+  finished_ = true;
+  std::remove(partial_path_.c_str());
 }
 
 void AppendRecordedRow(const RecordedSample& sample, int64_t t0_ns, std::string* out) {
@@ -130,8 +163,12 @@ void AppendRecordedRow(const RecordedSample& sample, int64_t t0_ns, std::string*
   out->append(buffer, p);
 }
 
-std::string RecordedGcsvHeader(const RecordSummary& summary, int index,
-                               const RecorderOptions& options) {
+namespace {
+
+// The header of sensor `index`: with its summary when `finished`, else what the start knows and
+// the line that says what a kill or a power cut loses.
+std::string GcsvHeaderOf(const RecordSummary& summary, int index, const RecorderOptions& options,
+                         bool finished) {
   const SensorSummary& s = summary.sensors.at(index);
   const PartInfo& part = GetPartInfo(s.setting.part);
   GcsvWriteOptions gcsv;
@@ -155,6 +192,17 @@ std::string RecordedGcsvHeader(const RecordSummary& summary, int index,
   h.emplace_back("filter", s.setting.Describe());
   h.emplace_back("clock", "CLOCK_MONOTONIC; t = clock - t0_clock_ns");
   h.emplace_back("t0_clock_ns", std::to_string(summary.t0_clock_ns));
+  if (!finished) {
+    h.emplace_back(
+        "recording",
+        "unfinished: the recorder stopped before its summary (killed or power lost); "
+        "a kill loses the reads of about the last " +
+            FormatNumber("%.0f", options.writer_interval_s * 1e3) +
+            " ms, a power cut those of the last " +
+            FormatNumber("%.0f", (options.sync_interval_s + options.writer_interval_s) * 1e3) +
+            " ms");
+    return GcsvHeaderText(gcsv);
+  }
   h.emplace_back("samples", std::to_string(s.samples));
   h.emplace_back("rate_hz", Number(s.rate_hz));
   h.emplace_back("drift_ppm", FormatNumber("%.3f", s.drift_ppm));
@@ -174,6 +222,18 @@ std::string RecordedGcsvHeader(const RecordSummary& summary, int index,
                    FormatNumber("%.9f", gap.t_s) + "," + std::to_string(gap.lost) + "," + gap.kind);
   }
   return GcsvHeaderText(gcsv);
+}
+
+}  // namespace
+
+std::string RecordedGcsvHeader(const RecordSummary& summary, int index,
+                               const RecorderOptions& options) {
+  return GcsvHeaderOf(summary, index, options, true);
+}
+
+std::string RecordingGcsvHeader(const RecordSummary& start, int index,
+                                const RecorderOptions& options) {
+  return GcsvHeaderOf(start, index, options, false);
 }
 
 void WriteTriggersFile(const std::string& path, const RecordSummary& summary,

@@ -12,13 +12,18 @@
 //   tscale,0.000000001 / gscale (rad/s per count) / t,gx,gy,gz
 //   rows: t in ns from t0, the raw counts (sensor axes)
 //
-// The rows stream into a temporary file beside the output while recording; Finish writes the
-// header and copies the rows after it into a second temporary file, then renames it: the .gcsv
-// appears whole or not at all.
+// While recording, each sensor's file is OUT.partial: a .gcsv whose header (the sensor's settings
+// and time base, no summary yet, and "recording,unfinished: ...") is on disk before any row, the
+// rows appended as the writer drains the ring and synced at least every sync_interval. A kill or a
+// power cut leaves that file, which every reader takes as it is, with the loss said in its header
+// (the rows of the last writer interval for a kill, of the last sync interval for a power cut)
+// and by the reader's `truncated` warning. Finish writes OUT whole (the final header, the rows) and
+// then removes OUT.partial.
 
 #include "record/recording.h"
 #include "record/sample_ring.h"
 
+#include <chrono>
 #include <string>
 
 namespace shutterlab {
@@ -26,20 +31,30 @@ namespace shutterlab {
 // The rows of one sensor while recording.
 class RowFile {
  public:
-  // Creates "DIR/.NAME.rows-XXXXXX" beside final_path. Throws IoError.
-  explicit RowFile(const std::string& final_path);
-  ~RowFile();  // removes the temporary file unless Finish moved the rows
+  // Creates final_path + ".partial" and writes `partial_header` to it, synced. Throws IoError when
+  // that file exists (a recording that was cut: it is kept, never overwritten) or cannot be made.
+  RowFile(const std::string& final_path, const std::string& partial_header, double sync_interval_s);
+  // Closes the file; removes it if it holds no row (nothing recorded), keeps it otherwise.
+  ~RowFile();
   RowFile(const RowFile&) = delete;
   RowFile& operator=(const RowFile&) = delete;
 
-  // Appends text (whole rows); throws IoError naming the output when the write fails.
+  // Appends text (whole rows), synced when sync_interval has passed since the last sync; throws
+  // IoError naming the output when the write fails.
   void Append(const std::string& text);
-  // Writes header + rows to final_path, whole or not at all, and removes the temporary file.
+  // Writes header + rows to final_path, whole or not at all, then removes the partial file.
   void Finish(const std::string& header);
 
+  const std::string& partial_path() const { return partial_path_; }
+  bool has_rows() const { return has_rows_; }
+
  private:
-  std::string final_path_, rows_path_;
+  std::string final_path_, partial_path_;
   int fd_ = -1;
+  size_t header_bytes_ = 0;
+  bool has_rows_ = false, finished_ = false;
+  std::chrono::steady_clock::duration sync_interval_;
+  std::chrono::steady_clock::time_point last_sync_;
 };
 
 // "t_ns,gx,gy,gz\n" of one sample, t relative to t0.
@@ -48,6 +63,11 @@ void AppendRecordedRow(const RecordedSample& sample, int64_t t0_ns, std::string*
 // The .gcsv header of sensor `index` of a finished recording.
 std::string RecordedGcsvHeader(const RecordSummary& summary, int index,
                                const RecorderOptions& options);
+// The header of its .partial while it records: what is known at the start (the sensor's settings
+// from summary.sensors, summary.t0_clock_ns) and the line "recording,unfinished: ..." that says
+// what a kill or a power cut loses.
+std::string RecordingGcsvHeader(const RecordSummary& start, int index,
+                                const RecorderOptions& options);
 
 // The triggers file: '#' lines with the source and the filter, then "image,t" (IMG_0001, ...; t
 // in s on the logs' clock), as `analyze --triggers` reads it. Written whole.

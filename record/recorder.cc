@@ -505,9 +505,22 @@ RecordSummary Session::Run() {
     s->gscale = kPi / 180.0 / s->setting.lsb_per_dps;
     s->ring = std::make_unique<SampleRing>(
         static_cast<size_t>(std::ceil(options_.ring_s * s->setting.odr_hz)));
-    s->rows = std::make_unique<RowFile>(s->spec.out_path);
   }
+  // Each file's header on disk before any read: a kill or a power cut leaves a readable file.
   t0_ns_ = clock_.NowNs();
+  RecordSummary at_start;
+  at_start.t0_clock_ns = t0_ns_;
+  for (const auto& s : sensors_) {
+    SensorSummary sensor;
+    sensor.device = s->spec.device;
+    sensor.setting = s->setting;
+    at_start.sensors.push_back(sensor);
+  }
+  for (size_t i = 0; i < sensors_.size(); ++i) {
+    sensors_[i]->rows = std::make_unique<RowFile>(
+        sensors_[i]->spec.out_path, RecordingGcsvHeader(at_start, static_cast<int>(i), options_),
+        options_.sync_interval_s);
+  }
   started_ = std::chrono::steady_clock::now();
   std::vector<std::thread> threads;
   threads_total_ = options_.trigger ? 3 : 2;
@@ -534,7 +547,17 @@ RecordSummary Session::Run() {
     }
   }
   for (std::thread& thread : threads) thread.join();
-  if (error_) std::rethrow_exception(error_);
+  if (error_) {
+    try {
+      std::rethrow_exception(error_);
+    } catch (const IoError& e) {  // the rows so far are kept: say where
+      std::string kept;
+      for (const auto& s : sensors_)
+        if (s->rows->has_rows()) kept += (kept.empty() ? "" : ", ") + s->rows->partial_path();
+      if (kept.empty()) throw;
+      throw IoError(std::string(e.what()) + "; the rows recorded until then are in " + kept);
+    }
+  }
   RecordSummary summary = Summarise();
   for (const SensorSummary& s : summary.sensors) {
     if (s.samples == 0) {

@@ -19,6 +19,8 @@ void RecorderOptions::Check() const {
   SHUTTERLAB_CHECK(std::isfinite(writer_interval_s) && writer_interval_s > 0 &&
                    writer_interval_s <= 1)
       << "writer interval must be within (0, 1] s";
+  SHUTTERLAB_CHECK(std::isfinite(sync_interval_s) && sync_interval_s > 0 && sync_interval_s <= 60)
+      << "sync interval must be within (0, 60] s";
   SHUTTERLAB_CHECK(std::isfinite(health_check_s) && health_check_s > 0) << "health check interval";
   SHUTTERLAB_CHECK(non_negative(writer_stall.every_s) && non_negative(writer_stall.for_s))
       << "writer stall must be >= 0";

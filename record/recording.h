@@ -60,6 +60,8 @@ struct RecorderOptions {
   // interval is dithered uniformly within +-50 %.
   double read_interval_s = 0.0;
   double writer_interval_s = 0.02;
+  // The rows on disk (fdatasync) at least this often: what a power cut can lose.
+  double sync_interval_s = 0.5;
   double health_check_s = 1.0;  // WHO_AM_I and the configuration read back this often
   // Testing the buffers: the writer blocks for_s once every every_s (an SD card's stall).
   struct Stall {

@@ -180,6 +180,11 @@ void ReadHeaderLine(const std::string& path, long n, std::string_view line,
     header->readout_line = n;
   } else if (key == "gap") {
     log->warnings.push_back(GapLineWarning(n, fields));
+  } else if (key == "recording" && value.rfind("unfinished", 0) == 0) {
+    // shutterlab record's file of a recording that was killed or lost power (record_output.h).
+    log->warnings.push_back({"truncated", "the recording did not finish (header line " +
+                                              std::to_string(n) + ": " + value +
+                                              "); its rows end where the file does"});
   } else if (key == "frame_readout_direction") {
     const auto direction = GyroflowReadoutDirection(value);
     if (!direction) {

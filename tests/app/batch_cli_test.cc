@@ -251,16 +251,8 @@ TEST_F(BatchCli, FleetOfFiftyWithDamagedItemsThenARerunMakesOnlyTheFailed) {
 TEST_F(BatchCli, KilledMidwayLosesOnlyTheItemsInFlight) {
   const std::string out = *fleet_ / "killed";
   const std::string first_items = *fleet_ / "first_items.toml";
-  const pid_t pid = ::fork();
+  const pid_t pid = test::SpawnShutterlab({"batch", first_items, "--out", out, "--parallel", "2"});
   ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    const int null = ::open("/dev/null", O_WRONLY);
-    ::dup2(null, 1);
-    ::dup2(null, 2);
-    ::execl(SHUTTERLAB_BINARY, SHUTTERLAB_BINARY, "batch", first_items.c_str(), "--out",
-            out.c_str(), "--parallel", "2", static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
   while (ItemsWithRecords(out) < 3 && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fcntl.h>
 #include <iostream>
 #include <random>
 #include <string>
@@ -64,6 +65,21 @@ inline CommandResult RunShutterlab(const std::string& args, const std::string& s
   std::remove(err_path);
   result.output = result.out + result.err;
   return result;
+}
+
+// Starts the shutterlab executable with `args` (no shell), its output to /dev/null, and returns
+// its pid, for a test that kills it or waits for it; -1 when fork fails.
+inline pid_t SpawnShutterlab(const std::vector<std::string>& args) {
+  const pid_t pid = ::fork();
+  if (pid != 0) return pid;
+  const int null = ::open("/dev/null", O_WRONLY);
+  ::dup2(null, 1);
+  ::dup2(null, 2);
+  std::vector<char*> argv = {const_cast<char*>(SHUTTERLAB_BINARY)};
+  for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
+  argv.push_back(nullptr);
+  ::execv(SHUTTERLAB_BINARY, argv.data());
+  ::_exit(127);
 }
 
 // Opens a page the tool wrote in headless Chromium (scripts/check_report.sh): it must draw every

@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <set>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -76,7 +77,7 @@ TEST(RecordOutput, TheGcsvOfSensorTwoReadsBackWithItsHeaderRowsAndGaps) {
   options.note = "bench test";
   const std::string path = dir / "b.gcsv";
   {
-    RowFile rows(path);
+    RowFile rows(path, RecordingGcsvHeader(summary, 1, options), options.sync_interval_s);
     std::string text;
     AppendRecordedRow(OutputSample(kOutputT0Ns, 100, -200, 300), kOutputT0Ns, &text);
     rows.Append(text);
@@ -85,6 +86,15 @@ TEST(RecordOutput, TheGcsvOfSensorTwoReadsBackWithItsHeaderRowsAndGaps) {
     AppendRecordedRow(OutputSample(kOutputT0Ns + 62500, -32768, 32767, 0), kOutputT0Ns, &text);
     rows.Append(text);
     EXPECT_FALSE(std::filesystem::exists(path));  // not before Finish
+    // Meanwhile the partial file reads as it is, its rows so far, saying it did not finish.
+    const GcsvLog partial = ReadGcsv(path + ".partial");
+    ASSERT_EQ(partial.trace.size(), 3u);
+    EXPECT_EQ(partial.trace[2].t_ns, 62500);
+    ASSERT_EQ(partial.warnings.size(), 1u) << test::JoinedWarnings(partial.warnings);
+    EXPECT_EQ(partial.warnings[0].kind, "truncated");
+    EXPECT_TRUE(test::AnyWarningContains(partial.warnings, "the recording did not finish"));
+    EXPECT_TRUE(test::AnyWarningContains(partial.warnings, "a power cut those of the last 520 ms"))
+        << test::JoinedWarnings(partial.warnings);
     rows.Finish(RecordedGcsvHeader(summary, 1, options));
   }
   const GcsvLog log = ReadGcsv(path);
@@ -142,14 +152,28 @@ TEST(RecordOutput, TheGcsvOfSensorTwoReadsBackWithItsHeaderRowsAndGaps) {
   EXPECT_EQ(files, 1u);
 }
 
-TEST(RecordOutput, ARowFileNotFinishedLeavesNothingBehind) {
+// Not finished (killed, power lost, a failure): the partial file stays when it holds rows, and is
+// never overwritten by the next recording; without rows it goes.
+TEST(RecordOutput, ARowFileNotFinishedKeepsItsRowsAndIsNeverOverwritten) {
   test::TempDir dir;
-  {
-    RowFile rows(dir / "never.gcsv");
-    rows.Append("0,1,2,3\n");
-    EXPECT_FALSE(std::filesystem::is_empty(dir.path()));  // the rows go beside it meanwhile
-  }
+  const std::string header = RecordingGcsvHeader(OutputSummary(), 0, RecorderOptions{});
+  { RowFile rows(dir / "empty.gcsv", header, 0.5); }
   EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+  {
+    RowFile rows(dir / "cut.gcsv", header, 0.5);
+    rows.Append("0,1,2,3\n");
+  }
+  EXPECT_EQ(ReadGcsv(dir / "cut.gcsv.partial").trace.size(), 1u);
+  EXPECT_FALSE(std::filesystem::exists(dir / "cut.gcsv"));
+  try {
+    RowFile again(dir / "cut.gcsv", header, 0.5);
+    FAIL() << "a recording's partial file was taken over";
+  } catch (const IoError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(dir / "cut.gcsv.partial: exists: a recording before", 0),
+              0u)
+        << e.what();
+  }
+  EXPECT_EQ(ReadGcsv(dir / "cut.gcsv.partial").trace.size(), 1u);
 }
 
 TEST(RecordOutput, AFinishThatCannotRenameLeavesNoTemporaryFile) {
@@ -157,23 +181,21 @@ TEST(RecordOutput, AFinishThatCannotRenameLeavesNoTemporaryFile) {
   const std::string blocked = dir / "taken.gcsv";
   std::filesystem::create_directories(std::filesystem::path(blocked) / "inside");  // a folder
   {
-    RowFile rows(blocked);
+    RowFile rows(blocked, RecordingGcsvHeader(OutputSummary(), 0, RecorderOptions{}), 0.5);
     rows.Append("0,1,2,3\n");
     EXPECT_THROW(rows.Finish(RecordedGcsvHeader(OutputSummary(), 0, RecorderOptions{})), IoError);
   }
-  size_t entries = 0;
-  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
-    ++entries;
-    EXPECT_EQ(entry.path().filename(), "taken.gcsv");
-  }
-  EXPECT_EQ(entries, 1u);
+  std::set<std::string> entries;  // the rows stay in the partial file, nothing else is left
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    entries.insert(entry.path().filename().string());
+  EXPECT_EQ(entries, (std::set<std::string>{"taken.gcsv", "taken.gcsv.partial"}));
 }
 
 TEST(RecordOutput, ARowFileInAMissingFolderIsAnIoErrorNamingTheOutput) {
   test::TempDir dir;
   const std::string path = dir / "no/such/folder/rec.gcsv";
   try {
-    RowFile rows(path);
+    RowFile rows(path, RecordingGcsvHeader(OutputSummary(), 0, RecorderOptions{}), 0.5);
     FAIL() << "created rows for " << path;
   } catch (const IoError& e) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
