@@ -107,6 +107,7 @@ RowFile::RowFile(const std::string& final_path, const std::string& partial_heade
     throw;
   }
   header_bytes_ = partial_header.size();
+  size_ = static_cast<off_t>(header_bytes_);
   last_sync_ = std::chrono::steady_clock::now();
 }
 
@@ -116,7 +117,15 @@ RowFile::~RowFile() {
 }
 
 void RowFile::Append(const std::string& text) {
-  WriteAll(fd_, text.data(), text.size(), partial_path_);
+  try {
+    WriteAll(fd_, text.data(), text.size(), partial_path_);
+  } catch (const IoError&) {
+    // A full disk (or a file size limit) mid-block: back to the last whole row, so that the file
+    // kept holds whole rows only.
+    if (::ftruncate(fd_, size_) == 0) ::lseek(fd_, size_, SEEK_SET);
+    throw;
+  }
+  size_ += static_cast<off_t>(text.size());
   has_rows_ = has_rows_ || !text.empty();
   const auto now = std::chrono::steady_clock::now();
   if (now - last_sync_ >= sync_interval_) {
@@ -195,7 +204,8 @@ std::string GcsvHeaderOf(const RecordSummary& summary, int index, const Recorder
   if (!finished) {
     h.emplace_back(
         "recording",
-        "unfinished: the recorder stopped before its summary (killed or power lost); "
+        "unfinished: the recorder stopped before its summary (killed, power lost or the "
+        "disk full); "
         "a kill loses the reads of about the last " +
             FormatNumber("%.0f", options.writer_interval_s * 1e3) +
             " ms, a power cut those of the last " +

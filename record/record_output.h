@@ -25,6 +25,7 @@
 
 #include <chrono>
 #include <string>
+#include <sys/types.h>
 
 namespace shutterlab {
 
@@ -40,7 +41,8 @@ class RowFile {
   RowFile& operator=(const RowFile&) = delete;
 
   // Appends text (whole rows), synced when sync_interval has passed since the last sync; throws
-  // IoError naming the output when the write fails.
+  // IoError naming the output when the write fails (a full disk), the file cut back to the rows
+  // before `text`.
   void Append(const std::string& text);
   // Writes header + rows to final_path, whole or not at all, then removes the partial file.
   void Finish(const std::string& header);
@@ -52,6 +54,7 @@ class RowFile {
   std::string final_path_, partial_path_;
   int fd_ = -1;
   size_t header_bytes_ = 0;
+  off_t size_ = 0;  // the file's length: the header and the whole rows appended
   bool has_rows_ = false, finished_ = false;
   std::chrono::steady_clock::duration sync_interval_;
   std::chrono::steady_clock::time_point last_sync_;

@@ -555,7 +555,8 @@ RecordSummary Session::Run() {
       for (const auto& s : sensors_)
         if (s->rows->has_rows()) kept += (kept.empty() ? "" : ", ") + s->rows->partial_path();
       if (kept.empty()) throw;
-      throw IoError(std::string(e.what()) + "; the rows recorded until then are in " + kept);
+      throw IoError(std::string(e.what()) + "; the recording stopped: its rows until then are in " +
+                    kept + " (every command reads it as it is)");
     }
   }
   RecordSummary summary = Summarise();

@@ -178,6 +178,40 @@ TEST(RecordCli, KilledAtRandomMomentsLeavesAReadableFileLosingOnlyTheLastReads) 
   EXPECT_LT(worst_loss_ms, 250.0) << "a kill lost more than the writer's interval and scheduling";
 }
 
+// A full disk mid-recording: a file size limit (RLIMIT_FSIZE with SIGXFSZ ignored) fails the
+// writes as a full disk does (EFBIG where a disk says ENOSPC). The recording stops at once with one
+// line and exit code 2, and the partial file keeps whole rows only, read as it is.
+TEST(RecordCli, AFullDiskStopsTheRecordingWithItsWholeRowsKept) {
+  test::TempDir dir;
+  const std::string trace = dir / "still.csv", rec = dir / "rec.gcsv";
+  WriteTrace(trace, MotionProfile::kStill, 1000, 10.0, 7);
+  const std::string command = "bash -c \"trap '' XFSZ; ulimit -f 64; exec " +
+                              std::string(SHUTTERLAB_BINARY) + " record --device emulate:" + trace +
+                              ",rate=8kHz --duration 8s --still 0s --out " + rec + "\" 2> " +
+                              dir / "err.txt";
+  const auto start = std::chrono::steady_clock::now();
+  const int status = std::system(command.c_str());
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5))
+      << "it went on after the disk was full";
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  const std::string err = ReadFileToString(dir / "err.txt");
+  EXPECT_EQ(test::LineCount(err), 1u) << err;
+  EXPECT_NE(err.find(rec + ".partial: write failed: File too large"), std::string::npos) << err;
+  EXPECT_NE(err.find("the recording stopped: its rows until then are in " + rec + ".partial"),
+            std::string::npos)
+      << err;
+  EXPECT_FALSE(std::filesystem::exists(rec));
+  const std::string text = ReadFileToString(rec + ".partial");
+  EXPECT_LE(text.size(), 64u * 1024u);
+  ASSERT_FALSE(text.empty());
+  EXPECT_EQ(text.back(), '\n') << "a row cut by the full disk was kept";
+  const GcsvLog log = ReadGcsv(rec + ".partial");
+  EXPECT_GT(log.trace.size(), 1000u);
+  ASSERT_EQ(log.warnings.size(), 1u) << test::JoinedWarnings(log.warnings);
+  EXPECT_TRUE(test::AnyWarningContains(log.warnings, "disk full"));
+}
+
 TEST(RecordCli, BadDevicesAreOneLineWithExitCodeTwo) {
   test::TempDir dir;
   const std::string trace = dir / "still.csv";
