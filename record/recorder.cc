@@ -25,6 +25,10 @@ namespace shutterlab {
 
 namespace {
 
+// How long a part fails its health checks (WHO_AM_I and its configuration read back) before it is
+// reset: a burst of noise on the bus shorter than this costs only the FIFO it spoiled.
+constexpr int64_t kUnhealthyBeforeResetNs = 10000000;
+
 int64_t ToNs(double s) { return static_cast<int64_t>(std::llround(s * 1e9)); }
 
 // Everything about one sensor during a recording. The reader owns the reader fields, the writer
@@ -46,10 +50,11 @@ struct SensorState {
   int64_t next_index = 0;        // index of the next sample on the current sample train
   const char* resync = nullptr;  // the next read's index comes from the clock (why: a gap kind)
   bool down = false;             // the part failed its health check and is not configured yet
-  int64_t reset_issued_ns = INT64_MIN;  // while down: when the reset was sent
-  bool check_now = false;               // bad data or a failed read: check the part at once
-  bool restarted = false;               // configured again: the first read after it counts the gap
-  int64_t last_t_ns = INT64_MIN;        // newest sample time
+  int64_t reset_issued_ns = INT64_MIN;     // while down: when the reset was sent
+  bool check_now = false;                  // bad data or a failed read: check the part at once
+  int64_t unhealthy_since_ns = INT64_MIN;  // the first of the failed checks in a row
+  bool restarted = false;         // configured again: the first read after it counts the gap
+  int64_t last_t_ns = INT64_MIN;  // newest sample time
   int64_t last_read_ns = 0;
   size_t reads = 0;
   double max_read_interval_s = 0;
@@ -255,7 +260,19 @@ void Session::CheckHealth(int index) {
     healthy = s.driver->Healthy();
   } catch (const IoError&) {
   }
-  if (healthy) return;
+  const int64_t now_ns = clock_.NowNs();
+  if (healthy) {
+    s.unhealthy_since_ns = INT64_MIN;
+    return;
+  }
+  // Noise on the bus for a few reads is not a dead part: check again at every pass, and reset the
+  // part only once it has failed for kUnhealthyBeforeResetNs.
+  if (s.unhealthy_since_ns == INT64_MIN) s.unhealthy_since_ns = now_ns;
+  if (now_ns - s.unhealthy_since_ns < kUnhealthyBeforeResetNs) {
+    s.check_now = true;
+    return;
+  }
+  s.unhealthy_since_ns = INT64_MIN;
   s.down = true;
   s.reset_issued_ns = INT64_MIN;
   Recover(index);

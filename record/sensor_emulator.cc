@@ -285,6 +285,12 @@ void SensorEmulator::Transfer(const uint8_t* tx, uint8_t* rx, size_t n, uint32_t
     }
     if (address != data_reg) address = static_cast<uint8_t>((address + 1) & 0x7F);
   }
+  for (const auto& [start_ns, length_ns] : options_.garbled_reads) {
+    if (now_ns >= start_ns && now_ns < start_ns + length_ns) {
+      std::uniform_int_distribution<int> byte(0, 255);
+      for (size_t i = 1; i < n; ++i) rx[i] = static_cast<uint8_t>(byte(noise_));
+    }
+  }
 }
 
 }  // namespace shutterlab

@@ -36,6 +36,7 @@
 #include <deque>
 #include <memory>
 #include <optional>
+#include <random>
 #include <string>
 #include <utility>
 #include <vector>
@@ -50,6 +51,12 @@ struct EmulatorOptions {
   // Brown-outs, for tests: from each start (clock ns) for its length the bus answers 0xFF to
   // everything (a loose wire, a dead part), and the part comes back from its reset values.
   std::vector<std::pair<int64_t, int64_t>> brownouts;
+  // Noise on the data line back from the part (a long wire, interference), for tests: from each
+  // start (clock ns) for its length every byte a read returns is random (seeded), while what is
+  // sent still reaches the part and the part runs on. A FIFO count read then is mostly one the FIFO
+  // cannot hold (bad data); one that could be is read as data, which an MPU's packets, having no
+  // header, cannot show.
+  std::vector<std::pair<int64_t, int64_t>> garbled_reads;
   // Emulated parts that share this play origin play their traces on one time line: the first
   // to start its FIFO sets it (two sensors on one camera feel the same motion at the same time,
   // however far apart they were configured). Null: the part's own.
@@ -112,6 +119,7 @@ class SensorEmulator : public SpiTransport {
   std::vector<std::array<int16_t, 3>> fifo_counts_;
   size_t samples_dropped_ = 0;
   bool browned_out_ = false;
+  std::mt19937 noise_{1};  // the bytes of a garbled read (EmulatorOptions::garbled_reads)
 };
 
 }  // namespace shutterlab
