@@ -92,7 +92,8 @@ RowFile::RowFile(const std::string& final_path, const std::string& partial_heade
   fd_ = ::open(partial_path_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd_ < 0 && errno == EEXIST) {
     throw IoError(IoMessage(partial_path_, 0,
-                            "exists: a recording before this one was cut (killed or power lost); "
+                            "exists: a recording before this one was cut (killed, power lost or the disk "
+                            "full); "
                             "it is kept as it is: read it (shutterlab analyze " +
                                 partial_path_ + ") or move it away, then record again"));
   }
@@ -113,7 +114,7 @@ RowFile::RowFile(const std::string& final_path, const std::string& partial_heade
 
 RowFile::~RowFile() {
   if (fd_ >= 0) ::close(fd_);
-  if (!finished_ && !has_rows_) std::remove(partial_path_.c_str());
+  if (!finished_ && !has_rows()) std::remove(partial_path_.c_str());
 }
 
 void RowFile::Append(const std::string& text) {
@@ -126,7 +127,6 @@ void RowFile::Append(const std::string& text) {
     throw;
   }
   size_ += static_cast<off_t>(text.size());
-  has_rows_ = has_rows_ || !text.empty();
   const auto now = std::chrono::steady_clock::now();
   if (now - last_sync_ >= sync_interval_) {
     if (::fdatasync(fd_) < 0)
