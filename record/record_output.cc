@@ -91,11 +91,12 @@ RowFile::RowFile(const std::string& final_path, const std::string& partial_heade
   // Read and write: Finish copies the rows from it.
   fd_ = ::open(partial_path_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd_ < 0 && errno == EEXIST) {
-    throw IoError(IoMessage(partial_path_, 0,
-                            "exists: a recording before this one was cut (killed, power lost or the disk "
-                            "full); "
-                            "it is kept as it is: read it (shutterlab analyze " +
-                                partial_path_ + ") or move it away, then record again"));
+    throw IoError(
+        IoMessage(partial_path_, 0,
+                  "exists: a recording before this one was cut (killed, power lost or the disk "
+                  "full); "
+                  "it is kept as it is: read it (shutterlab analyze " +
+                      partial_path_ + ") or move it away, then record again"));
   }
   if (fd_ < 0) throw IoError(IoMessage(final_path_, 0, "cannot create: " + ErrnoText()));
   try {
