@@ -129,7 +129,14 @@ class LocalBatch {
     if (running_.empty() || options_.memory_cap_bytes <= 0) return true;
     double used = 0;
     for (const auto& [pid, item] : running_) used += item.estimate_bytes;
-    return used + EstimateBatchItemMemoryBytes(manifest_.items[index]) <= options_.memory_cap_bytes;
+    return used + EstimateBytes(index) <= options_.memory_cap_bytes;
+  }
+
+  // An item's memory estimate, made once: it lists the item's input files.
+  double EstimateBytes(size_t index) {
+    const auto [at, inserted] = estimates_.try_emplace(index, 0.0);
+    if (inserted) at->second = EstimateBatchItemMemoryBytes(manifest_.items[index]);
+    return at->second;
   }
 
   void End(ActiveItem&& item) {
@@ -200,7 +207,7 @@ class LocalBatch {
                    {"recipe", recipe},
                    {"inputs", InputStampsJson(stamps)},
                    {"jobs", nlohmann::json::array()}};
-    item.estimate_bytes = EstimateBatchItemMemoryBytes(spec);
+    item.estimate_bytes = EstimateBytes(index);
     item.record["estimated_memory_mib"] = item.estimate_bytes / (1024.0 * 1024);
     Launch(std::move(item));
   }
@@ -359,6 +366,7 @@ class LocalBatch {
   fs::path items_dir_;
   std::map<pid_t, ActiveItem> running_;
   std::map<size_t, BatchItemOutcome> outcomes_;
+  std::map<size_t, double> estimates_;  // EstimateBytes's, by item index
   BatchProgress progress_;
   double made_seconds_ = 0;
   size_t made_count_ = 0;
