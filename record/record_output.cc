@@ -109,7 +109,7 @@ RowFile::RowFile(const std::string& final_path, const std::string& partial_heade
     throw;
   }
   header_bytes_ = partial_header.size();
-  size_ = static_cast<off_t>(header_bytes_);
+  size_bytes_ = static_cast<off_t>(header_bytes_);
   last_sync_ = std::chrono::steady_clock::now();
 }
 
@@ -124,10 +124,10 @@ void RowFile::Append(const std::string& text) {
   } catch (const IoError&) {
     // A full disk (or a file size limit) mid-block: back to the last whole row, so that the file
     // kept holds whole rows only.
-    if (::ftruncate(fd_, size_) == 0) ::lseek(fd_, size_, SEEK_SET);
+    if (::ftruncate(fd_, size_bytes_) == 0) ::lseek(fd_, size_bytes_, SEEK_SET);
     throw;
   }
-  size_ += static_cast<off_t>(text.size());
+  size_bytes_ += static_cast<off_t>(text.size());
   const auto now = std::chrono::steady_clock::now();
   if (now - last_sync_ >= sync_interval_) {
     if (::fdatasync(fd_) < 0)
