@@ -146,6 +146,25 @@ std::optional<TriggerInput> TriggersFromFlags(const AnalyzeFlags& flags) {
   if (flags.triggers_path.empty()) return std::nullopt;
   TriggerInput triggers{ReadTriggerFile(flags.triggers_path), flags.triggers_path};
   PrintLogWarnings(flags.triggers_path, triggers.file.warnings);
+  if (!flags.triggers_clock_path.empty()) {
+    // Both gyros read whole: the alignment correlates them over every lag.
+    const GyroTrace log_gyro = ReadFlightLog(flags.log_path, ReadOptionsFromFlags(flags)).gyro;
+    const GyroTrace clock_gyro = ReadFlightLog(flags.triggers_clock_path).gyro;
+    const std::string clock_name = std::filesystem::path(flags.triggers_clock_path).filename();
+    try {
+      const GyroSync sync =
+          MoveTriggersToLogClock(log_gyro, clock_gyro, clock_name, &triggers.file);
+      // On stderr: the warnings' stream, which --json leaves free of its document.
+      std::fprintf(stderr,
+                   "triggers: on %s's clock; log clock = its clock %+.6f s (+- %.2f ms), from "
+                   "the motion (peak correlation %.2f)\n",
+                   clock_name.c_str(), -sync.offset_s, sync.offset_stderr_s * 1e3,
+                   sync.peak_correlation);
+    } catch (const std::invalid_argument& e) {
+      throw IoError(flags.triggers_clock_path + ": cannot put the triggers on " + flags.log_path +
+                    "'s clock: " + WithoutCheckLocation(e.what()));
+    }
+  }
   return triggers;
 }
 
@@ -154,6 +173,7 @@ LogInput InputFromFlags(const AnalyzeFlags& flags) {
   input.path = flags.log_path;
   input.read = ReadOptionsFromFlags(flags);
   input.second_path = flags.second_path;
+  input.second_own_clock = flags.sync_second;
   return input;
 }
 
@@ -273,11 +293,19 @@ std::function<void()> AddAnalyzeFlags(CLI::App* command, AnalyzeFlags* flags) {
           "timestamp, utc_usec or utc instead)")
       ->check(CLI::ExistingFile);
   command
+      ->add_option("--triggers-clock", flags->triggers_clock_path,
+                   "GYROLOG: the --triggers times are on this gyro log's clock (record's triggers "
+                   "file: its .gcsv), not LOG's; put on LOG's by aligning the two gyros from the "
+                   "motion (as sync)")
+      ->check(CLI::ExistingFile)
+      ->needs("--triggers");
+  command
       ->add_option(
           "--second", flags->second_path,
           "a second sensor's log on the same clock (record --device twice): fused with the "
           "first, the mounting fitted from the motion")
       ->check(CLI::ExistingFile);
+  AddSyncSecond(command, &flags->sync_second);
   AddQuantityOption(command, "--every", &flags->every_s, "s", "s",
                     "simulated triggers at this cadence, e.g. 2s; with --triggers or --every "
                     "the log's camera events are not used");

@@ -34,7 +34,10 @@ struct AnalyzeFlags {
   double focal_px = 1100.0;
   std::string size = "1280x960";
   std::string triggers_path;
+  std::string
+      triggers_clock_path;  // --triggers-clock: the gyro log whose clock the triggers are on
   std::string second_path;
+  bool sync_second = false;
   double every_s = std::numeric_limits<double>::quiet_NaN();  // NaN: not given
   double latency_s = 0.0;
   std::vector<double> limits_m{0.05, 0.10};

@@ -12,15 +12,41 @@
 namespace shutterlab::app {
 namespace {
 
+// What `--gyro LOG` found: the log, the frames tracked, the offset and the mounting.
+void PrintGyroLogAlignment(const GyroLogAlignment& log) {
+  const GyroSync& sync = log.sync;
+  std::printf("log      %s: %s %s, %zu samples over %.1f s\n", log.path.c_str(), log.format.c_str(),
+              log.gyro_source.c_str(), log.log_samples, log.log_duration_s);
+  if (log.pairs > 0)
+    std::printf("tracked  %zu of %zu frame pairs show a rotation (median %zu rays)\n",
+                log.pairs_used, log.pairs, log.median_inliers);
+  std::printf(
+      "aligned  log clock = clip clock + %.6f s (+- %.2f ms), mounting %.1f deg%s, by %s "
+      "(peak correlation %.2f, next %.2f)\n",
+      log.time_offset_s, sync.offset_stderr_s * 1e3, sync.mounting_angle_deg,
+      sync.mounting_fitted ? "" : " (one axis only: identity kept)", log.method.c_str(),
+      sync.peak_correlation, sync.runner_up_correlation);
+}
+
 const CommandRegistration kImportRegistration(55, [](CLI::App& app) {
   auto* cmd = app.add_subcommand("import",
                                  "real footage with its own gyro (GoPro MP4 with GPMF, phone clip "
-                                 "folder) -> video rig dataset");
+                                 "folder) or with a flight log's (--gyro) -> video rig dataset");
   auto options = std::make_shared<ImportOptions>();
   cmd->add_option(
          "SOURCE", options->source,
-         "a GoPro .mp4 with a gpmd track, or a folder with gyro.txt, framestamp.txt, frames/")
+         "a GoPro .mp4 with a gpmd track, a folder with gyro.txt, framestamp.txt, frames/, or "
+         "with --gyro any .mp4 / .mov")
       ->required();
+  cmd->add_option("--gyro", options->gyro_log,
+                  "LOG: a flight controller's or recorder's log (any format analyze reads) whose "
+                  "gyro the dataset takes, put on the clip's clock and axes from the motion (the "
+                  "clip's own gyro, else the frames' rotation)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--camera", options->camera_path,
+                  "camera.json (rig/1) of a video that states no camera (with --gyro): its "
+                  "camera, lens and readout")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--out", options->out_dir,
                   "output dataset folder (replaced only if it is an earlier import)")
       ->required();
@@ -39,21 +65,33 @@ const CommandRegistration kImportRegistration(55, [](CLI::App& app) {
   return std::function<void()>([options] {
     options->Check();
     std::unique_ptr<Progress> bar;
+    size_t bar_total = 0;
+    // The frames, then (--gyro on a video without a gyro) the pairs of frames tracked.
     const ImportSummary summary = ImportVideo(*options, [&](size_t done, size_t total) {
-      if (!bar) bar = std::make_unique<Progress>("import", total);
+      if (!bar || total != bar_total) {
+        bar.reset();
+        bar = std::make_unique<Progress>(bar_total == 0 ? "import" : "track", total);
+        bar_total = total;
+      }
       bar->Update(done);
     });
     bar.reset();
     PrintLogWarnings(options->source, summary.record.warnings);
-    const char* kind = summary.kind == ImportSource::kGoproMp4 ? "GoPro MP4 (GPMF)" : "phone clip";
+    const char* kind = summary.kind == ImportSource::kGoproMp4      ? "GoPro MP4 (GPMF)"
+                       : summary.kind == ImportSource::kPhoneFolder ? "phone clip"
+                                                                    : "video without a gyro";
     std::printf("source   %s: %s\n", kind, options->source.c_str());
     std::printf("gyro     %zu samples, %.2f Hz\n", summary.gyro_samples, summary.gyro_rate_hz);
     std::printf("frames   %zu, t_first_row %.6f .. %.6f s\n", summary.frames, summary.t_first_s,
                 summary.t_last_s);
     const ImportRecord& record = summary.record;
     const auto* gopro = std::get_if<GoproImportDetails>(&record.details);
-    if (gopro && gopro->failed_grabs > 0)
-      std::printf("note     the video reader failed %d grab(s) and went on\n", gopro->failed_grabs);
+    const auto* video = std::get_if<VideoFileImportDetails>(&record.details);
+    const int failed_grabs = gopro   ? gopro->decoding.failed_grabs
+                             : video ? video->decoding.failed_grabs
+                                     : 0;
+    if (failed_grabs > 0)
+      std::printf("note     the video reader failed %d grab(s) and went on\n", failed_grabs);
     if (gopro && gopro->settings.present) {
       const GoproSettings& s = gopro->settings;
       std::printf("camera   %s, firmware %s, stabiliser %s%s\n", s.model.c_str(),
@@ -65,6 +103,7 @@ const CommandRegistration kImportRegistration(55, [](CLI::App& app) {
           "note     image_orientation.csv: the stabiliser's IORI for %zu frames, up to "
           "%.1f deg\n",
           gopro->orientation_frames, gopro->iori_max_deg);
+    if (record.gyro_log) PrintGyroLogAlignment(*record.gyro_log);
     if (record.lens_profile) {
       for (const std::string& line : record.lens_profile->notes)
         std::printf("lens     %s\n", line.c_str());

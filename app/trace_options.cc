@@ -92,6 +92,15 @@ void TraceOptions::AddSecond(CLI::App* command) {
       "--second", second_path,
       "a second sensor's log on the same clock (record --device twice): paired, the mounting "
       "fitted from the motion, and fused"));
+  AddSyncSecond(command, &sync_second);
+}
+
+void AddSyncSecond(CLI::App* command, bool* sync_second) {
+  command
+      ->add_flag("--sync-second", *sync_second,
+                 "the --second log runs on a clock of its own (another recorder, a camera's "
+                 "gyro): put it on LOG's from the motion first, as sync does (both read whole)")
+      ->needs("--second");
 }
 
 FlightLogReadOptions TraceOptions::ReadOptions() const {
@@ -110,6 +119,7 @@ LogInput TraceOptions::Input() const {
   input.path = path;
   input.read = ReadOptions();
   input.second_path = second_path;
+  input.second_own_clock = sync_second;
   input.find_still_segment = auto_bias;
   return input;
 }

@@ -43,6 +43,7 @@ struct TraceOptions {
   bool auto_bias = false;       // find the still segment automatically instead of --bias
   bool zero_bias = false;       // the rates are bias-free: no segment, every sample analysed
   std::string second_path;      // --second: a second sensor's log on the same clock
+  bool sync_second = false;     // --sync-second: ... or on a clock of its own
   CLI::Option* bias_option = nullptr;  // --bias, to tell a given segment from the default
 
   // Adds TRACE (positional) and the options above to a subcommand. with_bias: add --bias too.
@@ -61,6 +62,9 @@ struct TraceOptions {
 
 // Prints each assumption's line ("assumed: ...; give ...") on stdout after a command's table.
 void PrintAssumptions(const std::vector<Assumption>& assumptions);
+
+// --sync-second (it needs --second): every command that takes a second sensor's log.
+void AddSyncSecond(CLI::App* command, bool* sync_second);
 
 // The --format option of a command that reads logs: every format of the reader table
 // (sim/logs/flight_log_io.h LogReaders) in its help, after `what`.

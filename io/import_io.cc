@@ -37,6 +37,14 @@ json ExposuresJson(const std::vector<FrameExposure>& exposures) {
   return out;
 }
 
+void AddDecoding(const VideoDecoding& decoding, json* record) {
+  json& frames = (*record)["frames"];
+  frames["video_samples"] = decoding.video_samples;
+  frames["decoded"] = decoding.decoded;
+  frames["failed_grabs"] = decoding.failed_grabs;
+  frames["reader_time_mismatches"] = decoding.reader_time_mismatches;
+}
+
 void AddGopro(const GoproImportDetails& gopro, json* record) {
   json& r = *record;
   r["source"]["kind"] = "gopro_mp4";
@@ -47,10 +55,7 @@ void AddGopro(const GoproImportDetails& gopro, json* record) {
   r["gyro"]["payload_samples"] = gopro.payload_samples;
   r["gyro"]["timing"] = gopro.timing;
   r["gyro"]["fit_max_residual_s"] = gopro.fit_max_residual_s;
-  r["frames"]["video_samples"] = gopro.video_samples;
-  r["frames"]["decoded"] = gopro.decoded;
-  r["frames"]["failed_grabs"] = gopro.failed_grabs;
-  r["frames"]["reader_time_mismatches"] = gopro.reader_time_mismatches;
+  AddDecoding(gopro.decoding, &r);
   r["frames"]["times"] = gopro.times;
   // Fields that only newer cameras write: absent, not null, for a clip without them.
   if (!gopro.gyro_orin.empty()) r["gyro"]["orin"] = gopro.gyro_orin;
@@ -98,6 +103,41 @@ void AddPhone(const PhoneImportDetails& phone, json* record) {
   r["exposure_range_s"] = {phone.exposure_min_s, phone.exposure_max_s};
 }
 
+void AddVideoFile(const VideoFileImportDetails& video, json* record) {
+  (*record)["source"]["kind"] = "video_file";
+  AddDecoding(video.decoding, record);
+}
+
+json GyroLogJson(const GyroLogAlignment& log) {
+  const GyroSync& sync = log.sync;
+  json j = {{"path", log.path},
+            {"format", log.format},
+            {"gyro_source", log.gyro_source},
+            {"log_samples", log.log_samples},
+            {"log_duration_s", log.log_duration_s},
+            {"method", log.method},
+            {"offset_s", sync.offset_s},
+            {"offset_stderr_s", sync.offset_stderr_s},
+            {"rate_ppm", sync.rate_ppm ? json(*sync.rate_ppm) : json(nullptr)},
+            {"rate_stderr_ppm", sync.rate_stderr_ppm ? json(*sync.rate_stderr_ppm) : json(nullptr)},
+            {"reference_clip_s", sync.reference_a_s},
+            {"camera_from_log", MatrixJson(sync.a_from_b)},
+            {"mounting_fitted", sync.mounting_fitted},
+            {"mounting_angle_deg", sync.mounting_angle_deg},
+            {"peak_correlation", sync.peak_correlation},
+            {"runner_up_correlation", sync.runner_up_correlation},
+            {"overlap_s", sync.overlap_s},
+            {"residual_rms_rad_s", sync.residual_rms_rad_s},
+            {"time_offset_s", log.time_offset_s},
+            {"written_span_s", {log.written_from_s, log.written_to_s}}};
+  if (log.pairs > 0) {
+    j["pairs"] = log.pairs;
+    j["pairs_used"] = log.pairs_used;
+    j["median_inliers"] = log.median_inliers;
+  }
+  return j;
+}
+
 }  // namespace
 
 const char* ClaimStatusName(ClaimStatus status) {
@@ -139,6 +179,9 @@ std::string ImportJson(const ImportRecord& record) {
   }
   if (const auto* gopro = std::get_if<GoproImportDetails>(&record.details)) AddGopro(*gopro, &r);
   if (const auto* phone = std::get_if<PhoneImportDetails>(&record.details)) AddPhone(*phone, &r);
+  if (const auto* video = std::get_if<VideoFileImportDetails>(&record.details))
+    AddVideoFile(*video, &r);
+  if (record.gyro_log) r["gyro_log"] = GyroLogJson(*record.gyro_log);
   return r.dump(2) + "\n";
 }
 

@@ -5,6 +5,7 @@
 
 #include "io/lens_profile.h"
 #include "model/lens_distortion.h"
+#include "sim/gyro_sync.h"
 #include "sim/log_warning.h"
 #include "sim/logs/gopro_telemetry.h"
 
@@ -49,6 +50,14 @@ struct FrameExposure {
   std::optional<double> exposure_s;  // unknown: written as null
 };
 
+// How an MP4's frames were decoded (a GoPro's, a video file's): "frames" in import.json.
+struct VideoDecoding {
+  size_t video_samples = 0;  // in the video track's sample table
+  int64_t decoded = 0;       // frames the video reader returned
+  int failed_grabs = 0;
+  int reader_time_mismatches = 0;
+};
+
 // What only a GoPro MP4 records (its "source", "gyro" and "frames" extras).
 struct GoproImportDetails {
   std::string device;  // source.device: DVNM
@@ -57,10 +66,7 @@ struct GoproImportDetails {
   std::vector<size_t> payload_samples;
   std::string timing;  // how the gyro samples were timed, for a person
   double fit_max_residual_s = 0.0;
-  size_t video_samples = 0;
-  int64_t decoded = 0;  // frames the video reader returned
-  int failed_grabs = 0;
-  int reader_time_mismatches = 0;
+  VideoDecoding decoding;
   std::string times;  // where the frame times come from, for a person
   // The GYRO stream's orientation keys as written ("gyro": "orin", "orio", "mtrx" when present).
   std::string gyro_orin, gyro_orio;
@@ -70,6 +76,25 @@ struct GoproImportDetails {
   // matched, and the largest IORI angle over the imported frames, deg.
   size_t iori_samples = 0, cori_samples = 0, orientation_frames = 0;
   double iori_max_deg = 0.0;
+};
+
+// What only a video without a gyro of its own records (an MP4 imported with `--gyro LOG`).
+struct VideoFileImportDetails {
+  VideoDecoding decoding;
+};
+
+// `import --gyro LOG`: the outside log gyro.csv holds, and how it was put on the clip's clock and
+// axes (io/clip_alignment.h).
+struct GyroLogAlignment {
+  std::string path, format, gyro_source;  // the log, its reader's name, the stream read
+  size_t log_samples = 0;                 // in the whole log
+  double log_duration_s = 0.0;
+  std::string method;  // "the clip's own gyro" or "the frames' rotation", for a person
+  // The frames' rotation only: consecutive pairs, those with a rotation, their median inlier rays.
+  size_t pairs = 0, pairs_used = 0, median_inliers = 0;
+  GyroSync sync;               // clip (camera axes, camera clock) against the log
+  double time_offset_s = 0.0;  // camera.json's: log clock = clip clock + this, at the clip's middle
+  double written_from_s = 0.0, written_to_s = 0.0;  // the span of the log in gyro.csv (log clock)
 };
 
 // What only a phone clip folder records.
@@ -98,7 +123,9 @@ struct ImportRecord {
   // saturation), also printed on stderr.
   std::vector<LogWarning> warnings;
   std::optional<LensProfileUse> lens_profile;  // `--lens-profile` ("lens_profile" when given)
-  std::variant<GoproImportDetails, PhoneImportDetails> details;  // also gives source.kind
+  // Also gives source.kind.
+  std::variant<GoproImportDetails, PhoneImportDetails, VideoFileImportDetails> details;
+  std::optional<GyroLogAlignment> gyro_log;  // `--gyro LOG` ("gyro_log")
   // import --mask: the mask file the dataset's camera.json names (docs/FORMATS.md `mask`) and the
   // user's file it was made from; empty when none was given.
   std::string mask_file, mask_source;

@@ -1,5 +1,6 @@
 #include "io/video_import.h"
 
+#include "io/clip_alignment.h"
 #include "io/codecs.h"
 #include "io/frames_csv.h"
 #include "io/image_io.h"
@@ -7,6 +8,7 @@
 #include "io/rig_dataset.h"
 #include "model/camera.h"
 #include "sim/check.h"
+#include "sim/logs/flight_log_io.h"
 #include "sim/logs/gopro_telemetry.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/logs/phone_clip.h"
@@ -35,6 +37,9 @@ constexpr double kHero5WideHfovDeg = 118.2;
 // Full-frame readout of the HERO5 in this mode is not published; a guess of the usual order for
 // its 1080p/30 modes, to be fitted by validate.
 constexpr double kHero5ReadoutGuessS = 0.015;
+// The readout declared for a video that states none (no camera.json, a profile without one): the
+// usual order of consumer cameras' video modes, for validate to fit.
+constexpr double kVideoReadoutGuessS = 0.015;
 // OpenCV's reader fails an occasional grab and then goes on (OpenCV 4.6 on karma.mp4: once, near
 // frame 29); this many failures in a row means the end.
 constexpr int kMaxConsecutiveGrabFailures = 8;
@@ -228,6 +233,10 @@ DecodedFrames DecodeSelectedFrames(const std::string& path, const fs::path& dir,
   }
   flush();
   return out;
+}
+
+VideoDecoding Decoding(const DecodedFrames& frames, size_t video_samples) {
+  return {video_samples, frames.decoded, frames.failures, frames.time_mismatches};
 }
 
 // The HERO5 Black's declared rig for frames of `size`: the Wide field of view's focal length, the
@@ -445,10 +454,7 @@ ImportRecord GoproRecord(const std::string& path, const GoproTelemetry& telemetr
   gopro.timing =
       "one least-squares line of payload start time (gpmd sample table) against samples before it";
   gopro.fit_max_residual_s = telemetry.gyro_fit_max_residual_s;
-  gopro.video_samples = video_samples;
-  gopro.decoded = frames.decoded;
-  gopro.failed_grabs = frames.failures;
-  gopro.reader_time_mismatches = frames.time_mismatches;
+  gopro.decoding = Decoding(frames, video_samples);
   gopro.times = "presentation times of the MP4 video track (stts/ctts/elst)";
   gopro.gyro_orin = telemetry.gyro_orin;
   gopro.gyro_orio = telemetry.gyro_orio;
@@ -507,8 +513,8 @@ void WriteImageOrientation(const fs::path& dir, const GoproTelemetry& t,
   WriteFileAtomically((dir / "image_orientation.csv").string(), text);
 }
 
-ImportSummary ImportGopro(const ImportOptions& options, const std::optional<LensProfile>& profile,
-                          const fs::path& dir,
+ImportSummary ImportGopro(const ImportOptions& options, const FlightLog* log,
+                          const std::optional<LensProfile>& profile, const fs::path& dir,
                           const std::function<void(size_t, size_t)>& progress) {
   const std::string& path = options.source;
   const GoproTelemetry telemetry = ReadGoproTelemetry(path);
@@ -537,8 +543,11 @@ ImportSummary ImportGopro(const ImportOptions& options, const std::optional<Lens
   ImportRecord record = GoproRecord(path, telemetry, declared, frames, frame_times_s.size());
   WriteImageOrientation(dir, telemetry, frames.entries, period_s,
                         &std::get<GoproImportDetails>(record.details));
-  return WriteDataset(dir, ImportSource::kGoproMp4, declared.rig, telemetry.gyro, frames.entries,
-                      std::move(record));
+  RigModel rig = declared.rig;
+  const GyroTrace gyro = !log ? telemetry.gyro
+                              : AlignGyroLog(*log, options.gyro_log, frames.entries, dir.string(),
+                                             cv::Mat(), &telemetry.gyro, &rig, &record);
+  return WriteDataset(dir, ImportSource::kGoproMp4, rig, gyro, frames.entries, std::move(record));
 }
 
 // The phone clip's declared rig for frames of `size`: the source's calibration and full-frame
@@ -617,8 +626,8 @@ ImportRecord PhoneRecord(const std::string& path, const PhoneClip& clip, const R
   return record;
 }
 
-ImportSummary ImportPhone(const ImportOptions& options, const std::optional<LensProfile>& profile,
-                          const fs::path& dir,
+ImportSummary ImportPhone(const ImportOptions& options, const FlightLog* log,
+                          const std::optional<LensProfile>& profile, const fs::path& dir,
                           const std::function<void(size_t, size_t)>& progress) {
   const PhoneClip clip = ReadPhoneClip(options.source);
   std::vector<int64_t> ids;
@@ -668,7 +677,85 @@ ImportSummary ImportPhone(const ImportOptions& options, const std::optional<Lens
                              "Gyroflow " + use.notes.front()});
     record.lens_profile = use;
   }
-  return WriteDataset(dir, ImportSource::kPhoneFolder, rig, clip.gyro, entries, std::move(record));
+  const GyroTrace gyro = !log ? clip.gyro
+                              : AlignGyroLog(*log, options.gyro_log, entries, dir.string(),
+                                             cv::Mat(), &clip.gyro, &rig, &record);
+  return WriteDataset(dir, ImportSource::kPhoneFolder, rig, gyro, entries, std::move(record));
+}
+
+// The camera a video without a gyro of its own declares: camera.json's (--camera), else the lens
+// profile's, with a claim for each number.
+RigModel VideoFileRig(const ImportOptions& options, const std::optional<LensProfile>& profile,
+                      const cv::Size& size, ImportRecord* record) {
+  RigModel rig = BaseRig(size.width, size.height);
+  std::string source;
+  if (!options.camera_path.empty()) {
+    rig = ReadRigModel(options.camera_path);
+    rig.mask.clear();  // relative to the camera.json given; import --mask makes the dataset's
+    if (rig.camera.width != size.width || rig.camera.height != size.height)
+      throw IoError(IoMessage(options.camera_path, -1,
+                              "declares " + std::to_string(rig.camera.width) + "x" +
+                                  std::to_string(rig.camera.height) +
+                                  " but the clip's frames are " + std::to_string(size.width) + "x" +
+                                  std::to_string(size.height)));
+    source = "--camera " + options.camera_path;
+    record->claims.push_back(
+        {"readout_s", rig.shutter.readout_s, ClaimStatus::kSourceClaim, source});
+  } else {
+    LensProfileUse use = ScaleLensProfile(*profile, size.width, size.height);
+    rig.shutter.readout_s = kVideoReadoutGuessS;
+    ApplyLensProfile(&use, &rig);
+    source = "Gyroflow " + use.notes.front();
+    record->claims.push_back(
+        use.readout ? ImportClaim{"readout_s", rig.shutter.readout_s, ClaimStatus::kSourceClaim,
+                                  "Gyroflow lens profile " + use.name + ": frame_readout_time"}
+                    : ImportClaim{"readout_s", kVideoReadoutGuessS, ClaimStatus::kGuess,
+                                  "the clip and the profile state none; the usual order of "
+                                  "consumer cameras' video modes"});
+    record->lens_profile = use;
+  }
+  record->claims.push_back(
+      {"intrinsics", IntrinsicsClaim(rig.camera), ClaimStatus::kSourceClaim, source});
+  if (rig.camera.HasDistortion())
+    record->claims.push_back(
+        {"lens_distortion", rig.camera.distortion, ClaimStatus::kSourceClaim, source});
+  record->claims.push_back(
+      {"direction", std::string(ReadoutDirectionName(rig.shutter.direction)),
+       options.camera_path.empty() ? ClaimStatus::kGuess : ClaimStatus::kSourceClaim,
+       options.camera_path.empty() ? "CMOS default" : source});
+  return rig;
+}
+
+// Any MP4 or MOV without a gyro of its own, with --gyro LOG: its frames as a GoPro's, its camera
+// from --camera or --lens-profile, its gyro the log's (AlignGyroLog by the frames' rotation).
+ImportSummary ImportVideoFile(const ImportOptions& options, const FlightLog* log,
+                              const std::optional<LensProfile>& profile, const fs::path& dir,
+                              const std::function<void(size_t, size_t)>& progress) {
+  const std::string& path = options.source;
+  const std::vector<double> frame_times_s = ReadVideoFrameTimesS(path);
+  std::vector<int64_t> ids(frame_times_s.size());
+  for (size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<int64_t>(i);
+  const std::vector<int64_t> selected = SelectFrames(ids, options);
+  const DecodedFrames frames =
+      DecodeSelectedFrames(path, dir, GoproTelemetry{}, frame_times_s, selected, progress);
+  if (frames.entries.size() < 2)
+    throw IoError(IoMessage(path, -1,
+                            "OpenCV decoded " + std::to_string(frames.entries.size()) +
+                                " frame(s) of the selection; aligning a log needs the motion "
+                                "between frames"));
+  ImportRecord record;
+  record.path = path;
+  record.frame_count = frames.entries.size();
+  record.t_first_row = "frame presentation time; what it marks in the exposure is unknown";
+  record.exposures = frames.exposures;
+  record.details = VideoFileImportDetails{Decoding(frames, frame_times_s.size())};
+  RigModel rig = VideoFileRig(options, profile, frames.size, &record);
+  const cv::Mat mask = options.mask_path.empty()
+                           ? cv::Mat()
+                           : ReadMask(options.mask_path, frames.size.width, frames.size.height);
+  const GyroTrace gyro = AlignGyroLog(*log, options.gyro_log, frames.entries, dir.string(), mask,
+                                      nullptr, &rig, &record, progress);
+  return WriteDataset(dir, ImportSource::kVideoFile, rig, gyro, frames.entries, std::move(record));
 }
 
 }  // namespace
@@ -678,9 +765,11 @@ void ImportOptions::Check() const {
   SHUTTERLAB_CHECK(!out_dir.empty()) << "--out is empty";
   SHUTTERLAB_CHECK(max_frames == -1 || max_frames >= 1) << "--max-frames must be at least 1";
   SHUTTERLAB_CHECK(start_frame >= -1) << "--start-frame must be a frame id (>= 0)";
+  SHUTTERLAB_CHECK(camera_path.empty() || lens_profile_path.empty())
+      << "give --camera or --lens-profile, not both";
 }
 
-ImportSource DetectImportSource(const std::string& source) {
+ImportSource DetectImportSource(const std::string& source, bool with_gyro_log) {
   if (fs::is_directory(source)) {
     const std::string missing = MissingPhoneClipPart(source);
     if (!missing.empty())
@@ -690,10 +779,12 @@ ImportSource DetectImportSource(const std::string& source) {
     return ImportSource::kPhoneFolder;
   }
   if (!fs::is_regular_file(source)) throw IoError(IoMessage(source, -1, "no such file or folder"));
-  if (!HasGoproTelemetry(source))
-    throw IoError(
-        IoMessage(source, -1, "an MP4 without a GoPro 'gpmd' metadata track (no GPMF telemetry)"));
-  return ImportSource::kGoproMp4;
+  if (HasGoproTelemetry(source)) return ImportSource::kGoproMp4;
+  if (with_gyro_log) return ImportSource::kVideoFile;
+  throw IoError(IoMessage(source, -1,
+                          "an MP4 without a GoPro 'gpmd' metadata track: no gyro of its own; give "
+                          "--gyro LOG (a flight controller's or recorder's log) to import it with "
+                          "that"));
 }
 
 // import --mask: the mask checked against the frames' size, written as DIR/mask.png (0 / 255),
@@ -713,14 +804,30 @@ void AddMask(const std::string& mask_path, const fs::path& dir, ImportRecord* re
 ImportSummary ImportVideo(const ImportOptions& options,
                           const std::function<void(size_t, size_t)>& progress) {
   options.Check();
-  const ImportSource kind = DetectImportSource(options.source);
-  // Read before the long decoding: a bad profile fails at once.
+  const ImportSource kind = DetectImportSource(options.source, !options.gyro_log.empty());
+  if (kind == ImportSource::kVideoFile && options.camera_path.empty() &&
+      options.lens_profile_path.empty())
+    throw IoError(IoMessage(options.source, -1,
+                            "states no camera: give --camera camera.json or --lens-profile "
+                            "PROFILE.json (the frames' rays are what the log is aligned to)"));
+  if (kind != ImportSource::kVideoFile && !options.camera_path.empty())
+    throw IoError(IoMessage(options.camera_path, -1,
+                            "--camera is for a video that states no camera; this clip declares "
+                            "its own (--lens-profile replaces its lens)"));
+  // Read before the long decoding: a bad profile or log fails at once.
   std::optional<LensProfile> profile;
   if (!options.lens_profile_path.empty()) profile = ReadLensProfile(options.lens_profile_path);
+  if (!options.camera_path.empty()) ReadRigModel(options.camera_path);
+  std::optional<FlightLog> log;
+  if (!options.gyro_log.empty()) log = ReadFlightLog(options.gyro_log);
+  const FlightLog* outside = log ? &*log : nullptr;
   StagingDir staging(options.out_dir);
-  ImportSummary summary = kind == ImportSource::kGoproMp4
-                              ? ImportGopro(options, profile, staging.path(), progress)
-                              : ImportPhone(options, profile, staging.path(), progress);
+  ImportSummary summary =
+      kind == ImportSource::kGoproMp4
+          ? ImportGopro(options, outside, profile, staging.path(), progress)
+      : kind == ImportSource::kPhoneFolder
+          ? ImportPhone(options, outside, profile, staging.path(), progress)
+          : ImportVideoFile(options, outside, profile, staging.path(), progress);
   if (!options.mask_path.empty()) AddMask(options.mask_path, staging.path(), &summary.record);
   staging.Commit();
   return summary;

@@ -12,6 +12,11 @@
 //  - a phone clip folder (lhaippp/gyro-video-stabilization layout; sim/logs/phone_clip.h):
 //    gyro.txt, framestamp.txt, gyro_dump.txt (exposure per frame), frames/RE_frame-N.jpg (frame
 //    N), the images copied as they are.
+//  - any other MP4 or MOV (an FPV camera's, a GoPro's without GPMF), with `--gyro LOG` only: frames
+//    and times as for the GoPro, the camera from `--camera` or `--lens-profile`.
+// With `--gyro LOG` the dataset's gyro is an outside log's (a flight controller's, a recorder's),
+// put on the clip's clock and axes from the motion (io/clip_alignment.h): camera.json's
+// time_offset_s and gyro_to_camera are what the alignment found, import.json's gyro_log says how.
 // What the sources do not state (GoPro intrinsics, readout, axis mapping) is declared as a claim or
 // a guess and listed in import.json: validate tests it, this importer does not.
 
@@ -24,7 +29,7 @@
 
 namespace shutterlab {
 
-enum class ImportSource { kGoproMp4, kPhoneFolder };
+enum class ImportSource { kGoproMp4, kPhoneFolder, kVideoFile };
 
 struct ImportOptions {
   std::string source;   // an .mp4 with a gpmd track, or a phone clip folder
@@ -40,12 +45,19 @@ struct ImportOptions {
   // burned-in text painted black); written as the dataset's mask.png, named by camera.json's
   // `mask` and recorded in import.json. Empty: none.
   std::string mask_path;
+  // An outside gyro log (any format sim/logs/flight_log_io.h reads) that becomes the dataset's
+  // gyro, aligned to the clip (io/clip_alignment.h). Empty: the clip's own gyro.
+  std::string gyro_log;
+  // camera.json (rig/1) of a video without a gyro of its own: its camera (the frames' size),
+  // lens, readout and direction. Empty: from lens_profile_path.
+  std::string camera_path;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };
 
-// Recognises SOURCE; throws IoError("SOURCE: problem") saying what was expected otherwise.
-ImportSource DetectImportSource(const std::string& source);
+// Recognises SOURCE (an MP4 without GPMF only when an outside gyro log is given); throws
+// IoError("SOURCE: problem") saying what was expected otherwise.
+ImportSource DetectImportSource(const std::string& source, bool with_gyro_log = false);
 
 struct ImportSummary {
   ImportSource kind = ImportSource::kGoproMp4;

@@ -4,10 +4,11 @@
 # Installs the outside programs some tests run (Debian packages, safe to run again): COLMAP (reads
 # the exported cameras) and Python's YAML (reads Kalibr's file), second implementations; Chromium,
 # which opens every page the tool writes (scripts/check_report.sh); Slurm and munge, whose
-# one-node cluster on the loopback address runs `batch --slurm` (scripts/slurm_cluster.sh).
+# one-node cluster on the loopback address runs `batch --slurm` (scripts/slurm_cluster.sh); ffmpeg,
+# which writes the FPV clip `import --gyro` reads (its own encoder and muxer).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/install_packages.sh test colmap python3-yaml chromium slurm-wlm munge
+scripts/install_packages.sh test colmap python3-yaml chromium slurm-wlm munge ffmpeg
 build_dir="${SHUTTERLAB_BUILD_DIR:-build}"
 if [ ! -f "$build_dir/CMakeCache.txt" ]; then
   cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release >/dev/null

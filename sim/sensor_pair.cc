@@ -346,6 +346,11 @@ std::string SensorPairText(const SensorPair& pair, const std::string& a_name,
   std::string text = "sensor pair: " + a_name + " + " + b_name + ": " +
                      std::to_string(pair.paired) + " samples paired (" +
                      std::to_string(pair.unpaired) + " of the first without a partner)\n";
+  if (pair.clock_offset_s) {
+    text += "  clock: the second's = the first's " + FormatNumber("%+.6f", *pair.clock_offset_s) +
+            " s (+- " + FormatNumber("%.3f", pair.clock_offset_stderr_s * 1e3) +
+            " ms), from the motion\n";
+  }
   text += "  mounting (second into first's axes): ";
   if (pair.mounting_fitted) {
     text += "fitted from the motion, a " + FormatNumber("%.2f", pair.mounting_angle_deg) +

@@ -45,6 +45,10 @@ struct SensorPairOptions {
 
 struct SensorPair {
   GyroTrace fused;  // a's axes, rad/s, at a's times (paired samples only)
+  // b ran on a clock of its own, put on a's from the motion (--sync-second, sim/gyro_sync.h):
+  // b's clock = a's + clock_offset_s, with its standard error; nullopt: one clock.
+  std::optional<double> clock_offset_s;
+  double clock_offset_stderr_s = 0.0;
   Eigen::Matrix3d a_from_b = Eigen::Matrix3d::Identity();  // as applied
   bool mounting_fitted = false;
   double mounting_angle_deg = 0.0;  // the rotation angle of a_from_b

@@ -2,6 +2,7 @@
 
 #include "sim/check.h"
 #include "sim/gyro_source.h"
+#include "sim/gyro_sync.h"
 #include "sim/still_detect.h"
 #include "sim/text_file.h"
 
@@ -113,24 +114,60 @@ struct PairInPasses {
       : first(std::move(first_log)), second(std::move(second_log)), read(std::move(options)) {}
   ReopenableFile first, second;
   FlightLogReadOptions read;
-  SensorPair pair;                   // every field but fused
-  std::vector<LogWarning> warnings;  // the first log's, then the second's
-  int64_t second_interval_ns = 0;    // the second log's median sample interval
+  std::optional<GyroSync> second_clock;  // LogInput::second_own_clock: the second on the first's
+  SensorPair pair;                       // every field but fused
+  std::vector<LogWarning> warnings;      // the first log's, then the second's
+  int64_t second_interval_ns = 0;        // the second log's median sample interval
   // The fused samples from the start (both logs opened again).
   std::unique_ptr<GyroSource> OpenFused() const {
-    return FusedPairSource(OpenFlightLog(first, read).gyro, OpenFlightLog(second, read).gyro, pair,
-                           second_interval_ns);
+    return FusedPairSource(OpenFlightLog(first, read).gyro, OpenSecond(), pair, second_interval_ns);
+  }
+  // The second log's samples from the start, on the first's clock.
+  std::unique_ptr<GyroSource> OpenSecond() const {
+    std::unique_ptr<GyroSource> samples = OpenFlightLog(second, read).gyro;
+    return second_clock ? OnClockA(std::move(samples), *second_clock) : std::move(samples);
   }
 };
+
+// A log's whole gyro trace, read through its stream (a pipe too).
+GyroTrace WholeTrace(const ReopenableFile& file, const FlightLogReadOptions& read) {
+  FlightLogStream stream = OpenFlightLog(file, read);
+  std::vector<GyroSample> samples;
+  ConsumeFlightLog(&stream, [&](const GyroChunk& chunk) {
+    samples.insert(samples.end(), chunk.begin(), chunk.end());
+  });
+  return GyroTrace(std::move(samples));
+}
+
+// LogInput::second_own_clock: the second log's clock against the first's, from the motion (both
+// read whole). Throws IoError naming both logs when the motion cannot align them.
+GyroSync SecondClock(const GyroTrace& first, const GyroTrace& second, const std::string& first_path,
+                     const std::string& second_path) {
+  try {
+    return SyncGyros(first, second);
+  } catch (const std::invalid_argument& e) {
+    throw IoError(
+        first_path + " + " + second_path +
+        ": cannot put the second log on the first's clock: " + WithoutCheckLocation(e.what()));
+  }
+}
+
+void NoteClock(const GyroSync& sync, SensorPair* pair) {
+  pair->clock_offset_s = sync.offset_s;
+  pair->clock_offset_stderr_s = sync.offset_stderr_s;
+}
 
 // first_stream: the first log, opened already (its metadata read). still: the segment that weighs
 // the fusion; nullopt: searched on the first log (equal weights when none is found). Throws
 // IoError naming both logs when they do not pair.
 PairInPasses FitPairInPasses(const ReopenableFile& first, const ReopenableFile& second,
-                             const FlightLogReadOptions& read, FlightLogStream first_stream,
-                             const std::optional<BiasSegment>& still,
+                             const FlightLogReadOptions& read, bool second_own_clock,
+                             FlightLogStream first_stream, const std::optional<BiasSegment>& still,
                              const PipelineEvents& events) {
   PairInPasses out(first, second, read);
+  if (second_own_clock)
+    out.second_clock =
+        SecondClock(WholeTrace(first, read), WholeTrace(second, read), first.path(), second.path());
   const auto samples_of = [&read](const ReopenableFile& file) -> OpenGyroSource {
     return [&read, file] { return OpenFlightLog(file, read).gyro; };
   };
@@ -165,7 +202,9 @@ PairInPasses FitPairInPasses(const ReopenableFile& first, const ReopenableFile& 
   }
   out.second_interval_ns = second_read.sampling.median_interval_ns;
   try {
-    out.pair = FitSensorPair(first_passes, samples_of(second), out.second_interval_ns, options);
+    const OpenGyroSource second_passes = [&out] { return out.OpenSecond(); };
+    out.pair = FitSensorPair(first_passes, second_passes, out.second_interval_ns, options);
+    if (out.second_clock) NoteClock(*out.second_clock, &out.pair);
   } catch (const std::invalid_argument& e) {
     // Named by both logs, as the whole read names them: an IoError, so that a caller's wrapping of
     // the analysis's errors in the first log's name does not name it twice.
@@ -209,8 +248,9 @@ AnalyzeLogSource PairStreamSource(const LogInput& input,
                                   FlightLogStream first, const AnalyzedLogs& logs,
                                   std::optional<SensorPair>* pair, const PipelineEvents& events) {
   FlightLog first_log = first.log;
-  auto fitted = std::make_shared<const PairInPasses>(FitPairInPasses(
-      logs.first, *logs.second, input.read, std::move(first), std::nullopt, events));
+  auto fitted = std::make_shared<const PairInPasses>(
+      FitPairInPasses(logs.first, *logs.second, input.read, input.second_own_clock,
+                      std::move(first), std::nullopt, events));
   *pair = fitted->pair;
   // The fused log: the first's metadata, both logs' warnings, the fused samples.
   FlightLog fused = std::move(first_log);
@@ -271,8 +311,14 @@ LoadedTrace LoadTrace(const LogInput& input, const BiasSegment& segment,
   loaded.warnings.insert(loaded.warnings.end(), second.warnings.begin(), second.warnings.end());
   SensorPairOptions options;
   options.still = loaded.segment;
+  std::optional<GyroSync> clock;
+  if (input.second_own_clock) {
+    clock = SecondClock(log.gyro, second.gyro, input.path, input.second_path);
+    second.gyro = OnClockA(second.gyro, *clock);
+  }
   SensorPair pair = NamedByLog(input.path + " + " + input.second_path,
                                [&] { return FuseSensorPair(log.gyro, second.gyro, options); });
+  if (clock) NoteClock(*clock, &pair);
   loaded.trace = pair.fused;
   loaded.pair = TracePair{std::move(log.gyro), std::move(second.gyro), std::move(pair)};
   return loaded;
@@ -292,8 +338,9 @@ FlightRun RunFlight(const LogInput& input, FlightOptions options, const Pipeline
   FlightRun run;
   if (!input.second_path.empty()) {
     const ReopenableFile second(input.second_path);
-    const PairInPasses fitted = FitPairInPasses(
-        *first, second, input.read, OpenFlightLog(*first, input.read), options.bias, events);
+    const PairInPasses fitted =
+        FitPairInPasses(*first, second, input.read, input.second_own_clock,
+                        OpenFlightLog(*first, input.read), options.bias, events);
     run.pair = fitted.pair;
     run.warnings = fitted.warnings;
     std::unique_ptr<GyroSource> fused = fitted.OpenFused();

@@ -38,6 +38,10 @@ struct LogInput {
   std::string path;  // "/dev/stdin" reads a pipe
   FlightLogReadOptions read;
   std::string second_path;  // a second sensor's log on the same clock, read alike; "" for none
+  // The second log runs on a clock of its own (another recorder, a camera's gyro): put on the
+  // first's from the motion (sim/gyro_sync.h, both logs read whole once) before it is paired;
+  // the pair's clock_offset_s says what was found.
+  bool second_own_clock = false;
   // Search the still segment for the bias (sim/still_detect.h DetectStillSegment, its defaults)
   // instead of the segment the analysis's options give.
   bool find_still_segment = false;

@@ -41,6 +41,12 @@ nlohmann::ordered_json SensorPairToJson(const SensorPair& pair, const std::strin
   j["second_log"] = second_path;
   j["paired"] = pair.paired;
   j["unpaired"] = pair.unpaired;
+  // --sync-second: the second's clock = the first's + this; null when both ran on one clock.
+  j["clock_offset_s"] = pair.clock_offset_s ? nlohmann::ordered_json(*pair.clock_offset_s)
+                                            : nlohmann::ordered_json(nullptr);
+  j["clock_offset_stderr_s"] = pair.clock_offset_s
+                                   ? nlohmann::ordered_json(pair.clock_offset_stderr_s)
+                                   : nlohmann::ordered_json(nullptr);
   j["mounting_fitted"] = pair.mounting_fitted;
   j["mounting_angle_deg"] = pair.mounting_angle_deg;
   j["mounting_signal_ratio"] = pair.mounting_signal_ratio;

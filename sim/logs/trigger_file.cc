@@ -352,6 +352,22 @@ TriggerFile ParseTriggerCsv(std::string_view text, const std::string& path) {
   return file;
 }
 
+GyroSync MoveTriggersToLogClock(const GyroTrace& log_gyro, const GyroTrace& clock_gyro,
+                                const std::string& clock_name, TriggerFile* file) {
+  SHUTTERLAB_CHECK(file->clock == TriggerClock::kLog)
+      << "the triggers are on " << TriggerClockName(file->clock)
+      << " already, not on a gyro's clock: give --triggers-clock only for triggers recorded "
+         "beside another gyro (record's triggers file and its .gcsv)";
+  const GyroSync sync = SyncGyros(log_gyro, clock_gyro);
+  for (TriggerEvent& event : file->events)
+    event.t_ns = SecondsToNs(ClockAFromB(sync, event.t_ns * 1e-9));
+  file->source += "; on " + clock_name +
+                  "'s clock, put on the log's from the motion: log clock = " + clock_name + "'s " +
+                  FormatNumber("%+.6f", -sync.offset_s) + " s (+- " +
+                  FormatNumber("%.2f", sync.offset_stderr_s * 1e3) + " ms)";
+  return sync;
+}
+
 TriggerFile ReadTriggerFile(const std::string& path) {
   const MappedFile mapped(path);
   const std::string_view text = mapped.text();

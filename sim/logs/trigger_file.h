@@ -12,6 +12,8 @@
 //  - A flight log with camera events: PX4 ULog camera_capture / camera_trigger, ArduPilot
 //    DataFlash CAM / TRIG (sim/logs/flight_log_io.h), on that log's clock.
 
+#include "sim/gyro_sync.h"
+#include "sim/gyro_trace.h"
 #include "sim/log_warning.h"
 
 #include <cstdint>
@@ -50,6 +52,13 @@ struct TriggerFile {
 // Reads any trigger file above by its content. Throws IoError("PATH:LINE: problem") on a file it
 // cannot read or that holds no event.
 TriggerFile ReadTriggerFile(const std::string& path);
+
+// Triggers recorded on another gyro's clock (record's triggers file, on its .gcsv's clock) put on a
+// log's: the two gyros aligned from the motion (sim/gyro_sync.h SyncGyros(log, clock_gyro)), each
+// event's time mapped, and `source` extended to say so. Throws std::invalid_argument in one line
+// when the file's times are GPS or UTC (no gyro's clock) or the gyros cannot be aligned.
+GyroSync MoveTriggersToLogClock(const GyroTrace& log_gyro, const GyroTrace& clock_gyro,
+                                const std::string& clock_name, TriggerFile* file);
 
 // The parsers, on text already read; path is for messages.
 bool LooksLikeMrk(std::string_view text);

@@ -67,6 +67,23 @@ inline CommandResult RunShutterlab(const std::string& args, const std::string& s
   return result;
 }
 
+// The gyro.csv at trace_path as a flight controller beside it would log the same motion: every
+// second sample, on axes turned 2 rad about (1, 2, 3) (kFcFromBodyAngleRad), on a clock
+// kFcClockAheadS ahead; written as gyro.csv to fc_path.
+inline constexpr double kFcFromBodyAngleRad = 2.0;
+inline constexpr double kFcClockAheadS = 123.456;
+inline void WriteAsFlightControllerLog(const std::string& trace_path, const std::string& fc_path) {
+  const GyroTrace trace = ReadGyroCsv(trace_path);
+  const Eigen::Matrix3d fc_from_body =
+      Eigen::AngleAxisd(kFcFromBodyAngleRad, Eigen::Vector3d(1, 2, 3).normalized())
+          .toRotationMatrix();
+  std::vector<GyroSample> fc;
+  for (size_t i = 0; i < trace.size(); i += 2)
+    fc.push_back(
+        {trace[i].t_ns + SecondsToNs(kFcClockAheadS), fc_from_body * trace[i].omega_rad_s});
+  WriteGyroCsv(fc_path, GyroTrace(fc));
+}
+
 // Starts the shutterlab executable with `args` (no shell), its output to /dev/null, and returns
 // its pid, for a test that kills it or waits for it; -1 when fork fails.
 inline pid_t SpawnShutterlab(const std::vector<std::string>& args) {

@@ -65,6 +65,52 @@ TEST(RecordCli, EmulatedRecordingGoesThroughFlightAndAnalyzeWithItsTriggers) {
   for (const auto& image : images) EXPECT_TRUE(image["in_trace"].get<bool>()) << image.dump();
 }
 
+// The recorder's triggers are on its own clock; a flight controller's log of the same flight is
+// on another (WriteAsFlightControllerLog: 123.456 s ahead, its axes turned, 500 Hz). analyze
+// --triggers-clock puts the triggers on the log's clock by aligning the two gyros: each image lands
+// where the recorder's own analysis of the same trigger puts it, shifted by the clocks' difference.
+TEST(RecordCli, TriggersOnTheRecordersClockGoOntoAFlightLogByTheMotion) {
+  test::TempDir dir;
+  const std::string trace = dir / "flight.csv", rec = dir / "rec.gcsv", fc = dir / "fc.csv";
+  WriteTrace(trace, MotionProfile::kFlight, 1000.0, 30.0, 4);
+  const auto record = RunShutterlab("record --device emulate:" + trace +
+                                    ",rate=1000Hz --duration 25s --clock virtual --trigger "
+                                    "emulate:every=2s --out " +
+                                    rec);
+  ASSERT_EQ(record.exit_code, 0) << record.output;
+  test::WriteAsFlightControllerLog(trace, fc);
+
+  const std::string triggers = " --triggers " + (dir / "rec.triggers.csv");
+  const auto own = RunShutterlab("analyze " + rec + triggers + " --json");
+  ASSERT_EQ(own.exit_code, 0) << own.output;
+  // Without --triggers-clock the recorder's times fall before the log's first sample.
+  const auto moved =
+      RunShutterlab("analyze " + fc + triggers + " --triggers-clock " + rec + " --json");
+  ASSERT_EQ(moved.exit_code, 0) << moved.output;
+  EXPECT_NE(moved.err.find("triggers: on rec.gcsv's clock"), std::string::npos) << moved.err;
+  const auto own_images = nlohmann::json::parse(own.out)["images"];
+  const auto moved_images = nlohmann::json::parse(moved.out)["images"];
+  ASSERT_EQ(own_images.size(), 12u);
+  ASSERT_EQ(moved_images.size(), own_images.size());
+  // The emulator plays the trace's first sample as the recording's first (sensor_emulator.h): a
+  // recorder time t is trace time t - first, which the log reads + 123.456 s.
+  const double first_s = ReadGcsv(rec).trace.t_begin_ns() * 1e-9;
+  const double truth_s = ReadGyroCsv(trace).t_begin_ns() * 1e-9 - first_s + test::kFcClockAheadS;
+  for (size_t k = 0; k < own_images.size(); ++k) {
+    EXPECT_NEAR(moved_images[k]["t"].get<double>() - own_images[k]["t"].get<double>(), truth_s,
+                2e-4)
+        << k;
+    EXPECT_TRUE(moved_images[k]["in_trace"].get<bool>());
+  }
+  // Triggers on GPS time are not on a gyro's clock: refused in one line.
+  WriteFileAtomically(dir / "utc.csv", "image,utc_usec\nA.jpg,1700000000000000\n");
+  const auto refused = RunShutterlab("analyze " + fc + " --triggers " + (dir / "utc.csv") +
+                                     " --triggers-clock " + rec);
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_EQ(test::LineCount(refused.output), 1u) << refused.output;
+  EXPECT_NE(refused.output.find("on UTC already"), std::string::npos) << refused.output;
+}
+
 TEST(RecordCli, TwoSensorsAreFusedByNoiseWithTheGainShown) {
   test::TempDir dir;
   const std::string a = dir / "a.csv", b = dir / "b.csv", rec = dir / "pair.gcsv";

@@ -114,9 +114,9 @@ TEST(ImportIo, GoproRecordHoldsTheGoproExtrasAndIsWrittenWhole) {
   gopro.payload_samples = {392, 28};
   gopro.timing = "one line";
   gopro.fit_max_residual_s = 0.009;
-  gopro.video_samples = 362;
-  gopro.decoded = 362;
-  gopro.failed_grabs = 1;
+  gopro.decoding.video_samples = 362;
+  gopro.decoding.decoded = 362;
+  gopro.decoding.failed_grabs = 1;
   gopro.times = "sample table";
   r.details = gopro;
   test::TempDir dir;

@@ -155,5 +155,31 @@ TEST(GyroSync, RefusesStillOrRepetitiveMotion) {
   EXPECT_THROW(SyncGyros(tiny, sb), std::invalid_argument);
 }
 
+// Brute-force twin: each sample the plain mean of the samples within half the window of it.
+TEST(BoxAverage, EachSampleIsTheMeanOfItsWindow) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  std::vector<GyroSample> samples;
+  int64_t t_ns = 0;
+  for (int i = 0; i < 500; ++i) {
+    t_ns += 1'000'000 + static_cast<int64_t>(200'000 * noise(rng));  // about 1 kHz, jittered
+    samples.push_back({t_ns, Eigen::Vector3d(noise(rng), noise(rng), std::sin(i * 0.05))});
+  }
+  const GyroTrace trace(samples);
+  const double window_s = 0.0333;
+  const GyroTrace averaged = BoxAverage(trace, window_s);
+  ASSERT_EQ(averaged.size(), trace.size());
+  const int64_t half_ns = SecondsToNs(0.5 * window_s);
+  for (size_t i = 0; i < trace.size(); ++i) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int n = 0;
+    for (const GyroSample& s : samples) {
+      if (std::llabs(s.t_ns - samples[i].t_ns) <= half_ns) sum += s.omega_rad_s, ++n;
+    }
+    EXPECT_EQ(averaged[i].t_ns, samples[i].t_ns);
+    EXPECT_LT((averaged[i].omega_rad_s - sum / n).norm(), 1e-12) << i;
+  }
+}
+
 }  // namespace
 }  // namespace shutterlab

@@ -109,7 +109,10 @@ void ExpectCalibrated(const Coverage& c) {
 }
 
 TEST(Coverage, JackknifeCoversTheTruthWithPairCoherentErrors) {
-  constexpr int kClips = 60, kFrames = 8, kStepPx = 32;
+  constexpr int kFrames = 8, kStepPx = 32;
+  // Under ASan the same code on 6 clips, for what the sanitizers find (38 s of its suite for 60);
+  // the calibration is judged on all 60 in the plain run.
+  constexpr int kClips = test::kAsan ? 6 : 60;
   constexpr double kSigmaPx = 0.03, kPairSigmaPx = 0.01;
   Coverage coverage;
   for (int c = 0; c < kClips; ++c) {
@@ -143,7 +146,7 @@ TEST(Coverage, JackknifeCoversTheTruthWithPairCoherentErrors) {
     }
     Count(clip, pairs, kSigmaPx * std::sqrt(2.0), &coverage);
   }
-  ExpectCalibrated(coverage);
+  if (!test::kAsan) ExpectCalibrated(coverage);
 }
 
 // Rendered and measured: the flow's own errors (see the top).
