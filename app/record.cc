@@ -7,6 +7,7 @@
 #include "estimate/paper/analyze.h"
 #include "estimate/report/analysis_json.h"
 #include "record/device_spec.h"
+#include "record/record_output.h"
 #include "record/recorder.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
@@ -47,6 +48,7 @@ struct RecordCommand {
   std::string ring = "8s";
   std::string orientation = "XYZ";
   std::string note;
+  std::vector<std::string> also;
   std::string status_every;
   std::string stall_writer;
   std::string pause_while_writing;
@@ -82,6 +84,7 @@ RecorderOptions Options(const RecordCommand& command, bool tty) {
   options.debounce_s = Seconds(command.debounce, "--debounce");
   options.orientation = command.orientation;
   options.note = command.note;
+  for (const std::string& name : command.also) options.also.push_back(ParseAlsoFormat(name));
   options.reader_priority = command.priority;
   options.stop = &g_stop;
   if (!command.stall_writer.empty()) {
@@ -214,6 +217,11 @@ const CommandRegistration kRecordRegistration(15, [](CLI::App& app) {
   cmd->add_option("--orientation", command->orientation, "the .gcsv orientation line (Gyroflow's)")
       ->capture_default_str();
   cmd->add_option("--note", command->note, "a note line for the .gcsv header");
+  cmd->add_option("--also", command->also,
+                  "FORMAT,...: at the end also write each sensor's rows as gyro.csv (OUT less "
+                  ".gcsv + .gyro.csv: s, rad/s on the orientation) and/or raw (.raw.csv: the "
+                  "source paper's counts, read with --raw --range)")
+      ->delimiter(',');
   cmd->add_option("--status-every", command->status_every,
                   "status line period (default: 1 s on a terminal, else 60 s)");
   cmd->add_option(

@@ -12,6 +12,8 @@
 #include <ctime>
 #include <fcntl.h>
 #include <filesystem>
+#include <functional>
+#include <stdexcept>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -66,6 +68,29 @@ void CopyRows(int from_fd, off_t from, int to_fd, const std::string& name) {
     if (n < 0) throw IoError(IoMessage(name, 0, "read failed: " + ErrnoText()));
     if (n == 0) return;
     WriteAll(to_fd, buffer.data(), static_cast<size_t>(n), name);
+  }
+}
+
+// Writes path whole or not at all: fill(fd) writes a temporary file beside it, which is synced and
+// renamed into place; on any failure it is removed and the error passed on.
+void WriteWhole(const std::string& path, const std::function<void(int)>& fill) {
+  std::string temp_path;
+  const int out_fd = MakeTempBeside(path, "tmp", &temp_path);
+  try {
+    fill(out_fd);
+    if (::fchmod(out_fd, 0644) < 0 || ::fsync(out_fd) < 0) {
+      throw IoError(IoMessage(path, 0, "cannot sync: " + ErrnoText()));
+    }
+  } catch (...) {
+    ::close(out_fd);
+    std::remove(temp_path.c_str());
+    throw;
+  }
+  ::close(out_fd);  // once: closing it again could close a descriptor another thread just opened
+  if (::rename(temp_path.c_str(), path.c_str()) < 0) {
+    const std::string why = ErrnoText();
+    std::remove(temp_path.c_str());
+    throw IoError(IoMessage(path, 0, "cannot rename into place: " + why));
   }
 }
 
@@ -137,27 +162,69 @@ void RowFile::Append(const std::string& text) {
 }
 
 void RowFile::Finish(const std::string& header) {
-  std::string temp_path;
-  const int out_fd = MakeTempBeside(final_path_, "tmp", &temp_path);
-  try {
+  WriteWhole(final_path_, [&](int out_fd) {
     WriteAll(out_fd, header.data(), header.size(), final_path_);
     CopyRows(fd_, static_cast<off_t>(header_bytes_), out_fd, final_path_);
-    if (::fchmod(out_fd, 0644) < 0 || ::fsync(out_fd) < 0) {
-      throw IoError(IoMessage(final_path_, 0, "cannot sync: " + ErrnoText()));
-    }
-  } catch (...) {
-    ::close(out_fd);
-    std::remove(temp_path.c_str());
-    throw;
-  }
-  ::close(out_fd);  // once: closing it again could close a descriptor another thread just opened
-  if (::rename(temp_path.c_str(), final_path_.c_str()) < 0) {
-    const std::string why = ErrnoText();
-    std::remove(temp_path.c_str());
-    throw IoError(IoMessage(final_path_, 0, "cannot rename into place: " + why));
-  }
+  });
   finished_ = true;
   std::remove(partial_path_.c_str());
+}
+
+void RowFile::WriteAlso(const std::string& path, AlsoFormat format, double rad_s_per_count,
+                        const Eigen::Matrix3d& orientation) const {
+  WriteWhole(path, [&](int out_fd) {
+    std::string out =
+        format == AlsoFormat::kGyroCsv ? "t,gx,gy,gz\n" : "t,gx_counts,gy_counts,gz_counts\n";
+    // The rows as written: "t_ns,c0,c1,c2\n", read back in blocks (a line may straddle two).
+    std::vector<char> block(size_t{1} << 20);
+    std::string carry;
+    for (off_t at = static_cast<off_t>(header_bytes_); at < size_bytes_;) {
+      const ssize_t n = ::pread(fd_, block.data(), block.size(), at);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) throw IoError(IoMessage(partial_path_, 0, "read failed: " + ErrnoText()));
+      at += n;
+      carry.append(block.data(), static_cast<size_t>(n));
+      size_t begin = 0;
+      for (size_t end; (end = carry.find('\n', begin)) != std::string::npos; begin = end + 1) {
+        int64_t fields[4];
+        const char* p = carry.data() + begin;
+        for (int64_t& field : fields) p = std::from_chars(p, carry.data() + end, field).ptr + 1;
+        AppendSecondsFromNs(fields[0], &out);
+        const Eigen::Vector3d counts(fields[1], fields[2], fields[3]);
+        const Eigen::Vector3d values = format == AlsoFormat::kGyroCsv
+                                           ? Eigen::Vector3d(orientation * counts * rad_s_per_count)
+                                           : counts;
+        for (int axis = 0; axis < 3; ++axis) {
+          out += ',';
+          if (format == AlsoFormat::kGyroCsv)
+            AppendDouble(values[axis], &out);
+          else
+            out += std::to_string(fields[axis + 1]);
+        }
+        out += '\n';
+      }
+      carry.erase(0, begin);
+      if (out.size() > block.size()) {
+        WriteAll(out_fd, out.data(), out.size(), path);
+        out.clear();
+      }
+    }
+    WriteAll(out_fd, out.data(), out.size(), path);
+  });
+}
+
+AlsoFormat ParseAlsoFormat(const std::string& name) {
+  if (name == "gyro.csv") return AlsoFormat::kGyroCsv;
+  if (name == "raw") return AlsoFormat::kRawCounts;
+  throw std::invalid_argument("--also: '" + name + "' is not a format (gyro.csv, raw)");
+}
+
+std::string AlsoPath(const std::string& gcsv_path, AlsoFormat format) {
+  const std::string stem =
+      gcsv_path.size() > 5 && gcsv_path.compare(gcsv_path.size() - 5, 5, ".gcsv") == 0
+          ? gcsv_path.substr(0, gcsv_path.size() - 5)
+          : gcsv_path;
+  return stem + (format == AlsoFormat::kGyroCsv ? ".gyro.csv" : ".raw.csv");
 }
 
 void AppendRecordedRow(const RecordedSample& sample, int64_t t0_ns, std::string* out) {

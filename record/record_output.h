@@ -23,11 +23,19 @@
 #include "record/recording.h"
 #include "record/sample_ring.h"
 
+#include <Eigen/Core>
+
 #include <chrono>
 #include <string>
 #include <sys/types.h>
 
 namespace shutterlab {
+
+// `record --also`'s names: "gyro.csv" or "raw"; throws std::invalid_argument naming the text and
+// the two otherwise.
+AlsoFormat ParseAlsoFormat(const std::string& name);
+// The .gcsv's path less ".gcsv", plus ".gyro.csv" or ".raw.csv".
+std::string AlsoPath(const std::string& gcsv_path, AlsoFormat format);
 
 // The rows of one sensor while recording.
 class RowFile {
@@ -46,6 +54,10 @@ class RowFile {
   void Append(const std::string& text);
   // Writes header + rows to final_path, whole or not at all, then removes the partial file.
   void Finish(const std::string& header);
+  // Writes the rows so far to path in another format (AlsoFormat), whole or not at all:
+  // rad_s_per_count the .gcsv's gscale, orientation its orientation line's matrix (gyro.csv only).
+  void WriteAlso(const std::string& path, AlsoFormat format, double rad_s_per_count,
+                 const Eigen::Matrix3d& orientation) const;
 
   const std::string& partial_path() const { return partial_path_; }
   bool has_rows() const { return size_bytes_ > static_cast<off_t>(header_bytes_); }

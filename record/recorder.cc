@@ -5,6 +5,7 @@
 #include "record/record_output.h"
 #include "record/sample_ring.h"
 #include "sim/check.h"
+#include "sim/logs/gcsv.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
 
@@ -584,8 +585,14 @@ RecordSummary Session::Run() {
           FormatNumber("no samples recorded in %.3f s: no file written", summary.duration_s)));
     }
   }
+  const Eigen::Matrix3d orientation = GcsvOrientationMatrix(options_.orientation);
   for (size_t i = 0; i < sensors_.size(); ++i) {
-    sensors_[i]->rows->Finish(RecordedGcsvHeader(summary, static_cast<int>(i), options_));
+    RowFile& rows = *sensors_[i]->rows;
+    const double rad_s_per_count = kPi / 180.0 / summary.sensors[i].setting.lsb_per_dps;
+    for (AlsoFormat format : options_.also)
+      rows.WriteAlso(AlsoPath(summary.sensors[i].out_path, format), format, rad_s_per_count,
+                     orientation);
+    rows.Finish(RecordedGcsvHeader(summary, static_cast<int>(i), options_));
   }
   if (options_.trigger) WriteTriggersFile(options_.triggers_path, summary, options_);
   return summary;

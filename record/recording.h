@@ -52,6 +52,12 @@ struct RecordStatus {
   double max_writer_stall_s = 0.0;
 };
 
+// The other files `record --also` writes of each sensor at the end, from its rows, beside the
+// .gcsv (record/record_output.h AlsoPath): gyro.csv (t s from t0, rad/s on the .gcsv's
+// orientation, as its readers see it) and the source paper's raw counts (t s, the counts as the
+// part gave them: read with --raw --range).
+enum class AlsoFormat { kGyroCsv, kRawCounts };
+
 struct RecorderOptions {
   double duration_s = 0.0;  // 0: until *stop
   double still_s = 5.0;     // the bias at start: the mean of the first still_s seconds
@@ -79,8 +85,10 @@ struct RecorderOptions {
   TriggerSource* trigger = nullptr;
   TriggerPolarity polarity = TriggerPolarity::kRising;
   double debounce_s = 0.005;
-  std::string triggers_path;                // where they go (with a trigger source)
-  std::string orientation = "XYZ";          // the .gcsv's orientation line
+  std::string triggers_path;        // where they go (with a trigger source)
+  std::string orientation = "XYZ";  // the .gcsv's orientation line
+  // Other files of each sensor written at the end beside its .gcsv (record/record_output.h).
+  std::vector<AlsoFormat> also;
   std::string note;                         // a note line for the header (free text)
   const std::atomic<bool>* stop = nullptr;  // set (from a signal handler) to stop cleanly
   std::function<void(const RecordStatus&)> on_status;  // called from Record's own thread

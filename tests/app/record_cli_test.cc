@@ -2,6 +2,7 @@
 // read back by flight and analyze with its triggers, two sensors fused by noise --second, a clean
 // stop on SIGINT, and bad devices refused with one line and exit code 2.
 
+#include "sim/logs/flight_log_io.h"
 #include "sim/logs/gcsv.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/synth/synth.h"
@@ -41,6 +42,15 @@ void WriteTrace(const std::string& path, MotionProfile profile, double rate_hz, 
   if (!second_path.empty()) WriteGyroCsv(second_path, SynthesizeTrace(synth, 1));
 }
 
+// `record` of the trace through the emulated MPU-9250 at `rate` for `duration`, on the virtual
+// clock, with the extra options, into out.
+test::CommandResult RecordEmulated(const std::string& trace, const std::string& rate,
+                                   const std::string& duration, const std::string& extra,
+                                   const std::string& out) {
+  return RunShutterlab("record --device emulate:" + trace + ",rate=" + rate + " --duration " +
+                       duration + " --clock virtual " + extra + " --out " + out);
+}
+
 TEST(RecordCli, EmulatedRecordingGoesThroughFlightAndAnalyzeWithItsTriggers) {
   test::TempDir dir;
   const std::string trace = dir / "flight.csv", rec = dir / "rec.gcsv";
@@ -73,10 +83,7 @@ TEST(RecordCli, TriggersOnTheRecordersClockGoOntoAFlightLogByTheMotion) {
   test::TempDir dir;
   const std::string trace = dir / "flight.csv", rec = dir / "rec.gcsv", fc = dir / "fc.csv";
   WriteTrace(trace, MotionProfile::kFlight, 1000.0, 30.0, 4);
-  const auto record = RunShutterlab("record --device emulate:" + trace +
-                                    ",rate=1000Hz --duration 25s --clock virtual --trigger "
-                                    "emulate:every=2s --out " +
-                                    rec);
+  const auto record = RecordEmulated(trace, "1000Hz", "25s", "--trigger emulate:every=2s", rec);
   ASSERT_EQ(record.exit_code, 0) << record.output;
   test::WriteAsFlightControllerLog(trace, fc);
 
@@ -109,6 +116,43 @@ TEST(RecordCli, TriggersOnTheRecordersClockGoOntoAFlightLogByTheMotion) {
   EXPECT_EQ(refused.exit_code, 2) << refused.output;
   EXPECT_EQ(test::LineCount(refused.output), 1u) << refused.output;
   EXPECT_NE(refused.output.find("on UTC already"), std::string::npos) << refused.output;
+}
+
+// record --also: the same rows as gyro.csv (on the .gcsv's orientation, as its reader turns them)
+// and as the source paper's raw counts (the part's own axes), each read back by its reader: the
+// same samples, times to the nanosecond, rates to rounding.
+TEST(RecordCli, AlsoWritesGyroCsvAndRawCountsOfTheSameRows) {
+  test::TempDir dir;
+  const std::string trace = dir / "flight.csv", rec = dir / "rec.gcsv";
+  WriteTrace(trace, MotionProfile::kFlight, 2000.0, 3.0, 5);
+  const auto record =
+      RecordEmulated(trace, "2000Hz", "2s", "--orientation yXz --also gyro.csv,raw", rec);
+  ASSERT_EQ(record.exit_code, 0) << record.output;
+  const GyroTrace gcsv = ReadGcsv(rec).trace;
+  const GyroTrace csv = ReadGyroCsv(dir / "rec.gyro.csv");
+  FlightLogReadOptions raw_options;
+  raw_options.format = LogFormat::kRaw;
+  raw_options.raw.range_dps = 250;
+  const GyroTrace raw = ReadFlightLog(dir / "rec.raw.csv", raw_options).gyro;
+  ASSERT_GT(gcsv.size(), 3900u);
+  ASSERT_EQ(csv.size(), gcsv.size());
+  ASSERT_EQ(raw.size(), gcsv.size());
+  const Eigen::Matrix3d orientation = GcsvOrientationMatrix("yXz");
+  for (size_t i = 0; i < gcsv.size(); ++i) {
+    EXPECT_EQ(csv[i].t_ns, gcsv[i].t_ns) << i;
+    EXPECT_EQ(raw[i].t_ns, gcsv[i].t_ns) << i;
+    EXPECT_LT((csv[i].omega_rad_s - gcsv[i].omega_rad_s).norm(), 1e-12) << i;
+    EXPECT_LT((orientation * raw[i].omega_rad_s - gcsv[i].omega_rad_s).norm(), 1e-12) << i;
+    if (HasFailure()) break;
+  }
+  // Refused in one line: a format it does not write.
+  const auto bad =
+      RunShutterlab("record --device emulate:" + trace +
+                    " --duration 1s --clock virtual --also ulog --out " + (dir / "bad.gcsv"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("'ulog' is not a format (gyro.csv, raw)"), std::string::npos)
+      << bad.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.gcsv"));
 }
 
 TEST(RecordCli, TwoSensorsAreFusedByNoiseWithTheGainShown) {
