@@ -163,12 +163,6 @@ GyroTrace InCameraFrame(const GyroTrace& gyro, const RigModel& rig) {
   return GyroTrace(std::move(out));
 }
 
-GyroTrace Slice(const GyroTrace& gyro, int64_t from_ns, int64_t to_ns) {
-  const auto& s = gyro.samples();
-  return GyroTrace(std::vector<GyroSample>(s.begin() + gyro.LowerBound(from_ns),
-                                           s.begin() + gyro.LowerBound(to_ns + 1)));
-}
-
 void SetClaim(ImportClaim claim, std::vector<ImportClaim>* claims) {
   for (ImportClaim& c : *claims) {
     if (c.what == claim.what) {
@@ -237,7 +231,7 @@ GyroTrace AlignGyroLog(const FlightLog& log, const std::string& log_path,
       frames.front().t_first_row_ns + SecondsToNs(alignment.time_offset_s - kLogMarginS);
   const int64_t to_ns = frames.back().t_first_row_ns +
                         SecondsToNs(alignment.time_offset_s + rig->shutter.readout_s + kLogMarginS);
-  GyroTrace written = Slice(log.gyro, from_ns, to_ns);
+  GyroTrace written = GyroAround(log.gyro, from_ns, to_ns);
   if (written.size() < 2)
     throw IoError(IoMessage(log_path, -1, "the log holds no gyro over the clip's frames"));
   alignment.written_from_s = written.t_begin_ns() * 1e-9;

@@ -55,4 +55,15 @@ int64_t SecondsToNs(double t_s) {
   return std::llround(t_s * 1e9);
 }
 
+GyroTrace GyroAround(const GyroTrace& gyro, int64_t begin_ns, int64_t end_ns) {
+  const std::vector<GyroSample>& s = gyro.samples();
+  const auto first = std::upper_bound(s.begin(), s.end(), begin_ns,
+                                      [](int64_t t, const GyroSample& x) { return t < x.t_ns; });
+  const auto last = std::lower_bound(s.begin(), s.end(), end_ns,
+                                     [](const GyroSample& x, int64_t t) { return x.t_ns < t; });
+  const auto from = first == s.begin() ? first : first - 1;
+  const auto to = last == s.end() ? last : last + 1;
+  return GyroTrace(std::vector<GyroSample>(from, std::max(from, to)));
+}
+
 }  // namespace shutterlab

@@ -65,6 +65,10 @@ class GyroTrace {
   SamplingReport sampling_;
 };
 
+// The samples of gyro within [begin_ns, end_ns] and the ones just outside them (so that the span
+// stays covered), as a trace of its own.
+GyroTrace GyroAround(const GyroTrace& gyro, int64_t begin_ns, int64_t end_ns);
+
 // Seconds (double, as in files) to integer nanoseconds, rounded to nearest.
 int64_t SecondsToNs(double t_s);
 

@@ -9,6 +9,7 @@
 #include "render/pictures.h"
 #include "render/rs_warp.h"
 #include "sim/check.h"
+#include "sim/gyro_trace.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
 #include "sim/units.h"

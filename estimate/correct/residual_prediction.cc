@@ -84,17 +84,6 @@ void ResidualPredictionOptions::Check() const {
   SHUTTERLAB_CHECK(grid_columns >= 2 && grid_rows >= 2) << "the grid needs two rows and columns";
 }
 
-GyroTrace GyroAround(const GyroTrace& gyro, int64_t begin_ns, int64_t end_ns) {
-  const std::vector<GyroSample>& s = gyro.samples();
-  const auto first = std::upper_bound(s.begin(), s.end(), begin_ns,
-                                      [](int64_t t, const GyroSample& x) { return t < x.t_ns; });
-  const auto last = std::lower_bound(s.begin(), s.end(), end_ns,
-                                     [](const GyroSample& x, int64_t t) { return x.t_ns < t; });
-  const auto from = first == s.begin() ? first : first - 1;
-  const auto to = last == s.end() ? last : last + 1;
-  return GyroTrace(std::vector<GyroSample>(from, std::max(from, to)));
-}
-
 ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace& gyro,
                                    int64_t t_first_row_ns, const CorrectionSetting& setting,
                                    const ResidualPredictionOptions& options) {

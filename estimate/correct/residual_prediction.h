@@ -53,8 +53,4 @@ ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace
                                    int64_t t_first_row_ns, const CorrectionSetting& setting,
                                    const ResidualPredictionOptions& options = {});
 
-// The samples of gyro within [begin_ns, end_ns] and the ones just outside them (so that the span
-// stays covered), as a trace of its own.
-GyroTrace GyroAround(const GyroTrace& gyro, int64_t begin_ns, int64_t end_ns);
-
 }  // namespace shutterlab
