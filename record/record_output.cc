@@ -113,24 +113,47 @@ RowFile::RowFile(const std::string& final_path, const std::string& partial_heade
       partial_path_(final_path + ".partial"),
       sync_interval_(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
           std::chrono::duration<double>(sync_interval_s))) {
-  // Read and write: Finish copies the rows from it.
-  fd_ = ::open(partial_path_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  if (fd_ < 0 && errno == EEXIST) {
+  // Read and write: Finish copies the rows from it. The header is written and synced in an
+  // unnamed file that is then linked into place, so that a kill or power cut never leaves the
+  // partial file without its header; where the file system has no unnamed files (vfat), the file
+  // is made under its name and written at once.
+  const std::filesystem::path dir = std::filesystem::path(final_path_).has_parent_path()
+                                        ? std::filesystem::path(final_path_).parent_path()
+                                        : std::filesystem::path(".");
+  fd_ = ::open(dir.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0644);
+  const bool unnamed = fd_ >= 0;
+  if (!unnamed) fd_ = ::open(partial_path_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  const auto refuse_existing = [&] {
     throw IoError(
         IoMessage(partial_path_, 0,
                   "exists: a recording before this one was cut (killed, power lost or the disk "
-                  "full); "
-                  "it is kept as it is: read it (shutterlab analyze " +
+                  "full); it is kept as it is: read it (shutterlab analyze " +
                       partial_path_ + ") or move it away, then record again"));
-  }
+  };
+  if (fd_ < 0 && errno == EEXIST) refuse_existing();
   if (fd_ < 0) throw IoError(IoMessage(final_path_, 0, "cannot create: " + ErrnoText()));
   try {
     WriteAll(fd_, partial_header.data(), partial_header.size(), partial_path_);
     if (::fdatasync(fd_) < 0)
       throw IoError(IoMessage(partial_path_, 0, "cannot sync: " + ErrnoText()));
+    if (unnamed) {
+      const std::string fd_path = "/proc/self/fd/" + std::to_string(fd_);
+      if (::linkat(AT_FDCWD, fd_path.c_str(), AT_FDCWD, partial_path_.c_str(), AT_SYMLINK_FOLLOW) <
+          0) {
+        if (errno == EEXIST) refuse_existing();
+        throw IoError(IoMessage(partial_path_, 0, "cannot create: " + ErrnoText()));
+      }
+      // The name itself on disk: a power cut right after must not lose the file.
+      const int dir_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+      if (dir_fd >= 0) {
+        ::fsync(dir_fd);
+        ::close(dir_fd);
+      }
+    }
   } catch (...) {
     ::close(fd_);
-    std::remove(partial_path_.c_str());
+    fd_ = -1;
+    if (!unnamed) std::remove(partial_path_.c_str());
     throw;
   }
   header_bytes_ = partial_header.size();

@@ -211,25 +211,48 @@ TEST(RecordCli, SigintStopsTheRecordingWithTheFileWhole) {
 // left is the recording's .partial, read as it is with its header and a `truncated` warning, and
 // what it lost (the kill's time on the recorder's clock less its last row's) stays under the
 // writer's interval plus scheduling. Each loss is printed; the worst is docs/raspberry-pi.md's.
+// The moments are drawn within phases the test sees on disk, not in wall time from the start, so a
+// loaded machine that starts the process late still has most kills land among the rows: one in
+// four soon after the start (maybe before the files), one in four after the header appears (maybe
+// before the first rows, which the emulated part's start-up holds back by about 0.3 s), half after
+// the first rows are on disk.
 TEST(RecordCli, KilledAtRandomMomentsLeavesAReadableFileLosingOnlyTheLastReads) {
   test::TempDir dir;
   const std::string trace = dir / "still.csv";
   WriteTrace(trace, MotionProfile::kStill, 1000, 4.0, 6);
   std::mt19937 random(11);
-  // From before the files to well into the rows: the emulated part's start-up (its reset and the
-  // gyro's settling, as its datasheet's) holds the first row back by about 0.3 s.
-  // Under the sanitizers the process itself starts 0.3 s later.
-  std::uniform_int_distribution<int> wait_ms(20, test::kAsan ? 1500 : 900);
+  std::uniform_int_distribution<int> wait_ms(0, 400);
   const int kills = test::kAsan ? 30 : 100;
+  const std::string column_line = "\nt,gx,gy,gz\n";
+  const auto rows_written = [&](const std::string& partial) {
+    const std::string text = std::filesystem::exists(partial) ? ReadFileToString(partial) : "";
+    const size_t columns_at = text.find(column_line);
+    return columns_at != std::string::npos && text.size() > columns_at + column_line.size();
+  };
+  // Polls every 5 ms for up to 20 s; false when it never came.
+  const auto wait_for = [](const auto& condition) {
+    for (int i = 0; i < 4000; ++i) {
+      if (condition()) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return false;
+  };
   int before_start = 0, without_rows = 0;
   double worst_loss_ms = 0;
   for (int k = 0; k < kills; ++k) {
     const std::string rec = dir / ("k" + std::to_string(k) + ".gcsv");
+    const std::string partial = rec + ".partial";
     const std::string device = "emulate:" + trace + ",rate=1000Hz";
     const pid_t pid =
         test::SpawnShutterlab({"record", "--device", device, "--out", rec, "--still", "0s"});
     ASSERT_GE(pid, 0);
-    std::this_thread::sleep_for(std::chrono::milliseconds(wait_ms(random)));
+    const int phase = k % 4;  // 0: from the start; 1: from the header; 2, 3: from the first rows
+    if (phase == 1) {
+      ASSERT_TRUE(wait_for([&] { return std::filesystem::exists(partial); })) << "run " << k;
+    } else if (phase >= 2) {
+      ASSERT_TRUE(wait_for([&] { return rows_written(partial); })) << "run " << k;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(wait_ms(random) / (phase == 0 ? 4 : 1)));
     timespec now{};
     ::clock_gettime(CLOCK_MONOTONIC, &now);
     ::kill(pid, SIGKILL);
@@ -238,21 +261,23 @@ TEST(RecordCli, KilledAtRandomMomentsLeavesAReadableFileLosingOnlyTheLastReads) 
     ::waitpid(pid, &status, 0);
     ASSERT_TRUE(WIFSIGNALED(status)) << "run " << k << " ended before its kill";
     EXPECT_FALSE(std::filesystem::exists(rec)) << "run " << k;
-    if (!std::filesystem::exists(rec + ".partial")) {
+    if (!std::filesystem::exists(partial)) {
+      EXPECT_EQ(phase, 0) << "run " << k << ": the partial file went away";
       ++before_start;  // killed before its files: nothing was read yet
       continue;
     }
-    const std::string text = ReadFileToString(rec + ".partial");
+    const std::string text = ReadFileToString(partial);
     ASSERT_EQ(text.rfind("GYROFLOW IMU LOG\n", 0), 0u) << "run " << k << ": the header first";
     const size_t t0_at = text.find("\nt0_clock_ns,");
     ASSERT_NE(t0_at, std::string::npos);
     const int64_t t0_ns = std::stoll(text.substr(t0_at + 13));
-    if (text.substr(text.find("\nt,gx,gy,gz\n")).size() <= std::string("\nt,gx,gy,gz\n").size()) {
+    if (!rows_written(partial)) {
+      EXPECT_LT(phase, 2) << "run " << k << ": the rows on disk went away";
       ++without_rows;  // killed before the part's first samples were written
-      EXPECT_LT((kill_ns - t0_ns) * 1e-6, 600.0) << "run " << k << " wrote no row for so long";
+      EXPECT_LT((kill_ns - t0_ns) * 1e-6, 2000.0) << "run " << k << " wrote no row for so long";
       continue;
     }
-    const GcsvLog log = ReadGcsv(rec + ".partial");
+    const GcsvLog log = ReadGcsv(partial);
     ASSERT_FALSE(log.trace.empty());
     EXPECT_TRUE(test::AnyWarningContains(log.warnings, "the recording did not finish"))
         << test::JoinedWarnings(log.warnings);
@@ -264,7 +289,7 @@ TEST(RecordCli, KilledAtRandomMomentsLeavesAReadableFileLosingOnlyTheLastReads) 
       "record killed %d times: %d before its files, %d before its first rows; the worst "
       "loss %.1f ms\n",
       kills, before_start, without_rows, worst_loss_ms);
-  EXPECT_LT(before_start + without_rows, kills / 2) << "the kills came too early to test much";
+  EXPECT_GT(before_start + without_rows, 0) << "no kill came before the rows";
   EXPECT_LT(worst_loss_ms, 250.0) << "a kill lost more than the writer's interval and scheduling";
 }
 
