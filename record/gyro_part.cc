@@ -3,6 +3,7 @@
 #include "sim/check.h"
 #include "sim/logs/raw_csv.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <algorithm>
 #include <cmath>
@@ -16,23 +17,32 @@ namespace {
 // and interrupt registers; the ICM-42688-P allows 24 MHz throughout.
 const PartInfo kParts[] = {
     {GyroPart::kMpu9250, "MPU-9250", "mpu9250", 0x71, mpu::kWhoAmI, 512, 6, 35000000, 1000000,
-     20000000, 8000.0},
+     20000000, 32000.0},
     {GyroPart::kMpu6500, "MPU-6500", "mpu6500", 0x70, mpu::kWhoAmI, 512, 6, 35000000, 1000000,
-     20000000, 8000.0},
+     20000000, 32000.0},
     {GyroPart::kIcm42688p, "ICM-42688-P", "icm42688p", 0x47, icm::kWhoAmI, 2048, 8, 30000000,
      24000000, 24000000, 32000.0},
 };
 
-// MPU DLPF_CFG 1..6 with FCHOICE_B = 0: the gyro bandwidth, Hz, at a 1 kHz internal rate.
-constexpr double kMpuDlpfBandwidthHz[] = {250.0, 184.0, 92.0, 41.0, 20.0, 10.0, 5.0, 3600.0};
+// MPU register map, CONFIG (FCHOICE_B 00): DLPF_CFG 0..7's gyro bandwidth, delay and rate.
+constexpr GyroFilter kMpuDlpf[] = {
+    {250.0, 0.97e-3, 8000.0, true}, {184.0, 2.9e-3, 1000.0, true},   {92.0, 3.9e-3, 1000.0, true},
+    {41.0, 5.9e-3, 1000.0, true},   {20.0, 9.9e-3, 1000.0, true},    {10.0, 17.85e-3, 1000.0, true},
+    {5.0, 33.48e-3, 1000.0, true},  {3600.0, 0.17e-3, 8000.0, true},
+};
+// FCHOICE_B x1 and 10: the filter bypassed, 32 kHz.
+constexpr GyroFilter kMpuFchoiceX1 = {8800.0, 0.064e-3, 32000.0, true};
+constexpr GyroFilter kMpuFchoice10 = {3600.0, 0.11e-3, 32000.0, true};
 
 PartSetting ResolveMpu(GyroPart part, const SensorConfig& config) {
   PartSetting s;
   s.part = part;
-  // FIFO rates: 8 kHz (DLPF_CFG 0, 250 Hz bandwidth), or 1 kHz / (1 + SMPLRT_DIV) with the widest
-  // DLPF below half the rate. 32 kHz (FCHOICE_B) is left out: the 512-byte FIFO would fill in
-  // 2.7 ms.
-  if (config.rate_hz > 1000.0) {
+  // FIFO rates: 32 kHz (FCHOICE_B 01, the filter bypassed: 8800 Hz bandwidth), 8 kHz (DLPF_CFG 0,
+  // 250 Hz bandwidth), or 1 kHz / (1 + SMPLRT_DIV) with the widest DLPF below half the rate.
+  s.fchoice_b = 0;
+  if (config.rate_hz > 8000.0) {
+    s.fchoice_b = 1;
+  } else if (config.rate_hz > 1000.0) {
     s.dlpf_cfg = 0;
     s.smplrt_div = 0;
   } else {
@@ -42,15 +52,16 @@ PartSetting ResolveMpu(GyroPart part, const SensorConfig& config) {
     const double rate = 1000.0 / (1 + div);
     s.dlpf_cfg = 6;
     for (uint8_t cfg = 1; cfg <= 6; ++cfg) {
-      if (kMpuDlpfBandwidthHz[cfg] <= rate / 2) {
+      if (kMpuDlpf[cfg].bandwidth_hz <= rate / 2) {
         s.dlpf_cfg = cfg;
         break;
       }
     }
   }
-  s.fchoice_b = 0;
   s.odr_hz = MpuRateHz(s.smplrt_div, s.dlpf_cfg, s.fchoice_b);
-  s.bandwidth_hz = kMpuDlpfBandwidthHz[s.dlpf_cfg];
+  const GyroFilter filter = MpuGyroFilter(s.dlpf_cfg, s.fchoice_b);
+  s.bandwidth_hz = filter.bandwidth_hz;
+  s.filter_delay_s = filter.delay_s;
   s.fs_sel = static_cast<uint8_t>(std::log2(config.range_dps / 250.0) + 0.5);
   return s;
 }
@@ -66,7 +77,9 @@ PartSetting ResolveIcm(const SensorConfig& config) {
   }
   s.icm_odr_code = best;
   s.odr_hz = IcmRateHz(best);
-  s.bandwidth_hz = std::max(400.0, s.odr_hz) / 4;  // default UI filter (GYRO_UI_FILT_BW 1)
+  const GyroFilter filter = IcmGyroFilter(s.odr_hz);
+  s.bandwidth_hz = filter.bandwidth_hz;
+  s.filter_delay_s = filter.delay_s;
   for (uint8_t code = 0; code < 8; ++code) {
     if (IcmRangeDps(code) == config.range_dps) s.icm_fs_code = code;
   }
@@ -104,6 +117,17 @@ double MpuRateHz(uint8_t smplrt_div, uint8_t dlpf_cfg, uint8_t fchoice_b) {
   if ((fchoice_b & 3) != 0) return 32000.0;
   if ((dlpf_cfg & 7) == 0 || (dlpf_cfg & 7) == 7) return 8000.0;
   return 1000.0 / (1 + smplrt_div);
+}
+
+GyroFilter MpuGyroFilter(uint8_t dlpf_cfg, uint8_t fchoice_b) {
+  if ((fchoice_b & 3) == 2) return kMpuFchoice10;
+  if ((fchoice_b & 1) != 0) return kMpuFchoiceX1;
+  return kMpuDlpf[dlpf_cfg & 7];
+}
+
+GyroFilter IcmGyroFilter(double odr_hz) {
+  const double bandwidth_hz = std::max(400.0, odr_hz) / 4;
+  return {bandwidth_hz, 1.0 / (2 * kPi * bandwidth_hz), odr_hz, false};
 }
 
 double IcmRateHz(uint8_t odr_code) {
@@ -162,10 +186,15 @@ std::string PartSetting::Describe() const {
   if (part == GyroPart::kIcm42688p) {
     text += " (GYRO_ODR " + std::to_string(icm_odr_code) + "; UI filter " +
             FormatNumber("%.6g", bandwidth_hz) + " Hz)";
+  } else if (fchoice_b != 0) {
+    text += " (FCHOICE_B " + std::to_string(fchoice_b) + ": DLPF bypassed; " +
+            FormatNumber("%.6g", bandwidth_hz) + " Hz bandwidth)";
   } else {
     text += " (SMPLRT_DIV " + std::to_string(smplrt_div) + "; DLPF_CFG " +
             std::to_string(dlpf_cfg) + ": " + FormatNumber("%.6g", bandwidth_hz) + " Hz bandwidth)";
   }
+  text += FormatNumber("; delay %.3g ms", filter_delay_s * 1e3);
+  if (part == GyroPart::kIcm42688p) text += " (modelled)";
   return text + "; +-" + std::to_string(range_dps) + " deg/s (" +
          FormatNumber("%.4g", lsb_per_dps) + " LSB per deg/s)";
 }

@@ -93,8 +93,9 @@ struct PartSetting {
   GyroPart part = GyroPart::kMpu9250;
   double odr_hz = 0.0;  // nominal output data rate (the part's own clock)
   int range_dps = 250;
-  double lsb_per_dps = 131.0;  // counts per deg/s
-  double bandwidth_hz = 0.0;   // the gyro's low-pass bandwidth at this setting (3 dB)
+  double lsb_per_dps = 131.0;   // counts per deg/s
+  double bandwidth_hz = 0.0;    // the gyro's low-pass bandwidth at this setting (3 dB)
+  double filter_delay_s = 0.0;  // its delay (GyroFilter::delay_s), taken off every sample's time
   // MPU-9250 / MPU-6500: SMPLRT_DIV, DLPF_CFG, FCHOICE_B and GYRO_FS_SEL.
   uint8_t smplrt_div = 0, dlpf_cfg = 0, fchoice_b = 0, fs_sel = 0;
   // ICM-42688-P: GYRO_ODR and GYRO_FS_SEL codes of GYRO_CONFIG0.
@@ -114,6 +115,21 @@ std::string HexByte(uint8_t value);
 // The MPU's rate and bandwidth from its registers, as the part computes them: FCHOICE_B != 0:
 // 32 kHz; DLPF_CFG 0 or 7: 8 kHz; otherwise 1 kHz / (1 + SMPLRT_DIV).
 double MpuRateHz(uint8_t smplrt_div, uint8_t dlpf_cfg, uint8_t fchoice_b);
+// The gyro's digital low-pass filter at a register setting.
+struct GyroFilter {
+  double bandwidth_hz;      // 3 dB
+  double delay_s;           // the delay of a slow motion through it (group delay at low frequency)
+  double internal_rate_hz;  // the rate it runs at, before SMPLRT_DIV keeps one sample in 1 + div
+  bool from_datasheet;      // false: modelled (a first-order filter at the bandwidth)
+};
+// The MPU-9250 / MPU-6500 gyro filter (register map, CONFIG: DLPF_CFG with FCHOICE_B 00, and
+// FCHOICE_B x1 and 10): bandwidth, delay and rate as the table gives them.
+GyroFilter MpuGyroFilter(uint8_t dlpf_cfg, uint8_t fchoice_b);
+// The ICM-42688-P's default UI filter (GYRO_UI_FILT_BW 1: max(400 Hz, ODR) / 4) at a rate. Its
+// delay is modelled as a first-order filter's at that bandwidth: the datasheet's table of the
+// filter's delays is not reproduced here.
+GyroFilter IcmGyroFilter(double odr_hz);
+
 // The ICM-42688-P's GYRO_ODR code in Hz; 0 for a reserved code.
 double IcmRateHz(uint8_t odr_code);
 // The ICM-42688-P's GYRO_FS_SEL code in deg/s (2000 / 2^code).

@@ -290,7 +290,9 @@ std::string GcsvHeaderOf(const RecordSummary& summary, int index, const Recorder
   h.emplace_back("range_dps", std::to_string(s.setting.range_dps));
   h.emplace_back("lsb_per_dps", Number(s.setting.lsb_per_dps));
   h.emplace_back("filter", s.setting.Describe());
-  h.emplace_back("clock", "CLOCK_MONOTONIC; t = clock - t0_clock_ns");
+  h.emplace_back("filter_delay_ms", Number(s.setting.filter_delay_s * 1e3));
+  h.emplace_back("clock",
+                 "CLOCK_MONOTONIC; t = clock - t0_clock_ns - filter_delay (the motion's time)");
   h.emplace_back("t0_clock_ns", std::to_string(summary.t0_clock_ns));
   if (!finished) {
     h.emplace_back(

@@ -117,6 +117,7 @@ class Session {
   int AddGap(int sensor, int64_t t_clock_ns, int64_t lost, const char* kind);
   void ReaderLoop();
   void ReadSensor(int index);
+  int64_t MotionTimeNs(const SensorState& s, int64_t index) const;
   void Resync(int index, SensorState& s);
   void Stamp(int index, SensorState& s, bool force);
   void CheckHealth(int index);
@@ -165,6 +166,12 @@ int Session::AddGap(int sensor, int64_t t_clock_ns, int64_t lost, const char* ki
   return static_cast<int>(gaps_.size()) - 1;
 }
 
+// The time of the motion that sample `index` of the current train shows: when the part made it,
+// less its filter's delay (the datasheet's; a slow motion reaches the output that much later).
+int64_t Session::MotionTimeNs(const SensorState& s, int64_t index) const {
+  return s.fifo_clock->SampleTimeNs(index) - std::llround(s.setting.filter_delay_s * 1e9);
+}
+
 // After an overflow, bad data or a failed read: these samples are the newest the part produced by
 // the latch, so their index comes from the fitted sample clock; the ones between were lost.
 void Session::Resync(int index, SensorState& s) {
@@ -172,7 +179,7 @@ void Session::Resync(int index, SensorState& s) {
   const int64_t latch_ns = s.read.t_before_ns + (s.read.t_after_ns - s.read.t_before_ns) / 2;
   const int64_t first = std::max(s.fifo_clock->ProducedBy(latch_ns) - n, s.next_index);
   const int64_t lost = first - s.next_index;
-  if (lost > 0) AddGap(index, s.fifo_clock->SampleTimeNs(s.next_index), lost, s.resync);
+  if (lost > 0) AddGap(index, MotionTimeNs(s, s.next_index), lost, s.resync);
   s.next_index = first;
   s.resync = nullptr;
 }
@@ -187,7 +194,7 @@ void Session::Stamp(int index, SensorState& s, bool force) {
   const size_t n = s.held.size();
   s.batch.resize(n);
   for (size_t i = 0; i < n; ++i) {
-    int64_t t_ns = s.fifo_clock->SampleTimeNs(s.held[i].t_ns);
+    int64_t t_ns = MotionTimeNs(s, s.held[i].t_ns);
     t_ns = std::max(t_ns, s.last_t_ns + 1);  // a refit never moves time backwards
     s.batch[i] = {t_ns, s.held[i].counts};
     s.last_t_ns = t_ns;
@@ -237,7 +244,7 @@ void Session::ReadSensor(int index) {
     // The part was configured again: a new sample train, whose first sample follows the last one
     // recorded by the samples that fit in between.
     const double period_ns = s.fifo_clock->PeriodNs();
-    const int64_t first_ns = s.fifo_clock->SampleTimeNs(s.next_index);
+    const int64_t first_ns = MotionTimeNs(s, s.next_index);
     const int64_t lost =
         std::max<int64_t>(std::llround((first_ns - s.last_t_ns) / period_ns) - 1, 0);
     AddGap(index, s.last_t_ns + static_cast<int64_t>(period_ns), lost, "part_reset");

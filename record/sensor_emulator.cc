@@ -2,6 +2,7 @@
 
 #include "sim/check.h"
 #include "sim/logs/raw_csv.h"
+#include "sim/units.h"
 
 #include <algorithm>
 #include <cmath>
@@ -88,9 +89,36 @@ void SensorEmulator::Retime(int64_t now_ns) {
   period_ns_ = 1e9 / RateHz() / (1.0 + options_.ppm * 1e-6);
   anchor_k_ = next_k_;
   anchor_ns_ = was_running ? now_ns : now_ns + info_.gyro_startup_ns;
+  if (!was_running) filter_primed_ = false;
+  ConfigureFilter();
 }
 
-std::array<int16_t, 3> SensorEmulator::PlayedCounts(int64_t t_ns) {
+void SensorEmulator::ConfigureFilter() {
+  // A first-order filter y += a (x - y) stepped at the internal rate, a chosen so that its gain
+  // at the bandwidth is exactly 1/sqrt(2) (with b = 1 - a and w the bandwidth in radians a step:
+  // b^2 - 2 (2 - cos w) b + 1 = 0); a slow motion comes through it b / a steps late, and the pure
+  // delay before it makes up the rest of the table's delay.
+  if (!options_.filter) {
+    filter_steps_ = 1;
+    filter_gain_ = 1.0;
+    filter_pure_delay_ns_ = 0;
+    return;
+  }
+  const GyroFilter filter = CurrentFilter();
+  filter_steps_ = std::max(1, static_cast<int>(std::lround(filter.internal_rate_hz / RateHz())));
+  const double step_s = 1.0 / filter.internal_rate_hz;
+  const double c = 2.0 - std::cos(2 * kPi * filter.bandwidth_hz * step_s);
+  filter_gain_ = 1.0 - (c - std::sqrt(c * c - 1.0));
+  const double first_order_delay_s = (1.0 - filter_gain_) / filter_gain_ * step_s;
+  filter_pure_delay_ns_ = std::llround(std::max(filter.delay_s - first_order_delay_s, 0.0) * 1e9);
+}
+
+GyroFilter SensorEmulator::CurrentFilter() const {
+  if (info_.part == GyroPart::kIcm42688p) return IcmGyroFilter(RateHz());
+  return MpuGyroFilter(regs_[mpu::kConfig] & 7, regs_[mpu::kGyroConfig] & 3);
+}
+
+Eigen::Vector3d SensorEmulator::PlayedRate(int64_t t_ns) {
   const auto& samples = trace_.samples();
   int64_t trace_t_ns = trace_.t_begin_ns();
   const auto origin = PlayOriginNs();
@@ -98,22 +126,53 @@ std::array<int16_t, 3> SensorEmulator::PlayedCounts(int64_t t_ns) {
     // One loop of the trace lasts its span plus one interval, so that it repeats evenly.
     const int64_t loop_ns = trace_.t_end_ns() - trace_.t_begin_ns() +
                             std::max<int64_t>(trace_.sampling().median_interval_ns, 1);
-    const int64_t offset_ns = (t_ns - *origin) % loop_ns;
+    const int64_t offset_ns = std::max<int64_t>(t_ns - *origin, 0) % loop_ns;
     trace_t_ns += offset_ns;
     if (trace_cursor_ < samples.size() && samples[trace_cursor_].t_ns > trace_t_ns) {
       trace_cursor_ = 0;  // the trace started again
     }
-    while (trace_cursor_ + 1 < samples.size() && samples[trace_cursor_ + 1].t_ns - trace_t_ns <=
-                                                     trace_t_ns - samples[trace_cursor_].t_ns) {
-      ++trace_cursor_;  // the next sample is at least as near
+    while (trace_cursor_ + 1 < samples.size() && samples[trace_cursor_ + 1].t_ns <= trace_t_ns) {
+      ++trace_cursor_;  // the last sample at or before the time
     }
   }
-  const Eigen::Vector3d& omega = samples[origin ? trace_cursor_ : 0].omega_rad_s;
+  if (!origin) return samples[0].omega_rad_s;
+  if (trace_cursor_ + 1 >= samples.size()) return samples[trace_cursor_].omega_rad_s;
+  // Between two samples: on the line between them, so that a delay that is no whole number of
+  // the trace's intervals is played as it is (the nearest sample would round it to one: 0.44 ms
+  // of the 2.9 ms of DLPF_CFG 1 on a 1 kHz trace).
+  const GyroSample& before = samples[trace_cursor_];
+  const GyroSample& after = samples[trace_cursor_ + 1];
+  const double fraction =
+      static_cast<double>(trace_t_ns - before.t_ns) / static_cast<double>(after.t_ns - before.t_ns);
+  return before.omega_rad_s + fraction * (after.omega_rad_s - before.omega_rad_s);
+}
+
+// The filter runs at its internal rate: the steps since the last output sample, each on the rate
+// felt a pure delay earlier.
+std::array<int16_t, 3> SensorEmulator::FilteredCounts(int64_t t_ns) {
+  for (int step = filter_steps_ - 1; step >= 0; --step) {
+    const int64_t step_ns =
+        t_ns - static_cast<int64_t>(std::llround(step * period_ns_ / filter_steps_));
+    const Eigen::Vector3d felt = PlayedRate(step_ns - filter_pure_delay_ns_);
+    if (!filter_primed_) {
+      filter_state_ = felt;  // a part that starts up settles on the motion of its first sample
+      filter_primed_ = true;
+    } else {
+      filter_state_ += filter_gain_ * (felt - filter_state_);
+    }
+  }
   std::array<int16_t, 3> counts;
   const double lsb = LsbPerDps();
   bool saturated = false;
-  for (int axis = 0; axis < 3; ++axis) counts[axis] = RateToCount(omega[axis], lsb, &saturated);
+  for (int axis = 0; axis < 3; ++axis) {
+    counts[axis] = RateToCount(filter_state_[axis], lsb, &saturated);
+  }
   return counts;
+}
+
+int64_t SensorEmulator::FilterDelayNs() const {
+  if (!options_.filter) return 0;
+  return static_cast<int64_t>(std::llround(CurrentFilter().delay_s * 1e9));
 }
 
 void SensorEmulator::PushPacket(const std::array<int16_t, 3>& counts) {
@@ -163,7 +222,7 @@ void SensorEmulator::Produce(int64_t t_ns) {
     int64_t unset = INT64_MIN;  // another part on the same time line may have set it meanwhile
     play_origin_ns_->compare_exchange_strong(unset, t_ns);
   }
-  output_ = PlayedCounts(t_ns);
+  output_ = FilteredCounts(t_ns);
   if (!collect) return;
   if (options_.keep_truth) {
     fifo_times_ns_.push_back(t_ns);
@@ -247,6 +306,8 @@ void SensorEmulator::WriteByte(uint8_t address, uint8_t value) {
   if (GyroOn() != was_on || RateHz() != was_rate) {
     if (was_on && !GyroOn()) running_ = false;
     Retime(now_ns);
+  } else if (running_) {
+    ConfigureFilter();  // DLPF_CFG may have changed at the same rate
   }
 }
 

@@ -11,18 +11,20 @@
 // SIGNAL_PATH_RESET flush, 2 KiB of packets 1 or 2 with their header byte), the FIFO count
 // (MPU 13 bits; ICM bytes or records, either endianness) and the FIFO data register, the
 // overflow interrupt (MPU INT_STATUS FIFO_OFLOW_INT, ICM FIFO_FULL_INT, cleared on read) and the
-// gyro output registers. Not emulated: the accelerometer and temperature (zeros), the digital
-// low-pass filter (the trace's rates pass unfiltered), the I2C master, self-test, other banks.
+// gyro output registers; the gyro's low-pass filter (GyroFilter at the registers' setting), as a
+// first-order filter at its bandwidth run at its internal rate, after a pure delay that makes the
+// whole delay of a slow motion the table's. Not emulated: the accelerometer and temperature
+// (zeros), the I2C master, self-test, other banks.
 //
 // Time: the part has its own oscillator, `ppm` off the nominal rate (positive: fast), so sample k
 // is produced at clock time first + round(k * period / (1 + ppm 1e-6)). Samples are produced
 // lazily, on each SPI transfer, up to the clock's now.
 //
 // Playback: the trace's first sample is played by the first sample that enters the FIFO (the
-// play origin); a later sample, produced at clock time t, plays the trace sample nearest to
-// trace start + (t - origin): a sample and hold, as the part's output register holds its last
-// sample. Interpolating between the trace's samples would average away part of their noise. The
-// trace repeats when the recording outlasts it. Rates are quantised to the range's counts and
+// play origin); the motion felt at a later clock time t is the trace at trace start +
+// (t - origin), on the line between its two samples there (held before the first and after the
+// last), and the filter runs on it. The trace repeats when the recording outlasts it. Rates are
+// quantised to the range's counts and
 // saturate at the int16 register, as the part does.
 
 #include "record/clock.h"
@@ -63,6 +65,8 @@ struct EmulatorOptions {
   std::shared_ptr<std::atomic<int64_t>> shared_origin;
   // Keep every FIFO sample's time and counts (FifoSampleTimeNs): the truth tests compare with.
   bool keep_truth = false;
+  // False: the trace's rates reach the output unfiltered and undelayed (tests of the playback).
+  bool filter = true;
   // Throws std::invalid_argument naming the first bad field (|ppm| < 10000).
   void Check() const;
 };
@@ -84,16 +88,22 @@ class SensorEmulator : public SpiTransport {
   const std::array<int16_t, 3>& FifoSampleCounts(size_t i) const { return fifo_counts_.at(i); }
   size_t fifo_samples() const { return fifo_times_ns_.size(); }
   size_t samples_dropped() const { return samples_dropped_; }  // lost to a full FIFO
+  // The filter's delay at the current setting (0 without the filter): a sample produced at t shows
+  // the motion of about t minus this (a recorder that takes it off stamps the motion's time).
+  int64_t FilterDelayNs() const;
 
  private:
   void Reset();
-  void Advance(int64_t now_ns);  // produces every sample up to now
-  void Produce(int64_t t_ns);    // one sample
-  std::array<int16_t, 3> PlayedCounts(int64_t t_ns);
-  void Retime(int64_t now_ns);  // the rate or power changed
+  void Advance(int64_t now_ns);                         // produces every sample up to now
+  void Produce(int64_t t_ns);                           // one sample
+  Eigen::Vector3d PlayedRate(int64_t t_ns);             // the trace's rate felt at clock time t
+  std::array<int16_t, 3> FilteredCounts(int64_t t_ns);  // the filter's output at t, in counts
+  void Retime(int64_t now_ns);                          // the rate or power changed
+  void ConfigureFilter();  // the filter's gain, steps and pure delay at the registers' setting
   bool GyroOn() const;
   bool FifoCollects() const;
   double RateHz() const;
+  GyroFilter CurrentFilter() const;
   double LsbPerDps() const;
   int PacketBytes() const;
   void PushPacket(const std::array<int16_t, 3>& counts);
@@ -114,6 +124,13 @@ class SensorEmulator : public SpiTransport {
   int64_t anchor_ns_ = 0, anchor_k_ = 0, next_k_ = 0;
   double period_ns_ = 0.0;
   size_t trace_cursor_ = 0;
+  // The filter: its state (rad/s), whether it holds one yet, its gain per internal step, the
+  // internal steps per output sample and the pure delay before it.
+  Eigen::Vector3d filter_state_ = Eigen::Vector3d::Zero();
+  bool filter_primed_ = false;
+  double filter_gain_ = 1.0;
+  int filter_steps_ = 1;
+  int64_t filter_pure_delay_ns_ = 0;
   std::shared_ptr<std::atomic<int64_t>> play_origin_ns_;  // INT64_MIN until the FIFO starts
   std::vector<int64_t> fifo_times_ns_;
   std::vector<std::array<int16_t, 3>> fifo_counts_;

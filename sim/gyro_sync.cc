@@ -416,13 +416,24 @@ GyroSync SyncGyros(const GyroTrace& a, const GyroTrace& b, const GyroSyncOptions
         ", and the next below " + FormatNumber("%.0f", 100 * kMaxRunnerUpShare) +
         " % of it): record some turns about every axis in both");
   }
+  // Both streams smoothed alike (a triangle kSmoothingS wide: two boxes of half that), for the
+  // mounting and the fine fit. The fine fit's derivatives over kDerivativeStepS hold for the
+  // motion below about 30 Hz, and a vibration above (a multirotor's motors at 100 to 300 Hz) would
+  // turn them around and walk Gauss-Newton away from the offset (9 ms on a synthetic flight
+  // against itself at half the rate). The mounting's test weighs the motion against what the
+  // streams do not share, and two gyros filtered differently (a recorder's 184 Hz DLPF against a
+  // flight controller's raw samples) differ by their noise above the slower filter, which refused
+  // a mounting the smoothed motion shows plainly. A symmetric window moves no time.
+  const double half_s = 0.5 * kSmoothingS;
+  const GyroTrace a_smooth = BoxAverage(BoxAverage(a, half_s), half_s);
+  const GyroTrace b_smooth = BoxAverage(BoxAverage(b, half_s), half_s);
   // The mounting, with b on a's clock at the coarse offset, each sample of the slower stream
   // paired (FuseSensorPair pairs each of its first trace's samples with the other's nearest: from
   // the faster one, half or more would find none, and the mounting's test then failed on a rich
   // motion).
-  const SensorPair pair = ia >= ib
-                              ? FuseSensorPair(a, Shifted(b, lag.offset_s), SensorPairOptions{})
-                              : FuseSensorPair(Shifted(b, lag.offset_s), a, SensorPairOptions{});
+  const SensorPair pair =
+      ia >= ib ? FuseSensorPair(a_smooth, Shifted(b_smooth, lag.offset_s), SensorPairOptions{})
+               : FuseSensorPair(Shifted(b_smooth, lag.offset_s), a_smooth, SensorPairOptions{});
   sync.a_from_b = ia >= ib ? pair.a_from_b : Eigen::Matrix3d(pair.a_from_b.transpose());
   sync.mounting_fitted = pair.mounting_fitted;
   sync.mounting_angle_deg = pair.mounting_angle_deg;
@@ -431,14 +442,6 @@ GyroSync SyncGyros(const GyroTrace& a, const GyroTrace& b, const GyroSyncOptions
   const double end_ns = std::min<double>(a.t_end_ns(), b.t_end_ns() - 1e9 * lag.offset_s);
   sync.overlap_s = (end_ns - begin_ns) * 1e-9;
   const bool fit_rate = sync.overlap_s >= options.min_rate_overlap_s;
-  // The fine fit on both streams smoothed alike (a triangle kSmoothingS wide: two boxes of half
-  // that): its derivatives over kDerivativeStepS hold for the motion below about 30 Hz, and a
-  // vibration above (a multirotor's motors at 100 to 300 Hz) would turn them around and walk
-  // Gauss-Newton away from the offset (9 ms on a synthetic flight against itself at half the
-  // rate). A symmetric window moves no time.
-  const double half_s = 0.5 * kSmoothingS;
-  const GyroTrace a_smooth = BoxAverage(BoxAverage(a, half_s), half_s);
-  const GyroTrace b_smooth = BoxAverage(BoxAverage(b, half_s), half_s);
   FineProblem problem{a_smooth, b_smooth, ia >= ib, 0.5 * (begin_ns + end_ns), sync.a_from_b};
   sync.reference_a_s = problem.t_mid_ns * 1e-9;
   // Gauss-Newton on (offset, rate). The derivatives are central differences over

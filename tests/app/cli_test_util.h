@@ -67,9 +67,11 @@ inline CommandResult RunShutterlab(const std::string& args, const std::string& s
   return result;
 }
 
-// The gyro.csv at trace_path as a flight controller beside it would log the same motion: every
-// second sample, on axes turned 2 rad about (1, 2, 3) (kFcFromBodyAngleRad), on a clock
-// kFcClockAheadS ahead; written as gyro.csv to fc_path.
+// The gyro.csv at trace_path as a flight controller beside it would log the same motion: at half
+// the rate, each sample the mean of two (a flight controller logs its filtered gyro; taking every
+// second sample instead would fold a multirotor's vibration down to slow motion that the other
+// gyro does not show), stamped at their middle, on axes turned 2 rad about (1, 2, 3)
+// (kFcFromBodyAngleRad), on a clock kFcClockAheadS ahead; written as gyro.csv to fc_path.
 inline constexpr double kFcFromBodyAngleRad = 2.0;
 inline constexpr double kFcClockAheadS = 123.456;
 inline void WriteAsFlightControllerLog(const std::string& trace_path, const std::string& fc_path) {
@@ -78,9 +80,11 @@ inline void WriteAsFlightControllerLog(const std::string& trace_path, const std:
       Eigen::AngleAxisd(kFcFromBodyAngleRad, Eigen::Vector3d(1, 2, 3).normalized())
           .toRotationMatrix();
   std::vector<GyroSample> fc;
-  for (size_t i = 0; i < trace.size(); i += 2)
-    fc.push_back(
-        {trace[i].t_ns + SecondsToNs(kFcClockAheadS), fc_from_body * trace[i].omega_rad_s});
+  for (size_t i = 0; i + 1 < trace.size(); i += 2) {
+    const int64_t t_ns = trace[i].t_ns + (trace[i + 1].t_ns - trace[i].t_ns) / 2;
+    fc.push_back({t_ns + SecondsToNs(kFcClockAheadS),
+                  fc_from_body * (0.5 * (trace[i].omega_rad_s + trace[i + 1].omega_rad_s))});
+  }
   WriteGyroCsv(fc_path, GyroTrace(fc));
 }
 

@@ -41,9 +41,11 @@ TEST(GyroPart, RatesAreTheLowestThePartOffersAtOrAboveTheRequest) {
     GyroPart part;
     double asked_hz, odr_hz;
   };
-  // MPU: 8 kHz (DLPF_CFG 0) or 1 kHz / (1 + SMPLRT_DIV); ICM: its GYRO_ODR table.
+  // MPU: 32 kHz (FCHOICE_B), 8 kHz (DLPF_CFG 0) or 1 kHz / (1 + SMPLRT_DIV); ICM: its GYRO_ODR
+  // table.
   for (const Case& c :
-       {Case{GyroPart::kMpu9250, 8000, 8000}, Case{GyroPart::kMpu9250, 3000, 8000},
+       {Case{GyroPart::kMpu9250, 32000, 32000}, Case{GyroPart::kMpu6500, 16000, 32000},
+        Case{GyroPart::kMpu9250, 8000, 8000}, Case{GyroPart::kMpu9250, 3000, 8000},
         Case{GyroPart::kMpu9250, 1000, 1000}, Case{GyroPart::kMpu9250, 300, 1000.0 / 3},
         Case{GyroPart::kMpu6500, 500, 500}, Case{GyroPart::kIcm42688p, 32000, 32000},
         Case{GyroPart::kIcm42688p, 3000, 4000}, Case{GyroPart::kIcm42688p, 600, 1000},
@@ -59,7 +61,7 @@ TEST(GyroPart, RatesAreTheLowestThePartOffersAtOrAboveTheRequest) {
       EXPECT_DOUBLE_EQ(IcmRateHz(setting.icm_odr_code), c.odr_hz);
     }
   }
-  config.rate_hz = 16000;
+  config.rate_hz = 40000;
   EXPECT_THROW(ResolvePartSetting(GyroPart::kMpu9250, config), std::invalid_argument);
   config.rate_hz = 8000;
   config.range_dps = 300;

@@ -140,12 +140,18 @@ TEST(GyroPart, HexByteWritesTwoUpperCaseDigits) {
 TEST(GyroPart, DescribeGivesRateFilterAndRangeOnOneCommaFreeLine) {
   const std::string mpu = GyroPartSettingAt(GyroPart::kMpu9250, 200.0, 500).Describe();
   EXPECT_EQ(mpu,
-            "200 Hz (SMPLRT_DIV 4; DLPF_CFG 2: 92 Hz bandwidth); +-500 deg/s (65.5 LSB per "
-            "deg/s)");
+            "200 Hz (SMPLRT_DIV 4; DLPF_CFG 2: 92 Hz bandwidth); delay 3.9 ms; +-500 deg/s (65.5 "
+            "LSB per deg/s)");
   const std::string icm = GyroPartSettingAt(GyroPart::kIcm42688p, 32000.0, 2000).Describe();
-  EXPECT_EQ(icm, "32000 Hz (GYRO_ODR 1; UI filter 8000 Hz); +-2000 deg/s (16.4 LSB per deg/s)");
+  EXPECT_EQ(icm,
+            "32000 Hz (GYRO_ODR 1; UI filter 8000 Hz); delay 0.0199 ms (modelled); +-2000 deg/s "
+            "(16.4 LSB per deg/s)");
+  const std::string fastest = GyroPartSettingAt(GyroPart::kMpu9250, 32000.0).Describe();
+  EXPECT_EQ(fastest,
+            "32000 Hz (FCHOICE_B 1: DLPF bypassed; 8800 Hz bandwidth); delay 0.064 ms; +-250 "
+            "deg/s (131 LSB per deg/s)");
   const std::string third = GyroPartSettingAt(GyroPart::kMpu6500, 300.0).Describe();  // 333.3 Hz
-  for (const std::string& text : {mpu, icm, third}) {
+  for (const std::string& text : {mpu, icm, fastest, third}) {
     EXPECT_EQ(text.find_first_of(",\n"), std::string::npos) << text;  // a .gcsv header value
   }
 }

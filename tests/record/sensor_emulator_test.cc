@@ -273,22 +273,29 @@ TEST(SensorEmulator, IcmPacketsCarryAHeaderAndTheCountInBytesOrRecords) {
 // Trace sample j of a 100 Hz, five-sample trace: x = (j + 1) * 0.02 rad/s (150 counts apart).
 Eigen::Vector3d EmuStepRate(size_t j) { return Eigen::Vector3d(0.02 * (j + 1), 0.0, 0.0); }
 
-// Which of the five trace samples a 1 kHz part plays i ms after its play origin: the nearest
-// (a tie goes to the later), the trace repeating every 50 ms (its 40 ms span plus an interval).
-size_t EmuPlayedStep(int64_t i_ms) {
-  return std::min<size_t>(4, static_cast<size_t>(((i_ms % 50) + 5) / 10));
+// The x rate a 1 kHz part plays i ms after its play origin: on the line between the two trace
+// samples about it, the last held until the trace repeats (every 50 ms: its 40 ms span plus an
+// interval).
+double EmuPlayedX(int64_t i_ms) {
+  const int64_t m = i_ms % 50;
+  if (m >= 40) return EmuStepRate(4)[0];
+  const size_t j = static_cast<size_t>(m / 10);
+  const double fraction = (m % 10) / 10.0;
+  return EmuStepRate(j)[0] + fraction * (EmuStepRate(j + 1)[0] - EmuStepRate(j)[0]);
 }
 
-TEST(SensorEmulator, PlaysTheTraceSampleAndHoldFromTheFirstFifoSampleAndRepeatsIt) {
+TEST(SensorEmulator, PlaysTheTraceFromTheFirstFifoSampleBetweenItsSamplesAndRepeatsIt) {
   VirtualClock clock(kEmuStartNs);
-  SensorEmulator part(EmuTrace(5, 10000000, EmuStepRate), &clock, EmuOptions(GyroPart::kMpu9250));
+  EmulatorOptions options = EmuOptions(GyroPart::kMpu9250);
+  options.filter = false;  // the trace's samples as they are
+  SensorEmulator part(EmuTrace(5, 10000000, EmuStepRate), &clock, options);
   EmuStartMpuFifo(part, true, /*dlpf_cfg=*/1);  // 1 kHz
   clock.SleepUntilNs(kEmuStartNs + 200000000);
   EmuMpuFifoCount(part);  // the part produces its samples when the bus is next used
   ASSERT_GE(part.fifo_samples(), 120u);
   for (size_t i = 0; i < 120; ++i) {
     ASSERT_EQ(part.FifoSampleCounts(i)[0],
-              EmuExpectedCount(EmuStepRate(EmuPlayedStep(static_cast<int64_t>(i)))[0], 131.0))
+              EmuExpectedCount(EmuPlayedX(static_cast<int64_t>(i)), 131.0))
         << "FIFO sample " << i;
   }
 }
@@ -298,6 +305,7 @@ TEST(SensorEmulator, PartsOnASharedOriginPlayOneTimeLine) {
   const GyroTrace trace = EmuTrace(5, 10000000, EmuStepRate);
   EmulatorOptions options = EmuOptions(GyroPart::kMpu9250);
   options.shared_origin = std::make_shared<std::atomic<int64_t>>(INT64_MIN);
+  options.filter = false;  // the trace's samples as they are
   SensorEmulator first(trace, &clock, options), second(trace, &clock, options);
   EmuStartMpuFifo(first, true, /*dlpf_cfg=*/1);  // 1 kHz
   clock.SleepUntilNs(kEmuStartNs + 60000000);
@@ -311,12 +319,91 @@ TEST(SensorEmulator, PartsOnASharedOriginPlayOneTimeLine) {
   // (which a part on its own time line would play first).
   ASSERT_GT(second.fifo_samples(), 10u);
   const int64_t offset_ms = (second.FifoSampleTimeNs(0) - *first.PlayOriginNs()) / 1000000;
-  EXPECT_NE(EmuPlayedStep(offset_ms), 0u) << offset_ms;
+  EXPECT_GT(offset_ms % 50, 5) << offset_ms;  // not where the trace starts
   for (size_t i = 0; i < second.fifo_samples(); ++i) {
-    EXPECT_EQ(
-        second.FifoSampleCounts(i)[0],
-        EmuExpectedCount(EmuStepRate(EmuPlayedStep(offset_ms + static_cast<int64_t>(i)))[0], 131.0))
+    EXPECT_EQ(second.FifoSampleCounts(i)[0],
+              EmuExpectedCount(EmuPlayedX(offset_ms + static_cast<int64_t>(i)), 131.0))
         << "sample " << i;
+  }
+}
+
+// An MPU-9250 playing `omega` at a filter setting (CONFIG's DLPF_CFG, GYRO_CONFIG's FCHOICE_B;
+// SMPLRT_DIV 0, +-250 deg/s) for duration_ns of samples: each FIFO sample's time after the first
+// and its x rate (rad/s), from the emulator's truth.
+struct EmuPlayed {
+  std::vector<double> t_s, x_rad_s;
+  int64_t delay_ns = 0;  // the emulator's FilterDelayNs
+};
+EmuPlayed EmuPlayThroughMpuFilter(const GyroTrace& trace, uint8_t dlpf_cfg, uint8_t fchoice_b,
+                                  int64_t duration_ns) {
+  VirtualClock clock(kEmuStartNs);
+  SensorEmulator part(trace, &clock, EmuOptions(GyroPart::kMpu9250));
+  EmuWrite(part, mpu::kGyroConfig, fchoice_b);
+  EmuStartMpuFifo(part, /*stop_when_full=*/true, dlpf_cfg);
+  clock.SleepUntilNs(kEmuStartNs + kEmuMpuStartupNs + duration_ns);
+  EmuMpuFifoCount(part);  // the part produces its samples when the bus is next used
+  EmuPlayed played;
+  played.delay_ns = part.FilterDelayNs();
+  for (size_t i = 0; i < part.fifo_samples(); ++i) {
+    played.t_s.push_back((part.FifoSampleTimeNs(i) - part.FifoSampleTimeNs(0)) * 1e-9);
+    played.x_rad_s.push_back(part.FifoSampleCounts(i)[0] / 131.0 * kPi / 180.0);
+  }
+  return played;
+}
+
+// Each of the MPU's filter settings against its register map's table (typed here again, not
+// read from the code): a ramp comes through the table's delay late (within 2 % or 10 us), and a
+// sine at the table's bandwidth keeps 1/sqrt(2) of its amplitude (within 3 %).
+TEST(SensorEmulator,
+     TheFilterDelaysASlowMotionByTheDatasheetsDelayAndHalvesThePowerAtItsBandwidth) {
+  struct Setting {
+    uint8_t dlpf_cfg, fchoice_b;
+    double bandwidth_hz, delay_ms;
+  };
+  constexpr double kSlope = 1.0;  // rad/s per s
+  // 1.5 s at 128 kHz: the part plays the nearest sample, within 3.9 us of its time.
+  const GyroTrace ramp = EmuTrace(
+      192000, 7812, [&](size_t j) { return Eigen::Vector3d(kSlope * j * 7812e-9, 0.0, 0.0); });
+  for (const Setting& c :
+       {Setting{0, 0, 250, 0.97}, Setting{1, 0, 184, 2.9}, Setting{2, 0, 92, 3.9},
+        Setting{3, 0, 41, 5.9}, Setting{4, 0, 20, 9.9}, Setting{5, 0, 10, 17.85},
+        Setting{6, 0, 5, 33.48}, Setting{7, 0, 3600, 0.17}, Setting{0, 1, 8800, 0.064},
+        Setting{0, 2, 3600, 0.11}}) {
+    const std::string name =
+        "DLPF_CFG " + std::to_string(c.dlpf_cfg) + ", FCHOICE_B " + std::to_string(c.fchoice_b);
+    // The ramp: from 0.5 s on (the slowest filter settled), rate = slope (t - delay).
+    const EmuPlayed slow = EmuPlayThroughMpuFilter(ramp, c.dlpf_cfg, c.fchoice_b, 1400000000);
+    double delay_sum_s = 0;
+    size_t n = 0;
+    for (size_t i = 0; i < slow.t_s.size(); ++i) {
+      if (slow.t_s[i] < 0.5) continue;
+      delay_sum_s += slow.t_s[i] - slow.x_rad_s[i] / kSlope;
+      ++n;
+    }
+    ASSERT_GT(n, 400u) << name;
+    const double delay_ms = delay_sum_s / n * 1e3;
+    EXPECT_NEAR(delay_ms, c.delay_ms, std::max(0.02 * c.delay_ms, 0.01)) << name;
+    EXPECT_NEAR(slow.delay_ns * 1e-6, c.delay_ms, 1e-6) << name;
+    // The sine at the bandwidth, 1 rad/s, played from a trace ten times finer than the filter
+    // runs; its amplitude out by least squares on sin and cos over the last 0.2 s.
+    const double f = c.bandwidth_hz;
+    const double trace_interval_s = 1.0 / (10 * std::max(8000.0, 4 * f));
+    const auto n_trace = static_cast<size_t>(0.5 / trace_interval_s);
+    const GyroTrace sine = EmuTrace(n_trace, std::llround(trace_interval_s * 1e9), [&](size_t j) {
+      return Eigen::Vector3d(std::sin(2 * kPi * f * j * trace_interval_s), 0.0, 0.0);
+    });
+    const EmuPlayed fast = EmuPlayThroughMpuFilter(sine, c.dlpf_cfg, c.fchoice_b, 450000000);
+    Eigen::Matrix2d normal = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d projected = Eigen::Vector2d::Zero();
+    for (size_t i = 0; i < fast.t_s.size(); ++i) {
+      if (fast.t_s[i] < 0.25) continue;
+      const Eigen::Vector2d basis(std::sin(2 * kPi * f * fast.t_s[i]),
+                                  std::cos(2 * kPi * f * fast.t_s[i]));
+      normal += basis * basis.transpose();
+      projected += basis * fast.x_rad_s[i];
+    }
+    const double gain = normal.ldlt().solve(projected).norm();
+    EXPECT_NEAR(gain, 1 / std::sqrt(2.0), 0.03 / std::sqrt(2.0)) << name;
   }
 }
 
