@@ -167,6 +167,11 @@ std::string HexByte(uint8_t value) {
   return text;
 }
 
+double AccelLsbPerG(GyroPart part, uint8_t fs_code) {
+  const int code = fs_code & 3;
+  return part == GyroPart::kIcm42688p ? 2048.0 * (1 << code) : 16384.0 / (1 << code);
+}
+
 double IcmRangeDps(uint8_t fs_code) { return 2000.0 / (1 << (fs_code & 7)); }
 
 PartSetting ResolvePartSetting(GyroPart part, const SensorConfig& config) {

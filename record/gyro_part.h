@@ -18,11 +18,12 @@ namespace mpu {
 inline constexpr uint8_t kSmplrtDiv = 0x19;  // sample rate = 1 kHz / (1 + div) when the DLPF is on
 inline constexpr uint8_t kConfig =
     0x1A;  // bit 6 FIFO_MODE (1: drop new data when full), 2:0 DLPF_CFG
-inline constexpr uint8_t kGyroConfig = 0x1B;  // 4:3 GYRO_FS_SEL, 1:0 FCHOICE_B
-inline constexpr uint8_t kFifoEn = 0x23;      // 7 TEMP, 6 GYRO_X, 5 GYRO_Y, 4 GYRO_Z, 3 ACCEL
-inline constexpr uint8_t kIntEnable = 0x38;   // bit 4 FIFO_OFLOW_EN
-inline constexpr uint8_t kIntStatus = 0x3A;   // bit 4 FIFO_OFLOW_INT; cleared by reading it
-inline constexpr uint8_t kAccelXoutH = 0x3B;  // 0x3B..0x40 accel, 0x41..0x42 temp, 0x43..0x48 gyro
+inline constexpr uint8_t kGyroConfig = 0x1B;   // 4:3 GYRO_FS_SEL, 1:0 FCHOICE_B
+inline constexpr uint8_t kAccelConfig = 0x1C;  // 4:3 ACCEL_FS_SEL: +-2, 4, 8, 16 g
+inline constexpr uint8_t kFifoEn = 0x23;       // 7 TEMP, 6 GYRO_X, 5 GYRO_Y, 4 GYRO_Z, 3 ACCEL
+inline constexpr uint8_t kIntEnable = 0x38;    // bit 4 FIFO_OFLOW_EN
+inline constexpr uint8_t kIntStatus = 0x3A;    // bit 4 FIFO_OFLOW_INT; cleared by reading it
+inline constexpr uint8_t kAccelXoutH = 0x3B;   // 0x3B..0x40 accel, 0x41..0x42 temp, 0x43..0x48 gyro
 inline constexpr uint8_t kGyroXoutH = 0x43;
 inline constexpr uint8_t kUserCtrl = 0x6A;    // 6 FIFO_EN, 4 I2C_IF_DIS, 2 FIFO_RST (self-clearing)
 inline constexpr uint8_t kPwrMgmt1 = 0x6B;    // 7 H_RESET, 6 SLEEP, 2:0 CLKSEL
@@ -41,15 +42,17 @@ inline constexpr uint8_t kPwrMgmt1Reset = 0x80, kPwrMgmt1Sleep = 0x40;
 namespace icm {
 inline constexpr uint8_t kDeviceConfig = 0x11;  // bit 0 SOFT_RESET_CONFIG
 inline constexpr uint8_t kFifoConfig = 0x16;  // 7:6 FIFO_MODE: 0 bypass, 1 stream, 2/3 stop on full
-inline constexpr uint8_t kGyroDataX1 = 0x25;  // 0x25..0x2A gyro, big-endian by default
-inline constexpr uint8_t kIntStatus = 0x2D;   // bit 1 FIFO_FULL_INT; cleared by reading it
-inline constexpr uint8_t kFifoCountH = 0x2E;  // 0x2E, 0x2F: FIFO count (bytes, big-endian)
-inline constexpr uint8_t kFifoData = 0x30;    // reads stream the FIFO
+inline constexpr uint8_t kAccelDataX1 = 0x1F;      // 0x1F..0x24 accel, big-endian by default
+inline constexpr uint8_t kGyroDataX1 = 0x25;       // 0x25..0x2A gyro, big-endian by default
+inline constexpr uint8_t kIntStatus = 0x2D;        // bit 1 FIFO_FULL_INT; cleared by reading it
+inline constexpr uint8_t kFifoCountH = 0x2E;       // 0x2E, 0x2F: FIFO count (bytes, big-endian)
+inline constexpr uint8_t kFifoData = 0x30;         // reads stream the FIFO
 inline constexpr uint8_t kSignalPathReset = 0x4B;  // bit 1 FIFO_FLUSH
-inline constexpr uint8_t kIntfConfig0 = 0x4C;  // 6 FIFO_COUNT_REC, 5 COUNT_ENDIAN, 4 DATA_ENDIAN
-inline constexpr uint8_t kPwrMgmt0 = 0x4E;     // 3:2 GYRO_MODE (3 = low noise)
-inline constexpr uint8_t kGyroConfig0 = 0x4F;  // 7:5 GYRO_FS_SEL, 3:0 GYRO_ODR
-inline constexpr uint8_t kFifoConfig1 = 0x5F;  // 2 TEMP_EN, 1 GYRO_EN, 0 ACCEL_EN
+inline constexpr uint8_t kIntfConfig0 = 0x4C;   // 6 FIFO_COUNT_REC, 5 COUNT_ENDIAN, 4 DATA_ENDIAN
+inline constexpr uint8_t kPwrMgmt0 = 0x4E;      // 3:2 GYRO_MODE (3 = low noise)
+inline constexpr uint8_t kGyroConfig0 = 0x4F;   // 7:5 GYRO_FS_SEL, 3:0 GYRO_ODR
+inline constexpr uint8_t kAccelConfig0 = 0x50;  // 7:5 ACCEL_FS_SEL: +-16, 8, 4, 2 g
+inline constexpr uint8_t kFifoConfig1 = 0x5F;   // 2 TEMP_EN, 1 GYRO_EN, 0 ACCEL_EN
 inline constexpr uint8_t kWhoAmI = 0x75;
 inline constexpr uint8_t kBankSel = 0x76;
 inline constexpr uint8_t kFifoFullBit = 0x02;
@@ -132,6 +135,9 @@ GyroFilter IcmGyroFilter(double odr_hz);
 
 // The ICM-42688-P's GYRO_ODR code in Hz; 0 for a reserved code.
 double IcmRateHz(uint8_t odr_code);
+// The accelerometer's counts per g at its ACCEL_FS_SEL code: MPU 16384 / 2^code (+-2 g at 0),
+// ICM-42688-P 2048 * 2^code (+-16 g at 0).
+double AccelLsbPerG(GyroPart part, uint8_t fs_code);
 // The ICM-42688-P's GYRO_FS_SEL code in deg/s (2000 / 2^code).
 double IcmRangeDps(uint8_t fs_code);
 

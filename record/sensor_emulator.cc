@@ -4,6 +4,8 @@
 #include "sim/logs/raw_csv.h"
 #include "sim/units.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 
@@ -12,6 +14,8 @@ namespace shutterlab {
 void EmulatorOptions::Check() const {
   SHUTTERLAB_CHECK(std::isfinite(ppm) && std::abs(ppm) < 10000.0)
       << "ppm must be within +-10000, got " << ppm;
+  SHUTTERLAB_CHECK(up_in_sensor.allFinite() && up_in_sensor.norm() > 0)
+      << "up_in_sensor must be a direction";
 }
 
 SensorEmulator::SensorEmulator(GyroTrace trace, const Clock* clock, EmulatorOptions options)
@@ -20,6 +24,10 @@ SensorEmulator::SensorEmulator(GyroTrace trace, const Clock* clock, EmulatorOpti
   play_origin_ns_ = options_.shared_origin ? options_.shared_origin
                                            : std::make_shared<std::atomic<int64_t>>(INT64_MIN);
   SHUTTERLAB_CHECK(!trace_.empty()) << "the emulator needs a trace with samples";
+  // The level frame's z is up: the sensor's axes in it turn up_in_sensor onto z.
+  attitude_ = Eigen::Quaterniond::FromTwoVectors(options_.up_in_sensor.normalized(),
+                                                 Eigen::Vector3d::UnitZ())
+                  .toRotationMatrix();
   SHUTTERLAB_CHECK(clock_ != nullptr) << "the emulator needs a clock";
   Reset();
 }
@@ -118,7 +126,7 @@ GyroFilter SensorEmulator::CurrentFilter() const {
   return MpuGyroFilter(regs_[mpu::kConfig] & 7, regs_[mpu::kGyroConfig] & 3);
 }
 
-Eigen::Vector3d SensorEmulator::PlayedRate(int64_t t_ns) {
+Eigen::Vector3d SensorEmulator::PlayedRate(int64_t t_ns, size_t* cursor) const {
   const auto& samples = trace_.samples();
   int64_t trace_t_ns = trace_.t_begin_ns();
   const auto origin = PlayOriginNs();
@@ -128,20 +136,20 @@ Eigen::Vector3d SensorEmulator::PlayedRate(int64_t t_ns) {
                             std::max<int64_t>(trace_.sampling().median_interval_ns, 1);
     const int64_t offset_ns = std::max<int64_t>(t_ns - *origin, 0) % loop_ns;
     trace_t_ns += offset_ns;
-    if (trace_cursor_ < samples.size() && samples[trace_cursor_].t_ns > trace_t_ns) {
-      trace_cursor_ = 0;  // the trace started again
+    if ((*cursor) < samples.size() && samples[(*cursor)].t_ns > trace_t_ns) {
+      (*cursor) = 0;  // the trace started again
     }
-    while (trace_cursor_ + 1 < samples.size() && samples[trace_cursor_ + 1].t_ns <= trace_t_ns) {
-      ++trace_cursor_;  // the last sample at or before the time
+    while ((*cursor) + 1 < samples.size() && samples[(*cursor) + 1].t_ns <= trace_t_ns) {
+      ++(*cursor);  // the last sample at or before the time
     }
   }
   if (!origin) return samples[0].omega_rad_s;
-  if (trace_cursor_ + 1 >= samples.size()) return samples[trace_cursor_].omega_rad_s;
+  if ((*cursor) + 1 >= samples.size()) return samples[(*cursor)].omega_rad_s;
   // Between two samples: on the line between them, so that a delay that is no whole number of
   // the trace's intervals is played as it is (the nearest sample would round it to one: 0.44 ms
   // of the 2.9 ms of DLPF_CFG 1 on a 1 kHz trace).
-  const GyroSample& before = samples[trace_cursor_];
-  const GyroSample& after = samples[trace_cursor_ + 1];
+  const GyroSample& before = samples[(*cursor)];
+  const GyroSample& after = samples[(*cursor) + 1];
   const double fraction =
       static_cast<double>(trace_t_ns - before.t_ns) / static_cast<double>(after.t_ns - before.t_ns);
   return before.omega_rad_s + fraction * (after.omega_rad_s - before.omega_rad_s);
@@ -153,7 +161,7 @@ std::array<int16_t, 3> SensorEmulator::FilteredCounts(int64_t t_ns) {
   for (int step = filter_steps_ - 1; step >= 0; --step) {
     const int64_t step_ns =
         t_ns - static_cast<int64_t>(std::llround(step * period_ns_ / filter_steps_));
-    const Eigen::Vector3d felt = PlayedRate(step_ns - filter_pure_delay_ns_);
+    const Eigen::Vector3d felt = PlayedRate(step_ns - filter_pure_delay_ns_, &trace_cursor_);
     if (!filter_primed_) {
       filter_state_ = felt;  // a part that starts up settles on the motion of its first sample
       filter_primed_ = true;
@@ -166,6 +174,34 @@ std::array<int16_t, 3> SensorEmulator::FilteredCounts(int64_t t_ns) {
   bool saturated = false;
   for (int axis = 0; axis < 3; ++axis) {
     counts[axis] = RateToCount(filter_state_[axis], lsb, &saturated);
+  }
+  return counts;
+}
+
+void SensorEmulator::TurnAttitude(int64_t t_ns) {
+  const auto origin = PlayOriginNs();
+  if (!origin || t_ns < *origin) return;  // level, as up_in_sensor says, until the play starts
+  if (attitude_t_ns_ == INT64_MIN) attitude_t_ns_ = *origin;
+  if (t_ns <= attitude_t_ns_) return;
+  // The rate at the middle of the step, turned about the sensor's own axes (right-multiplied).
+  const double step_s = (t_ns - attitude_t_ns_) * 1e-9;
+  const Eigen::Vector3d omega =
+      PlayedRate(attitude_t_ns_ + (t_ns - attitude_t_ns_) / 2, &attitude_cursor_);
+  const double angle = omega.norm() * step_s;
+  if (angle > 0) attitude_ = attitude_ * Eigen::AngleAxisd(angle, omega.normalized());
+  attitude_t_ns_ = t_ns;
+}
+
+std::array<int16_t, 3> SensorEmulator::AccelCounts() const {
+  const bool icm_part = info_.part == GyroPart::kIcm42688p;
+  const uint8_t fs_code = icm_part ? regs_[icm::kAccelConfig0] >> 5 : regs_[mpu::kAccelConfig] >> 3;
+  const double lsb_per_g = AccelLsbPerG(info_.part, fs_code);
+  // +1 g along up, in the sensor's axes.
+  const Eigen::Vector3d felt_g = attitude_.transpose() * Eigen::Vector3d::UnitZ();
+  std::array<int16_t, 3> counts;
+  for (int axis = 0; axis < 3; ++axis) {
+    counts[axis] = static_cast<int16_t>(
+        std::clamp(std::lround(felt_g[axis] * lsb_per_g), long{INT16_MIN}, long{INT16_MAX}));
   }
   return counts;
 }
@@ -189,7 +225,7 @@ void SensorEmulator::PushPacket(const std::array<int16_t, 3>& counts) {
     packet[n++] =
         static_cast<uint8_t>((accel ? icm::kHeaderAccel : 0) | (gyro ? icm::kHeaderGyro : 0));
     if (accel)
-      for (int i = 0; i < 3; ++i) put16(0, big);
+      for (int i = 0; i < 3; ++i) put16(accel_output_[i], big);
     if (gyro)
       for (int i = 0; i < 3; ++i) put16(counts[i], big);
     packet[n++] = 0;            // temperature
@@ -197,7 +233,7 @@ void SensorEmulator::PushPacket(const std::array<int16_t, 3>& counts) {
   } else {
     const uint8_t en = regs_[mpu::kFifoEn];  // register order: accel, temperature, gyro x, y, z
     if (en & 0x08)
-      for (int i = 0; i < 3; ++i) put16(0, true);
+      for (int i = 0; i < 3; ++i) put16(accel_output_[i], true);
     if (en & 0x80) put16(0, true);
     for (int axis = 0; axis < 3; ++axis) {
       if (en & (0x40 >> axis)) put16(counts[axis], true);
@@ -223,6 +259,8 @@ void SensorEmulator::Produce(int64_t t_ns) {
     play_origin_ns_->compare_exchange_strong(unset, t_ns);
   }
   output_ = FilteredCounts(t_ns);
+  TurnAttitude(t_ns);
+  accel_output_ = AccelCounts();
   if (!collect) return;
   if (options_.keep_truth) {
     fifo_times_ns_.push_back(t_ns);
@@ -275,6 +313,11 @@ uint8_t SensorEmulator::ReadByte(uint8_t address) {
   if (address >= gyro_h && address < gyro_h + 6) {
     const uint16_t u = static_cast<uint16_t>(output_[(address - gyro_h) / 2]);
     return static_cast<uint8_t>(((address - gyro_h) % 2 == 0) ? u >> 8 : u & 0xFF);
+  }
+  const uint8_t accel_h = icm_part ? icm::kAccelDataX1 : mpu::kAccelXoutH;
+  if (address >= accel_h && address < accel_h + 6) {
+    const uint16_t u = static_cast<uint16_t>(accel_output_[(address - accel_h) / 2]);
+    return static_cast<uint8_t>(((address - accel_h) % 2 == 0) ? u >> 8 : u & 0xFF);
   }
   return regs_[address & 0x7F];
 }

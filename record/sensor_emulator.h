@@ -13,8 +13,11 @@
 // overflow interrupt (MPU INT_STATUS FIFO_OFLOW_INT, ICM FIFO_FULL_INT, cleared on read) and the
 // gyro output registers; the gyro's low-pass filter (GyroFilter at the registers' setting), as a
 // first-order filter at its bandwidth run at its internal rate, after a pure delay that makes the
-// whole delay of a slow motion the table's. Not emulated: the accelerometer and temperature
-// (zeros), the I2C master, self-test, other banks.
+// whole delay of a slow motion the table's; the accelerometer (range MPU ACCEL_FS_SEL, ICM
+// ACCEL_FS_SEL; output registers and FIFO) as a sensor that only turns feels it: gravity's
+// reaction, +1 g up, turned into the sensor's axes by the played rates integrated from the play
+// origin (EmulatorOptions::up_in_sensor there). Not emulated: the accelerometer's own filter and
+// any linear acceleration, the temperature (zeros), the I2C master, self-test, other banks.
 //
 // Time: the part has its own oscillator, `ppm` off the nominal rate (positive: fast), so sample k
 // is produced at clock time first + round(k * period / (1 + ppm 1e-6)). Samples are produced
@@ -67,6 +70,9 @@ struct EmulatorOptions {
   bool keep_truth = false;
   // False: the trace's rates reach the output unfiltered and undelayed (tests of the playback).
   bool filter = true;
+  // Up (against gravity) in the sensor's axes at the play origin: the accelerometer reads +1 g
+  // along it while the part is still. Normalised; (0, 0, 1): lying level, z up.
+  Eigen::Vector3d up_in_sensor = Eigen::Vector3d::UnitZ();
   // Throws std::invalid_argument naming the first bad field (|ppm| < 10000).
   void Check() const;
 };
@@ -94,9 +100,13 @@ class SensorEmulator : public SpiTransport {
 
  private:
   void Reset();
-  void Advance(int64_t now_ns);                         // produces every sample up to now
-  void Produce(int64_t t_ns);                           // one sample
-  Eigen::Vector3d PlayedRate(int64_t t_ns);             // the trace's rate felt at clock time t
+  void Advance(int64_t now_ns);  // produces every sample up to now
+  void Produce(int64_t t_ns);    // one sample
+  // The trace's rate felt at clock time t; cursor: where the last call for this use ended (the
+  // filter's and the attitude's times differ by a delay, so each keeps its own).
+  Eigen::Vector3d PlayedRate(int64_t t_ns, size_t* cursor) const;
+  void TurnAttitude(int64_t t_ns);                      // integrates the rates up to t
+  std::array<int16_t, 3> AccelCounts() const;           // what the accelerometer reads now
   std::array<int16_t, 3> FilteredCounts(int64_t t_ns);  // the filter's output at t, in counts
   void Retime(int64_t now_ns);                          // the rate or power changed
   void ConfigureFilter();  // the filter's gain, steps and pure delay at the registers' setting
@@ -118,12 +128,18 @@ class SensorEmulator : public SpiTransport {
   std::array<uint8_t, 128> regs_{};
   std::deque<uint8_t> fifo_;
   uint8_t int_status_ = 0;
-  std::array<int16_t, 3> output_{};  // the gyro output registers
+  std::array<int16_t, 3> output_{};        // the gyro output registers
+  std::array<int16_t, 3> accel_output_{};  // the accelerometer output registers
   // Sample timing: samples are produced at anchor_ns_ + round((k - anchor_k_) * period_ns_).
   bool running_ = false;
   int64_t anchor_ns_ = 0, anchor_k_ = 0, next_k_ = 0;
   double period_ns_ = 0.0;
   size_t trace_cursor_ = 0;
+  // The attitude: the sensor's axes in a level frame (z up), from the play origin on; the time it
+  // holds, and its own trace cursor.
+  Eigen::Matrix3d attitude_ = Eigen::Matrix3d::Identity();
+  int64_t attitude_t_ns_ = INT64_MIN;
+  size_t attitude_cursor_ = 0;
   // The filter: its state (rad/s), whether it holds one yet, its gain per internal step, the
   // internal steps per output sample and the pure delay before it.
   Eigen::Vector3d filter_state_ = Eigen::Vector3d::Zero();

@@ -407,6 +407,51 @@ TEST(SensorEmulator,
   }
 }
 
+// The accelerometer of a part that only turns: +1 g up. Level and still, the MPU (+-2 g: 16384
+// counts per g) reads +1 g on z in its output registers and its FIFO; after a quarter turn about
+// x (pi/2 rad/s for 1 s), up is the sensor's +y. The ICM at +-16 g (2048 counts per g), mounted
+// with up along its -x, reads -1 g on x.
+TEST(SensorEmulator, TheAccelerometerFeelsGravityTurnedByThePlayedRates) {
+  VirtualClock clock(kEmuStartNs);
+  const GyroTrace quarter_turn = EmuTrace(3000, 1000000, [](size_t j) {
+    return Eigen::Vector3d(j >= 500 && j < 1500 ? kPi / 2 : 0.0, 0.0, 0.0);
+  });
+  SensorEmulator mpu(quarter_turn, &clock, EmuOptions(GyroPart::kMpu9250));
+  EmuWrite(mpu, mpu::kGyroConfig, 3 << 3);                    // +-2000 deg/s: pi/2 rad/s fits
+  EmuWrite(mpu, mpu::kConfig, mpu::kConfigFifoModeStop | 1);  // 1 kHz; a full FIFO keeps its first
+  EmuWrite(mpu, mpu::kFifoEn, 0x08 | mpu::kFifoGyroXyz);
+  EmuWrite(mpu, mpu::kUserCtrl, mpu::kUserCtrlFifoEn);
+  const auto accel_registers = [&] {
+    uint8_t bytes[6];
+    ReadRegisters(mpu, mpu::kAccelXoutH, bytes, 6, kEmuSpiHz);
+    return Eigen::Vector3d(EmuBigEndian(bytes), EmuBigEndian(bytes + 2), EmuBigEndian(bytes + 4));
+  };
+  clock.SleepUntilNs(kEmuStartNs + kEmuMpuStartupNs + 100000000);  // still, 0.1 s in
+  EXPECT_LT((accel_registers() - Eigen::Vector3d(0, 0, 16384)).norm(), 1.0) << accel_registers();
+  // The FIFO: accel x, y, z then gyro x, y, z per sample.
+  const std::vector<uint8_t> bytes = EmuReadFifoBytes(mpu, mpu::kFifoRw, 12);
+  EXPECT_EQ(EmuBigEndian(&bytes[4]), 16384);
+  EXPECT_EQ(EmuBigEndian(&bytes[0]), 0);
+  clock.SleepUntilNs(kEmuStartNs + kEmuMpuStartupNs + 2000000000);  // the turn done
+  const Eigen::Vector3d turned = accel_registers();
+  EXPECT_NEAR(turned.y(), 16384, 16384 * 0.005) << turned.transpose();
+  EXPECT_NEAR(turned.z(), 0, 16384 * 0.01) << turned.transpose();
+  EXPECT_NEAR(turned.x(), 0, 1.0) << turned.transpose();
+
+  EmulatorOptions options = EmuOptions(GyroPart::kIcm42688p);
+  options.up_in_sensor = -Eigen::Vector3d::UnitX();
+  SensorEmulator icm(EmuConstantTrace(Eigen::Vector3d::Zero()), &clock, options);
+  EmuWrite(icm, icm::kFifoConfig1, icm::kFifoGyroTemp);
+  EmuWrite(icm, icm::kFifoConfig, icm::kFifoModeStopOnFull);
+  EmuWrite(icm, icm::kPwrMgmt0, icm::kGyroModeLowNoise);
+  clock.SleepUntilNs(clock.NowNs() + kEmuIcmStartupNs + 10000000);
+  uint8_t icm_bytes[6];
+  ReadRegisters(icm, icm::kAccelDataX1, icm_bytes, 6, kEmuSpiHz);
+  EXPECT_EQ(EmuBigEndian(icm_bytes), -2048);  // ACCEL_FS_SEL 0 (reset): +-16 g
+  EXPECT_EQ(EmuBigEndian(icm_bytes + 2), 0);
+  EXPECT_EQ(EmuBigEndian(icm_bytes + 4), 0);
+}
+
 TEST(SensorEmulator, ABrownOutAnswers0xFFThenComesBackAtResetValues) {
   VirtualClock clock(kEmuStartNs);
   EmulatorOptions options = EmuOptions(GyroPart::kMpu9250);
