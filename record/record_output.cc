@@ -158,6 +158,7 @@ RowFile::RowFile(const std::string& final_path, const std::string& partial_heade
   }
   header_bytes_ = partial_header.size();
   size_bytes_ = static_cast<off_t>(header_bytes_);
+  synced_bytes_ = size_bytes_;
   last_sync_ = std::chrono::steady_clock::now();
 }
 
@@ -181,6 +182,7 @@ void RowFile::Append(const std::string& text) {
     if (::fdatasync(fd_) < 0)
       throw IoError(IoMessage(partial_path_, 0, "cannot sync: " + ErrnoText()));
     last_sync_ = now;
+    synced_bytes_ = size_bytes_;
   }
 }
 

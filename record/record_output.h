@@ -61,12 +61,15 @@ class RowFile {
 
   const std::string& partial_path() const { return partial_path_; }
   bool has_rows() const { return size_bytes_ > static_cast<off_t>(header_bytes_); }
+  // The bytes on disk at the last fdatasync: what a power cut now would leave of the file.
+  off_t synced_bytes() const { return synced_bytes_; }
 
  private:
   std::string final_path_, partial_path_;
   int fd_ = -1;
   size_t header_bytes_ = 0;
   off_t size_bytes_ = 0;  // the file's length: the header and the whole rows appended
+  off_t synced_bytes_ = 0;
   bool finished_ = false;
   std::chrono::steady_clock::duration sync_interval_;
   std::chrono::steady_clock::time_point last_sync_;

@@ -15,12 +15,14 @@
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <set>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -68,6 +70,44 @@ TEST(RecordOutput, RowsAreNanosecondsFromT0AndRawCounts) {
   AppendRecordedRow(OutputSample(kOutputT0Ns + 125000, -32768, 0, 32767), kOutputT0Ns, &rows);
   AppendRecordedRow(OutputSample(kOutputT0Ns - 5, 1, -1, 12), kOutputT0Ns, &rows);
   EXPECT_EQ(rows, "125000,-32768,0,32767\n-5,1,-1,12\n");
+}
+
+// The power-cut bound: rows appended every 5 ms with a 0.1 s sync interval; after every append,
+// the oldest row not yet synced (what a power cut would lose) is at most the interval plus one
+// append old (and scheduling: 40 ms), and the synced part always ends on a whole row.
+TEST(RecordOutput, APowerCutLosesAtMostTheRowsOfOneSyncInterval) {
+  test::TempDir dir;
+  const RecordSummary summary = OutputSummary();
+  RecorderOptions options;
+  options.sync_interval_s = 0.1;
+  RowFile rows(dir / "cut.gcsv", RecordingGcsvHeader(summary, 0, options), options.sync_interval_s);
+  const off_t header_bytes = rows.synced_bytes();
+  std::vector<std::pair<off_t, std::chrono::steady_clock::time_point>> appended;  // end, when
+  double worst_age_s = 0;
+  const auto start = std::chrono::steady_clock::now();
+  for (int k = 0; std::chrono::steady_clock::now() - start < std::chrono::milliseconds(1200); ++k) {
+    std::string text;
+    AppendRecordedRow(OutputSample(kOutputT0Ns + k * 125000, k, -k, 1), kOutputT0Ns, &text);
+    rows.Append(text);
+    const auto now = std::chrono::steady_clock::now();
+    appended.push_back({(appended.empty() ? header_bytes : appended.back().first) +
+                            static_cast<off_t>(text.size()),
+                        now});
+    bool on_a_row = rows.synced_bytes() == header_bytes;
+    for (const auto& [end, when] : appended) {
+      on_a_row = on_a_row || end == rows.synced_bytes();
+      if (end > rows.synced_bytes()) {  // the oldest row a power cut would lose
+        worst_age_s = std::max(worst_age_s, std::chrono::duration<double>(now - when).count());
+        break;
+      }
+    }
+    EXPECT_TRUE(on_a_row) << "synced to the middle of a row";
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  std::printf("a power cut would have lost rows at most %.1f ms old (sync interval 100 ms)\n",
+              worst_age_s * 1e3);
+  EXPECT_GT(rows.synced_bytes(), header_bytes + 1000);  // it did sync, many times
+  EXPECT_LT(worst_age_s, 0.1 + 0.005 + 0.04);
 }
 
 TEST(RecordOutput, TheGcsvOfSensorTwoReadsBackWithItsHeaderRowsAndGaps) {
