@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -430,6 +431,12 @@ TEST(ImportCli, AClipWithoutAGyroTakesAFlightLogFoundByItsFrames) {
     }
     if (claim["claim"] == "time_offset_s") {
       EXPECT_NEAR(claim["found"].get<double>(), first_frame_s, 0.001) << claim;
+      std::printf(
+          "offset: import %+.2f ms (standard error %.2f ms), validate %+.2f ms from the truth; "
+          "mounting %.2f deg off\n",
+          (offset_s - first_frame_s) * 1e3, aligned["offset_stderr_s"].get<double>() * 1e3,
+          (claim["found"].get<double>() - first_frame_s) * 1e3,
+          Eigen::AngleAxisd(rig.cam_from_gyro * truth.transpose()).angle() * kDegPerRad);
     }
   }
 }
