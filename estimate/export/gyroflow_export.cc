@@ -3,15 +3,48 @@
 #include "model/lens_distortion.h"
 #include "sim/readout_direction.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 #include <variant>
 #include <vector>
 
 namespace shutterlab {
 namespace {
+
+// Gyroflow's camera axes against shutterlab's (OpenCV's: x right, y down, z forward): x right, y
+// up, z back out of the lens (FrameTransform in Gyroflow's stabilization/frame_transform.rs turns
+// its rotation into OpenCV's by negating the entries that couple x with y and z, which is this
+// change of axes; no comment of Gyroflow's states it).
+const Eigen::Matrix3d kGyroflowFromCamera = Eigen::Vector3d(1, -1, -1).asDiagonal();
+
+// The gyro's mounting as Gyroflow applies it to each sample (IMUTransforms in
+// gyro_source/imu_transforms.rs): w = R(rotation) * orient(imu_orientation, w_gyro), where orient
+// sets output axis i to the input axis letter i names (lowercase: negated), and the project's
+// "rotation" [pitch, roll, yaw] in degrees is R = Rz(roll) Ry(pitch) Rx(yaw). A mounting that
+// turns axes onto axes is written as the letters alone (rotation null); any other as "XYZ" and
+// the rotation.
+nlohmann::json GyroflowMounting(const Eigen::Matrix3d& gyroflow_from_gyro) {
+  const Eigen::Matrix3d& m = gyroflow_from_gyro;
+  std::string letters;
+  for (int row = 0; row < 3; ++row) {
+    Eigen::Index col = 0;
+    const double largest = m.row(row).cwiseAbs().maxCoeff(&col);
+    if (std::abs(largest - 1.0) > 1e-9) break;  // not an axis onto an axis
+    letters += static_cast<char>((m(row, col) > 0 ? 'X' : 'x') + col);
+  }
+  if (letters.size() == 3) return {{"imu_orientation", letters}, {"rotation", nullptr}};
+  const double roll_rad = std::atan2(m(1, 0), m(0, 0));
+  const double pitch_rad = std::asin(std::clamp(-m(2, 0), -1.0, 1.0));
+  const double yaw_rad = std::atan2(m(2, 1), m(2, 2));
+  return {{"imu_orientation", "XYZ"},
+          {"rotation", {pitch_rad * kDegPerRad, roll_rad * kDegPerRad, yaw_rad * kDegPerRad}}};
+}
 
 nlohmann::json LensProfileJson(const ExportCamera& camera) {
   const RigModel& rig = camera.truth.rig;
@@ -80,7 +113,10 @@ ExportOutput GyroflowExport(const ExportCamera& camera, const ExportOptions& opt
       {"note",
        "shutterlab export: the lens, the readout and the sync offset; load the video and "
        "its gyro in Gyroflow, then these settings"}};
-  if (camera.gyro_known) project["offsets"] = {{"0", offset_ms}};
+  if (camera.gyro_known) {
+    project["offsets"] = {{"0", offset_ms}};
+    project["gyro_source"] = GyroflowMounting(kGyroflowFromCamera * rig.cam_from_gyro);
+  }
   out.files.push_back({"project.gyroflow", project.dump(2) + "\n",
                        "a Gyroflow project's lens, readout and sync offset"});
   out.notes.push_back("frame_readout_time " + FormatNumber("%.6g", readout_ms) +
@@ -98,9 +134,19 @@ ExportOutput GyroflowExport(const ExportCamera& camera, const ExportOptions& opt
   out.notes.push_back(
       "asymmetrical: true keeps the principal point (Gyroflow puts it at the image "
       "centre otherwise)");
-  out.notes.push_back(
-      "the gyro's mounting (R_CG) is not written: set Gyroflow's IMU orientation "
-      "by hand (the side note gives R_CG)");
+  if (camera.gyro_known) {
+    const nlohmann::json mounting = project["gyro_source"];
+    out.notes.push_back(
+        "the gyro's mounting (R_CG) as gyro_source's imu_orientation " +
+        mounting["imu_orientation"].get<std::string>() +
+        (mounting["rotation"].is_null()
+             ? std::string(" (axes onto axes: no rotation)")
+             : " and rotation [pitch, roll, yaw] " + mounting["rotation"].dump() + " deg") +
+        ", onto Gyroflow's camera axes (x right, y up, z back: shutterlab's with y and z "
+        "negated, as read from Gyroflow's source and not checked against Gyroflow itself: if its "
+        "stabilised preview turns the wrong way, set the orientation by hand); they apply to the "
+        "gyro's axes as shutterlab read them, and replace a .gcsv's own orientation line");
+  }
   AddSideNote("gyroflow", camera, &out);
   return out;
 }

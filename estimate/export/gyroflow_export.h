@@ -7,8 +7,9 @@
 // and frame_readout_direction, the sync offset). Gyroflow times a frame's rows from its middle
 // row (frame_transform.rs: start = timestamp - readout / 2) and reads its gyro at video time -
 // offset (gyro_source.rs), so offset_ms = -1000 (time_offset_s + readout_s / 2) for shutterlab's
-// first-row frame times. The gyro's mounting is not written: Gyroflow's own rotation and axis
-// letters are not yet checked against R_CG.
+// first-row frame times. The gyro's mounting goes into gyro_source (imu_orientation and rotation,
+// onto Gyroflow's camera axes: x right, y up, z back), read from Gyroflow's source, not checked
+// against Gyroflow itself.
 
 #include "estimate/export/export_camera.h"
 #include "estimate/export/export_output.h"

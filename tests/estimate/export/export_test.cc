@@ -20,12 +20,15 @@
 #include "sim/check.h"
 #include "sim/so3.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 #include "tests/test_util.h"
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core/persistence.hpp>
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -455,6 +458,64 @@ TEST(GyroflowExport, TheProfileReadsBackAndTheOffsetCountsFromTheMiddleRow) {
     ASSERT_TRUE(from_project.mode.readout_s);
     EXPECT_NEAR(*from_project.mode.readout_s, 0.0271, 1e-15);
     EXPECT_EQ(from_project.mode.direction, ReadoutDirection::kBottomToTop);
+  }
+}
+
+// The gyro's mounting in a Gyroflow project, applied as Gyroflow's IMUTransforms does (rebuilt
+// here from its description: output axis i = the input axis letter i names, lowercase negated;
+// then R = Rz(roll) Ry(pitch) Rx(yaw) of the "rotation" [pitch, roll, yaw] in degrees), turns
+// every gyro rate into the camera's rate on Gyroflow's axes: x right, y up, z back (shutterlab's
+// with y and z negated). Axes onto axes are written as letters alone.
+TEST(GyroflowExport, TheMountingTurnsTheGyroOntoGyroflowsCameraAxes) {
+  const auto gyroflow_applies = [](const nlohmann::json& source, const Eigen::Vector3d& w) {
+    const std::string letters = source["imu_orientation"];
+    Eigen::Vector3d oriented;
+    for (int i = 0; i < 3; ++i) {
+      const char letter = letters[i];
+      const int axis = std::toupper(letter) - 'X';
+      oriented[i] = (std::isupper(letter) ? 1.0 : -1.0) * w[axis];
+    }
+    if (source["rotation"].is_null()) return oriented;
+    const double pitch = source["rotation"][0].get<double>() * kPi / 180;
+    const double roll = source["rotation"][1].get<double>() * kPi / 180;
+    const double yaw = source["rotation"][2].get<double>() * kPi / 180;
+    const Eigen::Matrix3d r = (Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                               Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitX()))
+                                  .toRotationMatrix();
+    return Eigen::Vector3d(r * oriented);
+  };
+  struct Case {
+    Eigen::Matrix3d cam_from_gyro;
+    std::string letters;  // "" when a rotation is needed
+  };
+  Eigen::Matrix3d quarter;  // camera x = gyro y, camera y = -gyro x
+  quarter << 0, 1, 0, -1, 0, 0, 0, 0, 1;
+  const Eigen::Matrix3d tilted =
+      (Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())).toRotationMatrix();
+  for (const Case& c : {Case{Eigen::Matrix3d::Identity(), "Xyz"}, Case{quarter, "YXz"},
+                        Case{tilted, ""}, Case{tilted * quarter, ""}}) {
+    ExportCamera camera = TestCamera();
+    camera.truth.rig.cam_from_gyro = c.cam_from_gyro;
+    const ExportOutput out = GyroflowExport(camera, {});
+    const nlohmann::json source =
+        nlohmann::json::parse(FileNamed(out, "project.gyroflow").text)["gyro_source"];
+    if (!c.letters.empty()) {
+      EXPECT_EQ(source["imu_orientation"], c.letters);
+      EXPECT_TRUE(source["rotation"].is_null()) << source;
+    } else {
+      EXPECT_EQ(source["imu_orientation"], "XYZ");
+      EXPECT_FALSE(source["rotation"].is_null()) << source;
+    }
+    for (const Eigen::Vector3d& w :
+         {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, 1, 0), Eigen::Vector3d(0.3, -0.7, 0.2)}) {
+      const Eigen::Vector3d camera_rate = c.cam_from_gyro * w;
+      const Eigen::Vector3d expected(camera_rate.x(), -camera_rate.y(), -camera_rate.z());
+      EXPECT_LT((gyroflow_applies(source, w) - expected).norm(), 1e-12)
+          << source << " on " << w.transpose();
+    }
+    EXPECT_NE(FileNamed(out, "shutterlab_export.txt").text.find("imu_orientation"),
+              std::string::npos);
   }
 }
 
