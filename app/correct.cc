@@ -39,7 +39,7 @@ struct CorrectCommand {
   double altitude_m = 0.0;
   double ground_elevation_m = std::numeric_limits<double>::quiet_NaN();  // NaN: not given
   std::string photo_utc_offset;
-  std::string reference = "row0";
+  std::string reference;  // "": mid for photos, row0 for a dataset
   std::string interpolation = "bilinear";
   double depth_m = 0.0;
   double gyro_noise = std::numeric_limits<double>::quiet_NaN();  // NaN: from gyro.csv
@@ -106,7 +106,11 @@ void Run(CorrectCommand& command) {
       if (f >= 1.0) reading.reset();
     };
   }
-  const std::optional<CorrectionReference> reference = ParseCorrectionReference(command.reference);
+  // Photos go to a photogrammetry tool, which takes each as one pose: the middle of its readout.
+  // A rig dataset's default is the renderer's reference, the first row.
+  const std::string reference_name =
+      !command.reference.empty() ? command.reference : (options.photos ? "mid" : "row0");
+  const std::optional<CorrectionReference> reference = ParseCorrectionReference(reference_name);
   SHUTTERLAB_CHECK(reference) << "--reference must be row0 or mid (got " << command.reference
                               << ")";
   options.reference = *reference;
@@ -125,6 +129,10 @@ void Run(CorrectCommand& command) {
                        ? options.photos->log_path
                        : (std::filesystem::path(options.dataset_dir) / "gyro.csv").string(),
                    summary.warnings);
+  if (command.reference.empty() && options.photos) {
+    std::cerr << "note: the corrected photos show the instant of their middle row (a "
+                 "photogrammetry tool takes a photo as one pose); --reference row0 for the first\n";
+  }
   for (const std::string& note : summary.model.notes) std::cerr << "note: " << note << "\n";
   for (const std::string& note : summary.notes) std::cerr << "note: " << note << "\n";
   for (const CorrectedFrame& f : summary.frames) {
@@ -192,7 +200,7 @@ const CommandRegistration kCorrectRegistration(75, [](CLI::App& app) {
   cmd->add_option("--reference", command->reference,
                   "the instant the corrected image shows: row0 (the first row, as render's "
                   "reference) or mid (mid-readout)")
-      ->capture_default_str();
+      ->default_str("row0 for a dataset, mid for --photos");
   AddQuantityOption(cmd, "--depth", &command->depth_m, "m", "m",
                     "video: the scene's depth, to correct translation too (camera.json velocity); "
                     "without it video is rotation only")

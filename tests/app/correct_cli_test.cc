@@ -79,6 +79,19 @@ TEST(CorrectCommand, PhotosWithTheirLogAndTriggers) {
   ASSERT_EQ(result.exit_code, 0) << result.output;
   EXPECT_NE(result.out.find("corrected 2 photo(s)"), std::string::npos) << result.out;
   EXPECT_NE(result.err.find("photos placed on gyro.csv: "), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("note: the corrected photos show the instant of their middle row"),
+            std::string::npos)
+      << result.err;
+  const auto reference_of = [](const std::string& folder) {
+    return nlohmann::json::parse(ReadFileToString(folder + "/correct.json"))["reference"];
+  };
+  EXPECT_EQ(reference_of(out), "mid");
+  // Told otherwise, the first row, and nothing said.
+  const test::CommandResult row0 =
+      test::RunShutterlab(photos + " --reference row0 --out " + (dir / "row0"));
+  ASSERT_EQ(row0.exit_code, 0) << row0.output;
+  EXPECT_EQ(reference_of(dir / "row0"), "row0");
+  EXPECT_EQ(row0.err.find("middle row"), std::string::npos) << row0.err;
   for (const char* file : {"A.jpg", "B.jpg", "masks/A.jpg.png", "frames.csv", "correct.json"}) {
     EXPECT_TRUE(fs::is_regular_file(fs::path(out) / file)) << file;
   }
@@ -136,7 +149,8 @@ TEST(CorrectCommand, RealPhotosWithTheirOwnCameraAndTriggerFile) {
              metadata.end();
     };
     EXPECT_TRUE(has("Exif.Image.Model", "ZR10")) << image << ": the photo's EXIF is carried";
-    EXPECT_TRUE(has("Xmp.shutterlab.Reference", "row0")) << image;
+    // Photos show their middle row's instant unless told: a photogrammetry tool's one pose.
+    EXPECT_TRUE(has("Xmp.shutterlab.Reference", "mid")) << image;
   }
   EXPECT_NEAR(record["frames"][0]["t_first_row_s"].get<double>(), 329.091247, 1e-9);
 }
