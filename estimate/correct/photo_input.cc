@@ -120,13 +120,21 @@ void AddMountingNotes(const PhotoSet& set, const PhotoInputOptions& options, Pho
   }
   size_t on_gimbal = 0;
   for (const PhotoRecord& r : set.photos) on_gimbal += r.ok() && r.metadata.gimbal ? 1 : 0;
-  if (on_gimbal > 0) {
-    input->notes.push_back(
-        std::to_string(on_gimbal) + " of " + std::to_string(set.photos.size()) +
-        " photos were taken from a gimbal: a stabilised camera does not turn with the airframe, "
-        "so a flight controller's gyro does not describe its motion (the correction is right only "
-        "with a gyro on the camera)");
+  if (on_gimbal == 0) return;
+  const std::string taken = std::to_string(on_gimbal) + " of " + std::to_string(set.photos.size()) +
+                            " photos were taken from a gimbal";
+  if (options.camera) {
+    // camera.json declares the gyro's mounting on the camera: a gyro on the gimbal's camera (a
+    // recorder's) turns with it, and nothing here says otherwise.
+    input->notes.push_back(taken + ": " + options.camera_path +
+                           " declares the gyro's mounting on the camera, so the gyro is taken to "
+                           "turn with it (a flight controller's gyro would not)");
+    return;
   }
+  input->notes.push_back(taken +
+                         ": a stabilised camera does not turn with the airframe, so a flight "
+                         "controller's gyro does not describe its motion (the correction is right "
+                         "only with a gyro on the camera)");
 }
 
 // Why a photo is not corrected: unreadable, not placed, another image size, or (own_focal: the

@@ -81,9 +81,20 @@ TEST(ReadPhotoInput, TheirOwnCameraAndWhatCannotBeCorrected) {
   EXPECT_NE(input.skipped[2].second.find("E.JPG: not placed on the log"), std::string::npos)
       << input.skipped[2].second;
   EXPECT_TRUE(AnyContains(input.notes, "mounting unknown")) << "no --camera";
-  EXPECT_TRUE(AnyContains(input.notes, "1 of 5 photos were taken from a gimbal"));
+  EXPECT_TRUE(AnyContains(input.notes, "1 of 5 photos were taken from a gimbal: a stabilised"));
   ASSERT_TRUE(input.still_bias_rad_s) << input.still_bias_source;
   EXPECT_NEAR((*input.still_bias_rad_s - Eigen::Vector3d(1e-3, 0, 0)).norm(), 0.0, 1e-12);
+
+  // camera.json declares the gyro's mounting on the camera: no warning that the gyro is the
+  // airframe's, but the gimbal still said.
+  PhotoInputOptions declared = options;
+  declared.camera = rig;
+  declared.camera_path = "camera.json";
+  const PhotoInput on_camera = ReadPhotoInput(photos, declared);
+  EXPECT_FALSE(AnyContains(on_camera.notes, "a stabilised camera")) << "camera.json given";
+  EXPECT_TRUE(AnyContains(on_camera.notes,
+                          "1 of 5 photos were taken from a gimbal: camera.json "
+                          "declares the gyro's mounting on the camera"));
 
   // A given focal length is every photo's: the zoomed one is corrected with it too.
   options.focal_px = 500.0;
