@@ -24,11 +24,11 @@ SensorEmulator::SensorEmulator(GyroTrace trace, const Clock* clock, EmulatorOpti
   play_origin_ns_ = options_.shared_origin ? options_.shared_origin
                                            : std::make_shared<std::atomic<int64_t>>(INT64_MIN);
   SHUTTERLAB_CHECK(!trace_.empty()) << "the emulator needs a trace with samples";
+  SHUTTERLAB_CHECK(clock_ != nullptr) << "the emulator needs a clock";
   // The level frame's z is up: the sensor's axes in it turn up_in_sensor onto z.
   attitude_ = Eigen::Quaterniond::FromTwoVectors(options_.up_in_sensor.normalized(),
                                                  Eigen::Vector3d::UnitZ())
                   .toRotationMatrix();
-  SHUTTERLAB_CHECK(clock_ != nullptr) << "the emulator needs a clock";
   Reset();
 }
 
@@ -136,20 +136,20 @@ Eigen::Vector3d SensorEmulator::PlayedRate(int64_t t_ns, size_t* cursor) const {
                             std::max<int64_t>(trace_.sampling().median_interval_ns, 1);
     const int64_t offset_ns = std::max<int64_t>(t_ns - *origin, 0) % loop_ns;
     trace_t_ns += offset_ns;
-    if ((*cursor) < samples.size() && samples[(*cursor)].t_ns > trace_t_ns) {
-      (*cursor) = 0;  // the trace started again
+    if (*cursor < samples.size() && samples[*cursor].t_ns > trace_t_ns) {
+      *cursor = 0;  // the trace started again
     }
-    while ((*cursor) + 1 < samples.size() && samples[(*cursor) + 1].t_ns <= trace_t_ns) {
-      ++(*cursor);  // the last sample at or before the time
+    while (*cursor + 1 < samples.size() && samples[*cursor + 1].t_ns <= trace_t_ns) {
+      ++*cursor;  // the last sample at or before the time
     }
   }
   if (!origin) return samples[0].omega_rad_s;
-  if ((*cursor) + 1 >= samples.size()) return samples[(*cursor)].omega_rad_s;
+  if (*cursor + 1 >= samples.size()) return samples[*cursor].omega_rad_s;
   // Between two samples: on the line between them, so that a delay that is no whole number of
   // the trace's intervals is played as it is (the nearest sample would round it to one: 0.44 ms
   // of the 2.9 ms of DLPF_CFG 1 on a 1 kHz trace).
-  const GyroSample& before = samples[(*cursor)];
-  const GyroSample& after = samples[(*cursor) + 1];
+  const GyroSample& before = samples[*cursor];
+  const GyroSample& after = samples[*cursor + 1];
   const double fraction =
       static_cast<double>(trace_t_ns - before.t_ns) / static_cast<double>(after.t_ns - before.t_ns);
   return before.omega_rad_s + fraction * (after.omega_rad_s - before.omega_rad_s);
@@ -290,6 +290,16 @@ uint8_t SensorEmulator::FifoCountByte(bool high) const {
   return static_cast<uint8_t>(high ? (fifo_.size() >> 8) & 0x1F : fifo_.size() & 0xFF);
 }
 
+namespace {
+
+// Byte `offset` (0..5) of output registers x, y, z, each 16 bits high byte first.
+uint8_t OutputByte(const std::array<int16_t, 3>& output, int offset) {
+  const uint16_t u = static_cast<uint16_t>(output[offset / 2]);
+  return static_cast<uint8_t>(offset % 2 == 0 ? u >> 8 : u & 0xFF);
+}
+
+}  // namespace
+
 uint8_t SensorEmulator::ReadByte(uint8_t address) {
   const bool icm_part = info_.part == GyroPart::kIcm42688p;
   if (address == info_.who_am_i_reg) return options_.who_am_i.value_or(info_.who_am_i);
@@ -310,14 +320,10 @@ uint8_t SensorEmulator::ReadByte(uint8_t address) {
     fifo_.pop_front();
     return byte;
   }
-  if (address >= gyro_h && address < gyro_h + 6) {
-    const uint16_t u = static_cast<uint16_t>(output_[(address - gyro_h) / 2]);
-    return static_cast<uint8_t>(((address - gyro_h) % 2 == 0) ? u >> 8 : u & 0xFF);
-  }
   const uint8_t accel_h = icm_part ? icm::kAccelDataX1 : mpu::kAccelXoutH;
+  if (address >= gyro_h && address < gyro_h + 6) return OutputByte(output_, address - gyro_h);
   if (address >= accel_h && address < accel_h + 6) {
-    const uint16_t u = static_cast<uint16_t>(accel_output_[(address - accel_h) / 2]);
-    return static_cast<uint8_t>(((address - accel_h) % 2 == 0) ? u >> 8 : u & 0xFF);
+    return OutputByte(accel_output_, address - accel_h);
   }
   return regs_[address & 0x7F];
 }
