@@ -3,6 +3,9 @@
 #include "io/exiv2_setup.h"
 #include "sim/check.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
+
+#include <Eigen/Geometry>
 
 // exiv2 0.27's headers use std::auto_ptr, deprecated in C++11 and still in libstdc++'s C++17.
 #pragma GCC diagnostic push
@@ -207,6 +210,13 @@ void ReadDjiXmp(const Exiv2::XmpData& xmp, PhotoMetadata* out) {
 }
 
 }  // namespace
+
+Eigen::Matrix3d NedFromGimbal(const AttitudeDeg& attitude) {
+  return (Eigen::AngleAxisd(attitude.yaw_deg * kRadPerDeg, Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(attitude.pitch_deg * kRadPerDeg, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(attitude.roll_deg * kRadPerDeg, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
 
 PhotoMetadata ReadPhotoMetadata(const std::string& path) {
   internal::InitialiseExiv2();

@@ -28,6 +28,11 @@ struct AttitudeDeg {
   double roll_deg = 0.0, pitch_deg = 0.0, yaw_deg = 0.0;
 };
 
+// A gimbal's attitude as a rotation, NED from DJI's gimbal frame (x the optical axis, y image
+// right, z image down: the frame at pitch 0), Z-Y-X: yaw, then pitch, then roll. The camera's
+// axes of docs/FORMATS.md (x right, y down, z along the view) are its columns 1, 2 and 0.
+Eigen::Matrix3d NedFromGimbal(const AttitudeDeg& attitude);
+
 struct PhotoMetadata {
   std::string make, model;  // EXIF IFD0 Make and Model, trailing spaces and NULs removed
   // The pixels in the file (exiv2's pixelWidth/pixelHeight: the JPEG frame header, TIFF's tags).

@@ -66,8 +66,8 @@ CameraMotion::CameraMotion(const TrueModel& model, OrientationTrace world_from_c
   model_.Check();
 }
 
-FrameMotion CameraMotion::Frame(int64_t t_first_row_ns,
-                                std::optional<int64_t> anchor_first_row_ns) const {
+FrameMotion CameraMotion::Frame(int64_t t_first_row_ns, std::optional<int64_t> anchor_first_row_ns,
+                                const std::optional<Eigen::Vector3d>& velocity_mps) const {
   const int height = model_.rig.camera.height;
   FrameMotion motion;
   motion.world_from_cam.resize(height);
@@ -88,13 +88,14 @@ FrameMotion CameraMotion::Frame(int64_t t_first_row_ns,
           .toRotationMatrix();
   // c(t) = velocity * (t - t_anchor) with t the gyro-clock time, as docs/FORMATS.md's t_v (under
   // clock_rate the gyro clock runs (1 + ppm 1e-6) times the camera's). The anchor's centre is 0.
-  motion.ref_center_m = model_.rig.velocity_mps * since_anchor_s(t0_gyro_s);
+  const Eigen::Vector3d velocity = velocity_mps.value_or(model_.rig.velocity_mps);
+  motion.ref_center_m = velocity * since_anchor_s(t0_gyro_s);
   for (int v = 0; v < height; ++v) {
     const double row_gyro_s = model_.RowGyroOffsetS(t_first_row_ns, v);
     const Eigen::Quaterniond q =
         anchor_from_world * world_from_cam_.WorldFromBodyAt(t_first_row_ns, row_gyro_s);
     motion.world_from_cam[v] = q.normalized().toRotationMatrix();
-    motion.cam_center_m[v] = model_.rig.velocity_mps * since_anchor_s(row_gyro_s);
+    motion.cam_center_m[v] = velocity * since_anchor_s(row_gyro_s);
   }
   if (!anchor_first_row_ns) {
     // Exactly the identity and the origin (not a rounding away from them): the rotation-only

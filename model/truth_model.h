@@ -73,10 +73,12 @@ class CameraMotion {
   // world of its own row 0 (the header's anchoring). With anchor_first_row_ns, in the world of
   // that frame's row 0 instead: every frame of a video shares one world (the first frame's), so
   // consecutive frames see the same ground from continuing poses; world_from_ref / ref_center_m
-  // are then this frame's row-0 pose in that world. Throws std::out_of_range when the readout (or
-  // the anchor) lies outside the gyro trace.
+  // are then this frame's row-0 pose in that world. velocity_mps: this frame's own velocity in
+  // place of the model's (a photo's recorded flight speed), in the same world. Throws
+  // std::out_of_range when the readout (or the anchor) lies outside the gyro trace.
   FrameMotion Frame(int64_t t_first_row_ns,
-                    std::optional<int64_t> anchor_first_row_ns = std::nullopt) const;
+                    std::optional<int64_t> anchor_first_row_ns = std::nullopt,
+                    const std::optional<Eigen::Vector3d>& velocity_mps = std::nullopt) const;
   const TrueModel& model() const { return model_; }
 
  private:

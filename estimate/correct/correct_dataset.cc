@@ -21,6 +21,7 @@
 #include <cmath>
 #include <exception>
 #include <filesystem>
+#include <map>
 #include <mutex>
 #include <thread>
 
@@ -43,14 +44,17 @@ struct Context {
   const CorrectionModel& model;
   const CorrectionSetting& setting;
   const CameraMotion& motion;
+  // Photos: each one's own velocity (its metadata), unless the model's was set for all of them.
+  const std::map<int64_t, PhotoVelocity>* photo_velocity;
+  std::string image_root;   // DIR's folder of the corrected images ("": DIR itself)
+  std::string translation;  // the summary's words, for frames without their own velocity
   std::vector<std::pair<std::string, std::string>> xmp;  // the same for every frame
 };
 
-fs::path OutPath(const Context& c, const std::string& relative) {
-  return fs::path(c.options.out_dir) / relative;
-}
-fs::path MaskPath(const std::string& out_dir, const std::string& image) {
-  return fs::path(out_dir) / "masks" / (image + ".png");
+// A corrected image's mask, named by the image's path under the image root (COLMAP's
+// --ImageReader.mask_path convention, with --image_path the root).
+fs::path MaskPath(const std::string& out_dir, const std::string& image_under_root) {
+  return fs::path(out_dir) / "masks" / (image_under_root + ".png");
 }
 
 void CreateParent(const fs::path& path) {
@@ -70,7 +74,8 @@ int64_t ReferenceTimeNs(const TrueModel& model, int64_t t_first_row_ns, double r
 // pixels with no source.
 double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap& map,
                       const ResidualPrediction& residual, CorrectedFrame* out) {
-  const fs::path image_path = OutPath(c, e.image), mask_path = MaskPath(c.options.out_dir, e.image);
+  const fs::path image_path = fs::path(c.options.out_dir) / out->image;
+  const fs::path mask_path = MaskPath(c.options.out_dir, e.image);
   cv::Mat mask;
   if (!c.options.force && fs::is_regular_file(image_path) && fs::is_regular_file(mask_path)) {
     out->kept = true;
@@ -95,6 +100,7 @@ double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap
       mask &= (moved == 255);
     }
     std::vector<std::pair<std::string, std::string>> xmp = c.xmp;
+    xmp.emplace_back("Xmp.shutterlab.Translation", out->translation);
     xmp.emplace_back("Xmp.shutterlab.ReferenceTime",
                      FormatNumber("%.9f", out->t_reference_ns * 1e-9));
     xmp.emplace_back("Xmp.shutterlab.ReferenceRow", FormatNumber("%g", out->reference_row));
@@ -111,22 +117,52 @@ double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap
   return 1.0 - cv::countNonZero(mask) / static_cast<double>(mask.total());
 }
 
+// The frame's own velocity (a photo's metadata) when it has one, and the words for what of the
+// motion is corrected.
+std::optional<Eigen::Vector3d> FrameVelocity(const Context& c, int64_t frame, CorrectedFrame* out) {
+  out->velocity_mps = c.model.model.rig.velocity_mps;
+  out->translation = c.translation;
+  if (!c.photo_velocity || !c.setting.plane_depth_m) return std::nullopt;
+  const auto it = c.photo_velocity->find(frame);
+  if (it == c.photo_velocity->end()) return std::nullopt;
+  const PhotoVelocity& own = it->second;
+  const std::string plane = FormatNumber("ground plane at %g m", *c.setting.plane_depth_m);
+  if (!own.velocity_mps) {
+    out->translation = c.model.model.rig.velocity_mps.isZero()
+                           ? "rotation only: " + own.source
+                           : plane + ", camera.json's velocity (" + own.source + ")";
+    return std::nullopt;
+  }
+  out->velocity_mps = *own.velocity_mps;
+  out->translation = plane + ", velocity " + own.source;
+  return own.velocity_mps;
+}
+
 CorrectedFrame CorrectOne(const Context& c, const FrameEntry& e) {
-  const TrueModel& model = c.model.model;
   CorrectedFrame out;
   out.frame = e.frame;
-  out.image = e.image;
+  out.source_image = e.image;
+  out.image = c.image_root.empty() ? e.image : (fs::path(c.image_root) / e.image).string();
+  const std::optional<Eigen::Vector3d> own_velocity = FrameVelocity(c, e.frame, &out);
+  std::optional<CorrectionModel> own_model;
+  if (own_velocity) {
+    own_model = c.model;
+    own_model->model.rig.velocity_mps = *own_velocity;
+  }
+  const CorrectionModel& frame_model = own_model ? *own_model : c.model;
+  const TrueModel& model = frame_model.model;
   out.t_first_row_ns = e.t_first_row_ns;
   out.reference_row = ReferenceRow(c.setting.reference, model.rig.shutter, model.rig.camera.height);
   out.t_reference_ns = ReferenceTimeNs(model, e.t_first_row_ns, out.reference_row);
-  const FrameMotion motion = c.motion.Frame(e.t_first_row_ns);  // std::out_of_range: skipped
+  // std::out_of_range: skipped
+  const FrameMotion motion = c.motion.Frame(e.t_first_row_ns, std::nullopt, own_velocity);
   const CorrectionGeometry geometry(model.rig.camera, motion, out.reference_row,
                                     c.setting.plane_depth_m);
   const CorrectionMap map(geometry, c.options.map);
   out.cell_px = map.cell_px();
   out.map_error_px = map.estimated_error_px();
   const int64_t readout_ns = SecondsToNs(model.rig.shutter.readout_s);
-  out.residual = PredictResidual(c.model,
+  out.residual = PredictResidual(frame_model,
                                  GyroAround(c.dataset.gyro, e.t_first_row_ns - kGyroMarginNs,
                                             e.t_first_row_ns + readout_ns + kGyroMarginNs),
                                  e.t_first_row_ns, c.setting, c.options.prediction);
@@ -244,8 +280,8 @@ void LinkOrCopy(const fs::path& target, const fs::path& link) {
 // colmap/image_list.txt and odm/images/ (one folder: names flattened where folders would clash).
 void WritePipelineLists(const CorrectSummary& summary) {
   const fs::path out(summary.out_dir);
-  std::string list;
-  for (const CorrectedFrame& f : summary.frames) list += f.image + "\n";
+  std::string list;  // under the image root (COLMAP's --image_path)
+  for (const CorrectedFrame& f : summary.frames) list += f.source_image + "\n";
   CreateParent(out / "colmap" / "image_list.txt");
   WriteFileAtomically((out / "colmap" / "image_list.txt").string(), list);
   std::vector<std::string> names;
@@ -266,7 +302,7 @@ void WritePipelineLists(const CorrectSummary& summary) {
     }
     const fs::path image = odm / name;
     LinkOrCopy(out / summary.frames[i].image, image);
-    LinkOrCopy(MaskPath(summary.out_dir, summary.frames[i].image),
+    LinkOrCopy(MaskPath(summary.out_dir, summary.frames[i].source_image),
                odm / (image.stem().string() + "_mask.png"));
   }
 }
@@ -280,7 +316,7 @@ void WriteOverview(const CorrectSummary& summary) {
   for (size_t k = 0; k < count; ++k) {
     const CorrectedFrame& f =
         summary.frames[k * (summary.frames.size() - 1) / std::max<size_t>(1, count - 1)];
-    tiles.push_back(ToRgb8(ReadImage((fs::path(summary.dataset) / f.image).string())));
+    tiles.push_back(ToRgb8(ReadImage((fs::path(summary.dataset) / f.source_image).string())));
     tiles.push_back(ToRgb8(ReadImage((fs::path(summary.out_dir) / f.image).string())));
     captions.push_back("frame " + std::to_string(f.frame) + ": rolling shutter, D " +
                        FormatNumber("%.2f px", f.residual.d_before_px));
@@ -296,12 +332,20 @@ void WriteOverview(const CorrectSummary& summary) {
 void ChooseSetting(const CorrectOptions& options, const RigDataset& dataset, const TrueModel& model,
                    CorrectSummary* summary) {
   summary->setting.reference = options.reference;
+  const Eigen::Vector3d& v = model.rig.velocity_mps;
+  // With a zero velocity nothing translates: said, so that the plane is not taken for a
+  // translation corrected.
+  const std::string velocity =
+      v.isZero() ? std::string(", velocity zero (camera.json velocity_mps): rotation only")
+                 : FormatNumber(", velocity (%g", v.x()) + FormatNumber(", %g", v.y()) +
+                       FormatNumber(", %g) m/s", v.z());
   if (!dataset.video) {
     summary->setting.plane_depth_m = model.rig.altitude_m;
-    summary->translation = FormatNumber("ground plane at %g m", model.rig.altitude_m);
+    summary->translation = FormatNumber("ground plane at %g m", model.rig.altitude_m) + velocity;
   } else if (options.depth_m) {
     summary->setting.plane_depth_m = *options.depth_m;
-    summary->translation = FormatNumber("scene plane at %g m (--depth)", *options.depth_m);
+    summary->translation =
+        FormatNumber("scene plane at %g m (--depth)", *options.depth_m) + velocity;
   } else {
     summary->translation = "rotation only (video: no depth known; give --depth for translation)";
   }
@@ -396,6 +440,28 @@ void AdaptModelToPhotos(const PhotoInput& input, bool bias_given, CorrectionMode
   }
 }
 
+// The photos' translation in words: each one's own velocity, or the model's for every one.
+void DescribePhotoVelocities(const PhotoInput& input, bool velocity_given,
+                             CorrectSummary* summary) {
+  if (velocity_given) {
+    summary->notes.push_back(
+        "velocity: the one given (--effect or the report) for every photo, over each photo's own");
+    return;
+  }
+  size_t own = 0;
+  for (const auto& [frame, v] : input.velocity) own += v.velocity_mps ? 1 : 0;
+  summary->translation = FormatNumber("ground plane at %g m", *summary->setting.plane_depth_m) +
+                         ", each photo's own velocity (" + std::to_string(own) + " of " +
+                         std::to_string(input.velocity.size()) + " photos record it)";
+  if (own < input.velocity.size()) {
+    summary->notes.push_back(std::to_string(input.velocity.size() - own) +
+                             " photo(s) without a recorded flight speed and gimbal attitude: " +
+                             (summary->model.model.rig.velocity_mps.isZero()
+                                  ? "rotation only (camera.json velocity_mps would serve them)"
+                                  : "camera.json's velocity"));
+  }
+}
+
 // A model less certain than the rolling shutter is large (a gimbal clip with little to correct, a
 // fit from few frames) moves the image by more than it removes: said, so the originals are kept.
 void NoteWhenPredictedWorse(CorrectSummary* summary) {
@@ -466,10 +532,24 @@ CorrectSummary CorrectInput(const CorrectOptions& options, const RigDataset& dat
         *summary.setting.plane_depth_m / (0.5 * (model.rig.camera.fx + model.rig.camera.fy));
   }
   const CameraMotion motion(dataset.gyro, model);
-  Context context{options, dataset, summary.model, summary.setting, motion, {}};
+  const bool velocity_given =
+      std::count(summary.model.effects.begin(), summary.model.effects.end(), Effect::kVelocity) >
+          0 ||
+      std::any_of(options.effects.begin(), options.effects.end(),
+                  [](const std::string& e) { return e.rfind("velocity=", 0) == 0; });
+  if (photos) DescribePhotoVelocities(*photos, velocity_given, &summary);
+  Context context{options,
+                  dataset,
+                  summary.model,
+                  summary.setting,
+                  motion,
+                  photos && !velocity_given ? &photos->velocity : nullptr,
+                  photos ? "images" : "",
+                  summary.translation,
+                  {}};
+  summary.image_root = context.image_root;
   context.xmp = {{"Xmp.shutterlab.RollingShutterCorrected", "True"},
-                 {"Xmp.shutterlab.Reference", CorrectionReferenceName(options.reference)},
-                 {"Xmp.shutterlab.Translation", summary.translation}};
+                 {"Xmp.shutterlab.Reference", CorrectionReferenceName(options.reference)}};
   fs::create_directories(options.out_dir, ec);
   if (ec) throw IoError(IoMessage(options.out_dir, 0, "cannot create: " + ec.message()));
   RunFrames(context, progress, &summary);

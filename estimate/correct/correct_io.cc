@@ -7,11 +7,13 @@
 #include "sim/units.h"
 
 #include <algorithm>
+#include <filesystem>
 #include <sstream>
 
 namespace shutterlab {
 
 using nlohmann::json;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -19,7 +21,10 @@ json FrameJson(const CorrectedFrame& f, double m_per_px) {
   const ResidualPrediction& r = f.residual;
   json j = {{"frame", f.frame},
             {"image", f.image},
-            {"mask", "masks/" + f.image + ".png"},
+            {"source_image", f.source_image},
+            {"mask", "masks/" + f.source_image + ".png"},
+            {"velocity_mps", {f.velocity_mps.x(), f.velocity_mps.y(), f.velocity_mps.z()}},
+            {"translation", f.translation},
             {"t_first_row_s", f.t_first_row_ns * 1e-9},
             {"t_reference_s", f.t_reference_ns * 1e-9},
             {"reference_row", f.reference_row},
@@ -64,6 +69,7 @@ json CorrectionToJson(const CorrectSummary& s) {
                              : "still"},
           {"reference", CorrectionReferenceName(s.setting.reference)},
           {"translation", s.translation},
+          {"image_root", s.image_root},
           {"report", s.report_path.empty() ? json() : json(s.report_path)},
           {"effects", effects},
           {"model", TrueModelToJson(s.model.model)},
@@ -84,7 +90,7 @@ std::string CorrectionTable(const CorrectSummary& s) {
   // Frames by number; photos by name.
   size_t label_width = 5;
   for (const CorrectedFrame& f : s.frames) {
-    label_width = std::max(label_width, s.photos ? f.image.size() : 0);
+    label_width = std::max(label_width, s.photos ? f.source_image.size() : 0);
   }
   const auto label = [&](const std::string& text) {
     return std::string(label_width - std::min(label_width, text.size()), ' ') + text;
@@ -99,7 +105,7 @@ std::string CorrectionTable(const CorrectSummary& s) {
   };
   for (const CorrectedFrame& f : s.frames) {
     const ResidualPrediction& r = f.residual;
-    out << label(s.photos ? f.image : std::to_string(f.frame))
+    out << label(s.photos ? f.source_image : std::to_string(f.frame))
         << FormatNumber(" %13.3f", r.d_before_px) << metres(" %6.3f", r.d_before_px)
         << FormatNumber(" %12.3f", f.predicted_d_after_px)
         << FormatNumber(" (%.3f)", f.predicted_d_after_p90_px)
@@ -118,9 +124,10 @@ std::string CorrectionTable(const CorrectSummary& s) {
   }
   if (!s.frames.empty()) {
     out << "corrected " << s.frames.size() << (s.photos ? " photo(s) to " : " frame(s) to ")
-        << s.out_dir << " (" << CorrectionReferenceName(s.setting.reference) << ", "
-        << s.translation << "): median D " << FormatNumber("%.3f", UpperMedian(before))
-        << " px before, " << FormatNumber("%.3f", UpperMedian(after)) << " px predicted after\n";
+        << (s.image_root.empty() ? s.out_dir : (fs::path(s.out_dir) / s.image_root).string())
+        << " (" << CorrectionReferenceName(s.setting.reference) << ", " << s.translation
+        << "): median D " << FormatNumber("%.3f", UpperMedian(before)) << " px before, "
+        << FormatNumber("%.3f", UpperMedian(after)) << " px predicted after\n";
   }
   return out.str();
 }

@@ -7,6 +7,8 @@
 #include "estimate/correct/residual_prediction.h"
 #include "sim/log_warning.h"
 
+#include <Eigen/Core>
+
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -28,7 +30,12 @@ struct TruthResidual {
 
 struct CorrectedFrame {
   int64_t frame = 0;
-  std::string image;           // relative path, the same in the input and in DIR
+  std::string source_image;  // the input's relative path (photos: the file's name)
+  std::string image;         // DIR's relative path: the input's (photos: images/NAME)
+  // The translation corrected: the velocity in the frame's world (camera axes at row 0), m/s, and
+  // for a person what of the motion was corrected and from what.
+  Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
+  std::string translation;
   int64_t t_first_row_ns = 0;  // input frames.csv (camera clock)
   int64_t t_reference_ns = 0;  // the corrected image's instant: DIR's frames.csv t_first_row
   double reference_row = 0.0;  // image row captured at that instant
@@ -50,7 +57,10 @@ struct CorrectSummary {
   bool photos = false;  // a folder of photos with its log
   CorrectionModel model;
   CorrectionSetting setting;
-  std::string translation;             // for a person: "ground plane at 50 m", "rotation only: ..."
+  // for a person: "ground plane at 50 m, velocity ...", "rotation only: ..."; photos: per photo in
+  // each frame's translation
+  std::string translation;
+  std::string image_root;              // DIR's folder of the corrected images ("": DIR itself)
   double m_per_px = 0.0;               // ground metres per pixel at the altitude (D on the ground)
   std::vector<CorrectedFrame> frames;  // frames.csv order, corrected ones
   std::vector<std::pair<int64_t, std::string>> skipped;  // frame and why

@@ -157,6 +157,30 @@ std::string WhyNotCorrected(const PhotoRecord& r, const PhotoPlacement& placemen
 
 }  // namespace
 
+PhotoVelocity VelocityFromPhoto(const PhotoMetadata& metadata) {
+  PhotoVelocity out;
+  if (!metadata.speed_m_s) {
+    out.source = "the photo records no flight speed";
+    return out;
+  }
+  if (!metadata.gimbal) {
+    out.source = "the photo records its flight speed but not the camera's attitude";
+    return out;
+  }
+  const Eigen::Matrix3d ned_from_gimbal = NedFromGimbal(*metadata.gimbal);
+  const Eigen::Vector3d ned(metadata.speed_m_s->x(), metadata.speed_m_s->y(), 0.0);
+  out.velocity_mps =
+      Eigen::Vector3d(ned.dot(ned_from_gimbal.col(1)), ned.dot(ned_from_gimbal.col(2)),
+                      ned.dot(ned_from_gimbal.col(0)));
+  out.source = FormatNumber("%.2f m/s", ned.norm()) +
+               FormatNumber(" toward %.0f deg",
+                            std::fmod(std::atan2(ned.y(), ned.x()) * kDegPerRad + 360.0, 360.0)) +
+               " from the photo's " + metadata.flight_state_source +
+               FormatNumber(", turned by its gimbal's yaw %.1f deg", metadata.gimbal->yaw_deg) +
+               FormatNumber(" and pitch %.1f deg", metadata.gimbal->pitch_deg);
+  return out;
+}
+
 void PhotoInputOptions::Check() const {
   SHUTTERLAB_CHECK(!log_path.empty()) << "--photos needs the LOG that recorded the flight";
   SHUTTERLAB_CHECK(std::isfinite(trigger_latency_s) && std::abs(trigger_latency_s) < 10)
@@ -223,6 +247,7 @@ PhotoInput ReadPhotoInput(const std::string& photos_dir, const PhotoInputOptions
     e.frame = static_cast<int64_t>(i);
     e.image = set.photos[i].name;
     e.t_first_row_ns = *clock.placements[i].t_ns + latency_ns;
+    input.velocity[e.frame] = VelocityFromPhoto(set.photos[i].metadata);
     dataset.frames.push_back(std::move(e));
   }
 

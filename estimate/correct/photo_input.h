@@ -10,7 +10,9 @@
 // lens profile's lens when given. A photo that cannot be read, is not placed, or has another image
 // size or focal length (a zoom) than the camera is skipped, with the reason. The ground plane's
 // height: --altitude, else camera.json's, else the log's height above ground, else the photos'
-// median height above take-off, else camera.json's default (50 m), each said.
+// median height above take-off, else camera.json's default (50 m), each said. Each placed photo's
+// velocity comes from its own metadata: the recorded horizontal flight speed (north, east) turned
+// into the camera's axes by the gimbal's attitude (PhotoVelocity).
 
 #include "estimate/paper/photo_clock.h"
 #include "io/lens_profile.h"
@@ -23,6 +25,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -48,6 +51,15 @@ struct PhotoInputOptions {
   void Check() const;
 };
 
+// A placed photo's velocity in its camera's axes at row 0 (x right, y down, z along the view: the
+// frame's world, docs/FORMATS.md "The model"): the horizontal flight speed its metadata records
+// (north, east; the vertical one's sign is documented nowhere) turned by its gimbal's attitude.
+struct PhotoVelocity {
+  std::optional<Eigen::Vector3d> velocity_mps;  // nullopt: the photo lacks the speed or attitude
+  std::string source;                           // for a person: where it came from, or why none
+};
+PhotoVelocity VelocityFromPhoto(const PhotoMetadata& metadata);
+
 struct PhotoInput {
   // dir: the photos' folder; declared: the camera; gyro: the log's trace; frames: the placed
   // photos in name order (frame = the photo's index in the folder, image = its file name,
@@ -61,6 +73,7 @@ struct PhotoInput {
   std::optional<Eigen::Vector3d> still_bias_rad_s;
   std::string still_bias_source;
   std::vector<std::pair<int64_t, std::string>> skipped;  // photo index and why, name first
+  std::map<int64_t, PhotoVelocity> velocity;             // per placed photo (frame)
   std::vector<std::string> notes;
 };
 

@@ -73,6 +73,10 @@ ExportOutput ColmapExport(const ExportCamera& camera, const ExportOptions&) {
     out.notes.push_back("image_list.txt leaves out the " + std::to_string(excluded) +
                         " photo(s) flagged over a limit");
   }
+  if (!camera.images_dir.empty()) {
+    args += " --image_path " + camera.images_dir;
+    out.notes.push_back("--image_path: the corrected photos (" + camera.images_dir + ")");
+  }
   if (!camera.masks_dir.empty()) {
     args += " --ImageReader.mask_path " + camera.masks_dir;
     out.notes.push_back("--ImageReader.mask_path: the correction's masks (" + camera.masks_dir +

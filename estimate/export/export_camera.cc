@@ -144,6 +144,17 @@ ExportCamera ReadExportSource(const std::string& path) {
     ExportCamera camera = FromCameraJson(camera_json);
     if (fs::is_directory(fs::path(path) / "masks"))
       camera.masks_dir = fs::absolute(fs::path(path) / "masks").lexically_normal().string();
+    const fs::path record = fs::path(path) / "correct.json";
+    if (fs::is_regular_file(record)) {
+      const nlohmann::json correct = nlohmann::json::parse(ReadFileToString(record.string()),
+                                                           nullptr, /*allow_exceptions=*/false);
+      const std::string root =
+          correct.is_object() && correct.value("image_root", nlohmann::json()).is_string()
+              ? correct["image_root"].get<std::string>()
+              : "";
+      if (!root.empty() && fs::is_directory(fs::path(path) / root))
+        camera.images_dir = fs::absolute(fs::path(path) / root).lexically_normal().string();
+    }
     return camera;
   }
   const std::string text = ReadFileToString(path);

@@ -56,6 +56,9 @@ struct ExportCamera {
   // A correction's per-image masks (its output folder's masks/: IMAGE.png, 0 where a pixel has no
   // source, COLMAP's mask_path naming), as the source folder gives them; "" when none.
   std::string masks_dir;
+  // A correction of photos: the folder of the corrected images alone (correct.json's image_root),
+  // COLMAP's --image_path, which the masks' names are relative to; "" when none.
+  std::string images_dir;
 };
 
 // Reads path by its content: a JSON file with "format": "validation/1" (a report, whose

@@ -16,15 +16,6 @@
 namespace shutterlab {
 namespace {
 
-// The gimbal's attitude as a rotation, NED from the camera's frame (x optical axis, y image right,
-// z image down: DJI's gimbal frame at pitch 0), Z-Y-X: yaw, then pitch, then roll.
-Eigen::Matrix3d NedFromGimbal(const AttitudeDeg& a) {
-  return (Eigen::AngleAxisd(a.yaw_deg * kRadPerDeg, Eigen::Vector3d::UnitZ()) *
-          Eigen::AngleAxisd(a.pitch_deg * kRadPerDeg, Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(a.roll_deg * kRadPerDeg, Eigen::Vector3d::UnitX()))
-      .toRotationMatrix();
-}
-
 // Translation only, from the recorded speed (the header's equations).
 void PredictTranslation(const PhotoRecord& r, const PhotoAnalysisOptions& options,
                         PhotoResult* out) {

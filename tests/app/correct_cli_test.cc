@@ -92,7 +92,8 @@ TEST(CorrectCommand, PhotosWithTheirLogAndTriggers) {
   ASSERT_EQ(row0.exit_code, 0) << row0.output;
   EXPECT_EQ(reference_of(dir / "row0"), "row0");
   EXPECT_EQ(row0.err.find("middle row"), std::string::npos) << row0.err;
-  for (const char* file : {"A.jpg", "B.jpg", "masks/A.jpg.png", "frames.csv", "correct.json"}) {
+  for (const char* file :
+       {"images/A.jpg", "images/B.jpg", "masks/A.jpg.png", "frames.csv", "correct.json"}) {
     EXPECT_TRUE(fs::is_regular_file(fs::path(out) / file)) << file;
   }
   // Photo flags without --photos, and a trigger file that names no photo: one line, exit 2.

@@ -33,6 +33,7 @@ struct FixturePhoto {
   uint32_t exif_width = 0, exif_height = 0;                 // 0: not written
   std::string maker_note;                                   // raw bytes; empty: not written
   std::string xmp;                                          // a whole XMP packet; empty: none
+  cv::Mat pixels;  // the image (8-bit, its size over width and height); empty: a grey one
 };
 
 namespace photo_fixture_detail {
@@ -134,8 +135,9 @@ inline std::string JpegWithMetadata(const FixturePhoto& p) {
     jpeg += Segment(0xE1, std::string("http://ns.adobe.com/xap/1.0/\0", 29) + p.xmp);
   // The encoder's own file from its first segment that is not APPn (JFIF): tables, SOF0 with the
   // size, the scan and EOI.
-  const std::vector<uchar> encoded =
-      EncodeImage(".jpg", cv::Mat(p.height, p.width, CV_8UC3, cv::Scalar(90, 128, 160)));
+  const std::vector<uchar> encoded = EncodeImage(
+      ".jpg",
+      !p.pixels.empty() ? p.pixels : cv::Mat(p.height, p.width, CV_8UC3, cv::Scalar(90, 128, 160)));
   size_t at = 2;  // after SOI
   while (at + 4 <= encoded.size() && encoded[at] == 0xFF && encoded[at + 1] >= 0xE0 &&
          encoded[at + 1] <= 0xEF) {

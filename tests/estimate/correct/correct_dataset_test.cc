@@ -20,6 +20,7 @@
 #include "sim/synth/synth.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
+#include "tests/io/photo_fixtures.h"
 #include "tests/render/render_fixtures.h"
 #include "tests/test_util.h"
 
@@ -28,6 +29,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
+#include <optional>
 #include <random>
 #include <string>
 #include <variant>
@@ -345,13 +348,15 @@ void ExpectTheTruth(const CorrectSummary& summary, const std::vector<std::string
   ASSERT_EQ(summary.frames.size(), names.size());
   for (size_t i = 0; i < summary.frames.size(); ++i) {
     const CorrectedFrame& f = summary.frames[i];
-    EXPECT_EQ(f.image, names[i]);
+    EXPECT_EQ(f.source_image, names[i]);
+    EXPECT_EQ(f.image, "images/" + names[i]) << "a plain folder of the corrected photos";
     EXPECT_EQ(f.t_first_row_ns, SecondsToNs(times_s[i])) << f.image;
     EXPECT_LE(f.truth->rms_px, kInterpolationRmsPx) << f.image;
     EXPECT_LE(f.truth->d_px, 2 * CorrectionMapOptions{}.tolerance_px + 0.02) << f.image;
     EXPECT_GT(f.truth->d_before_px, 0.5) << "the photo must be distorted to test anything";
     EXPECT_TRUE(fs::is_regular_file(fs::path(summary.out_dir) / f.image));
-    EXPECT_TRUE(fs::is_regular_file(fs::path(summary.out_dir) / "masks" / (f.image + ".png")));
+    EXPECT_TRUE(
+        fs::is_regular_file(fs::path(summary.out_dir) / "masks" / (f.source_image + ".png")));
     std::printf("  %s: D before %.3f px, after %.4f px (rms %.4f) against the truth\n",
                 f.image.c_str(), f.truth->d_before_px, f.truth->d_px, f.truth->rms_px);
   }
@@ -407,6 +412,131 @@ TEST(CorrectPhotos, PlacedInOrderOnAPx4LogsOwnCameraEvents) {
       CorrectDataset(PhotoOptions(dir, rendered, photos, dir / "flight.ulg"));
   ExpectTheTruth(summary, names, {times_s[0] + 0.004, times_s[1] + 0.004});
   EXPECT_TRUE(summary.skipped.empty());
+}
+
+// A DJI photo of `image` whose metadata records the gimbal looking straight down at `yaw_deg` and
+// the flight speed that is `velocity_cam_mps` (horizontal, camera axes) in north and east.
+std::string DjiPhotoMovingAt(const cv::Mat& image, double yaw_deg,
+                             const std::optional<Eigen::Vector2d>& velocity_cam_mps) {
+  test::FixturePhoto p;
+  p.pixels = image;
+  p.width = image.cols;
+  p.height = image.rows;
+  std::map<std::string, std::string> xmp = {{"GimbalPitchDegree", "-90.0"},
+                                            {"GimbalRollDegree", "0.0"},
+                                            {"GimbalYawDegree", FormatNumber("%.1f", yaw_deg)}};
+  if (velocity_cam_mps) {
+    // Looking straight down with the image's top toward the yaw (0: north), image right points to
+    // the yaw + 90 deg and image down to the yaw + 180 deg: (north, east) of each.
+    const double yaw = yaw_deg * kRadPerDeg;
+    const Eigen::Vector2d right(-std::sin(yaw), std::cos(yaw)),
+        down(-std::cos(yaw), -std::sin(yaw));
+    const Eigen::Vector2d north_east = velocity_cam_mps->x() * right + velocity_cam_mps->y() * down;
+    xmp["FlightXSpeed"] = FormatNumber("%.6f", north_east.x());
+    xmp["FlightYSpeed"] = FormatNumber("%.6f", north_east.y());
+    xmp["FlightZSpeed"] = "0.0";
+  }
+  p.xmp = test::DjiXmp(xmp, false);
+  return test::JpegWithMetadata(p);
+}
+
+TEST(CorrectPhotos, EachPhotoIsCorrectedWithTheVelocityItRecords) {
+  // A survey flown at a fixed heading (yaw 30 deg), lines in both directions: two photos flying
+  // one way, one the other, and one that records no speed, each rendered with its true velocity,
+  // written as DJI photos recording it (flight speed north/east and gimbal attitude), corrected
+  // with camera.json's zero velocity. Each photo's own velocity, turned into its camera's axes,
+  // leaves interpolation only; the photo with no speed keeps its translation (rotation only,
+  // said); --effect velocity= sets one velocity for all, which the photo flown back then misses.
+  test::TempDir dir;
+  const Eigen::Vector2d out_mps(6.0, -3.0), back_mps(-6.0, 3.0);
+  const Rendered out_line = Render(dir, "out_line", {"velocity=6m/s,-3m/s,0"}, {12.0, 16.0});
+  const Rendered back_line = Render(dir, "back_line", {"velocity=-6m/s,3m/s,0"}, {20.0, 24.0});
+  struct Shot {
+    const Rendered* rendered;
+    int index;
+    double t_s;
+    std::optional<Eigen::Vector2d> recorded;
+  };
+  const std::map<std::string, Shot> shots = {{"DJI_0001.JPG", {&out_line, 0, 12.0, out_mps}},
+                                             {"DJI_0002.JPG", {&out_line, 1, 16.0, out_mps}},
+                                             {"DJI_0003.JPG", {&back_line, 0, 20.0, back_mps}},
+                                             {"DJI_0004.JPG", {&back_line, 1, 24.0, {}}}};
+  const fs::path photos = dir.path() / "photos";
+  fs::create_directories(photos);
+  std::string triggers = "image,t\n";
+  for (const auto& [name, shot] : shots) {
+    const FrameEntry frame = ReadFramesCsv(shot.rendered->dataset + "/frames.csv")[shot.index];
+    WriteFileAtomically(
+        photos / name, DjiPhotoMovingAt(ReadImage(shot.rendered->dataset + "/" + frame.image), 30.0,
+                                        shot.recorded));
+    triggers += name + "," + FormatNumber("%.6f", shot.t_s) + "\n";
+  }
+  WriteFileAtomically(dir / "triggers.csv", triggers);
+  CorrectOptions options;
+  options.dataset_dir = photos.string();
+  options.out_dir = dir / "corrected";
+  options.check_truth = true;
+  options.pictures = false;
+  options.reference = CorrectionReference::kFirstRow;  // the truth's reference
+  options.photos.emplace();
+  options.photos->log_path = out_line.dataset + "/gyro.csv";
+  options.photos->triggers_path = dir / "triggers.csv";
+  options.photos->camera = DeclaredRig();
+  options.photos->camera_path = "camera.json";
+  // The truth of each photo: its frame of its render.
+  const fs::path truth = dir.path() / "truth";
+  fs::create_directories(truth);
+  int64_t index = 0;
+  for (const auto& [name, shot] : shots) {
+    fs::copy_file(
+        fs::path(shot.rendered->dataset) / "truth" / (FrameName(shot.index) + "_disp.exr"),
+        truth / (FrameName(index++) + "_disp.exr"));
+  }
+  options.truth_dir = truth.string();
+
+  const CorrectSummary summary = CorrectDataset(options);
+  ASSERT_EQ(summary.frames.size(), 4u);
+  const std::vector<Eigen::Vector2d> expected = {out_mps, out_mps, back_mps, {0.0, 0.0}};
+  for (size_t i = 0; i < 4; ++i) {
+    const CorrectedFrame& f = summary.frames[i];
+    std::printf("  %s: velocity (%.3f, %.3f, %.3f) m/s, D before %.3f px, after %.4f px: %s\n",
+                f.source_image.c_str(), f.velocity_mps.x(), f.velocity_mps.y(), f.velocity_mps.z(),
+                f.truth->d_before_px, f.truth->d_px, f.translation.c_str());
+    EXPECT_NEAR((f.velocity_mps.head<2>() - expected[i]).norm(), 0.0, 1e-5) << f.source_image;
+    EXPECT_NEAR(f.velocity_mps.z(), 0.0, 1e-9) << f.source_image;
+    if (i < 3) {
+      EXPECT_LE(f.truth->rms_px, kInterpolationRmsPx) << f.source_image;
+      EXPECT_NE(f.translation.find("from the photo's XMP drone-dji"), std::string::npos)
+          << f.translation;
+    } else {
+      EXPECT_GT(f.truth->d_px, 0.5) << "its translation is not corrected";
+      EXPECT_EQ(f.translation.rfind("rotation only: the photo records no flight speed", 0), 0u)
+          << f.translation;
+    }
+  }
+  EXPECT_NE(summary.translation.find("3 of 4 photos"), std::string::npos) << summary.translation;
+  // A plain folder of corrected photos; masks and lists beside it.
+  std::vector<std::string> in_images;
+  for (const auto& entry : fs::directory_iterator(dir / "corrected/images"))
+    in_images.push_back(entry.path().filename().string());
+  std::sort(in_images.begin(), in_images.end());
+  EXPECT_EQ(in_images, (std::vector<std::string>{"DJI_0001.JPG", "DJI_0002.JPG", "DJI_0003.JPG",
+                                                 "DJI_0004.JPG"}));
+  EXPECT_TRUE(fs::is_regular_file(dir / "corrected/masks/DJI_0003.JPG.png"));
+  EXPECT_EQ(ReadFileToString(dir / "corrected/colmap/image_list.txt"),
+            "DJI_0001.JPG\nDJI_0002.JPG\nDJI_0003.JPG\nDJI_0004.JPG\n");
+  EXPECT_EQ(ReadFramesCsv(dir / "corrected/frames.csv")[2].image, "images/DJI_0003.JPG");
+  EXPECT_EQ(ReadRigDataset(dir / "corrected").frames.size(), 4u) << "a rig dataset again";
+
+  options.effects = {"velocity=6m/s,-3m/s,0"};
+  options.out_dir = dir / "one_velocity";
+  const CorrectSummary one = CorrectDataset(options);
+  ASSERT_EQ(one.frames.size(), 4u);
+  EXPECT_LE(one.frames[0].truth->rms_px, kInterpolationRmsPx);
+  EXPECT_GT(one.frames[2].truth->d_px, 1.0) << "flown back: the one velocity is wrong for it";
+  std::printf("  --effect velocity= for all: %s D after %.4f px, %s D after %.3f px\n",
+              one.frames[0].source_image.c_str(), one.frames[0].truth->d_px,
+              one.frames[2].source_image.c_str(), one.frames[2].truth->d_px);
 }
 
 TEST(CorrectEndToEnd, CameraMaskMovesWithEachFrame) {

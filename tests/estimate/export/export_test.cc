@@ -640,6 +640,17 @@ TEST(ExportSource, ReadsAReportACameraJsonAFolderAndPhotos) {
   EXPECT_NE(FileNamed(ColmapExport(corrected, {}), "colmap_args.txt")
                 .text.find("--ImageReader.mask_path " + corrected.masks_dir),
             std::string::npos);
+  EXPECT_TRUE(corrected.images_dir.empty()) << "a dataset's images are under the folder itself";
+  // A correction of photos: the corrected photos alone in images/, COLMAP's --image_path.
+  std::filesystem::create_directories(dir / "dataset/images");
+  WriteFileAtomically(dir / "dataset/correct.json",
+                      R"({"format": "correction/1", "image_root": "images"})");
+  const ExportCamera photos_corrected = ReadExportSource(dir / "dataset");
+  EXPECT_EQ(photos_corrected.images_dir,
+            std::filesystem::absolute(dir / "dataset/images").string());
+  EXPECT_NE(FileNamed(ColmapExport(photos_corrected, {}), "colmap_args.txt")
+                .text.find("--image_path " + photos_corrected.images_dir + " "),
+            std::string::npos);
 
   const nlohmann::json photos = {
       {"source", "DIR"},

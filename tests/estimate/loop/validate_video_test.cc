@@ -122,7 +122,9 @@ TEST(ValidateVideo, RecoversLensDistortion) {
   // Neither model's standard error of the lens holds (docs/validation.md): withheld in both.
   for (const LoopResult* loop : {&result.loop, &result.translation_loop}) {
     for (const IdentifiedEffect& e : loop->effects) {
-      if (e.effect == Effect::kLensDistortion) EXPECT_FALSE(e.stderr_withheld.empty());
+      if (e.effect == Effect::kLensDistortion) {
+        EXPECT_FALSE(e.stderr_withheld.empty());
+      }
     }
   }
 }
