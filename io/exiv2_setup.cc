@@ -29,6 +29,9 @@ void InitialiseExiv2() {
     Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute);
     Exiv2::XmpParser::initialize(LockXmp, &xmp_mutex);
     Exiv2::XmpProperties::registerNs("https://shutterlab.invalid/ns/1.0/", "shutterlab");
+    // DJI's flight state, which `survey` writes as a DJI drone does (readers find it under any
+    // prefix: io/photo_metadata.h).
+    Exiv2::XmpProperties::registerNs("http://www.dji.com/drone-dji/1.0/", "drone-dji");
   });
 }
 

@@ -325,6 +325,35 @@ std::vector<std::string> WriteImageLike(
   return notes;
 }
 
+void WriteImageWithMetadata(const std::string& path, const cv::Mat& image, int jpeg_quality,
+                            const MetadataFields& exif, const MetadataFields& xmp) {
+  codecs::ImageWriteSettings settings;
+  settings.file_type = SampleTypeOfDepth(image.depth());
+  if (IsJpegPath(path)) settings.compression = "jpeg:" + std::to_string(jpeg_quality);
+  WriteThroughTemp(path, image, settings, [&](const std::string& temp) {
+    const std::lock_guard<std::mutex> guard(Exiv2Lock());
+    internal::InitialiseExiv2();
+    std::string key;
+    try {
+      auto target = Exiv2::ImageFactory::open(temp);
+      target->readMetadata();
+      for (const auto& [k, value] : exif) {
+        key = k;
+        target->exifData()[k] = value;
+      }
+      for (const auto& [k, value] : xmp) {
+        key = k;
+        target->xmpData()[k] = value;
+      }
+      key.clear();
+      target->writeMetadata();
+    } catch (const Exiv2::AnyError& e) {
+      throw IoError(IoMessage(
+          path, 0, "cannot write metadata" + (key.empty() ? "" : " " + key) + ": " + e.what()));
+    }
+  });
+}
+
 std::vector<std::pair<std::string, std::string>> ReadImageMetadata(const std::string& path) {
   if (!std::filesystem::exists(path)) throw IoError(IoMessage(path, 0, "no such file"));
   std::vector<std::pair<std::string, std::string>> out;

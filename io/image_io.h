@@ -60,6 +60,15 @@ std::vector<std::string> WriteImageLike(
     const std::string& path, const cv::Mat& image, const ImageLike& like,
     const std::vector<std::pair<std::string, std::string>>& xmp = {});
 
+// Writes `image` (JPEG at `jpeg_quality`, other formats as WriteImage) with the EXIF and XMP
+// properties given as (exiv2 key, value text), each value as exiv2 reads its type's text
+// ("Exif.Photo.FocalLength" "4500/1000", "Exif.GPSInfo.GPSLatitude" "47/1 0/1 0/1",
+// "Xmp.drone-dji.FlightXSpeed" "+5.00"; the drone-dji prefix is bound to DJI's namespace
+// http://www.dji.com/drone-dji/1.0/). Whole or not at all; IoError naming a value exiv2 refuses.
+using MetadataFields = std::vector<std::pair<std::string, std::string>>;
+void WriteImageWithMetadata(const std::string& path, const cv::Mat& image, int jpeg_quality,
+                            const MetadataFields& exif, const MetadataFields& xmp);
+
 // The EXIF, IPTC and XMP metadata of an image file as (exiv2 key, value text) pairs, e.g.
 // ("Exif.Image.Make", "DJI"), ("Xmp.drone-dji.RelativeAltitude", "+117.90"); empty for a format
 // exiv2 does not read. Throws IoError for a file that is not there.

@@ -121,6 +121,9 @@ JSON
       done
       printf '\x01\x07t;gx;gy;gz\n0;1;2;3\n0.001;1;2;3\n' >"$build/corpus/column_csv/semicolon.csv"
       printf '\x00\x20"time_us","wx","wy","wz"\n1000,0.1,0.2,0.3\n2000,0.1,0.2,0.3\n' >"$build/corpus/column_csv/quoted.csv" ;;
+    colmap_model)  # cameras.txt, images.txt, points3D.txt between NUL bytes
+      mkdir -p "$build/corpus/colmap_model"
+      printf '# Camera list\n1 PINHOLE 160 120 140 140 80 60\n\0# Image list\n1 1 0 0 0 0 0 0 1 images/a.jpg\n10.5 20.5 1 30 40 -1\n2 0.7071 0 0.7071 0 1 2 3 1 b.jpg\n\n\0# 3D points\n1 0.5 1.5 -2 128 128 128 0.4 1 0 2 1\n' >"$build/corpus/colmap_model/model" ;;
     frames_csv)
       mkdir -p "$build/corpus/frames_csv"
       printf 'frame,t,image,ref\n0,0.0,images/frame_000000.png,\n1,0.04,images/frame_000001.png,0\n' >"$build/corpus/frames_csv/frames.csv" ;;

@@ -8,6 +8,9 @@ set_tests_properties(RecordCli.KilledAtRandomMomentsLeavesAReadableFileLosingOnl
                      PROPERTIES COST 47)
 set_tests_properties(BatchMixed.AClipALogAndPhotosLocallyAndThroughSlurm PROPERTIES COST 46)
 set_tests_properties(DemoCli.RunsEveryStepAndFindsTheHiddenOffset PROPERTIES COST 45)
+# COLMAP four times on both cores: 20 s.
+set_tests_properties(PhotogrammetryScript.CorrectionBringsTheReconstructionBackToTheGlobalShutters
+                     PROPERTIES COST 40)
 set_tests_properties(ImportCli.AClipWithoutAGyroTakesAFlightLogFoundByItsFrames PROPERTIES COST 40)
 set_tests_properties(RealClips.PhoneClipTimeOffsetAndReadoutDoNotDependOnTheDashboard
                      RealClips.GoproKarmaIsMostlyTranslation PROPERTIES COST 35)
