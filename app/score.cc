@@ -5,6 +5,7 @@
 #include "render/survey_score.h"
 #include "sim/text_file.h"
 
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -53,11 +54,15 @@ void PrintScore(const ReconstructionScore& s) {
         "camera centres (similarity-aligned to the truth's middle-row centres, %.4g m a "
         "model unit): horizontal %.2f cm, vertical %.2f cm RMS\n",
         s.alignment_scale, 100 * s.horizontal_rms_m, 100 * s.vertical_rms_m);
-    std::printf("orientation: %.4f deg RMS\n", s.orientation_rms_deg);
-    std::printf(
-        "sparse points: %zu, %zu over the terrain: |z - terrain| median %.2f cm, RMS %.2f "
-        "cm\n",
-        s.points, s.points_on_terrain, 100 * s.point_median_m, 100 * s.point_rms_m);
+    if (std::isnan(s.orientation_rms_deg)) {  // cameras on one line: said in the notes
+      std::printf("orientation and points: left out (see the note)\n");
+    } else {
+      std::printf("orientation: %.4f deg RMS\n", s.orientation_rms_deg);
+      std::printf(
+          "sparse points: %zu, %zu over the terrain: |z - terrain| median %.2f cm, RMS "
+          "%.2f cm\n",
+          s.points, s.points_on_terrain, 100 * s.point_median_m, 100 * s.point_rms_m);
+    }
     std::printf("%-16s %14s %12s %16s\n", "photo", "horizontal cm", "vertical cm",
                 "orientation deg");
     for (const PhotoScore& p : s.per_photo) {

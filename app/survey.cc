@@ -74,6 +74,9 @@ const CommandRegistration kSurveyRegistration(47, [](CLI::App& app) {
   cmd->add_option("--focal-px", o->focal_px, "focal length, px")->capture_default_str();
   AddQuantityOption(cmd, "--readout", &o->survey.readout_s, "s", "ms",
                     "readout, first row to last");
+  AddQuantityOption(
+      cmd, "--start", &o->survey.start_s, "s", "s",
+      "the first photo's first row on the gyro's clock (with --gyro: inside its log)");
   AddQuantityOption(cmd, "--altitude", &o->survey.altitude_m, "m", "m", "height above the datum");
   AddQuantityOption(cmd, "--speed", &o->survey.speed_mps, "m/s", "m/s",
                     "ground speed along a line");

@@ -103,6 +103,7 @@ ColmapModel ReadColmapTextModel(const std::string& dir_text) {
   ColmapImage* last = nullptr;
   ForEachLine(dir, "images.txt", true, [&](long number, const std::vector<std::string_view>& f) {
     if (last == nullptr) {
+      if (f.empty()) return;  // a blank line between images, or after the last
       if (f.size() < 10) {
         throw IoError(
             IoMessage(images.string(), number,

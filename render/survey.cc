@@ -78,7 +78,7 @@ std::optional<double> Terrain::HeightAt(double x_m, double y_m) const {
 
 std::optional<Eigen::Vector3d> Terrain::Intersect(const Eigen::Vector3d& from,
                                                   const Eigen::Vector3d& direction) const {
-  SHUTTERLAB_CHECK(direction.z() < 0) << "a ray to the ground must point down";
+  if (!(direction.z() < 0)) return std::nullopt;  // at or above the horizon: no ground
   const Eigen::Vector3d d = direction.normalized();
   // Above the highest point nothing can be hit: start there.
   double s = from.z() > max_m ? (from.z() - max_m) / -d.z() : 0.0;
@@ -463,7 +463,17 @@ SurveySummary WriteSurvey(const SurveyOptions& options, const GyroTrace& gyro,
   const Terrain& terrain = summary.terrain;
   summary.gsd_m = options.altitude_m / options.camera.fx;
   GroundTextureOptions texture_options;
+  // The camera must stay above the ground it flies over, with room for the rows' motion.
+  SHUTTERLAB_CHECK(options.altitude_m > terrain.max_m + 5.0)
+      << "--altitude " << options.altitude_m
+      << " m does not clear the terrain, whose highest point is "
+      << FormatNumber("%.1f m", terrain.max_m) << ": fly higher, or lower --hills";
   const double texture_gsd_m = TextureGsd(options);
+  SHUTTERLAB_CHECK(terrain.WidthM() / texture_gsd_m <= 16384 &&
+                   terrain.DepthM() / texture_gsd_m <= 16384)
+      << "the flight covers " << FormatNumber("%.0f", terrain.WidthM()) << " x "
+      << FormatNumber("%.0f m", terrain.DepthM()) << ", over 16384 texture pixels a side at "
+      << FormatNumber("%.3f m", texture_gsd_m) << ": fewer --lines or --photos-per-line";
   texture_options.ground_sample_distance_m = texture_gsd_m;
   texture_options.width_px = static_cast<int>(std::ceil(terrain.WidthM() / texture_gsd_m));
   texture_options.height_px = static_cast<int>(std::ceil(terrain.DepthM() / texture_gsd_m));

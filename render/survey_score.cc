@@ -7,17 +7,21 @@
 #include "sim/units.h"
 
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 
 namespace shutterlab {
 namespace {
 
 namespace fs = std::filesystem;
+
+constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 
 double Rms(const std::vector<double>& values) {
   double sum = 0.0;
@@ -35,7 +39,8 @@ std::vector<SurveyTruth::Photo> ReadTruthPhotos(const std::string& path) {
   long number = 0;
   while (start < text.size()) {
     const size_t end = std::min(text.find('\n', start), text.size());
-    const std::string_view line(text.data() + start, end - start);
+    std::string_view line(text.data() + start, end - start);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     start = end + 1;
     ++number;
     if (line.empty()) continue;
@@ -50,9 +55,14 @@ std::vector<SurveyTruth::Photo> ReadTruthPhotos(const std::string& path) {
       }
       continue;
     }
+    if (fields.size() < column.size()) {
+      throw IoError(IoMessage(path, number,
+                              "has " + std::to_string(fields.size()) + " fields, the header " +
+                                  std::to_string(column.size())));
+    }
     const auto value = [&](const char* name) {
       const size_t k = column.at(name);
-      const std::optional<double> v = k < fields.size() ? ParseDouble(fields[k]) : std::nullopt;
+      const std::optional<double> v = ParseDouble(fields[k]);
       if (!v) throw IoError(IoMessage(path, number, std::string(name) + " is not a number"));
       return *v;
     };
@@ -111,6 +121,10 @@ ReconstructionScore ScoreReconstruction(const SurveyTruth& truth, const std::str
       score.notes.push_back(image.name + ": not a photo of the survey (left out)");
       continue;
     }
+    if (estimated[it->second]) {
+      score.notes.push_back(image.name + ": a second image of " + it->first + " (the first kept)");
+      continue;
+    }
     estimated[it->second] = &image;
   }
   Eigen::Matrix3Xd from(3, 0), to(3, 0);
@@ -128,6 +142,11 @@ ReconstructionScore ScoreReconstruction(const SurveyTruth& truth, const std::str
                           " photo(s) registered: 3 are needed to align the model to the truth");
     return score;
   }
+  // Cameras on one line leave the roll about it to the noise: the centres' errors still hold,
+  // the orientations' and the points' would not.
+  const Eigen::Matrix3Xd centred = to.colwise() - to.rowwise().mean();
+  const Eigen::Vector3d spread = Eigen::JacobiSVD<Eigen::Matrix3Xd>(centred).singularValues();
+  const bool on_a_line = spread(1) < 1e-3 * spread(0);
   // Umeyama's similarity: to ~ s R from + t.
   const Eigen::Matrix4d align = Eigen::umeyama(from, to, true);
   score.alignment_scale = align.block<3, 3>(0, 0).col(0).norm();
@@ -144,7 +163,7 @@ ReconstructionScore ScoreReconstruction(const SurveyTruth& truth, const std::str
     p.vertical_error_m = error.z();
     const Eigen::Matrix3d turn =
         truth.photos[k].mid.world_from_cam.transpose() * rotation * estimated[k]->WorldFromCam();
-    p.orientation_error_deg = Eigen::AngleAxisd(turn).angle() * kDegPerRad;
+    p.orientation_error_deg = on_a_line ? kNan : Eigen::AngleAxisd(turn).angle() * kDegPerRad;
     horizontal.push_back(p.horizontal_error_m);
     vertical.push_back(p.vertical_error_m);
     orientation.push_back(p.orientation_error_deg);
@@ -152,6 +171,13 @@ ReconstructionScore ScoreReconstruction(const SurveyTruth& truth, const std::str
   score.horizontal_rms_m = Rms(horizontal);
   score.vertical_rms_m = Rms(vertical);
   score.orientation_rms_deg = Rms(orientation);
+  if (on_a_line) {
+    score.notes.push_back(
+        "the registered cameras lie on one line: the alignment's roll about it is undetermined, "
+        "so the orientation and point errors are left out (fly two lines)");
+    score.point_median_m = score.point_rms_m = score.orientation_rms_deg = kNan;
+    return score;
+  }
   std::vector<double> heights;
   for (const ColmapPoint& point : model.points) {
     const Eigen::Vector3d x = aligned(point.xyz);

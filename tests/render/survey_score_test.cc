@@ -122,6 +122,30 @@ TEST(ScoreReconstruction, ATurnedPhotoALiftedPointAndAMissingPhotoAreEachMeasure
   EXPECT_EQ(score.notes[0], "1 photo(s) not registered");
 }
 
+TEST(ScoreReconstruction, CamerasOnOneLineLeaveTheRollUndeterminedAndSayIt) {
+  // Only the first line's three photos registered: their centres lie on a line, about which the
+  // alignment could turn freely; the centres are scored, the orientations and points are not.
+  test::TempDir dir;
+  const SurveyTruth truth = ReadSurveyTruth(WrittenSurvey(dir));
+  WriteModel(truth, {}, dir / "model");
+  std::string images = ReadFileToString(dir / "model/images.txt"), kept;
+  size_t start = 0;
+  for (int line = 0; start < images.size(); ++line) {
+    const size_t end = images.find('\n', start);
+    // The header line, then two lines an image: keep the first three images (lines 1-6).
+    if (line <= 6) kept += images.substr(start, end - start + 1);
+    start = end + 1;
+  }
+  WriteFileAtomically(dir / "model/images.txt", kept + "\n\n");  // trailing blank lines too
+  const ReconstructionScore score = ScoreReconstruction(truth, dir / "model");
+  EXPECT_EQ(score.registered, 3u);
+  EXPECT_LT(score.horizontal_rms_m, 1e-8);
+  EXPECT_TRUE(std::isnan(score.orientation_rms_deg));
+  EXPECT_TRUE(std::isnan(score.point_median_m));
+  ASSERT_FALSE(score.notes.empty());
+  EXPECT_NE(score.notes.back().find("lie on one line"), std::string::npos) << score.notes.back();
+}
+
 TEST(ColmapModel, MalformedLinesAndABinaryModelAreNamed) {
   test::TempDir dir;
   const SurveyTruth truth = ReadSurveyTruth(WrittenSurvey(dir));

@@ -187,6 +187,23 @@ TEST(Survey, RefusesWhatNoFlightCanBe) {
   options = SmallSurvey();
   EXPECT_THROW(SurveyPlan(options, StillGyro(5.0)), std::invalid_argument)
       << "a trace that ends before the flight";
+  // Roofs within 5 m of the camera (20 buildings of 6-12 m under a camera at 15.5 m, which the
+  // options alone allow): refused once the terrain is made, before anything is written.
+  test::TempDir dir;
+  options.terrain.hill_height_m = 0.0;
+  options.terrain.buildings = 20;
+  options.altitude_m = 15.5;
+  try {
+    WriteSurvey(options, StillGyro(SurveyEndS(options) + 1.0), dir / "s");
+    ADD_FAILURE() << "a camera inside a hill";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("does not clear the terrain"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "s/images"));
+  // A ray at or above the horizon meets no ground.
+  const Terrain flat = MakeTerrain(TerrainOptions{});
+  EXPECT_FALSE(flat.Intersect(Eigen::Vector3d(50, 50, 40), Eigen::Vector3d(1, 0, 0)));
 }
 
 }  // namespace
