@@ -124,6 +124,11 @@ const CommandRegistration kSurveyRegistration(47, [](CLI::App& app) {
         Median(d_px), *std::max_element(d_px.begin(), d_px.end()));
     std::printf("motion: %s\n", gyro_source.c_str());
     SayWritten(o->out_dir, summary.files);
+    std::printf(
+        "next: shutterlab correct --photos %s/images %s/flight.ulg --camera "
+        "%s/truth/camera.json --out CORRECTED; scripts/photogrammetry.sh reconstructs it "
+        "with COLMAP (docs/photogrammetry.md)\n",
+        o->out_dir.c_str(), o->out_dir.c_str(), o->out_dir.c_str());
   });
 });
 

@@ -34,6 +34,10 @@ TEST(SurveyCli, WritesASmallFlightThatAnalyzeReadsAsADronesPhotos) {
       << result.out;
   EXPECT_NE(result.err.find("wrote " + out + "/: images/DJI_0001.JPG"), std::string::npos)
       << result.err;
+  EXPECT_NE(result.out.find("next: shutterlab correct --photos " + out + "/images " + out +
+                            "/flight.ulg --camera " + out + "/truth/camera.json"),
+            std::string::npos)
+      << result.out;
   for (const char* file :
        {"images/DJI_0004.JPG", "reference/DJI_0004.JPG", "flight.ulg", "truth/camera.json",
         "truth/terrain.png", "truth/poses.csv", "survey.json"}) {
