@@ -5,8 +5,9 @@
 // relief (gentle hills and box buildings, a height grid), the camera looking straight down with
 // the image's top ahead. Each photo is rendered row by row (rolling shutter: row v from the pose
 // at its own instant) and as its global-shutter reference (every row from the pose at the middle
-// row's instant); every pixel's ray is intersected with the terrain exactly (the grid's bilinear
-// surface) and the texture is sampled where it lands.
+// row's instant); every pixel's ray is intersected with the terrain (the grid's bilinear surface,
+// marched in quarter cells and bisected to 1e-6 m: a ray that grazes a roof's edge for less than a
+// quarter cell passes over it) and the texture is sampled where it lands.
 //
 // World frame: x east, y north, z up, metres; the terrain's grid and the texture cover the same
 // rectangle, north up. The camera frame is docs/FORMATS.md's (x right, y down, z along the view).
