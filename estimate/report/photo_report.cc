@@ -1,6 +1,7 @@
 #include "estimate/report/photo_report.h"
 
 #include "sim/text_file.h"
+#include "sim/units.h"
 
 #include <optional>
 #include <string>
@@ -49,6 +50,39 @@ std::vector<std::string> PhotoRow(const PhotoRecord& r, const PhotoResult& p,
           flags};
 }
 
+// docs/photogrammetry.md's six simulated surveys (COLMAP with the camera known): the
+// rolling-shutter photos put the cameras 0.43 to 1.09 times their median D on the ground off
+// horizontally; the corrected ones within about 1 cm of the global-shutter photos'.
+constexpr double kCentreErrorPerMedianDMin = 0.43, kCentreErrorPerMedianDMax = 1.09;
+
+// What correcting is expected to buy in a reconstruction, from that table, said as an estimate;
+// nothing when no photo's D is predicted.
+void ExpectedBenefit(const PhotoAnalysis& a, HtmlPage* page) {
+  std::vector<double> d_m;  // each predicted photo's D on the ground
+  bool rotation = false;
+  for (const PhotoResult& p : a.photos) {
+    if (p.d_translation_m || p.d_rotation_m)
+      d_m.push_back(p.d_translation_m.value_or(0.0) + p.d_rotation_m.value_or(0.0));
+    rotation = rotation || p.d_rotation_m.has_value();
+  }
+  if (d_m.empty()) return;
+  const double median_m = Median(d_m);
+  page->Heading("What correcting buys in the map (an estimate)");
+  page->Paragraph(
+      FormatNumber("These photos' median D is %.1f cm on the ground. ", 100 * median_m) +
+      "In six simulated surveys (docs/photogrammetry.md: COLMAP, the camera known), "
+      "rolling-shutter photos put the reconstructed cameras 0.43 to 1.09 times the median D off "
+      "horizontally: here " +
+      FormatNumber("%.1f", 100 * kCentreErrorPerMedianDMin * median_m) +
+      FormatNumber(" to %.1f cm", 100 * kCentreErrorPerMedianDMax * median_m) +
+      ". Corrected with the gyro (shutterlab correct --photos DIR LOG), they came within about 1 "
+      "cm of a global shutter's. An estimate from simulations of another camera, not a "
+      "measurement of this flight" +
+      std::string(rotation ? "."
+                           : "; without the flight log D holds only the translation, and "
+                             "the rotation adds to both."));
+}
+
 }  // namespace
 
 HtmlPage PhotoReportPage(const PhotoSet& set, const PhotoAnalysis& a) {
@@ -68,6 +102,7 @@ HtmlPage PhotoReportPage(const PhotoSet& set, const PhotoAnalysis& a) {
   page.Table(
       {"photo", "altitude m", "speed m/s", "readout", "D px", "D cm", "ground cm/px", "flagged"},
       rows);
+  ExpectedBenefit(a, &page);
   page.Heading("What your photogrammetry tool already removes");
   page.Paragraph(
       "OpenDroneMap's --rolling-shutter (with --rolling-shutter-readout, the readout in ms) "

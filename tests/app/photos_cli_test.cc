@@ -131,7 +131,9 @@ TEST(PhotosCli, BadPhotosAreReportedAndAFolderWithoutPhotosIsAnError) {
         std::string("excluded: " + (dir / "photos/DJI_0003.JPG") +
                     ": its image data does not decode"),
         std::string("What your photogrammetry tool already removes"),
-        std::string("--rolling-shutter-readout")}) {
+        std::string("--rolling-shutter-readout"),
+        std::string("What correcting buys in the map (an estimate)"),
+        std::string("0.43 to 1.09 times the median D off horizontally: here ")}) {
     EXPECT_NE(page.find(text), std::string::npos) << text;
   }
   test::ExpectDrawsInChromium(dir / "out/report.html", 0, "photos_report");
