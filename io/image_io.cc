@@ -259,10 +259,11 @@ std::mutex& Exiv2Lock() {
   return lock;
 }
 
-// Copies like's EXIF, IPTC and XMP into the file at `temp` and sets `xmp`; notes on `path`.
+// Copies like's EXIF, IPTC and XMP (none when like is "") into the file at `temp` and sets `exif`
+// and `xmp`; notes on `path`.
 std::vector<std::string> CopyMetadata(const std::string& path, const std::string& temp,
-                                      const std::string& like,
-                                      const std::vector<std::pair<std::string, std::string>>& xmp) {
+                                      const std::string& like, const MetadataFields& exif,
+                                      const MetadataFields& xmp) {
   std::vector<std::string> notes;
   const std::lock_guard<std::mutex> guard(Exiv2Lock());
   internal::InitialiseExiv2();
@@ -292,12 +293,15 @@ std::vector<std::string> CopyMetadata(const std::string& path, const std::string
         notes.push_back(path + ": this format holds no XMP: XMP of " + like + " not copied");
       }
     }
+    if (writes(Exiv2::mdExif)) {
+      for (const auto& [key, value] : exif) target->exifData()[key] = value;
+    }
     if (writes(Exiv2::mdXmp)) {
       for (const auto& [key, value] : xmp) target->xmpData()[key] = value;
     }
     target->writeMetadata();
   } catch (const Exiv2::AnyError& e) {
-    throw IoError(IoMessage(path, 0, std::string("cannot copy metadata: ") + e.what()));
+    throw IoError(IoMessage(path, 0, std::string("cannot write metadata: ") + e.what()));
   }
   return notes;
 }
@@ -320,7 +324,7 @@ std::vector<std::string> WriteImageLike(
   }
   std::vector<std::string> notes;
   WriteThroughTemp(path, image, settings, [&](const std::string& temp) {
-    notes = CopyMetadata(path, temp, like.path, xmp);
+    notes = CopyMetadata(path, temp, like.path, {}, xmp);
   });
   return notes;
 }
@@ -330,28 +334,8 @@ void WriteImageWithMetadata(const std::string& path, const cv::Mat& image, int j
   codecs::ImageWriteSettings settings;
   settings.file_type = SampleTypeOfDepth(image.depth());
   if (IsJpegPath(path)) settings.compression = "jpeg:" + std::to_string(jpeg_quality);
-  WriteThroughTemp(path, image, settings, [&](const std::string& temp) {
-    const std::lock_guard<std::mutex> guard(Exiv2Lock());
-    internal::InitialiseExiv2();
-    std::string key;
-    try {
-      auto target = Exiv2::ImageFactory::open(temp);
-      target->readMetadata();
-      for (const auto& [k, value] : exif) {
-        key = k;
-        target->exifData()[k] = value;
-      }
-      for (const auto& [k, value] : xmp) {
-        key = k;
-        target->xmpData()[k] = value;
-      }
-      key.clear();
-      target->writeMetadata();
-    } catch (const Exiv2::AnyError& e) {
-      throw IoError(IoMessage(
-          path, 0, "cannot write metadata" + (key.empty() ? "" : " " + key) + ": " + e.what()));
-    }
-  });
+  WriteThroughTemp(path, image, settings,
+                   [&](const std::string& temp) { CopyMetadata(path, temp, "", exif, xmp); });
 }
 
 std::vector<std::pair<std::string, std::string>> ReadImageMetadata(const std::string& path) {

@@ -417,6 +417,14 @@ TruthResidual MeasureAgainstTruth(const CorrectionMap& map, const cv::Mat& truth
 
 namespace {
 
+// Whether the report identified `effect` or --effect sets it: then it holds for every frame.
+bool EffectSet(const CorrectionModel& model, const CorrectOptions& options, Effect effect) {
+  const std::string prefix = Spec(effect).name + "=";
+  return std::count(model.effects.begin(), model.effects.end(), effect) > 0 ||
+         std::any_of(options.effects.begin(), options.effects.end(),
+                     [&](const std::string& e) { return e.rfind(prefix, 0) == 0; });
+}
+
 // A folder of photos: its triggers are on the log's clock (the model's time offset is not
 // applied), and the log's still segment gives the bias unless the report or --effect sets one.
 void AdaptModelToPhotos(const PhotoInput& input, bool bias_given, CorrectionModel* model) {
@@ -510,12 +518,8 @@ CorrectSummary CorrectInput(const CorrectOptions& options, const RigDataset& dat
                                   EffectValueText(set.value) + " (no uncertainty)");
   }
   if (photos) {
-    const bool bias_given =
-        std::count(summary.model.effects.begin(), summary.model.effects.end(), Effect::kGyroBias) >
-            0 ||
-        std::any_of(options.effects.begin(), options.effects.end(),
-                    [](const std::string& e) { return e.rfind("gyro_bias=", 0) == 0; });
-    AdaptModelToPhotos(*photos, bias_given, &summary.model);
+    AdaptModelToPhotos(*photos, EffectSet(summary.model, options, Effect::kGyroBias),
+                       &summary.model);
   }
   if (options.gyro_noise_rad_s_sqrt_hz) {
     summary.model.gyro_noise_rad_s_sqrt_hz = *options.gyro_noise_rad_s_sqrt_hz;
@@ -532,11 +536,7 @@ CorrectSummary CorrectInput(const CorrectOptions& options, const RigDataset& dat
         *summary.setting.plane_depth_m / (0.5 * (model.rig.camera.fx + model.rig.camera.fy));
   }
   const CameraMotion motion(dataset.gyro, model);
-  const bool velocity_given =
-      std::count(summary.model.effects.begin(), summary.model.effects.end(), Effect::kVelocity) >
-          0 ||
-      std::any_of(options.effects.begin(), options.effects.end(),
-                  [](const std::string& e) { return e.rfind("velocity=", 0) == 0; });
+  const bool velocity_given = EffectSet(summary.model, options, Effect::kVelocity);
   if (photos) DescribePhotoVelocities(*photos, velocity_given, &summary);
   Context context{options,
                   dataset,
