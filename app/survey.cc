@@ -24,7 +24,7 @@ struct SurveyCliOptions {
   SurveyOptions survey;
   std::string out_dir;
   std::string gyro_path;       // "": a synthetic multirotor's
-  std::string wind = "gusty";  // the synthetic multirotor's: calm or gusty
+  std::string wind = "gusty";  // the synthetic multirotor's: calm, gusty or none
   int width = 640, height = 480;
   double focal_px = 560.0;
 };
@@ -43,6 +43,11 @@ GyroTrace SurveyGyro(const SurveyCliOptions& o, std::string* source) {
   synth.t0_s = 0.001;  // PX4 times start above 0
   synth.seed = o.survey.seed;
   synth.imu = ImuErrorModel::Ideal();
+  if (o.wind == "none") {  // a perfect gimbal's hold: the translation alone
+    synth.profile = MotionProfile::kStill;
+    *source = "no rotation (sim/synth still profile, ideal sensor, 1 kHz)";
+    return SynthesizeTrace(synth);
+  }
   if (o.wind == "calm") {  // a still day: a slow wobble, few and weak gusts
     synth.flight.wobble_rms_dps = 1.0;
     synth.flight.gusts_per_s = 0.1;
@@ -65,9 +70,10 @@ const CommandRegistration kSurveyRegistration(47, [](CLI::App& app) {
                   "its axes the camera's (default: a synthetic multirotor's)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--wind", o->wind,
-                  "without --gyro: gusty (gusts of 4-50 deg/s, 0.7 a second) or calm (1 deg/s "
-                  "wobble, gusts to 10 deg/s)")
-      ->check(CLI::IsMember({"calm", "gusty"}))
+                  "without --gyro: gusty (gusts of 4-50 deg/s, 0.7 a second), calm (1 deg/s "
+                  "wobble, gusts to 10 deg/s) or none (no rotation: the flight's translation "
+                  "alone, as behind a perfect gimbal)")
+      ->check(CLI::IsMember({"calm", "gusty", "none"}))
       ->capture_default_str();
   cmd->add_option("--width", o->width, "image width, px")->capture_default_str();
   cmd->add_option("--height", o->height, "image height, px")->capture_default_str();

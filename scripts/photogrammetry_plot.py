@@ -12,7 +12,8 @@ import os
 import sys
 
 VARIANTS = [("global", "global shutter", "#1b7837"), ("rolling", "rolling shutter", "#b2182b"),
-            ("corrected", "corrected", "#2166ac"), ("wrong", "corrected, readout +20 %", "#f4a582")]
+            ("corrected", "corrected", "#2166ac"), ("wrong", "corrected, readout +20 %", "#f4a582"),
+            ("odm", "ODM's (reproduced)", "#984ea3")]
 W, H, LEFT, RIGHT, TOP, BOTTOM = 720, 360, 64, 200, 40, 48
 
 

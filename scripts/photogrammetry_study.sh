@@ -1,15 +1,16 @@
 #!/usr/bin/env bash
-# docs/photogrammetry.md's table: scripts/photogrammetry.sh on three flights (calm at 5 m/s, gusty
-# at 5 m/s, gusty at 10 m/s) at two readouts (10 and 30 ms), 640x480 photos, 12 a flight; then one
-# line per flight and readout. A flight whose OUT/NAME/table.md exists is not flown again (a rerun
-# only prints). About 3 minutes a flight on 2 cores.
+# docs/photogrammetry.md's table: scripts/photogrammetry.sh on four flights (calm at 5 m/s, gusty
+# at 5 m/s, gusty at 10 m/s, and without rotation at 10 m/s) at two readouts (10 and 30 ms),
+# 640x480 photos, 12 a flight; then one line per flight and readout. A flight whose
+# OUT/NAME/table.md exists is not flown again (a rerun only prints). About 4 minutes a flight on
+# 2 cores.
 #
 #   scripts/photogrammetry_study.sh OUT
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out="${1:?usage: scripts/photogrammetry_study.sh OUT}"
 mkdir -p "$out"
-for flight in "calm 5" "gusty 5" "gusty 10"; do
+for flight in "calm 5" "gusty 5" "gusty 10" "none 10"; do
   read -r wind speed <<<"$flight"
   for readout in 10 30; do
     name="${wind}_${speed}mps_${readout}ms"
@@ -23,23 +24,23 @@ done
 /usr/bin/python3 - "$out" <<'PY'
 import json, os, re, sys
 out = sys.argv[1]
-print("| flight | readout | D median px | centre horizontal cm: global / rolling / corrected / readout +20 % | points median cm: the same |")
+print("| flight | readout | D median px | centre horizontal cm: global / rolling / corrected / readout +20 % / ODM's | points median cm: the same |")
 print("| --- | --- | --- | --- | --- |")
-def order(name):  # calm first, then by speed and readout
+def order(name):  # calm, gusty, none; then by speed and readout
     wind, speed, readout = name.split("_")
-    return (wind != "calm", float(speed[:-3]), float(readout[:-2]))
+    return (["calm", "gusty", "none"].index(wind), float(speed[:-3]), float(readout[:-2]))
 names = [n for n in os.listdir(out) if os.path.isfile(os.path.join(out, n, "table.md"))]
 for name in sorted(names, key=order):
     wind, speed, readout = name.split("_")
     survey = open(os.path.join(out, name, "survey.txt")).read()
     d_median = re.search(r"D median ([0-9.]+) px", survey).group(1)
     scores = [json.load(open(os.path.join(out, name, "colmap_%s" % v, "score.json")))
-              for v in ("global", "rolling", "corrected", "wrong")]
+              for v in ("global", "rolling", "corrected", "wrong", "odm")]
     def row(key):
         return " / ".join("%.2f" % (100 * s[key]) if s["registered"] == s["photos"]
                           else "%.2f (%d of %d)" % (100 * s[key], s["registered"], s["photos"])
                           for s in scores)
     print("| %s, %s m/s | %s ms | %s | %s | %s |" % (
-        wind, speed.replace("mps", ""), readout.replace("ms", ""), d_median,
+        "no rotation" if wind == "none" else wind, speed.replace("mps", ""), readout.replace("ms", ""), d_median,
         row("horizontal_rms_m"), row("point_median_m")))
 PY

@@ -70,13 +70,20 @@ int64_t ReferenceTimeNs(const TrueModel& model, int64_t t_first_row_ns, double r
          SecondsToNs(model.rig.shutter.RowTimeOffsetS(reference_row, model.rig.camera.height));
 }
 
+// A worker's corrected image and mask, reused frame to frame: a 12 MP photo's output touched
+// afresh cost about as much in page faults as its warp (bench/photos_bench.cc).
+struct FrameBuffers {
+  cv::Mat corrected, mask;
+};
+
 // Writes the corrected image and its mask (unless DIR holds both and force is off); the share of
 // pixels with no source.
 double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap& map,
-                      const ResidualPrediction& residual, CorrectedFrame* out) {
+                      const ResidualPrediction& residual, CorrectedFrame* out,
+                      FrameBuffers* buffers) {
   const fs::path image_path = fs::path(c.options.out_dir) / out->image;
   const fs::path mask_path = MaskPath(c.options.out_dir, e.image);
-  cv::Mat mask;
+  cv::Mat& mask = buffers->mask;
   if (!c.options.force && fs::is_regular_file(image_path) && fs::is_regular_file(mask_path)) {
     out->kept = true;
     mask = ReadImage(mask_path.string());
@@ -90,7 +97,7 @@ double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap
                                   std::to_string(map.geometry().camera().width) + "x" +
                                   std::to_string(map.geometry().camera().height)));
     }
-    cv::Mat corrected;
+    cv::Mat& corrected = buffers->corrected;
     CorrectFrame(rs, map, c.options.interpolation, &corrected, &mask);
     if (!c.dataset.mask.empty()) {
       // camera.json's mask moves with the pixels: a corrected pixel may be used where every tap
@@ -138,7 +145,7 @@ std::optional<Eigen::Vector3d> FrameVelocity(const Context& c, int64_t frame, Co
   return own.velocity_mps;
 }
 
-CorrectedFrame CorrectOne(const Context& c, const FrameEntry& e) {
+CorrectedFrame CorrectOne(const Context& c, const FrameEntry& e, FrameBuffers* buffers) {
   CorrectedFrame out;
   out.frame = e.frame;
   out.source_image = e.image;
@@ -168,7 +175,7 @@ CorrectedFrame CorrectOne(const Context& c, const FrameEntry& e) {
                                  e.t_first_row_ns, c.setting, c.options.prediction);
   out.predicted_d_after_px = out.residual.d_after_px + 2 * out.map_error_px;
   out.predicted_d_after_p90_px = out.residual.d_after_p90_px + 2 * out.map_error_px;
-  out.no_source_fraction = WriteCorrected(c, e, map, out.residual, &out);
+  out.no_source_fraction = WriteCorrected(c, e, map, out.residual, &out, buffers);
   if (c.options.check_truth) {
     const fs::path truth_dir =
         c.options.truth_dir.empty() ? c.dataset.dir / "truth" : fs::path(c.options.truth_dir);
@@ -190,9 +197,10 @@ void RunFrames(const Context& c, const CorrectProgress& progress, CorrectSummary
   std::exception_ptr error;
   std::mutex lock;
   const auto work = [&] {
+    FrameBuffers buffers;
     for (size_t i = next++; i < entries.size() && !failed; i = next++) {
       try {
-        done[i] = CorrectOne(c, entries[i]);
+        done[i] = CorrectOne(c, entries[i], &buffers);
       } catch (const std::out_of_range&) {
         skipped[i] = "its readout is outside " + fs::path(c.dataset.gyro_path).filename().string();
       } catch (...) {

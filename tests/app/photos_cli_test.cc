@@ -133,7 +133,8 @@ TEST(PhotosCli, BadPhotosAreReportedAndAFolderWithoutPhotosIsAnError) {
         std::string("What your photogrammetry tool already removes"),
         std::string("--rolling-shutter-readout"),
         std::string("What correcting buys in the map (an estimate)"),
-        std::string("0.43 to 1.09 times the median D off horizontally: here ")}) {
+        std::string("without rotation"),
+        std::string("0.24 times the median D off horizontally: here ")}) {
     EXPECT_NE(page.find(text), std::string::npos) << text;
   }
   test::ExpectDrawsInChromium(dir / "out/report.html", 0, "photos_report");

@@ -1,0 +1,151 @@
+// Speed of `correct --photos` on 12 MP drone photos against the job's floor, side by side:
+//   - floor:   each photo decoded and re-encoded at its own JPEG quality with its EXIF and XMP,
+//              through the same calls `correct` makes (ReadImage, WriteImageLike);
+//   - correct: CorrectDataset on the folder with its ULog and camera.json, one job: the log
+//              read, the photos placed, every photo's map, warp, mask and writes (no overview).
+// The photos: a `shutterlab survey` of 4 photos of 4000 x 3000 (f 3500 px, 30 ms, gusty), rendered
+// once into $TMPDIR/shutterlab_photos_bench/ (about 3 min) and reused by later runs. Both
+// contenders write into a fresh folder each run; the runs alternate, and the medians of process
+// CPU time and wall time are printed with their ratio.
+// Run: build/bin/photos_bench [RUNS] (default 3)
+
+#include "bench/bench_util.h"
+#include "estimate/correct/correct_dataset.h"
+#include "io/image_io.h"
+#include "model/camera.h"
+#include "render/survey.h"
+#include "sim/synth/synth.h"
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace shutterlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kPhotos = 4;
+
+// The survey's folder, rendered on first use.
+fs::path SurveyFolder() {
+  const char* tmp = std::getenv("TMPDIR");
+  const fs::path dir =
+      fs::path(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") / "shutterlab_photos_bench";
+  if (fs::is_regular_file(dir / "survey.json")) return dir;
+  std::fprintf(stderr, "rendering %d photos of 4000 x 3000 into %s (once, about 3 min)\n", kPhotos,
+               dir.c_str());
+  SurveyOptions survey;
+  survey.camera.width = 4000;
+  survey.camera.height = 3000;
+  survey.camera.fx = survey.camera.fy = 3500.0;
+  survey.camera.cx = (survey.camera.width - 1) / 2.0;
+  survey.camera.cy = (survey.camera.height - 1) / 2.0;
+  survey.lines = 2;
+  survey.photos_per_line = kPhotos / 2;
+  SynthOptions synth;  // a gusty multirotor, as `survey` flies by default
+  synth.profile = MotionProfile::kFlight;
+  synth.rate_hz = 1000.0;
+  synth.duration_s = SurveyEndS(survey) + 2.0;
+  synth.t0_s = 0.001;
+  synth.imu = ImuErrorModel::Ideal();
+  fs::remove_all(dir);
+  WriteSurvey(survey, SynthesizeTrace(synth), dir.string(), {});
+  return dir;
+}
+
+double ProcessCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+struct Seconds {
+  double cpu_s = 0.0, wall_s = 0.0;
+};
+
+template <typename Body>
+Seconds Time(Body&& body) {
+  const double cpu_start_s = ProcessCpuSeconds();
+  const auto wall_start = std::chrono::steady_clock::now();
+  body();
+  return {ProcessCpuSeconds() - cpu_start_s,
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()};
+}
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+int Main(int argc, char** argv) {
+  const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 3;
+  const fs::path survey = SurveyFolder();
+  const fs::path out = survey / "bench_out";
+  std::vector<std::string> photos;
+  for (const auto& entry : fs::directory_iterator(survey / "images")) {
+    photos.push_back(entry.path().string());
+  }
+  std::sort(photos.begin(), photos.end());
+  cv::setNumThreads(1);
+
+  const auto floor = [&] {
+    fs::remove_all(out);
+    fs::create_directories(out);
+    for (const std::string& photo : photos) {
+      const cv::Mat image = ReadImage(photo);
+      WriteImageLike((out / fs::path(photo).filename()).string(), image,
+                     ImageLike{photo, ReadImageFileInfo(photo)});
+    }
+  };
+  CorrectOptions options;
+  options.dataset_dir = (survey / "images").string();
+  options.out_dir = out.string();
+  options.photos.emplace();
+  options.photos->log_path = (survey / "flight.ulg").string();
+  options.photos->camera = ReadRigModel((survey / "truth/camera.json").string());
+  options.photos->camera_path = (survey / "truth/camera.json").string();
+  options.reference = CorrectionReference::kMidReadout;
+  options.jobs = 1;
+  options.pictures = false;
+  const auto correct = [&] {
+    fs::remove_all(out);
+    CorrectDataset(options);
+  };
+
+  floor();  // warm-up: page cache, codecs loaded, exiv2 initialised
+  correct();
+  std::vector<double> floor_cpu, floor_wall, correct_cpu, correct_wall;
+  for (int i = 0; i < runs; ++i) {
+    const Seconds f = Time(floor), c = Time(correct);
+    floor_cpu.push_back(f.cpu_s);
+    floor_wall.push_back(f.wall_s);
+    correct_cpu.push_back(c.cpu_s);
+    correct_wall.push_back(c.wall_s);
+  }
+  fs::remove_all(out);
+  const double n = static_cast<double>(photos.size());
+  std::printf(
+      "%zu photos of 4000 x 3000 (JPEG, EXIF and XMP), 1 job, 1 OpenCV thread; %d "
+      "alternating runs, medians:\n",
+      photos.size(), runs);
+  std::printf("  decode + re-encode (the floor)  %6.2f s CPU (%.2f s a photo)  %6.2f s wall\n",
+              Median(floor_cpu), Median(floor_cpu) / n, Median(floor_wall));
+  std::printf("  correct --photos                %6.2f s CPU (%.2f s a photo)  %6.2f s wall\n",
+              Median(correct_cpu), Median(correct_cpu) / n, Median(correct_wall));
+  std::printf("  correct / floor: %.2fx CPU, %.2fx wall\n", Median(correct_cpu) / Median(floor_cpu),
+              Median(correct_wall) / Median(floor_wall));
+  return 0;
+}
+
+}  // namespace
+}  // namespace shutterlab
+
+int main(int argc, char** argv) { return shutterlab::bench::RunMain(shutterlab::Main, argc, argv); }
