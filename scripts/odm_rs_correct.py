@@ -17,7 +17,9 @@ reconstruction:
   - every observation of a reconstructed point, at pixel row y of an image h rows high, moves by
     proj(X, C - v * readout * (y - h/2) / h) - proj(X, C): translation only, about the middle row;
   - each corrected photo keeps only its corrected observations (the rest are dropped);
-    a photo outside the reconstruction keeps its features;
+    a photo outside the reconstruction, or with no observation in it, keeps its features;
+Only the one model given is corrected (OpenSfM corrects every partial reconstruction: the surveys
+here make one).
 ODM then matches the corrected features again and reconstructs once more: the caller runs COLMAP's
 matcher and mapper on DB. Only what the method needs of COLMAP's models: the pinhole family and
 OPENCV. Debian's python3 alone (sqlite3, array).
@@ -164,6 +166,8 @@ def main():
             kept_keypoints.extend(keypoint)
             kept_descriptors.extend(descriptors[index * descriptor_cols:(index + 1) * descriptor_cols])
         kept = len(kept_keypoints) // cols
+        if kept == 0:
+            continue  # OpenSfM loads and rewrites only the features of photos with observations
         db.execute("UPDATE keypoints SET rows = ?, data = ? WHERE image_id = ?",
                    (kept, kept_keypoints.tobytes(), image_id))
         db.execute("UPDATE descriptors SET rows = ?, data = ? WHERE image_id = ?",

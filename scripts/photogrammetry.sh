@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # What correcting the rolling shutter buys in a reconstruction (docs/photogrammetry.md): one
 # survey with exact truth (`shutterlab survey`), reconstructed by COLMAP (Debian's, CPU SIFT, its
-# own command line) four ways, each scored against the truth (`shutterlab score`):
+# own command line) five ways, each scored against the truth (`shutterlab score`):
 #   global shutter   the survey's references (every row from the middle row's pose)
 #   rolling shutter  the photos as recorded
 #   corrected        `shutterlab correct --photos` with the log and the true camera

@@ -81,7 +81,7 @@ void ExpectedBenefit(const PhotoAnalysis& a, HtmlPage* page) {
                  "camera known), where D is the translation alone, rolling-shutter photos put the "
                  "reconstructed cameras 0.24 times the median D off horizontally: here " +
                      FormatNumber("%.1f cm", 100 * kCentreErrorPerMedianDTranslation * median_m) +
-                     ", and the terrain's heights off by more (9 to 29 cm there). ";
+                     ", and the terrain's heights off by more (9.5 to 29 cm there). ";
   page->Paragraph(
       FormatNumber("These photos' median D is %.1f cm on the ground. ", 100 * median_m) + measured +
       "Corrected with the gyro (shutterlab correct --photos DIR LOG), they came within about 1 "

@@ -61,8 +61,9 @@ TEST(SurveyCli, WritesASmallFlightThatAnalyzeReadsAsADronesPhotos) {
 }
 
 TEST(SurveyCli, WithoutRotationEveryPhotoHoldsTheTranslationsShearAlone) {
-  // --wind none over flat ground: each photo's D is the ground the camera flies over in a readout,
-  // seen from the altitude: 140 px * 8 m/s * 20 ms / 40 m = 0.56 px, whichever way the line runs.
+  // --wind none over flat ground: each photo's D is the ground the camera flies over between its
+  // first and last row (20 ms * 119 / 120: rows are read 20 ms / 120 apart), seen from the
+  // altitude: 140 px * 8 m/s * 19.83 ms / 40 m = 0.5553 px, whichever way the line runs.
   test::TempDir dir;
   const std::string out = dir / "survey";
   const test::CommandResult result = test::RunShutterlab(
@@ -76,7 +77,7 @@ TEST(SurveyCli, WithoutRotationEveryPhotoHoldsTheTranslationsShearAlone) {
     const size_t end = photos.find('\n', line + 1);
     const std::string row = photos.substr(line + 1, end - line - 1);
     const double d_px = std::stod(row.substr(row.rfind(',') + 1));
-    EXPECT_NEAR(d_px, 140.0 * 8.0 * 0.020 / 40.0, 0.01) << row;
+    EXPECT_NEAR(d_px, 140.0 * 8.0 * (0.020 * 119 / 120) / 40.0, 0.002) << row;
     ++rows;
   }
   EXPECT_EQ(rows, 4u) << photos;
@@ -132,6 +133,14 @@ TEST(PhotogrammetryScript, CorrectionBringsTheReconstructionBackToTheGlobalShutt
   EXPECT_LT(corrected["point_median_m"].get<double>(),
             0.3 * rolling["point_median_m"].get<double>());
   EXPECT_GT(horizontal(odm), 3 * horizontal(corrected)) << "translation alone leaves the rotation";
+  // The reproduction moved the observations by the translation: 280 px * 5 m/s * 30 ms / 50 m =
+  // 0.84 px top to bottom, a quarter of it at the median row's distance from the middle.
+  const std::string odm_log = ReadFileToString(dir / "pg/colmap_odm/log.txt");
+  const size_t median_at = odm_log.find("observations moved (median ");
+  ASSERT_NE(median_at, std::string::npos) << odm_log;
+  const double median_px = std::stod(odm_log.substr(median_at + 27));
+  EXPECT_GT(median_px, 0.1) << odm_log;
+  EXPECT_LT(median_px, 0.4) << odm_log;
 }
 
 }  // namespace

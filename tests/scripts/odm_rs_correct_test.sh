@@ -1,11 +1,14 @@
 #!/usr/bin/env bash
 # scripts/odm_rs_correct.py (ODM's rolling-shutter treatment, reproduced) against a known answer:
-# a pinhole camera (f 1000 px, 1000 x 800) at the origin looking along +z, flying east at 10 m/s
-# (its XMP: FlightYSpeed 10), readout 30 ms. An observation at (600, 700) of the point
-# (5, 15, 50) m was read 11.25 ms after the middle row, so the camera is moved back by 11.25 cm
-# along x and the point is seen at x = 500 + 1000 * 5.1125 / 50 = 602.25 px, y unchanged. An
-# observation of no point is dropped with its descriptor; a photo outside the model keeps its
-# features; the matches are cleared; a photo without a flight speed is refused (exit 2).
+# a pinhole camera (f 1000 px, 1000 x 800) at (1, 2, 5) m turned 90 degrees about its view
+# (cam_from_world = Rz(90)), flying east at 10 m/s (its XMP: FlightYSpeed 10), readout 30 ms.
+# The point (16, -3, 55) m, 50 m in front of it, projects to (600, 700); it is observed at
+# (601, 699), 1 px off. Row 699 was read 11.2125 ms after the middle row, so the camera is moved
+# back by 11.2125 cm east, which its turn shows along y: the point reprojects to (600, 702.2425),
+# and the observation moves by that difference to (601, 701.2425). (A wrong centre, rotation or
+# update each gives another answer.) An observation of no point is dropped with its descriptor; a
+# photo outside the model keeps its features; the matches are cleared; a photo without a flight
+# speed is refused (exit 2).
 set -euo pipefail
 fail() { echo "FAIL: $*" >&2; exit 1; }
 script="$(cd "$(dirname "$0")/../.." && pwd)/scripts/odm_rs_correct.py"
@@ -23,11 +26,11 @@ cat >"$work/model/cameras.txt" <<'EOF'
 EOF
 cat >"$work/model/images.txt" <<'EOF'
 # Image list with two lines of data per image:
-1 1 0 0 0 0 0 0 1 a.jpg
-600 700 7 10 10 -1
+1 0.7071067811865476 0 0 0.7071067811865476 2 -1 -5 1 a.jpg
+601 699 7 10 10 -1
 EOF
 cat >"$work/model/points3D.txt" <<'EOF'
-7 5 15 50 0 0 0 0.1 1 0
+7 16 -3 55 0 0 0 0.1 1 0
 EOF
 /usr/bin/python3 - "$work/db.db" <<'PY'
 import array, sqlite3, sys
@@ -37,7 +40,7 @@ db.execute("CREATE TABLE descriptors (image_id INTEGER PRIMARY KEY, rows INTEGER
 db.execute("CREATE TABLE matches (pair_id INTEGER PRIMARY KEY, rows INTEGER, cols INTEGER, data BLOB)")
 db.execute("CREATE TABLE two_view_geometries (pair_id INTEGER PRIMARY KEY, rows INTEGER, cols INTEGER, data BLOB)")
 for image_id in (1, 2):  # affine keypoints (6 columns), 4-byte descriptors
-    keypoints = array.array("f", [600, 700, 1, 0, 0, 1, 10, 10, 2, 0, 0, 2])
+    keypoints = array.array("f", [601, 699, 1, 0, 0, 1, 10, 10, 2, 0, 0, 2])
     descriptors = array.array("B", [1, 1, 1, 1, 2, 2, 2, 2])
     db.execute("INSERT INTO keypoints VALUES (?, 2, 6, ?)", (image_id, keypoints.tobytes()))
     db.execute("INSERT INTO descriptors VALUES (?, 2, 4, ?)", (image_id, descriptors.tobytes()))
@@ -57,7 +60,7 @@ def table(name, image_id, kind):
     return rows, cols, list(array.array(kind, data))
 rows, cols, k = table("keypoints", 1, "f")
 assert (rows, cols) == (1, 6), (rows, cols)
-assert abs(k[0] - 602.25) < 1e-3 and abs(k[1] - 700) < 1e-3 and k[2:] == [1, 0, 0, 1], k
+assert abs(k[0] - 601) < 1e-3 and abs(k[1] - 701.2425) < 1e-3 and k[2:] == [1, 0, 0, 1], k
 assert table("descriptors", 1, "B") == (1, 4, [1, 1, 1, 1])
 assert table("keypoints", 2, "f")[0] == 2 and table("descriptors", 2, "B")[0] == 2
 assert db.execute("SELECT COUNT(*) FROM matches").fetchone()[0] == 0
