@@ -115,7 +115,8 @@ void RunPhotos(const AnalyzeFlags& flags) {
   printer.Done();
   const PhotoFlightResult& result = run.result;
   const std::optional<SensorPair>& pair = run.pair;
-  const auto exports = PhotoExports(flags, PhotoAnalysisToJson(set, result.photos)["photos"]);
+  const PhotoSet& analysed = result.set;  // with the log's speeds where the photos record none
+  const auto exports = PhotoExports(flags, PhotoAnalysisToJson(analysed, result.photos)["photos"]);
   if (result.lens) {
     for (const std::string& note : result.lens->notes) std::cerr << "note: " << note << "\n";
   }
@@ -123,7 +124,8 @@ void RunPhotos(const AnalyzeFlags& flags) {
     WriteAnalyzeOutputs(flags.out_dir, result.log);
     report.camera_source = result.camera_source;
     AnalyzeReportPage(result.analyzed, result.log, report).Write(flags.out_dir + "/report.html");
-    WritePhotoOutputs(flags.out_dir, set, result.photos);  // its exclude.txt replaces analyze's
+    WritePhotoOutputs(flags.out_dir, analysed,
+                      result.photos);  // its exclude.txt replaces analyze's
     SayWritten(flags.out_dir,
                InDir(flags.out_dir, {"report.html", "images.csv", "photos.csv", "exclude.txt",
                                      "image_list.txt", "colmap_image_list.txt"}));
@@ -133,14 +135,14 @@ void RunPhotos(const AnalyzeFlags& flags) {
     nlohmann::json json = AnalyzeToJson(result.log);
     if (pair) json["pair"] = SensorPairToJson(*pair, flags.second_path);
     if (result.lens) json["lens_profile"] = LensProfileUseJson(*result.lens);
-    json["photos"] = PhotoAnalysisToJson(set, result.photos);
+    json["photos"] = PhotoAnalysisToJson(analysed, result.photos);
     json["photos"]["camera_source"] = result.camera_source;
     std::cout << JsonText(json) << "\n";
   } else {
     if (pair) std::cout << SensorPairText(*pair, flags.log_path, flags.second_path) << "\n";
     std::cout << AnalyzeReport(result.log) << "\ncamera analysed: " << result.camera_source
               << "\n\n"
-              << PhotoAnalysisReport(set, result.photos);
+              << PhotoAnalysisReport(analysed, result.photos);
   }
 }
 

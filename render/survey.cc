@@ -316,6 +316,33 @@ void PhotoMetadataFor(const SurveyPhoto& p, const SurveyOptions& options, Metada
           {"Xmp.drone-dji.FlightZSpeed", Signed(-p.velocity_mps.z())}};
 }
 
+// The flight's velocity as a PX4 log's navigation would give it (north, east, down), at 10 Hz over
+// the gyro trace: each line's own, switching to the next line's halfway through the turn between
+// them (the turn itself is not flown: no photo is taken in it).
+std::vector<VelocitySample> SurveyNavigation(const SurveyPlan& plan, const GyroTrace& gyro) {
+  constexpr int64_t kPeriodNs = 100'000'000;
+  const std::vector<SurveyPhoto>& photos = plan.photos();
+  std::vector<VelocitySample> out;
+  size_t k = 0;  // the photo nearest in time: its line is flown
+  for (int64_t t_ns = gyro.samples().front().t_ns; t_ns <= gyro.samples().back().t_ns;
+       t_ns += kPeriodNs) {
+    while (k + 1 < photos.size() && t_ns > (photos[k].t_mid_ns + photos[k + 1].t_mid_ns) / 2) ++k;
+    const Eigen::Vector3d& v = photos[k].velocity_mps;  // east, north, up
+    out.push_back({t_ns, Eigen::Vector3d(v.y(), v.x(), -v.z())});
+  }
+  return out;
+}
+
+// What the flight's ULog holds beside the gyro and the camera events: the height above ground and
+// the navigation's velocity.
+ULogWriteOptions SurveyLogOptions(const SurveyPlan& plan, const GyroTrace& gyro,
+                                  const SurveyOptions& options) {
+  ULogWriteOptions ulog;
+  ulog.altitude_above_ground_m = options.altitude_m;
+  ulog.velocity = SurveyNavigation(plan, gyro);
+  return ulog;
+}
+
 // ",qw,qx,qy,qz" of a rotation (world_from_cam).
 std::string QuaternionCsv(const Eigen::Matrix3d& rotation) {
   const Eigen::Quaterniond q(rotation);
@@ -523,9 +550,7 @@ SurveySummary WriteSurvey(const SurveyOptions& options, const GyroTrace& gyro,
     summary.photos.push_back(photo);
     if (progress) progress(k + 1, plan.photos().size());
   }
-  ULogWriteOptions ulog;
-  ulog.altitude_above_ground_m = options.altitude_m;
-  WriteULog((out / "flight.ulg").string(), gyro, events, ulog);
+  WriteULog((out / "flight.ulg").string(), gyro, events, SurveyLogOptions(plan, gyro, options));
 
   RigModel rig;
   rig.camera = options.camera;

@@ -22,7 +22,9 @@
 //                         altitude, gimbal and flight attitude, flight speed north/east/down)
 //   reference/NAME.JPG    the global-shutter photos from the middle row's pose, same metadata
 //   flight.ulg            the gyro trace (camera axes) and a camera_capture event at each
-//                         photo's first row, PX4 ULog; the height above ground
+//                         photo's first row, PX4 ULog; the height above ground; the velocity
+//                         (vehicle_local_position at 10 Hz: each line's, switching halfway
+//                         through the turn)
 //   truth/camera.json     the camera (readout, altitude above the datum, velocity zero)
 //   truth/terrain.png     the height grid, 16-bit: height_m = offset_m + value * scale_m
 //   truth/terrain.json    the grid's corner, cell, scale and offset; the texture's

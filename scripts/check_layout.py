@@ -14,7 +14,8 @@
               FOLDER that is a library (or app/, scripts/), and a file named after a unit
               (UNIT_test.cc) beside that unit's own folder
   readme      the "Layout" block of docs/development.md (the README links it) names every folder
-              that holds code, each library with its target, and no folder that does not exist
+              that holds code, each library with its target, and no folder that does not exist;
+              the README stays under 150 lines
 
 Usage: scripts/check_layout.py CHECK [--build DIR]      (stdlib only; run from anywhere)
 Exit 0 when the check holds, 1 with one line per finding (FILE:LINE: problem) when it does not,
@@ -397,6 +398,7 @@ def check_tests():
 
 # The layout block the readme check compares with the tree.
 LAYOUT_DOC = "docs/development.md"
+README_MAX_LINES = 150
 
 
 def check_readme(build):
@@ -434,6 +436,11 @@ def check_readme(build):
     for top in ("tests", "scripts", "docs", "fuzz", "bench", "third_party"):
         if os.path.isdir(os.path.join(ROOT, top)) and top not in named:
             findings.append(f"{doc}: the Layout block does not name {top}/")
+    # The README is for users (issue 43): studies and histories belong in docs/.
+    readme_lines = len(read_lines(os.path.join(ROOT, "README.md")))
+    if readme_lines >= README_MAX_LINES:
+        findings.append(f"README.md: {readme_lines} lines, fewer than {README_MAX_LINES} wanted: "
+                        "move details to docs/")
     return report(findings)
 
 

@@ -157,6 +157,30 @@ std::string WhyNotCorrected(const PhotoRecord& r, const PhotoPlacement& placemen
 
 }  // namespace
 
+namespace {
+
+// "5.00 m/s toward 90 deg" of a NED velocity (its horizontal part's direction).
+std::string SpeedText(const Eigen::Vector3d& ned) {
+  return FormatNumber("%.2f m/s", ned.norm()) +
+         FormatNumber(" toward %.0f deg",
+                      std::fmod(std::atan2(ned.y(), ned.x()) * kDegPerRad + 360.0, 360.0));
+}
+
+// The camera's axes (x right, y down, z along the view) from NED, by a DJI gimbal's attitude.
+Eigen::Matrix3d CameraFromNed(const AttitudeDeg& gimbal) {
+  const Eigen::Matrix3d ned_from_gimbal = NedFromGimbal(gimbal);
+  Eigen::Matrix3d ned_from_camera;
+  ned_from_camera << ned_from_gimbal.col(1), ned_from_gimbal.col(2), ned_from_gimbal.col(0);
+  return ned_from_camera.transpose();
+}
+
+std::string GimbalText(const AttitudeDeg& gimbal) {
+  return FormatNumber("gimbal's yaw %.1f deg", gimbal.yaw_deg) +
+         FormatNumber(" and pitch %.1f deg", gimbal.pitch_deg);
+}
+
+}  // namespace
+
 PhotoVelocity VelocityFromPhoto(const PhotoMetadata& metadata) {
   PhotoVelocity out;
   if (!metadata.speed_m_s) {
@@ -167,17 +191,42 @@ PhotoVelocity VelocityFromPhoto(const PhotoMetadata& metadata) {
     out.source = "the photo records its flight speed but not the camera's attitude";
     return out;
   }
-  const Eigen::Matrix3d ned_from_gimbal = NedFromGimbal(*metadata.gimbal);
+  // DJI documents the sign of neither vertical speed: the horizontal part only.
   const Eigen::Vector3d ned(metadata.speed_m_s->x(), metadata.speed_m_s->y(), 0.0);
-  out.velocity_mps =
-      Eigen::Vector3d(ned.dot(ned_from_gimbal.col(1)), ned.dot(ned_from_gimbal.col(2)),
-                      ned.dot(ned_from_gimbal.col(0)));
-  out.source = FormatNumber("%.2f m/s", ned.norm()) +
-               FormatNumber(" toward %.0f deg",
-                            std::fmod(std::atan2(ned.y(), ned.x()) * kDegPerRad + 360.0, 360.0)) +
-               " from the photo's " + metadata.flight_state_source +
-               FormatNumber(", turned by its gimbal's yaw %.1f deg", metadata.gimbal->yaw_deg) +
-               FormatNumber(" and pitch %.1f deg", metadata.gimbal->pitch_deg);
+  out.velocity_mps = CameraFromNed(*metadata.gimbal) * ned;
+  out.source = SpeedText(ned) + " from the photo's " + metadata.flight_state_source +
+               ", turned by its " + GimbalText(*metadata.gimbal);
+  return out;
+}
+
+PhotoVelocity VelocityFromLog(const PhotoMetadata& metadata, const FlightLog& log, int64_t t_ns,
+                              const Eigen::Matrix3d& camera_from_body,
+                              const std::string& mounting_source) {
+  PhotoVelocity out;
+  const std::optional<Eigen::Vector3d> logged = VelocityAt(log.velocity, t_ns);
+  if (!logged) {
+    out.source = log.velocity.empty() ? "the photo records no flight speed, nor does the log"
+                                      : "the photo records no flight speed, and the log's (" +
+                                            log.velocity_source + ") does not reach its time";
+    return out;
+  }
+  // The log's down axis is documented (NED): kept where the log gives it.
+  Eigen::Vector3d ned = *logged;
+  if (!std::isfinite(ned.z())) ned.z() = 0.0;
+  const std::string what = SpeedText(ned) + " from the log's " + log.velocity_source +
+                           FormatNumber(" at %.3f s", t_ns * 1e-9);
+  if (metadata.gimbal) {
+    out.velocity_mps = CameraFromNed(*metadata.gimbal) * ned;
+    out.source = what + ", turned by the photo's " + GimbalText(*metadata.gimbal);
+    return out;
+  }
+  const std::optional<Eigen::Quaterniond> attitude = AttitudeAt(log.attitude, t_ns);
+  if (!attitude) {
+    out.source = what + ", but neither the photo nor the log gives the camera's attitude";
+    return out;
+  }
+  out.velocity_mps = camera_from_body * attitude->toRotationMatrix().transpose() * ned;
+  out.source = what + ", turned by the log's " + log.attitude_source + " and " + mounting_source;
   return out;
 }
 
@@ -237,6 +286,11 @@ PhotoInput ReadPhotoInput(const std::string& photos_dir, const PhotoInputOptions
   // Each photo's own focal length counts only where the photos' EXIF gives the camera's.
   const bool own_focal = !options.camera && !options.focal_px && !options.lens_profile;
   const int64_t latency_ns = SecondsToNs(options.trigger_latency_s);
+  const int64_t readout_half_ns = SecondsToNs(0.5 * dataset.declared.shutter.readout_s);
+  const std::string mounting_source =
+      options.camera ? options.camera_path + "'s gyro_to_camera"
+                     : "the mounting assumed (the log's body axes as the camera's: give "
+                       "camera.json's gyro_to_camera)";
   for (size_t i = 0; i < set.photos.size(); ++i) {
     const std::string why = WhyNotCorrected(set.photos[i], clock.placements[i], camera, own_focal);
     if (!why.empty()) {
@@ -247,7 +301,11 @@ PhotoInput ReadPhotoInput(const std::string& photos_dir, const PhotoInputOptions
     e.frame = static_cast<int64_t>(i);
     e.image = set.photos[i].name;
     e.t_first_row_ns = *clock.placements[i].t_ns + latency_ns;
-    input.velocity[e.frame] = VelocityFromPhoto(set.photos[i].metadata);
+    const PhotoMetadata& metadata = set.photos[i].metadata;
+    input.velocity[e.frame] =
+        metadata.speed_m_s ? VelocityFromPhoto(metadata)
+                           : VelocityFromLog(metadata, log, e.t_first_row_ns + readout_half_ns,
+                                             dataset.declared.cam_from_gyro, mounting_source);
     dataset.frames.push_back(std::move(e));
   }
 

@@ -247,6 +247,7 @@ PhotoAnalysis AnalyzePhotosWithLog(const PhotoSet& set, const PhotoAnalysisOptio
     if (it != by_name.end() && it->second->in_trace) {
       p.d_rotation_m = it->second->d_full_m;
       p.d_rotation_px = it->second->d_full_px;
+      p.d_paper_m = it->second->d_paper_m;
       // The same image angle covers ground in proportion to the height: a folder flown at 41 m
       // and 118 m is not one altitude.
       // A log's own height above ground stands (a photo's is above take-off).
@@ -255,9 +256,8 @@ PhotoAnalysis AnalyzePhotosWithLog(const PhotoSet& set, const PhotoAnalysisOptio
           log_result.altitude_source != "log") {
         const double scale = *altitude_m / log_result.altitude_m;
         *p.d_rotation_m *= scale;
-        *p.d_paper_m *= scale;
+        if (p.d_paper_m) *p.d_paper_m *= scale;
       }
-      p.d_paper_m = it->second->d_paper_m;
     } else if (p.placement.t_ns) {
       p.notes.push_back("its readout is outside the log's gyro trace");
     } else if (p.error.empty()) {

@@ -4,6 +4,7 @@
 #include "sim/text_file.h"
 #include "sim/units.h"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -60,6 +61,25 @@ void PhotoFlightOptions::Check() const {
 
 namespace {
 
+// Each placed photo that records no flight speed takes the log's horizontal velocity at its time.
+void SpeedsFromLog(const FlightLog& log, const PhotoClock& clock, PhotoSet* set) {
+  for (size_t i = 0; i < set->photos.size(); ++i) {
+    PhotoRecord& r = set->photos[i];
+    const std::optional<int64_t>& t_ns = clock.placements[i].t_ns;
+    if (!r.ok() || r.ground_speed_m_s || !t_ns) continue;
+    const std::optional<Eigen::Vector3d> v = VelocityAt(log.velocity, *t_ns);
+    if (!v) continue;
+    r.ground_speed_m_s = v->head<2>().norm();
+    if (*r.ground_speed_m_s > 0) {
+      const double course = std::atan2(v->y(), v->x()) * kDegPerRad;
+      r.course_deg = course < 0 ? course + 360.0 : course;
+    }
+    r.speed_source = "the log's " + log.velocity_source + " at the photo's time";
+    r.missing.erase(std::remove(r.missing.begin(), r.missing.end(), "flight speed"),
+                    r.missing.end());
+  }
+}
+
 // The photos placed on the log (its camera events and GPS fixes: never its samples), the camera
 // and the options analyze is given, and once analyze has run on them (analyze), each photo's
 // rotation beside its translation.
@@ -69,6 +89,8 @@ PhotoFlightResult PhotoFlight(const PhotoSet& set, const FlightLog& log,
   options.Check();
   PhotoFlightResult out;
   out.clock = PlacePhotos(set, log, triggers, options.clock);
+  out.set = set;
+  SpeedsFromLog(log, out.clock, &out.set);
 
   AnalyzeOptions a = options.analyze;
   if (options.rig_given) {
@@ -106,7 +128,7 @@ PhotoFlightResult PhotoFlight(const PhotoSet& set, const FlightLog& log,
   PhotoAnalysisOptions photo_options = options.photos;
   photo_options.limits_m = out.analyzed.limits_m;
   photo_options.rotation_at_each_photo_altitude = !options.altitude_given && !options.rig_given;
-  out.photos = AnalyzePhotosWithLog(set, photo_options, out.clock.placements, out.log);
+  out.photos = AnalyzePhotosWithLog(out.set, photo_options, out.clock.placements, out.log);
   out.photos.placement_method = out.clock.method;
   out.photos.clock_offset_s = out.clock.clock_offset_s;
   out.photos.clock_offset_to = out.clock.clock_offset_to;

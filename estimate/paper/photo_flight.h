@@ -38,6 +38,9 @@ struct PhotoFlightOptions {
 };
 
 struct PhotoFlightResult {
+  // The photos as analysed: the set given, where a placed photo that records no flight speed (and
+  // no --speed) has the log's velocity at its placed time (speed_source says so).
+  PhotoSet set;
   PhotoClock clock;
   AnalyzeOptions analyzed;             // what Analyze was given: the photos' camera, their times
   AnalyzeResult log;                   // analyze on the placed photos (images named by the photos)

@@ -7,6 +7,8 @@
 #include "sim/text_file.h"
 #include "sim/units.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -233,8 +235,8 @@ std::optional<Format> ParseFmt(std::string_view p, std::string* error) {
   fmt.labels = names;
   if ((fmt.time = fmt.Find("TimeUS")) == nullptr && (fmt.time = fmt.Find("TimeMS")) != nullptr)
     fmt.time_ns_per_tick = 1'000'000;
-  static const char* kRelevant[] = {"GYR", "IMU",  "IMU2", "IMU3", "ISBH", "ISBD",
-                                    "CAM", "TRIG", "FMTU", "UNIT", "MULT", "GPS"};
+  static const char* kRelevant[] = {"GYR",  "IMU",  "IMU2", "IMU3", "ISBH", "ISBD", "CAM",  "TRIG",
+                                    "FMTU", "UNIT", "MULT", "GPS",  "ATT",  "EKF1", "NKF1", "XKF1"};
   fmt.relevant = std::any_of(std::begin(kRelevant), std::end(kRelevant),
                              [&](const char* n) { return fmt.name == n; });
   if (offset + kHeaderBytes != fmt.length) {
@@ -303,7 +305,10 @@ class DataFlashParser {
   void HandleBatchData(const Format& fmt, std::string_view payload);
   void CloseBatch(int64_t key);
   void HandleCamera(const Format& fmt, std::string_view payload);
-  void HandleGpsTime(const Format& fmt, std::string_view payload);
+  void HandleGps(const Format& fmt, std::string_view payload);
+  void HandleGpsVelocity(const Format& fmt, std::string_view payload, int64_t t_ns);
+  void HandleAttitude(const Format& fmt, std::string_view payload);
+  void HandleEkfVelocity(const Format& fmt, std::string_view payload);
   void HandleUnits(const Format& fmt, std::string_view payload);
   double GyroToRadPerS(const Format& fmt, uint8_t type, const std::string& label);
   // GyroToRadPerS for GyrX, GyrY, GyrZ of a type, worked out once and kept until a UNIT, FMTU or
@@ -338,6 +343,8 @@ class DataFlashParser {
   std::array<std::array<Sink, 256>, 3> sink_by_stream_;
   std::map<int64_t, BatchHeader> batches_;  // by ISBH.N
   std::vector<double> cam_rel_alt_m_;
+  std::vector<VelocitySample> gps_velocity_, ekf_velocity_;  // Finish keeps one
+  std::string ekf_velocity_source_;
   size_t skipped_bytes_ = 0;
   std::array<std::optional<Eigen::Vector3d>, 256> gyro_scale_by_type_;  // GyroScale's cache
   std::map<char, std::string> unit_labels_;        // UNIT: id -> label ("rad/s")
@@ -415,7 +422,11 @@ void DataFlashParser::Handle(uint8_t type, const Format& fmt, std::string_view p
   } else if (name == "CAM" || name == "TRIG") {
     HandleCamera(fmt, p);
   } else if (name == "GPS") {
-    HandleGpsTime(fmt, p);
+    HandleGps(fmt, p);
+  } else if (name == "ATT") {
+    HandleAttitude(fmt, p);
+  } else if (name == "EKF1" || name == "NKF1" || name == "XKF1") {
+    HandleEkfVelocity(fmt, p);
   } else if (name == "UNIT" || name == "FMTU") {
     HandleUnits(fmt, p);
     for (auto& scale : gyro_scale_by_type_) scale.reset();  // a unit may have changed
@@ -574,21 +585,80 @@ void DataFlashParser::HandleCamera(const Format& fmt, std::string_view p) {
 }
 
 // GPS (ArduPilot 3.4 and later: TimeUS boot time, GWk GPS week, GMS ms of week, Status 3 and above
-// a 3-D fix): the boot clock against UTC, from the first GPS instance only. Older logs stamp GPS
-// with GPS time alone (TimeMS is then the ms of week) and give no relation.
-void DataFlashParser::HandleGpsTime(const Format& fmt, std::string_view p) {
+// a 3-D fix): the boot clock against UTC and the velocity, from the first GPS instance only. Older
+// logs stamp GPS with GPS time alone (TimeMS is then the ms of week) and give neither.
+void DataFlashParser::HandleGps(const Format& fmt, std::string_view p) {
   const Field* week = fmt.Find("GWk");
   const Field* ms = fmt.Find("GMS");
   const Field* status = fmt.Find("Status");
-  if (!week || !ms || !fmt.Find("TimeUS")) return;
+  if (!fmt.Find("TimeUS")) return;
   if (const Field* i = fmt.Find("I"); i && ReadNumber(p, *i) != 0.0) return;
   if (status && ReadNumber(p, *status) < 3.0) return;
   const auto t = fmt.TimeNs(p);
+  if (!t || *t <= 0) return;
+  HandleGpsVelocity(fmt, p, *t);
+  if (!week || !ms) return;
   const double w = ReadNumber(p, *week), gms = ReadNumber(p, *ms);
-  if (!t || *t <= 0 || !(w > 0 && w < 10000) || !(gms >= 0 && gms < 604800e3)) return;
+  if (!(w > 0 && w < 10000) || !(gms >= 0 && gms < 604800e3)) return;
   const int64_t gps_ns =
       (static_cast<int64_t>(w) * kSecondsPerWeek * 1000 + static_cast<int64_t>(gms)) * 1'000'000;
   log_.utc_fixes.push_back({*t, UtcFromGpsNs(gps_ns)});
+}
+
+// GPS Spd (ground speed, m/s), GCrs (its course, degrees from north) and VZ (vertical speed, m/s,
+// down positive: ArduPilot logs the NED velocity's z) of a 3-D fix.
+void DataFlashParser::HandleGpsVelocity(const Format& fmt, std::string_view p, int64_t t_ns) {
+  const Field* speed = fmt.Find("Spd");
+  const Field* course = fmt.Find("GCrs");
+  if (!speed || !course) return;
+  const double v = ReadNumber(p, *speed), course_rad = ReadNumber(p, *course) * kRadPerDeg;
+  if (!(v >= 0 && v <= kMaxLogSpeedMps) || !std::isfinite(course_rad)) return;
+  Eigen::Vector3d ned(v * std::cos(course_rad), v * std::sin(course_rad),
+                      std::numeric_limits<double>::quiet_NaN());
+  if (const Field* vz = fmt.Find("VZ")) {
+    const double down = ReadNumber(p, *vz);
+    if (std::abs(down) <= kMaxLogSpeedMps) ned.z() = down;
+  }
+  if (!gps_velocity_.empty() && t_ns <= gps_velocity_.back().t_ns) return;  // time order
+  gps_velocity_.push_back({t_ns, ned});
+}
+
+// The EKF's velocity: EKF1 (ArduPilot's first EKF), NKF1 (EKF2), XKF1 (EKF3) VN, VE, VD, m/s, of
+// the first core (C 0 where the message names its core). The estimate fuses GPS, IMU and baro:
+// preferred to the receiver's own velocity.
+void DataFlashParser::HandleEkfVelocity(const Format& fmt, std::string_view p) {
+  const Field* n = fmt.Find("VN");
+  const Field* e = fmt.Find("VE");
+  const Field* d = fmt.Find("VD");
+  if (!n || !e || !d) return;
+  if (const Field* core = fmt.Find("C"); core && ReadNumber(p, *core) != 0.0) return;
+  const auto t = fmt.TimeNs(p);
+  const Eigen::Vector3d ned(ReadNumber(p, *n), ReadNumber(p, *e), ReadNumber(p, *d));
+  if (!t || *t <= 0 || !ned.allFinite() || ned.norm() > kMaxLogSpeedMps) return;
+  if (!ekf_velocity_.empty() && *t <= ekf_velocity_.back().t_ns) return;  // time order
+  ekf_velocity_.push_back({*t, ned});
+  ekf_velocity_source_ = fmt.name + ".VN,VE,VD" + (fmt.Find("C") ? " (core 0)" : "");
+}
+
+// ATT Roll, Pitch, Yaw (degrees; centidegrees in older logs, which ReadNumber scales): Z-Y-X Euler
+// angles of the FRD body in NED, one every kAttitudeStepNs at most.
+void DataFlashParser::HandleAttitude(const Format& fmt, std::string_view p) {
+  const Field* roll = fmt.Find("Roll");
+  const Field* pitch = fmt.Find("Pitch");
+  const Field* yaw = fmt.Find("Yaw");
+  const auto t = fmt.TimeNs(p);  // boot time (TimeUS, or TimeMS in logs before 3.4)
+  if (!roll || !pitch || !yaw || !t || *t <= 0) return;
+  if (!log_.attitude.empty() && *t - log_.attitude.back().t_ns < kAttitudeStepNs) return;
+  const Eigen::Vector3d rpy_rad =
+      Eigen::Vector3d(ReadNumber(p, *roll), ReadNumber(p, *pitch), ReadNumber(p, *yaw)) *
+      kRadPerDeg;
+  if (!rpy_rad.allFinite() || rpy_rad.cwiseAbs().maxCoeff() > 2 * kPi) return;
+  const Eigen::Quaterniond ned_from_body =
+      Eigen::AngleAxisd(rpy_rad.z(), Eigen::Vector3d::UnitZ()) *
+      Eigen::AngleAxisd(rpy_rad.y(), Eigen::Vector3d::UnitY()) *
+      Eigen::AngleAxisd(rpy_rad.x(), Eigen::Vector3d::UnitX());
+  log_.attitude.push_back({*t, ned_from_body});
+  log_.attitude_source = "ATT.Roll,Pitch,Yaw";
 }
 
 // Everything said once the whole file has been read: what was lost, the altitude, the gyro.
@@ -622,6 +692,13 @@ void DataFlashParser::Finish() {
     log_.warnings.push_back(
         {"corrupt", std::to_string(skipped_bytes_) + " corrupt bytes skipped in total"});
 
+  if (!ekf_velocity_.empty()) {
+    log_.velocity = std::move(ekf_velocity_);
+    log_.velocity_source = ekf_velocity_source_;
+  } else if (!gps_velocity_.empty()) {
+    log_.velocity = std::move(gps_velocity_);
+    log_.velocity_source = "GPS.Spd,GCrs,VZ (3-D fix)";
+  }
   std::stable_sort(log_.camera_events.begin(), log_.camera_events.end(),
                    [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
   KeepOneCameraEventKind(&log_);

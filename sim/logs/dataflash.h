@@ -35,6 +35,9 @@ bool LooksLikeDataFlash(std::string_view first_bytes);
 // Camera events: CAM and TRIG at TimeUS, sequence from Img when logged.
 // Altitude above ground: median CAM.RelAlt (height above home at each picture) above
 // kAirborneAltitudeM, when CAM has RelAlt; a warning says so.
+// Navigation: velocity from the EKF (XKF1, NKF1 or EKF1 VN, VE, VD of core 0), else from the
+// first GPS's 3-D fixes (Spd along GCrs, VZ down); attitude from ATT Roll, Pitch, Yaw (Z-Y-X, FRD
+// body to NED), one every kAttitudeStepNs at most. Both on the boot clock (GPS only with TimeUS).
 // Throws IoError (path, byte offset, problem) when the file is not DataFlash or has no usable gyro
 // data. Corrupt stretches are skipped up to the next plausible message (records_skipped,
 // warnings); a truncated tail is reported in warnings.

@@ -57,7 +57,7 @@ std::string CandidateName(const std::string& topic, int multi_id, const std::str
 
 // How the data messages of one subscription are read: its fields, looked up once in its layout.
 struct TopicDecoder {
-  enum class Kind { kNone, kGyroFifo, kGyroRates, kCamera, kLocalPosition, kGps, kHome };
+  enum class Kind { kNone, kGyroFifo, kGyroRates, kCamera, kLocalPosition, kGps, kHome, kAttitude };
   Kind kind = Kind::kNone;       // kNone: no time field, or a topic the reader does not decode
   const FlatField* t = nullptr;  // the message's time
   // Gyro topics: the candidate's name and rank (set even when the sample fields are missing: the
@@ -75,6 +75,12 @@ struct TopicDecoder {
   const FlatField* utc = nullptr;  // GPS time
   // vehicle_local_position (home_position: z_m alone)
   const FlatField *dist = nullptr, *dist_valid = nullptr, *z_m = nullptr, *z_valid = nullptr;
+  std::array<const FlatField*, 3> velocity{};  // vx, vy, vz: NED, m/s
+  const FlatField *v_xy_valid = nullptr, *v_z_valid = nullptr;
+  std::vector<const FlatField*> q;  // vehicle_attitude.q: w, x, y, z, FRD body to NED
+  // vehicle_gps_position / sensor_gps: vel_n_m_s, vel_e_m_s, vel_d_m_s where vel_ned_valid
+  std::array<const FlatField*, 3> gps_velocity{};
+  const FlatField *gps_velocity_valid = nullptr, *fix_type = nullptr;
   bool gyro() const { return kind == Kind::kGyroFifo || kind == Kind::kGyroRates; }
 };
 
@@ -135,10 +141,19 @@ TopicDecoder MakeTopicDecoder(const std::string& topic, int multi_id, const Layo
     d.dist_valid = f.Find("dist_bottom_valid");
     d.z_m = f.Find("z");
     d.z_valid = f.Find("z_valid");
+    d.velocity = {f.Find("vx"), f.Find("vy"), f.Find("vz")};
+    d.v_xy_valid = f.Find("v_xy_valid");
+    d.v_z_valid = f.Find("v_z_valid");
+  } else if (topic == "vehicle_attitude") {
+    d.kind = TopicDecoder::Kind::kAttitude;
+    d.q = f.Array("q", 4);
   } else if (topic == "vehicle_gps_position" || topic == "sensor_gps") {
     d.kind = TopicDecoder::Kind::kGps;
     d.t = t_plain ? t_plain : d.t;
     d.utc = f.Find("time_utc_usec");
+    d.gps_velocity = {f.Find("vel_n_m_s"), f.Find("vel_e_m_s"), f.Find("vel_d_m_s")};
+    d.gps_velocity_valid = f.Find("vel_ned_valid");
+    d.fix_type = f.Find("fix_type");
   } else if (topic == "home_position") {
     d.kind = TopicDecoder::Kind::kHome;
     d.z_m = f.Find("z");
@@ -181,7 +196,37 @@ struct TopicRecords {
   std::vector<double> dist_bottom_m;  // valid distances to the ground
   std::vector<double> local_z_m;      // valid local z values
   std::optional<double> last_z_m;     // home_position.z of its last message (may be NaN)
+  std::vector<VelocitySample> velocity;
+  std::vector<VelocitySample> gps_velocity;
+  std::vector<AttitudeSample> attitude;  // one every kAttitudeStepNs at most
 };
+
+// vehicle_local_position's velocity when its flags say the horizontal part is valid (the
+// vertical part NaN when v_z_valid says it is not); nullopt otherwise.
+std::optional<Eigen::Vector3d> LocalVelocity(const TopicDecoder& d, std::string_view data) {
+  if (!d.velocity[0] || !d.velocity[1] || !d.v_xy_valid || ReadNumber(data, *d.v_xy_valid) == 0.0)
+    return std::nullopt;
+  Eigen::Vector3d v(ReadNumber(data, *d.velocity[0]), ReadNumber(data, *d.velocity[1]),
+                    std::numeric_limits<double>::quiet_NaN());
+  if (d.velocity[2] && d.v_z_valid && ReadNumber(data, *d.v_z_valid) != 0.0)
+    v.z() = ReadNumber(data, *d.velocity[2]);
+  // Beyond any multirotor's or plane's speed: a corrupt message.
+  if (!v.head<2>().allFinite() || v.head<2>().norm() > kMaxLogSpeedMps) return std::nullopt;
+  if (std::abs(v.z()) > kMaxLogSpeedMps) v.z() = std::numeric_limits<double>::quiet_NaN();
+  return v;
+}
+
+// The GPS receiver's velocity of a 3-D fix (fix_type 3 and above) where vel_ned_valid; nullopt
+// otherwise.
+std::optional<Eigen::Vector3d> GpsVelocity(const TopicDecoder& d, std::string_view data) {
+  const auto& [n, e, down] = d.gps_velocity;
+  if (!n || !e || !down || !d.gps_velocity_valid || ReadNumber(data, *d.gps_velocity_valid) == 0.0)
+    return std::nullopt;
+  if (d.fix_type && !(ReadNumber(data, *d.fix_type) >= 3.0)) return std::nullopt;
+  const Eigen::Vector3d v(ReadNumber(data, *n), ReadNumber(data, *e), ReadNumber(data, *down));
+  if (!v.allFinite() || v.norm() > kMaxLogSpeedMps) return std::nullopt;
+  return v;
+}
 
 // Decodes one data message of a topic other than a gyro one into records.
 void DecodeRecord(const std::string& topic, const TopicDecoder& d, std::string_view data,
@@ -202,9 +247,11 @@ void DecodeRecord(const std::string& topic, const TopicDecoder& d, std::string_v
       return;
     }
     case TopicDecoder::Kind::kGps: {
+      const auto t_ns = ReadTimeNs(data, *d.t);
+      if (const auto v = GpsVelocity(d, data); v && t_ns && *t_ns > 0)
+        records->gps_velocity.push_back({*t_ns, *v});
       // The log time of a message with a UTC time (time_utc_usec, 0 until the receiver knows it).
       if (!d.utc) return;
-      const auto t_ns = ReadTimeNs(data, *d.t);
       const double utc_us = ReadNumber(data, *d.utc);
       // After 2000-01-01 and before 2200: a set clock, not a count from zero.
       if (!t_ns || *t_ns <= 0 || !(utc_us > 946684800e6 && utc_us < 7258118400e6)) return;
@@ -220,6 +267,22 @@ void DecodeRecord(const std::string& topic, const TopicDecoder& d, std::string_v
         const double v = ReadNumber(data, *d.z_m);
         if (std::isfinite(v)) records->local_z_m.push_back(v);
       }
+      const auto t_ns = ReadTimeNs(data, *d.t);
+      if (const auto v = LocalVelocity(d, data); v && t_ns && *t_ns > 0)
+        records->velocity.push_back({*t_ns, *v});
+      return;
+    }
+    case TopicDecoder::Kind::kAttitude: {
+      const auto t_ns = ReadTimeNs(data, *d.t);
+      if (d.q.size() != 4 || !t_ns || *t_ns <= 0) return;
+      if (!records->attitude.empty() && *t_ns - records->attitude.back().t_ns < kAttitudeStepNs)
+        return;
+      const Eigen::Vector4d wxyz(ReadNumber(data, *d.q[0]), ReadNumber(data, *d.q[1]),
+                                 ReadNumber(data, *d.q[2]), ReadNumber(data, *d.q[3]));
+      // A unit quaternion (PX4 normalises it; anything far off is not an attitude).
+      if (!wxyz.allFinite() || std::abs(wxyz.norm() - 1.0) > 0.01) return;
+      records->attitude.push_back(
+          {*t_ns, Eigen::Quaterniond(wxyz[0], wxyz[1], wxyz[2], wxyz[3]).normalized()});
       return;
     }
     case TopicDecoder::Kind::kHome:
@@ -237,6 +300,9 @@ struct DecodedTopics {
   std::vector<double> dist_bottom_m;
   std::vector<double> local_z_m;
   std::optional<double> home_z_m;
+  std::vector<VelocitySample> velocity;
+  std::vector<VelocitySample> gps_velocity;
+  std::vector<AttitudeSample> attitude;
 };
 
 // The altitude above ground: the airborne median of dist_bottom, else of the height above home
@@ -263,6 +329,23 @@ void SetAltitudeAboveGround(const DecodedTopics& topics, FlightLog* log) {
                              ") above 1 m (height above home, not a ground-distance measurement)";
     }
   }
+}
+
+// The velocity (the estimator's, else the GPS receiver's) and the attitude, in time order, with
+// their sources.
+void SetNavigation(DecodedTopics topics, FlightLog* log) {
+  auto by_time = [](const auto& a, const auto& b) { return a.t_ns < b.t_ns; };
+  if (!topics.velocity.empty()) {
+    log->velocity_source = "vehicle_local_position.vx,vy,vz (where v_xy_valid)";
+  } else if (!topics.gps_velocity.empty()) {
+    topics.velocity = std::move(topics.gps_velocity);
+    log->velocity_source = "the GPS's vel_n_m_s,vel_e_m_s,vel_d_m_s (where vel_ned_valid)";
+  }
+  std::stable_sort(topics.velocity.begin(), topics.velocity.end(), by_time);
+  std::stable_sort(topics.attitude.begin(), topics.attitude.end(), by_time);
+  if (!topics.attitude.empty()) log->attitude_source = "vehicle_attitude.q";
+  log->velocity = std::move(topics.velocity);
+  log->attitude = std::move(topics.attitude);
 }
 
 // The bytes both passes read: a file mapped page by page (pages handed back behind the parse; a
@@ -472,6 +555,10 @@ DecodedTopics ULogSummary::Gather(std::vector<Candidate>* candidates,
                                   r.dist_bottom_m.end());
       topics.local_z_m.insert(topics.local_z_m.end(), r.local_z_m.begin(), r.local_z_m.end());
       if (r.last_z_m && std::isfinite(*r.last_z_m)) topics.home_z_m = r.last_z_m;
+      // One instance of each: the first that has samples (a second estimator's is not merged in).
+      if (topics.velocity.empty()) topics.velocity = std::move(r.velocity);
+      if (topics.gps_velocity.empty()) topics.gps_velocity = std::move(r.gps_velocity);
+      if (topics.attitude.empty()) topics.attitude = std::move(r.attitude);
       r = TopicRecords();
     }
     // A stream none of whose messages gave a sample with a readable time is no candidate.
@@ -506,6 +593,7 @@ ULogPass1 ULogSummary::Run() {
   log.utc_fixes = std::move(topics.utc_fixes);
   KeepOneCameraEventKind(&log);
   SetAltitudeAboveGround(topics, &log);
+  SetNavigation(std::move(topics), &log);
   std::vector<internal::CandidateSummary> summaries;
   for (Candidate& c : candidates) summaries.push_back(std::move(c.summary));
   const std::optional<size_t> chosen = internal::ChooseGyroSummary(summaries, &log);

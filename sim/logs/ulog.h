@@ -36,6 +36,11 @@ bool LooksLikeULog(std::string_view first_bytes);
 // Altitude above ground: median of vehicle_local_position.dist_bottom where dist_bottom_valid,
 // over the samples above kAirborneAltitudeM; else median of -(z - z_home) (home_position.z when
 // logged, else the first local z) over the samples above kAirborneAltitudeM; a warning says which.
+// Navigation: velocity from vehicle_local_position vx, vy, vz (NED) where v_xy_valid (vz where
+// v_z_valid, else NaN), else from the GPS topic's vel_n_m_s, vel_e_m_s, vel_d_m_s where
+// vel_ned_valid and fix_type >= 3 (a log without a valid estimate, as a bench or SITL log);
+// attitude from vehicle_attitude.q (FRD body to NED), one every kAttitudeStepNs at most; the
+// first instance of each that has samples.
 // Dropouts ('O') become warnings; the gaps they leave show in gyro.sampling().
 // Throws IoError (path, byte offset, problem) when the file is not ULog, sets an unknown
 // incompatible flag, or holds no usable gyro data. Corrupt or truncated stretches are skipped

@@ -153,7 +153,7 @@ bool WantedTopic(const std::string& topic) {
   static const char* kTopics[] = {
       "sensor_gyro_fifo",     "sensor_gyro",    "vehicle_angular_velocity", "sensor_combined",
       "camera_trigger",       "camera_capture", "vehicle_local_position",   "home_position",
-      "vehicle_gps_position", "sensor_gps"};
+      "vehicle_gps_position", "sensor_gps",     "vehicle_attitude"};
   for (const char* t : kTopics) {
     if (topic == t) return true;
   }

@@ -33,11 +33,14 @@ constexpr char kCameraFormat[] =
 constexpr uint16_t kPositionMsgId = 2;
 constexpr char kPositionTopic[] = "vehicle_local_position";
 constexpr char kPositionFormat[] =
-    "vehicle_local_position:uint64_t timestamp;float dist_bottom;bool dist_bottom_valid;"
-    "uint8_t[3] _padding0;";
+    "vehicle_local_position:uint64_t timestamp;float vx;float vy;float vz;float dist_bottom;"
+    "bool v_xy_valid;bool v_z_valid;bool dist_bottom_valid;uint8_t[5] _padding0;";
 constexpr uint16_t kGpsMsgId = 3;
 constexpr char kGpsTopic[] = "vehicle_gps_position";
 constexpr char kGpsFormat[] = "vehicle_gps_position:uint64_t timestamp;uint64_t time_utc_usec;";
+constexpr uint16_t kAttitudeMsgId = 4;
+constexpr char kAttitudeTopic[] = "vehicle_attitude";
+constexpr char kAttitudeFormat[] = "vehicle_attitude:uint64_t timestamp;float[4] q;";
 
 // Little-endian stores, independent of the host's byte order.
 void PutLittleEndian(uint64_t value, size_t bytes, std::string* out) {
@@ -94,6 +97,46 @@ struct Record {
   size_t index;
 };
 
+// The fields of record r's topic after its timestamp, into payload.
+void AppendFields(const Record& r, const GyroTrace& gyro,
+                  const std::vector<CameraEvent>& camera_events, const ULogWriteOptions& options,
+                  const std::optional<float>& altitude_m, std::string* payload_out) {
+  std::string& payload = *payload_out;
+  if (r.msg_id == kGyroMsgId) {
+    const Eigen::Vector3d& omega_rad_s = gyro[r.index].omega_rad_s;
+    PutU64(r.t_us, &payload);  // timestamp_sample: the sample is published when it is taken
+    PutU32(0, &payload);       // device_id: 0, no real device
+    for (int axis = 0; axis < 3; ++axis) {
+      PutFloat(static_cast<float>(omega_rad_s[axis]), &payload);  // x, y, z
+    }
+    PutFloat(std::numeric_limits<float>::quiet_NaN(), &payload);  // temperature: not simulated
+    PutU32(0, &payload);                                          // error_count
+    PutLittleEndian(0, 3, &payload);                              // clip_counter[3]
+    PutU8(1, &payload);                                           // samples in this message
+    PutLittleEndian(0, 4, &payload);                              // _padding0
+  } else if (r.msg_id == kCameraMsgId) {
+    PutU32(static_cast<uint32_t>(camera_events[r.index].sequence), &payload);
+    PutLittleEndian(0, 4, &payload);  // _padding0
+  } else if (r.msg_id == kGpsMsgId) {
+    const int64_t utc_ns = options.utc_fixes[r.index].utc_ns;
+    PutU64(static_cast<uint64_t>(utc_ns / 1000), &payload);  // time_utc_usec
+  } else if (r.msg_id == kAttitudeMsgId) {
+    const Eigen::Quaterniond& q = options.attitude[r.index].ned_from_body;
+    for (double c : {q.w(), q.x(), q.y(), q.z()}) PutFloat(static_cast<float>(c), &payload);
+  } else {
+    // The velocity sample r.index, or (without velocity) the altitude alone.
+    const bool moving = !options.velocity.empty();
+    const Eigen::Vector3d v = moving ? options.velocity[r.index].ned_mps : Eigen::Vector3d::Zero();
+    for (int axis = 0; axis < 3; ++axis)
+      PutFloat(std::isnan(v[axis]) ? 0.0f : static_cast<float>(v[axis]), &payload);  // vx..vz
+    PutFloat(altitude_m.value_or(0.0f), &payload);                                   // dist_bottom
+    PutU8(moving ? 1 : 0, &payload);                                                 // v_xy_valid
+    PutU8(moving && !std::isnan(v.z()) ? 1 : 0, &payload);                           // v_z_valid
+    PutU8(altitude_m ? 1 : 0, &payload);  // dist_bottom_valid
+    PutLittleEndian(0, 5, &payload);      // _padding0
+  }
+}
+
 }  // namespace
 
 std::string SerializeULog(const GyroTrace& gyro, const std::vector<CameraEvent>& camera_events,
@@ -111,8 +154,19 @@ std::string SerializeULog(const GyroTrace& gyro, const std::vector<CameraEvent>&
         << " m, below which readers take the vehicle to be on the ground";
   }
 
+  for (size_t i = 0; i < options.velocity.size(); ++i) {
+    const Eigen::Vector3d& v = options.velocity[i].ned_mps;
+    SHUTTERLAB_CHECK(v.head<2>().allFinite() && !std::isinf(v.z()))
+        << "velocity sample " << i << ": north and east must be finite (down finite or NaN)";
+  }
+  for (size_t i = 0; i < options.attitude.size(); ++i) {
+    SHUTTERLAB_CHECK(options.attitude[i].ned_from_body.coeffs().allFinite())
+        << "attitude sample " << i << " is not finite";
+  }
+
   std::vector<Record> records;
-  records.reserve(gyro.size() + camera_events.size() + options.utc_fixes.size());
+  records.reserve(gyro.size() + camera_events.size() + options.utc_fixes.size() +
+                  options.velocity.size() + options.attitude.size());
   for (size_t i = 0; i < gyro.size(); ++i) {
     records.push_back({ToULogMicros(gyro[i].t_ns, "gyro sample", i), kGyroMsgId, i});
   }
@@ -123,7 +177,16 @@ std::string SerializeULog(const GyroTrace& gyro, const std::vector<CameraEvent>&
         << ": camera_capture.seq is a uint32 (0.." << std::numeric_limits<uint32_t>::max() << ")";
     records.push_back({ToULogMicros(camera_events[i].t_ns, "camera event", i), kCameraMsgId, i});
   }
-  if (altitude_m) {
+  for (size_t i = 0; i < options.velocity.size(); ++i) {
+    records.push_back(
+        {ToULogMicros(options.velocity[i].t_ns, "velocity sample", i), kPositionMsgId, i});
+  }
+  for (size_t i = 0; i < options.attitude.size(); ++i) {
+    records.push_back(
+        {ToULogMicros(options.attitude[i].t_ns, "attitude sample", i), kAttitudeMsgId, i});
+  }
+  const bool position = altitude_m || !options.velocity.empty();
+  if (altitude_m && options.velocity.empty()) {
     // Over the gyro trace (records 0 .. gyro.size() - 1, non-decreasing in time).
     const uint64_t first_us = records.front().t_us;
     const uint64_t last_us = records[gyro.size() - 1].t_us;
@@ -154,41 +217,21 @@ std::string SerializeULog(const GyroTrace& gyro, const std::vector<CameraEvent>&
   AppendInfo("sys_name", "shutterlab", &out);
   AppendMessage('F', kGyroFormat, &out);
   AppendMessage('F', kCameraFormat, &out);
-  if (altitude_m) AppendMessage('F', kPositionFormat, &out);
+  if (position) AppendMessage('F', kPositionFormat, &out);
   if (gps) AppendMessage('F', kGpsFormat, &out);
+  if (!options.attitude.empty()) AppendMessage('F', kAttitudeFormat, &out);
   AppendSubscription(kGyroMsgId, kGyroTopic, &out);
   AppendSubscription(kCameraMsgId, kCameraTopic, &out);
-  if (altitude_m) AppendSubscription(kPositionMsgId, kPositionTopic, &out);
+  if (position) AppendSubscription(kPositionMsgId, kPositionTopic, &out);
   if (gps) AppendSubscription(kGpsMsgId, kGpsTopic, &out);
+  if (!options.attitude.empty()) AppendSubscription(kAttitudeMsgId, kAttitudeTopic, &out);
 
   std::string payload;  // reused: 'D' payload = uint16 msg_id, then the topic's fields
   for (const Record& r : records) {
     payload.clear();
     PutU16(r.msg_id, &payload);
     PutU64(r.t_us, &payload);  // timestamp
-    if (r.msg_id == kGyroMsgId) {
-      const Eigen::Vector3d& omega_rad_s = gyro[r.index].omega_rad_s;
-      PutU64(r.t_us, &payload);  // timestamp_sample: the sample is published when it is taken
-      PutU32(0, &payload);       // device_id: 0, no real device
-      for (int axis = 0; axis < 3; ++axis) {
-        PutFloat(static_cast<float>(omega_rad_s[axis]), &payload);  // x, y, z
-      }
-      PutFloat(std::numeric_limits<float>::quiet_NaN(), &payload);  // temperature: not simulated
-      PutU32(0, &payload);                                          // error_count
-      PutLittleEndian(0, 3, &payload);                              // clip_counter[3]
-      PutU8(1, &payload);                                           // samples in this message
-      PutLittleEndian(0, 4, &payload);                              // _padding0
-    } else if (r.msg_id == kCameraMsgId) {
-      PutU32(static_cast<uint32_t>(camera_events[r.index].sequence), &payload);
-      PutLittleEndian(0, 4, &payload);  // _padding0
-    } else if (r.msg_id == kGpsMsgId) {
-      const int64_t utc_ns = options.utc_fixes[r.index].utc_ns;
-      PutU64(static_cast<uint64_t>(utc_ns / 1000), &payload);  // time_utc_usec
-    } else {
-      PutFloat(*altitude_m, &payload);  // dist_bottom
-      PutU8(1, &payload);               // dist_bottom_valid
-      PutLittleEndian(0, 3, &payload);  // _padding0
-    }
+    AppendFields(r, gyro, camera_events, options, altitude_m, &payload);
     AppendMessage('D', payload, &out);
   }
   return out;

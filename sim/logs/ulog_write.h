@@ -12,9 +12,11 @@
 //                          x, y, z in rad/s (float32), sensor axes as in the trace; samples 1,
 //                          temperature NaN (not simulated), device_id and counters 0;
 //   camera_capture         one message per camera event: timestamp, seq (uint32);
-//   vehicle_local_position only with ULogWriteOptions::altitude_above_ground_m: dist_bottom and
-//                          dist_bottom_valid = true at 10 Hz from the first to the last gyro
-//                          sample;
+//   vehicle_local_position with ULogWriteOptions::velocity, one message a sample: vx, vy, vz (NED,
+//                          m/s), v_xy_valid, v_z_valid (false where down is NaN); with
+//                          altitude_above_ground_m, dist_bottom and dist_bottom_valid in each
+//                          (at 10 Hz over the gyro trace when there is no velocity);
+//   vehicle_attitude       with ULogWriteOptions::attitude: q (w, x, y, z; FRD body to NED);
 //   vehicle_gps_position   only with ULogWriteOptions::utc_fixes: timestamp and time_utc_usec
 //                          (UTC, us, truncated), one message a fix.
 // Times: the trace's int64 ns rounded to the nearest PX4 microsecond (uint64 since boot).
@@ -35,6 +37,10 @@ struct ULogWriteOptions {
   std::optional<double> altitude_above_ground_m;
   // GPS time messages (log time, UTC), for readers that place photos on the log's clock.
   std::vector<UtcFix> utc_fixes;
+  // The navigation: velocity (north and east finite, down finite or NaN) and attitude samples,
+  // each written as one message at its time.
+  std::vector<VelocitySample> velocity;
+  std::vector<AttitudeSample> attitude;
 };
 
 // Serialises a flight as ULog bytes. Preconditions (std::invalid_argument naming the offending

@@ -8,6 +8,7 @@
 #include "io/photo_metadata.h"
 #include "model/camera.h"
 #include "render/rs_warp.h"
+#include "sim/logs/flight_log.h"
 #include "sim/logs/flight_log_io.h"
 #include "sim/text_file.h"
 #include "tests/render/survey_fixtures.h"
@@ -152,6 +153,19 @@ TEST(Survey, WritesWhatADroneWritesAndTheTruthBesideIt) {
     EXPECT_NEAR(log.camera_events[k].t_ns, summary.photos[k].t_first_row_ns, 1000) << k;
   }
   EXPECT_EQ(log.gyro.samples().size(), gyro.samples().size());
+  // Its navigation: at each photo, the photo's own velocity (north, east, down); the line flown
+  // south switches halfway through the turn.
+  ASSERT_FALSE(log.velocity.empty());
+  for (const SurveyPhoto& p : summary.photos) {
+    const std::optional<Eigen::Vector3d> v = VelocityAt(log.velocity, p.t_mid_ns);
+    ASSERT_TRUE(v.has_value()) << p.name;
+    EXPECT_NEAR((*v - Eigen::Vector3d(p.velocity_mps.y(), p.velocity_mps.x(), 0.0)).norm(), 0.0,
+                1e-6)
+        << p.name;
+  }
+  const int64_t turn_middle_ns = (summary.photos[2].t_mid_ns + summary.photos[3].t_mid_ns) / 2;
+  EXPECT_NEAR(VelocityAt(log.velocity, turn_middle_ns - 200'000'000)->x(), 8.0, 1e-6);
+  EXPECT_NEAR(VelocityAt(log.velocity, turn_middle_ns + 200'000'000)->x(), -8.0, 1e-6);
 
   // The camera and the terrain as written.
   const RigModel rig = ReadRigModel((out / "truth/camera.json").string());

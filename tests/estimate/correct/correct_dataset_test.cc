@@ -442,6 +442,24 @@ std::string DjiPhotoMovingAt(const cv::Mat& image, double yaw_deg,
   return test::JpegWithMetadata(p);
 }
 
+// correct --photos PHOTOS LOG --triggers TRIGGERS --camera camera.json (DeclaredRig) into
+// DIR/corrected, first row as the reference (the truth's), measured against the truth.
+CorrectOptions DjiPhotoOptions(const test::TempDir& dir, const fs::path& photos,
+                               const std::string& log, const std::string& triggers) {
+  CorrectOptions options;
+  options.dataset_dir = photos.string();
+  options.out_dir = dir / "corrected";
+  options.check_truth = true;
+  options.pictures = false;
+  options.reference = CorrectionReference::kFirstRow;
+  options.photos.emplace();
+  options.photos->log_path = log;
+  options.photos->triggers_path = triggers;
+  options.photos->camera = DeclaredRig();
+  options.photos->camera_path = "camera.json";
+  return options;
+}
+
 TEST(CorrectPhotos, EachPhotoIsCorrectedWithTheVelocityItRecords) {
   // A survey flown at a fixed heading (yaw 30 deg), lines in both directions: two photos flying
   // one way, one the other, and one that records no speed, each rendered with its true velocity,
@@ -474,17 +492,8 @@ TEST(CorrectPhotos, EachPhotoIsCorrectedWithTheVelocityItRecords) {
     triggers += name + "," + FormatNumber("%.6f", shot.t_s) + "\n";
   }
   WriteFileAtomically(dir / "triggers.csv", triggers);
-  CorrectOptions options;
-  options.dataset_dir = photos.string();
-  options.out_dir = dir / "corrected";
-  options.check_truth = true;
-  options.pictures = false;
-  options.reference = CorrectionReference::kFirstRow;  // the truth's reference
-  options.photos.emplace();
-  options.photos->log_path = out_line.dataset + "/gyro.csv";
-  options.photos->triggers_path = dir / "triggers.csv";
-  options.photos->camera = DeclaredRig();
-  options.photos->camera_path = "camera.json";
+  CorrectOptions options =
+      DjiPhotoOptions(dir, photos, out_line.dataset + "/gyro.csv", dir / "triggers.csv");
   // The truth of each photo: its frame of its render.
   const fs::path truth = dir.path() / "truth";
   fs::create_directories(truth);
@@ -539,6 +548,86 @@ TEST(CorrectPhotos, EachPhotoIsCorrectedWithTheVelocityItRecords) {
   std::printf("  --effect velocity= for all: %s D after %.4f px, %s D after %.3f px\n",
               one.frames[0].source_image.c_str(), one.frames[0].truth->d_px,
               one.frames[2].source_image.c_str(), one.frames[2].truth->d_px);
+}
+
+// The navigation a PX4 log would record of a nadir camera flying velocity_cam_mps (camera axes,
+// horizontal) with its image's top toward yaw_deg, its body axes the camera's: velocity (NED) at
+// 10 Hz and attitude at 50 Hz from 0 to until_s.
+ULogWriteOptions NavigationOf(const Eigen::Vector2d& velocity_cam_mps, double yaw_deg,
+                              double until_s) {
+  const double yaw = yaw_deg * kRadPerDeg;
+  Eigen::Matrix3d ned_from_camera;  // columns: image right, image down, the view (down)
+  ned_from_camera << -std::sin(yaw), -std::cos(yaw), 0.0, std::cos(yaw), -std::sin(yaw), 0.0, 0.0,
+      0.0, 1.0;
+  const Eigen::Vector3d ned =
+      ned_from_camera * Eigen::Vector3d(velocity_cam_mps.x(), velocity_cam_mps.y(), 0.0);
+  ULogWriteOptions out;
+  for (int64_t t_ns = 1'000'000; t_ns <= SecondsToNs(until_s); t_ns += 20'000'000) {
+    if (t_ns % 100'000'000 == 1'000'000) out.velocity.push_back({t_ns, ned});
+    out.attitude.push_back({t_ns, Eigen::Quaterniond(ned_from_camera)});
+  }
+  return out;
+}
+
+TEST(CorrectPhotos, APhotoThatRecordsNoSpeedTakesTheLogsVelocity) {
+  // A line flown at (-6, 3, 0) m/s in camera axes, heading 30 deg, as a PX4 ULog with its
+  // navigation (vehicle_local_position's velocity, vehicle_attitude). DJI_0001 records its gimbal
+  // but no speed: the log's velocity turned by the gimbal. DJI_0002 records neither (a camera
+  // without DJI's XMP): the log's velocity turned by the log's attitude and camera.json's mounting
+  // (identity: the camera's axes are the log's body axes). Both are corrected to interpolation. A
+  // log whose navigation ends before the photos leaves their translation, said.
+  test::TempDir dir;
+  const Eigen::Vector2d line_mps(-6.0, 3.0);
+  const std::vector<double> times_s = {20.0, 24.0};
+  const Rendered rendered = Render(dir, "line", {"velocity=-6m/s,3m/s,0"}, times_s);
+  const std::vector<FrameEntry> frames = ReadFramesCsv(rendered.dataset + "/frames.csv");
+  const fs::path photos = dir.path() / "photos";
+  fs::create_directories(photos);
+  WriteFileAtomically(
+      photos / "DJI_0001.JPG",
+      DjiPhotoMovingAt(ReadImage(rendered.dataset + "/" + frames[0].image), 30.0, std::nullopt));
+  WriteImage((photos / "DJI_0002.JPG").string(),
+             ReadImage(rendered.dataset + "/" + frames[1].image));
+  WriteFileAtomically(dir / "triggers.csv", "image,t\nDJI_0001.JPG,20\nDJI_0002.JPG,24\n");
+  std::vector<GyroSample> samples = FlightGyro().samples();
+  samples.erase(samples.begin());  // PX4 times are unsigned and 0 means unset: start at 1 ms
+  const GyroTrace gyro(std::move(samples));
+  WriteULog(dir / "flight.ulg", gyro, {}, NavigationOf(line_mps, 30.0, 30.0));
+  WriteULog(dir / "short.ulg", gyro, {}, NavigationOf(line_mps, 30.0, 10.0));
+
+  CorrectOptions options = DjiPhotoOptions(dir, photos, dir / "flight.ulg", dir / "triggers.csv");
+  options.truth_dir = rendered.dataset + "/truth";
+  const CorrectSummary summary = CorrectDataset(options);
+  ASSERT_EQ(summary.frames.size(), 2u);
+  const std::vector<std::string> turned_by = {
+      "turned by the photo's gimbal's yaw 30.0 deg",
+      "turned by the log's vehicle_attitude.q and camera.json's gyro_to_camera"};
+  for (size_t i = 0; i < 2; ++i) {
+    const CorrectedFrame& f = summary.frames[i];
+    std::printf("  %s: velocity (%.4f, %.4f, %.4f) m/s, D before %.3f px, after %.4f px: %s\n",
+                f.source_image.c_str(), f.velocity_mps.x(), f.velocity_mps.y(), f.velocity_mps.z(),
+                f.truth->d_before_px, f.truth->d_px, f.translation.c_str());
+    // float32 in the log: a few micrometres a second.
+    EXPECT_NEAR((f.velocity_mps.head<2>() - line_mps).norm(), 0.0, 1e-5) << f.source_image;
+    EXPECT_NEAR(f.velocity_mps.z(), 0.0, 1e-6) << f.source_image;
+    EXPECT_LE(f.truth->rms_px, kInterpolationRmsPx) << f.source_image;
+    EXPECT_NE(f.translation.find("6.71 m/s toward "), std::string::npos) << f.translation;
+    EXPECT_NE(f.translation.find("from the log's vehicle_local_position.vx,vy,vz"),
+              std::string::npos)
+        << f.translation;
+    EXPECT_NE(f.translation.find(turned_by[i]), std::string::npos) << f.translation;
+  }
+
+  options.photos->log_path = dir / "short.ulg";
+  options.out_dir = dir / "short";
+  for (const CorrectedFrame& f : CorrectDataset(options).frames) {
+    EXPECT_GT(f.truth->d_px, 0.5) << "its translation is not corrected";
+    EXPECT_NE(f.translation.find("rotation only: the photo records no flight speed, and the "
+                                 "log's (vehicle_local_position.vx,vy,vz (where v_xy_valid)) "
+                                 "does not reach its time"),
+              std::string::npos)
+        << f.translation;
+  }
 }
 
 TEST(CorrectPhotos, ASurveysPhotosMatchTheirGlobalShutterReferences) {

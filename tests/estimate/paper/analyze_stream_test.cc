@@ -362,6 +362,51 @@ TEST(AnalyzeStream, PhotoFlightEqualsTheWholeLogToTheBit) {
   EXPECT_EQ(PhotoAnalysisReport(set, streamed.photos), PhotoAnalysisReport(set, whole.photos));
 }
 
+// Photos that record no flight speed take the log's at their placed time: 3 m/s north and 4 m/s
+// east for the first two, 6 m/s east for the third; with a 20 ms readout D's translation part is
+// 10 and 12 cm. A photo that records its speed keeps its own.
+TEST(AnalyzeStream, PhotosWithoutASpeedTakeTheLogs) {
+  FlightLog log = WobblyLog();
+  for (int64_t t_ns = 0; t_ns <= 12 * kNsPerSecond; t_ns += kNsPerSecond / 10) {
+    const Eigen::Vector3d ned =
+        t_ns < 6 * kNsPerSecond ? Eigen::Vector3d(3.0, 4.0, -1.0) : Eigen::Vector3d(0.0, 6.0, 0.0);
+    log.velocity.push_back({t_ns, ned});
+  }
+  log.velocity_source = "test.v";
+  PhotoSet set;
+  PhotoSetOptions read;
+  read.readout_s = 0.02;
+  for (int k = 0; k < 4; ++k) {
+    log.camera_events.push_back({SecondsToNs(2.5 + 2.0 * k), k, "camera_capture"});
+    PhotoMetadata m;
+    m.width = 320;
+    m.height = 240;
+    m.focal_length_35mm = 24.0;
+    m.relative_altitude_m = 60.0;
+    if (k == 3) m.speed_m_s = Eigen::Vector3d(1.0, 0.0, 0.0);
+    set.photos.push_back(MakePhotoRecord("/p/DJI_000" + std::to_string(k + 1) + ".JPG", m, read));
+  }
+  PhotoFlightOptions options;
+  options.analyze = TurnedCameraOptions();
+  options.analyze.rig.shutter.readout_s = 0.02;
+  options.readout_given = true;
+  const PhotoFlightResult result = AnalyzePhotoFlight(set, Audited(log), nullptr, options);
+  ASSERT_EQ(result.clock.paired, 4u) << result.clock.method;
+  const double expected_m_s[] = {5.0, 5.0, 6.0, 1.0};
+  for (size_t k = 0; k < 4; ++k) {
+    const PhotoRecord& r = result.set.photos[k];
+    SCOPED_TRACE(r.name);
+    ASSERT_TRUE(r.ground_speed_m_s.has_value());
+    EXPECT_NEAR(*r.ground_speed_m_s, expected_m_s[k], 1e-12);
+    EXPECT_EQ(r.speed_source == "the log's test.v at the photo's time", k < 3) << r.speed_source;
+    EXPECT_EQ(std::count(r.missing.begin(), r.missing.end(), "flight speed"), 0);
+    ASSERT_TRUE(result.photos.photos[k].d_translation_m.has_value());
+    EXPECT_NEAR(*result.photos.photos[k].d_translation_m, expected_m_s[k] * 0.02, 1e-12);
+  }
+  EXPECT_NEAR(*result.set.photos[2].course_deg, 90.0, 1e-9);
+  EXPECT_FALSE(set.photos[0].ground_speed_m_s.has_value()) << "the set given is left as it was";
+}
+
 // The same on real bytes: the three DJI photos named by a trigger file on the PX4 log's clock
 // (they were not taken on that flight: this checks the streamed analysis against the whole read,
 // not the photos' truth), the log's gaps included.

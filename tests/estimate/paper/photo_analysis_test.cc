@@ -170,6 +170,7 @@ TEST(AnalyzePhotos, TheRotationPartIsAtEachPhotosOwnAltitude) {
     image.in_trace = true;
     image.d_full_px = 2.0;
     image.d_full_m = 2.0 * 50.0 / 2000.0;  // 5 cm at 50 m and f 2000 px
+    image.d_paper_m = 0.04;
     log.images.push_back(image);
   }
   std::vector<PhotoPlacement> placements(2);
@@ -181,6 +182,7 @@ TEST(AnalyzePhotos, TheRotationPartIsAtEachPhotosOwnAltitude) {
   EXPECT_DOUBLE_EQ(*a.photos[0].d_rotation_m, 2.0 * 100.0 / 2000.0);
   EXPECT_DOUBLE_EQ(*a.photos[1].d_rotation_m, 2.0 * 41.0 / 2000.0);
   EXPECT_DOUBLE_EQ(*a.photos[1].d_rotation_px, 2.0);
+  EXPECT_DOUBLE_EQ(*a.photos[1].d_paper_m, 0.04 * 41.0 / 50.0) << "the paper's D scales alike";
   const PhotoAnalysis one = AnalyzePhotosWithLog(set, {}, placements, log);
   EXPECT_DOUBLE_EQ(*one.photos[0].d_rotation_m, 0.05);
   EXPECT_DOUBLE_EQ(*one.photos[1].d_rotation_m, 0.05);

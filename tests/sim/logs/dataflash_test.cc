@@ -7,9 +7,11 @@
 #include "sim/units.h"
 #include "tests/test_util.h"
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -352,6 +354,87 @@ TEST(DataFlash, ReadsGpsTimeAgainstTheBootClock) {
   // GPS week 2211, 296288.242 s of week, less 18 leap seconds: 2022-05-25 10:17:50.242 UTC.
   EXPECT_EQ(UtcText(log.utc_fixes[0].utc_ns), "2022-05-25 10:17:50.242");
   EXPECT_EQ(log.utc_fixes[1].utc_ns - log.utc_fixes[0].utc_ns, 600'000'000);
+}
+
+// GPS Spd, GCrs, VZ: the velocity of instance 0's 3-D fixes, north, east, down; ATT Roll, Pitch,
+// Yaw (degrees as floats, or centidegrees as an older log writes them): the attitude, Z-Y-X.
+TEST(DataFlash, ReadsTheGpsVelocityAndTheAttitude) {
+  DataFlashBuilder b;
+  b.Fmt(149, 3 + 8 + 1 + 1 + 4 + 2 + 12, "GPS", "QBBIHfff", "TimeUS,I,Status,GMS,GWk,Spd,GCrs,VZ");
+  b.Fmt(150, 3 + 8 + 12, "ATT", "Qfff", "TimeUS,Roll,Pitch,Yaw");
+  auto gps = [&b](uint64_t t_us, uint8_t instance, uint8_t status, float speed, float course_deg,
+                  float down) {
+    b.bytes() += std::string("\xA3\x95\x95", 3);
+    test::PutLittleEndian(&b.bytes(), t_us);
+    test::PutLittleEndian(&b.bytes(), instance);
+    test::PutLittleEndian(&b.bytes(), status);
+    test::PutLittleEndian<uint32_t>(&b.bytes(), 296'288'242);
+    test::PutLittleEndian<uint16_t>(&b.bytes(), 2211);
+    for (float v : {speed, course_deg, down}) test::PutLittleEndian(&b.bytes(), v);
+  };
+  auto att = [&b](uint64_t t_us, float roll, float pitch, float yaw) {
+    b.bytes() += std::string("\xA3\x95\x96", 3);
+    test::PutLittleEndian(&b.bytes(), t_us);
+    for (float v : {roll, pitch, yaw}) test::PutLittleEndian(&b.bytes(), v);
+  };
+  gps(5'000'000, 0, 3, 10.0f, 30.0f, -1.5f);  // 10 m/s toward 30 deg, climbing 1.5 m/s
+  gps(5'100'000, 1, 3, 99.0f, 0.0f, 0.0f);    // a second receiver: not used
+  gps(5'200'000, 0, 1, 99.0f, 0.0f, 0.0f);    // no fix: not used
+  gps(5'400'000, 0, 3, 4.0f, 270.0f, 0.0f);   // 4 m/s west
+  gps(5'600'000, 0, 3, 900.0f, 0.0f, 0.0f);   // beyond any flight: not used
+  att(5'000'000, 10.0f, -20.0f, 90.0f);
+  att(5'010'000, 11.0f, -20.0f, 90.0f);  // within 20 ms of the one before: not kept
+  att(5'020'000, 0.0f, 0.0f, 350.0f);
+  for (int k = 0; k < 10; ++k) b.Imu(1000 + k * 1000, 0, 0, 0, 0);
+  const FlightLog log = ParseDataFlash(b.bytes(), "navigation.bin");
+  EXPECT_EQ(log.velocity_source, "GPS.Spd,GCrs,VZ (3-D fix)");
+  ASSERT_EQ(log.velocity.size(), 2u);
+  EXPECT_EQ(log.velocity[0].t_ns, 5'000'000'000);
+  EXPECT_NEAR((log.velocity[0].ned_mps - Eigen::Vector3d(10 * std::sqrt(0.75), 5.0, -1.5)).norm(),
+              0.0, 1e-5);
+  EXPECT_NEAR((log.velocity[1].ned_mps - Eigen::Vector3d(0.0, -4.0, 0.0)).norm(), 0.0, 1e-5);
+  EXPECT_EQ(log.attitude_source, "ATT.Roll,Pitch,Yaw");
+  ASSERT_EQ(log.attitude.size(), 2u);
+  // Yaw 90 deg, pitch -20 deg (nose down), roll 10 deg: the nose points east and down by 20 deg,
+  // the right wing south and down by 10 deg.
+  const Eigen::Matrix3d ned_from_body = log.attitude[0].ned_from_body.toRotationMatrix();
+  const double p = 20 * M_PI / 180, r = 10 * M_PI / 180;
+  EXPECT_NEAR((ned_from_body.col(0) - Eigen::Vector3d(0.0, std::cos(p), std::sin(p))).norm(), 0.0,
+              1e-6);
+  EXPECT_NEAR(ned_from_body.col(1).z(), std::sin(r) * std::cos(p), 1e-6);
+  EXPECT_LT(ned_from_body.col(1).x(), -0.9) << "the right wing to the south";
+  EXPECT_EQ(log.attitude[1].t_ns, 5'020'000'000);
+  EXPECT_NEAR(log.attitude[1].ned_from_body.angularDistance(Eigen::Quaterniond(
+                  Eigen::AngleAxisd(-10 * M_PI / 180, Eigen::Vector3d::UnitZ()))),
+              0.0, 1e-6);
+}
+
+// The EKF's velocity (XKF1 VN, VE, VD of core 0) is preferred to the GPS receiver's.
+TEST(DataFlash, TheEkfsVelocityOverTheGps) {
+  DataFlashBuilder b;
+  b.Fmt(149, 3 + 8 + 1 + 1 + 4 + 2 + 12, "GPS", "QBBIHfff", "TimeUS,I,Status,GMS,GWk,Spd,GCrs,VZ");
+  b.Fmt(151, 3 + 8 + 1 + 12, "XKF1", "QBfff", "TimeUS,C,VN,VE,VD");
+  b.bytes() += std::string("\xA3\x95\x95", 3);
+  test::PutLittleEndian<uint64_t>(&b.bytes(), 5'000'000);
+  for (uint8_t v : {uint8_t{0}, uint8_t{3}}) test::PutLittleEndian(&b.bytes(), v);
+  test::PutLittleEndian<uint32_t>(&b.bytes(), 296'288'242);
+  test::PutLittleEndian<uint16_t>(&b.bytes(), 2211);
+  for (float v : {10.0f, 30.0f, 0.0f}) test::PutLittleEndian(&b.bytes(), v);
+  auto ekf = [&b](uint64_t t_us, uint8_t core, float n, float e, float d) {
+    b.bytes() += std::string("\xA3\x95\x97", 3);
+    test::PutLittleEndian(&b.bytes(), t_us);
+    test::PutLittleEndian(&b.bytes(), core);
+    for (float v : {n, e, d}) test::PutLittleEndian(&b.bytes(), v);
+  };
+  ekf(5'000'000, 0, 1.0f, 2.0f, 0.5f);
+  ekf(5'000'000, 1, 7.0f, 7.0f, 7.0f);  // the second core: not used
+  ekf(5'100'000, 0, 1.5f, 2.5f, 0.0f);
+  for (int k = 0; k < 10; ++k) b.Imu(1000 + k * 1000, 0, 0, 0, 0);
+  const FlightLog log = ParseDataFlash(b.bytes(), "ekf.bin");
+  EXPECT_EQ(log.velocity_source, "XKF1.VN,VE,VD (core 0)");
+  ASSERT_EQ(log.velocity.size(), 2u);
+  EXPECT_EQ(log.velocity[0].ned_mps, Eigen::Vector3d(1.0, 2.0, 0.5));
+  EXPECT_EQ(log.velocity[1].t_ns, 5'100'000'000);
 }
 
 TEST(DataFlash, TruncatedCopyKeepsWhatCameBefore) {

@@ -6,6 +6,7 @@
 #include "sim/logs/ulog_write.h"
 #include "sim/still_detect.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 #include "tests/sim/logs/pipe_util.h"
 #include "tests/sim/logs/same_log.h"
 #include "tests/test_util.h"
@@ -15,7 +16,9 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -48,6 +51,59 @@ TEST(ReadFlightLog, DetectsAndReadsEveryRealLog) {
     EXPECT_EQ(log.format, c.format) << c.path;
     EXPECT_GT(log.gyro.samples().size(), 1000u) << c.path;
     EXPECT_FALSE(log.gyro_source.empty()) << c.path;
+  }
+}
+
+// The real PX4 and ArduPilot logs' navigation: a velocity and an attitude a flight can have. The
+// velocity over the ground below 30 m/s; the attitude mostly near level (median tilt below 15 deg;
+// under 10 % of it beyond 45 deg: log171 flips in ACRO and ends upside down, 6 % of its samples);
+// samples at the rates the autopilots log them, in time order.
+TEST(ReadFlightLog, RealLogsGiveTheirNavigation) {
+  struct Case {
+    std::string path;
+    std::string velocity_source, attitude_source;
+  };
+  SHUTTERLAB_NEED_REAL_DATA();
+  const std::string& data = real_data_dir_;
+  const Case cases[] = {
+      {"gyro/px4_ulog/sample_log_small.ulg",
+       "the GPS's vel_n_m_s,vel_e_m_s,vel_d_m_s (where vel_ned_valid)", "vehicle_attitude.q"},
+      {"incoming/ardupilot_log171/log171.bin", "EKF1.VN,VE,VD", "ATT.Roll,Pitch,Yaw"},
+      {"incoming/ardupilot_isb_80k/backend_log_80k.bin", "XKF1.VN,VE,VD (core 0)",
+       "ATT.Roll,Pitch,Yaw"}};
+  const auto span_s = [](const auto& samples) {
+    return samples.size() < 2 ? 0.0 : (samples.back().t_ns - samples.front().t_ns) * 1e-9;
+  };
+  for (const Case& c : cases) {
+    const FlightLog log = ReadFlightLog(data + "/" + c.path);
+    EXPECT_EQ(log.velocity_source, c.velocity_source) << c.path;
+    EXPECT_EQ(log.attitude_source, c.attitude_source) << c.path;
+    double top_speed = 0.0;
+    for (const VelocitySample& v : log.velocity)
+      top_speed = std::max(top_speed, v.ned_mps.head<2>().norm());
+    std::vector<double> tilt_deg;
+    for (const AttitudeSample& a : log.attitude) {
+      const double down = a.ned_from_body.toRotationMatrix()(2, 2);
+      tilt_deg.push_back(std::acos(std::clamp(down, -1.0, 1.0)) * 180 / M_PI);
+    }
+    const double beyond_45 =
+        std::count_if(tilt_deg.begin(), tilt_deg.end(), [](double t) { return t > 45.0; }) /
+        static_cast<double>(std::max<size_t>(tilt_deg.size(), 1));
+    std::printf(
+        "  %s: %zu velocity samples over %.1f s (top %.2f m/s), %zu attitude samples "
+        "over %.1f s (%.1f %% tilted beyond 45 deg)\n",
+        c.path.c_str(), log.velocity.size(), span_s(log.velocity), top_speed, log.attitude.size(),
+        span_s(log.attitude), 100 * beyond_45);
+    ASSERT_GE(log.velocity.size(), 5u) << c.path;  // the 80 kB log's first seconds hold 5
+    ASSERT_GE(log.attitude.size(), 5u) << c.path;
+    EXPECT_LT(top_speed, 30.0) << c.path;
+    EXPECT_LT(Median(tilt_deg), 15.0) << c.path;
+    EXPECT_LT(beyond_45, 0.10) << c.path;
+    // At 1 Hz or more (GPS 5-10 Hz, the estimators 10-100 Hz); the attitude at 50 Hz at most.
+    EXPECT_GT(log.velocity.size() / span_s(log.velocity), 1.0) << c.path;
+    EXPECT_LE(log.attitude.size() / span_s(log.attitude), 50.5) << c.path;
+    for (size_t k = 1; k < log.velocity.size(); ++k)
+      ASSERT_GT(log.velocity[k].t_ns, log.velocity[k - 1].t_ns) << c.path << " " << k;
   }
 }
 

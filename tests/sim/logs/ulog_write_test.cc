@@ -123,6 +123,53 @@ TEST(ULogWrite, AltitudeRoundTripsWhenGiven) {
   EXPECT_EQ(log.camera_events.size(), 5u);
 }
 
+TEST(ULogWrite, NavigationRoundTripsThroughTheReader) {
+  // Velocity at 10 Hz (one sample without a vertical part) with the altitude, attitude at 100 Hz:
+  // the velocity comes back sample for sample as float32, the down part NaN where v_z_valid is
+  // false; the attitude one sample every 20 ms (the reader's 50 Hz), each the quaternion written.
+  ULogWriteOptions options;
+  options.altitude_above_ground_m = 40.0;
+  for (int k = 0; k < 100; ++k) {
+    const int64_t t_ns = kStartNs + k * 100'000'000LL;
+    options.velocity.push_back(
+        {t_ns, Eigen::Vector3d(5.0 * std::cos(0.1 * k), 3.0 + 0.01 * k, k == 7 ? NAN : -0.25)});
+  }
+  for (int k = 0; k < 1000; ++k) {
+    const double yaw_rad = 0.002 * k;
+    options.attitude.push_back(
+        {kStartNs + k * 10'000'000LL,
+         Eigen::Quaterniond(Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()) *
+                            Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitX()))});
+  }
+  const FlightLog log =
+      ParseULog(SerializeULog(SyntheticTrace(), CameraEvery2s(), options), "synthetic.ulg");
+  EXPECT_TRUE(log.warnings.empty()) << test::JoinedWarnings(log.warnings);
+  EXPECT_EQ(log.altitude_above_ground_m, static_cast<double>(40.0f));
+  EXPECT_EQ(log.velocity_source, "vehicle_local_position.vx,vy,vz (where v_xy_valid)");
+  ASSERT_EQ(log.velocity.size(), options.velocity.size());
+  for (size_t k = 0; k < log.velocity.size(); ++k) {
+    const Eigen::Vector3d& written = options.velocity[k].ned_mps;
+    EXPECT_EQ(log.velocity[k].t_ns, RoundToMicrosecondNs(options.velocity[k].t_ns));
+    for (int axis = 0; axis < 3; ++axis) {
+      if (std::isnan(written[axis])) {
+        EXPECT_TRUE(std::isnan(log.velocity[k].ned_mps[axis])) << "sample " << k;
+      } else {
+        EXPECT_EQ(log.velocity[k].ned_mps[axis],
+                  static_cast<double>(static_cast<float>(written[axis])))
+            << "sample " << k << " axis " << axis;
+      }
+    }
+  }
+  EXPECT_EQ(log.attitude_source, "vehicle_attitude.q");
+  ASSERT_EQ(log.attitude.size(), 500u) << "one in two of the 100 Hz samples";
+  for (size_t k = 0; k < log.attitude.size(); ++k) {
+    const AttitudeSample& written = options.attitude[2 * k];
+    EXPECT_EQ(log.attitude[k].t_ns, RoundToMicrosecondNs(written.t_ns));
+    EXPECT_LT(log.attitude[k].ned_from_body.angularDistance(written.ned_from_body), 1e-6)
+        << "sample " << k;
+  }
+}
+
 TEST(ULogWrite, HeaderFlagBitsAndDataInTimeOrder) {
   const GyroTrace trace = SyntheticTrace();
   ULogWriteOptions options;
@@ -158,7 +205,8 @@ TEST(ULogWrite, HeaderFlagBitsAndDataInTimeOrder) {
         EXPECT_EQ(size, 2 + 48) << "sensor_gyro at byte " << pos;
         gyro_after_camera |= seen_camera;
       } else {
-        EXPECT_EQ(size, 2 + 16) << "msg_id " << msg_id << " at byte " << pos;
+        // camera_capture 16 bytes, vehicle_local_position 32 (velocity, altitude, flags)
+        EXPECT_EQ(size, 2 + (msg_id == 2 ? 32 : 16)) << "msg_id " << msg_id << " at byte " << pos;
         seen_camera |= msg_id == 1;
         position_messages += msg_id == 2;
       }
