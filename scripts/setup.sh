@@ -9,7 +9,8 @@ cd "$(dirname "$0")/.."
 packages=(cmake g++ make pkg-config libeigen3-dev libopencv-dev libopenimageio-dev
           openimageio-tools libjpeg-dev libpng-dev libexiv2-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev
           libbenchmark-dev clang-format libgpiod-dev libtomlplusplus-dev libxxhash-dev universal-ctags
-          clang libclang-rt-14-dev)  # clang + its libFuzzer: scripts/fuzz.sh
+          clang libclang-rt-14-dev  # clang + its libFuzzer: scripts/fuzz.sh
+          lld)  # LLVM's linker: links in under half GNU ld's time (CMakeLists.txt)
 scripts/install_packages.sh setup "${packages[@]}"
 
 build_dir="${SHUTTERLAB_BUILD_DIR:-build}"

@@ -155,10 +155,6 @@ std::string WhyNotCorrected(const PhotoRecord& r, const PhotoPlacement& placemen
   return "";
 }
 
-}  // namespace
-
-namespace {
-
 // "5.00 m/s toward 90 deg" of a NED velocity (its horizontal part's direction).
 std::string SpeedText(const Eigen::Vector3d& ned) {
   return FormatNumber("%.2f m/s", ned.norm()) +

@@ -624,9 +624,11 @@ void DataFlashParser::HandleGpsVelocity(const Format& fmt, std::string_view p, i
 }
 
 // The EKF's velocity: EKF1 (ArduPilot's first EKF), NKF1 (EKF2), XKF1 (EKF3) VN, VE, VD, m/s, of
-// the first core (C 0 where the message names its core). The estimate fuses GPS, IMU and baro:
-// preferred to the receiver's own velocity.
+// the first core (C 0 where the message names its core), of the first of them the log holds (a
+// log may run EKF2 and EKF3 side by side). The estimate fuses GPS, IMU and baro: preferred to the
+// receiver's own velocity.
 void DataFlashParser::HandleEkfVelocity(const Format& fmt, std::string_view p) {
+  if (!ekf_velocity_source_.empty() && ekf_velocity_source_.rfind(fmt.name + ".", 0) != 0) return;
   const Field* n = fmt.Find("VN");
   const Field* e = fmt.Find("VE");
   const Field* d = fmt.Find("VD");

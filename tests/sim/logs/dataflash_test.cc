@@ -409,11 +409,13 @@ TEST(DataFlash, ReadsTheGpsVelocityAndTheAttitude) {
               0.0, 1e-6);
 }
 
-// The EKF's velocity (XKF1 VN, VE, VD of core 0) is preferred to the GPS receiver's.
+// The EKF's velocity (XKF1 VN, VE, VD of core 0) is preferred to the GPS receiver's; a second EKF
+// logged beside the first (NKF1 after XKF1) is not mixed in.
 TEST(DataFlash, TheEkfsVelocityOverTheGps) {
   DataFlashBuilder b;
   b.Fmt(149, 3 + 8 + 1 + 1 + 4 + 2 + 12, "GPS", "QBBIHfff", "TimeUS,I,Status,GMS,GWk,Spd,GCrs,VZ");
   b.Fmt(151, 3 + 8 + 1 + 12, "XKF1", "QBfff", "TimeUS,C,VN,VE,VD");
+  b.Fmt(152, 3 + 8 + 12, "NKF1", "Qfff", "TimeUS,VN,VE,VD");
   b.bytes() += std::string("\xA3\x95\x95", 3);
   test::PutLittleEndian<uint64_t>(&b.bytes(), 5'000'000);
   for (uint8_t v : {uint8_t{0}, uint8_t{3}}) test::PutLittleEndian(&b.bytes(), v);
@@ -427,7 +429,10 @@ TEST(DataFlash, TheEkfsVelocityOverTheGps) {
     for (float v : {n, e, d}) test::PutLittleEndian(&b.bytes(), v);
   };
   ekf(5'000'000, 0, 1.0f, 2.0f, 0.5f);
-  ekf(5'000'000, 1, 7.0f, 7.0f, 7.0f);  // the second core: not used
+  ekf(5'000'000, 1, 7.0f, 7.0f, 7.0f);          // the second core: not used
+  b.bytes() += std::string("\xA3\x95\x98", 3);  // the other EKF: not used
+  test::PutLittleEndian<uint64_t>(&b.bytes(), 5'050'000);
+  for (float v : {9.0f, 9.0f, 9.0f}) test::PutLittleEndian(&b.bytes(), v);
   ekf(5'100'000, 0, 1.5f, 2.5f, 0.0f);
   for (int k = 0; k < 10; ++k) b.Imu(1000 + k * 1000, 0, 0, 0, 0);
   const FlightLog log = ParseDataFlash(b.bytes(), "ekf.bin");
