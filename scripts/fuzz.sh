@@ -35,6 +35,8 @@ while [ $# -gt 0 ]; do
     *) targets+=("$1"); shift ;;
   esac
 done
+# Ninja for a new build folder, as scripts/setup.sh says.
+command -v ninja >/dev/null && export CMAKE_GENERATOR="${CMAKE_GENERATOR:-Ninja}"
 if [ ! -f "$build/CMakeCache.txt" ]; then
   CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DSHUTTERLAB_FUZZ=ON -DSHUTTERLAB_BUILD_TESTS=OFF -DSHUTTERLAB_BUILD_BENCH=OFF \

@@ -10,10 +10,14 @@ packages=(cmake g++ make pkg-config libeigen3-dev libopencv-dev libopenimageio-d
           openimageio-tools libjpeg-dev libpng-dev libexiv2-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev
           libbenchmark-dev clang-format libgpiod-dev libtomlplusplus-dev libxxhash-dev universal-ctags
           clang libclang-rt-14-dev  # clang + its libFuzzer: scripts/fuzz.sh
-          lld)  # LLVM's linker: links in under half GNU ld's time (CMakeLists.txt)
+          lld  # LLVM's linker: links in under half GNU ld's time (CMakeLists.txt)
+          ninja-build)  # Ninja: compiles a target's files while the libraries it links still build
 scripts/install_packages.sh setup "${packages[@]}"
 
 build_dir="${SHUTTERLAB_BUILD_DIR:-build}"
+# A new build folder is made for Ninja where it is installed (a folder made for make keeps make:
+# CMake reads CMAKE_GENERATOR only when it makes the cache).
+command -v ninja >/dev/null && export CMAKE_GENERATOR="${CMAKE_GENERATOR:-Ninja}"
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
 cmake --build "$build_dir" -j"$(nproc)" --target shutterlab
 echo "setup: built $build_dir/bin/shutterlab"
