@@ -39,8 +39,7 @@ std::vector<std::string> InDir(const std::string& dir, const std::vector<std::st
 }
 
 // --export: the photos' camera in each tool's files, all made in memory first, so that a format
-// that refuses (kalibr: photos relate no gyro to the camera) stops the command before anything
-// is written.
+// that refuses (pix4d: a fisheye) or is unknown stops the command before anything is written.
 std::vector<std::pair<std::string, ExportOutput>> PhotoExports(const AnalyzeFlags& flags,
                                                                const nlohmann::json& photos) {
   std::vector<std::pair<std::string, ExportOutput>> exports;

@@ -109,10 +109,7 @@ void ChooseFlightState(const PhotoSetOptions& options, PhotoRecord* r) {
   }
   if (m.speed_m_s) {
     r->ground_speed_m_s = std::hypot(m.speed_m_s->x(), m.speed_m_s->y());
-    if (*r->ground_speed_m_s > 0) {
-      double course = std::atan2(m.speed_m_s->y(), m.speed_m_s->x()) * kDegPerRad;
-      r->course_deg = course < 0 ? course + 360.0 : course;
-    }
+    if (*r->ground_speed_m_s > 0) r->course_deg = CourseDeg(m.speed_m_s->x(), m.speed_m_s->y());
     r->speed_source = m.flight_state_source == "DJI maker note"
                           ? "DJI maker note SpeedX/SpeedY"
                           : "XMP drone-dji:FlightXSpeed/FlightYSpeed";

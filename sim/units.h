@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -19,6 +20,12 @@ inline constexpr double kRadPerDeg = kPi / 180.0;
 inline constexpr double kDegPerRad = 180.0 / kPi;
 inline constexpr double kArcsecPerRad = 180.0 / kPi * 3600.0;
 inline constexpr double kRadPerArcsec = kPi / (180.0 * 3600.0);
+
+// The course of a horizontal velocity: degrees clockwise from north, in [0, 360).
+inline double CourseDeg(double north_m_s, double east_m_s) {
+  const double deg = std::atan2(east_m_s, north_m_s) * kDegPerRad;
+  return deg >= 0 ? deg : std::fmod(deg + 360.0, 360.0);  // fmod: -1e-15 deg is 0, not 360
+}
 
 // Wall-clock seconds since start, for reports' timings.
 inline double SecondsSince(std::chrono::steady_clock::time_point start) {

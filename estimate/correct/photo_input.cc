@@ -158,8 +158,7 @@ std::string WhyNotCorrected(const PhotoRecord& r, const PhotoPlacement& placemen
 // "5.00 m/s toward 90 deg" of a NED velocity (its horizontal part's direction).
 std::string SpeedText(const Eigen::Vector3d& ned) {
   return FormatNumber("%.2f m/s", ned.norm()) +
-         FormatNumber(" toward %.0f deg",
-                      std::fmod(std::atan2(ned.y(), ned.x()) * kDegPerRad + 360.0, 360.0));
+         FormatNumber(" toward %.0f deg", CourseDeg(ned.x(), ned.y()));
 }
 
 // The camera's axes (x right, y down, z along the view) from NED, by a DJI gimbal's attitude.
@@ -177,40 +176,30 @@ std::string GimbalText(const AttitudeDeg& gimbal) {
 
 }  // namespace
 
-PhotoVelocity VelocityFromPhoto(const PhotoMetadata& metadata) {
-  PhotoVelocity out;
-  if (!metadata.speed_m_s) {
-    out.source = "the photo records no flight speed";
-    return out;
-  }
-  if (!metadata.gimbal) {
-    out.source = "the photo records its flight speed but not the camera's attitude";
-    return out;
-  }
-  // DJI documents the sign of neither vertical speed: the horizontal part only.
-  const Eigen::Vector3d ned(metadata.speed_m_s->x(), metadata.speed_m_s->y(), 0.0);
-  out.velocity_mps = CameraFromNed(*metadata.gimbal) * ned;
-  out.source = SpeedText(ned) + " from the photo's " + metadata.flight_state_source +
-               ", turned by its " + GimbalText(*metadata.gimbal);
-  return out;
-}
-
-PhotoVelocity VelocityFromLog(const PhotoMetadata& metadata, const FlightLog& log, int64_t t_ns,
+PhotoVelocity VelocityOfPhoto(const PhotoMetadata& metadata, const FlightLog& log, int64_t t_ns,
                               const Eigen::Matrix3d& camera_from_body,
                               const std::string& mounting_source) {
   PhotoVelocity out;
-  const std::optional<Eigen::Vector3d> logged = VelocityAt(log.velocity, t_ns);
-  if (!logged) {
-    out.source = log.velocity.empty() ? "the photo records no flight speed, nor does the log"
-                                      : "the photo records no flight speed, and the log's (" +
-                                            log.velocity_source + ") does not reach its time";
-    return out;
+  Eigen::Vector3d ned;
+  std::string what;
+  if (metadata.speed_m_s) {
+    // DJI documents the sign of neither vertical speed: the horizontal part only.
+    ned = Eigen::Vector3d(metadata.speed_m_s->x(), metadata.speed_m_s->y(), 0.0);
+    what = SpeedText(ned) + " from the photo's " + metadata.flight_state_source;
+  } else {
+    const std::optional<Eigen::Vector3d> logged = VelocityAt(log.velocity, t_ns);
+    if (!logged) {
+      out.source = log.velocity.empty() ? "the photo records no flight speed, nor does the log"
+                                        : "the photo records no flight speed, and the log's (" +
+                                              log.velocity_source + ") does not reach its time";
+      return out;
+    }
+    // The log's down axis is documented (NED): kept where the log gives it.
+    ned = *logged;
+    if (!std::isfinite(ned.z())) ned.z() = 0.0;
+    what = SpeedText(ned) + " from the log's " + log.velocity_source +
+           FormatNumber(" at %.3f s", t_ns * 1e-9);
   }
-  // The log's down axis is documented (NED): kept where the log gives it.
-  Eigen::Vector3d ned = *logged;
-  if (!std::isfinite(ned.z())) ned.z() = 0.0;
-  const std::string what = SpeedText(ned) + " from the log's " + log.velocity_source +
-                           FormatNumber(" at %.3f s", t_ns * 1e-9);
   if (metadata.gimbal) {
     out.velocity_mps = CameraFromNed(*metadata.gimbal) * ned;
     out.source = what + ", turned by the photo's " + GimbalText(*metadata.gimbal);
@@ -297,11 +286,9 @@ PhotoInput ReadPhotoInput(const std::string& photos_dir, const PhotoInputOptions
     e.frame = static_cast<int64_t>(i);
     e.image = set.photos[i].name;
     e.t_first_row_ns = *clock.placements[i].t_ns + latency_ns;
-    const PhotoMetadata& metadata = set.photos[i].metadata;
     input.velocity[e.frame] =
-        metadata.speed_m_s ? VelocityFromPhoto(metadata)
-                           : VelocityFromLog(metadata, log, e.t_first_row_ns + readout_half_ns,
-                                             dataset.declared.cam_from_gyro, mounting_source);
+        VelocityOfPhoto(set.photos[i].metadata, log, e.t_first_row_ns + readout_half_ns,
+                        dataset.declared.cam_from_gyro, mounting_source);
     dataset.frames.push_back(std::move(e));
   }
 

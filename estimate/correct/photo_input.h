@@ -11,10 +11,10 @@
 // size or focal length (a zoom) than the camera is skipped, with the reason. The ground plane's
 // height: --altitude, else camera.json's, else the log's height above ground, else the photos'
 // median height above take-off, else camera.json's default (50 m), each said. Each placed photo's
-// velocity comes from its own metadata: the recorded horizontal flight speed (north, east) turned
-// into the camera's axes by the gimbal's attitude (PhotoVelocity); a photo that records no speed
-// takes the log's (PX4 vehicle_local_position, ArduPilot GPS) at its middle row's time, turned by
-// its gimbal's attitude or else the log's attitude and the camera's mounting.
+// velocity (PhotoVelocity) is the horizontal flight speed (north, east) its metadata records, else
+// the log's (PX4 vehicle_local_position, ArduPilot's EKF or GPS) at its middle row's time; it is
+// turned into the camera's axes by the photo's gimbal attitude, else the log's attitude and the
+// camera's mounting.
 
 #include "estimate/paper/photo_clock.h"
 #include "io/lens_profile.h"
@@ -59,14 +59,13 @@ struct PhotoVelocity {
   std::optional<Eigen::Vector3d> velocity_mps;  // nullopt: no speed, or no attitude to turn it
   std::string source;                           // for a person: where it came from, or why none
 };
-// The horizontal flight speed the photo's metadata records (north, east; the vertical one's sign
-// is documented nowhere) turned by its gimbal's attitude.
-PhotoVelocity VelocityFromPhoto(const PhotoMetadata& metadata);
-// For a photo that records no speed: the log's velocity at t_ns (NED, the vertical part where the
-// log gives it), turned by the photo's gimbal attitude when it records one, else by the log's
-// attitude at t_ns and camera_from_body (the log's body axes are its gyro's: the rig's
-// cam_from_gyro), which mounting_source names for a person.
-PhotoVelocity VelocityFromLog(const PhotoMetadata& metadata, const FlightLog& log, int64_t t_ns,
+// A placed photo's velocity at t_ns (its middle row's time, on the log's clock): the horizontal
+// flight speed its metadata records (north, east; the sign of the vertical one is documented
+// nowhere), else the log's velocity (NED, the vertical part where the log gives it); turned by the
+// photo's gimbal attitude when it records one, else by the log's attitude at t_ns and
+// camera_from_body (the log's body axes are its gyro's: the rig's cam_from_gyro), which
+// mounting_source names for a person.
+PhotoVelocity VelocityOfPhoto(const PhotoMetadata& metadata, const FlightLog& log, int64_t t_ns,
                               const Eigen::Matrix3d& camera_from_body,
                               const std::string& mounting_source);
 

@@ -37,18 +37,24 @@ ExportOutput KalibrExport(const ExportCamera& camera, const ExportOptions& optio
     distortion_model = "equidistant";
     coeffs = {k[0], k[1], k[2], k[3]};
   }
-  RequireGyroRelation(camera, "Kalibr", "time shift", options, &out.notes);
+  // Photos alone relate no gyro to the camera: the camera chain alone, what Kalibr's camera-IMU
+  // calibration starts from (kalibr_calibrate_imu_camera --cams), which then finds T_cam_imu and
+  // the time shift.
+  const bool with_imu = camera.gyro_known;
+  if (with_imu) RequireGyroRelation(camera, "Kalibr", "time shift", options, &out.notes);
   std::string yaml = "# shutterlab export from " + camera.source + "\ncam0:\n";
   yaml += "  camera_model: pinhole\n";
   yaml += "  intrinsics: " + YamlList({c.fx, c.fy, c.cx, c.cy}) + "\n";
   yaml += "  distortion_model: " + distortion_model + "\n";
   yaml += "  distortion_coeffs: " + YamlList(coeffs) + "\n";
   yaml += "  resolution: [" + std::to_string(c.width) + ", " + std::to_string(c.height) + "]\n";
-  yaml += "  T_cam_imu:\n";
-  const Eigen::Matrix3d& r = rig.cam_from_gyro;
-  for (int i = 0; i < 3; ++i) yaml += "  - " + YamlList({r(i, 0), r(i, 1), r(i, 2), 0.0}) + "\n";
-  yaml += "  - [0.0, 0.0, 0.0, 1.0]\n";
-  yaml += "  timeshift_cam_imu: " + ExportNumber(rig.time_offset_s) + "\n";
+  if (with_imu) {
+    yaml += "  T_cam_imu:\n";
+    const Eigen::Matrix3d& r = rig.cam_from_gyro;
+    for (int i = 0; i < 3; ++i) yaml += "  - " + YamlList({r(i, 0), r(i, 1), r(i, 2), 0.0}) + "\n";
+    yaml += "  - [0.0, 0.0, 0.0, 1.0]\n";
+    yaml += "  timeshift_cam_imu: " + ExportNumber(rig.time_offset_s) + "\n";
+  }
   if (camera.readout_known && rig.shutter.readout_s > 0.0) {
     RequireDetermined(camera, "readout_time", options, &out.notes);
     RequireDetermined(camera, "readout_direction", options, &out.notes);
@@ -69,6 +75,14 @@ ExportOutput KalibrExport(const ExportCamera& camera, const ExportOptions& optio
         "frame's time, the first row's, as in shutterlab");
   }
   yaml += "  rostopic: /cam0/image_raw\n";
+  if (!with_imu) {
+    out.files.push_back({"camchain.yaml", yaml, "Kalibr's camera chain (the camera alone)"});
+    out.notes.push_back(
+        "the camera alone: the source relates no gyro to it (photos alone), so no T_cam_imu or "
+        "timeshift_cam_imu; kalibr_calibrate_imu_camera --cams camchain.yaml finds them");
+    AddSideNote("kalibr", camera, &out);
+    return out;
+  }
   out.files.push_back({"camchain-imucam.yaml", yaml, "Kalibr's camera-IMU chain"});
   out.notes.push_back(
       "timeshift_cam_imu = time_offset_s (t_imu = t_cam + shift, shutterlab's "

@@ -49,7 +49,10 @@ std::string CameraYaml(const ExportCamera& camera, const ExportOptions& options,
 ExportOutput VinsExport(const ExportCamera& camera, const ExportOptions& options) {
   const RigModel& rig = camera.truth.rig;
   ExportOutput out;
-  RequireGyroRelation(camera, "VINS", "td", options, &out.notes);
+  // Photos alone relate no gyro to the camera: VINS is told to calibrate the rotation and td itself
+  // (estimate_extrinsic 2, estimate_td 1 from 0).
+  const bool with_imu = camera.gyro_known;
+  if (with_imu) RequireGyroRelation(camera, "VINS", "td", options, &out.notes);
   const bool rolling = camera.readout_known && rig.shutter.readout_s > 0.0;
   if (rolling) {
     RequireDetermined(camera, "readout_time", options, &out.notes);
@@ -61,7 +64,7 @@ ExportOutput VinsExport(const ExportCamera& camera, const ExportOptions& options
   }
   const bool top_down = rolling && rig.shutter.direction == ReadoutDirection::kTopToBottom;
   const double readout_s = top_down ? rig.shutter.readout_s : 0.0;
-  const double td_s = rig.time_offset_s + 0.5 * readout_s;
+  const double td_s = with_imu ? rig.time_offset_s + 0.5 * readout_s : 0.0;
   std::string camera_yaml = "%YAML:1.0\n---\n# shutterlab export from " + camera.source + "\n";
   camera_yaml += CameraYaml(camera, options, &out.notes);
   const Eigen::Matrix3d r_gc = rig.cam_from_gyro.transpose();
@@ -70,24 +73,35 @@ ExportOutput VinsExport(const ExportCamera& camera, const ExportOptions& options
   yaml += "cam0_calib: \"camera.yaml\"\n";
   yaml += "image_width: " + std::to_string(rig.camera.width) + "\n";
   yaml += "image_height: " + std::to_string(rig.camera.height) + "\n";
-  yaml += "# 1: an initial guess; shutterlab fits the rotation, not the lever arm (0 here)\n";
-  yaml += "estimate_extrinsic: 1\n";
-  yaml += "extrinsicRotation: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [";
-  for (int i = 0; i < 9; ++i) yaml += (i ? ", " : "") + ExportNumber(r_gc(i / 3, i % 3));
-  yaml += "]\n";
-  yaml +=
-      "extrinsicTranslation: !!opencv-matrix\n   rows: 3\n   cols: 1\n   dt: d\n   data: [0, "
-      "0, 0]\n";
-  yaml += "estimate_td: 0\n";
+  if (with_imu) {
+    yaml += "# 1: an initial guess; shutterlab fits the rotation, not the lever arm (0 here)\n";
+    yaml += "estimate_extrinsic: 1\n";
+    yaml += "extrinsicRotation: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [";
+    for (int i = 0; i < 9; ++i) yaml += (i ? ", " : "") + ExportNumber(r_gc(i / 3, i % 3));
+    yaml += "]\n";
+    yaml +=
+        "extrinsicTranslation: !!opencv-matrix\n   rows: 3\n   cols: 1\n   dt: d\n   data: [0, "
+        "0, 0]\n";
+  } else {
+    yaml += "# 2: no prior (the source relates no gyro to the camera): VINS calibrates it\n";
+    yaml += "estimate_extrinsic: 2\n";
+  }
+  yaml += "estimate_td: " + std::string(with_imu ? "0" : "1") + "\n";
   yaml += "td: " + ExportNumber(td_s) + "\n";
   yaml += "rolling_shutter: " + std::string(top_down ? "1" : "0") + "\n";
   yaml += "rolling_shutter_tr: " + ExportNumber(readout_s) + "\n";
   out.files.push_back({"camera.yaml", camera_yaml, "VINS's camera (camodocal)"});
   out.files.push_back({"vins_config.yaml", yaml, "VINS's extrinsics, td and rolling shutter"});
-  out.notes.push_back("extrinsicRotation = imu^R_cam = R_CG^T (shutterlab: w_C = R_CG w_G)");
-  out.notes.push_back("td " + FormatNumber("%.6g", td_s) +
-                      " s = time_offset_s + readout_s / 2: image clock + td = IMU clock, and "
-                      "VINS times a frame from its middle row, shutterlab from its first");
+  if (with_imu) {
+    out.notes.push_back("extrinsicRotation = imu^R_cam = R_CG^T (shutterlab: w_C = R_CG w_G)");
+    out.notes.push_back("td " + FormatNumber("%.6g", td_s) +
+                        " s = time_offset_s + readout_s / 2: image clock + td = IMU clock, and "
+                        "VINS times a frame from its middle row, shutterlab from its first");
+  } else {
+    out.notes.push_back(
+        "the source relates no gyro to the camera (photos alone): estimate_extrinsic 2 and "
+        "estimate_td 1 from td 0, so VINS calibrates the rotation and the time offset itself");
+  }
   if (top_down)
     out.notes.push_back("rolling_shutter_tr " + FormatNumber("%.6g", readout_s) +
                         " s, the whole frame's readout");

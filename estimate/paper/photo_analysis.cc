@@ -39,9 +39,13 @@ void PredictTranslation(const PhotoRecord& r, const PhotoAnalysisOptions& option
   out->d_translation_m = *r.ground_speed_m_s * *r.readout_s;
   out->d_translation_px = *out->d_translation_m * px_per_m;
   if (m.exposure_s) out->blur_px = *r.ground_speed_m_s * *m.exposure_s * px_per_m;
-  if (nadir && m.speed_m_s) {
+  // A course is known for the photo's own speed or the log's (estimate/paper/photo_flight.h), not
+  // for --speed's alone.
+  if (nadir && (r.course_deg || *r.ground_speed_m_s == 0)) {
     // The ground moves against the camera: -v along each image axis (horizontal motion only).
-    const Eigen::Vector3d v(m.speed_m_s->x(), m.speed_m_s->y(), 0.0);
+    const double course = r.course_deg.value_or(0.0) * kRadPerDeg;
+    const Eigen::Vector3d v =
+        *r.ground_speed_m_s * Eigen::Vector3d(std::cos(course), std::sin(course), 0.0);
     const double scale = *r.readout_s * px_per_m;
     out->along_readout_px = -v.dot(ned_from_gimbal.col(2)) * scale;
     out->across_readout_px = -v.dot(ned_from_gimbal.col(1)) * scale;

@@ -70,10 +70,7 @@ void SpeedsFromLog(const FlightLog& log, const PhotoClock& clock, PhotoSet* set)
     const std::optional<Eigen::Vector3d> v = VelocityAt(log.velocity, *t_ns);
     if (!v) continue;
     r.ground_speed_m_s = v->head<2>().norm();
-    if (*r.ground_speed_m_s > 0) {
-      const double course = std::atan2(v->y(), v->x()) * kDegPerRad;
-      r.course_deg = course < 0 ? course + 360.0 : course;
-    }
+    if (*r.ground_speed_m_s > 0) r.course_deg = CourseDeg(v->x(), v->y());
     r.speed_source = "the log's " + log.velocity_source + " at the photo's time";
     r.missing.erase(std::remove(r.missing.begin(), r.missing.end(), "flight speed"),
                     r.missing.end());

@@ -235,8 +235,9 @@ std::optional<Format> ParseFmt(std::string_view p, std::string* error) {
   fmt.labels = names;
   if ((fmt.time = fmt.Find("TimeUS")) == nullptr && (fmt.time = fmt.Find("TimeMS")) != nullptr)
     fmt.time_ns_per_tick = 1'000'000;
-  static const char* kRelevant[] = {"GYR",  "IMU",  "IMU2", "IMU3", "ISBH", "ISBD", "CAM",  "TRIG",
-                                    "FMTU", "UNIT", "MULT", "GPS",  "ATT",  "EKF1", "NKF1", "XKF1"};
+  static const char* kRelevant[] = {"GYR", "IMU",  "IMU2", "IMU3", "ISBH", "ISBD",
+                                    "CAM", "TRIG", "FMTU", "UNIT", "MULT", "GPS",
+                                    "ATT", "EKF1", "NKF1", "XKF1", "PARM"};
   fmt.relevant = std::any_of(std::begin(kRelevant), std::end(kRelevant),
                              [&](const char* n) { return fmt.name == n; });
   if (offset + kHeaderBytes != fmt.length) {
@@ -309,6 +310,8 @@ class DataFlashParser {
   void HandleGpsVelocity(const Format& fmt, std::string_view payload, int64_t t_ns);
   void HandleAttitude(const Format& fmt, std::string_view payload);
   void HandleEkfVelocity(const Format& fmt, std::string_view payload);
+  void HandleParameter(const Format& fmt, std::string_view payload);
+  void ChooseVelocity();
   void HandleUnits(const Format& fmt, std::string_view payload);
   double GyroToRadPerS(const Format& fmt, uint8_t type, const std::string& label);
   // GyroToRadPerS for GyrX, GyrY, GyrZ of a type, worked out once and kept until a UNIT, FMTU or
@@ -343,8 +346,10 @@ class DataFlashParser {
   std::array<std::array<Sink, 256>, 3> sink_by_stream_;
   std::map<int64_t, BatchHeader> batches_;  // by ISBH.N
   std::vector<double> cam_rel_alt_m_;
-  std::vector<VelocitySample> gps_velocity_, ekf_velocity_;  // Finish keeps one
-  std::string ekf_velocity_source_;
+  std::vector<VelocitySample> gps_velocity_;                         // ChooseVelocity keeps one
+  std::map<std::string, std::vector<VelocitySample>> ekf_velocity_;  // by message: EKF1, NKF1, XKF1
+  std::string first_ekf_;                                            // the first of them logged
+  std::optional<double> ahrs_ekf_type_;                              // PARM AHRS_EKF_TYPE, the last
   size_t skipped_bytes_ = 0;
   std::array<std::optional<Eigen::Vector3d>, 256> gyro_scale_by_type_;  // GyroScale's cache
   std::map<char, std::string> unit_labels_;        // UNIT: id -> label ("rad/s")
@@ -427,6 +432,8 @@ void DataFlashParser::Handle(uint8_t type, const Format& fmt, std::string_view p
     HandleAttitude(fmt, p);
   } else if (name == "EKF1" || name == "NKF1" || name == "XKF1") {
     HandleEkfVelocity(fmt, p);
+  } else if (name == "PARM") {
+    HandleParameter(fmt, p);
   } else if (name == "UNIT" || name == "FMTU") {
     HandleUnits(fmt, p);
     for (auto& scale : gyro_scale_by_type_) scale.reset();  // a unit may have changed
@@ -624,11 +631,10 @@ void DataFlashParser::HandleGpsVelocity(const Format& fmt, std::string_view p, i
 }
 
 // The EKF's velocity: EKF1 (ArduPilot's first EKF), NKF1 (EKF2), XKF1 (EKF3) VN, VE, VD, m/s, of
-// the first core (C 0 where the message names its core), of the first of them the log holds (a
-// log may run EKF2 and EKF3 side by side). The estimate fuses GPS, IMU and baro: preferred to the
+// the first core (C 0 where the message names its core). A log may run EKF2 and EKF3 side by
+// side: ChooseVelocity keeps one. The estimate fuses GPS, IMU and baro: preferred to the
 // receiver's own velocity.
 void DataFlashParser::HandleEkfVelocity(const Format& fmt, std::string_view p) {
-  if (!ekf_velocity_source_.empty() && ekf_velocity_source_.rfind(fmt.name + ".", 0) != 0) return;
   const Field* n = fmt.Find("VN");
   const Field* e = fmt.Find("VE");
   const Field* d = fmt.Find("VD");
@@ -637,9 +643,45 @@ void DataFlashParser::HandleEkfVelocity(const Format& fmt, std::string_view p) {
   const auto t = fmt.TimeNs(p);
   const Eigen::Vector3d ned(ReadNumber(p, *n), ReadNumber(p, *e), ReadNumber(p, *d));
   if (!t || *t <= 0 || !ned.allFinite() || ned.norm() > kMaxLogSpeedMps) return;
-  if (!ekf_velocity_.empty() && *t <= ekf_velocity_.back().t_ns) return;  // time order
-  ekf_velocity_.push_back({*t, ned});
-  ekf_velocity_source_ = fmt.name + ".VN,VE,VD" + (fmt.Find("C") ? " (core 0)" : "");
+  std::vector<VelocitySample>& samples = ekf_velocity_[fmt.name];
+  if (!samples.empty() && *t <= samples.back().t_ns) return;  // time order
+  samples.push_back({*t, ned});
+  if (first_ekf_.empty()) first_ekf_ = fmt.name;
+}
+
+// PARM Name, Value: AHRS_EKF_TYPE says which EKF the autopilot flew on (2: EKF2, 3: EKF3).
+void DataFlashParser::HandleParameter(const Format& fmt, std::string_view p) {
+  const Field* name = fmt.Find("Name");
+  const Field* value = fmt.Find("Value");
+  if (!name || !value || name->type != 'N') return;
+  if (TrimmedText(p.substr(name->offset, 16)) != "AHRS_EKF_TYPE") return;
+  const double type = ReadNumber(p, *value);
+  if (std::isfinite(type)) ahrs_ekf_type_ = type;
+}
+
+// The log's velocity: the EKF the autopilot flew on (AHRS_EKF_TYPE) where the log holds its
+// messages, else the first EKF logged, else the GPS's.
+void DataFlashParser::ChooseVelocity() {
+  std::string ekf = first_ekf_, why;
+  if (ahrs_ekf_type_) {
+    const std::string flown = *ahrs_ekf_type_ == 2 ? "NKF1" : *ahrs_ekf_type_ == 3 ? "XKF1" : "";
+    if (!flown.empty() && ekf_velocity_.count(flown) != 0) {
+      ekf = flown;
+      why = FormatNumber(", the EKF flown on (AHRS_EKF_TYPE %g)", *ahrs_ekf_type_);
+    }
+  }
+  if (!ekf.empty()) {
+    const Format* format = nullptr;
+    for (const std::optional<Format>& f : formats_) {
+      if (f && f->name == ekf) format = &*f;
+    }
+    log_.velocity = std::move(ekf_velocity_[ekf]);
+    log_.velocity_source =
+        ekf + ".VN,VE,VD" + (format && format->Find("C") ? " (core 0)" : "") + why;
+  } else if (!gps_velocity_.empty()) {
+    log_.velocity = std::move(gps_velocity_);
+    log_.velocity_source = "GPS.Spd,GCrs,VZ (3-D fix)";
+  }
 }
 
 // ATT Roll, Pitch, Yaw (degrees; centidegrees in older logs, which ReadNumber scales): Z-Y-X Euler
@@ -694,13 +736,7 @@ void DataFlashParser::Finish() {
     log_.warnings.push_back(
         {"corrupt", std::to_string(skipped_bytes_) + " corrupt bytes skipped in total"});
 
-  if (!ekf_velocity_.empty()) {
-    log_.velocity = std::move(ekf_velocity_);
-    log_.velocity_source = ekf_velocity_source_;
-  } else if (!gps_velocity_.empty()) {
-    log_.velocity = std::move(gps_velocity_);
-    log_.velocity_source = "GPS.Spd,GCrs,VZ (3-D fix)";
-  }
+  ChooseVelocity();
   std::stable_sort(log_.camera_events.begin(), log_.camera_events.end(),
                    [](const CameraEvent& a, const CameraEvent& b) { return a.t_ns < b.t_ns; });
   KeepOneCameraEventKind(&log_);

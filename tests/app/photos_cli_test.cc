@@ -158,8 +158,8 @@ TEST(PhotosCli, BadPhotosAreReportedAndAFolderWithoutPhotosIsAnError) {
 // with the camera clock's offset and the residuals reported, and carry analyze's rotation beside
 // its own translation.
 // --export: the photos' camera in each tool's files beside the lists, as `shutterlab export` writes
-// it from the same result's JSON; a format that refuses (photos relate no gyro to the camera: no
-// Kalibr chain) stops the command before anything is written.
+// it from the same result's JSON; a format that fails stops the command before anything is
+// written.
 TEST(PhotosCli, ExportsThePhotosCameraBesideTheListsOrWritesNothing) {
   test::TempDir dir;
   std::filesystem::create_directories(dir / "photos");
@@ -191,11 +191,17 @@ TEST(PhotosCli, ExportsThePhotosCameraBesideTheListsOrWritesNothing) {
   EXPECT_EQ(ReadFileToString(dir / "odm/camera_models_overrides.json"),
             ReadFileToString(dir / "out/export_odm/camera_models_overrides.json"));
 
+  // Photos alone relate no gyro to the camera: Kalibr gets the camera chain alone.
+  const auto chain = RunShutterlab(photos + " --out " + (dir / "chain") + " --export kalibr,vins");
+  ASSERT_EQ(chain.exit_code, 0) << chain.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "chain/export_kalibr/camchain.yaml"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "chain/export_vins/vins_config.yaml"));
+  // A format that fails after odm's files were made (in memory) leaves nothing written.
   const auto refused =
-      RunShutterlab(photos + " --out " + (dir / "refused") + " --export odm,kalibr");
+      RunShutterlab(photos + " --out " + (dir / "refused") + " --export odm,pix4dmapper");
   EXPECT_EQ(refused.exit_code, 2) << refused.output;
   EXPECT_EQ(test::LineCount(refused.err), 1u) << refused.err;
-  EXPECT_NE(refused.err.find("--export kalibr"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("pix4dmapper"), std::string::npos) << refused.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "refused")) << refused.output;
   EXPECT_EQ(RunShutterlab(photos + " --export odm").exit_code, 2);  // no --out
 }

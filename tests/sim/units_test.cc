@@ -31,6 +31,17 @@ TEST(Units, AngleConstantsMatchTheirDefinitions) {
   EXPECT_DOUBLE_EQ(kRadPerArcsec * kArcsecPerRad, 1.0);
 }
 
+TEST(Units, CourseIsClockwiseFromNorthWithinOneTurn) {
+  EXPECT_EQ(CourseDeg(1.0, 0.0), 0.0);
+  EXPECT_NEAR(CourseDeg(0.0, 2.0), 90.0, 1e-12);
+  EXPECT_NEAR(CourseDeg(-3.0, 0.0), 180.0, 1e-12);
+  EXPECT_NEAR(CourseDeg(0.0, -0.5), 270.0, 1e-12);
+  EXPECT_NEAR(CourseDeg(3.0, -4.0), 360.0 - std::atan2(4.0, 3.0) * 180.0 / M_PI, 1e-12);
+  // Just west of north: a course a hair below 360 that must not print as 360.
+  EXPECT_EQ(CourseDeg(1.0, -1e-20), 0.0);
+  EXPECT_LT(CourseDeg(1.0, -1e-9), 360.0);
+}
+
 TEST(Units, MedianOfOddEvenOneAndNone) {
   EXPECT_EQ(Median({3.0, 1.0, 2.0}), 2.0);
   EXPECT_EQ(Median({4.0, 1.0, 3.0, 2.0}), 2.5);  // the mean of the two middle values

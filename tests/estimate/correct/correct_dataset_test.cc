@@ -419,14 +419,18 @@ TEST(CorrectPhotos, PlacedInOrderOnAPx4LogsOwnCameraEvents) {
 // A DJI photo of `image` whose metadata records the gimbal looking straight down at `yaw_deg` and
 // the flight speed that is `velocity_cam_mps` (horizontal, camera axes) in north and east.
 std::string DjiPhotoMovingAt(const cv::Mat& image, double yaw_deg,
-                             const std::optional<Eigen::Vector2d>& velocity_cam_mps) {
+                             const std::optional<Eigen::Vector2d>& velocity_cam_mps,
+                             bool records_gimbal = true) {
   test::FixturePhoto p;
   p.pixels = image;
   p.width = image.cols;
   p.height = image.rows;
-  std::map<std::string, std::string> xmp = {{"GimbalPitchDegree", "-90.0"},
-                                            {"GimbalRollDegree", "0.0"},
-                                            {"GimbalYawDegree", FormatNumber("%.1f", yaw_deg)}};
+  std::map<std::string, std::string> xmp;
+  if (records_gimbal) {
+    xmp = {{"GimbalPitchDegree", "-90.0"},
+           {"GimbalRollDegree", "0.0"},
+           {"GimbalYawDegree", FormatNumber("%.1f", yaw_deg)}};
+  }
   if (velocity_cam_mps) {
     // Looking straight down with the image's top toward the yaw (0: north), image right points to
     // the yaw + 90 deg and image down to the yaw + 180 deg: (north, east) of each.
@@ -574,11 +578,12 @@ TEST(CorrectPhotos, APhotoThatRecordsNoSpeedTakesTheLogsVelocity) {
   // navigation (vehicle_local_position's velocity, vehicle_attitude). DJI_0001 records its gimbal
   // but no speed: the log's velocity turned by the gimbal. DJI_0002 records neither (a camera
   // without DJI's XMP): the log's velocity turned by the log's attitude and camera.json's mounting
-  // (identity: the camera's axes are the log's body axes). Both are corrected to interpolation. A
-  // log whose navigation ends before the photos leaves their translation, said.
+  // (identity: the camera's axes are the log's body axes). DJI_0003 records its speed but not its
+  // gimbal: its own speed turned by the log's attitude. All are corrected to interpolation. A log
+  // whose navigation ends before the photos leaves their translation, said.
   test::TempDir dir;
   const Eigen::Vector2d line_mps(-6.0, 3.0);
-  const std::vector<double> times_s = {20.0, 24.0};
+  const std::vector<double> times_s = {20.0, 24.0, 28.0};
   const Rendered rendered = Render(dir, "line", {"velocity=-6m/s,3m/s,0"}, times_s);
   const std::vector<FrameEntry> frames = ReadFramesCsv(rendered.dataset + "/frames.csv");
   const fs::path photos = dir.path() / "photos";
@@ -588,7 +593,11 @@ TEST(CorrectPhotos, APhotoThatRecordsNoSpeedTakesTheLogsVelocity) {
       DjiPhotoMovingAt(ReadImage(rendered.dataset + "/" + frames[0].image), 30.0, std::nullopt));
   WriteImage((photos / "DJI_0002.JPG").string(),
              ReadImage(rendered.dataset + "/" + frames[1].image));
-  WriteFileAtomically(dir / "triggers.csv", "image,t\nDJI_0001.JPG,20\nDJI_0002.JPG,24\n");
+  WriteFileAtomically(
+      photos / "DJI_0003.JPG",
+      DjiPhotoMovingAt(ReadImage(rendered.dataset + "/" + frames[2].image), 30.0, line_mps, false));
+  WriteFileAtomically(dir / "triggers.csv",
+                      "image,t\nDJI_0001.JPG,20\nDJI_0002.JPG,24\nDJI_0003.JPG,28\n");
   std::vector<GyroSample> samples = FlightGyro().samples();
   samples.erase(samples.begin());  // PX4 times are unsigned and 0 means unset: start at 1 ms
   const GyroTrace gyro(std::move(samples));
@@ -598,11 +607,15 @@ TEST(CorrectPhotos, APhotoThatRecordsNoSpeedTakesTheLogsVelocity) {
   CorrectOptions options = DjiPhotoOptions(dir, photos, dir / "flight.ulg", dir / "triggers.csv");
   options.truth_dir = rendered.dataset + "/truth";
   const CorrectSummary summary = CorrectDataset(options);
-  ASSERT_EQ(summary.frames.size(), 2u);
-  const std::vector<std::string> turned_by = {
-      "turned by the photo's gimbal's yaw 30.0 deg",
-      "turned by the log's vehicle_attitude.q and camera.json's gyro_to_camera"};
-  for (size_t i = 0; i < 2; ++i) {
+  ASSERT_EQ(summary.frames.size(), 3u);
+  const std::string log_velocity = "from the log's vehicle_local_position.vx,vy,vz";
+  const std::vector<std::string> from = {log_velocity, log_velocity,
+                                         "from the photo's XMP drone-dji, turned"};
+  const std::string log_attitude =
+      "turned by the log's vehicle_attitude.q and camera.json's gyro_to_camera";
+  const std::vector<std::string> turned_by = {"turned by the photo's gimbal's yaw 30.0 deg",
+                                              log_attitude, log_attitude};
+  for (size_t i = 0; i < 3; ++i) {
     const CorrectedFrame& f = summary.frames[i];
     std::printf("  %s: velocity (%.4f, %.4f, %.4f) m/s, D before %.3f px, after %.4f px: %s\n",
                 f.source_image.c_str(), f.velocity_mps.x(), f.velocity_mps.y(), f.velocity_mps.z(),
@@ -612,21 +625,24 @@ TEST(CorrectPhotos, APhotoThatRecordsNoSpeedTakesTheLogsVelocity) {
     EXPECT_NEAR(f.velocity_mps.z(), 0.0, 1e-6) << f.source_image;
     EXPECT_LE(f.truth->rms_px, kInterpolationRmsPx) << f.source_image;
     EXPECT_NE(f.translation.find("6.71 m/s toward "), std::string::npos) << f.translation;
-    EXPECT_NE(f.translation.find("from the log's vehicle_local_position.vx,vy,vz"),
-              std::string::npos)
-        << f.translation;
+    EXPECT_NE(f.translation.find(from[i]), std::string::npos) << f.translation;
     EXPECT_NE(f.translation.find(turned_by[i]), std::string::npos) << f.translation;
   }
 
   options.photos->log_path = dir / "short.ulg";
   options.out_dir = dir / "short";
-  for (const CorrectedFrame& f : CorrectDataset(options).frames) {
-    EXPECT_GT(f.truth->d_px, 0.5) << "its translation is not corrected";
-    EXPECT_NE(f.translation.find("rotation only: the photo records no flight speed, and the "
-                                 "log's (vehicle_local_position.vx,vy,vz (where v_xy_valid)) "
-                                 "does not reach its time"),
-              std::string::npos)
-        << f.translation;
+  const std::string beyond_the_log =
+      "the photo records no flight speed, and the log's (vehicle_local_position.vx,vy,vz (where "
+      "v_xy_valid)) does not reach its time";
+  const std::vector<std::string> why = {
+      beyond_the_log, beyond_the_log,
+      "6.71 m/s toward 273 deg from the photo's XMP drone-dji, but neither the photo nor the "
+      "log gives the camera's attitude"};
+  const std::vector<CorrectedFrame> short_log = CorrectDataset(options).frames;
+  ASSERT_EQ(short_log.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_GT(short_log[i].truth->d_px, 0.5) << "its translation is not corrected";
+    EXPECT_EQ(short_log[i].translation, "rotation only: " + why[i]);
   }
 }
 

@@ -683,10 +683,24 @@ TEST(ExportSource, ReadsAReportACameraJsonAFolderAndPhotos) {
   EXPECT_TRUE(from_photos.photos[0].flagged);
   EXPECT_EQ(FileNamed(ColmapExport(from_photos, {}), "image_list.txt").text, "c.jpg\n");
   EXPECT_EQ(FileNamed(OdmExport(from_photos, {}), "image_list.txt").text, "/p/c.jpg\n");
-  // Photos alone relate no gyro to the camera: no mounting or time shift for Kalibr, no sync offset
-  // for Gyroflow.
+  // Photos alone relate no gyro to the camera: Kalibr's camera chain alone (what its camera-IMU
+  // calibration starts from), VINS told to calibrate the rotation and td, no sync offset for
+  // Gyroflow.
   EXPECT_FALSE(from_photos.gyro_known);
-  EXPECT_THROW(KalibrExport(from_photos, {}), std::invalid_argument);
+  const ExportOutput kalibr = KalibrExport(from_photos, {});
+  const std::string& chain = FileNamed(kalibr, "camchain.yaml").text;
+  EXPECT_NE(chain.find("  intrinsics: [2566.1, 2566.1, 2015.5, 1133.5]\n"), std::string::npos)
+      << chain;
+  EXPECT_NE(chain.find("  line_delay_nanoseconds: "), std::string::npos) << chain;
+  EXPECT_EQ(chain.find("T_cam_imu"), std::string::npos) << chain;
+  EXPECT_EQ(chain.find("timeshift_cam_imu"), std::string::npos) << chain;
+  const std::string vins_config = FileNamed(VinsExport(from_photos, {}), "vins_config.yaml").text;
+  cv::FileStorage vins(vins_config, cv::FileStorage::READ | cv::FileStorage::MEMORY);
+  EXPECT_EQ(static_cast<int>(vins["estimate_extrinsic"]), 2);
+  EXPECT_EQ(static_cast<int>(vins["estimate_td"]), 1);
+  EXPECT_EQ(static_cast<double>(vins["td"]), 0.0);
+  EXPECT_EQ(static_cast<double>(vins["rolling_shutter_tr"]), 0.016);
+  EXPECT_TRUE(vins["extrinsicRotation"].empty()) << vins_config;
   EXPECT_FALSE(
       nlohmann::json::parse(FileNamed(GyroflowExport(from_photos, {}), "project.gyroflow").text)
           .contains("offsets"));

@@ -384,6 +384,7 @@ TEST(AnalyzeStream, PhotosWithoutASpeedTakeTheLogs) {
     m.focal_length_35mm = 24.0;
     m.relative_altitude_m = 60.0;
     if (k == 3) m.speed_m_s = Eigen::Vector3d(1.0, 0.0, 0.0);
+    if (k == 2) m.gimbal = AttitudeDeg{0.0, -90.0, 0.0};  // nadir, the image's top to the north
     set.photos.push_back(MakePhotoRecord("/p/DJI_000" + std::to_string(k + 1) + ".JPG", m, read));
   }
   PhotoFlightOptions options;
@@ -404,6 +405,13 @@ TEST(AnalyzeStream, PhotosWithoutASpeedTakeTheLogs) {
     EXPECT_NEAR(*result.photos.photos[k].d_translation_m, expected_m_s[k] * 0.02, 1e-12);
   }
   EXPECT_NEAR(*result.set.photos[2].course_deg, 90.0, 1e-9);
+  // The log's speed is split by the nadir gimbal like a photo's own: flown east, the image's right,
+  // the ground moves to the left, all across the readout.
+  const PhotoResult& split = result.photos.photos[2];
+  ASSERT_TRUE(split.across_readout_px.has_value());
+  EXPECT_NEAR(*split.across_readout_px, -*split.d_translation_px, 1e-9);
+  EXPECT_NEAR(*split.along_readout_px, 0.0, 1e-9);
+  EXPECT_FALSE(result.photos.photos[0].along_readout_px.has_value()) << "no gimbal: no split";
   EXPECT_FALSE(set.photos[0].ground_speed_m_s.has_value()) << "the set given is left as it was";
 }
 

@@ -436,10 +436,27 @@ TEST(DataFlash, TheEkfsVelocityOverTheGps) {
   ekf(5'100'000, 0, 1.5f, 2.5f, 0.0f);
   for (int k = 0; k < 10; ++k) b.Imu(1000 + k * 1000, 0, 0, 0, 0);
   const FlightLog log = ParseDataFlash(b.bytes(), "ekf.bin");
-  EXPECT_EQ(log.velocity_source, "XKF1.VN,VE,VD (core 0)");
+  EXPECT_EQ(log.velocity_source, "XKF1.VN,VE,VD (core 0)") << "the first EKF logged";
   ASSERT_EQ(log.velocity.size(), 2u);
   EXPECT_EQ(log.velocity[0].ned_mps, Eigen::Vector3d(1.0, 2.0, 0.5));
   EXPECT_EQ(log.velocity[1].t_ns, 5'100'000'000);
+
+  // AHRS_EKF_TYPE names the EKF the autopilot flew on; the last value logged counts.
+  DataFlashBuilder flown_on_ekf2 = b;
+  flown_on_ekf2.Parm(6'000'000, "AHRS_EKF_TYPE", 3.0f);
+  flown_on_ekf2.Parm(6'000'001, "AHRS_EKF_TYPE", 2.0f);
+  const FlightLog ekf2 = ParseDataFlash(flown_on_ekf2.bytes(), "ekf2.bin");
+  EXPECT_EQ(ekf2.velocity_source, "NKF1.VN,VE,VD, the EKF flown on (AHRS_EKF_TYPE 2)");
+  ASSERT_EQ(ekf2.velocity.size(), 1u);
+  EXPECT_EQ(ekf2.velocity[0].ned_mps, Eigen::Vector3d(9.0, 9.0, 9.0));
+  DataFlashBuilder flown_on_ekf3 = b;
+  flown_on_ekf3.Parm(6'000'000, "AHRS_EKF_TYPE", 3.0f);
+  EXPECT_EQ(ParseDataFlash(flown_on_ekf3.bytes(), "ekf3.bin").velocity_source,
+            "XKF1.VN,VE,VD (core 0), the EKF flown on (AHRS_EKF_TYPE 3)");
+  DataFlashBuilder flown_on_dcm = b;  // no EKF flown: the first logged
+  flown_on_dcm.Parm(6'000'000, "AHRS_EKF_TYPE", 0.0f);
+  EXPECT_EQ(ParseDataFlash(flown_on_dcm.bytes(), "dcm.bin").velocity_source,
+            "XKF1.VN,VE,VD (core 0)");
 }
 
 TEST(DataFlash, TruncatedCopyKeepsWhatCameBefore) {

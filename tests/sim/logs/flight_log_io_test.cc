@@ -69,8 +69,8 @@ TEST(ReadFlightLog, RealLogsGiveTheirNavigation) {
       {"gyro/px4_ulog/sample_log_small.ulg",
        "the GPS's vel_n_m_s,vel_e_m_s,vel_d_m_s (where vel_ned_valid)", "vehicle_attitude.q"},
       {"incoming/ardupilot_log171/log171.bin", "EKF1.VN,VE,VD", "ATT.Roll,Pitch,Yaw"},
-      {"incoming/ardupilot_isb_80k/backend_log_80k.bin", "XKF1.VN,VE,VD (core 0)",
-       "ATT.Roll,Pitch,Yaw"}};
+      {"incoming/ardupilot_isb_80k/backend_log_80k.bin",
+       "XKF1.VN,VE,VD (core 0), the EKF flown on (AHRS_EKF_TYPE 3)", "ATT.Roll,Pitch,Yaw"}};
   const auto span_s = [](const auto& samples) {
     return samples.size() < 2 ? 0.0 : (samples.back().t_ns - samples.front().t_ns) * 1e-9;
   };
