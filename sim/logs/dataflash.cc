@@ -346,10 +346,14 @@ class DataFlashParser {
   std::array<std::array<Sink, 256>, 3> sink_by_stream_;
   std::map<int64_t, BatchHeader> batches_;  // by ISBH.N
   std::vector<double> cam_rel_alt_m_;
-  std::vector<VelocitySample> gps_velocity_;                         // ChooseVelocity keeps one
-  std::map<std::string, std::vector<VelocitySample>> ekf_velocity_;  // by message: EKF1, NKF1, XKF1
-  std::string first_ekf_;                                            // the first of them logged
-  std::optional<double> ahrs_ekf_type_;                              // PARM AHRS_EKF_TYPE, the last
+  std::vector<VelocitySample> gps_velocity_;  // ChooseVelocity keeps one
+  struct EkfVelocity {
+    std::vector<VelocitySample> samples;
+    std::string source;  // "XKF1.VN,VE,VD (core 0)"
+  };
+  std::map<std::string, EkfVelocity> ekf_velocity_;  // by message: EKF1, NKF1, XKF1
+  std::string first_ekf_;                            // the first of them logged
+  std::optional<double> ahrs_ekf_type_;              // PARM AHRS_EKF_TYPE, the last
   size_t skipped_bytes_ = 0;
   std::array<std::optional<Eigen::Vector3d>, 256> gyro_scale_by_type_;  // GyroScale's cache
   std::map<char, std::string> unit_labels_;        // UNIT: id -> label ("rad/s")
@@ -643,9 +647,10 @@ void DataFlashParser::HandleEkfVelocity(const Format& fmt, std::string_view p) {
   const auto t = fmt.TimeNs(p);
   const Eigen::Vector3d ned(ReadNumber(p, *n), ReadNumber(p, *e), ReadNumber(p, *d));
   if (!t || *t <= 0 || !ned.allFinite() || ned.norm() > kMaxLogSpeedMps) return;
-  std::vector<VelocitySample>& samples = ekf_velocity_[fmt.name];
-  if (!samples.empty() && *t <= samples.back().t_ns) return;  // time order
-  samples.push_back({*t, ned});
+  EkfVelocity& ekf = ekf_velocity_[fmt.name];
+  if (!ekf.samples.empty() && *t <= ekf.samples.back().t_ns) return;  // time order
+  if (ekf.samples.empty()) ekf.source = fmt.name + ".VN,VE,VD" + (fmt.Find("C") ? " (core 0)" : "");
+  ekf.samples.push_back({*t, ned});
   if (first_ekf_.empty()) first_ekf_ = fmt.name;
 }
 
@@ -671,13 +676,9 @@ void DataFlashParser::ChooseVelocity() {
     }
   }
   if (!ekf.empty()) {
-    const Format* format = nullptr;
-    for (const std::optional<Format>& f : formats_) {
-      if (f && f->name == ekf) format = &*f;
-    }
-    log_.velocity = std::move(ekf_velocity_[ekf]);
-    log_.velocity_source =
-        ekf + ".VN,VE,VD" + (format && format->Find("C") ? " (core 0)" : "") + why;
+    EkfVelocity& chosen = ekf_velocity_[ekf];
+    log_.velocity = std::move(chosen.samples);
+    log_.velocity_source = chosen.source + why;
   } else if (!gps_velocity_.empty()) {
     log_.velocity = std::move(gps_velocity_);
     log_.velocity_source = "GPS.Spd,GCrs,VZ (3-D fix)";
