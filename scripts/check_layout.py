@@ -294,7 +294,7 @@ def check_unit_loops():
 def check_functions():
     ctags = shutil.which("ctags-universal") or shutil.which("ctags")
     if ctags is None:
-        print("ctags not found: install universal-ctags (scripts/setup.sh does)")
+        print("ctags not found: install universal-ctags (scripts/test.sh does)")
         return 1
     out = subprocess.run(
         [ctags, "--languages=C++", "--kinds-C++=f", "--fields=+ne", "-x",

@@ -3,6 +3,7 @@
 # that it is applied (scripts/format.sh --check: lists the files that differ, exit 1 if any).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+scripts/install_packages.sh format clang-format
 files=$(git ls-files '*.cc' '*.h')
 if [ "${1:-}" = "--check" ]; then
   # A few processes for all the files (one process a file took 44 s on 500 of them in CI):

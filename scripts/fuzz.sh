@@ -20,6 +20,7 @@
 # targets start from the small text seeds alone.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+scripts/install_packages.sh fuzz clang libclang-rt-14-dev  # clang and its libFuzzer
 limit=(-max_total_time=60)
 targets=()
 build=build-fuzz
