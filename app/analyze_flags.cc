@@ -50,6 +50,7 @@ PhotoSetOptions PhotoOptionsFromFlags(const AnalyzeFlags& flags) {
     options.readout_text = "camera.json " + flags.camera_path;
     options.focal_px = 0.5 * (rig.camera.fx + rig.camera.fy);
     options.focal_text = "camera.json " + flags.camera_path;
+    options.camera = rig.camera;
   }
   if (flags.readout_given) {
     options.readout_s = ConvertUnit(flags.readout_ms, "ms", "s");
@@ -59,6 +60,7 @@ PhotoSetOptions PhotoOptionsFromFlags(const AnalyzeFlags& flags) {
   if (flags.focal_given) {
     options.focal_px = flags.focal_px;
     options.focal_text = "--focal-px";
+    options.camera.reset();  // its focal length is not the one given
   }
   if (flags.altitude_given) options.altitude_m = flags.altitude_m;
   if (!std::isnan(flags.speed_m_s)) options.speed_m_s = flags.speed_m_s;

@@ -6,6 +6,8 @@
 #include "sim/text_file.h"
 #include "sim/units.h"
 
+#include <Eigen/Core>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -45,9 +47,12 @@ void ChooseFocal(const PhotoSetOptions& options, PhotoRecord* r) {
   if (options.focal_px) {
     r->focal_px = options.focal_px;
     r->focal_source = options.focal_text.empty() ? "--focal-px" : options.focal_text;
+    if (options.camera && options.camera->width == m.width && options.camera->height == m.height)
+      r->camera = options.camera;
   } else if (const auto use = ProfileFor(options, m)) {
     r->focal_px = 0.5 * (use->camera.fx + use->camera.fy);
     r->focal_source = "lens profile " + use->name;
+    r->camera = use->camera;
   } else if (m.calibrated_focal_px) {
     r->focal_px = *m.calibrated_focal_px * FileScale(m);
     r->focal_source = "XMP drone-dji:CalibratedFocalLength";
@@ -194,6 +199,107 @@ PhotoRecord MakePhotoRecord(const std::string& path, const PhotoMetadata& metada
   return r;
 }
 
+namespace {
+
+// A photo's place on the ground and its capture time on its camera clock.
+struct GroundFix {
+  size_t photo = 0;  // index into the set
+  double t_s = 0, resolution_s = 0;
+  Eigen::Vector2d north_east_m = Eigen::Vector2d::Zero();  // from the first photo with a position
+};
+
+std::vector<GroundFix> GroundFixesByTime(const PhotoSet& set) {
+  std::vector<GroundFix> fixes;
+  std::optional<double> lat0_deg, lon0_deg;
+  for (size_t i = 0; i < set.photos.size(); ++i) {
+    const PhotoMetadata& m = set.photos[i].metadata;
+    if (!set.photos[i].ok() || !m.latitude_deg || !m.longitude_deg || !m.capture_time) continue;
+    if (!lat0_deg) {
+      lat0_deg = m.latitude_deg;
+      lon0_deg = m.longitude_deg;
+    }
+    GroundFix f;
+    f.photo = i;
+    f.t_s = m.capture_time->face_ns * 1e-9;
+    f.resolution_s = m.capture_time->resolution_s;
+    f.north_east_m = {
+        (*m.latitude_deg - *lat0_deg) * kMetresPerDegree,
+        (*m.longitude_deg - *lon0_deg) * kMetresPerDegree * std::cos(*lat0_deg * kRadPerDeg)};
+    fixes.push_back(f);
+  }
+  std::stable_sort(fixes.begin(), fixes.end(),
+                   [](const GroundFix& a, const GroundFix& b) { return a.t_s < b.t_s; });
+  return fixes;
+}
+
+// Whether every step between fixes a and b (of at least a metre: GPS noise turns shorter ones
+// anywhere) keeps within kMaxSpeedBendDeg of the chord from a to b.
+bool StraightBetween(const std::vector<GroundFix>& fixes, size_t a, size_t b) {
+  const Eigen::Vector2d chord = fixes[b].north_east_m - fixes[a].north_east_m;
+  if (chord.norm() < 1.0) return true;  // hovering: no course to keep
+  for (size_t j = a; j < b; ++j) {
+    const Eigen::Vector2d step = fixes[j + 1].north_east_m - fixes[j].north_east_m;
+    if (step.norm() < 1.0) continue;
+    const double cos_bend = step.dot(chord) / (step.norm() * chord.norm());
+    if (cos_bend < std::cos(kMaxSpeedBendDeg * kRadPerDeg)) return false;
+  }
+  return true;
+}
+
+// The photos on either side of fix k that a speed is taken between: a window of three (k's
+// neighbours, the two before it, or the two after it), widened on its open sides until their times
+// are kSpeedSpanResolutions resolutions apart; nullopt when none is straight within kMaxSpeedSpanS.
+std::optional<std::pair<size_t, size_t>> SpeedWindow(const std::vector<GroundFix>& fixes,
+                                                     size_t k) {
+  const size_t last = fixes.size() - 1;
+  struct Window {
+    size_t a, b;
+    bool widen_a, widen_b;
+  };
+  std::vector<Window> windows;  // best first: centred, then one side, then the other
+  if (k >= 1 && k + 1 <= last) windows.push_back({k - 1, k + 1, true, true});
+  if (k >= 2) windows.push_back({k - 2, k, true, false});
+  if (k + 2 <= last) windows.push_back({k, k + 2, false, true});
+  for (Window w : windows) {
+    const auto span = [&] { return fixes[w.b].t_s - fixes[w.a].t_s; };
+    const auto needed = [&] {
+      return kSpeedSpanResolutions * std::max(fixes[w.a].resolution_s, fixes[w.b].resolution_s);
+    };
+    while (span() < needed() && span() <= kMaxSpeedSpanS) {
+      const bool can_a = w.widen_a && w.a > 0, can_b = w.widen_b && w.b < last;
+      if (!can_a && !can_b) break;
+      if (can_a) --w.a;
+      if (can_b) ++w.b;
+    }
+    if (span() >= needed() && span() <= kMaxSpeedSpanS && StraightBetween(fixes, w.a, w.b))
+      return std::make_pair(w.a, w.b);
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+void SpeedsFromPositions(PhotoSet* set) {
+  const std::vector<GroundFix> fixes = GroundFixesByTime(*set);
+  for (size_t k = 0; k < fixes.size(); ++k) {
+    PhotoRecord& r = set->photos[fixes[k].photo];
+    if (r.ground_speed_m_s) continue;
+    const auto window = SpeedWindow(fixes, k);
+    if (!window) continue;
+    const auto [a, b] = *window;
+    const double span_s = fixes[b].t_s - fixes[a].t_s;
+    const Eigen::Vector2d chord = fixes[b].north_east_m - fixes[a].north_east_m;
+    r.ground_speed_m_s = chord.norm() / span_s;
+    if (*r.ground_speed_m_s > 0) r.course_deg = CourseDeg(chord.x(), chord.y());
+    r.speed_source = "the GPS positions of " + set->photos[fixes[a].photo].name + " and " +
+                     set->photos[fixes[b].photo].name + FormatNumber(": %.1f m in ", chord.norm()) +
+                     FormatNumber("%.2f s", span_s);
+    r.speed_from_positions = true;
+    r.missing.erase(std::remove(r.missing.begin(), r.missing.end(), "flight speed"),
+                    r.missing.end());
+  }
+}
+
 PhotoSet ReadPhotoSet(const std::string& dir, const PhotoSetOptions& options) {
   options.Check();
   PhotoSet set;
@@ -247,6 +353,7 @@ PhotoSet ReadPhotoSet(const std::string& dir, const PhotoSetOptions& options) {
     }
     if (options.progress) options.progress(static_cast<double>(i + 1) / paths.size());
   }
+  SpeedsFromPositions(&set);
   return set;
 }
 

@@ -46,6 +46,8 @@ struct PhotoSetOptions {
   std::string readout_text;                             // e.g. "--readout 20ms", "camera.json"
   std::optional<double> focal_px;
   std::string focal_text;  // e.g. "--focal-px", "camera.json"
+  // camera.json's camera: a photo of its size takes its principal point and lens too (exports).
+  std::optional<PinholeCamera> camera;
   // A Gyroflow lens profile (--lens-profile), scaled to each photo: its focal length after the
   // given one, its readout (ReadoutOrigin::kLensProfile) after the given one.
   std::optional<LensProfile> lens_profile;
@@ -78,6 +80,10 @@ struct PhotoRecord {
   // on the diagonal", "XMP drone-dji:RelativeAltitude", ...).
   std::optional<double> focal_px;
   std::string focal_source;
+  // The whole camera where camera.json (at the photo's size) or the lens profile gives one: its
+  // principal point and lens beside the focal length, for the exports; unset: the metadata give
+  // a focal length only.
+  std::optional<PinholeCamera> camera;
   std::optional<double> readout_s;
   ReadoutOrigin readout_origin = ReadoutOrigin::kNone;
   std::string readout_source;
@@ -86,6 +92,9 @@ struct PhotoRecord {
   std::optional<double> ground_speed_m_s;  // horizontal, |(north, east)|
   std::optional<double> course_deg;        // direction of that motion, degrees from north
   std::string speed_source;
+  // The speed and course above are the photos' GPS positions differentiated (SpeedsFromPositions),
+  // not recorded: a log's velocity, where one is given, is better and replaces them.
+  bool speed_from_positions = false;
   // What could not be found, in words ("focal length", "readout", "altitude", "flight speed",
   // "capture time", "image size"), in that order.
   std::vector<std::string> missing;
@@ -112,6 +121,21 @@ PhotoSet ReadPhotoSet(const std::string& dir, const PhotoSetOptions& options = {
 // metadata already, and for tests).
 PhotoRecord MakePhotoRecord(const std::string& path, const PhotoMetadata& metadata,
                             const PhotoSetOptions& options);
+
+// Photos that record no flight speed (and were given none) take it from the GPS positions of the
+// photos around them on their camera clock: the distance between two photos (north and east on
+// the sphere) over their capture times' difference. The two end a window of at least three photos
+// in time order: the photo's neighbours, else the two before it, else the two after it (a line's
+// last and first photos), widened on its open sides until its ends' times are at least
+// kSpeedSpanResolutions times their resolution apart (a capture time without sub-seconds is good
+// to a second), within kMaxSpeedSpanS. A window whose steps of a metre or more leave its chord's
+// course by more than kMaxSpeedBendDeg (a turn) is not used. None for a photo without a position
+// or capture time, or without such a window. Each says which photos and how far apart.
+// ReadPhotoSet calls it.
+inline constexpr double kSpeedSpanResolutions = 10.0;
+inline constexpr double kMaxSpeedSpanS = 30.0;
+inline constexpr double kMaxSpeedBendDeg = 15.0;
+void SpeedsFromPositions(PhotoSet* set);
 
 // What a lens profile gives the photos of a folder: its notes (io/lens_profile.h
 // ScaleLensProfile) at the size of the first readable photo that has one; empty when none has.

@@ -31,7 +31,6 @@ constexpr int64_t kUtcAtGyroZeroNs = 1'780'308'000'000'000'000;  // 2026-06-01 1
 // Where the flight's local frame sits on the globe (for the photos' GPS tags): a field in
 // Switzerland, near enough to the equator's scale that x, y convert by the sphere's metres.
 constexpr double kLatitudeDeg = 47.0, kLongitudeDeg = 8.0;
-constexpr double kMetresPerDegree = 6'371'000.0 * kPi / 180.0;
 // The sensor's width the photos' FocalLength (mm) is written for: a 1/2.3" sensor's.
 constexpr double kSensorWidthMm = 6.17;
 

@@ -176,29 +176,34 @@ std::string GimbalText(const AttitudeDeg& gimbal) {
 
 }  // namespace
 
-PhotoVelocity VelocityOfPhoto(const PhotoMetadata& metadata, const FlightLog& log, int64_t t_ns,
+PhotoVelocity VelocityOfPhoto(const PhotoRecord& photo, const FlightLog& log, int64_t t_ns,
                               const Eigen::Matrix3d& camera_from_body,
                               const std::string& mounting_source) {
+  const PhotoMetadata& metadata = photo.metadata;
   PhotoVelocity out;
   Eigen::Vector3d ned;
   std::string what;
+  const std::optional<Eigen::Vector3d> logged = VelocityAt(log.velocity, t_ns);
   if (metadata.speed_m_s) {
     // DJI documents the sign of neither vertical speed: the horizontal part only.
     ned = Eigen::Vector3d(metadata.speed_m_s->x(), metadata.speed_m_s->y(), 0.0);
     what = SpeedText(ned) + " from the photo's " + metadata.flight_state_source;
-  } else {
-    const std::optional<Eigen::Vector3d> logged = VelocityAt(log.velocity, t_ns);
-    if (!logged) {
-      out.source = log.velocity.empty() ? "the photo records no flight speed, nor does the log"
-                                        : "the photo records no flight speed, and the log's (" +
-                                              log.velocity_source + ") does not reach its time";
-      return out;
-    }
+  } else if (logged) {
     // The log's down axis is documented (NED): kept where the log gives it.
     ned = *logged;
     if (!std::isfinite(ned.z())) ned.z() = 0.0;
     what = SpeedText(ned) + " from the log's " + log.velocity_source +
            FormatNumber(" at %.3f s", t_ns * 1e-9);
+  } else if (photo.speed_from_positions && photo.ground_speed_m_s) {
+    const double course_rad = photo.course_deg.value_or(0.0) * kRadPerDeg;
+    ned =
+        *photo.ground_speed_m_s * Eigen::Vector3d(std::cos(course_rad), std::sin(course_rad), 0.0);
+    what = SpeedText(ned) + " from " + photo.speed_source;
+  } else {
+    out.source = log.velocity.empty() ? "the photo records no flight speed, nor does the log"
+                                      : "the photo records no flight speed, and the log's (" +
+                                            log.velocity_source + ") does not reach its time";
+    return out;
   }
   if (metadata.gimbal) {
     out.velocity_mps = CameraFromNed(*metadata.gimbal) * ned;
@@ -287,7 +292,7 @@ PhotoInput ReadPhotoInput(const std::string& photos_dir, const PhotoInputOptions
     e.image = set.photos[i].name;
     e.t_first_row_ns = *clock.placements[i].t_ns + latency_ns;
     input.velocity[e.frame] =
-        VelocityOfPhoto(set.photos[i].metadata, log, e.t_first_row_ns + readout_half_ns,
+        VelocityOfPhoto(set.photos[i], log, e.t_first_row_ns + readout_half_ns,
                         dataset.declared.cam_from_gyro, mounting_source);
     dataset.frames.push_back(std::move(e));
   }

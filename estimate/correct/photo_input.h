@@ -61,11 +61,12 @@ struct PhotoVelocity {
 };
 // A placed photo's velocity at t_ns (its middle row's time, on the log's clock): the horizontal
 // flight speed its metadata records (north, east; the sign of the vertical one is documented
-// nowhere), else the log's velocity (NED, the vertical part where the log gives it); turned by the
+// nowhere), else the log's velocity (NED, the vertical part where the log gives it), else the
+// horizontal one from the photos' GPS positions (io/photo_set.h SpeedsFromPositions); turned by the
 // photo's gimbal attitude when it records one, else by the log's attitude at t_ns and
 // camera_from_body (the log's body axes are its gyro's: the rig's cam_from_gyro), which
 // mounting_source names for a person.
-PhotoVelocity VelocityOfPhoto(const PhotoMetadata& metadata, const FlightLog& log, int64_t t_ns,
+PhotoVelocity VelocityOfPhoto(const PhotoRecord& photo, const FlightLog& log, int64_t t_ns,
                               const Eigen::Matrix3d& camera_from_body,
                               const std::string& mounting_source);
 

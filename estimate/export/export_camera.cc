@@ -87,8 +87,9 @@ ExportCamera FromCameraJson(const std::string& path) {
 
 }  // namespace
 
-// The camera of the first photo with a size and a focal length (principal point at the centre,
-// no lens distortion: the photos' metadata give none), its readout.
+// The camera of the first photo with a size and a focal length, its readout: the whole camera
+// where camera.json or a lens profile gave one ("camera"), else the principal point at the centre
+// and no lens distortion (the photos' metadata give none).
 ExportCamera ExportCameraFromPhotos(const nlohmann::json& photos, const std::string& source) {
   ExportCamera camera;
   camera.source = source;
@@ -117,6 +118,14 @@ ExportCamera ExportCameraFromPhotos(const nlohmann::json& photos, const std::str
       c.fx = c.fy = p["focal_px"].get<double>();
       c.cx = 0.5 * (photo.width - 1);
       c.cy = 0.5 * (photo.height - 1);
+      if (p.contains("camera") && p["camera"].is_object()) {  // camera.json's or a lens profile's
+        const nlohmann::json& given = p["camera"];
+        c.fx = given.value("fx", c.fx);
+        c.fy = given.value("fy", c.fy);
+        c.cx = given.value("cx", c.cx);
+        c.cy = given.value("cy", c.cy);
+        if (given.contains("distortion")) c.distortion = DistortionFromJson(given["distortion"]);
+      }
       camera.make = p.value("make", "");
       camera.model = p.value("model", "");
       camera.readout_known = photo.readout_s.has_value();

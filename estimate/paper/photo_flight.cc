@@ -61,17 +61,19 @@ void PhotoFlightOptions::Check() const {
 
 namespace {
 
-// Each placed photo that records no flight speed takes the log's horizontal velocity at its time.
+// Each placed photo that records no flight speed takes the log's horizontal velocity at its time
+// (over one differentiated from the photos' positions).
 void SpeedsFromLog(const FlightLog& log, const PhotoClock& clock, PhotoSet* set) {
   for (size_t i = 0; i < set->photos.size(); ++i) {
     PhotoRecord& r = set->photos[i];
     const std::optional<int64_t>& t_ns = clock.placements[i].t_ns;
-    if (!r.ok() || r.ground_speed_m_s || !t_ns) continue;
+    if (!r.ok() || (r.ground_speed_m_s && !r.speed_from_positions) || !t_ns) continue;
     const std::optional<Eigen::Vector3d> v = VelocityAt(log.velocity, *t_ns);
     if (!v) continue;
     r.ground_speed_m_s = v->head<2>().norm();
     if (*r.ground_speed_m_s > 0) r.course_deg = CourseDeg(v->x(), v->y());
     r.speed_source = "the log's " + log.velocity_source + " at the photo's time";
+    r.speed_from_positions = false;
     r.missing.erase(std::remove(r.missing.begin(), r.missing.end(), "flight speed"),
                     r.missing.end());
   }

@@ -1,6 +1,7 @@
 #include "estimate/report/photo_json.h"
 
 #include "estimate/paper/analyze.h"
+#include "model/camera.h"
 #include "sim/civil_time.h"
 
 #include <optional>
@@ -50,6 +51,13 @@ nlohmann::json PhotoJson(const PhotoRecord& r, const PhotoResult& p, const Photo
   j["capture_time"] = CaptureTime(m);
   j["focal_px"] = Optional(r.focal_px);
   j["focal_source"] = r.focal_source;
+  if (r.camera) {
+    j["camera"] = {{"fx", r.camera->fx},
+                   {"fy", r.camera->fy},
+                   {"cx", r.camera->cx},
+                   {"cy", r.camera->cy},
+                   {"distortion", DistortionJson(r.camera->distortion)}};
+  }
   j["readout_s"] = Optional(r.readout_s);
   j["readout_origin"] = ReadoutOriginName(r.readout_origin);
   j["readout_source"] = r.readout_source;

@@ -1,5 +1,6 @@
 // `analyze --photos`: a folder of photos, without and with a log.
 
+#include "model/camera.h"
 #include "sim/civil_time.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/logs/ulog_write.h"
@@ -190,6 +191,25 @@ TEST(PhotosCli, ExportsThePhotosCameraBesideTheListsOrWritesNothing) {
             0);
   EXPECT_EQ(ReadFileToString(dir / "odm/camera_models_overrides.json"),
             ReadFileToString(dir / "out/export_odm/camera_models_overrides.json"));
+
+  // camera.json's lens goes into the exports with its principal point (COLMAP's OPENCV camera:
+  // fx, fy, cx, cy, k1, k2, p1, p2; its pixel centres at half-integers: cx + 0.5).
+  RigModel rig;
+  rig.camera.width = 400;
+  rig.camera.height = 300;
+  rig.camera.fx = rig.camera.fy = 350.0;
+  rig.camera.cx = 201.0;
+  rig.camera.cy = 148.0;
+  rig.camera.distortion = BrownConrady{{-0.12, 0.03, 0.001, -0.002, 0}};
+  rig.shutter.readout_s = 0.020;
+  WriteRigModel(dir / "camera.json", rig);
+  const auto lens = RunShutterlab(photos + " --camera " + (dir / "camera.json") + " --out " +
+                                  (dir / "lens") + " --export colmap");
+  ASSERT_EQ(lens.exit_code, 0) << lens.output;
+  EXPECT_NE(ReadFileToString(dir / "lens/export_colmap/cameras.txt")
+                .find("1 OPENCV 400 300 350 350 201.5 148.5 -0.12 0.03 0.001 -0.002"),
+            std::string::npos)
+      << ReadFileToString(dir / "lens/export_colmap/cameras.txt");
 
   // Photos alone relate no gyro to the camera: Kalibr gets the camera chain alone.
   const auto chain = RunShutterlab(photos + " --out " + (dir / "chain") + " --export kalibr,vins");

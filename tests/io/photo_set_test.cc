@@ -2,7 +2,10 @@
 
 #include "model/readout_table.h"
 #include "sim/check.h"
+#include "sim/civil_time.h"
+#include "sim/gyro_trace.h"
 #include "sim/text_file.h"
+#include "sim/units.h"
 #include "tests/io/photo_fixtures.h"
 #include "tests/test_util.h"
 
@@ -173,6 +176,9 @@ TEST(PhotoRecord, ALensProfileGivesFocalAndReadoutAfterTheUsers) {
   EXPECT_DOUBLE_EQ(*r.readout_s, 0.012);
   EXPECT_EQ(r.readout_origin, ReadoutOrigin::kLensProfile);
   EXPECT_EQ(r.readout_source, "lens profile Mini 4 Pro 16:9");
+  ASSERT_TRUE(r.camera);  // the whole camera, for the exports: (c + 0.5) * 2 - 0.5
+  EXPECT_DOUBLE_EQ(r.camera->cx, 2015.5);
+  EXPECT_DOUBLE_EQ(r.camera->cy, 1133.5);
 
   options.readout_s = 0.020;
   options.readout_text = "--readout 20ms";
@@ -181,6 +187,7 @@ TEST(PhotoRecord, ALensProfileGivesFocalAndReadoutAfterTheUsers) {
   EXPECT_EQ(given.readout_origin, ReadoutOrigin::kUser);
   EXPECT_DOUBLE_EQ(*given.readout_s, 0.020);
   EXPECT_DOUBLE_EQ(*given.focal_px, 3000.0);
+  EXPECT_FALSE(given.camera) << "a focal length given alone gives no principal point or lens";
 
   // A profile without a readout leaves the table's.
   options = {};
@@ -189,6 +196,100 @@ TEST(PhotoRecord, ALensProfileGivesFocalAndReadoutAfterTheUsers) {
   const PhotoRecord table = MakePhotoRecord("/x/a.jpg", m, options);
   EXPECT_EQ(table.readout_origin, ReadoutOrigin::kTable);
   EXPECT_DOUBLE_EQ(*table.focal_px, 2600.0);
+}
+
+// camera.json's camera gives a photo of its size its principal point and lens (for the exports);
+// a photo of another size keeps camera.json's focal length only.
+TEST(PhotoRecord, CameraJsonsCameraGoesWithPhotosOfItsSize) {
+  PinholeCamera camera;
+  camera.width = 4032;
+  camera.height = 2268;
+  camera.fx = camera.fy = 2600.0;
+  camera.cx = 2000.0;
+  camera.cy = 1100.0;
+  camera.distortion = BrownConrady{{-0.1, 0.02, 0, 0, 0}};
+  PhotoSetOptions options;
+  options.focal_px = 2600.0;
+  options.focal_text = "camera.json c.json";
+  options.camera = camera;
+  PhotoMetadata m = DjiMetadata();
+  m.width = 4032;
+  m.height = 2268;
+  const PhotoRecord same = MakePhotoRecord("/x/a.jpg", m, options);
+  ASSERT_TRUE(same.camera);
+  EXPECT_EQ(same.camera->cx, 2000.0);
+  EXPECT_EQ(std::get<BrownConrady>(same.camera->distortion).coeffs[0], -0.1);
+  m.width = 2016;
+  m.height = 1134;
+  EXPECT_FALSE(MakePhotoRecord("/x/a.jpg", m, options).camera);
+}
+
+// A photo without a speed, at north_m, east_m of (47, 8) deg, its capture time t_s to resolution_s.
+PhotoRecord PhotoAt(const std::string& name, double t_s, double north_m, double east_m,
+                    double resolution_s) {
+  PhotoRecord r;
+  r.name = name;
+  r.path = "/x/" + name;
+  r.metadata.latitude_deg = 47.0 + north_m / kMetresPerDegree;
+  r.metadata.longitude_deg = 8.0 + east_m / (kMetresPerDegree * std::cos(47.0 * kRadPerDeg));
+  ClockFace face;
+  face.resolution_s = resolution_s;
+  face.face_ns = SecondsToNs(std::floor(t_s / resolution_s + 1e-9) * resolution_s);
+  r.metadata.capture_time = face;
+  r.missing = {"flight speed"};
+  return r;
+}
+
+// A lawnmower: a line flown east at 8 m/s, a 10 s turn, the next line 40 m north flown west, a
+// photo every 2 s, in name order not time order. Capture times to 0.01 s: every photo takes its
+// speed and course from its neighbours', a line's last and first from the two before or after
+// it on their own line (the photos across the turn bend).
+TEST(SpeedsFromPositions, DifferentiatesThePositionsAroundEachPhotoAlongItsLine) {
+  PhotoSet set;
+  for (int k = 0; k < 6; ++k) {
+    set.photos.push_back(PhotoAt(FormatNumber("B_%02.0f.JPG", k), 2.0 * k, 0.0, 16.0 * k, 0.01));
+    set.photos.push_back(
+        PhotoAt(FormatNumber("A_%02.0f.JPG", k), 20.0 + 2.0 * k, 40.0, 80.0 - 16.0 * k, 0.01));
+  }
+  set.photos.push_back(PhotoAt("C_recorded.JPG", 40.0, 40.0, -80.0, 0.01));
+  set.photos.back().ground_speed_m_s = 3.0;
+  set.photos.back().speed_source = "XMP";
+  SpeedsFromPositions(&set);
+  for (const PhotoRecord& r : set.photos) {
+    if (r.name == "C_recorded.JPG") {
+      EXPECT_EQ(*r.ground_speed_m_s, 3.0);
+      EXPECT_FALSE(r.speed_from_positions);
+      continue;
+    }
+    ASSERT_TRUE(r.ground_speed_m_s) << r.name;
+    EXPECT_NEAR(*r.ground_speed_m_s, 8.0, 0.03) << r.name;  // the sphere's 0.3 % at most
+    EXPECT_NEAR(*r.course_deg, r.name[0] == 'B' ? 90.0 : 270.0, 0.01) << r.name;
+    EXPECT_TRUE(r.speed_from_positions);
+    EXPECT_TRUE(r.missing.empty()) << r.name;
+  }
+  EXPECT_EQ(set.photos[2].speed_source,
+            "the GPS positions of B_00.JPG and B_02.JPG: 32.0 m in 4.00 s");
+  EXPECT_EQ(set.photos[10].speed_source,
+            "the GPS positions of B_03.JPG and B_05.JPG: 32.0 m in 4.00 s");
+
+  // Whole seconds: the photos around are widened until they are 10 s apart, so a time's second
+  // costs at most a tenth; a photo with no such straight stretch on either side gets none.
+  PhotoSet coarse;
+  for (int k = 0; k < 8; ++k)
+    coarse.photos.push_back(PhotoAt(FormatNumber("D_%02.0f.JPG", k), 2.0 * k + 0.3 * (k % 3), 0.0,
+                                    16.0 * k + 2.4 * (k % 3), 1.0));
+  coarse.photos.push_back(PhotoAt("E.JPG", 16.0, 50.0, 100.0, 1.0));
+  SpeedsFromPositions(&coarse);
+  int with_speed = 0;
+  for (const PhotoRecord& r : coarse.photos) {
+    if (!r.ground_speed_m_s) continue;
+    ++with_speed;
+    EXPECT_NEAR(*r.ground_speed_m_s, 8.0, 0.8) << r.name << ": " << r.speed_source;
+    EXPECT_NE(r.speed_source.find(" s"), std::string::npos);
+  }
+  EXPECT_EQ(with_speed, 8) << "E, after a turn and 2 s away, has no straight 10 s";
+  EXPECT_FALSE(coarse.photos.back().ground_speed_m_s);
+  EXPECT_EQ(coarse.photos.back().missing, std::vector<std::string>{"flight speed"});
 }
 
 TEST(PhotoSet, ReadsPhotoFilesByNameAndReportsBadOnes) {

@@ -6,6 +6,8 @@
 
 #include "io/photo_set.h"
 #include "sim/check.h"
+#include "sim/gyro_trace.h"
+#include "sim/logs/flight_log.h"
 #include "sim/logs/gyro_io.h"
 #include "sim/text_file.h"
 #include "sim/units.h"
@@ -111,6 +113,43 @@ TEST(ReadPhotoInput, TheirOwnCameraAndWhatCannotBeCorrected) {
   // No photo placed: one line naming the folder.
   options.triggers_path.clear();
   EXPECT_THROW(ReadPhotoInput(photos, options), IoError) << "the log has no camera events";
+}
+
+// A photo's velocity: its own recorded speed, else the log's, else the one differentiated from
+// the photos' GPS positions; each turned into the camera's axes by the same gimbal.
+TEST(VelocityOfPhoto, ThePhotosSpeedThenTheLogsThenThePositions) {
+  PhotoRecord recorded;
+  recorded.metadata.gimbal = AttitudeDeg{0.0, -90.0, 30.0};
+  recorded.metadata.speed_m_s = Eigen::Vector3d(0.0, 5.0, 0.0);  // east
+  recorded.metadata.flight_state_source = "XMP drone-dji";
+  PhotoRecord from_positions;
+  from_positions.metadata.gimbal = recorded.metadata.gimbal;
+  from_positions.ground_speed_m_s = 5.0;
+  from_positions.course_deg = 90.0;
+  from_positions.speed_source = "the GPS positions of A.JPG and C.JPG: 20.0 m in 4.00 s";
+  from_positions.speed_from_positions = true;
+  FlightLog no_navigation;
+  const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+  const PhotoVelocity own = VelocityOfPhoto(recorded, no_navigation, 0, identity, "");
+  const PhotoVelocity derived = VelocityOfPhoto(from_positions, no_navigation, 0, identity, "");
+  ASSERT_TRUE(own.velocity_mps && derived.velocity_mps) << derived.source;
+  EXPECT_NEAR((*derived.velocity_mps - *own.velocity_mps).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(own.velocity_mps->norm(), 5.0, 1e-12);
+  EXPECT_EQ(derived.source,
+            "5.00 m/s toward 90 deg from the GPS positions of A.JPG and C.JPG: 20.0 m in 4.00 s, "
+            "turned by the photo's gimbal's yaw 30.0 deg and pitch -90.0 deg");
+  // A log's velocity at the photo's time is better than positions a few seconds apart.
+  FlightLog navigation;
+  navigation.velocity = {{0, Eigen::Vector3d(5.0, 0.0, 0.0)},
+                         {SecondsToNs(0.5), Eigen::Vector3d(5.0, 0.0, 0.0)}};
+  navigation.velocity_source = "vehicle_local_position.vx,vy,vz";
+  const PhotoVelocity logged =
+      VelocityOfPhoto(from_positions, navigation, SecondsToNs(0.25), identity, "");
+  EXPECT_NE(logged.source.find("toward 0 deg from the log's"), std::string::npos) << logged.source;
+  // Nothing: said.
+  PhotoRecord nothing;
+  nothing.metadata.gimbal = recorded.metadata.gimbal;
+  EXPECT_FALSE(VelocityOfPhoto(nothing, no_navigation, 0, identity, "").velocity_mps);
 }
 
 }  // namespace

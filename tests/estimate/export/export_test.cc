@@ -706,6 +706,21 @@ TEST(ExportSource, ReadsAReportACameraJsonAFolderAndPhotos) {
           .contains("offsets"));
   EXPECT_TRUE(from_report.gyro_known);
 
+  // A photo whose camera came from camera.json or a lens profile: its principal point and lens.
+  nlohmann::json profiled = photos;
+  profiled["photos"][0]["camera"] = {
+      {"fx", 2570.0},
+      {"fy", 2562.0},
+      {"cx", 2010.0},
+      {"cy", 1130.0},
+      {"distortion", DistortionJson(Fisheye({0.06, 0.04, -0.04, 0.015}))}};
+  WriteFileAtomically(dir / "profiled.json", profiled.dump());
+  const PinholeCamera lens = ReadExportSource(dir / "profiled.json").truth.rig.camera;
+  EXPECT_EQ(lens.fy, 2562.0);
+  EXPECT_EQ(lens.cx, 2010.0);
+  ASSERT_TRUE(std::holds_alternative<Fisheye>(lens.distortion));
+  EXPECT_EQ(std::get<Fisheye>(lens.distortion).coeffs()[3], 0.015);
+
   WriteFileAtomically(dir / "other.json", "{\"format\": \"measure/1\"}");
   EXPECT_THROW(ReadExportSource(dir / "other.json"), IoError);
 }
