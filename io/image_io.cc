@@ -146,7 +146,12 @@ void WriteImage(const std::string& path, const cv::Mat& image,
   settings.channel_names = channel_names;
   if (image.channels() == 4 && channel_names.empty()) settings.alpha_channel = 3;
   // zlib level 1: photographic textures barely compress further, and level 6 costs ~5x.
-  if (extension == ".png" || extension == ".PNG") settings.png_compression_level = 1;
+  if (extension == ".png" || extension == ".PNG") {
+    settings.png_compression_level = 1;
+    // A one-channel 8-bit image is a mask: libpng's adaptive row filters took 4x the time of
+    // none (PNG_FILTER_NONE, 8) on a 12 MP one (69 against 16 ms) for the same size (63 kB).
+    if (image.channels() == 1 && image.depth() == CV_8U) settings.png_filter = 8;
+  }
   if (IsJpegPath(path)) settings.compression = "jpeg:95";
   WriteThroughTemp(path, image, settings, {});
 }

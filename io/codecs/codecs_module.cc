@@ -134,6 +134,7 @@ std::string WriteImage(const std::string& path, const cv::Mat& image,
       spec.attribute("jpeg:subsampling", settings.jpeg_subsampling);
     if (settings.png_compression_level >= 0)
       spec.attribute("png:compressionLevel", settings.png_compression_level);
+    if (settings.png_filter != 0) spec.attribute("png:filter", settings.png_filter);
     auto output = OIIO::ImageOutput::create(path);
     if (!output) return OiioError("unknown format");
     const bool ok = output->open(path, spec) &&

@@ -16,7 +16,7 @@
 namespace shutterlab::codecs {
 
 // Bumped whenever anything below changes.
-constexpr int kCodecsVersion = 1;
+constexpr int kCodecsVersion = 2;
 
 // A sample type as OpenImageIO names it.
 enum class SampleType { kUint8, kUint16, kHalf, kFloat, kDouble, kOther };
@@ -41,6 +41,7 @@ struct ImageWriteSettings {
   std::string compression;                 // "" : the format's default
   std::string jpeg_subsampling;            // "" : the format's default
   int png_compression_level = -1;          // zlib level, -1: the format's default
+  int png_filter = 0;                      // libpng's PNG_FILTER_* bits; 0: its own (adaptive)
 };
 
 struct Functions {
