@@ -468,10 +468,12 @@ void DescribePhotoVelocities(const PhotoInput& input, bool velocity_given,
   for (const auto& [frame, v] : input.velocity) own += v.velocity_mps ? 1 : 0;
   summary->translation = FormatNumber("ground plane at %g m", *summary->setting.plane_depth_m) +
                          ", each photo's own velocity (" + std::to_string(own) + " of " +
-                         std::to_string(input.velocity.size()) + " photos record it)";
+                         std::to_string(input.velocity.size()) +
+                         " photos have one: recorded, the log's, or from the photos' positions)";
   if (own < input.velocity.size()) {
     summary->notes.push_back(std::to_string(input.velocity.size() - own) +
-                             " photo(s) without a recorded flight speed and gimbal attitude: " +
+                             " photo(s) without a speed (recorded, logged or from positions) or "
+                             "an attitude to turn it: " +
                              (summary->model.model.rig.velocity_mps.isZero()
                                   ? "rotation only (camera.json velocity_mps would serve them)"
                                   : "camera.json's velocity"));
