@@ -2,6 +2,7 @@
 
 #include "io/codecs.h"
 #include "io/exiv2_setup.h"
+#include "io/image_check.h"
 #include "sim/check.h"
 
 #include <algorithm>
@@ -49,27 +50,31 @@ SampleType ReadAs(SampleType in_file) {
   }
 }
 
-// Reads all channels of the first subimage, as `as` (kOther: ReadAs the file's type).
-cv::Mat ReadRaw(const std::string& path, SampleType as, codecs::ImageHeader* header) {
+// Decodes all channels of the first subimage into *image, as `as` (kOther: ReadAs the file's
+// type); the problem, "" when none. A decode that succeeded may still complain (a JPEG cut short):
+// *complaint.
+std::string DecodeRaw(const std::string& path, SampleType as, codecs::ImageHeader* header,
+                      cv::Mat* image, std::string* complaint) {
   std::string error = Codecs().read_header(path, header);
-  if (!error.empty()) throw IoError(IoMessage(path, 0, "cannot read image: " + error));
+  if (!error.empty()) return "cannot read image: " + error;
   if (header->width <= 0 || header->height <= 0 || header->channels <= 0 || header->depth != 1) {
-    throw IoError(IoMessage(path, 0, "not a 2-D image"));
+    return "not a 2-D image";
   }
+  error = Codecs().read_image(path, as == SampleType::kOther ? ReadAs(header->sample_type) : as,
+                              image, header, complaint);
+  return error.empty() ? "" : "cannot decode image: " + error;
+}
+
+cv::Mat ReadRaw(const std::string& path, SampleType as, codecs::ImageHeader* header) {
   cv::Mat image;
   std::string complaint;
-  error = Codecs().read_image(path, as == SampleType::kOther ? ReadAs(header->sample_type) : as,
-                              &image, header, &complaint);
-  if (!error.empty()) throw IoError(IoMessage(path, 0, "cannot decode image: " + error));
+  const std::string problem = DecodeRaw(path, as, header, &image, &complaint);
+  if (!problem.empty()) throw IoError(IoMessage(path, 0, problem));
   return image;
 }
 
-}  // namespace
-
-cv::Mat ReadImage(const std::string& path) {
-  codecs::ImageHeader header;
-  cv::Mat raw = ReadRaw(path, SampleType::kOther, &header);
-  const int channels = header.channels;
+// The pixels as ReadImage gives them: grey, RGB, or RGBA without its alpha.
+cv::Mat GreyOrRgb(const std::string& path, cv::Mat raw, int channels) {
   if (channels == 1 || channels == 3) return raw;
   if (channels == 4) {
     cv::Mat rgb;
@@ -80,6 +85,24 @@ cv::Mat ReadImage(const std::string& path) {
   }
   throw IoError(IoMessage(
       path, 0, "has " + std::to_string(channels) + " channels; expected grey, RGB or RGBA"));
+}
+
+}  // namespace
+
+cv::Mat ReadImage(const std::string& path) {
+  codecs::ImageHeader header;
+  cv::Mat raw = ReadRaw(path, SampleType::kOther, &header);
+  return GreyOrRgb(path, std::move(raw), header.channels);
+}
+
+cv::Mat ReadWholeImage(const std::string& path) {
+  codecs::ImageHeader header;
+  cv::Mat raw;
+  std::string complaint;
+  std::string problem = DecodeRaw(path, SampleType::kOther, &header, &raw, &complaint);
+  if (problem.empty()) problem = JpegDamageIn(complaint);
+  if (!problem.empty()) throw UndecodableImage(path, UndecodableImageText(problem));
+  return GreyOrRgb(path, std::move(raw), header.channels);
 }
 
 cv::Mat ReadFloatImage(const std::string& path, std::vector<std::string>* channel_names) {

@@ -7,6 +7,8 @@
 // so the order never matters to the geometry, and a grey image stays one channel.
 // Rows are never reoriented (oiio:reorient = 0): an image row must stay a sensor row.
 
+#include "sim/check.h"
+
 #include <opencv2/core.hpp>
 
 #include <optional>
@@ -20,6 +22,21 @@ namespace shutterlab {
 // float to CV_32F), with 1 or 3 channels (an alpha channel is dropped, two channels are refused).
 // Throws IoError("PATH: problem") with OpenImageIO's own message when the file cannot be read.
 cv::Mat ReadImage(const std::string& path);
+
+// A file whose pixels do not decode, in whole or in part: what() is "PATH: REASON", the reason
+// "its image data does not decode (PROBLEM): a cut or damaged file; ...".
+class UndecodableImage : public IoError {
+ public:
+  UndecodableImage(const std::string& path, const std::string& reason)
+      : IoError(IoMessage(path, 0, reason)), reason(reason) {}
+  std::string reason;  // without the path, for a list that names the file its own way
+};
+
+// ReadImage for pixels that must all be there: a JPEG cut short or damaged inside its coded data
+// still decodes, with grey or smeared rows, and OpenImageIO says so only in a warning
+// (io/image_check.h JpegDamageIn). Throws UndecodableImage then and when the file does not decode
+// at all. One decode where ImageDataProblem's check and then ReadImage would be two.
+cv::Mat ReadWholeImage(const std::string& path);
 
 // Writes a CV_8U / CV_16U / CV_32F image with 1, 2, 3 or 4 channels, format chosen by the
 // extension. Whole or not at all: written to a temporary file in the same folder, then renamed.

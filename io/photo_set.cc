@@ -335,12 +335,8 @@ PhotoSet ReadPhotoSet(const std::string& dir, const PhotoSetOptions& options) {
     try {
       PhotoRecord record = MakePhotoRecord(paths[i], ReadPhotoMetadata(paths[i]), options);
       // Metadata survives a cut: the pixels are what a photogrammetry tool will use.
-      const std::string problem = ImageDataProblem(paths[i]);
-      if (!problem.empty()) {
-        record.error = IoMessage(paths[i], 0,
-                                 "its image data does not decode (" + problem +
-                                     "): a cut or damaged file; copy it from the card again");
-      }
+      const std::string problem = options.check_image_data ? ImageDataProblem(paths[i]) : "";
+      if (!problem.empty()) record.error = IoMessage(paths[i], 0, UndecodableImageText(problem));
       if (options.recursive) record.name = fs::relative(paths[i], dir).generic_string();
       set.photos.push_back(std::move(record));
     } catch (const IoError& e) {

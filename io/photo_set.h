@@ -62,6 +62,9 @@ struct PhotoSetOptions {
   // Read the folder's subfolders too (a card's DCIM/100MEDIA, 101MEDIA, ...); a photo's name is
   // then its path under the folder ("101MEDIA/DJI_0001.JPG").
   bool recursive = false;
+  // Decode each photo's pixels to find a cut or damaged file (io/image_check.h). A job that
+  // decodes every photo in full anyway (correct --photos, through ReadWholeImage) finds it then.
+  bool check_image_data = true;
   std::function<void(double)> progress;  // fraction read (0..1); may be empty
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;

@@ -49,6 +49,7 @@ struct Context {
   std::string image_root;   // DIR's folder of the corrected images ("": DIR itself)
   std::string translation;  // the summary's words, for frames without their own velocity
   std::vector<std::pair<std::string, std::string>> xmp;  // the same for every frame
+  bool photos = false;  // correct --photos: a frame is named by its photo in what is said
 };
 
 // A corrected image's mask, named by the image's path under the image root (COLMAP's
@@ -89,7 +90,7 @@ double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap
     mask = ReadImage(mask_path.string());
   } else {
     const std::string input = (c.dataset.dir / e.image).string();
-    const cv::Mat rs = ReadImage(input);
+    const cv::Mat rs = ReadWholeImage(input);
     if (rs.cols != map.geometry().camera().width || rs.rows != map.geometry().camera().height) {
       throw IoError(IoMessage(input, 0,
                               "is " + std::to_string(rs.cols) + "x" + std::to_string(rs.rows) +
@@ -187,7 +188,9 @@ CorrectedFrame CorrectOne(const Context& c, const FrameEntry& e, FrameBuffers* b
 }
 
 // Every frame on `jobs` threads, frames.csv order kept; frames whose readout the gyro does not
-// cover go to skipped. The first error stops the others and is thrown.
+// cover, or whose image does not decode whole (a cut photo: found here, in the one decode, rather
+// than by decoding every photo first), go to skipped. The first other error stops the others and
+// is thrown.
 void RunFrames(const Context& c, const CorrectProgress& progress, CorrectSummary* summary) {
   const std::vector<FrameEntry>& entries = c.dataset.frames;
   std::vector<std::optional<CorrectedFrame>> done(entries.size());
@@ -203,6 +206,8 @@ void RunFrames(const Context& c, const CorrectProgress& progress, CorrectSummary
         done[i] = CorrectOne(c, entries[i], &buffers);
       } catch (const std::out_of_range&) {
         skipped[i] = "its readout is outside " + fs::path(c.dataset.gyro_path).filename().string();
+      } catch (const UndecodableImage& e) {
+        skipped[i] = c.photos ? e.reason : e.what();  // a photo is named by its name below
       } catch (...) {
         const std::lock_guard<std::mutex> guard(lock);
         if (!failed.exchange(true)) error = std::current_exception();
@@ -222,7 +227,9 @@ void RunFrames(const Context& c, const CorrectProgress& progress, CorrectSummary
   if (error) std::rethrow_exception(error);
   for (size_t i = 0; i < entries.size(); ++i) {
     if (done[i]) summary->frames.push_back(std::move(*done[i]));
-    if (!skipped[i].empty()) summary->skipped.emplace_back(entries[i].frame, skipped[i]);
+    if (skipped[i].empty()) continue;
+    summary->skipped.emplace_back(entries[i].frame,
+                                  c.photos ? entries[i].image + ": " + skipped[i] : skipped[i]);
   }
 }
 
@@ -556,7 +563,8 @@ CorrectSummary CorrectInput(const CorrectOptions& options, const RigDataset& dat
                   photos && !velocity_given ? &photos->velocity : nullptr,
                   photos ? "images" : "",
                   summary.translation,
-                  {}};
+                  {},
+                  photos != nullptr};
   summary.image_root = context.image_root;
   context.xmp = {{"Xmp.shutterlab.RollingShutterCorrected", "True"},
                  {"Xmp.shutterlab.Reference", CorrectionReferenceName(options.reference)}};
@@ -564,8 +572,13 @@ CorrectSummary CorrectInput(const CorrectOptions& options, const RigDataset& dat
   if (ec) throw IoError(IoMessage(options.out_dir, 0, "cannot create: " + ec.message()));
   RunFrames(context, progress, &summary);
   if (summary.frames.empty()) {
-    throw IoError(
-        IoMessage(dataset.frames_path, 0, "no frame's readout lies inside " + dataset.gyro_path));
+    // Every frame was skipped here (its readout outside the log, or its image cut): say why.
+    const size_t first_here = photos ? photos->skipped.size() : 0;
+    throw IoError(IoMessage(
+        dataset.frames_path, 0,
+        first_here < summary.skipped.size()
+            ? "no frame could be corrected (the first: " + summary.skipped[first_here].second + ")"
+            : "no frames"));
   }
   NoteWhenPredictedWorse(&summary);
   WriteDatasetFiles(context, summary);

@@ -43,6 +43,7 @@ PhotoSetOptions PhotoSetOptionsFrom(const PhotoInputOptions& options) {
   set.ground_elevation_m = options.ground_elevation_m;
   set.lens_profile = options.lens_profile;
   set.progress = options.progress;
+  set.check_image_data = false;  // each photo's one full decode finds a cut (ReadWholeImage)
   return set;
 }
 

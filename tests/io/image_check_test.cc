@@ -1,5 +1,6 @@
 // io/image_check.h: a photo whose metadata is whole but whose pixels are cut or damaged is found
-// by decoding it (a JPEG at 1/8 size through libjpeg, anything else whole through OpenImageIO).
+// by decoding it (a JPEG at 1/8 size through libjpeg, anything else whole through OpenImageIO),
+// and by io/image_io.h ReadWholeImage from OpenImageIO's full decode and its warning.
 
 #include "io/image_check.h"
 
@@ -95,6 +96,66 @@ TEST(ImageDataProblem, OtherFormatsAreDecodedWhole) {
   EXPECT_EQ(ImageDataProblem(dir / "missing.jpg"), "cannot be opened");
   WriteFileAtomically(dir / "text.jpg", "cut off");
   EXPECT_NE(ImageDataProblem(dir / "text.jpg"), "");
+}
+
+TEST(JpegDamageIn, NamesTheWarningsThatMeanDamageAndNoOthers) {
+  // OpenImageIO's wording around libjpeg's message.
+  const auto warning = [](const std::string& message) {
+    return "JPEG error: " + message + " (\"/card/DJI_0001.JPG\")";
+  };
+  EXPECT_EQ(JpegDamageIn(warning("Premature end of JPEG file")), "Premature end of JPEG file");
+  EXPECT_EQ(JpegDamageIn(warning("Corrupt JPEG data: bad Huffman code")),
+            "Corrupt JPEG data: bad Huffman code");
+  EXPECT_EQ(JpegDamageIn(warning("Corrupt JPEG data: found marker 0xd3 instead of RST2")),
+            "Corrupt JPEG data: found marker 0xd3 instead of RST2");
+  // Padding before the end of the image (0xd9) is harmless; before a table (0xc4), data is lost.
+  EXPECT_EQ(JpegDamageIn(warning("Corrupt JPEG data: 3 extraneous bytes before marker 0xd9")), "");
+  EXPECT_EQ(JpegDamageIn(warning("Corrupt JPEG data: 3 extraneous bytes before marker 0xc4")),
+            "Corrupt JPEG data: 3 extraneous bytes before marker 0xc4");
+  EXPECT_EQ(JpegDamageIn(warning("Warning: unknown JFIF revision number 3.01")), "");
+  EXPECT_EQ(JpegDamageIn(warning("Premature end of JPEG file, really")), "");
+  EXPECT_EQ(JpegDamageIn("PNG read error: IDAT"), "");
+  EXPECT_EQ(JpegDamageIn(""), "");
+}
+
+TEST(ReadWholeImage, RefusesWhatTheOneEighthDecodeRefusesAndReadsTheRest) {
+  // Two decoders: OpenImageIO's full decode (its warning) against libjpeg's 1/8 one.
+  test::TempDir dir;
+  const std::string whole = NoisyPhoto();
+  WriteFileAtomically(dir / "whole.jpg", whole);
+  EXPECT_EQ(ReadWholeImage(dir / "whole.jpg").size(), cv::Size(640, 480));
+  const auto [begin, end] = ScanOf(whole);
+  std::string damaged = whole;
+  for (size_t at = begin + (end - begin) / 2; at < begin + (end - begin) / 2 + 40; at += 2) {
+    damaged[at] = '\xff';
+    damaged[at + 1] = '\xd3';
+  }
+  WriteFileAtomically(dir / "damaged.jpg", damaged);
+  std::vector<std::string> paths = {dir / "damaged.jpg"};
+  for (const double share : {0.05, 0.5, 0.99}) {
+    paths.push_back(dir / FormatNumber("cut_%g.jpg", share));
+    WriteFileAtomically(paths.back(),
+                        whole.substr(0, begin + static_cast<size_t>(share * (end - begin))));
+  }
+  WriteFileAtomically(dir / "text.jpg", "cut off");
+  paths.push_back(dir / "text.jpg");
+  for (const std::string& path : paths) {
+    const std::string problem = ImageDataProblem(path);
+    ASSERT_NE(problem, "") << path;
+    try {
+      ReadWholeImage(path);
+      ADD_FAILURE() << path << " read whole";
+    } catch (const UndecodableImage& e) {
+      const std::string said = e.what();
+      EXPECT_EQ(said.rfind(path + ": its image data does not decode (", 0), 0u) << said;
+      EXPECT_NE(said.find("copy it from the card again"), std::string::npos) << said;
+      if (path != dir / "text.jpg") {
+        EXPECT_NE(said.find("(" + problem + ")"), std::string::npos) << said << " / " << problem;
+        // ReadImage still decodes it, grey or smeared where the data was lost.
+        EXPECT_EQ(ReadImage(path).size(), cv::Size(640, 480)) << path;
+      }
+    }
+  }
 }
 
 }  // namespace

@@ -368,26 +368,34 @@ TEST(CorrectPhotos, RenderedStillsPlacedByTheirTriggersMatchTheTruth) {
   // Three stills rendered from one flight, written as JPEG photos, with the flight's gyro log and
   // a trigger file naming them 5 ms before row 0 (--latency 5 ms) and a fourth photo that no
   // trigger names: corrected with the true model, the three match the renderer's exact truth to
-  // interpolation error, the fourth is skipped with its reason, and a second run keeps them.
+  // interpolation error, the fourth is skipped with its reason, and a second run keeps them. A
+  // fifth, a copy cut short inside its image data, is found when it is decoded and skipped.
   test::TempDir dir;
   const std::vector<double> times_s = {12.0, 16.0, 20.0};
   const std::vector<std::string> names = {"DJI_0001.JPG", "DJI_0002.JPG", "DJI_0003.JPG"};
   const Rendered rendered = Render(dir, "ds", {"velocity=6m/s,-3m/s,0"}, times_s);
   const fs::path photos = PhotoFolder(dir, rendered, names);
   fs::copy_file(photos / "DJI_0001.JPG", photos / "DJI_0099.JPG");
+  const std::string whole = ReadFileToString(photos / "DJI_0002.JPG");
+  WriteFileAtomically(photos / "DJI_0004.JPG", whole.substr(0, whole.size() * 3 / 4));
   std::string triggers = "image,t\n";
   for (size_t i = 0; i < names.size(); ++i) {
     triggers += names[i] + "," + FormatNumber("%.6f", times_s[i] - 0.005) + "\n";
   }
+  triggers += "DJI_0004.JPG," + FormatNumber("%.6f", times_s[1] - 0.005) + "\n";
   WriteFileAtomically(dir / "triggers.csv", triggers);
   CorrectOptions options = PhotoOptions(dir, rendered, photos, rendered.dataset + "/gyro.csv");
   options.photos->triggers_path = dir / "triggers.csv";
   options.photos->trigger_latency_s = 0.005;
   const CorrectSummary summary = CorrectDataset(options);
   ExpectTheTruth(summary, names, times_s);
-  ASSERT_EQ(summary.skipped.size(), 1u);
+  ASSERT_EQ(summary.skipped.size(), 2u);
   EXPECT_NE(summary.skipped[0].second.find("DJI_0099.JPG"), std::string::npos)
       << summary.skipped[0].second;
+  EXPECT_EQ(summary.skipped[1].second,
+            "DJI_0004.JPG: its image data does not decode (Premature end of JPEG file): a cut or "
+            "damaged file; copy it from the card again");
+  EXPECT_FALSE(fs::exists(fs::path(options.out_dir) / "images/DJI_0004.JPG"));
   EXPECT_EQ(ReadFramesCsv((fs::path(options.out_dir) / "frames.csv").string()).size(), 3u);
   EXPECT_TRUE(fs::is_regular_file(fs::path(options.out_dir) / "correct.json"));
   options.check_truth = false;
