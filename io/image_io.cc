@@ -95,14 +95,15 @@ cv::Mat ReadImage(const std::string& path) {
   return GreyOrRgb(path, std::move(raw), header.channels);
 }
 
-cv::Mat ReadWholeImage(const std::string& path) {
+cv::Mat ReadWholeImage(const std::string& path, cv::Mat* buffer) {
   codecs::ImageHeader header;
-  cv::Mat raw;
+  cv::Mat own;
+  cv::Mat& raw = buffer ? *buffer : own;
   std::string complaint;
   std::string problem = DecodeRaw(path, SampleType::kOther, &header, &raw, &complaint);
   if (problem.empty()) problem = JpegDamageIn(complaint);
   if (!problem.empty()) throw UndecodableImage(path, UndecodableImageText(problem));
-  return GreyOrRgb(path, std::move(raw), header.channels);
+  return GreyOrRgb(path, raw, header.channels);
 }
 
 cv::Mat ReadFloatImage(const std::string& path, std::vector<std::string>* channel_names) {

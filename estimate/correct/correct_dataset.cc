@@ -71,10 +71,10 @@ int64_t ReferenceTimeNs(const TrueModel& model, int64_t t_first_row_ns, double r
          SecondsToNs(model.rig.shutter.RowTimeOffsetS(reference_row, model.rig.camera.height));
 }
 
-// A worker's corrected image and mask, reused frame to frame: a 12 MP photo's output touched
-// afresh cost about as much in page faults as its warp (bench/photos_bench.cc).
+// A worker's decoded source, corrected image and mask, reused frame to frame: a 12 MP photo's
+// output touched afresh cost about as much in page faults as its warp (bench/photos_bench.cc).
 struct FrameBuffers {
-  cv::Mat corrected, mask;
+  cv::Mat source, corrected, mask;
 };
 
 // Writes the corrected image and its mask (unless DIR holds both and force is off); the share of
@@ -90,7 +90,7 @@ double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap
     mask = ReadImage(mask_path.string());
   } else {
     const std::string input = (c.dataset.dir / e.image).string();
-    const cv::Mat rs = ReadWholeImage(input);
+    const cv::Mat rs = ReadWholeImage(input, &buffers->source);
     if (rs.cols != map.geometry().camera().width || rs.rows != map.geometry().camera().height) {
       throw IoError(IoMessage(input, 0,
                               "is " + std::to_string(rs.cols) + "x" + std::to_string(rs.rows) +

@@ -108,6 +108,16 @@ TEST(PredictResidual, ACertainModelLeavesNothingAndDBeforeIsTheFramesDistortion)
                                CameraMotion(gyro, model.model).Frame(SecondsToNs(0.5)),
                                cv::Size(400, 300));
   EXPECT_NEAR(certain.d_before_px, FrameDistortionPx(DisplacementField(geometry)), 0.02);
+  // Its one draw standing for all 32 against all 32 drawn: a covariance of zero draws the model
+  // itself every time, through the random draws.
+  CorrectionModel drawn_each_time = model;
+  drawn_each_time.uncertainty.push_back({Effect::kReadoutTime, Eigen::MatrixXd::Zero(1, 1)});
+  const ResidualPrediction twin = PredictResidual(drawn_each_time, gyro, SecondsToNs(0.5), setting);
+  EXPECT_EQ(twin.draws, certain.draws);
+  EXPECT_EQ(twin.d_after_px, certain.d_after_px);
+  EXPECT_EQ(twin.d_after_p90_px, certain.d_after_p90_px);
+  EXPECT_EQ(twin.rms_after_px, certain.rms_after_px);
+  EXPECT_EQ(twin.d_before_px, certain.d_before_px);
   // A readout uncertain by 10 %: something is left, more at the 90th percentile than the median.
   model.uncertainty.push_back({Effect::kReadoutTime, Eigen::MatrixXd::Constant(1, 1, 4e-6)});
   const ResidualPrediction uncertain = PredictResidual(model, gyro, SecondsToNs(0.5), setting);
