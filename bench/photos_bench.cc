@@ -4,7 +4,7 @@
 //   - correct: CorrectDataset on the folder with its ULog and camera.json, one job: the log
 //              read, the photos placed, every photo's map, warp, mask and writes (no overview).
 // The photos: a `shutterlab survey` of 4 photos of 4000 x 3000 (f 3500 px, 30 ms, gusty), rendered
-// once into $TMPDIR/shutterlab_photos_bench/ (about 3 min) and reused by later runs. Both
+// once into $TMPDIR/shutterlab_photos_bench_noisy/ (about 3 min) and reused by later runs. Both
 // contenders write into a fresh folder each run; the runs alternate, and the medians of process
 // CPU time and wall time are printed with their ratio. The photos are placed on the log by a
 // trigger file made from the truth (a photo alone cannot be placed by its capture time). The
@@ -43,7 +43,7 @@ constexpr int kPhotos = 4;
 fs::path SurveyFolder() {
   const char* tmp = std::getenv("TMPDIR");
   const fs::path dir =
-      fs::path(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") / "shutterlab_photos_bench";
+      fs::path(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") / "shutterlab_photos_bench_noisy";
   if (fs::is_regular_file(dir / "survey.json")) return dir;
   std::fprintf(stderr, "rendering %d photos of 4000 x 3000 into %s (once, about 3 min)\n", kPhotos,
                dir.c_str());
@@ -60,7 +60,10 @@ fs::path SurveyFolder() {
   synth.rate_hz = 1000.0;
   synth.duration_s = SurveyEndS(survey) + 2.0;
   synth.t0_s = 0.001;
+  // A MEMS gyro's white noise and nothing else (its density as ImuErrorModel's default): a real
+  // log's noise makes correct draw its prediction 32 times, as it does for a real flight.
   synth.imu = ImuErrorModel::Ideal();
+  synth.imu.noise_density_rad_s_sqrt_hz = ImuErrorModel().noise_density_rad_s_sqrt_hz;
   fs::remove_all(dir);
   WriteSurvey(survey, SynthesizeTrace(synth), dir.string(), {});
   return dir;

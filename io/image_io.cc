@@ -51,25 +51,25 @@ SampleType ReadAs(SampleType in_file) {
 }
 
 // Decodes all channels of the first subimage into *image, as `as` (kOther: ReadAs the file's
-// type); the problem, "" when none. A decode that succeeded may still complain (a JPEG cut short):
-// *complaint.
+// type). Throws IoError when the file cannot be opened or is not a 2-D image; returns the
+// decoder's error, "" when the pixels decoded. A decode that succeeded may still complain (a JPEG
+// cut short): *complaint.
 std::string DecodeRaw(const std::string& path, SampleType as, codecs::ImageHeader* header,
                       cv::Mat* image, std::string* complaint) {
-  std::string error = Codecs().read_header(path, header);
-  if (!error.empty()) return "cannot read image: " + error;
+  const std::string error = Codecs().read_header(path, header);
+  if (!error.empty()) throw IoError(IoMessage(path, 0, "cannot read image: " + error));
   if (header->width <= 0 || header->height <= 0 || header->channels <= 0 || header->depth != 1) {
-    return "not a 2-D image";
+    throw IoError(IoMessage(path, 0, "not a 2-D image"));
   }
-  error = Codecs().read_image(path, as == SampleType::kOther ? ReadAs(header->sample_type) : as,
-                              image, header, complaint);
-  return error.empty() ? "" : "cannot decode image: " + error;
+  return Codecs().read_image(path, as == SampleType::kOther ? ReadAs(header->sample_type) : as,
+                             image, header, complaint);
 }
 
 cv::Mat ReadRaw(const std::string& path, SampleType as, codecs::ImageHeader* header) {
   cv::Mat image;
   std::string complaint;
-  const std::string problem = DecodeRaw(path, as, header, &image, &complaint);
-  if (!problem.empty()) throw IoError(IoMessage(path, 0, problem));
+  const std::string error = DecodeRaw(path, as, header, &image, &complaint);
+  if (!error.empty()) throw IoError(IoMessage(path, 0, "cannot decode image: " + error));
   return image;
 }
 
@@ -99,10 +99,22 @@ cv::Mat ReadWholeImage(const std::string& path, cv::Mat* buffer) {
   codecs::ImageHeader header;
   cv::Mat own;
   cv::Mat& raw = buffer ? *buffer : own;
-  std::string complaint;
-  std::string problem = DecodeRaw(path, SampleType::kOther, &header, &raw, &complaint);
-  if (problem.empty()) problem = JpegDamageIn(complaint);
-  if (!problem.empty()) throw UndecodableImage(path, UndecodableImageText(problem));
+  std::string complaint, error;
+  try {
+    error = DecodeRaw(path, SampleType::kOther, &header, &raw, &complaint);
+  } catch (const IoError&) {  // a header cut short, or not an image at all
+    const std::string damage = ImageDataProblem(path);
+    if (!damage.empty()) throw UndecodableImage(path, UndecodableImageText(damage));
+    throw;
+  }
+  std::string damage = error.empty() ? JpegDamageIn(complaint) : "";
+  // The full decode's word is not the last when it failed (memory is not damage) or complained
+  // of something else: libjpeg passes on its first warning only, so a harmless one (an unknown
+  // JFIF revision) hides a later "Premature end of JPEG file", and other formats complain in
+  // their own words. ImageDataProblem, which hears every warning, decides then (rarely needed).
+  if (damage.empty() && (!error.empty() || !complaint.empty())) damage = ImageDataProblem(path);
+  if (!damage.empty()) throw UndecodableImage(path, UndecodableImageText(damage));
+  if (!error.empty()) throw IoError(IoMessage(path, 0, "cannot decode image: " + error));
   return GreyOrRgb(path, raw, header.channels);
 }
 

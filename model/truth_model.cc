@@ -68,10 +68,23 @@ CameraMotion::CameraMotion(const TrueModel& model, OrientationTrace world_from_c
 
 FrameMotion CameraMotion::Frame(int64_t t_first_row_ns, std::optional<int64_t> anchor_first_row_ns,
                                 const std::optional<Eigen::Vector3d>& velocity_mps) const {
+  return FrameOfRows(t_first_row_ns, anchor_first_row_ns, velocity_mps, nullptr);
+}
+
+FrameMotion CameraMotion::FrameAtRows(int64_t t_first_row_ns, const std::vector<bool>& rows) const {
+  SHUTTERLAB_CHECK(static_cast<int>(rows.size()) == model_.rig.camera.height)
+      << "row flags for " << rows.size() << " rows, the camera has " << model_.rig.camera.height;
+  return FrameOfRows(t_first_row_ns, std::nullopt, std::nullopt, &rows);
+}
+
+FrameMotion CameraMotion::FrameOfRows(int64_t t_first_row_ns,
+                                      std::optional<int64_t> anchor_first_row_ns,
+                                      const std::optional<Eigen::Vector3d>& velocity_mps,
+                                      const std::vector<bool>* rows) const {
   const int height = model_.rig.camera.height;
   FrameMotion motion;
-  motion.world_from_cam.resize(height);
-  motion.cam_center_m.resize(height);
+  motion.world_from_cam.assign(height, Eigen::Matrix3d::Identity());
+  motion.cam_center_m.assign(height, Eigen::Vector3d::Zero());
   // The anchor: the true capture time of row 0 of the frame that defines the world.
   const int64_t anchor_ns = anchor_first_row_ns.value_or(t_first_row_ns);
   const double anchor_gyro_s = model_.RowGyroOffsetS(anchor_ns, 0);
@@ -91,6 +104,7 @@ FrameMotion CameraMotion::Frame(int64_t t_first_row_ns, std::optional<int64_t> a
   const Eigen::Vector3d velocity = velocity_mps.value_or(model_.rig.velocity_mps);
   motion.ref_center_m = velocity * since_anchor_s(t0_gyro_s);
   for (int v = 0; v < height; ++v) {
+    if (rows && !(*rows)[v]) continue;
     const double row_gyro_s = model_.RowGyroOffsetS(t_first_row_ns, v);
     const Eigen::Quaterniond q =
         anchor_from_world * world_from_cam_.WorldFromBodyAt(t_first_row_ns, row_gyro_s);

@@ -188,9 +188,9 @@ CorrectedFrame CorrectOne(const Context& c, const FrameEntry& e, FrameBuffers* b
 }
 
 // Every frame on `jobs` threads, frames.csv order kept; frames whose readout the gyro does not
-// cover, or whose image does not decode whole (a cut photo: found here, in the one decode, rather
-// than by decoding every photo first), go to skipped. The first other error stops the others and
-// is thrown.
+// cover, and photos whose image does not decode whole (a cut photo: found here, in the one decode,
+// rather than by decoding every photo first), go to skipped. The first other error stops the
+// others and is thrown.
 void RunFrames(const Context& c, const CorrectProgress& progress, CorrectSummary* summary) {
   const std::vector<FrameEntry>& entries = c.dataset.frames;
   std::vector<std::optional<CorrectedFrame>> done(entries.size());
@@ -207,7 +207,14 @@ void RunFrames(const Context& c, const CorrectProgress& progress, CorrectSummary
       } catch (const std::out_of_range&) {
         skipped[i] = "its readout is outside " + fs::path(c.dataset.gyro_path).filename().string();
       } catch (const UndecodableImage& e) {
-        skipped[i] = c.photos ? e.reason : e.what();  // a photo is named by its name below
+        // A cut photo is skipped (named by its name below); a dataset's damaged frame stops the
+        // run like any other unreadable input.
+        if (c.photos) {
+          skipped[i] = e.reason;
+        } else {
+          const std::lock_guard<std::mutex> guard(lock);
+          if (!failed.exchange(true)) error = std::current_exception();
+        }
       } catch (...) {
         const std::lock_guard<std::mutex> guard(lock);
         if (!failed.exchange(true)) error = std::current_exception();

@@ -35,6 +35,9 @@ struct ResidualPredictionOptions {
   int grid_columns = 33;  // output pixels on a grid, borders included
   int grid_rows = 25;
   uint64_t seed = 1;  // with the frame's time: the same draws on every run
+  // Each draw's poses at every row, not only at the rows the grid reads: the same numbers, slower
+  // (the brute-force twin of the tests).
+  bool every_row = false;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
 };

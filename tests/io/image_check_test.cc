@@ -137,6 +137,15 @@ TEST(ReadWholeImage, RefusesWhatTheOneEighthDecodeRefusesAndReadsTheRest) {
     WriteFileAtomically(paths.back(),
                         whole.substr(0, begin + static_cast<size_t>(share * (end - begin))));
   }
+  // libjpeg passes on its first warning only: a harmless one first (an unknown JFIF revision,
+  // 3.01) must not hide the cut after it.
+  // A JFIF APP0 segment of revision 3.01 after the start of image.
+  const std::string app0("\xff\xe0\x00\x10JFIF\x00\x03\x01\x00\x00\x01\x00\x01\x00\x00", 18);
+  const std::string revised = whole.substr(0, 2) + app0 + whole.substr(2);
+  WriteFileAtomically(dir / "jfif3_whole.jpg", revised);
+  EXPECT_EQ(ReadWholeImage(dir / "jfif3_whole.jpg").size(), cv::Size(640, 480));
+  paths.push_back(dir / "jfif3_cut.jpg");
+  WriteFileAtomically(paths.back(), revised.substr(0, app0.size() + begin + (end - begin) * 3 / 4));
   WriteFileAtomically(dir / "text.jpg", "cut off");
   paths.push_back(dir / "text.jpg");
   for (const std::string& path : paths) {

@@ -114,6 +114,27 @@ TEST(CameraMotion, FramesAreAnchoredAtRowZero) {
   }
 }
 
+TEST(CameraMotion, FrameAtRowsFillsTheRowsItIsGivenAsFrameDoes) {
+  const CameraMotion motion(test::ConstantRateTrace(Eigen::Vector3d(0.4, -0.6, 0.9), 0.0, 3.0),
+                            BareModel());
+  std::vector<bool> rows(48, false);
+  rows[0] = rows[17] = rows[18] = rows[47] = true;
+  const FrameMotion all = motion.Frame(SecondsToNs(0.5));
+  const FrameMotion some = motion.FrameAtRows(SecondsToNs(0.5), rows);
+  for (int v = 0; v < 48; ++v) {
+    if (rows[v]) {
+      EXPECT_EQ(some.world_from_cam[v], all.world_from_cam[v]) << v;
+      EXPECT_EQ(some.cam_center_m[v], all.cam_center_m[v]) << v;
+    } else {
+      EXPECT_EQ(some.world_from_cam[v], Eigen::Matrix3d::Identity()) << v;
+    }
+  }
+  EXPECT_FALSE(all.world_from_cam[17].isIdentity()) << "a row that turned";
+  EXPECT_EQ(some.world_from_ref, all.world_from_ref);
+  EXPECT_THROW(motion.FrameAtRows(SecondsToNs(0.5), std::vector<bool>(3, true)),
+               std::invalid_argument);
+}
+
 TEST(CameraMotion, BottomToTopAnchorsAtTheTopRowToo) {
   TrueModel model = BareModel();
   model.rig.shutter.direction = ReadoutDirection::kBottomToTop;

@@ -804,6 +804,21 @@ TEST(CorrectEndToEnd, JpegInputKeepsItsQualityAndVideoIsRotationOnly) {
   EXPECT_NE(with_depth.translation.find("--depth"), std::string::npos) << with_depth.translation;
   options.check_truth = true;
   EXPECT_THROW(CorrectDataset(options), std::invalid_argument);
+  // A dataset's frame cut short is not skipped as a photo would be: the run stops, naming it.
+  options.check_truth = false;
+  options.out_dir = dir / "out_cut";
+  const fs::path second = jpeg / frames[1].image;
+  const std::string whole = ReadFileToString(second);
+  WriteFileAtomically(second, whole.substr(0, whole.size() * 3 / 4));
+  try {
+    CorrectDataset(options);
+    ADD_FAILURE() << "a cut frame was corrected";
+  } catch (const UndecodableImage& e) {
+    EXPECT_EQ(std::string(e.what()), second.string() +
+                                         ": its image data does not decode (Premature end of JPEG "
+                                         "file): a cut or damaged file; copy it from the card "
+                                         "again");
+  }
 }
 
 }  // namespace

@@ -124,6 +124,23 @@ TEST(PredictResidual, ACertainModelLeavesNothingAndDBeforeIsTheFramesDistortion)
   EXPECT_GT(uncertain.d_after_px, 0.02 * certain.d_before_px);
   EXPECT_GT(uncertain.d_after_p90_px, uncertain.d_after_px);
   EXPECT_LT(uncertain.d_after_p90_px, 0.3 * certain.d_before_px);
+  // Each draw's poses at the rows the grid reads only, against every row: the same numbers, the
+  // gyro's noise drawn too, for both reference rows.
+  model.gyro_noise_rad_s_sqrt_hz = 2e-3;
+  for (const CorrectionReference reference :
+       {CorrectionReference::kFirstRow, CorrectionReference::kMidReadout}) {
+    setting.reference = reference;
+    ResidualPredictionOptions every_row;
+    every_row.every_row = true;
+    const ResidualPrediction fast = PredictResidual(model, gyro, SecondsToNs(0.5), setting);
+    const ResidualPrediction slow =
+        PredictResidual(model, gyro, SecondsToNs(0.5), setting, every_row);
+    EXPECT_GT(fast.d_after_px, uncertain.d_after_px) << "the noise adds to what is left";
+    EXPECT_EQ(fast.draws, slow.draws);
+    EXPECT_EQ(fast.d_after_px, slow.d_after_px);
+    EXPECT_EQ(fast.d_after_p90_px, slow.d_after_p90_px);
+    EXPECT_EQ(fast.rms_after_px, slow.rms_after_px);
+  }
 }
 
 }  // namespace
