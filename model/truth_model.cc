@@ -104,7 +104,9 @@ FrameMotion CameraMotion::FrameOfRows(int64_t t_first_row_ns,
   const Eigen::Vector3d velocity = velocity_mps.value_or(model_.rig.velocity_mps);
   motion.ref_center_m = velocity * since_anchor_s(t0_gyro_s);
   for (int v = 0; v < height; ++v) {
-    if (rows && !(*rows)[v]) continue;
+    // The first and last rows always: their times bound the readout, which outside the trace
+    // throws as Frame's does.
+    if (rows && !(*rows)[v] && v != 0 && v != height - 1) continue;
     const double row_gyro_s = model_.RowGyroOffsetS(t_first_row_ns, v);
     const Eigen::Quaterniond q =
         anchor_from_world * world_from_cam_.WorldFromBodyAt(t_first_row_ns, row_gyro_s);

@@ -79,9 +79,10 @@ class CameraMotion {
   FrameMotion Frame(int64_t t_first_row_ns,
                     std::optional<int64_t> anchor_first_row_ns = std::nullopt,
                     const std::optional<Eigen::Vector3d>& velocity_mps = std::nullopt) const;
-  // Frame(t_first_row_ns) with only the rows marked in `rows` (one flag per image row) filled, each
-  // exactly as Frame fills it; the others are left the identity and the origin. For a caller that
-  // reads those rows only (a prediction evaluated at a grid of pixels, drawn many times).
+  // Frame(t_first_row_ns) with only the rows marked in `rows` (one flag per image row), and the
+  // first and last rows, filled, each exactly as Frame fills it (and throwing as Frame does); the
+  // others are left the identity and the origin. For a caller that reads those rows only (a
+  // prediction evaluated at a grid of pixels, drawn many times).
   FrameMotion FrameAtRows(int64_t t_first_row_ns, const std::vector<bool>& rows) const;
   const TrueModel& model() const { return model_; }
 
