@@ -74,17 +74,12 @@ fs::path SurveyFolder() {
 std::string TriggersFromTruth(const fs::path& survey) {
   const std::string truth = ReadFileToString((survey / "truth/photos.csv").string());
   std::string triggers = "image,t\n";
-  size_t line_start = truth.find('\n') + 1;  // past the header
-  while (line_start < truth.size()) {
-    const size_t line_end = std::min(truth.find('\n', line_start), truth.size());
-    std::vector<std::string> fields;
-    for (size_t field_start = line_start; field_start <= line_end;) {
-      const size_t comma = std::min(truth.find(',', field_start), line_end);
-      fields.push_back(truth.substr(field_start, comma - field_start));
-      field_start = comma + 1;
-    }
-    if (fields.size() > 3) triggers += fields[0] + "," + fields[3] + "\n";
-    line_start = line_end + 1;
+  LineCursor lines(truth);
+  lines.Next();  // the header
+  std::vector<std::string_view> fields;
+  while (const std::optional<std::string_view> line = lines.Next()) {
+    SplitFields(*line, ',', &fields);
+    if (fields.size() > 3) triggers += std::string(fields[0]) + "," + std::string(fields[3]) + "\n";
   }
   return triggers;
 }

@@ -2,13 +2,10 @@
 
 #include "io/codecs.h"
 
-#include <algorithm>
 #include <csetjmp>
 #include <cstdio>
 #include <cstdlib>
-#include <iterator>
 #include <memory>
-#include <regex>
 #include <string>
 #include <vector>
 
@@ -29,31 +26,24 @@ struct JpegErrors {
   std::string first;
 };
 
-// The warnings that mean the coded data is cut or damaged; JWRN_EXTRANEOUS_DATA only before a
-// marker other than the end of the image (some encoders pad before it).
-constexpr int kDamageWarnings[] = {
-    JWRN_JPEG_EOF,         // Premature end of JPEG file
-    JWRN_HIT_MARKER,       // Corrupt JPEG data: premature end of data segment
-    JWRN_MUST_RESYNC,      // Corrupt JPEG data: found marker 0x.. instead of RST.
-    JWRN_HUFF_BAD_CODE,    // Corrupt JPEG data: bad Huffman code
-    JWRN_ARITH_BAD_CODE,   // Corrupt JPEG data: bad arithmetic code
-    JWRN_EXTRANEOUS_DATA,  // Corrupt JPEG data: N extraneous bytes before marker 0x..
-};
-constexpr unsigned kEndOfImageMarker = 0xD9;
-
-bool MeansDamage(int code, unsigned marker) {
-  if (code == JWRN_EXTRANEOUS_DATA) return marker != kEndOfImageMarker;
-  return std::find(std::begin(kDamageWarnings), std::end(kDamageWarnings), code) !=
-         std::end(kDamageWarnings);
+bool MeansDamage(const jpeg_error_mgr& err) {
+  switch (err.msg_code) {
+    case JWRN_JPEG_EOF:        // Premature end of JPEG file
+    case JWRN_HIT_MARKER:      // Corrupt JPEG data: premature end of data segment
+    case JWRN_MUST_RESYNC:     // Corrupt JPEG data: found marker instead of RST
+    case JWRN_HUFF_BAD_CODE:   // Corrupt JPEG data: bad Huffman code
+    case JWRN_ARITH_BAD_CODE:  // Corrupt JPEG data: bad arithmetic code
+      return true;
+    case JWRN_EXTRANEOUS_DATA:  // N extraneous bytes before marker M: harmless before EOI only
+      return err.msg_parm.i[1] != 0xD9;
+    default:
+      return false;
+  }
 }
 
 void KeepFirstMessage(j_common_ptr info, int level) {
   auto* errors = reinterpret_cast<JpegErrors*>(info->err);
-  const jpeg_error_mgr& err = *info->err;
-  if (level >= 0 || !errors->first.empty() ||
-      !MeansDamage(err.msg_code, static_cast<unsigned>(err.msg_parm.i[1]))) {
-    return;
-  }
+  if (level >= 0 || !errors->first.empty() || !MeansDamage(*info->err)) return;
   char text[JMSG_LENGTH_MAX];
   info->err->format_message(info, text);
   errors->first = text;
@@ -122,47 +112,7 @@ std::string OiioProblem(const std::string& path) {
   return failure.empty() ? complaint : failure;
 }
 
-// Whether `text` is libjpeg's message `format` (e.g. "Corrupt JPEG data: %u extraneous bytes
-// before marker 0x%02x"): its literal parts as they are, each printf conversion as the number it
-// prints. *marker gets the number printed by a "0x%02x" (the marker of the warnings that name one).
-bool MatchesMessage(const std::string& text, const std::string& format, unsigned* marker) {
-  static const std::regex conversion("%[0-9]*[dux]");
-  static const std::regex special(R"([.^$|()\[\]{}*+?\\])");
-  std::string pattern;
-  auto literal_start = format.cbegin();
-  for (std::sregex_iterator it(format.begin(), format.end(), conversion), end; it != end; ++it) {
-    const std::string literal(literal_start, format.cbegin() + it->position());
-    pattern += std::regex_replace(literal, special, R"(\$&)");
-    pattern += it->str().back() == 'x' ? "([0-9a-fA-F]+)" : "-?[0-9]+";
-    literal_start = format.cbegin() + it->position() + it->length();
-  }
-  pattern += std::regex_replace(std::string(literal_start, format.cend()), special, R"(\$&)");
-  std::smatch match;
-  if (!std::regex_match(text, match, std::regex(pattern))) return false;
-  if (match.size() > 1) *marker = static_cast<unsigned>(std::stoul(match[1].str(), nullptr, 16));
-  return true;
-}
-
 }  // namespace
-
-std::string JpegDamageIn(const std::string& decoder_warning) {
-  // OpenImageIO's wording around libjpeg's message: "JPEG error: MESSAGE (\"PATH\")".
-  const std::string prefix = "JPEG error: ";
-  const size_t start = decoder_warning.find(prefix);
-  if (start == std::string::npos) return "";
-  std::string message = decoder_warning.substr(start + prefix.size());
-  const size_t path = message.rfind(" (\"");
-  if (path != std::string::npos) message.resize(path);
-  jpeg_error_mgr table;
-  jpeg_std_error(&table);
-  for (const int code : kDamageWarnings) {
-    unsigned marker = 0;
-    if (MatchesMessage(message, table.jpeg_message_table[code], &marker)) {
-      return MeansDamage(code, marker) ? message : "";
-    }
-  }
-  return "";
-}
 
 std::string UndecodableImageText(const std::string& problem) {
   return "its image data does not decode (" + problem +

@@ -16,13 +16,6 @@ namespace shutterlab {
 // throws: a file that cannot be opened is a complaint, a decoder that cannot run is none.
 std::string ImageDataProblem(const std::string& path);
 
-// The damage told by a JPEG decoder's warning after a decode that succeeded (OpenImageIO keeps it
-// as "JPEG error: Premature end of JPEG file (\"PATH\")"): libjpeg's message, "" when the warning
-// leaves the pixels whole. The warnings that count are ImageDataProblem's, matched against
-// libjpeg's own message table. A job that decodes every photo in full anyway asks this instead of
-// ImageDataProblem.
-std::string JpegDamageIn(const std::string& decoder_warning);
-
 // What a photo whose pixels do not decode is told: "its image data does not decode (PROBLEM): a
 // cut or damaged file; copy it from the card again".
 std::string UndecodableImageText(const std::string& problem);

@@ -33,11 +33,11 @@ class UndecodableImage : public IoError {
 };
 
 // ReadImage for pixels that must all be there: a JPEG cut short or damaged inside its coded data
-// still decodes, with grey or smeared rows, and OpenImageIO says so only in a warning
-// (io/image_check.h JpegDamageIn). Throws UndecodableImage then and when the pixels do not decode
-// (ImageDataProblem's verdict), IoError for a file that cannot be opened or read otherwise (memory
-// included). One decode where ImageDataProblem's check and then ReadImage would be two, unless the
-// decoder complains of something else. With `buffer` the pixels are decoded into it, its memory
+// still decodes, with grey or smeared rows, and OpenImageIO says so only in a warning. Throws
+// UndecodableImage then and when the pixels do not decode (ImageDataProblem's verdict, asked only
+// when the decode failed or warned), IoError for a file that cannot be opened or read otherwise
+// (memory included). One decode for a whole file, where ImageDataProblem's check and then
+// ReadImage would be two. With `buffer` the pixels are decoded into it, its memory
 // reused when the size and type match: the result shares it and holds until the next call with
 // the same buffer. A job that decodes many photos of one camera so skips each one's first-touch
 // page faults (a 12 MP RGB photo is 36 MB).

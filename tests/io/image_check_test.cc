@@ -98,26 +98,6 @@ TEST(ImageDataProblem, OtherFormatsAreDecodedWhole) {
   EXPECT_NE(ImageDataProblem(dir / "text.jpg"), "");
 }
 
-TEST(JpegDamageIn, NamesTheWarningsThatMeanDamageAndNoOthers) {
-  // OpenImageIO's wording around libjpeg's message.
-  const auto warning = [](const std::string& message) {
-    return "JPEG error: " + message + " (\"/card/DJI_0001.JPG\")";
-  };
-  EXPECT_EQ(JpegDamageIn(warning("Premature end of JPEG file")), "Premature end of JPEG file");
-  EXPECT_EQ(JpegDamageIn(warning("Corrupt JPEG data: bad Huffman code")),
-            "Corrupt JPEG data: bad Huffman code");
-  EXPECT_EQ(JpegDamageIn(warning("Corrupt JPEG data: found marker 0xd3 instead of RST2")),
-            "Corrupt JPEG data: found marker 0xd3 instead of RST2");
-  // Padding before the end of the image (0xd9) is harmless; before a table (0xc4), data is lost.
-  EXPECT_EQ(JpegDamageIn(warning("Corrupt JPEG data: 3 extraneous bytes before marker 0xd9")), "");
-  EXPECT_EQ(JpegDamageIn(warning("Corrupt JPEG data: 3 extraneous bytes before marker 0xc4")),
-            "Corrupt JPEG data: 3 extraneous bytes before marker 0xc4");
-  EXPECT_EQ(JpegDamageIn(warning("Warning: unknown JFIF revision number 3.01")), "");
-  EXPECT_EQ(JpegDamageIn(warning("Premature end of JPEG file, really")), "");
-  EXPECT_EQ(JpegDamageIn("PNG read error: IDAT"), "");
-  EXPECT_EQ(JpegDamageIn(""), "");
-}
-
 TEST(ReadWholeImage, RefusesWhatTheOneEighthDecodeRefusesAndReadsTheRest) {
   // Two decoders: OpenImageIO's full decode (its warning) against libjpeg's 1/8 one.
   test::TempDir dir;
