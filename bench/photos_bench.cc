@@ -4,14 +4,19 @@
 //   - correct: CorrectDataset on the folder with its ULog and camera.json, one job: the log
 //              read, the photos placed, every photo's map, warp, mask and writes (no overview).
 // The photos: a `shutterlab survey` of 4 photos of 4000 x 3000 (f 3500 px, 30 ms, gusty), rendered
-// once into $TMPDIR/shutterlab_photos_bench_noisy/ (about 3 min) and reused by later runs. Both
+// once into $TMPDIR/shutterlab_photos_bench_noisy/ (about 3 min) and reused by later runs; with
+// PHOTOS, a survey of that many, into shutterlab_photos_bench_noisy_PHOTOS/: from 20 photos on,
+// on 5 lines at 82 % front overlap over a texture of the camera's own GSD, so that the ground fits
+// the renderer's largest texture (100 photos: about 75 min). Both
 // contenders write into a fresh folder each run; the runs alternate, and the medians of process
 // CPU time and wall time are printed with their ratio. The photos are placed on the log by a
 // trigger file made from the truth (a photo alone cannot be placed by its capture time). The
 // command's fixed cost (the log read, the photos placed) weighs more on 4 photos than on a
 // survey's 100: the command is also timed on the first photo alone, and its cost a photo,
 // (T4 - T1) / 3, gives the ratio 100 photos would have, said as that projection.
-// Run: build/bin/photos_bench [RUNS] (default 3)
+// Last, a 12 MP mask (0/255, bands without source at three edges) written ten times as correct
+// writes it (WriteMask, one bit a pixel) and as an 8-bit PNG (WriteImage), the mean of each.
+// Run: build/bin/photos_bench [RUNS [PHOTOS]] (default 3 runs, 4 photos)
 
 #include "bench/bench_util.h"
 #include "estimate/correct/correct_dataset.h"
@@ -37,24 +42,27 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kPhotos = 4;
-
-// The survey's folder, rendered on first use.
-fs::path SurveyFolder() {
+// The survey's folder of `photos` photos, rendered on first use.
+fs::path SurveyFolder(int photos) {
   const char* tmp = std::getenv("TMPDIR");
-  const fs::path dir =
-      fs::path(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") / "shutterlab_photos_bench_noisy";
+  const std::string name = "shutterlab_photos_bench_noisy" +
+                           (photos == 4 ? std::string() : "_" + std::to_string(photos));
+  const fs::path dir = fs::path(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") / name;
   if (fs::is_regular_file(dir / "survey.json")) return dir;
-  std::fprintf(stderr, "rendering %d photos of 4000 x 3000 into %s (once, about 3 min)\n", kPhotos,
-               dir.c_str());
+  std::fprintf(stderr, "rendering %d photos of 4000 x 3000 into %s (once, about %d min)\n", photos,
+               dir.c_str(), 1 + photos * 3 / 4);
   SurveyOptions survey;
   survey.camera.width = 4000;
   survey.camera.height = 3000;
   survey.camera.fx = survey.camera.fy = 3500.0;
   survey.camera.cx = (survey.camera.width - 1) / 2.0;
   survey.camera.cy = (survey.camera.height - 1) / 2.0;
-  survey.lines = 2;
-  survey.photos_per_line = kPhotos / 2;
+  survey.lines = photos < 20 ? 2 : 5;
+  survey.photos_per_line = photos / survey.lines;
+  if (photos >= 20) {
+    survey.front_overlap = 0.82;
+    survey.texture_gsd_m = survey.altitude_m / survey.camera.fx;
+  }
   SynthOptions synth;  // a gusty multirotor, as `survey` flies by default
   synth.profile = MotionProfile::kFlight;
   synth.rate_hz = 1000.0;
@@ -108,9 +116,37 @@ double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// A 12 MP mask written ten times each way into `out`: as correct writes it (WriteMask, one bit a
+// pixel) and as an 8-bit PNG (WriteImage); the mean times and sizes.
+void PrintMaskWriteTimes(const fs::path& out) {
+  cv::Mat mask(3000, 4000, CV_8UC1, cv::Scalar(255));
+  mask(cv::Rect(0, 0, 4000, 40)).setTo(0);
+  mask(cv::Rect(0, 0, 25, 3000)).setTo(0);
+  mask(cv::Rect(1000, 2950, 3000, 50)).setTo(0);
+  fs::create_directories(out);
+  const fs::path mask_path = out / "mask.png";
+  const auto mean_ms = [&](const auto& write) {
+    write();  // warm-up
+    return 100.0 * Time([&] {
+                     for (int i = 0; i < 10; ++i) write();
+                   }).wall_s;
+  };
+  const double one_bit_ms = mean_ms([&] { WriteMask(mask_path.string(), mask); });
+  const double one_bit_bytes = static_cast<double>(fs::file_size(mask_path));
+  const double eight_bit_ms = mean_ms([&] { WriteImage(mask_path.string(), mask); });
+  std::printf(
+      "  a 12 MP mask: %.1f ms one bit a pixel (%.0f kB), %.1f ms as an 8-bit PNG (%.0f kB)\n",
+      one_bit_ms, one_bit_bytes / 1e3, eight_bit_ms, fs::file_size(mask_path) / 1e3);
+}
+
 int Main(int argc, char** argv) {
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 3;
-  const fs::path survey = SurveyFolder();
+  const int photo_count = argc > 2 ? std::atoi(argv[2]) : 4;
+  if (photo_count < 2 || photo_count % (photo_count < 20 ? 2 : 5) != 0) {
+    std::fprintf(stderr, "PHOTOS: an even count, a multiple of 5 from 20 on (got %s)\n", argv[2]);
+    return 2;
+  }
+  const fs::path survey = SurveyFolder(photo_count);
   const fs::path out = survey / "bench_out";
   std::vector<std::string> photos;
   for (const auto& entry : fs::directory_iterator(survey / "images")) {
@@ -192,6 +228,8 @@ int Main(int argc, char** argv) {
   std::printf("  projected for 100 photos: %.2fx CPU the floor (%.2fx a photo)\n",
               (fixed_s + 100.0 * per_photo_s) / (100.0 * floor_per_photo_s),
               per_photo_s / floor_per_photo_s);
+  PrintMaskWriteTimes(out);
+  fs::remove_all(out);
   return 0;
 }
 

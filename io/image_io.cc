@@ -193,6 +193,14 @@ void WriteImage(const std::string& path, const cv::Mat& image,
   WriteThroughTemp(path, image, settings, {});
 }
 
+void WriteMask(const std::string& path, const cv::Mat& mask) {
+  SHUTTERLAB_CHECK(mask.type() == CV_8UC1) << "a mask is one 8-bit channel, writing " << path;
+  codecs::ImageWriteSettings settings;
+  settings.png_compression_level = 1;
+  settings.png_one_bit = true;
+  WriteThroughTemp(path, mask, settings, {});
+}
+
 namespace {
 
 // The JPEG standard's luminance quantisation table (ITU-T T.81 Annex K, Table K.1), natural order.

@@ -57,13 +57,26 @@ GyroTrace CamRates(const GyroTrace& logged, const TrueModel& model) {
 }  // namespace
 
 CameraMotion::CameraMotion(const GyroTrace& logged, const TrueModel& model)
-    : model_(model), world_from_cam_(CamRates(logged, model)) {
+    : model_(model),
+      world_from_cam_(std::make_shared<const OrientationTrace>(CamRates(logged, model))) {
   model_.Check();
 }
 
 CameraMotion::CameraMotion(const TrueModel& model, OrientationTrace world_from_cam)
-    : model_(model), world_from_cam_(std::move(world_from_cam)) {
+    : model_(model),
+      world_from_cam_(std::make_shared<const OrientationTrace>(std::move(world_from_cam))) {
   model_.Check();
+}
+
+CameraMotion::CameraMotion(const TrueModel& model, const CameraMotion& same_rates)
+    : model_(model), world_from_cam_(same_rates.world_from_cam_) {
+  model_.Check();
+  const TrueModel& other = same_rates.model_;
+  SHUTTERLAB_CHECK(model_.rig.cam_from_gyro == other.rig.cam_from_gyro &&
+                   model_.gyro_scale == other.gyro_scale &&
+                   model_.gyro_bias_rad_s == other.gyro_bias_rad_s)
+      << "a camera motion shares the integrated rates of a model with the same mounting, gyro "
+         "scale and bias only";
 }
 
 FrameMotion CameraMotion::Frame(int64_t t_first_row_ns, std::optional<int64_t> anchor_first_row_ns,
@@ -89,14 +102,14 @@ FrameMotion CameraMotion::FrameOfRows(int64_t t_first_row_ns,
   const int64_t anchor_ns = anchor_first_row_ns.value_or(t_first_row_ns);
   const double anchor_gyro_s = model_.RowGyroOffsetS(anchor_ns, 0);
   const Eigen::Quaterniond anchor_from_world =
-      world_from_cam_.WorldFromBodyAt(anchor_ns, anchor_gyro_s).conjugate();
+      world_from_cam_->WorldFromBodyAt(anchor_ns, anchor_gyro_s).conjugate();
   // Gyro-clock seconds of an instant given as (t_first_row_ns, offset) relative to the anchor.
   const auto since_anchor_s = [&](double offset_s) {
     return (t_first_row_ns - anchor_ns) * 1e-9 + offset_s - anchor_gyro_s;
   };
   const double t0_gyro_s = model_.RowGyroOffsetS(t_first_row_ns, 0);
   motion.world_from_ref =
-      (anchor_from_world * world_from_cam_.WorldFromBodyAt(t_first_row_ns, t0_gyro_s))
+      (anchor_from_world * world_from_cam_->WorldFromBodyAt(t_first_row_ns, t0_gyro_s))
           .normalized()
           .toRotationMatrix();
   // c(t) = velocity * (t - t_anchor) with t the gyro-clock time, as docs/FORMATS.md's t_v (under
@@ -109,7 +122,7 @@ FrameMotion CameraMotion::FrameOfRows(int64_t t_first_row_ns,
     if (rows && !(*rows)[v] && v != 0 && v != height - 1) continue;
     const double row_gyro_s = model_.RowGyroOffsetS(t_first_row_ns, v);
     const Eigen::Quaterniond q =
-        anchor_from_world * world_from_cam_.WorldFromBodyAt(t_first_row_ns, row_gyro_s);
+        anchor_from_world * world_from_cam_->WorldFromBodyAt(t_first_row_ns, row_gyro_s);
     motion.world_from_cam[v] = q.normalized().toRotationMatrix();
     motion.cam_center_m[v] = velocity * since_anchor_s(row_gyro_s);
   }

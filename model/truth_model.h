@@ -20,6 +20,7 @@
 
 #include <Eigen/Core>
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -69,6 +70,11 @@ class CameraMotion {
   // from the trace's first sample) already integrated: a stretch of a trace streamed past gives,
   // for frames inside it, the frames of the whole trace.
   CameraMotion(const TrueModel& model, OrientationTrace world_from_cam);
+  // The motion under `model` of a camera whose rates are `same_rates`' (the same CamRate: mounting,
+  // gyro scale and bias equal), sharing its integrated trace instead of integrating it again: a
+  // draw of a model that differs in its readout, offset or lens. Throws std::invalid_argument
+  // when the rates differ.
+  CameraMotion(const TrueModel& model, const CameraMotion& same_rates);
   // The motion of a frame whose first-read row is captured at camera time t_first_row_ns, in the
   // world of its own row 0 (the header's anchoring). With anchor_first_row_ns, in the world of
   // that frame's row 0 instead: every frame of a video shares one world (the first frame's), so
@@ -93,7 +99,8 @@ class CameraMotion {
                           const std::vector<bool>* rows) const;
 
   TrueModel model_;
-  OrientationTrace world_from_cam_;  // R_int, camera frame, gyro clock
+  // R_int, camera frame, gyro clock; shared by the motions of models with the same rates.
+  std::shared_ptr<const OrientationTrace> world_from_cam_;
 };
 
 }  // namespace shutterlab

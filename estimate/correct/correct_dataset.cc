@@ -120,7 +120,7 @@ double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap
     CreateParent(mask_path);
     out->notes = WriteImageLike(image_path.string(), corrected,
                                 ImageLike{input, ReadImageFileInfo(input)}, xmp);
-    WriteImage(mask_path.string(), mask);
+    WriteMask(mask_path.string(), mask);
   }
   return 1.0 - cv::countNonZero(mask) / static_cast<double>(mask.total());
 }

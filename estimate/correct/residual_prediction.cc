@@ -40,31 +40,6 @@ double ColumnDiameter(const std::vector<int>& column, const std::vector<Eigen::V
   return best;
 }
 
-// Adds the gyro's white noise to a frame's rows: per camera axis a random walk in the rows'
-// times, zero at the reference row. The walk steps through every row (the same random numbers
-// whichever rows are read); only the rows marked in `rows` are turned by it.
-void AddGyroNoise(const TrueModel& model, int64_t t_first_row_ns, double reference_row,
-                  double density_rad_s_sqrt_hz, const std::vector<bool>& rows, std::mt19937_64* rng,
-                  FrameMotion* motion) {
-  const int height = static_cast<int>(motion->world_from_cam.size());
-  std::normal_distribution<double> normal(0.0, 1.0);
-  const int start = std::clamp(static_cast<int>(std::lround(reference_row)), 0, height - 1);
-  const auto walk = [&](int from, int to, int step) {
-    Eigen::Vector3d angle = Eigen::Vector3d::Zero();
-    for (int v = from; v != to; v += step) {
-      const double dt_s = std::abs(model.RowGyroOffsetS(t_first_row_ns, v) -
-                                   model.RowGyroOffsetS(t_first_row_ns, v - step));
-      const double sd = density_rad_s_sqrt_hz * std::sqrt(dt_s);
-      angle += sd * Eigen::Vector3d(normal(*rng), normal(*rng), normal(*rng));
-      if (rows[v]) {
-        motion->world_from_cam[v] = motion->world_from_cam[v] * ExpSO3(angle).toRotationMatrix();
-      }
-    }
-  };
-  walk(start + 1, height, 1);
-  walk(start - 1, -1, -1);
-}
-
 // The model with each effect's parameters drawn from its covariance.
 TrueModel DrawModel(const CorrectionModel& model, std::mt19937_64* rng) {
   TrueModel drawn = model.model;
@@ -85,6 +60,93 @@ TrueModel DrawModel(const CorrectionModel& model, std::mt19937_64* rng) {
 
 }  // namespace
 
+std::vector<Eigen::Vector3d> GyroNoiseAngles(const TrueModel& model, int64_t t_first_row_ns,
+                                             int start_row, double density_rad_s_sqrt_hz,
+                                             const std::vector<bool>& rows, std::mt19937_64* rng) {
+  const int height = static_cast<int>(rows.size());
+  SHUTTERLAB_CHECK(start_row >= 0 && start_row < height)
+      << "the noise walk starts at row " << start_row << " of " << height;
+  std::vector<Eigen::Vector3d> angles(height, Eigen::Vector3d::Zero());
+  std::normal_distribution<double> normal(0.0, 1.0);
+  // Away from start_row, one step from each marked row to the next: the rows between add
+  // independent normal steps whose variances sum to density^2 times the time between the two
+  // (rows are read in time order), the same distribution as stepping through every row.
+  const auto walk = [&](int step) {
+    Eigen::Vector3d angle = Eigen::Vector3d::Zero();
+    double last_s = model.RowGyroOffsetS(t_first_row_ns, start_row);
+    for (int v = start_row + step; v >= 0 && v < height; v += step) {
+      if (!rows[v]) continue;
+      const double t_s = model.RowGyroOffsetS(t_first_row_ns, v);
+      const double sd = density_rad_s_sqrt_hz * std::sqrt(std::abs(t_s - last_s));
+      angle += sd * Eigen::Vector3d(normal(*rng), normal(*rng), normal(*rng));
+      angles[v] = angle;
+      last_s = t_s;
+    }
+  };
+  walk(1);
+  walk(-1);
+  return angles;
+}
+
+namespace {
+
+// D of the model's displacement of each rolling-shutter grid pixel into the corrected view.
+double DBefore(const CorrectionGeometry& geometry, const std::vector<double>& us,
+               const std::vector<double>& vs) {
+  std::vector<int> column;
+  std::vector<Eigen::Vector2d> d;
+  for (size_t i = 0; i < us.size(); ++i) {
+    for (double v : vs) {
+      const std::optional<Eigen::Vector2d> p = geometry.OutputPixel(us[i], v);
+      if (!p) continue;
+      column.push_back(static_cast<int>(i));
+      d.push_back(*p - Eigen::Vector2d(us[i], v));
+    }
+  }
+  return ColumnDiameter(column, d);
+}
+
+// Turns the rows marked in `rows` by the gyro's noise walk, zero at the reference row. The walk is
+// drawn at those rows whichever rows `motion` has filled: a twin's other rows are never read.
+void TurnByGyroNoise(const TrueModel& truth, int64_t t_first_row_ns, double reference_row,
+                     double density_rad_s_sqrt_hz, const std::vector<bool>& rows,
+                     std::mt19937_64* rng, FrameMotion* motion) {
+  const int last_row = static_cast<int>(rows.size()) - 1;
+  const int start = std::clamp(static_cast<int>(std::lround(reference_row)), 0, last_row);
+  const std::vector<Eigen::Vector3d> angles =
+      GyroNoiseAngles(truth, t_first_row_ns, start, density_rad_s_sqrt_hz, rows, rng);
+  for (int v = 0; v <= last_row; ++v) {
+    if (rows[v] && v != start) {
+      motion->world_from_cam[v] = motion->world_from_cam[v] * ExpSO3(angles[v]).toRotationMatrix();
+    }
+  }
+}
+
+struct DrawResidual {
+  double d_px = 0.0, rms_px = 0.0;
+};
+
+// The corrected grid's displacement r against what the drawn truth shows (r, scratch, one a grid
+// point): its D and root mean square.
+DrawResidual ResidualOfDraw(const CorrectionGeometry& truth_geometry,
+                            const std::vector<GridPoint>& grid, const std::vector<int>& column,
+                            std::vector<Eigen::Vector2d>* r) {
+  double sum_sq = 0.0;
+  size_t n = 0;
+  for (size_t k = 0; k < grid.size(); ++k) {
+    const std::optional<Eigen::Vector2d> seen =
+        truth_geometry.OutputPixel(grid[k].q.x(), grid[k].q.y());
+    (*r)[k] = seen ? Eigen::Vector2d(*seen - grid[k].p) : Eigen::Vector2d::Zero();
+    if (seen) {
+      sum_sq += (*r)[k].squaredNorm();
+      ++n;
+    }
+  }
+  return {ColumnDiameter(column, *r), n > 0 ? std::sqrt(sum_sq / n) : 0.0};
+}
+
+}  // namespace
+
 void ResidualPredictionOptions::Check() const {
   SHUTTERLAB_CHECK(draws >= 1 && draws <= 10000)
       << "draws must be 1 to 10000 (got " << draws << ")";
@@ -97,27 +159,15 @@ ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace
   options.Check();
   const TrueModel& hat = model.model;
   const PinholeCamera& camera = hat.rig.camera;
-  const FrameMotion motion = CameraMotion(gyro, hat).Frame(t_first_row_ns);
+  const CameraMotion hat_motion(gyro, hat);
+  const FrameMotion motion = hat_motion.Frame(t_first_row_ns);
   const CorrectionGeometry geometry(camera, motion,
                                     ReferenceRow(setting.reference, hat.rig.shutter, camera.height),
                                     setting.plane_depth_m);
   const std::vector<double> us = GridAt(camera.width, options.grid_columns);
   const std::vector<double> vs = GridAt(camera.height, options.grid_rows);
   ResidualPrediction out;
-  // Before: the model's displacement of each rolling-shutter grid pixel into the corrected view.
-  {
-    std::vector<int> column;
-    std::vector<Eigen::Vector2d> d;
-    for (size_t i = 0; i < us.size(); ++i) {
-      for (double v : vs) {
-        const std::optional<Eigen::Vector2d> p = geometry.OutputPixel(us[i], v);
-        if (!p) continue;
-        column.push_back(static_cast<int>(i));
-        d.push_back(*p - Eigen::Vector2d(us[i], v));
-      }
-    }
-    out.d_before_px = ColumnDiameter(column, d);
-  }
+  out.d_before_px = DBefore(geometry, us, vs);
   std::vector<GridPoint> grid;
   for (size_t i = 0; i < us.size(); ++i) {
     for (double v : vs) {
@@ -129,14 +179,17 @@ ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace
   // (CorrectionGeometry::OutputPixel interpolates between them) and around the reference row. Each
   // draw computes those alone, a few hundred of a 12 MP frame's 3000, as Frame computes them.
   const int last_row = camera.height - 1;
-  std::vector<bool> rows_read(camera.height, options.every_row);
+  std::vector<bool> rows_read(camera.height, false);
   const auto read_around = [&](int row) {
     const int r0 = std::clamp(row, 0, std::max(0, last_row - 1));
     rows_read[r0] = true;
     rows_read[std::min(r0 + 1, last_row)] = true;
   };
   for (const GridPoint& g : grid) read_around(static_cast<int>(std::floor(g.q.y())));
+  // Two streams: the model's draws are the same whatever the gyro's noise (and the rows it is
+  // drawn at) is.
   std::mt19937_64 rng(options.seed ^ static_cast<uint64_t>(t_first_row_ns));
+  std::mt19937_64 noise_rng(rng());
   std::vector<double> d_after, rms_after;
   std::vector<int> column(grid.size());
   for (size_t k = 0; k < grid.size(); ++k) column[k] = grid[k].column;
@@ -150,31 +203,29 @@ ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace
     const TrueModel truth = DrawModel(model, &rng);
     const double reference_row = ReferenceRow(setting.reference, truth.rig.shutter, camera.height);
     read_around(static_cast<int>(reference_row));
+    // A draw whose rates are the model's (no drawn effect moves the mounting, the gyro's scale or
+    // bias) shares the model's integrated trace: exactly the trace it would integrate.
+    const bool same_rates = truth.rig.cam_from_gyro == hat.rig.cam_from_gyro &&
+                            truth.gyro_scale == hat.gyro_scale &&
+                            truth.gyro_bias_rad_s == hat.gyro_bias_rad_s && !options.every_row;
     FrameMotion truth_motion;
     try {
-      truth_motion = CameraMotion(gyro, truth).FrameAtRows(t_first_row_ns, rows_read);
+      const CameraMotion truth_camera =
+          same_rates ? CameraMotion(truth, hat_motion) : CameraMotion(gyro, truth);
+      truth_motion = options.every_row ? truth_camera.Frame(t_first_row_ns)
+                                       : truth_camera.FrameAtRows(t_first_row_ns, rows_read);
     } catch (const std::out_of_range&) {
       continue;  // this draw's readout leaves the trace around the frame
     }
     if (model.gyro_noise_rad_s_sqrt_hz > 0) {
-      AddGyroNoise(truth, t_first_row_ns, reference_row, model.gyro_noise_rad_s_sqrt_hz, rows_read,
-                   &rng, &truth_motion);
+      TurnByGyroNoise(truth, t_first_row_ns, reference_row, model.gyro_noise_rad_s_sqrt_hz,
+                      rows_read, &noise_rng, &truth_motion);
     }
     const CorrectionGeometry truth_geometry(truth.rig.camera, truth_motion, reference_row,
                                             setting.plane_depth_m);
-    double sum_sq = 0.0;
-    size_t n = 0;
-    for (size_t k = 0; k < grid.size(); ++k) {
-      const std::optional<Eigen::Vector2d> seen =
-          truth_geometry.OutputPixel(grid[k].q.x(), grid[k].q.y());
-      r[k] = seen ? Eigen::Vector2d(*seen - grid[k].p) : Eigen::Vector2d::Zero();
-      if (seen) {
-        sum_sq += r[k].squaredNorm();
-        ++n;
-      }
-    }
-    d_after.push_back(ColumnDiameter(column, r));
-    rms_after.push_back(n > 0 ? std::sqrt(sum_sq / n) : 0.0);
+    const DrawResidual residual = ResidualOfDraw(truth_geometry, grid, column, &r);
+    d_after.push_back(residual.d_px);
+    rms_after.push_back(residual.rms_px);
   }
   if (every_draw_same && !d_after.empty()) {
     d_after.assign(options.draws, d_after.front());

@@ -19,6 +19,8 @@
 
 #include <cstdint>
 #include <optional>
+#include <random>
+#include <vector>
 
 namespace shutterlab {
 
@@ -35,8 +37,9 @@ struct ResidualPredictionOptions {
   int grid_columns = 33;  // output pixels on a grid, borders included
   int grid_rows = 25;
   uint64_t seed = 1;  // with the frame's time: the same draws on every run
-  // Each draw's poses at every row, not only at the rows the grid reads: the same numbers, slower
-  // (the brute-force twin of the tests).
+  // Each draw's poses at every row, not only at the rows the grid reads, and its rates integrated
+  // afresh even where they are the model's: the same numbers, slower (the brute-force twin of the
+  // tests).
   bool every_row = false;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
@@ -49,6 +52,14 @@ struct ResidualPrediction {
   double rms_after_px = 0.0;    // median over draws of r's root mean square
   int draws = 0;                // draws whose truth covered the frame (and so counted)
 };
+
+// The gyro's white noise integrated along a frame's readout, drawn at the rows marked in `rows`
+// (one flag a row; the others stay zero): per camera axis a random walk that is zero at start_row
+// and has, at row v, the variance density^2 |t_v - t_start| (rad^2), t_v the row's gyro-clock time
+// under `model`; the walk's steps on either side of start_row are independent.
+std::vector<Eigen::Vector3d> GyroNoiseAngles(const TrueModel& model, int64_t t_first_row_ns,
+                                             int start_row, double density_rad_s_sqrt_hz,
+                                             const std::vector<bool>& rows, std::mt19937_64* rng);
 
 // gyro: the logged trace around the frame (a second either side is plenty: each draw integrates
 // it again). Throws std::out_of_range when the model's readout of the frame lies outside it.

@@ -31,6 +31,30 @@ TEST(ImageIo, LosslessFormatsRoundTripExactly) {
   }
 }
 
+// A mask is written one bit a pixel and read back, by libpng's own unpacking through OpenImageIO,
+// as 0 where it was 0 and 255 wherever it was not: every width from 1 to 19 (the last byte of a
+// row padded), values that share no bit with each other.
+TEST(ImageIo, MaskIsOneBitAPixelAndReadsBackAs0And255) {
+  test::TempDir dir;
+  cv::RNG rng(7);
+  const uint8_t values[] = {0, 1, 2, 4, 8, 16, 32, 64, 128, 255, 0, 0};
+  for (int width = 1; width <= 19; ++width) {
+    cv::Mat mask(5, width, CV_8UC1);
+    for (int y = 0; y < mask.rows; ++y) {
+      for (int x = 0; x < mask.cols; ++x) mask.at<uint8_t>(y, x) = values[rng.uniform(0, 12)];
+    }
+    const std::string path = dir / ("mask_" + std::to_string(width) + ".png");
+    WriteMask(path, mask);
+    const std::string bytes = ReadFileToString(path);
+    ASSERT_GT(bytes.size(), 25u);
+    EXPECT_EQ(bytes[24], 1) << "the IHDR's bit depth of " << path;
+    const cv::Mat back = ReadImage(path);
+    ASSERT_EQ(back.type(), CV_8UC1) << path;
+    EXPECT_EQ(cv::countNonZero(back != ((mask != 0) & 255)), 0) << path;
+    EXPECT_EQ(cv::countNonZero((back != 0) & (back != 255)), 0) << path;
+  }
+}
+
 TEST(ImageIo, ChannelOrderIsTheFilesRgb) {
   // A pure red pixel written as channel 0 comes back as channel 0 (no BGR swap anywhere).
   test::TempDir dir;

@@ -137,6 +137,32 @@ TEST(CameraMotion, FrameAtRowsFillsTheRowsItIsGivenAsFrameDoes) {
   EXPECT_THROW(motion.FrameAtRows(SecondsToNs(2.99), rows), std::out_of_range);
 }
 
+// A model that differs in readout and offset only shares another's integrated rates and gets
+// exactly the frames it would integrate itself; one whose mounting, gyro scale or bias differs is
+// refused.
+TEST(CameraMotion, AModelWithTheSameRatesSharesTheIntegratedTrace) {
+  const GyroTrace gyro = test::ConstantRateTrace(Eigen::Vector3d(0.4, -0.6, 0.9), 0.0, 3.0);
+  const CameraMotion motion(gyro, BareModel());
+  TrueModel other = BareModel();
+  other.rig.shutter.readout_s = 0.027;
+  other.rig.time_offset_s = 0.004;
+  const FrameMotion shared = CameraMotion(other, motion).Frame(SecondsToNs(0.5));
+  const FrameMotion own = CameraMotion(gyro, other).Frame(SecondsToNs(0.5));
+  for (int v = 0; v < 48; ++v) EXPECT_EQ(shared.world_from_cam[v], own.world_from_cam[v]) << v;
+  EXPECT_EQ(shared.world_from_ref, own.world_from_ref);
+  EXPECT_NE(shared.world_from_cam[47], motion.Frame(SecondsToNs(0.5)).world_from_cam[47])
+      << "the other readout turns the last row by another angle";
+  TrueModel scaled = BareModel();
+  scaled.gyro_scale.z() = 1.01;
+  EXPECT_THROW(CameraMotion(scaled, motion), std::invalid_argument);
+  TrueModel biased = BareModel();
+  biased.gyro_bias_rad_s.x() = 1e-4;
+  EXPECT_THROW(CameraMotion(biased, motion), std::invalid_argument);
+  TrueModel turned = BareModel();
+  turned.rig.cam_from_gyro = ExpSO3(Eigen::Vector3d(0.0, 0.0, 0.01)).toRotationMatrix();
+  EXPECT_THROW(CameraMotion(turned, motion), std::invalid_argument);
+}
+
 TEST(CameraMotion, BottomToTopAnchorsAtTheTopRowToo) {
   TrueModel model = BareModel();
   model.rig.shutter.direction = ReadoutDirection::kBottomToTop;

@@ -143,5 +143,42 @@ TEST(PredictResidual, ACertainModelLeavesNothingAndDBeforeIsTheFramesDistortion)
   }
 }
 
+// The noise walk drawn at a few rows has, at each, the variance density^2 |t_v - t_start| per
+// axis; rows on one side share their steps (the covariance of two is the nearer one's variance),
+// rows on either side of the start are independent. 20000 walks: the variances to 1 % (one sigma).
+TEST(GyroNoiseAngles, TheWalkAtTheRowsReadHasTheVarianceOfEveryRowsSteps) {
+  TrueModel model;
+  model.rig = test::SmallRig(8, 101);
+  model.rig.shutter.readout_s = 0.1;  // 1 ms from row to row
+  const double line_s = model.rig.shutter.RowTimeOffsetS(1.0, 101);
+  std::vector<bool> rows(101, false);
+  for (int v : {0, 10, 50, 51, 100}) rows[v] = true;
+  const double density = 0.01;
+  std::mt19937_64 rng(3);
+  const int walks = 20000;
+  Eigen::Matrix<double, 5, 5> second_moment = Eigen::Matrix<double, 5, 5>::Zero();
+  const int marked[5] = {0, 10, 50, 51, 100};
+  for (int i = 0; i < walks; ++i) {
+    const std::vector<Eigen::Vector3d> a =
+        GyroNoiseAngles(model, SecondsToNs(0.5), 50, density, rows, &rng);
+    ASSERT_EQ(a.size(), 101u);
+    EXPECT_EQ(a[50], Eigen::Vector3d::Zero());
+    EXPECT_EQ(a[30], Eigen::Vector3d::Zero()) << "an unmarked row";
+    for (int axis = 0; axis < 3; ++axis) {
+      Eigen::Matrix<double, 5, 1> x;
+      for (int k = 0; k < 5; ++k) x[k] = a[marked[k]][axis];
+      second_moment += x * x.transpose() / (3.0 * walks);
+    }
+  }
+  const double per_row = density * density * line_s;  // rad^2 a row
+  EXPECT_NEAR(second_moment(0, 0), 50 * per_row, 0.05 * 50 * per_row);
+  EXPECT_NEAR(second_moment(1, 1), 40 * per_row, 0.05 * 40 * per_row);
+  EXPECT_NEAR(second_moment(3, 3), 1 * per_row, 0.05 * per_row);
+  EXPECT_NEAR(second_moment(4, 4), 50 * per_row, 0.05 * 50 * per_row);
+  EXPECT_NEAR(second_moment(0, 1), 40 * per_row, 0.05 * 40 * per_row) << "steps shared";
+  EXPECT_NEAR(second_moment(3, 4), 1 * per_row, 0.2 * per_row) << "steps shared";
+  EXPECT_NEAR(second_moment(0, 4), 0.0, 0.05 * 50 * per_row) << "independent sides";
+}
+
 }  // namespace
 }  // namespace shutterlab
