@@ -13,8 +13,9 @@
 //   <image paths>   the corrected images: the input's format, bit depth, JPEG quality, EXIF and
 //                   XMP, with Xmp.shutterlab.* saying how they were corrected
 //   <ref paths>     the references, copied (still datasets corrected to row 0)
-//   masks/<image path>.png        255 where the pixel has a source in the frame (and camera.json's
-//                                 mask, moved with the frame, allows it), 0 where not
+//   masks/<image path>.png        one bit a pixel, set (read back as 255) where the pixel has a
+//                                 source in the frame (and camera.json's mask, moved with the
+//                                 frame, allows it), 0 where not
 //   camera_mask.png               camera.json's mask as it was, when it names one
 //   colmap/image_list.txt         the corrected images for COLMAP (--image_path DIR,
 //                                 --ImageReader.mask_path DIR/masks)

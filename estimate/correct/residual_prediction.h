@@ -61,8 +61,9 @@ std::vector<Eigen::Vector3d> GyroNoiseAngles(const TrueModel& model, int64_t t_f
                                              int start_row, double density_rad_s_sqrt_hz,
                                              const std::vector<bool>& rows, std::mt19937_64* rng);
 
-// gyro: the logged trace around the frame (a second either side is plenty: each draw integrates
-// it again). Throws std::out_of_range when the model's readout of the frame lies outside it.
+// gyro: the logged trace around the frame (a second either side is plenty: it is integrated once,
+// and again for each draw whose mounting, gyro scale or bias differs from the model's). Throws
+// std::out_of_range when the model's readout of the frame lies outside it.
 ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace& gyro,
                                    int64_t t_first_row_ns, const CorrectionSetting& setting,
                                    const ResidualPredictionOptions& options = {});

@@ -85,6 +85,20 @@ ExportCamera FromCameraJson(const std::string& path) {
   return camera;
 }
 
+// A photo's capture_time ({"camera_clock": "2024-07-16 09:41:37.000", "utc": ...} of analyze
+// --photos --json) in ISO 8601: UTC with its Z when known, the camera clock's face without a zone
+// otherwise; "" when it has none.
+std::string IsoCaptureTime(const nlohmann::json& photo) {
+  if (!photo.contains("capture_time") || !photo["capture_time"].is_object()) return "";
+  const nlohmann::json& t = photo["capture_time"];
+  const bool utc = t.contains("utc") && t["utc"].is_string();
+  if (!utc && !(t.contains("camera_clock") && t["camera_clock"].is_string())) return "";
+  std::string iso = t[utc ? "utc" : "camera_clock"].get<std::string>();
+  const size_t space = iso.find(' ');
+  if (space != std::string::npos) iso[space] = 'T';
+  return utc ? iso + "Z" : iso;
+}
+
 }  // namespace
 
 // The camera of the first photo with a size and a focal length, its readout: the whole camera
@@ -106,6 +120,9 @@ ExportCamera ExportCameraFromPhotos(const nlohmann::json& photos, const std::str
       photo.readout_s = p["readout_s"].get<double>();
     if (p.contains("speed_m_s") && p["speed_m_s"].is_number())
       photo.speed_m_s = p["speed_m_s"].get<double>();
+    if (p.contains("focal_mm") && p["focal_mm"].is_number())
+      photo.focal_mm = p["focal_mm"].get<double>();
+    photo.capture_time = IsoCaptureTime(p);
     if (p.contains("flagged") && p["flagged"].is_object()) {
       for (const auto& [limit, flag] : p["flagged"].items())
         photo.flagged = photo.flagged || (flag.is_boolean() && flag.get<bool>());
@@ -125,6 +142,7 @@ ExportCamera ExportCameraFromPhotos(const nlohmann::json& photos, const std::str
         c.cx = given.value("cx", c.cx);
         c.cy = given.value("cy", c.cy);
         if (given.contains("distortion")) c.distortion = DistortionFromJson(given["distortion"]);
+        camera.camera_given = true;
       }
       camera.make = p.value("make", "");
       camera.model = p.value("model", "");

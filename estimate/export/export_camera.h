@@ -27,7 +27,11 @@ struct ExportPhoto {
   int width = 0, height = 0;
   std::optional<double> readout_s;  // the photo's readout, when known
   std::optional<double> speed_m_s;  // its recorded ground speed, when known
-  bool flagged = false;             // over a limit in the analysis (the exclude list)
+  std::optional<double> focal_mm;   // EXIF FocalLength, when written
+  // ISO 8601: "2024-07-16T09:41:37.250Z" when the camera's zone is known, the camera clock's face
+  // without a zone ("2024-07-16T09:41:37.250") when not, "" when the photo has no capture time.
+  std::string capture_time;
+  bool flagged = false;  // over a limit in the analysis (the exclude list)
 };
 
 struct ExportCamera {
@@ -53,6 +57,8 @@ struct ExportCamera {
   // (import.json's "source claim") that the report could not test, exported as stated.
   std::vector<std::string> notes;
   std::vector<ExportPhoto> photos;  // an `analyze --photos` result's, in its order
+  // The photos' camera came from a camera.json or a lens profile, not from their metadata.
+  bool camera_given = false;
   // A correction's per-image masks (its output folder's masks/: IMAGE.png, 0 where a pixel has no
   // source, COLMAP's mask_path naming), as the source folder gives them; "" when none.
   std::string masks_dir;

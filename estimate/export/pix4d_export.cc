@@ -6,12 +6,125 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 #include <variant>
 
 namespace shutterlab {
+namespace {
+
+// A file name as a URI reference (RFC 3986): bytes other than unreserved ones and '/' as %XX.
+std::string UriReference(const std::string& name) {
+  std::string uri;
+  for (const unsigned char c : name) {
+    if (std::isalnum(c) || c == '-' || c == '.' || c == '_' || c == '~' || c == '/') {
+      uri += static_cast<char>(c);
+    } else {
+      char escaped[4];
+      std::snprintf(escaped, sizeof escaped, "%%%02X", c);
+      uri += escaped;
+    }
+  }
+  return uri;
+}
+
+bool IsJpegName(std::string name) {
+  std::transform(name.begin(), name.end(), name.begin(), ::tolower);
+  return name.size() > 4 && (name.rfind(".jpg") == name.size() - 4 ||
+                             (name.size() > 5 && name.rfind(".jpeg") == name.size() - 5));
+}
+
+// OPF's input cameras and camera list of an analyze --photos result: the sensor (id 1, as the
+// calibrated one; its pixel size from a photo's EXIF focal length in mm over the focal length in
+// pixels, its shutter from the readout) and a capture of one camera for each JPEG photo of the
+// camera's size with a capture time. Neither is written, and it is said, without a readout or a
+// focal length in mm.
+void AddInputCameras(const ExportCamera& camera, const nlohmann::json& internals,
+                     ExportOutput* out) {
+  const RigModel& rig = camera.truth.rig;
+  const PinholeCamera& c = rig.camera;
+  const auto of_camera = [&](const ExportPhoto& p) {
+    return p.width == c.width && p.height == c.height;
+  };
+  const auto with_focal_mm = std::find_if(
+      camera.photos.begin(), camera.photos.end(),
+      [&](const ExportPhoto& p) { return of_camera(p) && p.focal_mm && *p.focal_mm > 0.0; });
+  std::string lacking;
+  if (!camera.readout_known) lacking = "readout (OPF's shutter_type)";
+  if (with_focal_mm == camera.photos.end()) lacking = "focal length in mm (OPF's pixel_size_um)";
+  if (!lacking.empty()) {
+    out->notes.push_back("input_cameras.json and camera_list.json not written: no photo gives a " +
+                         lacking + ", which OPF's input cameras require");
+    return;
+  }
+  const double focal_px = 0.5 * (c.fx + c.fy);
+  const double pixel_size_um = 1000.0 * *with_focal_mm->focal_mm / focal_px;
+  const std::string name = camera.make.empty() ? "camera" : camera.make + " " + camera.model;
+  const nlohmann::json sensor = {
+      {"id", 1},
+      {"name", name + " " + std::to_string(c.width) + "x" + std::to_string(c.height)},
+      {"bands",
+       {{{"name", "Red"}, {"weight", 0.2126}},
+        {{"name", "Green"}, {"weight", 0.7152}},
+        {{"name", "Blue"}, {"weight", 0.0722}}}},
+      {"image_size_px", {c.width, c.height}},
+      {"pixel_size_um", pixel_size_um},
+      {"internals", internals},
+      {"shutter_type", rig.shutter.readout_s > 0.0 ? "rolling" : "global"}};
+  nlohmann::json captures = nlohmann::json::array(), listed = nlohmann::json::array();
+  size_t left_out = 0;
+  const uint64_t photos = camera.photos.size();
+  for (uint64_t k = 0; k < photos; ++k) {
+    const ExportPhoto& p = camera.photos[k];
+    if (!of_camera(p) || p.capture_time.empty() || !IsJpegName(p.name)) {
+      ++left_out;
+      continue;
+    }
+    // Unique in the project, the sensor's 1 included.
+    const uint64_t camera_id = k + 2, capture_id = photos + k + 2;
+    captures.push_back({{"id", capture_id},
+                        {"reference_camera_id", camera_id},
+                        {"cameras",
+                         {{{"sensor_id", 1},
+                           {"id", camera_id},
+                           {"model_source", camera.camera_given ? "user" : "generic_from_exif"},
+                           {"pixel_type", "uint8"},
+                           {"pixel_range", {{"min", 0}, {"max", 255}}}}}},
+                        {"rig_model_source", "not_applicable"},
+                        {"time", p.capture_time}});
+    listed.push_back({{"id", camera_id}, {"uri", UriReference(p.name)}});
+  }
+  const nlohmann::json input = {{"format", "application/opf-input-cameras+json"},
+                                {"version", "1.0"},
+                                {"sensors", {sensor}},
+                                {"captures", captures}};
+  const nlohmann::json list = {
+      {"format", "application/opf-camera-list+json"}, {"version", "1.0"}, {"cameras", listed}};
+  out->files.push_back({"input_cameras.json", input.dump(2) + "\n",
+                        "OPF's input cameras (the sensor, a capture a photo)"});
+  out->files.push_back({"camera_list.json", list.dump(2) + "\n", "OPF's camera list"});
+  out->notes.push_back("pixel_size_um = 1000 x " + with_focal_mm->name + "'s EXIF FocalLength " +
+                       ExportNumber(*with_focal_mm->focal_mm) + " mm / focal_length_px " +
+                       ExportNumber(focal_px) + " = " + FormatNumber("%.3f", pixel_size_um) +
+                       " um");
+  out->notes.push_back(
+      "camera_list.json names each photo by its file name (a URI reference relative to the "
+      "file): keep it beside the photos; camera ids are sequential, project scope (no UID "
+      "generator); captures carry no geolocation (EXIF gives no accuracy, which OPF requires: "
+      "Pix4D reads the photos' own positions) and time is UTC where the camera's zone is known, "
+      "the camera clock without a zone otherwise");
+  if (left_out > 0) {
+    out->notes.push_back(std::to_string(left_out) +
+                         " photo(s) without a capture: not a JPEG of the camera's size, or "
+                         "without a capture time");
+  }
+}
+
+}  // namespace
 
 ExportOutput Pix4dExport(const ExportCamera& camera, const ExportOptions& options) {
   const RigModel& rig = camera.truth.rig;
@@ -35,13 +148,12 @@ ExportOutput Pix4dExport(const ExportCamera& camera, const ExportOptions& option
                      FormatNumber("%.2g", corner_px) + " px)",
                  options, &out.notes);
   const auto& k = brown->coeffs;  // OpenCV's k1 k2 p1 p2 k3
-  nlohmann::json sensor = {{"id", 1},
-                           {"internals",
-                            {{"type", "perspective"},
-                             {"principal_point_px", {c.cx + 0.5, c.cy + 0.5}},
-                             {"focal_length_px", focal_px},
-                             {"radial_distortion", {k[0], k[1], k[4]}},
-                             {"tangential_distortion", {k[2], k[3]}}}}};
+  const nlohmann::json internals = {{"type", "perspective"},
+                                    {"principal_point_px", {c.cx + 0.5, c.cy + 0.5}},
+                                    {"focal_length_px", focal_px},
+                                    {"radial_distortion", {k[0], k[1], k[4]}},
+                                    {"tangential_distortion", {k[2], k[3]}}};
+  nlohmann::json sensor = {{"id", 1}, {"internals", internals}};
   nlohmann::json rolling = {{"readout_time_s", nullptr}};
   if (camera.readout_known) {
     RequireDetermined(camera, "readout_time", options, &out.notes);
@@ -66,6 +178,7 @@ ExportOutput Pix4dExport(const ExportCamera& camera, const ExportOptions& option
       "the readout is in the sensor's extension SHUTTERLAB_rolling_shutter: OPF has no field for "
       "it; its per-image rolling_shutter 3-vector and the XMP Camera:LineReadoutTime are not "
       "written (Pix4D documents neither their meaning nor their unit)");
+  if (!camera.photos.empty()) AddInputCameras(camera, internals, &out);
   AddSideNote("pix4d", camera, &out);
   return out;
 }

@@ -7,8 +7,11 @@
 // FULL_OPENCV as they are). OPF has no field for the readout: it goes into the sensor's extension
 // SHUTTERLAB_rolling_shutter (OPF's extension naming, VENDOR_extname). Refused: a fisheye lens
 // (OPF's fisheye is Pix4D's polynomial model, not OpenCV's) and fx != fy (one focal length;
-// --force writes their mean). Not written: the per-image "rolling_shutter" 3-vector of calibrated
-// cameras and the XMP Camera:LineReadoutTime, whose meaning and unit Pix4D does not document.
+// --force writes their mean). From an analyze --photos result also input_cameras.json and
+// camera_list.json: the sensor (its pixel size from a photo's EXIF focal length in mm, its shutter
+// type from the readout) and a capture a photo (docs/FORMATS.md, "Exports"). Not written: the
+// per-image "rolling_shutter" 3-vector of calibrated cameras and the XMP Camera:LineReadoutTime,
+// whose meaning and unit Pix4D does not document.
 
 #include "estimate/export/export_camera.h"
 #include "estimate/export/export_output.h"

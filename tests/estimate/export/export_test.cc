@@ -35,6 +35,7 @@
 #include <map>
 #include <random>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -601,6 +602,76 @@ TEST(Pix4dExport, CalibratedCameraHasOpfsFieldsAndProjectsAsPix4dsConverterReads
       FileNamed(Pix4dExport(TestCamera(), force), "calibrated_cameras.json").text);
   EXPECT_EQ(forced["sensors"][0]["internals"]["focal_length_px"], 0.5 * (1101.25 + 1098.5));
   EXPECT_THROW(Pix4dExport(TestCamera(/*fisheye=*/true), force), std::invalid_argument);
+}
+
+// From an analyze --photos result, OPF's input cameras and camera list beside the calibrated
+// camera: the calibrated sensor's id is an input sensor's (OPF requires it), its pixel size is the
+// EXIF focal length in mm over the focal length in pixels (4.5 mm / 3000 px = 1.5 um), its shutter
+// the readout's, a capture of one camera for each JPEG of the camera's size with a capture time
+// (ISO 8601: UTC with Z where the zone is known, the camera clock without one where not), every id
+// unique, and the camera list naming each capture's photo as a URI reference. Without a focal
+// length in mm, neither file, and it is said.
+TEST(Pix4dExport, PhotosGiveOpfsInputCamerasAndCameraList) {
+  const auto photo = [](const std::string& name, int width, const nlohmann::json& time) {
+    return nlohmann::json{{"name", name},        {"path", "/p/" + name}, {"make", "DJI"},
+                          {"model", "FC8482"},   {"width", width},       {"height", 2000},
+                          {"focal_px", 3000.0},  {"focal_mm", 4.5},      {"readout_s", 0.016},
+                          {"capture_time", time}};
+  };
+  const nlohmann::json utc = {{"camera_clock", "2024-07-16 17:41:37.250"},
+                              {"utc", "2024-07-16 09:41:37.250"}};
+  const nlohmann::json face_only = {{"camera_clock", "2024-07-16 17:41:39.000"}, {"utc", nullptr}};
+  const nlohmann::json photos = nlohmann::json::array(
+      {photo("DJI_0001.JPG", 3000, utc), photo("DJI 0002.jpeg", 3000, face_only),
+       photo("DJI_0003.JPG", 1500, utc), photo("DJI_0004.tif", 3000, utc),
+       photo("DJI_0005.JPG", 3000, nullptr)});
+  const ExportCamera camera = ExportCameraFromPhotos(photos, "photos.json");
+  const ExportOutput out = Pix4dExport(camera, {});
+  const nlohmann::json calibrated =
+      nlohmann::json::parse(FileNamed(out, "calibrated_cameras.json").text);
+  const nlohmann::json input = nlohmann::json::parse(FileNamed(out, "input_cameras.json").text);
+  const nlohmann::json list = nlohmann::json::parse(FileNamed(out, "camera_list.json").text);
+  EXPECT_EQ(input.at("format"), "application/opf-input-cameras+json");
+  EXPECT_EQ(input.at("version"), "1.0");
+  EXPECT_EQ(list.at("format"), "application/opf-camera-list+json");
+  ASSERT_EQ(input.at("sensors").size(), 1u);
+  const nlohmann::json& sensor = input["sensors"][0];
+  EXPECT_EQ(sensor.at("id"), calibrated.at("sensors")[0].at("id"));
+  EXPECT_NEAR(sensor.at("pixel_size_um").get<double>(), 1.5, 1e-12);
+  EXPECT_EQ(sensor.at("shutter_type"), "rolling");
+  EXPECT_EQ(sensor.at("image_size_px"), nlohmann::json({3000, 2000}));
+  EXPECT_EQ(sensor.at("internals"), calibrated.at("sensors")[0].at("internals"));
+  double band_weights = 0.0;
+  for (const nlohmann::json& band : sensor.at("bands"))
+    band_weights += band.at("weight").get<double>();
+  EXPECT_NEAR(band_weights, 1.0, 1e-12);
+  const nlohmann::json& captures = input.at("captures");
+  ASSERT_EQ(captures.size(), 2u) << "the half-size photo, the TIFF and the undated one have none";
+  EXPECT_EQ(captures[0].at("time"), "2024-07-16T09:41:37.250Z");
+  EXPECT_EQ(captures[1].at("time"), "2024-07-16T17:41:39.000");
+  std::set<uint64_t> ids = {sensor.at("id").get<uint64_t>()};
+  ASSERT_EQ(list.at("cameras").size(), 2u);
+  for (size_t k = 0; k < captures.size(); ++k) {
+    const nlohmann::json& capture = captures[k];
+    ASSERT_EQ(capture.at("cameras").size(), 1u);
+    const nlohmann::json& shot = capture["cameras"][0];
+    EXPECT_EQ(capture.at("reference_camera_id"), shot.at("id"));
+    EXPECT_EQ(shot.at("sensor_id"), sensor.at("id"));
+    EXPECT_EQ(shot.at("model_source"), "generic_from_exif");
+    EXPECT_EQ(shot.at("pixel_type"), "uint8");
+    EXPECT_EQ(capture.at("rig_model_source"), "not_applicable");
+    EXPECT_EQ(list["cameras"][k].at("id"), shot.at("id"));
+    EXPECT_TRUE(ids.insert(shot.at("id").get<uint64_t>()).second);
+    EXPECT_TRUE(ids.insert(capture.at("id").get<uint64_t>()).second);
+  }
+  EXPECT_EQ(list["cameras"][0].at("uri"), "DJI_0001.JPG");
+  EXPECT_EQ(list["cameras"][1].at("uri"), "DJI%200002.jpeg");
+  nlohmann::json no_focal_mm = photos;
+  for (nlohmann::json& p : no_focal_mm) p.erase("focal_mm");
+  const ExportOutput without = Pix4dExport(ExportCameraFromPhotos(no_focal_mm, "photos.json"), {});
+  EXPECT_THROW(FileNamed(without, "input_cameras.json"), std::runtime_error);
+  EXPECT_NE(FileNamed(without, "shutterlab_export.txt").text.find("pixel_size_um"),
+            std::string::npos);
 }
 
 // The sources: a validation report's fitted model with its effects' standard errors, a
