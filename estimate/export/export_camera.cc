@@ -122,6 +122,8 @@ ExportCamera ExportCameraFromPhotos(const nlohmann::json& photos, const std::str
       photo.speed_m_s = p["speed_m_s"].get<double>();
     if (p.contains("focal_mm") && p["focal_mm"].is_number())
       photo.focal_mm = p["focal_mm"].get<double>();
+    if (p.contains("focal_plane_px_per_mm") && p["focal_plane_px_per_mm"].is_number())
+      photo.focal_plane_px_per_mm = p["focal_plane_px_per_mm"].get<double>();
     photo.capture_time = IsoCaptureTime(p);
     if (p.contains("flagged") && p["flagged"].is_object()) {
       for (const auto& [limit, flag] : p["flagged"].items())

@@ -28,6 +28,8 @@ struct ExportPhoto {
   std::optional<double> readout_s;  // the photo's readout, when known
   std::optional<double> speed_m_s;  // its recorded ground speed, when known
   std::optional<double> focal_mm;   // EXIF FocalLength, when written
+  // EXIF FocalPlaneXResolution in pixels per mm, when written.
+  std::optional<double> focal_plane_px_per_mm;
   // ISO 8601: "2024-07-16T09:41:37.250Z" when the camera's zone is known, the camera clock's face
   // without a zone ("2024-07-16T09:41:37.250") when not, "" when the photo has no capture time.
   std::string capture_time;

@@ -50,19 +50,32 @@ void AddInputCameras(const ExportCamera& camera, const nlohmann::json& internals
   const auto of_camera = [&](const ExportPhoto& p) {
     return p.width == c.width && p.height == c.height;
   };
-  const auto with_focal_mm = std::find_if(
-      camera.photos.begin(), camera.photos.end(),
-      [&](const ExportPhoto& p) { return of_camera(p) && p.focal_mm && *p.focal_mm > 0.0; });
+  // The pixel size as Pix4D finds it in EXIF: FocalPlaneXResolution, else the focal length in mm
+  // over the focal length in pixels (which analyze takes from the 35 mm equivalent when it must).
+  const auto first_of_camera = [&](auto has) {
+    return std::find_if(camera.photos.begin(), camera.photos.end(),
+                        [&](const ExportPhoto& p) { return of_camera(p) && has(p); });
+  };
+  auto sized = first_of_camera([](const ExportPhoto& p) {
+    return p.focal_plane_px_per_mm && *p.focal_plane_px_per_mm > 0.0;
+  });
+  const bool focal_plane = sized != camera.photos.end();
+  if (!focal_plane) {
+    sized = first_of_camera([](const ExportPhoto& p) { return p.focal_mm && *p.focal_mm > 0.0; });
+  }
   std::string lacking;
   if (!camera.readout_known) lacking = "readout (OPF's shutter_type)";
-  if (with_focal_mm == camera.photos.end()) lacking = "focal length in mm (OPF's pixel_size_um)";
+  if (sized == camera.photos.end()) {
+    lacking = "FocalPlaneXResolution or focal length in mm (OPF's pixel_size_um)";
+  }
   if (!lacking.empty()) {
     out->notes.push_back("input_cameras.json and camera_list.json not written: no photo gives a " +
                          lacking + ", which OPF's input cameras require");
     return;
   }
   const double focal_px = 0.5 * (c.fx + c.fy);
-  const double pixel_size_um = 1000.0 * *with_focal_mm->focal_mm / focal_px;
+  const double pixel_size_um =
+      focal_plane ? 1000.0 / *sized->focal_plane_px_per_mm : 1000.0 * *sized->focal_mm / focal_px;
   const std::string name = camera.make.empty() ? "camera" : camera.make + " " + camera.model;
   const nlohmann::json sensor = {
       {"id", 1},
@@ -107,10 +120,13 @@ void AddInputCameras(const ExportCamera& camera, const nlohmann::json& internals
   out->files.push_back({"input_cameras.json", input.dump(2) + "\n",
                         "OPF's input cameras (the sensor, a capture a photo)"});
   out->files.push_back({"camera_list.json", list.dump(2) + "\n", "OPF's camera list"});
-  out->notes.push_back("pixel_size_um = 1000 x " + with_focal_mm->name + "'s EXIF FocalLength " +
-                       ExportNumber(*with_focal_mm->focal_mm) + " mm / focal_length_px " +
-                       ExportNumber(focal_px) + " = " + FormatNumber("%.3f", pixel_size_um) +
-                       " um");
+  const std::string exif = " (" + sized->name + "'s EXIF)";
+  out->notes.push_back("pixel_size_um = " + FormatNumber("%.3f", pixel_size_um) + " um = " +
+                       (focal_plane
+                            ? "1000 / FocalPlaneXResolution " +
+                                  ExportNumber(*sized->focal_plane_px_per_mm) + " px/mm" + exif
+                            : "1000 x FocalLength " + ExportNumber(*sized->focal_mm) + " mm" +
+                                  exif + " / focal_length_px " + ExportNumber(focal_px)));
   out->notes.push_back(
       "camera_list.json names each photo by its file name (a URI reference relative to the "
       "file): keep it beside the photos; camera ids are sequential, project scope (no UID "

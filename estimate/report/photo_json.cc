@@ -51,6 +51,7 @@ nlohmann::json PhotoJson(const PhotoRecord& r, const PhotoResult& p, const Photo
   j["capture_time"] = CaptureTime(m);
   j["focal_px"] = Optional(r.focal_px);
   j["focal_mm"] = Optional(m.focal_length_mm);
+  j["focal_plane_px_per_mm"] = Optional(m.focal_plane_px_per_mm);
   j["focal_source"] = r.focal_source;
   if (r.camera) {
     j["camera"] = {{"fx", r.camera->fx},

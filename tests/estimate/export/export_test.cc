@@ -607,10 +607,10 @@ TEST(Pix4dExport, CalibratedCameraHasOpfsFieldsAndProjectsAsPix4dsConverterReads
 // From an analyze --photos result, OPF's input cameras and camera list beside the calibrated
 // camera: the calibrated sensor's id is an input sensor's (OPF requires it), its pixel size is the
 // EXIF focal length in mm over the focal length in pixels (4.5 mm / 3000 px = 1.5 um), its shutter
-// the readout's, a capture of one camera for each JPEG of the camera's size with a capture time
-// (ISO 8601: UTC with Z where the zone is known, the camera clock without one where not), every id
-// unique, and the camera list naming each capture's photo as a URI reference. Without a focal
-// length in mm, neither file, and it is said.
+// the readout's (EXIF FocalPlaneXResolution first where a photo has it), a capture of one camera
+// for each JPEG of the camera's size with a capture time (ISO 8601: UTC with Z where the zone is
+// known, the camera clock without one where not), every id unique, and the camera list naming each
+// capture's photo as a URI reference. Without a focal length in mm, neither file, and it is said.
 TEST(Pix4dExport, PhotosGiveOpfsInputCamerasAndCameraList) {
   const auto photo = [](const std::string& name, int width, const nlohmann::json& time) {
     return nlohmann::json{{"name", name},        {"path", "/p/" + name}, {"make", "DJI"},
@@ -666,6 +666,15 @@ TEST(Pix4dExport, PhotosGiveOpfsInputCamerasAndCameraList) {
   }
   EXPECT_EQ(list["cameras"][0].at("uri"), "DJI_0001.JPG");
   EXPECT_EQ(list["cameras"][1].at("uri"), "DJI%200002.jpeg");
+  // EXIF FocalPlaneXResolution goes first, as Pix4D reads it: 400 px/mm, 2.5 um.
+  nlohmann::json focal_plane = photos;
+  focal_plane[1]["focal_plane_px_per_mm"] = 400.0;
+  EXPECT_NEAR(nlohmann::json::parse(
+                  FileNamed(Pix4dExport(ExportCameraFromPhotos(focal_plane, "p.json"), {}),
+                            "input_cameras.json")
+                      .text)["sensors"][0]["pixel_size_um"]
+                  .get<double>(),
+              2.5, 1e-12);
   nlohmann::json no_focal_mm = photos;
   for (nlohmann::json& p : no_focal_mm) p.erase("focal_mm");
   const ExportOutput without = Pix4dExport(ExportCameraFromPhotos(no_focal_mm, "photos.json"), {});
