@@ -55,6 +55,45 @@ TEST(ImageIo, MaskIsOneBitAPixelAndReadsBackAs0And255) {
   }
 }
 
+// COLMAP, the masks' first reader (--ImageReader.mask_path), honours a one-bit mask: with the left
+// half masked its feature extractor keeps fewer features of a noise image, and exactly as many as
+// with the same mask written in 8 bits.
+TEST(ImageIo, ColmapHonoursAOneBitMask) {
+  if (std::system("colmap help >/dev/null 2>&1") != 0) {
+    if (test::RealDataRequired()) FAIL() << "colmap is not installed (scripts/test.sh installs it)";
+    GTEST_SKIP() << "colmap is not installed (apt-get install colmap)";
+  }
+  test::TempDir dir;
+  cv::Mat image(240, 320, CV_8UC3);
+  cv::randu(image, cv::Scalar::all(0), cv::Scalar::all(255));
+  std::filesystem::create_directories(dir / "images");
+  WriteImage(dir / "images/noise.png", image);
+  cv::Mat mask(image.size(), CV_8UC1, cv::Scalar(255));
+  mask.colRange(0, 160).setTo(0);
+  std::filesystem::create_directories(dir / "one_bit");
+  std::filesystem::create_directories(dir / "eight_bit");
+  WriteMask(dir / "one_bit/noise.png.png", mask);
+  WriteImage(dir / "eight_bit/noise.png.png", mask);
+  const auto features = [&](const std::string& name, const std::string& masks) {
+    const std::string log = dir / (name + ".log");
+    const std::string command =
+        "QT_QPA_PLATFORM=offscreen colmap feature_extractor --database_path '" +
+        (dir / (name + ".db")) + "' --image_path '" + (dir / "images") + "' " +
+        (masks.empty() ? "" : "--ImageReader.mask_path '" + (dir / masks) + "' ") +
+        "--SiftExtraction.use_gpu 0 --SiftExtraction.num_threads 1 >'" + log + "' 2>&1";
+    EXPECT_EQ(std::system(command.c_str()), 0) << ReadFileToString(log);
+    const std::string text = ReadFileToString(log);
+    const size_t at = text.find("Features:");
+    return at == std::string::npos ? -1 : std::atoi(text.c_str() + at + 9);
+  };
+  const int all = features("all", ""), one_bit = features("one_bit", "one_bit"),
+            eight_bit = features("eight_bit", "eight_bit");
+  EXPECT_GT(all, 100);
+  EXPECT_GT(one_bit, 0);
+  EXPECT_LT(one_bit, 0.7 * all) << "half the image masked";
+  EXPECT_EQ(one_bit, eight_bit);
+}
+
 TEST(ImageIo, ChannelOrderIsTheFilesRgb) {
   // A pure red pixel written as channel 0 comes back as channel 0 (no BGR swap anywhere).
   test::TempDir dir;
