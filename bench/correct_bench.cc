@@ -32,7 +32,8 @@ namespace {
 constexpr int kWidth = 5472, kHeight = 3648;
 
 struct Fixture {
-  cv::Mat image, out, mask;
+  cv::Mat image, out;
+  PackedMask mask;
   PinholeCamera camera, lens_camera;
   FrameMotion motion, moving;
   cv::Matx33d homography;
@@ -62,8 +63,8 @@ struct Fixture {
     }
     out.create(kHeight, kWidth, image.type());
     out.setTo(cv::Scalar::all(0));
-    mask.create(kHeight, kWidth, CV_8UC1);
-    mask.setTo(0);
+    mask.width = kWidth;
+    mask.bits = cv::Mat::zeros(kHeight, (kWidth + 7) / 8, CV_8UC1);
   }
   void Correct(const PinholeCamera& cam, const FrameMotion& m, std::optional<double> depth) {
     const CorrectionGeometry geometry(cam, m, 0.0, depth);

@@ -193,12 +193,41 @@ void WriteImage(const std::string& path, const cv::Mat& image,
   WriteThroughTemp(path, image, settings, {});
 }
 
-void WriteMask(const std::string& path, const cv::Mat& mask) {
-  SHUTTERLAB_CHECK(mask.type() == CV_8UC1) << "a mask is one 8-bit channel, writing " << path;
+PackedMask PackMask(const cv::Mat& mask) {
+  SHUTTERLAB_CHECK(mask.type() == CV_8UC1) << "a mask is one 8-bit channel";
+  PackedMask packed{mask.cols, cv::Mat::zeros(mask.rows, (mask.cols + 7) / 8, CV_8UC1)};
+  for (int v = 0; v < mask.rows; ++v) {
+    const uint8_t* pixels = mask.ptr<uint8_t>(v);
+    uint8_t* bits = packed.bits.ptr<uint8_t>(v);
+    for (int u = 0; u < mask.cols; ++u) {
+      if (pixels[u] != 0) bits[u / 8] |= static_cast<uint8_t>(0x80 >> (u % 8));
+    }
+  }
+  return packed;
+}
+
+cv::Mat UnpackMask(const PackedMask& mask) {
+  cv::Mat unpacked(mask.height(), mask.width, CV_8UC1);
+  for (int v = 0; v < mask.height(); ++v) {
+    const uint8_t* bits = mask.bits.ptr<uint8_t>(v);
+    uint8_t* pixels = unpacked.ptr<uint8_t>(v);
+    for (int u = 0; u < mask.width; ++u) pixels[u] = (bits[u / 8] << (u % 8)) & 0x80 ? 255 : 0;
+  }
+  return unpacked;
+}
+
+size_t CountSetPixels(const PackedMask& mask) {
+  // The Hamming norm counts set bits (OpenCV's vectorised popcount); the bits past the width are 0.
+  return mask.bits.empty() ? 0 : static_cast<size_t>(cv::norm(mask.bits, cv::NORM_HAMMING));
+}
+
+void WriteMask(const std::string& path, const PackedMask& mask) {
+  SHUTTERLAB_CHECK(mask.bits.type() == CV_8UC1 && mask.bits.cols == (mask.width + 7) / 8)
+      << "a packed mask has (width + 7) / 8 bytes a row, writing " << path;
   codecs::ImageWriteSettings settings;
   settings.png_compression_level = 1;
-  settings.png_one_bit = true;
-  WriteThroughTemp(path, mask, settings, {});
+  settings.one_bit_width_px = mask.width;
+  WriteThroughTemp(path, mask.bits, settings, {});
 }
 
 namespace {

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <map>
 
@@ -336,7 +337,7 @@ void CorrectionMap::SourceRow(int v, int u0, int n, float* xs, float* ys) const 
   }
 }
 
-void CorrectionMap::SourceRowFixed(int v, int u0, int n, int* xi, int* yi) const {
+void CorrectionMap::SourceRowFixed(int v, int u0, int n, int* xi, int* yi, bool* all_inside) const {
   // Within a cell the interpolated coordinates are linear in u: a + u b, in fixed-point units
   // (|values| < 2^27 with kFarPx: float keeps ~1/2000 px), four at a time.
   const size_t columns = node_u_.size();
@@ -349,6 +350,12 @@ void CorrectionMap::SourceRowFixed(int v, int u0, int n, int* xi, int* yi) const
   const float* bottom_y = &node_y_fixed_[j1 * columns];
   size_t i = column_cell_[u0];
   float xs[64], ys[64];
+  const int max_x = (geometry_.camera().width - 1) << kSampleFracBits;
+  const int max_y = (geometry_.camera().height - 1) << kSampleFracBits;
+  const auto inside = [&](int k) {
+    return xi[k] >= 0 && xi[k] <= max_x && yi[k] >= 0 && yi[k] <= max_y;
+  };
+  bool pieces_inside = true;
   for (int u = u0; u < u0 + n; ++i) {
     const size_t i1 = std::min(i + 1, columns - 1);
     const int end = std::min(u0 + n, i + 1 >= cells_u ? u0 + n : node_u_[i1] + 1);
@@ -362,6 +369,7 @@ void CorrectionMap::SourceRowFixed(int v, int u0, int n, int* xi, int* yi) const
         }
       }
       u = end;
+      pieces_inside = false;
       continue;
     }
     const float x0 = top_x[i] + t * (bottom_x[i] - top_x[i]);
@@ -372,22 +380,28 @@ void CorrectionMap::SourceRowFixed(int v, int u0, int n, int* xi, int* yi) const
     const float ax = x0 + offset * bx, ay = y0 + offset * by;
     LinearFixedRow(ax, bx, end - u, xi + (u - u0));
     LinearFixedRow(ay, by, end - u, yi + (u - u0));
+    pieces_inside = pieces_inside && inside(u - u0) && inside(end - 1 - u0);
     u = end;
   }
+  if (all_inside) *all_inside = pieces_inside;
 }
 
 namespace {
 
-void MaskRowFloat(const float* xs, const float* ys, int n, int width, int height, uint8_t* mask) {
+// InsideMaskBits for float coordinates (NaN: no source).
+void MaskBitsFloat(const float* xs, const float* ys, int n, int width, int height, uint8_t* bits) {
+  std::memset(bits, 0, (n + 7) / 8);
   for (int k = 0; k < n; ++k) {
-    mask[k] = xs[k] >= 0 && xs[k] <= width - 1 && ys[k] >= 0 && ys[k] <= height - 1 ? 255 : 0;
+    if (xs[k] >= 0 && xs[k] <= width - 1 && ys[k] >= 0 && ys[k] <= height - 1) {
+      bits[k / 8] |= static_cast<uint8_t>(0x80 >> (k % 8));
+    }
   }
 }
 
 }  // namespace
 
 void CorrectFrame(const cv::Mat& rs_image, const CorrectionMap& map, Interpolation interpolation,
-                  cv::Mat* out, cv::Mat* mask) {
+                  cv::Mat* out, PackedMask* mask) {
   const PinholeCamera& camera = map.geometry().camera();
   const int width = camera.width, height = camera.height;
   SHUTTERLAB_CHECK(rs_image.cols == width && rs_image.rows == height)
@@ -398,9 +412,14 @@ void CorrectFrame(const cv::Mat& rs_image, const CorrectionMap& map, Interpolati
       << "image must be 8U, 16U or 32F";
   SHUTTERLAB_CHECK(rs_image.channels() <= 4) << "image has more than 4 channels";
   out->create(height, width, rs_image.type());
-  if (mask) mask->create(height, width, CV_8UC1);
+  if (mask) {
+    mask->width = width;
+    mask->bits.create(height, (width + 7) / 8, CV_8UC1);
+  }
   const bool fixed = interpolation == Interpolation::kBilinear && depth != CV_32F;
-  constexpr int kChunk = 512;  // columns per pass: 4 KiB of coordinates, kept in L1
+  // Columns per pass: 4 KiB of coordinates, kept in L1; a multiple of 8, so that each pass starts
+  // a byte of the mask.
+  constexpr int kChunk = 512;
   cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
     std::vector<int> xi(kChunk), yi(kChunk);
     std::vector<float> xs(kChunk), ys(kChunk);
@@ -409,13 +428,22 @@ void CorrectFrame(const cv::Mat& rs_image, const CorrectionMap& map, Interpolati
         const int n = std::min(kChunk, width - u0);
         uchar* row_out = out->ptr(v) + u0 * out->elemSize();
         if (fixed) {
-          map.SourceRowFixed(v, u0, n, xi.data(), yi.data());
+          bool all_inside = false;
+          map.SourceRowFixed(v, u0, n, xi.data(), yi.data(), &all_inside);
           SampleRowFixed(rs_image, xi.data(), yi.data(), n, row_out);
-          if (mask) InsideMaskRow(xi.data(), yi.data(), n, width, height, mask->ptr(v) + u0);
+          uint8_t* bits = mask ? mask->bits.ptr(v) + u0 / 8 : nullptr;
+          if (bits && all_inside) {
+            std::memset(bits, 0xFF, n / 8);
+            if (n % 8 != 0) bits[n / 8] = static_cast<uint8_t>(0xFF00 >> (n % 8));
+          } else if (bits) {
+            InsideMaskBits(xi.data(), yi.data(), n, width, height, bits);
+          }
         } else {
           map.SourceRow(v, u0, n, xs.data(), ys.data());
           SampleRowFloat(rs_image, xs.data(), ys.data(), n, interpolation, row_out);
-          if (mask) MaskRowFloat(xs.data(), ys.data(), n, width, height, mask->ptr(v) + u0);
+          if (mask) {
+            MaskBitsFloat(xs.data(), ys.data(), n, width, height, mask->bits.ptr(v) + u0 / 8);
+          }
         }
       }
     }

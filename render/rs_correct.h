@@ -23,6 +23,7 @@
 // row shows. The tests check the map against the exact solution at every pixel. The sampler is
 // the renderer's (render/warp_kernel.h).
 
+#include "io/image_io.h"
 #include "model/camera.h"
 #include "model/truth_model.h"
 #include "render/warp_kernel.h"
@@ -105,8 +106,11 @@ class CorrectionMap {
   // Node rows of the final grid (more where the motion bends).
   size_t node_rows() const { return node_v_.size(); }
   // Source coordinates of output row v, columns [u0, u0 + n): fixed point (render/warp_kernel.h),
-  // kInvalidFixed where there is no solution.
-  void SourceRowFixed(int v, int u0, int n, int* xi, int* yi) const;
+  // kInvalidFixed where there is no solution. With all_inside: whether every one of them has all
+  // its bilinear taps inside the frame, when the row's pieces say so cheaply (false otherwise:
+  // test each, InsideMaskBits). A piece interpolated along a cell is monotone in each coordinate
+  // (float's multiply, add and rounding are), so its ends bound it.
+  void SourceRowFixed(int v, int u0, int n, int* xi, int* yi, bool* all_inside = nullptr) const;
   // The same as floats (NaN where there is no solution), for bicubic sampling and for tests.
   void SourceRow(int v, int u0, int n, float* xs, float* ys) const;
 
@@ -138,10 +142,11 @@ class CorrectionMap {
   std::vector<float> row_t_, inverse_span_;
 };
 
-// The corrected image: out gets rs_image's type and the camera's size, mask (when given) CV_8U,
-// 255 where the pixel has a source in the frame (HasSource) and 0 where it has none (black or
-// partial in out). Rows are split over threads (cv::parallel_for_), bit-identical for any count.
+// The corrected image: out gets rs_image's type and the camera's size, mask (when given) the
+// camera's size, set where the pixel has a source in the frame (HasSource) and clear where it has
+// none (black or partial in out). Rows are split over threads (cv::parallel_for_), bit-identical
+// for any count.
 void CorrectFrame(const cv::Mat& rs_image, const CorrectionMap& map, Interpolation interpolation,
-                  cv::Mat* out, cv::Mat* mask = nullptr);
+                  cv::Mat* out, PackedMask* mask = nullptr);
 
 }  // namespace shutterlab

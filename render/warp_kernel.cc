@@ -489,6 +489,17 @@ int WideLevel() {
 }
 #endif
 
+// InsideMaskBits one pixel at a time, from bit 7 of bits[0]; max_x, max_y in fixed point.
+void InsideMaskBitsScalar(const int* xi, const int* yi, int n, int max_x, int max_y,
+                          uint8_t* bits) {
+  std::memset(bits, 0, (n + 7) / 8);
+  for (int k = 0; k < n; ++k) {
+    if (xi[k] >= 0 && xi[k] <= max_x && yi[k] >= 0 && yi[k] <= max_y) {
+      bits[k / 8] |= static_cast<uint8_t>(0x80 >> (k % 8));
+    }
+  }
+}
+
 #if defined(SHUTTERLAB_WIDE_SAMPLER)
 __attribute__((target("avx2"))) void LinearFixedRowAvx2(float a, float b, int n, int* out) {
   const __m256 va = _mm256_set1_ps(a), vb = _mm256_set1_ps(b), eight = _mm256_set1_ps(8.0f);
@@ -502,25 +513,23 @@ __attribute__((target("avx2"))) void LinearFixedRowAvx2(float a, float b, int n,
   for (; k < n; ++k) out[k] = cvRound(a + k * b);
 }
 
-__attribute__((target("avx2"))) void InsideMaskRowAvx2(const int* xi, const int* yi, int n,
-                                                       int max_x, int max_y, uint8_t* mask) {
+__attribute__((target("avx2"))) void InsideMaskBitsAvx2(const int* xi, const int* yi, int n,
+                                                        int max_x, int max_y, uint8_t* bits) {
   const __m256i low = _mm256_set1_epi32(-1), high_x = _mm256_set1_epi32(max_x + 1),
                 high_y = _mm256_set1_epi32(max_y + 1);
+  const __m256i reversed = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
   int k = 0;
   for (; k + 8 <= n; k += 8) {
     const __m256i x = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(xi + k));
     const __m256i y = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(yi + k));
-    // -1 < x < max + 1, all ones where inside; packed to one byte a pixel.
+    // -1 < x < max + 1, all ones where inside; pixel k's sign bit to bit 7 (lanes reversed).
     const __m256i inside = _mm256_and_si256(
         _mm256_and_si256(_mm256_cmpgt_epi32(x, low), _mm256_cmpgt_epi32(high_x, x)),
         _mm256_and_si256(_mm256_cmpgt_epi32(y, low), _mm256_cmpgt_epi32(high_y, y)));
-    const __m128i words =
-        _mm_packs_epi32(_mm256_castsi256_si128(inside), _mm256_extracti128_si256(inside, 1));
-    _mm_storel_epi64(reinterpret_cast<__m128i*>(mask + k), _mm_packs_epi16(words, words));
+    bits[k / 8] = static_cast<uint8_t>(
+        _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_permutevar8x32_epi32(inside, reversed))));
   }
-  for (; k < n; ++k) {
-    mask[k] = xi[k] >= 0 && xi[k] <= max_x && yi[k] >= 0 && yi[k] <= max_y ? 255 : 0;
-  }
+  if (k < n) InsideMaskBitsScalar(xi + k, yi + k, n - k, max_x, max_y, bits + k / 8);
 }
 #endif
 
@@ -575,14 +584,12 @@ void LinearFixedRow(float a, float b, int n, int* out) {
   for (int k = 0; k < n; ++k) out[k] = cvRound(a + k * b);
 }
 
-void InsideMaskRow(const int* xi, const int* yi, int n, int width, int height, uint8_t* mask) {
+void InsideMaskBits(const int* xi, const int* yi, int n, int width, int height, uint8_t* bits) {
   const int max_x = (width - 1) << kSampleFracBits, max_y = (height - 1) << kSampleFracBits;
 #if defined(SHUTTERLAB_WIDE_SAMPLER)
-  if (WideLevel() == 2) return InsideMaskRowAvx2(xi, yi, n, max_x, max_y, mask);
+  if (WideLevel() == 2) return InsideMaskBitsAvx2(xi, yi, n, max_x, max_y, bits);
 #endif
-  for (int k = 0; k < n; ++k) {
-    mask[k] = xi[k] >= 0 && xi[k] <= max_x && yi[k] >= 0 && yi[k] <= max_y ? 255 : 0;
-  }
+  InsideMaskBitsScalar(xi, yi, n, max_x, max_y, bits);
 }
 
 void SampleRowFloat(const cv::Mat& src, const float* xs, const float* ys, int n,

@@ -41,9 +41,11 @@ void SampleRowFloat(const cv::Mat& src, const float* xs, const float* ys, int n,
 // fixed-point units (|a + k b| < 2^30).
 void LinearFixedRow(float a, float b, int n, int* out);
 
-// 255 where every bilinear tap of the fixed-point (xi[k], yi[k]) lies inside a width x height
-// source (0 <= x <= width - 1, 0 <= y <= height - 1), else 0.
-void InsideMaskRow(const int* xi, const int* yi, int n, int width, int height, uint8_t* mask);
+// Packed one bit a pixel (io/image_io.h PackedMask's order: pixel k in bit 7 - k % 8 of byte
+// k / 8): set where every bilinear tap of the fixed-point (xi[k], yi[k]) lies inside a width x
+// height source (0 <= x <= width - 1, 0 <= y <= height - 1). Writes (n + 7) / 8 bytes, the bits
+// past n 0.
+void InsideMaskBits(const int* xi, const int* yi, int n, int width, int height, uint8_t* bits);
 
 // The 8-bit RGB four-pixel path: true where this CPU runs it. SetWideSampler(false) turns it off
 // (tests compare both paths; benches time them), and returns the previous setting.

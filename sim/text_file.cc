@@ -538,13 +538,17 @@ void AppendDouble(double value, std::string* out) {
 }
 
 void AppendSecondsFromNs(int64_t t_ns, std::string* out) {
-  char buffer[40];
-  const bool negative = t_ns < 0;
-  const uint64_t magnitude = negative ? 0 - static_cast<uint64_t>(t_ns) : t_ns;
-  const int n = std::snprintf(buffer, sizeof(buffer), "%s%llu.%09llu", negative ? "-" : "",
-                              static_cast<unsigned long long>(magnitude / 1000000000ULL),
-                              static_cast<unsigned long long>(magnitude % 1000000000ULL));
-  out->append(buffer, n);
+  // By hand rather than snprintf: gyro.csv writes one a sample, and snprintf's parsing of its
+  // format took 0.06 s of a 120 s log at 1 kHz.
+  char buffer[32];
+  char* p = buffer;
+  if (t_ns < 0) *p++ = '-';
+  const uint64_t magnitude = t_ns < 0 ? 0 - static_cast<uint64_t>(t_ns) : t_ns;
+  p = std::to_chars(p, buffer + 21, magnitude / 1000000000ULL).ptr;
+  *p++ = '.';
+  uint64_t fraction_ns = magnitude % 1000000000ULL;
+  for (int digit = 8; digit >= 0; --digit, fraction_ns /= 10) p[digit] = '0' + fraction_ns % 10;
+  out->append(buffer, p + 9 - buffer);
 }
 
 std::string ToLower(std::string_view s) {

@@ -74,7 +74,8 @@ int64_t ReferenceTimeNs(const TrueModel& model, int64_t t_first_row_ns, double r
 // A worker's decoded source, corrected image and mask, reused frame to frame: a 12 MP photo's
 // output touched afresh cost about as much in page faults as its warp (bench/photos_bench.cc).
 struct FrameBuffers {
-  cv::Mat source, corrected, mask;
+  cv::Mat source, corrected;
+  PackedMask mask;
 };
 
 // Writes the corrected image and its mask (unless DIR holds both and force is off); the share of
@@ -84,10 +85,10 @@ double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap
                       FrameBuffers* buffers) {
   const fs::path image_path = fs::path(c.options.out_dir) / out->image;
   const fs::path mask_path = MaskPath(c.options.out_dir, e.image);
-  cv::Mat& mask = buffers->mask;
+  PackedMask& mask = buffers->mask;
   if (!c.options.force && fs::is_regular_file(image_path) && fs::is_regular_file(mask_path)) {
     out->kept = true;
-    mask = ReadImage(mask_path.string());
+    mask = PackMask(ReadImage(mask_path.string()));
   } else {
     const std::string input = (c.dataset.dir / e.image).string();
     const cv::Mat rs = ReadWholeImage(input, &buffers->source);
@@ -105,7 +106,7 @@ double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap
       // of its source may (the bilinear sample of 0/255 is 255 exactly there).
       cv::Mat moved;
       CorrectFrame(c.dataset.mask, map, Interpolation::kBilinear, &moved);
-      mask &= (moved == 255);
+      mask.bits &= PackMask(moved == 255).bits;
     }
     std::vector<std::pair<std::string, std::string>> xmp = c.xmp;
     xmp.emplace_back("Xmp.shutterlab.Translation", out->translation);
@@ -122,7 +123,8 @@ double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap
                                 ImageLike{input, ReadImageFileInfo(input)}, xmp);
     WriteMask(mask_path.string(), mask);
   }
-  return 1.0 - cv::countNonZero(mask) / static_cast<double>(mask.total());
+  return 1.0 - static_cast<double>(CountSetPixels(mask)) /
+                   (static_cast<double>(mask.width) * mask.height());
 }
 
 // The frame's own velocity (a photo's metadata) when it has one, and the words for what of the

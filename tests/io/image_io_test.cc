@@ -31,9 +31,10 @@ TEST(ImageIo, LosslessFormatsRoundTripExactly) {
   }
 }
 
-// A mask is written one bit a pixel and read back, by libpng's own unpacking through OpenImageIO,
-// as 0 where it was 0 and 255 wherever it was not: every width from 1 to 19 (the last byte of a
-// row padded), values that share no bit with each other.
+// A mask is packed one bit a pixel (unpacked and counted alike), written so and read back, by
+// libpng's own unpacking through OpenImageIO, as 0 where it was 0 and 255 wherever it was not:
+// every width from 1 to 19 (the last byte of a row padded with 0), values that share no bit with
+// each other.
 TEST(ImageIo, MaskIsOneBitAPixelAndReadsBackAs0And255) {
   test::TempDir dir;
   cv::RNG rng(7);
@@ -43,8 +44,14 @@ TEST(ImageIo, MaskIsOneBitAPixelAndReadsBackAs0And255) {
     for (int y = 0; y < mask.rows; ++y) {
       for (int x = 0; x < mask.cols; ++x) mask.at<uint8_t>(y, x) = values[rng.uniform(0, 12)];
     }
+    const PackedMask packed = PackMask(mask);
+    EXPECT_EQ(cv::countNonZero(UnpackMask(packed) != ((mask != 0) & 255)), 0) << width;
+    EXPECT_EQ(CountSetPixels(packed), static_cast<size_t>(cv::countNonZero(mask))) << width;
+    const int padding = 8 * packed.bits.cols - width;
+    EXPECT_EQ(cv::countNonZero(packed.bits.col(packed.bits.cols - 1) & ((1 << padding) - 1)), 0)
+        << "the bits past a row of " << width;
     const std::string path = dir / ("mask_" + std::to_string(width) + ".png");
-    WriteMask(path, mask);
+    WriteMask(path, packed);
     const std::string bytes = ReadFileToString(path);
     ASSERT_GT(bytes.size(), 25u);
     EXPECT_EQ(bytes[24], 1) << "the IHDR's bit depth of " << path;
@@ -72,7 +79,7 @@ TEST(ImageIo, ColmapHonoursAOneBitMask) {
   mask.colRange(0, 160).setTo(0);
   std::filesystem::create_directories(dir / "one_bit");
   std::filesystem::create_directories(dir / "eight_bit");
-  WriteMask(dir / "one_bit/noise.png.png", mask);
+  WriteMask(dir / "one_bit/noise.png.png", PackMask(mask));
   WriteImage(dir / "eight_bit/noise.png.png", mask);
   const auto features = [&](const std::string& name, const std::string& masks) {
     const std::string log = dir / (name + ".log");

@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
@@ -54,10 +55,11 @@ TEST(CorrectionGeometry, NoMotionMapsEveryPixelToItself) {
   const CorrectionGeometry geometry(truth.rig.camera, motion, 0.0, rig.altitude_m);
   const CorrectionMap map(geometry, {});
   const cv::Mat image = SmoothTexture(cv::Size(96, 72), CV_8UC3, 9, 1.0);
-  cv::Mat out, mask;
+  cv::Mat out;
+  PackedMask mask;
   CorrectFrame(image, map, Interpolation::kBilinear, &out, &mask);
   EXPECT_EQ(cv::norm(out, image, cv::NORM_INF), 0.0);
-  EXPECT_EQ(cv::countNonZero(mask), 96 * 72);
+  EXPECT_EQ(CountSetPixels(mask), 96u * 72u);
 }
 
 // The renderer's exact truth sends a rolling-shutter pixel q to p_ref (FrameGeometry::RefPixel);
@@ -252,8 +254,10 @@ void ExpectCorrectionGivesTheReference(const RigModel& rig) {
   RenderFrame(scene, reference, Interpolation::kBilinear, &ref);
   const CorrectionGeometry geometry(rig.camera, motion, 0.0, rig.altitude_m);
   const CorrectionMap map(geometry, {});
-  cv::Mat corrected, mask;
-  CorrectFrame(rs, map, Interpolation::kBilinear, &corrected, &mask);
+  cv::Mat corrected;
+  PackedMask packed;
+  CorrectFrame(rs, map, Interpolation::kBilinear, &corrected, &packed);
+  const cv::Mat mask = UnpackMask(packed);
   cv::Mat diff;
   cv::absdiff(corrected, ref, diff);
   // Texture 0..1 with a 4 px blur: two bilinear passes leave ~1e-3.
@@ -275,6 +279,36 @@ void ExpectCorrectionGivesTheReference(const RigModel& rig) {
   }
   EXPECT_EQ(disagree, 0);
   EXPECT_GT(masked, 0) << "the motion must leave part of the view without a source";
+}
+
+// The mask takes a piece's ends for the whole piece where both lie inside: it must equal the
+// taps' test of every pixel (InsideMaskBits of the map's own coordinates), row by row, on frames
+// wider than a pass (512 columns) whose motion leaves bands without a source, through a lens
+// whose corners are solved per pixel.
+TEST(CorrectFrame, MaskIsEveryPixelsTapTest) {
+  for (const RigModel& rig : {SmallRig(1203, 90), test::FisheyeRig(1203, 90, 75.0)}) {
+    const TrueModel truth = TruthWith(rig, {"velocity=4m/s,2m/s,0"});
+    const FrameMotion motion =
+        Motion(truth, ConstantRateTrace(Eigen::Vector3d(0.8, -1.1, 1.4)), 0.5);
+    const CorrectionGeometry geometry(rig.camera, motion, 45.0, rig.altitude_m);
+    const CorrectionMap map(geometry, {});
+    const cv::Mat image =
+        SmoothTexture(cv::Size(rig.camera.width, rig.camera.height), CV_8UC3, 5, 1.0);
+    cv::Mat out;
+    PackedMask mask;
+    CorrectFrame(image, map, Interpolation::kBilinear, &out, &mask);
+    const int width = rig.camera.width, height = rig.camera.height;
+    std::vector<int> xi(width), yi(width);
+    std::vector<uint8_t> expected((width + 7) / 8);
+    for (int v = 0; v < height; ++v) {
+      map.SourceRowFixed(v, 0, width, xi.data(), yi.data());
+      InsideMaskBits(xi.data(), yi.data(), width, width, height, expected.data());
+      ASSERT_EQ(std::memcmp(expected.data(), mask.bits.ptr(v), expected.size()), 0) << "row " << v;
+    }
+    const size_t set = CountSetPixels(mask);
+    EXPECT_GT(set, static_cast<size_t>(width) * height / 2);
+    EXPECT_LT(set, static_cast<size_t>(width) * height) << "no band without a source";
+  }
 }
 
 TEST(CorrectFrame, TrueModelGivesTheGlobalShutterReference) {

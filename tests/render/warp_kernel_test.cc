@@ -74,6 +74,34 @@ TEST(WarpKernel, EveryRgbPathGivesTheScalarPathsBits) {
   }
 }
 
+// The mask's bits against their definition, pixel by pixel: a source whose every bilinear tap lies
+// inside, at and beyond each border, with no source mixed in; every length from 1 to 40 (the
+// wide path's blocks of 8 and its tail) and a long row.
+TEST(WarpKernel, MaskBitsMarkThePixelsWhoseTapsAreAllInside) {
+  const cv::Size src(23, 5);
+  for (const int n : {1, 2, 7, 8, 9, 15, 16, 17, 31, 33, 40, 1001}) {
+    for (const float y0 : {-0.6f, 0.0f, 2.0f, 4.0f, 4.2f}) {
+      std::vector<int> xi, yi;
+      NearShiftCoordinates(n, src, 5 + n, &xi, &yi);
+      for (int& y : yi) y = y == kInvalidFixed ? y : y - ToFixed(src.height * 0.5f - y0);
+      std::vector<uint8_t> bits((n + 7) / 8, 0xA5);  // to be overwritten, padding included
+      InsideMaskBits(xi.data(), yi.data(), n, src.width, src.height, bits.data());
+      int set = 0;
+      for (int k = 0; k < 8 * static_cast<int>(bits.size()); ++k) {
+        const bool bit = (bits[k / 8] >> (7 - k % 8)) & 1;
+        const bool inside = k < n && xi[k] >= 0 && xi[k] <= ToFixed(src.width - 1.0f) &&
+                            yi[k] >= 0 && yi[k] <= ToFixed(src.height - 1.0f);
+        ASSERT_EQ(bit, inside) << "pixel " << k << " of " << n << ", y0 " << y0;
+        set += bit;
+      }
+      if (n > 100 && y0 == 2.0f) {  // starts inside, runs out below
+        EXPECT_GT(set, 0);
+        EXPECT_LT(set, n);
+      }
+    }
+  }
+}
+
 TEST(WarpKernel, SamplesAtPixelCentresAreThePixels) {
   const cv::Mat src = SmoothTexture(cv::Size(40, 8), CV_8UC3, 5, 1.0);
   std::vector<int> xi(40), yi(40);

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cstdio>
+#include <limits>
 #include <random>
 #include <string>
 #include <unistd.h>
@@ -179,6 +180,36 @@ TEST(TextBlocks, APeekAtTheStartIsHandedOutAgain) {
   TextBlocks started = TextBlocks::InMemory("a\nb\n", 2);
   started.Next();
   EXPECT_THROW(started.Peek(1), std::invalid_argument);
+}
+
+// Seconds with nine decimals, against printf's integer formatting as the twin: zero, each side of
+// a second, the extremes of int64 and random times of both signs.
+TEST(AppendSecondsFromNs, IsTheNanosecondsExactlyAsSecondsWithNineDecimals) {
+  std::vector<int64_t> times = {0,
+                                1,
+                                -1,
+                                999999999,
+                                -999999999,
+                                1000000000,
+                                -1000000000,
+                                1000000001,
+                                std::numeric_limits<int64_t>::max(),
+                                std::numeric_limits<int64_t>::min()};
+  std::mt19937_64 rng(3);
+  for (int i = 0; i < 1000; ++i) times.push_back(static_cast<int64_t>(rng()) >> (i % 60));
+  for (const int64_t t_ns : times) {
+    const uint64_t magnitude = t_ns < 0 ? 0 - static_cast<uint64_t>(t_ns) : t_ns;
+    char expected[40];
+    std::snprintf(expected, sizeof(expected), "%s%llu.%09llu", t_ns < 0 ? "-" : "",
+                  static_cast<unsigned long long>(magnitude / 1000000000ULL),
+                  static_cast<unsigned long long>(magnitude % 1000000000ULL));
+    std::string text = "x";
+    AppendSecondsFromNs(t_ns, &text);
+    EXPECT_EQ(text, std::string("x") + expected) << t_ns;
+  }
+  std::string one;
+  AppendSecondsFromNs(-1500000000, &one);
+  EXPECT_EQ(one, "-1.500000000");
 }
 
 TEST(FormatNumber, KeepsTextLongerThanItsStackBuffer) {
