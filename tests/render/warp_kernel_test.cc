@@ -102,6 +102,28 @@ TEST(WarpKernel, MaskBitsMarkThePixelsWhoseTapsAreAllInside) {
   }
 }
 
+// The wide path's coordinates along a line are the scalar formula's, bit for bit: every length up
+// to 40 and a long one, slopes of both signs, far from the origin too.
+TEST(WarpKernel, LinearRowIsRoundOfAPlusKB) {
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<float> start(-3e5f, 3e5f), slope(-300.0f, 300.0f);
+  std::vector<int> n_values(41);
+  for (int n = 0; n <= 40; ++n) n_values[n] = n;
+  n_values.push_back(4001);
+  for (const int n : n_values) {
+    for (int trial = 0; trial < 20; ++trial) {
+      const float a = start(rng), b = slope(rng);
+      std::vector<int> out(n + 1, 12345);
+      LinearFixedRow(a, b, n, out.data());
+      for (int k = 0; k < n; ++k) {
+        const float value = a + static_cast<float>(k) * b;
+        ASSERT_EQ(out[k], cvRound(value)) << "k " << k << " of " << n << ", a " << a << ", b " << b;
+      }
+      EXPECT_EQ(out[n], 12345) << "written past n = " << n;
+    }
+  }
+}
+
 TEST(WarpKernel, SamplesAtPixelCentresAreThePixels) {
   const cv::Mat src = SmoothTexture(cv::Size(40, 8), CV_8UC3, 5, 1.0);
   std::vector<int> xi(40), yi(40);
