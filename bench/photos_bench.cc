@@ -10,7 +10,7 @@
 // once into $TMPDIR/shutterlab_photos_bench_noisy/ (about 3 min) and reused by later runs; with
 // PHOTOS, a survey of that many, into shutterlab_photos_bench_noisy_PHOTOS/: from 20 photos on,
 // on 5 lines at 82 % front overlap over a texture of the camera's own GSD, so that the ground fits
-// the renderer's largest texture (100 photos: about 75 min). Both
+// the renderer's largest texture (100 photos: about 80 min). Both
 // contenders write into a fresh folder each run; the runs alternate, and the medians of process
 // CPU time and wall time are printed with their ratio. The photos are placed on the log by a
 // trigger file made from the truth (a photo alone cannot be placed by its capture time). The

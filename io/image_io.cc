@@ -4,17 +4,21 @@
 #include "io/exiv2_setup.h"
 #include "io/image_check.h"
 #include "sim/check.h"
+#include "sim/text_file.h"
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <exiv2/exiv2.hpp>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <png.h>
 #include <unistd.h>
 
 namespace shutterlab {
@@ -128,15 +132,12 @@ cv::Mat ReadFloatImage(const std::string& path, std::vector<std::string>* channe
 
 namespace {
 
-// Writes image as settings say to a temporary file beside path (the extension kept: OpenImageIO
-// chooses the format by it), lets finish add to the written file, then renames it to path.
-// Nothing is left behind on failure.
-void WriteThroughTemp(const std::string& path, const cv::Mat& image,
-                      const codecs::ImageWriteSettings& settings,
-                      const std::function<void(const std::string&)>& finish) {
-  SHUTTERLAB_CHECK(!image.empty()) << "cannot write an empty image to " << path;
-  SHUTTERLAB_CHECK(SampleTypeOfDepth(image.depth()) != SampleType::kOther)
-      << "unsupported pixel depth writing " << path;
+// Lets write put the file at a temporary path beside path (the extension kept: OpenImageIO
+// chooses the format by it; write returns "" or its error), lets finish add to the written file,
+// then renames it to path. Nothing is left behind on failure.
+void WriteFileThroughTemp(const std::string& path,
+                          const std::function<std::string(const std::string&)>& write,
+                          const std::function<void(const std::string&)>& finish) {
   const std::filesystem::path target(path);
   const std::filesystem::path temp = target.parent_path() / (".tmp" + std::to_string(::getpid()) +
                                                              "_" + target.filename().string());
@@ -144,8 +145,7 @@ void WriteThroughTemp(const std::string& path, const cv::Mat& image,
     std::error_code ec;
     std::filesystem::remove(temp, ec);
   };
-  const cv::Mat contiguous = image.isContinuous() ? image : image.clone();
-  const std::string error = Codecs().write_image(temp.string(), contiguous, settings);
+  const std::string error = write(temp.string());
   if (!error.empty()) {
     remove_temp();
     throw IoError(IoMessage(path, 0, "cannot write image: " + error));
@@ -164,10 +164,44 @@ void WriteThroughTemp(const std::string& path, const cv::Mat& image,
   }
 }
 
-bool IsJpegPath(const std::filesystem::path& path) {
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
-  return extension == ".jpg" || extension == ".jpeg";
+// WriteFileThroughTemp of image as settings say, through the codecs module.
+void WriteThroughTemp(const std::string& path, const cv::Mat& image,
+                      const codecs::ImageWriteSettings& settings,
+                      const std::function<void(const std::string&)>& finish) {
+  SHUTTERLAB_CHECK(!image.empty()) << "cannot write an empty image to " << path;
+  SHUTTERLAB_CHECK(SampleTypeOfDepth(image.depth()) != SampleType::kOther)
+      << "unsupported pixel depth writing " << path;
+  const cv::Mat contiguous = image.isContinuous() ? image : image.clone();
+  WriteFileThroughTemp(
+      path,
+      [&](const std::string& temp) { return Codecs().write_image(temp, contiguous, settings); },
+      finish);
+}
+
+// Writes a mask's packed rows through libpng into `file`, one bit a pixel, unfiltered, zlib level
+// 1; false when libpng fails. libpng reports errors by longjmp: this function holds nothing with a
+// destructor.
+bool WritePackedPng(std::FILE* file, const PackedMask& mask) {
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png != nullptr ? png_create_info_struct(png) : nullptr;
+  if (png == nullptr || info == nullptr) {
+    png_destroy_write_struct(&png, &info);
+    return false;
+  }
+  if (setjmp(png_jmpbuf(png))) {  // alone in its if: where C allows setjmp
+    png_destroy_write_struct(&png, &info);
+    return false;
+  }
+  png_init_io(png, file);
+  png_set_IHDR(png, info, mask.width, mask.height(), 1, PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_NONE);
+  png_set_compression_level(png, 1);
+  png_write_info(png, info);
+  for (int y = 0; y < mask.height(); ++y) png_write_row(png, mask.bits.ptr<png_byte>(y));
+  png_write_end(png, info);
+  png_destroy_write_struct(&png, &info);
+  return true;
 }
 
 }  // namespace
@@ -189,7 +223,7 @@ void WriteImage(const std::string& path, const cv::Mat& image,
     // none (PNG_FILTER_NONE, 8) on a 12 MP one (69 against 16 ms) for the same size (63 kB).
     if (image.channels() == 1 && image.depth() == CV_8U) settings.png_filter = 8;
   }
-  if (IsJpegPath(path)) settings.compression = "jpeg:95";
+  if (HasJpegExtension(path)) settings.compression = "jpeg:95";
   WriteThroughTemp(path, image, settings, {});
 }
 
@@ -200,7 +234,7 @@ PackedMask PackMask(const cv::Mat& mask) {
     const uint8_t* pixels = mask.ptr<uint8_t>(v);
     uint8_t* bits = packed.bits.ptr<uint8_t>(v);
     for (int u = 0; u < mask.cols; ++u) {
-      if (pixels[u] != 0) bits[u / 8] |= static_cast<uint8_t>(0x80 >> (u % 8));
+      if (pixels[u] != 0) SetMaskBit(u, bits);
     }
   }
   return packed;
@@ -224,10 +258,18 @@ size_t CountSetPixels(const PackedMask& mask) {
 void WriteMask(const std::string& path, const PackedMask& mask) {
   SHUTTERLAB_CHECK(mask.bits.type() == CV_8UC1 && mask.bits.cols == (mask.width + 7) / 8)
       << "a packed mask has (width + 7) / 8 bytes a row, writing " << path;
-  codecs::ImageWriteSettings settings;
-  settings.png_compression_level = 1;
-  settings.one_bit_width_px = mask.width;
-  WriteThroughTemp(path, mask.bits, settings, {});
+  // OpenImageIO writes no PNG under 8 bits: libpng itself.
+  WriteFileThroughTemp(path,
+                       [&](const std::string& temp) -> std::string {
+                         std::FILE* file = std::fopen(temp.c_str(), "wb");
+                         if (file == nullptr)
+                           return "cannot open for writing: " + std::string(std::strerror(errno));
+                         const bool written = WritePackedPng(file, mask);
+                         const bool closed = std::fclose(file) == 0;
+                         if (!written) return "libpng could not write the image";
+                         return closed ? "" : "cannot write: " + std::string(std::strerror(errno));
+                       },
+                       {});
 }
 
 namespace {
@@ -395,7 +437,7 @@ std::vector<std::string> WriteImageLike(
   settings.file_type = SampleTypeOfDepth(image.depth());
   if (info.floating && info.bits_per_channel == 16 && image.depth() == CV_32F)
     settings.file_type = SampleType::kHalf;
-  if (IsJpegPath(path)) {
+  if (HasJpegExtension(path)) {
     settings.compression = "jpeg:" + std::to_string(info.jpeg_quality.value_or(95));
     settings.jpeg_subsampling = info.jpeg_subsampling;
   } else if (!info.compression.empty() && info.format != "jpeg") {
@@ -412,7 +454,7 @@ void WriteImageWithMetadata(const std::string& path, const cv::Mat& image, int j
                             const MetadataFields& exif, const MetadataFields& xmp) {
   codecs::ImageWriteSettings settings;
   settings.file_type = SampleTypeOfDepth(image.depth());
-  if (IsJpegPath(path)) settings.compression = "jpeg:" + std::to_string(jpeg_quality);
+  if (HasJpegExtension(path)) settings.compression = "jpeg:" + std::to_string(jpeg_quality);
   WriteThroughTemp(path, image, settings,
                    [&](const std::string& temp) { CopyMetadata(path, temp, "", exif, xmp); });
 }

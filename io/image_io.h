@@ -11,6 +11,8 @@
 
 #include <opencv2/core.hpp>
 
+#include <cstdint>
+#include <cstring>
 #include <optional>
 #include <string>
 #include <utility>
@@ -58,6 +60,15 @@ struct PackedMask {
   cv::Mat bits;
   int height() const { return bits.rows; }
 };
+// Sets pixel k of a packed row.
+inline void SetMaskBit(int k, uint8_t* bits) {
+  bits[k / 8] |= static_cast<uint8_t>(0x80 >> (k % 8));
+}
+// Sets pixels 0 to n - 1 of a packed row, the rest of its last byte clear.
+inline void SetFirstMaskBits(int n, uint8_t* bits) {
+  std::memset(bits, 0xFF, n / 8);
+  if (n % 8 != 0) bits[n / 8] = static_cast<uint8_t>(0xFF00 >> (n % 8));
+}
 // Packs a CV_8UC1 mask: nonzero pixels set.
 PackedMask PackMask(const cv::Mat& mask);
 // The mask as CV_8UC1, 255 where set and 0 elsewhere.

@@ -23,6 +23,11 @@ Eigen::Vector3d TrueModel::CamRate(const Eigen::Vector3d& logged_omega_rad_s) co
   return rig.cam_from_gyro * gyro_scale.cwiseProduct(logged_omega_rad_s - gyro_bias_rad_s);
 }
 
+bool TrueModel::SameCamRates(const TrueModel& other) const {
+  return rig.cam_from_gyro == other.rig.cam_from_gyro && gyro_scale == other.gyro_scale &&
+         gyro_bias_rad_s == other.gyro_bias_rad_s;
+}
+
 double TrueModel::RowGyroOffsetS(int64_t t_first_row_ns, double row) const {
   const double row_offset_s = rig.shutter.RowTimeOffsetS(row, rig.camera.height);
   // gyro = camera * (1 + k) + offset; the camera instant is t_first_row_ns + row_offset_s. Only the
@@ -71,10 +76,7 @@ CameraMotion::CameraMotion(const TrueModel& model, OrientationTrace world_from_c
 CameraMotion::CameraMotion(const TrueModel& model, const CameraMotion& same_rates)
     : model_(model), world_from_cam_(same_rates.world_from_cam_) {
   model_.Check();
-  const TrueModel& other = same_rates.model_;
-  SHUTTERLAB_CHECK(model_.rig.cam_from_gyro == other.rig.cam_from_gyro &&
-                   model_.gyro_scale == other.gyro_scale &&
-                   model_.gyro_bias_rad_s == other.gyro_bias_rad_s)
+  SHUTTERLAB_CHECK(model_.SameCamRates(same_rates.model_))
       << "a camera motion shares the integrated rates of a model with the same mounting, gyro "
          "scale and bias only";
 }

@@ -40,6 +40,9 @@ struct TrueModel {
   void Check() const;
   // The true rate in the camera frame for a logged gyro-axis rate: R_CG * scale * (w - bias).
   Eigen::Vector3d CamRate(const Eigen::Vector3d& logged_omega_rad_s) const;
+  // True when `other`'s CamRate is this one's (the same mounting, gyro scale and bias), so that
+  // both integrate a log to the same orientation trace.
+  bool SameCamRates(const TrueModel& other) const;
   // Gyro-clock seconds after t_first_row_ns (on the gyro clock) at which image row `row` is
   // captured, for a frame whose first-read row is at camera time t_first_row_ns.
   double RowGyroOffsetS(int64_t t_first_row_ns, double row) const;

@@ -350,11 +350,8 @@ void CorrectionMap::SourceRowFixed(int v, int u0, int n, int* xi, int* yi, bool*
   const float* bottom_y = &node_y_fixed_[j1 * columns];
   size_t i = column_cell_[u0];
   float xs[64], ys[64];
-  const int max_x = (geometry_.camera().width - 1) << kSampleFracBits;
-  const int max_y = (geometry_.camera().height - 1) << kSampleFracBits;
-  const auto inside = [&](int k) {
-    return xi[k] >= 0 && xi[k] <= max_x && yi[k] >= 0 && yi[k] <= max_y;
-  };
+  const int width = geometry_.camera().width, height = geometry_.camera().height;
+  const auto inside = [&](int k) { return TapsInside(xi[k], yi[k], width, height); };
   bool pieces_inside = true;
   for (int u = u0; u < u0 + n; ++i) {
     const size_t i1 = std::min(i + 1, columns - 1);
@@ -392,9 +389,7 @@ namespace {
 void MaskBitsFloat(const float* xs, const float* ys, int n, int width, int height, uint8_t* bits) {
   std::memset(bits, 0, (n + 7) / 8);
   for (int k = 0; k < n; ++k) {
-    if (xs[k] >= 0 && xs[k] <= width - 1 && ys[k] >= 0 && ys[k] <= height - 1) {
-      bits[k / 8] |= static_cast<uint8_t>(0x80 >> (k % 8));
-    }
+    if (xs[k] >= 0 && xs[k] <= width - 1 && ys[k] >= 0 && ys[k] <= height - 1) SetMaskBit(k, bits);
   }
 }
 
@@ -417,9 +412,8 @@ void CorrectFrame(const cv::Mat& rs_image, const CorrectionMap& map, Interpolati
     mask->bits.create(height, (width + 7) / 8, CV_8UC1);
   }
   const bool fixed = interpolation == Interpolation::kBilinear && depth != CV_32F;
-  // Columns per pass: 4 KiB of coordinates, kept in L1; a multiple of 8, so that each pass starts
-  // a byte of the mask.
-  constexpr int kChunk = 512;
+  constexpr int kChunk = 512;  // columns per pass: 4 KiB of coordinates, kept in L1
+  static_assert(kChunk % 8 == 0, "each pass starts a byte of the mask");
   cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
     std::vector<int> xi(kChunk), yi(kChunk);
     std::vector<float> xs(kChunk), ys(kChunk);
@@ -433,8 +427,7 @@ void CorrectFrame(const cv::Mat& rs_image, const CorrectionMap& map, Interpolati
           SampleRowFixed(rs_image, xi.data(), yi.data(), n, row_out);
           uint8_t* bits = mask ? mask->bits.ptr(v) + u0 / 8 : nullptr;
           if (bits && all_inside) {
-            std::memset(bits, 0xFF, n / 8);
-            if (n % 8 != 0) bits[n / 8] = static_cast<uint8_t>(0xFF00 >> (n % 8));
+            SetFirstMaskBits(n, bits);
           } else if (bits) {
             InsideMaskBits(xi.data(), yi.data(), n, width, height, bits);
           }

@@ -1,5 +1,7 @@
 #include "render/warp_kernel.h"
 
+#include "io/image_io.h"
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -505,14 +507,12 @@ int WideLevel() {
 }
 #endif
 
-// InsideMaskBits one pixel at a time, from bit 7 of bits[0]; max_x, max_y in fixed point.
-void InsideMaskBitsScalar(const int* xi, const int* yi, int n, int max_x, int max_y,
+// InsideMaskBits one pixel at a time.
+void InsideMaskBitsScalar(const int* xi, const int* yi, int n, int width, int height,
                           uint8_t* bits) {
   std::memset(bits, 0, (n + 7) / 8);
   for (int k = 0; k < n; ++k) {
-    if (xi[k] >= 0 && xi[k] <= max_x && yi[k] >= 0 && yi[k] <= max_y) {
-      bits[k / 8] |= static_cast<uint8_t>(0x80 >> (k % 8));
-    }
+    if (TapsInside(xi[k], yi[k], width, height)) SetMaskBit(k, bits);
   }
 }
 
@@ -530,7 +530,8 @@ __attribute__((target("avx2"))) void LinearFixedRowAvx2(float a, float b, int n,
 }
 
 __attribute__((target("avx2"))) void InsideMaskBitsAvx2(const int* xi, const int* yi, int n,
-                                                        int max_x, int max_y, uint8_t* bits) {
+                                                        int width, int height, uint8_t* bits) {
+  const int max_x = (width - 1) << kSampleFracBits, max_y = (height - 1) << kSampleFracBits;
   const __m256i low = _mm256_set1_epi32(-1), high_x = _mm256_set1_epi32(max_x + 1),
                 high_y = _mm256_set1_epi32(max_y + 1);
   const __m256i reversed = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
@@ -545,7 +546,7 @@ __attribute__((target("avx2"))) void InsideMaskBitsAvx2(const int* xi, const int
     bits[k / 8] = static_cast<uint8_t>(
         _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_permutevar8x32_epi32(inside, reversed))));
   }
-  if (k < n) InsideMaskBitsScalar(xi + k, yi + k, n - k, max_x, max_y, bits + k / 8);
+  if (k < n) InsideMaskBitsScalar(xi + k, yi + k, n - k, width, height, bits + k / 8);
 }
 #endif
 
@@ -601,11 +602,10 @@ void LinearFixedRow(float a, float b, int n, int* out) {
 }
 
 void InsideMaskBits(const int* xi, const int* yi, int n, int width, int height, uint8_t* bits) {
-  const int max_x = (width - 1) << kSampleFracBits, max_y = (height - 1) << kSampleFracBits;
 #if defined(SHUTTERLAB_WIDE_SAMPLER)
-  if (WideLevel() == 2) return InsideMaskBitsAvx2(xi, yi, n, max_x, max_y, bits);
+  if (WideLevel() == 2) return InsideMaskBitsAvx2(xi, yi, n, width, height, bits);
 #endif
-  InsideMaskBitsScalar(xi, yi, n, max_x, max_y, bits);
+  InsideMaskBitsScalar(xi, yi, n, width, height, bits);
 }
 
 void SampleRowFloat(const cv::Mat& src, const float* xs, const float* ys, int n,

@@ -41,6 +41,13 @@ void SampleRowFloat(const cv::Mat& src, const float* xs, const float* ys, int n,
 // fixed-point units (|a + k b| < 2^30).
 void LinearFixedRow(float a, float b, int n, int* out);
 
+// True when every bilinear tap of the fixed-point (xi, yi) lies inside a width x height source:
+// 0 <= x <= width - 1 and 0 <= y <= height - 1.
+inline bool TapsInside(int xi, int yi, int width, int height) {
+  return xi >= 0 && xi <= (width - 1) << kSampleFracBits && yi >= 0 &&
+         yi <= (height - 1) << kSampleFracBits;
+}
+
 // Packed one bit a pixel (io/image_io.h PackedMask's order: pixel k in bit 7 - k % 8 of byte
 // k / 8): set where every bilinear tap of the fixed-point (xi[k], yi[k]) lies inside a width x
 // height source (0 <= x <= width - 1, 0 <= y <= height - 1). Writes (n + 7) / 8 bytes, the bits

@@ -63,9 +63,10 @@ TrueModel DrawModel(const CorrectionModel& model, std::mt19937_64* rng) {
 
 }  // namespace
 
-std::vector<Eigen::Vector3d> GyroNoiseAngles(const TrueModel& model, int64_t t_first_row_ns,
-                                             int start_row, double density_rad_s_sqrt_hz,
-                                             const std::vector<bool>& rows, std::mt19937_64* rng) {
+std::vector<Eigen::Vector3d> GyroNoiseAnglesRad(const TrueModel& model, int64_t t_first_row_ns,
+                                                int start_row, double density_rad_s_sqrt_hz,
+                                                const std::vector<bool>& rows,
+                                                std::mt19937_64* rng) {
   const int height = static_cast<int>(rows.size());
   SHUTTERLAB_CHECK(start_row >= 0 && start_row < height)
       << "the noise walk starts at row " << start_row << " of " << height;
@@ -117,7 +118,7 @@ void TurnByGyroNoise(const TrueModel& truth, int64_t t_first_row_ns, double refe
   const int last_row = static_cast<int>(rows.size()) - 1;
   const int start = std::clamp(static_cast<int>(std::lround(reference_row)), 0, last_row);
   const std::vector<Eigen::Vector3d> angles =
-      GyroNoiseAngles(truth, t_first_row_ns, start, density_rad_s_sqrt_hz, rows, rng);
+      GyroNoiseAnglesRad(truth, t_first_row_ns, start, density_rad_s_sqrt_hz, rows, rng);
   for (int v = 0; v <= last_row; ++v) {
     if (rows[v] && v != start) {
       motion->world_from_cam[v] = motion->world_from_cam[v] * ExpSO3(angles[v]).toRotationMatrix();
@@ -208,9 +209,7 @@ ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace
     read_around(static_cast<int>(reference_row));
     // A draw whose rates are the model's (no drawn effect moves the mounting, the gyro's scale or
     // bias) shares the model's integrated trace: exactly the trace it would integrate.
-    const bool same_rates = truth.rig.cam_from_gyro == hat.rig.cam_from_gyro &&
-                            truth.gyro_scale == hat.gyro_scale &&
-                            truth.gyro_bias_rad_s == hat.gyro_bias_rad_s && !options.every_row;
+    const bool same_rates = truth.SameCamRates(hat) && !options.every_row;
     FrameMotion truth_motion;
     try {
       const CameraMotion truth_camera =

@@ -39,7 +39,8 @@ struct ResidualPredictionOptions {
   uint64_t seed = 1;  // with the frame's time: the same draws on every run
   // Each draw's poses at every row, not only at the rows the grid reads, and its rates integrated
   // afresh even where they are the model's: the same numbers, slower (the brute-force twin of the
-  // tests).
+  // tests). The gyro's noise is drawn at the rows read either way (GyroNoiseAnglesRad's own test
+  // checks its walk).
   bool every_row = false;
   // Throws std::invalid_argument naming the first bad field.
   void Check() const;
@@ -57,9 +58,10 @@ struct ResidualPrediction {
 // (one flag a row; the others stay zero): per camera axis a random walk that is zero at start_row
 // and has, at row v, the variance density^2 |t_v - t_start| (rad^2), t_v the row's gyro-clock time
 // under `model`; the walk's steps on either side of start_row are independent.
-std::vector<Eigen::Vector3d> GyroNoiseAngles(const TrueModel& model, int64_t t_first_row_ns,
-                                             int start_row, double density_rad_s_sqrt_hz,
-                                             const std::vector<bool>& rows, std::mt19937_64* rng);
+std::vector<Eigen::Vector3d> GyroNoiseAnglesRad(const TrueModel& model, int64_t t_first_row_ns,
+                                                int start_row, double density_rad_s_sqrt_hz,
+                                                const std::vector<bool>& rows,
+                                                std::mt19937_64* rng);
 
 // gyro: the logged trace around the frame (a second either side is plenty: it is integrated once,
 // and again for each draw whose mounting, gyro scale or bias differs from the model's). Throws

@@ -32,12 +32,6 @@ std::string UriReference(const std::string& name) {
   return uri;
 }
 
-bool IsJpegName(std::string name) {
-  std::transform(name.begin(), name.end(), name.begin(), ::tolower);
-  return name.size() > 4 && (name.rfind(".jpg") == name.size() - 4 ||
-                             (name.size() > 5 && name.rfind(".jpeg") == name.size() - 5));
-}
-
 // OPF's input cameras and camera list of an analyze --photos result: the sensor (id 1, as the
 // calibrated one; its pixel size from a photo's EXIF focal length in mm over the focal length in
 // pixels, its shutter from the readout) and a capture of one camera for each JPEG photo of the
@@ -64,12 +58,13 @@ void AddInputCameras(const ExportCamera& camera, const nlohmann::json& internals
     sized = first_of_camera([](const ExportPhoto& p) { return p.focal_mm && *p.focal_mm > 0.0; });
   }
   std::string lacking;
-  if (!camera.readout_known) lacking = "readout (OPF's shutter_type)";
+  if (!camera.readout_known) lacking = "a readout (OPF's shutter_type)";
   if (sized == camera.photos.end()) {
-    lacking = "FocalPlaneXResolution or focal length in mm (OPF's pixel_size_um)";
+    lacking += std::string(lacking.empty() ? "" : " nor ") +
+               "a FocalPlaneXResolution or focal length in mm (OPF's pixel_size_um)";
   }
   if (!lacking.empty()) {
-    out->notes.push_back("input_cameras.json and camera_list.json not written: no photo gives a " +
+    out->notes.push_back("input_cameras.json and camera_list.json not written: no photo gives " +
                          lacking + ", which OPF's input cameras require");
     return;
   }
@@ -93,7 +88,7 @@ void AddInputCameras(const ExportCamera& camera, const nlohmann::json& internals
   const uint64_t photos = camera.photos.size();
   for (uint64_t k = 0; k < photos; ++k) {
     const ExportPhoto& p = camera.photos[k];
-    if (!of_camera(p) || p.capture_time.empty() || !IsJpegName(p.name)) {
+    if (!of_camera(p) || p.capture_time.empty() || !HasJpegExtension(p.name)) {
       ++left_out;
       continue;
     }

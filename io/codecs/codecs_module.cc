@@ -10,7 +10,6 @@
 #include <cstring>
 #include <exception>
 #include <memory>
-#include <png.h>
 #include <vector>
 
 namespace shutterlab::codecs {
@@ -124,52 +123,8 @@ std::string ReadImage(const std::string& path, SampleType as, cv::Mat* image, Im
   }
 }
 
-// Writes the packed rows of a mask `width` pixels wide through libpng into `file`, one bit a
-// pixel, unfiltered; false when libpng fails. libpng reports errors by longjmp: this function
-// holds nothing with a destructor.
-bool WritePackedPng(std::FILE* file, const cv::Mat& bits, int width, int compression_level) {
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
-  png_infop info = png != nullptr ? png_create_info_struct(png) : nullptr;
-  if (png == nullptr || info == nullptr) {
-    png_destroy_write_struct(&png, &info);
-    return false;
-  }
-  if (setjmp(png_jmpbuf(png))) {  // alone in its if: where C allows setjmp
-    png_destroy_write_struct(&png, &info);
-    return false;
-  }
-  png_init_io(png, file);
-  png_set_IHDR(png, info, width, bits.rows, 1, PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE,
-               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_NONE);
-  if (compression_level >= 0) png_set_compression_level(png, compression_level);
-  png_write_info(png, info);
-  for (int y = 0; y < bits.rows; ++y) png_write_row(png, bits.ptr<png_byte>(y));
-  png_write_end(png, info);
-  png_destroy_write_struct(&png, &info);
-  return true;
-}
-
-// settings.one_bit_width_px: 3 ms a 12 MP mask against 21 ms as OpenImageIO's 8-bit PNG
-// (bench/photos_bench.cc).
-std::string WriteOneBitPng(const std::string& path, const cv::Mat& bits, int width,
-                           int compression_level) {
-  if (bits.type() != CV_8UC1 || bits.cols != (width + 7) / 8) {
-    return "a one-bit PNG needs (width + 7) / 8 bytes a row";
-  }
-  std::FILE* file = std::fopen(path.c_str(), "wb");
-  if (file == nullptr) return "cannot open for writing: " + std::string(std::strerror(errno));
-  const bool written = WritePackedPng(file, bits, width, compression_level);
-  const bool closed = std::fclose(file) == 0;
-  if (!written) return "libpng could not write the image";
-  return closed ? "" : "cannot write: " + std::string(std::strerror(errno));
-}
-
 std::string WriteImage(const std::string& path, const cv::Mat& image,
                        const ImageWriteSettings& settings) {
-  if (settings.one_bit_width_px > 0) {
-    return WriteOneBitPng(path, image, settings.one_bit_width_px, settings.png_compression_level);
-  }
   try {
     const SampleType in_memory = image.depth() == CV_8U    ? SampleType::kUint8
                                  : image.depth() == CV_16U ? SampleType::kUint16

@@ -16,7 +16,7 @@
 namespace shutterlab::codecs {
 
 // Bumped whenever anything below changes.
-constexpr int kCodecsVersion = 4;
+constexpr int kCodecsVersion = 5;
 
 // A sample type as OpenImageIO names it.
 enum class SampleType { kUint8, kUint16, kHalf, kFloat, kDouble, kOther };
@@ -42,10 +42,6 @@ struct ImageWriteSettings {
   std::string jpeg_subsampling;            // "" : the format's default
   int png_compression_level = -1;          // zlib level, -1: the format's default
   int png_filter = 0;                      // libpng's PNG_FILTER_* bits; 0: its own (adaptive)
-  // > 0: the image is a mask's rows packed one bit a pixel as PNG stores them (io/image_io.h
-  // PackedMask), this many pixels wide, written as a one-bit grey PNG through libpng itself
-  // (OpenImageIO writes 8 bits only); libpng's readers give a set bit back as 255.
-  int one_bit_width_px = 0;
 };
 
 struct Functions {

@@ -53,22 +53,26 @@ TEST(WarpKernel, EveryRgbPathGivesTheScalarPathsBits) {
   cv::split(src, channels);
   // Rows above the source, at its top edge, inside, near and at its bottom edge (the last row has
   // no row below it) and below it.
-  for (const float y0 : {-1.6f, -0.6f, 2.0f, 4.4f, 5.6f, 6.5f}) {
-    std::vector<int> xi, yi;
-    const int n = 4001;  // not a multiple of 4 or 8: the tail runs too
-    NearShiftCoordinates(n, src_size, 11 + static_cast<int>(y0 * 10), &xi, &yi);
-    for (int& y : yi) y = y == kInvalidFixed ? y : y - ToFixed(src_size.height * 0.5f - y0);
-    std::vector<uint8_t> wide(3 * n), narrow(3 * n), grey(n);
-    const bool previous = SetWideSampler(true);
-    SampleRowFixed(src, xi.data(), yi.data(), n, wide.data());
-    SetWideSampler(false);
-    SampleRowFixed(src, xi.data(), yi.data(), n, narrow.data());
-    SetWideSampler(previous);
-    EXPECT_EQ(wide, narrow) << "y0 = " << y0;
-    for (int c = 0; c < 3; ++c) {
-      SampleRowFixed(channels[c], xi.data(), yi.data(), n, grey.data());
-      for (int u = 0; u < n; ++u) {
-        ASSERT_EQ(wide[3 * u + c], grey[u]) << "pixel " << u << " channel " << c << " y0 " << y0;
+  // Lengths of each remainder the 8-pixel blocks leave, and 10 and 18, where a block's wide stores
+  // end two pixels before the row does.
+  for (const int n : {4001, 4000, 4002, 4005, 18, 10}) {
+    for (const float y0 : {-1.6f, -0.6f, 2.0f, 4.4f, 5.6f, 6.5f}) {
+      std::vector<int> xi, yi;
+      NearShiftCoordinates(n, src_size, 11 + static_cast<int>(y0 * 10), &xi, &yi);
+      for (int& y : yi) y = y == kInvalidFixed ? y : y - ToFixed(src_size.height * 0.5f - y0);
+      std::vector<uint8_t> wide(3 * n), narrow(3 * n), grey(n);
+      const bool previous = SetWideSampler(true);
+      SampleRowFixed(src, xi.data(), yi.data(), n, wide.data());
+      SetWideSampler(false);
+      SampleRowFixed(src, xi.data(), yi.data(), n, narrow.data());
+      SetWideSampler(previous);
+      EXPECT_EQ(wide, narrow) << "y0 = " << y0 << ", n = " << n;
+      for (int c = 0; c < 3; ++c) {
+        SampleRowFixed(channels[c], xi.data(), yi.data(), n, grey.data());
+        for (int u = 0; u < n; ++u) {
+          ASSERT_EQ(wide[3 * u + c], grey[u])
+              << "pixel " << u << " channel " << c << " y0 " << y0 << " n " << n;
+        }
       }
     }
   }

@@ -212,6 +212,15 @@ TEST(AppendSecondsFromNs, IsTheNanosecondsExactlyAsSecondsWithNineDecimals) {
   EXPECT_EQ(one, "-1.500000000");
 }
 
+TEST(HasJpegExtension, IsJpgOrJpegInAnyCase) {
+  for (const char* name : {"a.jpg", "DJI_0001.JPG", "b.Jpeg", "dir/c.JPEG", ".jpg"}) {
+    EXPECT_TRUE(HasJpegExtension(name)) << name;
+  }
+  for (const char* name : {"a.png", "a.jpg.png", "jpg", "a.jpe", "a.jpgx", "", "a.tif"}) {
+    EXPECT_FALSE(HasJpegExtension(name)) << name;
+  }
+}
+
 TEST(FormatNumber, KeepsTextLongerThanItsStackBuffer) {
   EXPECT_EQ(FormatNumber("%.2f", 3.14159), "3.14");
   const std::string sentence(100, 'x');

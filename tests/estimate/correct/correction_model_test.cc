@@ -124,8 +124,8 @@ TEST(PredictResidual, ACertainModelLeavesNothingAndDBeforeIsTheFramesDistortion)
   EXPECT_GT(uncertain.d_after_px, 0.02 * certain.d_before_px);
   EXPECT_GT(uncertain.d_after_p90_px, uncertain.d_after_px);
   EXPECT_LT(uncertain.d_after_p90_px, 0.3 * certain.d_before_px);
-  // Each draw's poses at the rows the grid reads only, against every row: the same numbers, the
-  // gyro's noise drawn too, for both reference rows.
+  // Each draw's poses at the rows the grid reads only, against every row: the same numbers, for
+  // both reference rows. The gyro's noise is on (drawn alike on both sides, at the rows read).
   model.gyro_noise_rad_s_sqrt_hz = 2e-3;
   for (const CorrectionReference reference :
        {CorrectionReference::kFirstRow, CorrectionReference::kMidReadout}) {
@@ -149,7 +149,7 @@ TEST(PredictResidual, ACertainModelLeavesNothingAndDBeforeIsTheFramesDistortion)
 // axes are independent. Top to bottom, and bottom to top on a clock 300 ppm fast. 40000 walks:
 // each variance to 0.7 % (one sigma); a walk that forgot where its last step ended would give row
 // 100 the variance 90 rows' steps (from 90) plus 50 (from 50), not 50.
-TEST(GyroNoiseAngles, TheWalkAtTheRowsReadHasTheVarianceOfEveryRowsSteps) {
+TEST(GyroNoiseAnglesRad, TheWalkAtTheRowsReadHasTheVarianceOfEveryRowsSteps) {
   for (const bool bottom_to_top : {false, true}) {
     TrueModel model;
     model.rig = test::SmallRig(8, 101);
@@ -170,7 +170,7 @@ TEST(GyroNoiseAngles, TheWalkAtTheRowsReadHasTheVarianceOfEveryRowsSteps) {
     double cross_axis = 0.0;  // x against y at row 100
     for (int i = 0; i < walks; ++i) {
       const std::vector<Eigen::Vector3d> a =
-          GyroNoiseAngles(model, t_first_row_ns, 50, density, rows, &rng);
+          GyroNoiseAnglesRad(model, t_first_row_ns, 50, density, rows, &rng);
       ASSERT_EQ(a.size(), 101u);
       EXPECT_EQ(a[50], Eigen::Vector3d::Zero());
       EXPECT_EQ(a[30], Eigen::Vector3d::Zero()) << "an unmarked row";

@@ -681,6 +681,13 @@ TEST(Pix4dExport, PhotosGiveOpfsInputCamerasAndCameraList) {
   EXPECT_THROW(FileNamed(without, "input_cameras.json"), std::runtime_error);
   EXPECT_NE(FileNamed(without, "shutterlab_export.txt").text.find("pixel_size_um"),
             std::string::npos);
+  // Without the readout too, the note names both.
+  nlohmann::json neither = no_focal_mm;
+  for (nlohmann::json& p : neither) p.erase("readout_s");
+  const ExportOutput lacking = Pix4dExport(ExportCameraFromPhotos(neither, "photos.json"), {});
+  EXPECT_NE(FileNamed(lacking, "shutterlab_export.txt")
+                .text.find("a readout (OPF's shutter_type) nor a FocalPlaneXResolution"),
+            std::string::npos);
 }
 
 // The sources: a validation report's fitted model with its effects' standard errors, a
