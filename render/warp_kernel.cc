@@ -526,7 +526,15 @@ __attribute__((target("avx2"))) void LinearFixedRowAvx2(float a, float b, int n,
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + k),
                         _mm256_cvtps_epi32(_mm256_add_ps(va, _mm256_mul_ps(vk, vb))));
   }
-  for (; k < n; ++k) out[k] = cvRound(a + k * b);
+  if (k < n) {
+    // The last values by the same vector formula: a line's values must be one formula's, monotone
+    // in k (CorrectionMap::SourceRowFixed bounds a piece by its ends), whether or not a compiler
+    // fuses the scalar formula's multiply and add.
+    alignas(32) int last[8];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(last),
+                       _mm256_cvtps_epi32(_mm256_add_ps(va, _mm256_mul_ps(vk, vb))));
+    std::memcpy(out + k, last, sizeof(int) * (n - k));
+  }
 }
 
 __attribute__((target("avx2"))) void InsideMaskBitsAvx2(const int* xi, const int* yi, int n,
