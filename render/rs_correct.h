@@ -52,11 +52,12 @@ constexpr double kCorrectionSolveTolPx = 1e-6;
 
 class CorrectionGeometry {
  public:
-  // camera: the true intrinsics and lens; motion: one pose per image row (CameraMotion::Frame);
+  // camera: the true intrinsics and lens; motion: one pose per image row (CameraMotion::Frame),
+  // taken by value so that a caller done with it moves its rows in instead of copying them;
   // reference_row: where the output's pose is taken (ReferenceRow; fractional rows interpolate);
   // plane_depth_m: the scene plane z_W = depth in the frame's world (the ground at the altitude for
   // a nadir still), nullopt for rotation only (translation ignored).
-  CorrectionGeometry(const PinholeCamera& camera, const FrameMotion& motion, double reference_row,
+  CorrectionGeometry(const PinholeCamera& camera, FrameMotion motion, double reference_row,
                      std::optional<double> plane_depth_m);
 
   // The source pixel q in the rolling-shutter image of output pixel (u, v), solved to

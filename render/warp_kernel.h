@@ -37,9 +37,9 @@ void SampleRowFixed(const cv::Mat& src, const int* xi, const int* yi, int n, uch
 void SampleRowFloat(const cv::Mat& src, const float* xs, const float* ys, int n,
                     Interpolation interpolation, uchar* out);
 
-// Fixed-point coordinates of n pixels along a line: out[k] = round(a + k b), a and b already in
-// fixed-point units (|a + k b| < 2^30).
-void LinearFixedRow(float a, float b, int n, int* out);
+// Fixed-point coordinates of n pixels along a line, x and y: x_out[k] = round(ax + k bx),
+// y_out[k] = round(ay + k by), a and b already in fixed-point units (|a + k b| < 2^30).
+void LinearFixedRows(float ax, float bx, float ay, float by, int n, int* x_out, int* y_out);
 
 // True when every bilinear tap of the fixed-point (xi, yi) lies inside a width x height source:
 // 0 <= x <= width - 1 and 0 <= y <= height - 1.

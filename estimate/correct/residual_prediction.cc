@@ -164,8 +164,8 @@ ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace
   const TrueModel& hat = model.model;
   const PinholeCamera& camera = hat.rig.camera;
   const CameraMotion hat_motion(gyro, hat);
-  const FrameMotion motion = hat_motion.Frame(t_first_row_ns);
-  const CorrectionGeometry geometry(camera, motion,
+  const FrameMotion hat_frame = hat_motion.Frame(t_first_row_ns);
+  const CorrectionGeometry geometry(camera, hat_frame,
                                     ReferenceRow(setting.reference, hat.rig.shutter, camera.height),
                                     setting.plane_depth_m);
   const std::vector<double> us = GridAt(camera.width, options.grid_columns);
@@ -203,6 +203,10 @@ ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace
   // camera.json without covariances over a noiseless synthetic log; a real log has noise).
   const bool every_draw_same = model.uncertainty.empty() && !(model.gyro_noise_rad_s_sqrt_hz > 0);
   const int distinct_draws = every_draw_same ? 1 : options.draws;
+  // A model without uncertainty draws itself every time: each draw's poses are the model's frame
+  // (FrameAtRows fills the rows read exactly as Frame does; the others are never read), turned by
+  // the draw's own gyro noise.
+  const bool every_truth_the_model = model.uncertainty.empty() && !options.every_row;
   for (int draw = 0; draw < distinct_draws; ++draw) {
     const TrueModel truth = DrawModel(model, &rng);
     const double reference_row = ReferenceRow(setting.reference, truth.rig.shutter, camera.height);
@@ -212,10 +216,14 @@ ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace
     const bool same_rates = truth.SameCamRates(hat) && !options.every_row;
     FrameMotion truth_motion;
     try {
-      const CameraMotion truth_camera =
-          same_rates ? CameraMotion(truth, hat_motion) : CameraMotion(gyro, truth);
-      truth_motion = options.every_row ? truth_camera.Frame(t_first_row_ns)
-                                       : truth_camera.FrameAtRows(t_first_row_ns, rows_read);
+      if (every_truth_the_model) {
+        truth_motion = hat_frame;
+      } else {
+        const CameraMotion truth_camera =
+            same_rates ? CameraMotion(truth, hat_motion) : CameraMotion(gyro, truth);
+        truth_motion = options.every_row ? truth_camera.Frame(t_first_row_ns)
+                                         : truth_camera.FrameAtRows(t_first_row_ns, rows_read);
+      }
     } catch (const std::out_of_range&) {
       continue;  // this draw's readout leaves the trace around the frame
     }
@@ -223,8 +231,8 @@ ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace
       TurnByGyroNoise(truth, t_first_row_ns, reference_row, model.gyro_noise_rad_s_sqrt_hz,
                       rows_read, &noise_rng, &truth_motion);
     }
-    const CorrectionGeometry truth_geometry(truth.rig.camera, truth_motion, reference_row,
-                                            setting.plane_depth_m);
+    const CorrectionGeometry truth_geometry(truth.rig.camera, std::move(truth_motion),
+                                            reference_row, setting.plane_depth_m);
     const DrawResidual residual = ResidualOfDraw(truth_geometry, grid, column, &r);
     d_after.push_back(residual.d_px);
     rms_after.push_back(residual.rms_px);

@@ -32,6 +32,52 @@ std::string UriReference(const std::string& name) {
   return uri;
 }
 
+// OPF's captures, one camera each, and camera list entries of the JPEG photos of the camera's size
+// with a capture time; the notes say how many have none and that flagged photos keep theirs.
+void AddCaptures(const ExportCamera& camera, nlohmann::json* captures, nlohmann::json* listed,
+                 ExportOutput* out) {
+  *captures = nlohmann::json::array();
+  *listed = nlohmann::json::array();
+  size_t left_out = 0, flagged = 0;
+  const uint64_t photos = camera.photos.size();
+  for (uint64_t k = 0; k < photos; ++k) {
+    const ExportPhoto& p = camera.photos[k];
+    if (p.width != camera.truth.rig.camera.width || p.height != camera.truth.rig.camera.height ||
+        p.capture_time.empty() || !HasJpegExtension(p.name)) {
+      ++left_out;
+      continue;
+    }
+    if (p.flagged) ++flagged;
+    // Unique in the project, the sensor's 1 included.
+    const uint64_t camera_id = k + 2, capture_id = photos + k + 2;
+    captures->push_back({{"id", capture_id},
+                         {"reference_camera_id", camera_id},
+                         {"cameras",
+                          {{{"sensor_id", 1},
+                            {"id", camera_id},
+                            {"model_source", camera.camera_given ? "user" : "generic_from_exif"},
+                            {"pixel_type", "uint8"},
+                            {"pixel_range", {{"min", 0}, {"max", 255}}}}}},
+                         {"rig_model_source", "not_applicable"},
+                         {"time", p.capture_time}});
+    listed->push_back({{"id", camera_id}, {"uri", UriReference(p.name)}});
+  }
+  if (flagged > 0) {
+    // OPF's input cameras say what each capture is, not which to process: leaving a photo out
+    // here would only lose its description, not keep Pix4D from using it.
+    out->notes.push_back(
+        "input_cameras.json describes the " + std::to_string(flagged) +
+        " photo(s) flagged over a limit too (OPF's input cameras say what each capture is, not "
+        "which to process): leave them out of the Pix4D project by hand, or correct them first "
+        "with shutterlab correct; the ODM and COLMAP exports' image_list.txt leave them out");
+  }
+  if (left_out > 0) {
+    out->notes.push_back(std::to_string(left_out) +
+                         " photo(s) without a capture: not a JPEG of the camera's size, or "
+                         "without a capture time");
+  }
+}
+
 // OPF's input cameras and camera list of an analyze --photos result: the sensor (id 1, as the
 // calibrated one; its pixel size from a photo's EXIF focal length in mm over the focal length in
 // pixels, its shutter from the readout) and a capture of one camera for each JPEG photo of the
@@ -83,29 +129,8 @@ void AddInputCameras(const ExportCamera& camera, const nlohmann::json& internals
       {"pixel_size_um", pixel_size_um},
       {"internals", internals},
       {"shutter_type", rig.shutter.readout_s > 0.0 ? "rolling" : "global"}};
-  nlohmann::json captures = nlohmann::json::array(), listed = nlohmann::json::array();
-  size_t left_out = 0;
-  const uint64_t photos = camera.photos.size();
-  for (uint64_t k = 0; k < photos; ++k) {
-    const ExportPhoto& p = camera.photos[k];
-    if (!of_camera(p) || p.capture_time.empty() || !HasJpegExtension(p.name)) {
-      ++left_out;
-      continue;
-    }
-    // Unique in the project, the sensor's 1 included.
-    const uint64_t camera_id = k + 2, capture_id = photos + k + 2;
-    captures.push_back({{"id", capture_id},
-                        {"reference_camera_id", camera_id},
-                        {"cameras",
-                         {{{"sensor_id", 1},
-                           {"id", camera_id},
-                           {"model_source", camera.camera_given ? "user" : "generic_from_exif"},
-                           {"pixel_type", "uint8"},
-                           {"pixel_range", {{"min", 0}, {"max", 255}}}}}},
-                        {"rig_model_source", "not_applicable"},
-                        {"time", p.capture_time}});
-    listed.push_back({{"id", camera_id}, {"uri", UriReference(p.name)}});
-  }
+  nlohmann::json captures, listed;
+  AddCaptures(camera, &captures, &listed, out);
   const nlohmann::json input = {{"format", "application/opf-input-cameras+json"},
                                 {"version", "1.0"},
                                 {"sensors", {sensor}},
@@ -128,11 +153,6 @@ void AddInputCameras(const ExportCamera& camera, const nlohmann::json& internals
       "generator); captures carry no geolocation (EXIF gives no accuracy, which OPF requires: "
       "Pix4D reads the photos' own positions) and time is UTC where the camera's zone is known, "
       "the camera clock without a zone otherwise");
-  if (left_out > 0) {
-    out->notes.push_back(std::to_string(left_out) +
-                         " photo(s) without a capture: not a JPEG of the camera's size, or "
-                         "without a capture time");
-  }
 }
 
 }  // namespace

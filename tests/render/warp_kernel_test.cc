@@ -106,8 +106,8 @@ TEST(WarpKernel, MaskBitsMarkThePixelsWhoseTapsAreAllInside) {
   }
 }
 
-// The wide path's coordinates along a line are the scalar formula's, bit for bit: every length up
-// to 40 and a long one, slopes of both signs, far from the origin too.
+// The wide path's coordinates along two lines are the scalar formula's, bit for bit: every length
+// up to 40 and a long one, slopes of both signs, far from the origin too.
 TEST(WarpKernel, LinearRowIsRoundOfAPlusKB) {
   std::mt19937_64 rng(9);
   std::uniform_real_distribution<float> start(-3e5f, 3e5f), slope(-300.0f, 300.0f);
@@ -116,14 +116,17 @@ TEST(WarpKernel, LinearRowIsRoundOfAPlusKB) {
   n_values.push_back(4001);
   for (const int n : n_values) {
     for (int trial = 0; trial < 20; ++trial) {
-      const float a = start(rng), b = slope(rng);
-      std::vector<int> out(n + 1, 12345);
-      LinearFixedRow(a, b, n, out.data());
+      const float ax = start(rng), bx = slope(rng), ay = start(rng), by = slope(rng);
+      std::vector<int> x_out(n + 1, 12345), y_out(n + 1, 12345);
+      LinearFixedRows(ax, bx, ay, by, n, x_out.data(), y_out.data());
       for (int k = 0; k < n; ++k) {
-        const float value = a + static_cast<float>(k) * b;
-        ASSERT_EQ(out[k], cvRound(value)) << "k " << k << " of " << n << ", a " << a << ", b " << b;
+        ASSERT_EQ(x_out[k], cvRound(ax + static_cast<float>(k) * bx))
+            << "x, k " << k << " of " << n << ", a " << ax << ", b " << bx;
+        ASSERT_EQ(y_out[k], cvRound(ay + static_cast<float>(k) * by))
+            << "y, k " << k << " of " << n << ", a " << ay << ", b " << by;
       }
-      EXPECT_EQ(out[n], 12345) << "written past n = " << n;
+      EXPECT_EQ(x_out[n], 12345) << "x written past n = " << n;
+      EXPECT_EQ(y_out[n], 12345) << "y written past n = " << n;
     }
   }
 }

@@ -141,6 +141,20 @@ TEST(PredictResidual, ACertainModelLeavesNothingAndDBeforeIsTheFramesDistortion)
     EXPECT_EQ(fast.d_after_p90_px, slow.d_after_p90_px);
     EXPECT_EQ(fast.rms_after_px, slow.rms_after_px);
   }
+  // A model without uncertainty draws itself: each draw turns the model's one frame by its own
+  // noise, against each draw's poses at every row computed afresh.
+  CorrectionModel noise_only = model;
+  noise_only.uncertainty.clear();
+  ResidualPredictionOptions every_row;
+  every_row.every_row = true;
+  const ResidualPrediction fast = PredictResidual(noise_only, gyro, SecondsToNs(0.5), setting);
+  const ResidualPrediction slow =
+      PredictResidual(noise_only, gyro, SecondsToNs(0.5), setting, every_row);
+  EXPECT_GT(fast.d_after_px, 10 * certain.d_after_px) << "the noise is left";
+  EXPECT_EQ(fast.draws, slow.draws);
+  EXPECT_EQ(fast.d_after_px, slow.d_after_px);
+  EXPECT_EQ(fast.d_after_p90_px, slow.d_after_p90_px);
+  EXPECT_EQ(fast.rms_after_px, slow.rms_after_px);
 }
 
 // The noise walk drawn at a few rows has, at each and on each axis alone, the variance

@@ -28,6 +28,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core/persistence.hpp>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -666,6 +667,24 @@ TEST(Pix4dExport, PhotosGiveOpfsInputCamerasAndCameraList) {
   }
   EXPECT_EQ(list["cameras"][0].at("uri"), "DJI_0001.JPG");
   EXPECT_EQ(list["cameras"][1].at("uri"), "DJI%200002.jpeg");
+  const auto notes_say = [](const ExportOutput& output, const std::string& words) {
+    return std::any_of(output.notes.begin(), output.notes.end(), [&](const std::string& note) {
+      return note.find(words) != std::string::npos;
+    });
+  };
+  EXPECT_FALSE(notes_say(out, "flagged")) << "no photo is flagged";
+  // A flagged photo keeps its capture (OPF describes captures; it has no subset to process), and
+  // the note says so and where the subset is.
+  nlohmann::json with_flagged = photos;
+  with_flagged[0]["flagged"] = {{"0.05", true}};
+  const ExportOutput flagged_out =
+      Pix4dExport(ExportCameraFromPhotos(with_flagged, "photos.json"), {});
+  EXPECT_EQ(nlohmann::json::parse(FileNamed(flagged_out, "input_cameras.json").text)
+                .at("captures")
+                .size(),
+            2u);
+  EXPECT_TRUE(notes_say(flagged_out, "describes the 1 photo(s) flagged over a limit too"));
+  EXPECT_TRUE(notes_say(flagged_out, "image_list.txt leave them out"));
   // EXIF FocalPlaneXResolution goes first, as Pix4D reads it: 400 px/mm, 2.5 um.
   nlohmann::json focal_plane = photos;
   focal_plane[1]["focal_plane_px_per_mm"] = 400.0;
