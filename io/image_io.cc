@@ -179,8 +179,8 @@ void WriteThroughTemp(const std::string& path, const cv::Mat& image,
 }
 
 // Writes a mask's packed rows through libpng into `file`, one bit a pixel, unfiltered, zlib level
-// 1; false when libpng fails. libpng reports errors by longjmp: this function holds nothing with a
-// destructor.
+// 1 with its smallest hash table; false when libpng fails. libpng reports errors by longjmp: this
+// function holds nothing with a destructor.
 bool WritePackedPng(std::FILE* file, const PackedMask& mask) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png != nullptr ? png_create_info_struct(png) : nullptr;
@@ -197,6 +197,9 @@ bool WritePackedPng(std::FILE* file, const PackedMask& mask) {
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_NONE);
   png_set_compression_level(png, 1);
+  // zlib's smallest hash table: a mask is long runs, and sliding the default table with the window
+  // every 32 kB was a fifth of a 12 MP mask's 2.7 ms (5 % larger files; photos_bench's last line).
+  png_set_compression_mem_level(png, 1);
   png_write_info(png, info);
   for (int y = 0; y < mask.height(); ++y) png_write_row(png, mask.bits.ptr<png_byte>(y));
   png_write_end(png, info);

@@ -249,11 +249,18 @@ void SampleRowFloatImpl(const cv::Mat& src, const float* xs, const float* ys, in
 // Same integer weights, sums and rounding as BilinearPixel: bit-identical. A block whose taps do
 // not fit (a stretched map, the source's last columns or rows, no source) takes the one-pixel path.
 
-// The block fits when its loads stay inside the source: 3 ix0 + 16 <= 3 width, iy0 + 1 <= height-1.
-struct BlockLimits {
+// The source as the blocks read it: its pixels and row step (copied: read through the cv::Mat,
+// which the blocks' stores might alias for all the compiler knows, they were loaded again for
+// every block), and where a block fits: its loads stay inside the source when
+// 3 ix0 + 16 <= 3 width and iy0 + 1 <= height - 1.
+struct BlockSource {
+  const uint8_t* data;
+  size_t step;
   unsigned max_ix0, max_iy0;
-  explicit BlockLimits(const cv::Mat& src)
-      : max_ix0(static_cast<unsigned>(std::max(-1, src.cols - 6))),
+  explicit BlockSource(const cv::Mat& src)
+      : data(src.data),
+        step(src.step),
+        max_ix0(static_cast<unsigned>(std::max(-1, src.cols - 6))),
         max_iy0(static_cast<unsigned>(std::max(-1, src.rows - 2))) {}
   bool Inside(int ix0, int iy0) const {
     return static_cast<unsigned>(ix0) <= max_ix0 && static_cast<unsigned>(iy0) <= max_iy0;
@@ -279,8 +286,8 @@ __attribute__((target("sse4.1"))) inline __m128i ChannelSum4(bool three_rows, __
 }
 
 template <bool kThreeRows>
-__attribute__((target("sse4.1"))) inline bool Block4(const cv::Mat& src, const BlockLimits& limits,
-                                                     const int* xi, const int* yi, uint8_t* out) {
+__attribute__((target("sse4.1"))) inline bool Block4(const BlockSource& source, const int* xi,
+                                                     const int* yi, uint8_t* out) {
   const __m128i vx = _mm_loadu_si128(reinterpret_cast<const __m128i*>(xi));
   const __m128i vy = _mm_loadu_si128(reinterpret_cast<const __m128i*>(yi));
   const __m128i ix = _mm_srai_epi32(vx, kSampleFracBits);
@@ -295,12 +302,12 @@ __attribute__((target("sse4.1"))) inline bool Block4(const cv::Mat& src, const B
   const __m128i misfit = _mm_or_si128(_mm_andnot_si128(_mm_set1_epi32(3), dx),
                                       _mm_andnot_si128(_mm_set1_epi32(kThreeRows ? 1 : 0), dy));
   const int ix0 = _mm_cvtsi128_si32(ix), iy0 = _mm_cvtsi128_si32(low);
-  if (!_mm_testz_si128(misfit, misfit) || !limits.Inside(ix0, iy0) ||
-      (kThreeRows && !limits.Inside(ix0, iy0 + 1))) {
+  if (!_mm_testz_si128(misfit, misfit) || !source.Inside(ix0, iy0) ||
+      (kThreeRows && !source.Inside(ix0, iy0 + 1))) {
     return false;
   }
-  const size_t step = src.step;
-  const uint8_t* p0 = src.data + iy0 * step + ix0 * 3;
+  const size_t step = source.step;
+  const uint8_t* p0 = source.data + iy0 * step + ix0 * 3;
   const __m128i row0 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p0));
   const __m128i row1 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p0 + step));
   const __m128i row2 =
@@ -361,11 +368,11 @@ __attribute__((target("sse4.1"))) inline bool AllOutside4(const cv::Mat& src, co
 __attribute__((target("sse4.1"))) void BilinearRow8uc3Sse41(const cv::Mat& src, const int* xi,
                                                             const int* yi, int width,
                                                             uint8_t* out) {
-  const BlockLimits limits(src);
+  const BlockSource source(src);
   int u = 0;
   for (; u + 4 <= width; u += 4) {
-    if (Block4<false>(src, limits, xi + u, yi + u, out + 3 * u)) continue;
-    if (Block4<true>(src, limits, xi + u, yi + u, out + 3 * u)) continue;
+    if (Block4<false>(source, xi + u, yi + u, out + 3 * u)) continue;
+    if (Block4<true>(source, xi + u, yi + u, out + 3 * u)) continue;
     if (AllOutside4(src, xi + u, yi + u)) {
       std::memset(out + 3 * u, 0, 12);
       continue;
@@ -375,16 +382,40 @@ __attribute__((target("sse4.1"))) void BilinearRow8uc3Sse41(const cv::Mat& src, 
   if (u < width) BilinearRow8uc3(src, xi + u, yi + u, width - u, out + 3 * u);
 }
 
+// Block8's constants, made once a row and hidden from constant folding (an empty asm that may
+// change them): folded, GCC rebuilt each broadcast constant inside the loop from a general
+// register, three instructions each, 12 of a block's 125.
+struct WideConstants {
+  __m256i three, one_row, frac_mask, frac_one, half;
+  // Each 32-bit lane's low byte into both its 16-bit halves; the fraction and one in both halves.
+  __m256i low_byte_twice, frac_mask_pair, frac_one_pair;
+  __attribute__((target("avx2"))) WideConstants()
+      : three(Opaque(_mm256_set1_epi32(3))),
+        one_row(Opaque(_mm256_set1_epi32(1))),
+        frac_mask(Opaque(_mm256_set1_epi32(kFracMask))),
+        frac_one(Opaque(_mm256_set1_epi32(kFracOne))),
+        half(Opaque(_mm256_set1_epi32(1 << (2 * kSampleFracBits - 1)))),
+        low_byte_twice(Opaque(_mm256_setr_epi8(0, -128, 0, -128, 4, -128, 4, -128, 8, -128, 8, -128,
+                                               12, -128, 12, -128, 0, -128, 0, -128, 4, -128, 4,
+                                               -128, 8, -128, 8, -128, 12, -128, 12, -128))),
+        frac_mask_pair(Opaque(_mm256_set1_epi32(kFracMask | kFracMask << 16))),
+        frac_one_pair(Opaque(_mm256_set1_epi32(kFracOne | kFracOne << 16))) {}
+  __attribute__((target("avx2"))) static __m256i Opaque(__m256i v) {
+    asm("" : "+x"(v));
+    return v;
+  }
+};
+
 __attribute__((target("avx2"))) inline __m256i ChannelSum8(bool three_rows, __m256i row0,
                                                            __m256i row1, __m256i row2, __m256i ctrl,
-                                                           __m256i w0, __m256i w1, __m256i w2) {
+                                                           __m256i w0, __m256i w1, __m256i w2,
+                                                           __m256i half) {
   __m256i sum = _mm256_add_epi32(_mm256_madd_epi16(_mm256_shuffle_epi8(row0, ctrl), w0),
                                  _mm256_madd_epi16(_mm256_shuffle_epi8(row1, ctrl), w1));
   if (three_rows) {
     sum = _mm256_add_epi32(sum, _mm256_madd_epi16(_mm256_shuffle_epi8(row2, ctrl), w2));
   }
-  const __m256i round = _mm256_set1_epi32(1 << (2 * kSampleFracBits - 1));
-  return _mm256_srli_epi32(_mm256_add_epi32(sum, round), 2 * kSampleFracBits);
+  return _mm256_srli_epi32(_mm256_add_epi32(sum, half), 2 * kSampleFracBits);
 }
 
 // Two source rows' 16 bytes, from p_low (first block) and p_high (second block), k rows down.
@@ -400,9 +431,9 @@ __attribute__((target("avx2"))) inline __m256i LoadRows(const uint8_t* p_low, co
 // With spare_after, the 4 bytes after the block's 24 are the caller's to overwrite (pixels it
 // writes later): two 16-byte stores then do the work of four.
 template <bool kThreeRows>
-__attribute__((target("avx2"))) inline bool Block8(const cv::Mat& src, const BlockLimits& limits,
-                                                   const int* xi, const int* yi, bool spare_after,
-                                                   uint8_t* out) {
+__attribute__((target("avx2"))) inline bool Block8(const BlockSource& source,
+                                                   const WideConstants& k, const int* xi,
+                                                   const int* yi, bool spare_after, uint8_t* out) {
   const __m256i vx = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(xi));
   const __m256i vy = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(yi));
   const __m256i ix = _mm256_srai_epi32(vx, kSampleFracBits);
@@ -414,20 +445,20 @@ __attribute__((target("avx2"))) inline bool Block8(const cv::Mat& src, const Blo
   }
   const __m256i dx = _mm256_sub_epi32(ix, _mm256_shuffle_epi32(ix, 0));
   const __m256i dy = _mm256_sub_epi32(iy, low);
-  const __m256i misfit =
-      _mm256_or_si256(_mm256_andnot_si256(_mm256_set1_epi32(3), dx),
-                      _mm256_andnot_si256(_mm256_set1_epi32(kThreeRows ? 1 : 0), dy));
+  const __m256i misfit = kThreeRows ? _mm256_or_si256(_mm256_andnot_si256(k.three, dx),
+                                                      _mm256_andnot_si256(k.one_row, dy))
+                                    : _mm256_or_si256(_mm256_andnot_si256(k.three, dx), dy);
   // The blocks' first pixels from memory: a lane's extract costs two instructions.
   const int ix0 = xi[0] >> kSampleFracBits, ix4 = xi[4] >> kSampleFracBits;
   const int iy0 = kThreeRows ? _mm256_extract_epi32(low, 0) : yi[0] >> kSampleFracBits;
   const int iy4 = kThreeRows ? _mm256_extract_epi32(low, 4) : yi[4] >> kSampleFracBits;
-  if (!_mm256_testz_si256(misfit, misfit) || !limits.Inside(ix0, iy0) || !limits.Inside(ix4, iy4) ||
-      (kThreeRows && (!limits.Inside(ix0, iy0 + 1) || !limits.Inside(ix4, iy4 + 1)))) {
+  if (!_mm256_testz_si256(misfit, misfit) || !source.Inside(ix0, iy0) || !source.Inside(ix4, iy4) ||
+      (kThreeRows && (!source.Inside(ix0, iy0 + 1) || !source.Inside(ix4, iy4 + 1)))) {
     return false;
   }
-  const size_t step = src.step;
-  const uint8_t* p0 = src.data + iy0 * step + ix0 * 3;
-  const uint8_t* p4 = src.data + iy4 * step + ix4 * 3;
+  const size_t step = source.step;
+  const uint8_t* p0 = source.data + iy0 * step + ix0 * 3;
+  const uint8_t* p4 = source.data + iy4 * step + ix4 * 3;
   const __m256i row0 = LoadRows(p0, p4, 0), row1 = LoadRows(p0, p4, step);
   const __m256i row2 = kThreeRows ? LoadRows(p0, p4, 2 * step) : row1;
   _mm_prefetch(reinterpret_cast<const char*>(p0 + (kThreeRows ? 3 : 2) * step), _MM_HINT_T0);
@@ -438,14 +469,17 @@ __attribute__((target("avx2"))) inline bool Block8(const cv::Mat& src, const Blo
       _mm256_shuffle_epi8(_mm256_add_epi32(dx, _mm256_add_epi32(dx, dx)),
                           _mm256_setr_epi8(0, 0, 0, 0, 4, 4, 4, 4, 8, 8, 8, 8, 12, 12, 12, 12, 0, 0,
                                            0, 0, 4, 4, 4, 4, 8, 8, 8, 8, 12, 12, 12, 12));
-  const __m256i mask = _mm256_set1_epi32(kFracMask), one = _mm256_set1_epi32(kFracOne);
-  const __m256i fx = _mm256_and_si256(vx, mask), fy = _mm256_and_si256(vy, mask);
-  const __m256i gx = _mm256_sub_epi32(one, fx), gy = _mm256_sub_epi32(one, fy);
-  const __m256i w_top = _mm256_or_si256(_mm256_mullo_epi16(gx, gy),
-                                        _mm256_slli_epi32(_mm256_mullo_epi16(fx, gy), 16));
-  const __m256i w_bottom = _mm256_or_si256(_mm256_mullo_epi16(gx, fy),
-                                           _mm256_slli_epi32(_mm256_mullo_epi16(fx, fy), 16));
-  const __m256i lower = _mm256_cmpeq_epi32(dy, _mm256_set1_epi32(1));
+  // Each row's (left, right) weights: x's pair (1 - fx, fx) times y's weight in both halves, one
+  // 16-bit multiply a row (each product at most 128 x 128).
+  const __m256i fx = _mm256_and_si256(vx, k.frac_mask);
+  const __m256i x_pair =
+      _mm256_or_si256(_mm256_sub_epi32(k.frac_one, fx), _mm256_slli_epi32(fx, 16));
+  const __m256i fy_pair =
+      _mm256_and_si256(_mm256_shuffle_epi8(vy, k.low_byte_twice), k.frac_mask_pair);
+  const __m256i gy_pair = _mm256_sub_epi16(k.frac_one_pair, fy_pair);
+  const __m256i w_top = _mm256_mullo_epi16(x_pair, gy_pair);
+  const __m256i w_bottom = _mm256_mullo_epi16(x_pair, fy_pair);
+  const __m256i lower = _mm256_cmpeq_epi32(dy, k.one_row);
   const __m256i w0 = kThreeRows ? _mm256_andnot_si256(lower, w_top) : w_top;
   const __m256i w1 = kThreeRows ? _mm256_blendv_epi8(w_bottom, w_top, lower) : w_bottom;
   const __m256i w2 = kThreeRows ? _mm256_and_si256(lower, w_bottom) : w_bottom;
@@ -453,17 +487,17 @@ __attribute__((target("avx2"))) inline bool Block8(const cv::Mat& src, const Blo
       kThreeRows, row0, row1, row2,
       _mm256_add_epi8(_mm256_setr_epi8(SHUTTERLAB_CHANNEL_CTRL(0), SHUTTERLAB_CHANNEL_CTRL(0)),
                       offsets),
-      w0, w1, w2);
+      w0, w1, w2, k.half);
   const __m256i g = ChannelSum8(
       kThreeRows, row0, row1, row2,
       _mm256_add_epi8(_mm256_setr_epi8(SHUTTERLAB_CHANNEL_CTRL(1), SHUTTERLAB_CHANNEL_CTRL(1)),
                       offsets),
-      w0, w1, w2);
+      w0, w1, w2, k.half);
   const __m256i b = ChannelSum8(
       kThreeRows, row0, row1, row2,
       _mm256_add_epi8(_mm256_setr_epi8(SHUTTERLAB_CHANNEL_CTRL(2), SHUTTERLAB_CHANNEL_CTRL(2)),
                       offsets),
-      w0, w1, w2);
+      w0, w1, w2, k.half);
   const __m256i planar = _mm256_packus_epi16(_mm256_packs_epi32(r, g), _mm256_packs_epi32(b, b));
   const __m256i rgb =
       _mm256_shuffle_epi8(planar, _mm256_setr_epi8(SHUTTERLAB_INTERLEAVE, SHUTTERLAB_INTERLEAVE));
@@ -486,13 +520,14 @@ __attribute__((target("avx2"))) inline bool Block8(const cv::Mat& src, const Blo
 
 __attribute__((target("avx2"))) void BilinearRow8uc3Avx2(const cv::Mat& src, const int* xi,
                                                          const int* yi, int width, uint8_t* out) {
-  const BlockLimits limits(src);
+  const BlockSource source(src);
+  const WideConstants k;
   int u = 0;
   for (; u + 8 <= width; u += 8) {
     // Pixels u + 8 and u + 9, which a wide store's last 4 bytes cover, are written later.
     const bool spare_after = u + 10 <= width;
-    if (Block8<false>(src, limits, xi + u, yi + u, spare_after, out + 3 * u)) continue;
-    if (Block8<true>(src, limits, xi + u, yi + u, spare_after, out + 3 * u)) continue;
+    if (Block8<false>(source, k, xi + u, yi + u, spare_after, out + 3 * u)) continue;
+    if (Block8<true>(source, k, xi + u, yi + u, spare_after, out + 3 * u)) continue;
     BilinearRow8uc3Sse41(src, xi + u, yi + u, 8, out + 3 * u);
   }
   if (u < width) BilinearRow8uc3Sse41(src, xi + u, yi + u, width - u, out + 3 * u);

@@ -159,12 +159,24 @@ void ResidualPredictionOptions::Check() const {
 
 ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace& gyro,
                                    int64_t t_first_row_ns, const CorrectionSetting& setting,
-                                   const ResidualPredictionOptions& options) {
+                                   const ResidualPredictionOptions& options,
+                                   const FrameMotion* model_frame) {
   options.Check();
   const TrueModel& hat = model.model;
   const PinholeCamera& camera = hat.rig.camera;
-  const CameraMotion hat_motion(gyro, hat);
-  const FrameMotion hat_frame = hat_motion.Frame(t_first_row_ns);
+  // The model's trace integrated only when needed: a caller's frame and draws of the model itself
+  // need none.
+  std::optional<CameraMotion> hat_motion_storage;
+  const auto hat_motion = [&]() -> const CameraMotion& {
+    if (!hat_motion_storage) hat_motion_storage.emplace(gyro, hat);
+    return *hat_motion_storage;
+  };
+  FrameMotion own_frame;
+  if (!model_frame) {
+    own_frame = hat_motion().Frame(t_first_row_ns);
+    model_frame = &own_frame;
+  }
+  const FrameMotion& hat_frame = *model_frame;
   const CorrectionGeometry geometry(camera, hat_frame,
                                     ReferenceRow(setting.reference, hat.rig.shutter, camera.height),
                                     setting.plane_depth_m);
@@ -220,7 +232,7 @@ ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace
         truth_motion = hat_frame;
       } else {
         const CameraMotion truth_camera =
-            same_rates ? CameraMotion(truth, hat_motion) : CameraMotion(gyro, truth);
+            same_rates ? CameraMotion(truth, hat_motion()) : CameraMotion(gyro, truth);
         truth_motion = options.every_row ? truth_camera.Frame(t_first_row_ns)
                                          : truth_camera.FrameAtRows(t_first_row_ns, rows_read);
       }

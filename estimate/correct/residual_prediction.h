@@ -63,11 +63,15 @@ std::vector<Eigen::Vector3d> GyroNoiseAnglesRad(const TrueModel& model, int64_t 
                                                 const std::vector<bool>& rows,
                                                 std::mt19937_64* rng);
 
-// gyro: the logged trace around the frame (a second either side is plenty: it is integrated once,
-// and again for each draw whose mounting, gyro scale or bias differs from the model's). Throws
-// std::out_of_range when the model's readout of the frame lies outside it.
+// gyro: the logged trace around the frame (a second either side is plenty: it is integrated once
+// where a draw needs it, and again for each draw whose mounting, gyro scale or bias differs from
+// the model's). model_frame: the model's poses of the frame (CameraMotion::Frame), when the caller
+// has them (a correction's, integrated from an earlier sample of the same log: the same to
+// rounding); computed here when null. Throws std::out_of_range when the model's readout of the
+// frame lies outside the trace.
 ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace& gyro,
                                    int64_t t_first_row_ns, const CorrectionSetting& setting,
-                                   const ResidualPredictionOptions& options = {});
+                                   const ResidualPredictionOptions& options = {},
+                                   const FrameMotion* model_frame = nullptr);
 
 }  // namespace shutterlab

@@ -215,7 +215,9 @@ GyroTrace ReadGyroCsv(const std::string& path) {
 
 void WriteGyroCsv(const std::string& path, const GyroTrace& trace) {
   std::string out = "t,gx,gy,gz\n";
-  out.reserve(trace.size() * 64 + 16);
+  // A line is about 80 characters (to_chars' shortest doubles, up to 24 each): reserved for 96,
+  // the text of a 120 s log at 1 kHz (10 MB) is not copied to grow halfway.
+  out.reserve(trace.size() * 96 + 16);
   for (const GyroSample& s : trace.samples()) {
     AppendSecondsFromNs(s.t_ns, &out);
     for (int axis = 0; axis < 3; ++axis) {

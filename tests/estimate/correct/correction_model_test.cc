@@ -155,6 +155,19 @@ TEST(PredictResidual, ACertainModelLeavesNothingAndDBeforeIsTheFramesDistortion)
   EXPECT_EQ(fast.d_after_px, slow.d_after_px);
   EXPECT_EQ(fast.d_after_p90_px, slow.d_after_p90_px);
   EXPECT_EQ(fast.rms_after_px, slow.rms_after_px);
+  // The caller's frame of the model (a correction's) stands for the one computed inside, with and
+  // without an uncertainty to draw.
+  for (const CorrectionModel* m : {&noise_only, &model}) {
+    const FrameMotion frame = CameraMotion(gyro, m->model).Frame(SecondsToNs(0.5));
+    const ResidualPrediction inside = PredictResidual(*m, gyro, SecondsToNs(0.5), setting);
+    const ResidualPrediction given =
+        PredictResidual(*m, gyro, SecondsToNs(0.5), setting, {}, &frame);
+    EXPECT_EQ(given.draws, inside.draws);
+    EXPECT_EQ(given.d_before_px, inside.d_before_px);
+    EXPECT_EQ(given.d_after_px, inside.d_after_px);
+    EXPECT_EQ(given.d_after_p90_px, inside.d_after_p90_px);
+    EXPECT_EQ(given.rms_after_px, inside.rms_after_px);
+  }
 }
 
 // The noise walk drawn at a few rows has, at each and on each axis alone, the variance
