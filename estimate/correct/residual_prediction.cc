@@ -130,6 +130,32 @@ struct DrawResidual {
   double d_px = 0.0, rms_px = 0.0;
 };
 
+// The output grid's points whose source under the geometry has every tap inside the frame.
+std::vector<GridPoint> GridWithSources(const CorrectionGeometry& geometry,
+                                       const std::vector<double>& us,
+                                       const std::vector<double>& vs) {
+  std::vector<GridPoint> grid;
+  for (size_t i = 0; i < us.size(); ++i) {
+    for (double v : vs) {
+      const std::optional<Eigen::Vector2d> q = geometry.SourcePixel(us[i], v);
+      if (q && geometry.HasSource(*q)) grid.push_back({static_cast<int>(i), {us[i], v}, *q});
+    }
+  }
+  return grid;
+}
+
+// The draws' D and root mean square into out: their medians, and D's 90th percentile.
+void SummariseDraws(std::vector<double> d_after, std::vector<double> rms_after,
+                    ResidualPrediction* out) {
+  out->draws = static_cast<int>(d_after.size());
+  if (out->draws == 0) return;
+  std::sort(d_after.begin(), d_after.end());
+  out->d_after_px = UpperMedian(d_after);
+  out->d_after_p90_px =
+      d_after[std::min(d_after.size() - 1, static_cast<size_t>(0.9 * d_after.size()))];
+  out->rms_after_px = UpperMedian(rms_after);
+}
+
 // The corrected grid's displacement r against what the drawn truth shows (r, scratch, one a grid
 // point): its D and root mean square.
 DrawResidual ResidualOfDraw(const CorrectionGeometry& truth_geometry,
@@ -184,13 +210,7 @@ ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace
   const std::vector<double> vs = GridAt(camera.height, options.grid_rows);
   ResidualPrediction out;
   out.d_before_px = DBefore(geometry, us, vs);
-  std::vector<GridPoint> grid;
-  for (size_t i = 0; i < us.size(); ++i) {
-    for (double v : vs) {
-      const std::optional<Eigen::Vector2d> q = geometry.SourcePixel(us[i], v);
-      if (q && geometry.HasSource(*q)) grid.push_back({static_cast<int>(i), {us[i], v}, *q});
-    }
-  }
+  const std::vector<GridPoint> grid = GridWithSources(geometry, us, vs);
   // The rows a draw's poses are read at: the two around each grid point's source row
   // (CorrectionGeometry::OutputPixel interpolates between them) and around the reference row. Each
   // draw computes those alone, a few hundred of a 12 MP frame's 3000, as Frame computes them.
@@ -253,14 +273,7 @@ ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace
     d_after.assign(options.draws, d_after.front());
     rms_after.assign(options.draws, rms_after.front());
   }
-  out.draws = static_cast<int>(d_after.size());
-  if (out.draws > 0) {
-    std::sort(d_after.begin(), d_after.end());
-    out.d_after_px = UpperMedian(d_after);
-    out.d_after_p90_px =
-        d_after[std::min(d_after.size() - 1, static_cast<size_t>(0.9 * d_after.size()))];
-    out.rms_after_px = UpperMedian(rms_after);
-  }
+  SummariseDraws(std::move(d_after), std::move(rms_after), &out);
   return out;
 }
 
