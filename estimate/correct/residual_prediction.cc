@@ -130,6 +130,19 @@ struct DrawResidual {
   double d_px = 0.0, rms_px = 0.0;
 };
 
+// Throws std::out_of_range, as CameraMotion::Frame would, when the gyro trace does not hold the
+// model's readout of the frame: a caller's frame (from a longer trace) is not checked against it.
+void RequireReadoutInTrace(const TrueModel& model, const GyroTrace& gyro, int64_t t_first_row_ns) {
+  for (const int row : {0, model.rig.camera.height - 1}) {
+    const int64_t t_ns =
+        t_first_row_ns +
+        static_cast<int64_t>(std::floor(model.RowGyroOffsetS(t_first_row_ns, row) * 1e9));
+    if (gyro.empty() || t_ns < gyro.t_begin_ns() || t_ns > gyro.t_end_ns()) {
+      throw std::out_of_range("the frame's readout leaves the gyro trace given for its prediction");
+    }
+  }
+}
+
 // The output grid's points whose source under the geometry has every tap inside the frame.
 std::vector<GridPoint> GridWithSources(const CorrectionGeometry& geometry,
                                        const std::vector<double>& us,
@@ -198,6 +211,7 @@ ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace
     return *hat_motion_storage;
   };
   FrameMotion own_frame;
+  if (model_frame) RequireReadoutInTrace(hat, gyro, t_first_row_ns);
   if (!model_frame) {
     own_frame = hat_motion().Frame(t_first_row_ns);
     model_frame = &own_frame;

@@ -68,7 +68,7 @@ std::vector<Eigen::Vector3d> GyroNoiseAnglesRad(const TrueModel& model, int64_t 
 // the model's). model_frame: the model's poses of the frame (CameraMotion::Frame), when the caller
 // has them (a correction's, integrated from an earlier sample of the same log: the same to
 // rounding); computed here when null. Throws std::out_of_range when the model's readout of the
-// frame lies outside the trace.
+// frame lies outside the trace, given a frame or not.
 ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace& gyro,
                                    int64_t t_first_row_ns, const CorrectionSetting& setting,
                                    const ResidualPredictionOptions& options = {},

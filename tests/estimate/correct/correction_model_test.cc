@@ -156,7 +156,8 @@ TEST(PredictResidual, ACertainModelLeavesNothingAndDBeforeIsTheFramesDistortion)
   EXPECT_EQ(fast.d_after_p90_px, slow.d_after_p90_px);
   EXPECT_EQ(fast.rms_after_px, slow.rms_after_px);
   // The caller's frame of the model (a correction's) stands for the one computed inside, with and
-  // without an uncertainty to draw.
+  // without an uncertainty to draw; the frame given is the one used (a frame of twice the rate
+  // doubles D before); a trace that misses the readout is refused as without a frame.
   for (const CorrectionModel* m : {&noise_only, &model}) {
     const FrameMotion frame = CameraMotion(gyro, m->model).Frame(SecondsToNs(0.5));
     const ResidualPrediction inside = PredictResidual(*m, gyro, SecondsToNs(0.5), setting);
@@ -167,6 +168,15 @@ TEST(PredictResidual, ACertainModelLeavesNothingAndDBeforeIsTheFramesDistortion)
     EXPECT_EQ(given.d_after_px, inside.d_after_px);
     EXPECT_EQ(given.d_after_p90_px, inside.d_after_p90_px);
     EXPECT_EQ(given.rms_after_px, inside.rms_after_px);
+    const FrameMotion faster =
+        CameraMotion(test::ConstantRateTrace(Eigen::Vector3d(0.8, -1.2, 1.8)), m->model)
+            .Frame(SecondsToNs(0.5));
+    EXPECT_NEAR(PredictResidual(*m, gyro, SecondsToNs(0.5), setting, {}, &faster).d_before_px,
+                2 * inside.d_before_px, 0.05 * inside.d_before_px);
+    const GyroTrace before_readout = GyroAround(gyro, 0, SecondsToNs(0.45));
+    EXPECT_THROW(PredictResidual(*m, before_readout, SecondsToNs(0.5), setting), std::out_of_range);
+    EXPECT_THROW(PredictResidual(*m, before_readout, SecondsToNs(0.5), setting, {}, &frame),
+                 std::out_of_range);
   }
 }
 
