@@ -165,17 +165,18 @@ CorrectedFrame CorrectOne(const Context& c, const FrameEntry& e, FrameBuffers* b
   out.reference_row = ReferenceRow(c.setting.reference, model.rig.shutter, model.rig.camera.height);
   out.t_reference_ns = ReferenceTimeNs(model, e.t_first_row_ns, out.reference_row);
   // std::out_of_range: skipped
-  const FrameMotion motion = c.motion.Frame(e.t_first_row_ns, std::nullopt, own_velocity);
-  const CorrectionGeometry geometry(model.rig.camera, motion, out.reference_row,
-                                    c.setting.plane_depth_m);
-  const CorrectionMap map(geometry, c.options.map);
-  out.cell_px = map.cell_px();
-  out.map_error_px = map.estimated_error_px();
+  FrameMotion motion = c.motion.Frame(e.t_first_row_ns, std::nullopt, own_velocity);
   const int64_t readout_ns = SecondsToNs(model.rig.shutter.readout_s);
+  // The prediction first, on the frame's poses, which the geometry then takes without a copy.
   out.residual = PredictResidual(frame_model,
                                  GyroAround(c.dataset.gyro, e.t_first_row_ns - kGyroMarginNs,
                                             e.t_first_row_ns + readout_ns + kGyroMarginNs),
                                  e.t_first_row_ns, c.setting, c.options.prediction, &motion);
+  const CorrectionGeometry geometry(model.rig.camera, std::move(motion), out.reference_row,
+                                    c.setting.plane_depth_m);
+  const CorrectionMap map(geometry, c.options.map);
+  out.cell_px = map.cell_px();
+  out.map_error_px = map.estimated_error_px();
   out.predicted_d_after_px = out.residual.d_after_px + 2 * out.map_error_px;
   out.predicted_d_after_p90_px = out.residual.d_after_p90_px + 2 * out.map_error_px;
   out.no_source_fraction = WriteCorrected(c, e, map, out.residual, &out, buffers);
