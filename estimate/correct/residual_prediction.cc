@@ -211,8 +211,9 @@ ResidualPrediction PredictResidual(const CorrectionModel& model, const GyroTrace
     return *hat_motion_storage;
   };
   FrameMotion own_frame;
-  if (model_frame) RequireReadoutInTrace(hat, gyro, t_first_row_ns);
-  if (!model_frame) {
+  if (model_frame) {
+    RequireReadoutInTrace(hat, gyro, t_first_row_ns);
+  } else {
     own_frame = hat_motion().Frame(t_first_row_ns);
     model_frame = &own_frame;
   }
