@@ -284,6 +284,10 @@ void CandidateCleaner::Release(const Held& held, std::vector<GyroSample>* out) {
 
 void CandidateCleaner::Hold(const GyroSample& sample, std::vector<GyroSample>* out) {
   Held held{sample, kept_++};
+  if (depth_ == 0 && !sort_at_end_) {  // a stream in order: final at once, as through the queue
+    Release(held, out);
+    return;
+  }
   if (sort_at_end_) {
     held_.push_back(held);
     return;

@@ -266,8 +266,8 @@ void ULogParser::Warn(const std::string& kind, size_t offset, const std::string&
 }
 
 bool ULogParser::SizeCheckedAgainstFormat(std::string_view payload) const {
-  auto it = by_msg_id_.find(LoadU16(payload.data()));
-  return it != by_msg_id_.end() && subscriptions_[it->second].layout != nullptr;
+  const int index = SubscriptionIndex(LoadU16(payload.data()));
+  return index >= 0 && subscriptions_[index].layout != nullptr;
 }
 
 bool ULogParser::Plausible(size_t q, size_t end, int pending_id) const {
@@ -292,12 +292,11 @@ bool ULogParser::Plausible(size_t q, size_t end, int pending_id) const {
   switch (type) {
     case 'D': {
       const uint16_t msg_id = LoadU16(p.data());
-      auto it = by_msg_id_.find(msg_id);
+      const int index = SubscriptionIndex(msg_id);
       // An id that was never subscribed may still be real when its 'A' was damaged; PX4 numbers
       // subscriptions from 0 upwards, so only ids near the known ones are believed.
-      if (it == by_msg_id_.end())
-        return msg_id == pending_id || msg_id <= max_msg_id_ + kMsgIdSlack;
-      const Layout* layout = subscriptions_[it->second].layout.get();
+      if (index < 0) return msg_id == pending_id || msg_id <= max_msg_id_ + kMsgIdSlack;
+      const Layout* layout = subscriptions_[index].layout.get();
       return !layout || (size - 2u >= layout->min_bytes && size - 2u <= layout->max_bytes);
     }
     case 'O':
@@ -394,9 +393,9 @@ std::shared_ptr<const Layout> ULogParser::LayoutFor(const std::string& topic, st
 }
 
 bool ULogParser::DataSizeFits(std::string_view payload) const {
-  auto it = by_msg_id_.find(LoadU16(payload.data()));
-  if (it == by_msg_id_.end()) return true;  // judged by the header after it; Handle skips it
-  const Subscription& sub = subscriptions_[it->second];
+  const int index = SubscriptionIndex(LoadU16(payload.data()));
+  if (index < 0) return true;  // judged by the header after it; Handle skips it
+  const Subscription& sub = subscriptions_[index];
   if (!sub.layout) return true;
   const size_t bytes = payload.size() - 2;
   return bytes >= sub.layout->min_bytes && bytes <= sub.layout->max_bytes;
@@ -404,10 +403,9 @@ bool ULogParser::DataSizeFits(std::string_view payload) const {
 
 std::string ULogParser::DataMismatch(std::string_view payload) const {
   const uint16_t msg_id = LoadU16(payload.data());
-  auto it = by_msg_id_.find(msg_id);
-  if (it == by_msg_id_.end())
-    return "data message for unsubscribed msg_id " + std::to_string(msg_id);
-  const Subscription& sub = subscriptions_[it->second];
+  const int index = SubscriptionIndex(msg_id);
+  if (index < 0) return "data message for unsubscribed msg_id " + std::to_string(msg_id);
+  const Subscription& sub = subscriptions_[index];
   return "data message of '" + sub.topic + "' has " + std::to_string(payload.size() - 2) +
          " bytes, its format " + std::to_string(sub.layout->min_bytes) + ".." +
          std::to_string(sub.layout->max_bytes);
@@ -440,27 +438,31 @@ void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
         ++log_.records_skipped;
         Warn("subscription", offset,
              "topic '" + sub.topic + "': " + error + "; its data is skipped");
+      } else if (auto ts = sub.layout->fields.find("timestamp"); ts != sub.layout->fields.end()) {
+        sub.timestamp = &ts->second;
       }
-      by_msg_id_[msg_id] = subscriptions_.size();
+      if (msg_id >= by_msg_id_.size()) by_msg_id_.resize(msg_id + 1, -1);
+      by_msg_id_[msg_id] = static_cast<int>(subscriptions_.size());
       max_msg_id_ = std::max<int>(max_msg_id_, msg_id);
       subscriptions_.push_back(std::move(sub));
       return;
     }
     case 'R': {
-      by_msg_id_.erase(LoadU16(payload.data()));
+      const uint16_t msg_id = LoadU16(payload.data());
+      if (msg_id < by_msg_id_.size()) by_msg_id_[msg_id] = -1;
       return;
     }
     case 'D': {
       // The main loop has checked the size against the format (DataSizeFits).
       const uint16_t msg_id = LoadU16(payload.data());
-      auto it = by_msg_id_.find(msg_id);
-      if (it == by_msg_id_.end()) {
+      const int index = SubscriptionIndex(msg_id);
+      if (index < 0) {
         ++log_.records_skipped;
         Warn("msg_id", offset,
              "data message for unsubscribed msg_id " + std::to_string(msg_id) + " skipped");
         return;
       }
-      Subscription& sub = subscriptions_[it->second];
+      Subscription& sub = subscriptions_[index];
       if (!sub.layout) {
         ++log_.records_skipped;
         ++skipped_by_topic_[sub.topic];
@@ -469,16 +471,13 @@ void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
       const std::string_view data = payload.substr(2);
       // A dropout is placed at the time of the last gyro-topic message before it: these come at
       // hundreds of Hz, and a single odd timestamp in a slow topic cannot drag the time away.
-      if (sub.gyro_topic) {
-        auto ts = sub.layout->fields.find("timestamp");
-        if (ts != sub.layout->fields.end()) {
-          if (auto t_ns = ReadTimeNs(data, ts->second))
-            last_timestamp_us_ = static_cast<uint64_t>(*t_ns / 1000);
-        }
+      if (sub.gyro_topic && sub.timestamp) {
+        if (auto t_ns = ReadTimeNs(data, *sub.timestamp))
+          last_timestamp_us_ = static_cast<uint64_t>(*t_ns / 1000);
       }
       if (sub.wanted) {
         sub.has_data = true;
-        sink_->OnData(it->second, sub, data);
+        sink_->OnData(static_cast<size_t>(index), sub, data);
       }
       return;
     }
