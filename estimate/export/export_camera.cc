@@ -73,6 +73,10 @@ ExportCamera FromReport(const std::string& path) {
     if (effect.effect == Effect::kTimeOffset) camera.time_offset_stderr_s = se;
     if (effect.effect == Effect::kReadoutTime) camera.readout_stderr_s = se;
     if (effect.effect == Effect::kClockRate) camera.clock_rate_stderr_ppm = se;
+    camera.fitted.push_back({name, Spec(effect.effect).unit, effect.value,
+                             effect.covariance.size() == 0
+                                 ? EffectValue()
+                                 : EffectStderr(effect.effect, camera.truth, effect.covariance)});
   }
   MarkUntestedClaims(report, fitted, &camera);
   return camera;

@@ -9,6 +9,7 @@
 // read v * readout_s / height later; gyro clock = camera clock + time_offset_s; w_C = R_CG w_G.
 // Each exporter converts to its tool's conventions and says how (estimate/export/exports.h).
 
+#include "model/effects.h"
 #include "model/truth_model.h"
 
 #include <nlohmann/json_fwd.hpp>
@@ -49,6 +50,15 @@ struct ExportCamera {
   // The standard errors the source gives, where the exported value has one: time_offset and
   // readout_time (s), clock_rate (ppm); NaN where the data did not determine it.
   std::optional<double> time_offset_stderr_s, readout_stderr_s, clock_rate_stderr_ppm;
+  // Every effect the source fitted (a validation report's), its value and standard errors in the
+  // value's shape (std::monostate where the report carries no covariance): the side note lists
+  // them all, since no target file has a place for them (Metashape's calibration file and OPF's
+  // calibrated cameras carry no uncertainty; docs/exports.md).
+  struct Fitted {
+    std::string name, unit;  // docs/FORMATS.md's effect name and its value's unit
+    EffectValue value, stderr_value;
+  };
+  std::vector<Fitted> fitted;
   // The values the data did not determine, by effect name (time_offset, readout_time,
   // readout_direction, gyro_to_camera), with why: a fitted value whose standard error is not a
   // number, a declared value (import.json's claim) the report's claims contradict, or a guess or

@@ -1,6 +1,7 @@
 #include "estimate/export/export_output.h"
 
 #include "model/camera.h"
+#include "model/effects.h"
 #include "model/lens_distortion.h"
 #include "sim/check.h"
 #include "sim/readout_direction.h"
@@ -10,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
+#include <variant>
 
 namespace shutterlab {
 
@@ -108,6 +110,17 @@ void AddSideNote(const char* format, const ExportCamera& camera, ExportOutput* o
           stderr_text(camera.time_offset_stderr_s) + " s, clock_rate " +
           ExportNumber(camera.truth.clock_rate_ppm) + stderr_text(camera.clock_rate_stderr_ppm) +
           " ppm (+- one standard error, where the source gives it)\n";
+  if (!camera.fitted.empty()) {
+    text +=
+        "  fitted by the source, each with one standard error in its value's shape (null: not "
+        "determined; none: the source gives none):\n";
+    for (const ExportCamera::Fitted& f : camera.fitted) {
+      const bool has_stderr = !std::holds_alternative<std::monostate>(f.stderr_value);
+      text += "    " + f.name + " " + EffectValueText(f.value) + " +- " +
+              (has_stderr ? EffectValueText(f.stderr_value) : std::string("none")) +
+              (f.unit.empty() ? "" : " " + f.unit) + "\n";
+    }
+  }
   const Eigen::Matrix3d& r = rig.cam_from_gyro;
   text += "  gyro_to_camera (R_CG, rows)";
   for (int i = 0; i < 3; ++i) {

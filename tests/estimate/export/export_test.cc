@@ -719,7 +719,12 @@ TEST(ExportSource, ReadsAReportACameraJsonAFolderAndPhotos) {
                                   {{{"name", "time_offset"},
                                     {"value", 0.0043},
                                     {"parameters", {0.0043}},
-                                    {"covariance", {{1e-10}}}}}},
+                                    {"covariance", {{1e-10}}}},
+                                   {{"name", "gyro_scale"},
+                                    {"value", {1.01, 0.99, 1.0}},
+                                    {"parameters", {0.01, -0.01, 0.0}},
+                                    {"covariance", {{4e-6, 0, 0}, {0, 9e-6, 0}, {0, 0, -1.0}}}},
+                                   {{"name", "readout_direction"}, {"value", "bottom_to_top"}}}},
                                  {"fitted_model", TrueModelToJson(camera.truth)}};
   WriteFileAtomically(dir / "report.json", report.dump());
   const ExportCamera from_report = ReadExportSource(dir / "report.json");
@@ -730,6 +735,14 @@ TEST(ExportSource, ReadsAReportACameraJsonAFolderAndPhotos) {
   // The side note carries it (most tools' files have no place for it).
   const std::string note = FileNamed(ColmapExport(from_report, {}), "shutterlab_export.txt").text;
   EXPECT_NE(note.find("time_offset 0.0043 +- 1"), std::string::npos) << note;
+  // Every fitted effect, in its value's shape: a variance below 0 is not determined (null), an
+  // effect without a covariance has none.
+  ASSERT_EQ(from_report.fitted.size(), 3u);
+  EXPECT_NE(note.find("    time_offset 0.0043 +- 1e-05 s\n"), std::string::npos) << note;
+  EXPECT_NE(note.find("    gyro_scale [1.01,0.99,1.0] +- [0.002,0.003,null]\n"), std::string::npos)
+      << note;
+  EXPECT_NE(note.find("    readout_direction \"bottom_to_top\" +- none\n"), std::string::npos)
+      << note;
 
   std::filesystem::create_directories(dir / "dataset");
   WriteRigModel(dir / "dataset/camera.json", camera.truth.rig);
