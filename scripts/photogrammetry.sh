@@ -25,8 +25,9 @@ out="${1:?usage: scripts/photogrammetry.sh OUT [survey options...]}"
 shift
 bin="${SHUTTERLAB_BIN:-build/bin/shutterlab}"  # the tests give their build's
 export QT_QPA_PLATFORM=offscreen  # COLMAP's command line without a display
-threads=$(nproc)
 mkdir -p "$out"
+export GLOG_log_dir="$out"  # COLMAP's and Ceres' log files (glog) in OUT, not left in /tmp
+threads=$(nproc)
 "$bin" survey --out "$out/survey" "$@" >"$out/survey.txt"
 cat "$out/survey.txt"
 readout_s=$(/usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['rolling_shutter']['readout_s'])" "$out/survey/truth/camera.json")

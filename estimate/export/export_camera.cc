@@ -20,12 +20,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A scalar effect's standard error from the report's covariance; nullopt without one.
-std::optional<double> ScalarStderr(const ReportedEffect& effect, const TrueModel& model) {
-  if (effect.covariance.size() == 0) return std::nullopt;
-  const EffectValue se = EffectStderr(effect.effect, model, effect.covariance);
-  if (const double* value = std::get_if<double>(&se)) return *value;
-  return std::nullopt;
+// A number, 3 numbers or a 3x3 matrix (a scalar effect's, gyro_scale's or bias's, the mounting's
+// standard errors) with an entry that is not a number: the data did not determine the effect. A
+// lens's declared coefficients have NaN standard errors by design (model/effects.h), and a
+// direction has none: neither counts.
+bool NotANumberIn(const EffectValue& stderr_value) {
+  if (const double* x = std::get_if<double>(&stderr_value)) return !std::isfinite(*x);
+  if (const auto* v = std::get_if<Eigen::Vector3d>(&stderr_value)) return !v->allFinite();
+  if (const auto* m = std::get_if<Eigen::Matrix3d>(&stderr_value)) return !m->allFinite();
+  return false;
 }
 
 // A value the report's model carries unfitted is the declared one. A claim of the report
@@ -63,22 +66,24 @@ ExportCamera FromReport(const std::string& path) {
   ExportCamera camera;
   camera.source = "validation report " + path;
   camera.truth = *report.fitted;
-  std::set<std::string> fitted;
+  std::set<std::string> fitted_names;
   for (const ReportedEffect& effect : report.effects) {
     const std::string name = Spec(effect.effect).name;
-    fitted.insert(name);
-    const std::optional<double> se = ScalarStderr(effect, camera.truth);
-    if (se && !std::isfinite(*se))
+    fitted_names.insert(name);
+    const EffectValue se = effect.covariance.size() == 0
+                               ? EffectValue()
+                               : EffectStderr(effect.effect, camera.truth, effect.covariance);
+    if (NotANumberIn(se))
       camera.undetermined[name] = "fitted, with a standard error that is not a number";
-    if (effect.effect == Effect::kTimeOffset) camera.time_offset_stderr_s = se;
-    if (effect.effect == Effect::kReadoutTime) camera.readout_stderr_s = se;
-    if (effect.effect == Effect::kClockRate) camera.clock_rate_stderr_ppm = se;
-    camera.fitted.push_back({name, Spec(effect.effect).unit, effect.value,
-                             effect.covariance.size() == 0
-                                 ? EffectValue()
-                                 : EffectStderr(effect.effect, camera.truth, effect.covariance)});
+    const double* scalar_se = std::get_if<double>(&se);
+    const std::optional<double> scalar =
+        scalar_se ? std::optional<double>(*scalar_se) : std::nullopt;
+    if (effect.effect == Effect::kTimeOffset) camera.time_offset_stderr_s = scalar;
+    if (effect.effect == Effect::kReadoutTime) camera.readout_stderr_s = scalar;
+    if (effect.effect == Effect::kClockRate) camera.clock_rate_stderr_ppm = scalar;
+    camera.fitted.push_back({name, Spec(effect.effect).unit, effect.value, se});
   }
-  MarkUntestedClaims(report, fitted, &camera);
+  MarkUntestedClaims(report, fitted_names, &camera);
   return camera;
 }
 

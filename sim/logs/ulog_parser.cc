@@ -388,6 +388,8 @@ std::shared_ptr<const Layout> ULogParser::LayoutFor(const std::string& topic, st
   size_t offset = 0, fields = 0;
   *error = Flatten(formats_, topic, "", 0, WantedTopic(topic), &fields, &offset, layout.get());
   if (!error->empty()) return nullptr;
+  if (auto ts = layout->fields.find("timestamp"); ts != layout->fields.end())
+    layout->timestamp = ts->second;
   layouts_.emplace(topic, layout);
   return layout;
 }
@@ -438,8 +440,6 @@ void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
         ++log_.records_skipped;
         Warn("subscription", offset,
              "topic '" + sub.topic + "': " + error + "; its data is skipped");
-      } else if (auto ts = sub.layout->fields.find("timestamp"); ts != sub.layout->fields.end()) {
-        sub.timestamp = &ts->second;
       }
       if (msg_id >= by_msg_id_.size()) by_msg_id_.resize(msg_id + 1, -1);
       by_msg_id_[msg_id] = static_cast<int>(subscriptions_.size());
@@ -471,8 +471,8 @@ void ULogParser::Handle(uint8_t type, std::string_view payload, size_t offset) {
       const std::string_view data = payload.substr(2);
       // A dropout is placed at the time of the last gyro-topic message before it: these come at
       // hundreds of Hz, and a single odd timestamp in a slow topic cannot drag the time away.
-      if (sub.gyro_topic && sub.timestamp) {
-        if (auto t_ns = ReadTimeNs(data, *sub.timestamp))
+      if (sub.gyro_topic && sub.layout->timestamp) {
+        if (auto t_ns = ReadTimeNs(data, *sub.layout->timestamp))
           last_timestamp_us_ = static_cast<uint64_t>(*t_ns / 1000);
       }
       if (sub.wanted) {

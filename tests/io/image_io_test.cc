@@ -84,8 +84,9 @@ TEST(ImageIo, ColmapHonoursAOneBitMask) {
   const auto features = [&](const std::string& name, const std::string& masks) {
     const std::string log = dir / (name + ".log");
     const std::string command =
-        "QT_QPA_PLATFORM=offscreen colmap feature_extractor --database_path '" +
-        (dir / (name + ".db")) + "' --image_path '" + (dir / "images") + "' " +
+        "QT_QPA_PLATFORM=offscreen GLOG_log_dir='" + dir.path().string() +
+        "' colmap feature_extractor --database_path '" + (dir / (name + ".db")) +
+        "' --image_path '" + (dir / "images") + "' " +
         (masks.empty() ? "" : "--ImageReader.mask_path '" + (dir / masks) + "' ") +
         "--SiftExtraction.use_gpu 0 --SiftExtraction.num_threads 1 >'" + log + "' 2>&1";
     EXPECT_EQ(std::system(command.c_str()), 0) << ReadFileToString(log);

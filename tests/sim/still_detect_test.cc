@@ -78,6 +78,22 @@ TEST(StillDetect, FindsTheStillSegmentWithinFiftyMilliseconds) {
   }
 }
 
+// The sums are kept in a ring of a power of two slots, at least every window's span + 1: at spans
+// next to a power of two (windows of 127 and 128 samples, stretches of 1023 and 1024), a ring one
+// slot short would read a window's first prefix where its last was written.
+TEST(StillDetect, SpansNextToAPowerOfTwoFindTheSegment) {
+  const Synth o;
+  const GyroTrace trace = Make(o, MotionOutside(2.0, 6.0));
+  for (const int window : {127, 128}) {
+    StillDetectOptions options;
+    options.window_s = window * 1e-3;
+    options.min_duration_s = (window == 127 ? 1023 : 1024) * 1e-3;
+    const StillSegment s = DetectStillSegment(trace, options);
+    EXPECT_EQ(s.window_samples, static_cast<size_t>(window));
+    ExpectSegment(s, 2.0, 6.0);
+  }
+}
+
 TEST(StillDetect, StillAtTheStartAsInThePaper) {
   Synth o;
   o.duration_s = 10.0;

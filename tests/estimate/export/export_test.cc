@@ -169,12 +169,15 @@ TEST(ColmapExport, ColmapsModelConverterReadsTheModel) {
   const std::string bin = dir / "bin", txt = dir / "txt";
   std::filesystem::create_directories(bin);
   std::filesystem::create_directories(txt);
-  ASSERT_EQ(std::system(("colmap model_converter --input_path '" + (dir / "model") +
+  // GLOG_log_dir: COLMAP's log files (glog) in the test's folder, not left in /tmp.
+  ASSERT_EQ(std::system(("GLOG_log_dir='" + dir.path().string() +
+                         "' colmap model_converter --input_path '" + (dir / "model") +
                          "' --output_path '" + bin + "' --output_type BIN >/dev/null 2>&1")
                             .c_str()),
             0);
-  ASSERT_EQ(std::system(("colmap model_converter --input_path '" + bin + "' --output_path '" + txt +
-                         "' --output_type TXT >/dev/null 2>&1")
+  ASSERT_EQ(std::system(("GLOG_log_dir='" + dir.path().string() +
+                         "' colmap model_converter --input_path '" + bin + "' --output_path '" +
+                         txt + "' --output_type TXT >/dev/null 2>&1")
                             .c_str()),
             0);
   const auto camera_numbers = [](const std::string& text) {
@@ -741,6 +744,9 @@ TEST(ExportSource, ReadsAReportACameraJsonAFolderAndPhotos) {
   EXPECT_NE(note.find("    time_offset 0.0043 +- 1e-05 s\n"), std::string::npos) << note;
   EXPECT_NE(note.find("    gyro_scale [1.01,0.99,1.0] +- [0.002,0.003,null]\n"), std::string::npos)
       << note;
+  // A standard error with an entry that is not a number leaves the effect not determined.
+  EXPECT_EQ(from_report.undetermined.count("gyro_scale"), 1u);
+  EXPECT_EQ(from_report.undetermined.count("time_offset"), 0u);
   EXPECT_NE(note.find("    readout_direction \"bottom_to_top\" +- none\n"), std::string::npos)
       << note;
 
