@@ -51,7 +51,8 @@ struct ExportCamera {
   // readout_time (s), clock_rate (ppm); NaN where the data did not determine it.
   std::optional<double> time_offset_stderr_s, readout_stderr_s, clock_rate_stderr_ppm;
   // Every effect the source fitted (a validation report's), its value and standard errors in the
-  // value's shape (std::monostate where the report carries no covariance): the side note lists
+  // value's shape (std::monostate where there are none: no covariance in the report, or a readout
+  // direction): the side note lists
   // them all, since no target file has a place for them (Metashape's calibration file and OPF's
   // calibrated cameras carry no uncertainty; docs/exports.md).
   struct Fitted {
