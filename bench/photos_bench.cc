@@ -5,7 +5,8 @@
 //              photo (ReadImage) costs its page faults: a floor 8 % slower (12.0 s against 13.0 s
 //              for 100 photos), which would flatter the command;
 //   - correct: CorrectDataset on the folder with its ULog and camera.json, one job: the log
-//              read, the photos placed, every photo's map, warp, mask and writes (no overview).
+//              read, the photos placed, every photo's map, warp, mask and writes, and the
+//              overview.png that the command writes unless told --no-pictures.
 // The photos: a `shutterlab survey` of 4 photos of 4000 x 3000 (f 3500 px, 30 ms, gusty), rendered
 // once into $TMPDIR/shutterlab_photos_bench_noisy/ (about 3 min) and reused by later runs; with
 // PHOTOS, a survey of that many, into shutterlab_photos_bench_noisy_PHOTOS/: from 20 photos on,
@@ -180,7 +181,6 @@ int Main(int argc, char** argv) {
   WriteFileAtomically(options.photos->triggers_path, TriggersFromTruth(survey));
   options.reference = CorrectionReference::kMidReadout;
   options.jobs = 1;
-  options.pictures = false;
   const auto correct = [&] {
     fs::remove_all(out);
     CorrectDataset(options);

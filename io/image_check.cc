@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <new>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -55,39 +57,78 @@ void JumpOnError(j_common_ptr info) {
 
 std::string OiioProblem(const std::string& path);
 
-// The JPEG decode itself. No C++ object with a destructor is made between setjmp and longjmp
-// here. A fatal error (a file libjpeg cannot decode at all, or a kind it does not decode: 12-bit,
-// lossless) is left to OpenImageIO's verdict.
-std::string JpegProblem(std::FILE* file, const std::string& path) {
+// A JPEG decoded by libjpeg at 1/8, 1/4 or 1/2 size (the smallest of its DCT scales that keeps
+// min_width columns, else whole), its rows into pixels (grey or R, G, B), or read and dropped when
+// pixels is null: then the check's quick settings (fast DCT, no fancy upsampling), as every coded
+// bit is read either way. False when libjpeg cannot decode it at all (damage past its warnings,
+// 12-bit, lossless; CMYK for pixels); errors->first holds its first complaint of damage. No C++
+// object with a destructor is made between setjmp and longjmp here.
+bool DecodeJpeg(std::FILE* file, int min_width, cv::Mat* pixels, JpegErrors* errors) {
   jpeg_decompress_struct info;
-  JpegErrors errors;
-  info.err = jpeg_std_error(&errors.manager);
-  errors.manager.emit_message = KeepFirstMessage;
-  errors.manager.error_exit = JumpOnError;
+  info.err = jpeg_std_error(&errors->manager);
+  errors->manager.emit_message = KeepFirstMessage;
+  errors->manager.error_exit = JumpOnError;
   // volatile: set after setjmp and read after a longjmp back to it.
   JSAMPLE* volatile row = nullptr;
-  if (setjmp(errors.fatal) != 0) {
+  if (setjmp(errors->fatal) != 0) {
     std::free(row);
     jpeg_destroy_decompress(&info);
-    return OiioProblem(path);
+    return false;
   }
   jpeg_create_decompress(&info);
   jpeg_stdio_src(&info, file);
   jpeg_read_header(&info, TRUE);
   info.scale_num = 1;
-  info.scale_denom = 8;
-  info.dct_method = JDCT_IFAST;
-  info.do_fancy_upsampling = FALSE;
+  info.scale_denom = 1;
+  for (const unsigned denom : {8u, 4u, 2u}) {
+    if ((info.image_width + denom - 1) / denom >= static_cast<unsigned>(min_width)) {
+      info.scale_denom = denom;
+      break;
+    }
+  }
+  if (pixels == nullptr) {
+    info.dct_method = JDCT_IFAST;
+    info.do_fancy_upsampling = FALSE;
+  } else if (info.jpeg_color_space != JCS_GRAYSCALE) {
+    if (info.num_components != 3) {
+      jpeg_destroy_decompress(&info);
+      return false;
+    }
+    info.out_color_space = JCS_RGB;
+  }
   jpeg_start_decompress(&info);
-  row = static_cast<JSAMPLE*>(
-      std::malloc(static_cast<size_t>(info.output_width) * info.output_components));
-  while (row != nullptr && info.output_scanline < info.output_height) {
-    JSAMPLE* line = row;
+  if (pixels != nullptr) {
+    try {  // no libjpeg call in here: a longjmp never crosses it
+      pixels->create(static_cast<int>(info.output_height), static_cast<int>(info.output_width),
+                     CV_8UC(info.output_components));
+    } catch (...) {
+      jpeg_destroy_decompress(&info);
+      throw;
+    }
+  } else {
+    row = static_cast<JSAMPLE*>(
+        std::malloc(static_cast<size_t>(info.output_width) * info.output_components));
+    if (row == nullptr) {
+      jpeg_destroy_decompress(&info);
+      throw std::bad_alloc();
+    }
+  }
+  while (info.output_scanline < info.output_height) {
+    JSAMPLE* line =
+        pixels != nullptr ? pixels->ptr<JSAMPLE>(static_cast<int>(info.output_scanline)) : row;
     jpeg_read_scanlines(&info, &line, 1);
   }
-  if (row != nullptr) jpeg_finish_decompress(&info);
+  jpeg_finish_decompress(&info);
   std::free(row);
   jpeg_destroy_decompress(&info);
+  return true;
+}
+
+// The decode of every coded bit at 1/8 size, its first complaint of damage; one libjpeg cannot
+// decode at all (or a kind it does not decode: 12-bit, lossless) is left to OpenImageIO's verdict.
+std::string JpegProblem(std::FILE* file, const std::string& path) {
+  JpegErrors errors;
+  if (!DecodeJpeg(file, 1, nullptr, &errors)) return OiioProblem(path);
   return errors.first;
 }
 
@@ -130,6 +171,16 @@ std::string ImageDataProblem(const std::string& path) {
   } catch (const std::exception&) {
     return "";  // a decoder that could not run (memory) says nothing of the file
   }
+}
+
+std::optional<cv::Mat> ReadJpegScaled(const std::string& path, int min_width) {
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
+                                                       &std::fclose);
+  if (!file || !StartsLikeJpeg(file.get())) return std::nullopt;
+  JpegErrors errors;
+  cv::Mat pixels;
+  if (!DecodeJpeg(file.get(), min_width, &pixels, &errors)) return std::nullopt;
+  return pixels;
 }
 
 }  // namespace shutterlab

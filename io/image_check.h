@@ -1,8 +1,11 @@
 #pragma once
 // Whether an image file's pixels decode, not only its header and metadata: a JPEG cut short
 // inside its image data keeps all its EXIF and XMP, so a photo is checked here before any tool
-// is told to use it.
+// is told to use it. The same decoder, at 1/8 size, draws a photo's picture for an overview.
 
+#include <opencv2/core.hpp>
+
+#include <optional>
 #include <string>
 
 namespace shutterlab {
@@ -18,6 +21,14 @@ std::string ImageDataProblem(const std::string& path);
 
 // What a photo whose pixels do not decode is told: "its image data does not decode (PROBLEM): a
 // cut or damaged file; copy it from the card again".
+// A JPEG's pixels at the smallest of libjpeg's DCT scales (1/8, 1/4, 1/2, whole) that keeps at
+// least min_width columns: grey (CV_8UC1) or R, G, B (CV_8UC3), each pixel from its block's
+// lowest frequencies (libjpeg's scaled inverse DCT; at 1/8 the block's mean). A 12 MP photo's
+// 500-pixel picture costs the entropy decode alone: about a third of a whole decode, and no resize
+// of 12 MP after it. nullopt for a file that is not a JPEG or that libjpeg cannot decode (CMYK,
+// 12-bit, damaged past its warnings); a damaged one that decodes is drawn as it decodes.
+std::optional<cv::Mat> ReadJpegScaled(const std::string& path, int min_width);
+
 std::string UndecodableImageText(const std::string& problem);
 
 }  // namespace shutterlab

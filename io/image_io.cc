@@ -18,6 +18,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <png.h>
 #include <unistd.h>
 
@@ -121,6 +122,11 @@ cv::Mat ReadWholeImage(const std::string& path, cv::Mat* buffer) {
   }
   if (!error.empty()) throw IoError(IoMessage(path, 0, "cannot decode image: " + error));
   return GreyOrRgb(path, raw, header.channels);
+}
+
+cv::Mat ReadImagePreview(const std::string& path, int min_width) {
+  if (std::optional<cv::Mat> scaled = ReadJpegScaled(path, min_width)) return std::move(*scaled);
+  return ReadImage(path);
 }
 
 cv::Mat ReadFloatImage(const std::string& path, std::vector<std::string>* channel_names) {

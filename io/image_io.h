@@ -45,6 +45,11 @@ class UndecodableImage : public IoError {
 // page faults (a 12 MP RGB photo is 36 MB).
 cv::Mat ReadWholeImage(const std::string& path, cv::Mat* buffer = nullptr);
 
+// A picture of the image for an overview, at least min_width pixels wide where the image is: a
+// JPEG at its smallest DCT scale that keeps min_width (ReadJpegScaled: 1/8 of a 4000-pixel photo
+// for a 480-pixel tile), any other file, or a JPEG libjpeg cannot decode, whole (ReadImage).
+cv::Mat ReadImagePreview(const std::string& path, int min_width);
+
 // Writes a CV_8U / CV_16U / CV_32F image with 1, 2, 3 or 4 channels, format chosen by the
 // extension. Whole or not at all: written to a temporary file in the same folder, then renamed.
 // channel_names (optional) name the channels, e.g. {"dx", "dy"} for an EXR displacement field.

@@ -124,6 +124,15 @@ cv::Mat SideBySide(const std::vector<cv::Mat>& panels, const std::vector<std::st
   return out;
 }
 
+cv::Mat ShrinkByWholeFactor(const cv::Mat& image, int min_width) {
+  const int k = std::max(1, std::min(image.cols / std::max(1, min_width), image.rows));
+  if (k == 1) return image;
+  cv::Mat small;
+  cv::resize(image(cv::Rect(0, 0, image.cols - image.cols % k, image.rows - image.rows % k)), small,
+             cv::Size(image.cols / k, image.rows / k), 0, 0, cv::INTER_AREA);
+  return small;
+}
+
 cv::Mat TiledOverview(const std::vector<cv::Mat>& tiles, const std::vector<std::string>& captions,
                       int tile_width, int columns) {
   SHUTTERLAB_CHECK(!tiles.empty() && tiles.size() == captions.size()) << "one caption per tile";

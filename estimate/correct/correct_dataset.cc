@@ -35,6 +35,7 @@ namespace fs = std::filesystem;
 constexpr int64_t kGyroMarginNs = 1'000'000'000;
 // Frames drawn in overview.png.
 constexpr size_t kOverviewFrames = 4;
+constexpr int kOverviewTileWidthPx = 480;
 // DIR's copy of camera.json's mask (docs/FORMATS.md v1.1 `mask`).
 constexpr const char* kCameraMaskName = "camera_mask.png";
 
@@ -78,11 +79,27 @@ struct FrameBuffers {
   PackedMask mask;
 };
 
-// Writes the corrected image and its mask (unless DIR holds both and force is off); the share of
-// pixels with no source.
+// An overview frame's pictures, made from the pixels in memory while the frame is corrected: from
+// the files afterwards they took a decode of each photo twice over.
+struct OverviewPictures {
+  cv::Mat recorded, corrected;
+};
+
+// Which of n frames overview.png shows: a few, evenly spread, the first and the last among them.
+std::vector<size_t> OverviewIndices(size_t n) {
+  const size_t count = std::min(kOverviewFrames, n);
+  std::vector<size_t> indices;
+  for (size_t k = 0; k < count; ++k)
+    indices.push_back(k * (n - 1) / std::max<size_t>(1, count - 1));
+  return indices;
+}
+
+// Writes the corrected image and its mask (unless DIR holds both and force is off), and with
+// `pictures` the overview's pictures of the frame when it was corrected here; the share of pixels
+// with no source.
 double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap& map,
                       const ResidualPrediction& residual, CorrectedFrame* out,
-                      FrameBuffers* buffers) {
+                      FrameBuffers* buffers, std::optional<OverviewPictures>* pictures) {
   const fs::path image_path = fs::path(c.options.out_dir) / out->image;
   const fs::path mask_path = MaskPath(c.options.out_dir, e.image);
   PackedMask& mask = buffers->mask;
@@ -101,6 +118,10 @@ double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap
     }
     cv::Mat& corrected = buffers->corrected;
     CorrectFrame(rs, map, c.options.interpolation, &corrected, &mask);
+    if (pictures) {
+      *pictures = OverviewPictures{ToRgb8(ShrinkByWholeFactor(rs, kOverviewTileWidthPx)),
+                                   ToRgb8(ShrinkByWholeFactor(corrected, kOverviewTileWidthPx))};
+    }
     if (!c.dataset.mask.empty()) {
       // camera.json's mask moves with the pixels: a corrected pixel may be used where every tap
       // of its source may (the bilinear sample of 0/255 is 255 exactly there).
@@ -148,7 +169,8 @@ std::optional<Eigen::Vector3d> FrameVelocity(const Context& c, int64_t frame, Co
   return own.velocity_mps;
 }
 
-CorrectedFrame CorrectOne(const Context& c, const FrameEntry& e, FrameBuffers* buffers) {
+CorrectedFrame CorrectOne(const Context& c, const FrameEntry& e, FrameBuffers* buffers,
+                          std::optional<OverviewPictures>* pictures) {
   CorrectedFrame out;
   out.frame = e.frame;
   out.source_image = e.image;
@@ -179,7 +201,7 @@ CorrectedFrame CorrectOne(const Context& c, const FrameEntry& e, FrameBuffers* b
   out.map_error_px = map.estimated_error_px();
   out.predicted_d_after_px = out.residual.d_after_px + 2 * out.map_error_px;
   out.predicted_d_after_p90_px = out.residual.d_after_p90_px + 2 * out.map_error_px;
-  out.no_source_fraction = WriteCorrected(c, e, map, out.residual, &out, buffers);
+  out.no_source_fraction = WriteCorrected(c, e, map, out.residual, &out, buffers, pictures);
   if (c.options.check_truth) {
     const fs::path truth_dir =
         c.options.truth_dir.empty() ? c.dataset.dir / "truth" : fs::path(c.options.truth_dir);
@@ -193,10 +215,17 @@ CorrectedFrame CorrectOne(const Context& c, const FrameEntry& e, FrameBuffers* b
 // Every frame on `jobs` threads, frames.csv order kept; frames whose readout the gyro does not
 // cover, and photos whose image does not decode whole (a cut photo: found here, in the one decode,
 // rather than by decoding every photo first), go to skipped. The first other error stops the
-// others and is thrown.
-void RunFrames(const Context& c, const CorrectProgress& progress, CorrectSummary* summary) {
+// others and is thrown. With pictures, the overview's pictures of its frames, by frame number.
+void RunFrames(const Context& c, const CorrectProgress& progress, CorrectSummary* summary,
+               std::map<int64_t, OverviewPictures>* pictures) {
   const std::vector<FrameEntry>& entries = c.dataset.frames;
   std::vector<std::optional<CorrectedFrame>> done(entries.size());
+  std::vector<std::optional<OverviewPictures>> drawn(entries.size());
+  std::vector<bool> draw(entries.size(),
+                         false);  // the frames overview.png shows if none is skipped
+  if (pictures) {
+    for (const size_t i : OverviewIndices(entries.size())) draw[i] = true;
+  }
   std::vector<std::string> skipped(entries.size());
   std::atomic<size_t> next{0}, finished{0};
   std::atomic<bool> failed{false};
@@ -206,7 +235,7 @@ void RunFrames(const Context& c, const CorrectProgress& progress, CorrectSummary
     FrameBuffers buffers;
     for (size_t i = next++; i < entries.size() && !failed; i = next++) {
       try {
-        done[i] = CorrectOne(c, entries[i], &buffers);
+        done[i] = CorrectOne(c, entries[i], &buffers, draw[i] ? &drawn[i] : nullptr);
       } catch (const std::out_of_range&) {
         skipped[i] = "its readout is outside " + fs::path(c.dataset.gyro_path).filename().string();
       } catch (const UndecodableImage& e) {
@@ -237,6 +266,7 @@ void RunFrames(const Context& c, const CorrectProgress& progress, CorrectSummary
   if (error) std::rethrow_exception(error);
   for (size_t i = 0; i < entries.size(); ++i) {
     if (done[i]) summary->frames.push_back(std::move(*done[i]));
+    if (done[i] && drawn[i]) pictures->emplace(entries[i].frame, std::move(*drawn[i]));
     if (skipped[i].empty()) continue;
     summary->skipped.emplace_back(entries[i].frame,
                                   c.photos ? entries[i].image + ": " + skipped[i] : skipped[i]);
@@ -332,17 +362,26 @@ void WritePipelineLists(const CorrectSummary& summary) {
   }
 }
 
-// overview.png: a few frames, evenly spread, rolling shutter beside corrected.
-void WriteOverview(const CorrectSummary& summary) {
+// overview.png: a few frames, evenly spread, rolling shutter beside corrected; each frame's
+// pictures from `drawn`, or from the files when the frame was not drawn while corrected (kept from
+// an earlier run, or another frame's place taken by a skipped one).
+void WriteOverview(const CorrectSummary& summary,
+                   const std::map<int64_t, OverviewPictures>& drawn) {
   if (summary.frames.empty()) return;
   std::vector<cv::Mat> tiles;
   std::vector<std::string> captions;
-  const size_t count = std::min(kOverviewFrames, summary.frames.size());
-  for (size_t k = 0; k < count; ++k) {
-    const CorrectedFrame& f =
-        summary.frames[k * (summary.frames.size() - 1) / std::max<size_t>(1, count - 1)];
-    tiles.push_back(ToRgb8(ReadImage((fs::path(summary.dataset) / f.source_image).string())));
-    tiles.push_back(ToRgb8(ReadImage((fs::path(summary.out_dir) / f.image).string())));
+  for (const size_t i : OverviewIndices(summary.frames.size())) {
+    const CorrectedFrame& f = summary.frames[i];
+    const auto it = drawn.find(f.frame);
+    if (it != drawn.end()) {
+      tiles.push_back(it->second.recorded);
+      tiles.push_back(it->second.corrected);
+    } else {  // pictures, not whole photos: eight 12 MP decodes and resizes took 1.2 s of a run
+      tiles.push_back(ToRgb8(ReadImagePreview((fs::path(summary.dataset) / f.source_image).string(),
+                                              kOverviewTileWidthPx)));
+      tiles.push_back(ToRgb8(
+          ReadImagePreview((fs::path(summary.out_dir) / f.image).string(), kOverviewTileWidthPx)));
+    }
     captions.push_back("frame " + std::to_string(f.frame) + ": rolling shutter, D " +
                        FormatNumber("%.2f px", f.residual.d_before_px));
     captions.push_back("corrected (" +
@@ -350,7 +389,7 @@ void WriteOverview(const CorrectSummary& summary) {
                        "), predicted D " + FormatNumber("%.2f px", f.predicted_d_after_px));
   }
   WriteImage((fs::path(summary.out_dir) / "overview.png").string(),
-             TiledOverview(tiles, captions, 480, 2));
+             TiledOverview(tiles, captions, kOverviewTileWidthPx, 2));
 }
 
 // The setting and its words: the ground plane for stills, rotation only for video unless a depth.
@@ -580,7 +619,8 @@ CorrectSummary CorrectInput(const CorrectOptions& options, const RigDataset& dat
                  {"Xmp.shutterlab.Reference", CorrectionReferenceName(options.reference)}};
   fs::create_directories(options.out_dir, ec);
   if (ec) throw IoError(IoMessage(options.out_dir, 0, "cannot create: " + ec.message()));
-  RunFrames(context, progress, &summary);
+  std::map<int64_t, OverviewPictures> pictures;
+  RunFrames(context, progress, &summary, options.pictures ? &pictures : nullptr);
   if (summary.frames.empty()) {
     // Every frame was skipped here (its readout outside the log, or its image cut): say why.
     const size_t first_here = photos ? photos->skipped.size() : 0;
@@ -593,7 +633,7 @@ CorrectSummary CorrectInput(const CorrectOptions& options, const RigDataset& dat
   NoteWhenPredictedWorse(&summary);
   WriteDatasetFiles(context, summary);
   WritePipelineLists(summary);
-  if (options.pictures) WriteOverview(summary);
+  if (options.pictures) WriteOverview(summary, pictures);
   WriteFileAtomically((fs::path(options.out_dir) / "correct.json").string(),
                       CorrectionToJson(summary).dump(2) + "\n");
   return summary;

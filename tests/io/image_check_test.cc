@@ -12,9 +12,11 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace shutterlab {
@@ -145,6 +147,50 @@ TEST(ReadWholeImage, RefusesWhatTheOneEighthDecodeRefusesAndReadsTheRest) {
       }
     }
   }
+}
+
+TEST(ReadImagePreview, AJpegAtTheSmallestDctScaleThatKeepsTheWidthOtherFilesWhole) {
+  test::TempDir dir;
+  // A smooth 800 x 600 picture (the scaled decode keeps low frequencies), colour and grey.
+  cv::Mat colour(600, 800, CV_8UC3), grey(600, 800, CV_8UC1);
+  for (int v = 0; v < colour.rows; ++v) {
+    for (int u = 0; u < colour.cols; ++u) {
+      colour.at<cv::Vec3b>(v, u) = cv::Vec3b(u * 255 / 799, v * 255 / 599, (u + v) * 255 / 1398);
+      grey.at<uchar>(v, u) = static_cast<uchar>((u * 3 + v) * 255 / (799 * 3 + 599));
+    }
+  }
+  WriteImage(dir / "colour.jpg", colour);
+  WriteImage(dir / "grey.jpg", grey);
+  WriteImage(dir / "colour.png", colour);
+  const cv::Mat whole = ReadImage(dir / "colour.jpg");
+  for (const auto& [min_width, size] : std::vector<std::pair<int, cv::Size>>{{1, {100, 75}},
+                                                                             {100, {100, 75}},
+                                                                             {101, {200, 150}},
+                                                                             {201, {400, 300}},
+                                                                             {401, {800, 600}},
+                                                                             {800, {800, 600}},
+                                                                             {5000, {800, 600}}}) {
+    const cv::Mat preview = ReadImagePreview(dir / "colour.jpg", min_width);
+    ASSERT_EQ(preview.size(), size) << min_width;
+    ASSERT_EQ(preview.type(), CV_8UC3);
+    // The same picture as the whole decode shrunk (R, G, B in the file's order as ReadImage's):
+    // within a level or two on a gradient.
+    cv::Mat shrunk;
+    cv::resize(whole, shrunk, size, 0, 0, cv::INTER_AREA);
+    cv::Mat difference;
+    cv::absdiff(preview, shrunk, difference);
+    const cv::Scalar mean = cv::mean(difference);
+    for (int c = 0; c < 3; ++c) EXPECT_LT(mean[c], 2.0) << min_width << " channel " << c;
+  }
+  const cv::Mat grey_preview = ReadImagePreview(dir / "grey.jpg", 100);
+  EXPECT_EQ(grey_preview.size(), cv::Size(100, 75));
+  EXPECT_EQ(grey_preview.type(), CV_8UC1);
+  // Another format is read whole, exactly.
+  const cv::Mat png = ReadImagePreview(dir / "colour.png", 100);
+  ASSERT_EQ(png.size(), colour.size());
+  EXPECT_EQ(cv::norm(png, colour, cv::NORM_INF), 0.0);
+  EXPECT_FALSE(ReadJpegScaled(dir / "colour.png", 100));
+  EXPECT_THROW(ReadImagePreview(dir / "missing.jpg", 100), IoError);
 }
 
 }  // namespace
