@@ -174,11 +174,6 @@ void WriteFileThroughTemp(const std::string& path,
 // default, costs ~5x.
 constexpr int kPngZlibLevel = 1;
 
-bool HasPngExtension(const std::string& path) {
-  const std::string extension = std::filesystem::path(path).extension().string();
-  return extension == ".png" || extension == ".PNG";
-}
-
 // libpng's row filters for a PNG of image (PNG_FILTER_* bits; 0: libpng's adaptive choice, which
 // tries all five on every row). An 8-bit grey image is a mask: unfiltered, 16 against 69 ms for a
 // 12 MP one, the same size. An 8-bit colour image takes PAETH alone: within 1 % of the adaptive

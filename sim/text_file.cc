@@ -557,14 +557,20 @@ std::string ToLower(std::string_view s) {
   return out;
 }
 
-bool HasJpegExtension(std::string_view name) {
-  const std::string lower = ToLower(name);
-  const auto ends_with = [&lower](std::string_view end) {
-    return lower.size() >= end.size() &&
-           lower.compare(lower.size() - end.size(), end.size(), end) == 0;
-  };
-  return ends_with(".jpg") || ends_with(".jpeg");
+namespace {
+
+// True when name ends in `end` (lowercase), in any case.
+bool EndsInAnyCase(std::string_view name, std::string_view end) {
+  return name.size() >= end.size() && ToLower(name.substr(name.size() - end.size())) == end;
 }
+
+}  // namespace
+
+bool HasJpegExtension(std::string_view name) {
+  return EndsInAnyCase(name, ".jpg") || EndsInAnyCase(name, ".jpeg");
+}
+
+bool HasPngExtension(std::string_view name) { return EndsInAnyCase(name, ".png"); }
 
 std::string FormatNumber(const char* format, double value) {
   // Most results fit the stack buffer; a longer format (a sentence around the number) is sized

@@ -324,6 +324,8 @@ inline std::string_view StripBom(std::string_view line) {
 std::string ToLower(std::string_view s);
 // True when name ends in ".jpg" or ".jpeg", in any case.
 bool HasJpegExtension(std::string_view name);
+// True when name ends in ".png", in any case.
+bool HasPngExtension(std::string_view name);
 
 // One number through a printf format ("%.3f"), for tables and messages.
 std::string FormatNumber(const char* format, double value);

@@ -221,6 +221,15 @@ TEST(HasJpegExtension, IsJpgOrJpegInAnyCase) {
   }
 }
 
+TEST(HasPngExtension, IsPngInAnyCase) {
+  for (const char* name : {"a.png", "MASK.PNG", "dir/b.Png", ".png"}) {
+    EXPECT_TRUE(HasPngExtension(name)) << name;
+  }
+  for (const char* name : {"a.jpg", "a.png.jpg", "png", "a.pn", "a.pngx", ""}) {
+    EXPECT_FALSE(HasPngExtension(name)) << name;
+  }
+}
+
 TEST(FormatNumber, KeepsTextLongerThanItsStackBuffer) {
   EXPECT_EQ(FormatNumber("%.2f", 3.14159), "3.14");
   const std::string sentence(100, 'x');
