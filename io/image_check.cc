@@ -2,6 +2,7 @@
 
 #include "io/codecs.h"
 
+#include <algorithm>
 #include <csetjmp>
 #include <cstdio>
 #include <cstdlib>
@@ -81,7 +82,7 @@ bool DecodeJpeg(std::FILE* file, int min_width, cv::Mat* pixels, JpegErrors* err
   info.scale_num = 1;
   info.scale_denom = 1;
   for (const unsigned denom : {8u, 4u, 2u}) {
-    if ((info.image_width + denom - 1) / denom >= static_cast<unsigned>(min_width)) {
+    if ((info.image_width + denom - 1) / denom >= static_cast<unsigned>(std::max(1, min_width))) {
       info.scale_denom = denom;
       break;
     }

@@ -125,7 +125,7 @@ cv::Mat SideBySide(const std::vector<cv::Mat>& panels, const std::vector<std::st
 }
 
 cv::Mat ShrinkByWholeFactor(const cv::Mat& image, int min_width) {
-  const int k = std::max(1, std::min(image.cols / std::max(1, min_width), image.rows));
+  const int k = std::max(1, std::min(image.cols / std::max(1, min_width), image.rows));  // >= 1 row
   if (k == 1) return image;
   cv::Mat small;
   cv::resize(image(cv::Rect(0, 0, image.cols - image.cols % k, image.rows - image.rows % k)), small,

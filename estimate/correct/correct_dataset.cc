@@ -118,7 +118,7 @@ double WriteCorrected(const Context& c, const FrameEntry& e, const CorrectionMap
     }
     cv::Mat& corrected = buffers->corrected;
     CorrectFrame(rs, map, c.options.interpolation, &corrected, &mask);
-    if (pictures) {
+    if (pictures) {  // ToRgb8 copies: nothing of the worker's reused buffers is kept
       *pictures = OverviewPictures{ToRgb8(ShrinkByWholeFactor(rs, kOverviewTileWidthPx)),
                                    ToRgb8(ShrinkByWholeFactor(corrected, kOverviewTileWidthPx))};
     }

@@ -182,6 +182,13 @@ TEST(ReadImagePreview, AJpegAtTheSmallestDctScaleThatKeepsTheWidthOtherFilesWhol
     const cv::Scalar mean = cv::mean(difference);
     for (int c = 0; c < 3; ++c) EXPECT_LT(mean[c], 2.0) << min_width << " channel " << c;
   }
+  // A width that is not a multiple of 8 rounds up, as libjpeg's scaled output does.
+  cv::Mat odd;
+  cv::resize(colour, odd, cv::Size(803, 601));
+  WriteImage(dir / "odd.jpg", odd);
+  EXPECT_EQ(ReadImagePreview(dir / "odd.jpg", 100).size(), cv::Size(101, 76));
+  EXPECT_EQ(ReadImagePreview(dir / "odd.jpg", -1).size(), cv::Size(101, 76))
+      << "below 1 counts as 1";
   const cv::Mat grey_preview = ReadImagePreview(dir / "grey.jpg", 100);
   EXPECT_EQ(grey_preview.size(), cv::Size(100, 75));
   EXPECT_EQ(grey_preview.type(), CV_8UC1);
