@@ -144,6 +144,19 @@ void PrintMaskWriteTimes(const fs::path& out) {
       one_bit_ms, one_bit_bytes / 1e3, eight_bit_ms, fs::file_size(mask_path) / 1e3);
 }
 
+// Each run's CPU ratio, and the ratio of the best run of each side. On a shared machine a
+// neighbour's load comes and goes on the scale of a run: the runs show the spread, and the best
+// runs, the least disturbed, give a second estimate.
+void PrintRunSpread(const std::vector<double>& floor_cpu, const std::vector<double>& correct_cpu) {
+  std::printf("  run by run (CPU):");
+  for (size_t i = 0; i < floor_cpu.size(); ++i)
+    std::printf(" %.2fx", correct_cpu[i] / floor_cpu[i]);
+  const double best_floor_s = *std::min_element(floor_cpu.begin(), floor_cpu.end());
+  const double best_correct_s = *std::min_element(correct_cpu.begin(), correct_cpu.end());
+  std::printf("; best of each: %.2f s against %.2f s, %.2fx\n", best_correct_s, best_floor_s,
+              best_correct_s / best_floor_s);
+}
+
 int Main(int argc, char** argv) {
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 3;
   const int photo_count = argc > 2 ? std::atoi(argv[2]) : 4;
@@ -222,14 +235,7 @@ int Main(int argc, char** argv) {
               Median(correct_cpu), Median(correct_cpu) / n, Median(correct_wall));
   std::printf("  correct / floor: %.2fx CPU, %.2fx wall\n", Median(correct_cpu) / Median(floor_cpu),
               Median(correct_wall) / Median(floor_wall));
-  // On a shared machine a neighbour's load comes and goes on the scale of a run: each run's ratio
-  // shows the spread, and the best run of each side, the least disturbed, a second estimate.
-  std::printf("  run by run (CPU):");
-  for (int i = 0; i < runs; ++i) std::printf(" %.2fx", correct_cpu[i] / floor_cpu[i]);
-  const double best_floor_s = *std::min_element(floor_cpu.begin(), floor_cpu.end());
-  const double best_correct_s = *std::min_element(correct_cpu.begin(), correct_cpu.end());
-  std::printf("; best of each: %.2f s against %.2f s, %.2fx\n", best_correct_s, best_floor_s,
-              best_correct_s / best_floor_s);
+  PrintRunSpread(floor_cpu, correct_cpu);
   // Cost a photo and fixed cost from the two folder sizes, then the 100-photo projection.
   const double per_photo_s = (Median(correct_cpu) - Median(one_cpu)) / (n - 1.0);
   const double fixed_s = Median(one_cpu) - per_photo_s;
