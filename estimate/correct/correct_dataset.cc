@@ -221,8 +221,8 @@ void RunFrames(const Context& c, const CorrectProgress& progress, CorrectSummary
   const std::vector<FrameEntry>& entries = c.dataset.frames;
   std::vector<std::optional<CorrectedFrame>> done(entries.size());
   std::vector<std::optional<OverviewPictures>> drawn(entries.size());
-  std::vector<bool> draw(entries.size(),
-                         false);  // the frames overview.png shows if none is skipped
+  // The frames overview.png shows if none is skipped.
+  std::vector<bool> draw(entries.size(), false);
   if (pictures) {
     for (const size_t i : OverviewIndices(entries.size())) draw[i] = true;
   }
