@@ -184,6 +184,14 @@ int PngFilterFor(const cv::Mat& image) {
   return image.channels() == 1 ? PNG_FILTER_NONE : PNG_FILTER_PAETH;
 }
 
+// Every PNG the tool writes: kPngZlibLevel and PngFilterFor (other formats: unchanged).
+void SetPngSettings(const std::string& path, const cv::Mat& image,
+                    codecs::ImageWriteSettings* settings) {
+  if (!HasPngExtension(path)) return;
+  settings->png_compression_level = kPngZlibLevel;
+  settings->png_filter = PngFilterFor(image);
+}
+
 // WriteFileThroughTemp of image as settings say, through the codecs module.
 void WriteThroughTemp(const std::string& path, const cv::Mat& image,
                       const codecs::ImageWriteSettings& settings,
@@ -241,10 +249,7 @@ void WriteImage(const std::string& path, const cv::Mat& image,
   settings.file_type = SampleTypeOfDepth(image.depth());
   settings.channel_names = channel_names;
   if (image.channels() == 4 && channel_names.empty()) settings.alpha_channel = 3;
-  if (HasPngExtension(path)) {
-    settings.png_compression_level = kPngZlibLevel;
-    settings.png_filter = PngFilterFor(image);
-  }
+  SetPngSettings(path, image, &settings);
   if (HasJpegExtension(path)) settings.compression = "jpeg:95";
   WriteThroughTemp(path, image, settings, {});
 }
@@ -467,10 +472,7 @@ std::vector<std::string> WriteImageLike(
   }
   // A corrected video frame: the same pixels whatever the level (the README's GoPro clip's 361
   // frames of 854 x 480 were corrected in 38 s of CPU at OpenImageIO's default, 60 % of it zlib).
-  if (HasPngExtension(path)) {
-    settings.png_compression_level = kPngZlibLevel;
-    settings.png_filter = PngFilterFor(image);
-  }
+  SetPngSettings(path, image, &settings);
   std::vector<std::string> notes;
   WriteThroughTemp(path, image, settings, [&](const std::string& temp) {
     notes = CopyMetadata(path, temp, like.path, {}, xmp);
