@@ -8,11 +8,14 @@
 #  - runs `validate --report` and corrects with what it fitted (`correct --report`),
 # each with `--truth`, and prints per effect the median over frames of D before, D after and the
 # rms of what is left, and the residual `correct` predicted from the report.
-#   scripts/correct_effects.sh [OUT_DIR]      (default /tmp/shutterlab_correct_effects; ~3 min)
+#   scripts/correct_effects.sh [OUT_DIR] [EFFECTS]   (default /tmp/shutterlab_correct_effects;
+#                                                       ~3 min)
+# EFFECTS: only these effects' rows, names separated by commas (time_offset,velocity; default all).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 shutterlab=${SHUTTERLAB:-build/bin/shutterlab}
 out=${1:-/tmp/shutterlab_correct_effects}
+only=${2:-}
 mkdir -p "$out"
 data=${SHUTTERLAB_DATA_DIR:-../shared/data}
 scene=${SCENE:-$data/images/siyi_zr10/IMG_0100.jpg}
@@ -39,6 +42,7 @@ for injection in "time_offset=4ms" "readout_time=36ms" \
     "gyro_scale=1.05,0.95,1.04" "gyro_bias=0.01rad/s,0,0" "velocity=4m/s,0,0" \
     "lens_distortion=-0.05,0.01" "readout_direction=bottom_to_top" "clock_rate=300ppm"; do
   name=${injection%%=*}
+  [ -z "$only" ] || [[ ",$only," == *",$name,"* ]] || continue
   gyro="$out/gyro.csv" times="$out/frames.csv"
   if [ "$name" = clock_rate ]; then gyro="$out/gyro_long.csv" times="$out/frames_long.csv"; fi
   ds="$out/$name"

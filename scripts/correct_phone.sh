@@ -7,17 +7,20 @@
 #  - after: the corrected frames, the same camera.json and gyro.csv.
 # Both through `validate` (video: each frame against the one before, rotation only and with each
 # pair's translation); prints both reports' residuals and writes the side-by-side pictures.
-#   scripts/correct_phone.sh [OUT_DIR]       (default /tmp/shutterlab_phone; ~2 min)
+#   scripts/correct_phone.sh [OUT_DIR] [FRAMES]   (default /tmp/shutterlab_phone, every frame;
+#                                                  ~2 min)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 shutterlab=${SHUTTERLAB:-build/bin/shutterlab}
 out=${1:-/tmp/shutterlab_phone}
+max_frames=()
+[ -z "${2:-}" ] || max_frames=(--max-frames "$2")
 data=${SHUTTERLAB_DATA_DIR:-../shared/data}
 clip=$data/rs/phone_gyro_video_20200109_145447
 [ -d "$clip" ] || { echo "$0: $clip not found (set SHUTTERLAB_DATA_DIR)" >&2; exit 2; }
 mkdir -p "$out"
 
-"$shutterlab" import "$clip" --out "$out/phone" >/dev/null
+"$shutterlab" import "$clip" --out "$out/phone" "${max_frames[@]}" >/dev/null
 "$shutterlab" validate "$out/phone" --report "$out/phone.json" >"$out/phone_validate.txt"
 "$shutterlab" correct "$out/phone" --report "$out/phone.json" --out "$out/corrected" --force \
   | tee "$out/correct.txt"

@@ -11,7 +11,10 @@ line that starts with # is output shown to the reader (bash skips it as a commen
 A block that cannot run here says why on the line before its fence:
   <!-- doc-test: template -->   placeholders in capitals (DATASET, PHOTOS, LOG)
   <!-- doc-test: hardware -->   SPI, GPIO, sudo
-  <!-- doc-test: long -->       over about 60 s on 2 cores: run only with --long
+  <!-- doc-test: long; suite: A => B; C => D -->
+                                over about 60 s on 2 cores: the suite runs it smaller, each text A
+                                of the block replaced by B (a count, a duration, a --max-frames
+                                added); --long runs it as written
 and a block of any language that the commands read as a file says which, the same way:
   <!-- doc-test: file /tmp/camera.json -->   written there before the file's first block runs
 A block that runs sudo, scripts/setup.sh or scripts/test.sh is never run, marked or not: it would
@@ -49,6 +52,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SKIP = 77  # ctest's SKIP_RETURN_CODE for this test
 MARKER = re.compile(r"^\s*<!--\s*doc-test:\s*([\w-]+)(?:\s+(\S+))?\s*-->\s*$")
 MARKS = ("template", "hardware", "long", "file")
+# A long block's smaller run in the suite: "long; suite: A => B; C => D".
+LONG = re.compile(r"^\s*<!--\s*doc-test:\s*long\s*;\s*suite:\s*(.+?)\s*-->\s*$")
 FENCE_OPEN = re.compile(r"^(\s*)```\s*([\w-]*)\s*$")
 FENCE_CLOSE = re.compile(r"^\s*```\s*$")
 EXIT_CODE = re.compile(r"\s#\s*exit code (\d+)\s*$")
@@ -68,12 +73,20 @@ HEADER = [  # the lines before the block's own: ERR and __expect write "LINE STA
 
 
 class Block:
-    def __init__(self, path, line, lang, mark, lines):
+    def __init__(self, path, line, lang, mark, lines, smaller=()):
         self.path = path  # as shown, relative to the root
         self.line = line  # the fence's line, 1-based
         self.lang = lang
         self.mark = mark
         self.lines = lines  # the block's lines, the fence's indentation removed
+        self.smaller = list(smaller)  # a long block's (text, replacement) pairs for the suite
+
+    def resized(self):
+        """The block as the suite runs it: each text of a long block's pairs replaced."""
+        lines = list(self.lines)
+        for text, replacement in self.smaller:
+            lines = [t.replace(text, replacement) for t in lines]
+        return Block(self.path, self.line, self.lang, self.mark, lines)
 
     def commands(self):
         """(first line, last line, text): each command, continued lines joined, with its lines."""
@@ -91,6 +104,29 @@ class Block:
         if parts:
             out.append((start, self.line + len(self.lines), " ".join(p.strip() for p in parts)))
         return out
+
+
+def read_mark(line, body):
+    """(kind, file path, a long block's (text, replacement) pairs, finding or None) of the line
+    before a block whose lines are body; kind None when the line is no mark."""
+    mark, long_mark = MARKER.match(line), LONG.match(line)
+    if long_mark:
+        smaller = []
+        for pair in long_mark.group(1).split(";"):
+            text, arrow, replacement = pair.partition("=>")
+            if not arrow or not text.strip() or not any(text.strip() in t for t in body):
+                return "long", None, [], (f"'{pair.strip()}' is not TEXT => REPLACEMENT with "
+                                          f"TEXT in the block below")
+            smaller.append((text.strip(), replacement.strip()))
+        return "long", None, smaller, None
+    kind, file_path = (mark.group(1), mark.group(2)) if mark else (None, None)
+    if kind == "long":
+        return kind, None, [], ("a long block says how the suite runs it smaller: "
+                                "<!-- doc-test: long; suite: TEXT => REPLACEMENT -->")
+    if kind is not None and (kind not in MARKS or (kind == "file") != bool(file_path)):
+        return kind, None, [], (f"unknown mark '{line.strip()}' "
+                                f"(template, hardware, long; suite: A => B, or file PATH)")
+    return kind, file_path, [], None
 
 
 def read_markdown(root, path):
@@ -113,15 +149,13 @@ def read_markdown(root, path):
             j += 1
         body = [text[indent:] if text[:indent].strip() == "" else text for text in lines[i + 1:j]]
         k = next((k for k in range(i - 1, -1, -1) if lines[k].strip()), 0)
-        mark = MARKER.match(lines[k])
-        kind, file_path = (mark.group(1), mark.group(2)) if mark else (None, None)
-        if kind is not None and (kind not in MARKS or (kind == "file") != bool(file_path)):
-            findings.append(f"{path}:{k + 1}: unknown mark '{lines[k].strip()}' "
-                            f"(template, hardware, long or file PATH)")
+        kind, file_path, smaller, finding = read_mark(lines[k], body)
+        if finding:  # a block with a mark that is not understood is not run
+            findings.append(f"{path}:{k + 1}: {finding}")
         elif kind == "file":
             saved[file_path] = "\n".join(body) + "\n"
         elif lang in ("sh", "bash"):
-            blocks.append(Block(path, i + 1, lang, kind, body))
+            blocks.append(Block(path, i + 1, lang, kind, body, smaller))
         elif lang == "" and any(COMMAND_LINE.match(t) for t in body):
             findings.append(f"{path}:{i + 1}: a command in a fence with no language: tag it ```sh")
         i = j + 1
@@ -310,9 +344,13 @@ def main():
         for line, span in spans:
             findings += checker.check(f"{path}:{line}", span)
         for block in blocks:
-            for first, _, command in block.commands():
+            resized = block.resized()
+            for (first, _, command), (_, _, smaller) in zip(block.commands(), resized.commands()):
                 if not command.lstrip().startswith("#"):
                     findings += checker.check(f"{path}:{first}", COMMENT.sub("", command))
+                    if smaller != command:
+                        findings += [f"{finding} (as the suite runs it)" for finding in
+                                     checker.check(f"{path}:{first}", COMMENT.sub("", smaller))]
 
     have_data = os.path.isdir(data)
     run_any = False
@@ -331,10 +369,12 @@ def main():
                 with open(name, "w", encoding="utf-8") as f:
                     f.write(text)
             for block in blocks_of[path]:
+                if block.mark == "long" and not args.long:
+                    block = block.resized()
                 commands = [COMMENT.sub("", c) for _, _, c in block.commands()]
                 unbuilt = [n for c in commands for n in NAMED.findall(c)
                            if n.startswith("build/") and not checker.built(n)]
-                marked = block.mark is not None and not (block.mark == "long" and args.long)
+                marked = block.mark is not None and block.mark != "long"
                 why = ("it installs, builds or runs the tests"
                        if any(NEVER_RUN.search(c) for c in commands)
                        else f"marked {block.mark}" if marked
@@ -347,7 +387,8 @@ def main():
                 seconds, finding = run_block(block, os.path.join(folder, "tmp"), cwd, data,
                                              args.timeout)
                 if args.verbose:
-                    mark = " (long)" if block.mark == "long" else ""
+                    mark = ("" if block.mark != "long" else " (long)" if args.long
+                            else " (long, run smaller)")
                     print(f"{block.path}:{block.line}: {seconds:6.1f} s{mark}"
                           f"{'  FAILED' if finding else ''}", flush=True)
                 if finding:

@@ -5,19 +5,31 @@
 # OUT/NAME/table.md exists is not flown again (a rerun only prints). About 4 minutes a flight on
 # 2 cores.
 #
-#   scripts/photogrammetry_study.sh OUT
+#   scripts/photogrammetry_study.sh OUT [NAME [survey options...]]
+#
+# NAME (e.g. gusty_5mps_30ms): only that flight and readout; the survey options go to each of its
+# photogrammetry.sh runs (e.g. --width 320 --height 240 --focal-px 280 --photos-per-line 4).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-out="${1:?usage: scripts/photogrammetry_study.sh OUT}"
+out="${1:?usage: scripts/photogrammetry_study.sh OUT [NAME [survey options...]]}"
+only="${2:-}"
+shift $(($# < 2 ? $# : 2))
+case "$only" in
+  "" | calm_5mps_10ms | calm_5mps_30ms | gusty_5mps_10ms | gusty_5mps_30ms | gusty_10mps_10ms | \
+    gusty_10mps_30ms | none_10mps_10ms | none_10mps_30ms) ;;
+  *) echo "$0: no flight '$only' (calm_5mps_10ms .. none_10mps_30ms: WIND_SPEEDmps_READOUTms)" >&2
+     exit 2 ;;
+esac
 mkdir -p "$out"
 for flight in "calm 5" "gusty 5" "gusty 10" "none 10"; do
   read -r wind speed <<<"$flight"
   for readout in 10 30; do
     name="${wind}_${speed}mps_${readout}ms"
+    [ -z "$only" ] || [ "$name" = "$only" ] || continue
     if [ ! -f "$out/$name/table.md" ]; then
       echo "flying $name" >&2
       scripts/photogrammetry.sh "$out/$name" --wind "$wind" --speed "${speed}m/s" \
-        --readout "${readout}ms" >"$out/$name.log" 2>&1
+        --readout "${readout}ms" "$@" >"$out/$name.log" 2>&1
     fi
   done
 done

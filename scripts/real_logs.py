@@ -7,7 +7,8 @@ prints one Markdown table: what the reader got (format, gyro source, samples, ra
 what it said it lost (the warnings' kinds with their counts), and each command's outcome (its
 exit code and, on an error, the one line it printed). docs/real-logs.md holds its output.
 
-Usage: scripts/real_logs.py [--shutterlab build/bin/shutterlab] [--data ../shared/data]
+Usage: scripts/real_logs.py [--shutterlab build/bin/shutterlab] [--data ../shared/data] [--only TEXT]
+  --only TEXT  only the logs whose path under the data folder holds TEXT
 (stdlib only; SHUTTERLAB_DATA_DIR overrides the data folder)
 """
 import argparse
@@ -104,11 +105,14 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--shutterlab", default="build/bin/shutterlab")
     parser.add_argument("--data", default=os.environ.get("SHUTTERLAB_DATA_DIR", "../shared/data"))
+    parser.add_argument("--only", default="", help="only the logs whose path holds this")
     args = parser.parse_args()
     print("| log | read as | warnings (kinds) | flight | noise | accuracy | analyze --every 2s |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     with tempfile.TemporaryDirectory() as tmp:
         for rel, flags in LOGS:
+            if args.only not in rel:
+                continue
             path = os.path.join(args.data, rel)
             if not os.path.exists(path):
                 print(f"missing: {path}", file=sys.stderr)

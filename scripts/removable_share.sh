@@ -14,11 +14,13 @@
 # Prints a markdown table: per readout, gyro and rate the median D before and after on the ground,
 # the median share of D removed, how many frames exceed 5 cm at 50 m before and after, and what
 # `correct` predicted.
-#   scripts/removable_share.sh [OUT_DIR]     (default /tmp/shutterlab_removable; ~5 min)
+#   scripts/removable_share.sh [OUT_DIR] [FRAMES]   (default /tmp/shutterlab_removable, 10 frames a
+#                                                    readout; ~5 min)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 shutterlab=${SHUTTERLAB:-build/bin/shutterlab}
 out=${1:-/tmp/shutterlab_removable}
+frames=${2:-10}
 mkdir -p "$out"
 data=${SHUTTERLAB_DATA_DIR:-../shared/data}
 scene=${SCENE:-$data/images/siyi_zr10/IMG_0150.jpg}
@@ -26,7 +28,7 @@ scene=${SCENE:-$data/images/siyi_zr10/IMG_0150.jpg}
 
 m_per_px=$(awk 'BEGIN { printf "%.6f", 50.0 / 1100.0 }')
 "$shutterlab" synth flight --ideal --rate 8000Hz --duration 30s --seed 5 --out "$out/truth.csv" >/dev/null
-awk 'BEGIN { print "frame,t_first_row"; for (i = 0; i < 10; i++) printf "%d,%d\n", i, 8 + 2 * i }' \
+awk -v n="$frames" 'BEGIN { print "frame,t_first_row"; for (i = 0; i < n; i++) printf "%d,%d\n", i, 8 + 2 * i }' \
   >"$out/times.csv"
 # gyro NAME ARGS...: the flight logged by the gyro ARGS describe (calibrated: no constant errors).
 gyro() {

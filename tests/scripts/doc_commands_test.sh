@@ -77,9 +77,25 @@ echo never reached
 build/bin/shutterlab greet --code 0    # exit code 2
 \`\`\`
 
+<!-- doc-test: long; suite: --code 4 => --code 0; 400 => 0 -->
+\`\`\`sh
+build/bin/shutterlab greet --code 4
+sleep 400
+\`\`\`
+
 <!-- doc-test: long -->
 \`\`\`sh
-false
+true
+\`\`\`
+
+<!-- doc-test: long; suite: --code 1 => --code 1 --bogus3 -->
+\`\`\`sh
+build/bin/shutterlab greet --code 1
+\`\`\`
+
+<!-- doc-test: long; suite: --code 0 => --code 1; --nowhere => --code 0 -->
+\`\`\`sh
+build/bin/shutterlab greet --code 0
 \`\`\`
 
 <!-- doc-test: template -->
@@ -121,26 +137,31 @@ run --verbose
 $got"
 has "docs/page.md:12: build/bin/shutterlab greet --fail: exit code 3: first line | boom: it failed"
 has "docs/page.md:17: build/bin/shutterlab greet --code 0: exit code 0 (expected 2): (no stderr)"
-has "docs/page.md:27: shutterlab greet has no option --bogus"
-has "docs/page.md:28: build/bin/missing_tool is not in the build folder"
-has "docs/page.md:43: shutterlab greet has no option --nope"
-has "docs/page.md:44: shutterlab has no subcommand 'wave'"
-has "docs/page.md:45: shutterlab greet has no option --nope2"
-has "docs/page.md:47: a command in a fence with no language"
-has "docs/page.md:21: not run (marked long)"
-has "docs/page.md:26: not run (marked template)"
-# README.md passes: its one line is its block's time; page.md: 5 blocks' lines and 8 findings.
+has "docs/page.md:43: shutterlab greet has no option --bogus"
+has "docs/page.md:44: build/bin/missing_tool is not in the build folder"
+has "docs/page.md:59: shutterlab greet has no option --nope"
+has "docs/page.md:60: shutterlab has no subcommand 'wave'"
+has "docs/page.md:61: shutterlab greet has no option --nope2"
+has "docs/page.md:63: a command in a fence with no language"
+# A long block runs smaller in the suite (--code 4 made 0, sleep 400 made 0); a bare long mark, a
+# pair whose text is not in the block are refused; what the pairs make is checked too.
+has "docs/page.md:21:    0.0 s (long, run smaller)"
+has "docs/page.md:26: a long block says how the suite runs it smaller"
+has "docs/page.md:33: shutterlab greet has no option --bogus3 (not in its --help): build/bin/shutterlab greet --code 1 --bogus3 (as the suite runs it)"
+has "docs/page.md:36: '--nowhere => --code 0' is not TEXT => REPLACEMENT"
+has "docs/page.md:42: not run (marked template)"
+# README.md passes: its one line is its block's time; page.md: 6 blocks' lines and 12 findings.
 [ "$(grep -c '^README.md:' <<<"$got")" = 1 ] && ! grep -q '^README.md:.*FAILED' <<<"$got" ||
   fail "README.md must pass:
 $got"
-[ "$(grep -c '^docs/page.md:[0-9]*: ' <<<"$got")" = 13 ] || fail "not one line per finding:
+[ "$(grep -c '^docs/page.md:[0-9]*: ' <<<"$got")" = 18 ] || fail "not one line per finding:
 $got"
 [ ! -e "$marker" ] || { rm -rf "$marker"; fail "a block wrote to the real /tmp"; }
 [ ! -e "$repo/camera.json" ] || fail "a file block was written into the repository"
 
-# The long block runs with --long (and fails: false).
+# The long block runs as written with --long (and fails: --code 4).
 run --long docs/page.md
-has "docs/page.md:22: false: exit code 1"
+has "docs/page.md:22: build/bin/shutterlab greet --code 4: exit code 4"
 
 # Without the shared data: only checked; a skip (77), a failure under CI=true.
 rm "$repo/docs/page.md"
