@@ -27,7 +27,7 @@ fence with no language whose lines start with a command is reported: tag it sh.
 
 Usage: scripts/doc_commands.py [--build DIR] [--long] [--verbose] [--keep] [--root DIR] [FILE.md..]
   --build DIR  the build folder whose bin/ the commands run (default: ROOT/build)
-  --long       run the blocks marked long too
+  --long       run the blocks marked long as written (not smaller): hours
   --verbose    print each block's time (and why a block is not run)
   --keep       keep the temporary folders (their path is printed)
   --root DIR   the repository (default: this script's); FILE.md default: README.md, docs/*.md
