@@ -14,7 +14,10 @@ cd "$(dirname "$0")/.."
 shutterlab=${SHUTTERLAB:-build/bin/shutterlab}
 out=${1:-/tmp/shutterlab_phone}
 max_frames=()
-[ -z "${2:-}" ] || max_frames=(--max-frames "$2")
+if [ -n "${2:-}" ]; then
+  [[ "$2" =~ ^[1-9][0-9]*$ ]] || { echo "$0: FRAMES must be a whole number from 1 (got '$2')" >&2; exit 2; }
+  max_frames=(--max-frames "$2")
+fi
 data=${SHUTTERLAB_DATA_DIR:-../shared/data}
 clip=$data/rs/phone_gyro_video_20200109_145447
 [ -d "$clip" ] || { echo "$0: $clip not found (set SHUTTERLAB_DATA_DIR)" >&2; exit 2; }

@@ -107,6 +107,10 @@ def main():
     parser.add_argument("--data", default=os.environ.get("SHUTTERLAB_DATA_DIR", "../shared/data"))
     parser.add_argument("--only", default="", help="only the logs whose path holds this")
     args = parser.parse_args()
+    if not any(args.only in rel for rel, _ in LOGS):
+        print(f"real_logs.py: no log's path holds '{args.only}' (the list: LOGS in this script)",
+              file=sys.stderr)
+        return 2
     print("| log | read as | warnings (kinds) | flight | noise | accuracy | analyze --every 2s |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     with tempfile.TemporaryDirectory() as tmp:
@@ -127,4 +131,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -21,6 +21,7 @@ cd "$(dirname "$0")/.."
 shutterlab=${SHUTTERLAB:-build/bin/shutterlab}
 out=${1:-/tmp/shutterlab_removable}
 frames=${2:-10}
+[[ "$frames" =~ ^[1-9][0-9]*$ ]] || { echo "$0: FRAMES must be a whole number from 1 (got '$frames')" >&2; exit 2; }
 mkdir -p "$out"
 data=${SHUTTERLAB_DATA_DIR:-../shared/data}
 scene=${SCENE:-$data/images/siyi_zr10/IMG_0150.jpg}
