@@ -17,10 +17,14 @@ shutterlab=${SHUTTERLAB:-build/bin/shutterlab}
 out=${1:-/tmp/shutterlab_correct_effects}
 only=${2:-}
 effects="time_offset readout_time gyro_to_camera gyro_scale gyro_bias velocity lens_distortion readout_direction clock_rate"
-for name in ${only//,/ }; do
-  [[ " $effects " == *" $name "* ]] ||
-    { echo "$0: no effect '$name' (one of: ${effects// /, })" >&2; exit 2; }
-done
+if [ -n "$only" ]; then
+  IFS=, read -ra names <<<"$only"
+  [ "${#names[@]}" -gt 0 ] || names=("")
+  for name in "${names[@]}"; do
+    [[ -n "$name" && " $effects " == *" $name "* ]] ||
+      { echo "$0: no effect '$name' in '$only' (names separated by commas, of: ${effects// /, })" >&2; exit 2; }
+  done
+fi
 mkdir -p "$out"
 data=${SHUTTERLAB_DATA_DIR:-../shared/data}
 scene=${SCENE:-$data/images/siyi_zr10/IMG_0100.jpg}

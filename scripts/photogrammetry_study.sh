@@ -2,7 +2,8 @@
 # docs/photogrammetry.md's table: scripts/photogrammetry.sh on four flights (calm at 5 m/s, gusty
 # at 5 m/s, gusty at 10 m/s, and without rotation at 10 m/s) at two readouts (10 and 30 ms),
 # 640x480 photos, 12 a flight; then one line per flight and readout. A flight whose
-# OUT/NAME/table.md exists is not flown again (a rerun only prints). About 4 minutes a flight on
+# OUT/NAME/table.md exists, flown with the same survey options, is not flown again (a rerun only
+# prints). About 4 minutes a flight on
 # 2 cores.
 #
 #   scripts/photogrammetry_study.sh OUT [NAME [survey options...]]
@@ -26,10 +27,14 @@ for flight in "calm 5" "gusty 5" "gusty 10" "none 10"; do
   for readout in 10 30; do
     name="${wind}_${speed}mps_${readout}ms"
     [ -z "$only" ] || [ "$name" = "$only" ] || continue
-    if [ ! -f "$out/$name/table.md" ]; then
+    # A flight flown with other survey options (an earlier run into the same OUT) is flown again.
+    options="$*"
+    if [ ! -f "$out/$name/table.md" ] || [ "$(cat "$out/$name.options" 2>/dev/null)" != "$options" ]; then
       echo "flying $name" >&2
+      rm -rf "$out/$name"
       scripts/photogrammetry.sh "$out/$name" --wind "$wind" --speed "${speed}m/s" \
         --readout "${readout}ms" "$@" >"$out/$name.log" 2>&1
+      printf '%s\n' "$options" >"$out/$name.options"
     fi
   done
 done

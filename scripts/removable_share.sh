@@ -21,7 +21,8 @@ cd "$(dirname "$0")/.."
 shutterlab=${SHUTTERLAB:-build/bin/shutterlab}
 out=${1:-/tmp/shutterlab_removable}
 frames=${2:-10}
-[[ "$frames" =~ ^[1-9][0-9]*$ ]] || { echo "$0: FRAMES must be a whole number from 1 (got '$frames')" >&2; exit 2; }
+# Frame i at 8 + 2i s: 10 fit in the 30 s flight.
+[[ "$frames" =~ ^([1-9]|10)$ ]] || { echo "$0: FRAMES must be a whole number from 1 to 10 (got '$frames')" >&2; exit 2; }
 mkdir -p "$out"
 data=${SHUTTERLAB_DATA_DIR:-../shared/data}
 scene=${SCENE:-$data/images/siyi_zr10/IMG_0150.jpg}
@@ -60,8 +61,13 @@ for readout in 0.010 0.030; do
  "rolling_shutter": {"readout_s": $readout, "direction": "top_to_bottom"},
  "scene": {"altitude_m": 50.0}}
 JSON
-  [ -f "$ds/frames.csv" ] || "$shutterlab" render --scene "$scene" --camera "$out/camera_$readout.json" \
-    --gyro "$out/truth.csv" --frames "$out/times.csv" --out "$ds" --no-pictures >/dev/null
+  # A dataset of another FRAMES (an earlier run into the same OUT_DIR) is rendered again.
+  cmp -s "$out/times.csv" "$ds/times.csv" || rm -rf "$ds"
+  if [ ! -f "$ds/frames.csv" ]; then
+    "$shutterlab" render --scene "$scene" --camera "$out/camera_$readout.json" \
+      --gyro "$out/truth.csv" --frames "$out/times.csv" --out "$ds" --no-pictures >/dev/null
+    cp "$out/times.csv" "$ds/times.csv"
+  fi
   for logged in perfect_1k mpu9250_200 mpu9250_1000 mpu9250_4000 mpu9250x10_200 mpu9250x10_1000 \
       mpu9250x10_4000; do
     # The dataset as this gyro logged it: its gyro.csv, the same images and truth.

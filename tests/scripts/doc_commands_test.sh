@@ -125,6 +125,44 @@ scripts/ok.sh --no-language
 \`\`\`
 EOF
 
+# A mistyped long mark, a pair whose text is only in a comment, a smaller block that fails, a
+# script that exits 77 (a tool missing), and a benchmark this build lacks with a block after it.
+mkdir -p "$repo/bench"
+touch "$repo/bench/tool_bench.cc"
+echo "SHUTTERLAB_BUILD_BENCH:BOOL=OFF" >"$repo/build/CMakeCache.txt"
+cat >"$repo/docs/more.md" <<'EOF'
+# more
+
+<!-- doc-test: long suite: --code 3 => --code 0 -->
+```sh
+build/bin/shutterlab greet --code 3
+```
+
+<!-- doc-test: long; suite: 15 => 2 -->
+```sh
+# shows 15 frames
+build/bin/shutterlab greet --code 0
+```
+
+<!-- doc-test: long; suite: --code 5 => --code 6 -->
+```sh
+build/bin/shutterlab greet --code 5   # takes 5 minutes
+```
+
+```sh
+build/bin/shutterlab greet --code 77
+echo never reached
+```
+
+```sh
+build/bin/tool_bench --keep /tmp/x
+```
+
+```sh
+cat /tmp/x/out.txt
+```
+EOF
+
 # run ARGS...: the script's output in $got, its exit status in $status
 run() { status=0; got=$(/usr/bin/python3 "$script" --root "$repo" "$@" 2>&1) || status=$?; }
 has() { grep -qF -- "$1" <<<"$got" || fail "no '$1' in the output:
@@ -159,12 +197,27 @@ $got"
 [ ! -e "$marker" ] || { rm -rf "$marker"; fail "a block wrote to the real /tmp"; }
 [ ! -e "$repo/camera.json" ] || fail "a file block was written into the repository"
 
+# more.md: each case in one line; exit 77 a skip, but a failure under CI=true.
+has "docs/more.md:3: unknown mark '<!-- doc-test: long suite: --code 3 => --code 0 -->'"
+has "docs/more.md:8: '15 => 2' is not TEXT => REPLACEMENT with TEXT in a command"
+has "docs/more.md:16: build/bin/shutterlab greet --code 6: exit code 6: (no stderr) (as the suite runs it)"
+has "docs/more.md:20: build/bin/shutterlab greet --code 77: exit code 77, a tool it needs is missing"
+has "docs/more.md:19:    0.0 s  SKIPPED"
+has "docs/more.md:24: not run (build/bin/tool_bench is not built here)"
+has "docs/more.md:28: not run (it may read what line 24 wrote, which did not run)"
+[ "$(grep -c '^docs/more.md:[0-9]*: ' <<<"$got")" = 8 ] || fail "more.md: not one line per case:
+$got"
+CI=true run docs/more.md
+[ "$status" = 1 ] || fail "exit $status under CI=true, not 1:
+$got"
+has "docs/more.md:20: build/bin/shutterlab greet --code 77: exit code 77, a tool it needs is missing: (no stderr) (CI=true needs it)"
+
 # The long block runs as written with --long (and fails: --code 4).
 run --long docs/page.md
 has "docs/page.md:22: build/bin/shutterlab greet --code 4: exit code 4"
 
 # Without the shared data: only checked; a skip (77), a failure under CI=true.
-rm "$repo/docs/page.md"
+rm "$repo/docs/page.md" "$repo/docs/more.md"
 export SHUTTERLAB_DATA_DIR="$work/no data"
 run
 [ "$status" = 77 ] || fail "exit $status without the data, not 77:
