@@ -16,13 +16,15 @@ cd "$(dirname "$0")/.."
 shutterlab=${SHUTTERLAB:-build/bin/shutterlab}
 out=${1:-/tmp/shutterlab_correct_effects}
 only=${2:-}
-effects="time_offset readout_time gyro_to_camera gyro_scale gyro_bias velocity lens_distortion readout_direction clock_rate"
+effects="time_offset readout_time gyro_to_camera gyro_scale gyro_bias velocity lens_distortion"
+effects+=" readout_direction clock_rate"
 if [ -n "$only" ]; then
   IFS=, read -ra names <<<"$only"
   [ "${#names[@]}" -gt 0 ] || names=("")
   for name in "${names[@]}"; do
     [[ -n "$name" && " $effects " == *" $name "* ]] ||
-      { echo "$0: no effect '$name' in '$only' (names separated by commas, of: ${effects// /, })" >&2; exit 2; }
+      { echo "$0: no effect '$name' in '$only' (names separated by commas, of:" \
+          "${effects// /, })" >&2; exit 2; }
   done
 fi
 mkdir -p "$out"

@@ -20,15 +20,16 @@ and a block of any language that the commands read as a file says which, the sam
   <!-- doc-test: file /tmp/camera.json -->   written there before the file's first block runs
 A block that runs sudo, scripts/setup.sh or scripts/test.sh is never run, marked or not: it would
 install packages, build, or run this test again. A block that names a benchmark this build lacks
-(SHUTTERLAB_BUILD_BENCH off) is not run, nor are the blocks after it in its file (they may read
-what it writes). A command that exits 77, a script saying that a tool it needs is missing
-(scripts/slurm_cluster.sh without Slurm), ends its block as a skip, said in one line; under
-CI=true that is a failure. A line that starts a doc-test mark but is none of these is reported. Every command of every block, and every command
-or synopsis quoted inline in the prose and tables (`build/bin/shutterlab ...`, `shutterlab SUB
-[--a X | --b]`), is also checked cheaply: each scripts/X and build/bin/X it names exists (a
-benchmark may be missing from a build that has SHUTTERLAB_BUILD_BENCH off), and each shutterlab
-command names a subcommand, and options, that `build/bin/shutterlab SUBCOMMAND --help` lists. A
-fence with no language whose lines start with a command is reported: tag it sh.
+(SHUTTERLAB_BUILD_BENCH off) is not run, nor are the blocks after it in its file (they may read what
+it writes). A command that exits 77, a script saying that a tool it needs is missing
+(scripts/slurm_cluster.sh without Slurm), ends its block as a skip, said in one line; under CI=true
+that is a failure. A line that starts a doc-test mark but is none of these is reported. Every
+command of every block, and every command or synopsis quoted inline in the prose and tables
+(`build/bin/shutterlab ...`, `shutterlab SUB [--a X | --b]`), is also checked cheaply: each
+scripts/X and build/bin/X it names exists (a benchmark may be missing from a build that has
+SHUTTERLAB_BUILD_BENCH off), and each shutterlab command names a subcommand, and options, that
+`build/bin/shutterlab SUBCOMMAND --help` lists. A fence with no language whose lines start with a
+command is reported: tag it sh.
 
 Usage: scripts/doc_commands.py [--build DIR] [--long] [--verbose] [--keep] [--root DIR] [FILE.md..]
   --build DIR  the build folder whose bin/ the commands run (default: ROOT/build)
@@ -428,9 +429,8 @@ def main():
                 if args.verbose:
                     mark = ("" if block.mark != "long" else " (long)" if args.long
                             else " (long, run smaller)")
-                    print(f"{block.path}:{block.line}: {seconds:6.1f} s{mark}"
-                          f"{'  SKIPPED' if skipped and not finding else '  FAILED' if finding else ''}",
-                          flush=True)
+                    outcome = ("  FAILED" if finding else "  SKIPPED" if skipped else "")
+                    print(f"{block.path}:{block.line}: {seconds:6.1f} s{mark}{outcome}", flush=True)
                 if finding:
                     findings.append(finding)
     finally:

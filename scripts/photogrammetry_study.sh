@@ -29,7 +29,8 @@ for flight in "calm 5" "gusty 5" "gusty 10" "none 10"; do
     [ -z "$only" ] || [ "$name" = "$only" ] || continue
     # A flight flown with other survey options (an earlier run into the same OUT) is flown again.
     options="$*"
-    if [ ! -f "$out/$name/table.md" ] || [ "$(cat "$out/$name.options" 2>/dev/null)" != "$options" ]; then
+    flown_with=$(cat "$out/$name.options" 2>/dev/null || true)
+    if [ ! -f "$out/$name/table.md" ] || [ "$flown_with" != "$options" ]; then
       echo "flying $name" >&2
       rm -rf "$out/$name"
       scripts/photogrammetry.sh "$out/$name" --wind "$wind" --speed "${speed}m/s" \

@@ -22,7 +22,8 @@ shutterlab=${SHUTTERLAB:-build/bin/shutterlab}
 out=${1:-/tmp/shutterlab_removable}
 frames=${2:-10}
 # Frame i at 8 + 2i s: 10 fit in the 30 s flight.
-[[ "$frames" =~ ^([1-9]|10)$ ]] || { echo "$0: FRAMES must be a whole number from 1 to 10 (got '$frames')" >&2; exit 2; }
+[[ "$frames" =~ ^([1-9]|10)$ ]] ||
+  { echo "$0: FRAMES must be a whole number from 1 to 10 (got '$frames')" >&2; exit 2; }
 mkdir -p "$out"
 data=${SHUTTERLAB_DATA_DIR:-../shared/data}
 scene=${SCENE:-$data/images/siyi_zr10/IMG_0150.jpg}
