@@ -56,7 +56,6 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SKIP = 77  # ctest's SKIP_RETURN_CODE for this test, and a script's "a tool I need is missing"
-SKIPPED = "skipped: "  # run_block's finding for a command that exited SKIP
 MARKER = re.compile(r"^\s*<!--\s*doc-test:\s*([\w-]+)(?:\s+(\S+))?\s*-->\s*$")
 MARKS = ("template", "hardware", "long", "file")
 ANY_MARK = re.compile(r"^\s*<!--\s*doc-test\b")
@@ -94,9 +93,8 @@ class Block:
         commands, not in its comments."""
         lines = []
         for t in self.lines:
-            m = None if t.lstrip().startswith("#") else COMMENT.search(t)
-            code, comment = (t[:m.start()], t[m.start():]) if m else (
-                ("", t) if t.lstrip().startswith("#") else (t, ""))
+            code = command_part(t)
+            comment = t[len(code):]
             for text, replacement in self.smaller:
                 code = code.replace(text, replacement)
             lines.append(code + comment)
@@ -120,30 +118,35 @@ class Block:
         return out
 
 
+def command_part(line):
+    """The line before its comment: "" for a line that starts with #."""
+    if line.lstrip().startswith("#"):
+        return ""
+    m = COMMENT.search(line)
+    return line[:m.start()] if m else line
+
+
 def read_mark(line, body):
     """(kind, file path, a long block's (text, replacement) pairs, finding or None) of the line
     before a block whose lines are body; kind None when the line is no mark."""
     mark, long_mark = MARKER.match(line), LONG.match(line)
     if long_mark:
-        smaller = []
+        smaller, commands = [], [command_part(t) for t in body]
         for pair in long_mark.group(1).split(";"):
             text, arrow, replacement = pair.partition("=>")
-            commands = [COMMENT.sub("", t) for t in body if not t.lstrip().startswith("#")]
             if not arrow or not text.strip() or not any(text.strip() in c for c in commands):
                 return "long", None, [], (f"'{pair.strip()}' is not TEXT => REPLACEMENT with "
                                           f"TEXT in a command of the block below")
             smaller.append((text.strip(), replacement.strip()))
         return "long", None, smaller, None
     kind, file_path = (mark.group(1), mark.group(2)) if mark else (None, None)
-    if kind is None and ANY_MARK.match(line):
-        return "unknown", None, [], (f"unknown mark '{line.strip()}' (template, hardware, "
-                                     f"long; suite: A => B, or file PATH)")
     if kind == "long":
         return kind, None, [], ("a long block says how the suite runs it smaller: "
                                 "<!-- doc-test: long; suite: TEXT => REPLACEMENT -->")
-    if kind is not None and (kind not in MARKS or (kind == "file") != bool(file_path)):
-        return kind, None, [], (f"unknown mark '{line.strip()}' "
-                                f"(template, hardware, long; suite: A => B, or file PATH)")
+    if (kind is None and ANY_MARK.match(line)) or (
+            kind is not None and (kind not in MARKS or (kind == "file") != bool(file_path))):
+        return "unknown", None, [], (f"unknown mark '{line.strip()}' (template, hardware, "
+                                     f"long; suite: A => B, or file PATH)")
     return kind, file_path, [], None
 
 
@@ -293,7 +296,7 @@ def script_of(block, folder, data):
 
 
 def run_block(block, folder, cwd, data, timeout):
-    """(seconds, finding or None)."""
+    """(seconds, finding or None, skipped: the finding is a command's exit SKIP)."""
     status_file = os.path.join(folder, ".doc-test-status")
     if os.path.exists(status_file):
         os.remove(status_file)
@@ -309,10 +312,10 @@ def run_block(block, folder, cwd, data, timeout):
         _, stderr = proc.communicate()
         seconds = time.monotonic() - start
         return seconds, (f"{block.path}:{block.line}: timed out after {timeout} s: "
-                         f"{tail(stderr)}")
+                         f"{tail(stderr)}"), False
     seconds = time.monotonic() - start
     if proc.returncode == 0:
-        return seconds, None
+        return seconds, None, False
     line, status, expected = block.line, proc.returncode, "-"
     if os.path.exists(status_file):
         fields = open(status_file, encoding="utf-8").read().split()
@@ -324,9 +327,9 @@ def run_block(block, folder, cwd, data, timeout):
     says = f"exit code {status}" + (f" (expected {expected})" if expected != "-" else "")
     command = COMMENT.sub("", command).strip()
     if status == SKIP and expected == "-":  # the block ends here: a tool it needs is missing
-        return seconds, (f"{SKIPPED}{block.path}:{line}: {short(command)}: exit code {SKIP}, a "
-                         f"tool it needs is missing: {tail(stderr)}")
-    return seconds, f"{block.path}:{line}: {short(command)}: {says}: {tail(stderr)}"
+        return seconds, (f"{block.path}:{line}: {short(command)}: exit code {SKIP}, a tool it "
+                         f"needs is missing: {tail(stderr)}"), True
+    return seconds, f"{block.path}:{line}: {short(command)}: {says}: {tail(stderr)}", False
 
 
 def farm(root, build, folder):
@@ -416,14 +419,13 @@ def main():
                         print(f"{block.path}:{block.line}: not run ({why})")
                     continue
                 run_any = True
-                seconds, finding = run_block(block, os.path.join(folder, "tmp"), cwd, data,
-                                             args.timeout)
-                skipped = finding is not None and finding.startswith(SKIPPED)
+                seconds, finding, skipped = run_block(block, os.path.join(folder, "tmp"), cwd,
+                                                      data, args.timeout)
                 if skipped and os.environ.get("CI") != "true":
-                    print(finding[len(SKIPPED):])
+                    print(finding)
                     finding = None
                 elif skipped:
-                    finding = finding[len(SKIPPED):] + " (CI=true needs it)"
+                    finding += " (CI=true needs it)"
                 if finding and smaller:
                     finding += " (as the suite runs it)"
                 if args.verbose:
