@@ -252,18 +252,24 @@ void SampleRowFloatImpl(const cv::Mat& src, const float* xs, const float* ys, in
 // The source as the blocks read it: its pixels and row step (copied: read through the cv::Mat,
 // which the blocks' stores might alias for all the compiler knows, they were loaded again for
 // every block), and where a block fits: its loads stay inside the source when
-// 3 ix0 + 16 <= 3 width and iy0 + 1 <= height - 1.
+// 3 ix0 + 16 <= 3 width and iy0 + 1 <= height - 1. A source of fewer than 6 columns or 2 rows
+// fits no block, which no unsigned limit can say (the limit -1 let every block through, reading
+// outside the source): its rows take the one-pixel path whole.
 struct BlockSource {
   const uint8_t* data;
   size_t step;
-  unsigned max_ix0, max_iy0;
+  int max_ix0, max_iy0;
+  bool blocks_fit;
   explicit BlockSource(const cv::Mat& src)
       : data(src.data),
         step(src.step),
-        max_ix0(static_cast<unsigned>(std::max(-1, src.cols - 6))),
-        max_iy0(static_cast<unsigned>(std::max(-1, src.rows - 2))) {}
+        max_ix0(src.cols - 6),
+        max_iy0(src.rows - 2),
+        blocks_fit(max_ix0 >= 0 && max_iy0 >= 0) {}
+  // Unsigned: a negative ix0 or iy0 is outside. Only where blocks_fit.
   bool Inside(int ix0, int iy0) const {
-    return static_cast<unsigned>(ix0) <= max_ix0 && static_cast<unsigned>(iy0) <= max_iy0;
+    return static_cast<unsigned>(ix0) <= static_cast<unsigned>(max_ix0) &&
+           static_cast<unsigned>(iy0) <= static_cast<unsigned>(max_iy0);
   }
 };
 
@@ -369,6 +375,7 @@ __attribute__((target("sse4.1"))) void BilinearRow8uc3Sse41(const cv::Mat& src, 
                                                             const int* yi, int width,
                                                             uint8_t* out) {
   const BlockSource source(src);
+  if (!source.blocks_fit) return BilinearRow8uc3(src, xi, yi, width, out);
   int u = 0;
   for (; u + 4 <= width; u += 4) {
     if (Block4<false>(source, xi + u, yi + u, out + 3 * u)) continue;
@@ -521,6 +528,7 @@ __attribute__((target("avx2"))) inline bool Block8(const BlockSource& source,
 __attribute__((target("avx2"))) void BilinearRow8uc3Avx2(const cv::Mat& src, const int* xi,
                                                          const int* yi, int width, uint8_t* out) {
   const BlockSource source(src);
+  if (!source.blocks_fit) return BilinearRow8uc3(src, xi, yi, width, out);
   const WideConstants k;
   int u = 0;
   for (; u + 8 <= width; u += 8) {

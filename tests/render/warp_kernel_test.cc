@@ -46,32 +46,39 @@ void NearShiftCoordinates(int n, cv::Size src, uint64_t seed, std::vector<int>* 
   }
 }
 
+// Each RGB path against the one-pixel path and the grey path of each channel, on sources whose
+// rows are wide blocks' (157 x 6) and on sources too narrow or too short for any block to fit
+// (fewer than 6 columns, 1 row; 6 x 2 and 7 x 3 just fit): rows above the source, at its top edge,
+// inside, near and at its bottom edge (the last row has no row below it) and below it.
 TEST(WarpKernel, EveryRgbPathGivesTheScalarPathsBits) {
-  const cv::Size src_size(157, 6);
-  const cv::Mat src = SmoothTexture(src_size, CV_8UC3, 3, 0.7) + cv::Scalar::all(1);
-  std::vector<cv::Mat> channels;
-  cv::split(src, channels);
-  // Rows above the source, at its top edge, inside, near and at its bottom edge (the last row has
-  // no row below it) and below it.
-  // Lengths of each remainder the 8-pixel blocks leave, and 10 and 18, where a block's wide stores
-  // end two pixels before the row does.
-  for (const int n : {4001, 4000, 4002, 4005, 18, 10}) {
-    for (const float y0 : {-1.6f, -0.6f, 2.0f, 4.4f, 5.6f, 6.5f}) {
-      std::vector<int> xi, yi;
-      NearShiftCoordinates(n, src_size, 11 + static_cast<int>(y0 * 10), &xi, &yi);
-      for (int& y : yi) y = y == kInvalidFixed ? y : y - ToFixed(src_size.height * 0.5f - y0);
-      std::vector<uint8_t> wide(3 * n), narrow(3 * n), grey(n);
-      const bool previous = SetWideSampler(true);
-      SampleRowFixed(src, xi.data(), yi.data(), n, wide.data());
-      SetWideSampler(false);
-      SampleRowFixed(src, xi.data(), yi.data(), n, narrow.data());
-      SetWideSampler(previous);
-      EXPECT_EQ(wide, narrow) << "y0 = " << y0 << ", n = " << n;
-      for (int c = 0; c < 3; ++c) {
-        SampleRowFixed(channels[c], xi.data(), yi.data(), n, grey.data());
-        for (int u = 0; u < n; ++u) {
-          ASSERT_EQ(wide[3 * u + c], grey[u])
-              << "pixel " << u << " channel " << c << " y0 " << y0 << " n " << n;
+  for (const cv::Size src_size : {cv::Size(157, 6), cv::Size(5, 6), cv::Size(157, 1),
+                                  cv::Size(4, 1), cv::Size(6, 2), cv::Size(7, 3)}) {
+    // A block that read outside the source would differ from the one-pixel path, which reads the
+    // taps outside as 0, or be reported by AddressSanitizer.
+    const cv::Mat src = SmoothTexture(src_size, CV_8UC3, 3, 0.7) + cv::Scalar::all(1);
+    std::vector<cv::Mat> channels;
+    cv::split(src, channels);
+    const float h = static_cast<float>(src_size.height);
+    // Lengths of each remainder the 8-pixel blocks leave, and 10 and 18, where a block's wide
+    // stores end two pixels before the row does.
+    for (const int n : {4001, 4000, 4002, 4005, 18, 10}) {
+      for (const float y0 : {-1.6f, -0.6f, 2.0f / 6 * h, 4.4f / 6 * h, h - 0.4f, h + 0.5f}) {
+        std::vector<int> xi, yi;
+        NearShiftCoordinates(n, src_size, 11 + static_cast<int>(y0 * 10), &xi, &yi);
+        for (int& y : yi) y = y == kInvalidFixed ? y : y - ToFixed(h * 0.5f - y0);
+        std::vector<uint8_t> wide(3 * n), narrow(3 * n), grey(n);
+        const bool previous = SetWideSampler(true);
+        SampleRowFixed(src, xi.data(), yi.data(), n, wide.data());
+        SetWideSampler(false);
+        SampleRowFixed(src, xi.data(), yi.data(), n, narrow.data());
+        SetWideSampler(previous);
+        EXPECT_EQ(wide, narrow) << src_size << ", y0 = " << y0 << ", n = " << n;
+        for (int c = 0; c < 3; ++c) {
+          SampleRowFixed(channels[c], xi.data(), yi.data(), n, grey.data());
+          for (int u = 0; u < n; ++u) {
+            ASSERT_EQ(wide[3 * u + c], grey[u])
+                << src_size << ", pixel " << u << " channel " << c << " y0 " << y0 << " n " << n;
+          }
         }
       }
     }
