@@ -42,6 +42,13 @@ void Run(const MeasureCommand& command) {
                             "image is " + SizeText(image) + " but the reference " +
                                 command.ref_path + " is " + SizeText(ref)));
   }
+  if (image.cols < kMinMeasuredSidePx || image.rows < kMinMeasuredSidePx) {
+    throw IoError(IoMessage(command.image_path, 0,
+                            "image is " + SizeText(image) + ": a measurement needs at least " +
+                                std::to_string(kMinMeasuredSidePx) + "x" +
+                                std::to_string(kMinMeasuredSidePx) +
+                                " pixels for its matching windows (use larger images)"));
+  }
   MeasureReport report;
   if (!command.camera_path.empty()) {
     const RigModel rig = ReadRigModel(command.camera_path);

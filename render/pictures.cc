@@ -76,9 +76,12 @@ cv::Mat DisplacementHeatmap(const cv::Mat& displacement, double max_px) {
   const cv::Size label =
       cv::getTextSize(FormatPx(max_px), cv::FONT_HERSHEY_SIMPLEX, font, 1, &baseline);
   const int strip_width = margin * 3 + bar_width + label.width;
-  cv::Mat canvas(h, displacement.cols + strip_width, CV_8UC3, cv::Scalar::all(32));
+  // A field too short for the bar's three labels (a thumbnail-sized frame) sits at the top of a
+  // taller canvas: the bar's rows would otherwise lie outside it.
+  const int canvas_height = std::max(h, 2 * margin + 5 * label.height);
+  cv::Mat canvas(canvas_height, displacement.cols + strip_width, CV_8UC3, cv::Scalar::all(32));
   bgr.copyTo(canvas(cv::Rect(0, 0, displacement.cols, h)));
-  const int top = label.height + margin, bottom = h - label.height - margin;
+  const int top = label.height + margin, bottom = canvas_height - label.height - margin;
   cv::Mat ramp(std::max(1, bottom - top), 1, CV_8U);
   for (int r = 0; r < ramp.rows; ++r)
     ramp.at<uchar>(r) =

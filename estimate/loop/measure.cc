@@ -311,7 +311,9 @@ void CheckImages(const cv::Mat& ref, const cv::Mat& image) {
     SHUTTERLAB_CHECK(m->channels() == 1 || m->channels() == 3 || m->channels() == 4)
         << "images must have 1, 3 or 4 channels";
   }
-  SHUTTERLAB_CHECK(ref.cols >= 32 && ref.rows >= 32) << "images must be at least 32x32 pixels";
+  SHUTTERLAB_CHECK(ref.cols >= kMinMeasuredSidePx && ref.rows >= kMinMeasuredSidePx)
+      << "images must be at least " << kMinMeasuredSidePx << "x" << kMinMeasuredSidePx
+      << " pixels (got " << ref.cols << "x" << ref.rows << ")";
 }
 
 void CheckMask(const cv::Mat& mask, const cv::Mat& image) {

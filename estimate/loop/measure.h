@@ -38,6 +38,9 @@ struct MeasureOptions {
 // against which every residual would be infinitely significant.
 inline constexpr double kMinNoisePx = 1e-3;
 
+// The smallest image side a measurement takes, px: its matching windows need that much around them.
+inline constexpr int kMinMeasuredSidePx = 32;
+
 struct DisplacementMeasurement {
   // Both empty without MeasureOptions::dense_field.
   cv::Mat field;       // CV_32FC2 (dx, dy) per rolling-shutter pixel; NaN where unmeasured

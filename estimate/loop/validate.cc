@@ -355,6 +355,16 @@ ValidationResult ValidateDataset(const std::string& dataset_dir,
   options.measure.mask = CombinedMask(dataset, given_options.mask_path, &result.mask_description);
   result.mask = options.measure.mask;
   result.declared = dataset.declared;
+  const PinholeCamera& camera = dataset.declared.camera;
+  if (camera.width < kMinMeasuredSidePx || camera.height < kMinMeasuredSidePx) {
+    throw IoError(IoMessage(dataset.camera_path, 0,
+                            "the camera is " + std::to_string(camera.width) + "x" +
+                                std::to_string(camera.height) +
+                                " pixels: validate measures each frame's distortion, which needs "
+                                "at least " +
+                                std::to_string(kMinMeasuredSidePx) + "x" +
+                                std::to_string(kMinMeasuredSidePx) + " (render larger frames)"));
+  }
   if (!options.lens_profile_path.empty()) {
     result.lens_profile =
         ScaleLensProfile(ReadLensProfile(options.lens_profile_path), result.declared.camera.width,

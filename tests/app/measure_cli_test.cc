@@ -151,6 +151,12 @@ TEST(MeasureCli, BadInputOneLineExitTwo) {
   WriteImage(small_path, small);
   ExpectBadInput(dir, Quote(files.ref) + " " + Quote(small_path), small_path,
                  "image is 400x300 but the reference");
+  // Images too small for the matching windows, of one size.
+  const std::string tiny_ref = dir / "tiny_ref.png", tiny = dir / "tiny.png";
+  WriteImage(tiny_ref, ReadImage(files.ref)(cv::Rect(0, 0, 24, 40)).clone());
+  WriteImage(tiny, ReadImage(files.rs)(cv::Rect(0, 0, 24, 40)).clone());
+  ExpectBadInput(dir, Quote(tiny_ref) + " " + Quote(tiny), tiny,
+                 "image is 24x40: a measurement needs at least 32x32 pixels");
   // A camera of another size.
   RigModel rig = files.rig;
   rig.camera.width = 640;

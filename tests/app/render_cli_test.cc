@@ -24,10 +24,10 @@ namespace fs = std::filesystem;
 // Inputs of a small render: declared camera, constant-rate gyro log, two frames, a scene.
 struct Inputs {
   test::TempDir dir;
-  RigModel declared = test::SmallRig(96, 72);
+  RigModel declared;
   GyroTrace gyro = test::ConstantRateTrace(Eigen::Vector3d(0.4, -0.6, 0.9), 0.0, 2.0);
   cv::Mat scene = test::SmoothTexture(cv::Size(240, 200), CV_8UC3);
-  Inputs() {
+  explicit Inputs(int width = 96, int height = 72) : declared(test::SmallRig(width, height)) {
     WriteRigModel(dir / "camera.json", declared);
     WriteGyroCsv(dir / "gyro.csv", gyro);
     WriteFileAtomically(dir / "times.csv", "frame,t_first_row\n3,0.5\n12,1.25\n");
@@ -103,6 +103,22 @@ TEST(RenderCommand, WritesACompleteDatasetWithTruth) {
 
 // A gyro log with a pause is rendered as it is, and the command says what it lost, as every
 // command that reads a log does.
+// Frames smaller than a picture's captions and scale bar (a heatmap's bar needs about 40 rows):
+// rendered with their pictures, each as big as its frame at least.
+TEST(RenderCommand, FramesOfAFewPixelsAreRenderedWithTheirPictures) {
+  for (const auto& [width, height] : {std::pair{8, 6}, {64, 2}, {1, 1}}) {
+    Inputs in(width, height);
+    const std::string out = in.dir / "out";
+    const test::CommandResult result = test::RunShutterlab(in.Args(out));
+    ASSERT_EQ(result.exit_code, 0) << width << "x" << height << ": " << result.output;
+    for (const char* picture : {"/truth/0003_heat.png", "/truth/0003_side.png", "/overview.png"}) {
+      const cv::Mat image = ReadImage(out + picture);
+      EXPECT_GE(image.cols, width) << picture;
+      EXPECT_GE(image.rows, height) << picture;
+    }
+  }
+}
+
 TEST(RenderCommand, SaysWhatTheGyroLogLost) {
   Inputs in;
   std::vector<GyroSample> samples;

@@ -171,6 +171,20 @@ TEST(ValidateCli, WrongImageSize) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+TEST(ValidateCli, ACameraTooSmallToMeasure) {
+  test::TempDir dir;
+  const std::string dataset = SmallValidateDataset(dir);
+  RigModel rig = ReadRigModel(fs::path(dataset) / "camera.json");
+  rig.camera.width = 30;
+  WriteRigModel(fs::path(dataset) / "camera.json", rig);
+  const std::string report = dir / "report.json";
+  const test::CommandResult r =
+      test::RunShutterlab("validate '" + dataset + "' --report '" + report + "'");
+  ExpectOneLineError(r, dataset + "/camera.json", "the camera is 30x240 pixels");
+  EXPECT_NE(r.output.find("at least 32x32"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(report));
+}
+
 TEST(ValidateCli, FrameOutsideGyroLog) {
   test::TempDir dir;
   const std::string dataset = SmallValidateDataset(dir);

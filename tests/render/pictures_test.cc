@@ -1,9 +1,13 @@
-// Pictures for people: the whole-factor shrink that draws a photo's overview tile.
+// Pictures for people: the whole-factor shrink that draws a photo's overview tile, and the
+// displacement heatmap at every size a camera may have.
 
 #include "render/pictures.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
+
+#include <cmath>
+#include <limits>
 
 namespace shutterlab {
 namespace {
@@ -39,6 +43,37 @@ TEST(ShrinkByWholeFactor, EachPixelIsTheMeanOfItsBlock) {
   // Never fewer than one row: a strip 2 rows high shrinks by 2 at most.
   EXPECT_EQ(ShrinkByWholeFactor(cv::Mat(2, 100, CV_8UC3, cv::Scalar::all(7)), 10).size(),
             cv::Size(50, 1));
+}
+
+TEST(DisplacementHeatmap, DrawsTheFieldAndItsScaleBarAtAnySize) {
+  // Fields from one pixel to a frame, as tall as a scale bar's labels need and far shorter: each
+  // drawn at the top left, |d| rising to the right from 0 (viridis: the largest yellow, 0
+  // purple), a pixel without a value black, the bar to its right.
+  for (const cv::Size size : {cv::Size(1, 1), cv::Size(8, 8), cv::Size(64, 2), cv::Size(2, 64),
+                              cv::Size(320, 240)}) {
+    cv::Mat field(size, CV_32FC2);
+    for (int v = 0; v < size.height; ++v) {
+      for (int u = 0; u < size.width; ++u) field.at<cv::Vec2f>(v, u) = cv::Vec2f(0.0f, size.width == 1 ? 1.0f : static_cast<float>(u));
+    }
+    const bool has_hole = size.area() > 2;
+    if (has_hole) {
+      field.at<cv::Vec2f>(size.height - 1, 0)[0] = std::numeric_limits<float>::quiet_NaN();
+    }
+    const cv::Mat picture = DisplacementHeatmap(field);
+    ASSERT_EQ(picture.type(), CV_8UC3) << size;
+    EXPECT_GE(picture.rows, size.height) << size;
+    EXPECT_GT(picture.cols, size.width + 12) << size;  // the bar's strip, 12 px wide at least
+    const cv::Vec3b largest = picture.at<cv::Vec3b>(0, size.width - 1);  // R, G, B
+    EXPECT_GT(largest[0], 200) << size;
+    EXPECT_GT(largest[1], 200) << size;
+    EXPECT_LT(largest[2], 100) << size;
+    if (size.width > 1) {
+      const cv::Vec3b smallest = picture.at<cv::Vec3b>(0, 0);
+      EXPECT_LT(smallest[1], 100) << size;
+      EXPECT_GT(smallest[2], smallest[1]) << size;
+    }
+    if (has_hole) EXPECT_EQ(picture.at<cv::Vec3b>(size.height - 1, 0), cv::Vec3b(0, 0, 0)) << size;
+  }
 }
 
 }  // namespace
