@@ -24,6 +24,10 @@ constexpr double kMinOverlapS = 10.0;  // at every lag searched (or half the sho
 constexpr double kMinPeakCorrelation = 0.5;
 constexpr double kMaxRunnerUpShare = 0.95;  // a steady swing scores 0.99 and more
 constexpr double kDistinctLagS = 0.5;       // a local maximum this far from the peak is another lag
+// The least RMS change of a trace's rate magnitude (its 10 ms means, rad/s) that can be aligned: a
+// constant rate's is rounding alone (about 1e-19), whose correlations mean nothing; a still MEMS
+// gyro's noise is 1e-3 and more, which the peak's own test refuses.
+constexpr double kMinMagnitudeChangeRadS = 1e-6;
 constexpr int kIterations = 8;
 constexpr double kDerivativeStepS = 0.005;  // keeps 30 Hz motion's derivative to 6 %
 constexpr double kSmoothingS = 0.02;        // the fine fit's triangle: 140 Hz kept to 5 %
@@ -96,6 +100,17 @@ CoarseLag FindCoarseLag(const GyroTrace& a, const GyroTrace& b, double step_s, d
                         double max_offset_s) {
   const std::vector<double> ma = Magnitudes(a, step_s), mb = Magnitudes(b, step_s);
   const int na = static_cast<int>(ma.size()), nb = static_cast<int>(mb.size());
+  for (const auto& [name, m] : {std::pair{"A", &ma}, {"B", &mb}}) {
+    double sum_sq = 0;
+    for (const double v : *m) sum_sq += v * v;
+    const double rms_change = std::sqrt(sum_sq / static_cast<double>(m->size()));
+    if (!(rms_change >= kMinMagnitudeChangeRadS)) {
+      throw std::invalid_argument(
+          std::string("the motion is too weak to align the traces: ") + name +
+          "'s rate magnitude never changes (" + FormatNumber("%.1e", rms_change) +
+          " rad/s RMS over its 10 ms means): record some turns about every axis in both");
+    }
+  }
   size_t n = 1;
   while (n < ma.size() + mb.size()) n *= 2;
   std::vector<double> pa(n, 0.0), pb(n, 0.0);
@@ -131,9 +146,21 @@ CoarseLag FindCoarseLag(const GyroTrace& a, const GyroTrace& b, double step_s, d
   CoarseLag lag;
   lag.peak = c[best];
   const int distinct = static_cast<int>(kDistinctLagS / step_s);
-  for (int i = 1; i + 1 < static_cast<int>(c.size()); ++i) {
-    if (std::abs(i - best) > distinct && c[i] >= c[i - 1] && c[i] >= c[i + 1])
+  bool other_lag_searched = false;
+  for (int i = 0; i < static_cast<int>(c.size()); ++i) {
+    if (std::abs(i - best) <= distinct || c[i] <= -2.0) continue;
+    other_lag_searched = true;
+    if (i > 0 && i + 1 < static_cast<int>(c.size()) && c[i] >= c[i - 1] && c[i] >= c[i + 1])
       lag.runner_up = std::max(lag.runner_up, c[i]);
+  }
+  // Without another lag to compare, a runner-up below the peak proves nothing (a swing a period
+  // long aligns anywhere): unless the caller bounds the offset, too short to tell.
+  if (!other_lag_searched && !(max_offset_s > 0)) {
+    throw std::invalid_argument(
+        "the traces are too short to tell their offset from one " +
+        FormatNumber("%.1f", kDistinctLagS) + " s away (each offset searched overlaps them by " +
+        FormatNumber("%.2f", min_overlap_s) +
+        " s or more): record a few seconds of turns in both, or bound the offset (--max-offset)");
   }
   // The peak's sub-step place from a parabola through it and its neighbours.
   double frac = 0;

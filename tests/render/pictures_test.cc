@@ -49,11 +49,12 @@ TEST(DisplacementHeatmap, DrawsTheFieldAndItsScaleBarAtAnySize) {
   // Fields from one pixel to a frame, as tall as a scale bar's labels need and far shorter: each
   // drawn at the top left, |d| rising to the right from 0 (viridis: the largest yellow, 0
   // purple), a pixel without a value black, the bar to its right.
-  for (const cv::Size size : {cv::Size(1, 1), cv::Size(8, 8), cv::Size(64, 2), cv::Size(2, 64),
-                              cv::Size(320, 240)}) {
+  for (const cv::Size size :
+       {cv::Size(1, 1), cv::Size(8, 8), cv::Size(64, 2), cv::Size(2, 64), cv::Size(320, 240)}) {
     cv::Mat field(size, CV_32FC2);
     for (int v = 0; v < size.height; ++v) {
-      for (int u = 0; u < size.width; ++u) field.at<cv::Vec2f>(v, u) = cv::Vec2f(0.0f, size.width == 1 ? 1.0f : static_cast<float>(u));
+      for (int u = 0; u < size.width; ++u)
+        field.at<cv::Vec2f>(v, u) = cv::Vec2f(0.0f, size.width == 1 ? 1.0f : static_cast<float>(u));
     }
     const bool has_hole = size.area() > 2;
     if (has_hole) {

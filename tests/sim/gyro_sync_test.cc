@@ -158,6 +158,40 @@ TEST(GyroSync, RefusesStillOrRepetitiveMotion) {
   EXPECT_THROW(SyncGyros(tiny, sb), std::invalid_argument);
 }
 
+// What cannot be aligned is said, never answered: a rate that never changes (its correlations are
+// rounding's), and traces too short for any lag but the peak's to be searched (with nothing to
+// compare, the peak's uniqueness is untested) unless the caller bounds the offset.
+TEST(GyroSync, RefusesAConstantRateAndTracesTooShortToTellLagsApart) {
+  const auto expect_refusal = [](const GyroTrace& a, const GyroTrace& b, const std::string& words) {
+    try {
+      const GyroSync sync = SyncGyros(a, b);
+      ADD_FAILURE() << "aligned at " << sync.offset_s << " s";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  const auto constant = [](double) { return Eigen::Vector3d(0.001, 0.0, 0.0); };
+  const GyroTrace steady = Stream(constant, 0.0, 1e-3, 20.0, 0.0, nullptr, 1);
+  expect_refusal(steady, steady, "A's rate magnitude never changes");
+  const auto still = [](double) { return Eigen::Vector3d::Zero(); };
+  expect_refusal(Stream(still, 0.0, 1e-3, 20.0, 0.0, nullptr, 1), steady,
+                 "A's rate magnitude never changes");
+
+  // 0.6 s of broadband motion against itself 40 ms later: refused, then found once bounded.
+  const Motion motion(7);
+  Truth truth;
+  truth.offset_s = 0.04;
+  truth.b_from_a.setIdentity();
+  truth.b_bias.setZero();
+  const GyroTrace a = Stream(motion, 0.0, 1e-3, 0.6, 0.0, nullptr, 2);
+  const GyroTrace b = Stream(motion, 0.0, 1e-3, 0.6, 0.0, &truth, 3);
+  expect_refusal(a, b, "too short to tell their offset");
+  GyroSyncOptions bounded;
+  bounded.max_offset_s = 0.2;
+  const GyroSync sync = SyncGyros(a, b, bounded);
+  EXPECT_NEAR(sync.offset_s, truth.offset_s, 1e-3);
+}
+
 // Brute-force twin: each sample the plain mean of the samples within half the window of it.
 TEST(BoxAverage, EachSampleIsTheMeanOfItsWindow) {
   std::mt19937 rng(3);
