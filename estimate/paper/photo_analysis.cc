@@ -58,27 +58,33 @@ void Flag(const std::vector<double>& limits_m, std::optional<double> d_m, PhotoR
   for (size_t l = 0; l < limits_m.size(); ++l) out->flagged[l] = *d_m > limits_m[l];
 }
 
-// When exclude.txt would drop more than half of the photos: how large the shifts are in pixels at
-// their ground sampling, so that a person sees whether a limit of a pixel or so is what they want,
-// and what the photogrammetry tool can do instead.
+// When exclude.txt would drop more than half of the photos: how many are unreadable, how large the
+// others' shifts are in pixels at their ground sampling, so that a person sees whether a limit of a
+// pixel or so is what they want, and what the photogrammetry tool can do instead (said only where
+// a shift dropped a photo: no limit keeps an unreadable one).
 std::string ExcludedMostText(const PhotoSet& set, PhotoAnalysis* a) {
   std::vector<double> d_px, gsd_m;
+  size_t unreadable = 0, shifted = 0;
   for (size_t i = 0; i < a->photos.size(); ++i) {
     const PhotoRecord& r = set.photos[i];
     const PhotoResult& p = a->photos[i];
-    if (!r.ok() || !p.AnyFlagged()) {
-      a->excluded += !r.ok();
+    if (!r.ok()) {
+      ++unreadable;
       continue;
     }
-    ++a->excluded;
+    if (!p.AnyFlagged()) continue;
+    ++shifted;
     if (!r.altitude_m || !r.focal_px) continue;
     const double gsd = *r.altitude_m / *r.focal_px;
     gsd_m.push_back(gsd);
     d_px.push_back((p.d_rotation_m.value_or(0.0) + p.d_translation_m.value_or(0.0)) / gsd);
   }
+  a->excluded = unreadable + shifted;
   if (2 * a->excluded <= a->photos.size() || a->limits_m.empty()) return "";
   std::string text = "; exclude.txt drops " + std::to_string(a->excluded) + " of " +
                      std::to_string(a->photos.size()) + " photos";
+  if (unreadable > 0) text += " (" + std::to_string(unreadable) + " unreadable)";
+  if (shifted == 0) return text;
   if (!d_px.empty()) {
     const double gsd = Median(gsd_m);
     const std::string lo = FormatNumber("%.2g", *std::min_element(d_px.begin(), d_px.end()));

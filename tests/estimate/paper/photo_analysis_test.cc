@@ -154,6 +154,28 @@ TEST(AnalyzePhotos, AnExclusionOfMostPhotosSaysWhyInPixels) {
       AnalyzePhotos(Set({Photo("a.jpg", 10.0, 0.0, 0.0), Photo("b.jpg", 1.0, 0.0, 0.0)}), {});
   EXPECT_EQ(few.excluded, 1u);
   EXPECT_EQ(few.verdict.find("exclude.txt drops"), std::string::npos) << few.verdict;
+
+  // Unreadable photos are dropped whatever the limit: counted as such, and a larger --limit is
+  // offered only where a shift dropped one.
+  PhotoRecord broken = Photo("d.jpg", 0.0, 0.0, 0.0);
+  broken.error = "cannot read the photo's metadata";
+  const PhotoAnalysis unreadable = AnalyzePhotos(Set({broken, Photo("e.jpg", 1.0, 0.0, 0.0)}), {});
+  EXPECT_EQ(unreadable.excluded, 1u);
+  const PhotoAnalysis mostly_unreadable =
+      AnalyzePhotos(Set({broken, broken, Photo("e.jpg", 1.0, 0.0, 0.0)}), {});
+  EXPECT_EQ(mostly_unreadable.excluded, 2u);
+  EXPECT_NE(mostly_unreadable.verdict.find("exclude.txt drops 2 of 3 photos (2 unreadable)"),
+            std::string::npos)
+      << mostly_unreadable.verdict;
+  EXPECT_EQ(mostly_unreadable.verdict.find("--limit"), std::string::npos)
+      << mostly_unreadable.verdict;
+  const PhotoAnalysis both = AnalyzePhotos(
+      Set({broken, Photo("a.jpg", 10.0, 0.0, 0.0), Photo("b.jpg", 10.0, 0.0, 0.0)}), {});
+  EXPECT_NE(both.verdict.find("exclude.txt drops 3 of 3 photos (1 unreadable): their shifts are 4 "
+                              "px"),
+            std::string::npos)
+      << both.verdict;
+  EXPECT_NE(both.verdict.find("a larger --limit keeps more"), std::string::npos) << both.verdict;
 }
 
 // The log's analysis used one altitude (50 m) for every photo; the ground shift of the same image
