@@ -43,11 +43,11 @@ void Run(const MeasureCommand& command) {
                                 command.ref_path + " is " + SizeText(ref)));
   }
   if (image.cols < kMinMeasuredSidePx || image.rows < kMinMeasuredSidePx) {
-    throw IoError(IoMessage(command.image_path, 0,
-                            "image is " + SizeText(image) + ": a measurement needs at least " +
-                                std::to_string(kMinMeasuredSidePx) + "x" +
-                                std::to_string(kMinMeasuredSidePx) +
-                                " pixels for its matching windows (use larger images)"));
+    throw IoError(IoMessage(
+        command.image_path, 0,
+        "image is " + SizeText(image) + " pixels: a measurement needs at least " +
+            std::to_string(kMinMeasuredSidePx) + "x" + std::to_string(kMinMeasuredSidePx) +
+            " pixels for its matching windows (use larger images)"));
   }
   MeasureReport report;
   if (!command.camera_path.empty()) {

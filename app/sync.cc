@@ -52,7 +52,11 @@ void Run(const SyncCommand& command) {
   PrintLogWarnings(command.a_path, a.warnings);
   const FlightLog b = ReadFlightLog(command.b_path);
   PrintLogWarnings(command.b_path, b.warnings);
-  const GyroSync s = SyncGyros(a.gyro, b.gyro, command.options);
+  GyroSyncOptions options = command.options;
+  options.a_name = command.a_path;
+  options.b_name = command.b_path;
+  options.bound_option = "--max-offset";
+  const GyroSync s = SyncGyros(a.gyro, b.gyro, options);
   if (command.json) {
     std::cout << JsonText(SyncToJson(command, s)) << "\n";
     return;

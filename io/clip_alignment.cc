@@ -212,7 +212,10 @@ GyroTrace AlignGyroLog(const FlightLog& log, const std::string& log_path,
   }
   GyroSync sync;
   try {
-    sync = SyncGyros(clip_rates, log_rates);
+    GyroSyncOptions options;
+    options.a_name = "the clip's frames";
+    options.b_name = log_path;
+    sync = SyncGyros(clip_rates, log_rates, options);
   } catch (const std::invalid_argument& e) {
     throw IoError(IoMessage(
         log_path, -1,

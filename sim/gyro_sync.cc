@@ -97,17 +97,18 @@ struct CoarseLag {
 // The lag of b against a (t_b = t_a + offset) where their magnitudes correlate best: every lag's
 // sum by one FFT, normalised by the energies of that lag's overlap.
 CoarseLag FindCoarseLag(const GyroTrace& a, const GyroTrace& b, double step_s, double min_overlap_s,
-                        double max_offset_s) {
+                        const GyroSyncOptions& options) {
+  const double max_offset_s = options.max_offset_s;
   const std::vector<double> ma = Magnitudes(a, step_s), mb = Magnitudes(b, step_s);
   const int na = static_cast<int>(ma.size()), nb = static_cast<int>(mb.size());
-  for (const auto& [name, m] : {std::pair{"A", &ma}, {"B", &mb}}) {
+  for (const auto& [name, m] : {std::pair{&options.a_name, &ma}, {&options.b_name, &mb}}) {
     double sum_sq = 0;
     for (const double v : *m) sum_sq += v * v;
     const double rms_change = std::sqrt(sum_sq / static_cast<double>(m->size()));
     if (!(rms_change >= kMinMagnitudeChangeRadS)) {
       throw std::invalid_argument(
-          std::string("the motion is too weak to align the traces: ") + name +
-          "'s rate magnitude never changes (" + FormatNumber("%.1e", rms_change) +
+          "the motion is too weak to align the traces: the rate magnitude of " + *name +
+          " never changes (" + FormatNumber("%.1e", rms_change) +
           " rad/s RMS over its 10 ms means): record some turns about every axis in both");
     }
   }
@@ -153,15 +154,6 @@ CoarseLag FindCoarseLag(const GyroTrace& a, const GyroTrace& b, double step_s, d
     if (i > 0 && i + 1 < static_cast<int>(c.size()) && c[i] >= c[i - 1] && c[i] >= c[i + 1])
       lag.runner_up = std::max(lag.runner_up, c[i]);
   }
-  // Without another lag to compare, a runner-up below the peak proves nothing (a swing a period
-  // long aligns anywhere): unless the caller bounds the offset, too short to tell.
-  if (!other_lag_searched && !(max_offset_s > 0)) {
-    throw std::invalid_argument(
-        "the traces are too short to tell their offset from one " +
-        FormatNumber("%.1f", kDistinctLagS) + " s away (each offset searched overlaps them by " +
-        FormatNumber("%.2f", min_overlap_s) +
-        " s or more): record a few seconds of turns in both, or bound the offset (--max-offset)");
-  }
   // The peak's sub-step place from a parabola through it and its neighbours.
   double frac = 0;
   if (best > 0 && best + 1 < static_cast<int>(c.size()) && c[best - 1] > -2 && c[best + 1] > -2) {
@@ -169,6 +161,23 @@ CoarseLag FindCoarseLag(const GyroTrace& a, const GyroTrace& b, double step_s, d
     if (denom < 0) frac = 0.5 * (c[best - 1] - c[best + 1]) / denom;
   }
   lag.offset_s = base_s + (best - (na - 1) + frac) * step_s;
+  // Without another lag to compare, a runner-up below the peak proves nothing (a swing a period
+  // long aligns anywhere): too short to tell, unless the caller's bound itself leaves no offset
+  // farther than kDistinctLagS from the peak.
+  const bool bound_leaves_no_other =
+      max_offset_s > 0 && std::max(std::abs(lag.offset_s - max_offset_s),
+                                   std::abs(lag.offset_s + max_offset_s)) <= kDistinctLagS;
+  if (!other_lag_searched && !bound_leaves_no_other) {
+    throw std::invalid_argument(
+        "the traces are too short to tell their offset from one " +
+        FormatNumber("%.1f", kDistinctLagS) + " s away (each offset searched overlaps them by " +
+        FormatNumber("%.2f", min_overlap_s) + " s or more): record a few seconds of turns in both" +
+        (options.bound_option.empty()
+             ? std::string()
+             : ", or, where the clocks are known to differ by under " +
+                   FormatNumber("%.2f", kDistinctLagS / 2) + " s, say so (" + options.bound_option +
+                   " " + FormatNumber("%.2f", kDistinctLagS / 2) + "s)"));
+  }
   return lag;
 }
 
@@ -430,7 +439,7 @@ GyroSync SyncGyros(const GyroTrace& a, const GyroTrace& b, const GyroSyncOptions
   sync.slower_interval_s = std::max(ia, ib);
   const double step_s = std::max(kCoarseStepS, sync.slower_interval_s);
   const double min_overlap_s = std::min(kMinOverlapS, 0.5 * std::min(a.DurationS(), b.DurationS()));
-  const CoarseLag lag = FindCoarseLag(a, b, step_s, min_overlap_s, options.max_offset_s);
+  const CoarseLag lag = FindCoarseLag(a, b, step_s, min_overlap_s, options);
   sync.peak_correlation = lag.peak;
   sync.runner_up_correlation = lag.runner_up;
   if (lag.peak < kMinPeakCorrelation || lag.runner_up >= kMaxRunnerUpShare * lag.peak) {

@@ -33,6 +33,7 @@
 
 #include <memory>
 #include <optional>
+#include <string>
 
 namespace shutterlab {
 
@@ -41,6 +42,10 @@ struct GyroSyncOptions {
   double max_offset_s = 0.0;
   // The clock rate is fitted when the overlap is at least this long (s).
   double min_rate_overlap_s = 60.0;
+  // The traces' names in messages (their files), and the caller's option that bounds the offset
+  // (named in the advice; empty: the caller has none).
+  std::string a_name = "A", b_name = "B";
+  std::string bound_option;
 };
 
 struct GyroSync {

@@ -357,13 +357,13 @@ ValidationResult ValidateDataset(const std::string& dataset_dir,
   result.declared = dataset.declared;
   const PinholeCamera& camera = dataset.declared.camera;
   if (camera.width < kMinMeasuredSidePx || camera.height < kMinMeasuredSidePx) {
-    throw IoError(IoMessage(dataset.camera_path, 0,
-                            "the camera is " + std::to_string(camera.width) + "x" +
-                                std::to_string(camera.height) +
-                                " pixels: validate measures each frame's distortion, which needs "
-                                "at least " +
-                                std::to_string(kMinMeasuredSidePx) + "x" +
-                                std::to_string(kMinMeasuredSidePx) + " (render larger frames)"));
+    throw IoError(IoMessage(
+        dataset.camera_path, 0,
+        "the camera is " + std::to_string(camera.width) + "x" + std::to_string(camera.height) +
+            " pixels: validate measures each frame's distortion, which needs "
+            "frames of at least " +
+            std::to_string(kMinMeasuredSidePx) + "x" + std::to_string(kMinMeasuredSidePx) +
+            " pixels (give a dataset of larger frames)"));
   }
   if (!options.lens_profile_path.empty()) {
     result.lens_profile =

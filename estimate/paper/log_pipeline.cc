@@ -144,7 +144,10 @@ GyroTrace WholeTrace(const ReopenableFile& file, const FlightLogReadOptions& rea
 GyroSync SecondClock(const GyroTrace& first, const GyroTrace& second, const std::string& first_path,
                      const std::string& second_path) {
   try {
-    return SyncGyros(first, second);
+    GyroSyncOptions options;
+    options.a_name = first_path;
+    options.b_name = second_path;
+    return SyncGyros(first, second, options);
   } catch (const std::invalid_argument& e) {
     throw IoError(
         first_path + " + " + second_path +

@@ -89,9 +89,10 @@ std::string ExcludedMostText(const PhotoSet& set, PhotoAnalysis* a) {
     const double gsd = Median(gsd_m);
     const std::string lo = FormatNumber("%.2g", *std::min_element(d_px.begin(), d_px.end()));
     const std::string hi = FormatNumber("%.2g", *std::max_element(d_px.begin(), d_px.end()));
-    text += ": their shifts are " + (lo == hi ? lo : lo + "-" + hi) + " px at " +
-            FormatNumber("%.2g", gsd * 100.0) + " cm/px, where " + LengthText(a->limits_m[0]) +
-            " is " + FormatNumber("%.2g", a->limits_m[0] / gsd) + " px";
+    text += (unreadable > 0 ? ": the others' shifts are " : ": their shifts are ") +
+            (lo == hi ? lo : lo + "-" + hi) + " px at " + FormatNumber("%.2g", gsd * 100.0) +
+            " cm/px, where " + LengthText(a->limits_m[0]) + " is " +
+            FormatNumber("%.2g", a->limits_m[0] / gsd) + " px";
   }
   return text +
          "; a larger --limit keeps more, and a photogrammetry tool's own rolling-shutter "

@@ -358,7 +358,10 @@ GyroSync MoveTriggersToLogClock(const GyroTrace& log_gyro, const GyroTrace& cloc
       << "the triggers are on " << TriggerClockName(file->clock)
       << " already, not on a gyro's clock: give --triggers-clock only for triggers recorded "
          "beside another gyro (record's triggers file and its .gcsv)";
-  const GyroSync sync = SyncGyros(log_gyro, clock_gyro);
+  GyroSyncOptions options;
+  options.a_name = "the log";
+  options.b_name = clock_name;
+  const GyroSync sync = SyncGyros(log_gyro, clock_gyro, options);
   for (TriggerEvent& event : file->events)
     event.t_ns = SecondsToNs(ClockAFromB(sync, event.t_ns * 1e-9));
   file->source += "; on " + clock_name +

@@ -156,7 +156,7 @@ TEST(MeasureCli, BadInputOneLineExitTwo) {
   WriteImage(tiny_ref, ReadImage(files.ref)(cv::Rect(0, 0, 24, 40)).clone());
   WriteImage(tiny, ReadImage(files.rs)(cv::Rect(0, 0, 24, 40)).clone());
   ExpectBadInput(dir, Quote(tiny_ref) + " " + Quote(tiny), tiny,
-                 "image is 24x40: a measurement needs at least 32x32 pixels");
+                 "image is 24x40 pixels: a measurement needs at least 32x32 pixels");
   // A camera of another size.
   RigModel rig = files.rig;
   rig.camera.width = 640;

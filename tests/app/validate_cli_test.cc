@@ -25,8 +25,8 @@ namespace {
 namespace fs = std::filesystem;
 
 // Renders dir/ds: 3 frames of 320x240 (f 275 px, 30 ms, 50 m), 3 ms undeclared time offset.
-std::string SmallValidateDataset(const test::TempDir& dir) {
-  WriteRigModel(dir / "camera.json", test::NadirRig(320, 240, 275.0));
+std::string SmallValidateDataset(const test::TempDir& dir, int width = 320, int height = 240) {
+  WriteRigModel(dir / "camera.json", test::NadirRig(width, height, 275.0 * width / 320.0));
   WriteGyroCsv(dir / "gyro.csv", test::FlightTrace(14.0, 5));
   WriteFileAtomically(dir / "times.csv", "frame,t_first_row\n0,8.5\n1,10.0\n2,12.0\n");
   RenderOptions render;
@@ -171,17 +171,15 @@ TEST(ValidateCli, WrongImageSize) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// A dataset of 30 x 24 frames, rendered whole: too small for the measurement's windows.
 TEST(ValidateCli, ACameraTooSmallToMeasure) {
   test::TempDir dir;
-  const std::string dataset = SmallValidateDataset(dir);
-  RigModel rig = ReadRigModel(fs::path(dataset) / "camera.json");
-  rig.camera.width = 30;
-  WriteRigModel(fs::path(dataset) / "camera.json", rig);
+  const std::string dataset = SmallValidateDataset(dir, 30, 24);
   const std::string report = dir / "report.json";
   const test::CommandResult r =
       test::RunShutterlab("validate '" + dataset + "' --report '" + report + "'");
-  ExpectOneLineError(r, dataset + "/camera.json", "the camera is 30x240 pixels");
-  EXPECT_NE(r.output.find("at least 32x32"), std::string::npos) << r.output;
+  ExpectOneLineError(r, dataset + "/camera.json", "the camera is 30x24 pixels");
+  EXPECT_NE(r.output.find("at least 32x32 pixels"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(report));
 }
 

@@ -172,10 +172,10 @@ TEST(GyroSync, RefusesAConstantRateAndTracesTooShortToTellLagsApart) {
   };
   const auto constant = [](double) { return Eigen::Vector3d(0.001, 0.0, 0.0); };
   const GyroTrace steady = Stream(constant, 0.0, 1e-3, 20.0, 0.0, nullptr, 1);
-  expect_refusal(steady, steady, "A's rate magnitude never changes");
+  expect_refusal(steady, steady, "the rate magnitude of A never changes");
   const auto still = [](double) { return Eigen::Vector3d::Zero(); };
   expect_refusal(Stream(still, 0.0, 1e-3, 20.0, 0.0, nullptr, 1), steady,
-                 "A's rate magnitude never changes");
+                 "the rate magnitude of A never changes");
 
   // 0.6 s of broadband motion against itself 40 ms later: refused, then found once bounded.
   const Motion motion(7);
@@ -186,6 +186,17 @@ TEST(GyroSync, RefusesAConstantRateAndTracesTooShortToTellLagsApart) {
   const GyroTrace a = Stream(motion, 0.0, 1e-3, 0.6, 0.0, nullptr, 2);
   const GyroTrace b = Stream(motion, 0.0, 1e-3, 0.6, 0.0, &truth, 3);
   expect_refusal(a, b, "too short to tell their offset");
+  // A bound that still leaves offsets 0.5 s from the peak proves nothing either.
+  GyroSyncOptions loose;
+  loose.max_offset_s = 10.0;
+  loose.bound_option = "--max-offset";
+  try {
+    SyncGyros(a, b, loose);
+    ADD_FAILURE() << "aligned under a 10 s bound";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("say so (--max-offset 0.25s)"), std::string::npos)
+        << e.what();
+  }
   GyroSyncOptions bounded;
   bounded.max_offset_s = 0.2;
   const GyroSync sync = SyncGyros(a, b, bounded);

@@ -171,8 +171,8 @@ TEST(AnalyzePhotos, AnExclusionOfMostPhotosSaysWhyInPixels) {
       << mostly_unreadable.verdict;
   const PhotoAnalysis both = AnalyzePhotos(
       Set({broken, Photo("a.jpg", 10.0, 0.0, 0.0), Photo("b.jpg", 10.0, 0.0, 0.0)}), {});
-  EXPECT_NE(both.verdict.find("exclude.txt drops 3 of 3 photos (1 unreadable): their shifts are 4 "
-                              "px"),
+  EXPECT_NE(both.verdict.find("exclude.txt drops 3 of 3 photos (1 unreadable): the others' shifts "
+                              "are 4 px"),
             std::string::npos)
       << both.verdict;
   EXPECT_NE(both.verdict.find("a larger --limit keeps more"), std::string::npos) << both.verdict;
