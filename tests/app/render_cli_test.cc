@@ -101,8 +101,6 @@ TEST(RenderCommand, WritesACompleteDatasetWithTruth) {
   EXPECT_TRUE(fs::exists(out + "/overview.png"));
 }
 
-// A gyro log with a pause is rendered as it is, and the command says what it lost, as every
-// command that reads a log does.
 // Frames smaller than a picture's captions and scale bar (a heatmap's bar needs about 40 rows):
 // rendered with their pictures, each as big as its frame at least.
 TEST(RenderCommand, FramesOfAFewPixelsAreRenderedWithTheirPictures) {
@@ -119,6 +117,8 @@ TEST(RenderCommand, FramesOfAFewPixelsAreRenderedWithTheirPictures) {
   }
 }
 
+// A gyro log with a pause is rendered as it is, and the command says what it lost, as every
+// command that reads a log does.
 TEST(RenderCommand, SaysWhatTheGyroLogLost) {
   Inputs in;
   std::vector<GyroSample> samples;
