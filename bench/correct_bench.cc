@@ -7,7 +7,8 @@
 //   - CorrectTranslation: the same with the ground plane at 50 m, 8 m/s and a lens (k1 = -0.05);
 //   - CorrectWarpOnly:    the warp of an already built map;
 //   - WarpPerspective:    cv::warpPerspective, one homography, INTER_LINEAR.
-// At the end it prints each time relative to warpPerspective, paired run by run.
+// At the end it prints each time relative to warpPerspective, paired run by run, and the warp of
+// the built map by each of the sampler's block paths this CPU runs (render/warp_kernel.h), paired.
 // Run: build/bin/correct_bench [--benchmark_repetitions=3]
 // The frame is the real asset upscaled to 20 MP.
 
@@ -23,7 +24,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cstdio>
+#include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace shutterlab {
@@ -119,6 +122,22 @@ void PrintPairedRatios(int runs) {
       {{"warpPerspective", [&] { f.Warp(); }},
        {"correct (rotation)", [&] { f.Correct(f.camera, f.motion, std::nullopt); }},
        {"correct (plane, lens)", [&] { f.Correct(f.lens_camera, f.moving, 50.0); }}});
+  // The warp of one built map by each of the sampler's block paths this CPU runs, widest last.
+  const CorrectionGeometry geometry(f.camera, f.motion, 0.0, std::nullopt);
+  const CorrectionMap map(geometry, {});
+  const SamplerPath widest = WidestSamplerPath();
+  std::vector<std::pair<std::string, std::function<void()>>> paths;
+  for (const auto& [path, name] : {std::pair{SamplerPath::kSse41, "SSE4.1, 4-pixel blocks"},
+                                   std::pair{SamplerPath::kAvx2, "AVX2, 8-pixel blocks"},
+                                   std::pair{SamplerPath::kAvx512, "AVX-512, 16-pixel blocks"}}) {
+    if (path > widest) break;
+    paths.push_back({name, [&f, &map, path = path] {
+                       const SamplerPath cap = CapSamplerPath(path);
+                       CorrectFrame(f.image, map, Interpolation::kBilinear, &f.out, &f.mask);
+                       CapSamplerPath(cap);
+                     }});
+  }
+  if (!paths.empty()) bench::PrintPaired("the warp of a built map, by path", runs, paths);
 }
 
 }  // namespace

@@ -21,13 +21,16 @@
 // (its overview draws one frame where a folder's draws four: about 0.1 s less than the folder's).
 // Last, a 12 MP mask (0/255, bands without source at three edges) written ten times as correct
 // writes it (WriteMask, one bit a pixel) and as an 8-bit PNG (WriteImage), the mean of each.
-// Run: build/bin/photos_bench [RUNS [PHOTOS]] (default 3 runs, 4 photos)
+// The sampler takes the widest path this CPU runs, or with PATH (avx512, avx2, sse4.1, one-pixel)
+// at most that one: the command timed with each.
+// Run: build/bin/photos_bench [RUNS [PHOTOS [PATH]]] (default 3 runs, 4 photos)
 
 #include "bench/bench_util.h"
 #include "estimate/correct/correct_dataset.h"
 #include "io/image_io.h"
 #include "model/camera.h"
 #include "render/survey.h"
+#include "render/warp_kernel.h"
 #include "sim/synth/synth.h"
 #include "sim/text_file.h"
 
@@ -40,6 +43,7 @@
 #include <ctime>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace shutterlab {
@@ -158,11 +162,39 @@ void PrintRunSpread(const std::vector<double>& floor_cpu, const std::vector<doub
               best_correct_s / best_floor_s);
 }
 
+// The sampler's paths (render/warp_kernel.h) by the names PATH takes.
+constexpr std::pair<const char*, SamplerPath> kSamplerPaths[] = {
+    {"avx512", SamplerPath::kAvx512},
+    {"avx2", SamplerPath::kAvx2},
+    {"sse4.1", SamplerPath::kSse41},
+    {"one-pixel", SamplerPath::kOnePixel}};
+
+const char* SamplerPathName(SamplerPath path) {
+  for (const auto& [name, named] : kSamplerPaths) {
+    if (named == path) return name;
+  }
+  return "?";
+}
+
+// Caps the sampler at the path of that name; false for a name of none.
+bool CapSamplerPathNamed(const std::string& name) {
+  for (const auto& [path_name, path] : kSamplerPaths) {
+    if (name != path_name) continue;
+    CapSamplerPath(path);
+    return true;
+  }
+  return false;
+}
+
 int Main(int argc, char** argv) {
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 3;
   const int photo_count = argc > 2 ? std::atoi(argv[2]) : 4;
   if (photo_count < 2 || photo_count % (photo_count < 20 ? 2 : 5) != 0) {
     std::fprintf(stderr, "PHOTOS: an even count, a multiple of 5 from 20 on (got %s)\n", argv[2]);
+    return 2;
+  }
+  if (argc > 3 && !CapSamplerPathNamed(argv[3])) {
+    std::fprintf(stderr, "PATH: avx512, avx2, sse4.1 or one-pixel (got %s)\n", argv[3]);
     return 2;
   }
   const fs::path survey = SurveyFolder(photo_count);
@@ -227,9 +259,9 @@ int Main(int argc, char** argv) {
   fs::remove_all(one_photo);
   const double n = static_cast<double>(photos.size());
   std::printf(
-      "%zu photos of 4000 x 3000 (JPEG, EXIF and XMP), 1 job, 1 OpenCV thread; %d "
-      "alternating runs, medians:\n",
-      photos.size(), runs);
+      "%zu photos of 4000 x 3000 (JPEG, EXIF and XMP), 1 job, 1 OpenCV thread, the sampler's "
+      "%s path; %d alternating runs, medians:\n",
+      photos.size(), SamplerPathName(WidestSamplerPath()), runs);
   std::printf("  decode + re-encode (the floor)  %6.2f s CPU (%.2f s a photo)  %6.2f s wall\n",
               Median(floor_cpu), Median(floor_cpu) / n, Median(floor_wall));
   std::printf("  correct --photos                %6.2f s CPU (%.2f s a photo)  %6.2f s wall\n",

@@ -522,6 +522,137 @@ __attribute__((target("avx2"))) inline bool Block8(const BlockSource& source,
   std::memcpy(out + 20, &hi4, 4);
   return true;
 }
+
+// Sixteen pixels a step (AVX-512 BW and VBMI) where their taps lie in one 64-byte span of each of
+// two (or three) source rows: columns ix0 .. ix0 + 20 from the block's first pixel's, as a map
+// close to a shift has them. One load a row holds every tap; VBMI's byte permute, free to take any
+// of the 64 bytes, lines up each pixel's (left, right) taps of a channel as two 16-bit lanes of its
+// 32-bit lane (zeroing the high bytes), and madd applies the row's weights, as in Block8. The
+// channels are packed and interleaved by a second permute into 48 contiguous bytes. Same integer
+// weights, sums and rounding as BilinearPixel: bit-identical.
+
+// Block16's constants, made once a row and hidden from constant folding (as WideConstants).
+struct Wide512Constants {
+  __m512i one_row, frac_mask, frac_one, half, low_byte_twice, frac_mask_pair, frac_one_pair;
+  __m512i three_twice;      // 3 in both 16-bit halves: a pixel's 3 dx at its left and right taps
+  __m512i channel_ctrl[3];  // (c, c + 3) in the two 16-bit halves of every 32-bit lane
+  // vpermb's index: the four 128-bit lanes' planar 12 bytes (R0 .. R3 G0 .. G3 B0 .. B3, as the
+  // packs leave them) to 48 bytes of interleaved pixels, lane 0's first; bytes 48 to 63 repeat
+  // lane 0's first 16.
+  __m512i interleave;
+  __attribute__((target("avx512f,avx512bw,avx512vbmi"))) Wide512Constants()
+      : one_row(Opaque(_mm512_set1_epi32(1))),
+        frac_mask(Opaque(_mm512_set1_epi32(kFracMask))),
+        frac_one(Opaque(_mm512_set1_epi32(kFracOne))),
+        half(Opaque(_mm512_set1_epi32(1 << (2 * kSampleFracBits - 1)))),
+        low_byte_twice(Opaque(_mm512_broadcast_i32x4(_mm_setr_epi8(
+            0, -128, 0, -128, 4, -128, 4, -128, 8, -128, 8, -128, 12, -128, 12, -128)))),
+        frac_mask_pair(Opaque(_mm512_set1_epi32(kFracMask | kFracMask << 16))),
+        frac_one_pair(Opaque(_mm512_set1_epi32(kFracOne | kFracOne << 16))),
+        three_twice(Opaque(_mm512_set1_epi32(3 | 3 << 16))),
+        channel_ctrl{Opaque(_mm512_set1_epi32(0 | 3 << 16)), Opaque(_mm512_set1_epi32(1 | 4 << 16)),
+                     Opaque(_mm512_set1_epi32(2 | 5 << 16))},
+        interleave(Opaque(InterleaveIndex())) {}
+  __attribute__((target("avx512f"))) static __m512i Opaque(__m512i v) {
+    asm("" : "+v"(v));
+    return v;
+  }
+  __attribute__((target("avx512f"))) static __m512i InterleaveIndex() {
+    static constexpr uint8_t kWithinLane[16] = {SHUTTERLAB_INTERLEAVE};
+    alignas(64) uint8_t index[64];
+    for (int j = 0; j < 64; ++j) {
+      index[j] = static_cast<uint8_t>(16 * (j % 48 / 12) + kWithinLane[j % 12]);
+    }
+    return _mm512_load_si512(index);
+  }
+};
+
+// One channel's bilinear sums of sixteen pixels, rounded: each row's taps picked by `index` (the
+// pixel's left tap in the low byte of its 32-bit lane, its right tap in the third, the other bytes
+// zeroed) and weighed by the row's (left, right) weights.
+__attribute__((target("avx512f,avx512bw,avx512vbmi"))) inline __m512i ChannelSum16(
+    bool three_rows, __m512i row0, __m512i row1, __m512i row2, __m512i index, __m512i w0,
+    __m512i w1, __m512i w2, __m512i half) {
+  constexpr __mmask64 kLowBytes = 0x5555555555555555;
+  __m512i sum = _mm512_add_epi32(
+      _mm512_madd_epi16(_mm512_maskz_permutexvar_epi8(kLowBytes, index, row0), w0),
+      _mm512_madd_epi16(_mm512_maskz_permutexvar_epi8(kLowBytes, index, row1), w1));
+  if (three_rows) {
+    sum = _mm512_add_epi32(
+        sum, _mm512_madd_epi16(_mm512_maskz_permutexvar_epi8(kLowBytes, index, row2), w2));
+  }
+  return _mm512_srli_epi32(_mm512_add_epi32(sum, half), 2 * kSampleFracBits);
+}
+
+// Sixteen pixels whose taps lie in the 64 bytes from column ix0, the first pixel's left tap,
+// of rows iy0 and iy0 + 1 (kThreeRows: rows low, low + 1 and low + 2, low the lowest pixel's row;
+// each pixel's rows iy or iy + 1). False, writing nothing, where they do not, or those bytes leave
+// the source's rows. With spare_after, the 16 bytes after the 48 are the caller's to overwrite:
+// one 64-byte store.
+template <bool kThreeRows>
+__attribute__((target("avx512f,avx512bw,avx512vbmi"))) inline bool Block16(
+    const uint8_t* data, size_t step, int max_ix0, int max_iy0, const Wide512Constants& k,
+    const int* xi, const int* yi, bool spare_after, uint8_t* out) {
+  const __m512i vx = _mm512_loadu_si512(xi);
+  const __m512i vy = _mm512_loadu_si512(yi);
+  const int ix0 = xi[0] >> kSampleFracBits, iy_first = yi[0] >> kSampleFracBits;
+  // 0 <= dx <= 19: the right tap's last byte, 3 dx + 5, is the span's 62nd at most.
+  const __m512i dx =
+      _mm512_sub_epi32(_mm512_srai_epi32(vx, kSampleFracBits), _mm512_set1_epi32(ix0));
+  const __m512i iy = _mm512_srai_epi32(vy, kSampleFracBits);
+  if (_mm512_cmpgt_epu32_mask(dx, _mm512_set1_epi32(19)) != 0) return false;
+  int iy0 = iy_first;
+  __m512i dy;
+  if (kThreeRows) {
+    // The lowest row is the first pixel's, or the one above it when any pixel reads higher.
+    iy0 -= _mm512_cmplt_epi32_mask(iy, _mm512_set1_epi32(iy_first)) != 0;
+    dy = _mm512_sub_epi32(iy, _mm512_set1_epi32(iy0));
+    if (_mm512_cmpgt_epu32_mask(dy, k.one_row) != 0) return false;
+  } else if (_mm512_cmpneq_epi32_mask(iy, _mm512_set1_epi32(iy_first)) != 0) {
+    return false;
+  }
+  if (static_cast<unsigned>(ix0) > static_cast<unsigned>(max_ix0) || iy0 < 0 ||
+      iy0 + (kThreeRows ? 1 : 0) > max_iy0) {
+    return false;
+  }
+  const uint8_t* p0 = data + iy0 * step + ix0 * 3;
+  const __m512i row0 = _mm512_loadu_si512(p0), row1 = _mm512_loadu_si512(p0 + step);
+  const __m512i row2 = kThreeRows ? _mm512_loadu_si512(p0 + 2 * step) : row1;
+  // The next output row reads these columns one source row further down (Block4).
+  const char* next = reinterpret_cast<const char*>(p0 + (kThreeRows ? 3 : 2) * step);
+  _mm_prefetch(next, _MM_HINT_T0);
+  _mm_prefetch(next + 63, _MM_HINT_T0);
+  const __m512i offsets = _mm512_mullo_epi32(dx, k.three_twice);
+  const __m512i fx = _mm512_and_si512(vx, k.frac_mask);
+  const __m512i x_pair =
+      _mm512_or_si512(_mm512_sub_epi32(k.frac_one, fx), _mm512_slli_epi32(fx, 16));
+  const __m512i fy_pair =
+      _mm512_and_si512(_mm512_shuffle_epi8(vy, k.low_byte_twice), k.frac_mask_pair);
+  const __m512i gy_pair = _mm512_sub_epi16(k.frac_one_pair, fy_pair);
+  const __m512i w_top = _mm512_mullo_epi16(x_pair, gy_pair);
+  const __m512i w_bottom = _mm512_mullo_epi16(x_pair, fy_pair);
+  __m512i w0 = w_top, w1 = w_bottom, w2 = w_bottom;
+  if (kThreeRows) {  // weights on rows 0, 1, 2: a pixel of the lower pair (dy = 1) reads rows 1, 2
+    const __mmask16 lower = _mm512_cmpeq_epi32_mask(dy, k.one_row);
+    w0 = _mm512_maskz_mov_epi32(_knot_mask16(lower), w_top);
+    w1 = _mm512_mask_blend_epi32(lower, w_bottom, w_top);
+    w2 = _mm512_maskz_mov_epi32(lower, w_bottom);
+  }
+  __m512i sums[3];
+  for (int c = 0; c < 3; ++c) {
+    sums[c] = ChannelSum16(kThreeRows, row0, row1, row2,
+                           _mm512_add_epi8(offsets, k.channel_ctrl[c]), w0, w1, w2, k.half);
+  }
+  const __m512i planar = _mm512_packus_epi16(_mm512_packs_epi32(sums[0], sums[1]),
+                                             _mm512_packs_epi32(sums[2], sums[2]));
+  const __m512i rgb = _mm512_permutexvar_epi8(k.interleave, planar);
+  if (spare_after) {
+    _mm512_storeu_si512(out, rgb);
+  } else {
+    _mm512_mask_storeu_epi8(out, (__mmask64{1} << 48) - 1, rgb);
+  }
+  return true;
+}
 #undef SHUTTERLAB_CHANNEL_CTRL
 #undef SHUTTERLAB_INTERLEAVE
 
@@ -541,13 +672,43 @@ __attribute__((target("avx2"))) void BilinearRow8uc3Avx2(const cv::Mat& src, con
   if (u < width) BilinearRow8uc3Sse41(src, xi + u, yi + u, width - u, out + 3 * u);
 }
 
-// Which wide path this CPU runs: 2 AVX2, 1 SSE4.1, 0 none.
-int WideLevel() {
-  static const int level = __builtin_cpu_supports("avx2")     ? 2
-                           : __builtin_cpu_supports("sse4.1") ? 1
-                                                              : 0;
-  return level;
+__attribute__((target("avx512f,avx512bw,avx512vbmi"))) void BilinearRow8uc3Avx512(
+    const cv::Mat& src, const int* xi, const int* yi, int width, uint8_t* out) {
+  // A block's 64-byte loads stay inside the source's rows when 3 ix0 + 64 <= 3 width and
+  // iy0 + 1 <= height - 1: a source of fewer than 22 columns or 2 rows fits none.
+  const int max_ix0 = src.cols - 22, max_iy0 = src.rows - 2;
+  if (max_ix0 < 0 || max_iy0 < 0) return BilinearRow8uc3Avx2(src, xi, yi, width, out);
+  const Wide512Constants k;
+  int u = 0;
+  for (; u + 16 <= width; u += 16) {
+    // Pixels u + 16 to u + 21, which the 64-byte store's last 16 bytes cover, are written later.
+    const bool spare_after = u + 22 <= width;
+    if (Block16<false>(src.data, src.step, max_ix0, max_iy0, k, xi + u, yi + u, spare_after,
+                       out + 3 * u)) {
+      continue;
+    }
+    if (Block16<true>(src.data, src.step, max_ix0, max_iy0, k, xi + u, yi + u, spare_after,
+                      out + 3 * u)) {
+      continue;
+    }
+    BilinearRow8uc3Avx2(src, xi + u, yi + u, 16, out + 3 * u);
+  }
+  if (u < width) BilinearRow8uc3Avx2(src, xi + u, yi + u, width - u, out + 3 * u);
 }
+
+// The widest path this CPU runs.
+SamplerPath WidestOnThisCpu() {
+  static const SamplerPath path = __builtin_cpu_supports("avx512f") &&
+                                          __builtin_cpu_supports("avx512bw") &&
+                                          __builtin_cpu_supports("avx512vbmi")
+                                      ? SamplerPath::kAvx512
+                                  : __builtin_cpu_supports("avx2")   ? SamplerPath::kAvx2
+                                  : __builtin_cpu_supports("sse4.1") ? SamplerPath::kSse41
+                                                                     : SamplerPath::kOnePixel;
+  return path;
+}
+#else
+SamplerPath WidestOnThisCpu() { return SamplerPath::kOnePixel; }
 #endif
 
 // InsideMaskBits one pixel at a time.
@@ -590,6 +751,34 @@ __attribute__((target("avx2"))) void LinearFixedRowsAvx2(float ax, float bx, flo
   }
 }
 
+// LinearFixedRowsAvx2 sixteen at a time, the last ones by a masked store. The product is kept
+// apart from the sum (an empty asm): AVX-512 brings FMA, and a fused multiply-add would round once
+// where the other paths round twice.
+__attribute__((target("avx512f"))) inline __m512i LinePoints16(__m512 a, __m512 b, __m512 k) {
+  __m512 kb = _mm512_mul_ps(k, b);
+  asm("" : "+v"(kb));
+  return _mm512_cvtps_epi32(_mm512_add_ps(a, kb));  // to nearest, as cvRound
+}
+
+__attribute__((target("avx512f"))) void LinearFixedRowsAvx512(float ax, float bx, float ay,
+                                                              float by, int n, int* x_out,
+                                                              int* y_out) {
+  const __m512 vax = _mm512_set1_ps(ax), vbx = _mm512_set1_ps(bx);
+  const __m512 vay = _mm512_set1_ps(ay), vby = _mm512_set1_ps(by);
+  const __m512 sixteen = _mm512_set1_ps(16.0f);
+  __m512 vk = _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  int k = 0;
+  for (; k + 16 <= n; k += 16, vk = _mm512_add_ps(vk, sixteen)) {
+    _mm512_storeu_si512(x_out + k, LinePoints16(vax, vbx, vk));
+    _mm512_storeu_si512(y_out + k, LinePoints16(vay, vby, vk));
+  }
+  if (k < n) {
+    const __mmask16 last = static_cast<__mmask16>((1u << (n - k)) - 1);
+    _mm512_mask_storeu_epi32(x_out + k, last, LinePoints16(vax, vbx, vk));
+    _mm512_mask_storeu_epi32(y_out + k, last, LinePoints16(vay, vby, vk));
+  }
+}
+
 __attribute__((target("avx2"))) void InsideMaskBitsAvx2(const int* xi, const int* yi, int n,
                                                         int width, int height, uint8_t* bits) {
   const int max_x = (width - 1) << kSampleFracBits, max_y = (height - 1) << kSampleFracBits;
@@ -611,7 +800,7 @@ __attribute__((target("avx2"))) void InsideMaskBitsAvx2(const int* xi, const int
 }
 #endif
 
-std::atomic<bool> wide_sampler_enabled{true};
+std::atomic<SamplerPath> sampler_path_cap{SamplerPath::kAvx512};
 
 }  // namespace
 
@@ -620,24 +809,26 @@ int ToFixed(float x) {
   return std::abs(x) < 8388608.0f ? cvRound(x * kFracOne) : kInvalidFixed;
 }
 
-bool WideSamplerAvailable() {
-#if defined(SHUTTERLAB_WIDE_SAMPLER)
-  return WideLevel() > 0 && wide_sampler_enabled.load(std::memory_order_relaxed);
-#else
-  return false;
-#endif
+SamplerPath WidestSamplerPath() {
+  return std::min(WidestOnThisCpu(), sampler_path_cap.load(std::memory_order_relaxed));
 }
 
-bool SetWideSampler(bool enabled) { return wide_sampler_enabled.exchange(enabled); }
+SamplerPath CapSamplerPath(SamplerPath widest) { return sampler_path_cap.exchange(widest); }
 
 void SampleRowFixed(const cv::Mat& src, const int* xi, const int* yi, int n, uchar* out) {
   const int cn = src.channels();
   if (src.depth() == CV_8U) {
     if (cn == 3) {
 #if defined(SHUTTERLAB_WIDE_SAMPLER)
-      if (WideSamplerAvailable()) {
-        return WideLevel() == 2 ? BilinearRow8uc3Avx2(src, xi, yi, n, out)
-                                : BilinearRow8uc3Sse41(src, xi, yi, n, out);
+      switch (WidestSamplerPath()) {
+        case SamplerPath::kAvx512:
+          return BilinearRow8uc3Avx512(src, xi, yi, n, out);
+        case SamplerPath::kAvx2:
+          return BilinearRow8uc3Avx2(src, xi, yi, n, out);
+        case SamplerPath::kSse41:
+          return BilinearRow8uc3Sse41(src, xi, yi, n, out);
+        case SamplerPath::kOnePixel:
+          break;
       }
 #endif
 #if defined(__SSE2__)
@@ -657,7 +848,9 @@ void SampleRowFixed(const cv::Mat& src, const int* xi, const int* yi, int n, uch
 
 void LinearFixedRows(float ax, float bx, float ay, float by, int n, int* x_out, int* y_out) {
 #if defined(SHUTTERLAB_WIDE_SAMPLER)
-  if (WideLevel() == 2) return LinearFixedRowsAvx2(ax, bx, ay, by, n, x_out, y_out);
+  const SamplerPath widest = WidestSamplerPath();
+  if (widest == SamplerPath::kAvx512) return LinearFixedRowsAvx512(ax, bx, ay, by, n, x_out, y_out);
+  if (widest == SamplerPath::kAvx2) return LinearFixedRowsAvx2(ax, bx, ay, by, n, x_out, y_out);
 #endif
   for (int k = 0; k < n; ++k) {
     x_out[k] = cvRound(ax + k * bx);
@@ -667,7 +860,8 @@ void LinearFixedRows(float ax, float bx, float ay, float by, int n, int* x_out, 
 
 void InsideMaskBits(const int* xi, const int* yi, int n, int width, int height, uint8_t* bits) {
 #if defined(SHUTTERLAB_WIDE_SAMPLER)
-  if (WideLevel() == 2) return InsideMaskBitsAvx2(xi, yi, n, width, height, bits);
+  if (WidestSamplerPath() >= SamplerPath::kAvx2)
+    return InsideMaskBitsAvx2(xi, yi, n, width, height, bits);
 #endif
   InsideMaskBitsScalar(xi, yi, n, width, height, bits);
 }

@@ -7,9 +7,10 @@
 // bits: 1/128 px, quantisation <= 1/256 px per axis) and fixed-point weights; float images and
 // bicubic sampling take float coordinates. Taps outside the source read as 0 (OpenCV's
 // BORDER_CONSTANT with value 0), each tap separately.
-// 8-bit RGB has SIMD paths: one pixel per step in SSE2, and where the CPU has SSE4.1 (checked at
-// run time) four pixels per step when their taps lie in one 16-byte span of two source rows, as
-// they do for maps close to a shift (rolling-shutter frames). Every path gives the same bits.
+// 8-bit RGB has SIMD paths: one pixel per step in SSE2, and where the CPU has SSE4.1, AVX2 or
+// AVX-512 (checked at run time) blocks of four pixels whose taps lie in one 16-byte span of two
+// source rows, as they do for maps close to a shift (rolling-shutter frames), one to four blocks a
+// step. Every path gives the same bits.
 
 #include <opencv2/core.hpp>
 
@@ -54,9 +55,14 @@ inline bool TapsInside(int xi, int yi, int width, int height) {
 // past n 0.
 void InsideMaskBits(const int* xi, const int* yi, int n, int width, int height, uint8_t* bits);
 
-// The 8-bit RGB four-pixel path: true where this CPU runs it. SetWideSampler(false) turns it off
-// (tests compare both paths; benches time them), and returns the previous setting.
-bool WideSamplerAvailable();
-bool SetWideSampler(bool enabled);
+// The 8-bit RGB sampler's paths, each giving the same bits: one pixel at a time (SSE2 or plain
+// C++), and blocks of four pixels (SSE4.1), eight (AVX2) or sixteen (AVX-512 BW and VBMI).
+enum class SamplerPath { kOnePixel, kSse41, kAvx2, kAvx512 };
+// The widest path the sampler takes: the widest this CPU runs (checked at run time), at most the
+// cap.
+SamplerPath WidestSamplerPath();
+// Caps the paths the sampler takes at `widest` (tests compare every path, benches time them);
+// returns the previous cap.
+SamplerPath CapSamplerPath(SamplerPath widest);
 
 }  // namespace shutterlab
