@@ -122,14 +122,16 @@ void PrintPairedRatios(int runs) {
       {{"warpPerspective", [&] { f.Warp(); }},
        {"correct (rotation)", [&] { f.Correct(f.camera, f.motion, std::nullopt); }},
        {"correct (plane, lens)", [&] { f.Correct(f.lens_camera, f.moving, 50.0); }}});
-  // The warp of one built map by each of the sampler's block paths this CPU runs, widest last.
+  // The warp of one built map with the kernel capped at each of its block paths this CPU runs,
+  // widest last (under AVX2 the coordinates along a line and the mask bits are plain C++ too).
   const CorrectionGeometry geometry(f.camera, f.motion, 0.0, std::nullopt);
   const CorrectionMap map(geometry, {});
   const SamplerPath widest = WidestSamplerPath();
   std::vector<std::pair<std::string, std::function<void()>>> paths;
-  for (const auto& [path, name] : {std::pair{SamplerPath::kSse41, "SSE4.1, 4-pixel blocks"},
-                                   std::pair{SamplerPath::kAvx2, "AVX2, 8-pixel blocks"},
-                                   std::pair{SamplerPath::kAvx512, "AVX-512, 16-pixel blocks"}}) {
+  for (const auto& [path, name] :
+       {std::pair{SamplerPath::kSse41, "SSE4.1 blocks of 4, C++ coordinates"},
+        std::pair{SamplerPath::kAvx2, "AVX2 blocks of 8"},
+        std::pair{SamplerPath::kAvx512, "AVX-512 blocks of 16"}}) {
     if (path > widest) break;
     paths.push_back({name, [&f, &map, path = path] {
                        const SamplerPath cap = CapSamplerPath(path);
@@ -137,7 +139,8 @@ void PrintPairedRatios(int runs) {
                        CapSamplerPath(cap);
                      }});
   }
-  if (!paths.empty()) bench::PrintPaired("the warp of a built map, by path", runs, paths);
+  if (!paths.empty())
+    bench::PrintPaired("the warp of a built map, by the kernel's path", runs, paths);
 }
 
 }  // namespace

@@ -247,7 +247,8 @@ void SampleRowFloatImpl(const cv::Mat& src, const float* xs, const float* ys, in
 // a row boundary runs through the block (each pixel's rows are iy or iy + 1 from the block's
 // lowest) three rows are loaded, each pixel's weights on the two it reads and zero on the third.
 // Same integer weights, sums and rounding as BilinearPixel: bit-identical. A block whose taps do
-// not fit (a stretched map, the source's last columns or rows, no source) takes the one-pixel path.
+// not fit (a stretched map, the source's last columns or rows, no source) takes the next narrower
+// path (Block8's four-pixel blocks, Block4's the one-pixel path).
 
 // The source as the blocks read it: its pixels and row step (copied: read through the cv::Mat,
 // which the blocks' stores might alias for all the compiler knows, they were loaded again for
@@ -538,7 +539,7 @@ struct Wide512Constants {
   __m512i channel_ctrl[3];  // (c, c + 3) in the two 16-bit halves of every 32-bit lane
   // vpermb's index: the four 128-bit lanes' planar 12 bytes (R0 .. R3 G0 .. G3 B0 .. B3, as the
   // packs leave them) to 48 bytes of interleaved pixels, lane 0's first; bytes 48 to 63 repeat
-  // lane 0's first 16.
+  // output bytes 0 to 15 (a 64-byte store leaves them for later pixels to overwrite).
   __m512i interleave;
   __attribute__((target("avx512f,avx512bw,avx512vbmi"))) Wide512Constants()
       : one_row(Opaque(_mm512_set1_epi32(1))),
@@ -596,7 +597,7 @@ __attribute__((target("avx512f,avx512bw,avx512vbmi"))) inline bool Block16(
   const __m512i vx = _mm512_loadu_si512(xi);
   const __m512i vy = _mm512_loadu_si512(yi);
   const int ix0 = xi[0] >> kSampleFracBits, iy_first = yi[0] >> kSampleFracBits;
-  // 0 <= dx <= 19: the right tap's last byte, 3 dx + 5, is the span's 62nd at most.
+  // 0 <= dx <= 19: the right tap's last byte, 3 dx + 5, is byte 62 of the span at most.
   const __m512i dx =
       _mm512_sub_epi32(_mm512_srai_epi32(vx, kSampleFracBits), _mm512_set1_epi32(ix0));
   const __m512i iy = _mm512_srai_epi32(vy, kSampleFracBits);
@@ -674,8 +675,8 @@ __attribute__((target("avx2"))) void BilinearRow8uc3Avx2(const cv::Mat& src, con
 
 __attribute__((target("avx512f,avx512bw,avx512vbmi"))) void BilinearRow8uc3Avx512(
     const cv::Mat& src, const int* xi, const int* yi, int width, uint8_t* out) {
-  // A block's 64-byte loads stay inside the source's rows when 3 ix0 + 64 <= 3 width and
-  // iy0 + 1 <= height - 1: a source of fewer than 22 columns or 2 rows fits none.
+  // A block's 64-byte loads stay inside the source's rows when 3 ix0 + 64 <= 3 src.cols and
+  // iy0 + 1 <= src.rows - 1: a source of fewer than 22 columns or 2 rows fits none.
   const int max_ix0 = src.cols - 22, max_iy0 = src.rows - 2;
   if (max_ix0 < 0 || max_iy0 < 0) return BilinearRow8uc3Avx2(src, xi, yi, width, out);
   const Wide512Constants k;

@@ -7,10 +7,12 @@
 // bits: 1/128 px, quantisation <= 1/256 px per axis) and fixed-point weights; float images and
 // bicubic sampling take float coordinates. Taps outside the source read as 0 (OpenCV's
 // BORDER_CONSTANT with value 0), each tap separately.
-// 8-bit RGB has SIMD paths: one pixel per step in SSE2, and where the CPU has SSE4.1, AVX2 or
-// AVX-512 (checked at run time) blocks of four pixels whose taps lie in one 16-byte span of two
-// source rows, as they do for maps close to a shift (rolling-shutter frames), one to four blocks a
-// step. Every path gives the same bits.
+// 8-bit RGB has SIMD paths, for maps close to a shift (rolling-shutter frames): one pixel per step
+// in SSE2; where the CPU has SSE4.1 or AVX2 (checked at run time), one or two blocks of four pixels
+// a step whose taps lie in one 16-byte span of two (across a row boundary, three) source rows; and
+// where it has AVX-512 BW and VBMI, sixteen pixels a step whose taps lie in one 64-byte span of
+// each of those rows. A block that does not fit takes the next narrower path. Every path gives the
+// same bits.
 
 #include <opencv2/core.hpp>
 
@@ -61,8 +63,9 @@ enum class SamplerPath { kOnePixel, kSse41, kAvx2, kAvx512 };
 // The widest path the sampler takes: the widest this CPU runs (checked at run time), at most the
 // cap.
 SamplerPath WidestSamplerPath();
-// Caps the paths the sampler takes at `widest` (tests compare every path, benches time them);
-// returns the previous cap.
+// Caps the paths the kernel takes at `widest`: the sampler's, and those of LinearFixedRows (AVX2,
+// AVX-512) and InsideMaskBits (AVX2), which take plain C++ below them. Tests compare every path,
+// benches time them. Returns the previous cap.
 SamplerPath CapSamplerPath(SamplerPath widest);
 
 }  // namespace shutterlab

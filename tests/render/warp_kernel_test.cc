@@ -62,22 +62,30 @@ std::vector<SamplerPath> EveryPathOnThisCpu() {
   return paths;
 }
 
-// Samples at (xi, yi) by the one-pixel path into one_pixel, and by every wider path this CPU runs:
-// "" where each gives the same bits, else the first path and pixel that does not.
+// Samples at (xi, yi) by the one-pixel path into one_pixel, and by every wider path this CPU runs,
+// each into a buffer filled afresh with a mark and 64 bytes longer than the row: "" where each
+// gives the same bits and writes nothing past the row, else the first path and pixel that does not.
 std::string WiderPathsDiffer(const cv::Mat& src, const std::vector<int>& xi,
                              const std::vector<int>& yi, std::vector<uint8_t>* one_pixel) {
   const int n = static_cast<int>(xi.size());
-  std::vector<uint8_t> wide(3 * n);
+  constexpr uint8_t kMark = 0xA5;
+  std::vector<uint8_t> wide;
   one_pixel->resize(3 * n);
   const SamplerPath widest = CapSamplerPath(SamplerPath::kOnePixel);
   SampleRowFixed(src, xi.data(), yi.data(), n, one_pixel->data());
   std::string difference;
   for (const SamplerPath path : EveryPathOnThisCpu()) {
     CapSamplerPath(path);
+    wide.assign(3 * n + 64, kMark);
     SampleRowFixed(src, xi.data(), yi.data(), n, wide.data());
-    const auto differ = std::mismatch(wide.begin(), wide.end(), one_pixel->begin());
-    if (differ.first == wide.end() || !difference.empty()) continue;
-    const long byte = differ.first - wide.begin();
+    if (!difference.empty()) continue;
+    if (std::count(wide.begin() + 3 * n, wide.end(), kMark) != 64) {
+      difference = "path " + std::to_string(static_cast<int>(path)) + " wrote past the row";
+      continue;
+    }
+    const auto differ = std::mismatch(one_pixel->begin(), one_pixel->end(), wide.begin());
+    if (differ.first == one_pixel->end()) continue;
+    const long byte = differ.first - one_pixel->begin();
     std::ostringstream text;
     text << "path " << static_cast<int>(path) << ": pixel " << byte / 3 << " at ("
          << xi[byte / 3] / 128.0 << ", " << yi[byte / 3] / 128.0 << ") channel " << byte % 3
@@ -104,9 +112,8 @@ TEST(WarpKernel, EveryRgbPathGivesTheScalarPathsBits) {
     cv::split(src, channels);
     const float h = static_cast<float>(src_size.height);
     // Lengths of each remainder the 8- and 16-pixel blocks leave; 10 and 18, where an 8-pixel
-    // block's wide stores end two pixels before the row does; 22 and 21, where a 16-pixel block's
-    // 64-byte store ends with the row or would end a pixel past it; 34, two 16-pixel blocks.
-    for (const int n : {4001, 4000, 4002, 4005, 4013, 18, 10, 22, 21, 34}) {
+    // block's wide stores end two pixels before the row does.
+    for (const int n : {4001, 4000, 4002, 4005, 4013, 18, 10}) {
       for (const float y0 : {-1.6f, -0.6f, 2.0f / 6 * h, 4.4f / 6 * h, h - 0.4f, h + 0.5f}) {
         std::vector<int> xi, yi;
         NearShiftCoordinates(n, src_size, 11 + static_cast<int>(y0 * 10), &xi, &yi);
@@ -130,22 +137,35 @@ TEST(WarpKernel, EveryRgbPathGivesTheScalarPathsBits) {
 // x from a squeeze to past the widest span a 16-pixel block takes (its 64 bytes hold taps 0 to 20
 // columns from its first pixel's: a scale of 1.25 fits, 1.3 does not everywhere), level or
 // sloping across source rows (a row boundary inside a block takes its three-row form), from
-// left of the source to right of it.
+// left of the source to right of it; rows of 37 and 38 pixels, whose second 16-pixel block's
+// 64-byte store would pass the row's end (a masked store) or just fits; and blocks that start at
+// the last column a 64-byte load allows, on the source's last two rows and across its last three.
 TEST(WarpKernel, EveryRgbPathGivesTheScalarPathsBitsAlongLines) {
   const cv::Mat src = SmoothTexture(cv::Size(331, 9), CV_8UC3, 3, 0.7) + cv::Scalar::all(1);
-  const int n = 403;
-  std::vector<int> xi(n), yi(n);
+  std::vector<int> xi, yi;
   std::vector<uint8_t> one_pixel;
-  for (const float scale : {0.5f, 1.0f, 1.18f, 1.25f, 1.3f}) {
-    for (const float slope : {0.0f, 0.02f, -0.02f, 0.07f}) {
-      for (const float x0 : {-5.3f, 0.4f, 17.6f}) {
-        LinearFixedRows(ToFixed(x0), ToFixed(scale), ToFixed(4.2f - slope * n / 2), ToFixed(slope),
-                        n, xi.data(), yi.data());
-        EXPECT_EQ(WiderPathsDiffer(src, xi, yi, &one_pixel), "")
-            << "scale " << scale << ", slope " << slope << ", x0 " << x0;
+  const auto line = [&](int n, float x0, float scale, float y0, float slope) {
+    xi.resize(n);
+    yi.resize(n);
+    LinearFixedRows(ToFixed(x0), ToFixed(scale), ToFixed(y0), ToFixed(slope), n, xi.data(),
+                    yi.data());
+    return WiderPathsDiffer(src, xi, yi, &one_pixel);
+  };
+  for (const int n : {403, 37, 38}) {
+    for (const float scale : {0.5f, 1.0f, 1.18f, 1.25f, 1.3f}) {
+      for (const float slope : {0.0f, 0.02f, -0.02f, 0.07f}) {
+        for (const float x0 : {-5.3f, 0.4f, 17.6f}) {
+          EXPECT_EQ(line(n, x0, scale, 4.2f - slope * n / 2, slope), "")
+              << "n " << n << ", scale " << scale << ", slope " << slope << ", x0 " << x0;
+        }
       }
     }
   }
+  // Pixel 64 starts a block at column cols - 22: on rows 7 and 8, the last two; rows 6 to 8 as
+  // its pixels cross from row 6 to row 7.
+  const float last_column = static_cast<float>(src.cols - 22) + 0.25f;
+  EXPECT_EQ(line(96, last_column - 64.0f, 1.0f, 7.4f, 0.0f), "") << "the last two rows";
+  EXPECT_EQ(line(96, last_column - 64.0f, 1.0f, 6.9f - 0.64f, 0.01f), "") << "the last three rows";
 }
 
 // The mask's bits against their definition, pixel by pixel: a source whose every bilinear tap lies
