@@ -161,11 +161,16 @@ TEST(WarpKernel, EveryRgbPathGivesTheScalarPathsBitsAlongLines) {
       }
     }
   }
-  // Pixel 64 starts a block at column cols - 22: on rows 7 and 8, the last two; rows 6 to 8 as
-  // its pixels cross from row 6 to row 7.
+  // Pixel 64 starts a block at column cols - 22: on rows 7 and 8, the last two; on rows 6 to 8 as
+  // its pixels cross from row 6 to row 7 (a slope of 2/128, which the fixed point keeps); and
+  // crossing from row 7 to row 8, whose taps below it lie outside (no block may load a row 9).
   const float last_column = static_cast<float>(src.cols - 22) + 0.25f;
+  const float slope = 2.0f / 128;
   EXPECT_EQ(line(96, last_column - 64.0f, 1.0f, 7.4f, 0.0f), "") << "the last two rows";
-  EXPECT_EQ(line(96, last_column - 64.0f, 1.0f, 6.9f - 0.64f, 0.01f), "") << "the last three rows";
+  EXPECT_EQ(line(96, last_column - 64.0f, 1.0f, 6.9f - 64 * slope, slope), "")
+      << "the last three rows";
+  EXPECT_EQ(line(96, last_column - 64.0f, 1.0f, 7.9f - 64 * slope, slope), "")
+      << "from the last row pair to beyond it";
 }
 
 // The mask's bits against their definition, pixel by pixel: a source whose every bilinear tap lies
